@@ -1,0 +1,1 @@
+"""Solvers and studies on a model (imported as autobal.analysis)."""

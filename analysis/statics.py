@@ -1,0 +1,291 @@
+"""Statics of the balancing device solved with IPOPT (Pavlenko 2014, (2.17)/(2.19), (2.137)).
+
+IPOPT solves the balances of :func:`autobal.models.device.static_system` as equality
+constraints with the physical bounds (pressures >= 0, gap u >= 0, valve 0 <= xi <= xi_max,
+stop reactions >= 0) and the stops' complementarity (sum of gap x reaction) as the objective,
+which is zero exactly at the physical solution and is checked to be so.  Regulator saturation
+(the valve on its open stop, spec §10.2) and face contact are part of the solution, reported
+through their reactions, never a crash.
+
+A CasADi Newton rootfinder on the square system of the same balances (stops fixed as IPOPT
+found them) is kept as an independent cross-check;
+:meth:`StaticsSolver.sweep` continues over the discharge ratio with warm starts and
+:meth:`StaticsSolver.batch` solves a whole sweep as one NLP.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+from autobal.analysis import closed_form, ipopt
+from autobal.errors import SolveError
+from autobal.models.device import DeviceDesign, StaticSystem, static_system
+
+REACTION_TOL = 1e-8  # a stop reaction above this (dimensionless force) means the stop is reached
+COMPLEMENTARITY_TOL = 1e-10  # sum of gap x reaction accepted as zero
+
+
+@dataclass
+class StaticPoint:
+    """One solved static state: unknowns by name, throttle flows q, solver report."""
+
+    psi1: float
+    dpsi: float
+    x: np.ndarray
+    values: dict
+    flows: dict
+    status: str
+    iterations: int
+    max_residual: float  # largest balance residual relative to the largest term in it
+    lam: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def saturated(self) -> bool:
+        return self.values.get("r_valve", 0.0) > REACTION_TOL
+
+    @property
+    def contact(self) -> bool:
+        return self.values["r_contact"] > REACTION_TOL
+
+    @property
+    def active(self) -> frozenset:
+        """The stops reached: names of the reactions that are not zero."""
+        return frozenset(k for k, v in self.values.items() if k.startswith("r_") and v > REACTION_TOL)
+
+
+class StaticsSolver:
+    """IPOPT (and Newton) solvers of one device's static equations, built once, called many times."""
+
+    def __init__(self, dev: DeviceDesign):
+        self.design = dev
+        self.system: StaticSystem = static_system(dev.groups)
+        n = len(self.system.unknowns)
+        w = ca.SX.sym("w", n)
+        p = ca.SX.sym("p", 2)  # psi1, dpsi
+        r = self.system.residual(w, p[0], p[1])
+        f = self.system.complementarity(w)
+        self._w, self._p, self._r, self._f = w, p, r, f
+        self._cold = ipopt.nlpsol("statics", w, p, f, r)
+        self._warm = ipopt.nlpsol("statics_warm", w, p, f, r, warm=True)
+        self._relative = self._relative_function(w, p)
+        self._jacobian = ca.Function("balance_jacobian", [w, p], [ca.jacobian(r, w)])
+        self._batch: dict[int, ca.Function] = {}
+        self._newton: dict[frozenset, tuple] = {}
+
+    # ---- single points ---------------------------------------------------------------------
+    def ideal_guess(self, psi1s, dpsi: float) -> np.ndarray:
+        """Rows of unknowns from the exact ideal-regulator closed form (no stop reached),
+        vectorised over ``psi1s``; where it has no physical value, a crude interior point."""
+        g = self.design.groups
+        psi1s = np.atleast_1d(np.asarray(psi1s, float))
+        ex = closed_form.exact_ideal(g, psi1s, dpsi)
+        bad = ~(np.isfinite(ex["u"]) & (ex["u"] > 0))
+        c = (g.b * psi1s - g.chi) / g.sigma
+        v = {"psi2": np.where(bad, psi1s + 0.5 * dpsi, ex["psi2"]),
+             "u": np.where(bad, 1.0, ex["u"]), "psi_e": psi1s + dpsi}
+        v["psi3"] = np.where(bad, np.maximum(v["psi2"] - c, 0.05), ex["psi3"])
+        if g.regulator is not None:
+            cam, xi = closed_form.regulator(g, psi1s, dpsi, psi2=v["psi2"])
+            ok = np.isfinite(xi) & (cam > v["psi_e"])
+            v["psi_cam"] = np.where(ok, cam, 0.5 * (g.regulator.psi_in + v["psi_e"]))
+            v["xi"] = np.where(ok, xi, 1.0)
+        return np.column_stack([v.get(k, np.zeros_like(psi1s)) for k in self.system.unknowns])
+
+    def guess(self, psi1: float, dpsi: float) -> np.ndarray:
+        """Initial point: the ideal-regulator closed form or, where the valve cannot pass that
+        flow, the Newton root with the valve on its open stop; clipped into the bounds."""
+        x = self.ideal_guess(psi1, dpsi)[0]
+        lo, hi = np.array(self.system.lower), np.array(self.system.upper)
+        if "r_valve" in self.system.stops:
+            sat = self.newton(psi1, dpsi, np.clip(x, lo, hi), frozenset({"r_valve"}))
+            if np.all(np.isfinite(sat)) and np.all(sat >= lo) and np.all(sat <= hi):
+                x = sat
+        return np.clip(x, lo + 1e-9, np.minimum(hi - 1e-9, np.maximum(x, lo + 1e-9)))
+
+    def solve(self, psi1: float, dpsi: float, start: StaticPoint | None = None) -> StaticPoint:
+        """Solve at discharge ratio ``psi1`` and margin ``dpsi``; warm-start from ``start``.
+
+        Raises SolveError (with the solver status and the last iterate) if IPOPT fails.
+        """
+        args = self._bounds() | {"p": [psi1, dpsi]}
+        if start is not None:
+            res = self._check(ipopt.solve(self._warm, **args, x0=start.x, lam_x0=start.lam["x"],
+                                          lam_g0=start.lam["g"]))
+            if res["success"]:
+                return self._point(psi1, dpsi, res)
+        res = self._check(ipopt.solve(self._cold, **args, x0=self.guess(psi1, dpsi)))
+        point = self._point(psi1, dpsi, res)
+        if not res["success"]:
+            raise SolveError(f"statics at psi1 = {psi1:g}, dpsi = {dpsi:g} did not converge",
+                             res["status"], {"psi1": psi1, "dpsi": dpsi, **point.values})
+        return point
+
+    def newton(self, psi1: float, dpsi: float, start: np.ndarray | None = None,
+               active: frozenset = frozenset()) -> np.ndarray:
+        """Root of the same balances by CasADi's Newton method, as a square system.
+
+        Each stop is fixed as inactive (reaction 0) or, if named in ``active``, active
+        (coordinate on its stop, reaction free).  No bounds; full vector of unknowns returned.
+        """
+        if active not in self._newton:
+            sys_ = self.system
+            fixed = {c if r in active else r: (at if r in active else 0.0)
+                     for r, (c, at, _) in sys_.stops.items()}
+            free = [i for i, k in enumerate(sys_.unknowns) if k not in fixed]
+            wf = ca.SX.sym("wf", len(free))
+            full = ca.vertcat(*[wf[free.index(i)] if i in free else fixed[k]
+                                for i, k in enumerate(sys_.unknowns)])
+            rf = ca.Function("square", [wf, self._p], [ca.substitute(self._r, self._w, full)])
+            solver = ca.rootfinder("newton", "newton", rf,
+                                   {"abstol": 1e-14, "max_iter": 50, "error_on_fail": False})
+            self._newton[active] = (solver, free, ca.Function("full", [wf], [full]))
+        solver, free, full = self._newton[active]
+        x0 = self.guess(psi1, dpsi) if start is None else start
+        return np.asarray(full(solver(x0[free], [psi1, dpsi]))).ravel()
+
+    def fast_sweep(self, psi1s, dpsi: float, tol: float = 1e-10) -> tuple[np.ndarray, np.ndarray]:
+        """A sweep in one call: Newton roots of the no-stop system mapped over the grid from the
+        vectorised closed-form guess.  Points not accepted (not converged to ``tol`` relative,
+        outside the bounds, i.e. needing a stop) are re-solved by IPOPT, warm-started along the
+        grid.  Returns rows of unknowns and a flag per point: True where IPOPT was needed."""
+        psi1s = np.asarray(psi1s, float)
+        m = len(psi1s)
+        if ("map", m) not in self._batch:
+            self.newton(float(psi1s[0]), dpsi)  # builds the no-stop rootfinder
+            solver, free, full = self._newton[frozenset()]
+            wf, pp = ca.MX.sym("X", len(free), m), ca.MX.sym("P", 2, m)
+            self._batch[("map", m)] = ca.Function("sweep", [wf, pp], [full.map(m)(solver.map(m)(wf, pp))])
+        free = self._newton[frozenset()][1]
+        X0 = self.ideal_guess(psi1s, dpsi)[:, free].T
+        X = np.asarray(self._batch[("map", m)](X0, np.vstack([psi1s, np.full(m, dpsi)]))).T
+        lo, hi = np.array(self.system.lower), np.array(self.system.upper)
+        ok = np.all(np.isfinite(X) & (X >= lo) & (X <= hi), axis=1)
+        ok &= self.relative_residual(X, psi1s, dpsi).max(axis=1) <= tol
+        prev = None
+        for i in np.flatnonzero(~ok):
+            prev = self.solve(float(psi1s[i]), dpsi, prev if i > 0 and not ok[i - 1] else None)
+            X[i] = prev.x
+        return X, ~ok
+
+    def sweep(self, psi1s, dpsi: float) -> list[StaticPoint]:
+        """Continuation over discharge ratio: each point warm-started from the previous one."""
+        points, prev = [], None
+        for s in np.asarray(psi1s, float):
+            prev = self.solve(float(s), dpsi, prev)
+            points.append(prev)
+        return points
+
+    def batch(self, psi1s, dpsi: float) -> tuple[np.ndarray, dict]:
+        """The whole sweep as one NLP (the point equations mapped over the grid); rows of x."""
+        psi1s = np.asarray(psi1s, float)
+        m, n = len(psi1s), len(self.system.unknowns)
+        if m not in self._batch:
+            W = ca.SX.sym("W", n, m)
+            P = ca.SX.sym("P", m + 1)
+            one = ca.Function("point", [self._w, self._p], [self._r])
+            g = one.map(m)(W, ca.vertcat(P[:m].T, ca.repmat(P[m], 1, m)))
+            f = ca.Function("stops", [self._w], [self._f]).map(m)(W)
+            self._batch[m] = ipopt.nlpsol("statics_batch", ca.vec(W), P, ca.sum2(f), ca.vec(g))
+        b = self._bounds()
+        x0 = np.concatenate([self.guess(s, dpsi) for s in psi1s])
+        res = self._check(ipopt.solve(self._batch[m], x0=x0, p=np.append(psi1s, dpsi),
+                                      lbx=np.tile(b["lbx"], m), ubx=np.tile(b["ubx"], m), lbg=0, ubg=0), m)
+        if not res["success"]:
+            raise SolveError(f"batch statics over {m} points did not converge", res["status"])
+        return res["x"].reshape(m, n), res
+
+    # ---- derived quantities ----------------------------------------------------------------
+    def stiffness(self, pt: StaticPoint) -> float:
+        """Exact static stiffness kappa_s = -d phi/d u at fixed psi1 (2.33), phi = sigma (psi2 - psi3).
+
+        All balances but the disc's force balance are held while u varies, the regulator's stop
+        as it stands: the implicit-function derivative of the square system.  NaN in contact.
+        """
+        if pt.contact:
+            return float("nan")
+        sys_ = self.system
+        J = np.asarray(self._jacobian(pt.x, [pt.psi1, pt.dpsi]))
+        eqs = [i for i, e in enumerate(sys_.equations) if e != "disc force"]
+        held = {"u", "r_contact"} | {sys_.stops[r][0] if r in pt.active else r
+                                     for r in sys_.stops if r != "r_contact"}
+        cols = [i for i, k in enumerate(sys_.unknowns) if k not in held]
+        dx = -np.linalg.solve(J[np.ix_(eqs, cols)], J[eqs, sys_.index("u")])
+        d = dict(zip([sys_.unknowns[i] for i in cols], dx, strict=True))
+        return -self.design.groups.sigma * (d["psi2"] - d["psi3"])
+
+    def critical(self, unknown: str, fixed: float, guess: float) -> StaticPoint:
+        """Exact state where the inner-seal flow q1 vanishes (onset of flow reversal).
+
+        unknown = "psi1": the critical discharge ratio psi1_kr at margin ``fixed`` (cf. (2.32));
+        unknown = "dpsi": the critical margin dpsi_kr at discharge ratio ``fixed`` (cf. (2.31)).
+        """
+        sys_ = self.system
+        s = ca.SX.sym("s")
+        psi1, dpsi = (s, fixed) if unknown == "psi1" else (fixed, s)
+        q1 = sys_.flows(self._w, psi1, dpsi)[0][sys_.throttles.index("1")]
+        g = ca.vertcat(sys_.residual(self._w, psi1, dpsi), q1)
+        solver = ipopt.nlpsol("critical", ca.vertcat(self._w, s), ca.SX.sym("none", 0), self._f, g)
+        start = (guess, fixed) if unknown == "psi1" else (fixed, guess)
+        b = self._bounds()
+        res = self._check(ipopt.solve(solver, x0=np.append(self.guess(*start), guess), lbg=0, ubg=0,
+                                      lbx=np.append(b["lbx"], 1e-6), ubx=np.append(b["ubx"], np.inf)))
+        if not res["success"]:
+            raise SolveError(f"critical {unknown} (q1 = 0) did not converge", res["status"])
+        value = float(res["x"][-1])
+        res |= {"x": res["x"][:-1], "lam_x": res["lam_x"][:-1], "lam_g": res["lam_g"][:-1]}
+        return self._point(*((value, fixed) if unknown == "psi1" else (fixed, value)), res)
+
+    def relative_residual(self, x: np.ndarray, psi1, dpsi: float) -> np.ndarray:
+        """Each balance's residual divided by its largest term; rows of ``x`` for arrays of psi1."""
+        X = np.atleast_2d(x)
+        P = np.vstack([np.broadcast_to(psi1, len(X)), np.full(len(X), dpsi)])
+        out = np.asarray(self._relative.map(len(X))(X.T, P)).T
+        return out[0] if np.ndim(x) == 1 else out
+
+    # ---- internals ---------------------------------------------------------------------------
+    def _bounds(self) -> dict:
+        return {"lbx": np.array(self.system.lower), "ubx": np.array(self.system.upper), "lbg": 0, "ubg": 0}
+
+    def _check(self, res: dict, points: int = 1) -> dict:
+        """A solve counts only if the stops' complementarity is zero too (per point)."""
+        if res["success"] and res["f"][0] > COMPLEMENTARITY_TOL * points:
+            res |= {"success": False, "status": f"Stop_Complementarity_Violated ({res['f'][0]:.1e})"}
+        return res
+
+    def _relative_function(self, w, p):
+        """Each balance's residual over its scale, the largest absolute term in it."""
+        sys_ = self.system
+        g = self.design.groups
+        q = dict(zip(sys_.throttles, ca.vertsplit(sys_.flows(w, p[0], p[1])[0]), strict=True))
+
+        def largest(*names):
+            return ca.mmax(ca.fabs(ca.vertcat(*[q[k] for k in names])))
+
+        scale = {
+            "disc force": ca.fmax(g.b * p[0], g.chi),
+            "chamber 2 flow": largest("e", "1", "T"),
+            "chamber 3 flow": largest("T", "3"),
+            "membrane force": g.regulator.sigma_m * p[1] if g.regulator else 1.0,
+            "valve chamber flow": largest("in", "valve") if g.regulator else 1.0,
+            "barrier chamber flow": largest("valve", "e") if g.regulator else 1.0,
+        }
+        scale = ca.vertcat(*[scale[e] for e in sys_.equations])
+        r = ca.fabs(sys_.residual(w, p[0], p[1]))
+        return ca.Function("relative_residual", [w, p], [r / scale])
+
+    def _point(self, psi1: float, dpsi: float, res: dict) -> StaticPoint:
+        sys_ = self.system
+        x = res["x"]
+        q, _ = sys_.flows(x, psi1, dpsi)
+        vals = dict(zip(sys_.unknowns, map(float, x), strict=True))
+        vals.setdefault("psi_e", psi1 + dpsi)
+        return StaticPoint(
+            psi1=psi1, dpsi=dpsi, x=x, values=vals,
+            flows=dict(zip(sys_.throttles, map(float, np.asarray(q).ravel()), strict=True)),
+            status=res["status"], iterations=res["iterations"],
+            max_residual=float(self.relative_residual(x, psi1, dpsi).max()),
+            lam={"x": res["lam_x"], "g": res["lam_g"]},
+        )

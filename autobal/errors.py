@@ -1,0 +1,24 @@
+"""One exception hierarchy for the toolkit; the CLI maps it to exit codes."""
+
+from __future__ import annotations
+
+
+class AutobalError(Exception):
+    """Base class of every error the toolkit raises on purpose."""
+
+
+class ScenarioError(AutobalError):
+    """Bad input: a scenario or data file that cannot be used (CLI exit code 2)."""
+
+
+class SolveError(AutobalError):
+    """A solver did not converge (CLI exit code 3).
+
+    ``status`` is the solver's own return status and ``last_iterate`` a dict of
+    the values it stopped at, kept for inspection.
+    """
+
+    def __init__(self, message: str, status: str, last_iterate: dict | None = None):
+        super().__init__(f"{message} (solver status: {status})")
+        self.status = status
+        self.last_iterate = last_iterate or {}

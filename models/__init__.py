@@ -1,0 +1,1 @@
+"""Physics of balancing devices as CasADi SX graphs (imported as autobal.models)."""

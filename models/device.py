@@ -1,0 +1,220 @@
+"""Locking-balancing device (balance disc + barrier chamber + pressure-drop regulator).
+
+The static model of Pavlenko (2014), Eqs. (2.17)/(2.19) for the pump and (2.137) for the
+compressor, assembled from blocks: the throttles of the flow network, the disc's force
+balance and, when the scene has one, the regulator (inlet throttle, valve and membrane).
+A device without a regulator has an ideal barrier supply, psi_e = psi1 + dpsi, and no
+regulator unknowns.
+
+Everything is dimensionless as in the source: psi = p/p_B, q = Q/(g1 p_B), forces over
+p_B s_B.  The mechanical stops are modelled by reactions with complementarity: ``r_contact``
+(the pad on the disc: u >= 0, r >= 0, u r = 0) and, for a valve with a travel limit,
+``r_valve`` (the stem on its open stop: xi_max - xi >= 0, r >= 0, product 0; spec §10.2
+saturation).  The bounds carry the signs; ``complementarity`` (the sum of the products) is
+zero exactly at a physical solution.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import casadi as ca
+
+from autobal.models.throttles import face_opening, flow
+
+
+@dataclass(frozen=True)
+class RegulatorGroups:
+    """Dimensionless groups of the pressure-drop regulator (2.18)."""
+
+    sigma_m: float  # membrane area / s_B
+    psi_in: float  # supply pressure / p_B
+    alpha_in1: float  # inlet throttle g_in / g1 (laminar)
+    alpha_B1: float  # valve g_B / (g1 sqrt(p_B)) (orifice, liquid law in both media)
+    xi_max: float = math.inf  # valve travel limit x_max / x_B
+
+
+@dataclass(frozen=True)
+class DeviceGroups:
+    """Dimensionless groups (2.18) of the disc and its flow network."""
+
+    medium: str  # "liquid" (pump, (2.19)) or "gas" (compressor, (2.137))
+    sigma: float  # s_e / s_B
+    chi: float  # push-off preload F_pr / (p_B s_B)
+    b: float  # tau = b psi1, axial force law
+    psi4: float  # drain pressure / p_B
+    alpha_TB1: float  # face throttle at u = 1
+    alpha_31: float  # outer seal
+    alpha_e1: float  # barrier supply throttle (laminar)
+    regulator: RegulatorGroups | None = None
+
+    @property
+    def square_root_law(self) -> str:
+        return "turbulent" if self.medium == "liquid" else "gas_turbulent"
+
+
+@dataclass
+class StaticSystem:
+    """The static equations as CasADi Functions of (w, psi1, dpsi).
+
+    ``residual`` returns the balances (zero at a solution); ``complementarity`` the sum of
+    stop gap x reaction (zero at a solution); ``flows`` the throttle flows q in the order of
+    ``throttles`` and the pressures (psi_e, psi2, psi3, psi_cam or NaN).  ``stops`` maps each
+    reaction to (coordinate, its value on the stop, side): gap = side (coordinate - stop) >= 0.
+    """
+
+    groups: DeviceGroups
+    unknowns: list[str]
+    lower: list[float]
+    upper: list[float]
+    equations: list[str]
+    throttles: list[str]
+    residual: ca.Function
+    flows: ca.Function
+    complementarity: ca.Function
+    stops: dict = field(default_factory=dict)
+
+    def index(self, name: str) -> int:
+        return self.unknowns.index(name)
+
+
+def static_system(groups: DeviceGroups) -> StaticSystem:
+    """Build the static equations of the device described by ``groups``."""
+    reg = groups.regulator
+    inf = math.inf
+    unknowns = {"psi2": (0, inf), "psi3": (0, inf), "u": (0, inf), "r_contact": (0, inf)}
+    stops = {"r_contact": ("u", 0.0, 1.0)}  # reaction: (coordinate, stop, side)
+    if reg is not None:
+        unknowns |= {"psi_e": (0, inf), "psi_cam": (0, inf), "xi": (0, reg.xi_max)}
+        if math.isfinite(reg.xi_max):
+            unknowns["r_valve"] = (0, inf)
+            stops["r_valve"] = ("xi", reg.xi_max, -1.0)
+    names = list(unknowns)
+    w = ca.SX.sym("w", len(names))
+    v = {n: w[i] for i, n in enumerate(names)}
+    psi1 = ca.SX.sym("psi1")
+    dpsi = ca.SX.sym("dpsi")
+    psi_e = v["psi_e"] if reg is not None else psi1 + dpsi
+    root = groups.square_root_law
+
+    # Throttles of the flow network (2.15)/(2.136): name -> q
+    q = {
+        "e": flow("laminar", groups.alpha_e1, psi_e, v["psi2"]),  # barrier supply, e -> 2
+        "1": flow("laminar", 1.0, v["psi2"], psi1),  # inner seal, 2 -> discharge
+        "T": face_opening(v["u"]) * flow(root, groups.alpha_TB1, v["psi2"], v["psi3"]),  # face, 2 -> 3
+        "3": flow(root, groups.alpha_31, v["psi3"], groups.psi4),  # outer seal, 3 -> drain
+    }
+    eqs = {
+        "disc force": groups.sigma * (v["psi2"] - v["psi3"]) + groups.chi + v["r_contact"] - groups.b * psi1,
+        "chamber 2 flow": q["e"] - q["1"] - q["T"],
+        "chamber 3 flow": q["T"] - q["3"],
+    }
+    if reg is not None:
+        q["in"] = flow("laminar", reg.alpha_in1, reg.psi_in, v["psi_cam"])  # inlet, supply -> cam
+        q["valve"] = v["xi"] * flow("turbulent", reg.alpha_B1, v["psi_cam"], psi_e)  # valve, cam -> e
+        r_valve = v.get("r_valve", 0)
+        eqs["membrane force"] = reg.sigma_m * (psi_e - psi1 - dpsi) + r_valve
+        eqs["valve chamber flow"] = q["in"] - q["valve"]
+        eqs["barrier chamber flow"] = q["valve"] - q["e"]
+
+    nan = ca.SX(math.nan)
+    outputs = ca.vertcat(psi_e, v["psi2"], v["psi3"], v["psi_cam"] if reg is not None else nan)
+    return StaticSystem(
+        groups=groups,
+        unknowns=names,
+        lower=[lo for lo, _ in unknowns.values()],
+        upper=[hi for _, hi in unknowns.values()],
+        equations=list(eqs),
+        throttles=list(q),
+        residual=ca.Function("static_residual", [w, psi1, dpsi], [ca.vertcat(*eqs.values())],
+                             ["w", "psi1", "dpsi"], ["r"]),
+        flows=ca.Function("static_flows", [w, psi1, dpsi], [ca.vertcat(*q.values()), outputs],
+                          ["w", "psi1", "dpsi"], ["q", "psi"]),
+        complementarity=ca.Function("stop_complementarity", [w], [sum(
+            v[r] * side * (v[coord] - at) for r, (coord, at, side) in stops.items())]),
+        stops=stops,
+    )
+
+
+@dataclass(frozen=True)
+class DeviceDesign:
+    """A device's dimensionless groups with the SI scales and conductances they came from.
+
+    ``scales``: p_B (Pa), s_B (m^2), z_B (m), x_B (m), g1 (m^3/(Pa s)), Q_scale = g1 p_B
+    (m^3/s), s_e (m^2), Q_n (m^3/s or NaN).  ``conductances``: g1, g3, g_TB, g_e, g_in, g_B
+    in their SI units (see models/throttles.py).
+    """
+
+    groups: DeviceGroups
+    scales: dict
+    conductances: dict
+    extra: dict
+
+
+def axial_force_ratio(density: float, impeller, nominal_pressure: float) -> float:
+    """b = 1 - rho w^2 R2^2 i / (8 p_n) (1 - (R1^2 + R0^2) / (2 R2^2)), App. A L3125."""
+    r0, r1, r2 = impeller.hub_radius, impeller.shroud_radius, impeller.outer_radius
+    head = density * impeller.speed**2 * r2**2 * impeller.stages / (8.0 * nominal_pressure)
+    return 1.0 - head * (1.0 - (r1**2 + r0**2) / (2.0 * r2**2))
+
+
+def design(device) -> DeviceDesign:
+    """Dimensionless groups (2.18) of a device given in SI (a validated scenario ``device``)."""
+    from autobal.models import throttles as th
+
+    fl, op, disc, medium = device.fluid, device.operating, device.disc, device.medium
+    p_n = fl.normal_pressure or 0.0
+    p_b = op.nominal_pressure
+    s_b = op.nominal_thrust / p_b
+    inner, face, outer = disc.inner_seal, disc.face, disc.outer_seal
+    r_u1, r2, r3 = inner.diameter / 2, face.inner_diameter / 2, face.outer_diameter / 2
+    s_t = math.pi * (r3**2 - r2**2)
+    s_e = math.pi * (r2**2 - r_u1**2) + 0.5 * s_t  # (2.5)
+
+    g1 = th.laminar_annulus(inner.diameter, inner.clearance, inner.length, fl.viscosity)
+    zeta3 = th.annulus_loss(outer.local_loss, outer.friction, outer.length, outer.clearance)
+    g3 = th.turbulent(math.pi * outer.diameter * outer.clearance, zeta3, fl.density, medium, p_n)
+    zeta_tb = th.face_loss(face.friction, face.inner_diameter, face.outer_diameter, face.base_gap)
+    f_tb = 0.5 * math.pi * (face.inner_diameter + face.outer_diameter) * face.base_gap
+    g_tb = th.turbulent(f_tb, zeta_tb, fl.density, medium, p_n)
+    sup = device.barrier.supply_throttle
+    g_e = th.laminar_tube(sup.diameter, sup.length, fl.viscosity)
+    # liquid square-root conductances carry sqrt(p_B) in their ratio, gas ones do not (2.18), (§7)
+    root_scale = math.sqrt(p_b) if medium == "liquid" else 1.0
+
+    b_computed = (axial_force_ratio(fl.density, op.impeller, p_b) if op.impeller is not None else math.nan)
+    b = op.thrust_ratio if op.thrust_ratio is not None else b_computed
+    cond = {"g1": g1, "g3": g3, "g_TB": g_tb, "g_e": g_e}
+    extra = {"zeta_u3": zeta3, "zeta_TB": zeta_tb, "f_TB": f_tb, "s_T": s_t, "s_e": s_e,
+             "b_from_impeller": b_computed}
+    x_b = math.nan
+    reg_groups = None
+    if device.regulator is not None:
+        reg = device.regulator
+        g_in = th.laminar_tube(reg.inlet_throttle.diameter, reg.inlet_throttle.length, fl.viscosity)
+        v = reg.valve
+        g_b = th.orifice(v.discharge_coefficient, v.seat_diameter, v.base_opening, fl.density)
+        x_b = v.base_opening
+        cond |= {"g_in": g_in, "g_B": g_b}
+        reg_groups = RegulatorGroups(
+            sigma_m=reg.membrane_area / s_b,
+            psi_in=reg.supply_pressure / p_b,
+            alpha_in1=g_in / g1,
+            alpha_B1=g_b / (g1 * math.sqrt(p_b)),  # valve: liquid orifice law in both media (§7)
+            xi_max=(v.max_opening / x_b) if v.max_opening is not None else math.inf,
+        )
+    groups = DeviceGroups(
+        medium=medium,
+        sigma=s_e / s_b,
+        chi=disc.pushoff_force / (p_b * s_b),
+        b=b,
+        psi4=op.drain_pressure / p_b,
+        alpha_TB1=g_tb / (g1 * root_scale),
+        alpha_31=g3 / (g1 * root_scale),
+        alpha_e1=g_e / g1,
+        regulator=reg_groups,
+    )
+    scales = {"p_B": p_b, "s_B": s_b, "z_B": face.base_gap, "x_B": x_b, "g1": g1, "Q_scale": g1 * p_b,
+              "s_e": s_e, "Q_n": op.nominal_flow if op.nominal_flow is not None else math.nan}
+    return DeviceDesign(groups=groups, scales=scales, conductances=cond, extra=extra)

@@ -1,0 +1,1 @@
+"""Optimal control problems (imported as autobal.ocp)."""
