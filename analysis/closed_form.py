@@ -47,6 +47,7 @@ def pump(g, psi1, dpsi) -> dict:
         "psi_e": psi1 + dpsi, "psi2": psi2, "psi3": psi3, "u": u,
         "q_e": np.ones_like(psi1), "q_T": q_t, "q_1": 1 - q_t,
         "Q_e_over_g1pB": ae * dpsi / (1 + ae) * np.ones_like(psi1),  # Q_e = g_e dp/(1 + a_e1)
+        "Q_B_over_g1pB": ae * dpsi / (1 + ae),  # flow base of q, (2.29)
         "kappa_s": 3 * g.sigma / u * (psi1 - g.psi4 + k * dpsi) * ratio / (1 + ratio) ** 2,  # (2.36)
         "dpsi_kr": (1 + ae) * a3 / ae * np.sqrt(1 - (g.b - g.chi) / g.sigma),  # (2.31)
         "psi1_kr": ((ae * dpsi / (a3 * (1 + ae))) ** 2 - k * dpsi - g.chi / g.sigma)
@@ -55,6 +56,12 @@ def pump(g, psi1, dpsi) -> dict:
     if g.regulator is not None:
         out["psi_cam"], out["xi"] = regulator(g, psi1, dpsi)
     return out
+
+
+def force_gap(g, psi1, dpsi, u):
+    """Balancing force against gap at fixed pressure, phi(u) of (2.35) (pump, psi2 from (2.24))."""
+    ae, a3, at, _ = _rel(g, psi1, dpsi)
+    return g.sigma * (psi1 - g.psi4 + ae / (1 + ae) * dpsi) / (1 + (at / a3) ** 2 * np.asarray(u) ** 3)
 
 
 def pump_quadratic(g, psi1, dpsi) -> dict:
@@ -105,7 +112,9 @@ def compressor(g, psi1, dpsi) -> dict:
         "psi_e": psi1 + dpsi, "psi2": psi2, "psi3": psi3, "u": u,
         "q_e": q_e, "q_1": q_1, "q_T": q_e - q_1,
         "Q_e_over_g1pB": ae * dpsi / (1 + ae) * np.ones_like(psi1),  # App. B uses the pump Q_e
-        "kappa_s": -g.b / du,  # (2.162)
+        "Q_B_over_g1pB": ae * a3 / (ae + a3) * (1 + dpsi - (g.b - g.chi) / g.sigma),  # (2.156)
+        "kappa_s": np.full_like(psi1, np.nan),  # no fixed-pressure closed form for the gas device
+        "kappa_u_2_162": -g.b / du,  # (2.162): slope along the pressure sweep, not at fixed psi1
         "dpsi_kr": a3 / ae * s1,  # (2.160) at psi1_kr = 1
         "psi1_kr": (ae / a3 * dpsi - cs) / (1 - bs),  # (2.160), App. B L3616
     }

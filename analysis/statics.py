@@ -98,7 +98,7 @@ class StaticsSolver:
         """Initial point: the ideal-regulator closed form or, where the valve cannot pass that
         flow, the Newton root with the valve on its open stop; clipped into the bounds."""
         x = self.ideal_guess(psi1, dpsi)[0]
-        lo, hi = np.array(self.system.lower), np.array(self.system.upper)
+        lo, hi = np.array(self.system.lower, float), np.array(self.system.upper, float)
         if "r_valve" in self.system.stops:
             sat = self.newton(psi1, dpsi, np.clip(x, lo, hi), frozenset({"r_valve"}))
             if np.all(np.isfinite(sat)) and np.all(sat >= lo) and np.all(sat <= hi):
@@ -161,7 +161,7 @@ class StaticsSolver:
         free = self._newton[frozenset()][1]
         X0 = self.ideal_guess(psi1s, dpsi)[:, free].T
         X = np.asarray(self._batch[("map", m)](X0, np.vstack([psi1s, np.full(m, dpsi)]))).T
-        lo, hi = np.array(self.system.lower), np.array(self.system.upper)
+        lo, hi = np.array(self.system.lower, float), np.array(self.system.upper, float)
         ok = np.all(np.isfinite(X) & (X >= lo) & (X <= hi), axis=1)
         ok &= self.relative_residual(X, psi1s, dpsi).max(axis=1) <= tol
         prev = None
@@ -216,6 +216,28 @@ class StaticsSolver:
         d = dict(zip([sys_.unknowns[i] for i in cols], dx, strict=True))
         return -self.design.groups.sigma * (d["psi2"] - d["psi3"])
 
+    def force_gap(self, psi1: float, dpsi: float, us) -> np.ndarray:
+        """Balancing force phi = sigma (psi2 - psi3) against a prescribed gap u at fixed psi1:
+        the static characteristic (2.35) from the exact flow network (disc force balance left
+        out), by IPOPT continuation along ``us``."""
+        sys_ = self.system
+        rows = [i for i, e in enumerate(sys_.equations) if e != "disc force"]
+        if "force_gap" not in self._batch:
+            self._batch["force_gap"] = ipopt.nlpsol("force_gap", self._w, self._p, self._f, self._r[rows])
+        solver, iu = self._batch["force_gap"], sys_.index("u")
+        x = self.solve(psi1, dpsi).x
+        phi = []
+        for u in np.asarray(us, float):
+            b = self._bounds()
+            b["lbx"][iu] = b["ubx"][iu] = u
+            x[iu] = u
+            res = self._check(ipopt.solve(solver, **b, x0=x, p=[psi1, dpsi]))
+            if not res["success"]:
+                raise SolveError(f"force-gap characteristic at u = {u:g} did not converge", res["status"])
+            x = res["x"]
+            phi.append(self.design.groups.sigma * (x[sys_.index("psi2")] - x[sys_.index("psi3")]))
+        return np.array(phi)
+
     def critical(self, unknown: str, fixed: float, guess: float) -> StaticPoint:
         """Exact state where the inner-seal flow q1 vanishes (onset of flow reversal).
 
@@ -247,7 +269,7 @@ class StaticsSolver:
 
     # ---- internals ---------------------------------------------------------------------------
     def _bounds(self) -> dict:
-        return {"lbx": np.array(self.system.lower), "ubx": np.array(self.system.upper), "lbg": 0, "ubg": 0}
+        return {"lbx": np.array(self.system.lower, float), "ubx": np.array(self.system.upper, float), "lbg": 0, "ubg": 0}
 
     def _check(self, res: dict, points: int = 1) -> dict:
         """A solve counts only if the stops' complementarity is zero too (per point)."""

@@ -123,8 +123,8 @@ def static_system(groups: DeviceGroups) -> StaticSystem:
     return StaticSystem(
         groups=groups,
         unknowns=names,
-        lower=[lo for lo, _ in unknowns.values()],
-        upper=[hi for _, hi in unknowns.values()],
+        lower=[float(lo) for lo, _ in unknowns.values()],
+        upper=[float(hi) for _, hi in unknowns.values()],
         equations=list(eqs),
         throttles=list(q),
         residual=ca.Function("static_residual", [w, psi1, dpsi], [ca.vertcat(*eqs.values())],
@@ -147,6 +147,7 @@ class DeviceDesign:
     """
 
     groups: DeviceGroups
+    dpsi: float  # barrier margin (p_e - p1)/p_B, the regulator set-point
     scales: dict
     conductances: dict
     extra: dict
@@ -217,4 +218,5 @@ def design(device) -> DeviceDesign:
     )
     scales = {"p_B": p_b, "s_B": s_b, "z_B": face.base_gap, "x_B": x_b, "g1": g1, "Q_scale": g1 * p_b,
               "s_e": s_e, "Q_n": op.nominal_flow if op.nominal_flow is not None else math.nan}
-    return DeviceDesign(groups=groups, scales=scales, conductances=cond, extra=extra)
+    return DeviceDesign(groups=groups, dpsi=device.barrier.margin_ratio, scales=scales,
+                        conductances=cond, extra=extra)

@@ -1,0 +1,221 @@
+"""The static calculation of a scene: exact IPOPT solution beside the source's closed forms.
+
+``run(design, settings)`` returns a :class:`StaticsResult`, plain data that writes itself as
+the ``statics`` block of results.json, CSV tables and the figures equivalent to the source's
+Figs 2.4-2.6 (pump) and 2.9-2.10 (compressor), plus the force-gap characteristic (2.35).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from autobal.analysis import closed_form
+from autobal.analysis.statics import StaticPoint, StaticsSolver
+from autobal.results import write_csv
+
+SWEEP_KEYS = ("psi_e", "psi2", "psi3", "psi_cam", "u", "xi")
+
+
+@dataclass
+class StaticsResult:
+    data: dict  # the results.json block; numbers in SI or as named dimensionless groups
+
+    def to_dict(self) -> dict:
+        return self.data
+
+    def summary(self) -> str:
+        ex, cf = self.data["exact"], self.data["closed_form"]
+        crit = self.data["critical_exact"]
+        lines = [f"statics at psi1 = {ex['psi1']:g}: IPOPT {ex['solver']['status']}, "
+                 f"max relative residual {ex['solver']['max_relative_residual']:.1e}",
+                 f"  {'':10s}{'exact':>12s}{'closed form':>14s}"]
+        for k in ("u0", "xi0", "psi2_0", "psi3_0", "psi_e0", "psi_cam0", "kappa_s"):
+            lines.append(f"  {k:10s}{_fmt(ex.get(k)):>12s}{_fmt(cf.get(k)):>14s}")
+        lines.append(f"  {'psi1_kr':10s}{_fmt(crit['psi1_kr']):>12s}{_fmt(cf['psi1_kr']):>14s}")
+        lines.append(f"  {'dpsi_kr':10s}{_fmt(crit['dpsi_kr']):>12s}{_fmt(cf['dpsi_kr']):>14s}")
+        lines.append(f"  Q_e [m3/s]{_fmt(ex['Q_e']):>12s}{_fmt(cf['Q_e']):>14s}")
+        sat = self.data["sweep"]["regulator_saturated"]
+        if any(sat):
+            first = self.data["sweep"]["psi1"][int(np.argmax(sat))]
+            lines.append(f"  regulator saturated (valve on its open stop) from psi1 = {first:.4g}")
+        if ex["regulator_saturated"]:
+            lines.append("  the operating point itself has the regulator saturated")
+        return "\n".join(lines)
+
+    def write_tables(self, out: Path) -> list[Path]:
+        sw, fg = self.data["sweep"], self.data["force_gap"]
+        cols = {k: sw[k] for k in ("psi1", *SWEEP_KEYS, "q_e", "q_T", "q_1", "Q_e", "Q_1", "Q_T",
+                                   "kappa_s", "regulator_saturated", "contact")}
+        cols |= {f"closed_form_{k}": v for k, v in sw["closed_form"].items()}
+        write_csv(out / "statics_sweep.csv", cols)
+        write_csv(out / "force_gap.csv", {"u": fg["u"], "phi_exact": fg["phi_exact"],
+                                          "phi_closed_form": fg["phi_closed_form"]})
+        return [out / "statics_sweep.csv", out / "force_gap.csv"]
+
+    def plot(self, out: Path) -> list[Path]:
+        """Figures: pressures (Fig 2.4/2.9), gap and valve (Fig 2.5), flows (Fig 2.6/2.10), phi(u)."""
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        sw, cf = self.data["sweep"], self.data["sweep"]["closed_form"]
+        psi1 = np.asarray(sw["psi1"], float)
+        sat = np.asarray(sw["regulator_saturated"], bool)
+        kr = self.data["critical_exact"]["psi1_kr"]
+        kr_cf = self.data["closed_form"]["psi1_kr"]
+        name = self.data["title"]
+
+        def decorate(ax, ylabel):
+            if sat.any():
+                ax.axvspan(psi1[sat].min(), psi1.max(), color="0.9", label="regulator saturated")
+            if kr is not None:
+                ax.axvline(kr, color="k", lw=0.8, ls=":", label=r"$\psi_1^{kr}$ exact")
+            ax.axvline(kr_cf, color="0.5", lw=0.8, ls="-.", label=r"$\psi_1^{kr}$ (2.32)/(2.160)")
+            ax.set_xlabel(r"discharge pressure ratio $\psi_1 = p_1/p_B$")
+            ax.set_ylabel(ylabel)
+            ax.grid(alpha=0.3)
+            ax.legend(fontsize=7)
+
+        paths = []
+
+        def save(fig, fname):
+            fig.suptitle(name, fontsize=9)
+            fig.tight_layout()
+            fig.savefig(out / fname, dpi=120)
+            plt.close(fig)
+            paths.append(out / fname)
+
+        fig, ax = plt.subplots(figsize=(6.4, 4.4))
+        for k, lab in (("psi_e", r"$\psi_e$"), ("psi2", r"$\psi_2$"), ("psi3", r"$\psi_3$"),
+                       ("psi_cam", r"$\psi_{cam}$")):
+            line, = ax.plot(psi1, np.asarray(sw[k], float), label=f"{lab} exact")
+            ax.plot(psi1, np.asarray(cf[k], float), ls="--", color=line.get_color(), label=f"{lab} closed form")
+        decorate(ax, "pressure ratio")
+        save(fig, "fig_pressures.png")
+
+        fig, (a1, a2) = plt.subplots(2, 1, figsize=(6.4, 6), sharex=True)
+        a1.plot(psi1, np.asarray(sw["u"], float), label="u exact")
+        a1.plot(psi1, np.asarray(cf["u"], float), ls="--", label="u closed form")
+        decorate(a1, r"face gap $u = z/z_B$")
+        a2.plot(psi1, np.asarray(sw["xi"], float), label=r"$\xi$ exact")
+        a2.plot(psi1, np.asarray(cf["xi"], float), ls="--", label=r"$\xi$ closed form (2.28)")
+        decorate(a2, r"valve opening $\xi = x/x_B$")
+        save(fig, "fig_gap.png")
+
+        fig, ax = plt.subplots(figsize=(6.4, 4.4))
+        for k, lab in (("q_e", "$q_e$"), ("q_T", "$q_T$"), ("q_1", "$q_1$")):
+            line, = ax.plot(psi1, np.asarray(sw[k], float), label=f"{lab} exact")
+            ax.plot(psi1, np.asarray(cf[k], float), ls="--", color=line.get_color(), label=f"{lab} closed form")
+        ax.axhline(0, color="k", lw=0.5)
+        decorate(ax, r"flow / $Q_B$ (source's base flow)")
+        save(fig, "fig_flows.png")
+
+        fg = self.data["force_gap"]
+        fig, ax = plt.subplots(figsize=(6.4, 4.4))
+        ax.plot(fg["u"], fg["phi_exact"], label=r"$\varphi(u)$ exact network")
+        if any(v is not None for v in fg["phi_closed_form"]):
+            ax.plot(fg["u"], np.asarray(fg["phi_closed_form"], float), ls="--", label=r"$\varphi(u)$ (2.35)")
+        ax.axhline(fg["tau"], color="k", lw=0.8, ls=":", label=r"$\tau - \chi$ (load)")
+        ax.set_xlabel(r"face gap $u = z/z_B$")
+        ax.set_ylabel(r"balancing force $\varphi = F/(p_B s_B)$")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+        save(fig, "fig_force_gap.png")
+        return paths
+
+
+def _fmt(v) -> str:
+    return "-" if v is None or (isinstance(v, float) and not np.isfinite(v)) else f"{v:.5g}"
+
+
+def _state(solver: StaticsSolver, pt: StaticPoint, q_base: float) -> dict:
+    """Unknowns, SI values and flows of one solved point (flows relative to q_base too)."""
+    sc = solver.design.scales
+    v, q = pt.values, pt.flows
+    q_e = q["e"]
+    return {
+        "psi1": pt.psi1, "u0": v["u"], "xi0": v.get("xi"), "psi2_0": v["psi2"], "psi3_0": v["psi3"],
+        "psi_e0": v["psi_e"], "psi_cam0": v.get("psi_cam"),
+        "z0": v["u"] * sc["z_B"], "x0": v.get("xi", np.nan) * sc["x_B"],
+        "p1": pt.psi1 * sc["p_B"], "p2": v["psi2"] * sc["p_B"], "p3": v["psi3"] * sc["p_B"],
+        "pe": v["psi_e"] * sc["p_B"], "pcam": v.get("psi_cam", np.nan) * sc["p_B"],
+        **{f"Q_{k}": q[k] * sc["Q_scale"] for k in ("e", "1", "T", "3")},
+        "q_e": q_e / q_base, "q_T": q["T"] / q_base, "q_1": q["1"] / q_base,
+        "kappa_s": solver.stiffness(pt),
+        "regulator_saturated": pt.saturated, "contact": pt.contact,
+        "r_valve": v.get("r_valve", 0.0), "r_contact": v["r_contact"],
+        "solver": {"status": pt.status, "iterations": pt.iterations, "max_relative_residual": pt.max_residual},
+    }
+
+
+def run(solver: StaticsSolver, settings, title: str = "") -> StaticsResult:
+    """Operating point, criticals, continuation sweep and force-gap curve of one device."""
+    dev = solver.design
+    g, sc = dev.groups, dev.scales
+    dpsi = dev.dpsi
+    psi1 = settings.operating_ratio
+    cf = closed_form.for_medium(g, psi1, dpsi)
+    q_base = float(cf["Q_B_over_g1pB"])
+
+    op = solver.solve(psi1, dpsi)
+    exact = _state(solver, op, q_base)
+    newton = solver.newton(psi1, dpsi, op.x, op.active)
+    exact["newton_max_difference"] = float(np.abs(newton - op.x).max())
+
+    closed = {
+        "dpsi_kr": cf["dpsi_kr"], "psi1_kr": cf["psi1_kr"], "u0": cf["u"], "xi0": cf.get("xi"),
+        "psi2_0": cf["psi2"], "psi3_0": cf["psi3"], "psi_e0": cf["psi_e"], "psi_cam0": cf.get("psi_cam"),
+        "Q_e": cf["Q_e_over_g1pB"] * sc["Q_scale"], "Q_B": q_base * sc["Q_scale"],
+        "q_T": cf["q_T"], "q_1": cf["q_1"], "kappa_s": cf["kappa_s"],
+    }
+    if "kappa_u_2_162" in cf:
+        closed["kappa_u_2_162"] = cf["kappa_u_2_162"]
+    closed["Q_e_over_Q_n"] = closed["Q_e"] / sc["Q_n"]
+    if g.medium == "liquid":
+        quad = closed_form.pump_quadratic(g, psi1, dpsi)
+        closed |= {"psi2_0_quadratic": quad["psi2"], "psi3_0_quadratic": quad["psi3"],
+                   "u0_quadratic": quad["u"]}
+
+    crit_psi1 = solver.critical("psi1", dpsi, min(float(cf["psi1_kr"]), settings.discharge_ratio.stop))
+    crit_dpsi = solver.critical("dpsi", psi1, float(cf["dpsi_kr"]))
+    critical = {"psi1_kr": crit_psi1.psi1, "psi1_kr_regulator_saturated": crit_psi1.saturated,
+                "p1_kr": crit_psi1.psi1 * sc["p_B"], "dpsi_kr": crit_dpsi.dpsi,
+                "dp_kr": crit_dpsi.dpsi * sc["p_B"]}
+
+    r = settings.discharge_ratio
+    grid = np.linspace(r.start, r.stop, r.points)
+    points = solver.sweep(grid, dpsi)
+    states = [_state(solver, p, q_base) for p in points]
+    cfs = closed_form.for_medium(g, grid, dpsi)
+    sweep = {"psi1": grid}
+    for k in SWEEP_KEYS:
+        sweep[k] = np.array([p.values.get(k, np.nan) for p in points])
+    for k in ("q_e", "q_T", "q_1", "Q_e", "Q_1", "Q_T", "kappa_s", "regulator_saturated", "contact"):
+        sweep[k] = np.array([s[k] for s in states])
+    sweep["status"] = [p.status for p in points]
+    sweep["max_relative_residual"] = max(p.max_residual for p in points)
+    sweep["closed_form"] = {k: np.broadcast_to(np.asarray(cfs.get(k, np.nan), float), grid.shape)
+                            for k in (*SWEEP_KEYS, "q_e", "q_T", "q_1")}
+
+    us = np.linspace(0.3, 2.0, settings.force_gap_points)
+    force_gap = {"psi1": psi1, "u": us, "phi_exact": solver.force_gap(psi1, dpsi, us),
+                 "phi_closed_form": (closed_form.force_gap(g, psi1, dpsi, us) if g.medium == "liquid"
+                                     else np.full(us.shape, np.nan)),
+                 "tau": g.b * psi1 - g.chi}
+
+    data = {
+        "title": title, "medium": g.medium, "dpsi": dpsi,
+        "groups": {"sigma": g.sigma, "chi": g.chi, "b": g.b, "psi4": g.psi4, "alpha_TB1": g.alpha_TB1,
+                   "alpha_31": g.alpha_31, "alpha_e1": g.alpha_e1,
+                   **({"sigma_m": g.regulator.sigma_m, "psi_in": g.regulator.psi_in,
+                       "alpha_in1": g.regulator.alpha_in1, "alpha_B1": g.regulator.alpha_B1,
+                       "xi_max": g.regulator.xi_max} if g.regulator else {})},
+        "scales": sc, "conductances": dev.conductances, "derived": dev.extra,
+        "closed_form": closed, "exact": exact, "critical_exact": critical,
+        "sweep": sweep, "force_gap": force_gap,
+    }
+    return StaticsResult(data)

@@ -1,0 +1,3 @@
+from autobal.cli import main
+
+raise SystemExit(main())

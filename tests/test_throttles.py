@@ -1,0 +1,64 @@
+"""Throttle laws and conductances: Pavlenko (2014) (2.16), Table 2.2, App. A/B (spec §13 item 1)."""
+
+import casadi as ca
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from autobal.models import throttles as th
+
+
+@pytest.mark.parametrize(
+    "name, key, published",
+    [  # spec §10.1 (App. A L3143-L3215) and §10.5 (App. B), tolerance 0.5 % as the spec states
+        ("pump_pe600_statics", "g1", 8.566e-9), ("pump_pe600_statics", "g3", 1.412e-6),
+        ("pump_pe600_statics", "g_TB", 1.49e-6), ("pump_pe600_statics", "g_in", 1.928e-7),
+        ("pump_pe600_statics", "g_B", 2.276e-6), ("pump_pe600_statics", "g_e", 1.767e-8),
+        ("compressor_k180_statics", "g1", 2.703e-7), ("compressor_k180_statics", "g3", 3.623e-7),
+        ("compressor_k180_statics", "g_TB", 8.639e-8), ("compressor_k180_statics", "g_in", 2.738e-6),
+        ("compressor_k180_statics", "g_B", 6.57e-5), ("compressor_k180_statics", "g_e", 4.545e-6),
+    ],
+)
+def test_conductances_match_appendices(name, key, published):
+    from autobal import scenario
+    from autobal.models.device import design
+
+    assert_allclose(design(scenario.load(name).device).conductances[key], published, rtol=5e-3)
+
+
+def test_groups_match_appendix_a():
+    # spec §10.1 recomputed column (App. A L3294-L3326)
+    from autobal import scenario
+    from autobal.models.device import design
+
+    d = design(scenario.load("pump_pe600_statics").device)
+    g = d.groups
+    assert_allclose([g.sigma, g.regulator.sigma_m, g.alpha_TB1, g.alpha_31, g.alpha_e1,
+                     g.regulator.alpha_in1, g.regulator.alpha_B1, g.regulator.psi_in],
+                    [1.58045, 1.53628, 0.0306212, 0.0290057, 2.06293, 22.5047, 0.0467692, 1.23935], rtol=2e-5)
+    assert_allclose([d.extra["zeta_u3"], d.extra["zeta_TB"], d.extra["b_from_impeller"]],
+                    [23.786, 8.0, 0.8327], rtol=2e-4)
+
+
+def test_signed_sqrt_is_finite_and_odd_through_zero():
+    x = ca.SX.sym("x")
+    f = ca.Function("f", [x], [th.signed_sqrt(x), ca.jacobian(th.signed_sqrt(x), x)])
+    for v in (-1.0, -1e-12, 0.0, 1e-12, 1.0):
+        val, der = (float(a) for a in f(v))
+        assert np.isfinite(val) and np.isfinite(der)
+    assert_allclose(float(f(0.25)[0]), 0.5, rtol=1e-15)
+    assert_allclose(float(f(-0.25)[0]), -0.5, rtol=1e-15)
+
+
+@pytest.mark.parametrize("law", th.LAWS)
+def test_flow_laws_reverse_with_pressure(law):
+    a, b = 0.7, 0.4
+    forward = float(th.flow(law, 2.0, a, b))
+    assert forward > 0
+    assert_allclose(float(th.flow(law, 2.0, b, a)), -forward, rtol=1e-12)
+    assert float(th.flow(law, 2.0, a, a)) == 0.0
+
+
+def test_unknown_law_is_an_error():
+    with pytest.raises(ValueError, match="unknown throttle law"):
+        th.flow("magic", 1.0, 1.0, 0.0)
