@@ -269,7 +269,8 @@ class StaticsSolver:
 
     # ---- internals ---------------------------------------------------------------------------
     def _bounds(self) -> dict:
-        return {"lbx": np.array(self.system.lower, float), "ubx": np.array(self.system.upper, float), "lbg": 0, "ubg": 0}
+        lo, hi = np.array(self.system.lower, float), np.array(self.system.upper, float)
+        return {"lbx": lo, "ubx": hi, "lbg": 0, "ubg": 0}
 
     def _check(self, res: dict, points: int = 1) -> dict:
         """A solve counts only if the stops' complementarity is zero too (per point)."""

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
 
 from autobal import scenario
@@ -20,19 +19,17 @@ EXIT_BAD_INPUT, EXIT_SOLVE_FAILED = 2, 3
 
 def run(scn: scenario.Scenario, out: Path) -> dict:
     """Run every analysis the scene names; write results.json, CSV tables and PNG figures."""
-    from autobal.analysis import statics_study
-    from autobal.analysis.statics import StaticsSolver
-    from autobal.models.device import design
+    from autobal.pipeline import RUNNERS
 
     out.mkdir(parents=True, exist_ok=True)
     results = {"scenario": scn.name, "title": scn.title, "source": scn.source, "files": []}
-    if scn.analyses.statics is not None:
-        t0 = time.perf_counter()
-        res = statics_study.run(StaticsSolver(design(scn.device)), scn.analyses.statics, scn.title)
-        results["statics"] = res.to_dict() | {"run_time_s": time.perf_counter() - t0}
-        files = res.write_tables(out) + res.plot(out)
-        results["files"] += [f.name for f in files]
-        print(res.summary())
+    for name, runner in RUNNERS.items():
+        settings = getattr(scn.analyses, name)
+        if settings is not None:
+            block, files, summary = runner(scn, settings, out)
+            results[name] = block
+            results["files"] += [f.name for f in files]
+            print(summary)
     write_json(out / "results.json", results)
     return results
 

@@ -183,8 +183,14 @@ class Scenario(Strict):
     name: str
     title: str
     source: str = ""
-    device: Device
+    device: Device | None = None  # the balancing device, for statics (and the analyses built on it)
     analyses: Analyses
+
+    @model_validator(mode="after")
+    def _parts_for_analyses(self):
+        if self.analyses.statics is not None and self.device is None:
+            raise ValueError("analyses.statics needs a device section")
+        return self
 
 
 def _one_line(err: ValidationError) -> str:

@@ -15,7 +15,6 @@ from autobal.analysis import closed_form
 from autobal.analysis.statics import StaticsSolver
 from autobal.models.device import design
 
-
 # ---- literature validation: the source's closed forms (App. A L3241-L3342, App. B L3568-L3664) ----
 
 def test_pump_closed_form_reproduces_appendix_a(pump):

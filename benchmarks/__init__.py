@@ -1,0 +1,1 @@
+"""Ratio benchmarks of autobal against peers, run in one process on this machine."""
