@@ -19,14 +19,14 @@ EXIT_BAD_INPUT, EXIT_SOLVE_FAILED = 2, 3
 
 def run(scn: scenario.Scenario, out: Path) -> dict:
     """Run every analysis the scene names; write results.json, CSV tables and PNG figures."""
-    from autobal.pipeline import RUNNERS
+    from autobal.pipeline import RUNNERS, runner
 
     out.mkdir(parents=True, exist_ok=True)
     results = {"scenario": scn.name, "title": scn.title, "source": scn.source, "files": []}
-    for name, runner in RUNNERS.items():
-        settings = getattr(scn.analyses, name)
+    for name in RUNNERS:
+        settings = getattr(scn.analyses, name, None)
         if settings is not None:
-            block, files, summary = runner(scn, settings, out)
+            block, files, summary = runner(name)(scn, settings, out)
             results[name] = block
             results["files"] += [f.name for f in files]
             print(summary)

@@ -1,10 +1,21 @@
-"""The analyses a scene can name, each a runner: (scenario, its settings, output folder) ->
-(results.json block, files written, printed summary).  ``RUNNERS`` order is the run order."""
+"""The analyses a scene can name.  Each runner is ``module:function`` with the signature
+(scenario, its settings, output folder) -> (results.json block, files written, printed summary),
+imported only when a scene names it.  ``RUNNERS`` order is the run order; one line per analysis."""
 
 from __future__ import annotations
 
+import importlib
 import time
 from pathlib import Path
+
+RUNNERS = {
+    "statics": "autobal.pipeline:statics",
+}
+
+
+def runner(name: str):
+    module, func = RUNNERS[name].split(":")
+    return getattr(importlib.import_module(module), func)
 
 
 def statics(scn, settings, out: Path):
@@ -17,6 +28,3 @@ def statics(scn, settings, out: Path):
     res = statics_study.run(StaticsSolver(design(scn.device)), settings, scn.title)
     files = res.write_tables(out) + res.plot(out)
     return res.to_dict() | {"run_time_s": time.perf_counter() - t0}, files, res.summary()
-
-
-RUNNERS = {"statics": statics}

@@ -11,9 +11,10 @@ from pathlib import Path
 from typing import Annotated, Literal
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import Field, ValidationError, model_validator
 
 from autobal.errors import ScenarioError
+from autobal.schema import NonNegative, Positive, Range, Strict
 from autobal.units import (
     AngularSpeed,
     Area,
@@ -28,14 +29,6 @@ from autobal.units import (
 )
 
 SCENARIO_DIR = Path(__file__).resolve().parents[1] / "scenarios"
-
-Positive = Annotated[float, Field(gt=0)]
-NonNegative = Annotated[float, Field(ge=0)]
-
-
-class Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
 
 class Fluid(Strict):
     density: Density  # liquid density, or gas density at normal conditions
@@ -152,18 +145,6 @@ class Device(Strict):
     def _gas_needs_normal_pressure(self):
         if self.medium == "gas" and self.fluid.normal_pressure is None:
             raise ValueError("fluid.normal_pressure is required for a gas (Pa, e.g. '0.1 MPa')")
-        return self
-
-
-class Range(Strict):
-    start: Positive
-    stop: Positive
-    points: Annotated[int, Field(ge=2, le=100000)]
-
-    @model_validator(mode="after")
-    def _increasing(self):
-        if self.stop <= self.start:
-            raise ValueError("stop must be larger than start")
         return self
 
 
