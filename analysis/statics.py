@@ -72,7 +72,7 @@ class StaticsSolver:
         self._warm = ipopt.nlpsol("statics_warm", w, p, f, r, warm=True)
         self._relative = self._relative_function(w, p)
         self._jacobian = ca.Function("balance_jacobian", [w, p], [ca.jacobian(r, w)])
-        self._batch: dict[int, ca.Function] = {}
+        self._built: dict = {}  # solvers built on first use, by key
         self._newton: dict[frozenset, tuple] = {}
 
     # ---- single points ---------------------------------------------------------------------
@@ -103,7 +103,7 @@ class StaticsSolver:
             sat = self.newton(psi1, dpsi, np.clip(x, lo, hi), frozenset({"r_valve"}))
             if np.all(np.isfinite(sat)) and np.all(sat >= lo) and np.all(sat <= hi):
                 x = sat
-        return np.clip(x, lo + 1e-9, np.minimum(hi - 1e-9, np.maximum(x, lo + 1e-9)))
+        return np.clip(x, lo + 1e-9, hi - 1e-9)
 
     def solve(self, psi1: float, dpsi: float, start: StaticPoint | None = None) -> StaticPoint:
         """Solve at discharge ratio ``psi1`` and margin ``dpsi``; warm-start from ``start``.
@@ -153,14 +153,14 @@ class StaticsSolver:
         grid.  Returns rows of unknowns and a flag per point: True where IPOPT was needed."""
         psi1s = np.asarray(psi1s, float)
         m = len(psi1s)
-        if ("map", m) not in self._batch:
+        if ("map", m) not in self._built:
             self.newton(float(psi1s[0]), dpsi)  # builds the no-stop rootfinder
             solver, free, full = self._newton[frozenset()]
             wf, pp = ca.MX.sym("X", len(free), m), ca.MX.sym("P", 2, m)
-            self._batch[("map", m)] = ca.Function("sweep", [wf, pp], [full.map(m)(solver.map(m)(wf, pp))])
+            self._built[("map", m)] = ca.Function("sweep", [wf, pp], [full.map(m)(solver.map(m)(wf, pp))])
         free = self._newton[frozenset()][1]
         X0 = self.ideal_guess(psi1s, dpsi)[:, free].T
-        X = np.asarray(self._batch[("map", m)](X0, np.vstack([psi1s, np.full(m, dpsi)]))).T
+        X = np.asarray(self._built[("map", m)](X0, np.vstack([psi1s, np.full(m, dpsi)]))).T
         lo, hi = np.array(self.system.lower, float), np.array(self.system.upper, float)
         ok = np.all(np.isfinite(X) & (X >= lo) & (X <= hi), axis=1)
         ok &= self.relative_residual(X, psi1s, dpsi).max(axis=1) <= tol
@@ -182,16 +182,16 @@ class StaticsSolver:
         """The whole sweep as one NLP (the point equations mapped over the grid); rows of x."""
         psi1s = np.asarray(psi1s, float)
         m, n = len(psi1s), len(self.system.unknowns)
-        if m not in self._batch:
+        if m not in self._built:
             W = ca.SX.sym("W", n, m)
             P = ca.SX.sym("P", m + 1)
             one = ca.Function("point", [self._w, self._p], [self._r])
             g = one.map(m)(W, ca.vertcat(P[:m].T, ca.repmat(P[m], 1, m)))
             f = ca.Function("stops", [self._w], [self._f]).map(m)(W)
-            self._batch[m] = ipopt.nlpsol("statics_batch", ca.vec(W), P, ca.sum2(f), ca.vec(g))
+            self._built[m] = ipopt.nlpsol("statics_batch", ca.vec(W), P, ca.sum2(f), ca.vec(g))
         b = self._bounds()
         x0 = np.concatenate([self.guess(s, dpsi) for s in psi1s])
-        res = self._check(ipopt.solve(self._batch[m], x0=x0, p=np.append(psi1s, dpsi),
+        res = self._check(ipopt.solve(self._built[m], x0=x0, p=np.append(psi1s, dpsi),
                                       lbx=np.tile(b["lbx"], m), ubx=np.tile(b["ubx"], m), lbg=0, ubg=0), m)
         if not res["success"]:
             raise SolveError(f"batch statics over {m} points did not converge", res["status"])
@@ -222,9 +222,9 @@ class StaticsSolver:
         out), by IPOPT continuation along ``us``."""
         sys_ = self.system
         rows = [i for i, e in enumerate(sys_.equations) if e != "disc force"]
-        if "force_gap" not in self._batch:
-            self._batch["force_gap"] = ipopt.nlpsol("force_gap", self._w, self._p, self._f, self._r[rows])
-        solver, iu = self._batch["force_gap"], sys_.index("u")
+        if "force_gap" not in self._built:
+            self._built["force_gap"] = ipopt.nlpsol("force_gap", self._w, self._p, self._f, self._r[rows])
+        solver, iu = self._built["force_gap"], sys_.index("u")
         x = self.solve(psi1, dpsi).x
         phi = []
         for u in np.asarray(us, float):
