@@ -82,7 +82,7 @@ class StaticsSolver:
         g = self.design.groups
         psi1s = np.atleast_1d(np.asarray(psi1s, float))
         ex = closed_form.exact_ideal(g, psi1s, dpsi)
-        bad = ~(np.isfinite(ex["u"]) & (ex["u"] > 0))
+        bad = ~(np.isfinite(ex["u"]) & (ex["u"] > 0) & np.isfinite(ex["psi2"]) & np.isfinite(ex["psi3"]))
         c = (g.b * psi1s - g.chi) / g.sigma
         v = {"psi2": np.where(bad, psi1s + 0.5 * dpsi, ex["psi2"]),
              "u": np.where(bad, 1.0, ex["u"]), "psi_e": psi1s + dpsi}
@@ -140,7 +140,8 @@ class StaticsSolver:
                                 for i, k in enumerate(sys_.unknowns)])
             rf = ca.Function("square", [wf, self._p], [ca.substitute(self._r, self._w, full)])
             solver = ca.rootfinder("newton", "newton", rf,
-                                   {"abstol": 1e-14, "max_iter": 50, "error_on_fail": False})
+                                   {"abstol": 1e-14, "max_iter": 50, "error_on_fail": False,
+                                    "show_eval_warnings": False})
             self._newton[active] = (solver, free, ca.Function("full", [wf], [full]))
         solver, free, full = self._newton[active]
         x0 = self.guess(psi1, dpsi) if start is None else start

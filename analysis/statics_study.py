@@ -12,8 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
-from autobal.analysis import closed_form
+from autobal.analysis import closed_form, workprecision
 from autobal.analysis.statics import StaticPoint, StaticsSolver
+from autobal.errors import SolveError
 from autobal.results import write_csv
 
 SWEEP_KEYS = ("psi_e", "psi2", "psi3", "psi_cam", "u", "xi")
@@ -152,6 +153,33 @@ def _state(solver: StaticsSolver, pt: StaticPoint, q_base: float) -> dict:
     }
 
 
+def cf_xi(g, psi1s, dpsi):
+    """The exact ideal-regulator valve opening along psi1s (NaN where no opening passes the flow)."""
+    return closed_form.regulator(g, psi1s, dpsi, psi2=closed_form.exact_ideal(g, psi1s, dpsi)["psi2"])[1]
+
+
+def _criticals(solver: StaticsSolver, psi1: float, dpsi: float, psi1_guess: float, dpsi_guess: float,
+               psi1_max: float) -> dict:
+    """Exact psi1_kr and dpsi_kr (q1 = 0); where none exists (a stop reached, flow never reverses)
+    the value is null with the solver status that says so."""
+    sc = solver.design.scales
+    out = {}
+    # the closed forms start the search; where they have no value (NaN, < 0) start at the operating point
+    psi1_guess = min(psi1_guess, psi1_max) if psi1_guess > 0 else psi1
+    dpsi_guess = dpsi_guess if dpsi_guess > 0 else dpsi
+    try:
+        pt = solver.critical("psi1", dpsi, psi1_guess)
+        out |= {"psi1_kr": pt.psi1, "psi1_kr_regulator_saturated": pt.saturated, "p1_kr": pt.psi1 * sc["p_B"]}
+    except SolveError as exc:
+        out |= {"psi1_kr": None, "psi1_kr_status": f"no discharge ratio with q1 = 0 found: {exc.status}"}
+    try:
+        pt = solver.critical("dpsi", psi1, dpsi_guess)
+        out |= {"dpsi_kr": pt.dpsi, "dp_kr": pt.dpsi * sc["p_B"]}
+    except SolveError as exc:
+        out |= {"dpsi_kr": None, "dpsi_kr_status": f"no margin with q1 = 0 at psi1 = {psi1:g}: {exc.status}"}
+    return out
+
+
 def run(solver: StaticsSolver, settings, title: str = "") -> StaticsResult:
     """Operating point, criticals, continuation sweep and force-gap curve of one device."""
     dev = solver.design
@@ -180,15 +208,22 @@ def run(solver: StaticsSolver, settings, title: str = "") -> StaticsResult:
         closed |= {"psi2_0_quadratic": quad["psi2"], "psi3_0_quadratic": quad["psi3"],
                    "u0_quadratic": quad["u"]}
 
-    crit_psi1 = solver.critical("psi1", dpsi, min(float(cf["psi1_kr"]), settings.discharge_ratio.stop))
-    crit_dpsi = solver.critical("dpsi", psi1, float(cf["dpsi_kr"]))
-    critical = {"psi1_kr": crit_psi1.psi1, "psi1_kr_regulator_saturated": crit_psi1.saturated,
-                "p1_kr": crit_psi1.psi1 * sc["p_B"], "dpsi_kr": crit_dpsi.dpsi,
-                "dp_kr": crit_dpsi.dpsi * sc["p_B"]}
+    critical = _criticals(solver, psi1, dpsi, float(cf["psi1_kr"]), float(cf["dpsi_kr"]),
+                          settings.discharge_ratio.stop)
 
     r = settings.discharge_ratio
     grid = np.linspace(r.start, r.stop, r.points)
-    points = solver.sweep(grid, dpsi)
+    try:
+        points = solver.sweep(grid, dpsi)
+    except SolveError as exc:
+        reg = g.regulator
+        xi = cf_xi(g, grid, dpsi) if reg is not None else np.zeros(1)
+        if reg is not None and not np.isfinite(reg.xi_max) and not np.all(np.isfinite(xi)):
+            first = grid[np.argmax(~np.isfinite(xi))]
+            raise SolveError(f"{exc.message}; from psi1 ~ {first:.3g} the regulator valve cannot pass the barrier "
+                             "flow at any opening and the valve has no travel limit (set regulator.valve.max_opening)",
+                             exc.status, exc.last_iterate) from None
+        raise
     states = [_state(solver, p, q_base) for p in points]
     cfs = closed_form.for_medium(g, grid, dpsi)
     sweep = {"psi1": grid}
@@ -207,7 +242,21 @@ def run(solver: StaticsSolver, settings, title: str = "") -> StaticsResult:
                                      else np.full(us.shape, np.nan)),
                  "tau": g.b * psi1 - g.chi}
 
+    accuracy = {"max_relative_residual": max(exact["solver"]["max_relative_residual"],
+                                             sweep["max_relative_residual"]),
+                "newton_max_difference": exact["newton_max_difference"],
+                "how": "balance residuals relative to their largest term (operating point and sweep); "
+                       "IPOPT vs CasADi Newton on the same equations at the operating point"}
+    if not op.active and g.regulator is not None:
+        ref = workprecision.statics_reference(g, psi1, dpsi)
+        got = np.array([op.values[k] for k in workprecision.STATICS_OUTPUTS])
+        accuracy["estimate"] = float(np.max(np.abs(got - ref) / np.abs(ref)))
+        accuracy["how"] += "; estimate = max relative error of the operating point against the 40-digit exact root"
+    else:
+        accuracy["estimate"] = accuracy["max_relative_residual"]
+        accuracy["how"] += "; estimate = the residual (a stop is reached or there is no regulator)"
     data = {
+        "accuracy": accuracy,
         "title": title, "medium": g.medium, "dpsi": dpsi,
         "groups": {"sigma": g.sigma, "chi": g.chi, "b": g.b, "psi4": g.psi4, "alpha_TB1": g.alpha_TB1,
                    "alpha_31": g.alpha_31, "alpha_e1": g.alpha_e1,

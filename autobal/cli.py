@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
 from pathlib import Path
 
 from autobal import scenario
@@ -23,15 +24,44 @@ def run(scn: scenario.Scenario, out: Path) -> dict:
 
     out.mkdir(parents=True, exist_ok=True)
     results = {"scenario": scn.name, "title": scn.title, "source": scn.source, "files": []}
+    results |= {"timing": {}, "accuracy": {}}
     for name in RUNNERS:
         settings = getattr(scn.analyses, name, None)
         if settings is not None:
+            t0 = time.perf_counter()
             block, files, summary = runner(name)(scn, settings, out)
+            results["timing"][name] = time.perf_counter() - t0
+            results["accuracy"][name] = block.get("accuracy", {"estimate": None,
+                                                              "how": "this analysis reports no error estimate"})
             results[name] = block
             results["files"] += [f.name for f in files]
             print(summary)
     write_json(out / "results.json", results)
     return results
+
+
+def accuracy(scn: scenario.Scenario, out: Path) -> dict:
+    """Work-precision of every analysis of the scene that has a provider: figure, CSV, summary."""
+    import importlib
+
+    from autobal.analysis.workprecision import PROVIDERS
+
+    out.mkdir(parents=True, exist_ok=True)
+    report = {"scenario": scn.name, "studies": {}, "files": []}
+    for name, target in PROVIDERS.items():
+        settings = getattr(scn.analyses, name, None)
+        if settings is None:
+            continue
+        module, func = target.split(":")
+        wp = getattr(importlib.import_module(module), func)(scn, settings)
+        report["studies"][name] = wp.to_dict()
+        report["files"] += [f.name for f in wp.write_tables(out) + wp.plot(out)]
+        print(wp.summary())
+    if not report["studies"]:
+        raise ScenarioError(f"{scn.name}: none of its analyses has a work-precision study "
+                            f"(available: {', '.join(PROVIDERS)})")
+    write_json(out / "accuracy.json", report)
+    return report
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -40,6 +70,9 @@ def main(argv: list[str] | None = None) -> int:
     p_run = sub.add_parser("run", help="run the analyses a scenario names")
     p_run.add_argument("scenario", help="a YAML file, or the name of a shipped scenario")
     p_run.add_argument("--out", type=Path, default=None, help="output folder (default out/<scenario>)")
+    p_acc = sub.add_parser("accuracy", help="error against run time of every solver of a scenario")
+    p_acc.add_argument("scenario")
+    p_acc.add_argument("--out", type=Path, default=None, help="output folder (default out/<scenario>)")
     p_check = sub.add_parser("check", help="validate a scenario without solving")
     p_check.add_argument("scenario")
     sub.add_parser("list", help="list the shipped scenarios")
@@ -58,7 +91,7 @@ def main(argv: list[str] | None = None) -> int:
             return 0
         out = args.out or Path("out") / scn.name
         try:
-            run(scn, out)
+            (accuracy if args.cmd == "accuracy" else run)(scn, out)
         except SolveError as exc:
             out.mkdir(parents=True, exist_ok=True)
             write_json(out / "failed_solve.json", {"error": str(exc), "status": exc.status,
@@ -66,7 +99,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"autobal: solve failed: {exc}; last iterate in {out / 'failed_solve.json'}",
                   file=sys.stderr)
             return EXIT_SOLVE_FAILED
-        print(f"results: {out / 'results.json'}")
+        print(f"results: {out / ('accuracy.json' if args.cmd == 'accuracy' else 'results.json')}")
         return 0
     except ScenarioError as exc:
         print(f"autobal: bad input: {exc}", file=sys.stderr)

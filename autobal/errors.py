@@ -20,5 +20,6 @@ class SolveError(AutobalError):
 
     def __init__(self, message: str, status: str, last_iterate: dict | None = None):
         super().__init__(f"{message} (solver status: {status})")
+        self.message = message
         self.status = status
         self.last_iterate = last_iterate or {}

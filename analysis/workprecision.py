@@ -1,0 +1,236 @@
+"""Error against run time of every solver of a scene (work-precision), with a reference solution
+computed by a different method, and a summary of the cheapest setting that reaches a target error.
+
+A :class:`Method` runs one solver at one setting and returns the main outputs; :func:`study`
+runs every method over its ladder of settings against a reference and returns a
+:class:`WorkPrecision` result (rows of method, setting, error, time; figure; CSV; summary).
+The statics provider is here; the dynamics and spin-up providers register in ``PROVIDERS``.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+from scipy.optimize import fsolve
+
+from autobal.analysis import closed_form, ipopt
+from autobal.results import write_csv
+
+TARGET = 1e-6  # relative error for the "cheapest setting" summary
+
+
+@dataclass
+class Method:
+    """A solver with a ladder of settings; ``run(setting)`` returns the main outputs (1-D array)."""
+
+    name: str
+    settings: list
+    run: Callable[[object], np.ndarray]
+    setting_name: str = "tolerance"
+
+
+@dataclass
+class WorkPrecision:
+    analysis: str
+    reference: str  # how the reference was computed
+    outputs: list[str]
+    rows: list[dict] = field(default_factory=list)
+
+    def cheapest(self, target: float = TARGET) -> dict:
+        """Per method: the fastest setting whose error is <= target (None if none reaches it)."""
+        out = {}
+        for m in dict.fromkeys(r["method"] for r in self.rows):
+            ok = [r for r in self.rows if r["method"] == m and r["error"] <= target]
+            best = min(ok, key=lambda r: r["time_s"]) if ok else None
+            reached = min(r["error"] for r in self.rows if r["method"] == m)
+            out[m] = {"setting": best["setting"] if best else None, "time_s": best["time_s"] if best else None,
+                      "best_error": reached}
+        return out
+
+    def to_dict(self) -> dict:
+        return {"analysis": self.analysis, "reference": self.reference, "outputs": self.outputs,
+                "target_error": TARGET, "rows": self.rows, "cheapest": self.cheapest()}
+
+    def summary(self) -> str:
+        lines = [f"work-precision of {self.analysis} (reference: {self.reference})",
+                 f"  {'method':44s}{'setting for 1e-6':>18s}{'time (s)':>12s}{'best error':>12s}"]
+        for m, c in self.cheapest().items():
+            s = "not reached" if c["setting"] is None else f"{c['setting']:g}"
+            t = "-" if c["time_s"] is None else f"{c['time_s']:.2e}"
+            lines.append(f"  {m:44s}{s:>18s}{t:>12s}{c['best_error']:>12.1e}")
+        return "\n".join(lines)
+
+    def write_tables(self, out: Path) -> list[Path]:
+        path = out / f"workprecision_{self.analysis}.csv"
+        write_csv(path, {k: [r[k] for r in self.rows] for k in ("method", "setting", "error", "time_s")})
+        return [path]
+
+    def plot(self, out: Path) -> list[Path]:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(figsize=(6.4, 4.6))
+        for m in dict.fromkeys(r["method"] for r in self.rows):
+            rs = [r for r in self.rows if r["method"] == m]
+            err = np.maximum([r["error"] for r in rs], 1e-17)
+            ax.loglog([r["time_s"] for r in rs], err, "o-", label=m, ms=4)
+        ax.axhline(TARGET, color="k", lw=0.7, ls=":")
+        ax.set_xlabel("run time per solve (s)")
+        ax.set_ylabel("max relative error of " + ", ".join(self.outputs))
+        ax.set_title(f"work-precision: {self.analysis}\nreference: {self.reference}", fontsize=8)
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        path = out / f"workprecision_{self.analysis}.png"
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+        return [path]
+
+
+def timed(fn, repeats: int = 5):
+    """Best-of-``repeats`` wall time of ``fn()`` and its result."""
+    best, out = np.inf, None
+    for _ in range(repeats):
+        t = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t)
+    return best, out
+
+
+def study(analysis: str, methods: list[Method], reference: np.ndarray, reference_how: str,
+          outputs: list[str], repeats: int = 5) -> WorkPrecision:
+    """Run every method over its settings; error = max relative deviation from ``reference``."""
+    wp = WorkPrecision(analysis, reference_how, outputs)
+    scale = np.maximum(np.abs(reference), 1e-300)
+    for m in methods:
+        for s in m.settings:
+            try:
+                t, y = timed(lambda m=m, s=s: m.run(s), repeats)
+                err = float(np.max(np.abs(np.asarray(y, float) - reference) / scale))
+            except Exception as exc:  # a setting that fails is a result: recorded, not hidden
+                t, err = float("nan"), float("nan")
+                wp.rows.append({"method": m.name, "setting": s, "error": err, "time_s": t, "failed": str(exc)})
+                continue
+            wp.rows.append({"method": m.name, "setting": s, "error": err if np.isfinite(err) else float("nan"),
+                            "time_s": t})
+    return wp
+
+
+# ---- statics ---------------------------------------------------------------------------------
+
+STATICS_OUTPUTS = ["psi2", "psi3", "u", "psi_e", "psi_cam", "xi"]
+
+
+def statics_reference(g, psi1: float, dpsi: float, digits: int = 40) -> np.ndarray:
+    """Exact solution with the regulator regulating, in ``digits``-digit arithmetic (mpmath): the
+    disc root (2.22) (liquid) or (2.144) (gas), then the regulator balances solved in closed form."""
+    import mpmath as mp
+
+    mp.mp.dps = digits
+    f = mp.mpf
+    ae, a3, at, b, chi, sg, p4 = (f(x) for x in (g.alpha_e1, g.alpha_31, g.alpha_TB1, g.b, g.chi, g.sigma, g.psi4))
+    psi1, dpsi = f(psi1), f(dpsi)
+    c = (b * psi1 - chi) / sg
+    p = (1 + ae) * psi1 + ae * dpsi
+    if g.medium == "liquid":
+        disc = a3**2 + 4 * (1 + ae) * ((1 + ae) * (psi1 - c - p4) + ae * dpsi)
+        psi2 = (a3**2 + 2 * (1 + ae) * p - a3 * mp.sqrt(disc)) / (2 * (1 + ae) ** 2)
+        psi3 = psi2 - c
+        u = mp.cbrt((a3 / at) ** 2 * (psi3 - p4) / c)
+    else:
+        den = (1 + ae) ** 2 - a3**2
+        a = ((1 + ae) * p - a3**2 * c) / den
+        psi2 = a - mp.sqrt(a**2 - (p**2 - a3**2 * (c**2 - p4**2)) / den)
+        psi3 = psi2 - c
+        u = mp.cbrt((a3 / at) ** 2 * (psi3**2 - p4**2) / (psi2**2 - psi3**2))
+    r = g.regulator
+    psi_e = psi1 + dpsi
+    q_e = ae * (psi_e - psi2)
+    psi_cam = f(r.psi_in) - q_e / f(r.alpha_in1)
+    xi = q_e / (f(r.alpha_B1) * mp.sqrt(psi_cam - psi_e))
+    return np.array([float(v) for v in (psi2, psi3, u, psi_e, psi_cam, xi)])
+
+
+def statics_methods(solver, psi1: float, dpsi: float) -> list[Method]:
+    """IPOPT over its tolerance, CasADi's Newton over its tolerance, scipy fsolve (peer, same
+    residual function) over xtol, and the source's closed form (2.24)-(2.28) (one setting).
+    Every iterative method starts from that closed form, the engineer's first estimate."""
+    sys_ = solver.system
+    idx = [sys_.unknowns.index(k) for k in STATICS_OUTPUTS]
+    n = len(sys_.unknowns)
+    w, p = ca.SX.sym("w", n), ca.SX.sym("p", 2)
+    r = sys_.residual(w, p[0], p[1])
+    cf = closed_form.for_medium(solver.design.groups, psi1, dpsi)
+    cf_out = np.array([float(cf[k]) for k in STATICS_OUTPUTS])
+    x0 = np.zeros(n)
+    x0[idx] = cf_out
+    bounds = {"lbx": np.array(sys_.lower, float), "ubx": np.array(sys_.upper, float), "lbg": 0, "ubg": 0}
+
+    def ipopt_at(tol):
+        s = ipopt.nlpsol("wp_ipopt", w, p, sys_.complementarity(w), r, tol=tol, constr_viol_tol=tol,
+                         compl_inf_tol=tol)
+        return lambda: ipopt.solve(s, x0=x0, p=[psi1, dpsi], **bounds)["x"][idx]
+
+    free = [i for i, k in enumerate(sys_.unknowns) if not k.startswith("r_")]  # no stop reached
+    wf = ca.SX.sym("wf", len(free))
+    full = ca.vertcat(*[wf[free.index(i)] if i in free else 0 for i in range(n)])
+    square = ca.Function("square", [wf, p], [ca.substitute(r, w, full)])
+    out_idx = [free.index(i) for i in idx]
+
+    def newton_at(tol):
+        rf = ca.rootfinder("wp_newton", "newton", square, {"abstol": tol, "error_on_fail": False})
+        return lambda: np.asarray(rf(x0[free], [psi1, dpsi])).ravel()[out_idx]
+
+    res_np = lambda x: np.asarray(square(x, [psi1, dpsi])).ravel()  # noqa: E731
+
+    def fsolve_at(tol):
+        return lambda: fsolve(res_np, x0[free], xtol=tol)[out_idx]
+
+    tols = [1e-2, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12]
+    built = {}
+
+    def cached(factory):
+        def run(tol):
+            if (factory, tol) not in built:
+                built[(factory, tol)] = factory(tol)
+            return built[(factory, tol)]()
+        return run
+
+    return [
+        Method("IPOPT (bounds, complementarity)", tols, cached(ipopt_at)),
+        Method("CasADi Newton rootfinder (exact Jacobian)", tols, cached(newton_at)),
+        Method("scipy fsolve (MINPACK hybrd, FD Jacobian)", tols, cached(fsolve_at)),
+        Method("closed form (2.24)-(2.28) / (2.145)-(2.147)", [0], lambda _: cf_out, "none"),
+    ]
+
+
+def statics_study(solver, psi1: float, dpsi: float) -> WorkPrecision:
+    pt = solver.solve(psi1, dpsi)
+    if pt.active:
+        raise ValueError(f"work-precision of the statics needs a regulated operating point; at psi1 = {psi1:g} "
+                         f"the stops {sorted(pt.active)} are reached")
+    ref = statics_reference(solver.design.groups, psi1, dpsi)
+    return study("statics", statics_methods(solver, psi1, dpsi), ref,
+                 "exact ideal-regulator root (2.22)/(2.144) in 40-digit arithmetic (mpmath)", STATICS_OUTPUTS)
+
+
+def statics_provider(scn, settings) -> WorkPrecision:
+    """Work-precision of the statics of a scene at its operating point."""
+    from autobal.analysis.statics import StaticsSolver
+    from autobal.models.device import design
+
+    solver = StaticsSolver(design(scn.device))
+    return statics_study(solver, settings.operating_ratio, solver.design.dpsi)
+
+
+# analysis name -> "module:function" (scenario, settings) -> WorkPrecision
+PROVIDERS = {
+    "statics": "autobal.analysis.workprecision:statics_provider",
+}

@@ -1,0 +1,64 @@
+"""Extreme scenes (scenarios/extreme/): each is solved to its stated accuracy or ends with the
+specific diagnostic asserted here."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from autobal import cli
+
+EXTREME = Path(__file__).resolve().parents[1] / "scenarios" / "extreme"
+
+
+def run(tmp_path, name):
+    code = cli.main(["run", str(EXTREME / f"{name}.yaml"), "--out", str(tmp_path)])
+    return code, (json.loads((tmp_path / "results.json").read_text()) if code == 0 else None)
+
+
+def test_discharge_three_times_nominal(tmp_path):
+    code, res = run(tmp_path, "statics_discharge_3x")
+    assert code == 0
+    ex = res["statics"]["exact"]
+    assert ex["regulator_saturated"] and not ex["contact"]
+    assert ex["xi0"] == pytest.approx(7.5, abs=1e-8)  # valve on its open stop
+    assert ex["solver"]["max_relative_residual"] < 1e-9
+    assert ex["Q_1"] < 0 and ex["Q_e"] < 0  # discharge above supply: the barrier flow runs backwards
+    assert res["accuracy"]["statics"]["estimate"] < 1e-9
+
+
+def test_face_contact(tmp_path):
+    code, res = run(tmp_path, "statics_face_contact")
+    assert code == 0
+    ex = res["statics"]["exact"]
+    assert ex["contact"] and ex["u0"] < 1e-8 and ex["r_contact"] > 0.3
+    assert ex["kappa_s"] is None  # no stiffness on the pad: written as null, with contact = true
+    assert ex["solver"]["max_relative_residual"] < 1e-9
+    assert res["statics"]["critical_exact"]["dpsi_kr"] is None
+    assert "no margin with q1 = 0" in res["statics"]["critical_exact"]["dpsi_kr_status"]
+
+
+def test_margin_at_its_critical_value(tmp_path):
+    code, res = run(tmp_path, "statics_margin_critical")
+    assert code == 0
+    ex = res["statics"]["exact"]
+    assert abs(ex["Q_1"]) < 1e-9 * abs(ex["Q_e"])  # inner-seal flow on the edge of reversal
+    assert res["statics"]["critical_exact"]["dpsi_kr"] == pytest.approx(0.0097978915, rel=1e-8)
+
+
+def test_valve_without_travel_limit_fails_with_the_cause(tmp_path, capsys):
+    code, _ = run(tmp_path, "statics_valve_unlimited")
+    assert code == 3
+    err = capsys.readouterr().err
+    assert "cannot pass the barrier flow at any opening" in err and "max_opening" in err
+    assert json.loads((tmp_path / "failed_solve.json").read_text())["status"]
+
+
+def test_no_nan_without_a_status(tmp_path):
+    # every null in the statics block of an extreme run sits beside a status that explains it
+    _, res = run(tmp_path, "statics_face_contact")
+    crit = res["statics"]["critical_exact"]
+    for key in ("psi1_kr", "dpsi_kr"):
+        assert crit[key] is not None or crit[f"{key}_status"]
+    assert np.all(np.isfinite(np.asarray(res["statics"]["sweep"]["u"], float)))

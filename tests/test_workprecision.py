@@ -1,0 +1,50 @@
+"""Work-precision of the statics: the 40-digit reference, the error ladders, the CLI command."""
+
+import json
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from autobal import cli
+from autobal.analysis import workprecision as wp
+
+
+def test_reference_agrees_with_double_precision_newton(pump, compressor):
+    for solver in (pump, compressor):
+        dpsi = solver.design.dpsi
+        ref = wp.statics_reference(solver.design.groups, 1.0, dpsi)
+        x = solver.newton(1.0, dpsi)
+        got = np.array([x[solver.system.index(k)] for k in wp.STATICS_OUTPUTS])
+        assert_allclose(got, ref, rtol=1e-12)
+
+
+def test_ipopt_error_follows_its_tolerance(pump):
+    study = wp.statics_study(pump, 1.0, 0.04)
+    rows = {r["setting"]: r["error"] for r in study.rows if r["method"].startswith("IPOPT")}
+    assert rows[1e-2] > 1e-4 and rows[1e-12] < 1e-11
+    assert rows[1e-12] < rows[1e-8] < rows[1e-4]
+    cheap = study.cheapest()
+    ipopt_rows = [r for r in study.rows if r["method"].startswith("IPOPT") and r["error"] <= 1e-6]
+    best = cheap["IPOPT (bounds, complementarity)"]
+    assert best["time_s"] == min(r["time_s"] for r in ipopt_rows)  # fastest of those reaching 1e-6
+    assert rows[best["setting"]] <= 1e-6
+    cf = [v for k, v in cheap.items() if k.startswith("closed form")][0]
+    assert cf["setting"] is None and cf["best_error"] == pytest.approx(0.341, abs=2e-3)  # xi0: 1.294 vs 1.964
+
+
+def test_accuracy_command_writes_figure_csv_and_summary(tmp_path, capsys):
+    assert cli.main(["accuracy", "pump_pe600_statics", "--out", str(tmp_path)]) == 0
+    rep = json.loads((tmp_path / "accuracy.json").read_text())
+    assert rep["studies"]["statics"]["target_error"] == 1e-6
+    for f in ("workprecision_statics.csv", "workprecision_statics.png"):
+        assert (tmp_path / f).stat().st_size > 0
+    assert "setting for 1e-6" in capsys.readouterr().out
+
+
+def test_run_reports_timing_and_accuracy(tmp_path):
+    assert cli.main(["run", "compressor_k180_statics", "--out", str(tmp_path)]) == 0
+    res = json.loads((tmp_path / "results.json").read_text())
+    assert res["timing"]["statics"] > 0
+    acc = res["accuracy"]["statics"]
+    assert acc["estimate"] < 1e-10 and "40-digit" in acc["how"]
