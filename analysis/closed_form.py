@@ -42,6 +42,7 @@ def pump(g, psi1, dpsi) -> dict:
     with np.errstate(invalid="ignore", divide="ignore"):
         u = np.cbrt((a3 / at) ** 2 * (psi3 - g.psi4) / c)  # (2.27)
         q_t = (1 + ae) * a3 / ae * np.sqrt(psi3 - g.psi4) / dpsi  # (2.30)
+        dpsi_kr = (1 + ae) * a3 / ae * np.sqrt(1 - (g.b - g.chi) / g.sigma)  # (2.31), NaN if b - chi > sigma
     ratio = (at / a3) ** 2 * u**3
     out = {
         "psi_e": psi1 + dpsi, "psi2": psi2, "psi3": psi3, "u": u,
@@ -49,7 +50,7 @@ def pump(g, psi1, dpsi) -> dict:
         "Q_e_over_g1pB": ae * dpsi / (1 + ae) * np.ones_like(psi1),  # Q_e = g_e dp/(1 + a_e1)
         "Q_B_over_g1pB": ae * dpsi / (1 + ae),  # flow base of q, (2.29)
         "kappa_s": 3 * g.sigma / u * (psi1 - g.psi4 + k * dpsi) * ratio / (1 + ratio) ** 2,  # (2.36)
-        "dpsi_kr": (1 + ae) * a3 / ae * np.sqrt(1 - (g.b - g.chi) / g.sigma),  # (2.31)
+        "dpsi_kr": dpsi_kr,
         "psi1_kr": ((ae * dpsi / (a3 * (1 + ae))) ** 2 - k * dpsi - g.chi / g.sigma)
         / (1 - g.b / g.sigma),  # (2.32), -chi/sigma (spec erratum 9)
     }
