@@ -26,6 +26,7 @@ from autobal.models.device import DeviceDesign, StaticSystem, static_system
 
 REACTION_TOL = 1e-8  # a stop reaction above this (dimensionless force) means the stop is reached
 COMPLEMENTARITY_TOL = 1e-10  # sum of gap x reaction accepted as zero
+CONTINUATION_START, CONTINUATION_STEPS = 0.25, 16  # fallback path in psi1 when a cold start fails
 
 
 @dataclass
@@ -118,6 +119,12 @@ class StaticsSolver:
                 return self._point(psi1, dpsi, res)
         res = self._check(ipopt.solve(self._cold, **args, x0=self.guess(psi1, dpsi)))
         point = self._point(psi1, dpsi, res)
+        if not res["success"] and start is None and psi1 > CONTINUATION_START:
+            # homotopy in the discharge ratio from a low, regulated pressure, warm-started along the path
+            try:
+                return self.sweep(np.linspace(CONTINUATION_START, psi1, CONTINUATION_STEPS), dpsi)[-1]
+            except SolveError:
+                pass
         if not res["success"]:
             raise SolveError(f"statics at psi1 = {psi1:g}, dpsi = {dpsi:g} did not converge",
                              res["status"], {"psi1": psi1, "dpsi": dpsi, **point.values})
