@@ -1,0 +1,572 @@
+"""Liquid auto-balancer design calculations (Khomyak 2020 ch. 2-3, App. В/Г; Pashkov 2010 ch. 3).
+
+``run(system, settings, title)`` returns a :class:`LiquidBalancerResult`: efficiency lambda0 against
+the speed ratio gamma (three variants of (2.13), the documented App. В closure and the self-consistent
+closure of spec §8.3), the results table of spec §7 C13, the extremum analysis (§2.5), the viscous
+equilibrium zone (2.15), the optimal chamber height and liquid volume as IPOPT problems checked
+against a dense grid, the liquid choice by viscosity, Pashkov's sufficiency and efficiency
+calculators, and the comparison with Tables 3.2 / 3.3.  SI units throughout.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from autobal.analysis import ipopt
+from autobal.errors import SolveError
+from autobal.models import liquid_balancer as lb
+from autobal.results import write_csv
+
+# Table 3.2 [T L1494-L1499]: efficiency vs gamma, theory (App. В / C# program) and experiment
+TABLE_3_2 = {"gamma": [0.4, 0.6, 0.8, 1.0, 1.2, 1.4],
+             "theory": [1.30, 1.52, 2.13, 3.13, 2.27, 1.72],
+             "experiment": [1.14, 1.43, 1.79, 3.30, 2.20, 1.64]}
+# Table 3.3 [T L1505-L1513]: D0 [g cm] -> computed V_opt [mL], capacity D [g cm], experimental V_opt [mL]
+TABLE_3_3 = {"D0_gcm": [1000, 2000, 3000, 4000], "V_opt_mL": [48.5, 93.7, 123.5, 176.7],
+             "capacity_gcm": [960.3, 1945.9, 2873.8, 3914.0], "V_exp_mL": [50, 90, 120, 180]}
+REASON_3_2 = ("the documented App. В algorithm (f = G e0 with e0 = D0/m_d = e_d, as in the Pascal code) makes the "
+              "liquid unbalance D >> D0 (k_D << 1): lambda0 ~ 0.13 at gamma = 0.4 and no equilibrium at most "
+              "speeds; Table 3.2 came from the C# program, which the thesis does not show (spec §8.1, §9 #23)")
+REASON_3_3 = ("in the documented model D = rho f (pi h R^2 - V) falls with V, so V_opt = pi h R^2 - D0/(rho f) "
+              "falls with D0, while Table 3.3 rises ~ D0 (D/V ~ R, a thin crescent at the wall); h, omega, n of "
+              "the table are not stated (spec §8.2)")
+
+
+@dataclass(frozen=True)
+class System:
+    """One liquid balancer in SI (Table 3.1 symbols; spec §1.3)."""
+
+    rotor_mass: float  # M_p [kg]
+    chamber_mass: float  # M_k [kg]
+    unbalance_mass: float  # m_d [kg]
+    unbalance_radius: float  # e_d [m]
+    omega_cr: float  # omega_p [rad/s]
+    n: float  # damping constant [1/s]
+    R: float  # chamber radius [m]
+    h: float  # chamber height [m]
+    V: float  # liquid volume [m^3]
+    rho: float  # [kg/m^3]
+    speed: float  # working speed [rad/s]
+    mu: float | None = None  # [Pa s]
+    stiffness: float | None = None  # c [N/m]
+    inclination: float | None = None  # Omega_inc [rad]
+    nested_radii: tuple = ()
+    nested_volumes: tuple = ()
+    wall_thickness: float = 0.0
+    hub_radius: float = 0.0
+
+    @classmethod
+    def from_scenario(cls, part) -> System:
+        ro, ch, li = part.rotor, part.chamber, part.liquid
+        n = ro.damping_coefficient if ro.damping_coefficient is not None else lb.n_from_decrement(
+            ro.log_decrement, ro.critical_speed)
+        nest = part.nested
+        return cls(rotor_mass=ro.mass, chamber_mass=ch.mass, unbalance_mass=ro.unbalance_mass,
+                   unbalance_radius=ro.unbalance_radius, omega_cr=ro.critical_speed, n=n, R=ch.radius,
+                   h=ch.height, V=li.volume, rho=li.density, speed=part.speed, mu=li.viscosity,
+                   stiffness=ro.stiffness,
+                   inclination=None if ch.inclination_deg is None else math.radians(ch.inclination_deg),
+                   nested_radii=tuple(c.radius for c in nest.chambers) if nest else (),
+                   nested_volumes=tuple(c.volume for c in nest.chambers) if nest else (),
+                   wall_thickness=nest.wall_thickness if nest else 0.0,
+                   hub_radius=nest.hub_radius if nest else 0.0)
+
+    @property
+    def D0(self) -> float:
+        """Rotor unbalance D0 = m_d e_d [kg m] (App. В step 2.7 corrected, erratum 15)."""
+        return self.unbalance_mass * self.unbalance_radius
+
+    @property
+    def m_l(self) -> float:
+        return self.rho * self.V
+
+    @property
+    def M_sys(self) -> float:
+        """M_p + M_k + m_d + m_l (App. В step 2.2)."""
+        return self.rotor_mass + self.chamber_mass + self.unbalance_mass + self.m_l
+
+    def e_f(self, deflection: str) -> float:
+        """Eccentricity in f = G e_f: D0/m_d (App. В code, "program") or D0/M_sys ("system")."""
+        if deflection == "program":
+            return self.D0 / self.unbalance_mass
+        if deflection == "system":
+            return self.D0 / self.M_sys
+        raise ValueError(f"deflection is one of {lb.DEFLECTIONS}, not {deflection!r}")
+
+    def inputs(self, deflection: str, **override) -> dict:
+        """Pipeline inputs (:data:`autobal.models.liquid_balancer.PIPE_IN`) at the working speed."""
+        p = {"omega": self.speed, "omega_cr": self.omega_cr, "n": self.n, "R": self.R, "h": self.h, "V": self.V,
+             "rho": self.rho, "D0": self.D0, "e_f": self.e_f(deflection)}
+        return p | override
+
+
+# ---- the optimisation problems (App. В / App. Г as IPOPT problems) ---------------------------
+
+def k_bounds(sin2d: float, variant: str) -> tuple[float, float]:
+    """Range of k_D where (2.13) of ``variant`` has an equilibrium: k >= sin delta, and the arccos
+    argument <= 1 (printed: k <= 1; program: k^2 <= s + (1 - s)(1 + s)^2; corrected: unbounded)."""
+    s = sin2d
+    lo = 0.0 if (s >= 1 and variant != "corrected") else math.sqrt(s)
+    if variant == "printed":
+        hi = 1.0 if s < 1 else math.inf
+    elif variant == "program":
+        hi = math.sqrt(s + (1 - s) * (1 + s) ** 2) if s < 1 else math.inf
+    else:
+        hi = math.inf
+    return lo, hi
+
+
+@functools.cache
+def _solver(kind: str, variant: str):
+    """IPOPT: min (e_c/e0)^2 = 1/lambda0^2 over x = h/R ("height") or x = V/(pi R^2 h) ("volume")."""
+    x = ca.SX.sym("x")
+    p = {k: ca.SX.sym(k) for k in lb.PIPE_IN}
+    sym = dict(p)
+    if kind == "height":
+        sym["h"] = x * p["R"]
+    else:
+        sym["V"] = x * ca.pi * p["R"] ** 2 * p["h"]
+    out = lb.pipeline(sym, variant)
+    J = lb.inverse_lambda0_squared(out["k_D"], out["sin2d"], variant)
+    return ipopt.nlpsol(f"liquid_{kind}_{variant}", x, ca.vertcat(*[p[k] for k in lb.PIPE_IN]), J, ca.SX(0, 1))
+
+
+def optimise(system: System, kind: str, variant: str, deflection: str, lower: float, upper: float,
+             grid_points: int, **override) -> dict:
+    """Maximise lambda0 over the chamber height (``kind="height"``) or the liquid volume (``"volume"``).
+
+    The bounds combine the geometry (V < pi R^2 h; the given design limits ``lower``/``upper``) with the
+    existence of an equilibrium (:func:`k_bounds` turned into the variable through the monotone k_D(h) or
+    k_D(V); D = rho f (pi h R^2 - V)).  IPOPT minimises 1/lambda0^2, smooth and zero at complete
+    balancing (k_D = 1, where the corrected and printed branches are singular); a dense grid of
+    ``grid_points`` over the same bounds, evaluating lambda0 itself, cross-checks it (App. В/Г loops).
+    """
+    p = system.inputs(deflection, **override)
+    R = p["R"]
+    j = {k: float(v) for k, v in lb.jeffcott(p["omega"], p["omega_cr"], p["n"]).items()}
+    f = j["G"] * p["e_f"]
+    k_lo, k_hi = k_bounds(j["sin2d"], variant)
+    rf = p["rho"] * f
+    with np.errstate(divide="ignore"):
+        if kind == "height":
+            geo_lo = p["V"] / (math.pi * R**2) * (1 + 1e-9)
+            # k = D0 / (rho f (pi R^2 h - V)) falls with h
+            lo = max(lower, geo_lo, (p["D0"] / (rf * k_hi) + p["V"]) / (math.pi * R**2) if k_hi < math.inf else 0)
+            hi = min(upper, (p["D0"] / (rf * k_lo) + p["V"]) / (math.pi * R**2) if k_lo > 0 else math.inf)
+            scale, name = R, "h"
+        else:
+            vol = math.pi * R**2 * p["h"]
+            lo = max(lower, vol - p["D0"] / (rf * k_lo) if k_lo > 0 else 0.0)
+            hi = min(upper, vol * (1 - 1e-9), vol - p["D0"] / (rf * k_hi) if k_hi < math.inf else math.inf)
+            scale, name = vol, "V"
+    res = {"variable": name, "variant": variant, "deflection": deflection, "lower_bound": lower,
+           "upper_bound": upper, "feasible_lower": lo, "feasible_upper": hi, "f": f}
+    if not (f > 0 and lo < hi):
+        return res | {"optimum": math.nan, "lambda0_max": math.nan, "k_D": math.nan, "reason":
+                      f"no equilibrium for any {name} in [{lower:.6g}, {upper:.6g}] (k_D range "
+                      f"[{k_lo:.4g}, {k_hi:.4g}] of the {variant} (2.13) not reachable)",
+                      "grid": {"x": [], "lambda0": []}}
+    solver = _solver(kind, variant)
+    pv = [p[k] for k in lb.PIPE_IN]
+    x0 = 0.5 * (lo + hi) / scale
+    sol = ipopt.solve(solver, x0=x0, lbx=lo / scale, ubx=hi / scale, p=pv, lbg=[], ubg=[])
+    if not sol["success"]:
+        raise SolveError(f"liquid balancer: optimal {name} not found", sol["status"],
+                         {name: float(sol["x"][0] * scale), "objective": float(sol["f"][0])})
+    x_opt = float(sol["x"][0]) * scale
+    at = lb.evaluate(variant, **(p | {name: x_opt}))
+    grid = np.linspace(lo, hi, grid_points)
+    g = lb.evaluate(variant, **(p | {name: grid}))
+    lam = np.where(np.isfinite(g["lambda0"]), g["lambda0"], -np.inf)
+    i = int(np.argmax(lam))
+    step = grid[1] - grid[0]
+    k_opt = float(at["k_D"])
+    singular = variant in ("corrected", "printed") and abs(k_opt - 1) < 1e-6
+    # analytic optimum of the singular branches: k_D = 1 (spec §4 [derived])
+    star = ((p["D0"] / rf + p["V"]) / (math.pi * R**2) if kind == "height"
+            else math.pi * R**2 * p["h"] - p["D0"] / rf)
+    return res | {
+        "optimum": x_opt, "optimum_over_R": x_opt / R if kind == "height" else None,
+        "lambda0_max": float(at["lambda0"]), "inverse_lambda0_squared": float(sol["f"][0]),
+        "k_D": k_opt, "alpha0_deg": math.degrees(float(at["alpha0"])), "singular": singular,
+        "k_D_equals_1_at": star, "solver": {"status": sol["status"], "iterations": sol["iterations"]},
+        "grid_optimum": float(grid[i]), "grid_lambda0": float(g["lambda0"][i]), "grid_step": float(step),
+        "grid_difference": abs(float(grid[i]) - x_opt), "agree": bool(abs(float(grid[i]) - x_opt) <= step),
+        "reason": "complete balancing (k_D = 1): lambda0 unbounded, value depends on the grid" if singular else "",
+        "grid": {"x": grid[:: max(1, grid_points // 400)], "lambda0": g["lambda0"][:: max(1, grid_points // 400)]},
+    }
+
+
+def crescent_volume(R: float, h: float, f: float, D0: float, rho: float) -> dict:
+    """V at which the liquid crescent's unbalance rho V x_p equals D0 (k_D = 1) [toolkit extension, spec §8.2]."""
+    from scipy.optimize import brentq
+
+    vol = math.pi * R**2 * h
+
+    def excess(V):
+        return rho * lb.crescent(R, h, V, f)["D_over_rho"] - D0
+
+    vs = np.linspace(vol * 1e-4, vol * (1 - 1e-6), 400)
+    ex = np.array([excess(v) for v in vs])
+    cross = np.nonzero((ex[:-1] < 0) & (ex[1:] >= 0))[0]
+    if not len(cross):
+        return {"V": math.nan, "x_p": math.nan, "sufficient": False}
+    V = brentq(excess, vs[cross[0]], vs[cross[0] + 1], xtol=1e-14)
+    c = lb.crescent(R, h, V, f)
+    return {"V": V, "x_p": c["x_p"], "sufficient": c["sufficient"]}
+
+
+# ---- the study ---------------------------------------------------------------------------------
+
+def _row(system: System, variant: str, deflection: str, gammas) -> dict:
+    """C13 columns at speed ratios ``gammas`` (spec §7 C13)."""
+    gammas = np.asarray(gammas, float)
+    p = system.inputs(deflection, omega=gammas * system.omega_cr)
+    o = lb.evaluate(variant, **p)
+    sc = lb.self_consistent(p["omega"], system.omega_cr, system.n, system.R, system.h, system.V, system.rho,
+                            system.M_sys)
+    with np.errstate(invalid="ignore"):
+        suff = (system.R - o["r"]) >= o["f"]
+    return {"gamma": gammas, "omega": p["omega"], "delta_deg": np.degrees(o["delta"]),
+            "phi_deg": np.degrees(o["phi"]), "G": o["G"], "f": o["f"], "r": o["r"], "x_p": o["x_p"],
+            "D": o["D"], "k_D": o["k_D"], "alpha0_deg": np.degrees(o["alpha0"]), "lambda0": o["lambda0"],
+            "variant": [variant] * len(gammas), "equilibrium_exists": np.isfinite(o["lambda0"]) | np.isinf(
+                o["lambda0"]), "sufficiency_ok": suff, "reason": list(o["reason"]),
+            "lambda0_self_consistent": sc["lambda0_plus"], "lambda0_self_consistent_minus": sc["lambda0_minus"]}
+
+
+def _viscous(system: System, settings, f: float, delta: float, k: float) -> dict:
+    """Viscous equilibrium zone (2.15) at the working speed, with the zone's range of lambda0 [derived].
+
+    The zone is |Delta| <= Delta* (:func:`autobal.models.liquid_balancer.zone_half_width`); its lambda0 range is
+    that of the corrected branch with delta replaced by delta +- Delta* at the same k_D (an equilibrium of
+    (2.12) with a lag shifted by the friction angle), whatever the scene's variant.
+    """
+    if system.mu is None:
+        return {"reason": "liquid.viscosity not given"}
+    nu = system.mu / system.rho
+    arc = lb.program_arc(system.R, system.h, system.V, f)
+    xi = math.radians(settings.arc_angle_deg) if settings.arc_angle_deg else float(arc["xi"])
+    sb = float(lb.sin_beta_star_nu(nu, system.R, xi, system.V, system.speed))
+    r2 = system.R**2 - system.V / (math.pi * system.h)
+    q = r2 / (system.R**2 - r2)
+    dstar = float(lb.zone_half_width(q, sb))
+    lam_zone = lb.lambda0_corrected(k, np.linspace(delta - dstar, delta + dstar, 201)) if np.isfinite(dstar) \
+        else np.array([math.nan])
+    finite = lam_zone[np.isfinite(lam_zone)]
+    return {"nu": nu, "xi_rad": xi, "xi_deg": math.degrees(xi), "xi_source": "scenario" if settings.arc_angle_deg
+            else ("program Г (clipped: free surface does not cut the wall)" if bool(arc["clipped"])
+                  else "program Г"), "z_program": float(arc["z"]),
+            "sin_beta_star": sb, "beta_star_deg": math.degrees(math.asin(min(sb, 1.0))),
+            "sinus_literal": float(lb.sinus_literal(nu, system.R, system.V, system.h, system.speed, f)),
+            "q": q, "zone_half_width_deg": math.degrees(dstar),
+            "lambda0_zone_min": float(finite.min()) if finite.size else math.nan,
+            "lambda0_zone_max": float(finite.max()) if finite.size else math.nan,
+            "zone_all_equilibria": bool(not np.isfinite(dstar)),
+            "zone_without_equilibrium": int(np.sum(~np.isfinite(lam_zone)))}
+
+
+def pashkov(system: System, kappa: float = 1.0) -> dict:
+    """Sufficiency and efficiency calculators, single and nested chambers ([T] (3.2)-(3.14); Pashkov ch. 3).
+
+    m = M_p + M_k + m_d (rotor with reservoir), e0 = D0/m.  E_e printed (3.9)/(3.14) with sum R_i^2; the
+    nested-chamber first-moment alternative sum [R_i^2 - (R_{i+1} + t_w)^2] beside it (flagged, spec
+    rotor-liquid §3.8).  Deflection, critical speed and sufficiency need ``stiffness``.
+    """
+    m = system.rotor_mass + system.chamber_mass + system.unbalance_mass
+    e0 = system.D0 / m
+    radii = (system.R, *system.nested_radii)
+    vols = (system.V, *system.nested_volumes)
+    out = {"m": m, "e0": e0, "kappa": kappa}
+    for key, rr, vv in (("single", radii[:1], vols[:1]), ("multi", radii, vols)):
+        if key == "multi" and len(radii) == 1:
+            continue
+        full = lb.full_liquid_mass(system.rho, system.h, rr)
+        nested = lb.nested_liquid_mass(system.rho, system.h, rr, system.wall_thickness if key == "multi" else 0.0,
+                                       system.hub_radius if key == "multi" else 0.0)
+        blk = {"radii": list(rr), "volumes": list(vv), "full_liquid_mass": full,
+               "efficiency": lb.efficiency(m, full, kappa), "psi": 1 / lb.efficiency(m, full, kappa),
+               "nested_liquid_mass": nested, "efficiency_nested": lb.efficiency(m, nested, kappa),
+               "eccentricity_high_speed": lb.eccentricity_38(e0, m, kappa * full)}
+        if system.stiffness is not None:
+            c = system.stiffness
+            s = float(lb.deflection(e0, m, system.speed, c, full, kappa))
+            suff = lb.sufficiency(rr, vv, system.h, s, system.wall_thickness if key == "multi" else 0.0,
+                                  system.hub_radius if key == "multi" else 0.0)
+            r1 = suff["r"][0]
+            m_p = system.rho * system.V
+            s_p = s * system.R**2 / (system.R**2 - r1**2)
+            blk |= {"critical_speed": lb.critical_speed(c, m, full, kappa), "deflection": s,
+                    "sufficiency": suff, "limit_mass": lb.limit_mass(s, system.rho, system.h, system.R),
+                    "eccentricity_3_7": lb.eccentricity_37(e0, m, s, m_p, s_p)}
+        out[key] = blk
+    if system.stiffness is None:
+        out["reason"] = "rotor.stiffness not given: no deflection, critical speed or sufficiency"
+    return out
+
+
+@dataclass
+class LiquidBalancerResult:
+    data: dict = field(default_factory=dict)  # the results.json block (SI; dimensionless groups by name)
+
+    def to_dict(self) -> dict:
+        return self.data
+
+    def summary(self) -> str:
+        d = self.data
+        op, st = d["operating_point"], d["settings"]
+        lines = [f"liquid balancer ({st['variant']} (2.13), f from {st['deflection']} eccentricity): "
+                 f"gamma = {op['gamma']:.4g}, delta = {op['delta_deg']:.4g} deg, k_D = {op['k_D']:.4g}, "
+                 f"lambda0 = {_fmt(op['lambda0'])}{' (' + op['reason'] + ')' if op['reason'] else ''}; "
+                 f"self-consistent lambda0+ = {_fmt(op['lambda0_self_consistent'])}"]
+        t = d["table"]
+        lines.append(f"  {'gamma':>6s} {'delta deg':>10s} {'k_D':>10s} {'alpha0 deg':>10s} {'lambda0':>10s} "
+                     f"{'self-cons.':>10s}  note")
+        for i in range(len(t["gamma"])):
+            lines.append(f"  {t['gamma'][i]:6.3g} {t['delta_deg'][i]:10.4f} {_fmt(t['k_D'][i]):>10s} "
+                         f"{_fmt(t['alpha0_deg'][i]):>10s} {_fmt(t['lambda0'][i]):>10s} "
+                         f"{_fmt(t['lambda0_self_consistent'][i]):>10s}  {t['reason'][i]}")
+        if "table_3_2" in d:
+            c = d["table_3_2"]
+            lines.append(f"  Table 3.2: max |theory - experiment|/theory = {c['max_theory_experiment_pct']:.2f} % "
+                         f"(thesis: <= 16 %); self-consistent vs experiment max "
+                         f"{c['max_self_consistent_experiment_pct']:.1f} %")
+        for key in ("optimal_height", "optimal_volume"):
+            if key in d:
+                o = d[key]
+                lines.append(f"  {key}: {o['variable']} = {_fmt(o['optimum'])} (grid {_fmt(o.get('grid_optimum'))}, "
+                             f"step {_fmt(o.get('grid_step'))}), k_D = {_fmt(o['k_D'])}, lambda0 = "
+                             f"{_fmt(o['lambda0_max'])} {o['reason']}")
+        if "liquid_choice" in d:
+            lines.append(f"  liquid chosen by viscosity: {d['liquid_choice']['chosen']}")
+        pk = d["pashkov"]
+        for key in ("single", "multi"):
+            if key in pk:
+                b = pk[key]
+                extra = (f", omega_k = {b['critical_speed']:.4g} rad/s, s = {b['deflection']:.4g} m, sufficient: "
+                         f"{b['sufficiency']['all_ok']}" if "sufficiency" in b else "")
+                lines.append(f"  Pashkov {key}: E_e = {b['efficiency']:.5g} (nested alternative "
+                             f"{b['efficiency_nested']:.5g}){extra}")
+        return "\n".join(lines)
+
+    def write_tables(self, out: Path) -> list[Path]:
+        out = Path(out)
+        t = self.data["table"]
+        write_csv(out / "liquid_balancer_table.csv", t)
+        sw = self.data["sweep"]
+        write_csv(out / "liquid_balancer_sweep.csv", {k: v for k, v in sw.items() if k != "reason"})
+        files = [out / "liquid_balancer_table.csv", out / "liquid_balancer_sweep.csv"]
+        if "table_3_2" in self.data:
+            rows = self.data["table_3_2"]["rows"]
+            write_csv(out / "liquid_balancer_table_3_2.csv", {k: [r[k] for r in rows] for k in rows[0]})
+            files.append(out / "liquid_balancer_table_3_2.csv")
+        if "table_3_3" in self.data:
+            rows = self.data["table_3_3"]["rows"]
+            write_csv(out / "liquid_balancer_table_3_3.csv", {k: [r[k] for r in rows] for k in rows[0]})
+            files.append(out / "liquid_balancer_table_3_3.csv")
+        return files
+
+    def plot(self, out: Path) -> list[Path]:
+        """Efficiency vs gamma with the Table 3.2 points; lambda0 against h and V near the optimum."""
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        out = Path(out)
+        d, paths = self.data, []
+        sw = d["sweep"]
+        g = np.asarray(sw["gamma"], float)
+        fig, ax = plt.subplots(figsize=(6.4, 4.6))
+        for v, ls in zip(lb.VARIANTS, (":", "-.", "-"), strict=True):
+            ax.plot(g, np.asarray(sw[f"lambda0_{v}"], float), ls=ls, label=f"documented App. В, {v} (2.13)")
+        ax.plot(g, np.asarray(sw["lambda0_self_consistent"], float), color="k", lw=1.6,
+                label=r"self-consistent closure $\lambda_0^+$ (extension)")
+        ax.plot(g, np.asarray(sw["lambda0_self_consistent_minus"], float), color="k", lw=0.8, ls="--",
+                label=r"self-consistent $\lambda_0^-$")
+        if d["settings"]["thesis_comparison"]:
+            ax.plot(TABLE_3_2["gamma"], TABLE_3_2["theory"], "o", mfc="none", color="C3",
+                    label="Table 3.2 theory")
+            ax.plot(TABLE_3_2["gamma"], TABLE_3_2["experiment"], "s", color="C3", label="Table 3.2 experiment")
+        ax.axhline(1, color="0.5", lw=0.6)
+        ax.set_ylim(0, 6)
+        ax.set_xlabel(r"speed ratio $\gamma = \omega/\omega_{cr}$")
+        ax.set_ylabel(r"self-balancing efficiency $\lambda_0 = e_0/e_c$")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+        ax.set_title(d["title"], fontsize=9)
+        fig.tight_layout()
+        fig.savefig(out / "fig_liquid_efficiency.png", dpi=120)
+        plt.close(fig)
+        paths.append(out / "fig_liquid_efficiency.png")
+        opts = [k for k in ("optimal_height", "optimal_volume") if k in d and len(d[k]["grid"]["x"])]
+        if opts:
+            fig, axes = plt.subplots(1, len(opts), figsize=(5.2 * len(opts), 4.2), squeeze=False)
+            for ax, key in zip(axes[0], opts, strict=True):
+                o = d[key]
+                x = np.asarray(o["grid"]["x"], float)
+                unit, sc = ("mm", 1e3) if o["variable"] == "h" else ("mL", 1e6)
+                ax.semilogy(x * sc, np.asarray(o["grid"]["lambda0"], float), label=r"$\lambda_0$ on the grid")
+                ax.axvline(o["optimum"] * sc, color="k", ls="--", lw=0.8, label="IPOPT optimum")
+                ax.set_xlabel(f"{o['variable']} [{unit}]")
+                ax.set_ylabel(r"$\lambda_0$")
+                ax.grid(alpha=0.3)
+                ax.legend(fontsize=7)
+                ax.set_title(f"{key.replace('_', ' ')} ({o['variant']})", fontsize=9)
+            fig.tight_layout()
+            fig.savefig(out / "fig_liquid_optimum.png", dpi=120)
+            plt.close(fig)
+            paths.append(out / "fig_liquid_optimum.png")
+        return paths
+
+
+def _fmt(v) -> str:
+    return "-" if v is None or (isinstance(v, float | np.floating) and not np.isfinite(v)) else f"{v:.5g}"
+
+
+def _pct(a, b):
+    return 100.0 * (a - b) / b
+
+
+def _table_3_2(system: System, settings) -> dict:
+    gam = np.array(TABLE_3_2["gamma"])
+    doc = {v: _row(system, v, "program", gam)["lambda0"] for v in lb.VARIANTS}
+    sysd = _row(system, settings.variant, "system", gam)["lambda0"]
+    sc = _row(system, settings.variant, settings.deflection, gam)["lambda0_self_consistent"]
+    rows = []
+    for i, gi in enumerate(gam):
+        T, X = TABLE_3_2["theory"][i], TABLE_3_2["experiment"][i]
+        tk = float(doc[settings.variant][i])
+        rows.append({"gamma": gi, "published_theory": T, "published_experiment": X,
+                     "theory_minus_experiment_pct": 100.0 * (T - X) / T,
+                     "toolkit_documented_printed": float(doc["printed"][i]),
+                     "toolkit_documented_program": float(doc["program"][i]),
+                     "toolkit_documented_corrected": float(doc["corrected"][i]),
+                     "toolkit_documented": tk, "toolkit_system_eccentricity": float(sysd[i]),
+                     "toolkit_self_consistent": float(sc[i]),
+                     "documented_minus_theory": tk - T, "self_consistent_vs_experiment_pct": _pct(float(sc[i]), X),
+                     "status": "reproduced" if abs(tk - T) <= 0.005 else "differs", "reason": REASON_3_2})
+    return {"rows": rows, "variant": settings.variant,
+            "max_theory_experiment_pct": max(abs(r["theory_minus_experiment_pct"]) for r in rows),
+            "max_self_consistent_experiment_pct": max(abs(r["self_consistent_vs_experiment_pct"]) for r in rows),
+            "note": "toolkit_documented uses the App. В closure (f from D0/m_d); toolkit_self_consistent is the "
+                    "extension of spec §8.3, not the thesis's algorithm"}
+
+
+def _table_3_3(system: System, settings, masses, vol_settings) -> dict:
+    rows = []
+    vmin = (vol_settings.min_volume if vol_settings and vol_settings.min_volume else
+            1e-6 * math.pi * system.R**2 * system.h)
+    pts = vol_settings.grid_points if vol_settings else 20001
+    for i, md in enumerate(masses):
+        sysi = System(**{**system.__dict__, "unbalance_mass": md})
+        o = optimise(sysi, "volume", settings.variant, settings.deflection, vmin, math.inf, pts)
+        cr = crescent_volume(system.R, system.h, o["f"], sysi.D0, system.rho)
+        row = {"m_d": md, "D0": sysi.D0, "D0_gcm": sysi.D0 / lb.GCM, "V_opt": o["optimum"],
+               "V_opt_mL": o["optimum"] * 1e6, "k_D": o["k_D"], "capacity_gcm": sysi.D0 / o["k_D"] / lb.GCM,
+               "V_opt_crescent_mL": cr["V"] * 1e6}
+        if settings.thesis_comparison and i < 4 and abs(row["D0_gcm"] - TABLE_3_3["D0_gcm"][i]) < 1e-6:
+            row |= {"published_V_opt_mL": TABLE_3_3["V_opt_mL"][i], "published_capacity_gcm":
+                    TABLE_3_3["capacity_gcm"][i], "experiment_V_opt_mL": TABLE_3_3["V_exp_mL"][i],
+                    "documented_vs_experiment_pct": _pct(row["V_opt_mL"], TABLE_3_3["V_exp_mL"][i]),
+                    "crescent_vs_experiment_pct": _pct(row["V_opt_crescent_mL"], TABLE_3_3["V_exp_mL"][i]),
+                    "published_vs_experiment_pct": _pct(TABLE_3_3["V_opt_mL"][i], TABLE_3_3["V_exp_mL"][i]),
+                    "status": "differs", "reason": REASON_3_3}
+        rows.append(row)
+    return {"rows": rows, "speed": system.speed, "height": system.h,
+            "note": "V_opt: IPOPT on the documented model; V_opt_crescent: exact liquid crescent at the wall "
+                    "with the same deflection f, k_D = 1 (toolkit extension, spec §8.2)"}
+
+
+def run(system: System, settings, title: str = "") -> LiquidBalancerResult:
+    """The whole study for one system (see the module docstring)."""
+    t0 = time.perf_counter()
+    var, dfl = settings.variant, settings.deflection
+    gamma_op = system.speed / system.omega_cr
+    oprow = _row(system, var, dfl, [gamma_op])
+    op = {k: (v[0] if not isinstance(v, str) else v) for k, v in oprow.items()}
+    op = {k: (float(v) if isinstance(v, np.floating) else v) for k, v in op.items()}
+    delta_op = math.radians(op["delta_deg"])
+    ext = lb.extremum(math.radians(op["alpha0_deg"])) if np.isfinite(op["alpha0_deg"]) else {
+        "k_star": math.nan, "lambda0_max": math.nan}
+    op |= {"extremum_k_star": float(ext["k_star"]), "extremum_lambda0_max": float(ext["lambda0_max"]),
+           "zeta_over_ec": float(lb.evaluate(var, **system.inputs(dfl))["zeta_over_ec"])}
+    if system.inclination is not None:
+        op["paraboloid"] = lb.paraboloid(system.R, system.h, system.V, system.speed, system.inclination)
+
+    r = settings.speed_ratio
+    gs = np.linspace(r.start, r.stop, r.points)
+    sweep = {"gamma": gs}
+    for v in lb.VARIANTS:
+        sweep[f"lambda0_{v}"] = _row(system, v, dfl, gs)["lambda0"]
+    full = _row(system, var, dfl, gs)
+    for k in ("delta_deg", "f", "k_D", "alpha0_deg", "lambda0_self_consistent", "lambda0_self_consistent_minus"):
+        sweep[k] = full[k]
+    sweep["reason"] = full["reason"]
+
+    r2 = system.R**2 - system.V / (math.pi * system.h)
+    data = {
+        "title": title,
+        "settings": {"variant": var, "deflection": dfl, "thesis_comparison": settings.thesis_comparison},
+        "system": {"D0": system.D0, "D0_gcm": system.D0 / lb.GCM, "m_l": system.m_l, "M_sys": system.M_sys,
+                   "n": system.n, "two_n": 2 * system.n, "zeta_damping": system.n / system.omega_cr,
+                   "e_f": system.e_f(dfl), "r": math.sqrt(r2), "R_minus_r": system.R - math.sqrt(r2),
+                   "chamber_volume": math.pi * system.R**2 * system.h,
+                   "rho_pi_h_R2": system.rho * math.pi * system.h * system.R**2,
+                   "rho_pi_h_r2": system.rho * math.pi * system.h * r2},
+        "operating_point": op,
+        "table": _row(system, var, dfl, settings.table_ratios),
+        "sweep": sweep,
+        "extremum": {"alpha0_deg": [120.0, 150.0, 170.0, 179.0],
+                     **{k: v.tolist() for k, v in lb.extremum(np.radians([120.0, 150.0, 170.0, 179.0])).items()}},
+        "viscous_zone": _viscous(system, settings, op["f"], delta_op, op["k_D"]),
+        "pashkov": pashkov(system, settings.conversion_coefficient),
+    }
+    if settings.thesis_comparison:
+        data["table_3_2"] = _table_3_2(system, settings)
+    if settings.height is not None:
+        hs = settings.height
+        data["optimal_height"] = optimise(system, "height", var, dfl, hs.min_height or 0.0, hs.max_height,
+                                          hs.grid_points)
+    vs = settings.volume
+    vmin = vs.min_volume if vs and vs.min_volume else 1e-6 * math.pi * system.R**2 * system.h
+    if vs is not None:
+        data["optimal_volume"] = optimise(system, "volume", var, dfl, vmin, math.inf, vs.grid_points)
+    if settings.liquids:
+        cands = []
+        for c in settings.liquids:
+            o = optimise(System(**{**system.__dict__, "rho": c.density, "mu": c.viscosity}), "volume", var, dfl,
+                         vmin, math.inf, vs.grid_points if vs else 2001)
+            row = {"name": c.name, "density": c.density, "viscosity": c.viscosity, "V_opt": o["optimum"],
+                   "k_D": o["k_D"], "lambda0_max": o["lambda0_max"], "sin_beta_star": math.nan}
+            if np.isfinite(o["optimum"]):
+                arc = lb.program_arc(system.R, system.h, o["optimum"], o["f"])
+                xi = math.radians(settings.arc_angle_deg) if settings.arc_angle_deg else float(arc["xi"])
+                row["xi_deg"] = math.degrees(xi)
+                row["xi_clipped"] = bool(arc["clipped"]) and not settings.arc_angle_deg
+                row["sin_beta_star"] = float(lb.sin_beta_star_nu(c.viscosity / c.density, system.R, xi,
+                                                                 o["optimum"], system.speed))
+            cands.append(row)
+        sb = [c["sin_beta_star"] if np.isfinite(c["sin_beta_star"]) else math.inf for c in cands]
+        best = int(np.argmin(sb))
+        data["liquid_choice"] = {"candidates": cands,
+                                 "chosen": cands[best]["name"] if np.isfinite(sb[best]) else None,
+                                 "rule": "smallest sin beta* at V_opt (App. Г): the narrowest viscous zone"}
+    if settings.unbalance_masses:
+        data["table_3_3"] = _table_3_3(system, settings, settings.unbalance_masses, vs)
+    data["run_time_s"] = time.perf_counter() - t0
+    return LiquidBalancerResult(data)
+
+
+def run_scenario(scn, settings, out: Path):
+    """Pipeline runner ``liquid_balancer``: (results.json block, files written, summary)."""
+    res = run(System.from_scenario(scn.liquid_balancer), settings, scn.title)
+    files = res.write_tables(out) + res.plot(out)
+    return res.to_dict(), files, res.summary()
