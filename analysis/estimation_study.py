@@ -1,0 +1,333 @@
+"""The estimation study of a scene: fits, the source's closed-form estimators, the adequacy test
+and the back-calculation of a loss coefficient (Pavlenko 2014, Secs. 4.3.3-4.4; spec
+reliability-experiments-estimation.md §4.5, §5).
+
+``run(scenario, settings, out)`` is the pipeline runner: it returns the ``estimation`` block of
+results.json, the files written and a printed summary.  :class:`EstimationResult` is plain data
+with to_dict / summary / write_tables / plot.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from autobal.analysis import estimation as est
+from autobal.errors import ScenarioError
+from autobal.measurements import read_csv
+from autobal.results import write_csv
+
+# The source's Table 4.4 (printed as a second "Table 4.3", L2792-L2802), from points it does not publish.
+SOURCE_TABLE_4_4 = {
+    "static_1p": {"alpha": 1.68, "tau_max": 2.75},
+    "static_2p": {"alpha": 1.72, "tau_max": 2.75},
+    "flow_1p": {"alpha": 1.67, "tau_max": 2.73},
+    "flow_2p": {"alpha": 1.70, "tau_max": 2.73},
+    "note": "estimated by the source from static/flow points it shows only as figures (Figs 4.5, 4.6, 4.11); "
+            "not reproducible from any tabulated data (spec §5.8)",
+}
+TRANSFORMED = {
+    "static_1p_4_23": "minimises sum [1/tau_i - (1 + alpha^2 u_i^3)/tau_max]^2 (4.20), tau_max fixed",
+    "static_2p_4_26": "minimises sum [tau_max - tau_i (1 + alpha^2 u_i^3)]^2 (normal equations (4.25))",
+    "flow_1p_4_35": "minimises sum [(q_i^2 - 1 + tau_i/tau_max) alpha^2 - (1 - tau_i/tau_max)]^2, tau_max fixed",
+    "flow_2p_4_36": "minimises sum {[(q_i^2 - 1) tau_max + tau_i] alpha^2 - tau_max + tau_i}^2 numerically",
+}
+
+
+@dataclass
+class EstimationResult:
+    data: dict  # the results.json block
+
+    def to_dict(self) -> dict:
+        return self.data
+
+    def summary(self) -> str:
+        d = self.data
+        lines = [f"estimation on {d['data']['file']} ({d['data']['points']} points)"]
+        for name, f in d["fits"].items():
+            lines.append(f"  fit {name} ({f['model']}, residual in {f['residual']}, {f['hessian']} Hessian): "
+                         f"IPOPT {f['solver']['status']} in {f['solver']['iterations']} iterations, "
+                         f"residual std {f['residual_std']:.4g}")
+            for k, p in f["parameters"].items():
+                if p["free"]:
+                    lines.append(f"    {k:16s} {p['estimate']:.6g} +- {p['standard_error']:.3g}  "
+                                 f"{100 * f['confidence']:.0f}% CI [{p['ci_low']:.5g}, {p['ci_high']:.5g}]")
+                else:
+                    lines.append(f"    {k:16s} {p['estimate']:.6g} (fixed)")
+            cc = f.get("cross_check_scipy")
+            if cc:
+                lines.append(f"    scipy least_squares: max |difference| {cc['max_abs_difference']:.1e}")
+            ad = f.get("adequacy")
+            if ad and ad.get("F") is not None:
+                lines.append(f"    adequacy (4.14): F = {ad['F']:.3g}, F_crit = {ad['F_crit']:.3g} -> "
+                             f"{'adequate' if ad['adequate'] else 'not adequate'}")
+        cf = d.get("closed_forms") or {}
+        for k, v in cf.items():
+            if isinstance(v, dict) and "alpha" in v:
+                lines.append(f"  closed form {k:16s} alpha = {_fmt(v['alpha'])}, tau_max = {_fmt(v['tau_max'])}")
+        ref = d.get("adequacy_reference")
+        if ref and ref.get("F") is not None:
+            lines.append(f"  adequacy of the reference curve: sigma1^2 = {ref['sigma1_sq']:.3g}, sigma2^2 = "
+                         f"{ref['sigma2_sq']:.3g}, F = {ref['F']:.3g}, F_crit = {ref['F_crit']:.3g} -> "
+                         f"{'adequate' if ref['adequate'] else 'not adequate'} (source's rule: "
+                         f"{'adequate' if ref['source_rule_adequate'] else 'not adequate'})")
+        lc = d.get("loss_coefficient")
+        if lc:
+            lines.append(f"  (4.38): {lc['unknown']} = {lc['value']:.4g} [{lc['ci_low']:.4g}, {lc['ci_high']:.4g}] "
+                         f"from alpha = {lc['alpha']:.5g} of fit {lc['fit']} (nominal alpha {lc['alpha_nominal']:.4g})")
+        return "\n".join(lines)
+
+    def write_tables(self, out: Path) -> list[Path]:
+        files = []
+        rows = {"fit": [], "parameter": [], "free": [], "estimate": [], "standard_error": [], "ci_low": [],
+                "ci_high": []}
+        for name, f in self.data["fits"].items():
+            for k, p in f["parameters"].items():
+                for col in rows:
+                    rows[col].append({"fit": name, "parameter": k}.get(col, p.get(col)))
+            pts = {"load": f["data"]["load"]}
+            for k in f["data"]:
+                if k != "load":
+                    pts |= {f"{k}_{c}": f["data"][k][c] for c in ("measured", "fitted", "residual")}
+            write_csv(out / f"estimation_{name}_points.csv", pts)
+            cur = {"load": f["curve"]["load"]}
+            for k in ("u", "q"):
+                cur |= {f"{k}_{c}": f["curve"][k][c] for c in ("value", "band_low", "band_high")}
+            write_csv(out / f"estimation_{name}_curve.csv", cur)
+            files += [out / f"estimation_{name}_points.csv", out / f"estimation_{name}_curve.csv"]
+        write_csv(out / "estimation_parameters.csv", rows)
+        return [out / "estimation_parameters.csv", *files]
+
+    def plot(self, out: Path) -> list[Path]:
+        """One figure per fit: data, fitted curve, confidence band (and the closed forms' curves for
+        the traditional disc), and the residuals below."""
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        files = []
+        cf = self.data.get("closed_forms") or {}
+        for name, f in self.data["fits"].items():
+            label = {"u": r"face gap $u = z/z_B$",
+                     "q": r"flow $q = Q/Q_B$ (4.29)" if f["model"] == "traditional_disc" else
+                     rf"flow $q_{{{f['extra'].get('flow_throttle', 'T')}}} = Q/(g_1 p_B)$"}
+            parts = [k for k in ("u", "q") if k in f["data"]]
+            fig, axes = plt.subplots(2, len(parts), figsize=(6.4 * len(parts), 6.4), squeeze=False,
+                                     gridspec_kw={"height_ratios": [3, 1]}, sharex="col")
+            x = np.asarray(f["data"]["load"], float)
+            grid = np.asarray(f["curve"]["load"], float)
+            xl = r"load $\tau$" if f.get("load_kind", "tau") == "tau" else r"discharge pressure $\psi_1$"
+            for j, k in enumerate(parts):
+                ax, axr = axes[0, j], axes[1, j]
+                c = f["curve"][k]
+                ax.fill_between(grid, c["band_low"], c["band_high"], color="C0", alpha=0.2,
+                                label=f"{100 * f['confidence']:.0f}% confidence band")
+                ax.plot(grid, c["value"], color="C0", label=f"fit: {_params_text(f)}")
+                ax.plot(x, f["data"][k]["measured"], "ko", ms=4, label="measured")
+                if f["model"] == "traditional_disc":
+                    model = est.gap_from_load if k == "u" else est.flow_from_load
+                    keys = ("static_1p_4_23", "static_2p_4_26") if k == "u" else ("flow_1p_4_35", "flow_2p_4_36")
+                    for key, ls in zip(keys, ("--", ":"), strict=True):
+                        v = cf.get(key)
+                        if v and v.get("alpha") is not None and v.get("tau_max") is not None:
+                            with np.errstate(invalid="ignore"):
+                                ax.plot(grid, model(grid, v["alpha"], v["tau_max"]), ls=ls, color="0.4",
+                                        label=f"({key.split('_', 2)[2].replace('_', '.')}): alpha {v['alpha']:.4g}, "
+                                              f"tau_max {v['tau_max']:.4g}")
+                ax.set_ylabel(label[k])
+                ax.grid(alpha=0.3)
+                ax.legend(fontsize=7)
+                axr.axhline(0, color="k", lw=0.6)
+                axr.plot(x, f["data"][k]["residual"], "ko", ms=4)
+                axr.set_ylabel("fit - measured")
+                axr.set_xlabel(xl)
+                axr.grid(alpha=0.3)
+            fig.suptitle(f"{self.data['title']}: fit {name} ({f['model']}, residual in {f['residual']})", fontsize=9)
+            fig.tight_layout()
+            path = out / f"fig_estimation_{name}.png"
+            fig.savefig(path, dpi=120)
+            plt.close(fig)
+            files.append(path)
+        return files
+
+
+def _fmt(v) -> str:
+    return "-" if v is None or (isinstance(v, float) and not math.isfinite(v)) else f"{v:.5g}"
+
+
+def _params_text(f: dict) -> str:
+    return ", ".join(f"{k} {p['estimate']:.4g}" for k, p in f["parameters"].items() if p["free"])
+
+
+def _bases(settings) -> dict:
+    b = settings.bases
+    bases = {"pressure": b.pressure, "gap": b.gap, "flow": b.flow,
+             "force": b.pressure * b.area if b.pressure and b.area else None}
+    return bases
+
+
+def _device_bases(bases: dict, dev) -> dict:
+    sc = dev.scales
+    own = {"pressure": sc["p_B"], "gap": sc["z_B"], "flow": sc["Q_scale"], "force": sc["p_B"] * sc["s_B"]}
+    return {k: bases[k] if bases.get(k) else own[k] for k in own}
+
+
+def _fit_block(f: est.FitResult, curve: dict) -> dict:
+    st = f.stats
+    params = {}
+    for k, v in f.estimate.items():
+        free = k in f.free
+        i = f.free.index(k) if free else None
+        params[k] = {"estimate": v, "free": free, "initial": f.initial[k],
+                     "lower": f.bounds[k][0] if free else None, "upper": f.bounds[k][1] if free else None,
+                     "standard_error": st["standard_error"][i] if free else None,
+                     "ci_low": st["ci_low"][i] if free else None, "ci_high": st["ci_high"][i] if free else None}
+    data = {"load": f.load}
+    for k in f.measured:
+        data[k] = {"measured": f.measured[k], "fitted": f.fitted[k], "residual": f.fitted[k] - f.measured[k]}
+    return {
+        "model": f.model, "residual": f.residual, "hessian": f.hessian, "weights": f.weights,
+        "load_kind": f.extra.get("load_kind", "tau"),
+        "parameters": params, "free": f.free, "correlation": st["correlation"], "covariance": st["covariance"],
+        "residual_std": st["residual_std"], "ssr": st["ssr"], "dof": st["dof"], "points": st["points"],
+        "confidence": st["confidence"], "t_quantile": st["t_quantile"], "jtj_condition": st["jtj_condition"],
+        "solver": f.solver, "data": data,
+        "curve": {"load": curve["load"], **{k: dict(zip(("value", "band_low", "band_high"), curve[k], strict=True))
+                                            for k in ("u", "q")}},
+        "extra": {k: v for k, v in f.extra.items() if k != "load_kind"},
+    }
+
+
+def _closed_forms(tau, u, q, group, tau_max: float) -> dict:
+    out = {}
+    if u is not None:
+        out["static_1p_4_23"] = {"alpha": est.static_1p(tau, u, tau_max), "tau_max": tau_max, "tau_max_fixed": True}
+        t2, a2 = est.static_2p(tau, u)
+        out["static_2p_4_26"] = {"alpha": a2, "tau_max": t2, "tau_max_fixed": False}
+        if group is not None:
+            labels, idx = np.unique(group, return_inverse=True)
+            mt, mu = np.bincount(idx, tau) / np.bincount(idx), np.bincount(idx, u) / np.bincount(idx)
+            t2m, a2m = est.static_2p(mt, mu)
+            out["on_group_means"] = {"static_1p_4_23": {"alpha": est.static_1p(mt, mu, tau_max), "tau_max": tau_max},
+                                     "static_2p_4_26": {"alpha": a2m, "tau_max": t2m}}
+    if q is not None:
+        out["flow_1p_4_35"] = {"alpha": est.flow_1p(tau, q, tau_max), "tau_max": tau_max, "tau_max_fixed": True}
+        t4, a4 = est.flow_2p(tau, q)
+        s = est.flow_sums(tau, q)
+        out["flow_2p_4_36"] = {"alpha": a4, "tau_max": t4, "tau_max_fixed": False, "sums_4_37": s,
+                               "stationarity_4_36": est.stationarity_4_36(t4, a4**2, s)}
+    out["objectives"] = {k: v for k, v in TRANSFORMED.items() if k in out}
+    out["note"] = ("the source's estimators minimise transformed residuals (linear in alpha^2 or in "
+                   "(tau_max, alpha^2)), not the residual in u or q; they differ from the least-squares fits "
+                   "on noisy data and agree on noiseless data")
+    out["source_printed"] = SOURCE_TABLE_4_4
+    return out
+
+
+def run(scn, settings, out: Path):
+    """Pipeline runner: every fit of ``settings``, closed forms, adequacy, (4.38); tables and figures."""
+    t0 = time.perf_counter()
+    data = read_csv(settings.data)
+    bases = _bases(settings)
+    role_load = data.has("load")
+    group = data.columns.get("group")
+    fits, solvers = {}, {}
+    for fit in settings.fits:
+        fb = bases
+        if fit.model == "device":
+            if scn.device is None:
+                raise ScenarioError(f"analyses.estimation.fits.{fit.name}: the device model needs a device section")
+            from autobal.models.device import design
+
+            dev = design(scn.device)
+            fb = _device_bases(bases, dev)
+        load = data.dimensionless("load", fb)
+        u = data.dimensionless("gap", fb) if fit.residual in ("u", "both") else None
+        q = data.dimensionless("flow", fb) if fit.residual in ("q", "both") else None
+        values = {k: p.value for k, p in fit.parameters.items()}
+        weights = {"u": fit.weights.u, "q": fit.weights.q}
+        grid = np.linspace(load.min(), load.max(), settings.band_points)
+        if fit.model == "traditional_disc":
+            free = tuple(fit.free())
+            bounds = {k: (fit.parameters[k].lower, fit.parameters[k].upper) for k in free}
+            res = est.DiscFitter(len(load), fit.residual, free, fit.hessian, fit.max_iterations).fit(
+                load, u, q, values=values, bounds=bounds, weights=weights, name=fit.name)
+            curve = est.disc_curve(grid, res.estimate, res.free, res.stats["covariance"], res.stats["t_quantile"])
+            block = _fit_block(res, curve)
+            if settings.cross_check:
+                sp = est.scipy_disc_fit(load, u, q, fit.residual, values, free, bounds, weights)
+                block["cross_check_scipy"] = sp | {"max_abs_difference": max(
+                    abs(sp["estimate"][k] - res.estimate[k]) for k in free)}
+        else:
+            params = {k: (p.value, p.free, p.lower, p.upper) for k, p in fit.parameters.items()}
+            kind = "tau" if role_load in ("tau", "axial_force") else "psi1"
+            fitter = est.DeviceFitter(scn.device, dev, params, fit.residual, fit.flow_throttle, fit.hessian,
+                                      fit.max_iterations)
+            res = fitter.fit(load, kind, u, q, weights=weights, name=fit.name)
+            curve = fitter.curve(res, grid)
+            block = _fit_block(res, curve)
+            block["bases"] = fb
+        if settings.adequacy is not None and group is not None:
+            var = "u" if "u" in res.measured else "q"
+            fitted, meas = res.fitted[var], res.measured[var]
+
+            def theory(loads, fitted=fitted, load=load):
+                return np.array([fitted[np.isclose(load, x, rtol=1e-12)].mean() for x in loads])
+
+            block["adequacy"] = est.fisher_adequacy(load, meas, group, theory, len(res.free),
+                                                    settings.adequacy.significance) | {"variable": var}
+        fits[fit.name] = block
+        solvers[fit.name] = res
+
+    first_disc = next((f for f in settings.fits if f.model == "traditional_disc"), None)
+    closed = None
+    if settings.closed_forms and role_load in ("tau", "axial_force"):
+        tau_max = settings.tau_max or (first_disc.parameters["tau_max"].value if first_disc else None)
+        if tau_max is not None:
+            tau = data.dimensionless("load", bases)
+            u = data.dimensionless("gap", bases) if data.has("gap") else None
+            q = data.dimensionless("flow", bases) if data.has("flow") else None
+            closed = _closed_forms(tau, u, q, group, tau_max)
+
+    reference = None
+    ad = settings.adequacy
+    if ad is not None and ad.reference is not None and group is not None and data.has("gap"):
+        ref = {"alpha": 1.75, "tau_max": 2.75} | ad.reference
+        tau, u = data.dimensionless("load", bases), data.dimensionless("gap", bases)
+        reference = est.fisher_adequacy(tau, u, group, lambda x: est.gap_from_load(x, ref["alpha"], ref["tau_max"]),
+                                        ad.reference_parameters, ad.significance) | {"reference": ref}
+
+    loss = None
+    lc = settings.loss_coefficient
+    if lc is not None:
+        f = solvers[lc.fit]
+        alpha = f.estimate["alpha"]
+        lo, hi = f.interval("alpha")
+        ends = sorted(est.loss_from_alpha(lc, a) for a in (lo, hi))
+        value = est.loss_from_alpha(lc, alpha)
+        loss = {"fit": lc.fit, "alpha": alpha, "alpha_ci": [lo, hi], "unknown": lc.unknown, "value": value,
+                "ci_low": ends[0], "ci_high": ends[1], "physical": bool(value >= 0),
+                "nominal": getattr(lc, lc.unknown), "alpha_nominal": est.alpha_from_losses(lc),
+                "friction_factor": lc.friction_factor,
+                "check_alpha_from_solved": est.alpha_from_losses(lc, **{lc.unknown: value})}
+
+    diffs = [b["cross_check_scipy"]["max_abs_difference"] for b in fits.values() if "cross_check_scipy" in b]
+    block = {
+        "title": scn.title,
+        "data": {"file": data.path.name, "points": data.points, "columns": data.units,
+                 "groups": int(len(np.unique(group))) if group is not None else None, "provenance": data.comments},
+        "bases": bases, "fits": fits, "closed_forms": closed, "adequacy_reference": reference,
+        "loss_coefficient": loss,
+        "accuracy": {"estimate": max(diffs) if diffs else None,
+                     "how": "largest difference of a fitted parameter between IPOPT and scipy least_squares on "
+                            "the same residual" if diffs else "no cross-check for these fits"},
+        "run_time_s": time.perf_counter() - t0,
+    }
+    res = EstimationResult(block)
+    files = res.write_tables(out) + res.plot(out)
+    return block, files, res.summary()
