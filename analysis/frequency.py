@@ -1,0 +1,151 @@
+"""Amplitude- and phase-frequency characteristics of the face gap (Pavlenko 2014, (2.100)-(2.110)).
+
+For a harmonic discharge pressure dpsi1 = dpsi1a sin(omega t) (with dtau = dpsi1, the appendix
+convention, or dtau = b dpsi1) the gap amplitude in micrometres is
+A_u(omega) = |W_u(i omega)| dpsi1a z_B 1e6 (App. A L3412, App. B L3734).  The Bode data come
+from python-control (``control.frequency_response``) on a grid refined near every lightly damped
+pole; peaks are local maxima refined with a bounded scalar search.  ``run`` is the runner of
+``analyses.frequency``.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import control
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from autobal.analysis.linearize import LinearModel, Setup
+from autobal.results import write_csv
+
+
+def grid(lin: LinearModel, start: float, stop: float, points: int) -> np.ndarray:
+    """Log grid from start to stop plus 81 points within +-8 |Re lambda| of each lightly damped
+    pole (damping ratio below 0.3) in range: the peaks are resolved whatever the base grid."""
+    om = [np.geomspace(start, stop, points)]
+    for lam in lin.poles():
+        wn = abs(lam)
+        if lam.imag > 0 and wn > 0 and abs(lam.real) / wn < 0.3 and start <= lam.imag <= stop:
+            om.append(lam.imag + abs(lam.real) * np.linspace(-8, 8, 81))
+    om = np.unique(np.concatenate(om))
+    return om[(om >= start) & (om <= stop)]
+
+
+def peaks(lin: LinearModel, omega: np.ndarray, amp: np.ndarray, convention: str, scale: float) -> list[dict]:
+    """Local maxima of the amplitude, each refined by a bounded search between its neighbours."""
+    out = []
+    for i in np.flatnonzero((amp[1:-1] > amp[:-2]) & (amp[1:-1] >= amp[2:])) + 1:
+        res = minimize_scalar(lambda w: -abs(lin.response([w], convention)[0]) * scale,
+                              bounds=(omega[i - 1], omega[i + 1]), method="bounded",
+                              options={"xatol": 1e-6 * omega[i]})
+        out.append({"omega": float(res.x), "amplitude_um": float(-res.fun)})
+    return out
+
+
+def characteristic(lin: LinearModel, omega_range: tuple, convention: str, amplitude: float,
+                   omega0: float) -> dict:
+    """AFC/PFC of du for one linear model: grid, amplitude (um), phase (deg), peaks, A(omega0)."""
+    scale = amplitude * lin.z_B * 1e6
+    om = grid(lin, *omega_range)
+    n = len(lin.states)
+    siso = control.ss(lin.A, lin.forcing(convention)[:, None], np.eye(n)[[lin.u_out]], 0)
+    fr = control.frequency_response(siso, om)
+    mag, phase = np.asarray(fr.magnitude).ravel() * scale, np.degrees(np.asarray(fr.phase).ravel())
+    w0 = lin.response([omega0], convention)[0] if np.isfinite(omega0) else np.nan
+    return {
+        "omega": om, "amplitude_um": mag, "phase_deg": phase,
+        "peaks": peaks(lin, om, mag, convention, scale),
+        "at_operating_speed": {"omega": omega0, "amplitude_um": abs(w0) * scale,
+                               "phase_deg": float(np.degrees(np.angle(w0)))},
+        "static_amplitude_um": float(abs(lin.response([0.0], convention)[0]) * scale),
+        "forcing": convention,
+    }
+
+
+@dataclass
+class FrequencyResult:
+    data: dict
+
+    def to_dict(self) -> dict:
+        d = {k: v for k, v in self.data.items() if k != "curves"}
+        d["models"] = {m: {k: v for k, v in c.items() if k not in ("omega", "amplitude_um", "phase_deg")}
+                       for m, c in self.data["curves"].items()}
+        return d
+
+    def summary(self) -> str:
+        lines = [f"frequency response (forcing {self.data['forcing']}, dpsi1a = {self.data['forcing_amplitude']:g}):"]
+        for m, c in self.data["curves"].items():
+            pk = ", ".join(f"{p['omega']:.1f} rad/s {p['amplitude_um']:.2f} um" for p in c["peaks"]) or "none"
+            a0 = c["at_operating_speed"]
+            lines.append(f"  {m:16s} peaks: {pk}; at {a0['omega']:.1f} rad/s: {a0['amplitude_um']:.2f} um")
+        return "\n".join(lines)
+
+    def write_tables(self, out: Path) -> list[Path]:
+        files = []
+        for m, c in self.data["curves"].items():
+            path = out / f"afc_{m}.csv"
+            write_csv(path, {"omega_rad_s": c["omega"], "amplitude_um": c["amplitude_um"], "phase_deg": c["phase_deg"]})
+            files.append(path)
+        return files
+
+    def plot(self, out: Path) -> list[Path]:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 6.4), sharex=True)
+        for m, c in self.data["curves"].items():
+            line, = a1.semilogy(c["omega"], c["amplitude_um"], label=m)
+            a2.plot(c["omega"], c["phase_deg"], color=line.get_color())
+            for p in c["peaks"]:
+                a1.plot(p["omega"], p["amplitude_um"], "o", ms=3, color=line.get_color())
+        w0 = self.data["at_operating_speed"]["omega"]
+        for ax in (a1, a2):
+            ax.axvline(w0, color="k", ls=":", lw=0.8)
+            ax.grid(alpha=0.3)
+        a1.set_ylabel(r"gap amplitude $A_u$, $\mu$m")
+        a1.legend(fontsize=7)
+        a2.set_ylabel("phase, deg")
+        a2.set_xlabel(r"$\omega$, rad/s")
+        fig.suptitle(f"{self.data['title']}\nAFC/PFC of the face gap (Fig. 2.7/2.11); dotted: operating speed",
+                     fontsize=9)
+        fig.tight_layout()
+        path = out / "fig_afc.png"
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+        return [path]
+
+
+def study(setup: Setup, models: list[str], convention: str, omega_range: tuple, title: str = "") -> FrequencyResult:
+    """AFC of each named model; the first one gives the top-level peaks and A(omega0)."""
+    d = setup.data
+    curves = {m: characteristic(setup.linear(m), omega_range, convention, d.forcing_amplitude, d.omega0)
+              for m in models}
+    first = curves[models[0]]
+    return FrequencyResult({
+        "title": title, "model": models[0], "forcing": convention, "forcing_amplitude": d.forcing_amplitude,
+        "z_B": setup.dev.scales["z_B"], "peaks": first["peaks"], "at_operating_speed": first["at_operating_speed"],
+        "curves": curves,
+    })
+
+
+def run(scn, settings, out: Path):
+    """Runner of ``analyses.frequency`` (autobal/pipeline.py)."""
+    t0 = time.perf_counter()
+    setup = Setup(_device(scn), settings.operating_ratio)
+    o = settings.omega
+    res = study(setup, list(settings.models), settings.forcing, (o.start, o.stop, o.points), scn.title)
+    files = res.write_tables(out) + res.plot(out)
+    return res.to_dict() | {"run_time_s": time.perf_counter() - t0}, files, res.summary()
+
+
+def _device(scn):
+    from autobal.errors import ScenarioError
+
+    if scn.device is None or scn.device.dynamics is None:
+        raise ScenarioError(f"{scn.name}: the dynamic analyses need device.dynamics (masses, springs, volumes)")
+    return scn.device

@@ -1,0 +1,245 @@
+"""Time responses of the nonlinear device model (Pavlenko 2014, (2.111); spec A8) with CVODES/IDAS.
+
+The model (models/dynamics.py) starts from its equilibrium, the IPOPT static solution, and is
+driven by a step in axial force (dtau), a step in discharge pressure (dpsi1) or a harmonic
+discharge pressure dpsi1a sin(omega t); with a pressure input the axial force follows it,
+dtau = b dpsi1, unless the case says otherwise.  CasADi's CVODES (BDF, Newton with the exact
+symbolic Jacobian) or IDAS integrates it on an output grid in one call.
+
+Reported, not hidden: the face gap reaching zero (u <= 0: the disc touches the pad; the model
+has no contact force, so the response is cut there and the time is reported), the valve closing
+(xi <= 0) or passing its travel limit, a reversal of the inner-seal flow (process fluid entering
+the barrier chamber), and an integrator failure (the time reached and the solver's message).
+``run`` is the runner of ``analyses.transient``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from autobal.models.dynamics import DynamicModel
+from autobal.results import write_csv
+
+KINDS = ("force_step", "pressure_step", "pressure_harmonic")
+
+
+U_RUNAWAY = 20.0  # gap over base gap beyond which a response is reported as a runaway and stopped
+
+
+class Simulator:
+    """A CasADi integrator of one model on one output grid, built once and called many times.
+
+    Parameters of each call: the dynamic data (PARAM_NAMES order) and the input: step in psi1,
+    step in tau, harmonic amplitude and frequency of psi1, the thrust coupling factor and a time
+    offset.  The grid is integrated in chunks of ``chunk`` outputs so that a response stops where
+    the gap closes or runs away (u > U_RUNAWAY) instead of integrating an unphysical state.
+    """
+
+    def __init__(self, model: DynamicModel, t_end: float, points: int, integrator: str = "cvodes",
+                 rtol: float = 1e-9, atol: float = 1e-11, chunk: int = 100, **opts):
+        self.model = model
+        self.t = np.linspace(0.0, t_end, points)
+        x = ca.SX.sym("x", len(model.states))
+        t = ca.SX.sym("t")
+        p = ca.SX.sym("p", len(model.p0))
+        s = ca.SX.sym("s", 6)  # dpsi1 step, dtau step, harmonic amplitude, omega, coupling, time offset
+        dpsi1 = s[0] + s[2] * ca.sin(s[3] * (t + s[5]))
+        w = ca.vertcat(model.w0[0] + dpsi1, model.w0[1] + s[1] + s[4] * dpsi1)
+        self._inputs = ca.Function("inputs", [t, s], [w])
+        dae = {"x": x, "t": t, "p": ca.vertcat(p, s), "ode": model.ode(x, w, p)}
+        o = {"reltol": rtol, "abstol": atol, "max_num_steps": 20000, "disable_internal_warnings": True} | opts
+        self.name = integrator
+        self.chunk = max(1, min(chunk, points - 1))
+        dt = self.t[1] - self.t[0]
+        self._f = ca.integrator("sim", integrator, dae, 0.0, list(dt * np.arange(1, self.chunk + 1)), o)
+
+    def input_vector(self, kind: str, amplitude: float, omega: float = math.nan, couple: bool = True) -> list:
+        b = self.model.design.groups.b if couple else 0.0
+        if kind == "force_step":
+            return [0.0, amplitude, 0.0, 0.0, 0.0, 0.0]
+        if kind == "pressure_step":
+            return [amplitude, 0.0, 0.0, 0.0, b, 0.0]
+        if kind == "pressure_harmonic":
+            return [0.0, 0.0, amplitude, omega, b, 0.0]
+        raise ValueError(f"unknown input {kind!r}; expected one of {KINDS}")
+
+    def run(self, s: list, x_start: np.ndarray | None = None, p: np.ndarray | None = None) -> dict:
+        """Integrate from ``x_start`` (default: the equilibrium); returns t, X (rows: time), the
+        reason it stopped early (None, "gap_closed", "gap_runaway") and any integrator failure."""
+        m = self.model
+        x = m.x0 if x_start is None else np.asarray(x_start, float)
+        P = np.concatenate([m.p0 if p is None else p, s])
+        rows, k, stop, failure, steps = [x], 0, None, None, 0
+        iu = m.index("u")
+        n = len(self.t) - 1
+        while k < n and stop is None:
+            P[-1] = self.t[k]
+            try:
+                X = np.array(self._f(x0=rows[-1], p=P)["xf"]).T
+            except RuntimeError as exc:
+                failure = {"t": float(self.t[k]), "message": str(exc).splitlines()[-1][:200]}
+                break
+            steps += int(self._f.stats().get("nsteps", 0))
+            X = X[: n - k]
+            rows.extend(X)
+            k += len(X)
+            if (X[:, iu] <= 0).any():
+                stop = "gap_closed"
+            elif (X[:, iu] > U_RUNAWAY).any() or not np.isfinite(X).all():
+                stop = "gap_runaway"
+        return {"t": self.t[: len(rows)], "X": np.array(rows), "stopped": stop, "failure": failure,
+                "steps": steps}
+
+    def inputs(self, s: list, t: np.ndarray) -> np.ndarray:
+        """psi1(t), tau(t) of the input parameters ``s`` (rows: time)."""
+        return np.array(self._inputs.map(len(t))(t, s)).T
+
+
+def events(model: DynamicModel, t: np.ndarray, X: np.ndarray, psi1: np.ndarray) -> list[dict]:
+    """Gap closure, valve closure/limit and inner-seal flow reversal along a response."""
+    out = []
+    i_u = model.index("u")
+    u = X[:, i_u]
+    k = np.flatnonzero(u <= 0)
+    if k.size:
+        j = k[0]
+        tc = t[j] if j == 0 else t[j - 1] + (t[j] - t[j - 1]) * u[j - 1] / (u[j - 1] - u[j])
+        out.append({"event": "gap_closed", "t": float(tc),
+                    "message": f"face gap reached zero at t = {tc:.6g} s: the disc touches the pad "
+                               "(no contact model); response cut there"})
+    if model.regulator:
+        xi = X[:, model.index("xi")]
+        xi_max = model.design.groups.regulator.xi_max
+        for name, mask in (("valve_closed", xi <= 0), ("valve_at_travel_limit", xi >= xi_max)):
+            if mask.any():
+                out.append({"event": name, "t": float(t[np.argmax(mask)])})
+    q1 = X[:, model.index("psi2")] - psi1
+    if (q1 < 0).any():
+        out.append({"event": "inner_seal_flow_reversed", "t": float(t[np.argmax(q1 < 0)]),
+                    "message": "process fluid enters the barrier chamber (q1 < 0)"})
+    if (u > U_RUNAWAY).any():
+        out.append({"event": "gap_runaway", "t": float(t[np.argmax(u > U_RUNAWAY)]),
+                    "message": f"face gap grew past {U_RUNAWAY:g} z_B (unstable): response stopped"})
+    return out
+
+
+@dataclass
+class TransientResult:
+    data: dict
+
+    def to_dict(self) -> dict:
+        return {k: v for k, v in self.data.items() if k != "series"} | {
+            "cases": [{k: v for k, v in c.items() if k not in ("t", "X", "inputs")} for c in self.data["series"]]}
+
+    def summary(self) -> str:
+        lines = [f"transients ({self.data['model']} model, {self.data['integrator']}):"]
+        for c in self.data["series"]:
+            ev = "; ".join(e.get("message", e["event"] + f" at t = {e['t']:.4g} s") for e in c["events"]) or "none"
+            fail = f"; integrator failed at t = {c['failure']['t']:.4g} s" if c["failure"] else ""
+            lines.append(f"  {c['input']:17s} amplitude {c['amplitude']:g}: max |dz| = {c['max_dz_um']:.3g} um, "
+                         f"final dz = {c['final_dz_um']:.3g} um; events: {ev}{fail}")
+        return "\n".join(lines)
+
+    def write_tables(self, out: Path) -> list[Path]:
+        files = []
+        for i, c in enumerate(self.data["series"]):
+            path = out / f"transient_{i}_{c['input']}.csv"
+            cols = {"t_s": c["t"]} | {k: c["X"][:, j] for j, k in enumerate(self.data["states"])}
+            cols |= {"z_m": c["z"], "p2_Pa": c["p2"], "p3_Pa": c["p3"]}
+            write_csv(path, cols)
+            files.append(path)
+        return files
+
+    def plot(self, out: Path) -> list[Path]:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        n = len(self.data["series"])
+        fig, axes = plt.subplots(n, 2, figsize=(9, 2.6 * n), squeeze=False)
+        for ax, c in zip(axes, self.data["series"], strict=True):
+            t = c["t"] * 1e3
+            ax[0].plot(t, (c["z"] - c["z"][0]) * 1e6)
+            ax[0].set_ylabel(r"$\delta z$, $\mu$m")
+            ax[0].set_title(f"{c['input']} ({c['amplitude']:g})", fontsize=8)
+            ax[1].plot(t, c["p2"] / 1e6, label="$p_2$")
+            ax[1].plot(t, c["p3"] / 1e6, label="$p_3$")
+            ax[1].set_ylabel("MPa")
+            ax[1].legend(fontsize=7)
+            for a in ax:
+                a.grid(alpha=0.3)
+                for e in c["events"]:
+                    a.axvline(e["t"] * 1e3, color="r", ls=":", lw=0.8)
+        for a in axes[-1]:
+            a.set_xlabel("t, ms")
+        fig.suptitle(f"{self.data['title']}\ntime responses from the static solution", fontsize=9)
+        fig.tight_layout()
+        path = out / "fig_transients.png"
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+        return [path]
+
+
+def study(model: DynamicModel, cases: list, duration: float, points: int, integrator: str = "cvodes",
+          title: str = "") -> TransientResult:
+    """Each case: dict with input, amplitude, frequency (harmonic; default omega0), couple."""
+    sim = Simulator(model, duration, points, integrator)
+    sc = model.design.scales
+    series = []
+    for case in cases:
+        kind = case["input"]
+        omega = case.get("frequency") or model.data.omega0
+        s = sim.input_vector(kind, case["amplitude"], omega, case.get("couple", True))
+        t0 = time.perf_counter()
+        r = sim.run(s)
+        cpu = time.perf_counter() - t0
+        t, X = r["t"], r["X"]
+        ev = events(model, t, X, sim.inputs(s, t)[:, 0])
+        cut = next((e["t"] for e in ev if e["event"] == "gap_closed"), None)
+        if cut is not None:
+            keep = t <= cut
+            t, X = t[keep], X[keep]
+        z = X[:, model.index("u")] * sc["z_B"]
+        dz = (z - z[0]) * 1e6
+        series.append({
+            "input": kind, "amplitude": case["amplitude"], "frequency": omega if kind == "pressure_harmonic" else None,
+            "t": t, "X": X, "z": z, "p2": X[:, model.index("psi2")] * sc["p_B"],
+            "p3": X[:, model.index("psi3")] * sc["p_B"],
+            "max_dz_um": float(np.abs(dz).max()), "final_dz_um": float(dz[-1]), "events": ev,
+            "failure": r["failure"], "cpu_s": cpu, "t_end": float(t[-1]),
+            "integrator_steps": r["steps"],
+        })
+    label = "nonlinear_chain" if model.form == "chain" else "nonlinear"
+    return TransientResult({"title": title, "model": label,
+                            "integrator": integrator, "states": model.states, "series": series,
+                            "equilibrium_residual": equilibrium_residual(model)})
+
+
+def equilibrium_residual(model: DynamicModel) -> float:
+    """Largest residual of the implicit rows at the static solution (each row normalised so that
+    its own-pressure or stiffness coefficient is O(1)): check (a) of spec A8."""
+    n = len(model.coords)
+    q0 = [float(model.point[k]) for k in model.coords]
+    return float(np.abs(np.array(model.rows(q0, np.zeros(n), np.zeros(n), model.w0, model.p0))).max())
+
+
+def run(scn, settings, out: Path):
+    """Runner of ``analyses.transient`` (autobal/pipeline.py)."""
+    from autobal.analysis.frequency import _device
+    from autobal.analysis.linearize import Setup
+
+    t0 = time.perf_counter()
+    setup = Setup(_device(scn), settings.operating_ratio)
+    model = setup.nonlinear("chain" if settings.model == "nonlinear_chain" else "energy")
+    cases = [{"input": c.input, "amplitude": c.amplitude, "frequency": c.frequency,
+              "couple": c.thrust_follows_pressure} for c in settings.cases]
+    res = study(model, cases, settings.duration, settings.points, settings.integrator, scn.title)
+    files = res.write_tables(out) + res.plot(out)
+    return res.to_dict() | {"run_time_s": time.perf_counter() - t0}, files, res.summary()

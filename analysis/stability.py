@@ -1,0 +1,313 @@
+"""Poles, damping, Hurwitz determinants and stability maps (Pavlenko 2014, (2.73)-(2.75), (2.97)-(2.99)).
+
+``verdict(lin)``: eigenvalues of the linear model, damping ratios, natural frequencies, the stability
+margin (decay rate -max Re lambda, 1/s, and the smallest damping ratio), and the Hurwitz test of the
+characteristic polynomial: coefficients a0..an in a scaled time p = omega_ref p~ (so that they are
+not 1e-40 .. 1e-2 as in det N(p)), and the leading minors of the Hurwitz matrix (2.99), evaluated
+exactly in rational arithmetic from those coefficients (their signs are reliable whatever the
+dynamic range; positive scalings of p and of the polynomial do not change them).
+``stability_map``: max Re lambda over a grid of two dynamic parameters, for the hand models
+(constants recomputed at each point) or the nonlinear model (its exact Jacobian mapped over the
+grid in one CasADi call).  ``run`` is the runner of ``analyses.stability``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from fractions import Fraction
+from pathlib import Path
+
+import numpy as np
+
+from autobal.analysis.linearize import LinearModel, Setup, coefficient_table, jacobians
+from autobal.results import write_csv
+from autobal.schema_dynamics import PARAMETERS
+
+OMEGA_REF = 1000.0  # rad/s, time scale of the reported polynomial coefficients
+
+
+def hurwitz_minors(a) -> list[float]:
+    """Leading principal minors Delta_1..Delta_n of the Hurwitz matrix (2.99), Delta_ij = a_{2j-i},
+    of a0 p^n + ... + an, computed exactly (fractions) from the float coefficients."""
+    a = [Fraction(float(x)) for x in a]
+    n = len(a) - 1
+
+    def coef(k):
+        return a[k] if 0 <= k <= n else Fraction(0)
+
+    H = [[coef(2 * (j + 1) - (i + 1)) for j in range(n)] for i in range(n)]
+    return [float(_det([row[:k] for row in H[:k]])) for k in range(1, n + 1)]
+
+
+def _det(M) -> Fraction:
+    """Determinant by fraction-exact Gaussian elimination."""
+    M = [row[:] for row in M]
+    n, det = len(M), Fraction(1)
+    for c in range(n):
+        piv = next((r for r in range(c, n) if M[r][c] != 0), None)
+        if piv is None:
+            return Fraction(0)
+        if piv != c:
+            M[c], M[piv] = M[piv], M[c]
+            det = -det
+        det *= M[c][c]
+        for r in range(c + 1, n):
+            f = M[r][c] / M[c][c]
+            if f:
+                M[r] = [x - f * y for x, y in zip(M[r], M[c], strict=True)]
+    return det
+
+
+def verdict(lin: LinearModel) -> dict:
+    """Poles, damping ratios, natural frequencies, margin and Hurwitz test of one linear model."""
+    lam = lin.poles()
+    lam = lam[np.lexsort((lam.imag, -lam.real))]  # least stable first
+    wn = np.abs(lam)
+    zeta = np.where(wn > 0, -lam.real / np.where(wn > 0, wn, 1), 1.0)
+    a = np.real(np.poly(lam / OMEGA_REF))  # monic, in p~ = p / omega_ref
+    minors = hurwitz_minors(a)
+    unstable = lam.real > 0
+    return {
+        "stable": bool(not unstable.any()),
+        "poles": {"real": lam.real, "imag": lam.imag},
+        "damping_ratio": zeta, "natural_frequency": wn,
+        "unstable_modes": [{"real": float(x.real), "imag": float(abs(x.imag))} for x in lam[unstable] if x.imag >= 0],
+        "margin": {"decay_rate": float(-lam.real.max()), "min_damping_ratio": float(zeta.min())},
+        "hurwitz": {"omega_ref": OMEGA_REF, "coefficients": a, "minors": minors,
+                    "coefficients_positive": bool(np.all(a > 0)),
+                    "negative_minors": [i + 1 for i, m in enumerate(minors) if m <= 0],
+                    "stable": bool(np.all(a > 0) and all(m > 0 for m in minors))},
+    }
+
+
+def _axis(ax) -> np.ndarray:
+    lo, hi = float(ax.start), float(ax.stop)
+    return np.geomspace(lo, hi, ax.points) if ax.scale == "log" else np.linspace(lo, hi, ax.points)
+
+
+def max_real(setup: Setup, model: str, changes: list[dict]) -> np.ndarray:
+    """max Re lambda (1/s) of ``model`` for each dict of changed dynamic data (short names)."""
+    if model.startswith("nonlinear"):
+        m = setup.nonlinear("chain" if model == "nonlinear_chain" else "energy")
+        P = np.column_stack([setup.data.with_(**ch).vector() for ch in changes])
+        J = np.array(jacobians(m).map(len(changes))(m.x0, m.w0, P)[0])  # n x (n m)
+        n = len(m.states)
+        A = J.reshape(n, len(changes), n).transpose(1, 0, 2)
+        return np.linalg.eigvals(A).real.max(axis=1)
+    out = []
+    for ch in changes:
+        lin = setup.linear(model, setup.data.with_(**ch))
+        out.append(lin.poles().real.max())
+    return np.array(out)
+
+
+def stability_map(setup: Setup, xaxis, yaxis, model: str) -> dict:
+    """max Re lambda over the (x, y) grid of two dynamic parameters (scenario key names)."""
+    xs, ys = _axis(xaxis), _axis(yaxis)
+    kx, ky = PARAMETERS[xaxis.parameter][0], PARAMETERS[yaxis.parameter][0]
+    changes = [{kx: x, ky: y} for y in ys for x in xs]
+    R = max_real(setup, model, changes).reshape(len(ys), len(xs))
+    return {"x": {"parameter": xaxis.parameter, "values": xs, "nominal": getattr(setup.data, kx), "scale": xaxis.scale},
+            "y": {"parameter": yaxis.parameter, "values": ys, "nominal": getattr(setup.data, ky), "scale": yaxis.scale},
+            "max_real": R, "stable_fraction": float(np.mean(R < 0)),
+            "restoring": _restoring(setup, model, xaxis, yaxis, xs, ys, R)}
+
+
+def _restoring(setup, model, xaxis, yaxis, xs, ys, R) -> dict:
+    """What the map says restores stability: along each axis through the nominal point (the other
+    parameter nominal), the stable intervals; and the stable grid point nearest to nominal."""
+    kx, ky = PARAMETERS[xaxis.parameter][0], PARAMETERS[yaxis.parameter][0]
+    x0, y0 = getattr(setup.data, kx), getattr(setup.data, ky)
+    lines = {}
+    for ax, key, vals in ((xaxis, kx, xs), (yaxis, ky, ys)):
+        r = max_real(setup, model, [{key: v} for v in vals])
+        lines[ax.parameter] = {"values": vals, "max_real": r, "stable_intervals": _intervals(vals, r < 0)}
+
+    def offset(v, v0, ax, vals):  # distance from nominal in decades (log) or in axis spans (linear)
+        return math.log10(v / v0) if ax.scale == "log" and v0 > 0 else (v - v0) / (vals[-1] - vals[0])
+
+    best = None
+    for (iy, ix), val in np.ndenumerate(R):
+        if val < 0:
+            d = math.hypot(offset(xs[ix], x0, xaxis, xs), offset(ys[iy], y0, yaxis, ys))
+            if best is None or d < best[0]:
+                best = (d, xs[ix], ys[iy], val)
+    nearest = None if best is None else {xaxis.parameter: best[1], yaxis.parameter: best[2], "max_real": best[3]}
+    return {"along_axes": lines, "nearest_stable": nearest}
+
+
+SCANNED = ("disc_chamber_volume", "cavity_volume", "rotor_damping", "stem_damping")
+
+
+def single_parameter_scans(setup: Setup, model: str, points: int = 61) -> dict:
+    """max Re lambda along each of V2, V3, c_z, c_x alone (the others nominal), over 1e-3..1e3 times
+    the nominal value (c_x: 1e-3..1e2 times the stem's critical damping 2 sqrt(k_reg m0)); the
+    stable intervals say which single change restores stability."""
+    out = {}
+    for name in SCANNED:
+        key = PARAMETERS[name][0]
+        nominal = getattr(setup.data, key)
+        if key == "c_x":
+            if not setup.data.has_regulator:
+                continue
+            crit = 2 * math.sqrt(setup.data.k_reg * setup.data.m0)
+            vals = np.geomspace(1e-3 * crit, 1e2 * crit, points)
+        else:
+            vals = np.geomspace(1e-3 * nominal, 1e3 * nominal, points)
+        r = max_real(setup, model, [{key: v} for v in vals])
+        out[name] = {"nominal": nominal, "values": vals, "max_real": r, "stable_intervals": _intervals(vals, r < 0)}
+    return out
+
+
+def _intervals(vals, mask) -> list[list[float]]:
+    out, start, prev = [], None, None
+    for v, m in zip(vals, mask, strict=True):
+        if m and start is None:
+            start = v
+        if not m and start is not None:
+            out.append([float(start), float(prev)])
+            start = None
+        prev = v
+    if start is not None:
+        out.append([float(start), float(vals[-1])])
+    return out
+
+
+@dataclass
+class StabilityResult:
+    data: dict
+
+    def to_dict(self) -> dict:
+        return self.data
+
+    def summary(self) -> str:
+        d = self.data
+        lines = [f"stability ({d['model']} model first): stable = {d['stable']}"]
+        for m, v in d["models"].items():
+            um = ", ".join(f"{x['real']:+.1f} +- {x['imag']:.1f}i" for x in v["unstable_modes"]) or "-"
+            lines.append(f"  {m:16s} stable {str(v['stable']):5s} margin {v['margin']['decay_rate']:+.1f} 1/s; "
+                         f"unstable modes: {um}; Hurwitz negative minors: {v['hurwitz']['negative_minors'] or '-'}")
+        for m, mp in d.get("maps", {}).items():
+            lines.append(f"  map ({m}): {mp['x']['parameter']} x {mp['y']['parameter']}, "
+                         f"stable on {100 * mp['stable_fraction']:.0f} % of the grid")
+            for name, line in mp["restoring"]["along_axes"].items():
+                iv = "; ".join(f"[{a:.4g}, {b:.4g}]" for a, b in line["stable_intervals"]) or "none in range"
+                lines.append(f"    {name} alone (other nominal): stable for {iv}")
+        co = d["coefficients"]
+        lines.append("  K/T of the hand model vs the exact linearization (consistent mode = nonlinear_chain "
+                     "to 1e-9); differences:")
+        lines += [f"    {k:5s} {v}" for k, v in co["notes"].items()]
+        for m, text in d.get("restoring", {}).items():
+            lines.append(f"  restores stability ({m}): {text}")
+        return "\n".join(lines)
+
+    def write_tables(self, out: Path) -> list[Path]:
+        files = []
+        for m, v in self.data["models"].items():
+            p = out / f"poles_{m}.csv"
+            write_csv(p, {"real": v["poles"]["real"], "imag": v["poles"]["imag"],
+                          "damping_ratio": v["damping_ratio"], "natural_frequency": v["natural_frequency"]})
+            files.append(p)
+        co = self.data["coefficients"]
+        p = out / "coefficients.csv"
+        write_csv(p, {"name": co["names"]} | co["columns"] | {"note": [co["notes"].get(k, "") for k in co["names"]]})
+        files.append(p)
+        for m, mp in self.data.get("maps", {}).items():
+            p = out / f"stability_map_{m}.csv"
+            X, Y = np.meshgrid(mp["x"]["values"], mp["y"]["values"])
+            write_csv(p, {mp["x"]["parameter"]: X.ravel(), mp["y"]["parameter"]: Y.ravel(),
+                          "max_real": np.asarray(mp["max_real"]).ravel()})
+            files.append(p)
+        return files
+
+    def plot(self, out: Path) -> list[Path]:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        files = []
+        fig, ax = plt.subplots(figsize=(6.4, 4.8))
+        for m, v in self.data["models"].items():
+            ax.plot(v["poles"]["real"], v["poles"]["imag"], "x", label=m)
+        ax.axvline(0, color="k", lw=0.8)
+        ax.set_xscale("symlog", linthresh=1e3)
+        ax.set_xlabel(r"Re $\lambda$, 1/s")
+        ax.set_ylabel(r"Im $\lambda$, rad/s")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+        ax.set_title(f"{self.data['title']}\npoles", fontsize=9)
+        fig.tight_layout()
+        files.append(out / "fig_poles.png")
+        fig.savefig(files[-1], dpi=120)
+        plt.close(fig)
+        for m, mp in self.data.get("maps", {}).items():
+            fig, ax = plt.subplots(figsize=(6.4, 4.8))
+            X, Y = np.meshgrid(mp["x"]["values"], mp["y"]["values"])
+            R = np.asarray(mp["max_real"], float)
+            lim = np.nanmax(np.abs(R))
+            cs = ax.pcolormesh(X, Y, R, cmap="RdBu_r", vmin=-lim, vmax=lim, shading="auto")
+            fig.colorbar(cs, ax=ax, label=r"max Re $\lambda$, 1/s")
+            if np.nanmin(R) < 0 < np.nanmax(R):
+                ax.contour(X, Y, R, levels=[0.0], colors="k", linewidths=1.5)
+            ax.plot(mp["x"]["nominal"], mp["y"]["nominal"], "k*", ms=10, label="scene (nominal)")
+            for a, setter in ((mp["x"], ax.set_xscale), (mp["y"], ax.set_yscale)):
+                if a["scale"] == "log":
+                    setter("log")
+            ax.set_xlabel(f"{mp['x']['parameter']} (SI)")
+            ax.set_ylabel(f"{mp['y']['parameter']} (SI)")
+            ax.legend(fontsize=7, loc="best")
+            ax.set_title(f"{self.data['title']}\nstability map, {m} model: boundary max Re = 0 (black); "
+                         "blue = stable", fontsize=8)
+            fig.tight_layout()
+            files.append(out / f"fig_stability_map_{m}.png")
+            fig.savefig(files[-1], dpi=120)
+            plt.close(fig)
+        return files
+
+
+def study(setup: Setup, models: list[str], smap=None, title: str = "") -> StabilityResult:
+    res = {m: verdict(setup.linear(m)) for m in models}
+    first = res[models[0]]
+    data = {"title": title, "model": models[0], "stable": first["stable"], "poles": first["poles"],
+            "hurwitz": first["hurwitz"], "margin": first["margin"], "models": res,
+            "coefficients": coefficient_table(setup)}
+    if smap is not None:
+        data["maps"] = {m: stability_map(setup, smap.x, smap.y, m) for m in smap.models}
+        data["single_parameter"] = {m: single_parameter_scans(setup, m) for m in smap.models}
+        data["restoring"] = {m: _statement(data, m) for m in smap.models}
+    return StabilityResult(data)
+
+
+def _statement(data: dict, model: str) -> str:
+    """One sentence: which change restores stability of ``model``, read off its scans and map."""
+    v = data["models"].get(model)
+    if v is not None and v["stable"]:
+        return f"{model}: stable as given (decay rate {v['margin']['decay_rate']:.1f} 1/s)"
+    single = [f"{k} in " + " or ".join(f"[{a:.3g}, {b:.3g}]" for a, b in s["stable_intervals"])
+              for k, s in data["single_parameter"][model].items() if s["stable_intervals"]]
+    mp = data["maps"][model]
+    ns = mp["restoring"]["nearest_stable"]
+    text = f"{model}: " + ("a single change restores stability: " + "; ".join(single) if single else
+                           "no single change of " + ", ".join(data["single_parameter"][model]) +
+                           " within 1e-3..1e3 x nominal restores stability")
+    if ns:
+        text += (f"; on the map the nearest stable point is {mp['x']['parameter']} = {ns[mp['x']['parameter']]:.3g}"
+                 f" with {mp['y']['parameter']} = {ns[mp['y']['parameter']]:.3g} (SI), "
+                 f"stable on {100 * mp['stable_fraction']:.0f} % of the map")
+    else:
+        text += "; nowhere stable on the map"
+    return text
+
+
+def run(scn, settings, out: Path):
+    """Runner of ``analyses.stability`` (autobal/pipeline.py)."""
+    from autobal.analysis.frequency import _device
+
+    t0 = time.perf_counter()
+    setup = Setup(_device(scn), settings.operating_ratio)
+    res = study(setup, list(settings.models), settings.map, scn.title)
+    files = res.write_tables(out) + res.plot(out)
+    return res.to_dict() | {"run_time_s": time.perf_counter() - t0}, files, res.summary()

@@ -1,0 +1,153 @@
+"""Scenario schema of the device dynamics (Pavlenko 2014, §2.4, §2.6, App. A/B dynamic data).
+
+``device.dynamics`` holds the masses, stiffnesses, damping, chamber volumes and bulk modulus of
+the rotor - balancing device - regulator system; ``analyses.frequency``, ``analyses.stability``
+and ``analyses.transient`` name the studies built on it (analysis/frequency.py, stability.py,
+simulate.py).  Quantities carry units and are converted to SI on loading.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import Field, model_validator
+
+from autobal.schema import Positive, Strict
+from autobal.units import AngularSpeed, Area, Pressure, quantity, to_si
+
+Mass = quantity("mass")
+Stiffness = quantity("stiffness")
+Damping = quantity("damping")
+DampingOrZero = quantity("damping", "nonnegative")
+Volume = quantity("volume")
+Time = quantity("time")
+
+
+class RegulatorDynamics(Strict):
+    """Stem of the pressure-drop regulator and its two chambers (App. A L3296-L3320)."""
+
+    stem_mass: Mass  # m0
+    spring_stiffness: Stiffness  # k_reg
+    stem_damping: DampingOrZero = 0.0  # c_x (the source: 0)
+    valve_chamber_volume: Volume  # V_cam
+    membrane_chamber_volume: Volume  # V_m
+    seat_area: Area | None = None  # s_c; default pi d_c^2 / 4 from regulator.valve.seat_diameter
+
+
+class Dynamics(Strict):
+    """Dynamic data of the device (``device.dynamics``), App. A L3294-L3324 / App. B L3620-L3646."""
+
+    rotor_mass: Mass  # m_p
+    pushoff_stiffness: Stiffness  # k_pr; preload deflection F_pr/k_pr + z0 (spec §5.2)
+    rotor_damping: Damping | None = None  # c_z; default squeeze film 1.5 mu s_T^2/(pi z_B^3) (L3322)
+    bulk_modulus: Pressure  # E of the barrier medium (gas: the source's 1.42e5 Pa)
+    disc_chamber_volume: Volume  # V2, chamber before the face throttle
+    cavity_volume: Volume  # V3, cavity behind the disc
+    regulator: RegulatorDynamics | None = None  # needed when the device has a regulator
+    forcing_amplitude: Positive = 0.2  # delta psi_1a, amplitude of the harmonic discharge pressure
+    operating_speed: AngularSpeed | None = None  # omega0; default the impeller speed
+
+
+# scenario key -> (short name used in the model, unit kind)
+PARAMETERS = {
+    "rotor_mass": ("m_p", "mass"),
+    "pushoff_stiffness": ("k_pr", "stiffness"),
+    "rotor_damping": ("c_z", "damping"),
+    "bulk_modulus": ("E", "pressure"),
+    "disc_chamber_volume": ("V2", "volume"),
+    "cavity_volume": ("V3", "volume"),
+    "stem_mass": ("m0", "mass"),
+    "spring_stiffness": ("k_reg", "stiffness"),
+    "stem_damping": ("c_x", "damping"),
+    "valve_chamber_volume": ("V_cam", "volume"),
+    "membrane_chamber_volume": ("V_m", "volume"),
+    "seat_area": ("s_c", "area"),
+}
+ParameterName = Literal[tuple(PARAMETERS)]  # type: ignore[valid-type]
+ModelName = Literal["nonlinear", "nonlinear_chain", "program", "thesis", "consistent"]
+
+
+class OmegaGrid(Strict):
+    start: AngularSpeed
+    stop: AngularSpeed
+    points: Annotated[int, Field(ge=10, le=20000)] = 600
+
+    @model_validator(mode="after")
+    def _increasing(self):
+        if self.stop <= self.start:
+            raise ValueError("stop must be larger than start")
+        return self
+
+
+class Frequency(Strict):
+    """AFC / Bode of the face gap for a harmonic discharge pressure (2.100)-(2.110)."""
+
+    operating_ratio: Positive = 1.0  # psi1 of the operating point
+    # first model: the top-level keys (peaks, at_operating_speed); all are reported under `models`
+    models: Annotated[list[ModelName], Field(min_length=1)] = ["program", "nonlinear", "nonlinear_chain"]
+    forcing: Literal["appendix", "physical"] = "appendix"  # dtau = dpsi1 (App. A/B) or b dpsi1
+    omega: OmegaGrid = OmegaGrid(start="10 rad/s", stop="8000 rad/s")
+
+
+class MapAxis(Strict):
+    """One axis of a stability map: a dynamic parameter from ``start`` to ``stop`` (with units)."""
+
+    parameter: ParameterName
+    start: str | float
+    stop: str | float
+    points: Annotated[int, Field(ge=3, le=400)] = 41
+    scale: Literal["log", "linear"] = "log"
+
+    @model_validator(mode="before")
+    @classmethod
+    def _to_si(cls, data):
+        if isinstance(data, dict) and data.get("parameter") in PARAMETERS:
+            kind = PARAMETERS[data["parameter"]][1]
+            data = dict(data)
+            for k in ("start", "stop"):
+                if k in data:
+                    try:
+                        data[k] = to_si(data[k], kind)
+                    except ValueError as exc:
+                        raise ValueError(f"{k}: {exc}") from None
+        return data
+
+    @model_validator(mode="after")
+    def _range(self):
+        if not float(self.stop) > float(self.start) >= 0:
+            raise ValueError("need 0 <= start < stop")
+        if self.scale == "log" and float(self.start) <= 0:
+            raise ValueError("a log axis needs start > 0")
+        return self
+
+
+class StabilityMap(Strict):
+    x: MapAxis
+    y: MapAxis
+    models: Annotated[list[ModelName], Field(min_length=1)] = ["program", "nonlinear"]
+
+
+class Stability(Strict):
+    """Poles, damping, Hurwitz determinants, margin; optional map over two parameters."""
+
+    operating_ratio: Positive = 1.0
+    models: Annotated[list[ModelName], Field(min_length=1)] = ["program", "nonlinear", "nonlinear_chain"]
+    map: StabilityMap | None = None
+
+
+class TransientCase(Strict):
+    """One time response from the static solution (2.111)."""
+
+    input: Literal["force_step", "pressure_step", "pressure_harmonic"]
+    amplitude: float = 0.01  # dtau (force step) or dpsi1 (pressure), dimensionless
+    frequency: AngularSpeed | None = None  # harmonic input; default the operating speed
+    thrust_follows_pressure: bool = True  # with a pressure input, dtau = b dpsi1
+
+
+class Transient(Strict):
+    operating_ratio: Positive = 1.0
+    model: Literal["nonlinear", "nonlinear_chain"] = "nonlinear"
+    integrator: Literal["cvodes", "idas"] = "cvodes"
+    duration: Time = 0.05
+    points: Annotated[int, Field(ge=10, le=200000)] = 2001
+    cases: Annotated[list[TransientCase], Field(min_length=1)]

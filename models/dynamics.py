@@ -1,0 +1,286 @@
+"""Nonlinear dynamics of the rotor - balancing device - regulator system (Pavlenko 2014, §2.4, §2.6).
+
+Equations (2.37)-(2.40) (pump) and (2.167) (compressor): rotor axial motion, regulator stem,
+chamber compressibility V/E and the displacement flows of the moving disc and membrane, with the
+throttle laws of the statics (models/throttles.py).  Two forms of the chamber balances:
+
+* ``"energy"`` (default): one balance per chamber, V_k/E dp_k/dt = inflow - outflow - dV_k/dt,
+  with the volume changes that match the forces (spec §12.1): dV2/dz = +s_e, dV3/dz = -s_e (the
+  disc moves into the cavity behind it when the gap opens), dV_e/dx = -s_m (the membrane force
+  s_m (p_e - p1) closes the valve).  For the gas (compressor) the displacement flows are
+  converted to normal volume flows with the chamber density, p_k / p_n (the throttle laws give
+  normal m^3/s); the source's (2.167) has rho instead and (2.169) drops it.
+* ``"chain"``: the printed chain form (2.38)/(2.40), explicit as (2.111) (reconstructed: xi, not
+  xi^(3/2), liquid roots for the pump, g3 in the last line).  Kept to reproduce the source; its
+  cavity 3 is never squeezed and its barrier chamber has the wrong sign of s_m dx/dt, both of
+  which feed energy into the system.
+
+A device without a regulator (simplified system of §2.4.2) is the same model without the regulator
+block: the barrier pressure is then ideal, psi_e = psi1 + dpsi.
+
+Everything is dimensionless as in the statics: u = z/z_B, xi = x/x_B, psi = p/p_B, flows over
+g1 p_B, forces over p_B s_B; time is in seconds.  Velocities are carried as v = t_ref du/dt and
+w = t_ref dxi/dt with t_ref = sqrt(m_p/k_pr) so that every state is O(1).  The spring preloads are
+Delta = F_pr/k_pr + z0 and Delta_reg = F_reg/k_reg + x0 (spec §5.2 preload note), so that the
+equilibrium is exactly the static solution.  Inputs are w = (psi1, tau), tau = T/(p_B s_B).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import casadi as ca
+import numpy as np
+
+from autobal.models.device import DeviceDesign
+from autobal.models.throttles import face_opening, flow
+
+FORMS = ("energy", "chain")
+# dynamic data, in this order, as the symbolic parameter vector of the model
+PARAM_NAMES = ("m_p", "k_pr", "c_z", "E", "V2", "V3", "m0", "k_reg", "c_x", "V_cam", "V_m", "s_c")
+
+
+@dataclass(frozen=True)
+class DynamicData:
+    """Dynamic data of a device in SI (App. A L3294-L3324, App. B L3620-L3646).
+
+    Regulator entries (m0, k_reg, c_x, V_cam, V_m, s_c, s_m) are NaN for a device without one.
+    """
+
+    m_p: float  # rotor mass, kg
+    k_pr: float  # push-off spring stiffness, N/m
+    c_z: float  # rotor damping, N s/m
+    E: float  # bulk modulus, Pa
+    V2: float  # chamber before the face throttle, m^3
+    V3: float  # cavity behind the disc, m^3
+    m0: float = math.nan  # regulator stem mass, kg
+    k_reg: float = math.nan  # regulator spring, N/m
+    c_x: float = math.nan  # stem damping, N s/m
+    V_cam: float = math.nan  # valve chamber, m^3
+    V_m: float = math.nan  # membrane (barrier) chamber, m^3
+    s_c: float = math.nan  # valve seat area, m^2
+    s_m: float = math.nan  # membrane area, m^2
+    p_n: float = math.nan  # gas: pressure of normal conditions, Pa (displacement flows, energy form)
+    forcing_amplitude: float = 0.2  # delta psi_1a
+    omega0: float = math.nan  # operating speed, rad/s
+
+    @property
+    def has_regulator(self) -> bool:
+        return math.isfinite(self.m0)
+
+    def vector(self) -> np.ndarray:
+        return np.array([getattr(self, k) for k in PARAM_NAMES], float)
+
+    def with_(self, **changes) -> DynamicData:
+        return replace(self, **changes)
+
+
+def squeeze_damping(viscosity: float, face_area: float, base_gap: float) -> float:
+    """c_z = 1.5 mu s_T^2 / (pi z_B^3), N s/m: squeeze film of the face throttle (App. A L3322)."""
+    return 1.5 * viscosity * face_area**2 / (math.pi * base_gap**3)
+
+
+def dynamic_data(device, dev: DeviceDesign) -> DynamicData:
+    """The ``device.dynamics`` block of a validated scenario, with its defaults filled in, in SI."""
+    from autobal.errors import ScenarioError
+
+    d = device.dynamics
+    if d is None:
+        raise ScenarioError("device.dynamics: the dynamic analyses need a dynamics section")
+    if (device.regulator is None) != (d.regulator is None):
+        raise ScenarioError("device.dynamics.regulator: give it exactly when the device has a regulator "
+                            "(stem_mass, spring_stiffness, valve_chamber_volume, membrane_chamber_volume)")
+    c_z = d.rotor_damping
+    if c_z is None:
+        c_z = squeeze_damping(device.fluid.viscosity, dev.extra["s_T"], dev.scales["z_B"])
+    omega0 = d.operating_speed
+    if omega0 is None:
+        imp = device.operating.impeller
+        omega0 = imp.speed if imp is not None else math.nan
+    kw = {}
+    if d.regulator is not None:
+        r, reg = d.regulator, device.regulator
+        s_c = r.seat_area if r.seat_area is not None else math.pi * reg.valve.seat_diameter**2 / 4
+        kw = {"m0": r.stem_mass, "k_reg": r.spring_stiffness, "c_x": r.stem_damping,
+              "V_cam": r.valve_chamber_volume, "V_m": r.membrane_chamber_volume, "s_c": s_c,
+              "s_m": reg.membrane_area}
+    return DynamicData(m_p=d.rotor_mass, k_pr=d.pushoff_stiffness, c_z=c_z, E=d.bulk_modulus,
+                       V2=d.disc_chamber_volume, V3=d.cavity_volume,
+                       p_n=device.fluid.normal_pressure or math.nan, forcing_amplitude=d.forcing_amplitude,
+                       omega0=omega0, **kw)
+
+
+@dataclass
+class DynamicModel:
+    """The nonlinear model as CasADi Functions, built once for one operating point.
+
+    ``ode(x, w, p) -> dx/dt`` (1/s); ``rows(q, qd, qdd, w, p)`` the implicit balances in the
+    order and sign convention of (2.43)/(2.101) with each chamber row divided by the coefficient of
+    its own pressure (so the thesis's constants can be read off their Jacobians); ``flows(x, w)``
+    the throttle flows.  ``x0``, ``w0``: the equilibrium (the static solution); ``p0``: the
+    scene's dynamic data in the order of PARAM_NAMES.
+    """
+
+    form: str
+    regulator: bool
+    medium: str
+    states: list[str]
+    coords: list[str]  # q of the operator form: u, (xi, psi_cam, psi_e), psi2, psi3
+    inputs: list[str]
+    t_ref: float
+    ode: ca.Function
+    rows: ca.Function
+    flows: ca.Function
+    x0: np.ndarray
+    w0: np.ndarray
+    p0: np.ndarray
+    design: DeviceDesign
+    data: DynamicData
+    point: dict = field(default_factory=dict)
+
+    def index(self, name: str) -> int:
+        return self.states.index(name)
+
+    def params(self, data: DynamicData | None = None) -> np.ndarray:
+        return self.p0 if data is None else data.vector()
+
+
+def build(dev: DeviceDesign, data: DynamicData, point: dict, form: str = "energy",
+          preload: str = "static") -> DynamicModel:
+    """Build the nonlinear model (2.40)/(2.111)/(2.167) at the static ``point``.
+
+    ``point``: psi1, dpsi and the static unknowns u, psi2, psi3 (and xi, psi_e, psi_cam with a
+    regulator), e.g. ``StaticPoint.values | {"psi1": .., "dpsi": ..}``.  ``preload``: "static"
+    (Delta = F_pr/k_pr + z0, Delta_reg = F_reg/k_reg + x0: the equilibrium is the static point) or
+    "literal" (Delta = F_pr/k_pr as (2.37) reads, spec §5.2 note: the equilibrium moves; it is
+    found by a Newton solve from the static point and replaces ``point``).
+    """
+    if form not in FORMS:
+        raise ValueError(f"unknown chamber form {form!r}; expected one of {FORMS}")
+    g, sc = dev.groups, dev.scales
+    reg = g.regulator
+    if (reg is not None) != data.has_regulator:
+        raise ValueError("dynamic data and device disagree on the regulator")
+    gas = g.medium == "gas"
+    root = g.square_root_law
+    p_b, s_b, z_b, x_b, g1 = sc["p_B"], sc["s_B"], sc["z_B"], sc["x_B"], sc["g1"]
+    s_e = sc["s_e"]
+    p_n = data.p_n
+    t_ref = math.sqrt(data.m_p / data.k_pr)
+    psi10, dpsi = float(point["psi1"]), float(point["dpsi"])
+    u0 = float(point["u"])
+    u_spring = u0 if preload == "static" else 0.0  # spring force k (Delta - z) = F_pr - k (z - u_spring z_B)
+
+    p = ca.SX.sym("p", len(PARAM_NAMES))
+    P = dict(zip(PARAM_NAMES, ca.vertsplit(p), strict=True))
+    w = ca.SX.sym("w", 2)
+    psi1, tau = w[0], w[1]
+    coords = ["u", "xi", "psi_cam", "psi_e", "psi2", "psi3"] if reg else ["u", "psi2", "psi3"]
+    n = len(coords)
+    q, qd, qdd = ca.SX.sym("q", n), ca.SX.sym("qd", n), ca.SX.sym("qdd", n)
+    Q = dict(zip(coords, ca.vertsplit(q), strict=True))
+    Qd = dict(zip(coords, ca.vertsplit(qd), strict=True))
+    Qdd = dict(zip(coords, ca.vertsplit(qdd), strict=True))
+    force = p_b * s_b
+    flow_scale = g1 * p_b
+
+    def theta(vol):  # compliance time V / (E g1), s
+        return vol / (P["E"] * g1)
+
+    def density(psi):  # displacement flows as normal volume flows (gas, energy form)
+        return psi * p_b / p_n if gas and form == "energy" else 1.0
+
+    psi_e = Q["psi_e"] if reg else psi1 + dpsi
+    fl = {
+        "e": flow("laminar", g.alpha_e1, psi_e, Q["psi2"]),
+        "1": flow("laminar", 1.0, Q["psi2"], psi1),
+        "T": face_opening(Q["u"]) * flow(root, g.alpha_TB1, Q["psi2"], Q["psi3"]),
+        "3": flow(root, g.alpha_31, Q["psi3"], g.psi4),
+    }
+    # rotor (2.37): m z'' + c z' + k (z - z0) = F - T + F_pr   [over p_B s_B]
+    rows = [(P["m_p"] * Qdd["u"] + P["c_z"] * Qd["u"] + P["k_pr"] * (Q["u"] - u_spring)) * z_b / force
+            - (g.sigma * (Q["psi2"] - Q["psi3"]) - tau + g.chi)]
+    d_e = s_e * z_b * Qd["u"] / flow_scale  # disc displacement flow s_e dz/dt
+    comp = {k: theta(P[v]) * Qd[k] for k, v in (("psi2", "V2"), ("psi3", "V3"))}
+    if reg:
+        xi0 = float(point["xi"]) if preload == "static" else 0.0
+        fl["in"] = flow("laminar", reg.alpha_in1, reg.psi_in, Q["psi_cam"])
+        # valve (2.15): a closed valve (xi <= 0, stem on the seat) passes no flow
+        fl["v"] = ca.fmax(Q["xi"], 0) * flow("turbulent", reg.alpha_B1, Q["psi_cam"], Q["psi_e"])
+        # stem (2.37): m0 x'' + c_x x' + k_reg (x - x0) = F_reg - s_m (p_e - p1), F_reg = s_m dp
+        rows.append((P["m0"] * Qdd["xi"] + P["c_x"] * Qd["xi"] + P["k_reg"] * (Q["xi"] - xi0)) * x_b / force
+                    + reg.sigma_m * (Q["psi_e"] - psi1 - dpsi))
+        d_c = P["s_c"] * x_b * Qd["xi"] / flow_scale
+        d_m = data.s_m * x_b * Qd["xi"] / flow_scale
+        comp |= {"psi_cam": theta(P["V_cam"]) * Qd["psi_cam"], "psi_e": theta(P["V_m"]) * Qd["psi_e"]}
+        if form == "chain":  # (2.40): every member of the chain equals the previous one
+            link_c = fl["v"] + comp["psi_cam"] + d_c
+            link_e = fl["e"] + comp["psi_e"] + d_m
+            balances = {"psi_cam": fl["in"] - link_c, "psi_e": link_c - link_e,
+                        "psi2": link_e - (fl["1"] + fl["T"] + comp["psi2"] + d_e)}
+        else:
+            balances = {"psi_cam": fl["in"] - fl["v"] - d_c * density(Q["psi_cam"]) - comp["psi_cam"],
+                        "psi_e": fl["v"] - fl["e"] + d_m * density(Q["psi_e"]) - comp["psi_e"],
+                        "psi2": fl["e"] - fl["1"] - fl["T"] - d_e * density(Q["psi2"]) - comp["psi2"]}
+    else:
+        if form == "chain":
+            balances = {"psi2": fl["e"] - (fl["1"] + fl["T"] + comp["psi2"] + d_e)}
+        else:
+            balances = {"psi2": fl["e"] - fl["1"] - fl["T"] - d_e * density(Q["psi2"]) - comp["psi2"]}
+    if form == "chain":
+        balances["psi3"] = (fl["T"] + comp["psi2"] + d_e) - (fl["3"] + comp["psi3"] + d_e)
+    else:
+        balances["psi3"] = fl["T"] - fl["3"] + d_e * density(Q["psi3"]) - comp["psi3"]
+    # chamber rows in the thesis's normalisation: coefficient of the own pressure = +1
+    q0 = [float(point[k]) for k in coords]
+    w_eq = [psi10, g.b * psi10]
+    for k in coords[1 + bool(reg):]:
+        own = ca.Function("own", [q, qd, w, p], [ca.jacobian(balances[k], Q[k])])
+        rows.append(balances[k] / float(own(q0, [0.0] * n, w_eq, data.vector())))
+
+    R = ca.vertcat(*rows)
+    rows_f = ca.Function("rows", [q, qd, qdd, w, p], [R], ["q", "qd", "qdd", "w", "p"], ["r"])
+
+    # explicit first-order form: the rows are affine in qdd (mechanics) and qd (chambers)
+    vel = ["u", "xi"] if reg else ["u"]
+    states = []
+    for k in coords:
+        states.append(k)
+        if k in vel:
+            states.append("v" if k == "u" else "w")
+    x = ca.SX.sym("x", len(states))
+    X = dict(zip(states, ca.vertsplit(x), strict=True))
+    q_of_x = ca.vertcat(*[X[k] for k in coords])
+    qd_known = {k: X["v" if k == "u" else "w"] / t_ref for k in vel}
+    # unknowns: accelerations of the mechanical coords and rates of the pressures
+    unk = ca.SX.sym("unk", n)
+    qd_x = ca.vertcat(*[qd_known[k] if k in vel else unk[i] for i, k in enumerate(coords)])
+    qdd_x = ca.vertcat(*[unk[i] if k in vel else 0 for i, k in enumerate(coords)])
+    r_x = rows_f(q_of_x, qd_x, qdd_x, w, p)
+    M = ca.jacobian(r_x, unk)
+    sol = -ca.solve(M, ca.substitute(r_x, unk, ca.DM.zeros(n)))  # exact: r is affine in unk
+    xdot = []
+    for i, k in enumerate(coords):
+        if k in vel:
+            xdot += [qd_known[k], t_ref * sol[i]]
+        else:
+            xdot.append(sol[i])
+    ode = ca.Function("ode", [x, w, p], [ca.vertcat(*xdot)], ["x", "w", "p"], ["xdot"])
+    fl_x = ca.substitute(ca.vertcat(*fl.values()), q, q_of_x)
+    flows = ca.Function("flows", [x, w], [fl_x], ["x", "w"], ["q"])
+
+    vals = {"u": u0, "v": 0.0, "w": 0.0, "psi2": point["psi2"], "psi3": point["psi3"]}
+    if reg:
+        vals |= {"xi": point["xi"], "psi_e": point["psi_e"], "psi_cam": point["psi_cam"]}
+    x0 = np.array([vals[k] for k in states], float)
+    w0 = np.array([psi10, g.b * psi10], float)
+    if preload != "static":  # the equilibrium of (2.37) with the literal preloads
+        solver = ca.rootfinder("equilibrium", "newton", ca.Function("f", [x], [ode(x, w0, data.vector())]),
+                               {"abstol": 1e-13})
+        x0 = np.array(solver(x0)).ravel()
+        point = dict(point) | {k: float(v) for k, v in zip(states, x0, strict=True) if k in coords}
+    return DynamicModel(form=form, regulator=reg is not None, medium=g.medium, states=states, coords=coords,
+                        inputs=["psi1", "tau"], t_ref=t_ref, ode=ode, rows=rows_f, flows=flows, x0=x0, w0=w0,
+                        p0=data.vector(), design=dev, data=data, point=dict(point))
+
