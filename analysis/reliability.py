@@ -1,0 +1,285 @@
+"""Reliability of the traditional balance disc: probability of failure-free operation P(t) and
+mean time to failure, Pavlenko (2014) chapter 1.2, Eqs. (1.36)-(1.52).
+
+The disc works while its gap stays in [u_min, u_max] (region B of Fig. 1.24).  The gap depends
+on the load tau (a stationary truncated normal variable, (1.45)-(1.47)) and on the inner seal's
+clearance chi(t) = chi0 + b t, which grows with erosive wear at a truncated normal rate b
+((1.38)-(1.43)).  For load tau the disc is failure-free while chi1(tau) <= chi(t) <= chi2(tau)
+with chi_j from (1.34), so (1.48):
+
+    P(t) = int_0^{sigma psi1} [F_chi(chi2(tau), t) - F_chi(chi1(tau), t)] p_tau(tau) dtau
+
+(upper limit sigma psi1 as reconstructed by the spec, erratum 2), and the mean time to failure is
+T = int_0^inf P(t) dt (1.49).  Both are implemented literally: trapezoid quadrature in tau on
+``tau_nodes`` nodes and the exact CDF of chi(t).  An independent cross-check of (1.49): for fixed
+(tau, b) the time spent in region B up to a horizon is the length of the interval where
+chi1 <= chi0 + b t <= chi2, so int_0^H P dt = E_{tau,b}[that length], computed by quadrature in b
+instead of in t (``sojourn``).
+
+Spec reliability-experiments-estimation.md §1.6: the literal model does not give the source's
+P(2000 h) = 0.75 and T = 2.7 thousand h; it gives 0.671 and 4.12 thousand h (see
+docs/validation.md).  The option ``renormalise`` divides p_tau by its mass on [0, sigma psi1],
+the other reading the spec lists.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy.optimize import brentq
+from scipy.special import ndtr
+
+from autobal.models.hydroheel import (
+    WearModel,
+    WornDisc,
+    conductance_ratio,
+    flow_ratio,
+    initial_clearance,
+    max_gap,
+    seal_shape_factor,
+)
+from autobal.results import write_csv
+
+HOUR = 3600.0
+
+# Chapter 1.2 printed values (L871-L951), kept beside the computed ones in results.json.
+SOURCE = {
+    "u_max": 1.5, "chi0": 1.76, "b_mean_per_s": 1.39e-7, "b_std_per_s": 2.78e-8, "tau_std": 0.19, "k": 3.3,
+    "a_b": 1.0, "a_tau": 1.0, "wear_le_zB_2000h": 0.5, "P_2000h": 0.75, "P_4000h_about": 0.25,
+    "mttf_h": 2700.0,
+}
+# Table 1.2 (L944-L951): mean time to failure and time of reliable operation at P = 0.8, thousand h, for
+# the bush materials; the meaning of the two rows is lost in the OCR and the wear rates of SCh20 and
+# 20Kh13 are not given, so the table is reference data only (spec §1.5-1.6).
+TABLE_1_2 = {
+    "materials": ["SCh20 (grey cast iron)", "20Kh13", "30Kh3MA"],
+    "mttf_kh": [[1.6, 3.9, 5.8], [3.5, 8.7, 14.0]],
+    "time_at_P_0.8_kh": [[1.0, 2.6, 3.5], [2.5, 7.4, 13.2]],
+}
+
+
+@dataclass
+class Reliability:
+    """P(t) and mean time to failure of a worn disc, Eqs. (1.48)-(1.49).
+
+    disc: the disc of (1.33)-(1.36); wear: the wear law; tau_mean, tau_std: load (1.45);
+    u_min, u_max: the gap limits of region B; tau_nodes: trapezoid nodes on [0, sigma psi1];
+    renormalise: divide p_tau by its mass on [0, sigma psi1] instead of by its mass on [0, inf) (1.46).
+    """
+
+    disc: WornDisc
+    wear: WearModel
+    tau_mean: float
+    tau_std: float
+    u_min: float
+    u_max: float
+    tau_nodes: int = 20001
+    renormalise: bool = False
+    _nodes: tuple = field(init=False, repr=False)
+
+    def __post_init__(self):
+        top = self.disc.sigma * self.disc.psi1
+        tau = np.linspace(0.0, top, self.tau_nodes)
+        w = np.full(tau.shape, tau[1] - tau[0])
+        w[[0, -1]] *= 0.5  # trapezoid weights
+        dens = np.exp(-0.5 * ((tau - self.tau_mean) / self.tau_std) ** 2) / (np.sqrt(2 * np.pi) * self.tau_std)
+        dens *= self.a_tau  # truncated at tau >= 0, (1.45)-(1.46)
+        if self.renormalise:
+            dens /= np.sum(w * dens)
+        chi1, chi2 = self.disc.clearance(self.u_min, tau), self.disc.clearance(self.u_max, tau)
+        chi1[-1] = chi2[-1] = np.inf  # tau = sigma psi1: no finite clearance balances it
+        self._nodes = (tau, w * dens, chi1, chi2)
+
+    @property
+    def a_tau(self) -> float:
+        """Normaliser of the load density truncated at 0, Eq. (1.46)."""
+        return float(1.0 / ndtr(self.tau_mean / self.tau_std))
+
+    @property
+    def load_mass(self) -> float:
+        """Probability mass of the load density on [0, sigma psi1] (1 when renormalised)."""
+        return float(np.sum(self._nodes[1]))
+
+    def probability(self, t, chunk: int = 64) -> np.ndarray:
+        """P(t) of Eq. (1.48) at times t (s), vectorised in chunks of ``chunk`` times."""
+        t = np.atleast_1d(np.asarray(t, float))
+        _, wd, chi1, chi2 = self._nodes
+        out = np.empty(t.shape)
+        for i in range(0, t.size, chunk):
+            tt = t[i:i + chunk, None]
+            f = self.wear.clearance_cdf(chi2, tt) - self.wear.clearance_cdf(chi1, tt)
+            out[i:i + chunk] = f @ wd
+        return out
+
+    def mttf(self, horizon: float, points: int = 4001) -> tuple[float, np.ndarray, np.ndarray]:
+        """Mean time to failure (1.49) as int_0^horizon P(t) dt by the trapezoid rule; also (t, P)."""
+        t = np.linspace(0.0, horizon, points)
+        p = self.probability(t)
+        return float(np.trapezoid(p, t)), t, p
+
+    def sojourn(self, horizon: float = np.inf, b_nodes: int = 4001) -> float:
+        """int_0^horizon P(t) dt by the time-in-region-B identity, quadrature in b and tau (s).
+
+        For b > 0 the clearance chi0 + b t is in [chi1, chi2] for t in [(chi1 - chi0)/b,
+        (chi2 - chi0)/b]; the length of that interval within [0, horizon] is averaged over the
+        truncated normal b (nodes within 8 standard deviations) and the load density.  With
+        horizon = inf the node b = 0 is left out (its density is a_b phi(b_mean/b_std)/b_std; the
+        integral diverges there only logarithmically, by that density per e-fold of time)."""
+        wr = self.wear
+        lo = max(0.0, wr.b_mean - 8.0 * wr.b_std)
+        b = np.linspace(lo, wr.b_mean + 8.0 * wr.b_std, b_nodes)
+        pb = wr.a_b * np.exp(-0.5 * ((b - wr.b_mean) / wr.b_std) ** 2) / (np.sqrt(2 * np.pi) * wr.b_std)
+        wb = np.full(b.shape, b[1] - b[0])
+        wb[[0, -1]] *= 0.5
+        keep = b > 0
+        b, wb = b[keep], wb[keep] * pb[keep]
+        _, wd, chi1, chi2 = self._nodes
+        total = 0.0
+        for i in range(0, wd.size, 512):  # blocks of load nodes: memory 512 x b_nodes
+            c1, c2 = chi1[i:i + 512, None], chi2[i:i + 512, None]
+            with np.errstate(invalid="ignore"):
+                t_in = np.maximum(c1 - wr.chi0, 0.0) / b  # entry into region B
+                t_out = np.minimum((c2 - wr.chi0) / b, horizon)  # exit (u > u_max) or horizon
+                length = np.nan_to_num(np.clip(t_out - t_in, 0.0, None), posinf=0.0)
+            total += wd[i:i + 512] @ (length @ wb)
+        return float(total)
+
+    def time_at(self, probability: float, horizon: float) -> float:
+        """Time of reliable operation at level ``probability`` (Table 1.2): the first t with
+        P(t) = probability; NaN if P(0) is already below it (s)."""
+        f = lambda t: float(self.probability(t)[0]) - probability  # noqa: E731
+        if f(0.0) < 0:
+            return float("nan")
+        if f(horizon) > 0:
+            return float("inf")
+        return brentq(f, 0.0, horizon, xtol=1.0)
+
+
+@dataclass
+class ReliabilityResult:
+    data: dict
+
+    def to_dict(self) -> dict:
+        return self.data
+
+    def summary(self) -> str:
+        d, lit, ren = self.data, self.data["literal"], self.data["renormalised"]
+        s = d["source"]
+        lines = [
+            "reliability of the traditional balance disc (ch. 1.2)",
+            f"  u_max {d['u_max']:.4f} (source {s['u_max']}), chi0 {d['chi0']:.4f} ({s['chi0']}), k {d['k']:.4f} "
+            f"({s['k']}), b_mean {d['b_mean']:.4g} 1/s ({s['b_mean_per_s']})",
+            "  P(wear <= z_B): " + ", ".join(f"{h:g} h: {p:.4f}" for h, p in
+                                             zip(d["times_h"], d["wear_le_base_gap"], strict=True)),
+        ]
+        for name, r in (("literal (1.48)", lit), ("renormalised p_tau", ren)):
+            lines.append(f"  {name}: P(0) {r['P0']:.4f}; " + ", ".join(
+                f"P({h:g} h) {p:.4f}" for h, p in zip(d["times_h"], r["P"], strict=True))
+                + f"; MTTF {r['mttf_h']:.0f} h to {d['horizon_h']:g} h ({r['mttf_sojourn_h']:.0f} h by sojourn),"
+                f" {r['mttf_infinite_h']:.0f} h to infinity; t(P = {d['reliable_probability']}) {r['time_at_h']:.0f} h")
+        lines.append(f"  source: P(2000 h) {s['P_2000h']}, MTTF {s['mttf_h']:.0f} h: not reproduced (spec §1.6)")
+        return "\n".join(lines)
+
+    def write_tables(self, out: Path) -> list[Path]:
+        c = self.data["curve"]
+        write_csv(out / "reliability_curve.csv", {"t_h": c["t_h"], "P_literal": c["P_literal"],
+                                                  "P_renormalised": c["P_renormalised"],
+                                                  "P_wear_le_base_gap": c["P_wear_le_base_gap"]})
+        return [out / "reliability_curve.csv"]
+
+    def plot(self, out: Path) -> list[Path]:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        d, c = self.data, self.data["curve"]
+        fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4.2))
+        a1.plot(c["t_h"], c["P_literal"], label="P(t), (1.48) literal")
+        a1.plot(c["t_h"], c["P_renormalised"], ls="--", label=r"P(t), $p_\tau$ renormalised on [0, $\sigma\psi_1$]")
+        a1.plot(c["t_h"], c["P_wear_le_base_gap"], ls=":", label=r"P(wear $\leq z_B$) (Fig. 1.27)")
+        a1.plot([2000, 4000], [0.75, 0.25], "kx", label="source (Fig. 1.28)")
+        a1.axvline(d["literal"]["mttf_h"], color="0.4", lw=0.8, label="MTTF (1.49), literal")
+        a1.set_xlim(0, min(c["t_h"][-1], 12000))
+        a1.set_xlabel("time, h")
+        a1.set_ylabel("probability")
+        a1.grid(alpha=0.3)
+        a1.legend(fontsize=7)
+        reg = d["region"]
+        a2.plot(reg["chi"], reg["tau_u_min"], label=r"$\tau_1(\chi)$, $u = u_{min}$")
+        a2.plot(reg["chi"], reg["tau_u_max"], label=r"$\tau_2(\chi)$, $u = u_{max}$")
+        a2.fill_between(reg["chi"], reg["tau_u_max"], reg["tau_u_min"], color="0.9", label="B: failure-free")
+        a2.axvline(d["chi0"], color="k", lw=0.8, ls=":", label=r"$\chi_0$")
+        a2.axhline(d["tau_mean"], color="0.5", lw=0.8, ls="--", label=r"$\bar\tau$")
+        a2.set_xlabel(r"seal clearance $\chi = h_1/z_B$")
+        a2.set_ylabel(r"axial force $\tau$")
+        a2.grid(alpha=0.3)
+        a2.legend(fontsize=7)
+        fig.suptitle(d["title"], fontsize=9)
+        fig.tight_layout()
+        fig.savefig(out / "fig_reliability.png", dpi=120)
+        plt.close(fig)
+        return [out / "fig_reliability.png"]
+
+
+def build(settings) -> tuple[Reliability, Reliability, dict]:
+    """The literal and renormalised models of a validated ``analyses.reliability`` block, and the
+    derived inputs (k, chi0, alpha_T1, u_max, b_mean, ...)."""
+    d = settings.disc
+    k = seal_shape_factor(d.seal_radius, d.seal_length, d.face_inner_radius, d.face_outer_radius)
+    if d.conductance_ratio is not None:
+        alpha, chi0 = d.conductance_ratio, initial_clearance(k, d.conductance_ratio)
+    else:
+        chi0 = d.seal_clearance / d.base_gap
+        alpha = float(conductance_ratio(k, chi0))
+    u_max = max_gap(settings.limits.max_flow, alpha)
+    b_mean = settings.wear.depth / settings.wear.per / d.base_gap  # (dchi/dt)_0, 1/s
+    b_std = settings.wear.cv * b_mean  # (1.50), sigma = kappa * mean (erratum 3)
+    ld = settings.load
+    disc = WornDisc(sigma=d.effective_area_ratio, k=k, psi1=ld.discharge_ratio)
+    wear = WearModel(chi0=chi0, b_mean=b_mean, b_std=b_std)
+    common = dict(disc=disc, wear=wear, tau_mean=ld.mean, tau_std=ld.cv * ld.mean, u_min=settings.limits.min_gap,
+                  u_max=u_max, tau_nodes=settings.tau_nodes)
+    derived = {"k": k, "alpha_T1": alpha, "chi0": chi0, "u_max": u_max, "u_min": settings.limits.min_gap,
+               "q_at_u_max": float(flow_ratio(u_max, alpha)), "b_mean": b_mean, "b_std": b_std,
+               "a_b": wear.a_b, "tau_mean": ld.mean, "tau_std": ld.cv * ld.mean, "sigma": d.effective_area_ratio,
+               "psi1": ld.discharge_ratio, "z_B": d.base_gap}
+    return Reliability(**common), Reliability(**common, renormalise=True), derived
+
+
+def run(settings, title: str = "") -> ReliabilityResult:
+    """The chapter 1.2 study of a scene: P(t), MTTF both ways, wear CDF, region B, source values."""
+    lit, ren, derived = build(settings)
+    horizon = settings.horizon
+    times = np.asarray(settings.times, float)
+    data = {"title": title, **derived, "a_tau": lit.a_tau, "load_mass_on_0_sigma_psi1": lit.load_mass,
+            "times_h": times / HOUR, "horizon_h": horizon / HOUR, "reliable_probability": settings.reliable_probability,
+            "wear_le_base_gap": lit.wear.wear_probability(1.0, times)}
+    for name, model in (("literal", lit), ("renormalised", ren)):
+        mttf, t, p = model.mttf(horizon, settings.time_points)
+        data[name] = {
+            "P0": float(model.probability(0.0)[0]), "P": model.probability(times),
+            "mttf_h": mttf / HOUR, "mttf_sojourn_h": model.sojourn(horizon) / HOUR,
+            "mttf_infinite_h": model.sojourn() / HOUR,
+            "time_at_h": model.time_at(settings.reliable_probability, horizon) / HOUR,
+        }
+        data["curve"] = data.get("curve", {"t_h": t / HOUR}) | {f"P_{name}": p}
+    data["curve"]["P_wear_le_base_gap"] = lit.wear.wear_probability(1.0, data["curve"]["t_h"] * HOUR)
+    chi = np.linspace(0.5, 4.0 * derived["chi0"], 200)
+    data["region"] = {"chi": chi, "tau_u_min": lit.disc.load(chi, lit.u_min),
+                      "tau_u_max": lit.disc.load(chi, lit.u_max)}
+    data["source"] = SOURCE
+    data["table_1_2"] = TABLE_1_2
+    return ReliabilityResult(data)
+
+
+def run_scene(scn, settings, out: Path):
+    """Runner of ``analyses.reliability`` (autobal.pipeline.RUNNERS)."""
+    import time
+
+    t0 = time.perf_counter()
+    res = run(settings, scn.title)
+    files = res.write_tables(out) + res.plot(out)
+    return res.to_dict() | {"run_time_s": time.perf_counter() - t0}, files, res.summary()
