@@ -44,7 +44,7 @@ from scipy.special import ndtr
 
 from autobal.analysis import closed_form
 from autobal.errors import ScenarioError
-from autobal.models.device import DeviceDesign, parametric_static_system
+from autobal.models.device import DeviceDesign, static_system
 from autobal.results import write_csv
 
 # the static model's groups that may be uncertain (DeviceGroups, RegulatorGroups and the margin dpsi)
@@ -158,7 +158,7 @@ class StaticsMC:
         self.design = dev
         self.names = tuple(names)
         self.theta_names = [n for n in self.names if n != "dpsi"]
-        self.system = parametric_static_system(dev.groups, self.theta_names)
+        self.system = static_system(dev.groups, self.theta_names)
         self._solvers: dict = {}
         self._maps: dict = {}
         self._first: dict = {}
@@ -205,7 +205,7 @@ class StaticsMC:
         if active not in self._solvers:
             sys_ = self.system
             n, k = len(sys_.unknowns), 2 + len(self.theta_names)
-            fixed = {c if r in active else r: (at if r in active else 0.0) for r, (c, at, _) in sys_.stops.items()}
+            fixed = sys_.fixed_by_stops(active)
             free = [i for i, name in enumerate(sys_.unknowns) if name not in fixed]
             wf, p = ca.SX.sym("wf", len(free)), ca.SX.sym("p", k)
             full = ca.vertcat(*[wf[free.index(i)] if i in free else fixed[name]

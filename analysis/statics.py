@@ -139,8 +139,7 @@ class StaticsSolver:
         """
         if active not in self._newton:
             sys_ = self.system
-            fixed = {c if r in active else r: (at if r in active else 0.0)
-                     for r, (c, at, _) in sys_.stops.items()}
+            fixed = sys_.fixed_by_stops(active)
             free = [i for i, k in enumerate(sys_.unknowns) if k not in fixed]
             wf = ca.SX.sym("wf", len(free))
             full = ca.vertcat(*[wf[free.index(i)] if i in free else fixed[k]

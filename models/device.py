@@ -78,10 +78,32 @@ class StaticSystem:
     def index(self, name: str) -> int:
         return self.unknowns.index(name)
 
+    def fixed_by_stops(self, active=frozenset()) -> dict:
+        """Unknowns a set of stops fixes: for a stop in ``active`` its coordinate on the stop,
+        for every other stop its reaction at zero (name -> value)."""
+        return {c if r in active else r: (at if r in active else 0.0) for r, (c, at, _) in self.stops.items()}
 
-def static_system(groups: DeviceGroups) -> StaticSystem:
-    """Build the static equations of the device described by ``groups``."""
+
+def static_system(groups: DeviceGroups, parameters=()) -> StaticSystem:
+    """Build the static equations of the device described by ``groups``.
+
+    ``parameters`` names groups (fields of DeviceGroups or RegulatorGroups, e.g. "alpha_TB1",
+    "psi_in"; not "medium" or "xi_max") that become a symbolic input ``theta``: then
+    ``residual(w, psi1, dpsi, theta)`` and ``flows(w, psi1, dpsi, theta)``, for mapping the
+    statics over parameter samples and exact parametric derivatives.
+    """
+    import dataclasses
+
     reg = groups.regulator
+    theta = ca.SX.sym("theta", len(parameters))
+    g = {f.name: getattr(groups, f.name) for f in dataclasses.fields(DeviceGroups)}
+    rg = {f.name: getattr(reg, f.name) for f in dataclasses.fields(RegulatorGroups)} if reg is not None else {}
+    for i, name in enumerate(parameters):
+        target = rg if name in rg else g
+        if name not in target or name in ("medium", "regulator", "xi_max"):
+            raise ValueError(f"{name!r} is not a parameter of this device's static model")
+        target[name] = theta[i]
+
     inf = math.inf
     unknowns = {"psi2": (0, inf), "psi3": (0, inf), "u": (0, inf), "r_contact": (0, inf)}
     stops = {"r_contact": ("u", 0.0, 1.0)}  # reaction: (coordinate, stop, side)
@@ -100,26 +122,28 @@ def static_system(groups: DeviceGroups) -> StaticSystem:
 
     # Throttles of the flow network (2.15)/(2.136): name -> q
     q = {
-        "e": flow("laminar", groups.alpha_e1, psi_e, v["psi2"]),  # barrier supply, e -> 2
+        "e": flow("laminar", g["alpha_e1"], psi_e, v["psi2"]),  # barrier supply, e -> 2
         "1": flow("laminar", 1.0, v["psi2"], psi1),  # inner seal, 2 -> discharge
-        "T": face_opening(v["u"]) * flow(root, groups.alpha_TB1, v["psi2"], v["psi3"]),  # face, 2 -> 3
-        "3": flow(root, groups.alpha_31, v["psi3"], groups.psi4),  # outer seal, 3 -> drain
+        "T": face_opening(v["u"]) * flow(root, g["alpha_TB1"], v["psi2"], v["psi3"]),  # face, 2 -> 3
+        "3": flow(root, g["alpha_31"], v["psi3"], g["psi4"]),  # outer seal, 3 -> drain
     }
     eqs = {
-        "disc force": groups.sigma * (v["psi2"] - v["psi3"]) + groups.chi + v["r_contact"] - groups.b * psi1,
+        "disc force": g["sigma"] * (v["psi2"] - v["psi3"]) + g["chi"] + v["r_contact"] - g["b"] * psi1,
         "chamber 2 flow": q["e"] - q["1"] - q["T"],
         "chamber 3 flow": q["T"] - q["3"],
     }
     if reg is not None:
-        q["in"] = flow("laminar", reg.alpha_in1, reg.psi_in, v["psi_cam"])  # inlet, supply -> cam
-        q["valve"] = v["xi"] * flow("turbulent", reg.alpha_B1, v["psi_cam"], psi_e)  # valve, cam -> e
-        r_valve = v.get("r_valve", 0)
-        eqs["membrane force"] = reg.sigma_m * (psi_e - psi1 - dpsi) + r_valve
+        q["in"] = flow("laminar", rg["alpha_in1"], rg["psi_in"], v["psi_cam"])  # inlet, supply -> cam
+        q["valve"] = v["xi"] * flow("turbulent", rg["alpha_B1"], v["psi_cam"], psi_e)  # valve, cam -> e
+        eqs["membrane force"] = rg["sigma_m"] * (psi_e - psi1 - dpsi) + v.get("r_valve", 0)
         eqs["valve chamber flow"] = q["in"] - q["valve"]
         eqs["barrier chamber flow"] = q["valve"] - q["e"]
 
     nan = ca.SX(math.nan)
     outputs = ca.vertcat(psi_e, v["psi2"], v["psi3"], v["psi_cam"] if reg is not None else nan)
+    args, arg_names = [w, psi1, dpsi], ["w", "psi1", "dpsi"]
+    if parameters:
+        args, arg_names = args + [theta], arg_names + ["theta"]
     return StaticSystem(
         groups=groups,
         unknowns=names,
@@ -127,10 +151,8 @@ def static_system(groups: DeviceGroups) -> StaticSystem:
         upper=[float(hi) for _, hi in unknowns.values()],
         equations=list(eqs),
         throttles=list(q),
-        residual=ca.Function("static_residual", [w, psi1, dpsi], [ca.vertcat(*eqs.values())],
-                             ["w", "psi1", "dpsi"], ["r"]),
-        flows=ca.Function("static_flows", [w, psi1, dpsi], [ca.vertcat(*q.values()), outputs],
-                          ["w", "psi1", "dpsi"], ["q", "psi"]),
+        residual=ca.Function("static_residual", args, [ca.vertcat(*eqs.values())], arg_names, ["r"]),
+        flows=ca.Function("static_flows", args, [ca.vertcat(*q.values()), outputs], arg_names, ["q", "psi"]),
         complementarity=ca.Function("stop_complementarity", [w], [sum(
             v[r] * side * (v[coord] - at) for r, (coord, at, side) in stops.items())]),
         stops=stops,

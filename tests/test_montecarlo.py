@@ -17,7 +17,7 @@ from autobal.analysis import montecarlo as mc
 from autobal.analysis.statics import StaticsSolver
 from autobal.cli import main
 from autobal.errors import ScenarioError
-from autobal.models.device import DeviceDesign, design, parametric_static_system, static_system
+from autobal.models.device import DeviceDesign, design, static_system
 from autobal.schema_reliability import Correlation, Distribution
 
 THESIS = ["alpha_in1", "alpha_B1", "alpha_e1", "alpha_TB1", "alpha_31", "b", "sigma", "chi", "dpsi", "psi_in"]
@@ -57,7 +57,7 @@ def test_parametric_residual_equals_the_statics_residual(name):
     names = ["sigma", "chi", "b", "psi4", "alpha_TB1", "alpha_31", "alpha_e1", "psi_in", "alpha_in1", "alpha_B1",
              "sigma_m"]
     theta = [getattr(g, n) if hasattr(g, n) else getattr(g.regulator, n) for n in names]
-    base, par = static_system(g), parametric_static_system(g, names)
+    base, par = static_system(g), static_system(g, names)
     assert par.unknowns == base.unknowns and par.equations == base.equations
     rng = np.random.default_rng(1)
     for _ in range(5):
@@ -67,7 +67,7 @@ def test_parametric_residual_equals_the_statics_residual(name):
         assert_allclose(np.array(par.flows(w, psi1, 0.04, theta)[0]), np.array(base.flows(w, psi1, 0.04)[0]),
                         rtol=0, atol=0)
     with pytest.raises(ValueError, match="'xi_max' is not a parameter"):
-        parametric_static_system(g, ["xi_max"])
+        static_system(g, ["xi_max"])
 
 
 def test_samples_are_reproducible_and_have_the_asked_moments(ev):
