@@ -39,7 +39,7 @@ class Dynamics(Strict):
 
     rotor_mass: Mass  # m_p
     pushoff_stiffness: Stiffness  # k_pr; preload deflection F_pr/k_pr + z0 (spec §5.2)
-    rotor_damping: Damping | None = None  # c_z; default squeeze film 1.5 mu s_T^2/(pi z_B^3) (L3322)
+    rotor_damping: DampingOrZero | None = None  # c_z (0: undamped); default 1.5 mu s_T^2/(pi z_B^3) (L3322)
     bulk_modulus: Pressure  # E of the barrier medium (gas: the source's 1.42e5 Pa)
     disc_chamber_volume: Volume  # V2, chamber before the face throttle
     cavity_volume: Volume  # V3, cavity behind the disc

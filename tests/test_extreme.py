@@ -62,3 +62,45 @@ def test_no_nan_without_a_status(tmp_path):
     for key in ("psi1_kr", "dpsi_kr"):
         assert crit[key] is not None or crit[f"{key}_status"]
     assert np.all(np.isfinite(np.asarray(res["statics"]["sweep"]["u"], float)))
+
+
+def stiffness_ratio(res):
+    poles = res["stability"]["models"]["nonlinear"]["poles"]
+    mod = np.hypot(poles["real"], poles["imag"])
+    return mod.max() / mod[mod > 0].min()
+
+
+def test_chambers_thousand_times_smaller(tmp_path):
+    code, res = run(tmp_path, "dynamics_small_chambers")
+    assert code == 0
+    assert stiffness_ratio(res) > 1e9  # the stiffness ratio
+    case = res["transient"]["cases"][0]
+    assert case["failure"] is None and case["t_end"] == pytest.approx(0.02)  # integrated to the end
+    # the chambers are nearly instantaneous: the gap response equals the nominal scene's to 15 %
+    assert case["max_dz_um"] == pytest.approx(1.86, rel=0.15)
+
+
+def test_incompressible_limit(tmp_path):
+    code, res = run(tmp_path, "dynamics_incompressible")
+    assert code == 0
+    assert stiffness_ratio(res) > 1e11
+    case = res["transient"]["cases"][0]
+    assert case["failure"] is None and np.isfinite(case["final_dz_um"])
+    assert case["max_dz_um"] == pytest.approx(1.86, rel=0.15)
+
+
+def test_no_damping_stays_stable_on_hydraulic_damping(tmp_path):
+    code, res = run(tmp_path, "dynamics_no_damping")
+    assert code == 0
+    nl = res["stability"]["models"]["nonlinear"]
+    assert nl["stable"] and 0 < nl["margin"]["decay_rate"] < 80.6  # less than with c_z (80.6 1/s), still stable
+
+
+def test_valve_driven_to_its_travel_limit(tmp_path):
+    code, res = run(tmp_path, "dynamics_valve_limits")
+    assert code == 0
+    up, down = res["transient"]["cases"]
+    assert any(e["event"] == "valve_at_travel_limit" for e in up["events"])
+    assert any(e["event"] == "inner_seal_reversal" or "q1 < 0" in e.get("message", "") for e in up["events"])
+    # a 90 % drop of discharge pressure closes the valve only partly: xi stays above 0.9 (no stop reached)
+    assert not any(e["event"] == "valve_closed" for e in down["events"])

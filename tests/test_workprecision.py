@@ -48,3 +48,19 @@ def test_run_reports_timing_and_accuracy(tmp_path):
     assert res["timing"]["statics"] > 0
     acc = res["accuracy"]["statics"]
     assert acc["estimate"] < 1e-10 and "40-digit" in acc["how"]
+
+
+def test_dynamics_work_precision_orders_the_integrators():
+    from autobal import scenario
+    from autobal.analysis.linearize import Setup
+
+    model = Setup(scenario.load("pump_pe600_dynamics").device).nonlinear("energy")
+    study = wp.dynamics_study(model, 0.005, 0.01, quick=True)
+    err = {(r["method"], r["setting"]): r["error"] for r in study.rows}
+    # CVODES converges with its tolerance, against a Radau reference
+    assert err[("CVODES (BDF, exact Jacobian)", 1e-10)] < 1e-8 < err[("CVODES (BDF, exact Jacobian)", 1e-5)]
+    # an explicit method cannot take the step a 8e8 1/s mode allows: it diverges (recorded, not hidden)
+    assert all("diverged" in r["failed"] for r in study.rows if r["method"].startswith("CasADi RK4"))
+    st = study.notes["stiffness"]
+    assert st["ratio"] > 1e6 and st["max_abs_eigenvalue"] == pytest.approx(8.04e8, rel=0.01)
+    assert st["reference_difference_cvodes_vs_radau"] < 1e-10
