@@ -1,0 +1,287 @@
+"""The ``rotor_dynamics`` analysis of a scene: the source's studies of the rotor with a liquid
+auto-balancer (Pashkov 2010, chapter 2; spec rotor-liquid-abd-dynamics.md §3, §5, §9 items 2-7, 9).
+
+Parts (each optional in the scene): ``stationary`` (Eq. (9), Figs 5-6, table §5.1, and the
+steady state (3) and stability (P) of the scene's rotor), ``steps`` (speed steps (4)-(7), Figs 3-4,
+closed form beside CVODES, table §5.3), ``passage`` (uniform acceleration (8')-(9'), Figs 7-9,
+table §5.4, crossover n*), ``lewis`` (table §5.5) and ``motor_runup`` (spec §8.3).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from autobal.analysis import rotor as R
+from autobal.errors import ScenarioError
+from autobal.models.rotor import RotorParams
+from autobal.results import write_csv
+
+STEP_TOL = 1e-12  # CVODES tolerance of the step transients checked against the closed form
+
+
+@dataclass
+class RotorDynamicsResult:
+    data: dict  # the results.json block
+    curves: dict = field(default_factory=dict, repr=False)  # arrays for tables and figures
+
+    def to_dict(self) -> dict:
+        return self.data
+
+    def summary(self) -> str:
+        d, lines = self.data, [f"rotor dynamics: psi = {self.data['rotor']['psi']:.4g}, Omega0 = "
+                               f"{self.data['rotor']['Omega0_rad_s']:.4g} rad/s, omega_cr = "
+                               f"{self.data['rotor']['omega_cr_rad_s']:.4g} rad/s"]
+        if "stationary" in d:
+            s = d["stationary"]
+            lines.append(f"  stationary (9): {len(s['cases'])} (mu1, n) cases; (3) = (9) to "
+                         f"{s['steady_vs_eq9_max_rel_diff']:.1e}; stability (P): max Re = "
+                         f"{s['stability']['max_real_over_Omega0']:.4g} Omega0, eigenvalues = lambda +- i nu to "
+                         f"{s['stability']['max_eigenvalue_residual']:.1e}")
+        if "steps" in d:
+            s = d["steps"]
+            lines.append(f"  steps (5)-(7): {len(s['table'])} cases, closed form vs CVODES max difference "
+                         f"{s['closed_form_vs_cvodes_max_rel_diff']:.1e}")
+        if "passage" in d:
+            s = d["passage"]
+            cx = ", ".join(f"psi={k}: {v:.3f} 1/s" for k, v in s["crossover_n_star"].items())
+            lines.append(f"  passage (8')-(9'): {len(s['table'])} runs; crossover n*: {cx or '-'}")
+        if "lewis" in d:
+            lines.append(f"  Lewis passage: {len(d['lewis']['table'])} cases")
+        if "motor_runup" in d:
+            m = d["motor_runup"]
+            lines.append(f"  motor run-up: final speed {m['omega_final_rad_s']:.4g} rad/s, "
+                         f"{'passed' if m['passed'] else 'captured below'} omega_cr")
+        return "\n".join(lines)
+
+    def write_tables(self, out: Path) -> list[Path]:
+        files = []
+        for key, rows in (("steps", "table"), ("passage", "table"), ("lewis", "table"), ("stationary", "cases")):
+            if key in self.data:
+                table = self.data[key][rows]
+                cols = {k: [r[k] for r in table] for k in table[0]}
+                write_csv(out / f"rotor_{key}.csv", cols)
+                files.append(out / f"rotor_{key}.csv")
+        return files
+
+    def plot(self, out: Path) -> list[Path]:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        c, paths = self.curves, []
+
+        def save(fig, name):
+            fig.tight_layout()
+            fig.savefig(out / name, dpi=110)
+            plt.close(fig)
+            paths.append(out / name)
+
+        if "stationary" in c:
+            fig, ax = plt.subplots(2, 2, figsize=(9, 7))
+            for (mu1, n), cv in c["stationary"].items():
+                lab = rf"$\mu_1$={mu1:g}, n={n:g}"
+                ax[0, 0].plot(cv["z"], cv["a"], label=lab)
+                ax[0, 1].plot(cv["z"], cv["M"], label=lab)
+                ax[1, 0].plot(cv["z"], cv["d"], label=lab)
+                ax[1, 1].plot(cv["z"], cv["ratio_a"], label=lab)
+            for a, yl in zip(ax.ravel(), ("a/e (Fig. 5)", r"M/(e$^2$c) (Fig. 6)", r"d/(m$_1$e)",
+                                          r"a/a$_1$ = d/d$_1$ (10)"), strict=True):
+                a.set_xlabel(r"z = $(\omega/\Omega_0)^2$")
+                a.set_ylabel(yl)
+                a.set_yscale("log") if "M" in yl else None
+                a.grid(alpha=0.3)
+                a.legend(fontsize=7)
+            save(fig, "fig_rotor_stationary.png")
+        if "steps" in c:
+            keys = list(c["steps"])
+            fig, ax = plt.subplots(2, 2, figsize=(9, 7), sharey=False)
+            for a, key in zip(ax.ravel(), keys, strict=False):
+                for psi, cv in c["steps"][key].items():
+                    a.plot(cv["t"] * 1e3, cv["d"], label=rf"$\psi$={psi:g}")
+                a.set_title(f"step {key} rad/s (Figs 3-4)", fontsize=9)
+                a.set_xlabel("t (ms)")
+                a.set_ylabel("system unbalance d (7)")
+                a.grid(alpha=0.3)
+                a.legend(fontsize=7)
+            save(fig, "fig_rotor_steps.png")
+        if "passage" in c:
+            fig, ax = plt.subplots(2, 2, figsize=(9, 7))
+            for col, n in enumerate(sorted(c["passage"]["curves"])[:1] + sorted(c["passage"]["curves"])[-1:]):
+                for psi, cv in c["passage"]["curves"][n].items():
+                    ax[0, col].plot(cv["z"], cv["delta"], lw=0.8, label=rf"$\psi$={psi:g}")
+                    ax[1, col].plot(cv["z"], cv["d"], lw=0.8, label=rf"$\psi$={psi:g}")
+                for r, yl in ((0, r"$\delta/e$"), (1, "d (9')")):
+                    ax[r, col].set_title(f"n = {n:g} 1/s (Fig. {7 if col == 0 else 8})", fontsize=9)
+                    ax[r, col].set_xlabel(r"z = $\omega/\Omega_0$")
+                    ax[r, col].set_ylabel(yl)
+                    ax[r, col].grid(alpha=0.3)
+                    ax[r, col].legend(fontsize=7)
+            save(fig, "fig_rotor_passage.png")
+            fig, ax = plt.subplots(1, 2, figsize=(9, 3.8))
+            tab = self.data["passage"]["table"]
+            for psi in sorted({r["psi"] for r in tab}, reverse=True):
+                rows = [r for r in tab if r["psi"] == psi]
+                n = [r["n"] for r in rows]
+                ax[0].plot(n, [r["delta_max_over_e"] for r in rows], "o-", label=rf"$\psi$={psi:g}")
+                ax[1].plot(n, [r["d_max"] for r in rows], "o-", label=rf"$\psi$={psi:g}")
+            for a, yl in zip(ax, (r"$\delta^*/e$", "d*"), strict=True):
+                a.set_xscale("symlog", linthresh=1)
+                a.set_xlabel(r"n = $\chi/m_1$ (1/s) (Fig. 9)")
+                a.set_ylabel(yl)
+                a.grid(alpha=0.3)
+                a.legend(fontsize=7)
+            save(fig, "fig_rotor_peaks.png")
+        if "lewis" in self.data:
+            fig, a = plt.subplots(figsize=(6, 4))
+            tab = self.data["lewis"]["table"]
+            for z in sorted({r["zeta"] for r in tab}):
+                rows = [r for r in tab if r["zeta"] == z]
+                a.loglog([r["a_star"] for r in rows], [r["peak_over_e"] for r in rows], "o-", label=rf"$\zeta$={z:g}")
+            aa = np.array(sorted({r["a_star"] for r in tab}))
+            a.loglog(aa, 1.4672 / np.sqrt(aa), "k--", lw=0.8, label=r"1.4672/$\sqrt{a^*}$ (undamped asymptote)")
+            a.set_xlabel(r"$a^* = \alpha/\Omega^2$")
+            a.set_ylabel("peak |u|/e")
+            a.grid(alpha=0.3, which="both")
+            a.legend(fontsize=7)
+            save(fig, "fig_rotor_lewis.png")
+        if "motor" in c:
+            fig, a = plt.subplots(2, 1, figsize=(6, 5), sharex=True)
+            m = c["motor"]
+            a[0].plot(m["t"], m["omega"])
+            a[0].axhline(self.data["rotor"]["omega_cr_rad_s"], color="k", ls=":", lw=0.8, label=r"$\omega_{cr}$")
+            a[0].set_ylabel(r"$\omega$ (rad/s)")
+            a[0].legend(fontsize=7)
+            a[1].plot(m["t"], m["delta"])
+            a[1].set_ylabel(r"$\delta/e$")
+            a[1].set_xlabel("t (s)")
+            for x in a:
+                x.grid(alpha=0.3)
+            save(fig, "fig_rotor_motor.png")
+        return paths
+
+
+# ---- parts -----------------------------------------------------------------------------------------
+
+def stationary_part(P: RotorParams, cases, z) -> tuple[dict, dict]:
+    """Table §5.1 for each (mu1, n); (3) vs (9) and stability (P) of the scene's rotor over speed."""
+    rows, curves = [], {}
+    for mu1, n in cases:
+        sp = R.stationary_points(mu1, n)
+        rows.append({k: sp[k] for k in ("mu1", "n", "z_kp", "a_kp", "z_helps", "a_inf", "z1", "M1", "z2", "M2",
+                                        "d_max", "z_d_max")})
+        curves[(mu1, n)] = R.stationary(mu1, n, z)
+    nu = np.sqrt(np.asarray(z))
+    ss = R.steady_state(P, nu)
+    eq9 = R.stationary(P.mu1, P.n_stationary(), nu**2)
+    rel = float(np.max(np.abs(ss["a"] - eq9["a"]) / eq9["a"]))
+    stab = [R.stability(P, float(v)) for v in np.linspace(0.05, float(nu.max()), 25)]
+    data = {"cases": rows, "steady_vs_eq9_max_rel_diff": rel,
+            "stability": {"max_real_over_Omega0": max(s["max_real"] for s in stab),
+                          "max_eigenvalue_residual": max(s["residual"] for s in stab)}}
+    return data, curves
+
+
+def step_case(P: RotorParams, w0: float, w1: float, duration: float, points: int = 6000) -> dict:
+    """One step w0 -> w1 (rad/s): the closed form (5)-(7) on a dense grid, and CVODES for comparison."""
+    Om = P.Omega0
+    tau = np.linspace(0, duration * Om, points + 1)
+    w = R.step_closed_form(P, w0 / Om, w1 / Om, tau)
+    q0 = R.steady_q(P, w0 / Om)[:4] + [w1 / Om]
+    sim = R.simulate(P, q0, np.zeros(points // 100), np.full(points // 100, tau[-1] / (points // 100)), points=100,
+                     tol=STEP_TOL)
+    w_int = sim["q"][0] + 1j * sim["q"][1]
+    diff = float(np.max(np.abs(w_int - w)) / np.max(np.abs(w)))
+    psi = P.psi
+    d = np.abs(w / psi + 1)
+    a = np.abs(w)
+    ss = R.steady_state(P, w1 / Om)
+    d_ss, a_ss = float(ss["d"]), float(ss["a"])
+    dmax, tmax = R.peak(tau, d)
+    out = np.nonzero(np.abs(d - d_ss) > 0.05 * d_ss)[0]
+    return {"step": f"{w0:g}->{w1:g}", "psi": psi, "d0": float(d[0]), "d_max": dmax, "t_d_max_ms": tmax / Om * 1e3,
+            "d_ss": d_ss, "a_max_over_e": R.peak(tau, a)[0], "a_ss_over_e": a_ss,
+            "t_5pct_ms": float(tau[out[-1]] / Om * 1e3) if len(out) else 0.0, "closed_form_vs_cvodes": diff,
+            "_t": tau / Om, "_d": d}
+
+
+def passage_part(P: RotorParams, s) -> tuple[dict, dict]:
+    Om = P.Omega0
+    rows, curves, cross = [], {}, {}
+    for n in s.friction:
+        curves[n] = {}
+        for psi in s.psi:
+            Pn = P.with_chi(n * P.m1).with_psi(psi)
+            r = R.passage(Pn, s.start_speed / Om, s.acceleration / Om**2, s.final_ratio)
+            rows.append({"n": n, "psi": psi, "delta_max_over_e": r["delta_max"], "z_delta_max": r["nu_delta_max"],
+                         "d_max": r["d_max"], "z_d_max": r["nu_d_max"]})
+            keep = slice(None, None, max(1, len(r["nu"]) // 3000))
+            curves[n][psi] = {"z": r["nu"][keep], "delta": r["delta"][keep], "d": r["d"][keep]}
+    sens = {}
+    if s.crossover:
+        for psi in (p for p in s.psi if p < 1):
+            cross[str(psi)] = R.crossover(Om, psi, s.start_speed, s.acceleration, s.final_ratio)
+            if s.sensitivity_acceleration:
+                sens[str(psi)] = R.crossover(Om, psi, s.start_speed, s.sensitivity_acceleration, s.final_ratio)
+    return {"table": rows, "crossover_n_star": cross, "crossover_n_star_sensitivity": sens,
+            "acceleration_rad_s2": s.acceleration, "sensitivity_acceleration_rad_s2": s.sensitivity_acceleration}, {
+        "curves": curves}
+
+
+def run(P: RotorParams, settings, title: str = "", motor=None) -> RotorDynamicsResult:
+    data = {"title": title, "rotor": {"psi": P.psi, "mu1": P.mu1, "Omega0_rad_s": P.Omega0,
+                                      "omega_cr_rad_s": P.omega_cr, "zeta0": P.zeta0, "n_steady_1_s": P.n_steady(),
+                                      "n_stationary": P.n_stationary(), "n_passage_1_s": P.n_passage()}}
+    curves = {}
+    if settings.stationary is not None:
+        s = settings.stationary
+        z = np.linspace(s.z.start, s.z.stop, s.z.points)
+        data["stationary"], curves["stationary"] = stationary_part(P, s.cases, z)
+    if settings.steps is not None:
+        s, rows, curves["steps"] = settings.steps, [], {}
+        for w0, w1 in s.steps:
+            key = f"{w0:g}->{w1:g}"
+            curves["steps"][key] = {}
+            for psi in s.psi:
+                r = step_case(P.with_psi(psi), w0, w1, s.duration)
+                curves["steps"][key][psi] = {"t": r.pop("_t"), "d": r.pop("_d")}
+                rows.append(r)
+        data["steps"] = {"table": rows, "closed_form_vs_cvodes_max_rel_diff": max(r["closed_form_vs_cvodes"]
+                                                                                  for r in rows)}
+    if settings.passage is not None:
+        data["passage"], curves["passage"] = passage_part(P, settings.passage)
+    if settings.lewis is not None:
+        rows = []
+        for z in settings.lewis.zeta:
+            for a in settings.lewis.accel_ratio:
+                r = R.lewis(z, a)
+                rows.append({"zeta": z, "a_star": a, "peak_over_e": r["peak"], "nu_peak": r["nu_peak"],
+                             "undamped_asymptote": r["asymptote"], "nu_asymptote": r["nu_asymptote"]})
+        data["lewis"] = {"table": rows}
+    if settings.motor_runup is not None:
+        if motor is None:
+            raise ScenarioError("analyses.rotor_dynamics.motor_runup needs rotor.drive.motor")
+        if P.J_p + P.m1 * P.e**2 * (1 - P.psi) <= 0:
+            raise ScenarioError("analyses.rotor_dynamics.motor_runup needs rotor.drive.polar_inertia > 0")
+        ts = P.torque_scale
+        r = R.motor_runup(P, motor.stall_torque / ts, motor.no_load_speed / P.Omega0,
+                          settings.motor_runup.duration * P.Omega0)
+        data["motor_runup"] = {"omega_final_rad_s": r["nu_final"] * P.Omega0, "passed": r["passed"],
+                               "peak_deflection_over_e": float(r["delta"].max())}
+        curves["motor"] = {"t": r["tau"] / P.Omega0, "omega": r["nu"] * P.Omega0, "delta": r["delta"]}
+    return RotorDynamicsResult(data, curves)
+
+
+def run_scene(scn, settings, out: Path):
+    """Runner of the ``rotor_dynamics`` analysis (autobal.pipeline.RUNNERS)."""
+    if scn.rotor is None:
+        raise ScenarioError("analyses.rotor_dynamics needs a rotor section")
+    t0 = time.perf_counter()
+    drive = scn.rotor.drive
+    res = run(scn.rotor.params(), settings, scn.title, drive.motor if drive else None)
+    files = res.write_tables(out) + res.plot(out)
+    return res.to_dict() | {"run_time_s": time.perf_counter() - t0}, files, res.summary()

@@ -1,0 +1,168 @@
+"""Scenario schema of the rotor (optional top-level part ``rotor:``) and of its analyses
+``rotor_dynamics`` (the source's studies, Pashkov 2010) and ``spinup`` (the optimal spin-up OCP).
+
+Quantities are written with units and converted to SI at load time; the source's dimensionless
+groups (psi, mu1, the stationary n, zeta, a*) are plain numbers named as in the source.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import Field, model_validator
+
+from autobal.schema import Positive, Range, Strict
+from autobal.units import AngularSpeed, Density, Length, quantity
+
+Mass = quantity("mass")
+Stiffness = quantity("stiffness")
+DampingOrZero = quantity("damping", "nonnegative")
+Time = quantity("time")
+TimeOrZero = quantity("time", "nonnegative")
+AngularAcceleration = quantity("angular acceleration")
+Torque = quantity("torque")
+Power = quantity("power")
+Inertia = quantity("moment of inertia")
+RotationalDampingOrZero = quantity("rotational damping", "nonnegative")
+RateOrZero = quantity("angular speed", "nonnegative")  # 1/s: speeds that may be 0 and chi/m1 rates
+Fraction = Annotated[float, Field(gt=0, le=1)]
+
+
+class Liquid(Strict):
+    """Liquid auto-balancer layer (model M1, spec §1.1): a chamber of wall radius R and height h of
+    liquid density rho (full-chamber mass rho pi R^2 h), or the design parameter psi = m1/m directly."""
+
+    density: Density | None = None
+    radius: Length | None = None
+    height: Length | None = None
+    free_surface_radius: Length | None = None
+    psi: Fraction | None = None
+
+    @model_validator(mode="after")
+    def _geometry_or_psi(self):
+        geo = [self.density, self.radius, self.height]
+        if self.psi is None and any(v is None for v in geo):
+            raise ValueError("give density, radius and height of the chamber, or psi")
+        if self.psi is not None and any(v is not None for v in geo):
+            raise ValueError("give either the chamber (density, radius, height) or psi, not both")
+        if self.free_surface_radius is not None and self.radius is not None and self.free_surface_radius >= self.radius:
+            raise ValueError("free_surface_radius must be smaller than radius")
+        return self
+
+
+class Motor(Strict):
+    """Linear motor characteristic L(omega) = stall_torque (1 - omega/no_load_speed) (spec §8.3)."""
+
+    stall_torque: Torque
+    no_load_speed: AngularSpeed
+
+
+class Drive(Strict):
+    polar_inertia: Inertia  # J_p of rotor and drive
+    drag: RotationalDampingOrZero = 0.0  # b, N m s
+    max_torque: Torque | None = None
+    max_power: Power | None = None
+    motor: Motor | None = None
+
+
+class Rotor(Strict):
+    """Jeffcott (Laval) rotor on a flexible shaft, with optional liquid layer and drive."""
+
+    mass: Mass  # m1, without liquid
+    stiffness: Stiffness  # c
+    damping: DampingOrZero  # chi, external viscous friction
+    eccentricity: Length  # e
+    liquid: Liquid | None = None
+    drive: Drive | None = None
+
+    def params(self):
+        """The model's :class:`autobal.models.rotor.RotorParams` (SI)."""
+        from autobal.models.rotor import LiquidLayer, RotorParams
+
+        p = RotorParams(m1=self.mass, c=self.stiffness, chi=self.damping, e=self.eccentricity,
+                        J_p=self.drive.polar_inertia if self.drive else 0.0,
+                        b=self.drive.drag if self.drive else 0.0)
+        if self.liquid is None:
+            return p
+        if self.liquid.psi is not None:
+            return p.with_psi(self.liquid.psi)
+        return p.with_liquid(LiquidLayer(self.liquid.density, self.liquid.radius, self.liquid.height,
+                                         self.liquid.free_surface_radius))
+
+
+# ---- analyses ----------------------------------------------------------------------------------------
+
+class Stationary(Strict):
+    """Stationary curves (9) of Figs 5-6 over z = (omega/Omega0)^2 for pairs (mu1, n), n = chi^2/(c m1)."""
+
+    cases: list[tuple[Annotated[float, Field(ge=1)], Positive]] = [(2, 0.1), (2, 0.7), (4, 0.1), (4, 0.7)]
+    z: Range = Range(start=0.01, stop=3.0, points=600)
+
+
+class Steps(Strict):
+    """Speed steps (4)-(7), Figs 3-4: closed form beside CVODES, for each psi."""
+
+    psi: list[Fraction] = [1.0, 0.75, 0.5, 0.25]
+    steps: list[tuple[RateOrZero, RateOrZero]]  # (from, to) angular speeds
+    duration: Time = 0.6
+
+
+class Passage(Strict):
+    """Uniform acceleration through the critical speed (8')-(9'), Figs 7-9."""
+
+    psi: list[Fraction] = [1.0, 0.75, 0.5, 0.25]
+    friction: list[RateOrZero]  # n = chi/m1 of section 3.7, 1/s
+    start_speed: AngularSpeed
+    acceleration: AngularAcceleration  # beta'' = 2 eps
+    final_ratio: Positive = 2.0  # run to omega/Omega0
+    crossover: bool = True  # find n* where max d(psi) = max d(1)
+    sensitivity_acceleration: AngularAcceleration | None = None  # the 10 s^-2 variant (spec §5.4)
+
+
+class Lewis(Strict):
+    """Jeffcott rotor from rest at constant acceleration (spec §5.5): table over zeta and a* = alpha/Omega^2."""
+
+    zeta: list[Annotated[float, Field(ge=0, lt=1)]] = [0.0, 0.01, 0.02, 0.05, 0.1]
+    accel_ratio: list[Positive] = [1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2]
+
+
+class MotorRunup(Strict):
+    """Run-up with the scene's motor characteristic (spec §8.3): passes, or is captured (Sommerfeld)."""
+
+    duration: Time
+
+
+class RotorDynamics(Strict):
+    stationary: Stationary | None = None
+    steps: Steps | None = None
+    passage: Passage | None = None
+    lewis: Lewis | None = None
+    motor_runup: MotorRunup | None = None
+
+
+class Spinup(Strict):
+    """Optimal spin-up through the critical speed (spec §8.7)."""
+
+    start_speed: RateOrZero
+    final_speed: AngularSpeed
+    horizon: Time  # the final time (its upper bound with the min_time objective)
+    max_acceleration: AngularAcceleration
+    max_speed: AngularSpeed | None = None
+    objective: Literal["peak_deflection", "peak_unbalance", "integrated_deflection", "min_time"] = "peak_deflection"
+    settling_time: TimeOrZero = 0.0
+    deflection_limit: Positive | None = None  # delta/e
+    method: Literal["collocation", "multiple_shooting"] = "collocation"
+    scheme: Literal["radau", "legendre"] = "radau"
+    degree: Annotated[int, Field(ge=1, le=9)] = 3
+    intervals: Annotated[int, Field(ge=4, le=5000)] = 200
+    multistart: bool = True
+
+    @model_validator(mode="after")
+    def _consistent(self):
+        if self.objective == "min_time" and self.deflection_limit is None:
+            raise ValueError("the min_time objective needs deflection_limit (delta/e)")
+        if self.max_speed is not None and self.max_speed < max(self.start_speed, self.final_speed):
+            raise ValueError("max_speed must not be below start_speed and final_speed")
+        if self.method == "multiple_shooting" and self.objective == "integrated_deflection":
+            raise ValueError("multiple_shooting supports the peak and min_time objectives")
+        return self

@@ -1,0 +1,192 @@
+"""The ``spinup`` analysis of a scene: the optimal spin-up profile beside the constant-ramp baselines.
+
+``run(ocp, settings)`` returns a :class:`SpinupResult` (plain data) that writes the ``spinup``
+block of results.json, CSV tables and the figures (omega(t), alpha(t), torque, deflection against
+time and against speed, optimum and both ramps on each plot).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from autobal.errors import ScenarioError
+from autobal.ocp.spinup import (
+    RESIM_POINTS,
+    RESIM_TOL,
+    DirectCollocation,
+    MultipleShooting,
+    SpinupOcp,
+    Trajectory,
+    baselines,
+    optimize,
+)
+from autobal.results import write_csv
+
+
+@dataclass
+class SpinupResult:
+    data: dict  # the results.json block
+    optimum: Trajectory
+    baselines: dict  # key -> Trajectory
+
+    def to_dict(self) -> dict:
+        return self.data
+
+    def summary(self) -> str:
+        d = self.data
+        b = d["baselines"]
+        lines = [f"spin-up OCP ({d['objective']}), {d['method']}: {d['status']}, {d['ipopt_iterations']} IPOPT "
+                 f"iterations, {d['solve_time_s']:.2f} s (build {d['build_time_s']:.2f} s, "
+                 f"{len(d['starts'])} starts)",
+                 f"  optimum: peak deflection {d['peak_deflection_over_e']:.4f} e (collocation "
+                 f"{d['collocation_peak_over_e']:.4f} e, re-simulation difference {d['resimulation_rel_error']:.2e}),"
+                 f" peak unbalance {d['peak_unbalance']:.4f}, final time {d['final_time_s']:.4g} s"]
+        for v in b.values():
+            lim = {True: "", False: " (exceeds the drive limits)", None: ""}[v["within_drive_limits"]]
+            lines.append(f"  {v['label']:40s} peak deflection {v['peak_deflection_over_e']:.4f} e, "
+                         f"peak unbalance {v['peak_unbalance']:.4f}{lim}")
+        return "\n".join(lines)
+
+    def write_tables(self, out: Path) -> list[Path]:
+        o = self.optimum
+        write_csv(out / "spinup_optimum.csv", {"t_s": o.t, "omega_rad_s": o.omega, "deflection_over_e": o.delta,
+                                               "unbalance_d": o.d, "torque_N_m": o.torque})
+        write_csv(out / "spinup_controls.csv", {"t_start_s": o.t_u, "alpha_rad_s2": o.alpha})
+        cols = {"t_s": next(iter(self.baselines.values())).t}
+        for k, v in self.baselines.items():
+            cols |= {f"{k}_omega_rad_s": v.omega, f"{k}_deflection_over_e": v.delta, f"{k}_unbalance_d": v.d}
+        write_csv(out / "spinup_baselines.csv", cols)
+        return [out / "spinup_optimum.csv", out / "spinup_controls.csv", out / "spinup_baselines.csv"]
+
+    def plot(self, out: Path) -> list[Path]:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        runs = [(self.optimum, "C3", "-", 1.4)] + [(v, c, "--", 1.0) for v, c in zip(self.baselines.values(),
+                                                                                      ("C0", "C2"), strict=False)]
+        title = self.data["title"]
+        paths = []
+
+        def alpha_steps(tr):
+            t = np.append(tr.t_u, tr.t[-1])
+            return t, np.append(tr.alpha, tr.alpha[-1])
+
+        fig, axes = plt.subplots(3, 1, figsize=(7, 8), sharex=True)
+        for tr, c, ls, lw in runs:
+            lab = "optimum" if tr is self.optimum else tr.label
+            axes[0].plot(tr.t, tr.omega, color=c, ls=ls, lw=lw, label=lab)
+            t, a = alpha_steps(tr)
+            axes[1].step(t, a, where="post", color=c, ls=ls, lw=lw, label=lab)
+            axes[2].plot(tr.t, tr.torque, color=c, ls=ls, lw=lw, label=lab)
+        wc = self.data["omega_cr_rad_s"]
+        axes[0].axhline(wc, color="k", lw=0.6, ls=":", label=r"$\omega_{cr}=\Omega_0\sqrt{\psi}$")
+        axes[0].set_ylabel(r"$\omega$ (rad/s)")
+        axes[1].set_ylabel(r"$\alpha$ (rad/s$^2$)")
+        axes[2].set_ylabel("drive torque M (N m)")
+        if self.data["drive_polar_inertia_kg_m2"] == 0:
+            axes[2].set_ylabel("torque M (N m), no drive data:\nunbalance reaction only", fontsize=8)
+        axes[2].set_xlabel("t (s)")
+        for ax in axes:
+            ax.grid(alpha=0.3)
+            ax.legend(fontsize=7)
+        fig.suptitle(title, fontsize=9)
+        fig.tight_layout()
+        fig.savefig(out / "spinup_profiles.png", dpi=120)
+        plt.close(fig)
+        paths.append(out / "spinup_profiles.png")
+
+        fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 7))
+        for tr, c, ls, lw in runs:
+            lab = (f"optimum (peak {tr.peak_delta:.3f} e)" if tr is self.optimum
+                   else f"{tr.label} (peak {tr.peak_delta:.3f} e)")
+            a1.plot(tr.t, tr.delta, color=c, ls=ls, lw=lw, label=lab)
+            a2.plot(tr.omega, tr.delta, color=c, ls=ls, lw=lw, label=lab)
+        a2.axvline(wc, color="k", lw=0.6, ls=":")
+        a1.set_xlabel("t (s)")
+        a2.set_xlabel(r"$\omega$ (rad/s)")
+        for ax in (a1, a2):
+            ax.set_ylabel(r"deflection $\delta/e$")
+            ax.grid(alpha=0.3)
+            ax.legend(fontsize=7)
+        fig.suptitle(title, fontsize=9)
+        fig.tight_layout()
+        fig.savefig(out / "spinup_deflection.png", dpi=120)
+        plt.close(fig)
+        paths.append(out / "spinup_deflection.png")
+        return paths
+
+
+def build_ocp(rotor, settings) -> SpinupOcp:
+    """The declared problem from the scene's ``rotor`` part and ``analyses.spinup`` settings."""
+    drive = rotor.drive
+    try:
+        return SpinupOcp(
+            rotor.params(), settings.start_speed, settings.final_speed, settings.horizon, settings.max_acceleration,
+            objective=settings.objective, settling_time=settings.settling_time, omega_max=settings.max_speed,
+            torque_max=drive.max_torque if drive else None, power_max=drive.max_power if drive else None,
+            motor_stall_torque=drive.motor.stall_torque if drive and drive.motor else None,
+            motor_no_load_speed=drive.motor.no_load_speed if drive and drive.motor else None,
+            deflection_limit=settings.deflection_limit)
+    except ValueError as exc:
+        raise ScenarioError(f"analyses.spinup: {exc}") from None
+
+
+def method_of(settings):
+    cls = DirectCollocation if settings.method == "collocation" else MultipleShooting
+    return cls(settings.intervals, settings.degree, settings.scheme)
+
+
+def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True) -> SpinupResult:
+    """Optimise (multi-start), re-simulate, and compute the constant-ramp baselines."""
+    opt = optimize(ocp, method, multistart)
+    base = baselines(ocp)
+    sol, tr = opt.solution, opt.trajectory
+    best_ramp = min(base.values(), key=lambda b: b.peak_delta)
+
+    def drive_use(tr):
+        if np.all(np.isnan(tr.torque)):
+            return {"max_torque_N_m": None, "max_power_W": None, "within_drive_limits": None}
+        mt, mp = float(np.nanmax(np.abs(tr.torque))), float(np.nanmax(tr.torque * tr.omega))
+        ok = (ocp.torque_max is None or mt <= ocp.torque_max * 1.001) and (ocp.power_max is None or
+                                                                            mp <= ocp.power_max * 1.001)
+        return {"max_torque_N_m": mt, "max_power_W": mp, "within_drive_limits": ok}
+
+    data = {
+        "title": title, "objective": ocp.objective, "method": method.label, "status": sol.status,
+        "peak_deflection_over_e": tr.peak_delta,
+        "baseline_ramp_peak_over_e": best_ramp.peak_delta,
+        "resimulation_rel_error": opt.resimulation_rel_error,
+        "solve_time_s": sol.solve_time_s,
+        "ipopt_iterations": sol.iterations,
+        "collocation_peak_over_e": sol.peak_collocation if ocp.objective != "peak_unbalance" else None,
+        "objective_value": opt.score, "objective_value_transcription": opt.collocation_value,
+        "peak_unbalance": tr.peak_d, "time_of_peak_s": tr.t_peak,
+        "omega_at_peak_rad_s": float(np.interp(tr.t_peak, tr.t, tr.omega)),
+        "integral_deflection2_s": tr.integral_delta2, "final_time_s": sol.final_time_s,
+        "build_time_s": opt.build_time_s, "total_solve_time_s": sum(r.get("solve_time_s", 0.0) for r in opt.starts),
+        "starts": opt.starts, "baselines": {k: v.to_dict() | drive_use(v) for k, v in base.items()},
+        "psi": ocp.params.psi, "omega_cr_rad_s": ocp.params.omega_cr, "Omega0_rad_s": ocp.params.Omega0,
+        "zeta0": ocp.params.zeta0, "drive_polar_inertia_kg_m2": ocp.params.J_p, **drive_use(tr),
+        "accuracy": {"estimate": opt.resimulation_rel_error,
+                     "how": "relative difference between the transcription's optimal objective and its CVODES "
+                            f"re-simulation (rtol {RESIM_TOL:g}, {RESIM_POINTS} samples per interval)"},
+    }
+    if ocp.objective == "peak_unbalance":
+        data["collocation_peak_unbalance"] = opt.collocation_value
+    return SpinupResult(data, tr, base)
+
+
+def run_scene(scn, settings, out: Path):
+    """Runner of the ``spinup`` analysis (autobal.pipeline.RUNNERS)."""
+    if scn.rotor is None:
+        raise ScenarioError("analyses.spinup needs a rotor section")
+    t0 = time.perf_counter()
+    res = run(build_ocp(scn.rotor, settings), method_of(settings), scn.title, settings.multistart)
+    files = res.write_tables(out) + res.plot(out)
+    return res.to_dict() | {"run_time_s": time.perf_counter() - t0}, files, res.summary()
