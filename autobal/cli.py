@@ -70,6 +70,8 @@ def main(argv: list[str] | None = None) -> int:
     p_run = sub.add_parser("run", help="run the analyses a scenario names")
     p_run.add_argument("scenario", help="a YAML file, or the name of a shipped scenario")
     p_run.add_argument("--out", type=Path, default=None, help="output folder (default out/<scenario>)")
+    p_run.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                       help="run sweeps and Monte Carlo on this dask.distributed scheduler (e.g. tcp://host:8786)")
     p_acc = sub.add_parser("accuracy", help="error against run time of every solver of a scenario")
     p_acc.add_argument("scenario")
     p_acc.add_argument("--out", type=Path, default=None, help="output folder (default out/<scenario>)")
@@ -77,6 +79,10 @@ def main(argv: list[str] | None = None) -> int:
     p_check.add_argument("scenario")
     sub.add_parser("list", help="list the shipped scenarios")
     args = ap.parse_args(argv)
+    if args.cmd == "run":  # analysis/executor.py: the CLI's --scheduler overrides the scene's executor
+        from autobal.analysis.executor import set_default_scheduler
+
+        set_default_scheduler(args.scheduler)
 
     if args.cmd == "list":
         for p in scenario.shipped():

@@ -10,6 +10,15 @@ from pathlib import Path
 
 RUNNERS = {
     "statics": "autobal.pipeline:statics",
+    "frequency": "autobal.analysis.frequency:run",  # device dynamics: AFC/Bode (2.100)-(2.110)
+    "stability": "autobal.analysis.stability:run",  # poles, Hurwitz, stability maps
+    "transient": "autobal.analysis.simulate:run",  # CVODES/IDAS time responses (2.111)
+    "liquid_balancer": "autobal.analysis.liquid_balancer:run_scenario",
+    "estimation": "autobal.analysis.estimation_study:run",
+    "reliability": "autobal.analysis.reliability:run_scene",
+    "montecarlo": "autobal.analysis.montecarlo:run_scene",
+    "rotor_dynamics": "autobal.analysis.rotor_study:run_scene",  # Pashkov 2010 rotor + liquid ABU studies
+    "spinup": "autobal.ocp.spinup_study:run_scene",  # optimal spin-up through the critical speed (OCP)
 }
 
 

@@ -15,6 +15,11 @@ from pydantic import Field, ValidationError, model_validator
 
 from autobal.errors import ScenarioError
 from autobal.schema import NonNegative, Positive, Range, Strict
+from autobal.schema_dynamics import Dynamics, Frequency, Stability, Transient
+from autobal.schema_estimation import Estimation
+from autobal.schema_liquid_balancer import LiquidBalancer, LiquidBalancerAnalysis
+from autobal.schema_reliability import Executor, MonteCarlo, Reliability
+from autobal.schema_rotor import Rotor, RotorDynamics, Spinup
 from autobal.units import (
     AngularSpeed,
     Area,
@@ -140,6 +145,7 @@ class Device(Strict):
     disc: Disc
     barrier: Barrier
     regulator: Regulator | None = None
+    dynamics: Dynamics | None = None  # masses, springs, volumes: analyses frequency/stability/transient
 
     @model_validator(mode="after")
     def _gas_needs_normal_pressure(self):
@@ -158,19 +164,45 @@ class Statics(Strict):
 
 class Analyses(Strict):
     statics: Statics | None = None
+    frequency: Frequency | None = None  # autobal/schema_dynamics.py; need device.dynamics
+    stability: Stability | None = None
+    transient: Transient | None = None
+    liquid_balancer: LiquidBalancerAnalysis | None = None  # autobal/schema_liquid_balancer.py; needs liquid_balancer
+    estimation: Estimation | None = None  # autobal/schema_estimation.py; device model fits need device
+    montecarlo: MonteCarlo | None = None  # autobal/schema_reliability.py; needs device
+    reliability: Reliability | None = None  # autobal/schema_reliability.py; traditional disc, ch. 1.2
+    rotor_dynamics: RotorDynamics | None = None  # autobal/schema_rotor.py; needs rotor
+    spinup: Spinup | None = None  # autobal/schema_rotor.py; optimal spin-up OCP, needs rotor
+
+
+# analysis -> the part of the scene it needs (a dotted path), checked at load time
+NEEDS = {
+    "statics": "device", "frequency": "device.dynamics", "stability": "device.dynamics",
+    "transient": "device.dynamics", "montecarlo": "device", "liquid_balancer": "liquid_balancer",
+    "rotor_dynamics": "rotor", "spinup": "rotor",
+}
 
 
 class Scenario(Strict):
     name: str
     title: str
     source: str = ""
-    device: Device | None = None  # the balancing device, for statics (and the analyses built on it)
+    device: Device | None = None  # the axial balancing device (statics, dynamics, Monte Carlo, fits)
+    liquid_balancer: LiquidBalancer | None = None  # liquid auto-balancer (autobal/schema_liquid_balancer.py)
+    rotor: Rotor | None = None  # Jeffcott rotor with optional liquid layer and drive (autobal/schema_rotor.py)
+    executor: Executor | None = None  # where sweeps and Monte Carlo run (autobal/schema_reliability.py)
     analyses: Analyses
 
     @model_validator(mode="after")
     def _parts_for_analyses(self):
-        if self.analyses.statics is not None and self.device is None:
-            raise ValueError("analyses.statics needs a device section")
+        for analysis, path in NEEDS.items():
+            if getattr(self.analyses, analysis) is None:
+                continue
+            node = self
+            for part in path.split("."):
+                node = getattr(node, part, None)
+            if node is None:
+                raise ValueError(f"analyses.{analysis} needs a {path} section")
         return self
 
 

@@ -21,6 +21,15 @@ DIMENSIONS = {
     "viscosity": ("[mass] / [length] / [time]", "Pa*s", "1e-3 Pa*s"),
     "volume flow": ("[length] ** 3 / [time]", "m**3/s", "0.167 m^3/s"),
     "angular speed": ("1 / [time]", "rad/s", "6300 rpm"),
+    "mass": ("[mass]", "kg", "3000 kg"),  # dynamics (autobal/schema_dynamics.py)
+    "stiffness": ("[mass] / [time] ** 2", "N/m", "1e8 N/m"),
+    "damping": ("[mass] / [time]", "N*s/m", "8.9e4 N*s/m"),
+    "time": ("[time]", "s", "50 ms"),
+    "angular acceleration": ("1 / [time] ** 2", "rad/s**2", "40 rad/s^2"),  # rotor spin-up (schema_rotor.py)
+    "torque": ("[mass] * [length] ** 2 / [time] ** 2", "N*m", "0.04 N*m"),
+    "power": ("[mass] * [length] ** 2 / [time] ** 3", "W", "6 W"),
+    "moment of inertia": ("[mass] * [length] ** 2", "kg*m**2", "1e-3 kg*m^2"),
+    "rotational damping": ("[mass] * [length] ** 2 / [time]", "N*m*s", "1e-5 N*m*s"),
 }
 
 
