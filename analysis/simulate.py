@@ -44,6 +44,7 @@ class Simulator:
     def __init__(self, model: DynamicModel, t_end: float, points: int, integrator: str = "cvodes",
                  rtol: float = 1e-9, atol: float = 1e-11, chunk: int = 100, **opts):
         self.model = model
+        self.rtol, self.atol = rtol, atol
         self.t = np.linspace(0.0, t_end, points)
         x = ca.SX.sym("x", len(model.states))
         t = ca.SX.sym("t")
@@ -230,6 +231,34 @@ def equilibrium_residual(model: DynamicModel) -> float:
     return float(np.abs(np.array(model.rows(q0, np.zeros(n), np.zeros(n), model.w0, model.p0))).max())
 
 
+TIGHTER = 100.0  # the accuracy check reruns every case with rtol and atol divided by this
+
+
+def accuracy(model: DynamicModel, res: TransientResult, cases: list, duration: float, points: int,
+             integrator: str) -> dict:
+    """Error estimate of the responses: every case rerun by the same integrator with tolerances
+    ``TIGHTER`` times smaller; per case the largest difference of the face-gap response dz(t) over the
+    common time grid relative to max |dz|, and the relative differences of max |dz| and the final dz."""
+    sim = Simulator(model, duration, points, integrator)
+    tight = Simulator(model, duration, points, integrator, rtol=sim.rtol / TIGHTER, atol=sim.atol / TIGHTER)
+    iu, z_B = model.index("u"), model.design.scales["z_B"]
+    per = []
+    for case, c in zip(cases, res.data["series"], strict=True):
+        omega = case.get("frequency") or model.data.omega0
+        r = tight.run(tight.input_vector(case["input"], case["amplitude"], omega, case.get("couple", True)))
+        k = min(len(c["z"]), len(r["t"]))
+        dz, dz_t = (c["z"][:k] - c["z"][0]) * 1e6, (r["X"][:k, iu] - r["X"][0, iu]) * z_B * 1e6
+        ref = max(np.abs(dz_t).max(), 1e-300)
+        per.append({"input": c["input"], "curve": float(np.abs(dz - dz_t).max() / ref),
+                    "max_dz": abs(c["max_dz_um"] - np.abs(dz_t).max()) / ref,
+                    "final_dz": abs(c["final_dz_um"] - dz_t[-1]) / ref if k == len(c["z"]) else math.nan})
+    est = max(max(p["curve"], p["max_dz"], 0.0 if math.isnan(p["final_dz"]) else p["final_dz"]) for p in per)
+    return {"estimate": float(est), "cases": per, "rtol": sim.rtol, "atol": sim.atol,
+            "how": f"largest difference of the face-gap response dz(t) (and of max |dz|, final dz) between the run "
+                   f"at rtol {sim.rtol:g}, atol {sim.atol:g} and a rerun with {integrator} at {TIGHTER:g}x tighter "
+                   "tolerances, relative to max |dz| of the case"}
+
+
 def run(scn, settings, out: Path):
     """Runner of ``analyses.transient`` (autobal/pipeline.py)."""
     from autobal.analysis.frequency import _device
@@ -241,5 +270,6 @@ def run(scn, settings, out: Path):
     cases = [{"input": c.input, "amplitude": c.amplitude, "frequency": c.frequency,
               "couple": c.thrust_follows_pressure} for c in settings.cases]
     res = study(model, cases, settings.duration, settings.points, settings.integrator, scn.title)
+    res.data["accuracy"] = accuracy(model, res, cases, settings.duration, settings.points, settings.integrator)
     files = res.write_tables(out) + res.plot(out)
     return res.to_dict() | {"run_time_s": time.perf_counter() - t0}, files, res.summary()

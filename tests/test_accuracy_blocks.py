@@ -1,0 +1,132 @@
+"""Every results.json carries, per analysis, an ``accuracy`` block: ``estimate`` (relative error of the
+main outputs, or a bound) and ``how``.  The runners frequency, stability, transient, liquid_balancer,
+reliability and montecarlo are run on their shipped scenes (Monte Carlo on a smaller copy) through the
+CLI; the estimators themselves are checked against known errors (a peak moved by a known amount, the
+standard error of a normal sample's cv, the descriptor pencil of the hand model)."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+import yaml
+from numpy.testing import assert_allclose
+
+from autobal import scenario
+from autobal.analysis import frequency, montecarlo, stability
+from autobal.analysis.linearize import Setup
+from autobal.cli import main
+
+
+def run_scene(scene, out):
+    assert main(["run", str(scene), "--out", str(out)]) == 0
+    return json.loads((out / "results.json").read_text())["accuracy"]
+
+
+def check(block, bound):
+    """estimate: a finite float below ``bound``; how: a sentence."""
+    est = block["estimate"]
+    assert isinstance(est, float) and math.isfinite(est), block
+    assert 0.0 <= est < bound, block
+    assert isinstance(block["how"], str) and len(block["how"]) > 40
+
+
+@pytest.fixture(scope="module")
+def dynamics(tmp_path_factory):
+    return run_scene("pump_pe600_dynamics", tmp_path_factory.mktemp("dyn"))
+
+
+def test_frequency_block(dynamics):
+    a = dynamics["frequency"]
+    # peaks located by a bounded search with xatol 1e-6 omega; measured 1.2e-7 (Newton step on d|G|^2/d omega)
+    check(a, 1e-6)
+    assert a["response_max_relative_rounding_error"] < 1e-11  # double LU vs 34-digit solve
+    assert a["estimate"] == max(a["peak_frequency_max_relative_error"], a["peak_amplitude_max_relative_loss"],
+                                a["response_max_relative_rounding_error"])
+
+
+def test_stability_block(dynamics):
+    a = dynamics["stability"]
+    check(a, 1e-9)  # QR vs QZ on the descriptor pencil: 1e-11 measured
+    assert a["signs_certain"]
+    for m in ("program", "nonlinear", "nonlinear_chain", "consistent", "thesis"):
+        v = a["models"][m]
+        assert v["max_residual"] < 1e-11  # backward stable eigensolver: residual ~ n eps
+        assert v["descriptor_max_relative_difference"] <= v["max_relative_bound"] * 10  # within the bound
+
+
+def test_transient_block(dynamics):
+    a = dynamics["transient"]
+    check(a, 1e-5)  # rtol 1e-9 against 1e-11: 7e-7 measured
+    assert a["estimate"] > 0 and len(a["cases"]) == 3
+
+
+def test_peak_error_measures_a_known_offset():
+    # a peak moved by 1e-5 (relative) from the refined one: the Newton step reports that distance, to the
+    # refined peak's own error (<= 2e-7), and the amplitude lost ~ quadratically
+    setup = Setup(scenario.load("pump_pe600_dynamics").device, 1.0)
+    lin = setup.linear("program")
+    c = frequency.characteristic(lin, (10.0, 8000.0, 800), "appendix", 0.2, 659.734)
+    for p in c["peaks"]:
+        near, loss_near = frequency.peak_error(lin, p["omega"], "appendix")
+        moved, loss = frequency.peak_error(lin, p["omega"] * (1 + 1e-5), "appendix")
+        assert_allclose(moved, 1e-5, atol=2 * near + 1e-9)
+        assert loss > 100 * loss_near
+        got = abs(lin.response([p["omega"]])[0])
+        assert_allclose(got, abs(frequency.exact_response(lin, p["omega"], "appendix")), rtol=1e-11)
+
+
+def test_pencil_of_the_operator_has_the_hand_descriptor_poles():
+    import scipy.linalg
+
+    setup = Setup(scenario.load("pump_pe600_dynamics").device, 1.0)
+    c = setup.constants("program")
+    E, A = stability.pencil(*c.operator()[:3])
+    Eh, Ah = c.descriptor()[:2]
+    mine = np.sort_complex(scipy.linalg.eig(A, E, right=False))
+    hand = np.sort_complex(scipy.linalg.eig(Ah, Eh, right=False))
+    assert_allclose(mine, hand, rtol=1e-10)
+
+
+def test_liquid_balancer_block(tmp_path):
+    a = run_scene("washer_liquid_balancer", tmp_path)["liquid_balancer"]
+    # IPOPT optimum vs the analytic k_D = 1 point (1e-13 measured); CVODES vs (2.5) (7e-10 measured)
+    check(a, 1e-8)
+    assert a["bounded"] == [] and set(a["parts"]) == {"optimal_height", "optimal_volume", "jeffcott_delta",
+                                                       "jeffcott_ratio"}
+
+
+def test_reliability_block(tmp_path):
+    a = run_scene("hydroheel_wear", tmp_path)["reliability"]
+    # dominated by the load quadrature of the MTTF to infinity: 1.3e-3 measured at 20001 nodes
+    check(a, 5e-3)
+    lit = a["parts"]["literal"]
+    assert lit["mttf_sojourn"] < 1e-6 and lit["mttf_time"] < 1e-6 and lit["P_tau"] < 1e-6
+    assert lit["mttf_tau"] < lit["mttf_infinite_tau"]
+
+
+def test_montecarlo_block_small_copy(tmp_path):
+    d = yaml.safe_load(scenario.resolve("pump_pe600_montecarlo").read_text())
+    d["analyses"]["montecarlo"] |= {"samples": 2000, "chunk_size": 1000, "discharge_ratio": [0.75, 1.0]}
+    d["analyses"]["montecarlo"]["afc"] |= {"samples": 1000, "chunk_size": 1000,
+                                           "omega": {"start": "500 rad/s", "stop": "5000 rad/s", "points": 20}}
+    scene = tmp_path / "mc_small.yaml"
+    scene.write_text(yaml.safe_dump(d))
+    a = run_scene(scene, tmp_path / "out")["montecarlo"]
+    check(a, 0.2)
+    # the spread's standard error of ~normal outputs is about 1/sqrt(2 N) (N = 2000: 0.0158)
+    se = np.array(a["spread_relative_standard_error"]["exact_u"])
+    assert np.all((0.8 / math.sqrt(4000) < se) & (se < 1.5 / math.sqrt(4000)))
+    assert a["estimate"] >= 1 / math.sqrt(2 * 1000)  # the AFC part has 1000 samples
+    assert a["max_root_residual"] <= a["root_residual_tolerance"] == montecarlo.RESIDUAL_TOL
+
+
+def test_standard_error_of_cv_matches_the_normal_theory():
+    # normal samples: var(s)/s^2 = 1/(2N), var(m)/m^2 = cv^2/N, independent -> rel SE(cv) = sqrt(1/(2N) + cv^2/N)
+    rng = np.random.default_rng(7)
+    n, cv = 200_000, 0.05
+    Y = 1.0 + cv * rng.standard_normal((n, 2))
+    Y[:5, 1] = np.nan  # invalid samples are left out
+    se_mean, se_cv = montecarlo.relative_standard_errors(Y)
+    assert_allclose(se_cv, math.sqrt(1 / (2 * n) + cv**2 / n), rtol=0.02)
+    assert_allclose(se_mean, cv / math.sqrt(n), rtol=0.02)
