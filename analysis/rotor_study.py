@@ -284,4 +284,20 @@ def run_scene(scn, settings, out: Path):
     drive = scn.rotor.drive
     res = run(scn.rotor.params(), settings, scn.title, drive.motor if drive else None)
     files = res.write_tables(out) + res.plot(out)
-    return res.to_dict() | {"run_time_s": time.perf_counter() - t0}, files, res.summary()
+    return res.to_dict() | {"run_time_s": time.perf_counter() - t0, "accuracy": accuracy(res.data)}, files, \
+        res.summary()
+
+
+def accuracy(data: dict) -> dict:
+    """The run's own cross-checks as its error estimate: steady state (3) against the stationary
+    curve (9), eigenpair residuals of the stability check, and the step transients' closed form
+    (4)-(7) against CVODES; the passage and Lewis integrations run at TOL with no second method."""
+    checks = {
+        "steady_state_vs_eq9": data.get("stationary", {}).get("steady_vs_eq9_max_rel_diff"),
+        "stability_eigen_residual": data.get("stationary", {}).get("stability", {}).get("max_eigenvalue_residual"),
+        "steps_closed_form_vs_cvodes": data.get("steps", {}).get("closed_form_vs_cvodes_max_rel_diff"),
+    }
+    checks = {k: v for k, v in checks.items() if v is not None}
+    how = (f"largest of the run's cross-checks ({', '.join(checks) or 'none in this scene'}); the passage, Lewis "
+           f"and run-up integrations use CVODES at rtol = atol = {R.TOL:g} and are bounded by that tolerance only")
+    return {"estimate": max(checks.values(), default=R.TOL), "how": how, **checks, "integration_tol": R.TOL}

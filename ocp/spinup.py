@@ -627,7 +627,7 @@ class Optimum:
         return abs(self.collocation_value - self.score) / abs(self.score)
 
 
-def _score(ocp: SpinupOcp, sol: SpinupSolution, tr: Trajectory) -> tuple[float, float]:
+def resimulated_scores(ocp: SpinupOcp, sol: SpinupSolution, tr: Trajectory) -> tuple[float, float]:
     """(re-simulated measure, the transcription's value of the same measure)."""
     if ocp.objective == "peak_unbalance":
         return tr.peak_d, sol.peak_collocation
@@ -668,7 +668,7 @@ def optimize(ocp: SpinupOcp, method, multistart: bool = True) -> Optimum:
             rows.append({"start": label, "status": exc.status, "success": False})
             continue
         tr = resimulate(ocp, sol.u, sol.h, "optimum")
-        score, own = _score(ocp, sol, tr)
+        score, own = resimulated_scores(ocp, sol, tr)
         ok = ocp.deflection_limit is None or tr.peak_delta <= 1.01 * ocp.deflection_limit
         rows.append({"start": label, "status": sol.status, "success": True, "iterations": sol.iterations,
                      "solve_time_s": sol.solve_time_s, "objective": score, "resimulated_peak_over_e": tr.peak_delta,
