@@ -104,3 +104,32 @@ def test_valve_driven_to_its_travel_limit(tmp_path):
     assert any(e["event"] == "inner_seal_reversal" or "q1 < 0" in e.get("message", "") for e in up["events"])
     # a 90 % drop of discharge pressure closes the valve only partly: xi stays above 0.9 (no stop reached)
     assert not any(e["event"] == "valve_closed" for e in down["events"])
+
+
+def test_spinup_hundred_times_faster(tmp_path):
+    code, res = run(tmp_path, "spinup_100x_faster")
+    assert code == 0
+    sp = res["spinup"]
+    assert sp["peak_deflection_over_e"] <= sp["baseline_ramp_peak_over_e"]  # never worse than the ramps
+    assert sp["peak_deflection_over_e"] < 3.0  # a passage far shorter than the damping time stays small
+    assert sp["resimulation_rel_error"] < 1e-6
+
+
+def test_spinup_hundred_times_slower_is_quasi_static(tmp_path):
+    code, res = run(tmp_path, "spinup_100x_slower")
+    assert code == 0
+    sp = res["spinup"]
+    zeta = 5.0 / (2 * 105.0)  # n / (2 Omega0) of the scene
+    resonance = 1 / (2 * zeta * np.sqrt(1 - zeta**2))  # steady-state peak of the unbalance response
+    assert sp["peak_deflection_over_e"] == pytest.approx(resonance, rel=2e-3)
+    # 13 000 whirl periods on 200 intervals: the mesh cannot follow the whirl; the re-simulation says by how much
+    assert 1e-3 < sp["resimulation_rel_error"] < 1e-2
+
+
+def test_liquid_filling_the_chamber_cannot_balance(tmp_path):
+    code, res = run(tmp_path, "liquid_fills_chamber")
+    assert code == 0
+    lb = res["liquid_balancer"]
+    assert np.allclose(lb["table"]["lambda0"], 1.0, atol=1e-8)  # rigid liquid: efficiency exactly 1
+    assert max(lb["table"]["r"]) < 1e-5  # no free surface (radius of micrometres from rounding of V)
+    assert lb["pashkov"]["single"]["sufficiency"]["all_ok"] is False
