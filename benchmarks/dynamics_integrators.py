@@ -16,7 +16,6 @@ Writes benchmarks/results/dynamics_integrators.md.
 from __future__ import annotations
 
 import platform
-import time
 from pathlib import Path
 
 import casadi as ca
@@ -25,6 +24,7 @@ from scipy.integrate import solve_ivp
 
 from autobal import scenario
 from autobal.analysis.linearize import Setup
+from benchmarks._timing import best_of
 
 T_END = 0.05
 DTAU = 0.01
@@ -71,16 +71,8 @@ def scipy_runner(m, f, jac, method, rtol):
     return run
 
 
-def timed(run):
-    best, out = np.inf, None
-    for _ in range(REPEAT):
-        t0 = time.perf_counter()
-        out = run()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
 
-
-def main() -> None:
+def main() -> str:
     m, w, f, jac = problem()
     ref, _ = cvodes_runner(m, w, 1e-13)()
     check = solve_ivp(lambda t, x: np.array(f(x)).ravel(), (0, T_END), m.x0, method="Radau", rtol=1e-12,
@@ -92,7 +84,7 @@ def main() -> None:
     for name, make in methods.items():
         for rtol in RTOLS:
             try:
-                sec, (xf, work) = timed(make(rtol))
+                sec, (xf, work) = best_of(REPEAT, make(rtol))
                 err = float(np.abs(xf - ref).max())
             except RuntimeError as exc:
                 sec, err, work = np.nan, np.nan, str(exc)[:40]
@@ -133,9 +125,10 @@ def main() -> None:
               "|---|---|---|---|---|"]
     lines += [f"| {n} | {r:.0e} | {e:.2e} | {s:.4f} | {wk} |" for n, r, e, s, wk in rows]
     out = Path(__file__).parent / "results" / "dynamics_integrators.md"
-    out.write_text("\n".join(lines) + "\n")
-    print(f"written {out}")
+    text = "\n".join(lines) + "\n"
+    out.write_text(text)
+    return text
 
 
 if __name__ == "__main__":
-    main()
+    print(main())

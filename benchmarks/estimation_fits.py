@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from autobal.analysis import estimation as est
+from benchmarks._timing import best_of
 
 FITS, POINTS, NOISE = 200, 12, 0.025
 TAU = np.linspace(0.5, 2.0, POINTS)
@@ -30,14 +31,6 @@ def datasets(seed: int = 0) -> list[np.ndarray]:
     u = est.gap_from_load(TAU, 1.72, 2.75)
     return [u * (1 + NOISE * rng.standard_normal(POINTS)) for _ in range(FITS)]
 
-
-def best_of(n, fn):
-    times, out = [], None
-    for _ in range(n):
-        t = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t)
-    return min(times), out
 
 
 def main(repeats: int = 3) -> str:

@@ -11,7 +11,6 @@ Run: ``python -m benchmarks.liquid_balancer``; writes benchmarks/results/liquid_
 from __future__ import annotations
 
 import math
-import time
 from pathlib import Path
 
 import numpy as np
@@ -20,6 +19,7 @@ from scipy.optimize import minimize_scalar
 from autobal import scenario
 from autobal.analysis import liquid_balancer as study
 from autobal.models import liquid_balancer as lb
+from benchmarks._timing import best_of
 
 
 def numpy_lambda0(omega, omega_cr, n, R, h, V, rho, D0, e_f):
@@ -33,14 +33,6 @@ def numpy_lambda0(omega, omega_cr, n, R, h, V, rho, D0, e_f):
     with np.errstate(invalid="ignore", divide="ignore"):
         return k / np.abs(np.abs(b / c) - np.sqrt(k**2 - s))
 
-
-def best_of(n, fn):
-    times, out = [], None
-    for _ in range(n):
-        t = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t)
-    return min(times), out
 
 
 def main(repeats: int = 3) -> str:

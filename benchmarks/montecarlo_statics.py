@@ -25,6 +25,7 @@ from autobal.analysis import executor as ex
 from autobal.analysis import montecarlo as mc
 from autobal.models.device import design
 from autobal.models.throttles import SQRT_SMOOTHING
+from benchmarks._timing import best_of
 
 SAMPLES, FSOLVE_SAMPLES, PSI1 = 100_000, 2_000, 1.0
 
@@ -47,14 +48,6 @@ def numpy_residual(g, reg, dpsi):
 
     return res
 
-
-def best_of(n, fn):
-    times, out = [], None
-    for _ in range(n):
-        t = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t)
-    return min(times), out
 
 
 def main(repeats: int = 3) -> str:

@@ -23,6 +23,7 @@ import numpy as np
 
 from autobal.models.rotor import RotorParams, rotor_model
 from autobal.ocp import spinup as S
+from benchmarks._timing import best_of
 
 OUT = Path(__file__).resolve().parent / "results" / "spinup_ocp.md"
 REPEATS = 3
@@ -31,14 +32,6 @@ REPEATS = 3
 def problem() -> S.SpinupOcp:
     return S.SpinupOcp(RotorParams.from_groups(105.0, 5.0, 1.0), 40.0, 210.0, 8.5, 40.0)
 
-
-def best_of(fn, n=REPEATS):
-    times, out = [], None
-    for _ in range(n):
-        t = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t)
-    return min(times), out
 
 
 def autobal_run(ocp, N, crude: bool):
@@ -50,7 +43,7 @@ def autobal_run(ocp, N, crude: bool):
     if crude:  # the guess rockit gets: collocation points = the interval-start states
         X = w0[solver.nlp.index["X"]]
         w0[solver.nlp.index["Xc"]] = X[:-1, None, :]
-    solve, sol = best_of(lambda: solver.solve(w0=w0.copy()))
+    solve, sol = best_of(REPEATS, lambda: solver.solve(w0=w0.copy()))
     tr = S.resimulate(ocp, sol.u, sol.h, "autobal")
     return {"build": build, "solve": solve, "iterations": sol.iterations, "status": sol.status,
             "objective": sol.objective, "resim": tr.peak_delta, "ref": solver.nlp.ref}
@@ -91,7 +84,7 @@ def rockit_run(ocp, N, ref: float):
     t = time.perf_counter()
     sol = r.solve()  # transcription + nlpsol construction + first solve
     first = time.perf_counter() - t
-    solve, sol = best_of(r.solve)  # Opti reuses the built solver: the repeated solves are the solve time
+    solve, sol = best_of(REPEATS, r.solve)  # Opti reuses the built solver: the repeated solves are the solve time
     st = sol.stats
     _, us = sol.sample(u, grid="control")
     uu = np.asarray(us, float)[:N]

@@ -9,7 +9,6 @@ Writes benchmarks/results/statics_sweep.md.
 
 from __future__ import annotations
 
-import time
 import warnings
 from pathlib import Path
 
@@ -20,6 +19,7 @@ from autobal import scenario
 from autobal.analysis.statics import StaticsSolver
 from autobal.models.device import design
 from autobal.models.throttles import SQRT_SMOOTHING
+from benchmarks._timing import best_of
 
 POINTS, DPSI = 1000, 0.04
 GRID = np.linspace(0.25, 1.15, POINTS)
@@ -47,14 +47,6 @@ def numpy_residual(g):
 
     return res
 
-
-def best_of(n, fn):
-    times, out = [], None
-    for _ in range(n):
-        t = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t)
-    return min(times), out
 
 
 def main(repeats: int = 3) -> str:
