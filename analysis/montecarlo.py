@@ -43,6 +43,7 @@ import numpy as np
 from scipy.special import ndtr
 
 from autobal.analysis import closed_form
+from autobal.analysis.statics import ideal_guess
 from autobal.errors import ScenarioError
 from autobal.models.device import DeviceDesign, static_system
 from autobal.results import write_csv
@@ -239,21 +240,9 @@ class StaticsMC:
 
     def guess(self, X: np.ndarray, psi1: float) -> np.ndarray:
         """Rows of unknowns from the exact ideal-regulator closed form (2.22)/(2.144) with each sample's
-        groups, vectorised; where it has no physical value, a crude interior point."""
+        groups (analysis/statics.py ideal_guess)."""
         g, dpsi = self.groups(X)
-        ex = closed_form.exact_ideal(g, np.full(len(X), psi1), dpsi)
-        c = (g.b * psi1 - g.chi) / g.sigma
-        bad = ~(np.isfinite(ex["u"]) & (ex["u"] > 0))
-        v = {"psi2": np.where(bad, psi1 + 0.5 * dpsi, ex["psi2"]), "u": np.where(bad, 1.0, ex["u"]),
-             "psi_e": psi1 + dpsi}
-        v["psi3"] = np.where(bad, np.maximum(v["psi2"] - c, 0.05), ex["psi3"])
-        if g.regulator is not None:
-            cam, xi = closed_form.regulator(g, psi1, dpsi, psi2=v["psi2"])
-            ok = np.isfinite(xi) & (cam > v["psi_e"])
-            v["psi_cam"] = np.where(ok, cam, 0.5 * (g.regulator.psi_in + v["psi_e"]))
-            v["xi"] = np.where(ok, xi, 1.0)
-        zeros = np.zeros(len(X))
-        return np.column_stack([np.broadcast_to(v.get(k, zeros), zeros.shape) for k in self.system.unknowns])
+        return ideal_guess(g, self.system.unknowns, np.full(len(X), psi1), dpsi)
 
     def _order(self, psi1: float) -> list:
         """The active sets in the order to try at psi1: first the one of the nominal device there."""

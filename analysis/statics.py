@@ -57,6 +57,26 @@ class StaticPoint:
         return frozenset(k for k, v in self.values.items() if k.startswith("r_") and v > REACTION_TOL)
 
 
+def ideal_guess(g, unknowns: list[str], psi1s, dpsi) -> np.ndarray:
+    """Rows of ``unknowns`` from the exact ideal-regulator closed form (no stop reached), vectorised
+    over ``psi1s`` (and over array-valued groups ``g``, one sample per row); where it has no physical
+    value, a crude interior point."""
+    psi1s = np.atleast_1d(np.asarray(psi1s, float))
+    ex = closed_form.exact_ideal(g, psi1s, dpsi)
+    bad = ~(np.isfinite(ex["u"]) & (ex["u"] > 0) & np.isfinite(ex["psi2"]) & np.isfinite(ex["psi3"]))
+    c = (g.b * psi1s - g.chi) / g.sigma
+    v = {"psi2": np.where(bad, psi1s + 0.5 * dpsi, ex["psi2"]),
+         "u": np.where(bad, 1.0, ex["u"]), "psi_e": psi1s + dpsi}
+    v["psi3"] = np.where(bad, np.maximum(v["psi2"] - c, 0.05), ex["psi3"])
+    if g.regulator is not None:
+        cam, xi = closed_form.regulator(g, psi1s, dpsi, psi2=v["psi2"])
+        ok = np.isfinite(xi) & (cam > v["psi_e"])
+        v["psi_cam"] = np.where(ok, cam, 0.5 * (g.regulator.psi_in + v["psi_e"]))
+        v["xi"] = np.where(ok, xi, 1.0)
+    zeros = np.zeros(len(psi1s))
+    return np.column_stack([np.broadcast_to(v.get(k, zeros), zeros.shape) for k in unknowns])
+
+
 class StaticsSolver:
     """IPOPT (and Newton) solvers of one device's static equations, built once, called many times."""
 
@@ -78,22 +98,8 @@ class StaticsSolver:
 
     # ---- single points ---------------------------------------------------------------------
     def ideal_guess(self, psi1s, dpsi: float) -> np.ndarray:
-        """Rows of unknowns from the exact ideal-regulator closed form (no stop reached),
-        vectorised over ``psi1s``; where it has no physical value, a crude interior point."""
-        g = self.design.groups
-        psi1s = np.atleast_1d(np.asarray(psi1s, float))
-        ex = closed_form.exact_ideal(g, psi1s, dpsi)
-        bad = ~(np.isfinite(ex["u"]) & (ex["u"] > 0) & np.isfinite(ex["psi2"]) & np.isfinite(ex["psi3"]))
-        c = (g.b * psi1s - g.chi) / g.sigma
-        v = {"psi2": np.where(bad, psi1s + 0.5 * dpsi, ex["psi2"]),
-             "u": np.where(bad, 1.0, ex["u"]), "psi_e": psi1s + dpsi}
-        v["psi3"] = np.where(bad, np.maximum(v["psi2"] - c, 0.05), ex["psi3"])
-        if g.regulator is not None:
-            cam, xi = closed_form.regulator(g, psi1s, dpsi, psi2=v["psi2"])
-            ok = np.isfinite(xi) & (cam > v["psi_e"])
-            v["psi_cam"] = np.where(ok, cam, 0.5 * (g.regulator.psi_in + v["psi_e"]))
-            v["xi"] = np.where(ok, xi, 1.0)
-        return np.column_stack([v.get(k, np.zeros_like(psi1s)) for k in self.system.unknowns])
+        """Rows of unknowns from the exact ideal-regulator closed form, vectorised over ``psi1s``."""
+        return ideal_guess(self.design.groups, self.system.unknowns, psi1s, dpsi)
 
     def guess(self, psi1: float, dpsi: float) -> np.ndarray:
         """Initial point: the ideal-regulator closed form or, where the valve cannot pass that

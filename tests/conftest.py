@@ -13,3 +13,25 @@ def pump():
 @pytest.fixture(scope="session")
 def compressor():
     return StaticsSolver(design(scenario.load("compressor_k180_statics").device))
+
+
+def _edit(data: dict, path: str, value) -> dict:
+    """A deep copy of a scene with the key at the dotted ``path`` set to ``value`` (deleted if None)."""
+    import copy
+
+    out = copy.deepcopy(data)
+    *parents, last = path.split(".")
+    node = out
+    for k in parents:
+        node = node[k]
+    if value is None:
+        del node[last]
+    else:
+        node[last] = value
+    return out
+
+
+@pytest.fixture
+def scene_edit():
+    """``scene_edit(data, "a.b.c", value)``: a copy of a scene dict with one key changed or removed."""
+    return _edit

@@ -18,19 +18,6 @@ def write(tmp_path, data, name="scene.yaml"):
     return p
 
 
-def edited(path: str, value):
-    data = yaml.safe_load(yaml.safe_dump(PUMP))
-    *parents, last = path.split(".")
-    node = data
-    for k in parents:
-        node = node[k]
-    if value is None:
-        del node[last]
-    else:
-        node[last] = value
-    return data
-
-
 @pytest.mark.parametrize(
     "path, value, message",
     [
@@ -48,8 +35,8 @@ def edited(path: str, value):
         ("device.disc.face.outer_diameter", "150 mm", "outer_diameter must be larger"),
     ],
 )
-def test_bad_input_one_line_naming_the_field(tmp_path, capsys, path, value, message):
-    p = write(tmp_path, edited(path, value))
+def test_bad_input_one_line_naming_the_field(tmp_path, capsys, scene_edit, path, value, message):
+    p = write(tmp_path, scene_edit(PUMP, path, value))
     with pytest.raises(ScenarioError, match=message.replace("(", r"\(")):
         scenario.load(p)
     assert cli.main(["check", str(p)]) == 2

@@ -500,19 +500,6 @@ def test_run_nested_scene(tmp_path):
 
 # ---- bad input -------------------------------------------------------------------------------
 
-def edited(path, value):
-    data = yaml.safe_load(yaml.safe_dump(WASHER))
-    *parents, last = path.split(".")
-    node = data
-    for k in parents:
-        node = node[k]
-    if value is None:
-        del node[last]
-    else:
-        node[last] = value
-    return data
-
-
 @pytest.mark.parametrize("path, value, message", [
     ("liquid_balancer.liquid.volume", "7 L", "is not smaller than the chamber volume"),
     ("liquid_balancer.speed", "0 rad/s", "liquid_balancer.speed: must be positive"),
@@ -522,9 +509,9 @@ def edited(path, value):
     ("analyses.liquid_balancer.variant", "fixed", "analyses.liquid_balancer.variant: Input should be"),
     ("liquid_balancer", None, "analyses.liquid_balancer needs a liquid_balancer section"),
 ])
-def test_bad_input_one_line(tmp_path, capsys, path, value, message):
+def test_bad_input_one_line(tmp_path, capsys, scene_edit, path, value, message):
     p = tmp_path / "scene.yaml"
-    p.write_text(yaml.safe_dump(edited(path, value)))
+    p.write_text(yaml.safe_dump(scene_edit(WASHER, path, value)))
     if message is None:
         scenario.load(p)
         return
@@ -535,8 +522,8 @@ def test_bad_input_one_line(tmp_path, capsys, path, value, message):
     assert len(err.splitlines()) == 1 and message in err
 
 
-def test_missing_damping_and_nested_overflow(tmp_path):
-    d = edited("liquid_balancer.rotor.damping_coefficient", None)
+def test_missing_damping_and_nested_overflow(tmp_path, scene_edit):
+    d = scene_edit(WASHER, "liquid_balancer.rotor.damping_coefficient", None)
     del d["liquid_balancer"]["rotor"]["log_decrement"]
     p = tmp_path / "a.yaml"
     p.write_text(yaml.safe_dump(d))

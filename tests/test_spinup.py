@@ -172,16 +172,8 @@ def test_cli_run_writes_the_spinup_block(tmp_path):
     ("analyses.spinup.objective", "min_time", "needs deflection_limit"),
     ("rotor", None, "analyses.spinup needs a rotor section"),
 ])
-def test_bad_input_one_line_naming_the_field(tmp_path, capsys, path, value, message):
-    data = json.loads(json.dumps(SCENE))
-    *parents, last = path.split(".")
-    node = data
-    for k in parents:
-        node = node[k]
-    if value is None:
-        del node[last]
-    else:
-        node[last] = value
+def test_bad_input_one_line_naming_the_field(tmp_path, capsys, scene_edit, path, value, message):
+    data = scene_edit(SCENE, path, value)
     p = tmp_path / "scene.yaml"
     p.write_text(yaml.safe_dump(data))
     with pytest.raises(ScenarioError, match=message.replace("(", r"\(").replace("|", r"\|")):
