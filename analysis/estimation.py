@@ -242,16 +242,18 @@ class LeastSquares:
     states].  ``hessian``: "gauss-newton" (lam_f J'J through CasADi's ``hess_lag``) or "exact".
     Built once, called many times (data and fixed values are the NLP parameters ``p``)."""
 
-    def __init__(self, name: str, x, p, r, g, n_theta: int, hessian: str = "gauss-newton", max_iter: int = 300):
+    def __init__(self, name: str, x, p, r, g, n_theta: int, hessian: str = "gauss-newton", max_iter: int = 300,
+                 tol: float | None = None):
         f = 0.5 * ca.sumsqr(r)
+        opts = {"max_iter": max_iter} | ({"tol": tol, "constr_viol_tol": tol, "compl_inf_tol": tol} if tol else {})
         if hessian == "gauss-newton":
             J = ca.jacobian(r, x)
             lam_f, lam_g = ca.SX.sym("lam_f"), ca.SX.sym("lam_g", g.numel())
             hess = ca.Function("gauss_newton_hessian", [x, p, lam_f, lam_g], [ca.triu(lam_f * ca.mtimes(J.T, J))],
                                ["x", "p", "lam_f", "lam_g"], ["hess_gamma_x_x"])
-            self.solver = ipopt.nlpsol(name, x, p, f, g, hess_lag=hess, max_iter=max_iter)
+            self.solver = ipopt.nlpsol(name, x, p, f, g, hess_lag=hess, **opts)
         elif hessian == "exact":
-            self.solver = ipopt.nlpsol(name, x, p, f, g, max_iter=max_iter)
+            self.solver = ipopt.nlpsol(name, x, p, f, g, **opts)
         else:
             raise ValueError(f"hessian must be 'gauss-newton' or 'exact', got {hessian!r}")
         self.n_theta = n_theta
@@ -317,7 +319,7 @@ class DiscFitter:
     """
 
     def __init__(self, n: int, residual: str = "u", free: tuple[str, ...] = DISC, hessian: str = "gauss-newton",
-                 max_iter: int = 300):
+                 max_iter: int = 300, tol: float | None = None):
         self.n, self.residual, self.free, self.hessian = n, residual, tuple(free), hessian
         x = ca.SX.sym("x", len(self.free))
         tau, um, qm = ca.SX.sym("tau", n), ca.SX.sym("u", n), ca.SX.sym("q", n)
@@ -329,7 +331,7 @@ class DiscFitter:
         if residual in ("q", "both"):
             parts.append(w[1] * (flow_from_load(tau, *theta) - qm))
         self.ls = LeastSquares(f"fit_disc_{residual}", x, ca.vertcat(tau, um, qm, w, fixed, scale),
-                               ca.vertcat(*parts), ca.SX(0, 1), len(self.free), hessian, max_iter)
+                               ca.vertcat(*parts), ca.SX(0, 1), len(self.free), hessian, max_iter, tol)
 
     def fit(self, tau, u=None, q=None, values: dict | None = None, bounds: dict | None = None,
             weights: dict | None = None, name: str = "fit") -> FitResult:
@@ -369,7 +371,8 @@ class DiscFitter:
 
 
 def scipy_disc_fit(tau, u=None, q=None, residual: str = "u", values: dict | None = None,
-                   free: tuple[str, ...] = DISC, bounds: dict | None = None, weights: dict | None = None) -> dict:
+                   free: tuple[str, ...] = DISC, bounds: dict | None = None, weights: dict | None = None,
+                   tol: float = 1e-15) -> dict:
     """The same least-squares problem as :class:`DiscFitter` solved by scipy.optimize.least_squares
     (trust-region reflective, analytic Jacobian in numpy): the independent peer of the IPOPT fit."""
     tau = np.asarray(tau, float)
@@ -406,7 +409,7 @@ def scipy_disc_fit(tau, u=None, q=None, residual: str = "u", values: dict | None
 
     x0 = np.array([min(max(values[k], bnd[k][0] * (1 + 1e-6)), bnd[k][1]) for k in free])
     sol = optimize.least_squares(res, x0, jac=jac, bounds=([bnd[k][0] for k in free], [bnd[k][1] for k in free]),
-                                 method="trf", xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=2000)
+                                 method="trf", xtol=tol, ftol=tol, gtol=tol, max_nfev=2000)
     return {"estimate": dict(zip(free, map(float, sol.x), strict=True)), "success": bool(sol.status > 0),
             "status": sol.message, "nfev": int(sol.nfev), "cost": float(sol.cost)}
 

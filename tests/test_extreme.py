@@ -133,3 +133,12 @@ def test_liquid_filling_the_chamber_cannot_balance(tmp_path):
     assert np.allclose(lb["table"]["lambda0"], 1.0, atol=1e-8)  # rigid liquid: efficiency exactly 1
     assert max(lb["table"]["r"]) < 1e-5  # no free surface (radius of micrometres from rounding of V)
     assert lb["pashkov"]["single"]["sufficiency"]["all_ok"] is False
+
+
+def test_discharge_at_its_critical_value(tmp_path):
+    code, res = run(tmp_path, "statics_discharge_critical")
+    assert code == 0
+    ex = res["statics"]["exact"]
+    assert abs(ex["Q_1"]) < 1e-8 * abs(ex["Q_T"])  # no flow through the inner seal: on the edge of reversal
+    assert ex["regulator_saturated"] and ex["solver"]["max_relative_residual"] < 1e-9
+    assert res["statics"]["critical_exact"]["psi1_kr"] == pytest.approx(1.2234834557, rel=1e-9)
