@@ -19,6 +19,7 @@ import numpy as np
 from scipy.optimize import fsolve
 
 from autobal.analysis import closed_form, ipopt
+from autobal.errors import ScenarioError
 from autobal.results import write_csv
 
 TARGET = 1e-6  # relative error for the "cheapest setting" summary
@@ -228,7 +229,7 @@ def statics_methods(solver, psi1: float, dpsi: float) -> list[Method]:
 def statics_study(solver, psi1: float, dpsi: float) -> WorkPrecision:
     pt = solver.solve(psi1, dpsi)
     if pt.active:
-        raise ValueError(f"work-precision of the statics needs a regulated operating point; at psi1 = {psi1:g} "
+        raise ScenarioError(f"work-precision of the statics needs a regulated operating point; at psi1 = {psi1:g} "
                          f"the stops {sorted(pt.active)} are reached")
     ref = statics_reference(solver.design.groups, psi1, dpsi)
     return study("statics", statics_methods(solver, psi1, dpsi), ref,
@@ -418,7 +419,7 @@ def estimation_provider(scn, settings) -> WorkPrecision:
 
     fit = next((f for f in settings.fits if f.model == "traditional_disc" and f.residual == "u"), None)
     if fit is None:
-        raise ValueError("work-precision of the estimation needs a traditional_disc fit with residual u")
+        raise ScenarioError("work-precision of the estimation needs a traditional_disc fit with residual u")
     data = read_csv(settings.data)
     bases = _bases(settings)
     return estimation_study(data.dimensionless("load", bases), data.dimensionless("gap", bases), fit.free(),

@@ -1,4 +1,4 @@
-"""Command line: ``autobal run|check|list``.
+"""Command line: ``autobal run|accuracy|check|list``.
 
 Exit codes: 0 success, 2 bad input (one line naming the field), 3 failed solve (solver status
 printed, last iterate written to DIR/failed_solve.json).
@@ -23,8 +23,8 @@ def run(scn: scenario.Scenario, out: Path) -> dict:
     from autobal.pipeline import RUNNERS, runner
 
     out.mkdir(parents=True, exist_ok=True)
-    results = {"scenario": scn.name, "title": scn.title, "source": scn.source, "files": []}
-    results |= {"timing": {}, "accuracy": {}}
+    results = {"scenario": scn.name, "title": scn.title, "source": scn.source, "files": [], "timing": {},
+               "accuracy": {}}
     for name in RUNNERS:
         settings = getattr(scn.analyses, name, None)
         if settings is not None:
@@ -42,9 +42,8 @@ def run(scn: scenario.Scenario, out: Path) -> dict:
 
 def accuracy(scn: scenario.Scenario, out: Path) -> dict:
     """Work-precision of every analysis of the scene that has a provider: figure, CSV, summary."""
-    import importlib
-
     from autobal.analysis.workprecision import PROVIDERS
+    from autobal.pipeline import resolve
 
     out.mkdir(parents=True, exist_ok=True)
     report = {"scenario": scn.name, "studies": {}, "files": []}
@@ -52,8 +51,7 @@ def accuracy(scn: scenario.Scenario, out: Path) -> dict:
         settings = getattr(scn.analyses, name, None)
         if settings is None:
             continue
-        module, func = target.split(":")
-        wp = getattr(importlib.import_module(module), func)(scn, settings)
+        wp = resolve(target)(scn, settings)
         report["studies"][name] = wp.to_dict()
         report["files"] += [f.name for f in wp.write_tables(out) + wp.plot(out)]
         print(wp.summary())

@@ -22,9 +22,14 @@ RUNNERS = {
 }
 
 
-def runner(name: str):
-    module, func = RUNNERS[name].split(":")
+def resolve(target: str):
+    """The function named by ``"module:function"``, imported now."""
+    module, func = target.split(":")
     return getattr(importlib.import_module(module), func)
+
+
+def runner(name: str):
+    return resolve(RUNNERS[name])
 
 
 def statics(scn, settings, out: Path):
