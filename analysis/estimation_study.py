@@ -19,7 +19,7 @@ import numpy as np
 from autobal.analysis import estimation as est
 from autobal.errors import ScenarioError
 from autobal.measurements import read_csv
-from autobal.results import write_csv
+from autobal.results import save_figure, write_csv
 
 # The source's Table 4.4 (printed as a second "Table 4.3", L2792-L2802), from points it does not publish.
 SOURCE_TABLE_4_4 = {
@@ -148,11 +148,7 @@ class EstimationResult:
                 axr.set_xlabel(xl)
                 axr.grid(alpha=0.3)
             fig.suptitle(f"{self.data['title']}: fit {name} ({f['model']}, residual in {f['residual']})", fontsize=9)
-            fig.tight_layout()
-            path = out / f"fig_estimation_{name}.png"
-            fig.savefig(path, dpi=120)
-            plt.close(fig)
-            files.append(path)
+            files.append(save_figure(fig, out / f"fig_estimation_{name}.png"))
         return files
 
 

@@ -19,7 +19,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from autobal.analysis.linearize import LinearModel, Setup
-from autobal.results import write_csv
+from autobal.results import save_figure, write_csv
 
 
 def grid(lin: LinearModel, start: float, stop: float, points: int) -> np.ndarray:
@@ -116,11 +116,7 @@ class FrequencyResult:
         a2.set_xlabel(r"$\omega$, rad/s")
         fig.suptitle(f"{self.data['title']}\nAFC/PFC of the face gap (Fig. 2.7/2.11); dotted: operating speed",
                      fontsize=9)
-        fig.tight_layout()
-        path = out / "fig_afc.png"
-        fig.savefig(path, dpi=120)
-        plt.close(fig)
-        return [path]
+        return [save_figure(fig, out / "fig_afc.png")]
 
 
 def study(setup: Setup, models: list[str], convention: str, omega_range: tuple, title: str = "") -> FrequencyResult:

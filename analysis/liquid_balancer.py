@@ -22,7 +22,7 @@ import numpy as np
 from autobal.analysis import ipopt
 from autobal.errors import SolveError
 from autobal.models import liquid_balancer as lb
-from autobal.results import write_csv
+from autobal.results import save_figure, write_csv
 
 # Table 3.2 [T L1494-L1499]: efficiency vs gamma, theory (App. В / C# program) and experiment
 TABLE_3_2 = {"gamma": [0.4, 0.6, 0.8, 1.0, 1.2, 1.4],
@@ -402,10 +402,7 @@ class LiquidBalancerResult:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
         ax.set_title(d["title"], fontsize=9)
-        fig.tight_layout()
-        fig.savefig(out / "fig_liquid_efficiency.png", dpi=120)
-        plt.close(fig)
-        paths.append(out / "fig_liquid_efficiency.png")
+        paths.append(save_figure(fig, out / "fig_liquid_efficiency.png"))
         opts = [k for k in ("optimal_height", "optimal_volume") if k in d and len(d[k]["grid"]["x"])]
         if opts:
             fig, axes = plt.subplots(1, len(opts), figsize=(5.2 * len(opts), 4.2), squeeze=False)
@@ -420,10 +417,7 @@ class LiquidBalancerResult:
                 ax.grid(alpha=0.3)
                 ax.legend(fontsize=7)
                 ax.set_title(f"{key.replace('_', ' ')} ({o['variant']})", fontsize=9)
-            fig.tight_layout()
-            fig.savefig(out / "fig_liquid_optimum.png", dpi=120)
-            plt.close(fig)
-            paths.append(out / "fig_liquid_optimum.png")
+            paths.append(save_figure(fig, out / "fig_liquid_optimum.png"))
         return paths
 
 

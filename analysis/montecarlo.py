@@ -46,7 +46,7 @@ from autobal.analysis import closed_form
 from autobal.analysis.statics import ideal_guess
 from autobal.errors import ScenarioError
 from autobal.models.device import DeviceDesign, static_system
-from autobal.results import write_csv
+from autobal.results import save_figure, write_csv
 
 # the static model's groups that may be uncertain (DeviceGroups, RegulatorGroups and the margin dpsi)
 PARAMETERS = ("sigma", "chi", "b", "psi4", "alpha_TB1", "alpha_31", "alpha_e1", "dpsi",
@@ -680,10 +680,7 @@ class MonteCarloResult:
         axes[2].legend(fontsize=7)
         axes[2].grid(alpha=0.3, axis="y")
         fig.suptitle(d["title"], fontsize=9)
-        fig.tight_layout()
-        fig.savefig(out / "fig_montecarlo.png", dpi=120)
-        plt.close(fig)
-        paths = [out / "fig_montecarlo.png"]
+        paths = [save_figure(fig, out / "fig_montecarlo.png")]
         if "afc" in d:
             a = d["afc"]
             fig, ax = plt.subplots(figsize=(7, 4.4))
@@ -700,10 +697,7 @@ class MonteCarloResult:
             ax.legend(fontsize=7)
             ax.set_title(f"{d['title']}\nAFC Monte Carlo (Fig. 3.7/3.10); dashed: 0.135 % and 99.865 % quantiles",
                          fontsize=9)
-            fig.tight_layout()
-            fig.savefig(out / "fig_montecarlo_afc.png", dpi=120)
-            plt.close(fig)
-            paths.append(out / "fig_montecarlo_afc.png")
+            paths.append(save_figure(fig, out / "fig_montecarlo_afc.png"))
         return paths
 
 

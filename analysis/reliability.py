@@ -41,7 +41,7 @@ from autobal.models.hydroheel import (
     max_gap,
     seal_shape_factor,
 )
-from autobal.results import write_csv
+from autobal.results import save_figure, write_csv
 
 HOUR = 3600.0
 
@@ -219,10 +219,7 @@ class ReliabilityResult:
         a2.grid(alpha=0.3)
         a2.legend(fontsize=7)
         fig.suptitle(d["title"], fontsize=9)
-        fig.tight_layout()
-        fig.savefig(out / "fig_reliability.png", dpi=120)
-        plt.close(fig)
-        return [out / "fig_reliability.png"]
+        return [save_figure(fig, out / "fig_reliability.png")]
 
 
 def build(settings) -> tuple[Reliability, Reliability, dict]:

@@ -18,7 +18,7 @@ import numpy as np
 from autobal.analysis import rotor as R
 from autobal.errors import ScenarioError
 from autobal.models.rotor import RotorParams
-from autobal.results import write_csv
+from autobal.results import save_figure, write_csv
 
 STEP_TOL = 1e-12  # CVODES tolerance of the step transients checked against the closed form
 
@@ -76,10 +76,7 @@ class RotorDynamicsResult:
         c, paths = self.curves, []
 
         def save(fig, name):
-            fig.tight_layout()
-            fig.savefig(out / name, dpi=110)
-            plt.close(fig)
-            paths.append(out / name)
+            paths.append(save_figure(fig, out / name, dpi=110))
 
         if "stationary" in c:
             fig, ax = plt.subplots(2, 2, figsize=(9, 7))

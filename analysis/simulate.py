@@ -24,7 +24,7 @@ import casadi as ca
 import numpy as np
 
 from autobal.models.dynamics import DynamicModel
-from autobal.results import write_csv
+from autobal.results import save_figure, write_csv
 
 KINDS = ("force_step", "pressure_step", "pressure_harmonic")
 
@@ -181,11 +181,7 @@ class TransientResult:
         for a in axes[-1]:
             a.set_xlabel("t, ms")
         fig.suptitle(f"{self.data['title']}\ntime responses from the static solution", fontsize=9)
-        fig.tight_layout()
-        path = out / "fig_transients.png"
-        fig.savefig(path, dpi=120)
-        plt.close(fig)
-        return [path]
+        return [save_figure(fig, out / "fig_transients.png")]
 
 
 def study(model: DynamicModel, cases: list, duration: float, points: int, integrator: str = "cvodes",

@@ -23,7 +23,7 @@ import numpy as np
 import scipy.linalg
 
 from autobal.analysis.linearize import LinearModel, Setup, coefficient_table, jacobians, operator
-from autobal.results import write_csv
+from autobal.results import save_figure, write_csv
 from autobal.schema_dynamics import PARAMETERS
 
 OMEGA_REF = 1000.0  # rad/s, time scale of the reported polynomial coefficients
@@ -240,10 +240,7 @@ class StabilityResult:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
         ax.set_title(f"{self.data['title']}\npoles", fontsize=9)
-        fig.tight_layout()
-        files.append(out / "fig_poles.png")
-        fig.savefig(files[-1], dpi=120)
-        plt.close(fig)
+        files.append(save_figure(fig, out / "fig_poles.png"))
         for m, mp in self.data.get("maps", {}).items():
             fig, ax = plt.subplots(figsize=(6.4, 4.8))
             X, Y = np.meshgrid(mp["x"]["values"], mp["y"]["values"])
@@ -262,10 +259,7 @@ class StabilityResult:
             ax.legend(fontsize=7, loc="best")
             ax.set_title(f"{self.data['title']}\nstability map, {m} model: boundary max Re = 0 (black); "
                          "blue = stable", fontsize=8)
-            fig.tight_layout()
-            files.append(out / f"fig_stability_map_{m}.png")
-            fig.savefig(files[-1], dpi=120)
-            plt.close(fig)
+            files.append(save_figure(fig, out / f"fig_stability_map_{m}.png"))
         return files
 
 

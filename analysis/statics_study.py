@@ -15,7 +15,7 @@ import numpy as np
 from autobal.analysis import closed_form, workprecision
 from autobal.analysis.statics import StaticPoint, StaticsSolver
 from autobal.errors import SolveError
-from autobal.results import write_csv
+from autobal.results import save_figure, write_csv
 
 SWEEP_KEYS = ("psi_e", "psi2", "psi3", "psi_cam", "u", "xi")
 
@@ -85,10 +85,7 @@ class StaticsResult:
 
         def save(fig, fname):
             fig.suptitle(name, fontsize=9)
-            fig.tight_layout()
-            fig.savefig(out / fname, dpi=120)
-            plt.close(fig)
-            paths.append(out / fname)
+            paths.append(save_figure(fig, out / fname))
 
         fig, ax = plt.subplots(figsize=(6.4, 4.4))
         for k, lab in (("psi_e", r"$\psi_e$"), ("psi2", r"$\psi_2$"), ("psi3", r"$\psi_3$"),

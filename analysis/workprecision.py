@@ -20,7 +20,7 @@ from scipy.optimize import fsolve
 
 from autobal.analysis import closed_form, ipopt
 from autobal.errors import ScenarioError
-from autobal.results import write_csv
+from autobal.results import save_figure, write_csv
 
 TARGET = 1e-6  # relative error for the "cheapest setting" summary
 
@@ -96,11 +96,7 @@ class WorkPrecision:
         ax.set_title(f"work-precision: {self.analysis}\nreference: {self.reference}", fontsize=8)
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=7)
-        fig.tight_layout()
-        path = out / f"workprecision_{self.analysis}.png"
-        fig.savefig(path, dpi=120)
-        plt.close(fig)
-        return [path]
+        return [save_figure(fig, out / f"workprecision_{self.analysis}.png")]
 
 
 def timed(fn, repeats: int = 5):

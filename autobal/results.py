@@ -39,3 +39,13 @@ def write_csv(path: Path, columns: dict) -> None:
         w = csv.writer(fh)
         w.writerow(names)
         w.writerows(rows)
+
+
+def save_figure(fig, path: Path, dpi: int = 120) -> Path:
+    """Lay out, write as PNG and close a matplotlib figure; returns ``path``."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    return path

@@ -24,7 +24,7 @@ from autobal.ocp.spinup import (
     baselines,
     optimize,
 )
-from autobal.results import write_csv
+from autobal.results import save_figure, write_csv
 
 
 @dataclass
@@ -96,10 +96,7 @@ class SpinupResult:
             ax.grid(alpha=0.3)
             ax.legend(fontsize=7)
         fig.suptitle(title, fontsize=9)
-        fig.tight_layout()
-        fig.savefig(out / "spinup_profiles.png", dpi=120)
-        plt.close(fig)
-        paths.append(out / "spinup_profiles.png")
+        paths.append(save_figure(fig, out / "spinup_profiles.png"))
 
         fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 7))
         for tr, c, ls, lw in runs:
@@ -115,10 +112,7 @@ class SpinupResult:
             ax.grid(alpha=0.3)
             ax.legend(fontsize=7)
         fig.suptitle(title, fontsize=9)
-        fig.tight_layout()
-        fig.savefig(out / "spinup_deflection.png", dpi=120)
-        plt.close(fig)
-        paths.append(out / "spinup_deflection.png")
+        paths.append(save_figure(fig, out / "spinup_deflection.png"))
         return paths
 
 
