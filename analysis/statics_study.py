@@ -8,21 +8,52 @@ Figs 2.4-2.6 (pump) and 2.9-2.10 (compressor), plus the force-gap characteristic
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from autobal.analysis import closed_form, workprecision
+from autobal.analysis.result import Result, fmt, new_figure
 from autobal.analysis.statics import StaticPoint, StaticsSolver
 from autobal.errors import SolveError
-from autobal.results import save_figure, write_csv
 
 SWEEP_KEYS = ("psi_e", "psi2", "psi3", "psi_cam", "u", "xi")
 
 
 @dataclass
-class StaticsResult:
+class StaticsResult(Result):
+    """The static calculation of one device: operating point, criticals, sweep, force-gap curve.
+
+    ``data`` is the results.json block; the headline numbers are the properties below.
+    """
+
     data: dict  # the results.json block; numbers in SI or as named dimensionless groups
+    name = "statics"
+
+    @property
+    def face_gap(self) -> float:
+        """Face gap z0 at the operating point, m."""
+        return self.data["exact"]["z0"]
+
+    @property
+    def barrier_flow(self) -> float:
+        """Barrier (leak) flow Q_e at the operating point, m^3/s."""
+        return self.data["exact"]["Q_e"]
+
+    @property
+    def chamber_pressures(self) -> dict[str, float]:
+        """Pressures at the operating point, Pa: p1 (discharge), p2 (disc chamber), p3, pe (barrier)."""
+        ex = self.data["exact"]
+        return {k: ex[k] for k in ("p1", "p2", "p3", "pe")}
+
+    @property
+    def critical_discharge_pressure(self) -> float | None:
+        """Exact discharge pressure p1_kr at which the inner-seal flow reverses, Pa (None if none)."""
+        return self.data["critical_exact"].get("p1_kr")
+
+    @property
+    def critical_margin(self) -> float | None:
+        """Exact critical barrier margin dpsi_kr = (p_e - p1)/p_B, dimensionless (None if none)."""
+        return self.data["critical_exact"]["dpsi_kr"]
 
     def to_dict(self) -> dict:
         return self.data
@@ -34,10 +65,10 @@ class StaticsResult:
                  f"max relative residual {ex['solver']['max_relative_residual']:.1e}",
                  f"  {'':10s}{'exact':>12s}{'closed form':>14s}"]
         for k in ("u0", "xi0", "psi2_0", "psi3_0", "psi_e0", "psi_cam0", "kappa_s"):
-            lines.append(f"  {k:10s}{_fmt(ex.get(k)):>12s}{_fmt(cf.get(k)):>14s}")
-        lines.append(f"  {'psi1_kr':10s}{_fmt(crit['psi1_kr']):>12s}{_fmt(cf['psi1_kr']):>14s}")
-        lines.append(f"  {'dpsi_kr':10s}{_fmt(crit['dpsi_kr']):>12s}{_fmt(cf['dpsi_kr']):>14s}")
-        lines.append(f"  Q_e [m3/s]{_fmt(ex['Q_e']):>12s}{_fmt(cf['Q_e']):>14s}")
+            lines.append(f"  {k:10s}{fmt(ex.get(k)):>12s}{fmt(cf.get(k)):>14s}")
+        lines.append(f"  {'psi1_kr':10s}{fmt(crit['psi1_kr']):>12s}{fmt(cf['psi1_kr']):>14s}")
+        lines.append(f"  {'dpsi_kr':10s}{fmt(crit['dpsi_kr']):>12s}{fmt(cf['dpsi_kr']):>14s}")
+        lines.append(f"  Q_e [m3/s]{fmt(ex['Q_e']):>12s}{fmt(cf['Q_e']):>14s}")
         sat = self.data["sweep"]["regulator_saturated"]
         if any(sat):
             first = self.data["sweep"]["psi1"][int(np.argmax(sat))]
@@ -46,74 +77,70 @@ class StaticsResult:
             lines.append("  the operating point itself has the regulator saturated")
         return "\n".join(lines)
 
-    def write_tables(self, out: Path) -> list[Path]:
+    def tables(self) -> dict[str, dict]:
         sw, fg = self.data["sweep"], self.data["force_gap"]
         cols = {k: sw[k] for k in ("psi1", *SWEEP_KEYS, "q_e", "q_T", "q_1", "Q_e", "Q_1", "Q_T",
                                    "kappa_s", "regulator_saturated", "contact")}
         cols |= {f"closed_form_{k}": v for k, v in sw["closed_form"].items()}
-        write_csv(out / "statics_sweep.csv", cols)
-        write_csv(out / "force_gap.csv", {"u": fg["u"], "phi_exact": fg["phi_exact"],
-                                          "phi_closed_form": fg["phi_closed_form"]})
-        return [out / "statics_sweep.csv", out / "force_gap.csv"]
+        return {"statics_sweep.csv": cols,
+                "force_gap.csv": {"u": fg["u"], "phi_exact": fg["phi_exact"],
+                                  "phi_closed_form": fg["phi_closed_form"]}}
 
-    def plot(self, out: Path) -> list[Path]:
-        """Figures: pressures (Fig 2.4/2.9), gap and valve (Fig 2.5), flows (Fig 2.6/2.10), phi(u)."""
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        sw, cf = self.data["sweep"], self.data["sweep"]["closed_form"]
+    def _decorate(self, ax, ylabel: str) -> None:
+        sw = self.data["sweep"]
         psi1 = np.asarray(sw["psi1"], float)
         sat = np.asarray(sw["regulator_saturated"], bool)
         kr = self.data["critical_exact"]["psi1_kr"]
         kr_cf = self.data["closed_form"]["psi1_kr"]
-        name = self.data["title"]
+        if sat.any():
+            ax.axvspan(psi1[sat].min(), psi1.max(), color="0.9", label="regulator saturated")
+        if kr is not None:
+            ax.axvline(kr, color="k", lw=0.8, ls=":", label=r"$\psi_1^{kr}$ exact")
+        ax.axvline(kr_cf, color="0.5", lw=0.8, ls="-.", label=r"$\psi_1^{kr}$ (2.32)/(2.160)")
+        ax.set_xlabel(r"discharge pressure ratio $\psi_1 = p_1/p_B$")
+        ax.set_ylabel(ylabel)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
 
-        def decorate(ax, ylabel):
-            if sat.any():
-                ax.axvspan(psi1[sat].min(), psi1.max(), color="0.9", label="regulator saturated")
-            if kr is not None:
-                ax.axvline(kr, color="k", lw=0.8, ls=":", label=r"$\psi_1^{kr}$ exact")
-            ax.axvline(kr_cf, color="0.5", lw=0.8, ls="-.", label=r"$\psi_1^{kr}$ (2.32)/(2.160)")
-            ax.set_xlabel(r"discharge pressure ratio $\psi_1 = p_1/p_B$")
-            ax.set_ylabel(ylabel)
-            ax.grid(alpha=0.3)
-            ax.legend(fontsize=7)
-
-        paths = []
-
-        def save(fig, fname):
-            fig.suptitle(name, fontsize=9)
-            paths.append(save_figure(fig, out / fname))
-
-        fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    def draw(self, ax) -> None:
+        """Chamber pressure ratios against the discharge ratio (Fig 2.4 / 2.9)."""
+        sw, cf = self.data["sweep"], self.data["sweep"]["closed_form"]
+        psi1 = np.asarray(sw["psi1"], float)
         for k, lab in (("psi_e", r"$\psi_e$"), ("psi2", r"$\psi_2$"), ("psi3", r"$\psi_3$"),
                        ("psi_cam", r"$\psi_{cam}$")):
             line, = ax.plot(psi1, np.asarray(sw[k], float), label=f"{lab} exact")
             ax.plot(psi1, np.asarray(cf[k], float), ls="--", color=line.get_color(), label=f"{lab} closed form")
-        decorate(ax, "pressure ratio")
-        save(fig, "fig_pressures.png")
+        self._decorate(ax, "pressure ratio")
 
-        fig, (a1, a2) = plt.subplots(2, 1, figsize=(6.4, 6), sharex=True)
+    def figures(self) -> dict:
+        """Pressures (Fig 2.4/2.9), gap and valve (Fig 2.5), flows (Fig 2.6/2.10), phi(u) (2.35)."""
+        sw, cf = self.data["sweep"], self.data["sweep"]["closed_form"]
+        psi1 = np.asarray(sw["psi1"], float)
+        figs = {}
+
+        fig, ax = new_figure()
+        self.draw(ax)
+        figs["fig_pressures.png"] = fig
+
+        fig, (a1, a2) = new_figure((6.4, 6), 2, 1, sharex=True)
         a1.plot(psi1, np.asarray(sw["u"], float), label="u exact")
         a1.plot(psi1, np.asarray(cf["u"], float), ls="--", label="u closed form")
-        decorate(a1, r"face gap $u = z/z_B$")
+        self._decorate(a1, r"face gap $u = z/z_B$")
         a2.plot(psi1, np.asarray(sw["xi"], float), label=r"$\xi$ exact")
         a2.plot(psi1, np.asarray(cf["xi"], float), ls="--", label=r"$\xi$ closed form (2.28)")
-        decorate(a2, r"valve opening $\xi = x/x_B$")
-        save(fig, "fig_gap.png")
+        self._decorate(a2, r"valve opening $\xi = x/x_B$")
+        figs["fig_gap.png"] = fig
 
-        fig, ax = plt.subplots(figsize=(6.4, 4.4))
+        fig, ax = new_figure()
         for k, lab in (("q_e", "$q_e$"), ("q_T", "$q_T$"), ("q_1", "$q_1$")):
             line, = ax.plot(psi1, np.asarray(sw[k], float), label=f"{lab} exact")
             ax.plot(psi1, np.asarray(cf[k], float), ls="--", color=line.get_color(), label=f"{lab} closed form")
         ax.axhline(0, color="k", lw=0.5)
-        decorate(ax, r"flow / $Q_B$ (source's base flow)")
-        save(fig, "fig_flows.png")
+        self._decorate(ax, r"flow / $Q_B$ (source's base flow)")
+        figs["fig_flows.png"] = fig
 
         fg = self.data["force_gap"]
-        fig, ax = plt.subplots(figsize=(6.4, 4.4))
+        fig, ax = new_figure()
         ax.plot(fg["u"], fg["phi_exact"], label=r"$\varphi(u)$ exact network")
         if any(v is not None for v in fg["phi_closed_form"]):
             ax.plot(fg["u"], np.asarray(fg["phi_closed_form"], float), ls="--", label=r"$\varphi(u)$ (2.35)")
@@ -122,12 +149,10 @@ class StaticsResult:
         ax.set_ylabel(r"balancing force $\varphi = F/(p_B s_B)$")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
-        save(fig, "fig_force_gap.png")
-        return paths
-
-
-def _fmt(v) -> str:
-    return "-" if v is None or (isinstance(v, float) and not np.isfinite(v)) else f"{v:.5g}"
+        figs["fig_force_gap.png"] = fig
+        for f in figs.values():
+            f.suptitle(self.data["title"], fontsize=9)
+        return figs
 
 
 def _state(solver: StaticsSolver, pt: StaticPoint, q_base: float) -> dict:

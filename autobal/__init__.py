@@ -1,2 +1,29 @@
-"""autobal: CasADi models, solvers and studies for rotor balancing devices."""
-__version__ = "0.1.0"
+"""autobal: CasADi models, solvers and studies for rotor balancing devices.
+
+The public API::
+
+    scene = autobal.load("pump_pe600_simplified", set={"device.disc.face.base_gap": "0.18 mm"})
+    run = autobal.run(scene)           # Run: analysis name -> Result
+    run["statics"].summary(); run["statics"].plot(); run.save("out/pump")
+"""
+
+__version__ = "0.2.0"
+
+__all__ = ["AutobalError", "Result", "Run", "Scenario", "ScenarioError", "SolveError", "__version__", "load", "run"]
+
+_WHERE = {"load": "autobal.api", "run": "autobal.api", "Run": "autobal.api", "Result": "autobal.analysis.result",
+          "Scenario": "autobal.scenario", "AutobalError": "autobal.errors", "ScenarioError": "autobal.errors",
+          "SolveError": "autobal.errors"}
+
+
+def __getattr__(name: str):
+    """Import the public names when first used, so ``import autobal.models`` stays light."""
+    if name in _WHERE:
+        import importlib
+
+        return getattr(importlib.import_module(_WHERE[name]), name)
+    raise AttributeError(f"module 'autobal' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(__all__)

@@ -1,113 +1,158 @@
-"""Command line: ``autobal run|accuracy|check|list``.
-
-Exit codes: 0 success, 2 bad input (one line naming the field), 3 failed solve (solver status
-printed, last iterate written to DIR/failed_solve.json).
-"""
+"""Command line of autobal: run the analyses of a scenario, check it, list the shipped ones."""
 
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
-import time
 from pathlib import Path
 
-from autobal import scenario
-from autobal.errors import ScenarioError, SolveError
-from autobal.results import write_json
+from autobal import __version__, api, scenario
+from autobal.errors import Interrupted, ScenarioError, SolveError
+from autobal.output import LOG, OutputFolder
 
-EXIT_BAD_INPUT, EXIT_SOLVE_FAILED = 2, 3
+EXIT_OK, EXIT_BAD_INPUT, EXIT_SOLVE_FAILED = 0, 2, 3
 
+EPILOG = """\
+exit codes:
+  0    success
+  2    bad input: one line naming the file or override, the field and the unit
+  3    failed solve: the solver status; its last iterate in OUT/failed_solve.json
+  130  interrupted (Ctrl-C, SIGINT); OUT holds interrupted.json
+  143  terminated (SIGTERM); OUT holds interrupted.json
 
-def run(scn: scenario.Scenario, out: Path) -> dict:
-    """Run every analysis the scene names; write results.json, CSV tables and PNG figures."""
-    from autobal.pipeline import RUNNERS, runner
-
-    out.mkdir(parents=True, exist_ok=True)
-    results = {"scenario": scn.name, "title": scn.title, "source": scn.source, "files": [], "timing": {},
-               "accuracy": {}}
-    for name in RUNNERS:
-        settings = getattr(scn.analyses, name, None)
-        if settings is not None:
-            t0 = time.perf_counter()
-            block, files, summary = runner(name)(scn, settings, out)
-            results["timing"][name] = time.perf_counter() - t0
-            results["accuracy"][name] = block.get("accuracy", {"estimate": None,
-                                                              "how": "this analysis reports no error estimate"})
-            results[name] = block
-            results["files"] += [f.name for f in files]
-            print(summary)
-    write_json(out / "results.json", results)
-    return results
+Every run writes into a temporary folder beside OUT and moves it into place when it ends, so OUT
+holds the files of exactly one run; what solvers print goes to OUT/autobal.log.
+"""
 
 
-def accuracy(scn: scenario.Scenario, out: Path) -> dict:
+def _overrides(pairs: list[str]) -> dict:
+    out = {}
+    for pair in pairs:
+        path, sep, value = pair.partition("=")
+        if not sep or not path.strip():
+            raise ScenarioError(f"--set {pair}: write PATH=VALUE, e.g. device.disc.face.base_gap='0.18 mm'")
+        out[path.strip()] = value.strip()
+    return out
+
+
+def _out_folder(args, scn) -> Path:
+    return args.out if args.out is not None else Path("out") / scn.name
+
+
+def _run(args, scn) -> int:
+    out = _out_folder(args, scn)
+
+    def show(name, result, seconds):
+        if not args.quiet:
+            print(result.summary())
+            print(f"  ({name}: {seconds:.2f} s)")
+
+    api.run(scn, out, on_result=show)
+    if not args.quiet:
+        print(f"results: {out / 'results.json'}")
+    return EXIT_OK
+
+
+def _accuracy(args, scn) -> int:
     """Work-precision of every analysis of the scene that has a provider: figure, CSV, summary."""
+    from autobal.analysis.result import write_json
     from autobal.analysis.workprecision import PROVIDERS
-    from autobal.pipeline import resolve
+    from autobal.runners import resolve
 
-    out.mkdir(parents=True, exist_ok=True)
-    report = {"scenario": scn.name, "studies": {}, "files": []}
-    for name, target in PROVIDERS.items():
-        settings = getattr(scn.analyses, name, None)
-        if settings is None:
-            continue
-        wp = resolve(target)(scn, settings)
-        report["studies"][name] = wp.to_dict()
-        report["files"] += [f.name for f in wp.write_tables(out) + wp.plot(out)]
-        print(wp.summary())
-    if not report["studies"]:
+    studies = {name: target for name, target in PROVIDERS.items() if getattr(scn.analyses, name, None) is not None}
+    if not studies:
         raise ScenarioError(f"{scn.name}: none of its analyses has a work-precision study "
                             f"(available: {', '.join(PROVIDERS)})")
-    write_json(out / "accuracy.json", report)
-    return report
+    out = _out_folder(args, scn)
+    folder = OutputFolder(out)
+    try:
+        report = {"status": "ok", "scenario": scn.name, "meta": api.meta(scn), "studies": {}, "files": []}
+        for name, target in studies.items():
+            wp = resolve(target)(scn, getattr(scn.analyses, name))
+            report["studies"][name] = wp.to_dict()
+            report["files"] += [f.name for f in wp.write_tables(folder.tmp) + wp.plot(folder.tmp)]
+            if not args.quiet:
+                print(wp.summary())
+        write_json(folder.tmp / "accuracy.json", report)
+        (folder.tmp / LOG).touch()
+    except BaseException:
+        folder.discard()
+        raise
+    folder.commit()
+    if not args.quiet:
+        print(f"results: {out / 'accuracy.json'}")
+    return EXIT_OK
+
+
+def parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="autobal", description=__doc__.splitlines()[0], epilog=EPILOG,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--version", action="version", version=f"autobal {__version__}")
+    sub = ap.add_subparsers(dest="cmd", required=True, metavar="COMMAND")
+
+    def scene_args(p):
+        p.add_argument("scenario", help="a YAML file, or the name of a shipped scenario (see 'autobal list')")
+        p.add_argument("--set", action="append", default=[], metavar="PATH=VALUE",
+                       help="override a scene value, validated like the file "
+                            "(repeatable), e.g. --set device.disc.face.base_gap='0.18 mm'")
+
+    def out_args(p):
+        p.add_argument("--out", type=Path, default=None, metavar="OUT",
+                       help="output folder (default out/<scenario name>); replaced whole by each run")
+        p.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
+
+    p_run = sub.add_parser("run", help="run the analyses a scenario names", epilog=EPILOG,
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
+    scene_args(p_run)
+    out_args(p_run)
+    p_run.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                       help="run sweeps and Monte Carlo on this dask.distributed scheduler (e.g. tcp://host:8786)")
+    p_acc = sub.add_parser("accuracy", help="error against run time of every solver of a scenario", epilog=EPILOG,
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
+    scene_args(p_acc)
+    out_args(p_acc)
+    p_check = sub.add_parser("check", help="validate a scenario without solving")
+    scene_args(p_check)
+    sub.add_parser("list", help="list the shipped scenarios")
+    return ap
+
+
+def _terminate(signum, frame):
+    raise Interrupted(signum)
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="autobal", description=__doc__.splitlines()[0])
-    sub = ap.add_subparsers(dest="cmd", required=True)
-    p_run = sub.add_parser("run", help="run the analyses a scenario names")
-    p_run.add_argument("scenario", help="a YAML file, or the name of a shipped scenario")
-    p_run.add_argument("--out", type=Path, default=None, help="output folder (default out/<scenario>)")
-    p_run.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                       help="run sweeps and Monte Carlo on this dask.distributed scheduler (e.g. tcp://host:8786)")
-    p_acc = sub.add_parser("accuracy", help="error against run time of every solver of a scenario")
-    p_acc.add_argument("scenario")
-    p_acc.add_argument("--out", type=Path, default=None, help="output folder (default out/<scenario>)")
-    p_check = sub.add_parser("check", help="validate a scenario without solving")
-    p_check.add_argument("scenario")
-    sub.add_parser("list", help="list the shipped scenarios")
-    args = ap.parse_args(argv)
-    if args.cmd == "run":  # analysis/executor.py: the CLI's --scheduler overrides the scene's executor
-        from autobal.analysis.executor import set_default_scheduler
-
-        set_default_scheduler(args.scheduler)
-
+    """Entry point of the ``autobal`` command; returns the exit code."""
+    args = parser().parse_args(argv)
     if args.cmd == "list":
         for p in scenario.shipped():
-            s = scenario.load(p)
-            print(f"{p.stem:32s} {s.title}")
-        return 0
+            print(f"{p.stem:32s} {scenario.load(p).title}")
+        return EXIT_OK
+    previous = signal.signal(signal.SIGTERM, _terminate)
     try:
-        scn = scenario.load(args.scenario)
+        scn = scenario.load(args.scenario, overrides=_overrides(args.set))
         if args.cmd == "check":
-            analyses = [k for k, v in scn.analyses if v is not None]
-            print(f"{scn.name}: valid; analyses: {', '.join(analyses) or 'none'}")
-            return 0
-        out = args.out or Path("out") / scn.name
-        try:
-            (accuracy if args.cmd == "accuracy" else run)(scn, out)
-        except SolveError as exc:
-            out.mkdir(parents=True, exist_ok=True)
-            write_json(out / "failed_solve.json", {"error": str(exc), "status": exc.status,
-                                                   "last_iterate": exc.last_iterate})
-            print(f"autobal: solve failed: {exc}; last iterate in {out / 'failed_solve.json'}",
-                  file=sys.stderr)
-            return EXIT_SOLVE_FAILED
-        print(f"results: {out / ('accuracy.json' if args.cmd == 'accuracy' else 'results.json')}")
-        return 0
+            print(f"{scn.name}: valid; analyses: {', '.join(api.analyses(scn)) or 'none'}")
+            return EXIT_OK
+        if args.cmd == "run":
+            from autobal.analysis.executor import set_default_scheduler
+
+            set_default_scheduler(args.scheduler)
+            return _run(args, scn)
+        return _accuracy(args, scn)
     except ScenarioError as exc:
         print(f"autobal: bad input: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except SolveError as exc:
+        print(f"autobal: solve failed: {exc}", file=sys.stderr)
+        return EXIT_SOLVE_FAILED
+    except KeyboardInterrupt as exc:
+        signum = getattr(exc, "signum", signal.SIGINT)
+        print(f"autobal: interrupted ({signal.Signals(signum).name})", file=sys.stderr)
+        return 128 + signum
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":

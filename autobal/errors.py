@@ -23,3 +23,11 @@ class SolveError(AutobalError):
         self.message = message
         self.status = status
         self.last_iterate = last_iterate or {}
+
+
+class Interrupted(KeyboardInterrupt):
+    """The run was stopped by a signal (SIGINT or SIGTERM); the CLI exits with 128 + ``signum``."""
+
+    def __init__(self, signum: int):
+        super().__init__(f"interrupted by signal {signum}")
+        self.signum = signum

@@ -7,11 +7,12 @@ expected unit.
 
 from __future__ import annotations
 
+import hashlib
 from pathlib import Path
 from typing import Annotated, Literal
 
 import yaml
-from pydantic import Field, ValidationError, model_validator
+from pydantic import Field, PrivateAttr, ValidationError, model_validator
 
 from autobal.errors import ScenarioError
 from autobal.schema import NonNegative, Positive, Range, Strict
@@ -192,6 +193,7 @@ class Scenario(Strict):
     rotor: Rotor | None = None  # Jeffcott rotor with optional liquid layer and drive (autobal/schema_rotor.py)
     executor: Executor | None = None  # where sweeps and Monte Carlo run (autobal/schema_reliability.py)
     analyses: Analyses
+    _origin: dict = PrivateAttr(default_factory=dict)  # file, sha256, overrides (set by load)
 
     @model_validator(mode="after")
     def _parts_for_analyses(self):
@@ -227,8 +229,45 @@ def resolve(name_or_path: str | Path) -> Path:
     raise ScenarioError(f"{name_or_path}: no such scenario file or shipped scenario (see 'autobal list')")
 
 
-def load(name_or_path: str | Path) -> Scenario:
-    """Read, validate and convert a scenario to SI; raise ScenarioError with one line."""
+def _set(data: dict, path: str, value) -> None:
+    """Set the key at the dotted ``path`` of a scene mapping (list items by index), making the
+    mappings on the way; a string value is read as YAML ("3" -> 3, "0.18 mm" stays a string)."""
+    if isinstance(value, str):
+        try:
+            value = yaml.safe_load(value)
+        except yaml.YAMLError:
+            pass
+    elif hasattr(value, "units") and hasattr(value, "magnitude"):  # a pint Quantity
+        value = f"{value.magnitude!r} {value.units}"
+    keys = path.split(".")
+    node = data
+    for i, key in enumerate(keys):
+        last = i == len(keys) - 1
+        if isinstance(node, list):
+            if not key.isdigit() or int(key) >= len(node):
+                raise ScenarioError(f"set {path}: {'.'.join(keys[:i])} has no item {key}")
+            key = int(key)
+        elif not isinstance(node, dict):
+            raise ScenarioError(f"set {path}: {'.'.join(keys[:i]) or '(top level)'} is not a mapping")
+        elif not last and node.get(key) is None:
+            node[key] = {}
+        if last:
+            node[key] = value
+        else:
+            node = node[key]
+
+
+def load(name_or_path: str | Path, overrides: dict | None = None) -> Scenario:
+    """Read, validate and convert a scenario to SI; raise ScenarioError with one line.
+
+    Parameters
+    ----------
+    name_or_path : str or Path
+        A YAML file, or the name of a shipped scenario.
+    overrides : dict, optional
+        Dotted scene paths -> values (``{"device.disc.face.base_gap": "0.18 mm"}``), applied to
+        the file's content before validation, so they are checked exactly like YAML.
+    """
     path = resolve(name_or_path)
     try:
         data = yaml.safe_load(path.read_text())
@@ -236,10 +275,19 @@ def load(name_or_path: str | Path) -> Scenario:
         raise ScenarioError(f"{path}: not valid YAML: {str(exc).splitlines()[0]}") from None
     if not isinstance(data, dict):
         raise ScenarioError(f"{path}: a scenario is a YAML mapping of keys to values")
+    overrides = dict(overrides or {})
+    for key, value in overrides.items():
+        _set(data, key, value)
     try:
-        return Scenario.model_validate(data)
+        scn = Scenario.model_validate(data)
     except ValidationError as exc:
-        raise ScenarioError(f"{path}: {_one_line(exc)}") from None
+        loc = ".".join(str(p) for p in exc.errors()[0]["loc"])
+        hit = next((k for k in overrides if loc == k or loc.startswith(k + ".")), None)
+        where = f"set {hit}={overrides[hit]}" if hit else str(path)
+        raise ScenarioError(f"{where}: {_one_line(exc)}") from None
+    scn._origin = {"file": str(path), "sha256": hashlib.sha256(path.read_bytes()).hexdigest(),
+                   "overrides": {k: str(v) for k, v in overrides.items()}}
+    return scn
 
 
 def shipped() -> list[Path]:

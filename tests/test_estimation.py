@@ -367,7 +367,8 @@ def test_missing_data_file(tmp_path):
 
 def test_device_fit_needs_device(tmp_path, capsys):
     fits = [{"name": "d", "model": "device", "parameters": {"alpha_TB1": {"value": 0.03}}}]
-    assert cli.main(["run", str(_scene(tmp_path, fits=fits, loss_coefficient=None)), "--out", str(tmp_path)]) == 2
+    scene = _scene(tmp_path, fits=fits, loss_coefficient=None)
+    assert cli.main(["run", str(scene), "--out", str(tmp_path / "out")]) == 2
     assert "the device model needs a device section" in capsys.readouterr().err
 
 

@@ -1,0 +1,154 @@
+"""The Result protocol every analysis returns, and the plain writers of its files.
+
+A result is data first: ``to_dict()`` is its block of results.json, ``summary()`` a short text,
+``tables()`` its CSV tables and ``figures()`` its matplotlib figures.  Figures are plain
+:class:`matplotlib.figure.Figure` objects made by :func:`new_figure`, never through pyplot, so
+plotting neither switches the caller's backend nor writes anything; ``save(folder)`` writes.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+DPI = 120
+
+
+def plain(obj):
+    """numpy scalars/arrays -> Python numbers/lists; NaN and infinities -> None (JSON null)."""
+    if isinstance(obj, dict):
+        return {str(k): plain(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [plain(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return plain(obj.tolist())
+    if isinstance(obj, np.bool_ | bool):
+        return bool(obj)
+    if isinstance(obj, np.integer | int):
+        return int(obj)
+    if isinstance(obj, np.floating | float):
+        return float(obj) if math.isfinite(obj) else None
+    return obj
+
+
+def write_json(path: Path, data: dict) -> Path:
+    """Write ``data`` as indented JSON with :func:`plain` numbers; returns ``path``."""
+    path.write_text(json.dumps(plain(data), indent=2, allow_nan=False) + "\n")
+    return path
+
+
+def write_csv(path: Path, columns: dict) -> Path:
+    """One column per key, all of equal length, numbers at full precision; returns ``path``."""
+    names = list(columns)
+    rows = zip(*[np.asarray(columns[n]).tolist() for n in names], strict=True)
+    with path.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(names)
+        w.writerows(rows)
+    return path
+
+
+def new_figure(figsize: tuple[float, float] = (6.4, 4.4), nrows: int = 1, ncols: int = 1, **subplots_kw):
+    """A new :class:`~matplotlib.figure.Figure` and its axes, outside pyplot.
+
+    Parameters
+    ----------
+    figsize : (float, float)
+        Width and height, inches.
+    nrows, ncols : int
+        Grid of axes, as :meth:`matplotlib.figure.Figure.subplots`.
+    **subplots_kw
+        Passed to :meth:`~matplotlib.figure.Figure.subplots` (``sharex``, ``squeeze`` ...).
+
+    Returns
+    -------
+    (Figure, Axes or array of Axes)
+        The figure is not registered with pyplot: the caller's backend is untouched and nothing
+        has to be closed.
+    """
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=figsize, layout="constrained")
+    return fig, fig.subplots(nrows, ncols, **subplots_kw)
+
+
+def save_figure(fig: Figure, path: Path, dpi: int = DPI) -> Path:
+    """Write a figure as PNG (or the format of ``path``'s suffix); returns ``path``."""
+    fig.savefig(path, dpi=dpi)
+    return path
+
+
+def fmt(v, digits: int = 5) -> str:
+    """A number for a summary table: ``digits`` significant digits, '-' for None/NaN."""
+    if v is None or (isinstance(v, float | np.floating) and not np.isfinite(v)):
+        return "-"
+    return f"{v:.{digits}g}"
+
+
+class Result:
+    """Base of every analysis result.
+
+    Subclasses implement :meth:`to_dict` and :meth:`summary`, and usually :meth:`tables`,
+    :meth:`figures` and :meth:`draw`.  Headline quantities are properties with their unit in
+    the docstring.
+    """
+
+    #: the analysis key of results.json (``"statics"``, ``"frequency"`` ...)
+    name: str = ""
+
+    def to_dict(self) -> dict:
+        """The results.json block: plain numbers in SI or named dimensionless groups."""
+        raise NotImplementedError
+
+    def summary(self) -> str:
+        """A short plain-text summary of the headline numbers."""
+        raise NotImplementedError
+
+    def tables(self) -> dict[str, dict]:
+        """CSV tables: file name -> {column name: sequence of equal length}."""
+        return {}
+
+    def figures(self) -> dict[str, Figure]:
+        """Figures: file name -> new :class:`~matplotlib.figure.Figure` (made with :func:`new_figure`)."""
+        return {}
+
+    def draw(self, ax: Axes) -> None:
+        """Draw the headline plot onto the caller's axes."""
+        raise NotImplementedError(f"{type(self).__name__} has no single-axes plot: call plot() without ax")
+
+    def plot(self, ax: Axes | None = None):
+        """The figures of this result.
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Draw the headline plot onto these axes instead of making new figures.
+
+        Returns
+        -------
+        list of Figure, or Figure
+            Without ``ax``, every figure of :meth:`figures`; with ``ax``, ``ax.figure``.
+        """
+        if ax is None:
+            return list(self.figures().values())
+        self.draw(ax)
+        return ax.figure
+
+    def save(self, folder: str | Path) -> list[Path]:
+        """Write :meth:`tables` as CSV and :meth:`figures` as PNG into ``folder``; returns the paths."""
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        paths = [write_csv(folder / name, cols) for name, cols in self.tables().items()]
+        return paths + [save_figure(fig, folder / name) for name, fig in self.figures().items()]
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.name}>"

@@ -1,0 +1,186 @@
+"""The Python API: ``load`` a scene, ``run`` its analyses, get Result objects.
+
+>>> import autobal
+>>> scene = autobal.load("pump_pe600_simplified", set={"device.disc.face.base_gap": "0.18 mm"})
+>>> run = autobal.run(scene)                     # nothing printed, nothing written
+>>> run["statics"].face_gap                      # m
+>>> run.save("out/pump")                         # results.json, CSV, PNG; atomically
+"""
+
+from __future__ import annotations
+
+import datetime
+import os
+import platform
+import sys
+import time
+from collections.abc import Iterator, Mapping
+from pathlib import Path
+
+from autobal import __version__, scenario
+from autobal.analysis.result import Result, write_json
+from autobal.errors import AutobalError, SolveError
+from autobal.output import LOG, OutputFolder, SolverLog
+from autobal.runners import RUNNERS
+from autobal.scenario import Scenario
+
+NO_ACCURACY = {"estimate": None, "how": "this analysis reports no error estimate"}
+
+
+def load(name_or_path: str | Path, set: dict | None = None) -> Scenario:  # noqa: A002 (the documented name)
+    """Read and validate a scene.
+
+    Parameters
+    ----------
+    name_or_path : str or Path
+        A YAML file, or the name of a shipped scenario (``autobal list``).
+    set : dict, optional
+        Overrides: dotted scene paths -> values with units, as they would be written in the YAML
+        (``{"device.disc.face.base_gap": "0.18 mm"}``; pint quantities are accepted too). They are
+        validated exactly like the file.
+
+    Returns
+    -------
+    Scenario
+        The validated scene, every quantity in SI.
+
+    Raises
+    ------
+    ScenarioError
+        One line naming the file or override, the field and the expected unit.
+    """
+    return scenario.load(name_or_path, overrides=set)
+
+
+class Run(Mapping):
+    """The results of one run of a scene: analysis name -> :class:`~autobal.analysis.result.Result`.
+
+    ``timing`` holds the wall time of each analysis, s; ``meta`` the version, time, platform and the
+    resolved scene.
+    """
+
+    def __init__(self, scene: Scenario, results: dict[str, Result], timing: dict[str, float]):
+        self.scene, self.results, self.timing = scene, results, timing
+        self.meta = meta(scene)
+
+    def __getitem__(self, name: str) -> Result:
+        return self.results[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.results)
+
+    def __len__(self) -> int:
+        return len(self.results)
+
+    def to_dict(self) -> dict:
+        """The content of results.json (without the ``files`` list, which ``save`` adds)."""
+        s = self.scene
+        out = {"status": "ok", "scenario": s.name, "title": s.title, "source": s.source, "meta": self.meta,
+               "timing": self.timing, "accuracy": {}}
+        for name, res in self.results.items():
+            block = res.to_dict()
+            out["accuracy"][name] = block.get("accuracy", NO_ACCURACY)
+            out[name] = block
+        return out
+
+    def summary(self) -> str:
+        return "\n".join(r.summary() for r in self.results.values())
+
+    def write(self, folder: Path) -> list[Path]:
+        """Write every result's files and results.json into an existing ``folder``."""
+        files = [f for r in self.results.values() for f in r.save(folder)]
+        write_json(folder / "results.json", self.to_dict() | {"files": [f.name for f in files]})
+        return files
+
+    def save(self, out: str | Path) -> Path:
+        """Write the run into ``out`` atomically (see :mod:`autobal.output`); returns the folder."""
+        folder = OutputFolder(out)
+        try:
+            self.write(folder.tmp)
+            (folder.tmp / LOG).touch()
+        except BaseException:
+            folder.discard()
+            raise
+        return folder.commit()
+
+    def __repr__(self) -> str:
+        return f"<Run {self.scene.name}: {', '.join(self.results)}>"
+
+
+def meta(scene: Scenario) -> dict:
+    """Provenance of a run: versions, time, platform, the scene file's hash and the scene in SI."""
+    return {"autobal_version": __version__,
+            "timestamp": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+            "python": sys.version.split()[0], "platform": platform.platform(),
+            **scene._origin, "scene_si": scene.model_dump(mode="json")}
+
+
+def analyses(scene: Scenario) -> list[str]:
+    """The analyses the scene names, in run order."""
+    return [name for name in RUNNERS if getattr(scene.analyses, name, None) is not None]
+
+
+def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=None) -> Run:
+    """Run every analysis the scene names.
+
+    Parameters
+    ----------
+    scene : Scenario, str or Path
+        A scene from :func:`load`, or what :func:`load` takes.
+    out : str or Path, optional
+        Output folder. When given, the run is written there atomically: results.json, CSV tables,
+        PNG figures and ``autobal.log`` (what the solvers printed); a failed solve leaves
+        ``failed_solve.json`` instead and an interrupt ``interrupted.json`` (see :mod:`autobal.output`).
+        Nothing is written when omitted.
+    on_result : callable, optional
+        Called as ``on_result(name, result, seconds)`` after each analysis (the CLI prints with it).
+
+    Returns
+    -------
+    Run
+        Analysis name -> Result.
+
+    Raises
+    ------
+    SolveError
+        A solver did not converge: its status and last iterate are on the exception.
+    ScenarioError
+        The scene cannot be run as given.
+    """
+    if not isinstance(scene, Scenario):
+        scene = load(scene)
+    folder = OutputFolder(out) if out is not None else None
+    results, timing, current = {}, {}, None
+    try:
+        with SolverLog(folder.tmp / LOG if folder else os.devnull) as log:
+            for current in analyses(scene):
+                t0 = time.perf_counter()
+                results[current] = RUNNERS[current](scene, getattr(scene.analyses, current))
+                timing[current] = time.perf_counter() - t0
+                if on_result is not None:
+                    with log.terminal():
+                        on_result(current, results[current], timing[current])
+        done = Run(scene, results, timing)
+        if folder is not None:
+            done.write(folder.tmp)
+            folder.commit()
+        return done
+    except SolveError as exc:
+        if folder is not None:
+            folder.finish("failed_solve.json", {"status": exc.status, "analysis": current, "error": str(exc),
+                                                "last_iterate": exc.last_iterate})
+        raise
+    except KeyboardInterrupt:
+        if folder is not None:
+            folder.finish("interrupted.json", {"status": "interrupted", "analysis": current,
+                                               "completed": list(results)})
+        raise
+    except AutobalError as exc:
+        if folder is not None:
+            folder.finish("error.json", {"status": "error", "analysis": current, "error": str(exc)})
+        raise
+    except BaseException:
+        if folder is not None:
+            folder.discard()
+        raise
+
