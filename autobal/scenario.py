@@ -8,6 +8,7 @@ expected unit.
 from __future__ import annotations
 
 import hashlib
+import importlib.resources
 from pathlib import Path
 from typing import Annotated, Literal
 
@@ -34,7 +35,7 @@ from autobal.units import (
     VolumeFlow,
 )
 
-SCENARIO_DIR = Path(__file__).resolve().parents[1] / "scenarios"
+SCENARIO_DIR = Path(str(importlib.resources.files("autobal.scenarios")))  # package data (scenarios/ in the repo)
 
 class Fluid(Strict):
     density: Density  # liquid density, or gas density at normal conditions

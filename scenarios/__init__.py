@@ -1,0 +1,1 @@
+"""The shipped scenes: YAML files read as package data (``autobal list``)."""
