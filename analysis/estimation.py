@@ -44,6 +44,7 @@ from scipy import optimize, stats
 
 from autobal.analysis import ipopt
 from autobal.errors import ScenarioError, SolveError
+from autobal.models.device import DEVICE_GROUPS, REGULATOR_GROUPS
 
 DISC = ("alpha", "tau_max")
 
@@ -436,8 +437,7 @@ def disc_curve(tau, estimate: dict, free: list[str], cov, t: float) -> dict:
 
 # ---- the full static model of the device ----------------------------------------------------------
 
-GROUP_FIELDS = ("sigma", "chi", "b", "alpha_TB1", "alpha_31", "alpha_e1")
-REGULATOR_FIELDS = ("alpha_in1", "alpha_B1", "sigma_m")
+GROUP_FIELDS, REGULATOR_FIELDS = DEVICE_GROUPS, REGULATOR_GROUPS
 LOSS_TARGET = {"face_friction": "alpha_TB1", "outer_local_loss": "alpha_31", "outer_friction": "alpha_31"}
 
 

@@ -238,7 +238,7 @@ def run(scn, settings, out: Path):
         if fit.model == "device":
             if scn.device is None:
                 raise ScenarioError(f"analyses.estimation.fits.{fit.name}: the device model needs a device section")
-            from autobal.models.device import design
+            from autobal.adapters import design  # the runner moves to the front door (autobal/runners.py)
 
             dev = design(scn.device)
             fb = _device_bases(bases, dev)

@@ -134,8 +134,10 @@ def study(setup: Setup, models: list[str], convention: str, omega_range: tuple, 
 
 def run(scn, settings, out: Path):
     """Runner of ``analyses.frequency`` (autobal/pipeline.py)."""
+    from autobal.adapters import dynamic_device  # the runner moves to the front door (autobal/runners.py)
+
     t0 = time.perf_counter()
-    setup = Setup(_device(scn), settings.operating_ratio)
+    setup = Setup(dynamic_device(scn), settings.operating_ratio)
     o = settings.omega
     res = study(setup, list(settings.models), settings.forcing, (o.start, o.stop, o.points), scn.title)
     res.data["accuracy"] = accuracy(setup, res.data["curves"], settings.forcing)
@@ -206,11 +208,3 @@ def accuracy(setup: Setup, curves: dict, convention: str) -> dict:
                   "residual listed; python-control's curve uses the same LU without slycot, so it is no "
                   "independent check)")
     return out
-
-
-def _device(scn):
-    from autobal.errors import ScenarioError
-
-    if scn.device is None or scn.device.dynamics is None:
-        raise ScenarioError(f"{scn.name}: the dynamic analyses need device.dynamics (masses, springs, volumes)")
-    return scn.device

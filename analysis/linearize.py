@@ -21,8 +21,11 @@ import casadi as ca
 import control
 import numpy as np
 
-from autobal.analysis.hand_linear import Constants
-from autobal.models.dynamics import DynamicModel
+from autobal.analysis.hand_linear import K_NAMES, OTHER, T_NAMES, Constants, constants, from_operator, program_point
+from autobal.analysis.statics import StaticsSolver
+from autobal.errors import SolveError
+from autobal.models.device import DeviceParams, design
+from autobal.models.dynamics import DynamicModel, build
 
 INPUTS = ["tau", "psi1"]
 
@@ -143,16 +146,12 @@ class Setup:
     closed-form point (2.24)-(2.28) / (2.145)-(2.147), as the source computes it.
     """
 
-    def __init__(self, device, psi1: float = 1.0):
-        from autobal.analysis.hand_linear import program_point
-        from autobal.analysis.statics import StaticsSolver
-        from autobal.errors import SolveError
-        from autobal.models.device import design
-        from autobal.models.dynamics import dynamic_data
-
+    def __init__(self, device: DeviceParams, psi1: float = 1.0):
+        if device.dynamics is None:
+            raise ValueError("the dynamic analyses need the device's dynamic data (DeviceParams.dynamics)")
         self.device = device
         self.dev = design(device)
-        self.data = dynamic_data(device, self.dev)
+        self.data = device.dynamics
         self.psi1 = psi1
         self.static = StaticsSolver(self.dev).solve(psi1, self.dev.dpsi)
         if self.static.contact or self.static.saturated:
@@ -165,15 +164,11 @@ class Setup:
         self._models: dict = {}
 
     def nonlinear(self, form: str = "energy"):
-        from autobal.models.dynamics import build
-
         if form not in self._models:
             self._models[form] = build(self.dev, self.data, self.point, form)
         return self._models[form]
 
     def constants(self, mode: str, data=None):
-        from autobal.analysis.hand_linear import constants
-
         pt = self.point if mode == "consistent" else self.program_point
         return constants(self.dev, data or self.data, pt, mode)
 
@@ -190,8 +185,6 @@ def coefficient_table(setup: Setup) -> dict:
     """K1..K13, T1..T9, tau3..tau7, zeta1, zeta2 of the hand model in each mode beside the values read
     off the exact Jacobians of the nonlinear model's rows (chain and energy forms), with a note where
     they differ: ``{"names": [...], "columns": {model: [values]}, "notes": {name: text}, "extra": {...}}``."""
-    from autobal.analysis.hand_linear import K_NAMES, OTHER, T_NAMES, constants, from_operator
-
     cols, extra = {}, {}
     for mode in ("program", "thesis", "consistent"):
         cols[mode] = dict(setup.constants(mode).c)

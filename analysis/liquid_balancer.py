@@ -22,6 +22,7 @@ import numpy as np
 from autobal.analysis import ipopt
 from autobal.errors import SolveError
 from autobal.models import liquid_balancer as lb
+from autobal.models.liquid_balancer import System
 from autobal.results import save_figure, write_csv
 
 # Table 3.2 [T L1494-L1499]: efficiency vs gamma, theory (App. В / C# program) and experiment
@@ -37,74 +38,6 @@ REASON_3_2 = ("the documented App. В algorithm (f = G e0 with e0 = D0/m_d = e_d
 REASON_3_3 = ("in the documented model D = rho f (pi h R^2 - V) falls with V, so V_opt = pi h R^2 - D0/(rho f) "
               "falls with D0, while Table 3.3 rises ~ D0 (D/V ~ R, a thin crescent at the wall); h, omega, n of "
               "the table are not stated (spec §8.2)")
-
-
-@dataclass(frozen=True)
-class System:
-    """One liquid balancer in SI (Table 3.1 symbols; spec §1.3)."""
-
-    rotor_mass: float  # M_p [kg]
-    chamber_mass: float  # M_k [kg]
-    unbalance_mass: float  # m_d [kg]
-    unbalance_radius: float  # e_d [m]
-    omega_cr: float  # omega_p [rad/s]
-    n: float  # damping constant [1/s]
-    R: float  # chamber radius [m]
-    h: float  # chamber height [m]
-    V: float  # liquid volume [m^3]
-    rho: float  # [kg/m^3]
-    speed: float  # working speed [rad/s]
-    mu: float | None = None  # [Pa s]
-    stiffness: float | None = None  # c [N/m]
-    inclination: float | None = None  # Omega_inc [rad]
-    nested_radii: tuple = ()
-    nested_volumes: tuple = ()
-    wall_thickness: float = 0.0
-    hub_radius: float = 0.0
-
-    @classmethod
-    def from_scenario(cls, part) -> System:
-        ro, ch, li = part.rotor, part.chamber, part.liquid
-        n = ro.damping_coefficient if ro.damping_coefficient is not None else lb.n_from_decrement(
-            ro.log_decrement, ro.critical_speed)
-        nest = part.nested
-        return cls(rotor_mass=ro.mass, chamber_mass=ch.mass, unbalance_mass=ro.unbalance_mass,
-                   unbalance_radius=ro.unbalance_radius, omega_cr=ro.critical_speed, n=n, R=ch.radius,
-                   h=ch.height, V=li.volume, rho=li.density, speed=part.speed, mu=li.viscosity,
-                   stiffness=ro.stiffness,
-                   inclination=None if ch.inclination_deg is None else math.radians(ch.inclination_deg),
-                   nested_radii=tuple(c.radius for c in nest.chambers) if nest else (),
-                   nested_volumes=tuple(c.volume for c in nest.chambers) if nest else (),
-                   wall_thickness=nest.wall_thickness if nest else 0.0,
-                   hub_radius=nest.hub_radius if nest else 0.0)
-
-    @property
-    def D0(self) -> float:
-        """Rotor unbalance D0 = m_d e_d [kg m] (App. В step 2.7 corrected, erratum 15)."""
-        return self.unbalance_mass * self.unbalance_radius
-
-    @property
-    def m_l(self) -> float:
-        return self.rho * self.V
-
-    @property
-    def M_sys(self) -> float:
-        """M_p + M_k + m_d + m_l (App. В step 2.2)."""
-        return self.rotor_mass + self.chamber_mass + self.unbalance_mass + self.m_l
-
-    def e_f(self, deflection: str) -> float:
-        """Eccentricity in f = G e_f: D0/m_d (App. В code, "program") or D0/M_sys ("system")."""
-        if deflection == "program":
-            return self.D0 / self.unbalance_mass
-        if deflection == "system":
-            return self.D0 / self.M_sys
-        raise ValueError(f"deflection is one of {lb.DEFLECTIONS}, not {deflection!r}")
-
-    def inputs(self, deflection: str, **override) -> dict:
-        """Pipeline inputs (:data:`autobal.models.liquid_balancer.PIPE_IN`) at the working speed."""
-        p = {"omega": self.speed, "omega_cr": self.omega_cr, "n": self.n, "R": self.R, "h": self.h, "V": self.V,
-             "rho": self.rho, "D0": self.D0, "e_f": self.e_f(deflection)}
-        return p | override
 
 
 # ---- the optimisation problems (App. В / App. Г as IPOPT problems) ---------------------------
@@ -127,15 +60,15 @@ def k_bounds(sin2d: float, variant: str) -> tuple[float, float]:
 def _solver(kind: str, variant: str):
     """IPOPT: min (e_c/e0)^2 = 1/lambda0^2 over x = h/R ("height") or x = V/(pi R^2 h) ("volume")."""
     x = ca.SX.sym("x")
-    p = {k: ca.SX.sym(k) for k in lb.PIPE_IN}
+    p = {k: ca.SX.sym(k) for k in lb.INPUTS}
     sym = dict(p)
     if kind == "height":
         sym["h"] = x * p["R"]
     else:
         sym["V"] = x * ca.pi * p["R"] ** 2 * p["h"]
-    out = lb.pipeline(sym, variant)
+    out = lb.quasi_static(sym, variant)
     J = lb.inverse_lambda0_squared(out["k_D"], out["sin2d"], variant)
-    return ipopt.nlpsol(f"liquid_{kind}_{variant}", x, ca.vertcat(*[p[k] for k in lb.PIPE_IN]), J, ca.SX(0, 1))
+    return ipopt.nlpsol(f"liquid_{kind}_{variant}", x, ca.vertcat(*[p[k] for k in lb.INPUTS]), J, ca.SX(0, 1))
 
 
 def optimise(system: System, kind: str, variant: str, deflection: str, lower: float, upper: float,
@@ -174,7 +107,7 @@ def optimise(system: System, kind: str, variant: str, deflection: str, lower: fl
                       f"[{k_lo:.4g}, {k_hi:.4g}] of the {variant} (2.13) not reachable)",
                       "grid": {"x": [], "lambda0": []}}
     solver = _solver(kind, variant)
-    pv = [p[k] for k in lb.PIPE_IN]
+    pv = [p[k] for k in lb.INPUTS]
     x0 = 0.5 * (lo + hi) / scale
     sol = ipopt.solve(solver, x0=x0, lbx=lo / scale, ubx=hi / scale, p=pv, lbg=[], ubg=[])
     if not sol["success"]:
@@ -560,6 +493,25 @@ def run(system: System, settings, title: str = "") -> LiquidBalancerResult:
     return LiquidBalancerResult(data)
 
 
+# ---- time-domain Jeffcott rotor: the independent check of (2.5)/(2.7) ----------------------------
+
+@functools.cache
+def jeffcott_integrator(t_end: float, n_out: int) -> ca.Function:
+    """CVODES integrator of x'' + 2n x' + omega_cr^2 x = e_c omega^2 cos(omega t) (and y with sin), per unit e_c.
+
+    Parameters p = (omega, omega_cr, n); states (x, y, x', y'); outputs on a grid of ``n_out`` times in (0, t_end].
+    """
+    x = ca.SX.sym("x", 4)
+    p = ca.SX.sym("p", 3)
+    t = ca.SX.sym("t")
+    w, wcr, n = p[0], p[1], p[2]
+    rhs = ca.vertcat(x[2], x[3], -2 * n * x[2] - wcr**2 * x[0] + w**2 * ca.cos(w * t),
+                     -2 * n * x[3] - wcr**2 * x[1] + w**2 * ca.sin(w * t))
+    grid = np.linspace(0.0, t_end, n_out + 1)[1:]
+    return ca.integrator("jeffcott", "cvodes", {"x": x, "p": p, "t": t, "ode": rhs}, 0.0, grid,
+                         {"abstol": 1e-11, "reltol": 1e-11, "max_num_steps": 200000})
+
+
 def accuracy(system: System, data: dict) -> dict:
     """Error estimate of the main outputs: the optimal height / volume (IPOPT) against the analytic optimum
     k_D = 1 of the singular branches (spec §4 [derived]) or, for a regular optimum, against the dense grid
@@ -578,7 +530,7 @@ def accuracy(system: System, data: dict) -> dict:
             bounded.append(key)
     w, wcr, n = system.speed, system.omega_cr, system.n
     t_end = max(6.0, 40.0 / n)  # transient decays as exp(-n t) < 5e-18
-    xf = np.asarray(lb.jeffcott_integrator(round(t_end, 3), 60)(x0=[0, 0, 0, 0], p=[w, wcr, n])["xf"])
+    xf = np.asarray(jeffcott_integrator(round(t_end, 3), 60)(x0=[0, 0, 0, 0], p=[w, wcr, n])["xf"])
     x, y = xf[0, -1], xf[1, -1]
     j = {k: float(v) for k, v in lb.jeffcott(w, wcr, n).items()}
     lag = (w * round(t_end, 3) - math.atan2(y, x)) % (2 * math.pi)
@@ -595,6 +547,8 @@ def accuracy(system: System, data: dict) -> dict:
 
 def run_scenario(scn, settings, out: Path):
     """Pipeline runner ``liquid_balancer``: (results.json block, files written, summary)."""
-    res = run(System.from_scenario(scn.liquid_balancer), settings, scn.title)
+    from autobal.adapters import liquid_balancer  # the runner moves to the front door (autobal/runners.py)
+
+    res = run(liquid_balancer(scn.liquid_balancer), settings, scn.title)
     files = res.write_tables(out) + res.plot(out)
     return res.to_dict(), files, res.summary()

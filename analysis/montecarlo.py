@@ -45,13 +45,12 @@ from scipy.special import ndtr
 from autobal.analysis import closed_form
 from autobal.analysis.statics import ideal_guess
 from autobal.errors import ScenarioError
-from autobal.models.device import DeviceDesign, static_system
+from autobal.models.device import DEVICE_GROUPS, REGULATOR_GROUPS, DeviceDesign, static_system
 from autobal.results import save_figure, write_csv
 
 # the static model's groups that may be uncertain (DeviceGroups, RegulatorGroups and the margin dpsi)
-PARAMETERS = ("sigma", "chi", "b", "psi4", "alpha_TB1", "alpha_31", "alpha_e1", "dpsi",
-              "sigma_m", "psi_in", "alpha_in1", "alpha_B1")
-REGULATOR_PARAMETERS = ("sigma_m", "psi_in", "alpha_in1", "alpha_B1")
+PARAMETERS = (*DEVICE_GROUPS, "dpsi", *REGULATOR_GROUPS)
+REGULATOR_PARAMETERS = REGULATOR_GROUPS
 # exact outputs per sample and grid point; the source's closed forms give the SOURCE_OUTPUTS
 OUTPUTS = ("u", "xi", "psi2", "psi3", "psi_e", "psi_cam", "q_T", "q_1", "Q_T", "Q_e")
 SOURCE_OUTPUTS = ("u", "xi", "q_T", "q_1")
@@ -497,7 +496,7 @@ def _afc_model(device, psi1: float, model: str, names, convention: str) -> AfcMo
     """One AfcModel per process, device, operating point and model (built once per worker)."""
     from autobal.analysis.linearize import Setup
 
-    key = (device.model_dump_json(), psi1, model, tuple(names), convention)
+    key = (repr(device), psi1, model, tuple(names), convention)
     if key not in _AFC_MODELS:
         _AFC_MODELS[key] = AfcModel(Setup(device, psi1), model, names, convention)
     return _AFC_MODELS[key]
@@ -853,12 +852,13 @@ def accuracy(data: dict, raw: dict) -> dict:
 
 def run_scene(scn, settings, out: Path):
     """Runner of ``analyses.montecarlo`` (autobal.pipeline.RUNNERS)."""
+    from autobal.adapters import device as device_params  # the runner moves to the front door (autobal/runners.py)
     from autobal.analysis import executor as ex
     from autobal.models.device import design
 
     if scn.device is None:
         raise ScenarioError("analyses.montecarlo needs a device section")
     with ex.make(scene_executor=getattr(scn, "executor", None)) as exe:
-        res = run(design(scn.device), settings, exe, scn.title, device=scn.device)
+        res = run(design(dp := device_params(scn.device)), settings, exe, scn.title, device=dp)
     files = res.write_tables(out) + res.plot(out)
     return res.to_dict(), files, res.summary()

@@ -279,7 +279,9 @@ def run_scene(scn, settings, out: Path):
         raise ScenarioError("analyses.rotor_dynamics needs a rotor section")
     t0 = time.perf_counter()
     drive = scn.rotor.drive
-    res = run(scn.rotor.params(), settings, scn.title, drive.motor if drive else None)
+    from autobal.adapters import rotor  # the runner moves to the front door (autobal/runners.py)
+
+    res = run(rotor(scn.rotor), settings, scn.title, drive.motor if drive else None)
     files = res.write_tables(out) + res.plot(out)
     return res.to_dict() | {"run_time_s": time.perf_counter() - t0, "accuracy": accuracy(res.data)}, files, \
         res.summary()

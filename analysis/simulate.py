@@ -257,11 +257,11 @@ def accuracy(model: DynamicModel, res: TransientResult, cases: list, duration: f
 
 def run(scn, settings, out: Path):
     """Runner of ``analyses.transient`` (autobal/pipeline.py)."""
-    from autobal.analysis.frequency import _device
+    from autobal.adapters import dynamic_device  # the runner moves to the front door (autobal/runners.py)
     from autobal.analysis.linearize import Setup
 
     t0 = time.perf_counter()
-    setup = Setup(_device(scn), settings.operating_ratio)
+    setup = Setup(dynamic_device(scn), settings.operating_ratio)
     model = setup.nonlinear("chain" if settings.model == "nonlinear_chain" else "energy")
     cases = [{"input": c.input, "amplitude": c.amplitude, "frequency": c.frequency,
               "couple": c.thrust_follows_pressure} for c in settings.cases]

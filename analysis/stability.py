@@ -23,8 +23,8 @@ import numpy as np
 import scipy.linalg
 
 from autobal.analysis.linearize import LinearModel, Setup, coefficient_table, jacobians, operator
+from autobal.models.dynamics import LONG_NAMES
 from autobal.results import save_figure, write_csv
-from autobal.schema_dynamics import PARAMETERS
 
 OMEGA_REF = 1000.0  # rad/s, time scale of the reported polynomial coefficients
 
@@ -107,7 +107,7 @@ def max_real(setup: Setup, model: str, changes: list[dict]) -> np.ndarray:
 def stability_map(setup: Setup, xaxis, yaxis, model: str) -> dict:
     """max Re lambda over the (x, y) grid of two dynamic parameters (scenario key names)."""
     xs, ys = _axis(xaxis), _axis(yaxis)
-    kx, ky = PARAMETERS[xaxis.parameter][0], PARAMETERS[yaxis.parameter][0]
+    kx, ky = LONG_NAMES[xaxis.parameter], LONG_NAMES[yaxis.parameter]
     changes = [{kx: x, ky: y} for y in ys for x in xs]
     R = max_real(setup, model, changes).reshape(len(ys), len(xs))
     return {"x": {"parameter": xaxis.parameter, "values": xs, "nominal": getattr(setup.data, kx), "scale": xaxis.scale},
@@ -119,7 +119,7 @@ def stability_map(setup: Setup, xaxis, yaxis, model: str) -> dict:
 def _restoring(setup, model, xaxis, yaxis, xs, ys, R) -> dict:
     """What the map says restores stability: along each axis through the nominal point (the other
     parameter nominal), the stable intervals; and the stable grid point nearest to nominal."""
-    kx, ky = PARAMETERS[xaxis.parameter][0], PARAMETERS[yaxis.parameter][0]
+    kx, ky = LONG_NAMES[xaxis.parameter], LONG_NAMES[yaxis.parameter]
     x0, y0 = getattr(setup.data, kx), getattr(setup.data, ky)
     lines = {}
     for ax, key, vals in ((xaxis, kx, xs), (yaxis, ky, ys)):
@@ -148,7 +148,7 @@ def single_parameter_scans(setup: Setup, model: str, points: int = 61) -> dict:
     stable intervals say which single change restores stability."""
     out = {}
     for name in SCANNED:
-        key = PARAMETERS[name][0]
+        key = LONG_NAMES[name]
         nominal = getattr(setup.data, key)
         if key == "c_x":
             if not setup.data.has_regulator:
@@ -299,10 +299,10 @@ def _statement(data: dict, model: str) -> str:
 
 def run(scn, settings, out: Path):
     """Runner of ``analyses.stability`` (autobal/pipeline.py)."""
-    from autobal.analysis.frequency import _device
+    from autobal.adapters import dynamic_device  # the runner moves to the front door (autobal/runners.py)
 
     t0 = time.perf_counter()
-    setup = Setup(_device(scn), settings.operating_ratio)
+    setup = Setup(dynamic_device(scn), settings.operating_ratio)
     res = study(setup, list(settings.models), settings.map, scn.title)
     res.data["accuracy"] = accuracy(setup, list(settings.models))
     files = res.write_tables(out) + res.plot(out)

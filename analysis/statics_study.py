@@ -15,6 +15,7 @@ from autobal.analysis import closed_form, workprecision
 from autobal.analysis.result import Result, fmt, new_figure
 from autobal.analysis.statics import StaticPoint, StaticsSolver
 from autobal.errors import SolveError
+from autobal.models.device import groups_by_name
 
 SWEEP_KEYS = ("psi_e", "psi2", "psi3", "psi_cam", "u", "xi")
 
@@ -280,11 +281,7 @@ def run(solver: StaticsSolver, settings, title: str = "") -> StaticsResult:
     data = {
         "accuracy": accuracy,
         "title": title, "medium": g.medium, "dpsi": dpsi,
-        "groups": {"sigma": g.sigma, "chi": g.chi, "b": g.b, "psi4": g.psi4, "alpha_TB1": g.alpha_TB1,
-                   "alpha_31": g.alpha_31, "alpha_e1": g.alpha_e1,
-                   **({"sigma_m": g.regulator.sigma_m, "psi_in": g.regulator.psi_in,
-                       "alpha_in1": g.regulator.alpha_in1, "alpha_B1": g.regulator.alpha_B1,
-                       "xi_max": g.regulator.xi_max} if g.regulator else {})},
+        "groups": groups_by_name(g) | ({"xi_max": g.regulator.xi_max} if g.regulator else {}),
         "scales": sc, "conductances": dev.conductances, "derived": dev.extra,
         "closed_form": closed, "exact": exact, "critical_exact": critical,
         "sweep": sweep, "force_gap": force_gap,

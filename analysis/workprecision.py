@@ -234,8 +234,8 @@ def statics_study(solver, psi1: float, dpsi: float) -> WorkPrecision:
 
 def statics_provider(scn, settings) -> WorkPrecision:
     """Work-precision of the statics of a scene at its operating point."""
+    from autobal.adapters import design  # the runner moves to the front door (autobal/runners.py)
     from autobal.analysis.statics import StaticsSolver
-    from autobal.models.device import design
 
     solver = StaticsSolver(design(scn.device))
     return statics_study(solver, settings.operating_ratio, solver.design.dpsi)
@@ -329,9 +329,10 @@ def dynamics_study(model, duration: float, dtau: float, quick: bool = False) -> 
 
 def dynamics_provider(scn, settings) -> WorkPrecision:
     """Work-precision of the time integration of a scene's transient (first force step, or dtau = 0.01)."""
+    from autobal.adapters import dynamic_device  # the runner moves to the front door (autobal/runners.py)
     from autobal.analysis.linearize import Setup
 
-    setup = Setup(scn.device, settings.operating_ratio)
+    setup = Setup(dynamic_device(scn), settings.operating_ratio)
     model = setup.nonlinear("chain" if settings.model == "nonlinear_chain" else "energy")
     dtau = next((c.amplitude for c in settings.cases if c.input == "force_step"), 0.01)
     return dynamics_study(model, settings.duration, dtau)

@@ -12,6 +12,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
+from autobal.models.dynamics import LONG_NAMES
 from autobal.schema import Positive, Strict
 from autobal.units import AngularSpeed, Area, Pressure, quantity, to_si
 
@@ -48,21 +49,14 @@ class Dynamics(Strict):
     operating_speed: AngularSpeed | None = None  # omega0; default the impeller speed
 
 
-# scenario key -> (short name used in the model, unit kind)
+# scenario key -> unit kind of each dynamic parameter a stability map may scan (models/dynamics.LONG_NAMES)
 PARAMETERS = {
-    "rotor_mass": ("m_p", "mass"),
-    "pushoff_stiffness": ("k_pr", "stiffness"),
-    "rotor_damping": ("c_z", "damping"),
-    "bulk_modulus": ("E", "pressure"),
-    "disc_chamber_volume": ("V2", "volume"),
-    "cavity_volume": ("V3", "volume"),
-    "stem_mass": ("m0", "mass"),
-    "spring_stiffness": ("k_reg", "stiffness"),
-    "stem_damping": ("c_x", "damping"),
-    "valve_chamber_volume": ("V_cam", "volume"),
-    "membrane_chamber_volume": ("V_m", "volume"),
-    "seat_area": ("s_c", "area"),
+    "rotor_mass": "mass", "pushoff_stiffness": "stiffness", "rotor_damping": "damping", "bulk_modulus": "pressure",
+    "disc_chamber_volume": "volume", "cavity_volume": "volume", "stem_mass": "mass", "spring_stiffness": "stiffness",
+    "stem_damping": "damping", "valve_chamber_volume": "volume", "membrane_chamber_volume": "volume",
+    "seat_area": "area",
 }
+assert set(PARAMETERS) == set(LONG_NAMES)
 ParameterName = Literal[tuple(PARAMETERS)]  # type: ignore[valid-type]
 ModelName = Literal["nonlinear", "nonlinear_chain", "program", "thesis", "consistent"]
 
@@ -102,7 +96,7 @@ class MapAxis(Strict):
     @classmethod
     def _to_si(cls, data):
         if isinstance(data, dict) and data.get("parameter") in PARAMETERS:
-            kind = PARAMETERS[data["parameter"]][1]
+            kind = PARAMETERS[data["parameter"]]
             data = dict(data)
             for k in ("start", "stop"):
                 if k in data:

@@ -13,6 +13,7 @@ from typing import Annotated, Literal
 from pydantic import Field, model_validator
 
 from autobal.errors import ScenarioError
+from autobal.models.device import DEVICE_GROUPS, PRESSURE_GROUPS, REGULATOR_GROUPS
 from autobal.schema import NonNegative, Positive, Strict
 from autobal.units import Area, Length, Pressure, VolumeFlow
 
@@ -20,7 +21,7 @@ from autobal.units import Area, Length, Pressure, VolumeFlow
 # full static model (models/device.py) and the loss coefficients they come from.
 MODEL_PARAMETERS = {
     "traditional_disc": ("alpha", "tau_max"),
-    "device": ("alpha_TB1", "alpha_31", "alpha_e1", "sigma", "b", "chi", "alpha_in1", "alpha_B1", "sigma_m",
+    "device": (*(k for k in (*DEVICE_GROUPS, *REGULATOR_GROUPS) if k not in PRESSURE_GROUPS),
                "face_friction", "outer_local_loss", "outer_friction"),
 }
 

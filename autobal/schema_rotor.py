@@ -75,20 +75,6 @@ class Rotor(Strict):
     liquid: Liquid | None = None
     drive: Drive | None = None
 
-    def params(self):
-        """The model's :class:`autobal.models.rotor.RotorParams` (SI)."""
-        from autobal.models.rotor import LiquidLayer, RotorParams
-
-        p = RotorParams(m1=self.mass, c=self.stiffness, chi=self.damping, e=self.eccentricity,
-                        J_p=self.drive.polar_inertia if self.drive else 0.0,
-                        b=self.drive.drag if self.drive else 0.0)
-        if self.liquid is None:
-            return p
-        if self.liquid.psi is not None:
-            return p.with_psi(self.liquid.psi)
-        return p.with_liquid(LiquidLayer(self.liquid.density, self.liquid.radius, self.liquid.height,
-                                         self.liquid.free_surface_radius))
-
 
 # ---- analyses ----------------------------------------------------------------------------------------
 

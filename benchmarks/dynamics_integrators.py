@@ -22,7 +22,7 @@ import casadi as ca
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from autobal import scenario
+from autobal import adapters, scenario
 from autobal.analysis.linearize import Setup
 from benchmarks._timing import best_of
 
@@ -34,7 +34,7 @@ REPEAT = 3
 
 
 def problem():
-    setup = Setup(scenario.load("pump_pe600_dynamics").device)
+    setup = Setup(adapters.device(scenario.load("pump_pe600_dynamics").device))
     m = setup.nonlinear("energy")
     w = m.w0 + np.array([0.0, DTAU])
     x = ca.SX.sym("x", len(m.states))

@@ -16,14 +16,14 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from autobal import scenario
+from autobal import adapters, scenario
 from autobal.analysis import liquid_balancer as study
 from autobal.models import liquid_balancer as lb
 from benchmarks._timing import best_of
 
 
 def numpy_lambda0(omega, omega_cr, n, R, h, V, rho, D0, e_f):
-    """The corrected pipeline in numpy (same formulas as models/liquid_balancer.pipeline)."""
+    """The corrected pipeline in numpy (same formulas as models/liquid_balancer.quasi_static)."""
     a, b = 2 * n * omega, omega_cr**2 - omega**2
     c = np.hypot(a, b)
     s = (a / c) ** 2
@@ -36,7 +36,7 @@ def numpy_lambda0(omega, omega_cr, n, R, h, V, rho, D0, e_f):
 
 
 def main(repeats: int = 3) -> str:
-    sysm = study.System.from_scenario(scenario.load("washer_liquid_balancer").liquid_balancer)
+    sysm = adapters.liquid_balancer(scenario.load("washer_liquid_balancer").liquid_balancer)
     p = sysm.inputs("program")
     g = np.linspace(0.3, 1.6, 100_000)
     lb.evaluate("corrected", **(p | {"omega": g[:10] * sysm.omega_cr}))  # build once

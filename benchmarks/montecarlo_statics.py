@@ -20,10 +20,10 @@ import numpy as np
 from scipy.optimize import fsolve
 
 from autobal import scenario
+from autobal.adapters import design
 from autobal.analysis import closed_form
 from autobal.analysis import executor as ex
 from autobal.analysis import montecarlo as mc
-from autobal.models.device import design
 from autobal.models.throttles import SQRT_SMOOTHING
 from benchmarks._timing import best_of
 

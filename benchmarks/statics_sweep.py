@@ -16,8 +16,8 @@ import numpy as np
 from scipy.optimize import fsolve
 
 from autobal import scenario
+from autobal.adapters import design
 from autobal.analysis.statics import StaticsSolver
-from autobal.models.device import design
 from autobal.models.throttles import SQRT_SMOOTHING
 from benchmarks._timing import best_of
 

@@ -16,12 +16,226 @@ zero exactly at a physical solution.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import casadi as ca
 
-from autobal.models.throttles import face_opening, flow
+from autobal.models import throttles as th
+from autobal.models.params import SIParams, si
+from autobal.models.throttles import face_opening, flow, valve_opening
+
+if TYPE_CHECKING:
+    from autobal.models.dynamics import DynamicData
+
+
+# ---- the device in SI: plain parameter objects ------------------------------------------------
+
+@dataclass(frozen=True)
+class Fluid(SIParams):
+    """Working fluid.
+
+    Attributes
+    ----------
+    density : float
+        Liquid density, or gas density at normal conditions, kg/m^3.
+    viscosity : float
+        Dynamic viscosity, Pa s.
+    normal_pressure : float
+        Gas only: pressure of normal conditions (Pavlenko (2014), Eq. (2.128)), Pa; NaN for a liquid.
+    """
+
+    density: float = si("kg/m**3")
+    viscosity: float = si("Pa*s")
+    normal_pressure: float = si("Pa", math.nan)
+
+
+@dataclass(frozen=True)
+class Impeller(SIParams):
+    """Last-stage impeller data for the axial-force ratio b (Pavlenko (2014), Eq. (2.18), App. A).
+
+    Attributes
+    ----------
+    hub_radius, shroud_radius, outer_radius : float
+        R0, R1, R2, m.
+    stages : int
+        Number of stages i.
+    speed : float
+        Angular speed, rad/s.
+    """
+
+    hub_radius: float = si("m")
+    shroud_radius: float = si("m")
+    outer_radius: float = si("m")
+    stages: int = si("")
+    speed: float = si("rad/s")
+
+
+@dataclass(frozen=True)
+class Operating(SIParams):
+    """Base values of the operating regime.
+
+    Attributes
+    ----------
+    nominal_pressure : float
+        p_n = p_B, Pa.
+    nominal_thrust : float
+        T_n, N; s_B = T_n / p_B.
+    drain_pressure : float
+        p4, Pa.
+    thrust_ratio : float
+        b in tau = b psi1 (dimensionless); NaN: computed from ``impeller``.
+    impeller : Impeller or None
+        Impeller data for b.
+    nominal_flow : float
+        Q_n, m^3/s (NaN if unknown; only for reporting Q_e / Q_n).
+    """
+
+    nominal_pressure: float = si("Pa")
+    nominal_thrust: float = si("N")
+    drain_pressure: float = si("Pa", 0.0)
+    thrust_ratio: float = si("", math.nan)
+    impeller: Impeller | None = None
+    nominal_flow: float = si("m**3/s", math.nan)
+
+
+@dataclass(frozen=True)
+class InnerSeal(SIParams):
+    """Laminar annular bushing seal, g1 = pi d h^3 / (12 mu l).
+
+    Attributes
+    ----------
+    diameter, length, clearance : float
+        d, l, h, m.
+    """
+
+    diameter: float = si("m")
+    length: float = si("m")
+    clearance: float = si("m")
+
+
+@dataclass(frozen=True)
+class OuterSeal(SIParams):
+    """Square-root-law annular seal, zeta = zeta_local + lambda l / (2h).
+
+    Attributes
+    ----------
+    diameter, length, clearance : float
+        d, l, h, m.
+    local_loss : float
+        zeta_local, dimensionless.
+    friction : float
+        lambda, dimensionless.
+    """
+
+    diameter: float = si("m")
+    length: float = si("m")
+    clearance: float = si("m")
+    local_loss: float = si("", 1.5)
+    friction: float = si("", 0.06)
+
+
+@dataclass(frozen=True)
+class Face(SIParams):
+    """Face throttle between the disc and the pad; conductance g_TB u^(3/2).
+
+    Attributes
+    ----------
+    inner_diameter, outer_diameter : float
+        d2, d3, m.
+    base_gap : float
+        z_B, m.
+    friction : float
+        lambda_T, dimensionless.
+    """
+
+    inner_diameter: float = si("m")
+    outer_diameter: float = si("m")
+    base_gap: float = si("m")
+    friction: float = si("", 0.06)
+
+
+@dataclass(frozen=True)
+class Disc(SIParams):
+    """Balance disc: its three throttles and the push-off preload F_pr (N)."""
+
+    inner_seal: InnerSeal
+    face: Face
+    outer_seal: OuterSeal
+    pushoff_force: float = si("N", 0.0)
+
+
+@dataclass(frozen=True)
+class Tube(SIParams):
+    """Laminar round tube, g = pi d^4 / (192 mu l): diameter and length, m."""
+
+    diameter: float = si("m")
+    length: float = si("m")
+
+
+@dataclass(frozen=True)
+class Barrier(SIParams):
+    """Barrier supply: its throttle and the margin dpsi = (p_e - p1)/p_B (dimensionless set-point)."""
+
+    supply_throttle: Tube
+    margin_ratio: float = si("")
+
+
+@dataclass(frozen=True)
+class Valve(SIParams):
+    """Regulator valve.
+
+    Attributes
+    ----------
+    seat_diameter : float
+        d_c, m.
+    base_opening : float
+        x_B, m.
+    discharge_coefficient : float
+        phi, dimensionless.
+    max_opening : float
+        Travel limit, m; inf: unlimited.
+    """
+
+    seat_diameter: float = si("m")
+    base_opening: float = si("m")
+    discharge_coefficient: float = si("", 0.54)
+    max_opening: float = si("m", math.inf)
+
+
+@dataclass(frozen=True)
+class Regulator(SIParams):
+    """Pressure-drop regulator: supply pressure p_in (Pa), inlet throttle, valve, membrane area s_m (m^2)."""
+
+    supply_pressure: float = si("Pa")
+    inlet_throttle: Tube
+    valve: Valve
+    membrane_area: float = si("m**2")
+
+
+@dataclass(frozen=True)
+class DeviceParams(SIParams):
+    """A locking-balancing device in SI (Pavlenko (2014), Fig. 2.1, App. A/B).
+
+    Attributes
+    ----------
+    medium : str
+        "liquid" (pump) or "gas" (compressor).
+    fluid, operating, disc, barrier, regulator
+        The parts (see their classes); ``regulator`` None: an ideal barrier supply.
+    dynamics : DynamicData or None
+        Masses, springs, damping and volumes for the dynamic analyses (models/dynamics.py).
+    """
+
+    medium: str
+    fluid: Fluid
+    operating: Operating
+    disc: Disc
+    barrier: Barrier
+    regulator: Regulator | None = None
+    dynamics: DynamicData | None = None
 
 
 @dataclass(frozen=True)
@@ -52,6 +266,65 @@ class DeviceGroups:
     @property
     def square_root_law(self) -> str:
         return "turbulent" if self.medium == "liquid" else "gas_turbulent"
+
+
+def _group_names(cls) -> tuple[str, ...]:
+    return tuple(f.name for f in dataclasses.fields(cls) if f.name not in ("medium", "regulator", "xi_max"))
+
+
+# The dimensionless groups (2.18) by name: every list of groups in the toolkit derives from these.
+DEVICE_GROUPS = _group_names(DeviceGroups)  # sigma, chi, b, psi4, alpha_TB1, alpha_31, alpha_e1
+REGULATOR_GROUPS = _group_names(RegulatorGroups)  # sigma_m, psi_in, alpha_in1, alpha_B1
+# the groups that are boundary pressures (drain, regulator supply), not properties of the device itself
+PRESSURE_GROUPS = ("psi4", "psi_in")
+
+
+def groups_by_name(groups: DeviceGroups) -> dict:
+    """Group name -> value of every dimensionless group of the device (DEVICE_GROUPS and, with a
+    regulator, REGULATOR_GROUPS)."""
+    out = {k: getattr(groups, k) for k in DEVICE_GROUPS}
+    if groups.regulator is not None:
+        out |= {k: getattr(groups.regulator, k) for k in REGULATOR_GROUPS}
+    return out
+
+
+def network(groups: DeviceGroups, g: dict, psi1, dpsi, v: dict) -> dict:
+    """Throttle flows of the device's flow network (Pavlenko (2014), Eqs. (2.15), (2.136)).
+
+    Parameters
+    ----------
+    groups : DeviceGroups
+        The device (medium, regulator present or not).
+    g : dict
+        Group name -> value (numbers or CasADi symbols): the fields of DeviceGroups and, with a
+        regulator, of RegulatorGroups.
+    psi1, dpsi
+        Discharge pressure p1/p_B and barrier margin (p_e - p1)/p_B (dimensionless).
+    v : dict
+        The pressures and coordinates: psi2, psi3, u (face gap z/z_B) and, with a regulator,
+        psi_e, psi_cam, xi (valve opening x/x_B).
+
+    Returns
+    -------
+    dict
+        Throttle name -> dimensionless flow q = Q/(g1 p_B): "e" (barrier supply, e -> 2), "1" (inner
+        seal, 2 -> discharge), "T" (face, 2 -> 3), "3" (outer seal, 3 -> drain) and, with a
+        regulator, "in" (inlet, supply -> valve chamber) and "valve" (valve chamber -> e).  The face
+        and the valve pass no flow when closed (u <= 0, xi <= 0).
+    """
+    root = groups.square_root_law
+    psi_e = v["psi_e"] if groups.regulator is not None else psi1 + dpsi
+    q = {
+        "e": flow("laminar", g["alpha_e1"], psi_e, v["psi2"]),
+        "1": flow("laminar", 1.0, v["psi2"], psi1),
+        "T": face_opening(v["u"]) * flow(root, g["alpha_TB1"], v["psi2"], v["psi3"]),
+        "3": flow(root, g["alpha_31"], v["psi3"], g["psi4"]),
+    }
+    if groups.regulator is not None:
+        q["in"] = flow("laminar", g["alpha_in1"], g["psi_in"], v["psi_cam"])
+        # valve: liquid orifice law in both media (2.137), App. B
+        q["valve"] = valve_opening(v["xi"]) * flow("turbulent", g["alpha_B1"], v["psi_cam"], psi_e)
+    return q
 
 
 @dataclass
@@ -92,8 +365,6 @@ def static_system(groups: DeviceGroups, parameters=()) -> StaticSystem:
     ``residual(w, psi1, dpsi, theta)`` and ``flows(w, psi1, dpsi, theta)``, for mapping the
     statics over parameter samples and exact parametric derivatives.
     """
-    import dataclasses
-
     reg = groups.regulator
     theta = ca.SX.sym("theta", len(parameters))
     g = {f.name: getattr(groups, f.name) for f in dataclasses.fields(DeviceGroups)}
@@ -118,23 +389,13 @@ def static_system(groups: DeviceGroups, parameters=()) -> StaticSystem:
     psi1 = ca.SX.sym("psi1")
     dpsi = ca.SX.sym("dpsi")
     psi_e = v["psi_e"] if reg is not None else psi1 + dpsi
-    root = groups.square_root_law
-
-    # Throttles of the flow network (2.15)/(2.136): name -> q
-    q = {
-        "e": flow("laminar", g["alpha_e1"], psi_e, v["psi2"]),  # barrier supply, e -> 2
-        "1": flow("laminar", 1.0, v["psi2"], psi1),  # inner seal, 2 -> discharge
-        "T": face_opening(v["u"]) * flow(root, g["alpha_TB1"], v["psi2"], v["psi3"]),  # face, 2 -> 3
-        "3": flow(root, g["alpha_31"], v["psi3"], g["psi4"]),  # outer seal, 3 -> drain
-    }
+    q = network(groups, g | rg, psi1, dpsi, v)  # (2.15)/(2.136): name -> q
     eqs = {
         "disc force": g["sigma"] * (v["psi2"] - v["psi3"]) + g["chi"] + v["r_contact"] - g["b"] * psi1,
         "chamber 2 flow": q["e"] - q["1"] - q["T"],
         "chamber 3 flow": q["T"] - q["3"],
     }
     if reg is not None:
-        q["in"] = flow("laminar", rg["alpha_in1"], rg["psi_in"], v["psi_cam"])  # inlet, supply -> cam
-        q["valve"] = v["xi"] * flow("turbulent", rg["alpha_B1"], v["psi_cam"], psi_e)  # valve, cam -> e
         eqs["membrane force"] = rg["sigma_m"] * (psi_e - psi1 - dpsi) + v.get("r_valve", 0)
         eqs["valve chamber flow"] = q["in"] - q["valve"]
         eqs["barrier chamber flow"] = q["valve"] - q["e"]
@@ -175,24 +436,56 @@ class DeviceDesign:
     extra: dict
 
 
-def axial_force_ratio(density: float, impeller, nominal_pressure: float) -> float:
-    """b = 1 - rho w^2 R2^2 i / (8 p_n) (1 - (R1^2 + R0^2) / (2 R2^2)), App. A L3125."""
+def axial_force_ratio(density: float, impeller: Impeller, nominal_pressure: float) -> float:
+    """Axial-force ratio b of the impeller (Pavlenko (2014), App. A).
+
+    b = 1 - rho w^2 R2^2 i / (8 p_n) (1 - (R1^2 + R0^2) / (2 R2^2)).
+
+    Parameters
+    ----------
+    density : float
+        kg/m^3.
+    impeller : Impeller
+        Radii (m), stages, speed (rad/s).
+    nominal_pressure : float
+        p_n, Pa.
+
+    Returns
+    -------
+    float
+        b, dimensionless.
+    """
     r0, r1, r2 = impeller.hub_radius, impeller.shroud_radius, impeller.outer_radius
     head = density * impeller.speed**2 * r2**2 * impeller.stages / (8.0 * nominal_pressure)
     return 1.0 - head * (1.0 - (r1**2 + r0**2) / (2.0 * r2**2))
 
 
-def design(device) -> DeviceDesign:
-    """Dimensionless groups (2.18) of a device given in SI (a validated scenario ``device``)."""
-    from autobal.models import throttles as th
+def face_area(face: Face) -> float:
+    """Face throttle area s_T = pi (r3^2 - r2^2), m^2 (Pavlenko (2014), Eq. (2.5))."""
+    return math.pi * ((face.outer_diameter / 2) ** 2 - (face.inner_diameter / 2) ** 2)
 
+
+def design(device: DeviceParams) -> DeviceDesign:
+    """Dimensionless groups of a device (Pavlenko (2014), Eqs. (2.16), (2.18), (2.135), (2.137)).
+
+    Parameters
+    ----------
+    device : DeviceParams
+        The device in SI.
+
+    Returns
+    -------
+    DeviceDesign
+        Groups, barrier margin dpsi, SI scales (p_B Pa, s_B m^2, z_B m, x_B m, g1 m^3/(Pa s),
+        Q_scale m^3/s, s_e m^2, Q_n m^3/s) and conductances in SI.
+    """
     fl, op, disc, medium = device.fluid, device.operating, device.disc, device.medium
-    p_n = fl.normal_pressure or 0.0
+    p_n = fl.normal_pressure
     p_b = op.nominal_pressure
     s_b = op.nominal_thrust / p_b
     inner, face, outer = disc.inner_seal, disc.face, disc.outer_seal
-    r_u1, r2, r3 = inner.diameter / 2, face.inner_diameter / 2, face.outer_diameter / 2
-    s_t = math.pi * (r3**2 - r2**2)
+    r_u1, r2 = inner.diameter / 2, face.inner_diameter / 2
+    s_t = face_area(face)
     s_e = math.pi * (r2**2 - r_u1**2) + 0.5 * s_t  # (2.5)
 
     g1 = th.laminar_annulus(inner.diameter, inner.clearance, inner.length, fl.viscosity)
@@ -203,11 +496,11 @@ def design(device) -> DeviceDesign:
     g_tb = th.turbulent(f_tb, zeta_tb, fl.density, medium, p_n)
     sup = device.barrier.supply_throttle
     g_e = th.laminar_tube(sup.diameter, sup.length, fl.viscosity)
-    # liquid square-root conductances carry sqrt(p_B) in their ratio, gas ones do not (2.18), (§7)
+    # liquid square-root conductances carry sqrt(p_B) in their ratio, gas ones do not (2.18), (2.137)
     root_scale = math.sqrt(p_b) if medium == "liquid" else 1.0
 
     b_computed = (axial_force_ratio(fl.density, op.impeller, p_b) if op.impeller is not None else math.nan)
-    b = op.thrust_ratio if op.thrust_ratio is not None else b_computed
+    b = op.thrust_ratio if math.isfinite(op.thrust_ratio) else b_computed
     cond = {"g1": g1, "g3": g3, "g_TB": g_tb, "g_e": g_e}
     extra = {"zeta_u3": zeta3, "zeta_TB": zeta_tb, "f_TB": f_tb, "s_T": s_t, "s_e": s_e,
              "b_from_impeller": b_computed}
@@ -224,8 +517,8 @@ def design(device) -> DeviceDesign:
             sigma_m=reg.membrane_area / s_b,
             psi_in=reg.supply_pressure / p_b,
             alpha_in1=g_in / g1,
-            alpha_B1=g_b / (g1 * math.sqrt(p_b)),  # valve: liquid orifice law in both media (§7)
-            xi_max=(v.max_opening / x_b) if v.max_opening is not None else math.inf,
+            alpha_B1=g_b / (g1 * math.sqrt(p_b)),  # valve: liquid orifice law in both media (2.137)
+            xi_max=v.max_opening / x_b,
         )
     groups = DeviceGroups(
         medium=medium,
@@ -239,6 +532,6 @@ def design(device) -> DeviceDesign:
         regulator=reg_groups,
     )
     scales = {"p_B": p_b, "s_B": s_b, "z_B": face.base_gap, "x_B": x_b, "g1": g1, "Q_scale": g1 * p_b,
-              "s_e": s_e, "Q_n": op.nominal_flow if op.nominal_flow is not None else math.nan}
+              "s_e": s_e, "Q_n": op.nominal_flow}
     return DeviceDesign(groups=groups, dpsi=device.barrier.margin_ratio, scales=scales,
                         conductances=cond, extra=extra)

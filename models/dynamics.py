@@ -33,37 +33,72 @@ from dataclasses import dataclass, field, replace
 import casadi as ca
 import numpy as np
 
-from autobal.models.device import DeviceDesign
-from autobal.models.throttles import face_opening, flow
+from autobal.models.device import DeviceDesign, groups_by_name, network
+from autobal.models.params import SIParams, si
 
 FORMS = ("energy", "chain")
 # dynamic data, in this order, as the symbolic parameter vector of the model
 PARAM_NAMES = ("m_p", "k_pr", "c_z", "E", "V2", "V3", "m0", "k_reg", "c_x", "V_cam", "V_m", "s_c")
+# the same parameters by their descriptive names (the scene's and the reports' names) -> short name
+LONG_NAMES = {
+    "rotor_mass": "m_p", "pushoff_stiffness": "k_pr", "rotor_damping": "c_z", "bulk_modulus": "E",
+    "disc_chamber_volume": "V2", "cavity_volume": "V3", "stem_mass": "m0", "spring_stiffness": "k_reg",
+    "stem_damping": "c_x", "valve_chamber_volume": "V_cam", "membrane_chamber_volume": "V_m", "seat_area": "s_c",
+}
 
 
 @dataclass(frozen=True)
-class DynamicData:
-    """Dynamic data of a device in SI (App. A L3294-L3324, App. B L3620-L3646).
+class DynamicData(SIParams):
+    """Dynamic data of a device in SI (Pavlenko (2014), App. A and App. B dynamic data).
 
     Regulator entries (m0, k_reg, c_x, V_cam, V_m, s_c, s_m) are NaN for a device without one.
+
+    Attributes
+    ----------
+    m_p : float
+        Rotor mass, kg.
+    k_pr : float
+        Push-off spring stiffness, N/m.
+    c_z : float
+        Rotor damping, N s/m (see :func:`squeeze_damping`).
+    E : float
+        Bulk modulus of the barrier medium, Pa.
+    V2, V3 : float
+        Chamber before the face throttle and cavity behind the disc, m^3.
+    m0 : float
+        Regulator stem mass, kg.
+    k_reg : float
+        Regulator spring stiffness, N/m.
+    c_x : float
+        Stem damping, N s/m.
+    V_cam, V_m : float
+        Valve chamber and membrane (barrier) chamber, m^3.
+    s_c, s_m : float
+        Valve seat area and membrane area, m^2.
+    p_n : float
+        Gas: pressure of normal conditions, Pa (displacement flows of the energy form).
+    forcing_amplitude : float
+        delta psi_1a, amplitude of the harmonic discharge pressure, dimensionless.
+    omega0 : float
+        Operating speed, rad/s.
     """
 
-    m_p: float  # rotor mass, kg
-    k_pr: float  # push-off spring stiffness, N/m
-    c_z: float  # rotor damping, N s/m
-    E: float  # bulk modulus, Pa
-    V2: float  # chamber before the face throttle, m^3
-    V3: float  # cavity behind the disc, m^3
-    m0: float = math.nan  # regulator stem mass, kg
-    k_reg: float = math.nan  # regulator spring, N/m
-    c_x: float = math.nan  # stem damping, N s/m
-    V_cam: float = math.nan  # valve chamber, m^3
-    V_m: float = math.nan  # membrane (barrier) chamber, m^3
-    s_c: float = math.nan  # valve seat area, m^2
-    s_m: float = math.nan  # membrane area, m^2
-    p_n: float = math.nan  # gas: pressure of normal conditions, Pa (displacement flows, energy form)
-    forcing_amplitude: float = 0.2  # delta psi_1a
-    omega0: float = math.nan  # operating speed, rad/s
+    m_p: float = si("kg")
+    k_pr: float = si("N/m")
+    c_z: float = si("N*s/m")
+    E: float = si("Pa")
+    V2: float = si("m**3")
+    V3: float = si("m**3")
+    m0: float = si("kg", math.nan)
+    k_reg: float = si("N/m", math.nan)
+    c_x: float = si("N*s/m", math.nan)
+    V_cam: float = si("m**3", math.nan)
+    V_m: float = si("m**3", math.nan)
+    s_c: float = si("m**2", math.nan)
+    s_m: float = si("m**2", math.nan)
+    p_n: float = si("Pa", math.nan)
+    forcing_amplitude: float = si("", 0.2)
+    omega0: float = si("rad/s", math.nan)
 
     @property
     def has_regulator(self) -> bool:
@@ -77,38 +112,23 @@ class DynamicData:
 
 
 def squeeze_damping(viscosity: float, face_area: float, base_gap: float) -> float:
-    """c_z = 1.5 mu s_T^2 / (pi z_B^3), N s/m: squeeze film of the face throttle (App. A L3322)."""
+    """Squeeze-film damping of the face throttle, c_z = 1.5 mu s_T^2 / (pi z_B^3) (Pavlenko (2014), App. A).
+
+    Parameters
+    ----------
+    viscosity : float
+        mu, Pa s.
+    face_area : float
+        s_T, m^2.
+    base_gap : float
+        z_B, m.
+
+    Returns
+    -------
+    float
+        c_z, N s/m.
+    """
     return 1.5 * viscosity * face_area**2 / (math.pi * base_gap**3)
-
-
-def dynamic_data(device, dev: DeviceDesign) -> DynamicData:
-    """The ``device.dynamics`` block of a validated scenario, with its defaults filled in, in SI."""
-    from autobal.errors import ScenarioError
-
-    d = device.dynamics
-    if d is None:
-        raise ScenarioError("device.dynamics: the dynamic analyses need a dynamics section")
-    if (device.regulator is None) != (d.regulator is None):
-        raise ScenarioError("device.dynamics.regulator: give it exactly when the device has a regulator "
-                            "(stem_mass, spring_stiffness, valve_chamber_volume, membrane_chamber_volume)")
-    c_z = d.rotor_damping
-    if c_z is None:
-        c_z = squeeze_damping(device.fluid.viscosity, dev.extra["s_T"], dev.scales["z_B"])
-    omega0 = d.operating_speed
-    if omega0 is None:
-        imp = device.operating.impeller
-        omega0 = imp.speed if imp is not None else math.nan
-    kw = {}
-    if d.regulator is not None:
-        r, reg = d.regulator, device.regulator
-        s_c = r.seat_area if r.seat_area is not None else math.pi * reg.valve.seat_diameter**2 / 4
-        kw = {"m0": r.stem_mass, "k_reg": r.spring_stiffness, "c_x": r.stem_damping,
-              "V_cam": r.valve_chamber_volume, "V_m": r.membrane_chamber_volume, "s_c": s_c,
-              "s_m": reg.membrane_area}
-    return DynamicData(m_p=d.rotor_mass, k_pr=d.pushoff_stiffness, c_z=c_z, E=d.bulk_modulus,
-                       V2=d.disc_chamber_volume, V3=d.cavity_volume,
-                       p_n=device.fluid.normal_pressure or math.nan, forcing_amplitude=d.forcing_amplitude,
-                       omega0=omega0, **kw)
 
 
 @dataclass
@@ -163,7 +183,6 @@ def build(dev: DeviceDesign, data: DynamicData, point: dict, form: str = "energy
     if (reg is not None) != data.has_regulator:
         raise ValueError("dynamic data and device disagree on the regulator")
     gas = g.medium == "gas"
-    root = g.square_root_law
     p_b, s_b, z_b, x_b, g1 = sc["p_B"], sc["s_B"], sc["z_B"], sc["x_B"], sc["g1"]
     s_e = sc["s_e"]
     p_n = data.p_n
@@ -191,13 +210,7 @@ def build(dev: DeviceDesign, data: DynamicData, point: dict, form: str = "energy
     def density(psi):  # displacement flows as normal volume flows (gas, energy form)
         return psi * p_b / p_n if gas and form == "energy" else 1.0
 
-    psi_e = Q["psi_e"] if reg else psi1 + dpsi
-    fl = {
-        "e": flow("laminar", g.alpha_e1, psi_e, Q["psi2"]),
-        "1": flow("laminar", 1.0, Q["psi2"], psi1),
-        "T": face_opening(Q["u"]) * flow(root, g.alpha_TB1, Q["psi2"], Q["psi3"]),
-        "3": flow(root, g.alpha_31, Q["psi3"], g.psi4),
-    }
+    fl = network(g, groups_by_name(g), psi1, dpsi, Q)  # the flow network of the statics
     # rotor (2.37): m z'' + c z' + k (z - z0) = F - T + F_pr   [over p_B s_B]
     rows = [(P["m_p"] * Qdd["u"] + P["c_z"] * Qd["u"] + P["k_pr"] * (Q["u"] - u_spring)) * z_b / force
             - (g.sigma * (Q["psi2"] - Q["psi3"]) - tau + g.chi)]
@@ -205,9 +218,6 @@ def build(dev: DeviceDesign, data: DynamicData, point: dict, form: str = "energy
     comp = {k: theta(P[v]) * Qd[k] for k, v in (("psi2", "V2"), ("psi3", "V3"))}
     if reg:
         xi0 = float(point["xi"]) if preload == "static" else 0.0
-        fl["in"] = flow("laminar", reg.alpha_in1, reg.psi_in, Q["psi_cam"])
-        # valve (2.15): a closed valve (xi <= 0, stem on the seat) passes no flow
-        fl["v"] = ca.fmax(Q["xi"], 0) * flow("turbulent", reg.alpha_B1, Q["psi_cam"], Q["psi_e"])
         # stem (2.37): m0 x'' + c_x x' + k_reg (x - x0) = F_reg - s_m (p_e - p1), F_reg = s_m dp
         rows.append((P["m0"] * Qdd["xi"] + P["c_x"] * Qd["xi"] + P["k_reg"] * (Q["xi"] - xi0)) * x_b / force
                     + reg.sigma_m * (Q["psi_e"] - psi1 - dpsi))
@@ -215,13 +225,13 @@ def build(dev: DeviceDesign, data: DynamicData, point: dict, form: str = "energy
         d_m = data.s_m * x_b * Qd["xi"] / flow_scale
         comp |= {"psi_cam": theta(P["V_cam"]) * Qd["psi_cam"], "psi_e": theta(P["V_m"]) * Qd["psi_e"]}
         if form == "chain":  # (2.40): every member of the chain equals the previous one
-            link_c = fl["v"] + comp["psi_cam"] + d_c
+            link_c = fl["valve"] + comp["psi_cam"] + d_c
             link_e = fl["e"] + comp["psi_e"] + d_m
             balances = {"psi_cam": fl["in"] - link_c, "psi_e": link_c - link_e,
                         "psi2": link_e - (fl["1"] + fl["T"] + comp["psi2"] + d_e)}
         else:
-            balances = {"psi_cam": fl["in"] - fl["v"] - d_c * density(Q["psi_cam"]) - comp["psi_cam"],
-                        "psi_e": fl["v"] - fl["e"] + d_m * density(Q["psi_e"]) - comp["psi_e"],
+            balances = {"psi_cam": fl["in"] - fl["valve"] - d_c * density(Q["psi_cam"]) - comp["psi_cam"],
+                        "psi_e": fl["valve"] - fl["e"] + d_m * density(Q["psi_e"]) - comp["psi_e"],
                         "psi2": fl["e"] - fl["1"] - fl["T"] - d_e * density(Q["psi2"]) - comp["psi2"]}
     else:
         if form == "chain":

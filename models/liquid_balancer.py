@@ -5,7 +5,7 @@ KhNU 2020, ch. 2 Eqs. (2.4)-(2.15), ch. 3 (3.1)-(3.14), App. В/Г programs; Pas
 Tomsk 2010, ch. 3 (spec ``rotor-liquid-abd-dynamics.md`` §3.8).  SI units at every argument:
 m, m^3, kg, kg/m^3, Pa s, rad/s, 1/s; angles in rad unless a name ends in ``_deg``.
 
-The quasi-static model (the "pipeline" of App. В, §5.1 of the spec) is a CasADi SX graph:
+The quasi-static model (the calculation of App. В) is a CasADi SX graph (:func:`quasi_static`):
 (omega, omega_cr, n, R, h, V, rho, D0, e_f) -> delta, phi, G, f, r, x_p, D, k_D, alpha0, lambda0.
 ``e_f`` is the eccentricity that drives the shaft deflection f = G e_f: the App. В code uses
 e0 = D0/m_d ("program" deflection, spec §8.1), the check of §8.1 uses D0/M_sys ("system").
@@ -24,18 +24,103 @@ from __future__ import annotations
 
 import functools
 import math
+from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
+
+from autobal.models.params import SIParams, si
 
 VARIANTS = ("printed", "program", "corrected")
 DEFLECTIONS = ("program", "system")  # eccentricity in f = G e_f: D0/m_d (App. В code) or D0/M_sys
 G_ACCEL = 9.81  # m/s^2, as in [T]
 GCM = 1e-5  # 1 g*cm in kg*m
 
-PIPE_IN = ("omega", "omega_cr", "n", "R", "h", "V", "rho", "D0", "e_f")
-PIPE_OUT = ("delta", "phi", "G", "G_exact", "zeta_over_ec", "f", "r2", "r", "x_p", "D", "k_D", "sin2d",
+INPUTS = ("omega", "omega_cr", "n", "R", "h", "V", "rho", "D0", "e_f")
+OUTPUTS = ("delta", "phi", "G", "G_exact", "zeta_over_ec", "f", "r2", "r", "x_p", "D", "k_D", "sin2d",
             "radicand", "acos_arg", "alpha0", "lambda0")
+
+
+@dataclass(frozen=True)
+class System(SIParams):
+    """One liquid auto-balancer system in SI (Khomyak (2020), Table 3.1 symbols).
+
+    Attributes
+    ----------
+    rotor_mass, chamber_mass, unbalance_mass : float
+        M_p, M_k, m_d, kg.
+    unbalance_radius : float
+        e_d, m (D0 = m_d e_d).
+    omega_cr : float
+        Critical (resonance) speed omega_p, rad/s.
+    n : float
+        Damping constant, 1/s (:func:`n_from_decrement`).
+    R, h : float
+        Chamber radius and height, m.
+    V : float
+        Liquid volume, m^3.
+    rho : float
+        Liquid density, kg/m^3.
+    speed : float
+        Working speed omega, rad/s.
+    mu : float or None
+        Liquid viscosity, Pa s (viscous zone (2.15) only).
+    stiffness : float or None
+        Shaft stiffness c, N/m (chapter-3 calculators only).
+    inclination : float or None
+        Rotor inclination Omega_inc, rad (paraboloid free surface).
+    nested_radii, nested_volumes : tuple of float
+        Further concentric chambers, outermost first: wall radii (m) and liquid volumes (m^3).
+    wall_thickness, hub_radius : float
+        Partition thickness and the innermost chamber's inner wall radius, m.
+    """
+
+    rotor_mass: float = si("kg")
+    chamber_mass: float = si("kg")
+    unbalance_mass: float = si("kg")
+    unbalance_radius: float = si("m")
+    omega_cr: float = si("rad/s")
+    n: float = si("1/s")
+    R: float = si("m")
+    h: float = si("m")
+    V: float = si("m**3")
+    rho: float = si("kg/m**3")
+    speed: float = si("rad/s")
+    mu: float | None = si("Pa*s", None)
+    stiffness: float | None = si("N/m", None)
+    inclination: float | None = si("rad", None)
+    nested_radii: tuple = ()
+    nested_volumes: tuple = ()
+    wall_thickness: float = si("m", 0.0)
+    hub_radius: float = si("m", 0.0)
+
+    @property
+    def D0(self) -> float:
+        """Rotor unbalance D0 = m_d e_d [kg m] (App. В step 2.7 corrected, erratum 15)."""
+        return self.unbalance_mass * self.unbalance_radius
+
+    @property
+    def m_l(self) -> float:
+        return self.rho * self.V
+
+    @property
+    def M_sys(self) -> float:
+        """M_p + M_k + m_d + m_l (App. В step 2.2)."""
+        return self.rotor_mass + self.chamber_mass + self.unbalance_mass + self.m_l
+
+    def e_f(self, deflection: str) -> float:
+        """Eccentricity in f = G e_f: D0/m_d (App. В code, "program") or D0/M_sys ("system")."""
+        if deflection == "program":
+            return self.D0 / self.unbalance_mass
+        if deflection == "system":
+            return self.D0 / self.M_sys
+        raise ValueError(f"deflection is one of {DEFLECTIONS}, not {deflection!r}")
+
+    def inputs(self, deflection: str, **override) -> dict:
+        """Inputs of the quasi-static model (:data:`INPUTS`) at the working speed."""
+        p = {"omega": self.speed, "omega_cr": self.omega_cr, "n": self.n, "R": self.R, "h": self.h, "V": self.V,
+             "rho": self.rho, "D0": self.D0, "e_f": self.e_f(deflection)}
+        return p | override
 
 
 # ---- damping (2.5), erratum 1 -----------------------------------------------------------------
@@ -102,8 +187,8 @@ def inverse_lambda0_squared(k, sin2d, variant: str):
     return (1 - 2 * k * acos_argument(sin2d, k, variant) + k**2) / k**2
 
 
-def pipeline(p: dict, variant: str = "corrected") -> dict:
-    """App. В pipeline (spec §5.1), steps 2.1-4, on symbols or numbers ``p`` keyed by :data:`PIPE_IN`.
+def quasi_static(p: dict, variant: str = "corrected") -> dict:
+    """The quasi-static model of App. В, steps 2.1-4, on symbols or numbers ``p`` keyed by :data:`INPUTS`.
 
     r = sqrt(R^2 - V/(pi h)) (step 2.3); f = G e_f (2.7); x_p = r^2 f / (R^2 - r^2) (T-un@L668, the
     program's e); D = rho V x_p = rho f (pi h R^2 - V) (step 2.8); k_D = D0/D (2.9); alpha0 by
@@ -129,37 +214,37 @@ def pipeline(p: dict, variant: str = "corrected") -> dict:
 
 
 @functools.cache
-def pipeline_function(variant: str = "corrected") -> ca.Function:
-    """The pipeline as a CasADi Function with named scalar inputs :data:`PIPE_IN` and outputs :data:`PIPE_OUT`."""
+def quasi_static_function(variant: str = "corrected") -> ca.Function:
+    """The quasi-static model as a CasADi Function: named scalar inputs :data:`INPUTS`, outputs :data:`OUTPUTS`."""
     if variant not in VARIANTS:
         raise ValueError(f"unknown variant {variant!r}; expected one of {VARIANTS}")
-    sym = {k: ca.SX.sym(k) for k in PIPE_IN}
-    out = pipeline(sym, variant)
-    return ca.Function(f"liquid_balancer_{variant}", [sym[k] for k in PIPE_IN], [out[k] for k in PIPE_OUT],
-                       list(PIPE_IN), list(PIPE_OUT))
+    sym = {k: ca.SX.sym(k) for k in INPUTS}
+    out = quasi_static(sym, variant)
+    return ca.Function(f"liquid_balancer_{variant}", [sym[k] for k in INPUTS], [out[k] for k in OUTPUTS],
+                       list(INPUTS), list(OUTPUTS))
 
 
 @functools.lru_cache(maxsize=64)
 def _mapped(variant: str, size: int) -> ca.Function:
-    return pipeline_function(variant).map(size)
+    return quasi_static_function(variant).map(size)
 
 
 def evaluate(variant: str = "corrected", **inputs) -> dict:
-    """Evaluate the pipeline for scalar or array inputs (broadcast); numpy arrays out, with ``reason``.
+    """Evaluate the quasi-static model for scalar or array inputs (broadcast); numpy arrays out, with ``reason``.
 
     Never raises on a domain violation: the outputs are NaN (or inf at complete balancing) and
     ``reason`` says why (see :func:`reasons`).
     """
-    missing = [k for k in PIPE_IN if k not in inputs]
+    missing = [k for k in INPUTS if k not in inputs]
     if missing:
         raise TypeError(f"missing inputs {missing}")
-    vals = [np.asarray(inputs[k], float) for k in PIPE_IN]
+    vals = [np.asarray(inputs[k], float) for k in INPUTS]
     shape = np.broadcast_shapes(*[v.shape for v in vals])
     size = max(int(np.prod(shape)), 1)
     # constant inputs go in as scalars (map repeats them); the others as 1 x size rows
     args = [float(v) if v.ndim == 0 else np.broadcast_to(v, shape).reshape(1, -1) for v in vals]
     res = _mapped(variant, size)(*args)
-    out = {name: res[i].full().ravel().reshape(shape) for i, name in enumerate(PIPE_OUT)}
+    out = {name: res[i].full().ravel().reshape(shape) for i, name in enumerate(OUTPUTS)}
     out["reason"] = reasons(out, np.broadcast_to(vals[0], shape), variant)
     bad = (out["reason"] != "") & ~np.isinf(out["lambda0"])
     for name in ("alpha0", "lambda0"):
@@ -448,49 +533,3 @@ def sufficiency(radii, volumes, h, s, wall_thickness=0.0, hub_radius=0.0) -> dic
         inner_margin.append(rr - ri - s)
     ok = [bool(a >= 0 and b >= 0) for a, b in zip(outer_margin, inner_margin, strict=True)]
     return {"r": r, "wall_margin": outer_margin, "partition_margin": inner_margin, "ok": ok, "all_ok": all(ok)}
-
-
-# ---- balancing norms (spec §2.0, C11) -----------------------------------------------------------
-
-def permissible_specific_unbalance(n_rpm, kind: str = "general"):
-    """[e_st] in micrometres: general machinery 2e8/n^2, household appliances 6000/n (n in rpm) [T L598-L606]."""
-    n_rpm = np.asarray(n_rpm, float)
-    if kind == "general":
-        return 2e8 / n_rpm**2
-    if kind == "household":
-        return 6000.0 / n_rpm
-    raise ValueError("kind is 'general' or 'household'")
-
-
-def unbalance_coefficient(F_c, P_st):
-    """k = F_c / P_st, Eq. (2.3); recommended below 1 (0.01-0.5)."""
-    return F_c / P_st
-
-
-def two_plane_unbalances(D_C, L_A, L_B, M_D, couple_sign: int = -1):
-    """Equivalent two-plane unbalances [T T-un@L536]: D_A = (D_C L_B + M_D)/L, D_B = (D_C L_A + sign M_D)/L.
-
-    ``couple_sign = -1`` is the reconstruction (the couple enters the planes with opposite signs,
-    erratum 21); ``+1`` reproduces the printed pair.
-    """
-    L = L_A + L_B
-    return (D_C * L_B + M_D) / L, (D_C * L_A + couple_sign * M_D) / L
-
-
-# ---- time-domain Jeffcott rotor for checking (2.5)/(2.7) (spec §2.8, supplied) ----------------
-
-@functools.cache
-def jeffcott_integrator(t_end: float, n_out: int) -> ca.Function:
-    """CVODES integrator of x'' + 2n x' + omega_cr^2 x = e_c omega^2 cos(omega t) (and y with sin), per unit e_c.
-
-    Parameters p = (omega, omega_cr, n); states (x, y, x', y'); outputs on a grid of ``n_out`` times in (0, t_end].
-    """
-    x = ca.SX.sym("x", 4)
-    p = ca.SX.sym("p", 3)
-    t = ca.SX.sym("t")
-    w, wcr, n = p[0], p[1], p[2]
-    rhs = ca.vertcat(x[2], x[3], -2 * n * x[2] - wcr**2 * x[0] + w**2 * ca.cos(w * t),
-                     -2 * n * x[3] - wcr**2 * x[1] + w**2 * ca.sin(w * t))
-    grid = np.linspace(0.0, t_end, n_out + 1)[1:]
-    return ca.integrator("jeffcott", "cvodes", {"x": x, "p": p, "t": t, "ode": rhs}, 0.0, grid,
-                         {"abstol": 1e-11, "reltol": 1e-11, "max_num_steps": 200000})

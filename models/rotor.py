@@ -34,19 +34,33 @@ from functools import cache
 
 import casadi as ca
 
+from autobal.models.params import SIParams, si
+
 STATES = ("x", "y", "vx", "vy", "nu")  # w~ = x + i y, w~' = vx + i vy, nu = omega / Omega0
 FIXED_STATES = ("X", "Y", "VX", "VY", "nu", "beta")
 NP = 4  # parameters p = [psi, zeta0, j, b~]
 
 
 @dataclass(frozen=True)
-class LiquidLayer:
-    """Liquid chamber of the auto-balancer (spec §1.1): full-chamber ("fictitious") mass rho pi R^2 h."""
+class LiquidLayer(SIParams):
+    """Liquid chamber of the auto-balancer (Pashkov (2010), model M1): full-chamber mass rho pi R^2 h.
 
-    density: float  # rho, kg/m^3
-    radius: float  # R = r1, chamber wall radius, m
-    height: float  # h, m
-    free_surface_radius: float | None = None  # r, m (optional: only the sufficiency check needs it)
+    Attributes
+    ----------
+    density : float
+        rho, kg/m^3.
+    radius : float
+        R = r1, chamber wall radius, m.
+    height : float
+        h, m.
+    free_surface_radius : float or None
+        r, m (only the sufficiency check needs it).
+    """
+
+    density: float = si("kg/m**3")
+    radius: float = si("m")
+    height: float = si("m")
+    free_surface_radius: float | None = si("m", None)
 
     @property
     def full_chamber_mass(self) -> float:
@@ -66,16 +80,34 @@ class LiquidLayer:
 
 
 @dataclass(frozen=True)
-class RotorParams:
-    """SI parameters of rotor, optional liquid layer and drive (spec §9 item 1)."""
+class RotorParams(SIParams):
+    """SI parameters of the Jeffcott rotor, its optional liquid layer and its drive (Pashkov (2010), ch. 3).
 
-    m1: float  # rotor mass without liquid, kg
-    c: float  # shaft stiffness, N/m
-    chi: float  # external viscous friction, N s/m
-    e: float  # eccentricity, m
-    m2_star: float = 0.0  # full-chamber liquid mass rho pi R^2 h, kg (0: no liquid block)
-    J_p: float = 0.0  # polar inertia of the rotor and drive, kg m^2
-    b: float = 0.0  # rotational drag of the drive, N m s
+    Attributes
+    ----------
+    m1 : float
+        Rotor mass without liquid, kg.
+    c : float
+        Shaft stiffness, N/m.
+    chi : float
+        External viscous friction, N s/m.
+    e : float
+        Eccentricity, m.
+    m2_star : float
+        Full-chamber liquid mass rho pi R^2 h, kg (0: no liquid block).
+    J_p : float
+        Polar inertia of the rotor and drive, kg m^2.
+    b : float
+        Rotational drag of the drive, N m s.
+    """
+
+    m1: float = si("kg")
+    c: float = si("N/m")
+    chi: float = si("N*s/m")
+    e: float = si("m")
+    m2_star: float = si("kg", 0.0)
+    J_p: float = si("kg*m**2", 0.0)
+    b: float = si("N*m*s", 0.0)
 
     @classmethod
     def from_groups(cls, Omega0: float, chi_over_m1: float, psi: float = 1.0, e: float = 1.0,

@@ -51,6 +51,12 @@ def face_opening(u):
     return ca.fmax(u, 0) ** 1.5
 
 
+def valve_opening(xi):
+    """Opening factor of the regulator valve, xi clamped at 0 (Eq. (2.15)): a valve on its seat
+    (xi <= 0) passes no flow, in either direction."""
+    return ca.fmax(xi, 0)
+
+
 # ---- conductances, SI in, SI out (Eq. (2.16), Table 2.2, appendices A/B) ----------------
 
 def laminar_annulus(diameter: float, clearance: float, length: float, viscosity: float) -> float:

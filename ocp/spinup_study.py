@@ -118,10 +118,13 @@ class SpinupResult:
 
 def build_ocp(rotor, settings) -> SpinupOcp:
     """The declared problem from the scene's ``rotor`` part and ``analyses.spinup`` settings."""
+    from autobal.adapters import rotor as rotor_params  # the scene -> parameters adapter (front door)
+
     drive = rotor.drive
     try:
         return SpinupOcp(
-            rotor.params(), settings.start_speed, settings.final_speed, settings.horizon, settings.max_acceleration,
+            rotor_params(rotor), settings.start_speed, settings.final_speed, settings.horizon,
+            settings.max_acceleration,
             objective=settings.objective, settling_time=settings.settling_time, omega_max=settings.max_speed,
             torque_max=drive.max_torque if drive else None, power_max=drive.max_power if drive else None,
             motor_stall_torque=drive.motor.stall_torque if drive and drive.motor else None,

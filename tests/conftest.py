@@ -1,8 +1,8 @@
 import pytest
 
 from autobal import scenario
+from autobal.adapters import design
 from autobal.analysis.statics import StaticsSolver
-from autobal.models.device import design
 
 
 @pytest.fixture(scope="session")

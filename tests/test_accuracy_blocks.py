@@ -12,7 +12,7 @@ import pytest
 import yaml
 from numpy.testing import assert_allclose
 
-from autobal import scenario
+from autobal import adapters, scenario
 from autobal.analysis import frequency, montecarlo, stability
 from autobal.analysis.linearize import Setup
 from autobal.cli import main
@@ -64,7 +64,7 @@ def test_transient_block(dynamics):
 def test_peak_error_measures_a_known_offset():
     # a peak moved by 1e-5 (relative) from the refined one: the Newton step reports that distance, to the
     # refined peak's own error (<= 2e-7), and the amplitude lost ~ quadratically
-    setup = Setup(scenario.load("pump_pe600_dynamics").device, 1.0)
+    setup = Setup(adapters.device(scenario.load("pump_pe600_dynamics").device), 1.0)
     lin = setup.linear("program")
     c = frequency.characteristic(lin, (10.0, 8000.0, 800), "appendix", 0.2, 659.734)
     for p in c["peaks"]:
@@ -79,7 +79,7 @@ def test_peak_error_measures_a_known_offset():
 def test_pencil_of_the_operator_has_the_hand_descriptor_poles():
     import scipy.linalg
 
-    setup = Setup(scenario.load("pump_pe600_dynamics").device, 1.0)
+    setup = Setup(adapters.device(scenario.load("pump_pe600_dynamics").device), 1.0)
     c = setup.constants("program")
     E, A = stability.pencil(*c.operator()[:3])
     Eh, Ah = c.descriptor()[:2]

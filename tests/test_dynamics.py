@@ -9,7 +9,7 @@ import pytest
 import yaml
 from numpy.testing import assert_allclose
 
-from autobal import scenario
+from autobal import adapters, scenario
 from autobal.analysis import frequency, hand_linear, linearize, simulate, stability
 from autobal.analysis.linearize import Setup
 from autobal.cli import main
@@ -18,17 +18,17 @@ from autobal.models import dynamics as dy
 
 @pytest.fixture(scope="module")
 def pump():
-    return Setup(scenario.load("pump_pe600_dynamics").device)
+    return Setup(adapters.device(scenario.load("pump_pe600_dynamics").device))
 
 
 @pytest.fixture(scope="module")
 def comp():
-    return Setup(scenario.load("compressor_k180_dynamics").device)
+    return Setup(adapters.device(scenario.load("compressor_k180_dynamics").device))
 
 
 @pytest.fixture(scope="module")
 def simple():
-    return Setup(scenario.load("pump_pe600_simplified").device)
+    return Setup(adapters.device(scenario.load("pump_pe600_simplified").device))
 
 
 def afc(setup, model="program", convention="appendix"):

@@ -16,11 +16,11 @@ from numpy.testing import assert_allclose
 from scipy.optimize import least_squares
 
 from autobal import cli, scenario
+from autobal.adapters import design
 from autobal.analysis import estimation as est
 from autobal.analysis.statics import StaticsSolver
 from autobal.errors import ScenarioError, SolveError
 from autobal.measurements import read_csv
-from autobal.models.device import design
 
 TABLE = read_csv("data/table43.csv")
 TAU, U, GROUP = TABLE.columns["tau"], TABLE.columns["u"], TABLE.columns["group"]

@@ -11,13 +11,14 @@ import pytest
 import yaml
 from numpy.testing import assert_allclose
 
-from autobal import scenario
+from autobal import adapters, scenario
+from autobal.adapters import design
 from autobal.analysis import executor as ex
 from autobal.analysis import montecarlo as mc
 from autobal.analysis.statics import StaticsSolver
 from autobal.cli import main
 from autobal.errors import ScenarioError
-from autobal.models.device import DeviceDesign, design, static_system
+from autobal.models.device import DeviceDesign, static_system
 from autobal.schema_reliability import Correlation, Distribution
 
 THESIS = ["alpha_in1", "alpha_B1", "alpha_e1", "alpha_TB1", "alpha_31", "b", "sigma", "chi", "dpsi", "psi_in"]
@@ -219,7 +220,7 @@ def test_dask_cluster_gives_the_in_process_numbers(scene, dev, cluster, tmp_path
 def test_vectorised_afc_equals_the_linear_models_response(scene, model, names):
     # the Monte Carlo's batched solves / mapped Jacobians against linearize.LinearModel.response at the
     # nominal parameters; program model: App. A peaks 1977 rad/s 25.20 um, 2912 rad/s 9.90 um, A(660) 6.84 um
-    am = mc._afc_model(scene.device, 1.0, model, names, "appendix")
+    am = mc._afc_model(adapters.device(scene.device), 1.0, model, names, "appendix")
     om = np.array([300.0, 659.734, 1977.15, 2912.49, 4000.0])
     mine = am.amplitude(np.array([[am.nominal()[n] for n in names]] * 3), om)
     theirs = np.abs(am.setup.linear(model).response(om, "appendix")) * am.scale
@@ -233,7 +234,7 @@ def test_afc_spread_of_the_program_model_matches_spec(scene):
     omega0 = 660 rad/s, 0.29 at omega_I, 0.51 at omega_II (the source: amplitude 'up to 40 %', conclusion 4,
     L2837, read off figures: same order, not a number to reproduce)."""
     a = scene.analyses.montecarlo.afc.model_copy(update={"samples": 4000, "chunk_size": 2000})
-    r = mc.afc_study(scene.device, a, 2014, ex.InProcess(progress=False), 3.0, [0.5])
+    r = mc.afc_study(adapters.device(scene.device), a, 2014, ex.InProcess(progress=False), 3.0, [0.5])
     at = r["at"]
     assert_allclose([at["peak_1"]["omega"], at["peak_2"]["omega"]], [1977.2, 2912.5], atol=1.0)
     # MC noise of a cv from 4000 samples: about cv / sqrt(2 N) = 0.004-0.006

@@ -6,11 +6,11 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from autobal import scenario
+from autobal import adapters, scenario
 from autobal.analysis import linearize
 from autobal.analysis.simulate import Simulator, equilibrium_residual
 
-SETUP = linearize.Setup(scenario.load("pump_pe600_dynamics").device)
+SETUP = linearize.Setup(adapters.device(scenario.load("pump_pe600_dynamics").device))
 FACTOR = st.floats(0.2, 5.0)
 
 

@@ -9,7 +9,7 @@ import pytest
 import yaml
 from numpy.testing import assert_allclose
 
-from autobal import cli, scenario
+from autobal import adapters, cli, scenario
 from autobal.errors import ScenarioError, SolveError
 from autobal.models.rotor import RotorParams
 from autobal.ocp import spinup as S
@@ -187,4 +187,4 @@ def test_shipped_scenes_validate(name):
     scn = scenario.load(name)
     assert scn.rotor is not None
     if name == "spinup_liquid_balancer":
-        assert_allclose(scn.rotor.params().psi, 0.5, rtol=1e-4)  # rho pi R^2 h = 1 kg = m1
+        assert_allclose(adapters.rotor(scn.rotor).psi, 0.5, rtol=1e-4)  # rho pi R^2 h = 1 kg = m1

@@ -21,7 +21,7 @@ from autobal.models import throttles as th
 )
 def test_conductances_match_appendices(name, key, published):
     from autobal import scenario
-    from autobal.models.device import design
+    from autobal.adapters import design
 
     assert_allclose(design(scenario.load(name).device).conductances[key], published, rtol=5e-3)
 
@@ -29,7 +29,7 @@ def test_conductances_match_appendices(name, key, published):
 def test_groups_match_appendix_a():
     # spec §10.1 recomputed column (App. A L3294-L3326)
     from autobal import scenario
-    from autobal.models.device import design
+    from autobal.adapters import design
 
     d = design(scenario.load("pump_pe600_statics").device)
     g = d.groups
