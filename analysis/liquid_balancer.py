@@ -401,7 +401,8 @@ def _table_3_3(system: System, settings, masses, vol_settings) -> dict:
                "V_opt_crescent_mL": cr["V"] * 1e6}
         if settings.thesis_comparison and i < 4 and abs(row["D0_gcm"] - TABLE_3_3["D0_gcm"][i]) < 1e-6:
             row |= {"published_V_opt_mL": TABLE_3_3["V_opt_mL"][i], "published_capacity_gcm":
-                    TABLE_3_3["capacity_gcm"][i], "experiment_V_opt_mL": TABLE_3_3["V_exp_mL"][i],
+                    TABLE_3_3["capacity_gcm"][i], "published_k_D": row["D0_gcm"] / TABLE_3_3["capacity_gcm"][i],
+                    "experiment_V_opt_mL": TABLE_3_3["V_exp_mL"][i],
                     "documented_vs_experiment_pct": _pct(row["V_opt_mL"], TABLE_3_3["V_exp_mL"][i]),
                     "crescent_vs_experiment_pct": _pct(row["V_opt_crescent_mL"], TABLE_3_3["V_exp_mL"][i]),
                     "published_vs_experiment_pct": _pct(TABLE_3_3["V_opt_mL"][i], TABLE_3_3["V_exp_mL"][i]),

@@ -13,6 +13,7 @@ from autobal import adapters, scenario
 from autobal.analysis import frequency, hand_linear, linearize, simulate, stability
 from autobal.analysis.linearize import Setup
 from autobal.cli import main
+from autobal.errors import ScenarioError
 from autobal.models import dynamics as dy
 
 
@@ -343,5 +344,5 @@ def test_map_axis_with_wrong_unit_is_refused(tmp_path):
     data["analyses"]["stability"]["map"]["x"]["start"] = "1 kg"
     p = tmp_path / "bad.yaml"
     p.write_text(yaml.safe_dump(data))
-    with pytest.raises(Exception, match="stability.map.x.*volume"):
+    with pytest.raises(ScenarioError, match=r"analyses\.stability\.map\.x.*start: '1 kg' is not a volume"):
         scenario.load(p)
