@@ -62,3 +62,44 @@ def test_flow_laws_reverse_with_pressure(law):
 def test_unknown_law_is_an_error():
     with pytest.raises(ValueError, match="unknown throttle law"):
         th.flow("magic", 1.0, 1.0, 0.0)
+
+
+# ---- one flow network for the statics and the dynamics; the parameter objects ----------------------
+
+def test_closed_valve_passes_no_flow():
+    # Pavlenko (2014), Eq. (2.15): Q_c = g_B xi sqrt(p_cam - p_e) holds for an open valve; on its seat
+    # (xi <= 0) it passes nothing, in either direction (xi sqrt(dp) with xi < 0 would reverse the flow)
+    from autobal import scenario
+    from autobal.adapters import design
+    from autobal.models.device import groups_by_name, network
+
+    g = design(scenario.load("pump_pe600_statics").device).groups
+    v = {"psi2": 0.8, "psi3": 0.4, "u": 1.0, "psi_e": 1.05, "psi_cam": 1.1}
+    q = {xi: float(network(g, groups_by_name(g), 1.0, 0.05, v | {"xi": xi})["valve"]) for xi in (-0.2, 0.0, 0.5)}
+    assert q[-0.2] == q[0.0] == 0.0
+    assert_allclose(q[0.5], 0.5 * g.regulator.alpha_B1 * np.sqrt(1.1 - 1.05), rtol=1e-9)
+
+
+def test_dynamics_flows_at_equilibrium_are_the_statics_flows():
+    from autobal import adapters, scenario
+    from autobal.analysis.linearize import Setup
+
+    setup = Setup(adapters.device(scenario.load("pump_pe600_dynamics").device), 1.0)
+    for form in ("energy", "chain"):
+        m = setup.nonlinear(form)
+        assert_allclose(np.array(m.flows(m.x0, m.w0)).ravel(), list(setup.static.flows.values()), rtol=1e-12)
+
+
+def test_parameters_from_pint_quantities_equal_si_floats():
+    import pint
+
+    from autobal.models.device import Face
+    from autobal.models.rotor import RotorParams
+
+    u = pint.UnitRegistry()
+    face = Face.from_quantities(inner_diameter=u("220 mm"), outer_diameter=0.3, base_gap=u("0.1 mm"))
+    assert face == Face(inner_diameter=0.22, outer_diameter=0.3, base_gap=1e-4)
+    rotor = RotorParams.from_quantities(m1=u("2 kg"), c=u("1 kN/m"), chi=u("2 g/s"), e=u("0.1 mm"))
+    assert_allclose([rotor.m1, rotor.c, rotor.chi, rotor.e], [2.0, 1e3, 2e-3, 1e-4], rtol=1e-12)
+    with pytest.raises(pint.DimensionalityError):
+        Face.from_quantities(inner_diameter=u("1 kg"), outer_diameter=0.3, base_gap=1e-4)
