@@ -4,22 +4,20 @@ For a harmonic discharge pressure dpsi1 = dpsi1a sin(omega t) (with dtau = dpsi1
 convention, or dtau = b dpsi1) the gap amplitude in micrometres is
 A_u(omega) = |W_u(i omega)| dpsi1a z_B 1e6 (App. A L3412, App. B L3734).  The Bode data come
 from python-control (``control.frequency_response``) on a grid refined near every lightly damped
-pole; peaks are local maxima refined with a bounded scalar search.  ``run`` is the runner of
-``analyses.frequency``.
+pole; peaks are local maxima refined with a bounded scalar search.  The runner of ``analyses.frequency`` is
+:func:`autobal.runners.frequency`.
 """
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
-from pathlib import Path
 
 import control
 import numpy as np
 from scipy.optimize import minimize_scalar
 
 from autobal.analysis.linearize import LinearModel, Setup
-from autobal.results import save_figure, write_csv
+from autobal.analysis.result import Result, new_figure
 
 
 def grid(lin: LinearModel, start: float, stop: float, points: int) -> np.ndarray:
@@ -69,8 +67,25 @@ def characteristic(lin: LinearModel, omega_range: tuple, convention: str, amplit
 
 
 @dataclass
-class FrequencyResult:
+class FrequencyResult(Result):
+    """AFC/PFC of the face gap for each model (Pavlenko (2014), Figs 2.7, 2.11).
+
+    ``data`` is the results.json block plus the curves; amplitudes are in micrometres per
+    forcing amplitude dpsi1a, frequencies in rad/s.
+    """
+
     data: dict
+    name = "frequency"
+
+    @property
+    def peaks(self) -> list[dict]:
+        """Resonance peaks of the first model: ``{"omega": rad/s, "amplitude_um": um}`` each."""
+        return self.data["peaks"]
+
+    @property
+    def amplitude_at_operating_speed(self) -> float:
+        """Face-gap amplitude of the first model at the operating speed omega0, m."""
+        return self.data["at_operating_speed"]["amplitude_um"] * 1e-6
 
     def to_dict(self) -> dict:
         d = {k: v for k, v in self.data.items() if k != "curves"}
@@ -86,37 +101,33 @@ class FrequencyResult:
             lines.append(f"  {m:16s} peaks: {pk}; at {a0['omega']:.1f} rad/s: {a0['amplitude_um']:.2f} um")
         return "\n".join(lines)
 
-    def write_tables(self, out: Path) -> list[Path]:
-        files = []
+    def tables(self) -> dict[str, dict]:
+        return {f"afc_{m}.csv": {"omega_rad_s": c["omega"], "amplitude_um": c["amplitude_um"],
+                                 "phase_deg": c["phase_deg"]} for m, c in self.data["curves"].items()}
+
+    def draw(self, ax) -> None:
+        """The amplitude curves of every model with their peaks; dotted: the operating speed."""
         for m, c in self.data["curves"].items():
-            path = out / f"afc_{m}.csv"
-            write_csv(path, {"omega_rad_s": c["omega"], "amplitude_um": c["amplitude_um"], "phase_deg": c["phase_deg"]})
-            files.append(path)
-        return files
-
-    def plot(self, out: Path) -> list[Path]:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 6.4), sharex=True)
-        for m, c in self.data["curves"].items():
-            line, = a1.semilogy(c["omega"], c["amplitude_um"], label=m)
-            a2.plot(c["omega"], c["phase_deg"], color=line.get_color())
+            line, = ax.semilogy(c["omega"], c["amplitude_um"], label=m)
             for p in c["peaks"]:
-                a1.plot(p["omega"], p["amplitude_um"], "o", ms=3, color=line.get_color())
-        w0 = self.data["at_operating_speed"]["omega"]
-        for ax in (a1, a2):
-            ax.axvline(w0, color="k", ls=":", lw=0.8)
-            ax.grid(alpha=0.3)
-        a1.set_ylabel(r"gap amplitude $A_u$, $\mu$m")
-        a1.legend(fontsize=7)
+                ax.plot(p["omega"], p["amplitude_um"], "o", ms=3, color=line.get_color())
+        ax.axvline(self.data["at_operating_speed"]["omega"], color="k", ls=":", lw=0.8)
+        ax.grid(alpha=0.3)
+        ax.set_ylabel(r"gap amplitude $A_u$, $\mu$m")
+        ax.legend(fontsize=7)
+
+    def figures(self) -> dict:
+        fig, (a1, a2) = new_figure(figsize=(7, 6.4), nrows=2, sharex=True)
+        self.draw(a1)
+        for c in self.data["curves"].values():
+            a2.plot(c["omega"], c["phase_deg"])
+        a2.axvline(self.data["at_operating_speed"]["omega"], color="k", ls=":", lw=0.8)
+        a2.grid(alpha=0.3)
         a2.set_ylabel("phase, deg")
         a2.set_xlabel(r"$\omega$, rad/s")
         fig.suptitle(f"{self.data['title']}\nAFC/PFC of the face gap (Fig. 2.7/2.11); dotted: operating speed",
                      fontsize=9)
-        return [save_figure(fig, out / "fig_afc.png")]
+        return {"fig_afc.png": fig}
 
 
 def study(setup: Setup, models: list[str], convention: str, omega_range: tuple, title: str = "") -> FrequencyResult:
@@ -130,19 +141,6 @@ def study(setup: Setup, models: list[str], convention: str, omega_range: tuple, 
         "z_B": setup.dev.scales["z_B"], "peaks": first["peaks"], "at_operating_speed": first["at_operating_speed"],
         "curves": curves,
     })
-
-
-def run(scn, settings, out: Path):
-    """Runner of ``analyses.frequency`` (autobal/pipeline.py)."""
-    from autobal.adapters import dynamic_device  # the runner moves to the front door (autobal/runners.py)
-
-    t0 = time.perf_counter()
-    setup = Setup(dynamic_device(scn), settings.operating_ratio)
-    o = settings.omega
-    res = study(setup, list(settings.models), settings.forcing, (o.start, o.stop, o.points), scn.title)
-    res.data["accuracy"] = accuracy(setup, res.data["curves"], settings.forcing)
-    files = res.write_tables(out) + res.plot(out)
-    return res.to_dict() | {"run_time_s": time.perf_counter() - t0}, files, res.summary()
 
 
 def exact_response(lin: LinearModel, omega: float, convention: str, digits: int = 34) -> complex:

@@ -14,16 +14,15 @@ import functools
 import math
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
 from autobal.analysis import ipopt
+from autobal.analysis.result import Result, fmt, new_figure
 from autobal.errors import SolveError
 from autobal.models import liquid_balancer as lb
 from autobal.models.liquid_balancer import System
-from autobal.results import save_figure, write_csv
 
 # Table 3.2 [T L1494-L1499]: efficiency vs gamma, theory (App. В / C# program) and experiment
 TABLE_3_2 = {"gamma": [0.4, 0.6, 0.8, 1.0, 1.2, 1.4],
@@ -246,8 +245,32 @@ def pashkov(system: System, kappa: float = 1.0) -> dict:
 
 
 @dataclass
-class LiquidBalancerResult:
-    data: dict = field(default_factory=dict)  # the results.json block (SI; dimensionless groups by name)
+class LiquidBalancerResult(Result):
+    """The liquid auto-balancer study of one system (Khomyak (2020), ch. 2-3; Pashkov (2010), ch. 3).
+
+    ``data`` is the results.json block (SI; dimensionless groups by name).
+    """
+
+    data: dict = field(default_factory=dict)
+    name = "liquid_balancer"
+
+    @property
+    def efficiency(self) -> float | None:
+        """Self-balancing efficiency lambda0 = e0/e_c at the working speed (dimensionless; None: no equilibrium)."""
+        v = self.data["operating_point"]["lambda0"]
+        return None if v is None or not np.isfinite(v) else float(v)
+
+    @property
+    def optimal_height(self) -> float | None:
+        """Chamber height of the largest lambda0, m (None when not asked for or not found)."""
+        o = self.data.get("optimal_height")
+        return None if o is None or not np.isfinite(o["optimum"]) else float(o["optimum"])
+
+    @property
+    def optimal_volume(self) -> float | None:
+        """Liquid volume of the largest lambda0, m^3 (None when not asked for or not found)."""
+        o = self.data.get("optimal_volume")
+        return None if o is None or not np.isfinite(o["optimum"]) else float(o["optimum"])
 
     def to_dict(self) -> dict:
         return self.data
@@ -257,15 +280,15 @@ class LiquidBalancerResult:
         op, st = d["operating_point"], d["settings"]
         lines = [f"liquid balancer ({st['variant']} (2.13), f from {st['deflection']} eccentricity): "
                  f"gamma = {op['gamma']:.4g}, delta = {op['delta_deg']:.4g} deg, k_D = {op['k_D']:.4g}, "
-                 f"lambda0 = {_fmt(op['lambda0'])}{' (' + op['reason'] + ')' if op['reason'] else ''}; "
-                 f"self-consistent lambda0+ = {_fmt(op['lambda0_self_consistent'])}"]
+                 f"lambda0 = {fmt(op['lambda0'])}{' (' + op['reason'] + ')' if op['reason'] else ''}; "
+                 f"self-consistent lambda0+ = {fmt(op['lambda0_self_consistent'])}"]
         t = d["table"]
         lines.append(f"  {'gamma':>6s} {'delta deg':>10s} {'k_D':>10s} {'alpha0 deg':>10s} {'lambda0':>10s} "
                      f"{'self-cons.':>10s}  note")
         for i in range(len(t["gamma"])):
-            lines.append(f"  {t['gamma'][i]:6.3g} {t['delta_deg'][i]:10.4f} {_fmt(t['k_D'][i]):>10s} "
-                         f"{_fmt(t['alpha0_deg'][i]):>10s} {_fmt(t['lambda0'][i]):>10s} "
-                         f"{_fmt(t['lambda0_self_consistent'][i]):>10s}  {t['reason'][i]}")
+            lines.append(f"  {t['gamma'][i]:6.3g} {t['delta_deg'][i]:10.4f} {fmt(t['k_D'][i]):>10s} "
+                         f"{fmt(t['alpha0_deg'][i]):>10s} {fmt(t['lambda0'][i]):>10s} "
+                         f"{fmt(t['lambda0_self_consistent'][i]):>10s}  {t['reason'][i]}")
         if "table_3_2" in d:
             c = d["table_3_2"]
             lines.append(f"  Table 3.2: max |theory - experiment|/theory = {c['max_theory_experiment_pct']:.2f} % "
@@ -274,9 +297,9 @@ class LiquidBalancerResult:
         for key in ("optimal_height", "optimal_volume"):
             if key in d:
                 o = d[key]
-                lines.append(f"  {key}: {o['variable']} = {_fmt(o['optimum'])} (grid {_fmt(o.get('grid_optimum'))}, "
-                             f"step {_fmt(o.get('grid_step'))}), k_D = {_fmt(o['k_D'])}, lambda0 = "
-                             f"{_fmt(o['lambda0_max'])} {o['reason']}")
+                lines.append(f"  {key}: {o['variable']} = {fmt(o['optimum'])} (grid {fmt(o.get('grid_optimum'))}, "
+                             f"step {fmt(o.get('grid_step'))}), k_D = {fmt(o['k_D'])}, lambda0 = "
+                             f"{fmt(o['lambda0_max'])} {o['reason']}")
         if "liquid_choice" in d:
             lines.append(f"  liquid chosen by viscosity: {d['liquid_choice']['chosen']}")
         pk = d["pashkov"]
@@ -289,35 +312,20 @@ class LiquidBalancerResult:
                              f"{b['efficiency_nested']:.5g}){extra}")
         return "\n".join(lines)
 
-    def write_tables(self, out: Path) -> list[Path]:
-        out = Path(out)
-        t = self.data["table"]
-        write_csv(out / "liquid_balancer_table.csv", t)
-        sw = self.data["sweep"]
-        write_csv(out / "liquid_balancer_sweep.csv", {k: v for k, v in sw.items() if k != "reason"})
-        files = [out / "liquid_balancer_table.csv", out / "liquid_balancer_sweep.csv"]
-        if "table_3_2" in self.data:
-            rows = self.data["table_3_2"]["rows"]
-            write_csv(out / "liquid_balancer_table_3_2.csv", {k: [r[k] for r in rows] for k in rows[0]})
-            files.append(out / "liquid_balancer_table_3_2.csv")
-        if "table_3_3" in self.data:
-            rows = self.data["table_3_3"]["rows"]
-            write_csv(out / "liquid_balancer_table_3_3.csv", {k: [r[k] for r in rows] for k in rows[0]})
-            files.append(out / "liquid_balancer_table_3_3.csv")
-        return files
+    def tables(self) -> dict[str, dict]:
+        out = {"liquid_balancer_table.csv": self.data["table"],
+               "liquid_balancer_sweep.csv": {k: v for k, v in self.data["sweep"].items() if k != "reason"}}
+        for key in ("table_3_2", "table_3_3"):
+            if key in self.data:
+                rows = self.data[key]["rows"]
+                out[f"liquid_balancer_{key}.csv"] = {k: [r[k] for r in rows] for k in rows[0]}
+        return out
 
-    def plot(self, out: Path) -> list[Path]:
-        """Efficiency vs gamma with the Table 3.2 points; lambda0 against h and V near the optimum."""
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        out = Path(out)
-        d, paths = self.data, []
+    def draw(self, ax) -> None:
+        """Efficiency lambda0 against the speed ratio gamma, every variant, with the Table 3.2 points."""
+        d = self.data
         sw = d["sweep"]
         g = np.asarray(sw["gamma"], float)
-        fig, ax = plt.subplots(figsize=(6.4, 4.6))
         for v, ls in zip(lb.VARIANTS, (":", "-.", "-"), strict=True):
             ax.plot(g, np.asarray(sw[f"lambda0_{v}"], float), ls=ls, label=f"documented App. В, {v} (2.13)")
         ax.plot(g, np.asarray(sw["lambda0_self_consistent"], float), color="k", lw=1.6,
@@ -334,11 +342,17 @@ class LiquidBalancerResult:
         ax.set_ylabel(r"self-balancing efficiency $\lambda_0 = e_0/e_c$")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
+
+    def figures(self) -> dict:
+        """Efficiency vs gamma with the Table 3.2 points; lambda0 against h and V near the optimum."""
+        d = self.data
+        fig, ax = new_figure(figsize=(6.4, 4.6))
+        self.draw(ax)
         ax.set_title(d["title"], fontsize=9)
-        paths.append(save_figure(fig, out / "fig_liquid_efficiency.png"))
+        figs = {"fig_liquid_efficiency.png": fig}
         opts = [k for k in ("optimal_height", "optimal_volume") if k in d and len(d[k]["grid"]["x"])]
         if opts:
-            fig, axes = plt.subplots(1, len(opts), figsize=(5.2 * len(opts), 4.2), squeeze=False)
+            fig, axes = new_figure(figsize=(5.2 * len(opts), 4.2), ncols=len(opts), squeeze=False)
             for ax, key in zip(axes[0], opts, strict=True):
                 o = d[key]
                 x = np.asarray(o["grid"]["x"], float)
@@ -350,12 +364,8 @@ class LiquidBalancerResult:
                 ax.grid(alpha=0.3)
                 ax.legend(fontsize=7)
                 ax.set_title(f"{key.replace('_', ' ')} ({o['variant']})", fontsize=9)
-            paths.append(save_figure(fig, out / "fig_liquid_optimum.png"))
-        return paths
-
-
-def _fmt(v) -> str:
-    return "-" if v is None or (isinstance(v, float | np.floating) and not np.isfinite(v)) else f"{v:.5g}"
+            figs["fig_liquid_optimum.png"] = fig
+        return figs
 
 
 def _pct(a, b):
@@ -544,12 +554,3 @@ def accuracy(system: System, data: dict) -> dict:
            "steady state (rtol 1e-11); lambda0 itself is a closed form evaluated in double precision (not "
            "checked separately), and at a singular optimum its value (unbounded) is not an output")
     return {"estimate": float(max(parts.values())), "how": how, "parts": parts, "bounded": bounded}
-
-
-def run_scenario(scn, settings, out: Path):
-    """Pipeline runner ``liquid_balancer``: (results.json block, files written, summary)."""
-    from autobal.adapters import liquid_balancer  # the runner moves to the front door (autobal/runners.py)
-
-    res = run(liquid_balancer(scn.liquid_balancer), settings, scn.title)
-    files = res.write_tables(out) + res.plot(out)
-    return res.to_dict(), files, res.summary()

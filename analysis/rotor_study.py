@@ -9,24 +9,38 @@ table §5.4, crossover n*), ``lewis`` (table §5.5) and ``motor_runup`` (spec §
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from autobal.analysis import rotor as R
+from autobal.analysis.result import Result, new_figure
 from autobal.errors import ScenarioError
 from autobal.models.rotor import RotorParams
-from autobal.results import save_figure, write_csv
 
 STEP_TOL = 1e-12  # CVODES tolerance of the step transients checked against the closed form
 
 
 @dataclass
-class RotorDynamicsResult:
-    data: dict  # the results.json block
-    curves: dict = field(default_factory=dict, repr=False)  # arrays for tables and figures
+class RotorDynamicsResult(Result):
+    """The source's studies of the rotor with a liquid auto-balancer (Pashkov (2010), ch. 2).
+
+    ``data`` is the results.json block; ``curves`` the arrays of the tables and figures.
+    """
+
+    data: dict
+    curves: dict = field(default_factory=dict, repr=False)
+    name = "rotor_dynamics"
+
+    @property
+    def psi(self) -> float:
+        """psi = m1/m of the scene's rotor (dimensionless; 1 without liquid)."""
+        return self.data["rotor"]["psi"]
+
+    @property
+    def critical_speed(self) -> float:
+        """Undamped critical speed with the liquid, omega_cr = sqrt(c/m), rad/s."""
+        return self.data["rotor"]["omega_cr_rad_s"]
 
     def to_dict(self) -> dict:
         return self.data
@@ -57,29 +71,22 @@ class RotorDynamicsResult:
                          f"{'passed' if m['passed'] else 'captured below'} omega_cr")
         return "\n".join(lines)
 
-    def write_tables(self, out: Path) -> list[Path]:
-        files = []
+    def tables(self) -> dict[str, dict]:
+        out = {}
         for key, rows in (("steps", "table"), ("passage", "table"), ("lewis", "table"), ("stationary", "cases")):
             if key in self.data:
                 table = self.data[key][rows]
-                cols = {k: [r[k] for r in table] for k in table[0]}
-                write_csv(out / f"rotor_{key}.csv", cols)
-                files.append(out / f"rotor_{key}.csv")
-        return files
+                out[f"rotor_{key}.csv"] = {k: [r[k] for r in table] for k in table[0]}
+        return out
 
-    def plot(self, out: Path) -> list[Path]:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        c, paths = self.curves, []
+    def figures(self) -> dict:
+        c, figs = self.curves, {}
 
         def save(fig, name):
-            paths.append(save_figure(fig, out / name, dpi=110))
+            figs[name] = fig
 
         if "stationary" in c:
-            fig, ax = plt.subplots(2, 2, figsize=(9, 7))
+            fig, ax = new_figure(figsize=(9, 7), nrows=2, ncols=2)
             for (mu1, n), cv in c["stationary"].items():
                 lab = rf"$\mu_1$={mu1:g}, n={n:g}"
                 ax[0, 0].plot(cv["z"], cv["a"], label=lab)
@@ -96,7 +103,7 @@ class RotorDynamicsResult:
             save(fig, "fig_rotor_stationary.png")
         if "steps" in c:
             keys = list(c["steps"])
-            fig, ax = plt.subplots(2, 2, figsize=(9, 7), sharey=False)
+            fig, ax = new_figure(figsize=(9, 7), nrows=2, ncols=2, sharey=False)
             for a, key in zip(ax.ravel(), keys, strict=False):
                 for psi, cv in c["steps"][key].items():
                     a.plot(cv["t"] * 1e3, cv["d"], label=rf"$\psi$={psi:g}")
@@ -107,7 +114,7 @@ class RotorDynamicsResult:
                 a.legend(fontsize=7)
             save(fig, "fig_rotor_steps.png")
         if "passage" in c:
-            fig, ax = plt.subplots(2, 2, figsize=(9, 7))
+            fig, ax = new_figure(figsize=(9, 7), nrows=2, ncols=2)
             for col, n in enumerate(sorted(c["passage"]["curves"])[:1] + sorted(c["passage"]["curves"])[-1:]):
                 for psi, cv in c["passage"]["curves"][n].items():
                     ax[0, col].plot(cv["z"], cv["delta"], lw=0.8, label=rf"$\psi$={psi:g}")
@@ -119,7 +126,7 @@ class RotorDynamicsResult:
                     ax[r, col].grid(alpha=0.3)
                     ax[r, col].legend(fontsize=7)
             save(fig, "fig_rotor_passage.png")
-            fig, ax = plt.subplots(1, 2, figsize=(9, 3.8))
+            fig, ax = new_figure(figsize=(9, 3.8), ncols=2)
             tab = self.data["passage"]["table"]
             for psi in sorted({r["psi"] for r in tab}, reverse=True):
                 rows = [r for r in tab if r["psi"] == psi]
@@ -134,7 +141,7 @@ class RotorDynamicsResult:
                 a.legend(fontsize=7)
             save(fig, "fig_rotor_peaks.png")
         if "lewis" in self.data:
-            fig, a = plt.subplots(figsize=(6, 4))
+            fig, a = new_figure(figsize=(6, 4))
             tab = self.data["lewis"]["table"]
             for z in sorted({r["zeta"] for r in tab}):
                 rows = [r for r in tab if r["zeta"] == z]
@@ -147,7 +154,7 @@ class RotorDynamicsResult:
             a.legend(fontsize=7)
             save(fig, "fig_rotor_lewis.png")
         if "motor" in c:
-            fig, a = plt.subplots(2, 1, figsize=(6, 5), sharex=True)
+            fig, a = new_figure(figsize=(6, 5), nrows=2, sharex=True)
             m = c["motor"]
             a[0].plot(m["t"], m["omega"])
             a[0].axhline(self.data["rotor"]["omega_cr_rad_s"], color="k", ls=":", lw=0.8, label=r"$\omega_{cr}$")
@@ -159,7 +166,7 @@ class RotorDynamicsResult:
             for x in a:
                 x.grid(alpha=0.3)
             save(fig, "fig_rotor_motor.png")
-        return paths
+        return figs
 
 
 # ---- parts -----------------------------------------------------------------------------------------
@@ -270,21 +277,8 @@ def run(P: RotorParams, settings, title: str = "", motor=None) -> RotorDynamicsR
         data["motor_runup"] = {"omega_final_rad_s": r["nu_final"] * P.Omega0, "passed": r["passed"],
                                "peak_deflection_over_e": float(r["delta"].max())}
         curves["motor"] = {"t": r["tau"] / P.Omega0, "omega": r["nu"] * P.Omega0, "delta": r["delta"]}
+    data["accuracy"] = accuracy(data)
     return RotorDynamicsResult(data, curves)
-
-
-def run_scene(scn, settings, out: Path):
-    """Runner of the ``rotor_dynamics`` analysis (autobal.pipeline.RUNNERS)."""
-    if scn.rotor is None:
-        raise ScenarioError("analyses.rotor_dynamics needs a rotor section")
-    t0 = time.perf_counter()
-    drive = scn.rotor.drive
-    from autobal.adapters import rotor  # the runner moves to the front door (autobal/runners.py)
-
-    res = run(rotor(scn.rotor), settings, scn.title, drive.motor if drive else None)
-    files = res.write_tables(out) + res.plot(out)
-    return res.to_dict() | {"run_time_s": time.perf_counter() - t0, "accuracy": accuracy(res.data)}, files, \
-        res.summary()
 
 
 def accuracy(data: dict) -> dict:

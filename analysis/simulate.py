@@ -10,7 +10,7 @@ Reported, not hidden: the face gap reaching zero (u <= 0: the disc touches the p
 has no contact force, so the response is cut there and the time is reported), the valve closing
 (xi <= 0) or passing its travel limit, a reversal of the inner-seal flow (process fluid entering
 the barrier chamber), and an integrator failure (the time reached and the solver's message).
-``run`` is the runner of ``analyses.transient``.
+The runner of ``analyses.transient`` is :func:`autobal.runners.transient`.
 """
 
 from __future__ import annotations
@@ -18,13 +18,12 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
-from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
+from autobal.analysis.result import Result, new_figure
 from autobal.models.dynamics import DynamicModel
-from autobal.results import save_figure, write_csv
 
 KINDS = ("force_step", "pressure_step", "pressure_harmonic")
 
@@ -131,8 +130,19 @@ def events(model: DynamicModel, t: np.ndarray, X: np.ndarray, psi1: np.ndarray) 
 
 
 @dataclass
-class TransientResult:
+class TransientResult(Result):
+    """Time responses of the nonlinear model from its equilibrium (Pavlenko (2014), Eq. (2.111)).
+
+    ``data`` is the results.json block plus the time series of each case.
+    """
+
     data: dict
+    name = "transient"
+
+    @property
+    def max_gap_change(self) -> list[float]:
+        """Largest face-gap change max |z - z0| of each case, m."""
+        return [c["max_dz_um"] * 1e-6 for c in self.data["series"]]
 
     def to_dict(self) -> dict:
         return {k: v for k, v in self.data.items() if k != "series"} | {
@@ -147,24 +157,25 @@ class TransientResult:
                          f"final dz = {c['final_dz_um']:.3g} um; events: {ev}{fail}")
         return "\n".join(lines)
 
-    def write_tables(self, out: Path) -> list[Path]:
-        files = []
+    def tables(self) -> dict[str, dict]:
+        out = {}
         for i, c in enumerate(self.data["series"]):
-            path = out / f"transient_{i}_{c['input']}.csv"
             cols = {"t_s": c["t"]} | {k: c["X"][:, j] for j, k in enumerate(self.data["states"])}
-            cols |= {"z_m": c["z"], "p2_Pa": c["p2"], "p3_Pa": c["p3"]}
-            write_csv(path, cols)
-            files.append(path)
-        return files
+            out[f"transient_{i}_{c['input']}.csv"] = cols | {"z_m": c["z"], "p2_Pa": c["p2"], "p3_Pa": c["p3"]}
+        return out
 
-    def plot(self, out: Path) -> list[Path]:
-        import matplotlib
+    def draw(self, ax) -> None:
+        """The face-gap change of every case against time."""
+        for c in self.data["series"]:
+            ax.plot(c["t"] * 1e3, (c["z"] - c["z"][0]) * 1e6, label=f"{c['input']} ({c['amplitude']:g})")
+        ax.set_xlabel("t, ms")
+        ax.set_ylabel(r"$\delta z$, $\mu$m")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
+    def figures(self) -> dict:
         n = len(self.data["series"])
-        fig, axes = plt.subplots(n, 2, figsize=(9, 2.6 * n), squeeze=False)
+        fig, axes = new_figure(figsize=(9, 2.6 * n), nrows=n, ncols=2, squeeze=False)
         for ax, c in zip(axes, self.data["series"], strict=True):
             t = c["t"] * 1e3
             ax[0].plot(t, (c["z"] - c["z"][0]) * 1e6)
@@ -181,7 +192,7 @@ class TransientResult:
         for a in axes[-1]:
             a.set_xlabel("t, ms")
         fig.suptitle(f"{self.data['title']}\ntime responses from the static solution", fontsize=9)
-        return [save_figure(fig, out / "fig_transients.png")]
+        return {"fig_transients.png": fig}
 
 
 def study(model: DynamicModel, cases: list, duration: float, points: int, integrator: str = "cvodes",
@@ -253,19 +264,3 @@ def accuracy(model: DynamicModel, res: TransientResult, cases: list, duration: f
             "how": f"largest difference of the face-gap response dz(t) (and of max |dz|, final dz) between the run "
                    f"at rtol {sim.rtol:g}, atol {sim.atol:g} and a rerun with {integrator} at {TIGHTER:g}x tighter "
                    "tolerances, relative to max |dz| of the case"}
-
-
-def run(scn, settings, out: Path):
-    """Runner of ``analyses.transient`` (autobal/pipeline.py)."""
-    from autobal.adapters import dynamic_device  # the runner moves to the front door (autobal/runners.py)
-    from autobal.analysis.linearize import Setup
-
-    t0 = time.perf_counter()
-    setup = Setup(dynamic_device(scn), settings.operating_ratio)
-    model = setup.nonlinear("chain" if settings.model == "nonlinear_chain" else "energy")
-    cases = [{"input": c.input, "amplitude": c.amplitude, "frequency": c.frequency,
-              "couple": c.thrust_follows_pressure} for c in settings.cases]
-    res = study(model, cases, settings.duration, settings.points, settings.integrator, scn.title)
-    res.data["accuracy"] = accuracy(model, res, cases, settings.duration, settings.points, settings.integrator)
-    files = res.write_tables(out) + res.plot(out)
-    return res.to_dict() | {"run_time_s": time.perf_counter() - t0}, files, res.summary()

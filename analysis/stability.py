@@ -8,23 +8,21 @@ exactly in rational arithmetic from those coefficients (their signs are reliable
 dynamic range; positive scalings of p and of the polynomial do not change them).
 ``stability_map``: max Re lambda over a grid of two dynamic parameters, for the hand models
 (constants recomputed at each point) or the nonlinear model (its exact Jacobian mapped over the
-grid in one CasADi call).  ``run`` is the runner of ``analyses.stability``.
+grid in one CasADi call).  The runner of ``analyses.stability`` is :func:`autobal.runners.stability`.
 """
 
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 from fractions import Fraction
-from pathlib import Path
 
 import numpy as np
 import scipy.linalg
 
 from autobal.analysis.linearize import LinearModel, Setup, coefficient_table, jacobians, operator
+from autobal.analysis.result import Result, new_figure
 from autobal.models.dynamics import LONG_NAMES
-from autobal.results import save_figure, write_csv
 
 OMEGA_REF = 1000.0  # rad/s, time scale of the reported polynomial coefficients
 
@@ -177,8 +175,28 @@ def _intervals(vals, mask) -> list[list[float]]:
 
 
 @dataclass
-class StabilityResult:
+class StabilityResult(Result):
+    """Poles, damping, Hurwitz test and margin of each linear model, coefficient table, maps
+    (Pavlenko (2014), Eqs. (2.73)-(2.75), (2.97)-(2.99)).  ``data`` is the results.json block."""
+
     data: dict
+    name = "stability"
+
+    @property
+    def stable(self) -> bool:
+        """Whether the first model is asymptotically stable."""
+        return bool(self.data["stable"])
+
+    @property
+    def decay_rate(self) -> float:
+        """Stability margin of the first model, -max Re lambda, 1/s (negative: unstable)."""
+        return self.data["margin"]["decay_rate"]
+
+    @property
+    def poles(self) -> np.ndarray:
+        """Poles of the first model, 1/s (complex)."""
+        p = self.data["poles"]
+        return np.asarray(p["real"], float) + 1j * np.asarray(p["imag"], float)
 
     def to_dict(self) -> dict:
         return self.data
@@ -204,33 +222,22 @@ class StabilityResult:
             lines.append(f"  restores stability ({m}): {text}")
         return "\n".join(lines)
 
-    def write_tables(self, out: Path) -> list[Path]:
-        files = []
+    def tables(self) -> dict[str, dict]:
+        out = {}
         for m, v in self.data["models"].items():
-            p = out / f"poles_{m}.csv"
-            write_csv(p, {"real": v["poles"]["real"], "imag": v["poles"]["imag"],
-                          "damping_ratio": v["damping_ratio"], "natural_frequency": v["natural_frequency"]})
-            files.append(p)
+            out[f"poles_{m}.csv"] = {"real": v["poles"]["real"], "imag": v["poles"]["imag"],
+                                     "damping_ratio": v["damping_ratio"], "natural_frequency": v["natural_frequency"]}
         co = self.data["coefficients"]
-        p = out / "coefficients.csv"
-        write_csv(p, {"name": co["names"]} | co["columns"] | {"note": [co["notes"].get(k, "") for k in co["names"]]})
-        files.append(p)
+        out["coefficients.csv"] = ({"name": co["names"]} | co["columns"]
+                                   | {"note": [co["notes"].get(k, "") for k in co["names"]]})
         for m, mp in self.data.get("maps", {}).items():
-            p = out / f"stability_map_{m}.csv"
             X, Y = np.meshgrid(mp["x"]["values"], mp["y"]["values"])
-            write_csv(p, {mp["x"]["parameter"]: X.ravel(), mp["y"]["parameter"]: Y.ravel(),
-                          "max_real": np.asarray(mp["max_real"]).ravel()})
-            files.append(p)
-        return files
+            out[f"stability_map_{m}.csv"] = {mp["x"]["parameter"]: X.ravel(), mp["y"]["parameter"]: Y.ravel(),
+                                             "max_real": np.asarray(mp["max_real"]).ravel()}
+        return out
 
-    def plot(self, out: Path) -> list[Path]:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        files = []
-        fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    def draw(self, ax) -> None:
+        """The poles of every model in the complex plane (symlog real axis)."""
         for m, v in self.data["models"].items():
             ax.plot(v["poles"]["real"], v["poles"]["imag"], "x", label=m)
         ax.axvline(0, color="k", lw=0.8)
@@ -239,10 +246,14 @@ class StabilityResult:
         ax.set_ylabel(r"Im $\lambda$, rad/s")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
+
+    def figures(self) -> dict:
+        fig, ax = new_figure(figsize=(6.4, 4.8))
+        self.draw(ax)
         ax.set_title(f"{self.data['title']}\npoles", fontsize=9)
-        files.append(save_figure(fig, out / "fig_poles.png"))
+        figs = {"fig_poles.png": fig}
         for m, mp in self.data.get("maps", {}).items():
-            fig, ax = plt.subplots(figsize=(6.4, 4.8))
+            fig, ax = new_figure(figsize=(6.4, 4.8))
             X, Y = np.meshgrid(mp["x"]["values"], mp["y"]["values"])
             R = np.asarray(mp["max_real"], float)
             lim = np.nanmax(np.abs(R))
@@ -259,8 +270,8 @@ class StabilityResult:
             ax.legend(fontsize=7, loc="best")
             ax.set_title(f"{self.data['title']}\nstability map, {m} model: boundary max Re = 0 (black); "
                          "blue = stable", fontsize=8)
-            files.append(save_figure(fig, out / f"fig_stability_map_{m}.png"))
-        return files
+            figs[f"fig_stability_map_{m}.png"] = fig
+        return figs
 
 
 def study(setup: Setup, models: list[str], smap=None, title: str = "") -> StabilityResult:
@@ -295,18 +306,6 @@ def _statement(data: dict, model: str) -> str:
     else:
         text += "; nowhere stable on the map"
     return text
-
-
-def run(scn, settings, out: Path):
-    """Runner of ``analyses.stability`` (autobal/pipeline.py)."""
-    from autobal.adapters import dynamic_device  # the runner moves to the front door (autobal/runners.py)
-
-    t0 = time.perf_counter()
-    setup = Setup(dynamic_device(scn), settings.operating_ratio)
-    res = study(setup, list(settings.models), settings.map, scn.title)
-    res.data["accuracy"] = accuracy(setup, list(settings.models))
-    files = res.write_tables(out) + res.plot(out)
-    return res.to_dict() | {"run_time_s": time.perf_counter() - t0}, files, res.summary()
 
 
 def pencil(N0: np.ndarray, N1: np.ndarray, N2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
