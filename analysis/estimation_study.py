@@ -9,7 +9,6 @@ with to_dict / summary / write_tables / plot.
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from autobal.analysis import estimation as est
+from autobal.analysis.result import fmt
 from autobal.errors import ScenarioError
 from autobal.measurements import read_csv
 from autobal.results import save_figure, write_csv
@@ -68,7 +68,7 @@ class EstimationResult:
         cf = d.get("closed_forms") or {}
         for k, v in cf.items():
             if isinstance(v, dict) and "alpha" in v:
-                lines.append(f"  closed form {k:16s} alpha = {_fmt(v['alpha'])}, tau_max = {_fmt(v['tau_max'])}")
+                lines.append(f"  closed form {k:16s} alpha = {fmt(v['alpha'])}, tau_max = {fmt(v['tau_max'])}")
         ref = d.get("adequacy_reference")
         if ref and ref.get("F") is not None:
             lines.append(f"  adequacy of the reference curve: sigma1^2 = {ref['sigma1_sq']:.3g}, sigma2^2 = "
@@ -150,10 +150,6 @@ class EstimationResult:
             fig.suptitle(f"{self.data['title']}: fit {name} ({f['model']}, residual in {f['residual']})", fontsize=9)
             files.append(save_figure(fig, out / f"fig_estimation_{name}.png"))
         return files
-
-
-def _fmt(v) -> str:
-    return "-" if v is None or (isinstance(v, float) and not math.isfinite(v)) else f"{v:.5g}"
 
 
 def _params_text(f: dict) -> str:

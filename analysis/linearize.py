@@ -144,6 +144,18 @@ class Setup:
     chamber form) at the exact IPOPT static solution; ``consistent``: the hand model at the same
     point (equals ``nonlinear_chain``); ``program``/``thesis``: the hand model at the appendix's
     closed-form point (2.24)-(2.28) / (2.145)-(2.147), as the source computes it.
+
+    Parameters
+    ----------
+    device : DeviceParams
+        The device in SI with its dynamic data (``device.dynamics``).
+    psi1 : float
+        Discharge pressure ratio p1/p_B of the operating point (dimensionless).
+
+    Raises
+    ------
+    SolveError
+        When the operating point has the face in contact or the regulator valve on its stop.
     """
 
     def __init__(self, device: DeviceParams, psi1: float = 1.0):

@@ -7,6 +7,7 @@ where a missing or inconsistent section is reported with its YAML path.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 from autobal.errors import ScenarioError
@@ -53,7 +54,7 @@ def device(d) -> dv.DeviceParams:
     )
     if d.dynamics is None:
         return params
-    return dv.DeviceParams(**{**params.__dict__, "dynamics": dynamic_data(d, params)})
+    return dataclasses.replace(params, dynamics=dynamic_data(d, params))
 
 
 def _regulator(r) -> dv.Regulator:

@@ -168,13 +168,30 @@ class DynamicModel:
 
 def build(dev: DeviceDesign, data: DynamicData, point: dict, form: str = "energy",
           preload: str = "static") -> DynamicModel:
-    """Build the nonlinear model (2.40)/(2.111)/(2.167) at the static ``point``.
+    """Build the nonlinear model at the static ``point`` (Pavlenko (2014), Eqs. (2.40), (2.111), (2.167)).
 
-    ``point``: psi1, dpsi and the static unknowns u, psi2, psi3 (and xi, psi_e, psi_cam with a
-    regulator), e.g. ``StaticPoint.values | {"psi1": .., "dpsi": ..}``.  ``preload``: "static"
-    (Delta = F_pr/k_pr + z0, Delta_reg = F_reg/k_reg + x0: the equilibrium is the static point) or
-    "literal" (Delta = F_pr/k_pr as (2.37) reads, spec §5.2 note: the equilibrium moves; it is
-    found by a Newton solve from the static point and replaces ``point``).
+    The throttle flows are those of the statics (:func:`autobal.models.device.network`).
+
+    Parameters
+    ----------
+    dev : DeviceDesign
+        The device's groups and SI scales (:func:`autobal.models.device.design`).
+    data : DynamicData
+        Masses, springs, damping and volumes in SI.
+    point : dict
+        psi1, dpsi and the static unknowns u, psi2, psi3 (and xi, psi_e, psi_cam with a regulator),
+        e.g. ``StaticPoint.values | {"psi1": .., "dpsi": ..}`` (dimensionless).
+    form : {"energy", "chain"}
+        Chamber balances: energy-consistent (default) or the printed chain form (2.40).
+    preload : {"static", "literal"}
+        "static": Delta = F_pr/k_pr + z0, Delta_reg = F_reg/k_reg + x0, so the equilibrium is the static
+        point; "literal": Delta = F_pr/k_pr as (2.37) reads, the equilibrium moves and is found by a
+        Newton solve from the static point (it replaces ``point``).
+
+    Returns
+    -------
+    DynamicModel
+        CasADi Functions of the model (time in s) and its equilibrium.
     """
     if form not in FORMS:
         raise ValueError(f"unknown chamber form {form!r}; expected one of {FORMS}")
