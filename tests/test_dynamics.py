@@ -346,3 +346,31 @@ def test_map_axis_with_wrong_unit_is_refused(tmp_path):
     p.write_text(yaml.safe_dump(data))
     with pytest.raises(ScenarioError, match=r"analyses\.stability\.map\.x.*start: '1 kg' is not a volume"):
         scenario.load(p)
+
+
+# ---- the results as objects: figures without pyplot, tables, save ------------------------------------
+
+def test_results_plot_figures_without_touching_the_backend(pump, tmp_path):
+    import matplotlib
+    from matplotlib.figure import Figure
+
+    fr = frequency.study(pump, ["program", "nonlinear"], "appendix", (10.0, 8000.0, 200), "pump")
+    st = stability.study(pump, ["program"], None, "pump")
+    tr = simulate.study(pump.nonlinear("energy"), [{"input": "force_step", "amplitude": 0.01}], 0.002, 50,
+                        title="pump")
+    before = matplotlib.get_backend()
+    for res, n_figs, table in ((fr, 1, "afc_program.csv"), (st, 1, "poles_program.csv"),
+                               (tr, 1, "transient_0_force_step.csv")):
+        figs = res.plot()
+        assert len(figs) == n_figs and all(isinstance(f, Figure) for f in figs)
+        fig = Figure()
+        assert res.plot(ax=fig.add_subplot()) is fig and fig.axes[0].lines
+        files = res.save(tmp_path / res.name)
+        assert (tmp_path / res.name / table) in files and all(f.stat().st_size > 0 for f in files)
+    assert matplotlib.get_backend() == before
+    # headline quantities in SI
+    assert fr.peaks and 0 < fr.amplitude_at_operating_speed < 1e-4  # m
+    # the pump as given is unstable (Pavlenko (2014) claims stability; see the validation ledger)
+    assert st.stable is False and st.decay_rate < 0
+    assert st.decay_rate == pytest.approx(-st.poles.real.max(), rel=1e-12)
+    assert 0 < tr.max_gap_change[0] < 1e-4  # m

@@ -584,3 +584,23 @@ def test_resonance_efficiency_1_7_of_fig_3_6_differs(washer):
     assert np.isnan(lb.evaluate("corrected", **p)["lambda0"])
     assert_allclose(lb.self_consistent(WCR, WCR, N, 0.2, 0.05, 1e-4, 1000, s.M_sys)["lambda0_plus"], 3.3055,
                     atol=5e-5)
+
+
+def test_result_object_without_pyplot(washer, tmp_path):
+    import matplotlib
+    from matplotlib.figure import Figure
+
+    settings = scenario.load("washer_liquid_balancer").analyses.liquid_balancer
+    settings = settings.model_copy(update={"height": None, "unbalance_masses": [], "liquids": [],
+                                           "volume": settings.volume.model_copy(update={"grid_points": 201})})
+    res = study.run(washer, settings)
+    before = matplotlib.get_backend()
+    figs = res.plot()
+    assert len(figs) == 2 and all(isinstance(f, Figure) for f in figs) and matplotlib.get_backend() == before
+    fig = Figure()
+    assert res.plot(ax=fig.add_subplot()) is fig and len(fig.axes[0].lines) >= 5
+    names = {f.name for f in res.save(tmp_path)}
+    assert {"liquid_balancer_table.csv", "fig_liquid_efficiency.png", "fig_liquid_optimum.png"} <= names
+    assert res.optimal_height is None
+    assert_allclose(res.optimal_volume, res.to_dict()["optimal_volume"]["k_D_equals_1_at"], rtol=1e-10)  # m^3
+    assert_allclose(res.efficiency, 0.1423, atol=5e-5)  # gamma = 0.4, as C13's first row

@@ -268,3 +268,21 @@ def test_motor_runup_sommerfeld_capture():
     # strong motor: the no-load end point where L = H above resonance
     nu_end = brentq(lambda v: 40.0 * (1 - v / 2) - float(R.steady_state(p, v)["M"]), 1.2, 2.0)
     assert_allclose(strong["nu_final"], nu_end, rtol=1e-3)
+
+
+def test_rotor_dynamics_result_plots_without_pyplot(tmp_path):
+    import matplotlib
+    from matplotlib.figure import Figure
+
+    from autobal.analysis.rotor_study import run
+    from autobal.schema import Range
+    from autobal.schema_rotor import RotorDynamics, Stationary
+
+    P = RotorParams.from_groups(Omega0=100.0, chi_over_m1=2.0, psi=0.5)
+    res = run(P, RotorDynamics(stationary=Stationary(cases=[(2, 0.1)], z=Range(start=0.01, stop=3.0, points=60))))
+    before = matplotlib.get_backend()
+    figs = res.plot()
+    assert len(figs) == 1 and isinstance(figs[0], Figure) and matplotlib.get_backend() == before
+    assert [f.name for f in res.save(tmp_path)] == ["rotor_stationary.csv", "fig_rotor_stationary.png"]
+    assert_allclose([res.psi, res.critical_speed], [0.5, 100.0 * math.sqrt(0.5)], rtol=1e-12)
+    assert res.to_dict()["accuracy"]["estimate"] < 1e-8
