@@ -2,7 +2,7 @@
 
 ``exact(model)``: CasADi Jacobians of the nonlinear model (models/dynamics.py) at its equilibrium
 (the IPOPT static solution): dx/dt = A dx + B [dpsi1, dtau]... ordered as the hand model's inputs
-(dtau, dpsi1).  ``hand(constants)``: the source's descriptor model (2.43)/(2.101) (spec A7),
+(dtau, dpsi1).  ``hand(constants)``: the source's descriptor model (2.43)/(2.101),
 E dX/dt = A X + G w with E nonsingular, converted to a StateSpace by solving with E.
 ``operator(model)``: the Jacobians of the model's implicit rows with respect to q, dq/dt and
 d2q/dt2 in the layout of (2.101), from which the constants K1..K13, T1..T9 are read off
@@ -114,7 +114,7 @@ def operator(model: DynamicModel, p: np.ndarray | None = None):
 
 
 def hand(c: Constants, label: str | None = None) -> LinearModel:
-    """The descriptor model of (2.43)/(2.101) (spec A7) as a StateSpace: E is nonsingular, so
+    """The descriptor model of (2.43)/(2.101) as a StateSpace: E is nonsingular, so
     A_ss = E^-1 A and B_ss = E^-1 G."""
     E, A, G, names = c.descriptor()
     if abs(np.linalg.det(E)) == 0 or np.linalg.cond(E) > 1e15:

@@ -1,4 +1,4 @@
-"""Time responses of the nonlinear device model (Pavlenko 2014, (2.111); spec A8) with CVODES/IDAS.
+"""Time responses of the nonlinear device model (Pavlenko (2014), Eq. (2.111)) with CVODES/IDAS.
 
 The model (models/dynamics.py) starts from its equilibrium, the IPOPT static solution, and is
 driven by a step in axial force (dtau), a step in discharge pressure (dpsi1) or a harmonic
@@ -232,7 +232,7 @@ def study(model: DynamicModel, cases: list, duration: float, points: int, integr
 
 def equilibrium_residual(model: DynamicModel) -> float:
     """Largest residual of the implicit rows at the static solution (each row normalised so that
-    its own-pressure or stiffness coefficient is O(1)): check (a) of spec A8."""
+    its own-pressure or stiffness coefficient is O(1)): zero when the equilibrium is the static solution."""
     n = len(model.coords)
     q0 = [float(model.point[k]) for k in model.coords]
     return float(np.abs(np.array(model.rows(q0, np.zeros(n), np.zeros(n), model.w0, model.p0))).max())

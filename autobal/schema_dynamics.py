@@ -25,7 +25,7 @@ Time = quantity("time")
 
 
 class RegulatorDynamics(Strict):
-    """Stem of the pressure-drop regulator and its two chambers (App. A L3296-L3320)."""
+    """Stem of the pressure-drop regulator and its two chambers (Pavlenko (2014), App. A)."""
 
     stem_mass: Mass  # m0
     spring_stiffness: Stiffness  # k_reg
@@ -36,11 +36,11 @@ class RegulatorDynamics(Strict):
 
 
 class Dynamics(Strict):
-    """Dynamic data of the device (``device.dynamics``), App. A L3294-L3324 / App. B L3620-L3646."""
+    """Dynamic data of the device (``device.dynamics``), Pavlenko (2014), App. A / App. B."""
 
     rotor_mass: Mass  # m_p
-    pushoff_stiffness: Stiffness  # k_pr; preload deflection F_pr/k_pr + z0 (spec §5.2)
-    rotor_damping: DampingOrZero | None = None  # c_z (0: undamped); default 1.5 mu s_T^2/(pi z_B^3) (L3322)
+    pushoff_stiffness: Stiffness  # k_pr; preload deflection F_pr/k_pr + z0
+    rotor_damping: DampingOrZero | None = None  # c_z (0: undamped); default the squeeze film, Pavlenko (2014), App. A
     bulk_modulus: Pressure  # E of the barrier medium (gas: the source's 1.42e5 Pa)
     disc_chamber_volume: Volume  # V2, chamber before the face throttle
     cavity_volume: Volume  # V3, cavity behind the disc

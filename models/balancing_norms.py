@@ -7,7 +7,10 @@ import numpy as np
 
 
 def permissible_specific_unbalance(n_rpm, kind: str = "general"):
-    """[e_st] in micrometres: general machinery 2e8/n^2, household appliances 6000/n (n in rpm) [T L598-L606]."""
+    """Permissible specific unbalance [e_st], micrometres (Khomyak (2020), ch. 2).
+
+    General machinery 2e8/n^2, household appliances 6000/n, with the speed n in rpm.
+    """
     n_rpm = np.asarray(n_rpm, float)
     if kind == "general":
         return 2e8 / n_rpm**2
@@ -22,7 +25,7 @@ def unbalance_coefficient(F_c, P_st):
 
 
 def two_plane_unbalances(D_C, L_A, L_B, M_D, couple_sign: int = -1):
-    """Equivalent two-plane unbalances [T T-un@L536]: D_A = (D_C L_B + M_D)/L, D_B = (D_C L_A + sign M_D)/L.
+    """Equivalent two-plane unbalances (Khomyak (2020), ch. 2): D_A = (D_C L_B + M_D)/L, D_B = (D_C L_A + sign M_D)/L.
 
     ``couple_sign = -1`` is the reconstruction (the couple enters the planes with opposite signs,
     erratum 21); ``+1`` reproduces the printed pair.

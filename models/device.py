@@ -9,8 +9,8 @@ regulator unknowns.
 Everything is dimensionless as in the source: psi = p/p_B, q = Q/(g1 p_B), forces over
 p_B s_B.  The mechanical stops are modelled by reactions with complementarity: ``r_contact``
 (the pad on the disc: u >= 0, r >= 0, u r = 0) and, for a valve with a travel limit,
-``r_valve`` (the stem on its open stop: xi_max - xi >= 0, r >= 0, product 0; spec §10.2
-saturation).  The bounds carry the signs; ``complementarity`` (the sum of the products) is
+``r_valve`` (the stem on its open stop: xi_max - xi >= 0, r >= 0, product 0: the
+regulator saturates).  The bounds carry the signs; ``complementarity`` (the sum of the products) is
 zero exactly at a physical solution.
 """
 

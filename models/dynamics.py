@@ -5,7 +5,7 @@ chamber compressibility V/E and the displacement flows of the moving disc and me
 throttle laws of the statics (models/throttles.py).  Two forms of the chamber balances:
 
 * ``"energy"`` (default): one balance per chamber, V_k/E dp_k/dt = inflow - outflow - dV_k/dt,
-  with the volume changes that match the forces (spec §12.1): dV2/dz = +s_e, dV3/dz = -s_e (the
+  with the volume changes that match the forces (a correction of the printed form): dV2/dz = +s_e, dV3/dz = -s_e (the
   disc moves into the cavity behind it when the gap opens), dV_e/dx = -s_m (the membrane force
   s_m (p_e - p1) closes the valve).  For the gas (compressor) the displacement flows are
   converted to normal volume flows with the chamber density, p_k / p_n (the throttle laws give
@@ -21,7 +21,7 @@ block: the barrier pressure is then ideal, psi_e = psi1 + dpsi.
 Everything is dimensionless as in the statics: u = z/z_B, xi = x/x_B, psi = p/p_B, flows over
 g1 p_B, forces over p_B s_B; time is in seconds.  Velocities are carried as v = t_ref du/dt and
 w = t_ref dxi/dt with t_ref = sqrt(m_p/k_pr) so that every state is O(1).  The spring preloads are
-Delta = F_pr/k_pr + z0 and Delta_reg = F_reg/k_reg + x0 (spec §5.2 preload note), so that the
+Delta = F_pr/k_pr + z0 and Delta_reg = F_reg/k_reg + x0 (the preloads read so), so that the
 equilibrium is exactly the static solution.  Inputs are w = (psi1, tau), tau = T/(p_B s_B).
 """
 

@@ -60,7 +60,7 @@ def valve_opening(xi):
 # ---- conductances, SI in, SI out (Eq. (2.16), Table 2.2, appendices A/B) ----------------
 
 def laminar_annulus(diameter: float, clearance: float, length: float, viscosity: float) -> float:
-    """g = pi d h^3 / (12 mu l), m^3/(Pa s): a plain annular bushing seal (App. A L3143)."""
+    """g = pi d h^3 / (12 mu l), m^3/(Pa s): a plain annular bushing seal (Pavlenko (2014), App. A)."""
     return math.pi * diameter * clearance**3 / (12.0 * viscosity * length)
 
 
@@ -76,7 +76,7 @@ def turbulent(area: float, loss: float, density: float, medium: str, normal_pres
     """Square-root-law conductance of a flow section ``area`` with total loss coefficient ``loss``.
 
     liquid: g = f / sqrt(rho zeta / 2), m^3/(Pa^0.5 s)   (2.16), (2.118);
-    gas:    g = f / sqrt(p_n rho_n zeta), m^3/(Pa s)       (2.135) as corrected, App. B L3492.
+    gas:    g = f / sqrt(p_n rho_n zeta), m^3/(Pa s)       (2.135) as corrected in App. B.
     """
     if medium == "liquid":
         return area / math.sqrt(0.5 * density * loss)
@@ -84,12 +84,12 @@ def turbulent(area: float, loss: float, density: float, medium: str, normal_pres
 
 
 def annulus_loss(local_loss: float, friction: float, length: float, clearance: float) -> float:
-    """zeta = zeta_local + lambda l / (2 h) of a cylindrical seal (App. A L3165)."""
+    """zeta = zeta_local + lambda l / (2 h) of a cylindrical seal (Pavlenko (2014), App. A)."""
     return local_loss + 0.5 * friction * length / clearance
 
 
 def face_loss(friction: float, inner_diameter: float, outer_diameter: float, base_gap: float) -> float:
-    """zeta_TB = lambda (d3 - d2) / (4 z_B) of the face throttle (App. A L3191)."""
+    """zeta_TB = lambda (d3 - d2) / (4 z_B) of the face throttle (Pavlenko (2014), App. A)."""
     return 0.25 * friction * (outer_diameter - inner_diameter) / base_gap
 
 
