@@ -1,20 +1,20 @@
 """Liquid auto-balancer: a cylindrical chamber partly filled with liquid on a flexible rotor.
 
-Sources (spec ``liquid-autobalancer-model.md``, tags as there): [T] Khomyak, master's thesis,
+Sources: [T] Khomyak, master's thesis,
 KhNU 2020, ch. 2 Eqs. (2.4)-(2.15), ch. 3 (3.1)-(3.14), App. В/Г programs; Pashkov, PhD abstract,
-Tomsk 2010, ch. 3 (spec ``rotor-liquid-abd-dynamics.md`` §3.8).  SI units at every argument:
+Tomsk 2010, ch. 3.  SI units at every argument:
 m, m^3, kg, kg/m^3, Pa s, rad/s, 1/s; angles in rad unless a name ends in ``_deg``.
 
 The quasi-static model (the calculation of App. В) is a CasADi SX graph (:func:`quasi_static`):
 (omega, omega_cr, n, R, h, V, rho, D0, e_f) -> delta, phi, G, f, r, x_p, D, k_D, alpha0, lambda0.
 ``e_f`` is the eccentricity that drives the shaft deflection f = G e_f: the App. В code uses
-e0 = D0/m_d ("program" deflection, spec §8.1), the check of §8.1 uses D0/M_sys ("system").
+e0 = D0/m_d ("program" deflection), a check uses D0/M_sys ("system").
 
 Where the source's formula for the equilibrium angle is defective, ``variant`` selects it:
 
 * ``"printed"``: (2.13) as printed, alpha0 = pi - arccos(sin^2 d + sqrt((sin^2 d - 1)(sin^2 d - k^2)));
 * ``"program"``: the Pascal ``LAMBDA`` of App. В/Г, which squares ``Sin2d`` (sin^4 d in the first term);
-* ``"corrected"`` (default): (2.13-corr), the division by k_D restored (spec §2.2, errata 2-3).
+* ``"corrected"`` (default): (2.13-corr), the division by k_D restored (a derived correction of the printed (2.13)).
 
 Domain violations are results, never exceptions: CasADi returns NaN for sqrt/arccos of an invalid
 argument and :func:`reasons` names the cause ("no equilibrium (k_D < sin delta)", ...).
@@ -128,14 +128,14 @@ class System(SIParams):
 def n_from_decrement(theta: float, omega_cr: float) -> float:
     """Damping constant n [1/s] of x'' + 2n x' + omega_cr^2 x from the log decrement: n = theta omega_cr / (2 pi).
 
-    Erratum 1 of the spec: the thesis writes 2n = theta omega_cr [T L734], but its own Table 3.1
+    A correction: the thesis writes 2n = theta omega_cr [T, Eq. (2.5)], but its own Table 3.1
     (theta = 0.826, omega_cr = 59.7, n = 7.85) fits theta omega_cr / (2 pi) = 7.848.
     """
     return theta * omega_cr / (2.0 * math.pi)
 
 
 def n_from_decrement_literal(theta: float, omega_cr: float) -> float:
-    """The thesis's literal 2n = theta omega_cr [T L734] (n = 24.66 for Table 3.1); kept for completeness."""
+    """The thesis's literal 2n = theta omega_cr [T, Eq. (2.5)] (n = 24.66 for Table 3.1); kept for completeness."""
     return theta * omega_cr / 2.0
 
 
@@ -145,7 +145,7 @@ def jeffcott(omega, omega_cr, n) -> dict:
     """Phase lag and deflection ratio of the damped Jeffcott rotor, Eqs. (2.5)-(2.8).
 
     delta = atan2(2 n omega, omega_cr^2 - omega^2) in (0, pi) (2.5); sin phi = 2 n omega / omega_cr^2 (2.8);
-    G = f/e_c from (2.7) in the form safe at omega = omega_cr (spec §2.2),
+    G = f/e_c from (2.7) in the form safe at omega = omega_cr [derived],
     G = (sqrt(omega_cr^4 - (2 n omega)^2) - (omega_cr^2 - omega^2)) / sqrt((omega_cr^2 - omega^2)^2 + (2 n omega)^2);
     G_exact = omega^2 / sqrt(...) is the exact Jeffcott deflection ratio that (2.7) approximates;
     zeta_over_ec = zeta / e_c of (2.6).
@@ -180,7 +180,7 @@ def inverse_lambda0_squared(k, sin2d, variant: str):
     """(e_c/e0)^2 = 1/lambda0^2 = (1 + 2 k cos alpha0 + k^2) / k^2: smooth, zero at complete balancing.
 
     The optimisation objective (maximising lambda0 is minimising this); for the corrected branch it is
-    (|cos delta| - sqrt(k^2 - sin^2 delta))^2 / k^2 (spec §2.2, [derived]).
+    (|cos delta| - sqrt(k^2 - sin^2 delta))^2 / k^2 [derived].
     """
     if variant == "corrected":
         return (ca.sqrt(1 - sin2d) - ca.sqrt(k**2 - sin2d)) ** 2 / k**2
@@ -190,9 +190,9 @@ def inverse_lambda0_squared(k, sin2d, variant: str):
 def quasi_static(p: dict, variant: str = "corrected") -> dict:
     """The quasi-static model of App. В, steps 2.1-4, on symbols or numbers ``p`` keyed by :data:`INPUTS`.
 
-    r = sqrt(R^2 - V/(pi h)) (step 2.3); f = G e_f (2.7); x_p = r^2 f / (R^2 - r^2) (T-un@L668, the
+    r = sqrt(R^2 - V/(pi h)) (step 2.3); f = G e_f (2.7); x_p = r^2 f / (R^2 - r^2) ([T], the
     program's e); D = rho V x_p = rho f (pi h R^2 - V) (step 2.8); k_D = D0/D (2.9); alpha0 by
-    ``variant``; lambda0 by (2.14) (closed form of spec §2.2 for the corrected branch, which is the
+    ``variant``; lambda0 by (2.14) (derived closed form for the corrected branch, which is the
     same number and exact at k_D = 1).
     """
     j = jeffcott(p["omega"], p["omega_cr"], p["n"])
@@ -273,10 +273,10 @@ def reasons(out: dict, omega, variant: str) -> np.ndarray:
     return code
 
 
-# ---- self-consistent closure (spec §8.3, toolkit extension) ----------------------------------
+# ---- self-consistent closure (toolkit extension) ----------------------------------
 
 def self_consistent(omega, omega_cr, n, R, h, V, rho, M_sys) -> dict:
-    """lambda0 with f = G e_c and e_c = (D0/M_sys)/lambda0 closed consistently (spec §8.3, [derived]).
+    """lambda0 with f = G e_c and e_c = (D0/M_sys)/lambda0 closed consistently [derived].
 
     Q = M_sys / (rho pi h r^2 G), lambda0+- = sqrt(sin^2 d + (|cos d| +- Q)^2) / Q, k_D = Q lambda0.
     The "+" root (k_D > 1) always exists; the "-" root needs Q <= |cos delta| (NaN otherwise).
@@ -297,7 +297,7 @@ def self_consistent(omega, omega_cr, n, R, h, V, rho, M_sys) -> dict:
     return {"Q": Q, "lambda0_plus": plus, "lambda0_minus": minus, "k_D_plus": Q * plus}
 
 
-# ---- extremum analysis of lambda0(k) at fixed alpha0 (spec §2.5) -------------------------------
+# ---- extremum analysis of lambda0(k) at fixed alpha0 ([T], ch. 2) -------------------------------
 
 @functools.cache
 def lambda0_of_k_function() -> ca.Function:
@@ -310,13 +310,13 @@ def lambda0_of_k_function() -> ca.Function:
 
 
 def dlambda0_dk(k, alpha0):
-    """Eq. [T L1082]: (1 + k cos a) / (1 + 2 k cos a + k^2)^(3/2)."""
+    """Eq. [T, ch. 2]: (1 + k cos a) / (1 + 2 k cos a + k^2)^(3/2)."""
     c = np.cos(alpha0)
     return (1 + k * c) / (1 + 2 * k * c + k**2) ** 1.5
 
 
 def d2lambda0_dk2(k, alpha0, printed: bool = False):
-    """Second derivative: general form (spec §2.5, erratum 6), or the printed one [T L1092] (valid at k* only)."""
+    """Second derivative: the general form [derived], or the printed one [T, ch. 2] (valid at k* only)."""
     c = np.cos(alpha0)
     q = (1 + 2 * k * c + k**2) ** 2.5
     if printed:
@@ -325,7 +325,7 @@ def d2lambda0_dk2(k, alpha0, printed: bool = False):
 
 
 def extremum(alpha0) -> dict:
-    """Stationary point k* = -1/cos alpha0 and maximum lambda0 = 1/|sin alpha0| [T L1084-L1100].
+    """Stationary point k* = -1/cos alpha0 and maximum lambda0 = 1/|sin alpha0| [T, ch. 2].
 
     A maximum for k >= 0 needs cos alpha0 < 0; otherwise (and at alpha0 = pi, where lambda0 = k/|1-k|
     is unbounded at k = 1) k* and the maximum are NaN / inf.
@@ -341,12 +341,12 @@ def extremum(alpha0) -> dict:
 # ---- viscous liquid: equilibrium zone (2.15) ---------------------------------------------------
 
 def sin_beta_star(mu, R, xi_deg, m_l, omega):
-    """Zone boundary sin beta* = 8 pi^2 mu R xi / (180 m omega), xi in degrees [T L951]."""
+    """Zone boundary sin beta* = 8 pi^2 mu R xi / (180 m omega), xi in degrees [T, ch. 2]."""
     return 8 * math.pi**2 * np.asarray(mu) * R * np.asarray(xi_deg) / (180.0 * m_l * np.asarray(omega))
 
 
 def sin_beta_star_nu(nu, R, xi_rad, V, omega):
-    """The same with mu/m = nu/V and xi in rad: 8 pi nu R xi / (V omega) (spec §2.4, program Г reconstructed)."""
+    """The same with mu/m = nu/V and xi in rad: 8 pi nu R xi / (V omega) (program Г reconstructed)."""
     return 8 * math.pi * np.asarray(nu) * R * np.asarray(xi_rad) / (V * np.asarray(omega))
 
 
@@ -371,7 +371,7 @@ def sinus_literal(nu, R, V, h, omega, f):
 def zone_half_width(q, sin_beta):
     """Half-width Delta* of the viscous equilibrium zone in Delta = alpha - delta - phi_c [derived].
 
-    With x_p = q f (q = r^2/(R^2 - r^2)), (2.9) is tan beta = sin Delta / (q + cos Delta) [spec §2.2], and
+    With x_p = q f (q = r^2/(R^2 - r^2)), (2.9) is tan beta = sin Delta / (q + cos Delta) [derived], and
     (2.15) |tan beta| <= tan beta* gives |Delta| <= Delta* = atan t + asin(t q / sqrt(1 + t^2)),
     t = tan beta*.  NaN when t q / sqrt(1 + t^2) > 1: every angle is an equilibrium (no balancing).
     """
@@ -382,18 +382,18 @@ def zone_half_width(q, sin_beta):
 
 
 def tan_beta(delta_dev, q):
-    """(2.9) in the clean form of spec §2.2: tan beta = sin Delta / (q + cos Delta), q = x_p/f."""
+    """(2.9) in a clean form [derived]: tan beta = sin Delta / (q + cos Delta), q = x_p/f."""
     return np.sin(delta_dev) / (q + np.cos(delta_dev))
 
 
 def lambda0_corrected(k, delta):
-    """lambda0 on the corrected branch, k / | |cos d| - sqrt(k^2 - sin^2 d) | (spec §2.2); NaN if k < |sin d|."""
+    """lambda0 on the corrected branch, k / | |cos d| - sqrt(k^2 - sin^2 d) | [derived]; NaN if k < |sin d|."""
     k, delta = np.asarray(k, float), np.asarray(delta, float)
     with np.errstate(all="ignore"):
         return k / np.abs(np.abs(np.cos(delta)) - np.sqrt(k**2 - np.sin(delta) ** 2))
 
 
-# ---- free surface as a paraboloid (spec §2.1, [derived]) ---------------------------------------
+# ---- free surface as a paraboloid [derived] ---------------------------------------
 
 def paraboloid(R, h, V, omega, inclination) -> dict:
     """Free surface z(rho) = z* + a rho^2, a = omega^2/(2 g sin Omega_inc), z* = h/2 - a (R^2 - V/(pi h)).
@@ -415,11 +415,11 @@ def paraboloid(R, h, V, omega, inclination) -> dict:
 
 
 def paraboloid_volume(R, h, a, z_star) -> float:
-    """Liquid volume of the paraboloid surface, pi h R^2 - (pi/a)(h^2/2 - z* h) (spec §2.1)."""
+    """Liquid volume of the paraboloid surface, pi h R^2 - (pi/a)(h^2/2 - z* h) [derived]."""
     return math.pi * h * R**2 - math.pi / a * (h**2 / 2 - z_star * h)
 
 
-# ---- insufficient liquid: the crescent at the wall (spec §8.2, toolkit extension) --------------
+# ---- insufficient liquid: the crescent at the wall (toolkit extension) --------------
 
 def _lens(R, r, d):
     """Area and first moment (about O, along O->O1) of disc(O,R) intersected with disc(O1,r), |OO1| = d."""
@@ -444,7 +444,7 @@ def crescent(R, h, V, f) -> dict:
     Solves the cross-section area pi R^2 - lens = V/h for r and returns r, the centroid offset x_p
     (from O, away from the rotation axis) and D/rho = V x_p.  Equals the thesis's x_p = r^2 f/(R^2 - r^2)
     while R - r >= f (sufficient liquid); beyond it the liquid is a crescent at the wall with
-    x_p -> R (spec §8.2 recommendation, toolkit extension).
+    x_p -> R (toolkit extension).
     """
     from scipy.optimize import brentq
 
@@ -473,7 +473,7 @@ def full_liquid_mass(rho, h, radii) -> float:
 
 def nested_liquid_mass(rho, h, radii, wall_thickness, hub_radius=0.0) -> float:
     """rho pi h sum [R_i^2 - (R_{i+1} + t_w)^2] (innermost: R_N^2 - hub^2): first-moment mass of nested
-    chambers (spec rotor-liquid §3.8 expert caveat; the alternative to the printed sum R_i^2)."""
+    chambers (the alternative to the printed sum R_i^2)."""
     radii = list(radii)
     inner = [R + wall_thickness for R in radii[1:]] + [hub_radius]
     return rho * math.pi * h * sum(R**2 - ri**2 for R, ri in zip(radii, inner, strict=True))

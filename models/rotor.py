@@ -1,14 +1,14 @@
 """Planar Jeffcott (Laval) rotor with static unbalance, optionally carrying a liquid auto-balancer
-(model M1 of Pashkov 2010; spec rotor-liquid-abd-dynamics.md §1.1, §3.2, §8.1-8.3).
+(model M1 of Pashkov (2010), ch. 2).
 
-Physics (SI, spec §3.2, Eq. (2) as reconstructed): rotor mass ``m1``, eccentricity ``e``, isotropic
+Physics (SI, Pashkov (2010), Eq. (2) as reconstructed): rotor mass ``m1``, eccentricity ``e``, isotropic
 shaft stiffness ``c``, external viscous friction ``chi`` on the absolute velocity of the shaft centre.
 The liquid block (a chamber of radius R and height h filled with liquid of density rho, rigidly
 co-rotating, free surface centred on the axis) adds only the full-chamber mass
-``m2* = rho pi R^2 h`` to the translational inertia, m = m1 + m2*, psi = m1/m (spec §1.1; L150, L156).
+``m2* = rho pi R^2 h`` to the translational inertia, m = m1 + m2*, psi = m1/m (Pashkov (2010)).
 A scene without a liquid block has m2* = 0, psi = 1: the plain Jeffcott rotor.
 
-Everything is built in the dimensionless form of spec §3.2 (tau = Omega0 t, nu = beta'/Omega0,
+Everything is built in the dimensionless form of Pashkov (2010), Eq. (2) (tau = Omega0 t, nu = beta'/Omega0,
 a* = beta''/Omega0^2, w~ = w/e, zeta0 = chi/(2 sqrt(c m1))), rotating frame (x, y along the
 unbalance, autonomous in beta):
 
@@ -16,11 +16,11 @@ unbalance, autonomous in beta):
 
 and, where useful, in the fixed frame u = w e^{i beta}: u~'' + 2 zeta0 psi u~' + psi u~ = psi (nu^2 - i a*) e^{i beta}.
 
-Drive (spec §8.3, rotating-frame closure):
+Drive (a toolkit extension, rotating-frame closure):
 M = (J_p + m1 e^2 (1 - psi)) beta'' + b beta' - psi e [c y + chi (y' + beta' x)], dimensionless
 M~ = M / (m1 e^2 Omega0^2).  Two drive modes: prescribed angular acceleration (control a*),
 or a motor torque (control M~, beta'' solved from the torque equation), e.g. the linear motor
-characteristic L(omega) = L_s (1 - omega / omega_nl) of spec §8.3.
+characteristic L(omega) = L_s (1 - omega / omega_nl) (toolkit extension).
 
 The Functions are built once with the groups as parameters ``p = [psi, zeta0, j, b~]``
 (j = J_p/(m1 e^2), b~ = b/(m1 e^2 Omega0)) and called for any rotor.
@@ -64,7 +64,7 @@ class LiquidLayer(SIParams):
 
     @property
     def full_chamber_mass(self) -> float:
-        """m2* = rho pi R^2 h (L150), kg."""
+        """m2* = rho pi R^2 h (Pashkov (2010)), kg."""
         return self.density * math.pi * self.radius**2 * self.height
 
     @property
@@ -74,7 +74,7 @@ class LiquidLayer(SIParams):
         return None if r is None else self.density * math.pi * (self.radius**2 - r**2) * self.height
 
     def sufficient(self, deflection: float) -> bool:
-        """Sufficiency condition R - r >= s (spec §3.8, L283) for a shaft deflection s (m)."""
+        """Sufficiency condition R - r >= s (Pashkov (2010), ch. 3) for a shaft deflection s (m)."""
         r = self.free_surface_radius
         return True if r is None else self.radius - r >= deflection
 
@@ -118,27 +118,27 @@ class RotorParams(SIParams):
 
     @property
     def m(self) -> float:
-        """Reduced mass m = m1 + m2* (L150)."""
+        """Reduced mass m = m1 + m2* (Pashkov (2010))."""
         return self.m1 + self.m2_star
 
     @property
     def psi(self) -> float:
-        """psi = m1/m = 1/(1 + m2*/m1) (L156); 1 without liquid."""
+        """psi = m1/m = 1/(1 + m2*/m1) (Pashkov (2010)); 1 without liquid."""
         return self.m1 / self.m
 
     @property
     def mu1(self) -> float:
-        """mu1 = m/m1 = 1/psi (L221)."""
+        """mu1 = m/m1 = 1/psi (Pashkov (2010))."""
         return self.m / self.m1
 
     @property
     def Omega0(self) -> float:
-        """Natural frequency of the rotor without liquid sqrt(c/m1), rad/s (L205, L257)."""
+        """Natural frequency of the rotor without liquid sqrt(c/m1), rad/s (Pashkov (2010))."""
         return math.sqrt(self.c / self.m1)
 
     @property
     def omega_cr(self) -> float:
-        """Undamped critical speed with liquid sqrt(c/m) = Omega0 sqrt(psi), rad/s (L261)."""
+        """Undamped critical speed with liquid sqrt(c/m) = Omega0 sqrt(psi), rad/s (Pashkov (2010))."""
         return math.sqrt(self.c / self.m)
 
     @property
@@ -148,20 +148,20 @@ class RotorParams(SIParams):
 
     @property
     def k(self) -> float:
-        """k = c psi / m1 = c/m, s^-2 (L156)."""
+        """k = c psi / m1 = c/m, s^-2 (Pashkov (2010))."""
         return self.c / self.m
 
-    # the source's three meanings of "n" (spec §2, defect 8), as separately named functions
+    # the source's three meanings of "n" (Pashkov (2010)), as separately named functions
     def n_steady(self) -> float:
-        """n of sections 3.4-3.5: chi psi / m1 = chi/m, 1/s (L156)."""
+        """n of sections 3.4-3.5: chi psi / m1 = chi/m, 1/s (Pashkov (2010))."""
         return self.chi / self.m
 
     def n_stationary(self) -> float:
-        """n of section 3.6, Eq. (9): dimensionless chi^2 / (c m1) = (2 zeta0)^2 (spec §3.6)."""
+        """n of section 3.6, Eq. (9): dimensionless chi^2 / (c m1) = (2 zeta0)^2."""
         return self.chi**2 / (self.c * self.m1)
 
     def n_passage(self) -> float:
-        """n of section 3.7 (uniform acceleration, Fig. 9): chi/m1, 1/s (L257)."""
+        """n of section 3.7 (uniform acceleration, Fig. 9): chi/m1, 1/s (Pashkov (2010))."""
         return self.chi / self.m1
 
     @property
@@ -191,7 +191,7 @@ class RotorModel:
     """CasADi Functions of the dimensionless rotor (built once; see module docstring).
 
     ``ode(q, a, p) -> q'``: rotating frame, prescribed acceleration a* (Eq. (2) / §3.2).
-    ``ode_torque(q, M, p) -> q'``: rotating frame driven by the torque M~ (spec §8.3).
+    ``ode_torque(q, M, p) -> q'``: rotating frame driven by the torque M~ (toolkit extension).
     ``ode_fixed(Q, a, p) -> Q'``: fixed frame, states (X, Y, X', Y', nu, beta).
     ``outputs(q, a, p) -> [delta/e, d, M~]``: deflection (9'), system unbalance d1 (7)/(9'), drive torque.
     ``delta2(q)``, ``unbalance2(q, p)``: the squares, smooth, for epigraph constraints.
@@ -216,7 +216,7 @@ def _rhs(q, a, psi, zeta0):
 
 
 def _torque(q, a, psi, zeta0, j, bt):
-    """M~ = (j + 1 - psi) a* + b~ nu - psi [y + 2 zeta0 (y' + nu x)] (spec §8.3, over m1 e^2 Omega0^2)."""
+    """M~ = (j + 1 - psi) a* + b~ nu - psi [y + 2 zeta0 (y' + nu x)] (toolkit extension, over m1 e^2 Omega0^2)."""
     x, y, vy, nu = q[0], q[1], q[3], q[4]
     return (j + 1 - psi) * a + bt * nu - psi * (y + 2 * zeta0 * (vy + nu * x))
 
@@ -253,5 +253,5 @@ def rotor_model() -> RotorModel:
 
 
 def motor_characteristic(omega, stall_torque: float, no_load_speed: float):
-    """Linear DC-motor characteristic L(omega) = L_s (1 - omega/omega_nl), N m (spec §8.3)."""
+    """Linear DC-motor characteristic L(omega) = L_s (1 - omega/omega_nl), N m (toolkit extension)."""
     return stall_torque * (1 - omega / no_load_speed)
