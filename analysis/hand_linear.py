@@ -1,11 +1,11 @@
 """The source's hand-derived linear model (Pavlenko 2014, (2.43)-(2.45), (2.101); gas (2.168)/(2.169)).
 
 28 constants K1..K13, T1..T9, tau3, tau5, tau6, tau7, zeta1, zeta2 from a static operating point
-and the dynamic data, in the three modes of spec A5:
+and the dynamic data, in three modes:
 
 * ``"thesis"``: the formulas as printed, (2.44) (pump) / (2.169) (compressor), with z_B in
   T4, T6, tau6 and K2 and the printed xi0^(3/2) in K4's denominator;
-* ``"program"``: what Appendices A/B compute (spec §5.3, §8): K1 := chi, K2 := sigma_m dpsi,
+* ``"program"``: what Appendices A/B compute: K1 := chi, K2 := sigma_m dpsi,
   pump K7 without its factor 2, K8 twice (2.44), K6 with xi0^1.5; compressor K9 with an extra 1/2,
   K12 with sqrt(u0 (psi20 - psi30)), the liquid tau7, tau3 = V_cam/(E G); z_B in T4, T6, tau6.
   This mode, at the appendix's closed-form operating point, reproduces the published AFC;
@@ -17,7 +17,7 @@ and the dynamic data, in the three modes of spec A5:
 The model is the operator matrix N(p) of (2.101) (6x6; 3x3 without the regulator, (2.46)) with
 columns (du, dxi, dpsi_cam, dpsi_e, dpsi2, dpsi3), and inputs (dtau, dpsi1); without the regulator
 the barrier pressure is ideal, dpsi_e = dpsi1.  Its descriptor form E dX/dt = A X + G [dtau, dpsi1]
-is spec A7's table.
+is the source's table.
 """
 
 from __future__ import annotations
@@ -113,7 +113,7 @@ class Constants:
         return np.array(out)
 
     def descriptor(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
-        """E dX/dt = A X + G [dtau, dpsi1] with X = (du, du', [dxi, dxi'], pressures) (spec A7)."""
+        """E dX/dt = A X + G [dtau, dpsi1] with X = (du, du', [dxi, dxi'], pressures)."""
         N0, N1, N2, Gin = self.operator()
         mech = [0, 1] if self.regulator else [0]
         names, col = [], {}
@@ -151,7 +151,7 @@ class Constants:
 
 def program_point(dev: DeviceDesign, psi1: float = 1.0) -> dict:
     """The appendix's operating point: closed forms (2.24)-(2.28) (pump) or (2.145)-(2.147) with
-    the pump's regulator formulas (compressor, spec §8), psi_e0 = psi1 + dpsi."""
+    the pump's regulator formulas (compressor), psi_e0 = psi1 + dpsi."""
     from autobal.analysis import closed_form
 
     g, dpsi = dev.groups, dev.dpsi
@@ -199,7 +199,7 @@ def constants(dev: DeviceDesign, data: DynamicData, point: dict, mode: str = "co
     reg = g.regulator
     if reg is not None:
         xi0, pe, pc = point["xi"], point["psi_e"], point["psi_cam"]
-        x_b = sc["x_B"] if mode == "consistent" else z_b  # x_B* (spec §5.3)
+        x_b = sc["x_B"] if mode == "consistent" else z_b  # x_B*
         sq = math.sqrt(pc - pe)
         av, bv = reg.alpha_B1 * xi0 / (2 * sq), reg.alpha_B1 * sq  # dQ_v/dp_cam, dQ_v/dxi (over g1 [p_B])
         Cp, Gp = reg.alpha_in1 + av, av + a_e
@@ -218,9 +218,9 @@ def constants(dev: DeviceDesign, data: DynamicData, point: dict, mode: str = "co
                 c["tau3"], c["tau5"] = theta(data.V_cam) / Gp, theta(data.V_m) / Bp
         if mode == "program":
             c["K1"], c["K2"] = g.chi, reg.sigma_m * point["dpsi"]
-            if gas:  # App. B L3668-L3726
+            if gas:  # App. B
                 c["tau3"], c["tau5"] = theta(data.V_cam) / Gp, theta(data.V_m) / Bp
-            else:  # App. A L3346-L3404
+            else:  # App. A
                 c["K6"] = bv / (reg.alpha_B1 * xi0**1.5 / (2 * sq) + a_e)
                 c["K7"] = a_e / (reg.alpha_B1 * xi0 / sq + a_e)
     if mode == "program":

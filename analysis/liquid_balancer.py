@@ -2,7 +2,7 @@
 
 ``run(system, settings, title)`` returns a :class:`LiquidBalancerResult`: efficiency lambda0 against
 the speed ratio gamma (three variants of (2.13), the documented App. В closure and the self-consistent
-closure of spec §8.3), the results table of spec §7 C13, the extremum analysis (§2.5), the viscous
+closure, a toolkit extension), the results table, the extremum analysis, the viscous
 equilibrium zone (2.15), the optimal chamber height and liquid volume as IPOPT problems checked
 against a dense grid, the liquid choice by viscosity, Pashkov's sufficiency and efficiency
 calculators, and the comparison with Tables 3.2 / 3.3.  SI units throughout.
@@ -24,19 +24,19 @@ from autobal.errors import SolveError
 from autobal.models import liquid_balancer as lb
 from autobal.models.liquid_balancer import System
 
-# Table 3.2 [T L1494-L1499]: efficiency vs gamma, theory (App. В / C# program) and experiment
+# Table 3.2: efficiency vs gamma, theory (App. В / C# program) and experiment
 TABLE_3_2 = {"gamma": [0.4, 0.6, 0.8, 1.0, 1.2, 1.4],
              "theory": [1.30, 1.52, 2.13, 3.13, 2.27, 1.72],
              "experiment": [1.14, 1.43, 1.79, 3.30, 2.20, 1.64]}
-# Table 3.3 [T L1505-L1513]: D0 [g cm] -> computed V_opt [mL], capacity D [g cm], experimental V_opt [mL]
+# Table 3.3: D0 [g cm] -> computed V_opt [mL], capacity D [g cm], experimental V_opt [mL]
 TABLE_3_3 = {"D0_gcm": [1000, 2000, 3000, 4000], "V_opt_mL": [48.5, 93.7, 123.5, 176.7],
              "capacity_gcm": [960.3, 1945.9, 2873.8, 3914.0], "V_exp_mL": [50, 90, 120, 180]}
 REASON_3_2 = ("the documented App. В algorithm (f = G e0 with e0 = D0/m_d = e_d, as in the Pascal code) makes the "
               "liquid unbalance D >> D0 (k_D << 1): lambda0 ~ 0.13 at gamma = 0.4 and no equilibrium at most "
-              "speeds; Table 3.2 came from the C# program, which the thesis does not show (spec §8.1, §9 #23)")
+              "speeds; Table 3.2 came from the C# program, which the thesis does not show")
 REASON_3_3 = ("in the documented model D = rho f (pi h R^2 - V) falls with V, so V_opt = pi h R^2 - D0/(rho f) "
               "falls with D0, while Table 3.3 rises ~ D0 (D/V ~ R, a thin crescent at the wall); h, omega, n of "
-              "the table are not stated (spec §8.2)")
+              "the table are not stated")
 
 
 # ---- the optimisation problems (App. В / App. Г as IPOPT problems) ---------------------------
@@ -121,7 +121,7 @@ def optimise(system: System, kind: str, variant: str, deflection: str, lower: fl
     step = grid[1] - grid[0]
     k_opt = float(at["k_D"])
     singular = variant in ("corrected", "printed") and abs(k_opt - 1) < 1e-6
-    # analytic optimum of the singular branches: k_D = 1 (spec §4 [derived])
+    # analytic optimum of the singular branches: k_D = 1
     star = ((p["D0"] / rf + p["V"]) / (math.pi * R**2) if kind == "height"
             else math.pi * R**2 * p["h"] - p["D0"] / rf)
     return res | {
@@ -137,7 +137,7 @@ def optimise(system: System, kind: str, variant: str, deflection: str, lower: fl
 
 
 def crescent_volume(R: float, h: float, f: float, D0: float, rho: float) -> dict:
-    """V at which the liquid crescent's unbalance rho V x_p equals D0 (k_D = 1) [toolkit extension, spec §8.2]."""
+    """V at which the liquid crescent's unbalance rho V x_p equals D0 (k_D = 1) [toolkit extension]."""
     from scipy.optimize import brentq
 
     vol = math.pi * R**2 * h
@@ -158,7 +158,7 @@ def crescent_volume(R: float, h: float, f: float, D0: float, rho: float) -> dict
 # ---- the study ---------------------------------------------------------------------------------
 
 def _row(system: System, variant: str, deflection: str, gammas) -> dict:
-    """C13 columns at speed ratios ``gammas`` (spec §7 C13)."""
+    """C13 columns at speed ratios ``gammas`` ."""
     gammas = np.asarray(gammas, float)
     p = system.inputs(deflection, omega=gammas * system.omega_cr)
     o = lb.evaluate(variant, **p)
@@ -209,8 +209,8 @@ def pashkov(system: System, kappa: float = 1.0) -> dict:
     """Sufficiency and efficiency calculators, single and nested chambers ([T] (3.2)-(3.14); Pashkov ch. 3).
 
     m = M_p + M_k + m_d (rotor with reservoir), e0 = D0/m.  E_e printed (3.9)/(3.14) with sum R_i^2; the
-    nested-chamber first-moment alternative sum [R_i^2 - (R_{i+1} + t_w)^2] beside it (flagged, spec
-    rotor-liquid §3.8).  Deflection, critical speed and sufficiency need ``stiffness``.
+    nested-chamber first-moment alternative sum [R_i^2 - (R_{i+1} + t_w)^2] beside it (flagged).
+    Deflection, critical speed and sufficiency need ``stiffness``.
     """
     m = system.rotor_mass + system.chamber_mass + system.unbalance_mass
     e0 = system.D0 / m
@@ -394,7 +394,7 @@ def _table_3_2(system: System, settings) -> dict:
             "max_theory_experiment_pct": max(abs(r["theory_minus_experiment_pct"]) for r in rows),
             "max_self_consistent_experiment_pct": max(abs(r["self_consistent_vs_experiment_pct"]) for r in rows),
             "note": "toolkit_documented uses the App. В closure (f from D0/m_d); toolkit_self_consistent is the "
-                    "extension of spec §8.3, not the thesis's algorithm"}
+                    "toolkit extension, not the thesis's algorithm"}
 
 
 def _table_3_3(system: System, settings, masses, vol_settings) -> dict:
@@ -420,7 +420,7 @@ def _table_3_3(system: System, settings, masses, vol_settings) -> dict:
         rows.append(row)
     return {"rows": rows, "speed": system.speed, "height": system.h,
             "note": "V_opt: IPOPT on the documented model; V_opt_crescent: exact liquid crescent at the wall "
-                    "with the same deflection f, k_D = 1 (toolkit extension, spec §8.2)"}
+                    "with the same deflection f, k_D = 1 (toolkit extension)"}
 
 
 def run(system: System, settings, title: str = "") -> LiquidBalancerResult:
@@ -525,9 +525,9 @@ def jeffcott_integrator(t_end: float, n_out: int) -> ca.Function:
 
 def accuracy(system: System, data: dict) -> dict:
     """Error estimate of the main outputs: the optimal height / volume (IPOPT) against the analytic optimum
-    k_D = 1 of the singular branches (spec §4 [derived]) or, for a regular optimum, against the dense grid
+    k_D = 1 of the singular branches or, for a regular optimum, against the dense grid
     (then only bounded by the grid step); and the closed-form Jeffcott phase delta (2.5) and exact deflection
-    ratio behind every lambda0 against a CVODES steady state at the working speed (spec §2.8)."""
+    ratio behind every lambda0 against a CVODES steady state at the working speed."""
     parts, bounded = {}, []
     for key in ("optimal_height", "optimal_volume"):
         o = data.get(key)

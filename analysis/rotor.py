@@ -1,19 +1,19 @@
-"""Analyses of the rotor with a liquid auto-balancer (Pashkov 2010; spec rotor-liquid-abd-dynamics.md).
+"""Analyses of the rotor with a liquid auto-balancer (Pashkov (2010)).
 
 Closed forms of the source beside CasADi/CVODES integration of the one nonlinear model
-(:mod:`autobal.models.rotor`), all in the dimensionless variables of spec §3.2 (time tau = Omega0 t,
+(:mod:`autobal.models.rotor`), all in the dimensionless variables of Pashkov (2010), Eq. (2) (time tau = Omega0 t,
 speed nu = omega/Omega0, deflection over e):
 
 * :func:`steady_state`: Eq. (3) at constant speed; :func:`stationary`: Eq. (9), (10), (7'),
-  the stationary curves of Figs 5-6 with their special points (L237, L241);
+  the stationary curves of Figs 5-6 with their special points (Pashkov (2010));
 * :func:`stability`: the 4x4 perturbation matrix of (P) from the exact CasADi Jacobian;
 * :func:`step_closed_form`: the residue solution (5)-(7) of a speed step; :func:`simulate` the
   CVODES integration of the same problem;
 * :func:`passage`: uniform acceleration through the critical speed, (8')-(9') (Figs 7-9);
   :func:`crossover`: the friction n* at which the peak system unbalance with liquid equals the
-  one without (L257);
-* :func:`lewis`: the Jeffcott rotor accelerated from rest at constant rate (spec §5.5, §8.2);
-* :func:`motor_runup`: run-up driven by a motor characteristic (spec §8.3, Sommerfeld capture).
+  one without (Pashkov (2010));
+* :func:`lewis`: the Jeffcott rotor accelerated from rest at constant rate;
+* :func:`motor_runup`: run-up driven by a motor characteristic.
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ def steady_state(p: RotorParams, nu) -> dict:
 
 
 def stationary(mu1: float, n: float, z) -> dict:
-    """Eq. (9), (7') at z = (omega/Omega0)^2 with dimensionless n = chi^2/(c m1) (spec §3.6):
+    """Eq. (9), (7') at z = (omega/Omega0)^2 with dimensionless n = chi^2/(c m1):
     a/e, d/(m1 e), M/(e^2 c), phase lag gamma, and the ratios (10) to the rotor without liquid."""
     z = np.asarray(z, float)
 
@@ -57,9 +57,9 @@ def stationary(mu1: float, n: float, z) -> dict:
 
 
 def stationary_points(mu1: float, n: float) -> dict:
-    """Special points of (9) (L237, L241): peak z_kp, a_kp; the speed z = 2/(1+mu1) above which the
+    """Special points of (9) (Pashkov (2010)): peak z_kp, a_kp; the speed z = 2/(1+mu1) above which the
     liquid helps; a(inf) = 1/mu1; torque maximum z1 and minimum z2 (None when they do not exist:
-    exact condition mu1 > 3n/(6 - 2 sqrt 5), spec §3.6); the largest d/(m1 e) and where it is."""
+    exact condition mu1 > 3n/(6 - 2 sqrt 5)); the largest d/(m1 e) and where it is."""
     out = {"mu1": mu1, "n": n, "z_kp": 2 / (2 * mu1 - n), "a_kp": 2 / np.sqrt(4 * mu1 * n - n**2),
            "z_helps": 2 / (1 + mu1), "a_inf": 1 / mu1, "z1": None, "M1": None, "z2": None, "M2": None}
     disc = (6 * mu1 - 3 * n) ** 2 - 20 * mu1**2
@@ -67,7 +67,7 @@ def stationary_points(mu1: float, n: float) -> dict:
         for key, sign in (("1", -1), ("2", 1)):
             z = (6 * mu1 - 3 * n + sign * np.sqrt(disc)) / (2 * mu1**2)
             out["z" + key], out["M" + key] = z, float(stationary(mu1, n, z)["M"])
-    # d has one maximum below z_helps (spec §5.1): golden-section search on a bracketing grid
+    # d has one maximum below z_helps: golden-section search on a bracketing grid
     zz = np.linspace(1e-3, 2 / mu1 + 1, 4001)
     i = int(np.argmax(stationary(mu1, n, zz)["d"]))
     from scipy.optimize import minimize_scalar
@@ -81,7 +81,7 @@ def stationary_points(mu1: float, n: float) -> dict:
 def stability(p: RotorParams, nu: float) -> dict:
     """Eigenvalues (over Omega0) of the perturbation equations (P) at speed nu, from the exact
     Jacobian of the model at its steady state, beside the derived roots lambda +- i nu,
-    lambda^2 + n lambda + k = 0 (spec §3.4; dimensionless k = psi, n = 2 zeta0 psi)."""
+    lambda^2 + n lambda + k = 0."""
     m = rotor_model()
     s = steady_state(p, nu)
     q = ca.DM([float(s["x"]), float(s["y"]), 0, 0, nu])
@@ -99,7 +99,7 @@ def stability(p: RotorParams, nu: float) -> dict:
 
 def step_closed_form(p: RotorParams, nu0: float, nu: float, tau) -> np.ndarray:
     """Complex w(tau)/e after a speed step nu0 -> nu from the steady state at nu0, relative velocity
-    zero (4): the residue solution (5) with roots (6) and the reconstructed D, X, Y of spec §3.5;
+    zero (4): the residue solution (5) with roots (6) and the reconstructed D, X, Y;
     the stop nu = 0 (double roots) by w = w_C(nu0) f(tau), f'' + n f' + k f = 0."""
     tau = np.asarray(tau, float)
     psi, z0 = p.psi, p.zeta0
@@ -213,7 +213,7 @@ def passage(p: RotorParams, nu0: float, a_star: float, nu_end: float, q0=None, p
 def crossover(Omega0: float, psi: float, omega0: float, alpha: float, nu_end: float = 2.0,
               bracket=(0.5, 30.0), xtol: float = 1e-3) -> float:
     """n* = chi/m1 (1/s) at which max d with liquid (psi) equals max d without (psi = 1) in the
-    uniform passage (L257; spec §5.4: 5.30 for psi = 0.5 at 20 s^-2)."""
+    uniform passage (5.30 for psi = 0.5 at 20 s^-2 [derived])."""
 
     def gap(n):
         r1 = passage(RotorParams.from_groups(Omega0, n, psi), omega0 / Omega0, alpha / Omega0**2, nu_end)
@@ -224,7 +224,7 @@ def crossover(Omega0: float, psi: float, omega0: float, alpha: float, nu_end: fl
 
 
 def lewis(zeta: float, a_star: float, per_unit: float = 12.0, tol: float = TOL) -> dict:
-    """Lewis (1932) problem (spec §5.5, §8.2): Jeffcott rotor (psi = 1) from rest, u = u' = 0,
+    """Lewis (1932) problem: Jeffcott rotor (psi = 1) from rest, u = u' = 0,
     nu(0) = 0, constant a* = alpha/Omega^2.  |u| = |w|, so the rotating frame is used; it runs
     past the asymptotic peak speed 1 + 2.1574 sqrt(a*).  Returns the peak |u|/e and nu there."""
     p = RotorParams(m1=1.0, c=1.0, chi=2 * zeta, e=1.0)
@@ -237,7 +237,7 @@ def lewis(zeta: float, a_star: float, per_unit: float = 12.0, tol: float = TOL) 
 def motor_runup(p: RotorParams, stall: float, no_load: float, tau_end: float, q0=None,
                 points: int = 4000) -> dict:
     """Run-up driven by the linear motor characteristic L = L_s (1 - nu/nu_nl) (dimensionless torque
-    over m1 e^2 Omega0^2, spec §8.3): the speed is a state, the torque equation gives beta''.
+    over m1 e^2 Omega0^2): the speed is a state, the torque equation gives beta''.
     Needs polar inertia (j + 1 - psi > 0).  Reports the final speed and whether the rotor passed
     its critical speed sqrt(psi) (Sommerfeld capture otherwise)."""
     m = rotor_model()

@@ -1,9 +1,9 @@
 """Synchronous response, dynamic-stiffness identification and the eccentricity-identification error bound.
 
-Proceedings 2017 [P] (spec liquid-autobalancer-model.md §6, computation C12): (a) the isotropic rotor
-with tangential (cross-coupled) stiffness, Romashchenko & Drach, eqs. (1)-(5) [P L75-L136]; (b) the
-condition-number bound of the eccentricity identification of a flexible rotor, reconstructed in spec
-§6.1 (the source's formulas (4)-(6) are missing).  SI units: kg, N/m, N s/m, rad/s, kg m.
+Proceedings 2017 [P]: (a) the isotropic rotor
+with tangential (cross-coupled) stiffness, Romashchenko & Drach, eqs. (1)-(5); (b) the
+condition-number bound of the eccentricity identification of a flexible rotor, reconstructed
+(the source's formulas (4)-(6) are missing).  SI units: kg, N/m, N s/m, rad/s, kg m.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import numpy as np
 
 
 def synchronous_response(M, K, D, lam, K_tau, m_r, Omega, delta=0.0):
-    """Amplitude A and phase alpha of z = A e^{i(Omega t + alpha)}, eq. (4) [P L91] (atan2 for alpha).
+    """Amplitude A and phase alpha of z = A e^{i(Omega t + alpha)}, eq. (4) (atan2 for alpha).
 
     A = m r Omega^2 / |K - M Omega^2 + i (D (1 - lambda) Omega - K_tau)|; alpha = delta + arg of the
     inverse dynamic stiffness.  ``K_tau`` may be a callable of Omega.
@@ -25,10 +25,10 @@ def synchronous_response(M, K, D, lam, K_tau, m_r, Omega, delta=0.0):
 
 
 def dynamic_stiffness(A, alpha, m_r, Omega, delta=0.0):
-    """Direct K - M Omega^2 and quadrature D(1 - lambda) Omega - K_tau from synchronous data [P L110, L95].
+    """Direct K - M Omega^2 and quadrature D(1 - lambda) Omega - K_tau from synchronous data.
 
     Direct = m r Omega^2 cos(delta - alpha)/A; quadrature = m r Omega^2 sin(delta - alpha)/A (sign typo of
-    the printed quadrature corrected, spec §6.2).
+    the printed quadrature corrected).
     """
     F = m_r * np.asarray(Omega, float) ** 2 / np.asarray(A, float)
     return F * np.cos(delta - np.asarray(alpha)), F * np.sin(delta - np.asarray(alpha))
@@ -55,7 +55,7 @@ def beam_flexibility(L: float, EI: float, positions) -> np.ndarray:
 
 
 def identification_bound(A: np.ndarray, omega: float) -> dict:
-    """cond(A), cond(E/omega^2 - A) and their product, the bound of ||de||/||e|| per ||dY||/||Y|| (spec §6.1).
+    """cond(A), cond(E/omega^2 - A) and their product, the bound of ||de||/||e|| per ||dY||/||Y||.
 
     Model Y = omega^2 A (Y + e) (A = flexibility times the disc masses), so e = A^-1 (E/omega^2 - A) Y.
     """

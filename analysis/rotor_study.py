@@ -1,10 +1,10 @@
 """The ``rotor_dynamics`` analysis of a scene: the source's studies of the rotor with a liquid
-auto-balancer (Pashkov 2010, chapter 2; spec rotor-liquid-abd-dynamics.md §3, §5, §9 items 2-7, 9).
+auto-balancer (Pashkov (2010), ch. 2).
 
 Parts (each optional in the scene): ``stationary`` (Eq. (9), Figs 5-6, table §5.1, and the
 steady state (3) and stability (P) of the scene's rotor), ``steps`` (speed steps (4)-(7), Figs 3-4,
 closed form beside CVODES, table §5.3), ``passage`` (uniform acceleration (8')-(9'), Figs 7-9,
-table §5.4, crossover n*), ``lewis`` (table §5.5) and ``motor_runup`` (spec §8.3).
+table §5.4, crossover n*), ``lewis`` (table §5.5) and ``motor_runup``.
 """
 
 from __future__ import annotations

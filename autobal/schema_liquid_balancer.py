@@ -2,7 +2,7 @@
 (``analyses.liquid_balancer:``).  Quantities carry units and are converted to SI at load time.
 
 Sources: Khomyak 2020 (Table 3.1 system, App. В/Г programs), Pashkov 2010 ch. 3 (nested chambers);
-spec liquid-autobalancer-model.md §3.1, §4, §7.
+Khomyak (2020), Pashkov (2010).
 """
 
 from __future__ import annotations

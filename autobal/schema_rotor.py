@@ -29,7 +29,7 @@ Fraction = Annotated[float, Field(gt=0, le=1)]
 
 
 class Liquid(Strict):
-    """Liquid auto-balancer layer (model M1, spec §1.1): a chamber of wall radius R and height h of
+    """Liquid auto-balancer layer (model M1): a chamber of wall radius R and height h of
     liquid density rho (full-chamber mass rho pi R^2 h), or the design parameter psi = m1/m directly."""
 
     density: Density | None = None
@@ -51,7 +51,7 @@ class Liquid(Strict):
 
 
 class Motor(Strict):
-    """Linear motor characteristic L(omega) = stall_torque (1 - omega/no_load_speed) (spec §8.3)."""
+    """Linear motor characteristic L(omega) = stall_torque (1 - omega/no_load_speed)."""
 
     stall_torque: Torque
     no_load_speed: AngularSpeed
@@ -102,18 +102,18 @@ class Passage(Strict):
     acceleration: AngularAcceleration  # beta'' = 2 eps
     final_ratio: Positive = 2.0  # run to omega/Omega0
     crossover: bool = True  # find n* where max d(psi) = max d(1)
-    sensitivity_acceleration: AngularAcceleration | None = None  # the 10 s^-2 variant (spec §5.4)
+    sensitivity_acceleration: AngularAcceleration | None = None  # the 10 s^-2 variant
 
 
 class Lewis(Strict):
-    """Jeffcott rotor from rest at constant acceleration (spec §5.5): table over zeta and a* = alpha/Omega^2."""
+    """Jeffcott rotor from rest at constant acceleration: table over zeta and a* = alpha/Omega^2."""
 
     zeta: list[Annotated[float, Field(ge=0, lt=1)]] = [0.0, 0.01, 0.02, 0.05, 0.1]
     accel_ratio: list[Positive] = [1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2]
 
 
 class MotorRunup(Strict):
-    """Run-up with the scene's motor characteristic (spec §8.3): passes, or is captured (Sommerfeld)."""
+    """Run-up with the scene's motor characteristic: passes, or is captured (Sommerfeld)."""
 
     duration: Time
 
@@ -127,7 +127,7 @@ class RotorDynamics(Strict):
 
 
 class Spinup(Strict):
-    """Optimal spin-up through the critical speed (spec §8.7)."""
+    """Optimal spin-up through the critical speed."""
 
     start_speed: RateOrZero
     final_speed: AngularSpeed
