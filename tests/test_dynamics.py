@@ -41,7 +41,7 @@ def afc(setup, model="program", convention="appendix"):
 # ---- literature validation: the appendix programs' hand-linear model ------------------------------
 
 def test_program_constants_match_appendix_a(pump):
-    # App. A L3346-L3404 as recomputed by the spec (§10.3 table, 'recomputed' column): 0.5 %
+    # App. A as recomputed [derived]: 0.5 %
     c = pump.constants("program").c
     ref = {"K1": 0.01, "K2": 0.0614513, "K3": 3.01153e-3, "K4": 9.22317e-4, "K5": 0.031901, "K6": 9.7274e-3,
            "K7": 0.93817, "K8": 0.0209747, "K9": 0.669106, "K10": 6.54656e-3, "K11": 0.324347, "K12": 0.799517,
@@ -54,7 +54,7 @@ def test_program_constants_match_appendix_a(pump):
 
 
 def test_program_constants_match_appendix_b(comp):
-    # App. B L3668-L3726, spec §10.6 recomputed column: 0.5 %
+    # App. B as recomputed [derived]: 0.5 %
     c = comp.constants("program").c
     K = [0.01, 7.66667e-3, 3.39152e-3, 6.5238e-3, 2.04565e-3, 3.93494e-3, 0.997954, 0.0255495, 0.935679,
          3.81418e-3, 0.0551559, 0.29627, 0.221468]
@@ -66,8 +66,8 @@ def test_program_constants_match_appendix_b(comp):
 
 
 def test_published_pump_afc_reproduced(pump):
-    # App. A L3412, B = (-1, sigma_m, 0, 0, K11, 0): thesis L1727 prints 1980/2920 rad/s, 25/10 um, 7 um at
-    # 660 rad/s (read off a figure); spec §10.3/§14 reproduction 1977.2/25.20, 2912.5/9.90, 6.84 um
+    # App. A, B = (-1, sigma_m, 0, 0, K11, 0): the thesis prints 1980/2920 rad/s, 25/10 um, 7 um at
+    # 660 rad/s (read off a figure); [derived] reproduction 1977.2/25.20, 2912.5/9.90, 6.84 um
     r = afc(pump)
     (p1, p2) = r["peaks"]
     assert abs(p1["omega"] - 1977.2) < 10 and abs(p1["amplitude_um"] - 25.2) < 0.5
@@ -80,8 +80,8 @@ def test_published_pump_afc_reproduced(pump):
 
 
 def test_published_compressor_afc_reproduced(comp):
-    # App. B L3734: thesis L2105 prints 2340/4810 rad/s, 33/18 um, 20 um at 1571 rad/s;
-    # spec §10.6 reproduction 2343.4/32.52, 4811.1/17.98, 19.97 um
+    # App. B: the thesis prints 2340/4810 rad/s, 33/18 um, 20 um at 1571 rad/s;
+    # [derived] reproduction 2343.4/32.52, 4811.1/17.98, 19.97 um
     r = afc(comp)
     (p1, p2) = r["peaks"]
     assert abs(p1["omega"] - 2343.4) < 10 and abs(p1["amplitude_um"] - 32.5) < 0.5
@@ -90,7 +90,7 @@ def test_published_compressor_afc_reproduced(comp):
 
 
 def test_physical_forcing_does_not_give_the_published_afc(pump):
-    # spec §10.3 sensitivity: with B1 = -b (b = 0.823) peaks ~6.8 um at 1962 and 7.1 um at 2887 rad/s,
+    # [derived] sensitivity: with B1 = -b (b = 0.823) peaks ~6.8 um at 1962 and 7.1 um at 2887 rad/s,
     # A(660) = 2.27 um: the published figure needs the appendix's b = 1 in the forcing
     r = afc(pump, convention="physical")
     assert_allclose([p["omega"] for p in r["peaks"]], [1962, 2887], atol=5)
@@ -99,7 +99,7 @@ def test_physical_forcing_does_not_give_the_published_afc(pump):
 
 
 def test_published_pump_model_is_unstable(pump):
-    # spec §10.4: det N(p) coefficients and roots with the App. A constants; a7 < 0
+    # [derived]: det N(p) coefficients and roots with the App. A constants; a7 < 0
     c = pump.constants("program")
     a = c.characteristic()
     assert_allclose(a, [1.699716e-40, 1.369715e-31, 4.513179e-25, 1.818193e-19, 1.302162e-15, 1.085258e-12,
@@ -117,7 +117,7 @@ def test_published_pump_model_is_unstable(pump):
 
 
 def test_published_compressor_model_is_unstable(comp):
-    # spec §10.4: all coefficients positive, Hurwitz minors Delta4..Delta6 negative, roots
+    # [derived]: all coefficients positive, Hurwitz minors Delta4..Delta6 negative, roots
     v = stability.verdict(comp.linear("program"))
     assert v["stable"] is False
     assert v["hurwitz"]["coefficients_positive"] and v["hurwitz"]["negative_minors"] == [4, 5, 6]
@@ -129,7 +129,7 @@ def test_published_compressor_model_is_unstable(comp):
 
 
 def test_simplified_fourth_order_model_is_unstable(simple):
-    # spec §10.4: the 4th-order system (2.69) with the App. A constants: roots 221.7 +- 1994.8i
+    # [derived]: the 4th-order system (2.69) with the App. A constants: roots 221.7 +- 1994.8i
     v = stability.verdict(simple.linear("program"))
     assert len(v["poles"]["real"]) == 4 and not v["stable"]
     assert_allclose((v["unstable_modes"][0]["real"], v["unstable_modes"][0]["imag"]), (221.7, 1994.8), atol=0.1)
@@ -162,7 +162,7 @@ def test_exact_jacobian_equals_central_differences(name, form, request):
 
 @pytest.mark.parametrize("name", ["pump", "comp", "simple"])
 def test_chain_model_linearization_equals_hand_consistent_mode(name, request):
-    # spec A5: the Jacobian of the chain form (2.40) at its equilibrium reproduces mode (iii)
+    # [derived]: the Jacobian of the chain form (2.40) at its equilibrium reproduces mode (iii)
     s = request.getfixturevalue(name)
     lin, hand = s.linear("nonlinear_chain"), s.linear("consistent")
     assert_allclose(np.sort_complex(lin.poles()), np.sort_complex(hand.poles()), rtol=1e-9)
@@ -177,8 +177,8 @@ def test_chain_model_linearization_equals_hand_consistent_mode(name, request):
         assert_allclose(v, ref, rtol=1e-9, atol=1e-300, err_msg=k)
 
 
-def test_energy_form_differs_from_the_printed_chain_where_spec_12_1_says(pump):
-    # spec §12.1: the consistent balances have no carried compression terms (tau3 = tau5 = tau7 = 0), the
+def test_energy_form_differs_from_the_printed_chain_in_the_compression_terms(pump):
+    # [derived]: the consistent balances have no carried compression terms (tau3 = tau5 = tau7 = 0), the
     # barrier chamber's displacement is +s_m dx/dt (T6 > 0, no s_c; tau6 = 0) and the cavity behind the
     # disc is squeezed by s_e dz/dt (a term (2.101) does not have, row 6, column du, dp)
     N0, N1, N2, Gin = linearize.operator(pump.nonlinear("energy"))
@@ -195,9 +195,9 @@ def test_energy_form_differs_from_the_printed_chain_where_spec_12_1_says(pump):
         assert_allclose(read[k], c[k], rtol=1e-9, err_msg=k)
 
 
-def test_literal_preload_equilibrium_and_poles_match_spec(pump):
-    # spec §5.2 preload note: with Delta = F_pr/k_pr the equilibrium of (2.111) at psi1 = 1 is u = 0.917,
-    # xi = 1.142, psi_e = 1.0175, psi2 = 1.0053, psi3 = 0.4645; spec §5.3: the FD Jacobian there has
+def test_literal_preload_equilibrium_and_poles(pump):
+    # [derived] preload note: with Delta = F_pr/k_pr the equilibrium of (2.111) at psi1 = 1 is u = 0.917,
+    # xi = 1.142, psi_e = 1.0175, psi2 = 1.0053, psi3 = 0.4645; [derived]: the FD Jacobian there has
     # eigenvalues -8.0216e8, -2.8341e6, -4.2978e5, -7578.1, +46.0 +- 985.5i, +2786.9 +- 2184.5i
     m = dy.build(pump.dev, pump.data, pump.point, "chain", preload="literal")
     got = [m.point[k] for k in ("u", "xi", "psi_e", "psi2", "psi3")]
@@ -208,14 +208,14 @@ def test_literal_preload_equilibrium_and_poles_match_spec(pump):
 
 
 def test_equilibrium_is_the_static_solution(pump, comp, simple):
-    # spec A8 check (a): with Delta = F/k + z0 the static solution is an equilibrium (rows < 1e-9)
+    # [derived] check (a): with Delta = F/k + z0 the static solution is an equilibrium (rows < 1e-9)
     for s in (pump, comp, simple):
         for form in ("energy", "chain"):
             assert simulate.equilibrium_residual(s.nonlinear(form)) < 1e-9
 
 
 def test_verdicts_of_the_toolkit_models(pump, comp):
-    # the printed chain form is unstable at the exact operating point too (spec §10.4: 'also unstable');
+    # the printed chain form is unstable at the exact operating point too;
     # the energy-consistent pump model is stable, the energy-consistent compressor model is not
     assert not stability.verdict(pump.linear("nonlinear_chain"))["stable"]
     assert stability.verdict(pump.linear("nonlinear"))["stable"]
@@ -224,7 +224,7 @@ def test_verdicts_of_the_toolkit_models(pump, comp):
 
 
 def test_transfer_functions_combine_to_the_forced_response(pump):
-    # spec A6 check: W_total = b W_tau + W_1 (python-control transfer functions from dtau, dpsi1 to du)
+    # [derived] check: W_total = b W_tau + W_1 (python-control transfer functions from dtau, dpsi1 to du)
     lin = pump.linear("nonlinear")
     tf = lin.transfer_functions()
     w = 800.0
@@ -265,7 +265,7 @@ def test_small_harmonic_response_matches_linear_model(pump):
 
 
 def test_unstable_published_set_grows_at_the_predicted_rate(pump):
-    # the printed chain model with the App. A data (unstable, spec §10.4): a small perturbation along its
+    # the printed chain model with the App. A data (unstable): a small perturbation along its
     # fastest-growing mode grows at Re lambda (2624 1/s) within 1 %
     m = pump.nonlinear("chain")
     lam, v, wl = _modal(m, 2624 + 2194j)
@@ -325,7 +325,7 @@ def test_pump_scene_results_keys(tmp_path):
     assert s["hurwitz"]["negative_minors"] and s["models"]["nonlinear"]["stable"] is True
     assert "no single change" in s["restoring"]["program"] and "stem_damping" in s["restoring"]["program"]
     assert r["transient"]["cases"][0]["events"] == []
-    # the K/T table: App. A's K8 is twice (2.44)'s at the same point (spec §5.3), T6 changes sign in the energy form
+    # the K/T table: App. A's K8 is twice (2.44)'s at the same point, T6 changes sign in the energy form
     notes = s["coefficients"]["notes"]
     assert "program/consistent = 2 at" in notes["K8"] and "sign differs" in notes["T6"]
     assert (tmp_path / "fig_stability_map_program.png").is_file() and (tmp_path / "fig_afc.png").is_file()

@@ -1,6 +1,6 @@
-"""Liquid auto-balancer: spec liquid-autobalancer-model.md §7 computations C1-C13 as golden tests,
-IPOPT optima against dense grids, Pashkov's calculators (spec rotor-liquid-abd-dynamics.md §3.8, §9 #8),
-bad input.  [T] = Khomyak 2020 thesis; [derived] = the spec author's numbers from the thesis's equations."""
+"""Liquid auto-balancer: Khomyak (2020), computations C1-C13 as golden tests,
+IPOPT optima against dense grids, Pashkov's calculators,
+bad input.  [T] = Khomyak 2020 thesis; [derived] = numbers derived from the thesis's equations."""
 
 import json
 import math
@@ -54,7 +54,7 @@ def test_c1_scene_uses_table_3_1(washer):
 
 # ---- C2 --------------------------------------------------------------------------------------
 
-C2 = np.array([  # gamma, delta deg, sin^2 delta, phi deg, G (2.7), exact Jeffcott, zeta/e_c (2.6)  [spec C2, derived]
+C2 = np.array([  # gamma, delta deg, sin^2 delta, phi deg, G (2.7), exact Jeffcott, zeta/e_c (2.6)  [derived]
     [0.4, 7.138, 0.01544, 6.038, 0.18245, 0.18900, 1.18125],
     [0.6, 13.850, 0.05730, 9.079, 0.52714, 0.54615, 1.51707],
     [0.8, 30.302, 0.25458, 12.145, 1.48121, 1.53489, 2.39827],
@@ -77,7 +77,7 @@ def test_c2_jeffcott_kinematics():
 
 
 def test_c2_literal_damping_breaks_sin_phi():
-    # spec C2: with 2n = 49.3 (literal erratum-1 reading) sin(phi) > 1 for gamma >= ~1.21 -> NaN with a reason
+    # [derived]: with 2n = 49.3 (literal erratum-1 reading) sin(phi) > 1 for gamma >= ~1.21 -> NaN with a reason
     n_lit = lb.n_from_decrement_literal(0.826, WCR)
     o = table31("corrected", [1.15, 1.25, 1.4], n=n_lit)
     assert np.isfinite(o["phi"][0]) and not np.isfinite(o["phi"][1])
@@ -89,7 +89,7 @@ def test_c2_literal_damping_breaks_sin_phi():
 
 def test_c3_liquid_geometry():
     o = table31("corrected", [0.4])
-    assert_allclose(o["r"], 0.1975983, atol=5e-8)  # spec §3.1 [derived]
+    assert_allclose(o["r"], 0.1975983, atol=5e-8)  # [derived]
     assert_allclose(0.2 - o["r"], 2.4017e-3, atol=5e-8)
     # D = rho pi h r^2 f = m_l x_p, machine precision
     assert_allclose(o["D"], 1000 * math.pi * 0.05 * o["r"] ** 2 * o["f"], rtol=1e-14)
@@ -100,7 +100,7 @@ def test_c3_liquid_geometry():
 
 @pytest.mark.parametrize("omega", [23.88, 59.7, 87.9])
 def test_c3_paraboloid_volume_and_mean_radius(omega):
-    # spec §2.1 [derived]: the paraboloid holds V and the mean of rho_s^2 over the height is r^2
+    # [derived]: the paraboloid holds V and the mean of rho_s^2 over the height is r^2
     R, h, V = 0.2, 0.05, 1.5e-4
     p = lb.paraboloid(R, h, V, omega, math.radians(90))
     assert_allclose(lb.paraboloid_volume(R, h, p["a"], p["z_star"]), V, rtol=1e-12)
@@ -126,13 +126,13 @@ def test_c3_crescent_equals_thesis_while_sufficient_and_stays_inside_the_wall():
 # ---- C4 --------------------------------------------------------------------------------------
 
 def test_c4_lambda0_at_alpha_pi():
-    # spec C4 / [T L1108-L1120]: lambda0(k, pi) = k/|1-k|; the threshold k > 0.5
+    # [derived], [T]: lambda0(k, pi) = k/|1-k|; the threshold k > 0.5
     k = np.array([0.25, 0.5, 0.75, 0.9, 1.1, 2.0])
     assert_allclose(np.asarray(lb.lambda0(k, -1.0)).ravel(), [1 / 3, 1.0, 3.0, 9.0, 11.0, 2.0], rtol=1e-12)
 
 
 def test_c4_extremum_table():
-    # spec C4 table: k* = -1/cos a0, lambda_max = 1/|sin a0| [T L1084-L1100]
+    # [derived] table: k* = -1/cos a0, lambda_max = 1/|sin a0| [T]
     a = np.radians([120.0, 150.0, 170.0, 179.0])
     e = lb.extremum(a)
     assert_allclose(e["k_star"], [2.000000, 1.154701, 1.015427, 1.000152], atol=5e-7)
@@ -151,9 +151,9 @@ def test_c4_derivatives_and_printed_second_derivative():
     a = math.radians(150.0)
     for k in (0.3, 1.3, 4.0):
         _, d1, d2 = (float(v) for v in fn(k, a))
-        assert_allclose(d1, lb.dlambda0_dk(k, a), rtol=1e-12)  # [T L1082]
+        assert_allclose(d1, lb.dlambda0_dk(k, a), rtol=1e-12)  # [T]
         assert_allclose(d2, lb.d2lambda0_dk2(k, a), rtol=1e-12)  # general form, erratum 6
-    # spec §2.5: at k = 1.3 numeric -1.69630 = general; the printed form gives -2.55 (valid at k* only)
+    # [derived]: at k = 1.3 numeric -1.69630 = general; the printed form gives -2.55 (valid at k* only)
     # (-1.6963096 here and by a finite difference: the spec's sixth digit is truncated, not rounded)
     assert_allclose(lb.d2lambda0_dk2(1.3, a), -1.69630, atol=1e-5)
     assert_allclose(lb.d2lambda0_dk2(1.3, a, printed=True), -2.55, atol=5e-3)
@@ -170,17 +170,17 @@ def test_c4_corrected_branch_and_printed_defect():
     assert_allclose(k / np.sqrt(1 - 2 * k * y + k**2), lb.lambda0_corrected(k, d), rtol=1e-9)
     assert_allclose(lb.lambda0_corrected(np.array([0.25, 0.75, 2.0]), math.pi), [1 / 3, 3.0, 2.0], rtol=1e-12)
     assert np.isnan(lb.lambda0_corrected(0.3, math.radians(30)))  # k < sin delta: no real solution
-    # printed (2.13) at delta = pi gives alpha0 = pi - arccos(k): the documented defect (spec §2.2 (ii))
+    # printed (2.13) at delta = pi gives alpha0 = pi - arccos(k): the documented defect
     s = float(np.sin(math.pi) ** 2)
     for kk in (0.3, 0.8):
         y_pr = float(lb.acos_argument(s, kk, "printed"))
         y_co = float(lb.acos_argument(s, kk, "corrected"))
         assert_allclose(math.pi - math.acos(y_pr), math.pi - math.acos(kk), atol=1e-7)
-        assert_allclose(y_co, 1.0, atol=1e-12)  # corrected: cos alpha0 = -1 as the thesis claims [T L873]
+        assert_allclose(y_co, 1.0, atol=1e-12)  # corrected: cos alpha0 = -1 as the thesis claims [T]
 
 
 def test_c4_sign_convention_of_2_12():
-    # spec §2.2: delta = 7.138 deg, k = 6.5238: (2.10b) root 186.05 deg, (2.12)/(2.13-corr) 173.95 deg
+    # [derived]: delta = 7.138 deg, k = 6.5238: (2.10b) root 186.05 deg, (2.12)/(2.13-corr) 173.95 deg
     d, k = math.radians(7.138), 6.5238
     y = float(lb.acos_argument(math.sin(d) ** 2, k, "corrected"))
     assert_allclose(math.degrees(math.pi - math.acos(y)), 173.95, atol=5e-3)
@@ -189,7 +189,7 @@ def test_c4_sign_convention_of_2_12():
 
 # ---- C5 --------------------------------------------------------------------------------------
 
-S81 = {  # spec §8.1 [derived]: App. В pipeline as documented, f from e0 = D0/m_d = 0.2 m
+S81 = {  # [derived]: App. В pipeline as documented, f from e0 = D0/m_d = 0.2 m
     "f": [0.036489, 0.10543, 0.29624, 0.73374, 0.51301, 0.36759],
     "x_p": [1.4920, 4.3107, 12.113, 30.001, 20.976, 15.030],
     "D": [0.22380, 0.64661, 1.8169, 4.5002, 3.1464, 2.2545],
@@ -197,7 +197,7 @@ S81 = {  # spec §8.1 [derived]: App. В pipeline as documented, f from e0 = D0/
 }
 
 
-def test_c5_documented_pipeline_reproduces_spec_8_1():
+def test_c5_documented_algorithm_reproduces_the_derived_values():
     o = table31("program")
     for key, ref in S81.items():
         assert_allclose(o[key], ref, rtol=5e-5, err_msg=key)  # 5 significant digits
@@ -216,7 +216,7 @@ def test_c5_documented_pipeline_reproduces_spec_8_1():
 
 
 def test_c5_system_eccentricity_check_of_8_1():
-    # spec §8.1: f from D0/M_sys (4.11 mm) does not reproduce Table 3.2 either
+    # [derived]: f from D0/M_sys (4.11 mm) does not reproduce Table 3.2 either
     ef = 0.03 / 7.3
     pr, co = table31("printed", e_f=ef)["lambda0"], table31("corrected", e_f=ef)["lambda0"]
     assert_allclose(pr, [np.nan, np.nan, 1.3232, 0.4802, np.nan, 0.8355], atol=5e-5, equal_nan=True)
@@ -226,23 +226,23 @@ def test_c5_system_eccentricity_check_of_8_1():
 def test_c5_table_3_2_statistic_and_self_consistent_closure(washer):
     T, X = np.array(study.TABLE_3_2["theory"]), np.array(study.TABLE_3_2["experiment"])
     dev = 100 * (T - X) / T
-    assert_allclose(dev, [12.31, 5.92, 15.96, -5.43, 3.08, 4.65], atol=5e-3)  # spec §3.3 [derived]
-    assert_allclose(np.abs(dev).max(), 15.96, atol=5e-3)  # the thesis's "no more than 16 %" [T L1501]
-    sc = lb.self_consistent(GAMMAS * WCR, WCR, N, 0.2, 0.05, 1.5e-4, 1000, 7.3)  # spec §8.3 [derived]
+    assert_allclose(dev, [12.31, 5.92, 15.96, -5.43, 3.08, 4.65], atol=5e-3)  # [derived]
+    assert_allclose(np.abs(dev).max(), 15.96, atol=5e-3)  # the thesis's "no more than 16 %" [T]
+    sc = lb.self_consistent(GAMMAS * WCR, WCR, N, 0.2, 0.05, 1.5e-4, 1000, 7.3)  # [derived]
     assert_allclose(sc["Q"], [6.52382, 2.25792, 0.80356, 0.32443, 0.46402, 0.64759], atol=5e-6)
     assert_allclose(sc["lambda0_plus"], [1.1523, 1.4339, 2.1674, 3.2405, 3.0244, 2.5036], atol=5e-5)
     # the "-" root needs Q <= |cos delta|; at gamma = 1 |cos delta| = 0, so it does not exist (the spec's
     # table prints the formula's value 3.2405 there, equal to the "+" root)
     assert_allclose(sc["lambda0_minus"], [np.nan, np.nan, 0.6323, np.nan, 1.4635, 0.7078], atol=5e-5,
                     equal_nan=True)
-    # sub-critical agreement with experiment claimed in spec §8.3: +1.1 %, +0.3 %, -1.8 %
+    # sub-critical agreement with experiment (derived): +1.1 %, +0.3 %, -1.8 %
     assert_allclose(100 * (sc["lambda0_plus"][[0, 1, 3]] / X[[0, 1, 3]] - 1), [1.1, 0.3, -1.8], atol=0.05)
 
 
 # ---- C6 / C7: the optimisation problems (IPOPT against dense grids) ---------------------------
 
 @pytest.mark.parametrize("gamma, variant, deflection, h_ref", [
-    # spec §8.4 [derived] regression values, grid dh = 1e-5 m
+    # [derived] regression values, grid dh = 1e-5 m
     (0.4, "program", "program", 0.00764), (0.4, "printed", "program", 0.00774),
     (0.8, "program", "program", 0.00187), (1.2, "program", "program", 0.00157),
     (0.8, "printed", "system", 0.04041), (1.2, "printed", "system", 0.02384),
@@ -272,7 +272,7 @@ def test_ipopt_optimum_agrees_with_dense_grid(washer, kind, variant):
 
 
 def test_optimum_volume_is_k_equal_one_and_falls_with_d0(washer):
-    # spec §4 / §8.2: V* = pi h R^2 - D0/(rho f), decreasing with D0 (why Table 3.3 is not reproducible)
+    # [derived]: V* = pi h R^2 - D0/(rho f), decreasing with D0 (why Table 3.3 is not reproducible)
     vs = []
     for md in (0.05, 0.10, 0.15, 0.20):
         s = study.System(**{**washer.__dict__, "unbalance_mass": md})
@@ -316,18 +316,18 @@ def test_c7_crescent_extension_rises_with_d0(washer):
 # ---- C8 --------------------------------------------------------------------------------------
 
 def test_c8_sin_beta_star():
-    # spec C8 [derived]: water, R = 0.2, m = 0.15, omega = 23.88
+    # [derived]: water, R = 0.2, m = 0.15, omega = 23.88
     s = lb.sin_beta_star(1e-3, 0.2, np.array([90.0, 180.0, 261.0]), 0.15, 23.88)
     assert_allclose(s, [0.002204, 0.004409, 0.006392], atol=5e-7)
     assert_allclose(math.degrees(math.asin(s[1])), 0.2526, atol=5e-5)
     # the nu form (program Г reconstructed) is the same number
     assert_allclose(lb.sin_beta_star_nu(1e-6, 0.2, np.radians([90.0, 180.0, 261.0]), 1.5e-4, 23.88), s, rtol=1e-12)
-    # monotonic: up with mu, down with omega [T L961-L963]
+    # monotonic: up with mu, down with omega [T]
     assert lb.sin_beta_star(2e-3, 0.2, 90, 0.15, 23.88) > s[0] > lb.sin_beta_star(1e-3, 0.2, 90, 0.15, 50)
 
 
 def test_c8_program_sinus_example():
-    # spec §5.3 [derived]: Table 3.1, gamma = 0.4, f = 0.036489, water
+    # [derived]: Table 3.1, gamma = 0.4, f = 0.036489, water
     a = lb.program_arc(0.2, 0.05, 1.5e-4, 0.036489)
     assert_allclose(float(a["z"]), -0.15665, atol=5e-6)
     assert_allclose(float(a["xi"]), 4.5551, atol=5e-5)
@@ -360,7 +360,7 @@ def test_c8_liquid_choice_is_argmin_sin_beta(washer):
 def test_c9_simplified_model():
     m, rho, h, R = 7.15, 1000.0, 0.05, 0.2
     full = lb.full_liquid_mass(rho, h, [R])
-    assert_allclose(lb.efficiency(m, full), 1.87877, atol=5e-6)  # spec C9 [derived]
+    assert_allclose(lb.efficiency(m, full), 1.87877, atol=5e-6)  # [derived]
     c, e0 = 26018.0, 0.03 / m
     wk = lb.critical_speed(c, m, full)
     s = float(lb.deflection(e0, m, 1e3 * wk, c, full))
@@ -378,9 +378,9 @@ def test_c10_multichamber_efficiency():
     m, rho, h = 7.15, 1000.0, 0.05
     radii = [[0.2], [0.2, 0.18], [0.2, 0.18, 0.16]]
     E = [lb.efficiency(m, lb.full_liquid_mass(rho, h, r)) for r in radii]
-    assert_allclose(E, [1.87877, 2.59057, 3.15298], atol=5e-6)  # spec C10 [derived], (3.14)
+    assert_allclose(E, [1.87877, 2.59057, 3.15298], atol=5e-6)  # [derived], (3.14)
     wk = [lb.critical_speed(26018.0, m, lb.full_liquid_mass(rho, h, r)) for r in radii]
-    assert np.all(np.diff(E) > 0) and np.all(np.diff(wk) < 0)  # claims [T L1305-L1306]
+    assert np.all(np.diff(E) > 0) and np.all(np.diff(wk) < 0)  # claims [T]
     # nested first-moment alternative (rotor-liquid §3.8 caveat) is smaller than the printed sum
     for r in radii[1:]:
         assert lb.nested_liquid_mass(rho, h, r, 0.002) < lb.full_liquid_mass(rho, h, r)
@@ -412,7 +412,7 @@ def test_pashkov_efficiency_is_the_inverse_of_psi():
 
 
 def test_pashkov_fill_level_independence(washer):
-    # Pashkov L331, Fig. 12: while sufficiency holds, deflection, omega_k and E do not depend on the fill
+    # Pashkov (2010), Fig. 12: while sufficiency holds, deflection, omega_k and E do not depend on the fill
     a = study.pashkov(washer)["single"]
     b = study.pashkov(study.System(**{**washer.__dict__, "V": 3e-4}))["single"]
     assert a["sufficiency"]["all_ok"] and b["sufficiency"]["all_ok"]
@@ -483,7 +483,7 @@ def test_c12b_identification_bound_holds_and_grows_near_resonance():
 
 @pytest.mark.parametrize("gamma", [0.4, 0.8, 1.0, 1.4])
 def test_c12c_time_domain_jeffcott_confirms_phase_and_amplitude(gamma):
-    # CVODES steady state against delta (2.5) and the exact Jeffcott ratio (spec §2.8)
+    # CVODES steady state against delta (2.5) and the exact Jeffcott ratio
     F = study.jeffcott_integrator(6.0, 60)
     w = gamma * WCR
     xf = np.asarray(F(x0=[0, 0, 0, 0], p=[w, WCR, N])["xf"])
@@ -576,7 +576,7 @@ def test_model_never_raises_on_bad_points():
 
 
 def test_resonance_efficiency_1_7_of_fig_3_6_differs(washer):
-    # [T L1467]: efficiency 1.7 at omega_cr for D0 = 2000 g cm, V = 100 mL; the documented pipeline gives
+    # [T]: efficiency 1.7 at omega_cr for D0 = 2000 g cm, V = 100 mL; the documented pipeline gives
     # 0.0044 (printed/program) or no equilibrium (corrected); the extension 3.31 (validation ledger row)
     s = study.System(**{**washer.__dict__, "unbalance_mass": 0.1, "V": 1e-4})
     p = s.inputs("program", omega=WCR)

@@ -1,6 +1,6 @@
-"""Rotor with a liquid auto-balancer (Pashkov 2010; spec rotor-liquid-abd-dynamics.md): model M1,
+"""Rotor with a liquid auto-balancer (Pashkov (2010)): model M1,
 steady state (3)/(9), stability (P), step transients (5)-(7), uniform passage (8')-(9'), Lewis passage,
-motor drive.  Golden values are the spec's derived targets (§5; computed with SciPy DOP853, printed
+motor drive.  Golden values are derived targets (computed with SciPy DOP853, printed
 to 3-5 digits), the source's statements, and cross-checks between closed forms and CVODES."""
 
 import math
@@ -13,25 +13,25 @@ from scipy.optimize import brentq
 from autobal.analysis import rotor as R
 from autobal.models.rotor import LiquidLayer, RotorParams, rotor_model
 
-SOURCE = RotorParams.from_groups(105.0, 100.0)  # Omega0 = 105 1/s, chi/m1 = 100 1/s (L205, L257)
+SOURCE = RotorParams.from_groups(105.0, 100.0)  # Omega0 = 105 1/s, chi/m1 = 100 1/s
 
 
-# ---- model M1 parameters (spec §1.1, §9 item 1) -------------------------------------------------------
+# ---- model M1 parameters -------------------------------------------------------
 
 def test_liquid_layer_sets_psi_and_critical_speed():
     layer = LiquidLayer(density=1000.0, radius=0.1, height=0.02, free_surface_radius=0.08)
     p = RotorParams(m1=2.0, c=2e4, chi=3.0, e=1e-4).with_liquid(layer)
-    m2s = 1000 * math.pi * 0.1**2 * 0.02  # rho pi R^2 h (L150)
-    assert_allclose(p.psi, 2.0 / (2.0 + m2s), rtol=1e-15)  # psi = m1/(m1 + rho pi R^2 h) (L156)
-    assert_allclose(p.omega_cr, p.Omega0 * math.sqrt(p.psi), rtol=1e-15)  # omega_cr^2 linear in psi (L261)
+    m2s = 1000 * math.pi * 0.1**2 * 0.02  # rho pi R^2 h
+    assert_allclose(p.psi, 2.0 / (2.0 + m2s), rtol=1e-15)  # psi = m1/(m1 + rho pi R^2 h)
+    assert_allclose(p.omega_cr, p.Omega0 * math.sqrt(p.psi), rtol=1e-15)  # omega_cr^2 linear in psi
     assert_allclose(p.mu1, 1 / p.psi, rtol=1e-15)
-    # the three meanings of n (spec §2 defect 8)
+    # the three meanings of n
     assert_allclose([p.n_steady(), p.n_stationary(), p.n_passage()], [3.0 / p.m, 9.0 / (2e4 * 2.0), 1.5])
-    assert layer.sufficient(0.02) and not layer.sufficient(0.021)  # R - r >= s (L283)
+    assert layer.sufficient(0.02) and not layer.sufficient(0.021)  # R - r >= s
     assert_allclose(layer.liquid_mass, 1000 * math.pi * (0.1**2 - 0.08**2) * 0.02)
 
 
-# ---- steady state (3), (9) and stability (P) (spec §3.3-§3.6, §9 items 2-3) ---------------------------
+# ---- steady state (3), (9) and stability (P) ---------------------------
 
 @pytest.mark.parametrize("psi, chi", [(1.0, 5.0), (0.5, 20.0), (0.25, 100.0)])
 def test_steady_state_eq3_equals_eq9_and_the_model_equilibrium(psi, chi):
@@ -49,13 +49,13 @@ def test_steady_state_eq3_equals_eq9_and_the_model_equilibrium(psi, chi):
     for v in nu[::7]:
         dq = np.array(m.ode(R.steady_q(p, v), 0.0, p.p)).ravel()
         assert np.max(np.abs(dq)) < 1e-12 * (1 + v**2)
-        # the drive torque closure (spec §8.3) reduces to (8) in steady state
+        # the drive torque closure reduces to (8) in steady state
         assert_allclose(float(m.torque(R.steady_q(p, v), 0.0, p.p)), float(R.steady_state(p, v)["M"]), rtol=1e-12)
 
 
 def test_stationary_limits_crossing_and_extrema():
-    """L235: a -> e/mu1, d -> 0, gamma -> pi; L237: curves for one mu1 cross at z = 2/(1+mu1) for every n;
-    L241: peak a = 2/sqrt(4 mu1 n - n^2) at z = 2/(2 mu1 - n), torque extrema z1 (max), z2 (min)."""
+    """a -> e/mu1, d -> 0, gamma -> pi; curves for one mu1 cross at z = 2/(1+mu1) for every n;
+    peak a = 2/sqrt(4 mu1 n - n^2) at z = 2/(2 mu1 - n), torque extrema z1 (max), z2 (min)."""
     for mu1 in (2.0, 4.0):
         big = R.stationary(mu1, 0.1, 1e8)
         assert_allclose(big["a"], 1 / mu1, rtol=1e-6)
@@ -73,13 +73,13 @@ def test_stationary_limits_crossing_and_extrema():
                 dM = np.diff(M)
                 turns = z[1:-1][np.diff(np.sign(dM)) != 0]
                 assert_allclose(turns, [sp["z1"], sp["z2"]], atol=2e-5)
-    # torque extrema exist exactly for mu1 > 3n/(6 - 2 sqrt 5) ~ 1.9635 n (spec §3.6; the source says 2n)
+    # torque extrema exist exactly for mu1 > 3n/(6 - 2 sqrt 5) ~ 1.9635 n (the source says 2n)
     n = 1.0
     assert R.stationary_points(1.97 * n, n)["z1"] is not None
     assert R.stationary_points(1.96 * n, n)["z1"] is None
 
 
-# spec §5.1 (derived; 5-6 digits printed)
+# [derived] (5-6 digits printed)
 TABLE_5_1 = [  # mu1, n, z_kp, a_kp, z1, M1, z2, M2, d_max, z_d_max
     (1, 0.1, 1.05263, 3.20256, 1.08294, 3.35089, 4.61706, 1.06940, 3.35157, 0.95445),
     (1, 0.7, 1.53846, 1.31590, None, None, None, None, 1.61277, 0.78456),
@@ -103,8 +103,8 @@ def test_stationary_table_5_1(row):
 
 
 def test_stability_eigenvalues_lambda_plus_minus_i_omega():
-    """(P): eigenvalues of the exact Jacobian are lambda +- i nu, lambda^2 + n lambda + k = 0 (spec §3.4);
-    Re < 0 at every speed with friction (L162), Re = 0 without."""
+    """(P): eigenvalues of the exact Jacobian are lambda +- i nu, lambda^2 + n lambda + k = 0;
+    Re < 0 at every speed with friction, Re = 0 without."""
     for psi in (1.0, 0.5, 0.25):
         p = SOURCE.with_psi(psi)
         for nu in (0.1, 0.7, 1.0, 1.9, 4.0):
@@ -116,7 +116,7 @@ def test_stability_eigenvalues_lambda_plus_minus_i_omega():
         assert abs(s0["max_real"]) < 1e-9
 
 
-# ---- step transients (4)-(7), Figs 3-4 (spec §3.5, §5.3, §9 item 4) ---------------------------------
+# ---- step transients (4)-(7), Figs 3-4 ---------------------------------
 
 STEPS = [(0, 150), (150, 0), (110, 150), (150, 110)]
 
@@ -127,10 +127,10 @@ def test_step_closed_form_equals_cvodes(psi, w0, w1):
     from autobal.analysis.rotor_study import step_case
 
     r = step_case(SOURCE.with_psi(psi), w0, w1, 0.3, points=3000)
-    assert r["closed_form_vs_cvodes"] < 1e-8  # spec §9 item 4
+    assert r["closed_form_vs_cvodes"] < 1e-8
 
 
-# spec §5.3 (derived): step, psi, d(0), max d, t of max d (ms), d_ss, max a/e, a_ss/e, t_5% (ms)
+# [derived]: step, psi, d(0), max d, t of max d (ms), d_ss, max a/e, a_ss/e, t_5% (ms)
 TABLE_5_3 = [
     ("0->150", 1, 1.0, 1.6804, 15.7, 0.9857, 1.4193, 1.1914, 53),
     ("0->150", 0.25, 1.0, 2.5751, 24.4, 0.2316, 0.8485, 0.2799, 409),
@@ -154,9 +154,9 @@ def test_step_table_5_3(row):
     assert abs(r["t_5pct_ms"] - t5) < 0.6  # ms, integer printed
 
 
-def test_stop_transient_rebound_spec_5_2():
+def test_stop_transient_rebound():
     """Spec §5.2: the stop is underdamped (n^2 < 4k): a(t) passes zero then rebounds to exp(-pi zeta/sqrt(1-zeta^2))
-    of a(0) (0.1825 for psi = 1 ... 0.4629 for psi = 0.25), so the source's 'monotonic' stop (L205) is approximate."""
+    of a(0) (0.1825 for psi = 1 ... 0.4629 for psi = 0.25), so the source's 'monotonic' stop is approximate."""
     for psi, rebound in ((1, 0.1825), (0.75, 0.2412), (0.5, 0.3252), (0.25, 0.4629)):
         p = SOURCE.with_psi(psi)
         tau = np.linspace(0, 0.3 * 105, 30001)
@@ -167,7 +167,7 @@ def test_stop_transient_rebound_spec_5_2():
 
 
 def test_fixed_and_rotating_frames_agree():
-    """The fixed-frame model u = w e^{i beta} (spec §3.2) integrated with CVODES equals the rotating frame."""
+    """The fixed-frame model u = w e^{i beta} integrated with CVODES equals the rotating frame."""
     import casadi as ca
 
     p, a_star = SOURCE.with_psi(0.5).with_chi(5.0), 20 / 105**2
@@ -184,9 +184,9 @@ def test_fixed_and_rotating_frames_agree():
     assert_allclose(w, sim["q"][0, 1:] + 1j * sim["q"][1, 1:], atol=1e-7)
 
 
-# ---- uniform acceleration (8')-(9'), Figs 7-9 (spec §3.7, §5.4, §9 item 6) --------------------------
+# ---- uniform acceleration (8')-(9'), Figs 7-9 --------------------------
 
-# spec §5.4 (derived): n -> [(delta*/e, z, d*, z) for psi = 1, 0.75, 0.5, 0.25]
+# [derived]: n -> [(delta*/e, z, d*, z) for psi = 1, 0.75, 0.5, 0.25]
 TABLE_5_4 = {
     0: [(35.210, 1.092, 34.210, 1.092), (22.945, 0.958, 29.594, 0.958), (12.571, 0.799, 24.142, 0.799),
         (4.556, 0.592, 17.225, 0.592)],
@@ -213,20 +213,20 @@ def test_uniform_passage_table_5_4_and_source_statements():
             assert_allclose([r["delta_max"], r["d_max"]], [dl, dd], rtol=2e-4, atol=6e-4)
             assert_allclose([r["nu_delta_max"], r["nu_d_max"]], [zdl, zdd], atol=6e-4)
             peaks[n, psi] = (r["delta_max"], r["d_max"])
-    for n in TABLE_5_4:  # L257, L263: the deflection peak is smaller with liquid for every n
+    for n in TABLE_5_4:  # the deflection peak is smaller with liquid for every n
         assert all(peaks[n, psi][0] < peaks[n, 1.0][0] for psi in PSIS[1:])
-    # L257: max d with the ABU smaller than without at n = 0, larger at n = 100 1/s
+    # max d with the ABU smaller than without at n = 0, larger at n = 100 1/s
     assert all(peaks[0, psi][1] < peaks[0, 1.0][1] for psi in PSIS[1:])
     assert all(peaks[100, psi][1] > peaks[100, 1.0][1] for psi in PSIS[1:])
 
 
 def test_crossover_n_star_near_5_per_second():
-    """L257: the behaviour of max d changes at n = 5 1/s; spec §5.4 derives n* = 5.30 for psi = 0.5 (20 s^-2)."""
+    """the behaviour of max d changes at n = 5 1/s; [derived] derives n* = 5.30 for psi = 0.5 (20 s^-2)."""
     n_star = R.crossover(105.0, 0.5, 40.0, 20.0)
     assert abs(n_star - 5.30) < 0.006
 
 
-# ---- Lewis passage from rest (spec §5.5, §8.2, §9 item 7) ------------------------------------------
+# ---- Lewis passage from rest ------------------------------------------
 
 TABLE_5_5 = {  # zeta -> peaks @ nu for a* = 1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2
     0: [(147.47, 1.022), (85.46, 1.037), (47.16, 1.068), (27.55, 1.118), (15.44, 1.215), (9.26, 1.376)],
@@ -244,17 +244,17 @@ def test_lewis_table_5_5(zeta):
         r = R.lewis(zeta, a_star)
         assert_allclose(r["peak"], pk, rtol=1e-3)  # the issue asks 1 %; the 4 printed digits hold to 0.1 %
         assert abs(r["nu_peak"] - nu) < 1.5e-3
-        if zeta == 0:  # undamped asymptotics (spec §8.2): 1.4672/sqrt(a*), nu_peak = 1 + 2.1574 sqrt(a*)
+        if zeta == 0:  # undamped asymptotics: 1.4672/sqrt(a*), nu_peak = 1 + 2.1574 sqrt(a*)
             assert_allclose(r["peak"], r["asymptote"], rtol=0.01 if a_star <= 3e-4 else 0.1)
             if a_star <= 1e-3:
                 assert abs(r["nu_peak"] - r["nu_asymptote"]) < 0.05 * math.sqrt(a_star)
 
 
-# ---- motor drive (spec §8.3, §9 item 9) ------------------------------------------------------------
+# ---- motor drive ------------------------------------------------------------
 
 def test_motor_runup_sommerfeld_capture():
     """A weak linear motor L = L_s (1 - nu/2) is captured below the critical speed at the steady point
-    L(nu) = H(nu) = 2 zeta0 nu a(nu)^2 (spec §8.3); a strong one passes."""
+    L(nu) = H(nu) = 2 zeta0 nu a(nu)^2; a strong one passes."""
     p = RotorParams(m1=1.0, c=1.0, chi=0.1, e=1.0, J_p=2000.0)  # zeta0 = 0.05, j = 2000
     weak = R.motor_runup(p, 4.0, 2.0, 3000.0)
     strong = R.motor_runup(p, 40.0, 2.0, 3000.0)

@@ -1,4 +1,4 @@
-"""Throttle laws and conductances: Pavlenko (2014) (2.16), Table 2.2, App. A/B (spec §13 item 1)."""
+"""Throttle laws and conductances: Pavlenko (2014) (2.16), Table 2.2, App. A/B."""
 
 import casadi as ca
 import numpy as np
@@ -10,7 +10,7 @@ from autobal.models import throttles as th
 
 @pytest.mark.parametrize(
     "name, key, published",
-    [  # spec §10.1 (App. A L3143-L3215) and §10.5 (App. B), tolerance 0.5 % as the spec states
+    [  # [derived] (App. A) and §10.5 (App. B), tolerance 0.5 % as the spec states
         ("pump_pe600_statics", "g1", 8.566e-9), ("pump_pe600_statics", "g3", 1.412e-6),
         ("pump_pe600_statics", "g_TB", 1.49e-6), ("pump_pe600_statics", "g_in", 1.928e-7),
         ("pump_pe600_statics", "g_B", 2.276e-6), ("pump_pe600_statics", "g_e", 1.767e-8),
@@ -27,7 +27,7 @@ def test_conductances_match_appendices(name, key, published):
 
 
 def test_groups_match_appendix_a():
-    # spec §10.1 recomputed column (App. A L3294-L3326)
+    # [derived] recomputed column (App. A)
     from autobal import scenario
     from autobal.adapters import design
 
