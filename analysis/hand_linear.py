@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from autobal.analysis import closed_form
 from autobal.models.device import DeviceDesign
 from autobal.models.dynamics import DynamicData
 
@@ -152,8 +153,6 @@ class Constants:
 def program_point(dev: DeviceDesign, psi1: float = 1.0) -> dict:
     """The appendix's operating point: closed forms (2.24)-(2.28) (pump) or (2.145)-(2.147) with
     the pump's regulator formulas (compressor), psi_e0 = psi1 + dpsi."""
-    from autobal.analysis import closed_form
-
     g, dpsi = dev.groups, dev.dpsi
     cf = closed_form.for_medium(g, psi1, dpsi)
     pt = {"psi1": psi1, "dpsi": dpsi, "u": float(cf["u"]), "psi2": float(cf["psi2"]),
