@@ -374,3 +374,36 @@ def test_results_plot_figures_without_touching_the_backend(pump, tmp_path):
     assert st.stable is False and st.decay_rate < 0
     assert st.decay_rate == pytest.approx(-st.poles.real.max(), rel=1e-12)
     assert 0 < tr.max_gap_change[0] < 1e-4  # m
+
+
+def test_dynamics_without_the_regulator_block_is_refused_naming_the_field(tmp_path, scene_edit):
+    import autobal
+
+    data = yaml.safe_load(scenario.resolve("pump_pe600_dynamics").read_text())
+    p = tmp_path / "no_regulator_dynamics.yaml"
+    p.write_text(yaml.safe_dump(scene_edit(data, "device.dynamics.regulator", None)))
+    scene = scenario.load(p)
+    with pytest.raises(ScenarioError, match=r"^device\.dynamics\.regulator: give it exactly when the device has"):
+        adapters.device(scene.device)
+    with pytest.raises(ScenarioError, match=r"device\.dynamics\.regulator"):
+        autobal.run(scene)
+    assert main(["run", str(p), "--out", str(tmp_path / "out")]) == 2
+
+
+def test_device_dynamics_defaults_filled_by_the_adapter(tmp_path, scene_edit):
+    # without rotor_damping, seat_area and operating_speed the adapter fills in the face's squeeze film
+    # 1.5 mu s_T^2 / (pi z_B^3) = 8.936e4 N s/m (Pavlenko (2014), App. A prints it), pi d_c^2 / 4 and the
+    # impeller speed 6300 rpm
+    data = yaml.safe_load(scenario.resolve("pump_pe600_dynamics").read_text())
+    for key in ("device.dynamics.rotor_damping", "device.dynamics.operating_speed",
+                "device.dynamics.regulator.seat_area"):
+        if key.split(".")[-1] in (data["device"]["dynamics"] | data["device"]["dynamics"]["regulator"]):
+            data = scene_edit(data, key, None)
+    p = tmp_path / "defaults.yaml"
+    p.write_text(yaml.safe_dump(data))
+    dev = adapters.device(scenario.load(p).device)
+    d = dev.dynamics
+    assert_allclose(d.c_z, 8.936e4, rtol=5e-4)
+    assert_allclose(d.omega0, 6300 * 2 * math.pi / 60, rtol=1e-12)
+    assert_allclose(d.s_c, math.pi * dev.regulator.valve.seat_diameter**2 / 4, rtol=1e-12)
+    assert d.s_m == dev.regulator.membrane_area and d.has_regulator
