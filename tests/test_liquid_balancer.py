@@ -12,6 +12,7 @@ from numpy.testing import assert_allclose
 
 from autobal import adapters, cli, scenario
 from autobal.analysis import liquid_balancer as study
+from autobal.analysis import liquid_balancer_optimum as optimum
 from autobal.analysis import rotor_identification as rid
 from autobal.errors import ScenarioError
 from autobal.models import balancing_norms as norms
@@ -248,7 +249,7 @@ def test_c5_table_3_2_statistic_and_self_consistent_closure(washer):
     (0.8, "printed", "system", 0.04041), (1.2, "printed", "system", 0.02384),
 ])
 def test_c6_optimal_height_regression_8_4(washer, gamma, variant, deflection, h_ref):
-    o = study.optimise(washer, "height", variant, deflection, 0.0, 0.1, 2001, omega=gamma * WCR)
+    o = optimum.optimise(washer, "height", variant, deflection, 0.0, 0.1, 2001, omega=gamma * WCR)
     assert o["solver"]["status"] == "Solve_Succeeded"
     assert abs(o["optimum"] - h_ref) <= 1e-5  # the spec's grid step
     assert o["agree"] and o["grid_difference"] <= o["grid_step"]
@@ -263,7 +264,7 @@ def test_c6_optimal_height_regression_8_4(washer, gamma, variant, deflection, h_
 @pytest.mark.parametrize("variant", ["program", "corrected"])
 def test_ipopt_optimum_agrees_with_dense_grid(washer, kind, variant):
     lo, hi = (0.0, 0.1) if kind == "height" else (1e-6, math.inf)
-    o = study.optimise(washer, kind, variant, "program", lo, hi, 200001)
+    o = optimum.optimise(washer, kind, variant, "program", lo, hi, 200001)
     # independent check: the grid's best lambda0 is within one grid step of IPOPT's optimum
     assert o["agree"], (o["optimum"], o["grid_optimum"], o["grid_step"])
     assert o["grid_difference"] <= o["grid_step"]
@@ -276,7 +277,7 @@ def test_optimum_volume_is_k_equal_one_and_falls_with_d0(washer):
     vs = []
     for md in (0.05, 0.10, 0.15, 0.20):
         s = study.System(**{**washer.__dict__, "unbalance_mass": md})
-        o = study.optimise(s, "volume", "corrected", "program", 1e-6, math.inf, 2001)
+        o = optimum.optimise(s, "volume", "corrected", "program", 1e-6, math.inf, 2001)
         assert_allclose(o["k_D"], 1.0, atol=1e-6)
         assert_allclose(o["optimum"], math.pi * 0.05 * 0.04 - s.D0 / (1000 * o["f"]), rtol=1e-7)
         vs.append(o["optimum"])
@@ -285,7 +286,7 @@ def test_optimum_volume_is_k_equal_one_and_falls_with_d0(washer):
 
 def test_no_equilibrium_in_bounds_is_reported_not_raised(washer):
     # gamma = 0.6: the documented model has no equilibrium at h = 0.05, and none for h in [0.03, 0.1]
-    o = study.optimise(washer, "height", "corrected", "program", 0.03, 0.1, 101, omega=0.6 * WCR)
+    o = optimum.optimise(washer, "height", "corrected", "program", 0.03, 0.1, 101, omega=0.6 * WCR)
     assert math.isnan(o["optimum"]) and "no equilibrium" in o["reason"]
 
 
@@ -308,7 +309,7 @@ def test_c7_table_3_3_derived_numbers(washer_run):
 
 def test_c7_crescent_extension_rises_with_d0(washer):
     f = 0.2 * float(lb.evaluate("corrected", **washer.inputs("program"))["G"])
-    v = [study.crescent_volume(0.2, 0.05, f, d0, 1000)["V"] for d0 in (0.01, 0.02, 0.03, 0.04)]
+    v = [optimum.crescent_volume(0.2, 0.05, f, d0, 1000)["V"] for d0 in (0.01, 0.02, 0.03, 0.04)]
     assert np.all(np.diff(v) > 0)
     assert_allclose(np.array(v) * 1e6, [52.789, 109.395, 169.490, 233.169], atol=5e-3)  # toolkit regression
 
