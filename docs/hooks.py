@@ -92,6 +92,10 @@ def _constraints(metadata) -> str:
 
 
 # ----------------------------------------------------------------------------- type description
+class Description(str):
+    """A description found on an inner ``Annotated[..., Field(description=...)]`` of a field's type."""
+
+
 def _strip_annotated(tp, metadata: list):
     while typing.get_origin(tp) is typing.Annotated:
         args = typing.get_args(tp)
@@ -99,6 +103,8 @@ def _strip_annotated(tp, metadata: list):
         for extra in args[1:]:
             if isinstance(extra, FieldInfo):
                 metadata.extend(extra.metadata)
+                if extra.description:
+                    metadata.append(Description(extra.description))
         tp = args[0]
     return tp
 
@@ -169,7 +175,8 @@ def _section(path: str, model: type[BaseModel], queue: list) -> str:
         typ, unit = _describe(field.annotation, metadata, queue, f"{path}.{name}" if path else name)
         limits = _constraints(metadata)
         unit_text = "; ".join(t for t in (unit, limits) if t)
-        description = field.description or ""
+        inner = [m for m in metadata if isinstance(m, Description)]
+        description = field.description or (inner[0] if inner else "")
         lines.append(f"| `{name}` | {_cell(typ)} | {_cell(unit_text)} | {_cell(_default(field))} | "
                      f"{_cell(description)} |")
     return "\n".join(lines) + "\n"
