@@ -43,6 +43,9 @@ def _kinds() -> dict:
 def _quantity_kind(metadata) -> str | None:
     """The quantity kind ("length", "pressure", ...) of a field validated by autobal.units.quantity."""
     kinds = _kinds()
+    for item in metadata:  # declared: json_schema_extra={"kind": ...}
+        if isinstance(item, Extra) and item.get("kind") in kinds:
+            return item["kind"]
     for item in metadata:
         func = getattr(item, "func", None)
         if func is None or type(item).__name__ != "BeforeValidator":
@@ -51,9 +54,9 @@ def _quantity_kind(metadata) -> str | None:
             value = cell.cell_contents
             if isinstance(value, str) and value in kinds:
                 return value
-        for kind, (_, _, example) in kinds.items():  # otherwise: the kind whose example it accepts
+        for kind, entry in kinds.items():  # otherwise: the kind whose example it accepts
             try:
-                func(example)
+                func(entry[2])
             except Exception:  # noqa: BLE001 - any refusal means "not this kind"
                 continue
             return kind
@@ -69,24 +72,32 @@ def _unit(kind: str) -> str:
     return f"{si} (e.g. `{entry[2]}`)"
 
 
+def _number(value) -> str:
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
 def _constraints(metadata) -> str:
     out = []
     names = {"gt": ">", "ge": "≥", "lt": "<", "le": "≤", "min_length": "length ≥", "max_length": "length ≤"}
     for item in metadata:
+        if isinstance(item, Description | Extra):
+            continue
         for attr, sym in names.items():
             value = getattr(item, attr, None)
             if value is not None and not callable(value):
-                out.append(f"{sym} {value}")
+                out.append(f"{sym} {_number(value)}")
         if isinstance(item, annotated_types.MultipleOf):
             out.append(f"multiple of {item.multiple_of}")
         pattern = getattr(item, "pattern", None)
         if isinstance(pattern, str):
             out.append(f"matches `{pattern}`")
-        if type(item).__name__ == "AfterValidator":
-            qualname = getattr(item.func, "__qualname__", "")
-            if "nonnegative" in qualname:
+        if type(item).__name__ == "AfterValidator":  # the sign of a quantity (autobal.units.quantity)
+            words = [getattr(item.func, "__qualname__", "")]
+            words += [c.cell_contents for c in getattr(item.func, "__closure__", None) or ()
+                      if isinstance(c.cell_contents, str)]
+            if "nonnegative" in " ".join(words):
                 out.append("≥ 0")
-            elif "positive" in qualname:
+            elif "positive" in " ".join(words):
                 out.append("> 0")
     return ", ".join(dict.fromkeys(out))
 
@@ -94,6 +105,10 @@ def _constraints(metadata) -> str:
 # ----------------------------------------------------------------------------- type description
 class Description(str):
     """A description found on an inner ``Annotated[..., Field(description=...)]`` of a field's type."""
+
+
+class Extra(dict):
+    """The ``json_schema_extra`` of a field or of an inner ``Annotated[..., Field(...)]``."""
 
 
 def _strip_annotated(tp, metadata: list):
@@ -105,6 +120,8 @@ def _strip_annotated(tp, metadata: list):
                 metadata.extend(extra.metadata)
                 if extra.description:
                     metadata.append(Description(extra.description))
+                if isinstance(extra.json_schema_extra, dict):
+                    metadata.append(Extra(extra.json_schema_extra))
         tp = args[0]
     return tp
 
@@ -172,6 +189,8 @@ def _section(path: str, model: type[BaseModel], queue: list) -> str:
     lines += ["| key | type | unit (SI) / constraint | default | meaning |", "|---|---|---|---|---|"]
     for name, field in model.model_fields.items():
         metadata = list(field.metadata)
+        if isinstance(field.json_schema_extra, dict):
+            metadata.append(Extra(field.json_schema_extra))
         typ, unit = _describe(field.annotation, metadata, queue, f"{path}.{name}" if path else name)
         limits = _constraints(metadata)
         unit_text = "; ".join(t for t in (unit, limits) if t)
