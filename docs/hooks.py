@@ -26,7 +26,16 @@ from pydantic.fields import FieldInfo
 from pydantic_core import PydanticUndefined
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGE_DIRS = {"models": "models", "analysis": "analysis", "ocp": "ocp"}  # autobal.<key> -> folder
+
+
+def package_dirs() -> dict[str, str]:
+    """autobal.<name> -> folder, from the ``package-dir`` mapping of pyproject.toml."""
+    try:
+        import tomllib
+    except ImportError:  # Python 3.10
+        return {"models": "models", "analysis": "analysis", "ocp": "ocp", "scenarios": "scenarios"}
+    mapping = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-dir"]
+    return {name.split(".")[1]: folder for name, folder in mapping.items() if name.count(".") == 1}
 INCLUDE = re.compile(r"<!--\s*include:\s*(\S+)\s*-->")
 SCHEMA = "<!-- scenario-schema -->"
 
@@ -228,7 +237,7 @@ def package_tree(target: Path = ROOT / "build" / "griffe") -> Path:
     for item in (ROOT / "autobal").iterdir():
         if item.name != "__pycache__":
             (pkg / item.name).symlink_to(item)
-    for sub, folder in PACKAGE_DIRS.items():
+    for sub, folder in package_dirs().items():
         (pkg / sub).symlink_to(ROOT / folder, target_is_directory=True)
     return target
 
