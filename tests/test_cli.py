@@ -70,7 +70,7 @@ def test_run_pump_writes_documented_results(tmp_path):
     res = json.loads((tmp_path / "results.json").read_text())
     st = res["statics"]
     cf, ex = st["closed_form"], st["exact"]
-    # Appendix A values (spec §10.2), to the printed digits
+    # Appendix A values, to the printed digits
     assert abs(cf["dpsi_kr"] - 0.030) < 5e-4 and abs(cf["psi1_kr"] - 1.73) < 5e-3
     assert abs(cf["xi0"] - 1.294) < 5e-4 and abs(cf["psi2_0"] - 1.027) < 5e-4
     assert abs(cf["psi3_0"] - 0.513) < 5e-4 and cf["Q_e"] == pytest.approx(7.448e-3, rel=1e-4)

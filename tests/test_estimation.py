@@ -1,8 +1,8 @@
 """Parameter estimation (analysis/estimation.py): Pavlenko 2014 Sec. 4.4 (4.16)-(4.38), Sec. 4.3.3
-(4.14)-(4.15), Table 4.3; spec reliability-experiments-estimation.md §4.5, §5.
+(4.14)-(4.15), Table 4.3
 
-Golden values: the spec's recomputation on Table 4.3 (§5.8, "computed here" regression values), the
-source's §4.5 parameter chain and Fisher numbers.  The source's Table 4.4 estimates (1.68, 1.72/2.75,
+Golden values: values recomputed from the source's equations on Table 4.3 (regression values), the
+source's Sec. 4.3.3 parameter chain and Fisher numbers.  The source's Table 4.4 estimates (1.68, 1.72/2.75,
 1.67, 1.70/2.73) come from unpublished points and are not asserted (docs/validation.md says why).
 """
 
@@ -24,11 +24,11 @@ from autobal.measurements import read_csv
 
 TABLE = read_csv("data/table43.csv")
 TAU, U, GROUP = TABLE.columns["tau"], TABLE.columns["u"], TABLE.columns["group"]
-SYN_TAU = np.linspace(0.5, 2.0, 12)  # spec §5.8: synthetic loads on [0.5, 2.0]
+SYN_TAU = np.linspace(0.5, 2.0, 12)  # recomputed: synthetic loads on [0.5, 2.0]
 RIG = yaml.safe_load(scenario.resolve("rig_table43_fit").read_text())
 
 
-# ---- synthetic recovery (spec §5.8) --------------------------------------------------------------
+# ---- synthetic recovery --------------------------------------------------------------
 
 def test_static_synthetic_recovery_ipopt_and_closed_forms():
     """Noiseless u from (4.18), alpha = 1.72, tau_max = 2.75: every estimator returns them to 1e-8."""
@@ -64,8 +64,8 @@ def test_model_identities():
 
 
 def test_corrected_4_36_is_stationarity_of_the_transformed_residual():
-    """The corrected (4.36) (spec §5.5) vanishes at the (4.36) optimum on noisy flow data; with the
-    printed sums a1..a5 it has no root near the printed (2.73, 1.70^2) for any n in 5..15 (spec §5.5)."""
+    """The corrected (4.36) vanishes at the (4.36) optimum on noisy flow data; with the
+    printed sums a1..a5 it has no root near the printed (2.73, 1.70^2) for any n in 5..15."""
     rng = np.random.default_rng(3)
     q = est.flow_from_load(SYN_TAU, 1.70, 2.73) * (1 + 0.02 * rng.standard_normal(12))
     x, a = est.flow_2p(SYN_TAU, q)
@@ -83,9 +83,9 @@ def test_corrected_4_36_is_stationarity_of_the_transformed_residual():
 # ---- Table 4.3 ----------------------------------------------------------------------------------
 
 def test_table43_data_file_is_the_source_table():
-    """scenarios/data/table43.csv holds Table 4.3 verbatim (L2660-L2676): group means 1.12, 0.87, 0.68,
+    """scenarios/data/table43.csv holds Table 4.3 verbatim: group means 1.12, 0.87, 0.68,
     0.62 to the printed digits; the printed theory u (1.14, 0.83, 0.65, 0.50) is (4.13) at sigma 2.75,
-    alpha 1.75 (spec §4.5)."""
+    alpha 1.75."""
     assert TABLE.points == 12 and len(np.unique(GROUP)) == 4
     means = [U[GROUP == g].mean() for g in (1, 2, 3, 4)]
     assert_allclose(means, [1.12, 0.87, 0.68, 0.62], atol=0.005)
@@ -94,7 +94,7 @@ def test_table43_data_file_is_the_source_table():
 
 
 def test_table43_closed_forms():
-    """Spec §5.8 regression values on Table 4.3: (4.23) with tau_max = 2.75 -> 1.7314; (4.26)-(4.27)
+    """Recomputed regression values on Table 4.3: (4.23) with tau_max = 2.75 -> 1.7314; (4.26)-(4.27)
     -> tau_max = 2.5213, alpha^2 = 2.1819, alpha = 1.4771; on the group means 1.7549 and (4.239, 2.282)."""
     assert_allclose(est.static_1p(TAU, U, 2.75), 1.7314, atol=5e-5)
     t2, a2 = est.static_2p(TAU, U)
@@ -105,7 +105,7 @@ def test_table43_closed_forms():
 
 
 def test_table43_least_squares_in_u():
-    """Spec §5.8: least squares in u with tau_max = 2.75 fixed gives alpha = 1.6643 (not the printed 1.68)."""
+    """Recomputed: least squares in u with tau_max = 2.75 fixed gives alpha = 1.6643 (not the printed 1.68)."""
     fit = est.DiscFitter(12, "u", ("alpha",)).fit(TAU, U, values={"alpha": 1.75, "tau_max": 2.75})
     assert_allclose(fit.estimate["alpha"], 1.6643, atol=5e-5)
     assert fit.estimate["tau_max"] == 2.75 and fit.solver["status"] == "Solve_Succeeded"
@@ -187,7 +187,7 @@ def test_confidence_intervals_cover_the_truth():
 def test_fisher_adequacy_table43():
     """(4.14)-(4.15) on Table 4.3 with the source's theory curve (sigma 2.75, alpha 1.75), l = 2:
     sigma1^2 = 8.72e-3 (printed 8.8e-3), sigma2^2 = 3.33e-3 (printed 2.9e-3: not reproducible),
-    F = 2.62 (printed 3.1), F_crit(0.90; 2, 11) = 2.86 (printed 2.8); spec §4.5.  Correct rule: adequate
+    F = 2.62 (printed 3.1), F_crit(0.90; 2, 11) = 2.86 (printed 2.8), recomputed.  Correct rule: adequate
     (F <= F_crit); the source's inverted rule would say the opposite."""
     ad = est.fisher_adequacy(TAU, U, GROUP, lambda x: est.gap_from_load(x, 1.75, 2.75), 2, 0.1)
     assert_allclose([ad["sigma1_sq"], ad["sigma2_sq"], ad["F"], ad["F_crit"]], [8.72e-3, 3.33e-3, 2.62, 2.86],
@@ -197,8 +197,8 @@ def test_fisher_adequacy_table43():
 
 
 def test_loss_coefficient_4_38():
-    """(4.38) with the §4.5 geometry: alpha = 1.746 with zeta + 0.5 lambda l/h (§4.5 prints 1.75) and 1.713
-    with (4.38)'s printed lambda l/h (spec §5.7); solving for each coefficient inverts it exactly."""
+    """(4.38) with the Sec. 4.3.3 geometry: alpha = 1.746 with zeta + 0.5 lambda l/h (Sec. 4.3.3 prints 1.75) and 1.713
+    with (4.38)'s printed lambda l/h; solving for each coefficient inverts it exactly."""
     lc = scenario.load("rig_table43_fit").analyses.estimation.loss_coefficient
     assert_allclose(est.alpha_from_losses(lc), 1.746, atol=5e-4)
     assert_allclose(est.alpha_from_losses(lc.model_copy(update={"friction_factor": 1.0})), 1.713, atol=5e-4)

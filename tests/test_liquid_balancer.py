@@ -83,7 +83,7 @@ def test_c2_literal_damping_breaks_sin_phi():
     o = table31("corrected", [1.15, 1.25, 1.4], n=n_lit)
     assert np.isfinite(o["phi"][0]) and not np.isfinite(o["phi"][1])
     assert all("sin(phi) > 1" in r for r in o["reason"][1:])
-    assert_allclose(WCR**2 / (2 * n_lit * WCR), 1.21, atol=5e-3)  # gamma where sin(phi) = 1: spec "~1.21"
+    assert_allclose(WCR**2 / (2 * n_lit * WCR), 1.21, atol=5e-3)  # gamma where sin(phi) = 1: recomputed "~1.21"
 
 
 # ---- C3 --------------------------------------------------------------------------------------
@@ -155,7 +155,7 @@ def test_c4_derivatives_and_printed_second_derivative():
         assert_allclose(d1, lb.dlambda0_dk(k, a), rtol=1e-12)  # [T]
         assert_allclose(d2, lb.d2lambda0_dk2(k, a), rtol=1e-12)  # general form, erratum 6
     # [derived]: at k = 1.3 numeric -1.69630 = general; the printed form gives -2.55 (valid at k* only)
-    # (-1.6963096 here and by a finite difference: the spec's sixth digit is truncated, not rounded)
+    # (-1.6963096 here and by a finite difference: the recomputation's sixth digit is truncated, not rounded)
     assert_allclose(lb.d2lambda0_dk2(1.3, a), -1.69630, atol=1e-5)
     assert_allclose(lb.d2lambda0_dk2(1.3, a, printed=True), -2.55, atol=5e-3)
     ks = -1 / math.cos(a)
@@ -232,7 +232,7 @@ def test_c5_table_3_2_statistic_and_self_consistent_closure(washer):
     sc = lb.self_consistent(GAMMAS * WCR, WCR, N, 0.2, 0.05, 1.5e-4, 1000, 7.3)  # [derived]
     assert_allclose(sc["Q"], [6.52382, 2.25792, 0.80356, 0.32443, 0.46402, 0.64759], atol=5e-6)
     assert_allclose(sc["lambda0_plus"], [1.1523, 1.4339, 2.1674, 3.2405, 3.0244, 2.5036], atol=5e-5)
-    # the "-" root needs Q <= |cos delta|; at gamma = 1 |cos delta| = 0, so it does not exist (the spec's
+    # the "-" root needs Q <= |cos delta|; at gamma = 1 |cos delta| = 0, so it does not exist (the recomputation's
     # table prints the formula's value 3.2405 there, equal to the "+" root)
     assert_allclose(sc["lambda0_minus"], [np.nan, np.nan, 0.6323, np.nan, 1.4635, 0.7078], atol=5e-5,
                     equal_nan=True)
@@ -251,7 +251,7 @@ def test_c5_table_3_2_statistic_and_self_consistent_closure(washer):
 def test_c6_optimal_height_regression_8_4(washer, gamma, variant, deflection, h_ref):
     o = optimum.optimise(washer, "height", variant, deflection, 0.0, 0.1, 2001, omega=gamma * WCR)
     assert o["solver"]["status"] == "Solve_Succeeded"
-    assert abs(o["optimum"] - h_ref) <= 1e-5  # the spec's grid step
+    assert abs(o["optimum"] - h_ref) <= 1e-5  # the recomputation's grid step
     assert o["agree"] and o["grid_difference"] <= o["grid_step"]
     if variant == "printed":  # singular at k_D = 1: the analytic h* = (D0/(rho f) + V)/(pi R^2)
         assert_allclose(o["k_D"], 1.0, atol=1e-6)
@@ -356,7 +356,7 @@ def test_c8_liquid_choice_is_argmin_sin_beta(washer):
     assert sb == sorted(sb)  # water < ethylene glycol < glycerol (nu increases)
 
 
-# ---- C9 / C10 / Pashkov (rotor-liquid §3.8, §9 #8) --------------------------------------------
+# ---- C9 / C10 / Pashkov --------------------------------------------
 
 def test_c9_simplified_model():
     m, rho, h, R = 7.15, 1000.0, 0.05, 0.2
@@ -382,7 +382,7 @@ def test_c10_multichamber_efficiency():
     assert_allclose(E, [1.87877, 2.59057, 3.15298], atol=5e-6)  # [derived], (3.14)
     wk = [lb.critical_speed(26018.0, m, lb.full_liquid_mass(rho, h, r)) for r in radii]
     assert np.all(np.diff(E) > 0) and np.all(np.diff(wk) < 0)  # claims [T]
-    # nested first-moment alternative (rotor-liquid §3.8 caveat) is smaller than the printed sum
+    # nested first-moment alternative is smaller than the printed sum
     for r in radii[1:]:
         assert lb.nested_liquid_mass(rho, h, r, 0.002) < lb.full_liquid_mass(rho, h, r)
     assert_allclose(lb.nested_liquid_mass(rho, h, [0.2], 0.002), lb.full_liquid_mass(rho, h, [0.2]), rtol=1e-15)

@@ -1,6 +1,6 @@
-"""Monte Carlo of the balancing device (Pavlenko 2014 ch. 3; spec reliability-experiments-estimation.md
-§3): sampling, the statics mapped over samples against IPOPT, the source's closed-form spreads (spec
-§3.4), exact sensitivities and the first-order variance, the executors (in-process and a dask
+"""Monte Carlo of the balancing device (Pavlenko 2014 ch. 3):
+sampling, the statics mapped over samples against IPOPT, the source's closed-form spreads,
+exact sensitivities and the first-order variance, the executors (in-process and a dask
 LocalCluster give identical numbers) and bad input."""
 
 import dataclasses
@@ -100,8 +100,8 @@ def test_samples_are_reproducible_and_have_the_asked_moments(ev):
 
 def test_source_closed_forms_reproduce_spec_table_and_the_20_25_percent(ev):
     """Figs 3.3-3.4 method (closed forms (2.27), (2.30)) with the ten groups normal, cv 5 %, N = 1e5:
-    spec §3.4 table (regression values, +-0.002 MC noise); conclusion 4 (L2837): 'the face gap may vary
-    by 20 %, the face-throttle flow by 25 %', read as 3 sigma / mean (spec §3.1 [inferred])."""
+    recomputed table (regression values, +-0.002 MC noise); conclusion 4: 'the face gap may vary
+    by 20 %, the face-throttle flow by 25 %', read as 3 sigma / mean (inferred)."""
     X = thesis_sampler(ev).draw(0, 100_000)
     table = {0.5: (0.9886, 0.0654, 0.5633, 0.0443), 1.0: (0.9640, 0.0650, 0.7721, 0.0621)}
     for psi1, (mu, su, mq, sq) in table.items():
@@ -164,7 +164,7 @@ def test_study_is_reproducible_and_seeded(scene, dev):
     assert np.array_equal(a.samples["exact"]["u"], b.samples["exact"]["u"])
     assert not np.array_equal(a.samples["exact"]["u"], c.samples["exact"]["u"])
     d = a.data
-    # the mean curve is the deterministic one to 0.2 % (L2417: 'expectations coincide with the curves')
+    # the mean curve is the deterministic one to 0.2 % (Pavlenko (2014): 'expectations coincide with the curves')
     assert_allclose(d["exact"]["u"]["mean"], d["exact"]["u"]["nominal"], rtol=2e-3 + 3 * 0.07 / np.sqrt(2000))
     assert d["exact"]["u"]["invalid"].sum() == 0
     assert d["saturated_fraction"][0] == 0 and d["saturated_fraction"][1] > 0.5
@@ -225,14 +225,14 @@ def test_vectorised_afc_equals_the_linear_models_response(scene, model, names):
     mine = am.amplitude(np.array([[am.nominal()[n] for n in names]] * 3), om)
     theirs = np.abs(am.setup.linear(model).response(om, "appendix")) * am.scale
     assert_allclose(mine, np.tile(theirs, (3, 1)), rtol=1e-10)
-    if model == "program":  # spec §6.1.4 recomputation of the published 7, 25 and 10 um
+    if model == "program":  # recomputation of the published 7, 25 and 10 um
         assert_allclose(mine[0, 1:4], [6.84, 25.20, 9.90], atol=0.01)
 
 
 def test_afc_spread_of_the_program_model_matches_spec(scene):
-    """Fig. 3.7: the 28 constants normal with cv 5 %: spec §3.4 [computed here, N = 2e4]: CV(A) = 0.30 at
+    """Fig. 3.7: the 28 constants normal with cv 5 %: recomputed with N = 2e4: CV(A) = 0.30 at
     omega0 = 660 rad/s, 0.29 at omega_I, 0.51 at omega_II (the source: amplitude 'up to 40 %', conclusion 4,
-    L2837, read off figures: same order, not a number to reproduce)."""
+    read off figures: same order, not a number to reproduce)."""
     a = scene.analyses.montecarlo.afc.model_copy(update={"samples": 4000, "chunk_size": 2000})
     r = mc.afc_study(adapters.device(scene.device), a, 2014, ex.InProcess(progress=False), 3.0, [0.5])
     at = r["at"]

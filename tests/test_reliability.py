@@ -1,6 +1,6 @@
 """Reliability of the traditional balance disc, Pavlenko (2014) ch. 1.2: static model (1.22)-(1.36),
 flow characteristic (1.51)-(1.52), wear (1.37)-(1.44), P(t) (1.48) and mean time to failure (1.49)
-with the worked example (L871-L951; spec reliability-experiments-estimation.md §1.4-1.6)."""
+with the worked example (Pavlenko (2014))."""
 
 import math
 
@@ -33,15 +33,15 @@ def example():
     return settings, lit, ren, derived
 
 
-# ---- literature validation: the worked example's inputs and printed results (L871-L939) ----------
+# ---- literature validation: the worked example's inputs and printed results ----------
 
 def test_worked_example_inputs_reproduce_printed_values(example):
     _, lit, _, d = example
-    # printed u_max = 1.5 (L891), chi0 = 1.76 (L895), b = 1.39e-7 1/s (L899), sigma_b = 2.78e-8 (L903),
-    # sigma_tau = 0.19 (L907), a_b = a_tau = 1 (L911, L915), k = 3.3 (L931): to the printed digits
+    # printed u_max = 1.5, chi0 = 1.76, b = 1.39e-7 1/s, sigma_b = 2.78e-8,
+    # sigma_tau = 0.19, a_b = a_tau = 1, k = 3.3: to the printed digits
     assert abs(d["u_max"] - 1.5) < 0.05  # printed to 2 digits
-    assert_allclose(d["u_max"], 1.51271, rtol=1e-5)  # spec §1.4 recomputation
-    assert abs(d["chi0"] - 1.76) < 0.015  # printed 1.76, recomputed 1.7711 (spec §1.4): 0.6 %
+    assert_allclose(d["u_max"], 1.51271, rtol=1e-5)  # recomputation
+    assert abs(d["chi0"] - 1.76) < 0.015  # printed 1.76, recomputed 1.7711: 0.6 %
     assert_allclose(d["chi0"], 1.77110, rtol=1e-5)
     assert_allclose(d["b_mean"], 1.39e-7, rtol=5e-3)
     assert_allclose(d["b_std"], 2.78e-8, rtol=5e-3)
@@ -52,7 +52,7 @@ def test_worked_example_inputs_reproduce_printed_values(example):
 
 
 def test_wear_cdf_matches_fig_1_27(example):
-    # L927: P(wear <= 100 um) after 2000 h = 0.5, "about ten times lower" after 3000 h (spec: 0.0478)
+    # Pavlenko (2014): P(wear <= 100 um) after 2000 h = 0.5, "about ten times lower" after 3000 h (recomputed: 0.0478)
     _, lit, _, _ = example
     p = lit.wear.wear_probability(1.0, np.array([2000.0, 3000.0]) * HOUR)
     assert_allclose(p[0], 0.5, atol=2e-4)  # mean wear after 2000 h = 1.0000 z_B (b rounded to 1.3889e-7)
@@ -61,25 +61,25 @@ def test_wear_cdf_matches_fig_1_27(example):
 
 
 def test_p_of_t_and_mttf_literal_differ_from_source_as_spec_explains(example):
-    """(1.48)-(1.49) literally: the spec's recomputation (§1.6), not the source's 0.75 and 2.7 kh.
+    """(1.48)-(1.49) literally: the recomputation, not the source's 0.75 and 2.7 kh.
 
     The source prints P(2000 h) = 0.75, P(4000 h) about a third of it and T = 2.7 thousand h; its own
     formulas give 0.671, 0.388 and 4.12 thousand h: 22 % of the load density lies above tau = 1.095,
     where the new disc's gap is already below u_min, so P(0) = 0.776, and the integral of P(t) to
-    40 000 h is 4.12 kh.  The printed values cannot be recovered (spec §1.6: Table 1.2 is not this
+    40 000 h is 4.12 kh.  The printed values cannot be recovered (Table 1.2 is not this
     model either), so the toolkit reports both and does not force agreement."""
     _, lit, _, _ = example
     t = np.array([0, 500, 1000, 2000, 3000, 4000, 5000, 6000, 8000]) * HOUR
     assert_allclose(lit.probability(t), [0.776, 0.775, 0.761, 0.671, 0.525, 0.388, 0.284, 0.210, 0.122], atol=6e-4)
     mttf, _, _ = lit.mttf(40000 * HOUR, 1001)
-    assert_allclose(mttf / HOUR, 4120, rtol=2e-3)  # spec: 4.12e3 h
+    assert_allclose(mttf / HOUR, 4120, rtol=2e-3)  # recomputed: 4.12e3 h
     # the published values are not what the model gives: differences well beyond numerics
     assert abs(lit.probability(2000 * HOUR)[0] - 0.75) > 0.05
     assert abs(mttf / HOUR - 2700) > 1000
 
 
 def test_renormalised_load_density_matches_spec(example):
-    # spec §1.6: p_tau renormalised on [0, sigma psi1]: P(0) = 0.99, P(2000) = 0.855, P(4000) = 0.495, T = 5.24 kh
+    # recomputed: p_tau renormalised on [0, sigma psi1]: P(0) = 0.99, P(2000) = 0.855, P(4000) = 0.495, T = 5.24 kh
     _, _, ren, _ = example
     assert_allclose(ren.load_mass, 1.0, rtol=1e-12)
     assert_allclose(ren.probability(np.array([0, 2000, 4000]) * HOUR), [0.99, 0.855, 0.495], atol=2e-3)

@@ -155,7 +155,7 @@ def test_step_table_5_3(row):
 
 
 def test_stop_transient_rebound():
-    """Spec §5.2: the stop is underdamped (n^2 < 4k): a(t) passes zero then rebounds to exp(-pi zeta/sqrt(1-zeta^2))
+    """Recomputed: the stop is underdamped (n^2 < 4k): a(t) passes zero then rebounds to exp(-pi zeta/sqrt(1-zeta^2))
     of a(0) (0.1825 for psi = 1 ... 0.4629 for psi = 0.25), so the source's 'monotonic' stop is approximate."""
     for psi, rebound in ((1, 0.1825), (0.75, 0.2412), (0.5, 0.3252), (0.25, 0.4629)):
         p = SOURCE.with_psi(psi)
@@ -209,7 +209,7 @@ def test_uniform_passage_table_5_4_and_source_statements():
     for n, row in TABLE_5_4.items():
         for psi, (dl, zdl, dd, zdd) in zip(PSIS, row, strict=True):
             r = R.passage(RotorParams.from_groups(105.0, n, psi), 40 / 105, 20 / 105**2, 2.0)
-            # 5 significant digits printed: half a unit of the last digit, plus the spec's 3-digit reproducibility
+            # 5 significant digits printed: half a unit of the last digit, plus the recomputed 3-digit reproducibility
             assert_allclose([r["delta_max"], r["d_max"]], [dl, dd], rtol=2e-4, atol=6e-4)
             assert_allclose([r["nu_delta_max"], r["nu_d_max"]], [zdl, zdd], atol=6e-4)
             peaks[n, psi] = (r["delta_max"], r["d_max"])

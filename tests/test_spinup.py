@@ -1,4 +1,4 @@
-"""Optimal spin-up through the critical speed (spec rotor-liquid-abd-dynamics.md §8.7, §9 item 10):
+"""Optimal spin-up through the critical speed:
 the issue's target case, collocation vs multiple shooting, every objective against its ramp baselines,
 drive limits kept by the re-simulated optimum, infeasible limits -> exit 3 naming the binding constraint."""
 
@@ -34,17 +34,17 @@ def target():
 
 
 def test_baseline_ramps_spec_8_7(target):
-    # spec §8.7 (derived): 20 s^-2 ramp peaks at 16.39 e, the 40 s^-2 ramp + hold at 14.15 e
+    # recomputed: 20 s^-2 ramp peaks at 16.39 e, the 40 s^-2 ramp + hold at 14.15 e
     b = target.data["baselines"]
     assert_allclose(b["constant_ramp"]["peak_deflection_over_e"], 16.39, atol=5e-3)
     assert_allclose(b["max_acceleration_ramp"]["peak_deflection_over_e"], 14.15, atol=5e-3)
-    assert_allclose(b["constant_ramp"]["peak_deflection_over_e"], 16.393, atol=5e-4)  # = table §5.4, n = 5, psi = 1
+    assert_allclose(b["constant_ramp"]["peak_deflection_over_e"], 16.393, atol=5e-4)  # passage table: n = 5, psi = 1
 
 
 def test_optimum_beats_both_ramps_and_resimulates(target):
     d = target.data
     assert d["status"] == "Solve_Succeeded"
-    assert d["peak_deflection_over_e"] <= 14.15  # spec §8.7: any optimiser with alpha_max >= 40 must reach this
+    assert d["peak_deflection_over_e"] <= 14.15  # recomputed: any optimiser with alpha_max >= 40 must reach this
     assert d["peak_deflection_over_e"] <= min(v["peak_deflection_over_e"] for v in d["baselines"].values())
     assert d["resimulation_rel_error"] < 0.01  # the issue: re-simulated peak within 1 % of the collocation peak
     # the re-simulated peak is that of the optimal profile integrated by CVODES (rtol 1e-12)
@@ -95,7 +95,7 @@ def test_other_objectives_never_worse_than_the_ramps(objective):
 
 
 def test_min_time_keeps_the_deflection_limit():
-    # the fastest ramp (33.3 tau) peaks at 6.12 e (spec §5.5: 6.10 e for zeta = 0.05, a* = 0.03 from rest);
+    # the fastest ramp (33.3 tau) peaks at 6.12 e (6.10 e for zeta = 0.05, a* = 0.03 from rest);
     # a 5.8 e limit makes the minimum time longer than that ramp's, yet shorter than the horizon
     ocp = small(objective="min_time", deflection_limit=5.8)
     res = run(ocp, S.DirectCollocation(40, 3, "radau"), multistart=False)

@@ -15,11 +15,11 @@ from autobal.adapters import design
 from autobal.analysis import closed_form
 from autobal.analysis.statics import StaticsSolver
 
-# ---- literature validation: the source's closed forms (App. A L3241-L3342, App. B L3568-L3664) ----
+# ---- literature validation: the source's closed forms (App. A, App. B) ----
 
 def test_pump_closed_form_reproduces_appendix_a(pump):
     cf = closed_form.pump(pump.design.groups, 1.0, 0.04)
-    # published values to the digits printed (spec §10.2): half a unit of the last digit
+    # published values to the digits printed: half a unit of the last digit
     assert abs(cf["dpsi_kr"] - 0.030) < 5e-4
     assert abs(cf["psi1_kr"] - 1.73) < 5e-3
     assert abs(cf["xi"] - 1.294) < 5e-4
@@ -29,14 +29,14 @@ def test_pump_closed_form_reproduces_appendix_a(pump):
     Q_e = cf["Q_e_over_g1pB"] * pump.design.scales["Q_scale"]
     assert_allclose(Q_e, 7.448e-3, rtol=1e-4)
     assert_allclose(Q_e / pump.design.scales["Q_n"], 0.0446, rtol=1e-3)
-    # u0: App. A prints 0.964, its own inputs give 0.96334 (spec §10.2, b = 0.823): reproduced to 0.07 %
+    # u0: App. A prints 0.964, its own inputs give 0.96334: reproduced to 0.07 %
     assert_allclose(cf["u"], 0.964, rtol=1e-3)
     assert_allclose(cf["u"], 0.96334, rtol=1e-5)
-    assert_allclose(cf["kappa_s"], 1.2636, rtol=1e-4)  # spec §10.2 check of (2.36)
+    assert_allclose(cf["kappa_s"], 1.2636, rtol=1e-4)  # recomputed check of (2.36)
 
 
 def test_pump_closed_form_curve_matches_spec_table(pump):
-    # spec §10.2 table of the Figs 2.4-2.6 curves (App. A formulas)
+    # recomputed table of the Figs 2.4-2.6 curves (App. A formulas)
     psi1 = np.array([0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 1.7306])
     cf = closed_form.pump(pump.design.groups, psi1, 0.04)
     assert_allclose(cf["psi2"], [0.27694, 0.52694, 0.77694, 1.02694, 1.27694, 1.52694, 1.75754], atol=1e-5)
@@ -54,7 +54,7 @@ def test_compressor_closed_form_reproduces_appendix_b(compressor):
     assert abs(cf["psi_cam"] - 1.367) < 5e-4
     assert_allclose(cf["Q_e_over_g1pB"] * compressor.design.scales["Q_scale"], 0.029, rtol=0.015)
     # App. B prints u0 = 0.967 and psi1_kr = 1.471; with its printed b = 0.987 its formulas give
-    # 0.96807 and 1.4682 (spec §10.5): reproduced to 0.11 % and 0.2 %
+    # 0.96807 and 1.4682: reproduced to 0.11 % and 0.2 %
     assert_allclose(cf["u"], 0.967, rtol=1.2e-3)
     assert_allclose(cf["psi1_kr"], 1.471, rtol=2.5e-3)
     assert abs(cf["psi1_kr"] - 1.47) < 5e-3  # the chapter text's value
@@ -71,7 +71,7 @@ def test_compressor_closed_form_curve_matches_spec_table(compressor):
 # ---- exact solution: IPOPT vs the closed forms where they are exact, vs Newton ---------------------
 
 def test_pump_exact_equals_quadratic_root(pump):
-    # With the regulator regulating, the disc subsystem is exactly (2.21); spec §10.2: 1.02021, 0.95910
+    # With the regulator regulating, the disc subsystem is exactly (2.21); recomputed: 1.02021, 0.95910
     pt = pump.solve(1.0, 0.04)
     quad = closed_form.pump_quadratic(pump.design.groups, 1.0, 0.04)
     assert not pt.saturated and not pt.contact
@@ -83,7 +83,7 @@ def test_pump_exact_equals_quadratic_root(pump):
 
 
 def test_compressor_exact_equals_closed_form(compressor):
-    # (2.145)-(2.147) are exact for the gas disc with psi4 = 0 (spec §10.5)
+    # (2.145)-(2.147) are exact for the gas disc with psi4 = 0
     pt = compressor.solve(1.0, 0.025)
     cf = closed_form.compressor(compressor.design.groups, 1.0, 0.025)
     for k in ("psi2", "psi3", "u"):

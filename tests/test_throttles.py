@@ -10,7 +10,7 @@ from autobal.models import throttles as th
 
 @pytest.mark.parametrize(
     "name, key, published",
-    [  # [derived] (App. A) and §10.5 (App. B), tolerance 0.5 % as the spec states
+    [  # [derived] (App. A and App. B), tolerance 0.5 %
         ("pump_pe600_statics", "g1", 8.566e-9), ("pump_pe600_statics", "g3", 1.412e-6),
         ("pump_pe600_statics", "g_TB", 1.49e-6), ("pump_pe600_statics", "g_in", 1.928e-7),
         ("pump_pe600_statics", "g_B", 2.276e-6), ("pump_pe600_statics", "g_e", 1.767e-8),
