@@ -1,7 +1,7 @@
 """The Python API: ``load`` a scene, ``run`` its analyses, get Result objects.
 
 >>> import autobal
->>> scene = autobal.load("pump_pe600_simplified", set={"device.disc.face.base_gap": "0.18 mm"})
+>>> scene = autobal.load("pump_pe600_statics", set={"device.disc.face.base_gap": "0.18 mm"})
 >>> run = autobal.run(scene)                     # nothing printed, nothing written
 >>> run["statics"].face_gap                      # m
 >>> run.save("out/pump")                         # results.json, CSV, PNG; atomically

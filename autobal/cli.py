@@ -126,8 +126,11 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``autobal`` command; returns the exit code."""
     args = parser().parse_args(argv)
     if args.cmd == "list":
-        for p in scenario.shipped():
-            print(f"{p.stem:32s} {scenario.load(p).title}")
+        try:
+            for p in scenario.shipped():
+                print(f"{p.stem:32s} {scenario.load(p).title}", flush=True)
+        except BrokenPipeError:  # `autobal list | head`
+            sys.stdout = None
         return EXIT_OK
     previous = signal.signal(signal.SIGTERM, _terminate)
     try:
