@@ -9,6 +9,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import datetime
 import os
 import platform
@@ -17,7 +18,7 @@ import time
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 
-from autobal import __version__, scenario
+from autobal import __version__, report, scenario
 from autobal.analysis.result import Result, write_json
 from autobal.errors import AutobalError, SolveError
 from autobal.output import LOG, OutputFolder, SolverLog
@@ -81,16 +82,18 @@ class Run(Mapping):
             block = res.to_dict()
             out["accuracy"][name] = block.get("accuracy", NO_ACCURACY)
             out[name] = block
+        out["units"] = report.units(out, list(self.results))
         return out
 
     def summary(self) -> str:
         return "\n".join(r.summary() for r in self.results.values())
 
     def write(self, folder: Path) -> list[Path]:
-        """Write every result's files and results.json into an existing ``folder``."""
-        files = [f for r in self.results.values() for f in r.save(folder)]
-        write_json(folder / "results.json", self.to_dict() | {"files": [f.name for f in files]})
-        return files
+        """Write every result's files, results.json and report.html into an existing ``folder``."""
+        outputs = {name: [f.name for f in r.save(folder)] for name, r in self.results.items()}
+        files = [name for names in outputs.values() for name in names]
+        write_json(folder / "results.json", self.to_dict() | {"files": [*files, report.REPORT], "outputs": outputs})
+        return [folder / f for f in files] + [report.render(folder)]
 
     def save(self, out: str | Path) -> Path:
         """Write the run into ``out`` atomically (see :mod:`autobal.output`); returns the folder."""
@@ -118,6 +121,15 @@ def meta(scene: Scenario) -> dict:
 def analyses(scene: Scenario) -> list[str]:
     """The analyses the scene names, in run order."""
     return [name for name in RUNNERS if getattr(scene.analyses, name, None) is not None]
+
+
+def _finish(folder: OutputFolder, scene: Scenario, name: str, data: dict) -> None:
+    """Write a status file (with the scene and the run's provenance) and its report.html into the
+    temporary folder, and commit it."""
+    write_json(folder.tmp / name, data | {"scenario": scene.name, "title": scene.title, "meta": meta(scene)})
+    with contextlib.suppress(Exception):  # the run's own error is being raised: a report must not replace it
+        report.render(folder.tmp)
+    folder.commit()
 
 
 def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=None) -> Run:
@@ -167,17 +179,17 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
         return done
     except SolveError as exc:
         if folder is not None:
-            folder.finish("failed_solve.json", {"status": exc.status, "analysis": current, "error": str(exc),
-                                                "last_iterate": exc.last_iterate})
+            _finish(folder, scene, "failed_solve.json", {"status": exc.status, "analysis": current,
+                                                         "error": str(exc), "last_iterate": exc.last_iterate})
         raise
     except KeyboardInterrupt:
         if folder is not None:
-            folder.finish("interrupted.json", {"status": "interrupted", "analysis": current,
-                                               "completed": list(results)})
+            _finish(folder, scene, "interrupted.json", {"status": "interrupted", "analysis": current,
+                                                        "completed": list(results)})
         raise
     except AutobalError as exc:
         if folder is not None:
-            folder.finish("error.json", {"status": "error", "analysis": current, "error": str(exc)})
+            _finish(folder, scene, "error.json", {"status": "error", "analysis": current, "error": str(exc)})
         raise
     except BaseException:
         if folder is not None:

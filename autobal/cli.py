@@ -7,7 +7,7 @@ import signal
 import sys
 from pathlib import Path
 
-from autobal import __version__, api, scenario
+from autobal import __version__, api, report, scenario
 from autobal.errors import Interrupted, ScenarioError, SolveError
 from autobal.output import LOG, OutputFolder
 
@@ -85,6 +85,17 @@ def _accuracy(args, scn) -> int:
     return EXIT_OK
 
 
+def _report(args) -> int:
+    """Render report.html of an existing output folder."""
+    try:
+        path = report.render(args.folder)
+    except ScenarioError as exc:
+        print(f"autobal: bad input: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    print(f"report: {path}")
+    return EXIT_OK
+
+
 def parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="autobal", description=__doc__.splitlines()[0], epilog=EPILOG,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -115,6 +126,9 @@ def parser() -> argparse.ArgumentParser:
     p_check = sub.add_parser("check", help="validate a scenario without solving")
     scene_args(p_check)
     sub.add_parser("list", help="list the shipped scenarios")
+    p_report = sub.add_parser("report", help="write OUT/report.html again from the results in an output folder")
+    p_report.add_argument("folder", type=Path, metavar="OUT",
+                          help="an output folder of 'autobal run' (holds results.json or failed_solve.json)")
     return ap
 
 
@@ -132,6 +146,8 @@ def main(argv: list[str] | None = None) -> int:
         except BrokenPipeError:  # `autobal list | head`
             sys.stdout = None
         return EXIT_OK
+    if args.cmd == "report":
+        return _report(args)
     previous = signal.signal(signal.SIGTERM, _terminate)
     try:
         scn = scenario.load(args.scenario, overrides=_overrides(args.set))

@@ -1,0 +1,964 @@
+"""report.html of an output folder: one self-contained page an engineer can hand on.
+
+``render(folder)`` reads what a run left in ``folder`` (``results.json``, or the status file of a
+failed, interrupted or refused run), embeds every PNG figure as a data URI and writes
+``report.html`` through the jinja2 templates in ``autobal/templates``.  Nothing in the page is
+fetched from elsewhere.  Per analysis it shows the inputs as given and in SI, the headline numbers
+with their units, the verdicts, the figures with captions, the accuracy estimate and the run time,
+the comparison with the source's published values and the warnings.
+
+``units(results)`` is the ``units`` map of results.json: every numeric key of an analysis block
+(dotted path, ``[]`` for the items of a list of records) -> its SI unit, ``"1"`` for a
+dimensionless group named as in the source.
+"""
+
+from __future__ import annotations
+
+import base64
+import csv
+import hashlib
+import json
+import math
+import re
+from importlib import resources
+from pathlib import Path
+
+import jinja2
+import yaml
+
+from autobal.errors import ScenarioError
+from autobal.schema_dynamics import PARAMETERS
+from autobal.units import DIMENSIONS, UREG
+
+REPORT = "report.html"
+STATUS_FILES = ("failed_solve.json", "interrupted.json", "error.json")
+
+# --------------------------------------------------------------------------------------------
+# units of the results.json keys: (regex on "analysis.dotted.path", SI unit); the first match wins
+# --------------------------------------------------------------------------------------------
+_P = r"(^|\.)"  # start of a key
+UNIT_RULES: list[tuple[str, str]] = [
+    # bookkeeping
+    (r"(run_time_s|time_s|time_monte_carlo_s|cpu_s|build_s|solve_s|total_s|seconds)$", "s"),
+    (r"\.accuracy\.", "1"),
+    (r"_rad_s2$", "rad/s^2"),
+    (r"_rad_s$", "rad/s"),
+    (r"_1_s$", "1/s"),
+    (r"_ms$", "ms"),
+    (r"_N_m$", "N*m"),
+    (r"_W$", "W"),
+    (r"_kg_m2$", "kg*m^2"),
+    (r"(time|cpu|seconds)\w*_s$|integral_deflection2_s$|(^|\.)t_s$", "s"),
+    (r"_um$", "um"),
+    (r"(^|\.)(cv|spread|std_ratio|stable_fraction|saturated_fraction|max_rel_diff|\w+_max_rel_diff)$", "1"),
+    (r"(iterations|points|samples|seed|chunk_size|dof|groups|valid|invalid|count|integrator_steps"
+     r"|zone_without_equilibrium|n_starts|intervals|degree|index|stages)$", "1"),
+    # statics (Pavlenko 2014, ch. 2: groups (2.18), ratios psi = p/p_B, u = z/z_B, xi = x/x_B, q = Q/Q_B)
+    (r"^statics\..*(z0|x0|z_B|x_B)$", "m"),
+    (r"^statics\..*" + _P + r"(p1|p2|p3|pe|pcam|p1_kr|dp_kr|p_B)$", "Pa"),
+    (r"^statics\..*(s_B|s_e|s_T|f_TB)$", "m^2"),
+    (r"^statics\.conductances\.", "m^3/(Pa*s)"),
+    (r"^statics\.scales\.g1$", "m^3/(Pa*s)"),
+    (r"^statics\..*Q_e_over_Q_n$", "1"),
+    (r"^statics\..*" + _P + r"Q_\w+$", "m^3/s"),
+    (r"^statics\.", "1"),
+    # dynamics (§2.4-2.7): frequencies rad/s, amplitudes micrometres, poles 1/s
+    (r"(^|\.)(omega|omega_ref|natural_frequency|imag|frequency)$", "rad/s"),
+    (r"(^|\.)(real|decay_rate|max_real|growth_rate)$", "1/s"),
+    (r"(^|\.)phase_deg$", "deg"),
+    (r"^frequency\..*z_B$", "m"),
+    (r"^stability\.coefficients\.(columns|extra)\.", "per coefficient: K, zeta 1; T, tau s (App. A/B)"),
+    (r"^transient\..*" + _P + r"(z|z0)$", "m"),
+    (r"^transient\..*" + _P + r"(p1|p2|p3|pe|pcam)$", "Pa"),
+    (r"^transient\..*" + _P + r"(t|t_end)$", "s"),
+    (r"^(frequency|stability|transient)\.", "1"),
+    # liquid auto-balancer (Khomyak 2020; Pashkov 2010): efficiency lambda0, k_D, gamma = omega/omega_cr
+    (r"^liquid_balancer\..*(_deg)$", "deg"),
+    (r"^liquid_balancer\..*(_rad)$", "rad"),
+    (r"^liquid_balancer\..*(_pct)$", "%"),
+    (r"^liquid_balancer\..*(_mL)$", "mL"),
+    (r"^liquid_balancer\..*(_gcm)$", "g*cm"),
+    (r"^liquid_balancer\..*" + _P + r"(D0|D)$", "kg*m"),
+    (r"^liquid_balancer\..*" + _P + r"(m_l|M_sys|m|m_d|full_liquid_mass|nested_liquid_mass|limit_mass"
+     r"|rho_pi_h_R2|rho_pi_h_r2)$", "kg"),
+    (r"^liquid_balancer\..*" + _P + r"(n|two_n)$", "1/s"),
+    (r"^liquid_balancer\..*paraboloid\.a$", "1/m"),
+    (r"^liquid_balancer\..*paraboloid\.(z_star|rho_bottom|rho_top)$", "m"),
+    (r"^liquid_balancer\..*" + _P + r"(e_f|r|R_minus_r|f|x_p|e0|radii|deflection|wall_margin|partition_margin"
+     r"|eccentricity_high_speed|eccentricity_3_7)$", "m"),
+    (r"^liquid_balancer\.optimal_height\.(lower_bound|upper_bound|feasible_lower|feasible_upper|optimum"
+     r"|k_D_equals_1_at|grid_optimum|grid_step|grid_difference|grid\.x)$", "m"),
+    (r"^liquid_balancer\.optimal_volume\.(lower_bound|upper_bound|feasible_lower|feasible_upper|optimum"
+     r"|k_D_equals_1_at|grid_optimum|grid_step|grid_difference|grid\.x)$", "m^3"),
+    (r"^liquid_balancer\..*" + _P + r"(chamber_volume|volumes|V|V_opt)$", "m^3"),
+    (r"^liquid_balancer\..*" + _P + r"(critical_speed)$", "rad/s"),
+    (r"^liquid_balancer\..*" + _P + r"nu$", "m^2/s"),
+    (r"^liquid_balancer\..*" + _P + r"density$", "kg/m^3"),
+    (r"^liquid_balancer\..*" + _P + r"viscosity$", "Pa*s"),
+    (r"^liquid_balancer\.", "1"),
+    # estimation (Pavlenko 2014, §4.3-4.4): alpha, tau_max, u, q, Phi are the source's groups
+    (r"^estimation\.bases\.pressure$", "Pa"),
+    (r"^estimation\.bases\.gap$", "m"),
+    (r"^estimation\.bases\.flow$", "m^3/s"),
+    (r"^estimation\.bases\.force$", "N"),
+    (r"^estimation\.", "1"),
+    # Monte Carlo (ch. 3): sampled groups, u, xi, psi, q dimensionless; Q in m^3/s; AFC in micrometres
+    (r"^montecarlo\.afc\.(nominal_um|mean|std|band_low|band_high|quantiles\..*)$", "um"),
+    (r"^montecarlo\..*" + _P + r"Q_\w+(\..*)?$", "m^3/s"),
+    (r"^montecarlo\.", "1"),
+    # reliability of the traditional disc (Pavlenko 2014, ch. 1.2): u, chi, tau dimensionless
+    (r"^reliability\..*_kh$", "kh"),
+    (r"^reliability\..*_h$", "h"),
+    (r"^reliability\..*" + _P + r"t_h$", "h"),
+    (r"^reliability\..*(b_mean|b_std|_per_s)$", "1/s"),
+    (r"^reliability\..*z_B$", "m"),
+    (r"^reliability\.", "1"),
+    # rotor with a liquid auto-balancer (Pashkov 2010): z = Omega/omega_cr, a/e, d dimensionless
+    (r"^rotor_dynamics\.passage\.(table\[\]\.n|crossover_n_star.*)$", "1/s"),
+    (r"^rotor_dynamics\.", "1"),
+    # optimal spin-up: deflection over the eccentricity delta/e, unbalance d, psi, zeta0 dimensionless
+    (r"^spinup\..*" + _P + r"(start_speed|final_speed|max_speed|omega_at_peak)$", "rad/s"),
+    (r"^spinup\..*" + _P + r"max_acceleration$", "rad/s^2"),
+    (r"^spinup\.", "1"),
+]
+
+
+def _leaf_paths(value, path: str):
+    """(dotted path, value) of every numeric leaf; lists of records are walked as ``key[]``."""
+    if isinstance(value, dict):
+        for k, v in value.items():
+            yield from _leaf_paths(v, f"{path}.{k}" if path else str(k))
+    elif isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
+        for v in value:
+            yield from _leaf_paths(v, path + "[]")
+    elif isinstance(value, list):
+        flat = _flatten(value)
+        if any(_is_number(v) for v in flat):
+            yield path, value
+    elif _is_number(value):
+        yield path, value
+
+
+def _flatten(seq):
+    for v in seq:
+        if isinstance(v, list):
+            yield from _flatten(v)
+        else:
+            yield v
+
+
+def _is_number(v) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool)
+
+
+def unit_of(path: str) -> str | None:
+    """SI unit of a results.json key ``analysis.dotted.path`` ("1" when dimensionless), or None."""
+    for pattern, unit in _RULES:
+        if pattern.search(path):
+            return unit
+    return None
+
+
+def units(results: dict, analyses: list[str] | None = None) -> dict[str, str]:
+    """The ``units`` map of results.json: dotted key -> SI unit of every numeric key of the analysis
+    blocks ("1" for dimensionless groups named as in the source)."""
+    names = analyses if analyses is not None else [k for k in results if k in SECTIONS]
+    out = {}
+    for name in names:
+        for path, _ in _leaf_paths(results.get(name, {}), name):
+            unit = _parameter_unit(path, results) or unit_of(path)
+            if unit is not None:
+                out.setdefault(path, unit)
+    return out
+
+
+def _si(kind: str) -> str:
+    return DIMENSIONS[kind][1].replace("**", "^")
+
+
+def _parameter_unit(path: str, results: dict) -> str | None:
+    """Unit of a value of a scanned dynamics parameter (stability maps and single-parameter scans)."""
+    m = re.search(r"\.(\w+)\.(values|nominal)$", path) or re.search(r"nearest_stable\.(\w+)$", path)
+    if m is None or not path.startswith("stability."):
+        return None
+    name = m.group(1)
+    if name in ("x", "y"):  # maps: the axis names its parameter
+        name = _get(results, path.rsplit(".", 1)[0] + ".parameter")
+    return _si(PARAMETERS[name][1]) if name in PARAMETERS else None
+
+
+def _get(data, path: str, default=None):
+    """``data`` at a dotted path (``a.b.c``; an integer picks a list item), or ``default``."""
+    for key in path.split("."):
+        if isinstance(data, dict) and key in data:
+            data = data[key]
+        elif isinstance(data, list) and key.isdigit() and int(key) < len(data):
+            data = data[int(key)]
+        else:
+            return default
+    return data
+
+
+_RULES = [(re.compile(p), u) for p, u in UNIT_RULES]
+
+# --------------------------------------------------------------------------------------------
+# numbers and cells
+# --------------------------------------------------------------------------------------------
+# SI unit -> (unit shown, factor): designers read MPa, mm and L/s
+DISPLAY = {"Pa": ("MPa", 1e-6), "m^3/s": ("L/s", 1e3), "m": ("mm", 1e3), "s": ("s", 1.0)}
+PRETTY = (("um", "µm"), ("^2", "²"), ("^3", "³"), ("*", "·"))
+
+
+def pretty_unit(unit: str) -> str:
+    """A unit as printed in the report ("1" -> "dimensionless")."""
+    if unit == "1":
+        return "dimensionless"
+    for a, b in PRETTY:
+        unit = unit.replace(a, b)
+    return unit
+
+
+def number(v) -> str:
+    """A number with 5 significant digits ('—' for null)."""
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "—"
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, int):
+        return str(v)
+    a = abs(v)
+    return f"{v:.5g}" if a == 0 or 1e-3 <= a < 1e6 else f"{v:.4e}"
+
+
+def cell(v, unit: str | None = None) -> dict:
+    """A table cell: a number (or null) with its unit, converted to the display unit of DISPLAY;
+    words and yes/no without a unit."""
+    if isinstance(v, bool | str):
+        return text(v)
+    unit = unit or "?"
+    if v is None:
+        return {"text": "—", "unit": pretty_unit(unit), "num": True, "null": True}
+    if unit in DISPLAY:
+        shown, factor = DISPLAY[unit]
+        if unit == "m" and abs(v) < 1e-5:
+            shown, factor = "um", 1e6
+        return {"text": number(v * factor), "unit": pretty_unit(shown), "num": True}
+    return {"text": number(v), "unit": pretty_unit(unit), "num": True}
+
+
+def text(v) -> dict:
+    """A table cell holding words (no unit)."""
+    if isinstance(v, bool):
+        v = "yes" if v else "no"
+    return {"text": "—" if v is None else str(v), "unit": "", "num": False}
+
+
+def table(caption: str, columns: list[str], rows: list[list[dict]], headline: bool = False) -> dict:
+    return {"caption": caption, "columns": columns, "rows": rows, "headline": headline}
+
+
+def _unit_path(name: str, path: str) -> str:
+    return re.sub(r"\.\d+(?=\.|$)", "[]", f"{name}.{path}")
+
+
+class Section:
+    """The report section of one analysis, filled by its function in SECTIONS."""
+
+    def __init__(self, name: str, block: dict, results: dict, folder: Path | None = None):
+        self.name, self.block, self.results, self.folder = name, block, results, folder
+        self.rows: list[list[dict]] = []  # the headline table: quantity, symbol, value, unit
+        self.tables: list[dict] = []
+        self.verdicts: list[dict] = []
+        self.warnings: list[str] = []
+        self.notes: list[str] = []
+        self.comparison: dict | None = None
+
+    def get(self, path: str, default=None):
+        return _get(self.block, path, default)
+
+    def unit(self, path: str) -> str | None:
+        return _parameter_unit(_unit_path(self.name, path), self.results) or unit_of(_unit_path(self.name, path))
+
+    def row(self, label: str, symbol: str, path: str, unit: str | None = None, value=None) -> None:
+        """One headline row; the value is the block's at ``path`` unless given, its unit the units map's.
+        A key the block lacks (the analysis did not compute it) gives no row."""
+        if value is None and not _has(self.block, path):
+            return
+        v = self.get(path) if value is None else value
+        c = cell(v, unit or self.unit(path) or "?")
+        self.rows.append([text(label), text(symbol), c, text(c["unit"]), text(self.get(path + "_status") or "")])
+
+    def verdict(self, ok: bool | None, message: str) -> None:
+        """ok True (good), False (bad), None (information)."""
+        self.verdicts.append({"ok": ok, "text": message})
+
+    def headline(self) -> dict | None:
+        if not self.rows:
+            return None
+        return table("Headline numbers", ["quantity", "symbol", "value", "unit", "note"], self.rows, headline=True)
+
+
+def _has(data, path: str) -> bool:
+    sentinel = object()
+    return _get(data, path, sentinel) is not sentinel
+
+
+def _leading(real: list, imag: list, count: int = 2) -> str:
+    """The poles with the largest real part, as 're ± im i' (1/s)."""
+    pairs = sorted(zip(real, imag, strict=True), key=lambda p: -(p[0] if p[0] is not None else -math.inf))
+    seen, out = set(), []
+    for re_, im in pairs:
+        key = (round(re_, 6), round(abs(im), 6))
+        if key in seen:
+            continue
+        seen.add(key)
+        out.append(f"{number(re_)} ± {number(abs(im))}i" if abs(im) > 0 else number(re_))
+        if len(out) == count:
+            break
+    return ", ".join(out)
+
+
+def _null_warnings(block, path: str, out: list[str]) -> None:
+    """'key is null: status' for every null that carries a ``key_status`` beside it."""
+    if isinstance(block, dict):
+        for k, v in block.items():
+            if k.endswith("_status") and isinstance(v, str) and block.get(k[:-7], 0) is None:
+                out.append(f"{path}.{k[:-7]} is null: {v}")
+            elif isinstance(v, dict | list):
+                _null_warnings(v, f"{path}.{k}", out)
+    elif isinstance(block, list):
+        for i, v in enumerate(block):
+            if isinstance(v, dict):
+                _null_warnings(v, f"{path}[{i}]", out)
+
+
+# --------------------------------------------------------------------------------------------
+# the source's published values per shipped scene (docs/validation.md has the full ledger)
+# --------------------------------------------------------------------------------------------
+#: scene -> analysis -> rows (quantity, symbol, key in the block or None, published value, unit, where)
+PUBLISHED = {
+    "pump_pe600_statics": {"statics": [
+        ("critical margin", "δψ_kr", "closed_form.dpsi_kr", 0.030, "1", "Pavlenko (2014), Eq. (2.31), App. A"),
+        ("critical discharge ratio", "ψ1_kr", "closed_form.psi1_kr", 1.73, "1", "Pavlenko (2014), Eq. (2.32), App. A"),
+        ("barrier flow", "Q_e", "closed_form.Q_e", 7.448e-3, "m^3/s", "Pavlenko (2014), App. A"),
+        ("face gap", "u0", "closed_form.u0", 0.964, "1", "Pavlenko (2014), Eq. (2.27), App. A"),
+        ("valve opening", "ξ0", "closed_form.xi0", 1.294, "1", "Pavlenko (2014), Eq. (2.28), App. A"),
+        ("valve chamber pressure", "ψ_cam0", "closed_form.psi_cam0", 1.238, "1", "Pavlenko (2014), Eq. (2.26)"),
+        ("disc chamber pressure", "ψ20", "closed_form.psi2_0", 1.027, "1", "Pavlenko (2014), Eq. (2.24)"),
+        ("cavity pressure", "ψ30", "closed_form.psi3_0", 0.513, "1", "Pavlenko (2014), Eq. (2.25)"),
+    ]},
+    "compressor_k180_statics": {"statics": [
+        ("critical margin", "δψ_kr", "closed_form.dpsi_kr", 0.017, "1", "Pavlenko (2014), Eq. (2.160), App. B"),
+        ("critical discharge ratio", "ψ1_kr", "closed_form.psi1_kr", 1.471, "1", "Pavlenko (2014), Eq. (2.160)"),
+        ("barrier flow", "Q_e", "closed_form.Q_e", 0.029, "m^3/s", "Pavlenko (2014), App. B"),
+        ("face gap", "u0", "closed_form.u0", 0.967, "1", "Pavlenko (2014), Eq. (2.147), App. B"),
+        ("valve opening", "ξ0", "closed_form.xi0", 0.356, "1", "Pavlenko (2014), App. B"),
+        ("valve chamber pressure", "ψ_cam0", "closed_form.psi_cam0", 1.367, "1", "Pavlenko (2014), App. B"),
+        ("disc chamber pressure", "ψ20", "closed_form.psi2_0", 1.007, "1", "Pavlenko (2014), Eq. (2.145)"),
+        ("cavity pressure", "ψ30", "closed_form.psi3_0", 0.223, "1", "Pavlenko (2014), Eq. (2.146)"),
+    ]},
+    "pump_pe600_dynamics": {"frequency": [
+        ("first AFC peak", "ω_I", "models.program.peaks.0.omega", 1980.0, "rad/s", "Pavlenko (2014), §2.6, AFC figure"),
+        ("first peak amplitude", "A_I", "models.program.peaks.0.amplitude_um", 25.0, "um", "Pavlenko (2014), §2.6"),
+        ("second AFC peak", "ω_II", "models.program.peaks.1.omega", 2920.0, "rad/s", "Pavlenko (2014), §2.6"),
+        ("second peak amplitude", "A_II", "models.program.peaks.1.amplitude_um", 10.0, "um", "Pavlenko (2014), §2.6"),
+        ("amplitude at 660 rad/s", "A(ω0)", "models.program.at_operating_speed.amplitude_um", 7.0, "um",
+         "Pavlenko (2014), §2.6"),
+    ]},
+    "compressor_k180_dynamics": {"frequency": [
+        ("first AFC peak", "ω_I", "models.program.peaks.0.omega", 2340.0, "rad/s", "Pavlenko (2014), §2.7, AFC figure"),
+        ("first peak amplitude", "A_I", "models.program.peaks.0.amplitude_um", 33.0, "um", "Pavlenko (2014), §2.7"),
+        ("second AFC peak", "ω_II", "models.program.peaks.1.omega", 4810.0, "rad/s", "Pavlenko (2014), §2.7"),
+        ("second peak amplitude", "A_II", "models.program.peaks.1.amplitude_um", 18.0, "um", "Pavlenko (2014), §2.7"),
+        ("amplitude at 1571 rad/s", "A(ω0)", "models.program.at_operating_speed.amplitude_um", 20.0, "um",
+         "Pavlenko (2014), §2.7"),
+    ]},
+    "hydroheel_wear": {"reliability": [
+        ("largest gap", "u_max", "u_max", 1.5, "1", "Pavlenko (2014), Eq. (1.52)"),
+        ("load group", "χ0", "chi0", 1.76, "1", "Pavlenko (2014), Eq. (1.30)"),
+        ("exponent", "k", "k", 3.3, "1", "Pavlenko (2014), Eq. (1.32)"),
+        ("P(wear ≤ z_B) at 2000 h", "", "wear_le_base_gap.0", 0.5, "1", "Pavlenko (2014), Fig. 1.27"),
+        ("reliability at 2000 h", "P(t)", "literal.P.0", 0.75, "1", "Pavlenko (2014), Eq. (1.48), Fig. 1.28"),
+        ("reliability at 4000 h", "P(t)", "literal.P.2", 0.25, "1", "Pavlenko (2014), Fig. 1.28 ('3 times lower')"),
+        ("mean time to failure", "T", "literal.mttf_h", 2700.0, "h", "Pavlenko (2014), Eq. (1.49)"),
+    ]},
+    "rig_table43_fit": {"estimation": [
+        ("loss coefficient from losses", "α", None, 1.75, "1", "Pavlenko (2014), §4.5, Eq. (4.38)"),
+        ("one-parameter static estimate", "α", "fits.static_1p.parameters.alpha.estimate", 1.68, "1",
+         "Pavlenko (2014), Eq. (4.23)"),
+        ("two-parameter static estimate", "α", "fits.static_2p.parameters.alpha.estimate", 1.72, "1",
+         "Pavlenko (2014), Eqs. (4.26)-(4.27)"),
+        ("two-parameter static estimate", "τ_max", "fits.static_2p.parameters.tau_max.estimate", 2.75, "1",
+         "Pavlenko (2014), Eqs. (4.26)-(4.27)"),
+    ]},
+    "pump_pe600_montecarlo": {"montecarlo": [
+        ("face-gap spread (3σ/mean) at ψ1 = 1", "δu", "exact.u.spread.2", 0.20, "1",
+         "Pavlenko (2014), ch. 3, conclusion 4"),
+        ("face-leak spread (3σ/mean) at ψ1 = 1", "δq_T", "source.q_T.spread.2", 0.25, "1",
+         "Pavlenko (2014), ch. 3, conclusion 4"),
+        ("AFC amplitude spread", "cv", "afc.at.peak_2.cv", 0.40, "1",
+         "Pavlenko (2014), ch. 3, conclusion 4 ('up to 40 %')"),
+    ]},
+}
+
+
+def _comparison(sec: Section, scenario: str) -> None:
+    rows = PUBLISHED.get(scenario, {}).get(sec.name)
+    if not rows:
+        return
+    out = []
+    for label, symbol, key, published, unit, where in rows:
+        got = sec.get(key) if key else None
+        rel = (got - published) / abs(published) if isinstance(got, int | float) and published else None
+        out.append([text(label), text(symbol), cell(published, unit), cell(got, unit),
+                    cell(None if rel is None else 100 * rel, "%"), text(where)])
+    sec.comparison = table("Comparison with the source's published values (docs/validation.md explains each "
+                           "difference)", ["quantity", "symbol", "published", "toolkit", "difference", "source"], out)
+
+
+# --------------------------------------------------------------------------------------------
+# one function per analysis: headline rows, verdicts, tables, warnings
+# --------------------------------------------------------------------------------------------
+def statics_section(sec: Section) -> None:
+    """Operating point, criticals, saturation and contact (Pavlenko 2014, ch. 2.2-2.3)."""
+    sec.row("discharge pressure ratio at the operating point", "ψ1 = p1/p_B", "exact.psi1")
+    sec.row("discharge pressure", "p1", "exact.p1")
+    sec.row("base pressure", "p_B", "scales.p_B")
+    sec.row("face gap", "z0", "exact.z0")
+    sec.row("face gap ratio", "u0 = z0/z_B", "exact.u0")
+    sec.row("valve opening", "x0", "exact.x0")
+    sec.row("valve opening ratio", "ξ0 = x0/x_B", "exact.xi0")
+    for k, sym, what in (("p2", "p2", "disc chamber"), ("p3", "p3", "cavity behind the disc"),
+                         ("pe", "p_e", "barrier chamber"), ("pcam", "p_cam", "valve chamber")):
+        sec.row(f"{what} pressure", sym, f"exact.{k}")
+    sec.row("barrier flow", "Q_e", "exact.Q_e")
+    sec.row("face-throttle leak", "Q_T", "exact.Q_T")
+    sec.row("inner-seal flow", "Q_1", "exact.Q_1")
+    sec.row("base flow of the source's flow ratios q", "Q_B", "closed_form.Q_B")
+    sec.row("axial stiffness of the balancing force", "κ_s", "exact.kappa_s")
+    sec.row("critical discharge pressure (inner-seal flow reverses)", "p1_kr", "critical_exact.p1_kr")
+    sec.row("critical discharge ratio", "ψ1_kr", "critical_exact.psi1_kr")
+    sec.row("critical barrier margin", "δψ_kr", "critical_exact.dpsi_kr")
+    sec.row("critical barrier pressure margin", "Δp_kr", "critical_exact.dp_kr")
+    ex, sw = sec.get("exact", {}), sec.get("sweep", {})
+    sat, contact, psi1 = sw.get("regulator_saturated", []), sw.get("contact", []), sw.get("psi1", [])
+    if "regulator_saturated" in ex:
+        sec.verdict(not ex["regulator_saturated"], "regulator at the operating point: " +
+                    ("SATURATED (valve on its open stop)" if ex["regulator_saturated"] else "regulating"))
+    if any(sat):
+        first = psi1[sat.index(True)]
+        sec.verdict(False, f"regulator saturated (valve on its stop) from ψ1 = {number(first)} in the sweep")
+        sec.warnings.append(f"regulator saturation from ψ1 = {number(first)}: the closed forms assume an ideal "
+                            "regulator and are not valid there")
+    if "contact" in ex:
+        sec.verdict(not ex["contact"], "face contact at the operating point: " + ("YES (disc on the seat)"
+                                                                                  if ex["contact"] else "none"))
+    if any(contact):
+        sec.verdict(False, f"face contact in the sweep from ψ1 = {number(psi1[contact.index(True)])}")
+    kr = sec.get("critical_exact.psi1_kr")
+    if kr is not None and ex.get("psi1"):
+        sec.verdict(kr > ex["psi1"], f"inner-seal flow reverses at ψ1_kr = {number(kr)} "
+                    f"({number(kr / ex['psi1'])} × the operating ratio)")
+    q1 = ex.get("Q_1")
+    if q1 is not None:
+        sec.verdict(q1 > 0, f"inner-seal flow at the operating point: {number(q1 * 1e3)} L/s "
+                    + ("(towards the disc, as designed)" if q1 > 0 else "(REVERSED)"))
+    cf = sec.get("closed_form", {})
+    rows = []
+    for key, sym, path in (("u0", "u0", "exact.u0"), ("xi0", "ξ0", "exact.xi0"), ("psi2_0", "ψ20", "exact.psi2_0"),
+                           ("psi3_0", "ψ30", "exact.psi3_0"), ("psi_e0", "ψ_e0", "exact.psi_e0"),
+                           ("psi_cam0", "ψ_cam0", "exact.psi_cam0"), ("kappa_s", "κ_s", "exact.kappa_s"),
+                           ("psi1_kr", "ψ1_kr", "critical_exact.psi1_kr"),
+                           ("dpsi_kr", "δψ_kr", "critical_exact.dpsi_kr"), ("Q_e", "Q_e", "exact.Q_e")):
+        if key in cf:
+            u = sec.unit(path) or "?"
+            rows.append([text(sym), cell(cf[key], u), cell(sec.get(path), u)])
+    if rows:
+        sec.tables.append(table("The source's closed forms (ideal regulator, Eqs. (2.24)-(2.36)) beside the exact "
+                                "IPOPT solution of the full static system", ["quantity", "closed form", "exact"],
+                                rows))
+
+
+def _stable_models(results: dict) -> dict:
+    return {m: v.get("stable") for m, v in _get(results, "stability.models", {}).items()}
+
+
+MODEL_ORDER = ("nonlinear", "nonlinear_chain", "consistent", "program", "thesis")
+
+
+def _ordered(models: dict) -> list:
+    """Models with the energy-consistent one first and the source's hand models last (validation)."""
+    rank = {m: i for i, m in enumerate(MODEL_ORDER)}
+    return sorted(models.items(), key=lambda kv: rank.get(kv[0], len(rank)))
+
+
+MODEL_NAMES = {"program": "source's program model (App. A/B hand-linear)", "thesis": "source's model as printed",
+               "consistent": "consistent (chain form, hand-derived)",
+               "nonlinear_chain": "nonlinear, chain form (2.40)/(2.111)",
+               "nonlinear": "nonlinear, energy-consistent"}
+
+
+def frequency_section(sec: Section) -> None:
+    """AFC peaks and the amplitude at the operating speed per model (Pavlenko 2014, §2.6)."""
+    stable = _stable_models(sec.results)
+    sec.row("forcing amplitude", "δψ_1a", "forcing_amplitude")
+    rows = []
+    for model, m in _ordered(sec.get("models", {})):
+        peaks = m.get("peaks", [])
+        at = m.get("at_operating_speed", {})
+        verdict = {True: "stable", False: "UNSTABLE", None: "—"}[stable.get(model)]
+        for i, pk in enumerate(peaks or [{}]):
+            first = i == 0
+            rows.append([text(MODEL_NAMES.get(model, model) if first else ""), text(m.get("forcing") if first else ""),
+                         text(verdict if first else ""), cell(pk.get("omega"), "rad/s"),
+                         cell(pk.get("amplitude_um"), "um"),
+                         cell(at.get("amplitude_um") if i == 0 else None, "um"),
+                         cell(m.get("static_amplitude_um") if i == 0 else None, "um")])
+        if stable.get(model) is False:
+            sec.warnings.append(f"{model}: the model is unstable at this operating point; its AFC is the response of "
+                                "an unstable system (no steady state exists)")
+    sec.tables.append(table(f"AFC of the face gap at ω0 = {number(sec.get('at_operating_speed.omega'))} rad/s: peaks, "
+                            "amplitude at the operating speed and the static amplitude",
+                            ["model", "forcing", "stability", "peak ω", "peak amplitude", "amplitude at ω0",
+                             "static amplitude"], rows, headline=True))
+    top = sec.get("model")
+    if top:
+        sec.verdict(None, f"top-level keys of this block are the {MODEL_NAMES.get(top, top)} model, "
+                          f"forcing '{sec.get('forcing')}'")
+
+
+def stability_section(sec: Section) -> None:
+    """Poles, Hurwitz determinants and margins per model (Pavlenko 2014, §2.7)."""
+    rows = []
+    for model, m in _ordered(sec.get("models", {})):
+        poles = m.get("poles", {})
+        lead = _leading(poles.get("real", []), poles.get("imag", []))
+        st = m.get("stable")
+        rows.append([text(MODEL_NAMES.get(model, model)), text({True: "stable", False: "UNSTABLE"}.get(st, "—")),
+                     {"text": lead, "unit": "1/s", "num": True}, cell(_get(m, "margin.decay_rate"), "1/s"),
+                     cell(_get(m, "margin.min_damping_ratio"), "1")])
+        sec.verdict(st, f"{MODEL_NAMES.get(model, model)}: {'stable' if st else 'UNSTABLE'}; leading poles "
+                        f"{lead} 1/s; decay rate {number(_get(m, 'margin.decay_rate'))} 1/s")
+    sec.tables.append(table("Stability per model: leading poles (largest real part), decay rate −max Re λ and the "
+                            "smallest damping ratio", ["model", "verdict", "leading poles", "decay rate",
+                                                       "min damping ratio ζ"], rows, headline=True))
+    sec.notes.extend((sec.get("restoring") or {}).values())
+
+
+def transient_section(sec: Section) -> None:
+    """Nonlinear transients by CVODES/IDAS (Pavlenko 2014, §2.5)."""
+    sec.row("equilibrium residual of the nonlinear model", "", "equilibrium_residual")
+    rows = []
+    for c in sec.get("cases", []):
+        rows.append([text(c.get("input")), cell(c.get("amplitude"), "1"), cell(c.get("frequency"), "rad/s"),
+                     cell(c.get("max_dz_um"), "um"), cell(c.get("final_dz_um"), "um"), cell(c.get("t_end"), "s"),
+                     cell(c.get("integrator_steps"), "1"), text(c.get("failure") or "ok")])
+        if c.get("failure"):
+            sec.verdict(False, f"{c.get('input')}: integration failed: {c['failure']}")
+        for e in c.get("events") or []:
+            sec.warnings.append(f"{c.get('input')}: event {e}")
+    sec.tables.append(table(f"Transients of the {sec.get('model')} model ({sec.get('integrator')}): face-gap change "
+                            "dz", ["input", "amplitude", "frequency", "max |dz|", "final dz", "t_end", "steps",
+                                   "status"], rows, headline=True))
+    if rows and not any(c.get("failure") for c in sec.get("cases", [])):
+        sec.verdict(True, "every transient integrated to its end time")
+
+
+def liquid_balancer_section(sec: Section) -> None:
+    """Efficiency of the liquid auto-balancer at the operating point (Khomyak 2020, ch. 3)."""
+    op = "operating_point"
+    sec.row("speed ratio", "γ = ω/ω_cr", f"{op}.gamma")
+    sec.row("speed", "ω", f"{op}.omega", "rad/s")
+    sec.row("phase lag of the deflection", "δ", f"{op}.delta_deg")
+    sec.row("initial unbalance", "D0", "system.D0")
+    sec.row("liquid unbalance capacity", "D", f"{op}.D")
+    sec.row("capacity ratio", "k_D", f"{op}.k_D")
+    sec.row("efficiency (the source's algorithm)", "λ0", f"{op}.lambda0")
+    sec.row("efficiency (self-consistent closure, toolkit extension)", "λ0", f"{op}.lambda0_self_consistent")
+    sec.row("optimal liquid height", "h_opt", "optimal_height.optimum")
+    sec.row("optimal liquid volume", "V_opt", "optimal_volume.optimum")
+    o = sec.get(op, {})
+    if "equilibrium_exists" in o:
+        sec.verdict(o["equilibrium_exists"], "balancing equilibrium " + ("exists" if o["equilibrium_exists"] else
+                                                                         f"does NOT exist: {o.get('reason')}"))
+    if "sufficiency_ok" in o:
+        sec.verdict(o["sufficiency_ok"], "liquid sufficiency (Pashkov 2010): " + ("met" if o["sufficiency_ok"]
+                                                                                 else "NOT met"))
+    for key in ("optimal_height", "optimal_volume"):
+        if sec.get(f"{key}.singular"):
+            sec.warnings.append(f"{key}: {sec.get(f'{key}.reason')}")
+    rows = sec.get("table_3_2.rows", [])
+    if rows:
+        sec.comparison = table("Comparison with Khomyak (2020), Table 3.2: efficiency λ0",
+                               ["γ", "published theory", "published experiment", "toolkit (documented)",
+                                "toolkit (self-consistent)", "status"],
+                               [[cell(r.get("gamma"), "1"), cell(r.get("published_theory"), "1"),
+                                 cell(r.get("published_experiment"), "1"), cell(r.get("toolkit_documented"), "1"),
+                                 cell(r.get("toolkit_self_consistent"), "1"), text(r.get("status"))] for r in rows])
+    rows = sec.get("table_3_3.rows", [])
+    if rows:
+        sec.tables.append(table("Khomyak (2020), Table 3.3: optimal liquid volume",
+                                ["D0", "published V_opt", "experiment V_opt", "toolkit (documented)",
+                                 "toolkit (crescent)", "status"],
+                                [[cell(r.get("D0_gcm"), "g*cm"), cell(r.get("published_V_opt_mL"), "mL"),
+                                  cell(r.get("experiment_V_opt_mL"), "mL"), cell(r.get("V_opt_mL"), "mL"),
+                                  cell(r.get("V_opt_crescent_mL"), "mL"), text(r.get("status"))] for r in rows]))
+
+
+def estimation_section(sec: Section) -> None:
+    """Least-squares fits with standard errors and adequacy (Pavlenko 2014, §4.3-4.4)."""
+    rows = []
+    for fit, f in sec.get("fits", {}).items():
+        for pname, p in f.get("parameters", {}).items():
+            if not p.get("free"):
+                continue
+            rows.append([text(fit), text(pname), cell(p.get("estimate"), "1"), cell(p.get("standard_error"), "1"),
+                         cell(p.get("ci_low"), "1"), cell(p.get("ci_high"), "1"), cell(f.get("residual_std"), "1")])
+        st = _get(f, "solver.status")
+        sec.verdict(_get(f, "solver.success"), f"{fit}: solver {st}")
+        ad = f.get("adequacy") or {}
+        if "adequate" in ad:
+            sec.verdict(ad["adequate"], f"{fit}: Fisher adequacy F = {number(ad.get('F'))} vs F_crit = "
+                                        f"{number(ad.get('F_crit'))}: " + ("adequate" if ad["adequate"] else
+                                                                           "NOT adequate"))
+    sec.tables.append(table("Fitted parameters (the source's dimensionless groups): estimate, standard error, "
+                            "confidence interval", ["fit", "parameter", "estimate", "standard error", "CI low",
+                                                    "CI high", "residual std"], rows, headline=True))
+
+
+def montecarlo_section(sec: Section) -> None:
+    """Spreads of face gap and leak over the sampled groups (Pavlenko 2014, ch. 3)."""
+    sec.row("samples", "N", "samples")
+    psi1 = sec.get("psi1", [])
+    rows = []
+    for i, p in enumerate(psi1):
+        rows.append([cell(p, "1"), cell(_get(sec.block, f"exact.u.mean.{i}"), "1"),
+                     cell(_get(sec.block, f"exact.u.std.{i}"), "1"), cell(_get(sec.block, f"exact.u.spread.{i}"), "1"),
+                     cell(_get(sec.block, f"exact.q_T.spread.{i}"), "1"),
+                     cell(_get(sec.block, f"exact.Q_T.mean.{i}"), "m^3/s"),
+                     cell(_get(sec.block, f"saturated_fraction.{i}"), "1"),
+                     cell(_get(sec.block, f"exact.u.invalid.{i}"), "1")])
+        frac = _get(sec.block, f"saturated_fraction.{i}") or 0
+        if frac > 0:
+            sec.warnings.append(f"ψ1 = {number(p)}: {number(100 * frac)} % of the samples have the regulator "
+                                "saturated")
+    sec.tables.append(table("Exact statics over the samples: mean, standard deviation and spread 3σ/mean",
+                            ["ψ1", "mean u", "std u", "spread u", "spread q_T", "mean Q_T", "saturated fraction",
+                             "invalid samples"], rows, headline=True))
+    at = sec.get("afc.at") or {}
+    if at:
+        model = sec.get("afc.model")
+        st = _stable_models(sec.results).get(model)
+        sec.tables.append(table(f"AFC amplitude spread ({model} model, {sec.get('afc.samples')} samples)",
+                                ["where", "ω", "nominal", "mean", "std", "cv"],
+                                [[text(k), cell(v.get("omega"), "rad/s"), cell(v.get("nominal_um"), "um"),
+                                  cell(v.get("mean_um"), "um"), cell(v.get("std_um"), "um"), cell(v.get("cv"), "1")]
+                                 for k, v in at.items()], headline=True))
+        if model == "program":
+            sec.warnings.append("the AFC spread is computed on the source's program model, which the stability "
+                                "analysis of the same device reports unstable (see the dynamics scenes)"
+                                if st is None else f"the AFC model '{model}' is {'stable' if st else 'UNSTABLE'}")
+
+
+def reliability_section(sec: Section) -> None:
+    """Wear, reliability P(t) and mean time to failure of the traditional disc (Pavlenko 2014, ch. 1.2)."""
+    sec.row("largest gap", "u_max", "u_max")
+    sec.row("mean wear rate", "b̄", "b_mean")
+    sec.row("mean load", "τ̄", "tau_mean")
+    times = sec.get("times_h", [])
+    for i, t in enumerate(times):
+        sec.row(f"reliability at {number(t)} h (literal (1.48))", "P(t)", f"literal.P.{i}")
+    sec.row("mean time to failure (literal)", "T", "literal.mttf_h")
+    sec.row("mean time to failure (renormalised load density)", "T", "renormalised.mttf_h")
+    level = sec.get("reliable_probability")
+    for variant in ("literal", "renormalised"):
+        t = sec.get(f"{variant}.time_at_h")
+        p0 = sec.get(f"{variant}.P0")
+        if t is None and level is not None:
+            sec.verdict(False, f"{variant}: P(t) never reaches {number(level)} (P(0) = {number(p0)}): no time of "
+                               "reliable operation")
+        elif t is not None:
+            sec.verdict(None, f"{variant}: P(t) ≥ {number(level)} up to t = {number(t)} h")
+
+
+def rotor_dynamics_section(sec: Section) -> None:
+    """Rotor with a liquid auto-balancer: stationary, steps, passage (Pashkov 2010)."""
+    sec.row("liquid mass ratio", "ψ", "rotor.psi")
+    sec.row("critical speed", "ω_cr", "rotor.omega_cr_rad_s")
+    sec.row("damping ratio", "ζ0", "rotor.zeta0")
+    sec.row("largest real part of the eigenvalues over Ω0", "max Re λ/Ω0", "stationary.stability.max_real_over_Omega0")
+    mr = sec.get("stationary.stability.max_real_over_Omega0")
+    if mr is not None:
+        sec.verdict(mr < 0, f"steady whirl {'asymptotically stable' if mr < 0 else 'NOT stable'} "
+                            f"(max Re λ/Ω0 = {number(mr)})")
+    rows = [[cell(r.get("n"), "1/s"), cell(r.get("psi"), "1"), cell(r.get("delta_max_over_e"), "1"),
+             cell(r.get("z_delta_max"), "1"), cell(r.get("d_max"), "1")] for r in sec.get("passage.table", [])]
+    if rows:
+        accel = number(sec.get("passage.acceleration_rad_s2"))
+        sec.tables.append(table(f"Passage through the critical speed at {accel} rad/s²: peak deflection δ*/e and its speed ratio z = Ω/ω_cr",
+                                ["n", "ψ", "δ*/e", "z at the peak", "d*"], rows, headline=True))
+
+
+def spinup_section(sec: Section) -> None:
+    """Optimal spin-up through the critical speed (direct collocation, CVODES re-simulation)."""
+    sec.row("objective", "", "objective", value=sec.get("objective"))
+    sec.row("peak deflection of the optimum (re-simulated)", "δ*/e", "peak_deflection_over_e")
+    sec.row("peak deflection of the best ramp", "δ*/e", "baseline_ramp_peak_over_e")
+    sec.row("time of the peak", "t*", "time_of_peak_s")
+    sec.row("speed at the peak", "Ω*", "omega_at_peak_rad_s")
+    sec.row("final time", "T", "final_time_s")
+    sec.row("critical speed", "ω_cr", "omega_cr_rad_s")
+    sec.row("largest drive torque", "M_max", "max_torque_N_m")
+    sec.row("largest drive power", "P_max", "max_power_W")
+    sec.row("re-simulation vs transcription", "", "resimulation_rel_error")
+    sec.row("build time", "", "build_time_s")
+    sec.row("solve time (all starts)", "", "total_solve_time_s")
+    st = sec.get("status")
+    sec.verdict(st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"IPOPT: {st} ({sec.get('method')})")
+    best, ramp = sec.get("peak_deflection_over_e"), sec.get("baseline_ramp_peak_over_e")
+    if best is not None and ramp:
+        sec.verdict(best <= ramp, f"optimum peak {number(best)} e vs the best ramp {number(ramp)} e "
+                                  f"({number(100 * (best - ramp) / ramp)} %)")
+    if "within_drive_limits" in sec.block:
+        sec.verdict(sec.get("within_drive_limits"), "drive torque and power limits " +
+                    ("kept" if sec.get("within_drive_limits") else "EXCEEDED") + " in the re-simulation")
+    for b in _spinup_binding(sec):
+        sec.verdict(None, f"binding constraint: {b}")
+    rows = [[text(s.get("start")), text(s.get("status")), cell(s.get("objective"), "1"),
+             cell(s.get("resimulated_peak_over_e"), "1"), cell(s.get("solve_time_s"), "s"), text(s.get("keeps_limit"))]
+            for s in sec.get("starts", [])]
+    if rows:
+        sec.tables.append(table("Starts of the multi-start", ["start", "status", "objective δ*/e",
+                                                              "re-simulated δ*/e", "solve time", "keeps limit"], rows))
+
+
+def _spinup_binding(sec: Section) -> list[str]:
+    """The limits the optimum runs on: acceleration (from the controls table), torque, power, deflection."""
+    scene = _get(sec.results, "meta.scene_si") or {}
+    ocp, drive = _get(scene, "analyses.spinup") or {}, _get(scene, "rotor.drive") or {}
+    out = []
+    amax, controls = ocp.get("max_acceleration"), sec.folder / "spinup_controls.csv" if sec.folder else None
+    if amax and controls is not None and controls.exists():
+        with controls.open() as fh:
+            alpha = [float(r["alpha_rad_s2"]) for r in csv.DictReader(fh)]
+        on = sum(abs(a) >= 0.999 * amax for a in alpha)
+        if on:
+            out.append(f"acceleration limit |α| ≤ {number(amax)} rad/s² on {on} of {len(alpha)} control intervals "
+                       f"({number(100 * on / len(alpha))} %)")
+    for key, limit, unit, what in (("max_torque_N_m", drive.get("max_torque"), "N·m", "drive torque limit"),
+                                   ("max_power_W", drive.get("max_power"), "W", "drive power limit")):
+        got = sec.get(key)
+        if limit and got is not None and got >= 0.999 * limit:
+            out.append(f"{what} {number(limit)} {unit} reached (largest {number(got)} {unit})")
+    lim = ocp.get("deflection_limit")
+    if lim and sec.get("peak_deflection_over_e") is not None and sec.get("peak_deflection_over_e") >= 0.999 * lim:
+        out.append(f"deflection limit δ/e ≤ {number(lim)} reached")
+    if not out:
+        out.append("none of the acceleration, torque, power and deflection limits is active at the optimum")
+    return out
+
+
+SECTIONS = {"statics": statics_section, "frequency": frequency_section, "stability": stability_section,
+            "transient": transient_section, "liquid_balancer": liquid_balancer_section,
+            "estimation": estimation_section, "reliability": reliability_section, "montecarlo": montecarlo_section,
+            "rotor_dynamics": rotor_dynamics_section, "spinup": spinup_section}
+
+TITLES = {"statics": "Statics", "frequency": "Frequency response (AFC)", "stability": "Stability",
+          "transient": "Transients", "liquid_balancer": "Liquid auto-balancer", "estimation": "Parameter estimation",
+          "reliability": "Reliability", "montecarlo": "Monte Carlo", "rotor_dynamics": "Rotor dynamics",
+          "spinup": "Optimal spin-up"}
+
+#: figure file name (regex) -> (analysis, caption)
+CAPTIONS = [
+    (r"fig_pressures", "statics", "Chamber pressure ratios ψ = p/p_B against the discharge ratio ψ1, exact (solid) "
+                                  "and the source's closed forms (dashed); Pavlenko (2014), Fig. 2.4 / 2.9"),
+    (r"fig_gap", "statics", "Face gap u = z/z_B and valve opening ξ = x/x_B against ψ1; Pavlenko (2014), Fig. 2.5"),
+    (r"fig_flows", "statics", "Flows relative to the base flow Q_B against ψ1; Pavlenko (2014), Fig. 2.6 / 2.10"),
+    (r"fig_force_gap", "statics", "Balancing force φ(u) against the face gap at the operating ψ1 and the load τ − χ; "
+                                  "Pavlenko (2014), Eq. (2.35)"),
+    (r"fig_afc", "frequency", "Amplitude and phase of the face-gap response per model (AFC); Pavlenko (2014), §2.6"),
+    (r"fig_poles", "stability", "Poles per model (right half-plane = unstable)"),
+    (r"fig_stability_map_(\w+)", "stability", "Stability map of the {0} model: largest real part of the poles over "
+                                              "two parameters, the nominal design marked"),
+    (r"fig_transients", "transient", "Nonlinear transients of the face gap and the chamber pressures"),
+    (r"fig_liquid_efficiency", "liquid_balancer", "Efficiency λ0 against the speed ratio γ, the source's variants and "
+                                                  "the self-consistent closure, with Khomyak (2020) Table 3.2"),
+    (r"fig_liquid_optimum", "liquid_balancer", "Efficiency against liquid height and volume: the IPOPT optimum and a "
+                                               "dense grid"),
+    (r"fig_estimation_(\w+)", "estimation", "Fit {0}: data, fitted curve and its 95 % band; "
+                                             "Pavlenko (2014), Table 4.3"),
+    (r"fig_montecarlo_afc", "montecarlo", "AFC amplitude over the sampled constants: nominal, mean and ±3σ band"),
+    (r"fig_montecarlo", "montecarlo", "Face gap, valve opening and leak over the samples against ψ1: mean and ±3σ "
+                                      "bands; Pavlenko (2014), Figs. 3.8-3.9"),
+    (r"fig_reliability", "reliability", "Reliability P(t) (literal and renormalised load density) and the wear "
+                                        "probability; Pavlenko (2014), Figs. 1.27-1.28"),
+    (r"fig_rotor_(\w+)", "rotor_dynamics", "Rotor with a liquid auto-balancer: {0} (Pashkov 2010)"),
+    (r"spinup_(\w+)", "spinup", "Optimal spin-up: {0} of the optimum beside the ramps"),
+]
+
+
+def caption(name: str) -> tuple[str | None, str]:
+    """(analysis, caption) of a figure file."""
+    stem = Path(name).stem
+    for pattern, analysis, words in CAPTIONS:
+        m = re.fullmatch(pattern, stem)
+        if m:
+            return analysis, words.format(*(g.replace("_", " ") for g in m.groups()))
+    return None, stem.replace("_", " ")
+
+
+def data_uri(path: Path) -> str:
+    kind = {".png": "image/png", ".svg": "image/svg+xml", ".jpg": "image/jpeg"}[path.suffix.lower()]
+    return f"data:{kind};base64," + base64.b64encode(path.read_bytes()).decode("ascii")
+
+
+FIGURE_SUFFIXES = (".png", ".svg", ".jpg")
+
+
+def _figures(folder: Path, results: dict) -> dict[str, list[dict]]:
+    """analysis -> its figures {name, caption, uri}, from results.json ``outputs`` or the file names."""
+    outputs = results.get("outputs") or {}
+    owner = {f: name for name, files in outputs.items() for f in files}
+    out: dict[str, list[dict]] = {}
+    for name in results.get("files") or sorted(p.name for p in folder.iterdir()):
+        path = folder / name
+        if path.suffix.lower() not in FIGURE_SUFFIXES or not path.exists():
+            continue
+        analysis, words = caption(name)
+        out.setdefault(owner.get(name, analysis) or "", []).append({"name": name, "caption": words,
+                                                                   "uri": data_uri(path)})
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# inputs: as given (the scene file and --set) and in SI
+# --------------------------------------------------------------------------------------------
+def _flat(data, path: str = "") -> dict:
+    if isinstance(data, dict):
+        out = {}
+        for k, v in data.items():
+            out |= _flat(v, f"{path}.{k}" if path else str(k))
+        return out
+    return {path: data}
+
+
+def _si_unit_of(given) -> str:
+    """The SI unit of a value written with a unit ('0.35 mm' -> 'm'), '' if it has none."""
+    if not isinstance(given, str):
+        return ""
+    try:
+        q = UREG.Quantity(given)
+    except Exception:  # noqa: BLE001 (words, not a quantity)
+        return ""
+    if q.dimensionless:
+        return ""
+    for dim, si, _ in DIMENSIONS.values():
+        if q.dimensionality == UREG.get_dimensionality(dim):
+            return si.replace("**", "^")
+    return ""
+
+
+def inputs(meta: dict) -> tuple[list[list[dict]], str]:
+    """Rows (path, as given, SI value, SI unit) of the scene, and where the 'as given' column came from."""
+    given, where = {}, "the scene file is not available: SI values only"
+    path = Path(meta.get("file") or "")
+    if path.is_file() and hashlib.sha256(path.read_bytes()).hexdigest() == meta.get("sha256"):
+        given = _flat(yaml.safe_load(path.read_text()) or {})
+        where = f"as given in {path.name} (sha256 {meta['sha256'][:12]}…)"
+    overrides = meta.get("overrides") or {}
+    given |= {k: f"{v} (--set)" for k, v in overrides.items()}
+    rows = []
+    for key, si in _flat(meta.get("scene_si") or {}).items():
+        g = given.get(key)
+        unit = _si_unit_of(g.removesuffix(" (--set)") if isinstance(g, str) else g)
+        shown = json.dumps(si) if isinstance(si, list | dict) else si
+        rows.append([text(key), text("" if g is None else g),
+                     {"text": number(shown) if _is_number(shown) else str(shown), "unit": pretty_unit(unit) if unit
+                      else "", "num": _is_number(shown)}, text(pretty_unit(unit) if unit else "")])
+    return rows, where
+
+
+# --------------------------------------------------------------------------------------------
+# rendering
+# --------------------------------------------------------------------------------------------
+def _environment() -> jinja2.Environment:
+    files = resources.files("autobal") / "templates"
+    loader = jinja2.DictLoader({p.name: p.read_text(encoding="utf-8") for p in files.iterdir()
+                                if p.name.endswith((".j2", ".css"))})
+    return jinja2.Environment(loader=loader, autoescape=True, trim_blocks=True, lstrip_blocks=True,
+                              undefined=jinja2.StrictUndefined)
+
+
+def _section(name: str, block: dict, results: dict, figures: list[dict], folder: Path) -> dict:
+    sec = Section(name, block, results, folder)
+    error = None
+    try:
+        SECTIONS[name](sec)
+        _comparison(sec, results.get("scenario", ""))
+    except Exception as exc:  # noqa: BLE001 (a report must not fail a run; it says what it could not show)
+        error = f"this section could not be rendered: {type(exc).__name__}: {exc}"
+    _null_warnings(block, name, sec.warnings)
+    acc = (results.get("accuracy") or {}).get(name) or block.get("accuracy") or {}
+    tables = [t for t in (sec.headline(), *sec.tables) if t is not None]
+    return {"name": name, "title": TITLES.get(name, name), "tables": tables, "verdicts": sec.verdicts,
+            "comparison": sec.comparison, "warnings": sec.warnings, "notes": sec.notes, "figures": figures,
+            "accuracy": {"estimate": acc.get("estimate"), "how": acc.get("how", "")},
+            "run_time": (results.get("timing") or {}).get(name), "error": error}
+
+
+def context(folder: Path) -> dict:
+    """Everything the template shows, from the files of ``folder``."""
+    folder = Path(folder)
+    status_file = next((folder / n for n in STATUS_FILES if (folder / n).exists()), None)
+    results_file = folder / "results.json"
+    if results_file.exists():
+        results = json.loads(results_file.read_text())
+        failure = None
+    elif status_file is not None:
+        results = {}
+        failure = json.loads(status_file.read_text()) | {"file": status_file.name}
+    else:
+        raise ScenarioError(f"{folder}: holds neither results.json nor {', '.join(STATUS_FILES)}")
+    if failure is not None:
+        it = failure.get("last_iterate")
+        failure["last_iterate_text"] = json.dumps(it, indent=1)[:4000] if it is not None else ""
+    figures = _figures(folder, results)
+    names = [k for k in results if k in SECTIONS]
+    sections = [_section(n, results[n], results, figures.pop(n, []), folder) for n in names]
+    rows, where = inputs(results.get("meta") or {})
+    others = [f for figs in figures.values() for f in figs]
+    summary = sorted(({"section": sec["title"], **v} for sec in sections for v in sec["verdicts"]
+                      if v["ok"] is not None), key=lambda v: v["ok"])
+    return {"results": results, "failure": failure, "sections": sections, "summary": summary, "other_figures": others,
+            "inputs": rows, "inputs_where": where, "meta": results.get("meta") or {},
+            "overrides": (results.get("meta") or {}).get("overrides") or {},
+            "title": results.get("title") or failure and f"{failure.get('status')}: {folder.name}" or folder.name,
+            "folder": folder.name, "log": (folder / "autobal.log").exists()}
+
+
+def html(folder: str | Path) -> str:
+    """The report of an output folder as an HTML string."""
+    return _environment().get_template("report.html.j2").render(**context(Path(folder)))
+
+
+def render(folder: str | Path) -> Path:
+    """Write ``report.html`` into an output folder (from its results.json or status file); returns its path.
+
+    Parameters
+    ----------
+    folder : str or Path
+        An output folder of ``autobal run`` (or :meth:`autobal.api.Run.save`).
+
+    Returns
+    -------
+    Path
+        ``folder/report.html``, self-contained: figures embedded as data URIs, no external resources.
+
+    Raises
+    ------
+    ScenarioError
+        The folder holds neither results.json nor a status file of a failed run.
+    """
+    out = Path(folder) / REPORT
+    out.write_text(html(folder), encoding="utf-8")
+    return out
