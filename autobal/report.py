@@ -695,7 +695,8 @@ def rotor_dynamics_section(sec: Section) -> None:
              cell(r.get("z_delta_max"), "1"), cell(r.get("d_max"), "1")] for r in sec.get("passage.table", [])]
     if rows:
         accel = number(sec.get("passage.acceleration_rad_s2"))
-        sec.tables.append(table(f"Passage through the critical speed at {accel} rad/s²: peak deflection δ*/e and its speed ratio z = Ω/ω_cr",
+        sec.tables.append(table(f"Passage through the critical speed at {accel} rad/s²: peak deflection δ*/e and its "
+                                "speed ratio z = Ω/ω_cr",
                                 ["n", "ψ", "δ*/e", "z at the peak", "d*"], rows, headline=True))
 
 
