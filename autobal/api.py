@@ -9,7 +9,6 @@
 
 from __future__ import annotations
 
-import contextlib
 import datetime
 import os
 import platform
@@ -127,8 +126,11 @@ def _finish(folder: OutputFolder, scene: Scenario, name: str, data: dict) -> Non
     """Write a status file (with the scene and the run's provenance) and its report.html into the
     temporary folder, and commit it."""
     write_json(folder.tmp / name, data | {"scenario": scene.name, "title": scene.title, "meta": meta(scene)})
-    with contextlib.suppress(Exception):  # the run's own error is being raised: a report must not replace it
+    try:
         report.render(folder.tmp)
+    except Exception as exc:  # noqa: BLE001 (the run's own error is being raised: a report must not replace it)
+        with open(folder.tmp / LOG, "a") as log:
+            log.write(f"report.html not written: {type(exc).__name__}: {exc}\n")
     folder.commit()
 
 

@@ -26,6 +26,7 @@ from pathlib import Path
 import jinja2
 import yaml
 
+from autobal.analysis.result import plain
 from autobal.errors import ScenarioError
 from autobal.schema_dynamics import PARAMETERS
 from autobal.units import DIMENSIONS, UREG
@@ -165,7 +166,7 @@ def units(results: dict, analyses: list[str] | None = None) -> dict[str, str]:
     names = analyses if analyses is not None else [k for k in results if k in SECTIONS]
     out = {}
     for name in names:
-        for path, _ in _leaf_paths(results.get(name, {}), name):
+        for path, _ in _leaf_paths(plain(results.get(name, {})), name):
             unit = _parameter_unit(path, results) or unit_of(path)
             if unit is not None:
                 out.setdefault(path, unit)
@@ -886,8 +887,7 @@ def _environment() -> jinja2.Environment:
     files = resources.files("autobal") / "templates"
     loader = jinja2.DictLoader({p.name: p.read_text(encoding="utf-8") for p in files.iterdir()
                                 if p.name.endswith((".j2", ".css"))})
-    return jinja2.Environment(loader=loader, autoescape=True, trim_blocks=True, lstrip_blocks=True,
-                              undefined=jinja2.StrictUndefined)
+    return jinja2.Environment(loader=loader, autoescape=True, trim_blocks=True, lstrip_blocks=True)
 
 
 def _section(name: str, block: dict, results: dict, figures: list[dict], folder: Path) -> dict:
@@ -907,6 +907,19 @@ def _section(name: str, block: dict, results: dict, figures: list[dict], folder:
             "run_time": (results.get("timing") or {}).get(name), "error": error}
 
 
+def _iterate_rows(it) -> list[list[str]]:
+    """The solver's last iterate as (key, what) rows: scalars as they are, lists by size and ends."""
+    rows = []
+    for key, v in _flat(it if isinstance(it, dict) else {"x": it}).items():
+        if isinstance(v, list):
+            flat = list(_flatten(v))
+            ends = f"{number(flat[0])} … {number(flat[-1])}" if flat and all(_is_number(x) for x in flat) else ""
+            rows.append([key, f"{len(flat)} values {ends}".strip()])
+        else:
+            rows.append([key, number(v) if _is_number(v) else str(v)])
+    return rows
+
+
 def context(folder: Path) -> dict:
     """Everything the template shows, from the files of ``folder``."""
     folder = Path(folder)
@@ -922,19 +935,20 @@ def context(folder: Path) -> dict:
         raise ScenarioError(f"{folder}: holds neither results.json nor {', '.join(STATUS_FILES)}")
     if failure is not None:
         it = failure.get("last_iterate")
-        failure["last_iterate_text"] = json.dumps(it, indent=1)[:4000] if it is not None else ""
+        failure["last_iterate_rows"] = _iterate_rows(it)
     figures = _figures(folder, results)
     names = [k for k in results if k in SECTIONS]
     sections = [_section(n, results[n], results, figures.pop(n, []), folder) for n in names]
-    rows, where = inputs(results.get("meta") or {})
+    meta = results.get("meta") or (failure or {}).get("meta") or {}
+    rows, where = inputs(meta)
     others = [f for figs in figures.values() for f in figs]
     summary = sorted(({"section": sec["title"], **v} for sec in sections for v in sec["verdicts"]
                       if v["ok"] is not None), key=lambda v: v["ok"])
     return {"results": results, "failure": failure, "sections": sections, "summary": summary, "other_figures": others,
-            "inputs": rows, "inputs_where": where, "meta": results.get("meta") or {},
-            "overrides": (results.get("meta") or {}).get("overrides") or {},
-            "title": results.get("title") or failure and f"{failure.get('status')}: {folder.name}" or folder.name,
-            "folder": folder.name, "log": (folder / "autobal.log").exists()}
+            "inputs": rows, "inputs_where": where, "meta": meta, "overrides": meta.get("overrides") or {},
+            "title": results.get("title") or (failure or {}).get("title") or "autobal run",
+            "scenario": results.get("scenario") or (failure or {}).get("scenario") or "—",
+            "log": (folder / "autobal.log").exists()}
 
 
 def html(folder: str | Path) -> str:
