@@ -206,7 +206,7 @@ _RULES = [(re.compile(p), u) for p, u in UNIT_RULES]
 # numbers and cells
 # --------------------------------------------------------------------------------------------
 # SI unit -> (unit shown, factor): designers read MPa, mm and L/s
-DISPLAY = {"Pa": ("MPa", 1e-6), "m^3/s": ("L/s", 1e3), "m": ("mm", 1e3), "s": ("s", 1.0)}
+DISPLAY = {"Pa": ("MPa", 1e-6), "m^3/s": ("L/s", 1e3), "m": ("mm", 1e3), "m^3": ("L", 1e3)}
 PRETTY = (("um", "µm"), ("^2", "²"), ("^3", "³"), ("*", "·"))
 
 
@@ -254,8 +254,11 @@ def text(v) -> dict:
     return {"text": "—" if v is None else str(v), "unit": "", "num": False}
 
 
-def table(caption: str, columns: list[str], rows: list[list[dict]], headline: bool = False) -> dict:
-    return {"caption": caption, "columns": columns, "rows": rows, "headline": headline}
+def table(caption: str, columns: list[str], rows: list[list[dict]], headline: bool = False,
+          unit_column: bool = False) -> dict:
+    """A table of cells; ``headline`` marks the headline numbers, ``unit_column`` a table whose units
+    stand in a column of their own (the numbers' cells then show no unit)."""
+    return {"caption": caption, "columns": columns, "rows": rows, "headline": headline, "unit_column": unit_column}
 
 
 def _unit_path(name: str, path: str) -> str:
@@ -296,7 +299,8 @@ class Section:
     def headline(self) -> dict | None:
         if not self.rows:
             return None
-        return table("Headline numbers", ["quantity", "symbol", "value", "unit", "note"], self.rows, headline=True)
+        return table("Headline numbers", ["quantity", "symbol", "value", "unit", "note"], self.rows, headline=True,
+                     unit_column=True)
 
 
 def _has(data, path: str) -> bool:
@@ -414,7 +418,9 @@ def _comparison(sec: Section, scenario: str) -> None:
         out.append([text(label), text(symbol), cell(published, unit), cell(got, unit),
                     cell(None if rel is None else 100 * rel, "%"), text(where)])
     sec.comparison = table("Comparison with the source's published values (docs/validation.md explains each "
-                           "difference)", ["quantity", "symbol", "published", "toolkit", "difference", "source"], out)
+                           "difference)",
+                           ["quantity", "symbol", "published", "toolkit (the source's model)", "difference", "source"],
+                           out)
 
 
 # --------------------------------------------------------------------------------------------
@@ -502,6 +508,15 @@ MODEL_NAMES = {"program": "source's program model (App. A/B hand-linear)", "thes
 def frequency_section(sec: Section) -> None:
     """AFC peaks and the amplitude at the operating speed per model (Pavlenko 2014, §2.6)."""
     stable = _stable_models(sec.results)
+    models = sec.get("models", {})
+    lead = next((m for m in MODEL_ORDER if m in models), None)
+    if lead is not None:
+        what = MODEL_NAMES.get(lead, lead)
+        sec.row(f"first resonance ({what})", "ω_I", f"models.{lead}.peaks.0.omega")
+        sec.row(f"amplitude at the first resonance ({what})", "A_I", f"models.{lead}.peaks.0.amplitude_um")
+        sec.row("operating speed", "ω0", f"models.{lead}.at_operating_speed.omega")
+        sec.row(f"amplitude at the operating speed ({what})", "A(ω0)",
+                f"models.{lead}.at_operating_speed.amplitude_um")
     sec.row("forcing amplitude", "δψ_1a", "forcing_amplitude")
     rows = []
     for model, m in _ordered(sec.get("models", {})):
@@ -524,8 +539,8 @@ def frequency_section(sec: Section) -> None:
                              "static amplitude"], rows, headline=True))
     top = sec.get("model")
     if top:
-        sec.verdict(None, f"top-level keys of this block are the {MODEL_NAMES.get(top, top)} model, "
-                          f"forcing '{sec.get('forcing')}'")
+        sec.verdict(None, f"the top-level keys of the frequency block in results.json hold the "
+                          f"{MODEL_NAMES.get(top, top)}, forcing '{sec.get('forcing')}'")
 
 
 def stability_section(sec: Section) -> None:
@@ -538,8 +553,11 @@ def stability_section(sec: Section) -> None:
         rows.append([text(MODEL_NAMES.get(model, model)), text({True: "stable", False: "UNSTABLE"}.get(st, "—")),
                      {"text": lead, "unit": "1/s", "num": True}, cell(_get(m, "margin.decay_rate"), "1/s"),
                      cell(_get(m, "margin.min_damping_ratio"), "1")])
+        decay = _get(m, "margin.decay_rate")
+        rate = ("" if decay is None else f"; disturbances decay at {number(decay)} 1/s" if decay > 0
+                else f"; disturbances GROW at {number(-decay)} 1/s")
         sec.verdict(st, f"{MODEL_NAMES.get(model, model)}: {'stable' if st else 'UNSTABLE'}; leading poles "
-                        f"{lead} 1/s; decay rate {number(_get(m, 'margin.decay_rate'))} 1/s")
+                        f"{lead} 1/s{rate}")
     sec.tables.append(table("Stability per model: leading poles (largest real part), decay rate −max Re λ and the "
                             "smallest damping ratio", ["model", "verdict", "leading poles", "decay rate",
                                                        "min damping ratio ζ"], rows, headline=True))
@@ -646,6 +664,16 @@ def montecarlo_section(sec: Section) -> None:
     sec.tables.append(table("Exact statics over the samples: mean, standard deviation and spread 3σ/mean",
                             ["ψ1", "mean u", "std u", "spread u", "spread q_T", "mean Q_T", "saturated fraction",
                              "invalid samples"], rows, headline=True))
+    ref = sec.get("reference_psi1")
+    if ref in psi1:
+        i = psi1.index(ref)
+        sec.verdict(None, f"at ψ1 = {number(ref)}: face gap u = {number(_get(sec.block, f'exact.u.mean.{i}'))} ± "
+                          f"{number(_get(sec.block, f'exact.u.std.{i}'))} (spread 3σ/mean "
+                          f"{number(100 * (_get(sec.block, f'exact.u.spread.{i}') or 0))} %), face leak spread "
+                          f"{number(100 * (_get(sec.block, f'exact.q_T.spread.{i}') or 0))} %")
+    invalid = sum(_get(sec.block, "exact.u.invalid") or [])
+    sec.verdict(invalid == 0, f"{invalid} samples without a converged exact solution" if invalid else
+                "every sample has a converged exact solution")
     at = sec.get("afc.at") or {}
     if at:
         model = sec.get("afc.model")
@@ -688,6 +716,9 @@ def rotor_dynamics_section(sec: Section) -> None:
     sec.row("critical speed", "ω_cr", "rotor.omega_cr_rad_s")
     sec.row("damping ratio", "ζ0", "rotor.zeta0")
     sec.row("largest real part of the eigenvalues over Ω0", "max Re λ/Ω0", "stationary.stability.max_real_over_Omega0")
+    for psi, n in (sec.get("passage.crossover_n_star") or {}).items():
+        sec.row(f"damping above which the liquid raises the passage peak d* (ψ = {psi})", "n*", "",
+                "1/s", value=n)
     mr = sec.get("stationary.stability.max_real_over_Omega0")
     if mr is not None:
         sec.verdict(mr < 0, f"steady whirl {'asymptotically stable' if mr < 0 else 'NOT stable'} "
@@ -705,6 +736,10 @@ def spinup_section(sec: Section) -> None:
     """Optimal spin-up through the critical speed (direct collocation, CVODES re-simulation)."""
     sec.row("objective", "", "objective", value=sec.get("objective"))
     sec.row("peak deflection of the optimum (re-simulated)", "δ*/e", "peak_deflection_over_e")
+    e = _get(sec.results, "meta.scene_si.rotor.eccentricity")
+    if e and sec.get("peak_deflection_over_e") is not None:
+        sec.row("peak deflection of the optimum", "δ*", "", "m", value=sec.get("peak_deflection_over_e") * e)
+        sec.row("eccentricity of the rotor", "e", "", "m", value=e)
     sec.row("peak deflection of the best ramp", "δ*/e", "baseline_ramp_peak_over_e")
     sec.row("time of the peak", "t*", "time_of_peak_s")
     sec.row("speed at the peak", "Ω*", "omega_at_peak_rad_s")
@@ -712,7 +747,7 @@ def spinup_section(sec: Section) -> None:
     sec.row("critical speed", "ω_cr", "omega_cr_rad_s")
     sec.row("largest drive torque", "M_max", "max_torque_N_m")
     sec.row("largest drive power", "P_max", "max_power_W")
-    sec.row("re-simulation vs transcription", "", "resimulation_rel_error")
+    sec.row("relative difference, CVODES re-simulation vs transcription", "", "resimulation_rel_error")
     sec.row("build time", "", "build_time_s")
     sec.row("solve time (all starts)", "", "total_solve_time_s")
     st = sec.get("status")
@@ -721,7 +756,10 @@ def spinup_section(sec: Section) -> None:
     if best is not None and ramp:
         sec.verdict(best <= ramp, f"optimum peak {number(best)} e vs the best ramp {number(ramp)} e "
                                   f"({number(100 * (best - ramp) / ramp)} %)")
-    if "within_drive_limits" in sec.block:
+    drive = _get(sec.results, "meta.scene_si.rotor.drive") or {}
+    if not (drive.get("max_torque") or drive.get("max_power")):
+        sec.verdict(None, "no drive torque or power limit in the scene")
+    elif "within_drive_limits" in sec.block:
         sec.verdict(sec.get("within_drive_limits"), "drive torque and power limits " +
                     ("kept" if sec.get("within_drive_limits") else "EXCEEDED") + " in the re-simulation")
     for b in _spinup_binding(sec):
@@ -872,9 +910,11 @@ def inputs(meta: dict) -> tuple[list[list[dict]], str]:
     rows = []
     for key, si in _flat(meta.get("scene_si") or {}).items():
         g = given.get(key)
+        if key in ("name", "title", "source") or si is None and g is None:
+            continue  # shown at the top / a part the scene does not have
         unit = _si_unit_of(g.removesuffix(" (--set)") if isinstance(g, str) else g)
         shown = json.dumps(si) if isinstance(si, list | dict) else si
-        rows.append([text(key), text("" if g is None else g),
+        rows.append([text(key), text("(default)" if g is None else json.dumps(g) if isinstance(g, list | dict) else g),
                      {"text": number(shown) if _is_number(shown) else str(shown), "unit": pretty_unit(unit) if unit
                       else "", "num": _is_number(shown)}, text(pretty_unit(unit) if unit else "")])
     return rows, where
@@ -942,8 +982,7 @@ def context(folder: Path) -> dict:
     meta = results.get("meta") or (failure or {}).get("meta") or {}
     rows, where = inputs(meta)
     others = [f for figs in figures.values() for f in figs]
-    summary = sorted(({"section": sec["title"], **v} for sec in sections for v in sec["verdicts"]
-                      if v["ok"] is not None), key=lambda v: v["ok"])
+    summary = [{"section": sec["title"], **v} for sec in sections for v in sec["verdicts"] if v["ok"] is not None]
     return {"results": results, "failure": failure, "sections": sections, "summary": summary, "other_figures": others,
             "inputs": rows, "inputs_where": where, "meta": meta, "overrides": meta.get("overrides") or {},
             "title": results.get("title") or (failure or {}).get("title") or "autobal run",

@@ -165,7 +165,7 @@ def test_units_map():
 
 def test_cells_convert_to_the_display_unit():
     assert report.cell(32.2749e6, "Pa")["text"] == "32.275" and report.cell(1e6, "Pa")["unit"] == "MPa"
-    assert report.cell(1.4386e-4, "m")["text"] == "0.14386"
+    assert report.cell(1.4386e-4, "m")["text"] == "0.14386" and report.cell(5.461e-3, "m^3")["unit"] == "L"
     assert report.cell(2e-6, "m") == {"text": "2", "unit": "µm", "num": True}
     assert report.cell(None, "Pa")["text"] == "—"
     assert report.cell(0.96, "1")["unit"] == "dimensionless"
