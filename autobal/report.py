@@ -340,44 +340,41 @@ def _null_warnings(block, path: str, out: list[str]) -> None:
 # --------------------------------------------------------------------------------------------
 # the source's published values per shipped scene (docs/validation.md has the full ledger)
 # --------------------------------------------------------------------------------------------
+_STATICS = (("critical margin", "δψ_kr", "dpsi_kr", "1"), ("critical discharge ratio", "ψ1_kr", "psi1_kr", "1"),
+            ("barrier flow", "Q_e", "Q_e", "m^3/s"), ("face gap", "u0", "u0", "1"), ("valve opening", "ξ0", "xi0", "1"),
+            ("valve chamber pressure", "ψ_cam0", "psi_cam0", "1"), ("disc chamber pressure", "ψ20", "psi2_0", "1"),
+            ("cavity pressure", "ψ30", "psi3_0", "1"))
+_AFC = (("first AFC peak", "ω_I", "peaks.0.omega", "rad/s"),
+        ("first peak amplitude", "A_I", "peaks.0.amplitude_um", "um"),
+        ("second AFC peak", "ω_II", "peaks.1.omega", "rad/s"),
+        ("second peak amplitude", "A_II", "peaks.1.amplitude_um", "um"),
+        ("amplitude at the operating speed", "A(ω0)", "at_operating_speed.amplitude_um", "um"))
+
+
+def _statics_published(values: tuple, where: tuple) -> list:
+    """Rows of the appendix's closed-form statics (Pavlenko 2014): published values and where printed."""
+    return [(label, sym, f"closed_form.{key}", v, unit, f"Pavlenko (2014), {w}")
+            for (label, sym, key, unit), v, w in zip(_STATICS, values, where, strict=True)]
+
+
+def _afc_published(values: tuple, where: str) -> list:
+    """Rows of the published AFC of the source's program model (Pavlenko 2014)."""
+    return [(label, sym, f"models.program.{key}", v, unit, f"Pavlenko (2014), {where}")
+            for (label, sym, key, unit), v in zip(_AFC, values, strict=True)]
+
+
 #: scene -> analysis -> rows (quantity, symbol, key in the block or None, published value, unit, where)
 PUBLISHED = {
-    "pump_pe600_statics": {"statics": [
-        ("critical margin", "δψ_kr", "closed_form.dpsi_kr", 0.030, "1", "Pavlenko (2014), Eq. (2.31), App. A"),
-        ("critical discharge ratio", "ψ1_kr", "closed_form.psi1_kr", 1.73, "1", "Pavlenko (2014), Eq. (2.32), App. A"),
-        ("barrier flow", "Q_e", "closed_form.Q_e", 7.448e-3, "m^3/s", "Pavlenko (2014), App. A"),
-        ("face gap", "u0", "closed_form.u0", 0.964, "1", "Pavlenko (2014), Eq. (2.27), App. A"),
-        ("valve opening", "ξ0", "closed_form.xi0", 1.294, "1", "Pavlenko (2014), Eq. (2.28), App. A"),
-        ("valve chamber pressure", "ψ_cam0", "closed_form.psi_cam0", 1.238, "1", "Pavlenko (2014), Eq. (2.26)"),
-        ("disc chamber pressure", "ψ20", "closed_form.psi2_0", 1.027, "1", "Pavlenko (2014), Eq. (2.24)"),
-        ("cavity pressure", "ψ30", "closed_form.psi3_0", 0.513, "1", "Pavlenko (2014), Eq. (2.25)"),
-    ]},
-    "compressor_k180_statics": {"statics": [
-        ("critical margin", "δψ_kr", "closed_form.dpsi_kr", 0.017, "1", "Pavlenko (2014), Eq. (2.160), App. B"),
-        ("critical discharge ratio", "ψ1_kr", "closed_form.psi1_kr", 1.471, "1", "Pavlenko (2014), Eq. (2.160)"),
-        ("barrier flow", "Q_e", "closed_form.Q_e", 0.029, "m^3/s", "Pavlenko (2014), App. B"),
-        ("face gap", "u0", "closed_form.u0", 0.967, "1", "Pavlenko (2014), Eq. (2.147), App. B"),
-        ("valve opening", "ξ0", "closed_form.xi0", 0.356, "1", "Pavlenko (2014), App. B"),
-        ("valve chamber pressure", "ψ_cam0", "closed_form.psi_cam0", 1.367, "1", "Pavlenko (2014), App. B"),
-        ("disc chamber pressure", "ψ20", "closed_form.psi2_0", 1.007, "1", "Pavlenko (2014), Eq. (2.145)"),
-        ("cavity pressure", "ψ30", "closed_form.psi3_0", 0.223, "1", "Pavlenko (2014), Eq. (2.146)"),
-    ]},
-    "pump_pe600_dynamics": {"frequency": [
-        ("first AFC peak", "ω_I", "models.program.peaks.0.omega", 1980.0, "rad/s", "Pavlenko (2014), §2.6, AFC figure"),
-        ("first peak amplitude", "A_I", "models.program.peaks.0.amplitude_um", 25.0, "um", "Pavlenko (2014), §2.6"),
-        ("second AFC peak", "ω_II", "models.program.peaks.1.omega", 2920.0, "rad/s", "Pavlenko (2014), §2.6"),
-        ("second peak amplitude", "A_II", "models.program.peaks.1.amplitude_um", 10.0, "um", "Pavlenko (2014), §2.6"),
-        ("amplitude at 660 rad/s", "A(ω0)", "models.program.at_operating_speed.amplitude_um", 7.0, "um",
-         "Pavlenko (2014), §2.6"),
-    ]},
-    "compressor_k180_dynamics": {"frequency": [
-        ("first AFC peak", "ω_I", "models.program.peaks.0.omega", 2340.0, "rad/s", "Pavlenko (2014), §2.7, AFC figure"),
-        ("first peak amplitude", "A_I", "models.program.peaks.0.amplitude_um", 33.0, "um", "Pavlenko (2014), §2.7"),
-        ("second AFC peak", "ω_II", "models.program.peaks.1.omega", 4810.0, "rad/s", "Pavlenko (2014), §2.7"),
-        ("second peak amplitude", "A_II", "models.program.peaks.1.amplitude_um", 18.0, "um", "Pavlenko (2014), §2.7"),
-        ("amplitude at 1571 rad/s", "A(ω0)", "models.program.at_operating_speed.amplitude_um", 20.0, "um",
-         "Pavlenko (2014), §2.7"),
-    ]},
+    "pump_pe600_statics": {"statics": _statics_published(
+        (0.030, 1.73, 7.448e-3, 0.964, 1.294, 1.238, 1.027, 0.513),
+        ("Eq. (2.31), App. A", "Eq. (2.32), App. A", "App. A", "Eq. (2.27), App. A", "Eq. (2.28), App. A",
+         "Eq. (2.26), App. A", "Eq. (2.24), App. A", "Eq. (2.25), App. A"))},
+    "compressor_k180_statics": {"statics": _statics_published(
+        (0.017, 1.471, 0.029, 0.967, 0.356, 1.367, 1.007, 0.223),
+        ("Eq. (2.160), App. B", "Eq. (2.160), App. B", "App. B", "Eq. (2.147), App. B", "App. B", "App. B",
+         "Eq. (2.145), App. B", "Eq. (2.146), App. B"))},
+    "pump_pe600_dynamics": {"frequency": _afc_published((1980.0, 25.0, 2920.0, 10.0, 7.0), "§2.6, AFC figure")},
+    "compressor_k180_dynamics": {"frequency": _afc_published((2340.0, 33.0, 4810.0, 18.0, 20.0), "§2.7, AFC figure")},
     "hydroheel_wear": {"reliability": [
         ("largest gap", "u_max", "u_max", 1.5, "1", "Pavlenko (2014), Eq. (1.52)"),
         ("load group", "χ0", "chi0", 1.76, "1", "Pavlenko (2014), Eq. (1.30)"),
