@@ -38,10 +38,26 @@ STATUS_FILES = ("failed_solve.json", "interrupted.json", "error.json")
 # units of the results.json keys: (regex on "analysis.dotted.path", SI unit); the first match wins
 # --------------------------------------------------------------------------------------------
 _P = r"(^|\.)"  # start of a key
+# A key named with its unit (``_s``, ``_um``, ``_rad_s`` ...) is caught by the suffix rules; the last rule
+# of each analysis marks the rest as the source's dimensionless groups, so an owner who adds a
+# dimensional key without a unit suffix adds its rule here.
 UNIT_RULES: list[tuple[str, str]] = [
-    # bookkeeping
+    # bookkeeping and keys that carry their unit in the name
     (r"(run_time_s|time_s|time_monte_carlo_s|cpu_s|build_s|solve_s|total_s|seconds)$", "s"),
     (r"\.accuracy\.", "1"),
+    (r"_deg$", "deg"),
+    (r"_rad$", "rad"),
+    (r"_pct$", "%"),
+    (r"_mL$", "mL"),
+    (r"_mm$", "mm"),
+    (r"_Pa$", "Pa"),
+    (r"_MPa$", "MPa"),
+    (r"_N$", "N"),
+    (r"_kg$", "kg"),
+    (r"_m3_s$", "m^3/s"),
+    (r"_m3$", "m^3"),
+    (r"_kh$", "kh"),
+    (r"_h$", "h"),
     (r"_rad_s2$", "rad/s^2"),
     (r"_rad_s$", "rad/s"),
     (r"_1_s$", "1/s"),
@@ -74,10 +90,6 @@ UNIT_RULES: list[tuple[str, str]] = [
     (r"^transient\..*" + _P + r"(t|t_end)$", "s"),
     (r"^(frequency|stability|transient)\.", "1"),
     # liquid auto-balancer (Khomyak 2020; Pashkov 2010): efficiency lambda0, k_D, gamma = omega/omega_cr
-    (r"^liquid_balancer\..*(_deg)$", "deg"),
-    (r"^liquid_balancer\..*(_rad)$", "rad"),
-    (r"^liquid_balancer\..*(_pct)$", "%"),
-    (r"^liquid_balancer\..*(_mL)$", "mL"),
     (r"^liquid_balancer\..*(_gcm)$", "g*cm"),
     (r"^liquid_balancer\..*" + _P + r"(D0|D)$", "kg*m"),
     (r"^liquid_balancer\..*" + _P + r"(m_l|M_sys|m|m_d|full_liquid_mass|nested_liquid_mass|limit_mass"
@@ -108,8 +120,6 @@ UNIT_RULES: list[tuple[str, str]] = [
     (r"^montecarlo\..*" + _P + r"Q_\w+(\..*)?$", "m^3/s"),
     (r"^montecarlo\.", "1"),
     # reliability of the traditional disc (Pavlenko 2014, ch. 1.2): u, chi, tau dimensionless
-    (r"^reliability\..*_kh$", "kh"),
-    (r"^reliability\..*_h$", "h"),
     (r"^reliability\..*" + _P + r"t_h$", "h"),
     (r"^reliability\..*(b_mean|b_std|_per_s)$", "1/s"),
     (r"^reliability\..*z_B$", "m"),
