@@ -197,8 +197,8 @@ def test_report_of_a_folder_without_results_is_bad_input(tmp_path, capsys):
 def test_interrupted_run_gets_a_report(tmp_path):
     """interrupted.json: the report names the analysis that was running and what had completed."""
     (tmp_path / "interrupted.json").write_text(json.dumps(
-        {"status": "interrupted", "analysis": "stability", "completed": ["frequency"], "scenario": "pump_pe600_dynamics",
-         "title": "Pump PE 600-300"}))
+        {"status": "interrupted", "analysis": "stability", "completed": ["frequency"],
+         "scenario": "pump_pe600_dynamics", "title": "Pump PE 600-300"}))
     body = " ".join(Page(report.html(tmp_path)).text)
     assert "The run did not complete: interrupted" in body and "stability" in body
     assert "Completed before the interrupt: frequency" in body
