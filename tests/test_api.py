@@ -81,7 +81,7 @@ def test_a_failed_run_replaces_earlier_results(tmp_path, monkeypatch, capsys):
     monkeypatch.setitem(ipopt.COLD, "ipopt.max_iter", 1)
     monkeypatch.setitem(ipopt.WARM, "ipopt.max_iter", 1)
     assert cli.main(["run", "compressor_k180_statics", "--out", str(out)]) == 3
-    assert sorted(p.name for p in out.iterdir()) == ["autobal.log", "failed_solve.json"]
+    assert sorted(p.name for p in out.iterdir()) == ["autobal.log", "failed_solve.json", "report.html"]
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
     monkeypatch.undo()
     assert cli.main(["run", "pump_pe600_statics", "--out", str(out), "--quiet"]) == 0
