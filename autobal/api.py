@@ -14,6 +14,7 @@ import os
 import platform
 import sys
 import time
+import warnings
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 
@@ -92,7 +93,14 @@ class Run(Mapping):
         outputs = {name: [f.name for f in r.save(folder)] for name, r in self.results.items()}
         files = [name for names in outputs.values() for name in names]
         write_json(folder / "results.json", self.to_dict() | {"files": [*files, report.REPORT], "outputs": outputs})
-        return [folder / f for f in files] + [report.render(folder)]
+        try:
+            written = [report.render(folder)]
+        except Exception as exc:  # noqa: BLE001 (the results are written; a report must not lose them)
+            with open(folder / LOG, "a") as log:
+                log.write(f"report.html not written: {type(exc).__name__}: {exc}\n")
+            warnings.warn(f"report.html not written: {exc}", stacklevel=2)
+            written = []
+        return [folder / f for f in files] + written
 
     def save(self, out: str | Path) -> Path:
         """Write the run into ``out`` atomically (see :mod:`autobal.output`); returns the folder."""

@@ -195,7 +195,8 @@ def _parameter_unit(path: str, results: dict) -> str | None:
     name = m.group(1)
     if name in ("x", "y"):  # maps: the axis names its parameter
         name = _get(results, path.rsplit(".", 1)[0] + ".parameter")
-    return _si(PARAMETERS[name][1]) if name in PARAMETERS else None
+    kind = PARAMETERS.get(name)
+    return _si(kind) if kind in DIMENSIONS else None
 
 
 def _get(data, path: str, default=None):
