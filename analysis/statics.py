@@ -15,6 +15,7 @@ found them) is kept as an independent cross-check;
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import casadi as ca
@@ -27,6 +28,7 @@ from autobal.models.device import DeviceDesign, StaticSystem, static_system
 REACTION_TOL = 1e-8  # a stop reaction above this (dimensionless force) means the stop is reached
 COMPLEMENTARITY_TOL = 1e-10  # sum of gap x reaction accepted as zero
 CONTINUATION_START, CONTINUATION_STEPS = 0.25, 16  # fallback path in psi1 when a cold start fails
+RESIDUAL_TOL = 1e-10  # a Newton root is accepted below this largest absolute balance residual
 
 
 @dataclass
@@ -76,13 +78,125 @@ def ideal_guess(g, unknowns: list[str], psi1s, dpsi) -> np.ndarray:
     zeros = np.zeros(len(psi1s))
     return np.column_stack([np.broadcast_to(v.get(k, zeros), zeros.shape) for k in unknowns])
 
+class ParametricStatics:
+    """The device's static balances with some groups as a parameter vector, and their Newton
+    solve with the stops fixed, mapped over columns of parameters: the one evaluator behind the
+    statics sweep (:meth:`StaticsSolver.fast_sweep`), the Monte Carlo and the estimation.
+
+    The balances are those of :func:`autobal.models.device.static_system` (Pavlenko 2014,
+    (2.17)/(2.19), (2.137)) with the groups ``names`` (fields of DeviceGroups/RegulatorGroups)
+    as ``theta``; the parameter column of every Function here is ``p = [psi1, dpsi, theta]``.
+
+    Parameters
+    ----------
+    groups : DeviceGroups
+        The device's dimensionless groups; those in ``names`` are replaced by ``theta``.
+    names : sequence of str
+        The groups that become parameters, in the order of ``theta``.
+    """
+
+    def __init__(self, groups, names=()):
+        self.names = tuple(names)
+        self.system: StaticSystem = static_system(groups, self.names)
+        sys_ = self.system
+        w, psi1, dpsi = ca.SX.sym("w", len(sys_.unknowns)), ca.SX.sym("psi1"), ca.SX.sym("dpsi")
+        theta = ca.SX.sym("theta", len(self.names))
+        args = [w, psi1, dpsi] + ([theta] if self.names else [])
+        q, psi = sys_.flows(*args)
+        #: balances r(w, psi1, dpsi, theta), dimensionless (zero at a solution)
+        self.residual = ca.Function("parametric_residual", [w, psi1, dpsi, theta], [sys_.residual(*args)])
+        #: throttle flows q(w, psi1, dpsi, theta) in the order of ``system.throttles``
+        self.flows = ca.Function("parametric_flows", [w, psi1, dpsi, theta], [q])
+        #: pressures (psi_e, psi2, psi3, psi_cam or NaN) of (w, psi1, dpsi, theta)
+        self.pressures = ca.Function("parametric_pressures", [w, psi1, dpsi, theta], [psi])
+        self.lower = np.array(sys_.lower, float)
+        self.upper = np.array(sys_.upper, float)
+        # the stop sets tried in turn: regulating, then the valve on its open stop
+        self.active_sets = [frozenset()] + ([frozenset({"r_valve"})] if "r_valve" in sys_.stops else [])
+        self._newton: dict = {}
+        self._maps: dict = {}
+
+    def free(self, active: frozenset = frozenset()) -> tuple[list[int], dict]:
+        """Indices of the unknowns left free when each stop is fixed (in ``active``: coordinate on
+        its stop; otherwise reaction 0), and the fixed values by index."""
+        sys_ = self.system
+        fixed = {sys_.index(k): v for k, v in sys_.fixed_by_stops(active).items()}
+        return [i for i in range(len(sys_.unknowns)) if i not in fixed], fixed
+
+    def newton(self, active: frozenset = frozenset()) -> tuple[ca.Function, list[int], ca.Function]:
+        """The square system with the stops fixed as in :meth:`free`, solved by CasADi's Newton
+        rootfinder: ``(solver(w_free0, p) -> w_free, free indices, full(w_free) -> w)``."""
+        if active not in self._newton:
+            free, fixed = self.free(active)
+            wf, p = ca.SX.sym("wf", len(free)), ca.SX.sym("p", 2 + len(self.names))
+            full = ca.vertcat(*[wf[free.index(i)] if i in free else fixed[i]
+                                for i in range(len(self.system.unknowns))])
+            rf = ca.Function("square", [wf, p], [self.residual(full, p[0], p[1], p[2:])])
+            solver = ca.rootfinder(f"newton_{'_'.join(sorted(active)) or 'free'}", "newton", rf,
+                                   {"abstol": 1e-14, "max_iter": 50, "error_on_fail": False,
+                                    "show_eval_warnings": False})
+            self._newton[active] = (solver, free, ca.Function("full", [wf], [full]))
+        return self._newton[active]
+
+    def sensitivity(self, active: frozenset = frozenset()) -> ca.Function:
+        """d(free unknowns)/dp of the rootfinder, (w_free0, p) -> matrix (exact, implicit function)."""
+        solver, free, _ = self.newton(active)
+        wf, p = ca.MX.sym("wf", len(free)), ca.MX.sym("p", 2 + len(self.names))
+        return ca.Function("dW_dp", [wf, p], [ca.jacobian(solver(wf, p), p)])
+
+    def mapped(self, active: frozenset, m: int) -> ca.Function:
+        """The Newton solve mapped over ``m`` columns: (W_free0, P) -> (W, |r|, q, psi), one column
+        per point (unknowns, absolute balance residuals, throttle flows, pressures)."""
+        key = (active, m)
+        if key not in self._maps:
+            solver, free, full = self.newton(active)
+            wf, p = ca.MX.sym("W", len(free), m), ca.MX.sym("P", 2 + len(self.names), m)
+            W = full.map(m)(solver.map(m)(wf, p))
+            args = (W, p[0, :], p[1, :], p[2:, :])
+            self._maps[key] = ca.Function("mapped_statics", [wf, p], [
+                W, ca.fabs(self.residual.map(m)(*args)), self.flows.map(m)(*args), self.pressures.map(m)(*args)])
+            if len(self._maps) > 16:  # keep the cache small: sizes of the fallback passes vary
+                self._maps.pop(next(iter(self._maps)))
+        return self._maps[key]
+
+    def solve(self, P: np.ndarray, attempts, tol: float = RESIDUAL_TOL) -> dict:
+        """Roots at every column of ``P`` (rows psi1, dpsi, theta).
+
+        ``attempts``: sequence of (active set, starts), starts rows of full unknowns per column;
+        each attempt re-solves only the columns not yet accepted.  A root is accepted when finite,
+        inside the bounds and every balance's absolute residual is <= ``tol``.  Returns rows
+        ``W`` (unknowns), ``q`` (flows), ``psi`` (pressures), ``residual`` (largest |r|),
+        ``valid`` and ``active`` (index into ``attempts`` of the accepting attempt, -1 none).
+        """
+        sys_ = self.system
+        n = P.shape[1]
+        W = np.full((n, len(sys_.unknowns)), np.nan)
+        q = np.full((n, len(sys_.throttles)), np.nan)
+        psi = np.full((n, 4), np.nan)
+        resid = np.full(n, np.nan)
+        which = np.full(n, -1)
+        todo = np.arange(n)
+        for k, (active, starts) in enumerate(attempts):
+            if todo.size == 0:
+                break
+            free = self.newton(active)[1]
+            Wk, r, qk, pk = (np.asarray(a).T for a in self.mapped(active, todo.size)(
+                starts[todo][:, free].T, P[:, todo]))
+            rmax = np.max(r, axis=1)
+            ok = np.all(np.isfinite(Wk) & (Wk >= self.lower) & (Wk <= self.upper), axis=1) & (rmax <= tol)
+            idx = todo[ok]
+            W[idx], q[idx], psi[idx], resid[idx], which[idx] = Wk[ok], qk[ok], pk[ok], rmax[ok], k
+            todo = todo[~ok]
+        return {"W": W, "q": q, "psi": psi, "residual": resid, "valid": which >= 0, "active": which}
+
 
 class StaticsSolver:
     """IPOPT (and Newton) solvers of one device's static equations, built once, called many times."""
 
     def __init__(self, dev: DeviceDesign):
         self.design = dev
-        self.system: StaticSystem = static_system(dev.groups)
+        self.parametric = ParametricStatics(dev.groups)  # the same balances, for the Newton solves
+        self.system: StaticSystem = self.parametric.system
         n = len(self.system.unknowns)
         w = ca.SX.sym("w", n)
         p = ca.SX.sym("p", 2)  # psi1, dpsi
@@ -94,7 +208,6 @@ class StaticsSolver:
         self._relative = self._relative_function(w, p)
         self._jacobian = ca.Function("balance_jacobian", [w, p], [ca.jacobian(r, w)])
         self._built: dict = {}  # solvers built on first use, by key
-        self._newton: dict[frozenset, tuple] = {}
 
     # ---- single points ---------------------------------------------------------------------
     def ideal_guess(self, psi1s, dpsi: float) -> np.ndarray:
@@ -138,45 +251,29 @@ class StaticsSolver:
 
     def newton(self, psi1: float, dpsi: float, start: np.ndarray | None = None,
                active: frozenset = frozenset()) -> np.ndarray:
-        """Root of the same balances by CasADi's Newton method, as a square system.
+        """Root of the same balances by CasADi's Newton method, as a square system
+        (:meth:`ParametricStatics.newton`).
 
         Each stop is fixed as inactive (reaction 0) or, if named in ``active``, active
         (coordinate on its stop, reaction free).  No bounds; full vector of unknowns returned.
         """
-        if active not in self._newton:
-            sys_ = self.system
-            fixed = sys_.fixed_by_stops(active)
-            free = [i for i, k in enumerate(sys_.unknowns) if k not in fixed]
-            wf = ca.SX.sym("wf", len(free))
-            full = ca.vertcat(*[wf[free.index(i)] if i in free else fixed[k]
-                                for i, k in enumerate(sys_.unknowns)])
-            rf = ca.Function("square", [wf, self._p], [ca.substitute(self._r, self._w, full)])
-            solver = ca.rootfinder("newton", "newton", rf,
-                                   {"abstol": 1e-14, "max_iter": 50, "error_on_fail": False,
-                                    "show_eval_warnings": False})
-            self._newton[active] = (solver, free, ca.Function("full", [wf], [full]))
-        solver, free, full = self._newton[active]
+        solver, free, full = self.parametric.newton(active)
         x0 = self.guess(psi1, dpsi) if start is None else start
         return np.asarray(full(solver(x0[free], [psi1, dpsi]))).ravel()
 
     def fast_sweep(self, psi1s, dpsi: float, tol: float = 1e-10) -> tuple[np.ndarray, np.ndarray]:
         """A sweep in one call: Newton roots of the no-stop system mapped over the grid from the
-        vectorised closed-form guess.  Points not accepted (not converged to ``tol`` relative,
-        outside the bounds, i.e. needing a stop) are re-solved by IPOPT, warm-started along the
-        grid.  Returns rows of unknowns and a flag per point: True where IPOPT was needed."""
+        vectorised closed-form guess (:meth:`ParametricStatics.solve`).  Points not accepted (not
+        converged to ``tol`` relative, outside the bounds, i.e. needing a stop) are re-solved by
+        IPOPT, warm-started along the grid.  Returns rows of unknowns and a flag per point: True
+        where IPOPT was needed."""
         psi1s = np.asarray(psi1s, float)
-        m = len(psi1s)
-        if ("map", m) not in self._built:
-            self.newton(float(psi1s[0]), dpsi)  # builds the no-stop rootfinder
-            solver, free, full = self._newton[frozenset()]
-            wf, pp = ca.MX.sym("X", len(free), m), ca.MX.sym("P", 2, m)
-            self._built[("map", m)] = ca.Function("sweep", [wf, pp], [full.map(m)(solver.map(m)(wf, pp))])
-        free = self._newton[frozenset()][1]
-        X0 = self.ideal_guess(psi1s, dpsi)[:, free].T
-        X = np.asarray(self._built[("map", m)](X0, np.vstack([psi1s, np.full(m, dpsi)]))).T
-        lo, hi = np.array(self.system.lower, float), np.array(self.system.upper, float)
-        ok = np.all(np.isfinite(X) & (X >= lo) & (X <= hi), axis=1)
-        ok &= self.relative_residual(X, psi1s, dpsi).max(axis=1) <= tol
+        P = np.vstack([psi1s, np.full(len(psi1s), dpsi)])
+        sol = self.parametric.solve(P, [(frozenset(), self.ideal_guess(psi1s, dpsi))], tol=math.inf)
+        X = sol["W"]
+        ok = sol["valid"].copy()
+        if ok.any():
+            ok[ok] = self.relative_residual(X[ok], psi1s[ok], dpsi).max(axis=1) <= tol
         prev = None
         for i in np.flatnonzero(~ok):
             prev = self.solve(float(psi1s[i]), dpsi, prev if i > 0 and not ok[i - 1] else None)
