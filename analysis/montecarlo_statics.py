@@ -84,11 +84,11 @@ class SampledStatics:
                 cols.get("dpsi", np.full(len(X), nom["dpsi"])))
 
     def params(self, X: np.ndarray, psi1: float) -> np.ndarray:
-        """Parameter columns [psi1, dpsi, theta] of the evaluator, one per sample."""
+        """Parameter rows [psi1, dpsi, theta] of the evaluator, one per sample."""
         nom = self.nominal()
         cols = {n: X[:, j] for j, n in enumerate(self.names)}
         rows = [np.full(len(X), psi1), cols.get("dpsi", np.full(len(X), nom["dpsi"]))]
-        return np.vstack(rows + [cols[n] for n in self.theta_names])
+        return np.column_stack(rows + [cols[n] for n in self.theta_names])
 
     def guess(self, X: np.ndarray, psi1: float) -> np.ndarray:
         """Rows of unknowns from the exact ideal-regulator closed form (2.22)/(2.144) with each
@@ -109,8 +109,8 @@ class SampledStatics:
                 if sol["valid"][0]:
                     self._first[psi1] = active
                     free = ps.free(active)[0]
-                    self._start[(psi1, active)] = (sol["W"][0], p0[:, 0],
-                                                   np.asarray(ps.sensitivity(active)(sol["W"][0][free], p0[:, 0])))
+                    self._start[(psi1, active)] = (sol["W"][0], p0[0],
+                                                   np.asarray(ps.sensitivity(active)(sol["W"][0][free], p0[0])))
                     break
         first = self._first[psi1]
         return [first] + [a for a in ps.active_sets if a != first]
@@ -125,7 +125,7 @@ class SampledStatics:
             if active and (psi1, active) in self._start:
                 w_nom, p0, S = self._start[(psi1, active)]
                 start = np.tile(w_nom, (len(X), 1))
-                start[:, self.statics.free(active)[0]] += (S @ (P - p0[:, None])).T
+                start[:, self.statics.free(active)[0]] += (P - p0) @ S.T
                 attempts.append((active, start))
             attempts.append((active, W0))
         sol = self.statics.solve(P, attempts)

@@ -28,6 +28,7 @@ from autobal.models.device import DeviceDesign, StaticSystem, static_system
 REACTION_TOL = 1e-8  # a stop reaction above this (dimensionless force) means the stop is reached
 COMPLEMENTARITY_TOL = 1e-10  # sum of gap x reaction accepted as zero
 CONTINUATION_START, CONTINUATION_STEPS = 0.25, 16  # fallback path in psi1 when a cold start fails
+NEWTON_ABSTOL = 1e-14  # the Newton rootfinder stops when every balance's |residual| is below this
 RESIDUAL_TOL = 1e-10  # a Newton root is accepted below this largest absolute balance residual
 
 
@@ -115,6 +116,7 @@ class ParametricStatics:
         self.active_sets = [frozenset()] + ([frozenset({"r_valve"})] if "r_valve" in sys_.stops else [])
         self._newton: dict = {}
         self._maps: dict = {}
+        self.parallel, self.threads = "serial", 2  # map mode of the batch evaluations (CasADi map)
 
     def free(self, active: frozenset = frozenset()) -> tuple[list[int], dict]:
         """Indices of the unknowns left free when each stop is fixed (in ``active``: coordinate on
@@ -133,7 +135,7 @@ class ParametricStatics:
                                 for i in range(len(self.system.unknowns))])
             rf = ca.Function("square", [wf, p], [self.residual(full, p[0], p[1], p[2:])])
             solver = ca.rootfinder(f"newton_{'_'.join(sorted(active)) or 'free'}", "newton", rf,
-                                   {"abstol": 1e-14, "max_iter": 50, "error_on_fail": False,
+                                   {"abstol": NEWTON_ABSTOL, "max_iter": 50, "error_on_fail": False,
                                     "show_eval_warnings": False})
             self._newton[active] = (solver, free, ca.Function("full", [wf], [full]))
         return self._newton[active]
@@ -144,49 +146,91 @@ class ParametricStatics:
         wf, p = ca.MX.sym("wf", len(free)), ca.MX.sym("p", 2 + len(self.names))
         return ca.Function("dW_dp", [wf, p], [ca.jacobian(solver(wf, p), p)])
 
-    def mapped(self, active: frozenset, m: int) -> ca.Function:
-        """The Newton solve mapped over ``m`` columns: (W_free0, P) -> (W, |r|, q, psi), one column
-        per point (unknowns, absolute balance residuals, throttle flows, pressures)."""
-        key = (active, m)
+    def _point(self, kind: str, active: frozenset) -> ca.Function:
+        """One point's Function: "check" (w, p) -> (largest |r|, q, psi); "newton" (w_free0, p) -> w."""
+        key = (kind, active)
         if key not in self._maps:
             solver, free, full = self.newton(active)
-            wf, p = ca.MX.sym("W", len(free), m), ca.MX.sym("P", 2 + len(self.names), m)
-            W = full.map(m)(solver.map(m)(wf, p))
-            args = (W, p[0, :], p[1, :], p[2:, :])
-            self._maps[key] = ca.Function("mapped_statics", [wf, p], [
-                W, ca.fabs(self.residual.map(m)(*args)), self.flows.map(m)(*args), self.pressures.map(m)(*args)])
-            if len(self._maps) > 16:  # keep the cache small: sizes of the fallback passes vary
-                self._maps.pop(next(iter(self._maps)))
+            if kind == "check":
+                w, p = ca.SX.sym("w", len(self.system.unknowns)), ca.SX.sym("p", 2 + len(self.names))
+                args = (w, p[0], p[1], p[2:])
+                self._maps[key] = ca.Function("check", [w, p], [
+                    ca.mmax(ca.fabs(self.residual(*args))), self.flows(*args), self.pressures(*args)])
+            else:
+                wf, p = ca.MX.sym("wf", len(free)), ca.MX.sym("p", 2 + len(self.names))
+                self._maps[key] = ca.Function("newton_full", [wf, p], [full(solver(wf, p))])
         return self._maps[key]
 
-    def solve(self, P: np.ndarray, attempts, tol: float = RESIDUAL_TOL) -> dict:
-        """Roots at every column of ``P`` (rows psi1, dpsi, theta).
+    def mapped(self, kind: str, active: frozenset, m: int) -> ca.Function:
+        """:meth:`_point` mapped over ``m`` points (``parallel``: CasADi's map mode), built once per size."""
+        key = (kind, active, m, self.parallel)
+        if key not in self._maps:
+            f = self._point(kind, active)
+            self._maps[key] = f.map(m, self.parallel, self.threads) if self.parallel != "serial" else f.map(m)
+            sized = [k for k in self._maps if len(k) == 4]
+            if len(sized) > 32:  # keep the cache small: sizes of the fallback passes vary
+                self._maps.pop(sized[0])
+        return self._maps[key]
 
-        ``attempts``: sequence of (active set, starts), starts rows of full unknowns per column;
-        each attempt re-solves only the columns not yet accepted.  A root is accepted when finite,
-        inside the bounds and every balance's absolute residual is <= ``tol``.  Returns rows
-        ``W`` (unknowns), ``q`` (flows), ``psi`` (pressures), ``residual`` (largest |r|),
-        ``valid`` and ``active`` (index into ``attempts`` of the accepting attempt, -1 none).
+    def evaluate(self, kind: str, active: frozenset, *rows: np.ndarray) -> list[np.ndarray]:
+        """Call the mapped Function on ``rows`` (points x entries each) through a CasADi buffer: a
+        point's entries are contiguous in a C-ordered row, which is CasADi's column-major column,
+        so nothing is converted to or from DM.  Returns one array (points x entries) per output."""
+        m = rows[0].shape[0]
+        f = self.mapped(kind, active, m)
+        buf, run = f.buffer()
+        rows = [np.ascontiguousarray(r, dtype=float) for r in rows]
+        outs = [np.empty((m, f.nnz_out(j) // m)) for j in range(f.n_out())]
+        for i, r in enumerate(rows):
+            buf.set_arg(i, memoryview(r))
+        for j, o in enumerate(outs):
+            buf.set_res(j, memoryview(o))
+        run()
+        return outs
+
+    def solve(self, P: np.ndarray, attempts, tol: float = RESIDUAL_TOL) -> dict:
+        """Roots at every row of ``P`` (points x [psi1, dpsi, theta]).
+
+        ``attempts``: sequence of (active set, starts), starts rows of full unknowns per point;
+        each attempt takes only the points not yet accepted: their start (with the stops fixed as
+        the set says) is checked first and, where it is no root, the Newton solve runs from it.
+        A point is accepted when finite, inside the bounds and every balance's absolute residual
+        is <= ``tol``.  Returns rows ``W`` (unknowns), ``q`` (flows), ``psi`` (pressures),
+        ``residual`` (largest |r|), ``valid`` and ``active`` (index into ``attempts`` of the
+        accepting attempt, -1 none).
         """
         sys_ = self.system
-        n = P.shape[1]
+        P = np.ascontiguousarray(P, dtype=float)
+        n = P.shape[0]
         W = np.full((n, len(sys_.unknowns)), np.nan)
         q = np.full((n, len(sys_.throttles)), np.nan)
         psi = np.full((n, 4), np.nan)
         resid = np.full(n, np.nan)
         which = np.full(n, -1)
         todo = np.arange(n)
+
+        def accept(Wk, active, k, tol):
+            nonlocal todo
+            r, qk, pk = self.evaluate("check", active, Wk, P[todo])
+            r = r[:, 0]
+            with np.errstate(invalid="ignore"):
+                ok = np.all((Wk >= self.lower) & (Wk <= self.upper), axis=1) & (r <= tol)
+            idx = todo[ok]
+            W[idx], q[idx], psi[idx], resid[idx], which[idx] = Wk[ok], qk[ok], pk[ok], r[ok], k
+            todo = todo[~ok]
+
         for k, (active, starts) in enumerate(attempts):
             if todo.size == 0:
                 break
-            free = self.newton(active)[1]
-            Wk, r, qk, pk = (np.asarray(a).T for a in self.mapped(active, todo.size)(
-                starts[todo][:, free].T, P[:, todo]))
-            rmax = np.max(r, axis=1)
-            ok = np.all(np.isfinite(Wk) & (Wk >= self.lower) & (Wk <= self.upper), axis=1) & (rmax <= tol)
-            idx = todo[ok]
-            W[idx], q[idx], psi[idx], resid[idx], which[idx] = Wk[ok], qk[ok], pk[ok], rmax[ok], k
-            todo = todo[~ok]
+            free, fixed = self.free(active)
+            start = np.array(starts[todo], float)
+            start[:, list(fixed)] = list(fixed.values())
+            # a start may be a root already (the closed form is exact when no stop is reached): accepted by
+            # the Newton method's own first test, |r| <= its abstol, without the rootfinder's call
+            accept(start, active, k, min(tol, NEWTON_ABSTOL))
+            if todo.size:
+                start = np.array(starts[todo], float)
+                accept(self.evaluate("newton", active, start[:, free], P[todo])[0], active, k, tol)
         return {"W": W, "q": q, "psi": psi, "residual": resid, "valid": which >= 0, "active": which}
 
 
@@ -268,7 +312,7 @@ class StaticsSolver:
         IPOPT, warm-started along the grid.  Returns rows of unknowns and a flag per point: True
         where IPOPT was needed."""
         psi1s = np.asarray(psi1s, float)
-        P = np.vstack([psi1s, np.full(len(psi1s), dpsi)])
+        P = np.column_stack([psi1s, np.full(len(psi1s), dpsi)])
         sol = self.parametric.solve(P, [(frozenset(), self.ideal_guess(psi1s, dpsi))], tol=math.inf)
         X = sol["W"]
         ok = sol["valid"].copy()
