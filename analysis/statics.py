@@ -79,6 +79,22 @@ def ideal_guess(g, unknowns: list[str], psi1s, dpsi) -> np.ndarray:
     zeros = np.zeros(len(psi1s))
     return np.column_stack([np.broadcast_to(v.get(k, zeros), zeros.shape) for k in unknowns])
 
+def call_rows(f: ca.Function, *rows: np.ndarray) -> list[np.ndarray]:
+    """Call a Function mapped over m points on ``rows`` (m x entries each) through a CasADi buffer:
+    a point's entries are contiguous in a C-ordered row, which is CasADi's column-major column, so
+    nothing is converted to or from DM.  Returns one array (m x entries) per output."""
+    m = rows[0].shape[0]
+    buf, run = f.buffer()
+    rows = [np.ascontiguousarray(r, dtype=float) for r in rows]
+    outs = [np.empty((m, f.nnz_out(j) // m)) for j in range(f.n_out())]
+    for i, r in enumerate(rows):
+        buf.set_arg(i, memoryview(r))
+    for j, o in enumerate(outs):
+        buf.set_res(j, memoryview(o))
+    run()
+    return outs
+
+
 class ParametricStatics:
     """The device's static balances with some groups as a parameter vector, and their Newton
     solve with the stops fixed, mapped over columns of parameters: the one evaluator behind the
@@ -173,20 +189,8 @@ class ParametricStatics:
         return self._maps[key]
 
     def evaluate(self, kind: str, active: frozenset, *rows: np.ndarray) -> list[np.ndarray]:
-        """Call the mapped Function on ``rows`` (points x entries each) through a CasADi buffer: a
-        point's entries are contiguous in a C-ordered row, which is CasADi's column-major column,
-        so nothing is converted to or from DM.  Returns one array (points x entries) per output."""
-        m = rows[0].shape[0]
-        f = self.mapped(kind, active, m)
-        buf, run = f.buffer()
-        rows = [np.ascontiguousarray(r, dtype=float) for r in rows]
-        outs = [np.empty((m, f.nnz_out(j) // m)) for j in range(f.n_out())]
-        for i, r in enumerate(rows):
-            buf.set_arg(i, memoryview(r))
-        for j, o in enumerate(outs):
-            buf.set_res(j, memoryview(o))
-        run()
-        return outs
+        """:meth:`mapped` called on ``rows`` (points x entries each) by :func:`call_rows`."""
+        return call_rows(self.mapped(kind, active, rows[0].shape[0]), *rows)
 
     def solve(self, P: np.ndarray, attempts, tol: float = RESIDUAL_TOL) -> dict:
         """Roots at every row of ``P`` (points x [psi1, dpsi, theta]).
@@ -417,8 +421,12 @@ class StaticsSolver:
     def relative_residual(self, x: np.ndarray, psi1, dpsi: float) -> np.ndarray:
         """Each balance's residual divided by its largest term; rows of ``x`` for arrays of psi1."""
         X = np.atleast_2d(x)
-        P = np.vstack([np.broadcast_to(psi1, len(X)), np.full(len(X), dpsi)])
-        out = np.asarray(self._relative.map(len(X))(X.T, P)).T
+        m = len(X)
+        if ("relative", m) not in self._built:
+            self._built = {k: v for k, v in self._built.items() if not (isinstance(k, tuple) and k[0] == "relative")}
+            self._built[("relative", m)] = self._relative.map(m)
+        P = np.column_stack([np.broadcast_to(psi1, m), np.full(m, dpsi)])
+        out = call_rows(self._built[("relative", m)], X, P)[0]
         return out[0] if np.ndim(x) == 1 else out
 
     # ---- internals ---------------------------------------------------------------------------
