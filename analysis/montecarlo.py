@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
@@ -33,17 +32,44 @@ from autobal.analysis.montecarlo_statics import (
     sensitivities,
     simulate,
 )
+from autobal.analysis.result import Result, new_figure
 from autobal.analysis.sampling import Sampler, correlation_matrix, marginals, relative_standard_errors, statistics
 from autobal.analysis.statics import RESIDUAL_TOL, StaticsSolver
 from autobal.errors import ScenarioError
 from autobal.models.device import DeviceDesign
-from autobal.results import save_figure, write_csv
 
 
 @dataclass
-class MonteCarloResult:
+class MonteCarloResult(Result):
+    """The Monte Carlo study: statistics of the exact statics and of the source's closed forms per
+    discharge ratio, sensitivities and, optionally, the AFC amplitude.  ``data`` is the results.json
+    block; ``samples`` the raw arrays (samples x discharge ratios), not written."""
+
     data: dict
-    samples: dict = field(default_factory=dict, repr=False)  # raw arrays, not written to results.json
+    samples: dict = field(default_factory=dict, repr=False)
+    name = "montecarlo"
+
+    @property
+    def discharge_ratios(self) -> list[float]:
+        """The grid of discharge ratios psi1 = p1/p_B, dimensionless."""
+        return self.data["psi1"]
+
+    @property
+    def gap_spread(self) -> np.ndarray:
+        """Spread k sigma / mean of the face gap u (exact statics) at each discharge ratio, dimensionless
+        (k = band_sigma; Pavlenko (2014), conclusion 4: about 0.20 at psi1 = 1 with k = 3)."""
+        return np.asarray(self.data["exact"]["u"]["spread"])
+
+    @property
+    def leak_spread(self) -> np.ndarray:
+        """Spread k sigma / mean of the face-throttle leak q_T = Q_T/Q_B (exact statics) at each discharge
+        ratio, dimensionless (Pavlenko (2014), conclusion 4: about 0.25 at psi1 = 1 with k = 3)."""
+        return np.asarray(self.data["exact"]["q_T"]["spread"])
+
+    @property
+    def saturated_fraction(self) -> np.ndarray:
+        """Fraction of the samples with the regulator's valve on its open stop, per discharge ratio."""
+        return np.asarray(self.data["saturated_fraction"])
 
     def to_dict(self) -> dict:
         return self.data
@@ -75,15 +101,9 @@ class MonteCarloResult:
                                      f"{v['mean_um']:.2f} um, cv {v['cv']:.3f}" for k, v in a["at"].items()))
         return "\n".join(lines)
 
-    def write_tables(self, out: Path) -> list[Path]:
+    def tables(self) -> dict[str, dict]:
         d = self.data
-        files = []
-        if "afc" in d:
-            a = d["afc"]
-            write_csv(out / "montecarlo_afc.csv", {"omega_rad_s": a["omega"], "nominal_um": a["nominal_um"],
-                                                   "mean_um": a["mean"], "std_um": a["std"],
-                                                   "band_low_um": a["band_low"], "band_high_um": a["band_high"]})
-            files.append(out / "montecarlo_afc.csv")
+        out = {}
         cols = {"psi1": d["psi1"], "saturated_fraction": d["saturated_fraction"]}
         for part, keys in (("exact", OUTPUTS), ("source", SOURCE_OUTPUTS)):
             for k in keys:
@@ -91,7 +111,7 @@ class MonteCarloResult:
                 for stat in ("nominal", "mean", "std", "band_low", "band_high", "invalid"):
                     if stat in s:
                         cols[f"{part}_{k}_{stat}"] = s[stat]
-        write_csv(out / "montecarlo_statics.csv", cols)
+        out["montecarlo_statics.csv"] = cols
         sens = d["sensitivity"]
         rows = {"psi1": [], "output": [], **{f"d_d_{n}": [] for n in d["parameters"]}}
         for j, p in enumerate(d["psi1"]):
@@ -100,18 +120,18 @@ class MonteCarloResult:
                 rows["output"].append(k)
                 for i, n in enumerate(d["parameters"]):
                     rows[f"d_d_{n}"].append(sens["jacobian"][k][j][i])
-        write_csv(out / "montecarlo_sensitivities.csv", rows)
-        return [out / "montecarlo_statics.csv", out / "montecarlo_sensitivities.csv"] + files
+        out["montecarlo_sensitivities.csv"] = rows
+        if "afc" in d:
+            a = d["afc"]
+            out["montecarlo_afc.csv"] = {"omega_rad_s": a["omega"], "nominal_um": a["nominal_um"],
+                                         "mean_um": a["mean"], "std_um": a["std"],
+                                         "band_low_um": a["band_low"], "band_high_um": a["band_high"]}
+        return out
 
-    def plot(self, out: Path) -> list[Path]:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
+    def figures(self) -> dict:
         d = self.data
         psi1 = np.asarray(d["psi1"], float)
-        fig, axes = plt.subplots(1, 3, figsize=(13, 4.2))
+        fig, axes = new_figure(figsize=(13, 4.2), ncols=3)
         for ax, k, lab in ((axes[0], "u", r"face gap $u = z/z_B$"), (axes[1], "q_T", r"leak $q_T = Q_T/Q_B$")):
             for part, ls in (("exact", "-"), ("source", "--")):
                 s = d[part][k]
@@ -134,10 +154,10 @@ class MonteCarloResult:
         axes[2].legend(fontsize=7)
         axes[2].grid(alpha=0.3, axis="y")
         fig.suptitle(d["title"], fontsize=9)
-        paths = [save_figure(fig, out / "fig_montecarlo.png")]
+        figs = {"fig_montecarlo.png": fig}
         if "afc" in d:
             a = d["afc"]
-            fig, ax = plt.subplots(figsize=(7, 4.4))
+            fig, ax = new_figure(figsize=(7, 4.4))
             ax.plot(a["omega"], a["nominal_um"], "k:", label=f"nominal ({a['model']} model)")
             line, = ax.plot(a["omega"], a["mean"], label="mean")
             ax.fill_between(a["omega"], np.maximum(a["band_low"], 0), a["band_high"], color=line.get_color(),
@@ -151,8 +171,8 @@ class MonteCarloResult:
             ax.legend(fontsize=7)
             ax.set_title(f"{d['title']}\nAFC Monte Carlo (Fig. 3.7/3.10); dashed: 0.135 % and 99.865 % quantiles",
                          fontsize=9)
-            paths.append(save_figure(fig, out / "fig_montecarlo_afc.png"))
-        return paths
+            figs["fig_montecarlo_afc.png"] = fig
+        return figs
 
 
 def run(dev: DeviceDesign, settings, executor, title: str = "", solver=None, device=None) -> MonteCarloResult:
@@ -247,17 +267,3 @@ def accuracy(data: dict, raw: dict) -> dict:
                    "psi1 and of the AFC amplitude at omega0 and the peaks; every accepted Newton root has an "
                    "absolute balance residual <= root_residual_tolerance (largest: max_root_residual), far "
                    "below the sampling error"}
-
-
-def run_scene(scn, settings, out: Path):
-    """Runner of ``analyses.montecarlo`` (autobal.pipeline.RUNNERS)."""
-    from autobal.adapters import device as device_params  # the runner moves to the front door (autobal/runners.py)
-    from autobal.analysis import executor as ex
-    from autobal.models.device import design
-
-    if scn.device is None:
-        raise ScenarioError("analyses.montecarlo needs a device section")
-    with ex.make(scene_executor=getattr(scn, "executor", None)) as exe:
-        res = run(design(dp := device_params(scn.device)), settings, exe, scn.title, device=dp)
-    files = res.write_tables(out) + res.plot(out)
-    return res.to_dict(), files, res.summary()

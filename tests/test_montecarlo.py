@@ -171,6 +171,15 @@ def test_study_is_reproducible_and_seeded(scene, dev):
     assert_allclose(d["exact"]["u"]["mean"], d["exact"]["u"]["nominal"], rtol=2e-3 + 3 * 0.07 / np.sqrt(2000))
     assert d["exact"]["u"]["invalid"].sum() == 0
     assert d["saturated_fraction"][0] == 0 and d["saturated_fraction"][1] > 0.5
+    # the Result protocol: typed headline arrays, figures without pyplot, tables as columns
+    import matplotlib
+    from matplotlib.figure import Figure
+
+    backend = matplotlib.get_backend()
+    figs = a.plot()
+    assert len(figs) == 1 and isinstance(figs[0], Figure) and matplotlib.get_backend() == backend
+    assert_allclose(a.gap_spread, 3 * np.asarray(d["exact"]["u"]["cv"]))
+    assert set(a.tables()) == {"montecarlo_statics.csv", "montecarlo_sensitivities.csv"}
 
 
 @pytest.fixture(scope="module")
