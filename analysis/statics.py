@@ -79,14 +79,15 @@ def ideal_guess(g, unknowns: list[str], psi1s, dpsi) -> np.ndarray:
     zeros = np.zeros(len(psi1s))
     return np.column_stack([np.broadcast_to(v.get(k, zeros), zeros.shape) for k in unknowns])
 
-def call_rows(f: ca.Function, *rows: np.ndarray) -> list[np.ndarray]:
+def call_rows(f: ca.Function, *rows: np.ndarray, out: list | None = None) -> list[np.ndarray]:
     """Call a Function mapped over m points on ``rows`` (m x entries each) through a CasADi buffer:
     a point's entries are contiguous in a C-ordered row, which is CasADi's column-major column, so
-    nothing is converted to or from DM.  Returns one array (m x entries) per output."""
+    nothing is converted to or from DM.  Returns one array (m x entries) per output (``out``: the
+    arrays to fill, C-contiguous)."""
     m = rows[0].shape[0]
     buf, run = f.buffer()
     rows = [np.ascontiguousarray(r, dtype=float) for r in rows]
-    outs = [np.empty((m, f.nnz_out(j) // m)) for j in range(f.n_out())]
+    outs = out if out is not None else [np.empty((m, f.nnz_out(j) // m)) for j in range(f.n_out())]
     for i, r in enumerate(rows):
         buf.set_arg(i, memoryview(r))
     for j, o in enumerate(outs):
@@ -133,6 +134,8 @@ class ParametricStatics:
         self._newton: dict = {}
         self._maps: dict = {}
         self.parallel, self.threads = "serial", 2  # map mode of the batch evaluations (CasADi map)
+        self.jit = False  # compile the balance check to C (needs a C compiler; build about 0.5 s)
+        self.chunk = 8192  # points per mapped call
 
     def free(self, active: frozenset = frozenset()) -> tuple[list[int], dict]:
         """Indices of the unknowns left free when each stop is fixed (in ``active``: coordinate on
@@ -164,14 +167,16 @@ class ParametricStatics:
 
     def _point(self, kind: str, active: frozenset) -> ca.Function:
         """One point's Function: "check" (w, p) -> (largest |r|, q, psi); "newton" (w_free0, p) -> w."""
-        key = (kind, active)
+        key = (kind, active, self.jit)
         if key not in self._maps:
             solver, free, full = self.newton(active)
             if kind == "check":
                 w, p = ca.SX.sym("w", len(self.system.unknowns)), ca.SX.sym("p", 2 + len(self.names))
                 args = (w, p[0], p[1], p[2:])
+                jit = {"jit": True, "compiler": "shell", "jit_options": {"flags": ["-O2"], "verbose": False}}
                 self._maps[key] = ca.Function("check", [w, p], [
-                    ca.mmax(ca.fabs(self.residual(*args))), self.flows(*args), self.pressures(*args)])
+                    ca.mmax(ca.fabs(self.residual(*args))), self.flows(*args), self.pressures(*args)],
+                    jit if self.jit else {})
             else:
                 wf, p = ca.MX.sym("wf", len(free)), ca.MX.sym("p", 2 + len(self.names))
                 self._maps[key] = ca.Function("newton_full", [wf, p], [full(solver(wf, p))])
@@ -179,18 +184,28 @@ class ParametricStatics:
 
     def mapped(self, kind: str, active: frozenset, m: int) -> ca.Function:
         """:meth:`_point` mapped over ``m`` points (``parallel``: CasADi's map mode), built once per size."""
-        key = (kind, active, m, self.parallel)
+        key = (kind, active, m, self.parallel, self.jit)
         if key not in self._maps:
             f = self._point(kind, active)
             self._maps[key] = f.map(m, self.parallel, self.threads) if self.parallel != "serial" else f.map(m)
-            sized = [k for k in self._maps if len(k) == 4]
+            sized = [k for k in self._maps if len(k) == 5]
             if len(sized) > 32:  # keep the cache small: sizes of the fallback passes vary
                 self._maps.pop(sized[0])
         return self._maps[key]
 
     def evaluate(self, kind: str, active: frozenset, *rows: np.ndarray) -> list[np.ndarray]:
-        """:meth:`mapped` called on ``rows`` (points x entries each) by :func:`call_rows`."""
-        return call_rows(self.mapped(kind, active, rows[0].shape[0]), *rows)
+        """:meth:`_point` on every row of ``rows`` (points x entries each) by :func:`call_rows`, in
+        chunks of at most ``chunk`` points: a CasADi map takes time to build in proportion to its
+        size (about 3 us per point), so one map of the chunk size is built once and called repeatedly
+        (plus one for the remainder).  Returns one array (points x entries) per output."""
+        m = rows[0].shape[0]
+        rows = [np.ascontiguousarray(r, dtype=float) for r in rows]
+        f = self._point(kind, active)
+        outs = [np.empty((m, f.nnz_out(j))) for j in range(f.n_out())]
+        for a in range(0, m, self.chunk):
+            b = min(a + self.chunk, m)
+            call_rows(self.mapped(kind, active, b - a), *[r[a:b] for r in rows], out=[o[a:b] for o in outs])
+        return outs
 
     def solve(self, P: np.ndarray, attempts, tol: float = RESIDUAL_TOL) -> dict:
         """Roots at every row of ``P`` (points x [psi1, dpsi, theta]).
@@ -214,13 +229,18 @@ class ParametricStatics:
         todo = np.arange(n)
 
         def accept(Wk, active, k, tol):
-            nonlocal todo
-            r, qk, pk = self.evaluate("check", active, Wk, P[todo])
+            nonlocal todo, W, q, psi, resid
+            r, qk, pk = self.evaluate("check", active, Wk, P if todo.size == n else P[todo])
             r = r[:, 0]
             with np.errstate(invalid="ignore"):
                 ok = np.all((Wk >= self.lower) & (Wk <= self.upper), axis=1) & (r <= tol)
-            idx = todo[ok]
-            W[idx], q[idx], psi[idx], resid[idx], which[idx] = Wk[ok], qk[ok], pk[ok], r[ok], k
+            if todo.size == n:  # the first pass: take the arrays as they are, blank the rejected points
+                W, q, psi, resid = Wk, qk, pk, r
+                W[~ok], q[~ok], psi[~ok], resid[~ok] = np.nan, np.nan, np.nan, np.nan
+                which[ok] = k
+            else:
+                idx = todo[ok]
+                W[idx], q[idx], psi[idx], resid[idx], which[idx] = Wk[ok], qk[ok], pk[ok], r[ok], k
             todo = todo[~ok]
 
         for k, (active, starts) in enumerate(attempts):

@@ -68,16 +68,22 @@ def residual_jacobian(x, psi1, dpsi, g, on_stop: bool = False):
 
 
 def newton(x0, psi1, dpsi, g, on_stop: bool = False, tol: float = 1e-14, max_iter: int = 50):
-    """Vectorised Newton on every row at once (one batched LAPACK solve per iteration), stopped when
-    the largest |F| over all rows is <= ``tol`` (CasADi's rootfinder: abstol on every point); rows
-    whose F or step is not finite are left as NaN.  Returns rows, iterations."""
+    """Vectorised Newton, point by point as CasADi's rootfinder stops (|F| <= ``tol`` on the point, at
+    most ``max_iter`` steps): every step evaluates F and J of the points still iterating at once and
+    takes one batched LAPACK solve.  Points whose F is not finite stop (NaN).  Returns rows, steps."""
     x = np.array(x0, float)
+    rows = np.arange(len(x))
     for it in range(max_iter):
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            F, J = residual_jacobian(x, psi1, dpsi, g, on_stop)
-            if np.nanmax(np.abs(F)) <= tol:
+            part = len(rows) < len(x)
+            F, J = residual_jacobian(x[rows], take_array(psi1, rows) if part else psi1,
+                                     take_array(dpsi, rows) if part else dpsi, take(g, rows) if part else g, on_stop)
+            size = np.abs(F).max(axis=1)
+            go = size > tol  # NaN: stops
+            rows, F, J = rows[go], F[go], J[go]
+            if rows.size == 0:
                 return x, it
-            x -= np.linalg.solve(J, F[..., None])[..., 0]
+            x[rows] -= np.linalg.solve(J, F[..., None])[..., 0]
     return x, max_iter
 
 
@@ -148,3 +154,39 @@ def point(g, i):
     r = g.regulator
     reg = _NS(**{k: at(getattr(r, k)) for k in ("sigma_m", "psi_in", "alpha_in1", "alpha_B1", "xi_max")})
     return _NS(regulator=reg, **{k: at(getattr(g, k)) for k in keys})
+
+
+def take(g, rows):
+    """The groups of the points ``rows`` (arrays indexed, scalars kept)."""
+    def at(v):
+        return v[rows] if np.ndim(v) else v
+
+    keys = ("sigma", "chi", "b", "psi4", "alpha_e1", "alpha_TB1", "alpha_31")
+    r = g.regulator
+    reg = _NS(**{k: at(getattr(r, k)) for k in ("sigma_m", "psi_in", "alpha_in1", "alpha_B1", "xi_max")})
+    return _NS(regulator=reg, **{k: at(getattr(g, k)) for k in keys})
+
+
+def solve_with_stop(x0, psi1, dpsi, g):
+    """The Monte Carlo's hand-written limit: vectorised Newton with the regulator regulating, then,
+    for the rows outside the bounds (valve opening above xi_max), with the valve on its open stop.
+    Returns rows [psi2, psi3, u, psi_e, psi_cam, xi], the rows on the stop, the largest |F|."""
+    x, _ = newton(x0, psi1, dpsi, g)
+    xi_max = g.regulator.xi_max
+    with np.errstate(invalid="ignore"):
+        bad = ~(np.all(np.isfinite(x) & (x >= 0), axis=1) & (x[:, 5] <= xi_max))
+    F = residual_jacobian(x[~bad], psi1, take_array(dpsi, ~bad), take(g, ~bad))[0]
+    worst = float(np.abs(F).max()) if F.size else 0.0
+    if bad.any():
+        gb, db = take(g, bad), take_array(dpsi, bad)
+        s0 = np.array(x0[bad], float)
+        s0[:, 5] = 0.0  # the stem's reaction
+        xs, _ = newton(s0, psi1, db, gb, on_stop=True)
+        worst = max(worst, float(np.abs(residual_jacobian(xs, psi1, db, gb, on_stop=True)[0]).max()))
+        xs[:, 5] = np.broadcast_to(gb.regulator.xi_max, len(xs))
+        x[bad] = xs
+    return x, bad, worst
+
+
+def take_array(v, rows):
+    return v[rows] if np.ndim(v) else v
