@@ -127,6 +127,8 @@ class ParametricStatics:
         self.flows = ca.Function("parametric_flows", [w, psi1, dpsi, theta], [q])
         #: pressures (psi_e, psi2, psi3, psi_cam or NaN) of (w, psi1, dpsi, theta)
         self.pressures = ca.Function("parametric_pressures", [w, psi1, dpsi, theta], [psi])
+        #: each balance's |residual| over its largest term, (w, psi1, dpsi, theta) -> vector
+        self.relative = self._relative(groups, w, psi1, dpsi, theta, q)
         self.lower = np.array(sys_.lower, float)
         self.upper = np.array(sys_.upper, float)
         # the stop sets tried in turn: regulating, then the valve on its open stop
@@ -136,6 +138,33 @@ class ParametricStatics:
         self.parallel, self.threads = "serial", 2  # map mode of the batch evaluations (CasADi map)
         self.jit = False  # compile the balance check to C (needs a C compiler; build about 0.5 s)
         self.chunk = 8192  # points per mapped call
+
+    def _relative(self, groups, w, psi1, dpsi, theta, q) -> ca.Function:
+        """Each balance's |residual| over its scale, the largest absolute term in it (the groups in
+        ``names`` taken from theta)."""
+        sys_ = self.system
+        named = dict(zip(self.names, ca.vertsplit(theta), strict=True)) if self.names else {}
+        reg = groups.regulator
+
+        def group(name, where):
+            return named.get(name, getattr(where, name))
+
+        flows = dict(zip(sys_.throttles, ca.vertsplit(q), strict=True))
+
+        def largest(*names):
+            return ca.mmax(ca.fabs(ca.vertcat(*[flows[k] for k in names])))
+
+        scale = {
+            "disc force": ca.fmax(group("b", groups) * psi1, group("chi", groups)),
+            "chamber 2 flow": largest("e", "1", "T"),
+            "chamber 3 flow": largest("T", "3"),
+            "membrane force": group("sigma_m", reg) * dpsi if reg else 1.0,
+            "valve chamber flow": largest("in", "valve") if reg else 1.0,
+            "barrier chamber flow": largest("valve", "e") if reg else 1.0,
+        }
+        r = ca.fabs(self.residual(w, psi1, dpsi, theta))
+        return ca.Function("relative_residual", [w, psi1, dpsi, theta],
+                           [r / ca.vertcat(*[scale[e] for e in sys_.equations])])
 
     def free(self, active: frozenset = frozenset()) -> tuple[list[int], dict]:
         """Indices of the unknowns left free when each stop is fixed (in ``active``: coordinate on
@@ -152,7 +181,7 @@ class ParametricStatics:
             wf, p = ca.SX.sym("wf", len(free)), ca.SX.sym("p", 2 + len(self.names))
             full = ca.vertcat(*[wf[free.index(i)] if i in free else fixed[i]
                                 for i in range(len(self.system.unknowns))])
-            rf = ca.Function("square", [wf, p], [self.residual(full, p[0], p[1], p[2:])])
+            rf = ca.Function("square", [wf, p], [self.residual(full, p[0], p[1], p[2:])], {"cse": True})
             solver = ca.rootfinder(f"newton_{'_'.join(sorted(active)) or 'free'}", "newton", rf,
                                    {"abstol": NEWTON_ABSTOL, "max_iter": 50, "error_on_fail": False,
                                     "show_eval_warnings": False})
@@ -166,17 +195,20 @@ class ParametricStatics:
         return ca.Function("dW_dp", [wf, p], [ca.jacobian(solver(wf, p), p)])
 
     def _point(self, kind: str, active: frozenset) -> ca.Function:
-        """One point's Function: "check" (w, p) -> (largest |r|, q, psi); "newton" (w_free0, p) -> w."""
+        """One point's Function: "check" (w, p) -> (largest |r|, largest relative |r|, q, psi);
+        "relative" (w, p) -> relative |r| per balance; "newton" (w_free0, p) -> w."""
         key = (kind, active, self.jit)
         if key not in self._maps:
             solver, free, full = self.newton(active)
-            if kind == "check":
+            if kind in ("check", "relative"):
                 w, p = ca.SX.sym("w", len(self.system.unknowns)), ca.SX.sym("p", 2 + len(self.names))
                 args = (w, p[0], p[1], p[2:])
                 jit = {"jit": True, "compiler": "shell", "jit_options": {"flags": ["-O2"], "verbose": False}}
-                self._maps[key] = ca.Function("check", [w, p], [
-                    ca.mmax(ca.fabs(self.residual(*args))), self.flows(*args), self.pressures(*args)],
-                    jit if self.jit else {})
+                out = [self.relative(*args)] if kind == "relative" else [
+                    ca.mmax(ca.fabs(self.residual(*args))), ca.mmax(self.relative(*args)), self.flows(*args),
+                    self.pressures(*args)]
+                # cse: the residual, the flows and the scales share their throttle flows (215 -> 111 instructions)
+                self._maps[key] = ca.Function(kind, [w, p], out, {"cse": True} | (jit if self.jit else {}))
             else:
                 wf, p = ca.MX.sym("wf", len(free)), ca.MX.sym("p", 2 + len(self.names))
                 self._maps[key] = ca.Function("newton_full", [wf, p], [full(solver(wf, p))])
@@ -225,22 +257,24 @@ class ParametricStatics:
         q = np.full((n, len(sys_.throttles)), np.nan)
         psi = np.full((n, 4), np.nan)
         resid = np.full(n, np.nan)
+        relative = np.full(n, np.nan)
         which = np.full(n, -1)
         todo = np.arange(n)
 
         def accept(Wk, active, k, tol):
-            nonlocal todo, W, q, psi, resid
-            r, qk, pk = self.evaluate("check", active, Wk, P if todo.size == n else P[todo])
-            r = r[:, 0]
+            nonlocal todo, W, q, psi, resid, relative
+            r, rel, qk, pk = self.evaluate("check", active, Wk, P if todo.size == n else P[todo])
+            r, rel = r[:, 0], rel[:, 0]
             with np.errstate(invalid="ignore"):
                 ok = np.all((Wk >= self.lower) & (Wk <= self.upper), axis=1) & (r <= tol)
             if todo.size == n:  # the first pass: take the arrays as they are, blank the rejected points
-                W, q, psi, resid = Wk, qk, pk, r
-                W[~ok], q[~ok], psi[~ok], resid[~ok] = np.nan, np.nan, np.nan, np.nan
+                W, q, psi, resid, relative = Wk, qk, pk, r, rel
+                W[~ok], q[~ok], psi[~ok], resid[~ok], relative[~ok] = np.nan, np.nan, np.nan, np.nan, np.nan
                 which[ok] = k
             else:
                 idx = todo[ok]
-                W[idx], q[idx], psi[idx], resid[idx], which[idx] = Wk[ok], qk[ok], pk[ok], r[ok], k
+                W[idx], q[idx], psi[idx], resid[idx], relative[idx], which[idx] = (Wk[ok], qk[ok], pk[ok], r[ok],
+                                                                                   rel[ok], k)
             todo = todo[~ok]
 
         for k, (active, starts) in enumerate(attempts):
@@ -255,7 +289,8 @@ class ParametricStatics:
             if todo.size:
                 start = np.array(starts[todo], float)
                 accept(self.evaluate("newton", active, start[:, free], P[todo])[0], active, k, tol)
-        return {"W": W, "q": q, "psi": psi, "residual": resid, "valid": which >= 0, "active": which}
+        return {"W": W, "q": q, "psi": psi, "residual": resid, "relative_residual": relative, "valid": which >= 0,
+                "active": which}
 
 
 class StaticsSolver:
@@ -273,7 +308,6 @@ class StaticsSolver:
         self._w, self._p, self._r, self._f = w, p, r, f
         self._cold = ipopt.nlpsol("statics", w, p, f, r)
         self._warm = ipopt.nlpsol("statics_warm", w, p, f, r, warm=True)
-        self._relative = self._relative_function(w, p)
         self._jacobian = ca.Function("balance_jacobian", [w, p], [ca.jacobian(r, w)])
         self._built: dict = {}  # solvers built on first use, by key
 
@@ -339,9 +373,8 @@ class StaticsSolver:
         P = np.column_stack([psi1s, np.full(len(psi1s), dpsi)])
         sol = self.parametric.solve(P, [(frozenset(), self.ideal_guess(psi1s, dpsi))], tol=math.inf)
         X = sol["W"]
-        ok = sol["valid"].copy()
-        if ok.any():
-            ok[ok] = self.relative_residual(X[ok], psi1s[ok], dpsi).max(axis=1) <= tol
+        with np.errstate(invalid="ignore"):
+            ok = sol["valid"] & (sol["relative_residual"] <= tol)
         prev = None
         for i in np.flatnonzero(~ok):
             prev = self.solve(float(psi1s[i]), dpsi, prev if i > 0 and not ok[i - 1] else None)
@@ -439,14 +472,11 @@ class StaticsSolver:
         return self._point(*((value, fixed) if unknown == "psi1" else (fixed, value)), res)
 
     def relative_residual(self, x: np.ndarray, psi1, dpsi: float) -> np.ndarray:
-        """Each balance's residual divided by its largest term; rows of ``x`` for arrays of psi1."""
+        """Each balance's residual divided by its largest term; rows of ``x`` for arrays of psi1
+        (:meth:`ParametricStatics.relative`)."""
         X = np.atleast_2d(x)
-        m = len(X)
-        if ("relative", m) not in self._built:
-            self._built = {k: v for k, v in self._built.items() if not (isinstance(k, tuple) and k[0] == "relative")}
-            self._built[("relative", m)] = self._relative.map(m)
-        P = np.column_stack([np.broadcast_to(psi1, m), np.full(m, dpsi)])
-        out = call_rows(self._built[("relative", m)], X, P)[0]
+        P = np.column_stack([np.broadcast_to(psi1, len(X)), np.full(len(X), dpsi)])
+        out = self.parametric.evaluate("relative", frozenset(), X, P)[0]
         return out[0] if np.ndim(x) == 1 else out
 
     # ---- internals ---------------------------------------------------------------------------
@@ -459,27 +489,6 @@ class StaticsSolver:
         if res["success"] and res["f"][0] > COMPLEMENTARITY_TOL * points:
             res |= {"success": False, "status": f"Stop_Complementarity_Violated ({res['f'][0]:.1e})"}
         return res
-
-    def _relative_function(self, w, p):
-        """Each balance's residual over its scale, the largest absolute term in it."""
-        sys_ = self.system
-        g = self.design.groups
-        q = dict(zip(sys_.throttles, ca.vertsplit(sys_.flows(w, p[0], p[1])[0]), strict=True))
-
-        def largest(*names):
-            return ca.mmax(ca.fabs(ca.vertcat(*[q[k] for k in names])))
-
-        scale = {
-            "disc force": ca.fmax(g.b * p[0], g.chi),
-            "chamber 2 flow": largest("e", "1", "T"),
-            "chamber 3 flow": largest("T", "3"),
-            "membrane force": g.regulator.sigma_m * p[1] if g.regulator else 1.0,
-            "valve chamber flow": largest("in", "valve") if g.regulator else 1.0,
-            "barrier chamber flow": largest("valve", "e") if g.regulator else 1.0,
-        }
-        scale = ca.vertcat(*[scale[e] for e in sys_.equations])
-        r = ca.fabs(sys_.residual(w, p[0], p[1]))
-        return ca.Function("relative_residual", [w, p], [r / scale])
 
     def _point(self, psi1: float, dpsi: float, res: dict) -> StaticPoint:
         sys_ = self.system
