@@ -192,7 +192,7 @@ def run(dev: DeviceDesign, settings, executor, title: str = "", solver=None, dev
     corr = correlation_matrix(names, settings.correlations) if settings.correlations else None
     sampler = Sampler(margs, corr, settings.seed)
     grid = tuple(float(p) for p in settings.discharge_ratio)
-    task = Task(dev, sampler, grid, settings.samples, min(settings.chunk_size, settings.samples))
+    task = Task(sampler, settings.samples, min(settings.chunk_size, settings.samples), design=dev, grid=grid)
     raw = simulate(task, executor)
     t_mc = time.perf_counter() - t0
 

@@ -13,7 +13,7 @@ import numpy as np
 from autobal.analysis import frequency
 from autobal.analysis.hand_linear import K_NAMES, OTHER, T_NAMES, Constants
 from autobal.analysis.linearize import Setup, jacobians
-from autobal.analysis.sampling import Sampler, marginals, statistics
+from autobal.analysis.sampling import Chunks, Sampler, marginals, statistics
 from autobal.errors import ScenarioError
 from autobal.models.dynamics import PARAM_NAMES
 
@@ -117,27 +117,18 @@ def afc_model(device, psi1: float, model: str, names, convention: str) -> AfcMod
 
 
 @dataclass(frozen=True)
-class AfcTask:
+class AfcTask(Chunks):
     """Chunk i of the AFC Monte Carlo: draw its samples (stream 1) and evaluate A_u on the omega grid."""
 
-    device: object  # the scene's validated ``device`` (plain data)
-    psi1: float
-    model: str
-    convention: str
-    sampler: Sampler
-    omega: tuple
-    samples: int
-    chunk_size: int
-
-    @property
-    def chunks(self) -> int:
-        return -(-self.samples // self.chunk_size)
+    device: object = None  # the scene's validated ``device`` (plain data)
+    psi1: float = 1.0
+    model: str = "program"
+    convention: str = "appendix"
+    omega: tuple = ()
 
     def __call__(self, chunk: int) -> np.ndarray:
-        n = min(self.chunk_size, self.samples - chunk * self.chunk_size)
-        X = self.sampler.draw(chunk, n)
         return afc_model(self.device, self.psi1, self.model, self.sampler.names, self.convention).amplitude(
-            X, self.omega)
+            self.draw(chunk), self.omega)
 
 
 def afc_study(device, settings, seed: int, executor, band_sigma: float, quantiles) -> dict:
@@ -158,8 +149,8 @@ def afc_study(device, settings, seed: int, executor, band_sigma: float, quantile
     omega = np.concatenate([grid, list(marks.values())])
     sampler = Sampler(marginals(a.parameters, am.nominal(), "analyses.montecarlo.afc.parameters"), None, seed,
                       stream=1)
-    task = AfcTask(device, a.operating_ratio, a.model, a.forcing, sampler, tuple(omega), a.samples,
-                   min(a.chunk_size, a.samples))
+    task = AfcTask(sampler, a.samples, min(a.chunk_size, a.samples), device=device, psi1=a.operating_ratio,
+                   model=a.model, convention=a.forcing, omega=tuple(omega))
     amp = np.concatenate(executor.map(task, range(task.chunks), desc="monte carlo afc"))
     det = am.amplitude(np.array([[am.nominal()[n] for n in names]]), omega)[0]
     st = statistics(amp, band_sigma, quantiles)

@@ -29,7 +29,7 @@ import casadi as ca
 import numpy as np
 
 from autobal.analysis import closed_form
-from autobal.analysis.sampling import Sampler
+from autobal.analysis.sampling import Chunks, Sampler
 from autobal.analysis.statics import ParametricStatics, ideal_guess
 from autobal.models.device import DEVICE_GROUPS, REGULATOR_GROUPS, DeviceDesign
 
@@ -192,22 +192,14 @@ def evaluator(dev: DeviceDesign, names) -> SampledStatics:
 
 
 @dataclass(frozen=True)
-class Task:
+class Task(Chunks):
     """Chunk i of a study: draw its samples and evaluate them at every grid point."""
 
-    design: DeviceDesign
-    sampler: Sampler
-    grid: tuple
-    samples: int
-    chunk_size: int
-
-    @property
-    def chunks(self) -> int:
-        return -(-self.samples // self.chunk_size)
+    design: DeviceDesign | None = None
+    grid: tuple = ()
 
     def __call__(self, chunk: int) -> dict:
-        n = min(self.chunk_size, self.samples - chunk * self.chunk_size)
-        X = self.sampler.draw(chunk, n)
+        X = self.draw(chunk)
         ev = evaluator(self.design, self.sampler.names)
         per = [ev.outputs(X, psi1) for psi1 in self.grid]
         out = {"X": X}

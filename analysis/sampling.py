@@ -135,3 +135,22 @@ def relative_standard_errors(Y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         se_cv = np.sqrt((infl**2).sum(axis=0) / n) / np.sqrt(n)
         return s / np.abs(m) / np.sqrt(n), se_cv / (s / np.abs(m))
 
+
+
+@dataclass(frozen=True)
+class Chunks:
+    """``samples`` draws of ``sampler`` split into chunks of ``chunk_size`` (the last one shorter): the
+    unit of work an executor runs; chunk i's samples depend only on the seed and i."""
+
+    sampler: Sampler
+    samples: int
+    chunk_size: int
+
+    @property
+    def chunks(self) -> int:
+        """Number of chunks."""
+        return -(-self.samples // self.chunk_size)
+
+    def draw(self, chunk: int) -> np.ndarray:
+        """The samples of chunk ``chunk`` (rows in the order of the sampler's names)."""
+        return self.sampler.draw(chunk, min(self.chunk_size, self.samples - chunk * self.chunk_size))
