@@ -79,6 +79,7 @@ def ideal_guess(g, unknowns: list[str], psi1s, dpsi) -> np.ndarray:
     zeros = np.zeros(len(psi1s))
     return np.column_stack([np.broadcast_to(v.get(k, zeros), zeros.shape) for k in unknowns])
 
+
 def call_rows(f: ca.Function, *rows: np.ndarray, out: list | None = None) -> list[np.ndarray]:
     """Call a Function mapped over m points on ``rows`` (m x entries each) through a CasADi buffer:
     a point's entries are contiguous in a C-ordered row, which is CasADi's column-major column, so
@@ -134,6 +135,7 @@ class ParametricStatics:
         # the stop sets tried in turn: regulating, then the valve on its open stop
         self.active_sets = [frozenset()] + ([frozenset({"r_valve"})] if "r_valve" in sys_.stops else [])
         self._newton: dict = {}
+        self._square: dict = {}
         self._maps: dict = {}
         self.parallel, self.threads = "serial", 2  # map mode of the batch evaluations (CasADi map)
         self.jit = False  # compile the balance check to C (needs a C compiler; build about 0.5 s)
@@ -174,14 +176,17 @@ class ParametricStatics:
         return [i for i in range(len(sys_.unknowns)) if i not in fixed], fixed
 
     def newton(self, active: frozenset = frozenset()) -> tuple[ca.Function, list[int], ca.Function]:
-        """The square system with the stops fixed as in :meth:`free`, solved by CasADi's Newton
-        rootfinder: ``(solver(w_free0, p) -> w_free, free indices, full(w_free) -> w)``."""
+        """The square system with the stops fixed as in :meth:`free` as CasADi's Newton rootfinder
+        (the implicit function, for exact derivatives of a root with respect to p):
+        ``(solver(w_free0, p) -> w_free, free indices, full(w_free) -> w)``.  Roots of many points
+        are found by :meth:`roots`, the same Newton iteration driven over all points at once."""
         if active not in self._newton:
             free, fixed = self.free(active)
             wf, p = ca.SX.sym("wf", len(free)), ca.SX.sym("p", 2 + len(self.names))
             full = ca.vertcat(*[wf[free.index(i)] if i in free else fixed[i]
                                 for i in range(len(self.system.unknowns))])
             rf = ca.Function("square", [wf, p], [self.residual(full, p[0], p[1], p[2:])], {"cse": True})
+            self._square[active] = rf
             solver = ca.rootfinder(f"newton_{'_'.join(sorted(active)) or 'free'}", "newton", rf,
                                    {"abstol": NEWTON_ABSTOL, "max_iter": 50, "error_on_fail": False,
                                     "linear_solver": "qr",  # dense QR: 1.8x csparse on these 6-8 unknowns
@@ -195,12 +200,13 @@ class ParametricStatics:
         wf, p = ca.MX.sym("wf", len(free)), ca.MX.sym("p", 2 + len(self.names))
         return ca.Function("dW_dp", [wf, p], [ca.jacobian(solver(wf, p), p)])
 
-    def _point(self, kind: str, active: frozenset) -> ca.Function:
+    def function(self, kind: str, active: frozenset) -> ca.Function:
         """One point's Function: "check" (w, p) -> (largest |r|, largest relative |r|, q, psi);
-        "relative" (w, p) -> relative |r| per balance; "newton" (w_free0, p) -> w."""
+        "relative" (w, p) -> relative |r| per balance; "step" (w_free, p) -> (the Newton step's
+        w_free, largest |r| at w_free) of the square system with the stops fixed as ``active`` says."""
         key = (kind, active, self.jit)
         if key not in self._maps:
-            solver, free, full = self.newton(active)
+            free = self.newton(active)[1]
             if kind in ("check", "relative"):
                 w, p = ca.SX.sym("w", len(self.system.unknowns)), ca.SX.sym("p", 2 + len(self.names))
                 args = (w, p[0], p[1], p[2:])
@@ -210,16 +216,18 @@ class ParametricStatics:
                     self.pressures(*args)]
                 # cse: the residual, the flows and the scales share their throttle flows (215 -> 111 instructions)
                 self._maps[key] = ca.Function(kind, [w, p], out, {"cse": True} | (jit if self.jit else {}))
-            else:
-                wf, p = ca.MX.sym("wf", len(free)), ca.MX.sym("p", 2 + len(self.names))
-                self._maps[key] = ca.Function("newton_full", [wf, p], [full(solver(wf, p))])
+            else:  # one Newton step of the square system and the largest |r| before it
+                wf, p = ca.SX.sym("wf", len(free)), ca.SX.sym("p", 2 + len(self.names))
+                r = self._square[active](wf, p)
+                self._maps[key] = ca.Function("newton_step", [wf, p], [wf - ca.solve(ca.jacobian(r, wf), r),
+                                                                      ca.mmax(ca.fabs(r))], {"cse": True})
         return self._maps[key]
 
     def mapped(self, kind: str, active: frozenset, m: int) -> ca.Function:
-        """:meth:`_point` mapped over ``m`` points (``parallel``: CasADi's map mode), built once per size."""
+        """:meth:`function` mapped over ``m`` points (``parallel``: CasADi's map mode), built once per size."""
         key = (kind, active, m, self.parallel, self.jit)
         if key not in self._maps:
-            f = self._point(kind, active)
+            f = self.function(kind, active)
             self._maps[key] = f.map(m, self.parallel, self.threads) if self.parallel != "serial" else f.map(m)
             sized = [k for k in self._maps if len(k) == 5]
             if len(sized) > 32:  # keep the cache small: sizes of the fallback passes vary
@@ -227,13 +235,13 @@ class ParametricStatics:
         return self._maps[key]
 
     def evaluate(self, kind: str, active: frozenset, *rows: np.ndarray) -> list[np.ndarray]:
-        """:meth:`_point` on every row of ``rows`` (points x entries each) by :func:`call_rows`, in
+        """:meth:`function` on every row of ``rows`` (points x entries each) by :func:`call_rows`, in
         chunks of at most ``chunk`` points: a CasADi map takes time to build in proportion to its
         size (about 3 us per point), so one map of the chunk size is built once and called repeatedly,
         and a remainder is padded to a power of two.  Returns one array (points x entries) per output."""
         m = rows[0].shape[0]
         rows = [np.ascontiguousarray(r, dtype=float) for r in rows]
-        f = self._point(kind, active)
+        f = self.function(kind, active)
         outs = [np.empty((m, f.nnz_out(j))) for j in range(f.n_out())]
         for a in range(0, m, self.chunk):
             b = min(a + self.chunk, m)
@@ -245,6 +253,44 @@ class ParametricStatics:
                 for o, v in zip(outs, call_rows(self.mapped(kind, active, size), *pad), strict=True):
                     o[a:b] = v[:b - a]
         return outs
+
+    def roots(self, active: frozenset, W0: np.ndarray, P: np.ndarray, max_iter: int = 50) -> np.ndarray:
+        """Newton's method on the square system (stops fixed as ``active`` says) at every point.
+
+        Every iteration evaluates one mapped Newton step of the points still iterating; a point
+        stops when all its balances satisfy |r| <= NEWTON_ABSTOL (as CasADi's rootfinder), when its
+        step is not finite, or after ``max_iter`` steps.  No bounds.
+
+        Parameters
+        ----------
+        active : frozenset of str
+            The stops reached (their coordinates fixed on the stop); the other reactions are zero.
+        W0 : ndarray (points x unknowns)
+            Starts, full rows of unknowns (the fixed entries are overwritten).
+        P : ndarray (points x (2 + len(names)))
+            Rows [psi1, dpsi, theta], dimensionless.
+        max_iter : int
+            Newton steps at most.
+
+        Returns
+        -------
+        ndarray (points x unknowns)
+            The last iterate of every point, full rows, dimensionless.
+        """
+        free, fixed = self.free(active)
+        W = np.array(W0, float)
+        W[:, list(fixed)] = list(fixed.values())
+        X = np.ascontiguousarray(W[:, free])
+        rows = np.arange(len(W))
+        for _ in range(max_iter):
+            step, r = self.evaluate("step", active, X[rows], P[rows])
+            go = (r[:, 0] > NEWTON_ABSTOL) & np.all(np.isfinite(step), axis=1)
+            X[rows[go]] = step[go]
+            rows = rows[go]
+            if rows.size == 0:
+                break
+        W[:, free] = X
+        return W
 
     def solve(self, P: np.ndarray, attempts, tol: float = RESIDUAL_TOL) -> dict:
         """Roots at every row of ``P`` (points x [psi1, dpsi, theta]).
@@ -287,15 +333,14 @@ class ParametricStatics:
         for k, (active, starts) in enumerate(attempts):
             if todo.size == 0:
                 break
-            free, fixed = self.free(active)
+            fixed = self.free(active)[1]
             start = np.array(starts[todo], float)
             start[:, list(fixed)] = list(fixed.values())
             # a start may be a root already (the closed form is exact when no stop is reached): accepted by
-            # the Newton method's own first test, |r| <= its abstol, without the rootfinder's call
+            # the Newton method's own first test, |r| <= its abstol, without a step
             accept(start, active, k, min(tol, NEWTON_ABSTOL))
             if todo.size:
-                start = np.array(starts[todo], float)
-                accept(self.evaluate("newton", active, start[:, free], P[todo])[0], active, k, tol)
+                accept(self.roots(active, starts[todo], P[todo]), active, k, tol)
         return {"W": W, "q": q, "psi": psi, "residual": resid, "relative_residual": relative, "valid": which >= 0,
                 "active": which}
 
@@ -360,15 +405,14 @@ class StaticsSolver:
 
     def newton(self, psi1: float, dpsi: float, start: np.ndarray | None = None,
                active: frozenset = frozenset()) -> np.ndarray:
-        """Root of the same balances by CasADi's Newton method, as a square system
-        (:meth:`ParametricStatics.newton`).
+        """Root of the same balances by Newton's method, as a square system
+        (:meth:`ParametricStatics.roots`).
 
         Each stop is fixed as inactive (reaction 0) or, if named in ``active``, active
         (coordinate on its stop, reaction free).  No bounds; full vector of unknowns returned.
         """
-        solver, free, full = self.parametric.newton(active)
         x0 = self.guess(psi1, dpsi) if start is None else start
-        return np.asarray(full(solver(x0[free], [psi1, dpsi]))).ravel()
+        return self.parametric.roots(active, np.atleast_2d(x0), np.array([[psi1, dpsi]]))[0]
 
     def fast_sweep(self, psi1s, dpsi: float, tol: float = 1e-10) -> tuple[np.ndarray, np.ndarray]:
         """A sweep in one call: Newton roots of the no-stop system mapped over the grid from the
