@@ -29,6 +29,7 @@ REACTION_TOL = 1e-8  # a stop reaction above this (dimensionless force) means th
 COMPLEMENTARITY_TOL = 1e-10  # sum of gap x reaction accepted as zero
 CONTINUATION_START, CONTINUATION_STEPS = 0.25, 16  # fallback path in psi1 when a cold start fails
 NEWTON_ABSTOL = 1e-14  # the Newton rootfinder stops when every balance's |residual| is below this
+FAST_NEWTON_ITER = 12  # batched Newton evaluations before the points left go to CasADi's rootfinder
 RESIDUAL_TOL = 1e-10  # a Newton root is accepted below this largest absolute balance residual
 
 
@@ -95,6 +96,21 @@ def call_rows(f: ca.Function, *rows: np.ndarray, out: list | None = None) -> lis
         buf.set_res(j, memoryview(o))
     run()
     return outs
+
+
+def _solve_each(J: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """J^-1 r for a stack of square systems (LAPACK LU, partial pivoting); NaN rows where singular."""
+    with np.errstate(all="ignore"):
+        try:
+            return np.linalg.solve(J, r[..., None])[..., 0]
+        except np.linalg.LinAlgError:  # one singular system fails the batch: solve one by one
+            out = np.full(r.shape, np.nan)
+            for i in range(len(J)):
+                try:
+                    out[i] = np.linalg.solve(J[i], r[i])
+                except np.linalg.LinAlgError:
+                    pass
+            return out
 
 
 class ParametricStatics:
@@ -202,8 +218,9 @@ class ParametricStatics:
 
     def function(self, kind: str, active: frozenset) -> ca.Function:
         """One point's Function: "check" (w, p) -> (largest |r|, largest relative |r|, q, psi);
-        "relative" (w, p) -> relative |r| per balance; "step" (w_free, p) -> (the Newton step's
-        w_free, largest |r| at w_free) of the square system with the stops fixed as ``active`` says."""
+        "relative" (w, p) -> relative |r| per balance; "step" (w_free, p) -> (r, J row by row) of the
+        square system with the stops fixed as ``active`` says; "newton" (w_free0, p) -> w_free, its
+        root by CasADi's rootfinder."""
         key = (kind, active, self.jit)
         if key not in self._maps:
             free = self.newton(active)[1]
@@ -216,11 +233,15 @@ class ParametricStatics:
                     self.pressures(*args)]
                 # cse: the residual, the flows and the scales share their throttle flows (215 -> 111 instructions)
                 self._maps[key] = ca.Function(kind, [w, p], out, {"cse": True} | (jit if self.jit else {}))
-            else:  # one Newton step of the square system and the largest |r| before it
+            elif kind == "newton":  # CasADi's rootfinder (with its line search) from w_free
+                solver = self.newton(active)[0]
+                wf, p = ca.MX.sym("wf", len(free)), ca.MX.sym("p", 2 + len(self.names))
+                self._maps[key] = ca.Function("newton", [wf, p], [solver(wf, p)])
+            else:  # the square system's residual and its Jacobian (row-major, dense) at w_free
                 wf, p = ca.SX.sym("wf", len(free)), ca.SX.sym("p", 2 + len(self.names))
                 r = self._square[active](wf, p)
-                self._maps[key] = ca.Function("newton_step", [wf, p], [wf - ca.solve(ca.jacobian(r, wf), r),
-                                                                      ca.mmax(ca.fabs(r))], {"cse": True})
+                J = ca.densify(ca.jacobian(r, wf))
+                self._maps[key] = ca.Function("newton_system", [wf, p], [r, ca.vec(J.T)], {"cse": True})
         return self._maps[key]
 
     def mapped(self, kind: str, active: frozenset, m: int) -> ca.Function:
@@ -254,12 +275,16 @@ class ParametricStatics:
                     o[a:b] = v[:b - a]
         return outs
 
-    def roots(self, active: frozenset, W0: np.ndarray, P: np.ndarray, max_iter: int = 50) -> np.ndarray:
+    def roots(self, active: frozenset, W0: np.ndarray, P: np.ndarray) -> np.ndarray:
         """Newton's method on the square system (stops fixed as ``active`` says) at every point.
 
-        Every iteration evaluates one mapped Newton step of the points still iterating; a point
-        stops when all its balances satisfy |r| <= NEWTON_ABSTOL (as CasADi's rootfinder), when its
-        step is not finite, or after ``max_iter`` steps.  No bounds.
+        Every iteration evaluates the residual and its exact Jacobian (CasADi, mapped) at the points
+        still iterating and solves all their Newton systems at once (LAPACK LU with partial pivoting,
+        batched), halving a step that does not reduce |r|; a point stops when all its balances
+        satisfy |r| <= NEWTON_ABSTOL (as CasADi's rootfinder) or when its Jacobian is singular.
+        The points still iterating after FAST_NEWTON_ITER evaluations (slow, e.g. a valve on its stop
+        with almost no pressure drop) are solved again from their start by CasADi's rootfinder on the
+        same system (its line search, at most 50 iterations).  No bounds.
 
         Parameters
         ----------
@@ -269,8 +294,6 @@ class ParametricStatics:
             Starts, full rows of unknowns (the fixed entries are overwritten).
         P : ndarray (points x (2 + len(names)))
             Rows [psi1, dpsi, theta], dimensionless.
-        max_iter : int
-            Newton steps at most.
 
         Returns
         -------
@@ -281,14 +304,32 @@ class ParametricStatics:
         W = np.array(W0, float)
         W[:, list(fixed)] = list(fixed.values())
         X = np.ascontiguousarray(W[:, free])
-        rows = np.arange(len(W))
-        for _ in range(max_iter):
-            step, r = self.evaluate("step", active, X[rows], P[rows])
-            go = (r[:, 0] > NEWTON_ABSTOL) & np.all(np.isfinite(step), axis=1)
-            X[rows[go]] = step[go]
-            rows = rows[go]
+        n, k = len(free), len(W)
+        norm_prev = np.full(k, np.inf)
+        step = np.zeros((k, n))
+        alpha = np.ones(k)
+        rows = np.arange(k)
+        for _ in range(FAST_NEWTON_ITER):
+            r, J = self.evaluate("step", active, X[rows], P[rows])
+            norm = np.sqrt((r * r).sum(axis=1))
+            # backtracking as CasADi's Newton: a trial that does not reduce |r| is halved (down to 1/64)
+            worse = ~(norm < norm_prev[rows]) & (alpha[rows] > 1 / 64)
+            back = rows[worse]
+            alpha[back] *= 0.5
+            X[back] += alpha[back, None] * step[back]  # from x_prev - 2a dx to x_prev - a dx
+            ahead = ~worse & (np.abs(r).max(axis=1) > NEWTON_ABSTOL)
+            dx = _solve_each(J[ahead].reshape(-1, n, n), r[ahead])
+            ok = np.all(np.isfinite(dx), axis=1)  # singular or not finite: the point stops where it is
+            ahead[ahead] = ok
+            fwd = rows[ahead]
+            step[fwd] = dx[ok]
+            alpha[fwd], norm_prev[fwd] = 1.0, norm[ahead]
+            X[fwd] -= step[fwd]
+            rows = np.concatenate([back, fwd])
             if rows.size == 0:
                 break
+        if rows.size:  # the few slow ones (valve nearly without pressure drop): CasADi's rootfinder, from the start
+            X[rows] = self.evaluate("newton", active, W[rows][:, free], P[rows])[0]
         W[:, free] = X
         return W
 
