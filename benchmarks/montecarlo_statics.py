@@ -138,6 +138,9 @@ def main(repeats: int = 5) -> list[dict]:
         "Before this change (numpy<->DM conversion, the rootfinder on every sample): 0.47 s for the 1e5 samples "
         "in the previous RESULTS.md, 1.97 s in issue 17's measurement.",
     ]
+    ratio = cases[0]["ratio"]
+    notes.insert(0, f"Goals (issue 17): at least as fast as the numpy Newton: {'met' if ratio >= 1 else 'missed'} "
+                    f"({ratio:.2f}x); under 0.5 s: {'met' if t_a < 0.5 else 'missed'} ({t_a:.3f} s).")
     write("montecarlo_statics", "Monte Carlo of the pump statics: autobal vs a vectorised numpy Newton", cases, notes)
     return cases
 
