@@ -12,7 +12,9 @@ import shutil
 import tempfile
 from pathlib import Path
 
+from autobal import adapters
 from autobal.analysis.result import Result
+from autobal.errors import ScenarioError
 
 
 class LegacyResult(Result):
@@ -53,35 +55,87 @@ def statics(scene, settings) -> Result:
     """Static calculation of the balancing device: operating point, criticals, sweep, force-gap."""
     from autobal.analysis import statics_study
     from autobal.analysis.statics import StaticsSolver
-    from autobal.models.device import design
 
-    return statics_study.run(StaticsSolver(design(scene.device)), settings, scene.title)
+    return statics_study.run(StaticsSolver(adapters.design(scene.device)), settings, scene.title)
+
+
+def frequency(scene, settings) -> Result:
+    """AFC/PFC of the face gap of every named model (Pavlenko (2014), Eqs. (2.100)-(2.110))."""
+    from autobal.analysis import frequency as fr
+    from autobal.analysis.linearize import Setup
+
+    setup = Setup(adapters.dynamic_device(scene), settings.operating_ratio)
+    o = settings.omega
+    res = fr.study(setup, list(settings.models), settings.forcing, (o.start, o.stop, o.points), scene.title)
+    res.data["accuracy"] = fr.accuracy(setup, res.data["curves"], settings.forcing)
+    return res
+
+
+def stability(scene, settings) -> Result:
+    """Poles, damping, Hurwitz determinants, margin and the optional stability map."""
+    from autobal.analysis import stability as st
+    from autobal.analysis.linearize import Setup
+
+    setup = Setup(adapters.dynamic_device(scene), settings.operating_ratio)
+    res = st.study(setup, list(settings.models), settings.map, scene.title)
+    res.data["accuracy"] = st.accuracy(setup, list(settings.models))
+    return res
+
+
+def transient(scene, settings) -> Result:
+    """Time responses of the nonlinear device model from its static solution (CVODES / IDAS)."""
+    from autobal.analysis import simulate as sim
+    from autobal.analysis.linearize import Setup
+
+    setup = Setup(adapters.dynamic_device(scene), settings.operating_ratio)
+    model = setup.nonlinear("chain" if settings.model == "nonlinear_chain" else "energy")
+    cases = [{"input": c.input, "amplitude": c.amplitude, "frequency": c.frequency,
+              "couple": c.thrust_follows_pressure} for c in settings.cases]
+    res = sim.study(model, cases, settings.duration, settings.points, settings.integrator, scene.title)
+    res.data["accuracy"] = sim.accuracy(model, res, cases, settings.duration, settings.points, settings.integrator)
+    return res
+
+
+def liquid_balancer(scene, settings) -> Result:
+    """Design calculations of the liquid auto-balancer (Khomyak (2020); Pashkov (2010), ch. 3)."""
+    from autobal.analysis import liquid_balancer as lb
+
+    return lb.run(adapters.liquid_balancer(scene.liquid_balancer), settings, scene.title)
+
+
+def rotor_dynamics(scene, settings) -> Result:
+    """The source's studies of the Jeffcott rotor with a liquid auto-balancer (Pashkov (2010))."""
+    from autobal.analysis import rotor_study
+
+    if scene.rotor is None:
+        raise ScenarioError("analyses.rotor_dynamics needs a rotor section")
+    drive = scene.rotor.drive
+    return rotor_study.run(adapters.rotor(scene.rotor), settings, scene.title, drive.motor if drive else None)
 
 
 def montecarlo(scene, settings) -> Result:
-    """Monte Carlo of the device statics (and optionally the AFC) over uncertain groups, on the
-    executor the CLI or the scene names."""
+    """Monte Carlo of the device statics (and optionally the AFC) over uncertain groups (Pavlenko (2014),
+    ch. 3), on the executor the CLI or the scene names."""
     from autobal.analysis import executor
     from autobal.analysis import montecarlo as mc
-    from autobal.errors import ScenarioError
-    from autobal.models.device import design
 
     if scene.device is None:
         raise ScenarioError("analyses.montecarlo needs a device section")
+    device = adapters.device(scene.device)
     with executor.make(scene_executor=getattr(scene, "executor", None)) as exe:
-        return mc.run(design(scene.device), settings, exe, scene.title, device=scene.device)
+        return mc.run(adapters.design(scene.device), settings, exe, scene.title, device=device)
 
 
 RUNNERS = {
     "statics": statics,
-    "frequency": _legacy("frequency", "autobal.analysis.frequency:run"),
-    "stability": _legacy("stability", "autobal.analysis.stability:run"),
-    "transient": _legacy("transient", "autobal.analysis.simulate:run"),
-    "liquid_balancer": _legacy("liquid_balancer", "autobal.analysis.liquid_balancer:run_scenario"),
+    "frequency": frequency,
+    "stability": stability,
+    "transient": transient,
+    "liquid_balancer": liquid_balancer,
     "estimation": _legacy("estimation", "autobal.analysis.estimation_study:run"),
     "reliability": _legacy("reliability", "autobal.analysis.reliability:run_scene"),
     "montecarlo": montecarlo,
-    "rotor_dynamics": _legacy("rotor_dynamics", "autobal.analysis.rotor_study:run_scene"),
+    "rotor_dynamics": rotor_dynamics,
     "spinup": _legacy("spinup", "autobal.ocp.spinup_study:run_scene"),
 }
 

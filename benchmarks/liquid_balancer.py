@@ -16,15 +16,15 @@ import time
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from autobal import scenario
-from autobal.analysis import liquid_balancer as study
+from autobal import adapters, scenario
+from autobal.analysis import liquid_balancer_optimum as optimum
 from autobal.models import liquid_balancer as lb
 from benchmarks._results import case, write
 from benchmarks._timing import best_of
 
 
 def numpy_lambda0(omega, omega_cr, n, R, h, V, rho, D0, e_f):
-    """The corrected pipeline in numpy (same formulas as models/liquid_balancer.pipeline)."""
+    """The corrected pipeline in numpy (same formulas as models/liquid_balancer.quasi_static)."""
     a, b = 2 * n * omega, omega_cr**2 - omega**2
     c = np.hypot(a, b)
     s = (a / c) ** 2
@@ -37,7 +37,7 @@ def numpy_lambda0(omega, omega_cr, n, R, h, V, rho, D0, e_f):
 
 
 def main(repeats: int = 3) -> list[dict]:
-    sysm = study.System.from_scenario(scenario.load("washer_liquid_balancer").liquid_balancer)
+    sysm = adapters.liquid_balancer(scenario.load("washer_liquid_balancer").liquid_balancer)
     p = sysm.inputs("program")
     g = np.linspace(0.3, 1.6, 100_000)
     lb.evaluate("corrected", **(p | {"omega": g[:10] * sysm.omega_cr}))  # build once
@@ -49,8 +49,8 @@ def main(repeats: int = 3) -> list[dict]:
 
     f = float(lb.evaluate("corrected", **p)["f"])
     hstar = (p["D0"] / (p["rho"] * f) + p["V"]) / (math.pi * p["R"] ** 2)
-    study.optimise(sysm, "height", "corrected", "program", 0.0, 0.1, 3)  # build once
-    t_ip, o = best_of(repeats, lambda: study.optimise(sysm, "height", "corrected", "program", 0.0, 0.1, 3))
+    optimum.optimise(sysm, "height", "corrected", "program", 0.0, 0.1, 3)  # build once
+    t_ip, o = best_of(repeats, lambda: optimum.optimise(sysm, "height", "corrected", "program", 0.0, 0.1, 3))
     lo, hi = o["feasible_lower"], o["feasible_upper"]
 
     def objective(h):
@@ -62,7 +62,7 @@ def main(repeats: int = 3) -> list[dict]:
     grid = np.linspace(lo, hi, 200_001)
     t_gr, gr = best_of(repeats, lambda: grid[np.nanargmax(numpy_lambda0(**(p | {"h": grid})))])
     t0 = time.perf_counter()
-    study.optimise(sysm, "height", "corrected", "program", 0.0, 0.1, 3)
+    optimum.optimise(sysm, "height", "corrected", "program", 0.0, 0.1, 3)
     t_ip_build = time.perf_counter() - t0
     cases = [
         case("lambda0 at 100 000 speed ratios (models.liquid_balancer.evaluate, mapped)", t_ab, None,

@@ -18,8 +18,8 @@ import time
 import numpy as np
 
 from autobal import scenario
+from autobal.adapters import design
 from autobal.analysis.statics import StaticsSolver, call_rows
-from autobal.models.device import design
 from benchmarks import _numpy_statics as ns
 from benchmarks._results import case, write
 from benchmarks._timing import best_of
