@@ -73,8 +73,12 @@ def write(name: str, title: str, cases: list[dict], notes: list[str] | None = No
     under the cases."""
     RESULTS.mkdir(exist_ok=True)
     path = RESULTS / f"{name}.json"
-    doc = {"name": name, "title": title, "machine": machine(), "notes": list(notes or []), "cases": cases,
-           "tables": list(tables or [])}
+    try:
+        load = [round(x, 2) for x in os.getloadavg()]
+    except OSError:
+        load = None
+    doc = {"name": name, "title": title, "machine": machine(), "load_average": load, "notes": list(notes or []),
+           "cases": cases, "tables": list(tables or [])}
     path.write_text(json.dumps(doc, indent=1, allow_nan=False) + "\n")
     (RESULTS / f"{name}.md").write_text(section(doc))
     return path
@@ -92,7 +96,10 @@ def _fmt(x, digits: int = 3) -> str:
 
 def section(doc: dict) -> str:
     """Markdown of one benchmark's JSON: title, notes, the cases table, extra tables."""
-    lines = [f"## {doc['title']}", "", f"Machine: {doc['machine']}.", ""]
+    load = doc.get("load_average")
+    lines = [f"## {doc['title']}", "", f"Machine: {doc['machine']}"
+             + (f"; load average at the end of the run {load[0]:g} (1 min), {load[1]:g} (5 min) on "
+                f"{os.cpu_count()} cores" if load else "") + ".", ""]
     lines += [f"- {n}" for n in doc.get("notes", [])]
     lines += ["", "| case | autobal (s) | autobal build (s) | peer | peer (s) | peer / autobal | autobal error "
               "| peer error |", "|---|---|---|---|---|---|---|---|"]
