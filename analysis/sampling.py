@@ -63,6 +63,8 @@ def marginals(parameters: dict, nominal: dict, where: str = "analyses.montecarlo
 
 
 def correlation_matrix(names, correlations) -> np.ndarray:
+    """The copula's correlation matrix of the parameters ``names`` from the scene's pairs
+    (autobal.schema_reliability.Correlation: ``between`` two names, ``rho``); 1 on the diagonal."""
     c = np.eye(len(names))
     for r in correlations:
         i, j = names.index(r.between[0]), names.index(r.between[1])

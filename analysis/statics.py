@@ -7,8 +7,11 @@ which is zero exactly at the physical solution and is checked to be so.  Regulat
 (the valve on its open stop, spec §10.2) and face contact are part of the solution, reported
 through their reactions, never a crash.
 
-A CasADi Newton rootfinder on the square system of the same balances (stops fixed as IPOPT
-found them) is kept as an independent cross-check;
+Newton's method on the square system of the same balances (stops fixed: each reaction zero or
+its coordinate on the stop) is the one batch solver, :class:`ParametricStatics`: the balances
+with any groups as parameters, solved for many points at once (mapped CasADi Functions called
+through buffers, batched linear solves), behind :meth:`StaticsSolver.newton` (an independent
+cross-check of IPOPT), :meth:`StaticsSolver.fast_sweep`, the Monte Carlo and the estimation.
 :meth:`StaticsSolver.sweep` continues over the discharge ratio with warm starts and
 :meth:`StaticsSolver.batch` solves a whole sweep as one NLP.
 """
@@ -334,15 +337,30 @@ class ParametricStatics:
         return W
 
     def solve(self, P: np.ndarray, attempts, tol: float = RESIDUAL_TOL) -> dict:
-        """Roots at every row of ``P`` (points x [psi1, dpsi, theta]).
+        """Roots at every point, trying stop sets in turn.
 
-        ``attempts``: sequence of (active set, starts), starts rows of full unknowns per point;
-        each attempt takes only the points not yet accepted: their start (with the stops fixed as
-        the set says) is checked first and, where it is no root, the Newton solve runs from it.
-        A point is accepted when finite, inside the bounds and every balance's absolute residual
-        is <= ``tol``.  Returns rows ``W`` (unknowns), ``q`` (flows), ``psi`` (pressures),
-        ``residual`` (largest |r|), ``valid`` and ``active`` (index into ``attempts`` of the
-        accepting attempt, -1 none).
+        Each attempt takes only the points not yet accepted: their start (with the stops fixed as
+        the set says) is checked first and, where it is no root, :meth:`roots` runs from it.  A
+        point is accepted when finite, inside the bounds and every balance's absolute residual is
+        <= ``tol``.
+
+        Parameters
+        ----------
+        P : ndarray (points x (2 + len(names)))
+            Rows [psi1, dpsi, theta]: discharge ratio p1/p_B, margin (p_e - p1)/p_B and the groups
+            ``names``, dimensionless.
+        attempts : sequence of (frozenset, ndarray)
+            (stop set, starts): the stops reached and full rows of unknowns per point.
+        tol : float
+            Largest absolute balance residual accepted (dimensionless).
+
+        Returns
+        -------
+        dict
+            ``W`` rows of unknowns, ``q`` throttle flows Q/(g1 p_B), ``psi`` pressures (psi_e, psi2,
+            psi3, psi_cam), ``residual`` largest |r|, ``relative_residual`` largest |r| over its
+            balance's largest term, ``valid`` (bool), ``active`` (index into ``attempts`` of the
+            accepting attempt, -1 none); NaN rows where no attempt was accepted.
         """
         sys_ = self.system
         P = np.ascontiguousarray(P, dtype=float)
