@@ -27,7 +27,7 @@ def test_ipopt_error_follows_its_tolerance(pump):
     assert rows[1e-12] < rows[1e-8] < rows[1e-4]
     cheap = study.cheapest()
     best = cheap["IPOPT (bounds, complementarity)"]
-    assert rows[best["setting"]] <= 1e-6 and best["setting"] >= 1e-8  # a loose setting suffices for 1e-6
+    assert rows[best["setting"]] <= 1e-6  # which setting is fastest depends on the machine: cheapest() is tested below
     cf = [v for k, v in cheap.items() if k.startswith("closed form")][0]
     assert cf["setting"] is None and cf["best_error"] == pytest.approx(0.341, abs=2e-3)  # xi0: 1.294 vs 1.964
 
