@@ -17,6 +17,29 @@ def _rel(g, psi1, dpsi):
     return ae, a3, at, c
 
 
+def flow_base(g, dpsi):
+    """The source's base flow Q_B/(g1 p_B) of the dimensionless flows q.
+
+    Liquid: Q_B = Q_e = g_e dp/(1 + a_e1), Pavlenko (2014) Eq. (2.29); gas: Eq. (2.156).  Plain
+    arithmetic, so it takes numpy arrays and CasADi symbols alike.
+
+    Parameters
+    ----------
+    g : DeviceGroups or a namespace of its groups (arrays or symbols)
+        medium, alpha_e1, alpha_31 and, for the gas, b, chi, sigma.
+    dpsi : float, array or symbol
+        Barrier margin (p_e - p1)/p_B, dimensionless.
+
+    Returns
+    -------
+    Q_B / (g1 p_B), dimensionless.
+    """
+    ae, a3 = g.alpha_e1, g.alpha_31
+    if g.medium == "liquid":
+        return ae * dpsi / (1 + ae)
+    return ae * a3 / (ae + a3) * (1 + dpsi - (g.b - g.chi) / g.sigma)
+
+
 def regulator(g, psi1, dpsi, psi2=None):
     """psi_cam (2.26) and xi (2.28); with ``psi2`` given, their exact counterparts for that psi2.
 
@@ -48,7 +71,7 @@ def pump(g, psi1, dpsi) -> dict:
         "psi_e": psi1 + dpsi, "psi2": psi2, "psi3": psi3, "u": u,
         "q_e": np.ones_like(psi1), "q_T": q_t, "q_1": 1 - q_t,
         "Q_e_over_g1pB": ae * dpsi / (1 + ae) * np.ones_like(psi1),  # Q_e = g_e dp/(1 + a_e1)
-        "Q_B_over_g1pB": ae * dpsi / (1 + ae),  # flow base of q, (2.29)
+        "Q_B_over_g1pB": flow_base(g, dpsi),  # flow base of q, (2.29)
         "kappa_s": 3 * g.sigma / u * (psi1 - g.psi4 + k * dpsi) * ratio / (1 + ratio) ** 2,  # (2.36)
         "dpsi_kr": dpsi_kr,
         "psi1_kr": ((ae * dpsi / (a3 * (1 + ae))) ** 2 - k * dpsi - g.chi / g.sigma)
@@ -113,7 +136,7 @@ def compressor(g, psi1, dpsi) -> dict:
         "psi_e": psi1 + dpsi, "psi2": psi2, "psi3": psi3, "u": u,
         "q_e": q_e, "q_1": q_1, "q_T": q_e - q_1,
         "Q_e_over_g1pB": ae * dpsi / (1 + ae) * np.ones_like(psi1),  # App. B uses the pump Q_e
-        "Q_B_over_g1pB": ae * a3 / (ae + a3) * (1 + dpsi - (g.b - g.chi) / g.sigma),  # (2.156)
+        "Q_B_over_g1pB": flow_base(g, dpsi),  # (2.156)
         "kappa_s": np.full_like(psi1, np.nan),  # no fixed-pressure closed form for the gas device
         "kappa_u_2_162": -g.b / du,  # (2.162): slope along the pressure sweep, not at fixed psi1
         "dpsi_kr": a3 / ae * s1,  # (2.160) at psi1_kr = 1

@@ -7,14 +7,18 @@ which is zero exactly at the physical solution and is checked to be so.  Regulat
 (the valve on its open stop, spec §10.2) and face contact are part of the solution, reported
 through their reactions, never a crash.
 
-A CasADi Newton rootfinder on the square system of the same balances (stops fixed as IPOPT
-found them) is kept as an independent cross-check;
+Newton's method on the square system of the same balances (stops fixed: each reaction zero or
+its coordinate on the stop) is the one batch solver, :class:`ParametricStatics`: the balances
+with any groups as parameters, solved for many points at once (mapped CasADi Functions called
+through buffers, batched linear solves), behind :meth:`StaticsSolver.newton` (an independent
+cross-check of IPOPT), :meth:`StaticsSolver.fast_sweep`, the Monte Carlo and the estimation.
 :meth:`StaticsSolver.sweep` continues over the discharge ratio with warm starts and
 :meth:`StaticsSolver.batch` solves a whole sweep as one NLP.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import casadi as ca
@@ -27,6 +31,9 @@ from autobal.models.device import DeviceDesign, StaticSystem, static_system
 REACTION_TOL = 1e-8  # a stop reaction above this (dimensionless force) means the stop is reached
 COMPLEMENTARITY_TOL = 1e-10  # sum of gap x reaction accepted as zero
 CONTINUATION_START, CONTINUATION_STEPS = 0.25, 16  # fallback path in psi1 when a cold start fails
+NEWTON_ABSTOL = 1e-14  # the Newton rootfinder stops when every balance's |residual| is below this
+FAST_NEWTON_ITER = 12  # batched Newton evaluations before the points left go to CasADi's rootfinder
+RESIDUAL_TOL = 1e-10  # a Newton root is accepted below this largest absolute balance residual
 
 
 @dataclass
@@ -77,12 +84,333 @@ def ideal_guess(g, unknowns: list[str], psi1s, dpsi) -> np.ndarray:
     return np.column_stack([np.broadcast_to(v.get(k, zeros), zeros.shape) for k in unknowns])
 
 
+def call_rows(f: ca.Function, *rows: np.ndarray, out: list | None = None) -> list[np.ndarray]:
+    """Call a Function mapped over m points on ``rows`` (m x entries each) through a CasADi buffer:
+    a point's entries are contiguous in a C-ordered row, which is CasADi's column-major column, so
+    nothing is converted to or from DM.  Returns one array (m x entries) per output (``out``: the
+    arrays to fill, C-contiguous)."""
+    m = rows[0].shape[0]
+    buf, run = f.buffer()
+    rows = [np.ascontiguousarray(r, dtype=float) for r in rows]
+    outs = out if out is not None else [np.empty((m, f.nnz_out(j) // m)) for j in range(f.n_out())]
+    for i, r in enumerate(rows):
+        buf.set_arg(i, memoryview(r))
+    for j, o in enumerate(outs):
+        buf.set_res(j, memoryview(o))
+    run()
+    return outs
+
+
+def _solve_each(J: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """J^-1 r for a stack of square systems (LAPACK LU, partial pivoting); NaN rows where singular."""
+    with np.errstate(all="ignore"):
+        try:
+            return np.linalg.solve(J, r[..., None])[..., 0]
+        except np.linalg.LinAlgError:  # one singular system fails the batch: solve one by one
+            out = np.full(r.shape, np.nan)
+            for i in range(len(J)):
+                try:
+                    out[i] = np.linalg.solve(J[i], r[i])
+                except np.linalg.LinAlgError:
+                    pass
+            return out
+
+
+class ParametricStatics:
+    """The device's static balances with some groups as a parameter vector, and their Newton
+    solve with the stops fixed, mapped over columns of parameters: the one evaluator behind the
+    statics sweep (:meth:`StaticsSolver.fast_sweep`), the Monte Carlo and the estimation.
+
+    The balances are those of :func:`autobal.models.device.static_system` (Pavlenko 2014,
+    (2.17)/(2.19), (2.137)) with the groups ``names`` (fields of DeviceGroups/RegulatorGroups)
+    as ``theta``; the parameter column of every Function here is ``p = [psi1, dpsi, theta]``.
+
+    Parameters
+    ----------
+    groups : DeviceGroups
+        The device's dimensionless groups; those in ``names`` are replaced by ``theta``.
+    names : sequence of str
+        The groups that become parameters, in the order of ``theta``.
+    """
+
+    def __init__(self, groups, names=()):
+        self.names = tuple(names)
+        self.system: StaticSystem = static_system(groups, self.names)
+        sys_ = self.system
+        w, psi1, dpsi = ca.SX.sym("w", len(sys_.unknowns)), ca.SX.sym("psi1"), ca.SX.sym("dpsi")
+        theta = ca.SX.sym("theta", len(self.names))
+        args = [w, psi1, dpsi] + ([theta] if self.names else [])
+        q, psi = sys_.flows(*args)
+        #: balances r(w, psi1, dpsi, theta), dimensionless (zero at a solution)
+        self.residual = ca.Function("parametric_residual", [w, psi1, dpsi, theta], [sys_.residual(*args)])
+        #: throttle flows q(w, psi1, dpsi, theta) in the order of ``system.throttles``
+        self.flows = ca.Function("parametric_flows", [w, psi1, dpsi, theta], [q])
+        #: pressures (psi_e, psi2, psi3, psi_cam or NaN) of (w, psi1, dpsi, theta)
+        self.pressures = ca.Function("parametric_pressures", [w, psi1, dpsi, theta], [psi])
+        #: each balance's |residual| over its largest term, (w, psi1, dpsi, theta) -> vector
+        self.relative = self._relative(groups, w, psi1, dpsi, theta, q)
+        self.lower = np.array(sys_.lower, float)
+        self.upper = np.array(sys_.upper, float)
+        # the stop sets tried in turn: regulating, then the valve on its open stop
+        self.active_sets = [frozenset()] + ([frozenset({"r_valve"})] if "r_valve" in sys_.stops else [])
+        self._newton: dict = {}
+        self._square: dict = {}
+        self._maps: dict = {}
+        self.parallel, self.threads = "serial", 2  # map mode of the batch evaluations (CasADi map)
+        self.jit = False  # compile the balance check to C (needs a C compiler; build about 0.5 s)
+        self.chunk = 8192  # points per mapped call
+
+    def _relative(self, groups, w, psi1, dpsi, theta, q) -> ca.Function:
+        """Each balance's |residual| over its scale, the largest absolute term in it (the groups in
+        ``names`` taken from theta)."""
+        sys_ = self.system
+        named = dict(zip(self.names, ca.vertsplit(theta), strict=True)) if self.names else {}
+        reg = groups.regulator
+
+        def group(name, where):
+            return named.get(name, getattr(where, name))
+
+        flows = dict(zip(sys_.throttles, ca.vertsplit(q), strict=True))
+
+        def largest(*names):
+            return ca.mmax(ca.fabs(ca.vertcat(*[flows[k] for k in names])))
+
+        scale = {
+            "disc force": ca.fmax(group("b", groups) * psi1, group("chi", groups)),
+            "chamber 2 flow": largest("e", "1", "T"),
+            "chamber 3 flow": largest("T", "3"),
+            "membrane force": group("sigma_m", reg) * dpsi if reg else 1.0,
+            "valve chamber flow": largest("in", "valve") if reg else 1.0,
+            "barrier chamber flow": largest("valve", "e") if reg else 1.0,
+        }
+        r = ca.fabs(self.residual(w, psi1, dpsi, theta))
+        return ca.Function("relative_residual", [w, psi1, dpsi, theta],
+                           [r / ca.vertcat(*[scale[e] for e in sys_.equations])])
+
+    def free(self, active: frozenset = frozenset()) -> tuple[list[int], dict]:
+        """Indices of the unknowns left free when each stop is fixed (in ``active``: coordinate on
+        its stop; otherwise reaction 0), and the fixed values by index."""
+        sys_ = self.system
+        fixed = {sys_.index(k): v for k, v in sys_.fixed_by_stops(active).items()}
+        return [i for i in range(len(sys_.unknowns)) if i not in fixed], fixed
+
+    def newton(self, active: frozenset = frozenset()) -> tuple[ca.Function, list[int], ca.Function]:
+        """The square system with the stops fixed as in :meth:`free` as CasADi's Newton rootfinder
+        (the implicit function, for exact derivatives of a root with respect to p):
+        ``(solver(w_free0, p) -> w_free, free indices, full(w_free) -> w)``.  Roots of many points
+        are found by :meth:`roots`, the same Newton iteration driven over all points at once."""
+        if active not in self._newton:
+            free, fixed = self.free(active)
+            wf, p = ca.SX.sym("wf", len(free)), ca.SX.sym("p", 2 + len(self.names))
+            full = ca.vertcat(*[wf[free.index(i)] if i in free else fixed[i]
+                                for i in range(len(self.system.unknowns))])
+            rf = ca.Function("square", [wf, p], [self.residual(full, p[0], p[1], p[2:])], {"cse": True})
+            self._square[active] = rf
+            solver = ca.rootfinder(f"newton_{'_'.join(sorted(active)) or 'free'}", "newton", rf,
+                                   {"abstol": NEWTON_ABSTOL, "max_iter": 50, "error_on_fail": False,
+                                    "linear_solver": "qr",  # dense QR: 1.8x csparse on these 6-8 unknowns
+                                    "show_eval_warnings": False})
+            self._newton[active] = (solver, free, ca.Function("full", [wf], [full]))
+        return self._newton[active]
+
+    def sensitivity(self, active: frozenset = frozenset()) -> ca.Function:
+        """d(free unknowns)/dp of the rootfinder, (w_free0, p) -> matrix (exact, implicit function)."""
+        solver, free, _ = self.newton(active)
+        wf, p = ca.MX.sym("wf", len(free)), ca.MX.sym("p", 2 + len(self.names))
+        return ca.Function("dW_dp", [wf, p], [ca.jacobian(solver(wf, p), p)])
+
+    def function(self, kind: str, active: frozenset) -> ca.Function:
+        """One point's Function: "check" (w, p) -> (largest |r|, largest relative |r|, q, psi);
+        "relative" (w, p) -> relative |r| per balance; "step" (w_free, p) -> (r, J row by row) of the
+        square system with the stops fixed as ``active`` says; "newton" (w_free0, p) -> w_free, its
+        root by CasADi's rootfinder."""
+        key = (kind, active, self.jit)
+        if key not in self._maps:
+            free = self.newton(active)[1]
+            if kind in ("check", "relative"):
+                w, p = ca.SX.sym("w", len(self.system.unknowns)), ca.SX.sym("p", 2 + len(self.names))
+                args = (w, p[0], p[1], p[2:])
+                jit = {"jit": True, "compiler": "shell", "jit_options": {"flags": ["-O2"], "verbose": False}}
+                out = [self.relative(*args)] if kind == "relative" else [
+                    ca.mmax(ca.fabs(self.residual(*args))), ca.mmax(self.relative(*args)), self.flows(*args),
+                    self.pressures(*args)]
+                # cse: the residual, the flows and the scales share their throttle flows (215 -> 111 instructions)
+                self._maps[key] = ca.Function(kind, [w, p], out, {"cse": True} | (jit if self.jit else {}))
+            elif kind == "newton":  # CasADi's rootfinder (with its line search) from w_free
+                solver = self.newton(active)[0]
+                wf, p = ca.MX.sym("wf", len(free)), ca.MX.sym("p", 2 + len(self.names))
+                self._maps[key] = ca.Function("newton", [wf, p], [solver(wf, p)])
+            else:  # the square system's residual and its Jacobian (row-major, dense) at w_free
+                wf, p = ca.SX.sym("wf", len(free)), ca.SX.sym("p", 2 + len(self.names))
+                r = self._square[active](wf, p)
+                J = ca.densify(ca.jacobian(r, wf))
+                self._maps[key] = ca.Function("newton_system", [wf, p], [r, ca.vec(J.T)], {"cse": True})
+        return self._maps[key]
+
+    def mapped(self, kind: str, active: frozenset, m: int) -> ca.Function:
+        """:meth:`function` mapped over ``m`` points (``parallel``: CasADi's map mode), built once per size."""
+        key = (kind, active, m, self.parallel, self.jit)
+        if key not in self._maps:
+            f = self.function(kind, active)
+            self._maps[key] = f.map(m, self.parallel, self.threads) if self.parallel != "serial" else f.map(m)
+            sized = [k for k in self._maps if len(k) == 5]
+            if len(sized) > 32:  # keep the cache small: sizes of the fallback passes vary
+                self._maps.pop(sized[0])
+        return self._maps[key]
+
+    def evaluate(self, kind: str, active: frozenset, *rows: np.ndarray) -> list[np.ndarray]:
+        """:meth:`function` on every row of ``rows`` (points x entries each) by :func:`call_rows`, in
+        chunks of at most ``chunk`` points: a CasADi map takes time to build in proportion to its
+        size (about 3 us per point), so one map of the chunk size is built once and called repeatedly,
+        and a remainder is padded to a power of two.  Returns one array (points x entries) per output."""
+        m = rows[0].shape[0]
+        rows = [np.ascontiguousarray(r, dtype=float) for r in rows]
+        f = self.function(kind, active)
+        outs = [np.empty((m, f.nnz_out(j))) for j in range(f.n_out())]
+        for a in range(0, m, self.chunk):
+            b = min(a + self.chunk, m)
+            size = self.chunk if b - a == self.chunk else max(16, 1 << (b - a - 1).bit_length())
+            if size == b - a:
+                call_rows(self.mapped(kind, active, size), *[r[a:b] for r in rows], out=[o[a:b] for o in outs])
+            else:  # a remainder: padded with copies of its last point to a power of two, so few sizes are built
+                pad = [np.concatenate([r[a:b], np.repeat(r[b - 1:b], size - (b - a), axis=0)]) for r in rows]
+                for o, v in zip(outs, call_rows(self.mapped(kind, active, size), *pad), strict=True):
+                    o[a:b] = v[:b - a]
+        return outs
+
+    def roots(self, active: frozenset, W0: np.ndarray, P: np.ndarray) -> np.ndarray:
+        """Newton's method on the square system (stops fixed as ``active`` says) at every point.
+
+        Every iteration evaluates the residual and its exact Jacobian (CasADi, mapped) at the points
+        still iterating and solves all their Newton systems at once (LAPACK LU with partial pivoting,
+        batched), halving a step that does not reduce |r|; a point stops when all its balances
+        satisfy |r| <= NEWTON_ABSTOL (as CasADi's rootfinder) or when its Jacobian is singular.
+        The points still iterating after FAST_NEWTON_ITER evaluations (slow, e.g. a valve on its stop
+        with almost no pressure drop) are solved again from their start by CasADi's rootfinder on the
+        same system (its line search, at most 50 iterations).  No bounds.
+
+        Parameters
+        ----------
+        active : frozenset of str
+            The stops reached (their coordinates fixed on the stop); the other reactions are zero.
+        W0 : ndarray (points x unknowns)
+            Starts, full rows of unknowns (the fixed entries are overwritten).
+        P : ndarray (points x (2 + len(names)))
+            Rows [psi1, dpsi, theta], dimensionless.
+
+        Returns
+        -------
+        ndarray (points x unknowns)
+            The last iterate of every point, full rows, dimensionless.
+        """
+        free, fixed = self.free(active)
+        W = np.array(W0, float)
+        W[:, list(fixed)] = list(fixed.values())
+        X = np.ascontiguousarray(W[:, free])
+        n, k = len(free), len(W)
+        norm_prev = np.full(k, np.inf)
+        step = np.zeros((k, n))
+        alpha = np.ones(k)
+        rows = np.arange(k)
+        for _ in range(FAST_NEWTON_ITER):
+            r, J = self.evaluate("step", active, X[rows], P[rows])
+            norm = np.sqrt((r * r).sum(axis=1))
+            # backtracking as CasADi's Newton: a trial that does not reduce |r| is halved (down to 1/64)
+            worse = ~(norm < norm_prev[rows]) & (alpha[rows] > 1 / 64)
+            back = rows[worse]
+            alpha[back] *= 0.5
+            X[back] += alpha[back, None] * step[back]  # from x_prev - 2a dx to x_prev - a dx
+            ahead = ~worse & (np.abs(r).max(axis=1) > NEWTON_ABSTOL)
+            dx = _solve_each(J[ahead].reshape(-1, n, n), r[ahead])
+            ok = np.all(np.isfinite(dx), axis=1)  # singular or not finite: the point stops where it is
+            ahead[ahead] = ok
+            fwd = rows[ahead]
+            step[fwd] = dx[ok]
+            alpha[fwd], norm_prev[fwd] = 1.0, norm[ahead]
+            X[fwd] -= step[fwd]
+            rows = np.concatenate([back, fwd])
+            if rows.size == 0:
+                break
+        if rows.size:  # the few slow ones (valve nearly without pressure drop): CasADi's rootfinder, from the start
+            X[rows] = self.evaluate("newton", active, W[rows][:, free], P[rows])[0]
+        W[:, free] = X
+        return W
+
+    def solve(self, P: np.ndarray, attempts, tol: float = RESIDUAL_TOL) -> dict:
+        """Roots at every point, trying stop sets in turn.
+
+        Each attempt takes only the points not yet accepted: their start (with the stops fixed as
+        the set says) is checked first and, where it is no root, :meth:`roots` runs from it.  A
+        point is accepted when finite, inside the bounds and every balance's absolute residual is
+        <= ``tol``.
+
+        Parameters
+        ----------
+        P : ndarray (points x (2 + len(names)))
+            Rows [psi1, dpsi, theta]: discharge ratio p1/p_B, margin (p_e - p1)/p_B and the groups
+            ``names``, dimensionless.
+        attempts : sequence of (frozenset, ndarray)
+            (stop set, starts): the stops reached and full rows of unknowns per point.
+        tol : float
+            Largest absolute balance residual accepted (dimensionless).
+
+        Returns
+        -------
+        dict
+            ``W`` rows of unknowns, ``q`` throttle flows Q/(g1 p_B), ``psi`` pressures (psi_e, psi2,
+            psi3, psi_cam), ``residual`` largest |r|, ``relative_residual`` largest |r| over its
+            balance's largest term, ``valid`` (bool), ``active`` (index into ``attempts`` of the
+            accepting attempt, -1 none); NaN rows where no attempt was accepted.
+        """
+        sys_ = self.system
+        P = np.ascontiguousarray(P, dtype=float)
+        n = P.shape[0]
+        W = np.full((n, len(sys_.unknowns)), np.nan)
+        q = np.full((n, len(sys_.throttles)), np.nan)
+        psi = np.full((n, 4), np.nan)
+        resid = np.full(n, np.nan)
+        relative = np.full(n, np.nan)
+        which = np.full(n, -1)
+        todo = np.arange(n)
+
+        def accept(Wk, active, k, tol):
+            nonlocal todo, W, q, psi, resid, relative
+            r, rel, qk, pk = self.evaluate("check", active, Wk, P if todo.size == n else P[todo])
+            r, rel = r[:, 0], rel[:, 0]
+            with np.errstate(invalid="ignore"):
+                ok = np.all((Wk >= self.lower) & (Wk <= self.upper), axis=1) & (r <= tol)
+            if todo.size == n:  # the first pass: take the arrays as they are, blank the rejected points
+                W, q, psi, resid, relative = Wk, qk, pk, r, rel
+                W[~ok], q[~ok], psi[~ok], resid[~ok], relative[~ok] = np.nan, np.nan, np.nan, np.nan, np.nan
+                which[ok] = k
+            else:
+                idx = todo[ok]
+                W[idx], q[idx], psi[idx], resid[idx], relative[idx], which[idx] = (Wk[ok], qk[ok], pk[ok], r[ok],
+                                                                                   rel[ok], k)
+            todo = todo[~ok]
+
+        for k, (active, starts) in enumerate(attempts):
+            if todo.size == 0:
+                break
+            fixed = self.free(active)[1]
+            start = np.array(starts[todo], float)
+            start[:, list(fixed)] = list(fixed.values())
+            # a start may be a root already (the closed form is exact when no stop is reached): accepted by
+            # the Newton method's own first test, |r| <= its abstol, without a step
+            accept(start, active, k, min(tol, NEWTON_ABSTOL))
+            if todo.size:
+                accept(self.roots(active, starts[todo], P[todo]), active, k, tol)
+        return {"W": W, "q": q, "psi": psi, "residual": resid, "relative_residual": relative, "valid": which >= 0,
+                "active": which}
+
+
 class StaticsSolver:
     """IPOPT (and Newton) solvers of one device's static equations, built once, called many times."""
 
     def __init__(self, dev: DeviceDesign):
         self.design = dev
-        self.system: StaticSystem = static_system(dev.groups)
+        self.parametric = ParametricStatics(dev.groups)  # the same balances, for the Newton solves
+        self.system: StaticSystem = self.parametric.system
         n = len(self.system.unknowns)
         w = ca.SX.sym("w", n)
         p = ca.SX.sym("p", 2)  # psi1, dpsi
@@ -91,10 +419,8 @@ class StaticsSolver:
         self._w, self._p, self._r, self._f = w, p, r, f
         self._cold = ipopt.nlpsol("statics", w, p, f, r)
         self._warm = ipopt.nlpsol("statics_warm", w, p, f, r, warm=True)
-        self._relative = self._relative_function(w, p)
         self._jacobian = ca.Function("balance_jacobian", [w, p], [ca.jacobian(r, w)])
         self._built: dict = {}  # solvers built on first use, by key
-        self._newton: dict[frozenset, tuple] = {}
 
     # ---- single points ---------------------------------------------------------------------
     def ideal_guess(self, psi1s, dpsi: float) -> np.ndarray:
@@ -138,45 +464,27 @@ class StaticsSolver:
 
     def newton(self, psi1: float, dpsi: float, start: np.ndarray | None = None,
                active: frozenset = frozenset()) -> np.ndarray:
-        """Root of the same balances by CasADi's Newton method, as a square system.
+        """Root of the same balances by Newton's method, as a square system
+        (:meth:`ParametricStatics.roots`).
 
         Each stop is fixed as inactive (reaction 0) or, if named in ``active``, active
         (coordinate on its stop, reaction free).  No bounds; full vector of unknowns returned.
         """
-        if active not in self._newton:
-            sys_ = self.system
-            fixed = sys_.fixed_by_stops(active)
-            free = [i for i, k in enumerate(sys_.unknowns) if k not in fixed]
-            wf = ca.SX.sym("wf", len(free))
-            full = ca.vertcat(*[wf[free.index(i)] if i in free else fixed[k]
-                                for i, k in enumerate(sys_.unknowns)])
-            rf = ca.Function("square", [wf, self._p], [ca.substitute(self._r, self._w, full)])
-            solver = ca.rootfinder("newton", "newton", rf,
-                                   {"abstol": 1e-14, "max_iter": 50, "error_on_fail": False,
-                                    "show_eval_warnings": False})
-            self._newton[active] = (solver, free, ca.Function("full", [wf], [full]))
-        solver, free, full = self._newton[active]
         x0 = self.guess(psi1, dpsi) if start is None else start
-        return np.asarray(full(solver(x0[free], [psi1, dpsi]))).ravel()
+        return self.parametric.roots(active, np.atleast_2d(x0), np.array([[psi1, dpsi]]))[0]
 
     def fast_sweep(self, psi1s, dpsi: float, tol: float = 1e-10) -> tuple[np.ndarray, np.ndarray]:
         """A sweep in one call: Newton roots of the no-stop system mapped over the grid from the
-        vectorised closed-form guess.  Points not accepted (not converged to ``tol`` relative,
-        outside the bounds, i.e. needing a stop) are re-solved by IPOPT, warm-started along the
-        grid.  Returns rows of unknowns and a flag per point: True where IPOPT was needed."""
+        vectorised closed-form guess (:meth:`ParametricStatics.solve`).  Points not accepted (not
+        converged to ``tol`` relative, outside the bounds, i.e. needing a stop) are re-solved by
+        IPOPT, warm-started along the grid.  Returns rows of unknowns and a flag per point: True
+        where IPOPT was needed."""
         psi1s = np.asarray(psi1s, float)
-        m = len(psi1s)
-        if ("map", m) not in self._built:
-            self.newton(float(psi1s[0]), dpsi)  # builds the no-stop rootfinder
-            solver, free, full = self._newton[frozenset()]
-            wf, pp = ca.MX.sym("X", len(free), m), ca.MX.sym("P", 2, m)
-            self._built[("map", m)] = ca.Function("sweep", [wf, pp], [full.map(m)(solver.map(m)(wf, pp))])
-        free = self._newton[frozenset()][1]
-        X0 = self.ideal_guess(psi1s, dpsi)[:, free].T
-        X = np.asarray(self._built[("map", m)](X0, np.vstack([psi1s, np.full(m, dpsi)]))).T
-        lo, hi = np.array(self.system.lower, float), np.array(self.system.upper, float)
-        ok = np.all(np.isfinite(X) & (X >= lo) & (X <= hi), axis=1)
-        ok &= self.relative_residual(X, psi1s, dpsi).max(axis=1) <= tol
+        P = np.column_stack([psi1s, np.full(len(psi1s), dpsi)])
+        sol = self.parametric.solve(P, [(frozenset(), self.ideal_guess(psi1s, dpsi))], tol=math.inf)
+        X = sol["W"]
+        with np.errstate(invalid="ignore"):
+            ok = sol["valid"] & (sol["relative_residual"] <= tol)
         prev = None
         for i in np.flatnonzero(~ok):
             prev = self.solve(float(psi1s[i]), dpsi, prev if i > 0 and not ok[i - 1] else None)
@@ -274,10 +582,11 @@ class StaticsSolver:
         return self._point(*((value, fixed) if unknown == "psi1" else (fixed, value)), res)
 
     def relative_residual(self, x: np.ndarray, psi1, dpsi: float) -> np.ndarray:
-        """Each balance's residual divided by its largest term; rows of ``x`` for arrays of psi1."""
+        """Each balance's residual divided by its largest term; rows of ``x`` for arrays of psi1
+        (:meth:`ParametricStatics.relative`)."""
         X = np.atleast_2d(x)
-        P = np.vstack([np.broadcast_to(psi1, len(X)), np.full(len(X), dpsi)])
-        out = np.asarray(self._relative.map(len(X))(X.T, P)).T
+        P = np.column_stack([np.broadcast_to(psi1, len(X)), np.full(len(X), dpsi)])
+        out = self.parametric.evaluate("relative", frozenset(), X, P)[0]
         return out[0] if np.ndim(x) == 1 else out
 
     # ---- internals ---------------------------------------------------------------------------
@@ -290,27 +599,6 @@ class StaticsSolver:
         if res["success"] and res["f"][0] > COMPLEMENTARITY_TOL * points:
             res |= {"success": False, "status": f"Stop_Complementarity_Violated ({res['f'][0]:.1e})"}
         return res
-
-    def _relative_function(self, w, p):
-        """Each balance's residual over its scale, the largest absolute term in it."""
-        sys_ = self.system
-        g = self.design.groups
-        q = dict(zip(sys_.throttles, ca.vertsplit(sys_.flows(w, p[0], p[1])[0]), strict=True))
-
-        def largest(*names):
-            return ca.mmax(ca.fabs(ca.vertcat(*[q[k] for k in names])))
-
-        scale = {
-            "disc force": ca.fmax(g.b * p[0], g.chi),
-            "chamber 2 flow": largest("e", "1", "T"),
-            "chamber 3 flow": largest("T", "3"),
-            "membrane force": g.regulator.sigma_m * p[1] if g.regulator else 1.0,
-            "valve chamber flow": largest("in", "valve") if g.regulator else 1.0,
-            "barrier chamber flow": largest("valve", "e") if g.regulator else 1.0,
-        }
-        scale = ca.vertcat(*[scale[e] for e in sys_.equations])
-        r = ca.fabs(sys_.residual(w, p[0], p[1]))
-        return ca.Function("relative_residual", [w, p], [r / scale])
 
     def _point(self, psi1: float, dpsi: float, res: dict) -> StaticPoint:
         sys_ = self.system

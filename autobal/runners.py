@@ -113,6 +113,19 @@ def rotor_dynamics(scene, settings) -> Result:
     return rotor_study.run(adapters.rotor(scene.rotor), settings, scene.title, drive.motor if drive else None)
 
 
+def montecarlo(scene, settings) -> Result:
+    """Monte Carlo of the device statics (and optionally the AFC) over uncertain groups (Pavlenko (2014),
+    ch. 3), on the executor the CLI or the scene names."""
+    from autobal.analysis import executor
+    from autobal.analysis import montecarlo as mc
+
+    if scene.device is None:
+        raise ScenarioError("analyses.montecarlo needs a device section")
+    device = adapters.device(scene.device)
+    with executor.make(scene_executor=getattr(scene, "executor", None)) as exe:
+        return mc.run(adapters.design(scene.device), settings, exe, scene.title, device=device)
+
+
 RUNNERS = {
     "statics": statics,
     "frequency": frequency,
@@ -121,7 +134,7 @@ RUNNERS = {
     "liquid_balancer": liquid_balancer,
     "estimation": _legacy("estimation", "autobal.analysis.estimation_study:run"),
     "reliability": _legacy("reliability", "autobal.analysis.reliability:run_scene"),
-    "montecarlo": _legacy("montecarlo", "autobal.analysis.montecarlo:run_scene"),
+    "montecarlo": montecarlo,
     "rotor_dynamics": rotor_dynamics,
     "spinup": _legacy("spinup", "autobal.ocp.spinup_study:run_scene"),
 }

@@ -13,7 +13,7 @@ import yaml
 from numpy.testing import assert_allclose
 
 from autobal import adapters, scenario
-from autobal.analysis import frequency, montecarlo, stability
+from autobal.analysis import frequency, sampling, stability, statics
 from autobal.analysis.linearize import Setup
 from autobal.cli import main
 
@@ -160,7 +160,7 @@ def test_montecarlo_block_small_copy(tmp_path):
     se = np.array(a["spread_relative_standard_error"]["exact_u"])
     assert np.all((0.8 / math.sqrt(4000) < se) & (se < 1.5 / math.sqrt(4000)))
     assert a["estimate"] >= 1 / math.sqrt(2 * 1000)  # the AFC part has 1000 samples
-    assert a["max_root_residual"] <= a["root_residual_tolerance"] == montecarlo.RESIDUAL_TOL
+    assert a["max_root_residual"] <= a["root_residual_tolerance"] == statics.RESIDUAL_TOL
 
 
 def test_standard_error_of_cv_matches_the_normal_theory():
@@ -169,6 +169,6 @@ def test_standard_error_of_cv_matches_the_normal_theory():
     n, cv = 200_000, 0.05
     Y = 1.0 + cv * rng.standard_normal((n, 2))
     Y[:5, 1] = np.nan  # invalid samples are left out
-    se_mean, se_cv = montecarlo.relative_standard_errors(Y)
+    se_mean, se_cv = sampling.relative_standard_errors(Y)
     assert_allclose(se_cv, math.sqrt(1 / (2 * n) + cv**2 / n), rtol=0.02)
     assert_allclose(se_mean, cv / math.sqrt(n), rtol=0.02)

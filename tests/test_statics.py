@@ -1,6 +1,7 @@
 """Statics of the balancing device: golden values of Pavlenko (2014) App. A/B, exact vs closed form,
 IPOPT vs Newton, saturation, and a property test over physical parameter sets."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -13,7 +14,7 @@ from numpy.testing import assert_allclose
 from autobal import scenario
 from autobal.adapters import design
 from autobal.analysis import closed_form
-from autobal.analysis.statics import StaticsSolver
+from autobal.analysis.statics import ParametricStatics, StaticsSolver
 
 # ---- literature validation: the source's closed forms (App. A, App. B) ----
 
@@ -215,3 +216,32 @@ def test_property_ipopt_satisfies_balances_and_equals_newton(case):
     assert np.all(pt.x >= lo) and np.all(pt.x <= hi)
     newton = solver.newton(psi1, dpsi, solver.guess(psi1, dpsi), pt.active)
     assert_allclose(newton, pt.x, atol=1e-8, rtol=1e-8)
+
+
+# ---- the parametric statics evaluator (one Newton solve for the sweep, the Monte Carlo, the estimation) ----
+
+def test_parametric_evaluator_equals_ipopt_in_chunks_and_on_the_stop(pump):
+    """Evaluator of analysis/statics.py with sigma and the supply pressure psi_in as parameters, in chunks
+    of 3 points (so maps of several sizes and a remainder), against IPOPT per point: the regulating points
+    from the closed-form start, the saturated ones (psi1 >= 1.2, App. A) through the valve-on-stop set."""
+    g = pump.design.groups
+    ps = ParametricStatics(g, ["sigma", "psi_in"])
+    ps.chunk = 3
+    psi1 = np.array([0.5, 0.8, 1.0, 1.1, 1.3, 1.5, 1.8])
+    theta = np.column_stack([np.full(7, g.sigma), np.full(7, g.regulator.psi_in)])
+    P = np.column_stack([psi1, np.full(7, 0.04), theta])
+    W0 = np.clip(pump.ideal_guess(psi1, 0.04), ps.lower, ps.upper)
+    sol = ps.solve(P, [(a, W0) for a in ps.active_sets])
+    assert sol["valid"].all() and np.nanmax(sol["residual"]) < 1e-10
+    for i, p in enumerate(psi1):
+        pt = pump.solve(float(p), 0.04)
+        assert_allclose(sol["W"][i], pt.x, atol=1e-8)
+        assert (sol["active"][i] == 1) == pt.saturated  # attempt 1 is the valve on its open stop
+        assert_allclose(sol["q"][i], [pt.flows[k] for k in ps.system.throttles], atol=1e-8)
+    # another parameter value changes the answer as the IPOPT solve of the changed device does
+    P2 = P.copy()
+    P2[:, 2] *= 1.1
+    sol2 = ps.solve(P2, [(a, W0) for a in ps.active_sets])
+    other = StaticsSolver(dataclasses.replace(pump.design, groups=dataclasses.replace(g, sigma=1.1 * g.sigma)))
+    assert_allclose(sol2["W"][2], other.solve(1.0, 0.04).x, atol=1e-8)
+    assert np.abs(sol2["W"][2] - sol["W"][2]).max() > 1e-3

@@ -1,6 +1,7 @@
 """Work-precision of the statics: the 40-digit reference, the error ladders, the CLI command."""
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -25,10 +26,8 @@ def test_ipopt_error_follows_its_tolerance(pump):
     assert rows[1e-2] > 1e-4 and rows[1e-12] < 1e-11
     assert rows[1e-12] < rows[1e-8] < rows[1e-4]
     cheap = study.cheapest()
-    ipopt_rows = [r for r in study.rows if r["method"].startswith("IPOPT") and r["error"] <= 1e-6]
     best = cheap["IPOPT (bounds, complementarity)"]
-    assert best["time_s"] == min(r["time_s"] for r in ipopt_rows)  # fastest of those reaching 1e-6
-    assert rows[best["setting"]] <= 1e-6
+    assert rows[best["setting"]] <= 1e-6  # which setting is fastest depends on the machine: cheapest() is tested below
     cf = [v for k, v in cheap.items() if k.startswith("closed form")][0]
     assert cf["setting"] is None and cf["best_error"] == pytest.approx(0.341, abs=2e-3)  # xi0: 1.294 vs 1.964
 
@@ -73,3 +72,16 @@ def test_estimation_work_precision_on_table_43(tmp_path):
     assert all(e < 1e-10 for e in best.values())  # IPOPT (both Hessians) and scipy agree at tight tolerances
     loose = [r["error"] for r in rows if r["method"] == "IPOPT, Gauss-Newton Hessian" and r["setting"] == 1e-2][0]
     assert loose > 1e-10  # a loose tolerance leaves a visible error: the ladder measures something
+
+
+def test_cheapest_picks_the_fastest_setting_meeting_the_target():
+    # hand-made rows: the fastest meeting 1e-6 is the 1e-9 setting (not the fastest overall, 1e-4, nor the
+    # loosest meeting it, 1e-7, nor the most accurate); a method that never reaches the target has no setting
+    # but reports its best error
+    rows = [{"method": "A", "setting": s, "error": e, "time_s": t}
+            for s, e, t in ((1e-4, 1e-3, 0.1), (1e-7, 5e-7, 0.3), (1e-9, 1e-9, 0.2), (1e-12, 1e-12, 0.9))]
+    rows += [{"method": "B", "setting": 1, "error": 1e-2, "time_s": 0.01}, {"method": "B", "setting": 2,
+                                                                          "error": math.nan, "time_s": 0.02}]
+    cheap = wp.WorkPrecision("x", "ref", ["y"], rows).cheapest(1e-6)
+    assert cheap["A"] == {"setting": 1e-9, "time_s": 0.2, "best_error": 1e-12}
+    assert cheap["B"] == {"setting": None, "time_s": None, "best_error": 1e-2}
