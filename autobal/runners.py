@@ -126,6 +126,26 @@ def montecarlo(scene, settings) -> Result:
         return mc.run(adapters.design(scene.device), settings, exe, scene.title, device=device)
 
 
+def design(scene, settings) -> Result:
+    """Stability-constrained design of the balancing device (analysis/design.py)."""
+    from autobal.analysis import design as ds
+    from autobal.analysis import design_study
+
+    try:
+        bounds = settings.bounds_si()
+    except ValueError as exc:
+        raise ScenarioError(str(exc)) from None
+    variables = tuple(ds.Variable(path, key, lo, hi) for path, (key, lo, hi) in bounds.items())
+    gap = (settings.face_gap.lower, settings.face_gap.upper)
+    weights = {"leakage": (1.0, 0.0), "stiffness": (0.0, 1.0), "mix": tuple(settings.weights)}[settings.objective]
+    spec = ds.Spec(variables=variables, points=tuple(settings.operating_ratios), nominal_ratio=settings.nominal_ratio,
+                   decay_rate=settings.decay_rate, gap=gap, valve_band=settings.valve_band,
+                   min_stiffness=-float("inf") if settings.min_stiffness is None else settings.min_stiffness,
+                   weights=weights, form=settings.model)
+    return design_study.run(adapters.dynamic_device(scene), spec, settings.samples, settings.seed,
+                            settings.sweep_points, scene.title)
+
+
 RUNNERS = {
     "statics": statics,
     "frequency": frequency,
@@ -137,6 +157,7 @@ RUNNERS = {
     "montecarlo": montecarlo,
     "rotor_dynamics": rotor_dynamics,
     "spinup": _legacy("spinup", "autobal.ocp.spinup_study:run_scene"),
+    "design": design,
 }
 
 

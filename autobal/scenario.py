@@ -17,6 +17,7 @@ from pydantic import Field, PrivateAttr, ValidationError, model_validator
 
 from autobal.errors import ScenarioError
 from autobal.schema import NonNegative, Positive, Range, Strict
+from autobal.schema_design import Design
 from autobal.schema_dynamics import Dynamics, Frequency, Stability, Transient
 from autobal.schema_estimation import Estimation
 from autobal.schema_liquid_balancer import LiquidBalancer, LiquidBalancerAnalysis
@@ -175,13 +176,14 @@ class Analyses(Strict):
     reliability: Reliability | None = None  # autobal/schema_reliability.py; traditional disc, ch. 1.2
     rotor_dynamics: RotorDynamics | None = None  # autobal/schema_rotor.py; needs rotor
     spinup: Spinup | None = None  # autobal/schema_rotor.py; optimal spin-up OCP, needs rotor
+    design: Design | None = None  # autobal/schema_design.py; stability-constrained design, needs device.dynamics
 
 
 # analysis -> the part of the scene it needs (a dotted path), checked at load time
 NEEDS = {
     "statics": "device", "frequency": "device.dynamics", "stability": "device.dynamics",
     "transient": "device.dynamics", "montecarlo": "device", "liquid_balancer": "liquid_balancer",
-    "rotor_dynamics": "rotor", "spinup": "rotor",
+    "rotor_dynamics": "rotor", "spinup": "rotor", "design": "device.dynamics",
 }
 
 

@@ -1,0 +1,80 @@
+"""Scenario schema of ``analyses.design``: stability-constrained design of the balancing device.
+
+Each design variable is a scene path with bounds in units, e.g.
+``device.dynamics.disc_chamber_volume: {lower: 1e-6 m^3, upper: 2e-3 m^3}``; the analysis is
+analysis/design.py and analysis/design_study.py.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import Field, model_validator
+
+from autobal.schema import NonNegative, Positive, Strict
+from autobal.units import Length, to_si
+
+# scene path -> (design key of analysis/design.py, unit kind; None: dimensionless)
+VARIABLES = {
+    "device.dynamics.disc_chamber_volume": ("V2", "volume"),
+    "device.dynamics.cavity_volume": ("V3", "volume"),
+    "device.dynamics.rotor_damping": ("c_z", "damping"),
+    "device.dynamics.regulator.stem_damping": ("c_x", "damping"),
+    "device.dynamics.regulator.spring_stiffness": ("k_reg", "stiffness"),
+    "device.dynamics.regulator.valve_chamber_volume": ("V_cam", "volume"),
+    "device.dynamics.regulator.membrane_chamber_volume": ("V_m", "volume"),
+    "device.barrier.margin_ratio": ("dpsi", None),
+    "device.regulator.supply_pressure": ("p_in", "pressure"),
+}
+
+
+class Bounds(Strict):
+    """Bounds of one design variable, with units (a number for the dimensionless margin)."""
+
+    lower: str | float
+    upper: str | float
+
+
+class GapBounds(Strict):
+    lower: Length
+    upper: Length
+
+
+class Design(Strict):
+    """``analyses.design``: variables (scene path -> bounds), operating points, margins, objective."""
+
+    variables: dict[str, Bounds]
+    operating_ratios: Annotated[list[Positive], Field(min_length=1)]  # psi1 = p1/p_B
+    nominal_ratio: Positive = 1.0  # psi1 of the objective
+    decay_rate: NonNegative  # alpha, 1/s: every eigenvalue Re lambda <= -alpha
+    face_gap: GapBounds
+    valve_band: Annotated[float, Field(ge=0, lt=0.5)] = 0.05  # free fraction of the valve travel at each end
+    min_stiffness: float | None = None  # kappa_s lower bound (dimensionless)
+    objective: Literal["leakage", "stiffness", "mix"] = "leakage"
+    weights: tuple[NonNegative, NonNegative] = (1.0, 1.0)  # mix: leakage, stiffness
+    model: Literal["energy", "chain"] = "energy"
+    samples: Annotated[int, Field(ge=0, le=100000)] = 200  # random-search certification
+    seed: int = 0
+    sweep_points: Annotated[int, Field(ge=2, le=1000)] = 11
+
+    @model_validator(mode="after")
+    def _paths(self):
+        for path in self.variables:
+            if path not in VARIABLES:
+                raise ValueError(f"design variable {path!r} is not one of {sorted(VARIABLES)}")
+        return self
+
+    def bounds_si(self) -> dict:
+        """Scene path -> (key, lower, upper) in SI."""
+        out = {}
+        for path, b in self.variables.items():
+            key, kind = VARIABLES[path]
+            conv = (lambda v: float(v)) if kind is None else (lambda v, k=kind: to_si(v, k))
+            try:
+                lo, hi = conv(b.lower), conv(b.upper)
+            except ValueError as exc:
+                raise ValueError(f"analyses.design.variables.{path}: {exc}") from None
+            if not hi > lo:
+                raise ValueError(f"analyses.design.variables.{path}: upper must exceed lower")
+            out[path] = (key, lo, hi)
+        return out
