@@ -1,0 +1,143 @@
+"""Stability-constrained design (analysis/design.py): the smooth Routh conditions against eigenvalues,
+the optimum checked by eigenvalues at every operating point, by a random search, and through --set."""
+
+import casadi as ca
+import numpy as np
+import pytest
+
+import autobal
+from autobal import adapters, runners
+from autobal.analysis import design as ds
+from autobal.analysis.linearize import Setup
+from autobal.analysis.stability import verdict
+from autobal.errors import ScenarioError
+
+
+def _stiff_matrix(rng, n=8):
+    """A random real matrix with eigenvalues -80 +- 900i and n - 2 real ones spread over 1e2..1e9 1/s
+    (as the device's), and those eigenvalues."""
+    lam = -np.logspace(2, 9, n - 2) * rng.uniform(0.5, 2, n - 2)
+    blk = np.zeros((n, n))
+    blk[:2, :2] = [[-80, 900], [-900, -80]]
+    blk[2:, 2:] = np.diag(lam)
+    T = np.linalg.qr(rng.normal(size=(n, n)))[0] @ np.diag(rng.uniform(0.5, 2, n))
+    return T @ blk @ np.linalg.inv(T), np.concatenate([[-80 + 900j, -80 - 900j], lam])
+
+
+def _numeric(f_expr, A_sym, A):
+    return np.array(ca.Function("f", [A_sym], [f_expr])(A)).ravel()
+
+
+def test_charpoly_matches_eigenvalues_over_seven_decades():
+    """La Budde on the symbolic Householder-Hessenberg form keeps every coefficient (the device's time
+    scales span 1e2..1e9 1/s); the reference is np.poly of the eigenvalues."""
+    rng = np.random.default_rng(1)
+    A, lam = _stiff_matrix(rng)
+    A = A / ds.OMEGA_REF
+    As = ca.SX.sym("A", 8, 8)
+    a = _numeric(ca.vertcat(*ds.charpoly_hessenberg(ds.hessenberg(As))), As, A)
+    ref = np.real(np.poly(lam / ds.OMEGA_REF))
+    assert np.allclose(a / ref, 1.0, rtol=1e-6, atol=0)
+
+
+@pytest.mark.parametrize("alpha, stable", [(70.0, True), (79.0, True), (82.0, False), (300.0, False)])
+def test_routh_conditions_agree_with_eigenvalues_at_the_pump_point(alpha, stable):
+    """Every Routh entry of det(sI - A - alpha I) >= 0 exactly when max Re lambda <= -alpha: the pump's
+    exact linearisation at psi1 = 1 has max Re lambda = -80.62 1/s."""
+    dev = adapters.dynamic_device(autobal.load("pump_pe600_dynamics"))
+    A = Setup(dev, 1.0).linear("nonlinear").A
+    assert np.linalg.eigvals(A).real.max() == pytest.approx(-80.623, abs=1e-3)
+    As = ca.SX.sym("A", *A.shape)
+    import scipy.linalg
+
+    _, (scale, _) = scipy.linalg.matrix_balance(A + alpha * np.eye(len(A)), permute=False, separate=True)
+    r = _numeric(ca.vertcat(*ds.stability_conditions(As, alpha, scale)[1]), As, A)
+    assert bool(np.all(r >= 0)) is stable
+
+
+def test_routh_column_of_a_known_polynomial():
+    # (s+1)(s+2)(s+3) = s^3 + 6 s^2 + 11 s + 6: Routh column 6, 10, 6
+    assert ds.routh_column([1.0, 6.0, 11.0, 6.0]) == pytest.approx([6.0, 10.0, 6.0])
+    # s^3 + s^2 + s + 2 is unstable: 1, -1, 2
+    assert ds.routh_column([1.0, 1.0, 1.0, 2.0]) == pytest.approx([1.0, -1.0, 2.0])
+
+
+def test_unknown_design_variable_is_one_line(scene_edit):
+    scn = autobal.load("pump_pe600_design")
+    with pytest.raises(ScenarioError, match="not one of"):
+        autobal.load("pump_pe600_design", set={"analyses.design.variables": {"device.fluid.density": {
+            "lower": "900 kg/m^3", "upper": "1100 kg/m^3"}}})
+    bad = scn.analyses.design.model_copy(update={"variables": {
+        "device.dynamics.cavity_volume": scn.analyses.design.variables["device.dynamics.cavity_volume"].model_copy(
+            update={"lower": "1 bar"})}})
+    with pytest.raises(ScenarioError, match="cavity_volume.*volume"):
+        runners.design(scn, bad)
+
+
+@pytest.fixture(scope="module")
+def pump_design():
+    scn = autobal.load("pump_pe600_design", set={"analyses.design.samples": 80})
+    return scn, runners.design(scn, scn.analyses.design)
+
+
+@pytest.mark.slow
+def test_optimum_meets_every_constraint_by_eigenvalues(pump_design):
+    scn, res = pump_design
+    d, st = res.to_dict(), scn.analyses.design
+    alpha = st.decay_rate
+    assert d["status"] == "Solve_Succeeded"
+    assert d["certification"]["eigenvalues_ok"]
+    for p in st.operating_ratios:
+        assert res.margin[f"{p:g}"] >= alpha * (1 - 1e-6)
+        z = d["optimum"]["face_gap"][f"{p:g}"]
+        assert st.face_gap.lower <= z <= st.face_gap.upper
+        assert st.valve_band * (1 - 1e-6) <= d["optimum"]["valve_travel"][f"{p:g}"] <= 1 - st.valve_band + 1e-6
+    # the nominal design does not meet the margin asked for
+    assert not d["nominal"]["feasible"]
+    assert d["optimum"]["objective"] < d["nominal"]["objective"]
+
+
+@pytest.mark.slow
+def test_no_sample_beats_the_optimum(pump_design):
+    _, res = pump_design
+    c = res.to_dict()["certification"]
+    assert c["feasible_samples"] > 0
+    assert c["best_sample"] >= res.objective * (1 - ds_tol())
+    assert not c["beaten"]
+
+
+def ds_tol():
+    from autobal.analysis.design_study import CERTIFY_TOL
+
+    return CERTIFY_TOL
+
+
+@pytest.mark.slow
+def test_optimum_through_set_gives_a_stable_verdict_with_the_same_margin(pump_design):
+    scn, res = pump_design
+    dyn = autobal.load("pump_pe600_dynamics", set=res.parameters)
+    dev = adapters.dynamic_device(dyn)
+    for p in scn.analyses.design.operating_ratios:
+        v = verdict(Setup(dev, p).linear("nonlinear"))
+        assert v["stable"] and v["hurwitz"]["stable"]
+        assert v["margin"]["decay_rate"] == pytest.approx(res.margin[f"{p:g}"], rel=1e-6)
+
+
+@pytest.mark.slow
+def test_result_figures_and_tables(pump_design):
+    _, res = pump_design
+    figs = res.figures()
+    assert set(figs) == {"design_abscissa.png", "design_parameters.png", "design_convergence.png"}
+    t = res.tables()["design_abscissa.csv"]
+    # after: the spectral abscissa over the design's range is below -alpha everywhere
+    assert np.nanmax(t["optimum"]) <= -100 * (1 - 1e-6)
+
+
+@pytest.mark.slow
+def test_compressor_design_is_stable_with_margin():
+    scn = autobal.load("compressor_k180_design", set={"analyses.design.samples": 30})
+    res = runners.design(scn, scn.analyses.design)
+    d = res.to_dict()
+    assert d["certification"]["eigenvalues_ok"] and not d["certification"]["beaten"]
+    assert min(res.margin.values()) >= scn.analyses.design.decay_rate * (1 - 1e-6)
+    assert min(d["nominal"]["margin"].values()) < 0  # the source's compressor device is unstable as given
