@@ -393,9 +393,9 @@ class DesignProblem:
         return out
 
     # ---- the ordinary path --------------------------------------------------------------------
-    def evaluate(self, values: dict, points=None) -> Evaluation:
+    def evaluate(self, values: dict, points=None, form: str | None = None) -> Evaluation:
         """Statics + exact linearisation + eigenvalues at every operating point (or at ``points``)
-        for the design ``values`` (key -> SI)."""
+        for the design ``values`` (key -> SI), with the spec's dynamic model (or ``form``)."""
         sp = self.spec
         dev_p = apply(self.device, values)
         dd = design(dev_p)
@@ -415,7 +415,7 @@ class DesignProblem:
                 ev.feasible, ev.reason = False, f"psi1={p:g}: on a stop"
                 ev.abscissa[p] = math.nan
                 continue
-            model = build(dd, dev_p.dynamics, st.values | {"psi1": p, "dpsi": dd.dpsi}, sp.form)
+            model = build(dd, dev_p.dynamics, st.values | {"psi1": p, "dpsi": dd.dpsi}, form or sp.form)
             ev.abscissa[p] = float(exact(model).poles().real.max())
             ev.stiffness[p] = solver.stiffness(st)
             tol = 1e-6

@@ -80,6 +80,10 @@ class DesignResult(Result):
             lines.append(f"  psi1 = {p}: margin {fmt(n['margin'].get(p, math.nan))} -> {fmt(a)} 1/s")
         for path, v in o["parameters"].items():
             lines.append(f"  {path}: {n['parameters'][path]} -> {v}")
+        cmp = d["other_model"]
+        lines.append(f"  {cmp['model']} model: max Re lambda nominal "
+                     + ", ".join(fmt(v) for v in cmp["nominal"].values()) + "; optimum "
+                     + ", ".join(fmt(v) for v in cmp["optimum"].values()) + " 1/s")
         lines.append("  active: " + (", ".join(a["constraint"] for a in d["active"]) or "-"))
         c = d["certification"]
         lines.append(f"  certified: eigenvalues {c['eigenvalues_ok']}; random search {c['samples']} samples, "
@@ -166,6 +170,9 @@ def run(device: DeviceParams, spec: Spec, samples: int = 200, seed: int = 0, swe
     psi1s = np.linspace(lo, hi, sweep_points)
     sweep = {"psi1": psi1s, "nominal": abscissa_sweep(prob, prob.nominal, psi1s),
              "optimum": abscissa_sweep(prob, out["values"], psi1s)}
+    other = "chain" if spec.form == "energy" else "energy"
+    compare = {"model": other} | {k: {f"{p:g}": a for p, a in prob.evaluate(v, form=other).abscissa.items()}
+                                  for k, v in (("nominal", prob.nominal), ("optimum", out["values"]))}
     data = {
         "form": spec.form, "decay_rate": spec.decay_rate, "points": prob.points,
         "status": out["res"]["status"], "iterations": out["res"]["iterations"],
@@ -176,6 +183,7 @@ def run(device: DeviceParams, spec: Spec, samples: int = 200, seed: int = 0, swe
             "best_sample": best, "tolerance": CERTIFY_TOL,
             "beaten": bool(math.isfinite(best) and best < opt.objective - CERTIFY_TOL * abs(opt.objective)),
         },
+        "other_model": compare,  # spectral abscissa (1/s) of the same designs in the other chamber form
         "abscissa_sweep": {"psi1": psi1s, "nominal": sweep["nominal"], "optimum": sweep["optimum"]},
     }
     return DesignResult(data, sweep, out["history"], title)
