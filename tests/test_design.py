@@ -141,3 +141,19 @@ def test_compressor_design_is_stable_with_margin():
     assert d["certification"]["eigenvalues_ok"] and not d["certification"]["beaten"]
     assert min(res.margin.values()) >= scn.analyses.design.decay_rate * (1 - 1e-6)
     assert min(d["nominal"]["margin"].values()) < 0  # the source's compressor device is unstable as given
+
+
+def test_symbolic_stiffness_and_leakage_match_the_statics():
+    """The NLP's kappa_s (implicit-function derivative in CasADi) and Q_e at the starting design equal
+    the statics solver's (StaticsSolver.stiffness, the flow through the barrier throttle)."""
+    dev = adapters.dynamic_device(autobal.load("pump_pe600_dynamics"))
+    spec = ds.Spec(variables=(ds.Variable("device.barrier.margin_ratio", "dpsi", 0.01, 0.1),),
+                   points=(1.0,), decay_rate=50.0, weights=(0.0, 1.0))
+    prob = ds.DesignProblem(dev, spec)
+    x0 = prob.start()
+    st = prob.statics0[1.0]
+    assert float(prob.objective_fn(x0)) == pytest.approx(-1.0, rel=1e-10)  # -kappa/|kappa_nominal|
+    assert float(prob.q_e(x0)) == pytest.approx(st.flows["e"] * prob.dev0.scales["Q_scale"], rel=1e-10)
+    ev = prob.evaluate(prob.nominal)
+    assert ev.stiffness[1.0] == pytest.approx(1.2649887867, rel=1e-8)
+    assert ev.objective == pytest.approx(-1.0, rel=1e-10)
