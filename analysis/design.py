@@ -45,9 +45,9 @@ from autobal.models.dynamics import PARAM_NAMES, build
 
 # design keys: dynamic data (models/dynamics.PARAM_NAMES) and the two static parameters
 DYNAMIC_KEYS = ("V2", "V3", "c_z", "c_x", "k_reg", "V_cam", "V_m")
-STATIC_KEYS = ("dpsi", "p_in")
+STATIC_KEYS = ("dpsi", "p_in", "s_m")
 UNITS = {"V2": "m**3", "V3": "m**3", "V_cam": "m**3", "V_m": "m**3", "c_z": "N*s/m", "c_x": "N*s/m",
-         "k_reg": "N/m", "dpsi": "", "p_in": "Pa"}
+         "k_reg": "N/m", "dpsi": "", "p_in": "Pa", "s_m": "m**2"}
 OMEGA_REF = 1000.0  # rad/s, time scale of the characteristic polynomial
 ACTIVE_TOL = 1e-6  # a constraint within this (scaled) distance of its bound ...
 MULTIPLIER_TOL = 1e-3  # ... and with a multiplier above this (relative to the objective, O(1)) is active
@@ -107,12 +107,16 @@ def apply(device: DeviceParams, values: dict) -> DeviceParams:
         out = dataclasses.replace(out, barrier=dataclasses.replace(out.barrier, margin_ratio=values["dpsi"]))
     if "p_in" in values:
         out = dataclasses.replace(out, regulator=dataclasses.replace(out.regulator, supply_pressure=values["p_in"]))
+    if "s_m" in values:  # the membrane area is the regulator's and the dynamic data's
+        out = dataclasses.replace(out, regulator=dataclasses.replace(out.regulator, membrane_area=values["s_m"]),
+                                  dynamics=dataclasses.replace(out.dynamics, s_m=values["s_m"]))
     return out
 
 
 def nominal_values(device: DeviceParams, keys) -> dict:
     """Key -> SI value of the design keys in ``device``."""
-    get = {"dpsi": lambda d: d.barrier.margin_ratio, "p_in": lambda d: d.regulator.supply_pressure}
+    get = {"dpsi": lambda d: d.barrier.margin_ratio, "p_in": lambda d: d.regulator.supply_pressure,
+           "s_m": lambda d: d.regulator.membrane_area}
     return {k: float(get[k](device) if k in get else getattr(device.dynamics, k)) for k in keys}
 
 
@@ -277,7 +281,7 @@ class DesignProblem:
         dpsi = si.get("dpsi", self.dev0.dpsi)
         theta = si["p_in"] / p_b if "p_in" in si else g.regulator.psi_in
         pvec = ca.vertcat(*[si.get(k, self.model.p0[i]) for i, k in enumerate(PARAM_NAMES)])
-        jac = jacobians(self.model)
+        jac = self.linearisation(si)
         cons, lo, hi, names = [], [], [], []
 
         def add(name, expr, lower, upper):
@@ -292,8 +296,8 @@ class DesignProblem:
             Wj = W[:, j]
             for e, r in zip(sys_.equations, ca.vertsplit(sys_.residual(Wj, p, dpsi, theta)), strict=True):
                 add(f"psi1={p:g}: {e}", r, 0.0, 0.0)
-            A = jac(self._states(Wj), ca.vertcat(p, g.b * p), pvec)[0]
-            A0 = np.array(jacobians(self.model)(self._x0(p), [p, g.b * p], self.model.p0)[0])
+            A = jac(self._states(Wj), ca.vertcat(p, g.b * p), pvec)
+            A0 = np.array(jacobians(self.model)(self.static_state(p), [p, g.b * p], self.model.p0)[0])
             _, (bscale, _) = scipy.linalg.matrix_balance(A0 + sp.decay_rate * np.eye(len(A0)), permute=False,
                                                          separate=True)
             self.balance[p] = bscale
@@ -325,7 +329,27 @@ class DesignProblem:
                                    tol=1e-8, constr_viol_tol=1e-10, compl_inf_tol=1e-8, acceptable_tol=1e-6,
                                    acceptable_iter=5, max_iter=500)
 
-    def _x0(self, p):
+    def linearisation(self, si: dict):
+        """(x, w, p) -> A of the model, with the membrane area s_m symbolic when it is a variable.
+
+        The model is affine in s_m (the membrane force sigma_m (psi_e - psi1 - dpsi) of the stem and the
+        displacement flow s_m dx/dt of the barrier chamber; the mass matrix does not contain it), and
+        the static point with the valve off its stop does not depend on it (psi_e = psi1 + dpsi), so
+        A(s_m) = A(s0) + (s_m - s0)/(s1 - s0) (A(s1) - A(s0)) exactly, from two built models."""
+        jac0 = jacobians(self.model)
+        if "s_m" not in si:
+            return lambda x, w, p: jac0(x, w, p)[0]
+        s0 = self.device.regulator.membrane_area
+        s1 = 2.0 * s0
+        dev1 = apply(self.device, {"s_m": s1})
+        ref = self.statics0[self.spec.nominal_ratio]
+        model1 = build(design(dev1), dev1.dynamics, ref.values | {"psi1": ref.psi1, "dpsi": ref.dpsi}, self.spec.form)
+        jac1 = jacobians(model1)
+        t = (si["s_m"] - s0) / (s1 - s0)
+        return lambda x, w, p: jac0(x, w, p)[0] + t * (jac1(x, w, p)[0] - jac0(x, w, p)[0])
+
+    def static_state(self, p):
+        """The dynamic model's state at the starting design's static solution at psi1 = ``p``."""
         st = self.statics0[p]
         v = dict(zip(self.sys.unknowns, st.x, strict=True))
         return np.array([0.0 if k in ("v", "w") else v[k] for k in self.model.states])

@@ -25,6 +25,7 @@ VARIABLES = {
     "device.dynamics.regulator.membrane_chamber_volume": ("V_m", "volume"),
     "device.barrier.margin_ratio": ("dpsi", None),
     "device.regulator.supply_pressure": ("p_in", "pressure"),
+    "device.regulator.membrane_area": ("s_m", "area"),
 }
 
 

@@ -157,3 +157,24 @@ def test_symbolic_stiffness_and_leakage_match_the_statics():
     ev = prob.evaluate(prob.nominal)
     assert ev.stiffness[1.0] == pytest.approx(1.2649887867, rel=1e-8)
     assert ev.objective == pytest.approx(-1.0, rel=1e-10)
+
+
+def test_membrane_area_enters_the_linearisation_exactly():
+    """A(s_m) from the two-model affine form equals the Jacobian of a model built at that membrane area."""
+    dev = adapters.dynamic_device(autobal.load("pump_pe600_dynamics"))
+    s0 = dev.regulator.membrane_area
+    spec = ds.Spec(variables=(ds.Variable("device.regulator.membrane_area", "s_m", 0.5 * s0, 3 * s0),),
+                   points=(1.0,), decay_rate=50.0)
+    prob = ds.DesignProblem(dev, spec)
+    s_m = 1.7 * s0
+    A = np.array(prob.linearisation({"s_m": s_m})(prob.static_state(1.0), [1.0, prob.dev0.groups.b], prob.model.p0))
+    moved = ds.apply(dev, {"s_m": s_m})
+    from autobal.analysis.linearize import jacobians
+    from autobal.models.device import design
+    from autobal.models.dynamics import build
+
+    st = prob.statics0[1.0]
+    model = build(design(moved), moved.dynamics, st.values | {"psi1": 1.0, "dpsi": st.dpsi})
+    ref = np.array(jacobians(model)(model.x0, model.w0, model.p0)[0])
+    assert np.allclose(A, ref, rtol=1e-10, atol=1e-10 * np.abs(ref).max())
+    assert not np.allclose(A, np.array(jacobians(prob.model)(model.x0, model.w0, model.p0)[0]), rtol=1e-3)
