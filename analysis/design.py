@@ -40,14 +40,17 @@ from autobal.analysis import ipopt
 from autobal.analysis.linearize import exact, jacobians
 from autobal.analysis.statics import StaticsSolver
 from autobal.errors import SolveError
+from autobal.models import throttles as th
 from autobal.models.device import DeviceParams, design, static_system
 from autobal.models.dynamics import PARAM_NAMES, build
 
 # design keys: dynamic data (models/dynamics.PARAM_NAMES) and the two static parameters
 DYNAMIC_KEYS = ("V2", "V3", "c_z", "c_x", "k_reg", "V_cam", "V_m")
-STATIC_KEYS = ("dpsi", "p_in", "s_m")
+STATIC_KEYS = ("dpsi", "p_in", "s_m", "d_e", "l_e", "d_in", "l_in")
 UNITS = {"V2": "m**3", "V3": "m**3", "V_cam": "m**3", "V_m": "m**3", "c_z": "N*s/m", "c_x": "N*s/m",
-         "k_reg": "N/m", "dpsi": "", "p_in": "Pa", "s_m": "m**2"}
+         "k_reg": "N/m", "dpsi": "", "p_in": "Pa", "s_m": "m**2", "d_e": "m", "l_e": "m", "d_in": "m", "l_in": "m"}
+# the laminar throttles a design may size: key prefix -> (group, where the tube is in DeviceParams)
+TUBES = {"e": "alpha_e1", "in": "alpha_in1"}
 OMEGA_REF = 1000.0  # rad/s, time scale of the characteristic polynomial
 ACTIVE_TOL = 1e-6  # a constraint within this (scaled) distance of its bound ...
 MULTIPLIER_TOL = 1e-3  # ... and with a multiplier above this (relative to the objective, O(1)) is active
@@ -107,6 +110,15 @@ def apply(device: DeviceParams, values: dict) -> DeviceParams:
         out = dataclasses.replace(out, barrier=dataclasses.replace(out.barrier, margin_ratio=values["dpsi"]))
     if "p_in" in values:
         out = dataclasses.replace(out, regulator=dataclasses.replace(out.regulator, supply_pressure=values["p_in"]))
+    for t in TUBES:
+        if f"d_{t}" in values or f"l_{t}" in values:
+            old = out.barrier.supply_throttle if t == "e" else out.regulator.inlet_throttle
+            tube = dataclasses.replace(old, diameter=values.get(f"d_{t}", old.diameter),
+                                       length=values.get(f"l_{t}", old.length))
+            if t == "e":
+                out = dataclasses.replace(out, barrier=dataclasses.replace(out.barrier, supply_throttle=tube))
+            else:
+                out = dataclasses.replace(out, regulator=dataclasses.replace(out.regulator, inlet_throttle=tube))
     if "s_m" in values:  # the membrane area is the regulator's and the dynamic data's
         out = dataclasses.replace(out, regulator=dataclasses.replace(out.regulator, membrane_area=values["s_m"]),
                                   dynamics=dataclasses.replace(out.dynamics, s_m=values["s_m"]))
@@ -116,7 +128,9 @@ def apply(device: DeviceParams, values: dict) -> DeviceParams:
 def nominal_values(device: DeviceParams, keys) -> dict:
     """Key -> SI value of the design keys in ``device``."""
     get = {"dpsi": lambda d: d.barrier.margin_ratio, "p_in": lambda d: d.regulator.supply_pressure,
-           "s_m": lambda d: d.regulator.membrane_area}
+           "s_m": lambda d: d.regulator.membrane_area,
+           "d_e": lambda d: d.barrier.supply_throttle.diameter, "l_e": lambda d: d.barrier.supply_throttle.length,
+           "d_in": lambda d: d.regulator.inlet_throttle.diameter, "l_in": lambda d: d.regulator.inlet_throttle.length}
     return {k: float(get[k](device) if k in get else getattr(device.dynamics, k)) for k in keys}
 
 
@@ -237,7 +251,7 @@ class DesignProblem:
         self.scale = np.array([max(abs(v.upper), abs(v.lower)) for v in spec.variables])
         self.dev0 = design(device)
         g = self.dev0.groups
-        self.sys = static_system(g, parameters=("psi_in",))
+        self.sys = static_system(g, parameters=("psi_in", "alpha_e1", "alpha_in1"))
         self.solver0 = StaticsSolver(self.dev0)
         self.statics0 = {p: self.solver0.solve(p, self.dev0.dpsi) for p in self.points}
         ref = self.statics0[spec.nominal_ratio]
@@ -279,9 +293,11 @@ class DesignProblem:
         si = self._si(y)
         p_b = self.dev0.scales["p_B"]
         dpsi = si.get("dpsi", self.dev0.dpsi)
-        theta = si["p_in"] / p_b if "p_in" in si else g.regulator.psi_in
+        groups = self.groups(si)
+        theta = ca.vertcat(si["p_in"] / p_b if "p_in" in si else g.regulator.psi_in,
+                           groups["alpha_e1"], groups["alpha_in1"])
         pvec = ca.vertcat(*[si.get(k, self.model.p0[i]) for i, k in enumerate(PARAM_NAMES)])
-        jac = self.linearisation(si)
+        jac = self.linearisation(si, groups)
         cons, lo, hi, names = [], [], [], []
 
         def add(name, expr, lower, upper):
@@ -329,24 +345,50 @@ class DesignProblem:
                                    tol=1e-8, constr_viol_tol=1e-10, compl_inf_tol=1e-8, acceptable_tol=1e-6,
                                    acceptable_iter=5, max_iter=500)
 
-    def linearisation(self, si: dict):
-        """(x, w, p) -> A of the model, with the membrane area s_m symbolic when it is a variable.
+    def groups(self, si: dict) -> dict:
+        """The groups a design changes, from the SI values (CasADi or numbers): alpha_e1, alpha_in1
+        (laminar throttles over g1, :func:`autobal.models.throttles.laminar_tube`) and s_m (m^2)."""
+        mu, g1 = self.device.fluid.viscosity, self.dev0.scales["g1"]
+        out = {"s_m": si.get("s_m", self.device.regulator.membrane_area)}
+        for t, name in TUBES.items():
+            tube = self.device.barrier.supply_throttle if t == "e" else self.device.regulator.inlet_throttle
+            out[name] = th.laminar_tube(si.get(f"d_{t}", tube.diameter), si.get(f"l_{t}", tube.length), mu) / g1
+        return out
 
-        The model is affine in s_m (the membrane force sigma_m (psi_e - psi1 - dpsi) of the stem and the
-        displacement flow s_m dx/dt of the barrier chamber; the mass matrix does not contain it), and
-        the static point with the valve off its stop does not depend on it (psi_e = psi1 + dpsi), so
-        A(s_m) = A(s0) + (s_m - s0)/(s1 - s0) (A(s1) - A(s0)) exactly, from two built models."""
+    def linearisation(self, si: dict, groups: dict | None = None):
+        """(x, w, p) -> A of the model, with s_m, alpha_e1 and alpha_in1 symbolic when the design changes them.
+
+        The model is affine in each of them jointly (the membrane force sigma_m (psi_e - psi1 - dpsi) of
+        the stem and the displacement flow s_m dx/dt of the barrier chamber; the laminar flows
+        alpha (psi_a - psi_b); the mass matrix contains none of them, and no product of two appears), so
+        A = A(nominal) + sum_i t_i (A(moved i) - A(nominal)), t_i = (theta_i - theta_i0)/(theta_i1 -
+        theta_i0), exactly, from one extra built model per group.  The static point off the valve stop
+        does not depend on s_m (psi_e = psi1 + dpsi); it does on the alphas, through the statics' symbols.
+        """
+        groups = self.groups(si) if groups is None else groups
         jac0 = jacobians(self.model)
-        if "s_m" not in si:
-            return lambda x, w, p: jac0(x, w, p)[0]
-        s0 = self.device.regulator.membrane_area
-        s1 = 2.0 * s0
-        dev1 = apply(self.device, {"s_m": s1})
         ref = self.statics0[self.spec.nominal_ratio]
-        model1 = build(design(dev1), dev1.dynamics, ref.values | {"psi1": ref.psi1, "dpsi": ref.dpsi}, self.spec.form)
-        jac1 = jacobians(model1)
-        t = (si["s_m"] - s0) / (s1 - s0)
-        return lambda x, w, p: jac0(x, w, p)[0] + t * (jac1(x, w, p)[0] - jac0(x, w, p)[0])
+        point = ref.values | {"psi1": ref.psi1, "dpsi": ref.dpsi}
+        nominal = self.groups({})
+        terms = []
+        moves = {"s_m": ("s_m",), "alpha_e1": ("d_e", "l_e"), "alpha_in1": ("d_in", "l_in")}
+        for name, keys in moves.items():
+            if not any(k in si for k in keys):
+                continue
+            key = keys[0]
+            v0 = nominal_values(self.device, [key])[key]
+            dev1 = apply(self.device, {key: 1.5 * v0})
+            moved = self.groups({key: 1.5 * v0})[name]
+            jac1 = jacobians(build(design(dev1), dev1.dynamics, point, self.spec.form))
+            terms.append(((groups[name] - nominal[name]) / (moved - nominal[name]), jac1))
+
+        def A(x, w, p):
+            a0 = jac0(x, w, p)[0]
+            for t, j in terms:
+                a0 = a0 + t * (j(x, w, p)[0] - jac0(x, w, p)[0])
+            return a0
+
+        return A
 
     def static_state(self, p):
         """The dynamic model's state at the starting design's static solution at psi1 = ``p``."""

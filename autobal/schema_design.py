@@ -26,6 +26,10 @@ VARIABLES = {
     "device.barrier.margin_ratio": ("dpsi", None),
     "device.regulator.supply_pressure": ("p_in", "pressure"),
     "device.regulator.membrane_area": ("s_m", "area"),
+    "device.barrier.supply_throttle.diameter": ("d_e", "length"),
+    "device.barrier.supply_throttle.length": ("l_e", "length"),
+    "device.regulator.inlet_throttle.diameter": ("d_in", "length"),
+    "device.regulator.inlet_throttle.length": ("l_in", "length"),
 }
 
 

@@ -159,16 +159,19 @@ def test_symbolic_stiffness_and_leakage_match_the_statics():
     assert ev.objective == pytest.approx(-1.0, rel=1e-10)
 
 
-def test_membrane_area_enters_the_linearisation_exactly():
-    """A(s_m) from the two-model affine form equals the Jacobian of a model built at that membrane area."""
+@pytest.mark.parametrize("path, key", [("device.regulator.membrane_area", "s_m"),
+                                       ("device.barrier.supply_throttle.diameter", "d_e"),
+                                       ("device.regulator.inlet_throttle.length", "l_in")])
+def test_group_variables_enter_the_linearisation_exactly(path, key):
+    """A from the affine form (membrane area, laminar throttles) equals the Jacobian of a model built
+    with that design, at the same state."""
     dev = adapters.dynamic_device(autobal.load("pump_pe600_dynamics"))
-    s0 = dev.regulator.membrane_area
-    spec = ds.Spec(variables=(ds.Variable("device.regulator.membrane_area", "s_m", 0.5 * s0, 3 * s0),),
-                   points=(1.0,), decay_rate=50.0)
+    s0 = ds.nominal_values(dev, [key])[key]
+    spec = ds.Spec(variables=(ds.Variable(path, key, 0.5 * s0, 3 * s0),), points=(1.0,), decay_rate=50.0)
     prob = ds.DesignProblem(dev, spec)
     s_m = 1.7 * s0
-    A = np.array(prob.linearisation({"s_m": s_m})(prob.static_state(1.0), [1.0, prob.dev0.groups.b], prob.model.p0))
-    moved = ds.apply(dev, {"s_m": s_m})
+    A = np.array(prob.linearisation({key: s_m})(prob.static_state(1.0), [1.0, prob.dev0.groups.b], prob.model.p0))
+    moved = ds.apply(dev, {key: s_m})
     from autobal.analysis.linearize import jacobians
     from autobal.models.device import design
     from autobal.models.dynamics import build
