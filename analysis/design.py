@@ -406,6 +406,9 @@ class DesignProblem:
         return np.concatenate([y0, W0.ravel(order="F")])
 
     def bounds(self):
+        """(lbx, ubx) of the NLP: the variables' boxes (scaled by their largest bound) and, per point,
+        the static unknowns with both reactions fixed at zero, the face gap u = z/z_B and the valve
+        opening xi inside the spec's bands."""
         sp, sys_ = self.spec, self.sys
         xi_max = self.dev0.groups.regulator.xi_max
         z_b = self.dev0.scales["z_B"]
