@@ -26,12 +26,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 from scipy.optimize import brentq
 from scipy.special import ndtr
 
+from autobal.analysis.result import Result, new_figure
 from autobal.models.hydroheel import (
     WearModel,
     WornDisc,
@@ -41,7 +41,6 @@ from autobal.models.hydroheel import (
     max_gap,
     seal_shape_factor,
 )
-from autobal.results import save_figure, write_csv
 
 HOUR = 3600.0
 
@@ -159,8 +158,21 @@ class Reliability:
 
 
 @dataclass
-class ReliabilityResult:
+class ReliabilityResult(Result):
+    """Reliability of the traditional balance disc (Pavlenko 2014, ch. 1.2): P(t), MTTF, wear CDF."""
+
     data: dict
+    name = "reliability"
+
+    @property
+    def mttf(self) -> float:
+        """Mean time to failure by (1.49) with the load density renormalised on [0, sigma psi1], h."""
+        return self.data["renormalised"]["mttf_h"]
+
+    @property
+    def mttf_literal(self) -> float:
+        """Mean time to failure by (1.48)-(1.49) as printed, h."""
+        return self.data["literal"]["mttf_h"]
 
     def to_dict(self) -> dict:
         return self.data
@@ -180,34 +192,34 @@ class ReliabilityResult:
                 f"P({h:g} h) {p:.4f}" for h, p in zip(d["times_h"], r["P"], strict=True))
                 + f"; MTTF {r['mttf_h']:.0f} h to {d['horizon_h']:g} h ({r['mttf_sojourn_h']:.0f} h by sojourn),"
                 f" {r['mttf_infinite_h']:.0f} h to infinity; t(P = {d['reliable_probability']}) {r['time_at_h']:.0f} h")
-        lines.append(f"  source: P(2000 h) {s['P_2000h']}, MTTF {s['mttf_h']:.0f} h: not reproduced (spec §1.6)")
+        lines.append(f"  source: P(2000 h) {s['P_2000h']}, MTTF {s['mttf_h']:.0f} h: "
+                     "not reproduced (see the validation ledger)")
         return "\n".join(lines)
 
-    def write_tables(self, out: Path) -> list[Path]:
+    def tables(self) -> dict[str, dict]:
         c = self.data["curve"]
-        write_csv(out / "reliability_curve.csv", {"t_h": c["t_h"], "P_literal": c["P_literal"],
-                                                  "P_renormalised": c["P_renormalised"],
-                                                  "P_wear_le_base_gap": c["P_wear_le_base_gap"]})
-        return [out / "reliability_curve.csv"]
+        return {"reliability_curve.csv": {"t_h": c["t_h"], "P_literal": c["P_literal"],
+                                          "P_renormalised": c["P_renormalised"],
+                                          "P_wear_le_base_gap": c["P_wear_le_base_gap"]}}
 
-    def plot(self, out: Path) -> list[Path]:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
+    def draw(self, ax) -> None:
+        """Probability of failure-free operation against time, both readings of (1.48), Fig. 1.28."""
         d, c = self.data, self.data["curve"]
-        fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4.2))
-        a1.plot(c["t_h"], c["P_literal"], label="P(t), (1.48) literal")
-        a1.plot(c["t_h"], c["P_renormalised"], ls="--", label=r"P(t), $p_\tau$ renormalised on [0, $\sigma\psi_1$]")
-        a1.plot(c["t_h"], c["P_wear_le_base_gap"], ls=":", label=r"P(wear $\leq z_B$) (Fig. 1.27)")
-        a1.plot([2000, 4000], [0.75, 0.25], "kx", label="source (Fig. 1.28)")
-        a1.axvline(d["literal"]["mttf_h"], color="0.4", lw=0.8, label="MTTF (1.49), literal")
-        a1.set_xlim(0, min(c["t_h"][-1], 12000))
-        a1.set_xlabel("time, h")
-        a1.set_ylabel("probability")
-        a1.grid(alpha=0.3)
-        a1.legend(fontsize=7)
+        ax.plot(c["t_h"], c["P_literal"], label="P(t), (1.48) literal")
+        ax.plot(c["t_h"], c["P_renormalised"], ls="--", label=r"P(t), $p_\tau$ renormalised on [0, $\sigma\psi_1$]")
+        ax.plot(c["t_h"], c["P_wear_le_base_gap"], ls=":", label=r"P(wear $\leq z_B$) (Fig. 1.27)")
+        ax.plot([2000, 4000], [0.75, 0.25], "kx", label="source (Fig. 1.28)")
+        ax.axvline(d["literal"]["mttf_h"], color="0.4", lw=0.8, label="MTTF (1.49), literal")
+        ax.set_xlim(0, min(c["t_h"][-1], 12000))
+        ax.set_xlabel("time, h")
+        ax.set_ylabel("probability")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+
+    def figures(self) -> dict:
+        d = self.data
+        fig, (a1, a2) = new_figure((10, 4.2), 1, 2)
+        self.draw(a1)
         reg = d["region"]
         a2.plot(reg["chi"], reg["tau_u_min"], label=r"$\tau_1(\chi)$, $u = u_{min}$")
         a2.plot(reg["chi"], reg["tau_u_max"], label=r"$\tau_2(\chi)$, $u = u_{max}$")
@@ -219,7 +231,7 @@ class ReliabilityResult:
         a2.grid(alpha=0.3)
         a2.legend(fontsize=7)
         fig.suptitle(d["title"], fontsize=9)
-        return [save_figure(fig, out / "fig_reliability.png")]
+        return {"fig_reliability.png": fig}
 
 
 def build(settings) -> tuple[Reliability, Reliability, dict]:
@@ -309,13 +321,3 @@ def accuracy(models: dict, settings, data: dict) -> dict:
             "how": "largest relative change of P(times), MTTF (horizon and infinite) and t(P = level) when the load "
                    "quadrature uses every other node (difference taken whole), when the time quadrature of (1.49) "
                    "uses every other sample, and between MTTF by the time integral and by the sojourn identity"}
-
-
-def run_scene(scn, settings, out: Path):
-    """Runner of ``analyses.reliability`` (autobal.pipeline.RUNNERS)."""
-    import time
-
-    t0 = time.perf_counter()
-    res = run(settings, scn.title)
-    files = res.write_tables(out) + res.plot(out)
-    return res.to_dict() | {"run_time_s": time.perf_counter() - t0}, files, res.summary()

@@ -146,6 +146,13 @@ def design(scene, settings) -> Result:
                             settings.sweep_points, scene.title)
 
 
+def reliability(scene, settings) -> Result:
+    """Reliability of the traditional balance disc: P(t), MTTF, wear (Pavlenko 2014, ch. 1.2)."""
+    from autobal.analysis import reliability as rel
+
+    return rel.run(settings, scene.title)
+
+
 RUNNERS = {
     "statics": statics,
     "frequency": frequency,
@@ -153,7 +160,7 @@ RUNNERS = {
     "transient": transient,
     "liquid_balancer": liquid_balancer,
     "estimation": _legacy("estimation", "autobal.analysis.estimation_study:run"),
-    "reliability": _legacy("reliability", "autobal.analysis.reliability:run_scene"),
+    "reliability": reliability,
     "montecarlo": montecarlo,
     "rotor_dynamics": rotor_dynamics,
     "spinup": _legacy("spinup", "autobal.ocp.spinup_study:run_scene"),
