@@ -1,5 +1,5 @@
 """Scenario schema of ``analyses.estimation``: fitting device parameters to measured static and
-flow characteristics (Pavlenko 2014, Sec. 4.4; spec reliability-experiments-estimation.md §5).
+flow characteristics (Pavlenko (2014), Sec. 4.4).
 
 The data file is read and checked at load time (``autobal check`` catches a bad CSV): columns,
 units, signs and the number of points against the free parameters of every fit.
@@ -13,7 +13,9 @@ from typing import Annotated, Literal
 from pydantic import Field, model_validator
 
 from autobal.errors import ScenarioError
+from autobal.measurements import Measurements, check_fit, read_csv
 from autobal.models.device import DEVICE_GROUPS, PRESSURE_GROUPS, REGULATOR_GROUPS
+from autobal.models.hydroheel import DiscLosses
 from autobal.schema import NonNegative, Positive, Strict
 from autobal.units import Area, Length, Pressure, VolumeFlow
 
@@ -94,6 +96,12 @@ class Bases(Strict):
     gap: Length | None = None  # z_B = h_TB
     flow: VolumeFlow | None = None  # Q_B
 
+    def values(self) -> dict:
+        """Base values in SI by the key the data columns use: pressure (Pa), gap (m), flow (m^3/s),
+        force p_B s_B (N); None where not given."""
+        force = self.pressure * self.area if self.pressure and self.area else None
+        return {"pressure": self.pressure, "gap": self.gap, "flow": self.flow, "force": force}
+
 
 class Adequacy(Strict):
     """Fisher adequacy test (4.14)-(4.15) on the groups of the data."""
@@ -104,7 +112,7 @@ class Adequacy(Strict):
 
 
 class LossCoefficient(Strict):
-    """Solve (4.38) for one loss coefficient from a fitted alpha, the others fixed (spec §5.7)."""
+    """Solve (4.38) for one loss coefficient from a fitted alpha, the others fixed."""
 
     fit: str  # name of the fit whose alpha is used
     unknown: Literal["zeta1", "lambda1", "zeta2", "lambda2"]
@@ -118,7 +126,19 @@ class LossCoefficient(Strict):
     lambda1: NonNegative = 0.06  # annular seal: friction
     zeta2: NonNegative = 1.5  # face throttle: local (inlet) loss
     lambda2: NonNegative = 0.06  # face throttle: friction
-    friction_factor: Positive = 0.5  # zeta + f lambda l/h: 0.5 as (2.11) and §4.5; 1.0 as (4.38) is printed
+    friction_factor: Positive = 0.5  # zeta + f lambda l/h: 0.5 as (2.11) and Sec. 4.3.3; 1.0 as (4.38) is printed
+
+    def losses(self) -> DiscLosses:
+        """The geometry and loss coefficients as the model's parameter object (SI)."""
+        return DiscLosses(**self.model_dump(exclude={"fit", "unknown"}))
+
+
+class Bootstrap(Strict):
+    """Residual-bootstrap confidence intervals of the traditional_disc fits (refits batched in one
+    mapped Gauss-Newton call); percentile intervals at the estimation's ``confidence``."""
+
+    samples: Annotated[int, Field(ge=20, le=1_000_000)] = 2000
+    seed: Annotated[int, Field(ge=0)] = 0
 
 
 class Estimation(Strict):
@@ -132,11 +152,14 @@ class Estimation(Strict):
     confidence: Annotated[float, Field(gt=0, lt=1)] = 0.95
     band_points: Annotated[int, Field(ge=2, le=10000)] = 101
     cross_check: bool = True  # re-fit with scipy.optimize.least_squares (traditional_disc fits)
+    bootstrap: Bootstrap | None = None  # bootstrap intervals of the traditional_disc fits
+
+    def measurements(self) -> Measurements:
+        """The data file, read and checked (values in SI or dimensionless)."""
+        return read_csv(self.data)
 
     @model_validator(mode="after")
     def _data_fits(self):
-        from autobal.measurements import check_fit, read_csv
-
         names = [f.name for f in self.fits]
         if len(set(names)) != len(names):
             raise ValueError("fits: two fits have the same name")
@@ -148,9 +171,7 @@ class Estimation(Strict):
                     raise ScenarioError(f"fits.{i}: the traditional_disc model takes a load column "
                                         f"(tau or axial_force), not {data.has('load')}")
                 if fit.model == "traditional_disc":  # the device model has its own bases
-                    b = self.bases
-                    bases = {"gap": b.gap, "flow": b.flow, "pressure": b.pressure,
-                             "force": b.pressure * b.area if b.pressure and b.area else None}
+                    bases = self.bases.values()
                     for role in ("load", *{"u": ["gap"], "q": ["flow"], "both": ["gap", "flow"]}[fit.residual]):
                         data.dimensionless(role, bases)
         except ScenarioError as exc:
