@@ -89,7 +89,7 @@ class DeviceFitter:
     data point are the NLP's unknowns, the balances its equality constraints (stops fixed as found
     at the initial guess), the residual in u and/or the flow of one throttle.
 
-    ``device`` is the scene's validated device section, ``dev`` its DeviceDesign; ``params``:
+    ``device`` is the device's DeviceParams (SI), ``dev`` its DeviceDesign; ``params``:
     name -> (value, free, lower, upper).  Loads are tau (psi1 = tau/b) or psi1.
     """
 

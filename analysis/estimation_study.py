@@ -1,16 +1,14 @@
 """The estimation study of a scene: fits, the source's closed-form estimators, the adequacy test,
 bootstrap intervals and the back-calculation of a loss coefficient (Pavlenko (2014), Secs. 4.3.3-4.4).
 
-``run(scenario, settings, out)`` is the pipeline runner: it returns the ``estimation`` block of
-results.json, the files written and a printed summary.  :class:`EstimationResult` is plain data
-with to_dict / summary / write_tables / plot.
+``run(scenario, settings)`` returns an :class:`EstimationResult`: the ``estimation`` block of
+results.json, a summary, CSV tables and one figure per fit (the Result protocol).
 """
 
 from __future__ import annotations
 
 import time
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 import numpy as np
 
@@ -18,10 +16,10 @@ from autobal.analysis import disc_fit
 from autobal.analysis.adequacy import fisher_adequacy
 from autobal.analysis.device_fit import DeviceFitter
 from autobal.analysis.least_squares import FitResult
-from autobal.analysis.result import fmt
+from autobal.analysis.result import Result, fmt, new_figure, plain
 from autobal.errors import ScenarioError
+from autobal.models.device import DeviceParams, design
 from autobal.models.hydroheel import TurbulentDisc
-from autobal.results import save_figure, write_csv
 
 # The source's Table 4.4 (printed as a second "Table 4.3"), from points it does not publish.
 SOURCE_TABLE_4_4 = {
@@ -41,8 +39,29 @@ TRANSFORMED = {
 
 
 @dataclass
-class EstimationResult:
+class EstimationResult(Result):
+    """Parameter fits of one scene, with the source's closed forms, adequacy tests, bootstrap
+    intervals and (4.38).  ``data`` is the results.json block; headline numbers are the properties."""
+
     data: dict  # the results.json block
+    name = "estimation"
+
+    @property
+    def estimates(self) -> dict[str, dict[str, float]]:
+        """Fit name -> parameter -> estimate (dimensionless groups, or loss coefficients)."""
+        return {n: {k: p["estimate"] for k, p in f["parameters"].items()} for n, f in self.data["fits"].items()}
+
+    @property
+    def intervals(self) -> dict[str, dict[str, tuple[float, float]]]:
+        """Fit name -> free parameter -> linearised (Student-t) confidence interval, in the parameter's unit."""
+        return {n: {k: (p["ci_low"], p["ci_high"]) for k, p in f["parameters"].items() if p["free"]}
+                for n, f in self.data["fits"].items()}
+
+    @property
+    def bootstrap_intervals(self) -> dict[str, dict[str, tuple[float, float]]]:
+        """Fit name -> free parameter -> bootstrap percentile interval (fits that have one)."""
+        return {n: {k: (p["ci_low"], p["ci_high"]) for k, p in f["bootstrap"]["parameters"].items()}
+                for n, f in self.data["fits"].items() if "parameters" in (f.get("bootstrap") or {})}
 
     def to_dict(self) -> dict:
         return self.data
@@ -87,8 +106,9 @@ class EstimationResult:
                          f"from alpha = {lc['alpha']:.5g} of fit {lc['fit']} (nominal alpha {lc['alpha_nominal']:.4g})")
         return "\n".join(lines)
 
-    def write_tables(self, out: Path) -> list[Path]:
-        files = []
+    def tables(self) -> dict[str, dict]:
+        """estimation_parameters.csv; per fit its points (measured, fitted, residual) and its curve with band."""
+        out = {}
         rows = {"fit": [], "parameter": [], "free": [], "estimate": [], "standard_error": [], "ci_low": [],
                 "ci_high": []}
         for name, f in self.data["fits"].items():
@@ -99,63 +119,64 @@ class EstimationResult:
             for k in f["data"]:
                 if k != "load":
                     pts |= {f"{k}_{c}": f["data"][k][c] for c in ("measured", "fitted", "residual")}
-            write_csv(out / f"estimation_{name}_points.csv", pts)
             cur = {"load": f["curve"]["load"]}
             for k in ("u", "q"):
                 cur |= {f"{k}_{c}": f["curve"][k][c] for c in ("value", "band_low", "band_high")}
-            write_csv(out / f"estimation_{name}_curve.csv", cur)
-            files += [out / f"estimation_{name}_points.csv", out / f"estimation_{name}_curve.csv"]
-        write_csv(out / "estimation_parameters.csv", rows)
-        return [out / "estimation_parameters.csv", *files]
+            out[f"estimation_{name}_points.csv"] = pts
+            out[f"estimation_{name}_curve.csv"] = cur
+        return {"estimation_parameters.csv": rows, **out}
 
-    def plot(self, out: Path) -> list[Path]:
+    def draw(self, ax) -> None:
+        """The first fit's first measured variable: data, fitted curve and its confidence band."""
+        name, f = next(iter(self.data["fits"].items()))
+        self._draw_fit(ax, name, f, next(k for k in ("u", "q") if k in f["data"]))
+
+    def _draw_fit(self, ax, name: str, f: dict, k: str) -> None:
+        label = {"u": r"face gap $u = z/z_B$",
+                 "q": r"flow $q = Q/Q_B$ (4.29)" if f["model"] == "traditional_disc" else
+                 rf"flow $q_{{{f['extra'].get('flow_throttle', 'T')}}} = Q/(g_1 p_B)$"}
+        grid = np.asarray(f["curve"]["load"], float)
+        c = f["curve"][k]
+        ax.fill_between(grid, c["band_low"], c["band_high"], color="C0", alpha=0.2,
+                        label=f"{100 * f['confidence']:.0f}% confidence band")
+        ax.plot(grid, c["value"], color="C0", label=f"fit {name}: {_params_text(f)}")
+        ax.plot(np.asarray(f["data"]["load"], float), f["data"][k]["measured"], "ko", ms=4, label="measured")
+        cf = self.data.get("closed_forms") or {}
+        if f["model"] == "traditional_disc":
+            keys = ("static_1p_4_23", "static_2p_4_26") if k == "u" else ("flow_1p_4_35", "flow_2p_4_36")
+            for key, ls in zip(keys, ("--", ":"), strict=True):
+                v = cf.get(key)
+                if v and v.get("alpha") is not None and v.get("tau_max") is not None:
+                    disc = TurbulentDisc(v["alpha"], v["tau_max"])
+                    with np.errstate(invalid="ignore"):
+                        ax.plot(grid, (disc.gap if k == "u" else disc.flow)(grid), ls=ls, color="0.4",
+                                label=f"({key.split('_', 2)[2].replace('_', '.')}): alpha {v['alpha']:.4g}, "
+                                      f"tau_max {v['tau_max']:.4g}")
+        ax.set_ylabel(label[k])
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+
+    def figures(self) -> dict:
         """One figure per fit: data, fitted curve, confidence band (and the closed forms' curves for
         the traditional disc), and the residuals below."""
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        files = []
-        cf = self.data.get("closed_forms") or {}
+        figs = {}
         for name, f in self.data["fits"].items():
-            label = {"u": r"face gap $u = z/z_B$",
-                     "q": r"flow $q = Q/Q_B$ (4.29)" if f["model"] == "traditional_disc" else
-                     rf"flow $q_{{{f['extra'].get('flow_throttle', 'T')}}} = Q/(g_1 p_B)$"}
             parts = [k for k in ("u", "q") if k in f["data"]]
-            fig, axes = plt.subplots(2, len(parts), figsize=(6.4 * len(parts), 6.4), squeeze=False,
-                                     gridspec_kw={"height_ratios": [3, 1]}, sharex="col")
+            fig, axes = new_figure((6.4 * len(parts), 6.4), 2, len(parts), squeeze=False,
+                                   gridspec_kw={"height_ratios": [3, 1]}, sharex="col")
             x = np.asarray(f["data"]["load"], float)
-            grid = np.asarray(f["curve"]["load"], float)
             xl = r"load $\tau$" if f.get("load_kind", "tau") == "tau" else r"discharge pressure $\psi_1$"
             for j, k in enumerate(parts):
-                ax, axr = axes[0, j], axes[1, j]
-                c = f["curve"][k]
-                ax.fill_between(grid, c["band_low"], c["band_high"], color="C0", alpha=0.2,
-                                label=f"{100 * f['confidence']:.0f}% confidence band")
-                ax.plot(grid, c["value"], color="C0", label=f"fit: {_params_text(f)}")
-                ax.plot(x, f["data"][k]["measured"], "ko", ms=4, label="measured")
-                if f["model"] == "traditional_disc":
-                    keys = ("static_1p_4_23", "static_2p_4_26") if k == "u" else ("flow_1p_4_35", "flow_2p_4_36")
-                    for key, ls in zip(keys, ("--", ":"), strict=True):
-                        v = cf.get(key)
-                        if v and v.get("alpha") is not None and v.get("tau_max") is not None:
-                            with np.errstate(invalid="ignore"):
-                                disc = TurbulentDisc(v["alpha"], v["tau_max"])
-                                ax.plot(grid, (disc.gap if k == "u" else disc.flow)(grid), ls=ls, color="0.4",
-                                        label=f"({key.split('_', 2)[2].replace('_', '.')}): alpha {v['alpha']:.4g}, "
-                                              f"tau_max {v['tau_max']:.4g}")
-                ax.set_ylabel(label[k])
-                ax.grid(alpha=0.3)
-                ax.legend(fontsize=7)
+                self._draw_fit(axes[0, j], name, f, k)
+                axr = axes[1, j]
                 axr.axhline(0, color="k", lw=0.6)
                 axr.plot(x, f["data"][k]["residual"], "ko", ms=4)
                 axr.set_ylabel("fit - measured")
                 axr.set_xlabel(xl)
                 axr.grid(alpha=0.3)
             fig.suptitle(f"{self.data['title']}: fit {name} ({f['model']}, residual in {f['residual']})", fontsize=9)
-            files.append(save_figure(fig, out / f"fig_estimation_{name}.png"))
-        return files
+            figs[f"fig_estimation_{name}.png"] = fig
+        return figs
 
 
 def _params_text(f: dict) -> str:
@@ -232,8 +253,23 @@ def _closed_forms(tau, u, q, group, tau_max: float) -> dict:
     return out
 
 
-def run(scn, settings, out: Path):
-    """Pipeline runner: every fit of ``settings``, closed forms, adequacy, (4.38); tables and figures."""
+def run(settings, device: DeviceParams | None = None, title: str = "") -> EstimationResult:
+    """Every fit of the scene's ``analyses.estimation`` block, the closed forms, the adequacy tests,
+    bootstrap intervals and (4.38).
+
+    Parameters
+    ----------
+    settings : Estimation
+        The validated ``analyses.estimation`` block (its data file is read here).
+    device : DeviceParams, optional
+        The device in SI, for fits of the device model.
+    title : str
+        Title of the scene, for the figures.
+
+    Returns
+    -------
+    EstimationResult
+    """
     t0 = time.perf_counter()
     data = settings.measurements()
     bases = settings.bases.values()
@@ -243,11 +279,9 @@ def run(scn, settings, out: Path):
     for fit in settings.fits:
         fb = bases
         if fit.model == "device":
-            if scn.device is None:
+            if device is None:
                 raise ScenarioError(f"analyses.estimation.fits.{fit.name}: the device model needs a device section")
-            from autobal.adapters import design  # the runner moves to the front door (autobal/runners.py)
-
-            dev = design(scn.device)
+            dev = design(device)
             fb = _device_bases(bases, dev)
         load = data.dimensionless("load", fb)
         u = data.dimensionless("gap", fb) if fit.residual in ("u", "both") else None
@@ -272,7 +306,7 @@ def run(scn, settings, out: Path):
         else:
             params = {k: (p.value, p.free, p.lower, p.upper) for k, p in fit.parameters.items()}
             kind = "tau" if role_load in ("tau", "axial_force") else "psi1"
-            fitter = DeviceFitter(scn.device, dev, params, fit.residual, fit.flow_throttle, fit.hessian,
+            fitter = DeviceFitter(device, dev, params, fit.residual, fit.flow_throttle, fit.hessian,
                                       fit.max_iterations)
             res = fitter.fit(load, kind, u, q, weights=weights, name=fit.name, confidence=settings.confidence)
             curve = fitter.curve(res, grid)
@@ -328,7 +362,7 @@ def run(scn, settings, out: Path):
 
     diffs = [b["cross_check_scipy"]["max_abs_difference"] for b in fits.values() if "cross_check_scipy" in b]
     block = {
-        "title": scn.title,
+        "title": title,
         "data": {"file": data.path.name, "points": data.points, "columns": data.units,
                  "groups": int(len(np.unique(group))) if group is not None else None, "provenance": data.comments},
         "bases": bases, "fits": fits, "closed_forms": closed, "adequacy_reference": reference,
@@ -338,6 +372,4 @@ def run(scn, settings, out: Path):
                             "the same residual" if diffs else "no cross-check for these fits"},
         "run_time_s": time.perf_counter() - t0,
     }
-    res = EstimationResult(block)
-    files = res.write_tables(out) + res.plot(out)
-    return block, files, res.summary()
+    return EstimationResult(plain(block))

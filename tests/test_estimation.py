@@ -12,20 +12,24 @@ import json
 import math
 from dataclasses import replace
 
+import matplotlib
 import numpy as np
 import pytest
 import yaml
+from matplotlib.figure import Figure
 from numpy.testing import assert_allclose
 from scipy.optimize import least_squares, minimize_scalar
 
+import autobal
 from autobal import cli, scenario
-from autobal.adapters import design
+from autobal.adapters import device as device_params
 from autobal.analysis import device_fit
 from autobal.analysis import disc_fit as est
 from autobal.analysis.adequacy import fisher_adequacy
 from autobal.analysis.statics import StaticsSolver
 from autobal.errors import ScenarioError, SolveError
 from autobal.measurements import read_csv
+from autobal.models.device import design
 from autobal.models.hydroheel import LOSS_NAMES, TurbulentDisc, base_flow, load_from_gap
 
 TABLE = read_csv("data/table43.csv")
@@ -291,10 +295,11 @@ def test_bootstrap_spread_matches_the_linearised_standard_error():
 def pump_truth():
     """Synthetic rig data from the pump device (App. A) with alpha_TB1 x 1.2 and alpha_31 x 0.9."""
     scn = scenario.load("pump_pe600_statics")
-    dev = design(scn.device)
+    device = device_params(scn.device)
+    dev = design(device)
     g = dev.groups
     truth = {"alpha_TB1": 1.2 * g.alpha_TB1, "alpha_31": 0.9 * g.alpha_31}
-    fitter = device_fit.DeviceFitter(scn.device, dev, {k: (getattr(g, k), True, None, None) for k in truth}, "both")
+    fitter = device_fit.DeviceFitter(device, dev, {k: (getattr(g, k), True, None, None) for k in truth}, "both")
     psi1 = np.linspace(0.4, 1.1, 8)
     pts = StaticsSolver(fitter.design(truth)).sweep(psi1, dev.dpsi)
     u, q = np.array([p.values["u"] for p in pts]), np.array([p.flows["T"] for p in pts])
@@ -331,7 +336,7 @@ def test_device_fit_loss_coefficient_and_band(pump_truth):
     scn, dev, truth, _, psi1, u, _ = pump_truth
     lam0 = scn.device.disc.face.friction
     params = {"face_friction": (lam0, True, None, None), "alpha_31": (truth["alpha_31"], False, None, None)}
-    fitter = device_fit.DeviceFitter(scn.device, dev, params, "u")
+    fitter = device_fit.DeviceFitter(device_params(scn.device), dev, params, "u")
     fit = fitter.fit(psi1, "psi1", u=u)
     assert_allclose(fit.estimate["face_friction"], lam0 * (dev.groups.alpha_TB1 / truth["alpha_TB1"]) ** 2, rtol=1e-8)
     assert_allclose(fit.extra["fitted_groups"]["alpha_TB1"], truth["alpha_TB1"], rtol=1e-8)
@@ -387,6 +392,21 @@ def test_rig_scenario_results(tmp_path):
     assert_allclose(e["loss_coefficient"]["check_alpha_from_solved"], one["parameters"]["alpha"]["estimate"])
     for f in ("fig_estimation_static_1p.png", "estimation_parameters.csv", "estimation_static_2p_curve.csv"):
         assert (tmp_path / f).stat().st_size > 0
+
+
+def test_estimation_result_object():
+    """autobal.run without a folder: the estimation Result has typed headline numbers equal to the
+    Table 4.3 least-squares value, and its plot() returns figures without touching pyplot's state."""
+    backend = matplotlib.get_backend()
+    res = autobal.run(autobal.load("rig_table43_fit", set={"analyses.estimation.bootstrap.samples": 200}))
+    est_res = res["estimation"]
+    assert_allclose(est_res.estimates["static_1p"]["alpha"], 1.6643, atol=5e-5)
+    lo, hi = est_res.intervals["static_1p"]["alpha"]
+    blo, bhi = est_res.bootstrap_intervals["static_1p"]["alpha"]
+    assert lo < 1.6643 < hi and blo < 1.6643 < bhi
+    figs = est_res.plot()
+    assert len(figs) == 2 and all(isinstance(f, Figure) for f in figs)
+    assert matplotlib.get_backend() == backend and set(est_res.tables()) >= {"estimation_parameters.csv"}
 
 
 def _scene(tmp_path, csv_text=None, **estimation):
