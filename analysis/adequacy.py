@@ -16,6 +16,23 @@ def fisher_adequacy(load, measured, group, theory, parameters: int, significance
     model is adequate when F <= F_crit**; the source's text calls F > F_crit adequate (inverted),
     reported as ``source_rule_adequate``.  The standard test weights each group by its
     size and uses the pure-error variance on m - n degrees of freedom.
+
+    Parameters
+    ----------
+    load, measured, group : array (m,)
+        Load of each point, its measured value and its group label (same units as the model).
+    theory : callable
+        Model value at each group's mean load.
+    parameters : int
+        l, the number of fitted parameters.
+    significance : float
+        Level of the test (1).
+
+    Returns
+    -------
+    dict: groups, points, group means and theory values, sigma1_sq, sigma2_sq, F, F_crit, dof,
+    p_value, adequate, source_rule_adequate, and lack_of_fit (F, F_crit, dof, p_value, adequate)
+    when the groups hold repeats.
     """
     load, measured, group = (np.asarray(a, float) for a in (load, measured, group))
     labels = np.unique(group)

@@ -40,7 +40,8 @@ def with_groups(groups, values: dict):
 
 
 def group_values(dev, device, theta: dict) -> dict:
-    """The groups (2.18) that the device parameters ``theta`` set (numbers or CasADi expressions).
+    """The groups (2.18) of Pavlenko (2014) that the device parameters ``theta`` set (numbers or
+    CasADi expressions), for the DeviceDesign ``dev`` of the scene's ``device`` section.
 
     Loss coefficients act through the square-root conductances, g ~ 1/sqrt(zeta) (2.16):
     face friction lambda_T through zeta_TB, the outer seal's local loss and friction through
@@ -62,19 +63,6 @@ def group_values(dev, device, theta: dict) -> dict:
         else:
             out[name] = th
     return out
-
-
-class ParametricStatics:
-    """The static balances and flows of models/device.py with the groups ``fields`` as an input
-    gamma: ``residual(w, psi1, dpsi, gamma)``, ``flows(w, psi1, dpsi, gamma)`` (throttle flows)."""
-
-    def __init__(self, groups, fields: list[str]):
-        self.fields = list(fields)
-        self.system = static_system(groups)
-        par = static_system(groups, self.fields)
-        self.residual = par.residual
-        w, psi1, dpsi, gam = (par.flows.sx_in(i) for i in range(4))
-        self.flows = ca.Function("parametric_flows", [w, psi1, dpsi, gam], [par.flows(w, psi1, dpsi, gam)[0]])
 
 
 def free_unknowns(system, active) -> tuple[list[int], dict]:
@@ -100,20 +88,22 @@ class DeviceFitter:
         self.free = [k for k, v in params.items() if v[1]]
         self.scale = np.array([scale_of(params[k][0]) for k in self.free])
         self.fields = sorted(group_values(dev, device, {k: 1.0 for k in params}))
-        self.ps = ParametricStatics(dev.groups, self.fields)
-        sys_ = self.ps.system
+        self.system = static_system(dev.groups)  # unknowns, bounds, throttles and stops
+        self.parametric = static_system(dev.groups, self.fields)  # the balances with the fitted groups as input
+        sys_ = self.system
         if flow_throttle not in sys_.throttles:
             raise ScenarioError(f"flow_throttle: {flow_throttle!r} is not a throttle of this device "
                                 f"({', '.join(sys_.throttles)})")
         self.k_flow = sys_.throttles.index(flow_throttle)
 
     def gamma(self, theta: dict):
-        """Vector of the fitted groups for parameter values ``theta`` (all listed parameters)."""
+        """Vector of the fitted groups (1) for parameter values ``theta`` (all listed parameters;
+        numbers or CasADi expressions)."""
         g = group_values(self.dev, self.device, theta)
         return ca.vertcat(*[g[k] for k in self.fields])
 
     def design(self, theta: dict):
-        """The DeviceDesign with the groups set by ``theta``."""
+        """The DeviceDesign with the groups set by the parameter values ``theta`` (numbers)."""
         g = np.asarray(ca.evalf(self.gamma(theta))).ravel() if self.fields else []
         return replace(self.dev, groups=with_groups(self.dev.groups, dict(zip(self.fields, map(float, g),
                                                                               strict=True))))
@@ -123,13 +113,31 @@ class DeviceFitter:
 
     def fit(self, load, load_kind: str, u=None, q=None, weights: dict | None = None, name: str = "fit",
             confidence: float = 0.95) -> FitResult:
-        """Fit the listed parameters to measured gaps ``u`` and/or flows ``q`` (1) at the loads
-        ``load`` (tau or psi1 as ``load_kind`` says, 1); Student-t intervals at ``confidence``."""
+        """Fit the listed parameters to measured gaps and/or flows.
+
+        Parameters
+        ----------
+        load : array (n,)
+            Loads: tau, or psi1 = p1/p_B, as ``load_kind`` ("tau" or "psi1") says (1).
+        u, q : array (n,), optional
+            Measured face gaps u = z/z_B and flows of the fitted throttle over g1 p_B (1).
+        weights : dict, optional
+            "u", "q" -> weight of that residual (1/its unit).
+        name : str
+            Label of the fit in messages.
+        confidence : float
+            Level of the Student-t intervals (1).
+
+        Returns
+        -------
+        FitResult, with ``extra`` holding the fitted groups, the stops of each point and the
+        largest difference of a StaticsSolver re-solve of the fitted model.
+        """
         load = np.asarray(load, float)
         weights = {"u": 1.0, "q": 1.0} | (weights or {})
         parts = measured_parts(self.residual)
         meas = {"u": None if u is None else np.asarray(u, float), "q": None if q is None else np.asarray(q, float)}
-        sys_ = self.ps.system
+        sys_ = self.system
         values0 = {k: v[0] for k, v in self.params.items()}
         start = StaticsSolver(self.design(values0))
         b0 = values0.get("b", self.dev.groups.b)
@@ -151,11 +159,11 @@ class DeviceFitter:
             z = ca.SX.sym(f"z{i}", len(free_i))
             wfull = ca.vertcat(*[z[free_i.index(j)] if j in free_i else fixed[j] for j in range(len(sys_.unknowns))])
             psi1 = self._psi1(load[i], load_kind, b)
-            g.append(self.ps.residual(wfull, psi1, self.dev.dpsi, gam))
+            g.append(self.parametric.residual(wfull, psi1, self.dev.dpsi, gam))
             if "u" in parts:
                 r["u"].append(weights["u"] * (wfull[iu] - meas["u"][i]))
             if "q" in parts:
-                r["q"].append(weights["q"] * (self.ps.flows(wfull, psi1, self.dev.dpsi, gam)[self.k_flow]
+                r["q"].append(weights["q"] * (self.parametric.flows(wfull, psi1, self.dev.dpsi, gam)[0][self.k_flow]
                                               - meas["q"][i]))
             zs.append(z)
             z0.append(pt.x[free_i])
@@ -212,15 +220,20 @@ class DeviceFitter:
 
     def curve(self, fit: FitResult, loads) -> dict:
         """Fitted u and flow on ``loads`` (StaticsSolver continuation on the fitted design) with a
-        delta-method band; sensitivities by the implicit-function theorem on the parametric balances."""
-        solver, sys_ = self._solver_hat, self.ps.system
+        delta-method band; sensitivities by the implicit-function theorem on the parametric balances.
+
+        Returns
+        -------
+        dict: load, "u" and "q" -> (value, band low, band high) (1).
+        """
+        solver, sys_ = self._solver_hat, self.system
         est = fit.estimate
         w, ld, xt = ca.SX.sym("w", len(sys_.unknowns)), ca.SX.sym("load"), ca.SX.sym("theta", len(self.free))
         theta = {k: (xt[self.free.index(k)] if k in self.free else est[k]) for k in self.params}
         gam = self.gamma(theta)
         psi1 = self._psi1(ld, self._load_kind, theta.get("b", self.dev.groups.b))
-        rr = self.ps.residual(w, psi1, self.dev.dpsi, gam)
-        y = ca.vertcat(w[sys_.index("u")], self.ps.flows(w, psi1, self.dev.dpsi, gam)[self.k_flow])
+        rr = self.parametric.residual(w, psi1, self.dev.dpsi, gam)
+        y = ca.vertcat(w[sys_.index("u")], self.parametric.flows(w, psi1, self.dev.dpsi, gam)[0][self.k_flow])
         fn = ca.Function("sens", [w, ld, xt], [y, ca.jacobian(rr, w), ca.jacobian(rr, xt), ca.jacobian(y, w),
                                                ca.jacobian(y, xt)])
         th = np.array([est[k] for k in self.free])
