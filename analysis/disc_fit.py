@@ -337,6 +337,49 @@ class DiscFitter:
                 "fallback": res["fallback"], "failed": res["failed"]}
 
 
+def reference_fit(tau, u, free: tuple[str, ...] = DISC, values: dict | None = None, digits: int = 40) -> np.ndarray:
+    """The least-squares fit in u of (4.18) in ``digits``-digit arithmetic (mpmath): Gauss-Newton with
+    the analytic Jacobian du/dalpha = -2u/(3 alpha), du/dtau_max = u/(3 (tau_max - tau)), from
+    ``values`` until the step is below 10^-(digits - 10); an independent reference for the fits
+    (its fixed point is the stationary point of the sum of squares, whatever the algorithm).
+
+    Parameters
+    ----------
+    tau, u : array (n,)
+        Loads and measured gaps (1).
+    free : tuple of str
+        The free parameters; the others keep their ``values``.
+    values : dict, optional
+        Start of the free parameters and value of the fixed ones (default 1.75, 2.75).
+    digits : int
+        Working precision, decimal digits.
+
+    Returns
+    -------
+    The free parameters at the optimum, rounded to double (1).
+    """
+    import mpmath as mp
+
+    values = START | (values or {})
+    with mp.workdps(digits):
+        th = {k: mp.mpf(float(values[k])) for k in DISC}
+        taus, us = [mp.mpf(float(x)) for x in tau], [mp.mpf(float(x)) for x in u]
+        for _ in range(1000):
+            m = [mp.cbrt((th["tau_max"] / x - 1) / th["alpha"] ** 2) for x in taus]
+            r = [mi - ui for mi, ui in zip(m, us, strict=True)]
+            cols = {"alpha": [-2 * mi / (3 * th["alpha"]) for mi in m],
+                    "tau_max": [mi / (3 * (th["tau_max"] - x)) for mi, x in zip(m, taus, strict=True)]}
+            J = [cols[k] for k in free]
+            A = mp.matrix([[mp.fsum(a * b for a, b in zip(ji, jk, strict=True)) for jk in J] for ji in J])
+            g = mp.matrix([mp.fsum(a * b for a, b in zip(ji, r, strict=True)) for ji in J])
+            d = mp.lu_solve(A, -g)
+            for i, k in enumerate(free):
+                th[k] += d[i]
+            if max(abs(d[i]) for i in range(len(free))) < mp.mpf(10) ** (10 - digits):
+                break
+        return np.array([float(th[k]) for k in free])
+
+
 def scipy_disc_fit(tau, u=None, q=None, residual: str = "u", values: dict | None = None,
                    free: tuple[str, ...] = DISC, bounds: dict | None = None, weights: dict | None = None,
                    tol: float = 1e-15, method: str = "trf") -> dict:

@@ -11,7 +11,7 @@ Function, unrolled and mapped over the 200 data sets (one CasADi call per block 
 IPOPT for any fit it does not converge.  Peers: scipy least_squares with the same residual and an
 analytic Jacobian in numpy, one call per fit, at the loosest xtol = ftol = gtol whose error
 reaches the target accuracy (matched, stated in the table).  Errors are relative to a 40-digit
-mpmath Gauss-Newton solution of each fit.  A second case times 2000 bootstrap refits.
+mpmath Gauss-Newton solution of each fit (``reference_fit``).  A second case times 2000 bootstrap refits.
 
 Run: ``python -m benchmarks.estimation_fits``; writes benchmarks/results/estimation_fits.json and .md.
 """
@@ -23,10 +23,9 @@ import time
 from pathlib import Path
 
 import casadi as ca
-import mpmath as mp
 import numpy as np
 
-from autobal.analysis.disc_fit import START, DiscFitter, scipy_disc_fit
+from autobal.analysis.disc_fit import START, DiscFitter, reference_fit, scipy_disc_fit
 from autobal.analysis.least_squares import LeastSquares
 from autobal.models.hydroheel import TurbulentDisc
 from benchmarks._timing import best_of
@@ -42,28 +41,6 @@ LADDER = [1e-4, 1e-6, 1e-8, 1e-10, 1e-12, 1e-15]
 def datasets(n: int = FITS, seed: int = 0) -> np.ndarray:
     rng = np.random.default_rng(seed)
     return TurbulentDisc(1.72, 2.75).gap(TAU) * (1 + NOISE * rng.standard_normal((n, POINTS)))
-
-
-def reference(u, start) -> np.ndarray:
-    """(alpha, tau_max) to 40 digits: Gauss-Newton in mpmath on (4.18), analytic Jacobian
-    du/dalpha = -2u/(3 alpha), du/dtau_max = u/(3 (tau_max - tau)), until the step is below 1e-30."""
-    with mp.workdps(40):
-        a, t = mp.mpf(start[0]), mp.mpf(start[1])
-        taus, us = [mp.mpf(float(x)) for x in TAU], [mp.mpf(float(x)) for x in u]
-        for _ in range(500):
-            m = [mp.cbrt((t / x - 1) / a**2) for x in taus]
-            r = [mi - ui for mi, ui in zip(m, us, strict=True)]
-            ja = [-2 * mi / (3 * a) for mi in m]
-            jt = [mi / (3 * (t - x)) for mi, x in zip(m, taus, strict=True)]
-            A = mp.matrix([[mp.fsum(x * x for x in ja), mp.fsum(x * y for x, y in zip(ja, jt, strict=True))],
-                           [mp.fsum(x * y for x, y in zip(ja, jt, strict=True)), mp.fsum(y * y for y in jt)]])
-            g = mp.matrix([mp.fsum(x * y for x, y in zip(ja, r, strict=True)),
-                           mp.fsum(x * y for x, y in zip(jt, r, strict=True))])
-            d = mp.lu_solve(A, -g)
-            a, t = a + d[0], t + d[1]
-            if max(abs(d[0]), abs(d[1])) < mp.mpf(10) ** -30:
-                break
-        return np.array([float(a), float(t)])
 
 
 def error(x, ref) -> float:
@@ -134,7 +111,7 @@ def write_json(name: str, cases: list[dict]) -> Path:
 def main(repeats: int = 3) -> str:
     data = datasets()
     t0 = time.perf_counter()
-    ref = np.array([reference(u, [START["alpha"], START["tau_max"]]) for u in data])
+    ref = np.array([reference_fit(TAU, u) for u in data])
     t_ref = time.perf_counter() - t0
 
     t0 = time.perf_counter()
