@@ -10,6 +10,8 @@ estimates (1.68, 1.72/2.75, 1.67, 1.70/2.73) come from unpublished points and ar
 
 import json
 import math
+import subprocess
+import sys
 from dataclasses import replace
 
 import matplotlib
@@ -457,6 +459,14 @@ def test_bad_data_one_line_error(tmp_path, capsys, csv_text, message):
 def test_bad_fit_settings(tmp_path, fits, message):
     with pytest.raises(ScenarioError, match=message):
         scenario.load(_scene(tmp_path, fits=fits, loss_coefficient=None))
+
+
+def test_data_reader_does_not_import_the_scenario_loader():
+    """No import cycle scenario -> schema_estimation -> measurements -> scenario: the data reader and
+    the estimation schema load without the scenario loader."""
+    code = ("import sys, autobal.schema_estimation, autobal.measurements; "
+            "sys.exit('autobal.scenario' in sys.modules)")
+    assert subprocess.run([sys.executable, "-c", code], check=False).returncode == 0
 
 
 def test_missing_data_file(tmp_path):
