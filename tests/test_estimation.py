@@ -463,8 +463,8 @@ def test_bad_fit_settings(tmp_path, fits, message):
 
 def test_data_reader_does_not_import_the_scenario_loader():
     """No import cycle scenario -> schema_estimation -> measurements -> scenario: the data reader and
-    the estimation schema load without the scenario loader."""
-    code = ("import sys, autobal.schema_estimation, autobal.measurements; "
+    the estimation schema load, and a shipped data file is found and read, without the scenario loader."""
+    code = ("import sys, autobal.schema_estimation, autobal.measurements as m; m.read_csv('data/table43.csv'); "
             "sys.exit('autobal.scenario' in sys.modules)")
     assert subprocess.run([sys.executable, "-c", code], check=False).returncode == 0
 
