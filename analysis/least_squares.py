@@ -163,7 +163,7 @@ class GaussNewtonBatch:
         while blocks < self.max_blocks:
             xd, sd = fn(x, p, lb, ub)
             x, step, blocks = np.asarray(xd), np.asarray(sd).ravel(), blocks + 1
-            if np.all(step <= self.tol):
+            if np.all((step <= self.tol) | ~np.isfinite(step)):  # converged or diverged: no use iterating
                 break
         with np.errstate(invalid="ignore"):
             interior = np.all((x > lb) & (x < ub), axis=0)
