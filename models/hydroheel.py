@@ -243,9 +243,9 @@ class WornDisc:
             return np.asarray(u, float) * np.cbrt(self.k * tau / (self.sigma * self.psi1 - tau))
 
     def load(self, chi, u):
-        """tau(chi) that gives gap u, Eq. (1.35); the bounds tau1, tau2 of region B (1.36) at u_min, u_max."""
-        c3 = np.asarray(chi, float) ** 3
-        return self.sigma * self.psi1 * c3 / (c3 + self.k * np.asarray(u, float) ** 3)
+        """tau(chi) that gives gap u, Eq. (1.35): the force law (1.28) with alpha_T1 = k/chi^3 (1.30);
+        the bounds tau1, tau2 of region B (1.36) at u_min, u_max."""
+        return load_from_gap(np.asarray(u, float), self.k / np.asarray(chi, float) ** 3, self.sigma * self.psi1)
 
 
 @dataclass(frozen=True)
