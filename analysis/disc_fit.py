@@ -277,10 +277,12 @@ class DiscFitter:
         """
         tau = np.asarray(tau, float)
         values, weights, bnd, scale, sc = self._setup(tau, values, bounds, weights)
-        sets = u if u is not None else q
-        n_sets = np.shape(sets)[0]
-        p = np.column_stack([self._data(tau, None if u is None else u[j], None if q is None else q[j], weights,
-                                        values, scale) for j in range(n_sets)])
+        n_sets = np.shape(u if u is not None else q)[0]
+        zeros = np.zeros((self.n, n_sets))
+        common = np.concatenate([[weights["u"], weights["q"]], [values[k] for k in DISC], scale])
+        p = np.vstack([np.broadcast_to(tau[:, None], (self.n, n_sets)),
+                       zeros if u is None else np.asarray(u, float).T, zeros if q is None else np.asarray(q, float).T,
+                       np.broadcast_to(common[:, None], (len(common), n_sets))])
         lb = np.array([bnd[k][0] for k in self.free]) / sc
         ub = np.array([bnd[k][1] for k in self.free]) / sc
         x0 = np.array([values[k] for k in self.free]) / sc
