@@ -3,8 +3,8 @@ any conductance ratio, area ratio or loss coefficient of the flow network free, 
 face gaps and/or the flow of one throttle (an extension of Pavlenko (2014), Sec. 4.4, to the
 device of Ch. 2).
 
-The parameters enter the balances affinely, so the parametric balances are ``static_system``
-with the fitted groups as its symbolic input (no second copy of the equations).  The fit is one
+The parametric balances are :class:`~autobal.analysis.statics.ParametricStatics` with the fitted
+groups as its parameter vector (the one evaluator of the statics, the Monte Carlo and this fit).  The fit is one
 NLP in the parameters and the static states of every data point (balances as equality
 constraints, stops fixed as :class:`~autobal.analysis.statics.StaticsSolver` found them at the
 initial guess), solved by :class:`~autobal.analysis.least_squares.LeastSquares` (constrained
@@ -20,9 +20,9 @@ import casadi as ca
 import numpy as np
 
 from autobal.analysis.least_squares import FitResult, LeastSquares, measured_parts, scale_of, uncertainty
-from autobal.analysis.statics import StaticsSolver
+from autobal.analysis.statics import ParametricStatics, StaticsSolver
 from autobal.errors import ScenarioError, SolveError
-from autobal.models.device import DEVICE_GROUPS, REGULATOR_GROUPS, static_system
+from autobal.models.device import DEVICE_GROUPS, REGULATOR_GROUPS
 from autobal.models.throttles import annulus_loss, face_loss
 
 GROUP_FIELDS, REGULATOR_FIELDS = DEVICE_GROUPS, REGULATOR_GROUPS
@@ -65,13 +65,6 @@ def group_values(dev, device, theta: dict) -> dict:
     return out
 
 
-def free_unknowns(system, active) -> tuple[list[int], dict]:
-    """Indices of the unknowns left free when each stop is fixed as StaticsSolver found it (inactive:
-    reaction 0; active: coordinate on its stop), and the fixed values by index."""
-    fixed = {system.index(k): v for k, v in system.fixed_by_stops(active).items()}
-    return [i for i in range(len(system.unknowns)) if i not in fixed], fixed
-
-
 class DeviceFitter:
     """Least squares of the device's full static model: parameters and the static states of every
     data point are the NLP's unknowns, the balances its equality constraints (stops fixed as found
@@ -88,9 +81,8 @@ class DeviceFitter:
         self.free = [k for k, v in params.items() if v[1]]
         self.scale = np.array([scale_of(params[k][0]) for k in self.free])
         self.fields = sorted(group_values(dev, device, {k: 1.0 for k in params}))
-        self.system = static_system(dev.groups)  # unknowns, bounds, throttles and stops
-        self.parametric = static_system(dev.groups, self.fields)  # the balances with the fitted groups as input
-        sys_ = self.system
+        self.parametric = ParametricStatics(dev.groups, self.fields)  # the balances with the fitted groups as input
+        self.system = sys_ = self.parametric.system  # unknowns, bounds, throttles and stops
         if flow_throttle not in sys_.throttles:
             raise ScenarioError(f"flow_throttle: {flow_throttle!r} is not a throttle of this device "
                                 f"({', '.join(sys_.throttles)})")
@@ -155,7 +147,7 @@ class DeviceFitter:
         lo, hi = np.array(sys_.lower, float), np.array(sys_.upper, float)
         iu = sys_.index("u")
         for i, pt in enumerate(points):
-            free_i, fixed = free_unknowns(sys_, pt.active)
+            free_i, fixed = self.parametric.free(pt.active)
             z = ca.SX.sym(f"z{i}", len(free_i))
             wfull = ca.vertcat(*[z[free_i.index(j)] if j in free_i else fixed[j] for j in range(len(sys_.unknowns))])
             psi1 = self._psi1(load[i], load_kind, b)
@@ -163,7 +155,7 @@ class DeviceFitter:
             if "u" in parts:
                 r["u"].append(weights["u"] * (wfull[iu] - meas["u"][i]))
             if "q" in parts:
-                r["q"].append(weights["q"] * (self.parametric.flows(wfull, psi1, self.dev.dpsi, gam)[0][self.k_flow]
+                r["q"].append(weights["q"] * (self.parametric.flows(wfull, psi1, self.dev.dpsi, gam)[self.k_flow]
                                               - meas["q"][i]))
             zs.append(z)
             z0.append(pt.x[free_i])
@@ -233,7 +225,7 @@ class DeviceFitter:
         gam = self.gamma(theta)
         psi1 = self._psi1(ld, self._load_kind, theta.get("b", self.dev.groups.b))
         rr = self.parametric.residual(w, psi1, self.dev.dpsi, gam)
-        y = ca.vertcat(w[sys_.index("u")], self.parametric.flows(w, psi1, self.dev.dpsi, gam)[0][self.k_flow])
+        y = ca.vertcat(w[sys_.index("u")], self.parametric.flows(w, psi1, self.dev.dpsi, gam)[self.k_flow])
         fn = ca.Function("sens", [w, ld, xt], [y, ca.jacobian(rr, w), ca.jacobian(rr, xt), ca.jacobian(y, w),
                                                ca.jacobian(y, xt)])
         th = np.array([est[k] for k in self.free])
@@ -243,7 +235,7 @@ class DeviceFitter:
         for lv in np.asarray(loads, float):
             prev = solver.solve(float(self._psi1(lv, self._load_kind, b_hat)), self.dev.dpsi, prev)
             yv, rw, rt, yw, yt = (np.asarray(a.full()) for a in fn(prev.x, lv, th))
-            free_i, _ = free_unknowns(sys_, prev.active)
+            free_i, _ = self.parametric.free(prev.active)
             dw = -np.linalg.solve(rw[:, free_i], rt)
             gr = yt + yw[:, free_i] @ dw
             vals.append(yv.ravel())
