@@ -1,34 +1,34 @@
-"""The estimation study of a scene: fits, the source's closed-form estimators, the adequacy test
-and the back-calculation of a loss coefficient (Pavlenko 2014, Secs. 4.3.3-4.4; spec
-reliability-experiments-estimation.md §4.5, §5).
+"""The estimation study of a scene: fits, the source's closed-form estimators, the adequacy test,
+bootstrap intervals and the back-calculation of a loss coefficient (Pavlenko (2014), Secs. 4.3.3-4.4).
 
-``run(scenario, settings, out)`` is the pipeline runner: it returns the ``estimation`` block of
-results.json, the files written and a printed summary.  :class:`EstimationResult` is plain data
-with to_dict / summary / write_tables / plot.
+``run(scenario, settings)`` returns an :class:`EstimationResult`: the ``estimation`` block of
+results.json, a summary, CSV tables and one figure per fit (the Result protocol).
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
-from pathlib import Path
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from autobal.analysis import estimation as est
-from autobal.analysis.result import fmt
+from autobal.analysis import disc_fit
+from autobal.analysis.adequacy import fisher_adequacy
+from autobal.analysis.device_fit import DeviceFitter
+from autobal.analysis.least_squares import FitResult
+from autobal.analysis.result import Result, fmt, new_figure, plain
 from autobal.errors import ScenarioError
-from autobal.measurements import read_csv
-from autobal.results import save_figure, write_csv
+from autobal.models.device import DeviceParams, design
+from autobal.models.hydroheel import TurbulentDisc
 
-# The source's Table 4.4 (printed as a second "Table 4.3", L2792-L2802), from points it does not publish.
+# The source's Table 4.4 (printed as a second "Table 4.3"), from points it does not publish.
 SOURCE_TABLE_4_4 = {
     "static_1p": {"alpha": 1.68, "tau_max": 2.75},
     "static_2p": {"alpha": 1.72, "tau_max": 2.75},
     "flow_1p": {"alpha": 1.67, "tau_max": 2.73},
     "flow_2p": {"alpha": 1.70, "tau_max": 2.73},
     "note": "estimated by the source from static/flow points it shows only as figures (Figs 4.5, 4.6, 4.11); "
-            "not reproducible from any tabulated data (spec §5.8)",
+            "not reproducible from any tabulated data",
 }
 TRANSFORMED = {
     "static_1p_4_23": "minimises sum [1/tau_i - (1 + alpha^2 u_i^3)/tau_max]^2 (4.20), tau_max fixed",
@@ -39,8 +39,29 @@ TRANSFORMED = {
 
 
 @dataclass
-class EstimationResult:
+class EstimationResult(Result):
+    """Parameter fits of one scene, with the source's closed forms, adequacy tests, bootstrap
+    intervals and (4.38).  ``data`` is the results.json block; headline numbers are the properties."""
+
     data: dict  # the results.json block
+    name = "estimation"
+
+    @property
+    def estimates(self) -> dict[str, dict[str, float]]:
+        """Fit name -> parameter -> estimate (dimensionless groups, or loss coefficients)."""
+        return {n: {k: p["estimate"] for k, p in f["parameters"].items()} for n, f in self.data["fits"].items()}
+
+    @property
+    def intervals(self) -> dict[str, dict[str, tuple[float, float]]]:
+        """Fit name -> free parameter -> linearised (Student-t) confidence interval, in the parameter's unit."""
+        return {n: {k: (p["ci_low"], p["ci_high"]) for k, p in f["parameters"].items() if p["free"]}
+                for n, f in self.data["fits"].items()}
+
+    @property
+    def bootstrap_intervals(self) -> dict[str, dict[str, tuple[float, float]]]:
+        """Fit name -> free parameter -> bootstrap percentile interval (fits that have one)."""
+        return {n: {k: (p["ci_low"], p["ci_high"]) for k, p in f["bootstrap"]["parameters"].items()}
+                for n, f in self.data["fits"].items() if "parameters" in (f.get("bootstrap") or {})}
 
     def to_dict(self) -> dict:
         return self.data
@@ -58,6 +79,10 @@ class EstimationResult:
                                  f"{100 * f['confidence']:.0f}% CI [{p['ci_low']:.5g}, {p['ci_high']:.5g}]")
                 else:
                     lines.append(f"    {k:16s} {p['estimate']:.6g} (fixed)")
+            bs = f.get("bootstrap") or {}
+            for k, p in bs.get("parameters", {}).items():
+                lines.append(f"    {k:16s} bootstrap ({bs['samples']} refits) {100 * bs['confidence']:.0f}% CI "
+                             f"[{p['ci_low']:.5g}, {p['ci_high']:.5g}]")
             cc = f.get("cross_check_scipy")
             if cc:
                 lines.append(f"    scipy least_squares: max |difference| {cc['max_abs_difference']:.1e}")
@@ -81,8 +106,9 @@ class EstimationResult:
                          f"from alpha = {lc['alpha']:.5g} of fit {lc['fit']} (nominal alpha {lc['alpha_nominal']:.4g})")
         return "\n".join(lines)
 
-    def write_tables(self, out: Path) -> list[Path]:
-        files = []
+    def tables(self) -> dict[str, dict]:
+        """estimation_parameters.csv; per fit its points (measured, fitted, residual) and its curve with band."""
+        out = {}
         rows = {"fit": [], "parameter": [], "free": [], "estimate": [], "standard_error": [], "ci_low": [],
                 "ci_high": []}
         for name, f in self.data["fits"].items():
@@ -93,74 +119,68 @@ class EstimationResult:
             for k in f["data"]:
                 if k != "load":
                     pts |= {f"{k}_{c}": f["data"][k][c] for c in ("measured", "fitted", "residual")}
-            write_csv(out / f"estimation_{name}_points.csv", pts)
             cur = {"load": f["curve"]["load"]}
             for k in ("u", "q"):
                 cur |= {f"{k}_{c}": f["curve"][k][c] for c in ("value", "band_low", "band_high")}
-            write_csv(out / f"estimation_{name}_curve.csv", cur)
-            files += [out / f"estimation_{name}_points.csv", out / f"estimation_{name}_curve.csv"]
-        write_csv(out / "estimation_parameters.csv", rows)
-        return [out / "estimation_parameters.csv", *files]
+            out[f"estimation_{name}_points.csv"] = pts
+            out[f"estimation_{name}_curve.csv"] = cur
+        return {"estimation_parameters.csv": rows, **out}
 
-    def plot(self, out: Path) -> list[Path]:
+    def draw(self, ax) -> None:
+        """The first fit's first measured variable: data, fitted curve and its confidence band."""
+        name, f = next(iter(self.data["fits"].items()))
+        self._draw_fit(ax, name, f, next(k for k in ("u", "q") if k in f["data"]))
+
+    def _draw_fit(self, ax, name: str, f: dict, k: str) -> None:
+        label = {"u": r"face gap $u = z/z_B$",
+                 "q": r"flow $q = Q/Q_B$ (4.29)" if f["model"] == "traditional_disc" else
+                 rf"flow $q_{{{f['extra'].get('flow_throttle', 'T')}}} = Q/(g_1 p_B)$"}
+        grid = np.asarray(f["curve"]["load"], float)
+        c = f["curve"][k]
+        ax.fill_between(grid, c["band_low"], c["band_high"], color="C0", alpha=0.2,
+                        label=f"{100 * f['confidence']:.0f}% confidence band")
+        ax.plot(grid, c["value"], color="C0", label=f"fit {name}: {_params_text(f)}")
+        ax.plot(np.asarray(f["data"]["load"], float), f["data"][k]["measured"], "ko", ms=4, label="measured")
+        cf = self.data.get("closed_forms") or {}
+        if f["model"] == "traditional_disc":
+            keys = ("static_1p_4_23", "static_2p_4_26") if k == "u" else ("flow_1p_4_35", "flow_2p_4_36")
+            for key, ls in zip(keys, ("--", ":"), strict=True):
+                v = cf.get(key)
+                if v and v.get("alpha") is not None and v.get("tau_max") is not None:
+                    disc = TurbulentDisc(v["alpha"], v["tau_max"])
+                    with np.errstate(invalid="ignore"):
+                        ax.plot(grid, (disc.gap if k == "u" else disc.flow)(grid), ls=ls, color="0.4",
+                                label=f"({key.split('_', 2)[2].replace('_', '.')}): alpha {v['alpha']:.4g}, "
+                                      f"tau_max {v['tau_max']:.4g}")
+        ax.set_ylabel(label[k])
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+
+    def figures(self) -> dict:
         """One figure per fit: data, fitted curve, confidence band (and the closed forms' curves for
         the traditional disc), and the residuals below."""
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        files = []
-        cf = self.data.get("closed_forms") or {}
+        figs = {}
         for name, f in self.data["fits"].items():
-            label = {"u": r"face gap $u = z/z_B$",
-                     "q": r"flow $q = Q/Q_B$ (4.29)" if f["model"] == "traditional_disc" else
-                     rf"flow $q_{{{f['extra'].get('flow_throttle', 'T')}}} = Q/(g_1 p_B)$"}
             parts = [k for k in ("u", "q") if k in f["data"]]
-            fig, axes = plt.subplots(2, len(parts), figsize=(6.4 * len(parts), 6.4), squeeze=False,
-                                     gridspec_kw={"height_ratios": [3, 1]}, sharex="col")
+            fig, axes = new_figure((6.4 * len(parts), 6.4), 2, len(parts), squeeze=False,
+                                   gridspec_kw={"height_ratios": [3, 1]}, sharex="col")
             x = np.asarray(f["data"]["load"], float)
-            grid = np.asarray(f["curve"]["load"], float)
             xl = r"load $\tau$" if f.get("load_kind", "tau") == "tau" else r"discharge pressure $\psi_1$"
             for j, k in enumerate(parts):
-                ax, axr = axes[0, j], axes[1, j]
-                c = f["curve"][k]
-                ax.fill_between(grid, c["band_low"], c["band_high"], color="C0", alpha=0.2,
-                                label=f"{100 * f['confidence']:.0f}% confidence band")
-                ax.plot(grid, c["value"], color="C0", label=f"fit: {_params_text(f)}")
-                ax.plot(x, f["data"][k]["measured"], "ko", ms=4, label="measured")
-                if f["model"] == "traditional_disc":
-                    model = est.gap_from_load if k == "u" else est.flow_from_load
-                    keys = ("static_1p_4_23", "static_2p_4_26") if k == "u" else ("flow_1p_4_35", "flow_2p_4_36")
-                    for key, ls in zip(keys, ("--", ":"), strict=True):
-                        v = cf.get(key)
-                        if v and v.get("alpha") is not None and v.get("tau_max") is not None:
-                            with np.errstate(invalid="ignore"):
-                                ax.plot(grid, model(grid, v["alpha"], v["tau_max"]), ls=ls, color="0.4",
-                                        label=f"({key.split('_', 2)[2].replace('_', '.')}): alpha {v['alpha']:.4g}, "
-                                              f"tau_max {v['tau_max']:.4g}")
-                ax.set_ylabel(label[k])
-                ax.grid(alpha=0.3)
-                ax.legend(fontsize=7)
+                self._draw_fit(axes[0, j], name, f, k)
+                axr = axes[1, j]
                 axr.axhline(0, color="k", lw=0.6)
                 axr.plot(x, f["data"][k]["residual"], "ko", ms=4)
                 axr.set_ylabel("fit - measured")
                 axr.set_xlabel(xl)
                 axr.grid(alpha=0.3)
             fig.suptitle(f"{self.data['title']}: fit {name} ({f['model']}, residual in {f['residual']})", fontsize=9)
-            files.append(save_figure(fig, out / f"fig_estimation_{name}.png"))
-        return files
+            figs[f"fig_estimation_{name}.png"] = fig
+        return figs
 
 
 def _params_text(f: dict) -> str:
     return ", ".join(f"{k} {p['estimate']:.4g}" for k, p in f["parameters"].items() if p["free"])
-
-
-def _bases(settings) -> dict:
-    b = settings.bases
-    bases = {"pressure": b.pressure, "gap": b.gap, "flow": b.flow,
-             "force": b.pressure * b.area if b.pressure and b.area else None}
-    return bases
 
 
 def _device_bases(bases: dict, dev) -> dict:
@@ -169,7 +189,7 @@ def _device_bases(bases: dict, dev) -> dict:
     return {k: bases[k] if bases.get(k) else own[k] for k in own}
 
 
-def _fit_block(f: est.FitResult, curve: dict) -> dict:
+def _fit_block(f: FitResult, curve: dict) -> dict:
     st = f.stats
     params = {}
     for k, v in f.estimate.items():
@@ -195,24 +215,36 @@ def _fit_block(f: est.FitResult, curve: dict) -> dict:
     }
 
 
+def _bootstrap_block(fitter, res: FitResult, opts, confidence: float) -> dict:
+    """Residual-bootstrap intervals of a disc fit, per free parameter, and how the refits went."""
+    t0 = time.perf_counter()
+    b = fitter.bootstrap(res, opts.samples, opts.seed, confidence)
+    params = {k: {"ci_low": float(b["ci_low"][i]), "ci_high": float(b["ci_high"][i]), "std": float(b["std"][i]),
+                  "mean": float(b["mean"][i])} for i, k in enumerate(res.free)}
+    return {"method": "residual bootstrap, percentile intervals", "samples": b["samples"], "seed": b["seed"],
+            "confidence": confidence, "parameters": params, "ipopt_fallback": b["fallback"], "failed": b["failed"],
+            "time_s": time.perf_counter() - t0}
+
+
 def _closed_forms(tau, u, q, group, tau_max: float) -> dict:
+    df = disc_fit
     out = {}
     if u is not None:
-        out["static_1p_4_23"] = {"alpha": est.static_1p(tau, u, tau_max), "tau_max": tau_max, "tau_max_fixed": True}
-        t2, a2 = est.static_2p(tau, u)
+        out["static_1p_4_23"] = {"alpha": df.static_1p(tau, u, tau_max), "tau_max": tau_max, "tau_max_fixed": True}
+        t2, a2 = df.static_2p(tau, u)
         out["static_2p_4_26"] = {"alpha": a2, "tau_max": t2, "tau_max_fixed": False}
         if group is not None:
             labels, idx = np.unique(group, return_inverse=True)
             mt, mu = np.bincount(idx, tau) / np.bincount(idx), np.bincount(idx, u) / np.bincount(idx)
-            t2m, a2m = est.static_2p(mt, mu)
-            out["on_group_means"] = {"static_1p_4_23": {"alpha": est.static_1p(mt, mu, tau_max), "tau_max": tau_max},
+            t2m, a2m = df.static_2p(mt, mu)
+            out["on_group_means"] = {"static_1p_4_23": {"alpha": df.static_1p(mt, mu, tau_max), "tau_max": tau_max},
                                      "static_2p_4_26": {"alpha": a2m, "tau_max": t2m}}
     if q is not None:
-        out["flow_1p_4_35"] = {"alpha": est.flow_1p(tau, q, tau_max), "tau_max": tau_max, "tau_max_fixed": True}
-        t4, a4 = est.flow_2p(tau, q)
-        s = est.flow_sums(tau, q)
+        out["flow_1p_4_35"] = {"alpha": df.flow_1p(tau, q, tau_max), "tau_max": tau_max, "tau_max_fixed": True}
+        t4, a4 = df.flow_2p(tau, q)
+        s = df.flow_sums(tau, q)
         out["flow_2p_4_36"] = {"alpha": a4, "tau_max": t4, "tau_max_fixed": False, "sums_4_37": s,
-                               "stationarity_4_36": est.stationarity_4_36(t4, a4**2, s)}
+                               "stationarity_4_36": df.stationarity_4_36(t4, a4**2, s)}
     out["objectives"] = {k: v for k, v in TRANSFORMED.items() if k in out}
     out["note"] = ("the source's estimators minimise transformed residuals (linear in alpha^2 or in "
                    "(tau_max, alpha^2)), not the residual in u or q; they differ from the least-squares fits "
@@ -221,22 +253,35 @@ def _closed_forms(tau, u, q, group, tau_max: float) -> dict:
     return out
 
 
-def run(scn, settings, out: Path):
-    """Pipeline runner: every fit of ``settings``, closed forms, adequacy, (4.38); tables and figures."""
+def run(settings, device: DeviceParams | None = None, title: str = "") -> EstimationResult:
+    """Every fit of the scene's ``analyses.estimation`` block, the closed forms, the adequacy tests,
+    bootstrap intervals and (4.38).
+
+    Parameters
+    ----------
+    settings : Estimation
+        The validated ``analyses.estimation`` block (its data file is read here).
+    device : DeviceParams, optional
+        The device in SI, for fits of the device model.
+    title : str
+        Title of the scene, for the figures.
+
+    Returns
+    -------
+    EstimationResult
+    """
     t0 = time.perf_counter()
-    data = read_csv(settings.data)
-    bases = _bases(settings)
+    data = settings.measurements()
+    bases = settings.bases.values()
     role_load = data.has("load")
     group = data.columns.get("group")
     fits, solvers = {}, {}
     for fit in settings.fits:
         fb = bases
         if fit.model == "device":
-            if scn.device is None:
+            if device is None:
                 raise ScenarioError(f"analyses.estimation.fits.{fit.name}: the device model needs a device section")
-            from autobal.adapters import design  # the runner moves to the front door (autobal/runners.py)
-
-            dev = design(scn.device)
+            dev = design(device)
             fb = _device_bases(bases, dev)
         load = data.dimensionless("load", fb)
         u = data.dimensionless("gap", fb) if fit.residual in ("u", "both") else None
@@ -247,23 +292,29 @@ def run(scn, settings, out: Path):
         if fit.model == "traditional_disc":
             free = tuple(fit.free())
             bounds = {k: (fit.parameters[k].lower, fit.parameters[k].upper) for k in free}
-            res = est.DiscFitter(len(load), fit.residual, free, fit.hessian, fit.max_iterations).fit(
-                load, u, q, values=values, bounds=bounds, weights=weights, name=fit.name)
-            curve = est.disc_curve(grid, res.estimate, res.free, res.stats["covariance"], res.stats["t_quantile"])
+            fitter = disc_fit.DiscFitter(len(load), fit.residual, free, fit.hessian, fit.max_iterations)
+            res = fitter.fit(load, u, q, values=values, bounds=bounds, weights=weights, name=fit.name,
+                             confidence=settings.confidence)
+            curve = disc_fit.disc_curve(grid, res.estimate, res.free, res.stats["covariance"], res.stats["t_quantile"])
             block = _fit_block(res, curve)
             if settings.cross_check:
-                sp = est.scipy_disc_fit(load, u, q, fit.residual, values, free, bounds, weights)
+                sp = disc_fit.scipy_disc_fit(load, u, q, fit.residual, values, free, bounds, weights)
                 block["cross_check_scipy"] = sp | {"max_abs_difference": max(
                     abs(sp["estimate"][k] - res.estimate[k]) for k in free)}
+            if settings.bootstrap is not None:
+                block["bootstrap"] = _bootstrap_block(fitter, res, settings.bootstrap, settings.confidence)
         else:
             params = {k: (p.value, p.free, p.lower, p.upper) for k, p in fit.parameters.items()}
             kind = "tau" if role_load in ("tau", "axial_force") else "psi1"
-            fitter = est.DeviceFitter(scn.device, dev, params, fit.residual, fit.flow_throttle, fit.hessian,
+            fitter = DeviceFitter(device, dev, params, fit.residual, fit.flow_throttle, fit.hessian,
                                       fit.max_iterations)
-            res = fitter.fit(load, kind, u, q, weights=weights, name=fit.name)
+            res = fitter.fit(load, kind, u, q, weights=weights, name=fit.name, confidence=settings.confidence)
             curve = fitter.curve(res, grid)
             block = _fit_block(res, curve)
             block["bases"] = fb
+            if settings.bootstrap is not None:
+                block["bootstrap"] = {"status": "not available",
+                                      "note": "bootstrap intervals are computed for traditional_disc fits only"}
         if settings.adequacy is not None and group is not None:
             var = "u" if "u" in res.measured else "q"
             fitted, meas = res.fitted[var], res.measured[var]
@@ -271,7 +322,7 @@ def run(scn, settings, out: Path):
             def theory(loads, fitted=fitted, load=load):
                 return np.array([fitted[np.isclose(load, x, rtol=1e-12)].mean() for x in loads])
 
-            block["adequacy"] = est.fisher_adequacy(load, meas, group, theory, len(res.free),
+            block["adequacy"] = fisher_adequacy(load, meas, group, theory, len(res.free),
                                                     settings.adequacy.significance) | {"variable": var}
         fits[fit.name] = block
         solvers[fit.name] = res
@@ -291,7 +342,7 @@ def run(scn, settings, out: Path):
     if ad is not None and ad.reference is not None and group is not None and data.has("gap"):
         ref = {"alpha": 1.75, "tau_max": 2.75} | ad.reference
         tau, u = data.dimensionless("load", bases), data.dimensionless("gap", bases)
-        reference = est.fisher_adequacy(tau, u, group, lambda x: est.gap_from_load(x, ref["alpha"], ref["tau_max"]),
+        reference = fisher_adequacy(tau, u, group, TurbulentDisc(ref["alpha"], ref["tau_max"]).gap,
                                         ad.reference_parameters, ad.significance) | {"reference": ref}
 
     loss = None
@@ -300,17 +351,18 @@ def run(scn, settings, out: Path):
         f = solvers[lc.fit]
         alpha = f.estimate["alpha"]
         lo, hi = f.interval("alpha")
-        ends = sorted(est.loss_from_alpha(lc, a) for a in (lo, hi))
-        value = est.loss_from_alpha(lc, alpha)
+        losses = lc.losses()
+        ends = sorted(losses.solve(lc.unknown, a) for a in (lo, hi))
+        value = losses.solve(lc.unknown, alpha)
         loss = {"fit": lc.fit, "alpha": alpha, "alpha_ci": [lo, hi], "unknown": lc.unknown, "value": value,
                 "ci_low": ends[0], "ci_high": ends[1], "physical": bool(value >= 0),
-                "nominal": getattr(lc, lc.unknown), "alpha_nominal": est.alpha_from_losses(lc),
+                "nominal": getattr(lc, lc.unknown), "alpha_nominal": losses.conductance_ratio(),
                 "friction_factor": lc.friction_factor,
-                "check_alpha_from_solved": est.alpha_from_losses(lc, **{lc.unknown: value})}
+                "check_alpha_from_solved": replace(losses, **{lc.unknown: value}).conductance_ratio()}
 
     diffs = [b["cross_check_scipy"]["max_abs_difference"] for b in fits.values() if "cross_check_scipy" in b]
     block = {
-        "title": scn.title,
+        "title": title,
         "data": {"file": data.path.name, "points": data.points, "columns": data.units,
                  "groups": int(len(np.unique(group))) if group is not None else None, "provenance": data.comments},
         "bases": bases, "fits": fits, "closed_forms": closed, "adequacy_reference": reference,
@@ -320,6 +372,4 @@ def run(scn, settings, out: Path):
                             "the same residual" if diffs else "no cross-check for these fits"},
         "run_time_s": time.perf_counter() - t0,
     }
-    res = EstimationResult(block)
-    files = res.write_tables(out) + res.plot(out)
-    return block, files, res.summary()
+    return EstimationResult(plain(block))

@@ -32,7 +32,7 @@ def nlpsol(name: str, x, p, f, g, warm: bool = False, hess_lag: ca.Function | No
     """An IPOPT solver for min f(x; p) s.t. g(x; p) in [lbg, ubg], x in [lbx, ubx].
 
     ``hess_lag``: a user Hessian of the Lagrangian, (x, p, lam_f, lam_g) -> its upper triangle,
-    e.g. the Gauss-Newton lam_f J'J of a least-squares fit (analysis/estimation.py).
+    e.g. the Gauss-Newton lam_f J'J of a least-squares fit (analysis/least_squares.py).
     """
     opts = (WARM if warm else COLD) | {f"ipopt.{k}": v for k, v in extra.items()}
     if hess_lag is not None:

@@ -18,7 +18,7 @@ import casadi as ca
 import numpy as np
 from scipy.optimize import fsolve
 
-from autobal.analysis import closed_form, ipopt
+from autobal.analysis import closed_form, disc_fit, ipopt
 from autobal.errors import ScenarioError
 from autobal.results import save_figure, write_csv
 
@@ -379,46 +379,56 @@ def spinup_provider(scn, settings) -> WorkPrecision:
 # ---- estimation -------------------------------------------------------------------------------------
 
 def estimation_study(load, u, free=("alpha", "tau_max"), values=None) -> WorkPrecision:
-    """Least squares in u of (4.18) on the data (load, u): IPOPT with the Gauss-Newton and with the
-    exact Hessian over its tol, scipy.optimize.least_squares (trf) over xtol = ftol = gtol.
-    Reference: scipy at 1e-15 for the IPOPT rows, IPOPT (exact Hessian, tol 1e-12) for scipy's."""
-    from autobal.analysis import estimation as est
-
-    free, values = tuple(free), values or {"alpha": 1.75, "tau_max": 2.75}
+    """Least squares in u of Pavlenko (2014), Eq. (4.18) on the data (load, u): IPOPT with the
+    Gauss-Newton and with the exact Hessian over its tol, the mapped Gauss-Newton over its step
+    tolerance, scipy.optimize.least_squares (trf and lm) over xtol = ftol = gtol.  Reference: the
+    40-digit mpmath fit (:func:`~autobal.analysis.disc_fit.reference_fit`), independent of all of them."""
+    free, values = tuple(free), values or dict(disc_fit.START)
 
     def ipopt_at(hessian):
         built = {}
 
         def run(tol):
             if tol not in built:
-                built[tol] = est.DiscFitter(len(load), "u", free, hessian, tol=tol)
+                built[tol] = disc_fit.DiscFitter(len(load), "u", free, hessian, tol=tol)
             r = built[tol].fit(load, u, values=values)
             return np.array([r.estimate[k] for k in free])
         return run
 
-    def scipy_at(tol):
-        r = est.scipy_disc_fit(load, u, residual="u", values=values, free=free, tol=tol)
-        return np.array([r["estimate"][k] for k in free])
+    batches = {}
+
+    def batch_at(tol):
+        if tol not in batches:
+            batches[tol] = disc_fit.DiscFitter(len(load), "u", free, batch={"tol": tol, "block": 1, "max_blocks": 100})
+        r = batches[tol].fit_many(load, np.asarray(u)[None, :], values=values)
+        if r["fallback"]:
+            raise FloatingPointError("Gauss-Newton did not converge (IPOPT fallback)")
+        return r["estimate"][0]
+
+    def scipy_at(method):
+        def run(tol):
+            r = disc_fit.scipy_disc_fit(load, u, residual="u", values=values, free=free, tol=tol, method=method)
+            return np.array([r["estimate"][k] for k in free])
+        return run
 
     tols = [1e-2, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12]
     methods = [Method("IPOPT, Gauss-Newton Hessian", tols, ipopt_at("gauss-newton")),
                Method("IPOPT, exact Hessian", tols, ipopt_at("exact")),
-               Method("scipy least_squares (trf, analytic Jacobian)", tols + [1e-15], scipy_at)]
-    ref_scipy, ref_ipopt = scipy_at(1e-15), ipopt_at("exact")(1e-12)
-    return study("estimation", methods, ref_scipy, "scipy least_squares at tol 1e-15 (for the scipy rows: IPOPT with "
-                 "the exact Hessian at tol 1e-12)", list(free),
-                 references={"scipy least_squares (trf, analytic Jacobian)": ref_ipopt})
+               Method("mapped Gauss-Newton (step tolerance)", tols + [1e-14], batch_at),
+               Method("scipy least_squares (trf, analytic Jacobian)", tols + [1e-15], scipy_at("trf")),
+               Method("scipy least_squares (lm, analytic Jacobian)", tols + [1e-15], scipy_at("lm"))]
+    ref = disc_fit.reference_fit(load, u, free, values)
+    return study("estimation", methods, ref, "least squares solved in 40-digit arithmetic (mpmath Gauss-Newton)",
+                 list(free))
 
 
 def estimation_provider(scn, settings) -> WorkPrecision:
     """Work-precision of the scene's first traditional-disc fit in u (its data, its free parameters)."""
-    from autobal.analysis.estimation_study import _bases, read_csv
-
     fit = next((f for f in settings.fits if f.model == "traditional_disc" and f.residual == "u"), None)
     if fit is None:
         raise ScenarioError("work-precision of the estimation needs a traditional_disc fit with residual u")
-    data = read_csv(settings.data)
-    bases = _bases(settings)
+    data = settings.measurements()
+    bases = settings.bases.values()
     return estimation_study(data.dimensionless("load", bases), data.dimensionless("gap", bases), fit.free(),
                             {k: p.value for k, p in fit.parameters.items()})
 

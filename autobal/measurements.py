@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from autobal.errors import ScenarioError
+from autobal.paths import SCENARIO_DIR
 from autobal.units import DIMENSIONS, UREG
 
 # quantity name -> (role, unit kind or None when dimensionless, meaning)
@@ -103,8 +104,6 @@ def _unit_factor(path: Path, name: str, unit: str) -> float:
 def resolve(path: str | Path) -> Path:
     """A data path as written in a scene: absolute, relative to the working folder, or relative
     to the shipped ``scenarios/`` folder."""
-    from autobal.scenario import SCENARIO_DIR
-
     p = Path(path)
     for candidate in (p, SCENARIO_DIR / p):
         if candidate.is_file():

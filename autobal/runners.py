@@ -153,13 +153,21 @@ def reliability(scene, settings) -> Result:
     return rel.run(settings, scene.title)
 
 
+def estimation(scene, settings) -> Result:
+    """Parameter estimation from measured static and flow characteristics (Pavlenko (2014), Sec. 4.4)."""
+    from autobal.analysis import estimation_study
+
+    device = adapters.device(scene.device) if scene.device is not None else None
+    return estimation_study.run(settings, device, scene.title)
+
+
 RUNNERS = {
     "statics": statics,
     "frequency": frequency,
     "stability": stability,
     "transient": transient,
     "liquid_balancer": liquid_balancer,
-    "estimation": _legacy("estimation", "autobal.analysis.estimation_study:run"),
+    "estimation": estimation,
     "reliability": reliability,
     "montecarlo": montecarlo,
     "rotor_dynamics": rotor_dynamics,

@@ -8,7 +8,6 @@ expected unit.
 from __future__ import annotations
 
 import hashlib
-import importlib.resources
 from pathlib import Path
 from typing import Annotated, Literal
 
@@ -16,6 +15,7 @@ import yaml
 from pydantic import Field, PrivateAttr, ValidationError, model_validator
 
 from autobal.errors import ScenarioError
+from autobal.paths import SCENARIO_DIR
 from autobal.schema import NonNegative, Positive, Range, Strict
 from autobal.schema_design import Design
 from autobal.schema_dynamics import Dynamics, Frequency, Stability, Transient
@@ -36,7 +36,6 @@ from autobal.units import (
     VolumeFlow,
 )
 
-SCENARIO_DIR = Path(str(importlib.resources.files("autobal.scenarios")))  # package data (scenarios/ in the repo)
 
 class Fluid(Strict):
     density: Density  # liquid density, or gas density at normal conditions

@@ -1,5 +1,5 @@
 """Scenario schema of ``analyses.estimation``: fitting device parameters to measured static and
-flow characteristics (Pavlenko 2014, Sec. 4.4; spec reliability-experiments-estimation.md §5).
+flow characteristics (Pavlenko (2014), Sec. 4.4).
 
 The data file is read and checked at load time (``autobal check`` catches a bad CSV): columns,
 units, signs and the number of points against the free parameters of every fit.
@@ -13,7 +13,9 @@ from typing import Annotated, Literal
 from pydantic import Field, model_validator
 
 from autobal.errors import ScenarioError
+from autobal.measurements import Measurements, check_fit, read_csv
 from autobal.models.device import DEVICE_GROUPS, PRESSURE_GROUPS, REGULATOR_GROUPS
+from autobal.models.hydroheel import DiscLosses
 from autobal.schema import NonNegative, Positive, Strict
 from autobal.units import Area, Length, Pressure, VolumeFlow
 
@@ -29,10 +31,12 @@ MODEL_PARAMETERS = {
 class Parameter(Strict):
     """One model parameter: its value (the initial guess when free), free or fixed, bounds."""
 
-    value: float
-    free: bool = True
-    lower: float | None = None
-    upper: float | None = None
+    value: Annotated[float, Field(
+        description="value of the parameter in its unit (dimensionless groups: 1); the initial guess when free")]
+    free: Annotated[bool, Field(description="fitted (true) or held at value (false)")] = True
+    lower: Annotated[float | None, Field(
+        description="lower bound when free (default: positive, tau_max above the largest load)")] = None
+    upper: Annotated[float | None, Field(description="upper bound when free (default: none)")] = None
 
     @model_validator(mode="after")
     def _inside(self):
@@ -48,21 +52,26 @@ class Parameter(Strict):
 class Weights(Strict):
     """Residual weights, r = weight (model - measured); use 1/standard deviation of each measurement."""
 
-    u: Positive = 1.0
-    q: Positive = 1.0
+    u: Annotated[Positive, Field(description="weight of the gap residual, 1/(standard deviation of u)")] = 1.0
+    q: Annotated[Positive, Field(description="weight of the flow residual, 1/(standard deviation of q)")] = 1.0
 
 
 class Fit(Strict):
     """One nonlinear least-squares fit."""
 
-    name: Annotated[str, Field(pattern=r"^[A-Za-z0-9_]+$")]
-    model: Literal["traditional_disc", "device"] = "traditional_disc"
-    residual: Literal["u", "q", "both"] = "u"  # measured variable(s) the residual is taken in
-    weights: Weights = Weights()
-    parameters: dict[str, Parameter]
-    flow_throttle: str = "T"  # device model: throttle whose flow is measured (e, 1, T, 3, in, valve)
-    hessian: Literal["gauss-newton", "exact"] = "gauss-newton"
-    max_iterations: Annotated[int, Field(ge=1, le=10000)] = 300
+    name: Annotated[str, Field(pattern=r"^[A-Za-z0-9_]+$", description="name of the fit in results and file names")]
+    model: Annotated[Literal["traditional_disc", "device"], Field(
+        description="traditional_disc: (4.16)-(4.31) in alpha and tau_max; device: the full static model")] = \
+        "traditional_disc"
+    residual: Annotated[Literal["u", "q", "both"], Field(
+        description="measured variable(s) the residual is taken in: gap u, flow q or both")] = "u"
+    weights: Annotated[Weights, Field(description="residual weights")] = Weights()
+    parameters: Annotated[dict[str, Parameter], Field(description="model parameter -> value, free, bounds")]
+    flow_throttle: Annotated[str, Field(
+        description="device model: throttle whose flow is measured (e, 1, T, 3, in, valve)")] = "T"
+    hessian: Annotated[Literal["gauss-newton", "exact"], Field(
+        description="Hessian IPOPT uses: Gauss-Newton J'J or the exact Lagrangian Hessian")] = "gauss-newton"
+    max_iterations: Annotated[int, Field(ge=1, le=10000, description="IPOPT's iteration limit")] = 300
 
     @model_validator(mode="after")
     def _known(self):
@@ -89,54 +98,84 @@ class Bases(Strict):
     """Base values that make dimensional data columns dimensionless (1.17)-(1.21), (4.29).
     The device model takes p_B, s_B, z_B and g1 p_B from the scene's device when these are omitted."""
 
-    pressure: Pressure | None = None  # p_B
-    area: Area | None = None  # s_B; force base = p_B s_B
-    gap: Length | None = None  # z_B = h_TB
-    flow: VolumeFlow | None = None  # Q_B
+    pressure: Annotated[Pressure | None, Field(description="base pressure p_B, Pa")] = None
+    area: Annotated[Area | None, Field(description="base area s_B, m^2; force base = p_B s_B")] = None
+    gap: Annotated[Length | None, Field(description="base gap z_B = h_TB, m")] = None
+    flow: Annotated[VolumeFlow | None, Field(description="base flow Q_B, m^3/s")] = None
+
+    def values(self) -> dict:
+        """Base values in SI by the key the data columns use: pressure (Pa), gap (m), flow (m^3/s),
+        force p_B s_B (N); None where not given."""
+        force = self.pressure * self.area if self.pressure and self.area else None
+        return {"pressure": self.pressure, "gap": self.gap, "flow": self.flow, "force": force}
 
 
 class Adequacy(Strict):
     """Fisher adequacy test (4.14)-(4.15) on the groups of the data."""
 
-    significance: Annotated[float, Field(gt=0, lt=1)] = 0.1
-    reference: dict[str, Positive] | None = None  # traditional_disc parameters of the source's theory curve
-    reference_parameters: Annotated[int, Field(ge=0)] = 2  # l of (4.15) for the reference curve (source: 2)
+    significance: Annotated[float, Field(gt=0, lt=1, description="level of the F test")] = 0.1
+    reference: Annotated[dict[str, Positive] | None, Field(
+        description="traditional_disc parameters (alpha, tau_max) of a theory curve to test, e.g. the source's")] = None
+    reference_parameters: Annotated[int, Field(ge=0, description="l of (4.15) for the reference curve (source: 2)")] = 2
 
 
 class LossCoefficient(Strict):
-    """Solve (4.38) for one loss coefficient from a fitted alpha, the others fixed (spec §5.7)."""
+    """Solve (4.38) for one loss coefficient from a fitted alpha, the others fixed."""
 
-    fit: str  # name of the fit whose alpha is used
-    unknown: Literal["zeta1", "lambda1", "zeta2", "lambda2"]
-    face_mean_diameter: Length  # d_m = r2 + r3
-    seal_diameter: Length  # d_u (d1) of the annular seal
-    base_gap: Length  # h_TB
-    seal_clearance: Length  # h1
-    seal_length: Length  # l1
-    face_length: Length  # l2 = r3 - r2
-    zeta1: NonNegative = 1.5  # annular seal: local loss
-    lambda1: NonNegative = 0.06  # annular seal: friction
-    zeta2: NonNegative = 1.5  # face throttle: local (inlet) loss
-    lambda2: NonNegative = 0.06  # face throttle: friction
-    friction_factor: Positive = 0.5  # zeta + f lambda l/h: 0.5 as (2.11) and §4.5; 1.0 as (4.38) is printed
+    fit: Annotated[str, Field(description="name of the traditional_disc fit whose alpha is used")]
+    unknown: Annotated[Literal["zeta1", "lambda1", "zeta2", "lambda2"], Field(
+        description="the loss coefficient solved for")]
+    face_mean_diameter: Annotated[Length, Field(description="d_m = r2 + r3, m")]
+    seal_diameter: Annotated[Length, Field(description="d_u (d1) of the annular seal, m")]
+    base_gap: Annotated[Length, Field(description="h_TB, m")]
+    seal_clearance: Annotated[Length, Field(description="h1, m")]
+    seal_length: Annotated[Length, Field(description="l1, m")]
+    face_length: Annotated[Length, Field(description="l2 = r3 - r2, m")]
+    zeta1: Annotated[NonNegative, Field(description="annular seal: local loss coefficient")] = 1.5
+    lambda1: Annotated[NonNegative, Field(description="annular seal: friction coefficient")] = 0.06
+    zeta2: Annotated[NonNegative, Field(description="face throttle: local (inlet) loss coefficient")] = 1.5
+    lambda2: Annotated[NonNegative, Field(description="face throttle: friction coefficient")] = 0.06
+    friction_factor: Annotated[Positive, Field(
+        description="f in zeta + f lambda l/h: 0.5 as (2.11) and Sec. 4.3.3; 1.0 as (4.38) is printed")] = 0.5
+
+    def losses(self) -> DiscLosses:
+        """The geometry and loss coefficients as the model's parameter object (SI)."""
+        return DiscLosses(**self.model_dump(exclude={"fit", "unknown"}))
+
+
+class Bootstrap(Strict):
+    """Residual-bootstrap confidence intervals of the traditional_disc fits (refits batched in one
+    mapped Gauss-Newton call); percentile intervals at the estimation's ``confidence``."""
+
+    samples: Annotated[int, Field(ge=20, le=1_000_000, description="number of bootstrap data sets")] = 2000
+    seed: Annotated[int, Field(ge=0, description="seed of the resampling")] = 0
 
 
 class Estimation(Strict):
-    data: str  # CSV path: absolute, from the working folder, or from the shipped scenarios/ folder
-    bases: Bases = Bases()
-    fits: Annotated[list[Fit], Field(min_length=1)]
-    closed_forms: bool = True  # the source's estimators (4.23), (4.26)-(4.27), (4.35), (4.36)
-    tau_max: Positive | None = None  # fixed tau_max of (4.23)/(4.35); default: the first disc fit's value
-    adequacy: Adequacy | None = None
-    loss_coefficient: LossCoefficient | None = None
-    confidence: Annotated[float, Field(gt=0, lt=1)] = 0.95
-    band_points: Annotated[int, Field(ge=2, le=10000)] = 101
-    cross_check: bool = True  # re-fit with scipy.optimize.least_squares (traditional_disc fits)
+    data: Annotated[str, Field(
+        description="CSV path: absolute, from the working folder, or from the shipped scenarios/ folder")]
+    bases: Annotated[Bases, Field(description="base values of dimensional data columns")] = Bases()
+    fits: Annotated[list[Fit], Field(min_length=1, description="the fits")]
+    closed_forms: Annotated[bool, Field(
+        description="the source's estimators (4.23), (4.26)-(4.27), (4.35), (4.36)")] = True
+    tau_max: Annotated[Positive | None, Field(
+        description="fixed tau_max of (4.23)/(4.35); default: the first disc fit's value")] = None
+    adequacy: Annotated[Adequacy | None, Field(description="Fisher adequacy test (4.14)-(4.15)")] = None
+    loss_coefficient: Annotated[LossCoefficient | None, Field(
+        description="solve (4.38) for one loss coefficient")] = None
+    confidence: Annotated[float, Field(gt=0, lt=1, description="level of every confidence interval and band")] = 0.95
+    band_points: Annotated[int, Field(ge=2, le=10000, description="points of the fitted curve and its band")] = 101
+    cross_check: Annotated[bool, Field(
+        description="re-fit with scipy.optimize.least_squares (traditional_disc fits)")] = True
+    bootstrap: Annotated[Bootstrap | None, Field(
+        description="residual-bootstrap intervals of the traditional_disc fits")] = None
+
+    def measurements(self) -> Measurements:
+        """The data file, read and checked (values in SI or dimensionless)."""
+        return read_csv(self.data)
 
     @model_validator(mode="after")
     def _data_fits(self):
-        from autobal.measurements import check_fit, read_csv
-
         names = [f.name for f in self.fits]
         if len(set(names)) != len(names):
             raise ValueError("fits: two fits have the same name")
@@ -148,9 +187,7 @@ class Estimation(Strict):
                     raise ScenarioError(f"fits.{i}: the traditional_disc model takes a load column "
                                         f"(tau or axial_force), not {data.has('load')}")
                 if fit.model == "traditional_disc":  # the device model has its own bases
-                    b = self.bases
-                    bases = {"gap": b.gap, "flow": b.flow, "pressure": b.pressure,
-                             "force": b.pressure * b.area if b.pressure and b.area else None}
+                    bases = self.bases.values()
                     for role in ("load", *{"u": ["gap"], "q": ["flow"], "both": ["gap", "flow"]}[fit.residual]):
                         data.dimensionless(role, bases)
         except ScenarioError as exc:

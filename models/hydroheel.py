@@ -11,6 +11,11 @@ psi1 - psi2 = alpha_31 (psi3 - psi4).  Closed forms (1.25)-(1.29) (spec reliabil
 psi4 terms re-derived), the geometry form (1.30)-(1.35), the failure-free region (1.36) and the
 flow characteristic (1.51)-(1.52).  Wear: chi(t) = chi0 + b t (1.38), b a normal wear rate
 truncated to b >= 0 (1.39)-(1.41).
+
+The same disc with *turbulent* throttles, Q = g sqrt(dp), is the model of the parameter
+estimation of Pavlenko (2014), Sec. 4.4, Eqs. (4.16)-(4.31): :class:`TurbulentDisc`.  Its force
+law is (1.28) with alpha_T1 replaced by alpha^2 (alpha = g_TB/g1), so both share
+:func:`load_from_gap` and :func:`gap_from_load`.
 """
 
 from __future__ import annotations
@@ -21,6 +26,50 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 from scipy.special import ndtr
+
+
+def load_from_gap(u, a, tau_max):
+    """Force law of the disc without outer throttle or spring: tau = tau_max / (1 + a u^3).
+
+    Pavlenko (2014), Eq. (1.28) (laminar throttles: a = alpha_T1, tau_max = sigma psi1) and
+    Eqs. (4.16)-(4.17) (turbulent throttles: a = alpha^2).  Numbers, numpy arrays or CasADi.
+
+    Parameters
+    ----------
+    u : float or array or casadi.SX
+        Face gap over its base value, u = z/z_B (1).
+    a : float or casadi.SX
+        Face-to-seal conductance term at u = 1 (1).
+    tau_max : float or casadi.SX
+        Load at which the gap closes, sigma psi1 (1).
+
+    Returns
+    -------
+    Load tau = T/(p_B s_B) (1).
+    """
+    return tau_max / (1.0 + a * u**3)
+
+
+def gap_from_load(tau, a, tau_max):
+    """The inverse of :func:`load_from_gap`: u = [(tau_max/tau - 1)/a]^(1/3).
+
+    Pavlenko (2014), Eq. (1.29) (a = alpha_T1) and Eq. (4.18) (a = alpha^2).  NaN (numpy) for
+    tau > tau_max, where no gap balances the load.
+
+    Parameters
+    ----------
+    tau : float or array or casadi.SX
+        Load T/(p_B s_B) (1).
+    a : float or casadi.SX
+        Face-to-seal conductance term at u = 1 (1).
+    tau_max : float or casadi.SX
+        Load at which the gap closes (1).
+
+    Returns
+    -------
+    Face gap u = z/z_B (1).
+    """
+    return ((tau_max / tau - 1.0) / a) ** (1.0 / 3.0)
 
 
 def seal_shape_factor(r1: float, l1: float, r2: float, r3: float) -> float:
@@ -38,9 +87,21 @@ def initial_clearance(k: float, alpha_T1: float) -> float:
     return float(np.cbrt(k / alpha_T1))
 
 
-def flow_ratio(u, alpha_T1: float):
-    """Flow characteristic q = Q/Q(u = 1) = (1 + alpha_T1) u^3 / (1 + alpha_T1 u^3), Eq. (1.51)."""
-    u3 = np.asarray(u, float) ** 3
+def flow_ratio(u, alpha_T1):
+    """Flow characteristic q = Q/Q(u = 1) = (1 + alpha_T1) u^3 / (1 + alpha_T1 u^3), Eq. (1.51).
+
+    Parameters
+    ----------
+    u : float or array or casadi.SX
+        Face gap over its base value (1).
+    alpha_T1 : float or casadi.SX
+        Face-to-seal conductance ratio g_TB/g1 (1.23) (1).
+
+    Returns
+    -------
+    Leak flow over its value at u = 1 (1).
+    """
+    u3 = u**3
     return (1.0 + alpha_T1) * u3 / (1.0 + alpha_T1 * u3)
 
 
@@ -109,6 +170,55 @@ class HydroHeel:
 
 
 @dataclass(frozen=True)
+class TurbulentDisc:
+    """The traditional disc of Pavlenko (2014), Sec. 4.4: no outer throttle, both throttles
+    turbulent (Q1 = g1 sqrt(p1 - p2), Q_T = g_TB u^1.5 sqrt(p2)), Eqs. (4.16)-(4.31).
+
+    The two parameters the source estimates: ``alpha`` = g_TB/g1, the face-to-seal conductance
+    ratio at u = 1 (1), and ``tau_max`` = sigma psi1, the load at which the gap closes (4.17) (1).
+    Fields may be numbers, numpy arrays or CasADi symbols (the fits use symbols).
+    """
+
+    alpha: float
+    tau_max: float
+
+    def load(self, u):
+        """tau(u) = tau_max/(1 + alpha^2 u^3), Eq. (4.16): (1.28) with alpha_T1 = alpha^2."""
+        return load_from_gap(u, self.alpha**2, self.tau_max)
+
+    def gap(self, tau):
+        """Static characteristic u(tau) = cbrt[(tau_max/tau - 1)/alpha^2], Eq. (4.18)."""
+        return gap_from_load(tau, self.alpha**2, self.tau_max)
+
+    def flow_at_gap(self, u):
+        """q = Q/Q_B = sqrt[(1 + alpha^2) u^3/(1 + alpha^2 u^3)], Eq. (4.30): the square root of
+        the laminar characteristic (1.51) with alpha_T1 = alpha^2."""
+        return flow_ratio(u, self.alpha**2) ** 0.5
+
+    def flow(self, tau):
+        """Flow characteristic q(tau) = sqrt[(1 + alpha^2)/alpha^2 (1 - tau/tau_max)], Eq. (4.31)."""
+        return ((1.0 + self.alpha**2) / self.alpha**2 * (1.0 - tau / self.tau_max)) ** 0.5
+
+
+def base_flow(g1: float, g_tb: float, p1: float) -> float:
+    """Base flow of the turbulent disc, the flow at u = 1: Q_B = sqrt[g1^2 g_TB^2 p1/(g1^2 + g_TB^2)],
+    Pavlenko (2014), Eq. (4.28) (the printed g_c is g1).
+
+    Parameters
+    ----------
+    g1, g_tb : float
+        Turbulent conductances of the inner seal and of the face at u = 1, m^3/(s Pa^0.5).
+    p1 : float
+        Discharge pressure over the drain, Pa.
+
+    Returns
+    -------
+    Q_B, m^3/s.
+    """
+    return math.sqrt(g1**2 * g_tb**2 * p1 / (g1**2 + g_tb**2))
+
+
+@dataclass(frozen=True)
 class WornDisc:
     """The disc of (1.33)-(1.36): no outer throttle, no spring, gap set by the seal clearance chi.
 
@@ -133,9 +243,9 @@ class WornDisc:
             return np.asarray(u, float) * np.cbrt(self.k * tau / (self.sigma * self.psi1 - tau))
 
     def load(self, chi, u):
-        """tau(chi) that gives gap u, Eq. (1.35); the bounds tau1, tau2 of region B (1.36) at u_min, u_max."""
-        c3 = np.asarray(chi, float) ** 3
-        return self.sigma * self.psi1 * c3 / (c3 + self.k * np.asarray(u, float) ** 3)
+        """tau(chi) that gives gap u, Eq. (1.35): the force law (1.28) with alpha_T1 = k/chi^3 (1.30);
+        the bounds tau1, tau2 of region B (1.36) at u_min, u_max."""
+        return load_from_gap(np.asarray(u, float), self.k / np.asarray(chi, float) ** 3, self.sigma * self.psi1)
 
 
 @dataclass(frozen=True)
@@ -181,3 +291,54 @@ class WearModel:
         """P(wear chi(t) - chi0 <= depth_ratio) (wear in units of z_B): Fig. 1.27."""
         with np.errstate(divide="ignore"):
             return self.rate_cdf(depth_ratio / np.asarray(t, float))
+
+
+LOSS_NAMES = ("zeta1", "lambda1", "zeta2", "lambda2")
+
+
+@dataclass(frozen=True)
+class DiscLosses:
+    """Geometry and loss coefficients of the turbulent disc's two throttles, for the conductance
+    ratio (4.38) of Pavlenko (2014), Sec. 4.4, with the conductance ratio written without the
+    printed square root (g_TB/g1 is a ratio of conductances).
+
+    Lengths in m; loss coefficients dimensionless.  ``friction_factor`` f: 0.5 for
+    zeta + lambda l/(2h) as in (2.11) and the parameter derivation of Sec. 4.3.3; 1.0 for
+    (4.38) as printed.
+    """
+
+    face_mean_diameter: float  # d_m = r2 + r3, m
+    seal_diameter: float  # d_u (d1) of the annular seal, m
+    base_gap: float  # h_TB, m
+    seal_clearance: float  # h1, m
+    seal_length: float  # l1, m
+    face_length: float  # l2 = r3 - r2, m
+    zeta1: float = 1.5  # annular seal: local loss
+    lambda1: float = 0.06  # annular seal: friction
+    zeta2: float = 1.5  # face throttle: local (inlet) loss
+    lambda2: float = 0.06  # face throttle: friction
+    friction_factor: float = 0.5
+
+    def _geometry(self) -> float:
+        return (self.face_mean_diameter / self.seal_diameter) * (self.base_gap / self.seal_clearance)
+
+    def conductance_ratio(self) -> float:
+        """alpha = (d_m/d_u)(h_TB/h1) sqrt[(zeta1 + f lambda1 l1/h1)/(zeta2 + f lambda2 l2/h_TB)], Eq. (4.38) (1)."""
+        f = self.friction_factor
+        num = self.zeta1 + f * self.lambda1 * self.seal_length / self.seal_clearance
+        den = self.zeta2 + f * self.lambda2 * self.face_length / self.base_gap
+        return self._geometry() * math.sqrt(num / den)
+
+    def solve(self, unknown: str, alpha: float) -> float:
+        """The loss coefficient ``unknown`` (one of zeta1, lambda1, zeta2, lambda2) that gives the
+        conductance ratio ``alpha`` in (4.38), the others fixed; closed form (1)."""
+        f = self.friction_factor
+        k = (alpha / self._geometry()) ** 2
+        seal = self.seal_length / self.seal_clearance
+        face = self.face_length / self.base_gap
+        num = self.zeta1 + f * self.lambda1 * seal
+        den = self.zeta2 + f * self.lambda2 * face
+        return {"zeta1": k * den - f * self.lambda1 * seal,
+                "lambda1": (k * den - self.zeta1) / (f * seal),
+                "zeta2": num / k - f * self.lambda2 * face,
+                "lambda2": (num / k - self.zeta2) / (f * face)}[unknown]
