@@ -20,6 +20,7 @@ DampingOrZero = quantity("damping", "nonnegative")
 Time = quantity("time")
 TimeOrZero = quantity("time", "nonnegative")
 AngularAcceleration = quantity("angular acceleration")
+AngularJerk = quantity("angular jerk")
 Torque = quantity("torque")
 Power = quantity("power")
 Inertia = quantity("moment of inertia")
@@ -127,21 +128,27 @@ class RotorDynamics(Strict):
 
 
 class Spinup(Strict):
-    """Optimal spin-up through the critical speed."""
+    """Optimal spin-up through the critical speed, posed as a drive is specified: reach ``final_speed``
+    by the deadline ``horizon``, hold it over ``settling_time`` (the peak counts over the whole window),
+    never exceed ``max_speed``."""
 
     start_speed: RateOrZero
     final_speed: AngularSpeed
-    horizon: Time  # the final time (its upper bound with the min_time objective)
+    horizon: Time  # the deadline (the upper bound of the final time with the min_time objective)
     max_acceleration: AngularAcceleration
     max_speed: AngularSpeed | None = None
     objective: Literal["peak_deflection", "peak_unbalance", "integrated_deflection", "min_time"] = "peak_deflection"
     settling_time: TimeOrZero = 0.0
     deflection_limit: Positive | None = None  # delta/e
+    max_jerk: AngularJerk | None = None  # bound on |d alpha/dt| between control intervals
+    jerk_penalty: Annotated[float, Field(ge=0)] = 1e-6  # weight of sum (Delta alpha/alpha_max)^2
     method: Literal["collocation", "multiple_shooting"] = "collocation"
     scheme: Literal["radau", "legendre"] = "radau"
     degree: Annotated[int, Field(ge=1, le=9)] = 3
     intervals: Annotated[int, Field(ge=4, le=5000)] = 200
     multistart: bool = True
+    max_iterations: Annotated[int, Field(ge=1, le=100000)] = 1000  # IPOPT iterations per solve
+    tolerance: Annotated[float, Field(gt=0, lt=1)] = 1e-8  # IPOPT tol (and constraint violation)
 
     @model_validator(mode="after")
     def _consistent(self):

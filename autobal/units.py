@@ -26,6 +26,7 @@ DIMENSIONS = {
     "damping": ("[mass] / [time]", "N*s/m", "8.9e4 N*s/m"),
     "time": ("[time]", "s", "50 ms"),
     "angular acceleration": ("1 / [time] ** 2", "rad/s**2", "40 rad/s^2"),  # rotor spin-up (schema_rotor.py)
+    "angular jerk": ("1 / [time] ** 3", "rad/s**3", "2000 rad/s^3"),  # spin-up jerk bound
     "torque": ("[mass] * [length] ** 2 / [time] ** 2", "N*m", "0.04 N*m"),
     "power": ("[mass] * [length] ** 2 / [time] ** 3", "W", "6 W"),
     "moment of inertia": ("[mass] * [length] ** 2", "kg*m**2", "1e-3 kg*m^2"),

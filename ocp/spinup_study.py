@@ -14,16 +14,10 @@ from pathlib import Path
 import numpy as np
 
 from autobal.errors import ScenarioError
-from autobal.ocp.spinup import (
-    RESIM_POINTS,
-    RESIM_TOL,
-    DirectCollocation,
-    MultipleShooting,
-    SpinupOcp,
-    Trajectory,
-    baselines,
-    optimize,
-)
+from autobal.ocp.problem import SpinupOcp
+from autobal.ocp.simulation import RESIM_POINTS, RESIM_TOL, Trajectory, baselines
+from autobal.ocp.solve import ipopt_options, optimize
+from autobal.ocp.transcription import DirectCollocation, MultipleShooting
 from autobal.results import save_figure, write_csv
 
 
@@ -129,7 +123,8 @@ def build_ocp(rotor, settings) -> SpinupOcp:
             torque_max=drive.max_torque if drive else None, power_max=drive.max_power if drive else None,
             motor_stall_torque=drive.motor.stall_torque if drive and drive.motor else None,
             motor_no_load_speed=drive.motor.no_load_speed if drive and drive.motor else None,
-            deflection_limit=settings.deflection_limit)
+            deflection_limit=settings.deflection_limit, jerk_max=settings.max_jerk,
+            jerk_penalty=settings.jerk_penalty)
     except ValueError as exc:
         raise ScenarioError(f"analyses.spinup: {exc}") from None
 
@@ -139,9 +134,29 @@ def method_of(settings):
     return cls(settings.intervals, settings.degree, settings.scheme)
 
 
-def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True) -> SpinupResult:
-    """Optimise (multi-start), re-simulate, and compute the constant-ramp baselines."""
-    opt = optimize(ocp, method, multistart)
+def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, options: dict | None = None
+        ) -> SpinupResult:
+    """Optimise (global search and multi-start), re-simulate, and compute the constant-ramp baselines.
+
+    Parameters
+    ----------
+    ocp : SpinupOcp
+        The declared problem (SI).
+    method : DirectCollocation or MultipleShooting
+        The transcription.
+    title : str
+        The scene's title (figures).
+    multistart : bool
+        Solve from several starts and keep the best re-simulated optimum.
+    options : dict, optional
+        IPOPT options (e.g. :func:`autobal.ocp.solve.ipopt_options`).
+
+    Returns
+    -------
+    SpinupResult
+        The optimum's re-simulation beside the ramps; peaks in delta/e, times in s.
+    """
+    opt = optimize(ocp, method, multistart, options)
     base = baselines(ocp)
     sol, tr = opt.solution, opt.trajectory
     best_ramp = min(base.values(), key=lambda b: b.peak_delta)
@@ -184,6 +199,7 @@ def run_scene(scn, settings, out: Path):
     if scn.rotor is None:
         raise ScenarioError("analyses.spinup needs a rotor section")
     t0 = time.perf_counter()
-    res = run(build_ocp(scn.rotor, settings), method_of(settings), scn.title, settings.multistart)
+    res = run(build_ocp(scn.rotor, settings), method_of(settings), scn.title, settings.multistart,
+              ipopt_options(settings.max_iterations, settings.tolerance))
     files = res.write_tables(out) + res.plot(out)
     return res.to_dict() | {"run_time_s": time.perf_counter() - t0}, files, res.summary()

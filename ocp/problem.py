@@ -1,0 +1,151 @@
+"""Declaration of the spin-up problem (rockit's ``Ocp`` role): states, control, dynamics, named path
+constraints, boundary conditions and objective, in SI at the boundary and in the dimensionless form
+of Pashkov (2010), Eq. (2) inside.
+
+Variables: time tau = Omega0 t (the critical period is 2 pi/sqrt(psi) in tau), deflection over e,
+speed nu = omega/Omega0; the control is the angular acceleration over its limit,
+u = alpha/alpha_max in [-1, 1], piecewise constant per interval.  State q = (x, y, x', y', nu) in
+the frame rotating with the unbalance; the system starts from the steady state at omega_start
+(rest when omega_start = 0) and reaches omega_final at the horizon (the deadline), then holds it
+over the settling window, over which the peak still counts.
+
+Objectives: ``peak_deflection`` (epigraph: delta^2 <= S at every collocation point, minimise S),
+``peak_unbalance`` (the same with the system unbalance d), ``integrated_deflection`` (integral of
+delta^2 over the horizon and the settling window), ``min_time`` (free final time subject to
+delta <= deflection_limit).  Limits: |alpha| <= alpha_max, 0 <= omega <= omega_max, |M| <= M_max,
+M omega <= P_max, the motor characteristic M <= L_s (1 - omega/omega_nl), and optionally the jerk
+|d alpha/dt| <= jerk_max between intervals; a jerk penalty (weight ``jerk_penalty``) regularises
+the profile where the peak does not fix it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+
+from autobal.analysis.rotor import steady_q
+from autobal.models.rotor import RotorParams, rotor_model
+
+OBJECTIVES = ("peak_deflection", "peak_unbalance", "integrated_deflection", "min_time")
+
+
+@dataclass(frozen=True)
+class PathConstraint:
+    """lb <= expr(q, a*, v) <= ub at every path point; ``name`` names it in messages."""
+
+    name: str
+    expr: ca.Function  # (q, a_star, v) -> scalar, already scaled to O(1)
+    lb: float
+    ub: float
+    uses_control: bool = False  # then also imposed at each interval start, where the control jumps
+
+
+@dataclass
+class SpinupOcp:
+    """Declaration of the spin-up problem in SI (converted to the dimensionless form inside)."""
+
+    params: RotorParams
+    omega_start: float  # rad/s
+    omega_final: float  # rad/s
+    horizon: float  # s (the upper bound of the final time when it is free)
+    alpha_max: float  # rad/s^2
+    objective: str = "peak_deflection"
+    settling_time: float = 0.0  # s, window held at omega_final after the horizon
+    omega_max: float | None = None  # rad/s
+    torque_max: float | None = None  # N m
+    power_max: float | None = None  # W
+    motor_stall_torque: float | None = None  # N m, L_s
+    motor_no_load_speed: float | None = None  # rad/s, omega_nl
+    deflection_limit: float | None = None  # delta/e (min_time, or an extra limit for any objective)
+    jerk_max: float | None = None  # rad/s^3, bound on the change of alpha between control intervals
+    jerk_penalty: float = 0.0  # weight of sum (Delta u)^2, u = alpha/alpha_max, relative to the objective
+
+    def __post_init__(self):
+        if self.objective not in OBJECTIVES:
+            raise ValueError(f"objective must be one of {OBJECTIVES}")
+        if self.objective == "min_time" and self.deflection_limit is None:
+            raise ValueError("the min_time objective needs a deflection_limit")
+        if (self.torque_max or self.power_max or self.motor_stall_torque) and \
+                self.params.J_p + self.params.m1 * self.params.e**2 * (1 - self.params.psi) <= 0:
+            raise ValueError("torque and power limits need the drive's polar inertia J_p > 0")
+        if self.jerk_penalty < 0:
+            raise ValueError("jerk_penalty must not be negative")
+        if self.jerk_max is not None and self.jerk_max <= 0:
+            raise ValueError("jerk_max must be positive (rad/s^3)")
+
+    # dimensionless data (spec §3.2)
+    @property
+    def free_time(self) -> bool:
+        return self.objective == "min_time"
+
+    @property
+    def Om(self) -> float:
+        return self.params.Omega0
+
+    @property
+    def nu0(self) -> float:
+        return self.omega_start / self.Om
+
+    @property
+    def nuf(self) -> float:
+        return self.omega_final / self.Om
+
+    @property
+    def tau_h(self) -> float:
+        return self.horizon * self.Om
+
+    @property
+    def tau_s(self) -> float:
+        return self.settling_time * self.Om
+
+    @property
+    def a_max(self) -> float:
+        return self.alpha_max / self.Om**2
+
+    @property
+    def q0(self) -> list[float]:
+        return steady_q(self.params, self.nu0) if self.nu0 > 0 else [0.0, 0.0, 0.0, 0.0, 0.0]
+
+    @property
+    def n_extra(self) -> int:
+        """Extra decision variables v: the epigraph level (peak objectives) or the final time."""
+        return 1 if self.objective != "integrated_deflection" else 0
+
+    def dynamics(self) -> ca.Function:
+        """(q, u, h) -> h f(q, u a*_max): the rotating-frame model over an interval of length h."""
+        m = rotor_model()
+        q, u, h = ca.SX.sym("q", 5), ca.SX.sym("u"), ca.SX.sym("h")
+        return ca.Function("spinup_f", [q, u, h], [h * m.ode(q, u * self.a_max, self.params.p)])
+
+    def path_constraints(self, ref: float) -> list[PathConstraint]:
+        """Named path constraints; ``ref`` is the scale of the epigraph level (delta^2 or d^2)."""
+        m, P = rotor_model(), self.params
+        q, a, v = ca.SX.sym("q", 5), ca.SX.sym("a"), ca.SX.sym("v", self.n_extra)
+        out = []
+
+        def add(name, expr, lb, ub):
+            out.append(PathConstraint(name, ca.Function(f"path{len(out)}", [q, a, v], [expr]), lb, ub,
+                                      ca.depends_on(expr, a)))
+
+        if self.objective == "peak_deflection":
+            add("deflection epigraph delta^2 <= S", (m.delta2(q) - v[0] * ref) / ref, -ca.inf, 0.0)
+        elif self.objective == "peak_unbalance":
+            add("unbalance epigraph d^2 <= S", (m.unbalance2(q, P.p) - v[0] * ref) / ref, -ca.inf, 0.0)
+        if self.deflection_limit is not None:
+            add(f"deflection limit delta/e <= {self.deflection_limit:g}", m.delta2(q) / self.deflection_limit**2,
+                -ca.inf, 1.0)
+        M = m.torque(q, a, P.p)  # over m1 e^2 Omega0^2
+        if self.torque_max is not None:
+            add(f"torque limit |M| <= {self.torque_max:g} N m", M * P.torque_scale / self.torque_max, -1.0, 1.0)
+        if self.power_max is not None:
+            add(f"power limit M omega <= {self.power_max:g} W",
+                M * P.torque_scale * q[4] * self.Om / self.power_max, -ca.inf, 1.0)
+        if self.motor_stall_torque is not None:
+            L = self.motor_stall_torque * (1 - q[4] * self.Om / self.motor_no_load_speed)
+            add("motor characteristic M <= L_s (1 - omega/omega_nl)",
+                (M * P.torque_scale - L) / self.motor_stall_torque, -ca.inf, 0.0)
+        return out
+
+    def nu_bounds(self) -> tuple[float, float]:
+        return 0.0, (self.omega_max / self.Om if self.omega_max is not None else ca.inf)

@@ -1,0 +1,187 @@
+"""Cheap global search over low-dimensional speed profiles: the starts of the spin-up OCP.
+
+Many candidate profiles are integrated at once by a fixed-step exponential integrator of the rotor
+in the fixed frame, where the deflection obeys a linear time-invariant equation driven by the
+unbalance force that rotates with the shaft angle beta (Pashkov (2010), Eq. (2) in the fixed frame,
+the ``ode_fixed`` Function of :mod:`autobal.models.rotor`).  The system matrix and the force are
+taken from that Function (no second copy of the equation): within a step the state is advanced
+exactly by the modal exponentials, the force is frozen in amplitude and rotates at the speed of
+the step's midpoint, so a step of one dimensionless time unit (about 10 ms for Omega0 = 105 rad/s)
+keeps the peak within a fraction of a per cent.
+
+The profile family (:func:`three_phase`): full acceleration up to a speed ``w1``, a constant
+acceleration ``u_b`` (over alpha_max, -1 brakes, 0 holds) for a time ``d``, then full acceleration
+to the final speed (held, capped at ``max_speed``): the structure of the optimum that accelerates
+towards the critical speed, backs off, and passes.  :func:`grid_search` evaluates a grid of it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from autobal.models.rotor import rotor_model
+from autobal.ocp.problem import SpinupOcp
+
+STEP = 1.0  # dimensionless time step of the search integrator (tau = Omega0 t)
+
+
+@dataclass(frozen=True)
+class ModalRotor:
+    """The fixed-frame rotor z' = A z + b(t) in modal form, z = (X, Y, X', Y') over e; the force
+    (X'' + i Y'' at beta = 0) is f0 + f_nu2 nu^2 + f_a a* (checked at a random point when built)."""
+
+    lam: np.ndarray  # (4,) eigenvalues of A
+    V: np.ndarray  # eigenvectors
+    W: np.ndarray  # V^-1
+    f: tuple  # complex (f0, f_nu2, f_a)
+
+    @classmethod
+    def of(cls, ocp: SpinupOcp) -> ModalRotor:
+        m = rotor_model()
+        Q, a = ca.SX.sym("Q", 6), ca.SX.sym("a")
+        rhs = m.ode_fixed(Q, a, ocp.params.p)
+        A = np.array(ca.Function("A", [Q, a], [ca.jacobian(rhs[:4], Q[:4])])(np.zeros(6), 0.0))
+        lam, V = np.linalg.eig(A)
+
+        def force(nu, acc):
+            b = np.array(m.ode_fixed([0, 0, 0, 0, nu, 0], acc, ocp.params.p)).ravel()
+            return b[2] + 1j * b[3]
+
+        f0 = force(0.0, 0.0)
+        f = (f0, force(1.0, 0.0) - f0, force(0.0, 1.0) - f0)
+        if abs(force(1.7, 0.3) - (f[0] + f[1] * 1.7**2 + f[2] * 0.3)) > 1e-12 * (1 + abs(f[1])):
+            raise ValueError("the search integrator needs a force affine in nu^2 and a*")
+        return cls(lam, V, np.linalg.inv(V), f)
+
+
+def simulate_steps(ocp: SpinupOcp, u: np.ndarray, dt: float = STEP, rotor: ModalRotor | None = None,
+                   block: int = 64) -> np.ndarray:
+    """Peak deflection delta/e of many piecewise-constant profiles at once.
+
+    Parameters
+    ----------
+    ocp : SpinupOcp
+        The problem (rotor, start state, alpha_max).
+    u : ndarray, shape (C, S)
+        Acceleration over alpha_max on each of S steps of length ``dt`` for C candidates.
+    dt : float
+        Step, dimensionless time (tau = Omega0 t).
+    block : int
+        Steps advanced at once (the modal recursion is summed in closed form within a block).
+
+    Returns
+    -------
+    ndarray, shape (C,)
+        The largest delta/e at the step ends.
+    """
+    rotor = rotor or ModalRotor.of(ocp)
+    C, S = u.shape
+    a = u * ocp.a_max
+    nu = ocp.nu0 + np.concatenate([np.zeros((C, 1)), np.cumsum(a * dt, axis=1)], axis=1)
+    num = 0.5 * (nu[:, 1:] + nu[:, :-1])  # rotation rate of the force on each step
+    beta = np.concatenate([np.zeros((C, 1)), np.cumsum(num * dt, axis=1)], axis=1)
+    f0, f2, fa = rotor.f
+    c = (f0 + f2 * num**2 + fa * a) * np.exp(1j * beta[:, :-1])  # force at each step start
+    lam, W = rotor.lam, rotor.W
+    gp = W[:, 2] - 1j * W[:, 3]  # W [0, 0, 1, -i]
+    gm = W[:, 2] + 1j * W[:, 3]
+    E = np.exp(lam * dt)
+    x, y, vx, vy, nu0 = ocp.q0
+    z0 = np.array([x, y, vx - nu0 * y, vy + nu0 * x])  # rotating -> fixed frame at beta = 0
+    mdl = np.tile(W @ z0, (C, 1)).astype(complex)  # (C, 4)
+    best = np.full(C, np.hypot(x, y))
+    for k0 in range(0, S, block):
+        k1 = min(S, k0 + block)
+        sp = 1j * num[:, k0:k1, None]  # (C, B, 1)
+        ck = c[:, k0:k1, None]
+        inc = 0.5 * (ck * gp * (np.exp(sp * dt) - E) / (sp - lam)
+                     + np.conj(ck) * gm * (np.exp(-sp * dt) - E) / (-sp - lam))  # (C, B, 4)
+        # m_{j+1} = E m_j + inc_j  =>  m_j = E^j (m_0 + sum_{i<j} E^{-(i+1)} inc_i) within the block
+        j = np.arange(1, k1 - k0 + 1)[:, None]
+        Ej = E[None, :] ** j  # (B, 4)
+        m = Ej[None] * (mdl[:, None, :] + np.cumsum(inc / Ej[None], axis=1))
+        X, Y = (m @ rotor.V[0]).real, (m @ rotor.V[1]).real
+        best = np.maximum(best, np.hypot(X, Y).max(axis=1))
+        mdl = m[:, -1]
+    return best
+
+
+def three_phase(ocp: SpinupOcp, u1, w1, u_b, d, steps: int, dt: float = STEP) -> np.ndarray:
+    """Controls (over alpha_max) on ``steps`` steps of the three-phase profile, for arrays of
+    parameters ``u1`` (the first phase's acceleration over alpha_max), ``w1`` (the speed at its end,
+    rad/s), ``u_b`` (the middle phase's acceleration over alpha_max) and ``d`` (its duration, s); the
+    last phase accelerates fully to omega_final and holds (never above it)."""
+    u1, w1, u_b, d = (np.atleast_1d(np.asarray(v, float))[:, None] for v in (u1, w1, u_b, d))
+    t = (np.arange(steps) + 0.5) * dt / ocp.Om  # step midpoints, s
+    t1 = (w1 - ocp.omega_start) / (u1 * ocp.alpha_max)
+    u = np.where(t < t1, u1, np.where(t < t1 + d, u_b, 1.0))
+    # integrate the speed and clip the profile at omega_final (hold from there on)
+    nu = ocp.nu0 + np.cumsum(u * ocp.a_max * dt, axis=1)
+    cap = ocp.nuf
+    over = nu > cap
+    first = np.where(over.any(axis=1), over.argmax(axis=1), steps)
+    for i, k in enumerate(first):
+        if k < steps:
+            prev = ocp.nu0 + (np.sum(u[i, :k]) * ocp.a_max * dt)
+            u[i, k] = (cap - prev) / (ocp.a_max * dt)
+            u[i, k + 1:] = 0.0
+    return u
+
+
+@dataclass
+class SearchResult:
+    """The best profiles of the grid, distinct basins first."""
+
+    params: np.ndarray  # (k, 4): u1, w1 (rad/s), u_b, d (s)
+    peaks: np.ndarray  # (k,) delta/e by the search integrator
+    evaluated: int
+
+
+def horizon_steps(ocp: SpinupOcp, dt: float = STEP) -> int:
+    return int(np.ceil((ocp.tau_h + ocp.tau_s) / dt))
+
+
+def feasible(ocp: SpinupOcp, u1, w1, u_b, d) -> np.ndarray:
+    """Whether the three-phase profile reaches omega_final by the horizon."""
+    t1 = (w1 - ocp.omega_start) / (u1 * ocp.alpha_max)
+    w2 = w1 + u_b * ocp.alpha_max * d
+    t3 = (ocp.omega_final - w2) / ocp.alpha_max
+    return (w2 >= 0) & (t1 + d + np.maximum(t3, 0) <= ocp.horizon * (1 - 1e-9)) & (w2 <= ocp.omega_final)
+
+
+def grid_search(ocp: SpinupOcp, n_w: int = 16, n_u: int = 5, n_d: int = 8, levels=(1.0,),
+                keep: int = 2, dt: float = STEP) -> SearchResult:
+    """Evaluate the three-phase family on a grid (first-phase acceleration ``levels``, w1 between the
+    start and the final speed, u_b in [-1, 0.5], d up to what the horizon leaves) and return the
+    ``keep`` best profiles whose first phases differ by more than a grid cell (distinct basins)."""
+    if ocp.free_time or ocp.horizon * ocp.alpha_max <= ocp.omega_final - ocp.omega_start:
+        return SearchResult(np.empty((0, 4)), np.empty(0), 0)
+    U1, W1, UB, D = np.meshgrid(levels, np.linspace(ocp.omega_start, ocp.omega_final, n_w + 1)[1:],
+                                np.linspace(-1.0, 0.5, n_u), np.linspace(0, 1, n_d + 1)[1:], indexing="ij")
+    U1, W1, UB, D = U1.ravel(), W1.ravel(), UB.ravel(), D.ravel()
+    slack = ocp.horizon - (W1 - ocp.omega_start) / (U1 * ocp.alpha_max) - (ocp.omega_final - W1) / ocp.alpha_max
+    D = D * np.maximum(slack, 0) / (1 - UB)  # the middle phase lasts at most what the horizon leaves
+    ok = feasible(ocp, U1, W1, UB, D) & (D > 0)
+    U1, W1, UB, D = U1[ok], W1[ok], UB[ok], D[ok]
+    steps = horizon_steps(ocp, dt)
+    peaks = simulate_steps(ocp, three_phase(ocp, U1, W1, UB, D, steps, dt), dt)
+    order = np.argsort(peaks)
+    cell = (ocp.omega_final - ocp.omega_start) / n_w
+    chosen = []
+    for i in order:
+        if all(abs(W1[i] - W1[j]) > 1.5 * cell or U1[i] != U1[j] for j in chosen):
+            chosen.append(i)
+        if len(chosen) == keep:
+            break
+    idx = np.array(chosen, int)
+    return SearchResult(np.column_stack([U1[idx], W1[idx], UB[idx], D[idx]]), peaks[idx], int(ok.sum()))
+
+
+def controls_on_mesh(ocp: SpinupOcp, params, n: int) -> np.ndarray:
+    """The three-phase profile ``params`` = (w1, u_b, d) averaged onto n equal control intervals."""
+    sub = 16
+    u = three_phase(ocp, *params, n * sub, ocp.tau_h / (n * sub))[0]
+    return u.reshape(n, sub).mean(axis=1)

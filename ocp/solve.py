@@ -1,0 +1,277 @@
+"""Solving the transcribed spin-up problem: IPOPT from chosen starts (a cheap global search over
+three-phase profiles, then the ramps), mesh continuation, and the CVODES re-simulation that judges
+every optimum (the reported peak is the re-simulated one)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+from autobal.analysis import ipopt
+from autobal.analysis.rotor import unbalance
+from autobal.errors import SolveError
+from autobal.ocp.problem import SpinupOcp
+from autobal.ocp.search import controls_on_mesh, grid_search
+from autobal.ocp.simulation import (
+    Trajectory,
+    initial_guess,
+    ramp_profile,
+    resimulate,
+    simulate_profile,
+)
+from autobal.ocp.transcription import MultipleShooting, Nlp, transcribe
+
+IPOPT_OPTIONS = {"tol": 1e-8, "constr_viol_tol": 1e-8, "compl_inf_tol": 1e-8, "acceptable_iter": 0,
+                 "max_iter": 1000, "mu_strategy": "adaptive", "bound_relax_factor": 1e-10}
+
+
+def ipopt_options(max_iterations: int = 1000, tolerance: float = 1e-8) -> dict:
+    """The scene's ``max_iterations`` and ``tolerance`` as IPOPT options (tol, constraint violation and
+    complementarity at the same tolerance)."""
+    return {"max_iter": int(max_iterations), "tol": tolerance, "constr_viol_tol": tolerance,
+            "compl_inf_tol": tolerance}
+
+
+INFEASIBLE = ("Infeasible_Problem_Detected", "Restoration_Failed")
+TIE = 1e-4  # relative: optima closer than this are equal, the first start is kept
+
+
+@dataclass
+class SpinupSolution:
+    """One IPOPT solve of one transcription."""
+
+    method: str
+    status: str
+    success: bool
+    iterations: int
+    solve_time_s: float
+    build_time_s: float
+    objective: float  # the NLP's objective in problem units (delta/e, d, integral (s), or T (s))
+    final_time_s: float
+    u: np.ndarray  # control intervals (over alpha_max), settling window included (zeros)
+    h: np.ndarray  # interval lengths, tau
+    points: np.ndarray  # (K, npath, 5) states at the path points (collocation or shooting outputs)
+    peak_collocation: float  # largest delta/e at the path points (or d for peak_unbalance)
+    w: np.ndarray = field(repr=False, default=None)
+
+
+def _objective_value(ocp: SpinupOcp, nlp: Nlp, wopt: np.ndarray, f: float) -> float:
+    if ocp.objective in ("peak_deflection", "peak_unbalance"):
+        return math.sqrt(max(f, 0.0) * nlp.ref)
+    if ocp.objective == "min_time":
+        return f * ocp.horizon
+    return f * nlp.ref / ocp.Om
+
+
+def _points(nlp: Nlp, wopt: np.ndarray, ocp: SpinupOcp) -> np.ndarray:
+    if nlp.index["Xc"] is not None:
+        pts = wopt[nlp.index["Xc"]]
+        if len(nlp.fractions) > nlp.method.degree:
+            pts = np.concatenate([pts, wopt[nlp.index["X"][1:]][:, None, :]], axis=1)
+        return pts
+    u, h = _controls(nlp, wopt, ocp)
+    return simulate_profile(ocp, u, h, nlp.fractions, tol=nlp.method.tol)  # = the shooting outputs
+
+
+def _controls(nlp: Nlp, wopt: np.ndarray, ocp: SpinupOcp) -> tuple[np.ndarray, np.ndarray]:
+    ms = nlp.mesh
+    hn = wopt[nlp.index["v"][0]] * ocp.tau_h / ms.n if ocp.free_time else ms.h
+    return wopt[nlp.index["u"]], np.concatenate([np.full(ms.n, hn), np.full(ms.ns, ms.hs)])
+
+
+class Solver:
+    """The NLP of one (problem, method) pair, built once and solved from any guess."""
+
+    def __init__(self, ocp: SpinupOcp, method, ref: float | None = None, options: dict | None = None):
+        t0 = time.perf_counter()
+        self.ocp, self.method = ocp, method
+        if ref is None:
+            ref = 1.0
+            if ocp.objective in ("peak_deflection", "peak_unbalance", "integrated_deflection"):
+                base = resimulate(ocp, ramp_profile(ocp, 50, ocp.alpha_max), np.full(50, ocp.tau_h / 50), "ref", 8,
+                                  1e-8)
+                ref = {"peak_deflection": base.peak_delta**2, "peak_unbalance": base.peak_d**2,
+                       "integrated_deflection": base.integral_delta2 * ocp.Om}[ocp.objective]
+        self.nlp = transcribe(ocp, method, ref)
+        nlp = self.nlp
+        extra = IPOPT_OPTIONS | (options or {})
+        if isinstance(method, MultipleShooting):
+            extra["hessian_approximation"] = method.hessian
+        self.solver = ipopt.nlpsol("spinup", nlp.x, ca.SX.sym("p", 0) if isinstance(nlp.x, ca.SX) else ca.MX.sym(
+            "p", 0), nlp.f, nlp.g, **extra)
+        self.build_time_s = time.perf_counter() - t0
+
+    def solve(self, u_guess: np.ndarray | None = None, w0: np.ndarray | None = None, raise_on_failure=True
+              ) -> SpinupSolution:
+        ocp, nlp = self.ocp, self.nlp
+        if w0 is None:
+            if u_guess is None:
+                u_guess = ramp_profile(ocp, nlp.mesh.n, ocp.alpha_max if ocp.free_time else
+                                       (ocp.omega_final - ocp.omega_start) / ocp.horizon)
+            w0 = initial_guess(ocp, nlp, u_guess)
+        t0 = time.perf_counter()
+        r = ipopt.solve(self.solver, x0=w0, lbx=nlp.lbx, ubx=nlp.ubx, lbg=nlp.lbg, ubg=nlp.ubg)
+        dt = time.perf_counter() - t0
+        wopt = r["x"]
+        if not r["success"] and raise_on_failure:
+            raise infeasibility_error(ocp, nlp, wopt, r)
+        u, h = _controls(nlp, wopt, ocp)
+        pts = _points(nlp, wopt, ocp)
+        if ocp.objective == "peak_unbalance":
+            pk = float(np.max(unbalance(pts.reshape(-1, 5).T, ocp.params.psi)))
+        else:
+            pk = float(np.max(np.hypot(pts[..., 0], pts[..., 1])))
+        return SpinupSolution(self.method.label, r["status"], r["success"], r["iterations"], dt, self.build_time_s,
+                              _objective_value(ocp, nlp, wopt, float(r["f"][0])), float(np.sum(h[:nlp.mesh.n]))
+                              / ocp.Om, u, h, pts, pk, wopt)
+
+
+def infeasibility_error(ocp: SpinupOcp, nlp: Nlp, wopt: np.ndarray, r: dict) -> SolveError:
+    """A SolveError naming the real cause (infeasible, iteration limit, restoration failure); for an
+    infeasible problem the binding constraint (the drive limit active on most of the horizon at the last
+    iterate: acceleration bound, torque, power, motor, speed limit) and the final-speed condition it
+    prevents; the constraint blocks the last iterate violates; the last iterate goes with it (the CLI
+    saves it)."""
+    g = np.asarray(r["g"]).ravel()
+    viol = np.maximum(np.maximum(nlp.lbg - g, g - nlp.ubg), 0.0)
+    u, h = _controls(nlp, wopt, ocp)
+    n = nlp.mesh.n
+    X = wopt[nlp.index["X"]]
+    active = {f"acceleration limit |alpha| <= {ocp.alpha_max:g} rad/s^2": float(np.mean(np.abs(u[:n]) > 1 - 1e-6))}
+    if ocp.omega_max is not None:
+        active[f"speed limit omega <= {ocp.omega_max:g} rad/s"] = float(np.mean(X[1:, 4] * ocp.Om >
+                                                                              ocp.omega_max * (1 - 1e-6)))
+    for name, a, b in nlp.blocks:
+        if "limit" in name or "characteristic" in name:
+            gap = np.minimum(g[a:b] - nlp.lbg[a:b], nlp.ubg[a:b] - g[a:b])
+            active[name] = float(np.mean(gap < 1e-6))
+    binding = max(active, key=active.get)
+    status, its = r["status"], r.get("iterations", -1)
+    cause = {"Infeasible_Problem_Detected": "infeasible (IPOPT detected locally infeasible constraints)",
+             "Restoration_Failed": "IPOPT's restoration phase failed (no feasible point found from this start)",
+             "Maximum_Iterations_Exceeded": f"iteration limit reached ({its} iterations; raise max_iterations)",
+             "Maximum_CpuTime_Exceeded": "time limit reached"}.get(status, f"not solved ({status})")
+    parts = [f"spin-up OCP {cause} ({nlp.method.label})"]
+    # the binding constraint is named only when it binds: a drive limit active on most of the horizon
+    # of a problem the solver found infeasible
+    if status in INFEASIBLE and active[binding] > 0.5:
+        parts.append(f"binding constraint: {binding}, active on {100 * active[binding]:.0f} % of the horizon, "
+                     f"prevents the final speed omega(T) = {ocp.omega_final:g} rad/s")
+        if binding.startswith("acceleration"):
+            parts.append(f"alpha_max x horizon = {ocp.alpha_max * ocp.horizon:.4g} rad/s of speed change, "
+                         f"{abs(ocp.omega_final - ocp.omega_start):.4g} rad/s needed")
+        else:
+            parts.append(f"the last iterate ends at omega = {X[n, 4] * ocp.Om:.4g} rad/s")
+    bad = [(name, float(viol[a:b].max(initial=0.0))) for name, a, b in nlp.blocks]
+    bad = [f"'{k}' by {v:.3g}" for k, v in bad if v > 1e-6]
+    if bad:
+        parts.append("the last iterate violates " + ", ".join(bad))
+    last = {"t_s": list(np.concatenate([[0.0], np.cumsum(h)]) / ocp.Om), "omega_rad_s": list(X[:, 4] * ocp.Om),
+            "deflection_over_e": list(np.hypot(X[:, 0], X[:, 1])), "alpha_rad_s2": list(u * ocp.alpha_max),
+            "constraint_violation": {b[0]: float(viol[b[1]:b[2]].max(initial=0.0)) for b in nlp.blocks},
+            "active_fraction": active}
+    return SolveError("; ".join(parts), r["status"], last)
+
+
+def starts(ocp: SpinupOcp, n: int, multistart: bool = True) -> list[tuple[str, np.ndarray]]:
+    """Initial control profiles on the n control intervals.
+
+    For a peak objective with a fixed deadline, the best profiles of the cheap global search over
+    three-phase profiles (:func:`autobal.ocp.search.grid_search`) come first; then the constant ramp,
+    and with ``multistart`` the maximum-acceleration ramp with hold, a faster constant ramp, and a
+    piecewise ramp that holds below the critical speed."""
+    const = abs(ocp.omega_final - ocp.omega_start) / ocp.horizon
+    out = []
+    if ocp.objective in ("peak_deflection", "peak_unbalance"):
+        found = grid_search(ocp, keep=2 if multistart else 1)
+        out += [(f"global search: {p[0] * ocp.alpha_max:.3g} rad/s^2 to {p[1]:.4g} rad/s, {p[2] * ocp.alpha_max:.3g} "
+                 f"rad/s^2 for {p[3]:.3g} s, then {ocp.alpha_max:.3g} rad/s^2 (peak {pk:.4g} e)",
+                 controls_on_mesh(ocp, p, n)) for p, pk in zip(found.params, found.peaks, strict=True)]
+    out.append(("constant ramp", ramp_profile(ocp, n, min(const, ocp.alpha_max) if not ocp.free_time
+                                                else ocp.alpha_max)))
+    if not multistart:
+        return out
+    out.append(("maximum-acceleration ramp and hold", ramp_profile(ocp, n, ocp.alpha_max)))
+    if not ocp.free_time:
+        out.append(("ramp at the mean of both", ramp_profile(ocp, n, 0.5 * (const + ocp.alpha_max))))
+        w_hold = 0.8 * ocp.params.omega_cr
+        t_need = (w_hold - ocp.omega_start + ocp.omega_final - w_hold) / ocp.alpha_max
+        if ocp.omega_start < w_hold < ocp.omega_final and t_need < 0.9 * ocp.horizon:
+            out.append(("ramp, hold at 0.8 omega_cr, ramp", ramp_profile(ocp, n, ocp.alpha_max, hold_at=w_hold)))
+    return out
+
+
+@dataclass
+class Optimum:
+    """The best of the multi-start solves, judged by its CVODES re-simulation."""
+
+    ocp: SpinupOcp
+    solution: SpinupSolution
+    trajectory: Trajectory  # the re-simulation of the optimal profile
+    score: float  # the re-simulated objective (delta/e, d, integral (s) or T (s))
+    starts: list  # one dict per start
+    collocation_value: float  # the transcription's own value of the same measure
+    build_time_s: float
+
+    @property
+    def resimulation_rel_error(self) -> float:
+        return abs(self.collocation_value - self.score) / abs(self.score)
+
+
+def resimulated_scores(ocp: SpinupOcp, sol: SpinupSolution, tr: Trajectory) -> tuple[float, float]:
+    """(re-simulated measure, the transcription's value of the same measure)."""
+    if ocp.objective == "peak_unbalance":
+        return tr.peak_d, sol.peak_collocation
+    if ocp.objective == "integrated_deflection":
+        return tr.integral_delta2, sol.objective
+    if ocp.objective == "min_time":
+        return sol.final_time_s, sol.final_time_s
+    return tr.peak_delta, sol.peak_collocation
+
+
+def optimize(ocp: SpinupOcp, method, multistart: bool = True, options: dict | None = None) -> Optimum:
+    """Solve from every start; keep the best optimum by its re-simulated objective (for min_time: the
+    shortest time whose re-simulated peak keeps the deflection limit within 1 %).
+
+    min_time is solved by continuation: first the smallest peak over the full horizon (if even that
+    exceeds the deflection limit, the limit is the binding constraint and no time is feasible), then
+    the minimum time started from that profile."""
+    solver = Solver(ocp, method, options=options)
+    rows, best, first_error = [], None, None
+    start_list = starts(ocp, solver.nlp.mesh.n, multistart)
+    if ocp.free_time:
+        peak_ocp = dataclasses.replace(ocp, objective="peak_deflection", deflection_limit=None)
+        pk = optimize(peak_ocp, method, multistart, options)
+        if pk.score > ocp.deflection_limit:
+            raise SolveError(f"spin-up OCP infeasible: binding constraint: deflection limit delta/e <= "
+                             f"{ocp.deflection_limit:g}; the smallest peak reachable within the horizon "
+                             f"{ocp.horizon:g} s is {pk.score:.4g} e", "Infeasible_Problem_Detected",
+                             {"smallest_peak_over_e": pk.score, "t_s": list(pk.trajectory.t),
+                              "omega_rad_s": list(pk.trajectory.omega)})
+        start_list = [("minimum-peak profile over the horizon", pk.solution.u[:solver.nlp.mesh.n])]
+    for label, u in start_list:
+        try:
+            sol = solver.solve(u)
+        except SolveError as exc:
+            if exc.status in INFEASIBLE:  # no other start can fix the limits
+                raise
+            first_error = first_error or exc
+            rows.append({"start": label, "status": exc.status, "success": False})
+            continue
+        tr = resimulate(ocp, sol.u, sol.h, "optimum")
+        score, own = resimulated_scores(ocp, sol, tr)
+        ok = ocp.deflection_limit is None or tr.peak_delta <= 1.01 * ocp.deflection_limit
+        rows.append({"start": label, "status": sol.status, "success": True, "iterations": sol.iterations,
+                     "solve_time_s": sol.solve_time_s, "objective": score, "resimulated_peak_over_e": tr.peak_delta,
+                     "keeps_limit": ok})
+        if ok and (best is None or score < best[0] * (1 - TIE)):  # ties go to the earlier start
+            best = (score, own, sol, tr)
+    if best is None:
+        raise first_error or SolveError("no start keeps the deflection limit after re-simulation", "limit_violated")
+    score, own, sol, tr = best
+    return Optimum(ocp, sol, tr, score, rows, own, solver.build_time_s)
