@@ -4,7 +4,8 @@ computed by a different method, and a summary of the cheapest setting that reach
 A :class:`Method` runs one solver at one setting and returns the main outputs; :func:`study`
 runs every method over its ladder of settings against a reference and returns a
 :class:`WorkPrecision` result (rows of method, setting, error, time; figure; CSV; summary).
-The statics provider is here; the dynamics and spin-up providers register in ``PROVIDERS``.
+The statics provider is here; the dynamics, estimation and spin-up (autobal.ocp.workprecision)
+providers register in ``PROVIDERS`` by name.
 """
 
 from __future__ import annotations
@@ -338,44 +339,6 @@ def dynamics_provider(scn, settings) -> WorkPrecision:
     return dynamics_study(model, settings.duration, dtau)
 
 
-# ---- the spin-up OCP ---------------------------------------------------------------------------------
-
-def spinup_study(ocp, degrees=(2, 3, 4), intervals=(50, 100, 200, 400), shooting=()) -> WorkPrecision:
-    """Transcription error of the spin-up optimum against its own CVODES re-simulation (rtol 1e-12):
-    direct collocation (Radau) over degree and number of intervals, and multiple shooting (CVODES)
-    over ``shooting`` intervals if given (by default not: one solve at 50 intervals takes about a
-    minute; tests/test_spinup.py checks that both transcriptions reach the same optimum); one start
-    (the constant ramp), solve time of IPOPT (the NLP is built beforehand)."""
-    from autobal.ocp.spinup import DirectCollocation, MultipleShooting, Solver, resimulate, resimulated_scores
-
-    wp = WorkPrecision("spinup", "each optimum's CVODES re-simulation at rtol 1e-12 (the exact response to the "
-                                 "optimal speed profile)", [f"{ocp.objective} (re-simulated)"])
-    ladders = [(f"direct collocation, Radau degree {d}", lambda n, d=d: DirectCollocation(n, d, "radau"), intervals)
-               for d in degrees]
-    if shooting:
-        ladders.append(("multiple shooting (CVODES)", lambda n: MultipleShooting(n), shooting))
-    for name, method, settings in ladders:
-        for n in settings:
-            row = {"method": name, "setting": n, "setting_name": "intervals"}
-            try:
-                sol = Solver(ocp, method(n)).solve()
-                score, own = resimulated_scores(ocp, sol, resimulate(ocp, sol.u, sol.h, "workprecision"))
-                row |= {"error": abs(own - score) / abs(score), "time_s": sol.solve_time_s, "objective": score,
-                        "iterations": sol.iterations}
-            except Exception as exc:  # a failed solve is a result: recorded, not hidden
-                row |= {"error": float("nan"), "time_s": float("nan"),
-                        "failed": str(exc).strip().splitlines()[-1][:200]}
-            wp.rows.append(row)
-    return wp
-
-
-def spinup_provider(scn, settings) -> WorkPrecision:
-    """Work-precision of a scene's spin-up OCP."""
-    from autobal.ocp.spinup_study import build_ocp
-
-    return spinup_study(build_ocp(scn.rotor, settings))
-
-
 # ---- estimation -------------------------------------------------------------------------------------
 
 def estimation_study(load, u, free=("alpha", "tau_max"), values=None) -> WorkPrecision:
@@ -437,6 +400,6 @@ def estimation_provider(scn, settings) -> WorkPrecision:
 PROVIDERS = {
     "statics": "autobal.analysis.workprecision:statics_provider",
     "transient": "autobal.analysis.workprecision:dynamics_provider",
-    "spinup": "autobal.analysis.workprecision:spinup_provider",
+    "spinup": "autobal.ocp.workprecision:spinup_provider",
     "estimation": "autobal.analysis.workprecision:estimation_provider",
 }

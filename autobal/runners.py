@@ -161,6 +161,13 @@ def estimation(scene, settings) -> Result:
     return estimation_study.run(settings, device, scene.title)
 
 
+def spinup(scene, settings) -> Result:
+    """Optimal spin-up through the critical speed (global search, collocation, CVODES re-simulation)."""
+    from autobal.ocp import spinup_study
+
+    return spinup_study.from_scene(scene, settings)
+
+
 RUNNERS = {
     "statics": statics,
     "frequency": frequency,
@@ -171,7 +178,7 @@ RUNNERS = {
     "reliability": reliability,
     "montecarlo": montecarlo,
     "rotor_dynamics": rotor_dynamics,
-    "spinup": _legacy("spinup", "autobal.ocp.spinup_study:run_scene"),
+    "spinup": spinup,
     "design": design,
 }
 

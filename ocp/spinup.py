@@ -25,6 +25,7 @@ from autobal.ocp.solve import (
     Solver,
     SpinupSolution,
     infeasibility_error,
+    ipopt_options,
     optimize,
     resimulated_scores,
     starts,
@@ -34,5 +35,5 @@ from autobal.ocp.transcription import DirectCollocation, Mesh, MultipleShooting,
 __all__ = ["OBJECTIVES", "PathConstraint", "SpinupOcp", "grid_search", "simulate_steps", "three_phase",
            "RESIM_POINTS", "RESIM_TOL", "Trajectory", "baselines", "initial_guess", "ramp_profile", "resimulate",
            "simulate_profile", "INFEASIBLE", "IPOPT_OPTIONS", "Optimum", "Solver", "SpinupSolution",
-           "infeasibility_error", "optimize", "resimulated_scores", "starts", "DirectCollocation", "Mesh",
-           "MultipleShooting", "Nlp", "mesh", "path_fractions", "transcribe"]
+           "infeasibility_error", "ipopt_options", "optimize", "resimulated_scores", "starts",
+           "DirectCollocation", "Mesh", "MultipleShooting", "Nlp", "mesh", "path_fractions", "transcribe"]

@@ -1,31 +1,42 @@
 """The ``spinup`` analysis of a scene: the optimal spin-up profile beside the constant-ramp baselines.
 
-``run(ocp, settings)`` returns a :class:`SpinupResult` (plain data) that writes the ``spinup``
-block of results.json, CSV tables and the figures (omega(t), alpha(t), torque, deflection against
-time and against speed, optimum and both ramps on each plot).
+``run(ocp, method)`` returns a :class:`SpinupResult` (the ``spinup`` block of results.json, CSV
+tables and figures: omega(t), alpha(t), torque, deflection against time and against speed, the
+optimum and both ramps on each plot).
 """
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
+from autobal.analysis.result import Result, new_figure
 from autobal.errors import ScenarioError
 from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.simulation import RESIM_POINTS, RESIM_TOL, Trajectory, baselines
 from autobal.ocp.solve import ipopt_options, optimize
 from autobal.ocp.transcription import DirectCollocation, MultipleShooting
-from autobal.results import save_figure, write_csv
 
 
 @dataclass
-class SpinupResult:
+class SpinupResult(Result):
+    """The optimal spin-up profile beside the constant-ramp baselines (every peak re-simulated)."""
+
     data: dict  # the results.json block
     optimum: Trajectory
     baselines: dict  # key -> Trajectory
+    name = "spinup"
+
+    @property
+    def peak_deflection(self) -> float:
+        """Re-simulated peak deflection of the optimum over the horizon and the settling window, delta/e."""
+        return self.data["peak_deflection_over_e"]
+
+    @property
+    def resimulation_rel_error(self) -> float:
+        """Relative difference between the transcription's optimum and its CVODES re-simulation."""
+        return self.data["resimulation_rel_error"]
 
     def to_dict(self) -> dict:
         return self.data
@@ -45,38 +56,38 @@ class SpinupResult:
                          f"peak unbalance {v['peak_unbalance']:.4f}{lim}")
         return "\n".join(lines)
 
-    def write_tables(self, out: Path) -> list[Path]:
+    def tables(self) -> dict[str, dict]:
         o = self.optimum
-        write_csv(out / "spinup_optimum.csv", {"t_s": o.t, "omega_rad_s": o.omega, "deflection_over_e": o.delta,
-                                               "unbalance_d": o.d, "torque_N_m": o.torque})
-        write_csv(out / "spinup_controls.csv", {"t_start_s": o.t_u, "alpha_rad_s2": o.alpha})
         cols = {"t_s": next(iter(self.baselines.values())).t}
         for k, v in self.baselines.items():
             cols |= {f"{k}_omega_rad_s": v.omega, f"{k}_deflection_over_e": v.delta, f"{k}_unbalance_d": v.d}
-        write_csv(out / "spinup_baselines.csv", cols)
-        return [out / "spinup_optimum.csv", out / "spinup_controls.csv", out / "spinup_baselines.csv"]
+        return {"spinup_optimum.csv": {"t_s": o.t, "omega_rad_s": o.omega, "deflection_over_e": o.delta,
+                                       "unbalance_d": o.d, "torque_N_m": o.torque},
+                "spinup_controls.csv": {"t_start_s": o.t_u, "alpha_rad_s2": o.alpha},
+                "spinup_baselines.csv": cols}
 
-    def plot(self, out: Path) -> list[Path]:
-        import matplotlib
+    def _runs(self):
+        return [(self.optimum, "C3", "-", 1.4)] + [(v, c, "--", 1.0) for v, c in zip(self.baselines.values(),
+                                                                                     ("C0", "C2"), strict=False)]
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+    def draw(self, ax) -> None:
+        """Deflection against time of the optimum and both ramps."""
+        for tr, c, ls, lw in self._runs():
+            lab = "optimum" if tr is self.optimum else tr.label
+            ax.plot(tr.t, tr.delta, color=c, ls=ls, lw=lw, label=f"{lab} (peak {tr.peak_delta:.3f} e)")
+        ax.set_xlabel("t (s)")
+        ax.set_ylabel(r"deflection $\delta/e$")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
 
-        runs = [(self.optimum, "C3", "-", 1.4)] + [(v, c, "--", 1.0) for v, c in zip(self.baselines.values(),
-                                                                                      ("C0", "C2"), strict=False)]
+    def figures(self) -> dict:
         title = self.data["title"]
-        paths = []
-
-        def alpha_steps(tr):
-            t = np.append(tr.t_u, tr.t[-1])
-            return t, np.append(tr.alpha, tr.alpha[-1])
-
-        fig, axes = plt.subplots(3, 1, figsize=(7, 8), sharex=True)
-        for tr, c, ls, lw in runs:
+        fig, axes = new_figure((7, 8), 3, 1, sharex=True)
+        for tr, c, ls, lw in self._runs():
             lab = "optimum" if tr is self.optimum else tr.label
             axes[0].plot(tr.t, tr.omega, color=c, ls=ls, lw=lw, label=lab)
-            t, a = alpha_steps(tr)
-            axes[1].step(t, a, where="post", color=c, ls=ls, lw=lw, label=lab)
+            axes[1].step(np.append(tr.t_u, tr.t[-1]), np.append(tr.alpha, tr.alpha[-1]), where="post", color=c,
+                         ls=ls, lw=lw, label=lab)
             axes[2].plot(tr.t, tr.torque, color=c, ls=ls, lw=lw, label=lab)
         wc = self.data["omega_cr_rad_s"]
         axes[0].axhline(wc, color="k", lw=0.6, ls=":", label=r"$\omega_{cr}=\Omega_0\sqrt{\psi}$")
@@ -90,24 +101,17 @@ class SpinupResult:
             ax.grid(alpha=0.3)
             ax.legend(fontsize=7)
         fig.suptitle(title, fontsize=9)
-        paths.append(save_figure(fig, out / "spinup_profiles.png"))
 
-        fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 7))
-        for tr, c, ls, lw in runs:
-            lab = (f"optimum (peak {tr.peak_delta:.3f} e)" if tr is self.optimum
-                   else f"{tr.label} (peak {tr.peak_delta:.3f} e)")
-            a1.plot(tr.t, tr.delta, color=c, ls=ls, lw=lw, label=lab)
-            a2.plot(tr.omega, tr.delta, color=c, ls=ls, lw=lw, label=lab)
+        fig2, (a1, a2) = new_figure((7, 7), 2, 1)
+        self.draw(a1)
+        for tr, c, ls, lw in self._runs():
+            a2.plot(tr.omega, tr.delta, color=c, ls=ls, lw=lw)
         a2.axvline(wc, color="k", lw=0.6, ls=":")
-        a1.set_xlabel("t (s)")
         a2.set_xlabel(r"$\omega$ (rad/s)")
-        for ax in (a1, a2):
-            ax.set_ylabel(r"deflection $\delta/e$")
-            ax.grid(alpha=0.3)
-            ax.legend(fontsize=7)
-        fig.suptitle(title, fontsize=9)
-        paths.append(save_figure(fig, out / "spinup_deflection.png"))
-        return paths
+        a2.set_ylabel(r"deflection $\delta/e$")
+        a2.grid(alpha=0.3)
+        fig2.suptitle(title, fontsize=9)
+        return {"spinup_profiles.png": fig, "spinup_deflection.png": fig2}
 
 
 def build_ocp(rotor, settings) -> SpinupOcp:
@@ -194,12 +198,9 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
     return SpinupResult(data, tr, base)
 
 
-def run_scene(scn, settings, out: Path):
-    """Runner of the ``spinup`` analysis (autobal.pipeline.RUNNERS)."""
-    if scn.rotor is None:
+def from_scene(scene, settings) -> SpinupResult:
+    """The ``spinup`` analysis of a validated scene (its rotor and ``analyses.spinup`` settings)."""
+    if scene.rotor is None:
         raise ScenarioError("analyses.spinup needs a rotor section")
-    t0 = time.perf_counter()
-    res = run(build_ocp(scn.rotor, settings), method_of(settings), scn.title, settings.multistart,
-              ipopt_options(settings.max_iterations, settings.tolerance))
-    files = res.write_tables(out) + res.plot(out)
-    return res.to_dict() | {"run_time_s": time.perf_counter() - t0}, files, res.summary()
+    return run(build_ocp(scene.rotor, settings), method_of(settings), scene.title, settings.multistart,
+               ipopt_options(settings.max_iterations, settings.tolerance))
