@@ -24,7 +24,7 @@ from autobal.ocp.simulation import (
     resimulate,
     simulate_profile,
 )
-from autobal.ocp.transcription import MultipleShooting, Nlp, transcribe
+from autobal.ocp.transcription import DirectCollocation, MultipleShooting, Nlp, transcribe
 
 IPOPT_OPTIONS = {"tol": 1e-8, "constr_viol_tol": 1e-8, "compl_inf_tol": 1e-8, "acceptable_iter": 0,
                  "max_iter": 1000, "mu_strategy": "adaptive", "bound_relax_factor": 1e-10}
@@ -106,14 +106,20 @@ class Solver:
             "p", 0), nlp.f, nlp.g, **extra)
         self.build_time_s = time.perf_counter() - t0
 
-    def solve(self, u_guess: np.ndarray | None = None, w0: np.ndarray | None = None, raise_on_failure=True
-              ) -> SpinupSolution:
+    def solve(self, u_guess: np.ndarray | None = None, w0: np.ndarray | None = None, raise_on_failure=True,
+              hold_states: bool = False) -> SpinupSolution:
+        """One IPOPT solve from the control profile ``u_guess`` (over alpha_max, the n control intervals;
+        the states simulated from it) or from the full NLP guess ``w0``.  ``hold_states``: the
+        collocation states start at the interval-start values (rockit's guess) instead of the simulated
+        ones: from a coarse mesh this reaches a better basin (measured in benchmarks/spinup_ocp.md)."""
         ocp, nlp = self.ocp, self.nlp
         if w0 is None:
             if u_guess is None:
                 u_guess = ramp_profile(ocp, nlp.mesh.n, ocp.alpha_max if ocp.free_time else
                                        (ocp.omega_final - ocp.omega_start) / ocp.horizon)
             w0 = initial_guess(ocp, nlp, u_guess)
+            if hold_states and nlp.index["Xc"] is not None:
+                w0[nlp.index["Xc"]] = w0[nlp.index["X"]][:-1, None, :]
         t0 = time.perf_counter()
         r = ipopt.solve(self.solver, x0=w0, lbx=nlp.lbx, ubx=nlp.ubx, lbg=nlp.lbg, ubg=nlp.ubg)
         dt = time.perf_counter() - t0
@@ -206,6 +212,20 @@ def starts(ocp: SpinupOcp, n: int, multistart: bool = True) -> list[tuple[str, n
     return out
 
 
+COARSE = 50  # control intervals of the coarse stage of the mesh continuation (at least)
+
+
+def coarse_solver(ocp: SpinupOcp, method, ref: float, options: dict | None) -> Solver | None:
+    """The coarse stage of the mesh continuation: the same collocation on N / 2^k intervals (the
+    fewest that are still at least COARSE), or None when N is already that coarse."""
+    if not isinstance(method, DirectCollocation) or ocp.free_time:
+        return None
+    n = method.intervals
+    while n % 2 == 0 and n // 2 >= COARSE:
+        n //= 2
+    return None if n == method.intervals else Solver(ocp, dataclasses.replace(method, intervals=n), ref, options)
+
+
 @dataclass
 class Optimum:
     """The best of the multi-start solves, judged by its CVODES re-simulation."""
@@ -254,8 +274,16 @@ def optimize(ocp: SpinupOcp, method, multistart: bool = True, options: dict | No
                              {"smallest_peak_over_e": pk.score, "t_s": list(pk.trajectory.t),
                               "omega_rad_s": list(pk.trajectory.omega)})
         start_list = [("minimum-peak profile over the horizon", pk.solution.u[:solver.nlp.mesh.n])]
+    coarse = coarse_solver(ocp, method, solver.nlp.ref, options)
     for label, u in start_list:
+        sc = None
         try:
+            if coarse is not None:  # mesh continuation: the coarse optimum, repeated onto the fine mesh
+                nc = coarse.nlp.mesh.n
+                cu = u.reshape(nc, -1).mean(axis=1) if u.size % nc == 0 else u[:: max(u.size // nc, 1)][:nc]
+                sc = coarse.solve(cu, raise_on_failure=False, hold_states=True)
+                if sc.success:
+                    u = np.repeat(sc.u[:nc], solver.nlp.mesh.n // nc)
             sol = solver.solve(u)
         except SolveError as exc:
             if exc.status in INFEASIBLE:  # no other start can fix the limits
@@ -267,11 +295,13 @@ def optimize(ocp: SpinupOcp, method, multistart: bool = True, options: dict | No
         score, own = resimulated_scores(ocp, sol, tr)
         ok = ocp.deflection_limit is None or tr.peak_delta <= 1.01 * ocp.deflection_limit
         rows.append({"start": label, "status": sol.status, "success": True, "iterations": sol.iterations,
-                     "solve_time_s": sol.solve_time_s, "objective": score, "resimulated_peak_over_e": tr.peak_delta,
+                     "coarse_iterations": sc.iterations if sc else 0,
+                     "solve_time_s": sol.solve_time_s + (sc.solve_time_s if sc else 0.0), "objective": score,
+                     "resimulated_peak_over_e": tr.peak_delta,
                      "keeps_limit": ok})
         if ok and (best is None or score < best[0] * (1 - TIE)):  # ties go to the earlier start
             best = (score, own, sol, tr)
     if best is None:
         raise first_error or SolveError("no start keeps the deflection limit after re-simulation", "limit_violated")
     score, own, sol, tr = best
-    return Optimum(ocp, sol, tr, score, rows, own, solver.build_time_s)
+    return Optimum(ocp, sol, tr, score, rows, own, solver.build_time_s + (coarse.build_time_s if coarse else 0.0))
