@@ -275,15 +275,22 @@ def optimize(ocp: SpinupOcp, method, multistart: bool = True, options: dict | No
                               "omega_rad_s": list(pk.trajectory.omega)})
         start_list = [("minimum-peak profile over the horizon", pk.solution.u[:solver.nlp.mesh.n])]
     coarse = coarse_solver(ocp, method, solver.nlp.ref, options)
+    if coarse is not None:  # mesh continuation: every start on the coarse mesh, the best one refined
+        nc, ranked = coarse.nlp.mesh.n, []
+        for label, u in start_list:
+            cu = u.reshape(nc, -1).mean(axis=1) if u.size % nc == 0 else np.interp(
+                np.linspace(0, 1, nc), np.linspace(0, 1, u.size), u)
+            sc = coarse.solve(cu, raise_on_failure=False, hold_states=True)
+            if sc.success:
+                ranked.append((resimulated_scores(ocp, sc, resimulate(ocp, sc.u, sc.h, "coarse", 8, 1e-10))[0],
+                               label, sc))
+            rows.append({"start": label, "stage": f"coarse ({nc} intervals)", "status": sc.status,
+                         "success": sc.success, "iterations": sc.iterations, "solve_time_s": sc.solve_time_s})
+        if ranked:
+            _, label, sc = min(ranked, key=lambda r: r[0])
+            start_list = [(f"{label}, refined from {nc} intervals", np.repeat(sc.u[:nc], solver.nlp.mesh.n // nc))]
     for label, u in start_list:
-        sc = None
         try:
-            if coarse is not None:  # mesh continuation: the coarse optimum, repeated onto the fine mesh
-                nc = coarse.nlp.mesh.n
-                cu = u.reshape(nc, -1).mean(axis=1) if u.size % nc == 0 else u[:: max(u.size // nc, 1)][:nc]
-                sc = coarse.solve(cu, raise_on_failure=False, hold_states=True)
-                if sc.success:
-                    u = np.repeat(sc.u[:nc], solver.nlp.mesh.n // nc)
             sol = solver.solve(u)
         except SolveError as exc:
             if exc.status in INFEASIBLE:  # no other start can fix the limits
@@ -295,8 +302,7 @@ def optimize(ocp: SpinupOcp, method, multistart: bool = True, options: dict | No
         score, own = resimulated_scores(ocp, sol, tr)
         ok = ocp.deflection_limit is None or tr.peak_delta <= 1.01 * ocp.deflection_limit
         rows.append({"start": label, "status": sol.status, "success": True, "iterations": sol.iterations,
-                     "coarse_iterations": sc.iterations if sc else 0,
-                     "solve_time_s": sol.solve_time_s + (sc.solve_time_s if sc else 0.0), "objective": score,
+                     "solve_time_s": sol.solve_time_s, "objective": score,
                      "resimulated_peak_over_e": tr.peak_delta,
                      "keeps_limit": ok})
         if ok and (best is None or score < best[0] * (1 - TIE)):  # ties go to the earlier start
