@@ -254,7 +254,8 @@ def independent_search(ocp: S.SpinupOcp, seed: int = 1) -> float:
         return np.where(search.feasible(ocp, 1.0, w1, ub, d), pk, 1e3)
 
     r = differential_evolution(cost, [(ocp.omega_start, ocp.omega_final), (-1.0, 0.9), (0.0, 1.0)], seed=seed,
-                               vectorized=True, popsize=20, maxiter=60, tol=1e-8, polish=False)
+                               vectorized=True, updating="deferred", popsize=20, maxiter=60, tol=1e-8,
+                               polish=False)
     w1, ub, x = r.x
     n = int(round(ocp.horizon / 2.5e-3))
     u = search.controls_on_mesh(ocp, (1.0, w1, ub, x * slack / (1 - ub)), n)
