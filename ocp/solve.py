@@ -16,7 +16,7 @@ from autobal.analysis import ipopt
 from autobal.analysis.rotor import unbalance
 from autobal.errors import SolveError
 from autobal.ocp.problem import SpinupOcp
-from autobal.ocp.search import controls_on_mesh, grid_search
+from autobal.ocp.search import controls_on_mesh, grid_search, horizon_steps
 from autobal.ocp.simulation import (
     Trajectory,
     initial_guess,
@@ -193,7 +193,7 @@ def starts(ocp: SpinupOcp, n: int, multistart: bool = True) -> list[tuple[str, n
     piecewise ramp that holds below the critical speed."""
     const = abs(ocp.omega_final - ocp.omega_start) / ocp.horizon
     out = []
-    if ocp.objective in ("peak_deflection", "peak_unbalance"):
+    if ocp.objective in ("peak_deflection", "peak_unbalance") and horizon_steps(ocp) <= SEARCH_STEPS:
         found = grid_search(ocp, keep=2 if multistart else 1)
         out += [(f"global search: {p[0] * ocp.alpha_max:.3g} rad/s^2 to {p[1]:.4g} rad/s, {p[2] * ocp.alpha_max:.3g} "
                  f"rad/s^2 for {p[3]:.3g} s, then {ocp.alpha_max:.3g} rad/s^2 (peak {pk:.4g} e)",
@@ -212,12 +212,14 @@ def starts(ocp: SpinupOcp, n: int, multistart: bool = True) -> list[tuple[str, n
     return out
 
 
+SEARCH_STEPS = 20000  # longer passages (quasi-static, thousands of whirl periods) skip the global search
 COARSE = 50  # control intervals of the coarse stage of the mesh continuation (at least)
 
 
 def coarse_solver(ocp: SpinupOcp, method, ref: float, options: dict | None) -> Solver | None:
     """The coarse stage of the mesh continuation: the same collocation on N / 2^k intervals (the
-    fewest that are still at least COARSE), or None when N is already that coarse."""
+    fewest that are still at least COARSE), or None when N is already that coarse.  Every start is
+    solved there and only the best is refined (with a single start the fine mesh is solved directly)."""
     if not isinstance(method, DirectCollocation) or ocp.free_time:
         return None
     n = method.intervals
@@ -274,7 +276,7 @@ def optimize(ocp: SpinupOcp, method, multistart: bool = True, options: dict | No
                              {"smallest_peak_over_e": pk.score, "t_s": list(pk.trajectory.t),
                               "omega_rad_s": list(pk.trajectory.omega)})
         start_list = [("minimum-peak profile over the horizon", pk.solution.u[:solver.nlp.mesh.n])]
-    coarse = coarse_solver(ocp, method, solver.nlp.ref, options)
+    coarse = coarse_solver(ocp, method, solver.nlp.ref, options) if len(start_list) > 1 else None
     if coarse is not None:  # mesh continuation: every start on the coarse mesh, the best one refined
         nc, ranked = coarse.nlp.mesh.n, []
         for label, u in start_list:
