@@ -4,8 +4,8 @@ computed by a different method, and a summary of the cheapest setting that reach
 A :class:`Method` runs one solver at one setting and returns the main outputs; :func:`study`
 runs every method over its ladder of settings against a reference and returns a
 :class:`WorkPrecision` result (rows of method, setting, error, time; figure; CSV; summary).
-The statics provider is here; the dynamics, estimation and spin-up (autobal.ocp.workprecision)
-providers register in ``PROVIDERS`` by name.
+The studies of a scene (``autobal accuracy``) are in :mod:`autobal.runners` (``ACCURACY``); the
+spin-up's is in :mod:`autobal.ocp.workprecision`.
 """
 
 from __future__ import annotations
@@ -13,15 +13,14 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import casadi as ca
 import numpy as np
 from scipy.optimize import fsolve
 
 from autobal.analysis import closed_form, disc_fit, ipopt
+from autobal.analysis.result import Result, new_figure
 from autobal.errors import ScenarioError
-from autobal.results import save_figure, write_csv
 
 TARGET = 1e-6  # relative error for the "cheapest setting" summary
 
@@ -37,7 +36,9 @@ class Method:
 
 
 @dataclass
-class WorkPrecision:
+class WorkPrecision(Result):
+    """Error against run time of every method of one analysis (``autobal accuracy``)."""
+
     analysis: str
     reference: str  # how the reference was computed
     outputs: list[str]
@@ -75,18 +76,21 @@ class WorkPrecision:
                          f"integrator: {st['chosen']}: {st['why']}")
         return "\n".join(lines)
 
-    def write_tables(self, out: Path) -> list[Path]:
-        path = out / f"workprecision_{self.analysis}.csv"
-        write_csv(path, {k: [r[k] for r in self.rows] for k in ("method", "setting", "error", "time_s")})
-        return [path]
+    @property
+    def name(self) -> str:
+        return self.analysis
 
-    def plot(self, out: Path) -> list[Path]:
-        import matplotlib
+    def tables(self) -> dict[str, dict]:
+        return {f"workprecision_{self.analysis}.csv": {k: [r[k] for r in self.rows]
+                                                       for k in ("method", "setting", "error", "time_s")}}
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+    def figures(self) -> dict:
+        fig, ax = new_figure((6.4, 4.6))
+        self.draw(ax)
+        return {f"workprecision_{self.analysis}.png": fig}
 
-        fig, ax = plt.subplots(figsize=(6.4, 4.6))
+    def draw(self, ax) -> None:
+        """Error against run time per method, the target error dotted."""
         for m in dict.fromkeys(r["method"] for r in self.rows):
             rs = [r for r in self.rows if r["method"] == m]
             err = np.maximum([r["error"] for r in rs], 1e-17)
@@ -97,7 +101,6 @@ class WorkPrecision:
         ax.set_title(f"work-precision: {self.analysis}\nreference: {self.reference}", fontsize=8)
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=7)
-        return [save_figure(fig, out / f"workprecision_{self.analysis}.png")]
 
 
 def timed(fn, repeats: int = 5):
@@ -233,15 +236,6 @@ def statics_study(solver, psi1: float, dpsi: float) -> WorkPrecision:
                  "exact ideal-regulator root (2.22)/(2.144) in 40-digit arithmetic (mpmath)", STATICS_OUTPUTS)
 
 
-def statics_provider(scn, settings) -> WorkPrecision:
-    """Work-precision of the statics of a scene at its operating point."""
-    from autobal.adapters import design  # the runner moves to the front door (autobal/runners.py)
-    from autobal.analysis.statics import StaticsSolver
-
-    solver = StaticsSolver(design(scn.device))
-    return statics_study(solver, settings.operating_ratio, solver.design.dpsi)
-
-
 # ---- time integration of the device dynamics ------------------------------------------------------
 
 INTEGRATOR_TOLS = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12]
@@ -328,17 +322,6 @@ def dynamics_study(model, duration: float, dtau: float, quick: bool = False) -> 
     return wp
 
 
-def dynamics_provider(scn, settings) -> WorkPrecision:
-    """Work-precision of the time integration of a scene's transient (first force step, or dtau = 0.01)."""
-    from autobal.adapters import dynamic_device  # the runner moves to the front door (autobal/runners.py)
-    from autobal.analysis.linearize import Setup
-
-    setup = Setup(dynamic_device(scn), settings.operating_ratio)
-    model = setup.nonlinear("chain" if settings.model == "nonlinear_chain" else "energy")
-    dtau = next((c.amplitude for c in settings.cases if c.input == "force_step"), 0.01)
-    return dynamics_study(model, settings.duration, dtau)
-
-
 # ---- estimation -------------------------------------------------------------------------------------
 
 def estimation_study(load, u, free=("alpha", "tau_max"), values=None) -> WorkPrecision:
@@ -383,23 +366,3 @@ def estimation_study(load, u, free=("alpha", "tau_max"), values=None) -> WorkPre
     ref = disc_fit.reference_fit(load, u, free, values)
     return study("estimation", methods, ref, "least squares solved in 40-digit arithmetic (mpmath Gauss-Newton)",
                  list(free))
-
-
-def estimation_provider(scn, settings) -> WorkPrecision:
-    """Work-precision of the scene's first traditional-disc fit in u (its data, its free parameters)."""
-    fit = next((f for f in settings.fits if f.model == "traditional_disc" and f.residual == "u"), None)
-    if fit is None:
-        raise ScenarioError("work-precision of the estimation needs a traditional_disc fit with residual u")
-    data = settings.measurements()
-    bases = settings.bases.values()
-    return estimation_study(data.dimensionless("load", bases), data.dimensionless("gap", bases), fit.free(),
-                            {k: p.value for k, p in fit.parameters.items()})
-
-
-# analysis name -> "module:function" (scenario, settings) -> WorkPrecision
-PROVIDERS = {
-    "statics": "autobal.analysis.workprecision:statics_provider",
-    "transient": "autobal.analysis.workprecision:dynamics_provider",
-    "spinup": "autobal.ocp.workprecision:spinup_provider",
-    "estimation": "autobal.analysis.workprecision:estimation_provider",
-}

@@ -57,21 +57,20 @@ def _run(args, scn) -> int:
 def _accuracy(args, scn) -> int:
     """Work-precision of every analysis of the scene that has a provider: figure, CSV, summary."""
     from autobal.analysis.result import write_json
-    from autobal.analysis.workprecision import PROVIDERS
-    from autobal.runners import resolve
+    from autobal.runners import ACCURACY
 
-    studies = {name: target for name, target in PROVIDERS.items() if getattr(scn.analyses, name, None) is not None}
+    studies = {name: study for name, study in ACCURACY.items() if getattr(scn.analyses, name, None) is not None}
     if not studies:
         raise ScenarioError(f"{scn.name}: none of its analyses has a work-precision study "
-                            f"(available: {', '.join(PROVIDERS)})")
+                            f"(available: {', '.join(ACCURACY)})")
     out = _out_folder(args, scn)
     folder = OutputFolder(out)
     try:
         report = {"status": "ok", "scenario": scn.name, "meta": api.meta(scn), "studies": {}, "files": []}
-        for name, target in studies.items():
-            wp = resolve(target)(scn, getattr(scn.analyses, name))
+        for name, study in studies.items():
+            wp = study(scn, getattr(scn.analyses, name))
             report["studies"][name] = wp.to_dict()
-            report["files"] += [f.name for f in wp.write_tables(folder.tmp) + wp.plot(folder.tmp)]
+            report["files"] += [f.name for f in wp.save(folder.tmp)]
             if not args.quiet:
                 print(wp.summary())
         write_json(folder.tmp / "accuracy.json", report)

@@ -131,6 +131,18 @@ UNIT_RULES: list[tuple[str, str]] = [
     (r"^spinup\..*" + _P + r"(start_speed|final_speed|max_speed|omega_at_peak)$", "rad/s"),
     (r"^spinup\..*" + _P + r"max_acceleration$", "rad/s^2"),
     (r"^spinup\.", "1"),
+    # stability-constrained design: margins and spectral abscissae 1/s, leakage m^3/s, parameters by their path
+    (r"^design\..*" + _P + r"(decay_rate|margin(\.[\d.]+)?|spectral_abscissa(\.[\d.]+)?)$", "1/s"),
+    (r"^design\.(abscissa_sweep\.(nominal|optimum)|other_model\.(nominal|optimum))", "1/s"),
+    (r"^design\..*leakage$", "m^3/s"),
+    (r"^design\..*face_gap(\.[\d.]+)?$", "m"),
+    (r"^design\..*values_si\..*volume$", "m^3"),
+    (r"^design\..*values_si\..*stem_damping$", "N*s/m"),
+    (r"^design\..*values_si\..*spring_stiffness$", "N/m"),
+    (r"^design\..*values_si\..*(pressure)$", "Pa"),
+    (r"^design\..*values_si\..*(area)$", "m^2"),
+    (r"^design\..*values_si\..*(diameter|length|clearance|opening)$", "m"),
+    (r"^design\.", "1"),
 ]
 
 
@@ -806,15 +818,52 @@ def _spinup_binding(sec: Section) -> list[str]:
     return out
 
 
+def design_section(sec: Section) -> None:
+    """Stability-constrained design: the optimum against the nominal design, its certificate and limits."""
+    sec.row("required decay rate", "α", "decay_rate")
+    sec.row("barrier leakage, nominal design", "Q_e", "nominal.leakage")
+    sec.row("barrier leakage, optimum", "Q_e", "optimum.leakage")
+    sec.row("objective, optimum over nominal", "J/J_nom", "optimum.objective")
+    for which in ("nominal", "optimum"):  # keys are the discharge ratios ("0.5"), so read them whole
+        for p, margin in (sec.get(f"{which}.margin") or {}).items():
+            sec.row(f"decay-rate margin at ψ1 = {p}, {which}", "−max Re λ", "", "1/s", value=margin)
+    st = sec.get("status")
+    sec.verdict(st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"IPOPT: {st} ({sec.get('iterations')} "
+                                                                         "iterations)")
+    alpha = sec.get("decay_rate")
+    for which in ("nominal", "optimum"):
+        margins = list((sec.get(f"{which}.margin") or {}).values())
+        if margins and alpha is not None:
+            worst = min(m for m in margins if m is not None)
+            sec.verdict(worst >= alpha * (1 - 1e-6), f"{which} design: every pole has Re λ ≤ −{number(alpha)} 1/s at "
+                        f"every operating point" if worst >= alpha * (1 - 1e-6) else
+                        f"{which} design: the decay-rate margin {number(alpha)} 1/s is NOT met "
+                        f"(worst {number(worst)} 1/s)")
+    cert = sec.get("certification") or {}
+    if cert:
+        sec.verdict(bool(cert.get("eigenvalues_ok")), "eigenvalues confirm every constraint at the optimum"
+                    if cert.get("eigenvalues_ok") else "eigenvalues do NOT confirm the smooth stability conditions")
+        sec.verdict(not cert.get("beaten"), f"random search: {cert.get('feasible_samples')} of {cert.get('samples')} "
+                    f"samples feasible, best {number(cert.get('best_sample'))} "
+                    + ("(none better by more than 0.5 %)" if not cert.get("beaten") else "BEATS the optimum"))
+    for a in sec.get("active", []):
+        sec.verdict(None, f"active constraint: {a.get('constraint')} (multiplier {number(a.get('multiplier'))})")
+    nominal, optimum = sec.get("nominal.parameters") or {}, sec.get("optimum.parameters") or {}
+    rows = [[text(path), text(nominal.get(path, "")), text(value)] for path, value in optimum.items()]
+    if rows:
+        sec.tables.append(table("Design parameters (scene paths; `autobal run SCENE --set PATH=VALUE` reproduces the "
+                                "optimum)", ["scene path", "nominal", "optimum"], rows))
+
+
 SECTIONS = {"statics": statics_section, "frequency": frequency_section, "stability": stability_section,
             "transient": transient_section, "liquid_balancer": liquid_balancer_section,
             "estimation": estimation_section, "reliability": reliability_section, "montecarlo": montecarlo_section,
-            "rotor_dynamics": rotor_dynamics_section, "spinup": spinup_section}
+            "rotor_dynamics": rotor_dynamics_section, "spinup": spinup_section, "design": design_section}
 
 TITLES = {"statics": "Statics", "frequency": "Frequency response (AFC)", "stability": "Stability",
           "transient": "Transients", "liquid_balancer": "Liquid auto-balancer", "estimation": "Parameter estimation",
           "reliability": "Reliability", "montecarlo": "Monte Carlo", "rotor_dynamics": "Rotor dynamics",
-          "spinup": "Optimal spin-up"}
+          "spinup": "Optimal spin-up", "design": "Stability-constrained design"}
 
 #: figure file name (regex) -> (analysis, caption)
 CAPTIONS = [
@@ -842,6 +891,10 @@ CAPTIONS = [
                                         "probability; Pavlenko (2014), Figs. 1.27-1.28"),
     (r"fig_rotor_(\w+)", "rotor_dynamics", "Rotor with a liquid auto-balancer: {0} (Pashkov 2010)"),
     (r"spinup_(\w+)", "spinup", "Optimal spin-up: {0} of the optimum beside the ramps"),
+    (r"design_abscissa", "design", "Spectral abscissa max Re λ against the discharge ratio, nominal and optimum "
+                                   "designs, with the required −α"),
+    (r"design_parameters", "design", "Design parameters: optimum relative to nominal"),
+    (r"design_convergence", "design", "IPOPT convergence of the design NLP"),
 ]
 
 

@@ -7,48 +7,9 @@ no files and prints nothing.  ``RUNNERS`` order is the run order.
 
 from __future__ import annotations
 
-import importlib
-import shutil
-import tempfile
-from pathlib import Path
-
 from autobal import adapters
 from autobal.analysis.result import Result
 from autobal.errors import ScenarioError
-
-
-class LegacyResult(Result):
-    """An analysis not yet converted to the Result protocol: its block, summary and the files its
-    old runner wrote (kept in a private temporary folder until saved).  ``plot()`` is not available."""
-
-    def __init__(self, name: str, block: dict, files: list[Path], text: str, keep: tempfile.TemporaryDirectory):
-        self.name, self._block, self._files, self._text, self._keep = name, block, files, text, keep
-
-    def to_dict(self) -> dict:
-        return self._block
-
-    def summary(self) -> str:
-        return self._text
-
-    def plot(self, ax=None):
-        raise NotImplementedError(f"the {self.name} result cannot plot yet; its figures are written by save()")
-
-    def save(self, folder) -> list[Path]:
-        folder = Path(folder)
-        folder.mkdir(parents=True, exist_ok=True)
-        return [Path(shutil.copy2(f, folder / f.name)) for f in self._files]
-
-
-def _legacy(name: str, target: str):
-    """A runner around an old ``(scene, settings, out) -> (block, files, summary)`` function."""
-
-    def run(scene, settings) -> Result:
-        keep = tempfile.TemporaryDirectory(prefix=f"autobal-{name}-")
-        block, files, text = resolve(target)(scene, settings, Path(keep.name))
-        return LegacyResult(name, block, files, text, keep)
-
-    run.__doc__ = f"Runner of ``analyses.{name}`` (not yet converted: {target})."
-    return run
 
 
 def statics(scene, settings) -> Result:
@@ -161,11 +122,34 @@ def estimation(scene, settings) -> Result:
     return estimation_study.run(settings, device, scene.title)
 
 
+def spinup_ocp(scene, settings):
+    """The declared spin-up problem (autobal.ocp.problem.SpinupOcp) of a scene's rotor and settings."""
+    from autobal.ocp.problem import SpinupOcp
+
+    if scene.rotor is None:
+        raise ScenarioError("analyses.spinup needs a rotor section")
+    drive = scene.rotor.drive
+    try:
+        return SpinupOcp(
+            adapters.rotor(scene.rotor), settings.start_speed, settings.final_speed, settings.horizon,
+            settings.max_acceleration,
+            objective=settings.objective, settling_time=settings.settling_time, omega_max=settings.max_speed,
+            torque_max=drive.max_torque if drive else None, power_max=drive.max_power if drive else None,
+            motor_stall_torque=drive.motor.stall_torque if drive and drive.motor else None,
+            motor_no_load_speed=drive.motor.no_load_speed if drive and drive.motor else None,
+            deflection_limit=settings.deflection_limit, jerk_max=settings.max_jerk,
+            jerk_penalty=settings.jerk_penalty)
+    except ValueError as exc:
+        raise ScenarioError(f"analyses.spinup: {exc}") from None
+
+
 def spinup(scene, settings) -> Result:
     """Optimal spin-up through the critical speed (global search, collocation, CVODES re-simulation)."""
     from autobal.ocp import spinup_study
+    from autobal.ocp.solve import ipopt_options
 
-    return spinup_study.from_scene(scene, settings)
+    return spinup_study.run(spinup_ocp(scene, settings), spinup_study.method_of(settings), scene.title,
+                            settings.multistart, ipopt_options(settings.max_iterations, settings.tolerance))
 
 
 RUNNERS = {
@@ -183,7 +167,48 @@ RUNNERS = {
 }
 
 
-def resolve(target: str):
-    """The function named by ``"module:function"``, imported now."""
-    module, func = target.split(":")
-    return getattr(importlib.import_module(module), func)
+
+# ---- work-precision studies of a scene (``autobal accuracy``) ---------------------------------------
+
+def statics_accuracy(scene, settings):
+    """Work-precision of the statics at the scene's operating point."""
+    from autobal.analysis import workprecision
+    from autobal.analysis.statics import StaticsSolver
+
+    solver = StaticsSolver(adapters.design(scene.device))
+    return workprecision.statics_study(solver, settings.operating_ratio, solver.design.dpsi)
+
+
+def transient_accuracy(scene, settings):
+    """Work-precision of the time integration of the scene's transient (first force step, or dtau = 0.01)."""
+    from autobal.analysis import workprecision
+    from autobal.analysis.linearize import Setup
+
+    setup = Setup(adapters.dynamic_device(scene), settings.operating_ratio)
+    model = setup.nonlinear("chain" if settings.model == "nonlinear_chain" else "energy")
+    dtau = next((c.amplitude for c in settings.cases if c.input == "force_step"), 0.01)
+    return workprecision.dynamics_study(model, settings.duration, dtau)
+
+
+def spinup_accuracy(scene, settings):
+    """Work-precision of the scene's spin-up OCP (collocation degree and intervals)."""
+    from autobal.ocp.workprecision import spinup_study
+
+    return spinup_study(spinup_ocp(scene, settings))
+
+
+def estimation_accuracy(scene, settings):
+    """Work-precision of the scene's first traditional-disc fit in u (its data, its free parameters)."""
+    from autobal.analysis import workprecision
+
+    fit = next((f for f in settings.fits if f.model == "traditional_disc" and f.residual == "u"), None)
+    if fit is None:
+        raise ScenarioError("work-precision of the estimation needs a traditional_disc fit with residual u")
+    data = settings.measurements()
+    bases = settings.bases.values()
+    return workprecision.estimation_study(data.dimensionless("load", bases), data.dimensionless("gap", bases),
+                                          fit.free(), {k: p.value for k, p in fit.parameters.items()})
+
+
+ACCURACY = {"statics": statics_accuracy, "transient": transient_accuracy, "spinup": spinup_accuracy,
+            "estimation": estimation_accuracy}

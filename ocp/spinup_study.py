@@ -12,10 +12,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from autobal.analysis.result import Result, new_figure
-from autobal.errors import ScenarioError
 from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.simulation import RESIM_POINTS, RESIM_TOL, Trajectory, baselines
-from autobal.ocp.solve import ipopt_options, optimize
+from autobal.ocp.solve import optimize
 from autobal.ocp.transcription import DirectCollocation, MultipleShooting
 
 
@@ -114,25 +113,6 @@ class SpinupResult(Result):
         return {"spinup_profiles.png": fig, "spinup_deflection.png": fig2}
 
 
-def build_ocp(rotor, settings) -> SpinupOcp:
-    """The declared problem from the scene's ``rotor`` part and ``analyses.spinup`` settings."""
-    from autobal.adapters import rotor as rotor_params  # the scene -> parameters adapter (front door)
-
-    drive = rotor.drive
-    try:
-        return SpinupOcp(
-            rotor_params(rotor), settings.start_speed, settings.final_speed, settings.horizon,
-            settings.max_acceleration,
-            objective=settings.objective, settling_time=settings.settling_time, omega_max=settings.max_speed,
-            torque_max=drive.max_torque if drive else None, power_max=drive.max_power if drive else None,
-            motor_stall_torque=drive.motor.stall_torque if drive and drive.motor else None,
-            motor_no_load_speed=drive.motor.no_load_speed if drive and drive.motor else None,
-            deflection_limit=settings.deflection_limit, jerk_max=settings.max_jerk,
-            jerk_penalty=settings.jerk_penalty)
-    except ValueError as exc:
-        raise ScenarioError(f"analyses.spinup: {exc}") from None
-
-
 def method_of(settings):
     cls = DirectCollocation if settings.method == "collocation" else MultipleShooting
     return cls(settings.intervals, settings.degree, settings.scheme)
@@ -196,11 +176,3 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
     if ocp.objective == "peak_unbalance":
         data["collocation_peak_unbalance"] = opt.collocation_value
     return SpinupResult(data, tr, base)
-
-
-def from_scene(scene, settings) -> SpinupResult:
-    """The ``spinup`` analysis of a validated scene (its rotor and ``analyses.spinup`` settings)."""
-    if scene.rotor is None:
-        raise ScenarioError("analyses.spinup needs a rotor section")
-    return run(build_ocp(scene.rotor, settings), method_of(settings), scene.title, settings.multistart,
-               ipopt_options(settings.max_iterations, settings.tolerance))

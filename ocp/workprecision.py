@@ -6,7 +6,6 @@ from __future__ import annotations
 from autobal.analysis.workprecision import WorkPrecision
 from autobal.ocp.simulation import resimulate
 from autobal.ocp.solve import Solver, resimulated_scores
-from autobal.ocp.spinup_study import build_ocp
 from autobal.ocp.transcription import DirectCollocation, MultipleShooting
 
 
@@ -35,8 +34,3 @@ def spinup_study(ocp, degrees=(2, 3, 4), intervals=(50, 100, 200, 400), shooting
                         "failed": str(exc).strip().splitlines()[-1][:200]}
             wp.rows.append(row)
     return wp
-
-
-def spinup_provider(scn, settings) -> WorkPrecision:
-    """Work-precision of a scene's spin-up OCP."""
-    return spinup_study(build_ocp(scn.rotor, settings))

@@ -1,0 +1,103 @@
+"""Layering: the import-linter contract of pyproject.toml holds (models <- analysis <- ocp <- front door),
+no module imports a private name of another, and the package has no import cycle.
+
+import-linter reads the package as installed; the ``package-dir`` mapping puts models/, analysis/ and
+ocp/ outside autobal/, so the test lays out that installed tree as symbolic links first.
+"""
+
+import ast
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import tomllib
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE_DIR = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-dir"]
+
+
+@pytest.fixture(scope="module")
+def installed_tree(tmp_path_factory) -> Path:
+    """``<tmp>/autobal`` laid out like the installed package, as links into the repository."""
+    site = tmp_path_factory.mktemp("site")
+    pkg = site / "autobal"
+    pkg.mkdir()
+    for f in (ROOT / "autobal").iterdir():
+        if f.name != "__pycache__":
+            (pkg / f.name).symlink_to(f)
+    for name, folder in PACKAGE_DIR.items():
+        if name.count(".") == 1:
+            (pkg / name.split(".")[1]).symlink_to(ROOT / folder)
+    return site
+
+
+def test_import_linter_contracts_hold(installed_tree):
+    env = os.environ | {"PYTHONPATH": str(installed_tree)}
+    lint = Path(sys.executable).with_name("lint-imports")
+    out = subprocess.run([str(lint), "--config", str(ROOT / "pyproject.toml"), "--no-cache"], cwd=installed_tree,
+                         env=env, capture_output=True, text=True)
+    assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-2000:]
+    assert "Contracts: 2 kept, 0 broken" in out.stdout
+
+
+def test_no_import_cycles(installed_tree):
+    code = (
+        "import grimp, json, sys\n"
+        "g = grimp.build_graph('autobal', exclude_type_checking_imports=True, cache_dir=None)\n"
+        "edges = {m: sorted(g.find_modules_directly_imported_by(m)) for m in g.modules}\n"
+        "json.dump(edges, sys.stdout)\n"
+    )
+    env = os.environ | {"PYTHONPATH": str(installed_tree)}
+    out = subprocess.run([sys.executable, "-c", code], cwd=installed_tree, env=env, capture_output=True, text=True,
+                         check=True)
+    import json
+
+    edges = json.loads(out.stdout)
+    # Tarjan's strongly connected components: a component of more than one module is a cycle
+    index, low, stack, on, cycles, counter = {}, {}, [], set(), [], [0]
+
+    def visit(v):
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in edges.get(v, ()):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                cycles.append(sorted(comp))
+
+    sys.setrecursionlimit(10000)
+    for v in edges:
+        if v not in index:
+            visit(v)
+    # imports for type checking only are left out; the package's __init__ imports nothing eagerly
+    assert cycles == []
+
+
+def _sources():
+    for folder in ["autobal", *(f for n, f in PACKAGE_DIR.items() if n.count(".") == 1)]:
+        yield from (ROOT / folder).glob("*.py")
+
+
+def test_no_private_imports_across_modules():
+    private = []
+    for path in _sources():
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("autobal"):
+                private += [f"{path.relative_to(ROOT)}: {node.module}.{a.name}" for a in node.names
+                            if a.name.startswith("_") and not a.name.startswith("__")]
+    assert private == []
