@@ -205,7 +205,8 @@ def _criticals(solver: StaticsSolver, psi1: float, dpsi: float, psi1_guess: floa
     return out
 
 
-def sweep(solver: StaticsSolver, psi1s, dpsi: float, span: tuple[float, float] | None = None) -> list[StaticPoint]:
+def continuation(solver: StaticsSolver, psi1s, dpsi: float,
+                 span: tuple[float, float] | None = None) -> list[StaticPoint]:
     """Statics over the discharge ratios ``psi1s`` by a continuation that does not depend on their spacing.
 
     A grid of at most :data:`PATH_NODES` points is solved as one continuation path, each point
@@ -304,7 +305,7 @@ def run(solver: StaticsSolver, settings, title: str = "") -> StaticsResult:
     r = settings.discharge_ratio
     grid = np.linspace(r.start, r.stop, r.points)
     try:
-        points = sweep(solver, grid, dpsi)
+        points = continuation(solver, grid, dpsi)
     except SolveError as exc:
         reg = g.regulator
         xi = cf_xi(g, grid, dpsi) if reg is not None else np.zeros(1)

@@ -14,7 +14,7 @@ from pydantic import Field, model_validator
 
 from autobal.models.dynamics import LONG_NAMES
 from autobal.schema import Positive, Strict
-from autobal.units import AngularSpeed, Area, Pressure, quantity, to_si
+from autobal.units import AngularSpeed, Area, quantity, to_si
 
 Mass = quantity("mass")
 Stiffness = quantity("stiffness")
@@ -22,6 +22,7 @@ Damping = quantity("damping")
 DampingOrZero = quantity("damping", "nonnegative")
 Volume = quantity("volume")
 Time = quantity("time")
+BulkModulus = quantity("bulk modulus")
 
 
 class RegulatorDynamics(Strict):
@@ -41,7 +42,7 @@ class Dynamics(Strict):
     rotor_mass: Mass  # m_p
     pushoff_stiffness: Stiffness  # k_pr; preload deflection F_pr/k_pr + z0
     rotor_damping: DampingOrZero | None = None  # c_z (0: undamped); default the squeeze film, Pavlenko (2014), App. A
-    bulk_modulus: Pressure  # E of the barrier medium (gas: the source's 1.42e5 Pa)
+    bulk_modulus: BulkModulus  # E of the barrier medium (gas: the source's 1.42e5 Pa)
     disc_chamber_volume: Volume  # V2, chamber before the face throttle
     cavity_volume: Volume  # V3, cavity behind the disc
     regulator: RegulatorDynamics | None = None  # needed when the device has a regulator
@@ -51,7 +52,7 @@ class Dynamics(Strict):
 
 # scenario key -> unit kind of each dynamic parameter a stability map may scan (models/dynamics.LONG_NAMES)
 PARAMETERS = {
-    "rotor_mass": "mass", "pushoff_stiffness": "stiffness", "rotor_damping": "damping", "bulk_modulus": "pressure",
+    "rotor_mass": "mass", "pushoff_stiffness": "stiffness", "rotor_damping": "damping", "bulk_modulus": "bulk modulus",
     "disc_chamber_volume": "volume", "cavity_volume": "volume", "stem_mass": "mass", "spring_stiffness": "stiffness",
     "stem_damping": "damping", "valve_chamber_volume": "volume", "membrane_chamber_volume": "volume",
     "seat_area": "area",

@@ -25,6 +25,8 @@ DIMENSIONS = {
     "area": ("[length] ** 2", "m**2", "0.016 m^2", (1e-18, 1e6)),
     "volume": ("[length] ** 3", "m**3", "4.7e-5 m^3", (1e-27, 1e9)),
     "pressure": ("[mass] / [length] / [time] ** 2", "Pa", "32.3 MPa", (1e-3, 1e11)),
+    # bulk modulus of the barrier medium: up to 1e16 Pa, so that a scene can approach the incompressible limit
+    "bulk modulus": ("[mass] / [length] / [time] ** 2", "Pa", "1.42e5 Pa", (1e-3, 1e16)),
     "force": ("[mass] * [length] / [time] ** 2", "N", "3.3e5 N", (1e-9, 1e10)),
     "density": ("[mass] / [length] ** 3", "kg/m**3", "1000 kg/m^3", (1e-6, 1e5)),
     "viscosity": ("[mass] / [length] / [time]", "Pa*s", "1e-3 Pa*s", (1e-8, 1e8)),
