@@ -158,9 +158,10 @@ def _bounded(kind: str, sign: str):
     return check
 
 
-def quantity(kind: str, sign: str = "positive", description: str | None = None):
+def quantity(kind: str, sign: str = "positive"):
     """An annotated float field holding a ``kind`` quantity in SI, checked for ``sign`` and the
-    physical range of :data:`DIMENSIONS`.
+    physical range of :data:`DIMENSIONS`; its unit and range are added to the field's description
+    (:class:`autobal.schema.Strict`).
 
     Parameters
     ----------
@@ -168,16 +169,13 @@ def quantity(kind: str, sign: str = "positive", description: str | None = None):
         A key of :data:`DIMENSIONS`.
     sign : {"positive", "nonnegative"}
         Zero allowed or not.
-    description : str, optional
-        The field's meaning, for the schema reference.
     """
-    lo, hi = DIMENSIONS[kind][3]
-    dim, si, example, _ = DIMENSIONS[kind]
-    text = f"{kind} with a unit, e.g. '{example}'; SI {si}, {'>= 0' if sign == 'nonnegative' else '> 0'}, " \
-           f"magnitude {lo:g} to {hi:g} {si}"
+    dim, si, example, (lo, hi) = DIMENSIONS[kind]
+    article = "an" if kind[0] in "aeiou" else "a"
+    zero = ">= 0" if sign == "nonnegative" else "> 0"
+    text = f"{article} {kind} with its unit, e.g. '{example}' (SI: {si}); {zero}, magnitude {lo:g} to {hi:g} {si}"
     return Annotated[float, BeforeValidator(lambda v: to_si(v, kind)), AfterValidator(_bounded(kind, sign)),
-                     Field(description=f"{description}; {text}" if description else text,
-                           json_schema_extra={"unit": si, "kind": kind})]
+                     Field(json_schema_extra={"unit": si, "kind": kind, "unit_text": text})]
 
 
 Length = quantity("length")
