@@ -354,4 +354,34 @@ def run(solver: StaticsSolver, settings, title: str = "") -> StaticsResult:
         "closed_form": closed, "exact": exact, "critical_exact": critical,
         "sweep": sweep, "force_gap": force_gap,
     }
-    return StaticsResult(data)
+    return StaticsResult(_with_statuses(data, _null_reasons(g)))
+
+
+def _null_reasons(g) -> dict:
+    """Why a value of the statics block is NaN (null in results.json), by key."""
+    no_reg = "the device has no regulator" if g.regulator is None else None
+    gas = g.medium == "gas"
+    return {
+        "xi": no_reg or "no valve opening of the ideal regulator (2.28) passes the barrier flow: the valve saturates",
+        "xi0": no_reg or "no valve opening of the ideal regulator (2.28) passes the barrier flow: the valve saturates",
+        "psi_cam": no_reg, "psi_cam0": no_reg, "x0": no_reg, "pcam": no_reg,
+        "kappa_s": ("no fixed-pressure closed form of the stiffness for the gas device (see kappa_u_2_162)" if gas
+                    else "the face is in contact (u = 0): the gap does not move with the force"),
+        "phi_closed_form": "the closed form (2.35) is the liquid device's" if gas else None,
+    }
+
+
+def _with_statuses(block: dict, reasons: dict, default: str = "the closed form has no physical value here") -> dict:
+    """``block`` with a ``<key>_status`` beside every value that is or holds NaN (null in results.json)."""
+    out = {}
+    for k, v in block.items():
+        out[k] = _with_statuses(v, reasons, default) if isinstance(v, dict) else v
+        if isinstance(v, dict | str | bool) or v is None and f"{k}_status" in block:
+            continue
+        try:
+            values = np.asarray(np.nan if v is None else v, float)
+        except (TypeError, ValueError):
+            continue
+        if not np.all(np.isfinite(values)) and f"{k}_status" not in block:
+            out[f"{k}_status"] = reasons.get(k) or default
+    return out
