@@ -1,15 +1,18 @@
 """Interrupts (SIGINT, SIGTERM) that no solver swallows.
 
-CasADi checks for signals inside IPOPT, CVODES and its rootfinders and turns the KeyboardInterrupt raised
-there into a solver status ("NonIpopt_Exception_Thrown"), a RuntimeError ("CV_RHSFUNC_FAIL") or a
-SystemError, after which a study would carry on or fail with the wrong message.  Here the signal handler
-records the signal before raising, and :func:`check`, called after every solver call
-(:func:`autobal.analysis.ipopt.solve`, :func:`call`), raises :class:`Interrupted` whatever the solver made
-of it.  A run layer catching any exception can ask :func:`requested` whether it was an interrupt.
+CasADi checks for signals inside IPOPT, CVODES and its rootfinders; the KeyboardInterrupt (or
+:class:`autobal.errors.Interrupted`) that the Python signal handler raises there is turned into a solver
+status ("NonIpopt_Exception_Thrown"), a RuntimeError ("CV_RHSFUNC_FAIL") or a SystemError, after which a
+study would carry on, or fail with the wrong message.  Here every raising signal handler is wrapped so
+that the signal is recorded, and :func:`call`, through which the solvers are called (IPOPT by
+:func:`autobal.analysis.ipopt.solve`), raises :class:`~autobal.errors.Interrupted` after the call
+whatever the solver made of the signal.
 
-The handlers are installed by the run layer (:func:`install`); SIGINT is also taken over at the first
-solver call when it still has Python's default handler (:func:`ensure`), which behaves as before
-(KeyboardInterrupt) and records the signal.
+The wrapping (:func:`ensure`) happens at the first solver call and keeps each handler's behaviour
+(Python's default SIGINT handler still raises KeyboardInterrupt; a run layer's SIGTERM handler still
+raises what it raises); a handler that does not raise is not an interrupt.  A run layer may call
+:func:`install` instead: both signals then raise Interrupted, and a watchdog ends a process whose
+solver has not stopped 2 s after the signal.
 """
 
 from __future__ import annotations
@@ -19,81 +22,96 @@ import signal
 import sys
 import threading
 
-EXIT_CODES = {signal.SIGINT: 130, signal.SIGTERM: 143}  # 128 + signal number, as a shell reports them
+from autobal.errors import Interrupted
+
+SIGNALS = (signal.SIGINT, signal.SIGTERM)
 _state = {"signum": None, "watchdog": None}
 
 
-class Interrupted(KeyboardInterrupt):
-    """The run was interrupted by ``signum`` (SIGINT or SIGTERM); exit code 128 + signum."""
-
-    def __init__(self, signum: int):
-        super().__init__(f"interrupted by {signal.Signals(signum).name}")
-        self.signum = signum
-
-    @property
-    def exit_code(self) -> int:
-        return EXIT_CODES.get(self.signum, 128 + self.signum)
-
-
-def _handler(signum, frame):
-    first = _state["signum"] is None
-    _state["signum"] = signum
-    if first and _state["watchdog"] is not None:
-        threading.Thread(target=_watchdog, args=(signum, _state["watchdog"]), daemon=True).start()
+def _raise(signum, frame):
     raise Interrupted(signum)
 
 
+def _wrap(previous):
+    """A handler that records the signal when ``previous`` raises (the interrupt), then re-raises."""
+
+    def handler(signum, frame):
+        try:
+            previous(signum, frame)
+        except BaseException:
+            first = _state["signum"] is None
+            _state["signum"] = signum
+            if first and _state["watchdog"] is not None:
+                threading.Thread(target=_watchdog, args=(signum, _state["watchdog"]), daemon=True).start()
+            raise
+
+    handler.autobal_wrapped = True
+    return handler
+
+
 def _watchdog(signum: int, seconds: float) -> None:
-    """Last resort: a solver that keeps running ``seconds`` after the signal ends the process."""
+    """Last resort: a solver still running ``seconds`` after the signal ends the process."""
     threading.Event().wait(seconds)
-    sys.stderr.write(f"autobal: interrupted by {signal.Signals(signum).name}; a solver did not stop, "
-                     f"exiting\n")
+    sys.stderr.write(f"autobal: interrupted ({signal.Signals(signum).name}); a solver did not stop, exiting\n")
     sys.stderr.flush()
-    os._exit(EXIT_CODES.get(signum, 128 + signum))
+    os._exit(128 + signum)
+
+
+def _main_thread() -> bool:
+    return threading.current_thread() is threading.main_thread()
 
 
 def install(watchdog_s: float | None = 2.0) -> None:
-    """Install the SIGINT and SIGTERM handlers (main thread only; elsewhere nothing happens).
+    """Make SIGINT and SIGTERM raise :class:`~autobal.errors.Interrupted` (main thread only).
 
     Parameters
     ----------
     watchdog_s : float or None
-        After a signal, end the process if it has not stopped within this many seconds, s;
-        None: never.
+        After a signal, end the process (exit code 128 + signal) if it has not stopped within this
+        many seconds, s; None: never.
     """
-    if threading.current_thread() is not threading.main_thread():
+    if not _main_thread():
         return
     _state["watchdog"] = watchdog_s
-    signal.signal(signal.SIGINT, _handler)
-    signal.signal(signal.SIGTERM, _handler)
+    for sig in SIGNALS:
+        signal.signal(sig, _wrap(_raise))
 
 
 def ensure() -> None:
-    """Take over SIGINT if it still has Python's default handler (main thread only)."""
-    if (threading.current_thread() is threading.main_thread()
-            and signal.getsignal(signal.SIGINT) is signal.default_int_handler):
-        signal.signal(signal.SIGINT, _handler)
+    """Wrap the current SIGINT and SIGTERM handlers that are Python functions (main thread only)."""
+    if not _main_thread():
+        return
+    for sig in SIGNALS:
+        current = signal.getsignal(sig)
+        if callable(current) and not getattr(current, "autobal_wrapped", False):
+            signal.signal(sig, _wrap(current))
 
 
 def requested() -> int | None:
-    """The signal number of an interrupt received since the last :func:`clear`, else None."""
+    """The number of the signal that interrupted the run and that no :func:`check` has raised yet, else None."""
     return _state["signum"]
 
 
 def clear() -> None:
-    """Forget a received interrupt (tests, or a caller that handled it)."""
+    """Forget a received interrupt (a caller that handled it, or tests)."""
     _state["signum"] = None
 
 
 def check() -> None:
-    """Raise :class:`Interrupted` if a signal arrived, whatever a solver made of it."""
-    if _state["signum"] is not None:
-        raise Interrupted(_state["signum"])
+    """Raise :class:`~autobal.errors.Interrupted` (once) if a signal interrupted the run."""
+    signum, _state["signum"] = _state["signum"], None
+    if signum is not None:
+        raise Interrupted(signum)
 
 
 def call(function, *args, **kwargs):
-    """``function(*args, **kwargs)`` (a CasADi solver, integrator or rootfinder) with :func:`check` after it,
-    also when it raised: an interrupt turned into a solver error is an interrupt."""
+    """``function(*args, **kwargs)`` (a CasADi solver, integrator or rootfinder), then :func:`check`,
+    also when it raised: an interrupt turned into a solver error or status is an interrupt.
+
+    Returns
+    -------
+    What ``function`` returns.
+    """
     ensure()
     check()
     try:

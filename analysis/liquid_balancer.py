@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from autobal.analysis import interrupt
 from autobal.analysis.liquid_balancer_optimum import crescent_volume, optimise
 from autobal.analysis.result import Result, fmt, new_figure
 from autobal.models import liquid_balancer as lb
@@ -425,7 +426,7 @@ def accuracy(system: System, data: dict) -> dict:
             bounded.append(key)
     w, wcr, n = system.speed, system.omega_cr, system.n
     t_end = max(6.0, 40.0 / n)  # transient decays as exp(-n t) < 5e-18
-    xf = np.asarray(jeffcott_integrator(round(t_end, 3), 60)(x0=[0, 0, 0, 0], p=[w, wcr, n])["xf"])
+    xf = np.asarray(interrupt.call(jeffcott_integrator(round(t_end, 3), 60), x0=[0, 0, 0, 0], p=[w, wcr, n])["xf"])
     x, y = xf[0, -1], xf[1, -1]
     j = {k: float(v) for k, v in lb.jeffcott(w, wcr, n).items()}
     lag = (w * round(t_end, 3) - math.atan2(y, x)) % (2 * math.pi)

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from autobal.analysis import interrupt
 from autobal.analysis.result import Result, new_figure
 from autobal.models.dynamics import DynamicModel
 
@@ -81,7 +82,7 @@ class Simulator:
         while k < n and stop is None:
             P[-1] = self.t[k]
             try:
-                X = np.array(self._f(x0=rows[-1], p=P)["xf"]).T
+                X = np.array(interrupt.call(self._f, x0=rows[-1], p=P)["xf"]).T
             except RuntimeError as exc:
                 failure = {"t": float(self.t[k]), "message": str(exc).splitlines()[-1][:200]}
                 break

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from autobal.analysis import closed_form, ipopt
+from autobal.analysis import closed_form, interrupt, ipopt
 from autobal.errors import SolveError
 from autobal.models.device import DeviceDesign, StaticSystem, static_system
 
@@ -275,10 +275,11 @@ class ParametricStatics:
             b = min(a + self.chunk, m)
             size = self.chunk if b - a == self.chunk else max(16, 1 << (b - a - 1).bit_length())
             if size == b - a:
-                call_rows(self.mapped(kind, active, size), *[r[a:b] for r in rows], out=[o[a:b] for o in outs])
+                interrupt.call(call_rows, self.mapped(kind, active, size), *[r[a:b] for r in rows],
+                               out=[o[a:b] for o in outs])
             else:  # a remainder: padded with copies of its last point to a power of two, so few sizes are built
                 pad = [np.concatenate([r[a:b], np.repeat(r[b - 1:b], size - (b - a), axis=0)]) for r in rows]
-                for o, v in zip(outs, call_rows(self.mapped(kind, active, size), *pad), strict=True):
+                for o, v in zip(outs, interrupt.call(call_rows, self.mapped(kind, active, size), *pad), strict=True):
                     o[a:b] = v[:b - a]
         return outs
 

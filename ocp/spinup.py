@@ -37,7 +37,7 @@ from functools import cache
 import casadi as ca
 import numpy as np
 
-from autobal.analysis import ipopt
+from autobal.analysis import interrupt, ipopt
 from autobal.analysis.rotor import deflection, peak, steady_q, unbalance
 from autobal.errors import SolveError
 from autobal.models.rotor import RotorParams, rotor_model
@@ -358,7 +358,7 @@ def simulate_profile(ocp: SpinupOcp, u, h, fractions, tol: float = RESIM_TOL) ->
     F = interval_integrator(tuple(fractions), tol)
     q, out = np.asarray(ocp.q0, float), []
     for uk, hk in zip(u, h, strict=True):
-        xf = np.array(F(x0=q, p=[uk * ocp.a_max, hk, *ocp.params.p])["xf"])
+        xf = np.array(interrupt.call(F, x0=q, p=[uk * ocp.a_max, hk, *ocp.params.p])["xf"])
         out.append(xf.T)
         q = xf[:, -1]
     return np.array(out)

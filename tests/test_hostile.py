@@ -17,7 +17,6 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from autobal import cli, scenario
-from autobal.errors import ScenarioError
 
 HOSTILE = Path(__file__).parent / "hostile"
 PUMP = yaml.safe_load(scenario.resolve("pump_pe600_statics").read_text())
