@@ -106,7 +106,8 @@ def check() -> None:
 
 def call(function, *args, **kwargs):
     """``function(*args, **kwargs)`` (a CasADi solver, integrator or rootfinder), then :func:`check`,
-    also when it raised: an interrupt turned into a solver error or status is an interrupt.
+    also when it raised: an interrupt turned into a solver error or status is an interrupt.  With the
+    environment variable ``AUTOBAL_SOLVER_TRACE`` set to a file, the solver's name is appended to it first.
 
     Returns
     -------
@@ -114,6 +115,10 @@ def call(function, *args, **kwargs):
     """
     ensure()
     check()
+    trace = os.environ.get("AUTOBAL_SOLVER_TRACE")
+    if trace:  # a file that receives the name of each solver called (tests wait on it to interrupt a solve)
+        with open(trace, "a") as fh:
+            fh.write(f"{function.name() if hasattr(function, 'name') else function}\n")
     try:
         out = function(*args, **kwargs)
     except BaseException:
