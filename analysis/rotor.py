@@ -68,6 +68,9 @@ def stationary_points(mu1: float, n: float) -> dict:
         for key, sign in (("1", -1), ("2", 1)):
             z = (6 * mu1 - 3 * n + sign * np.sqrt(disc)) / (2 * mu1**2)
             out["z" + key], out["M" + key] = z, float(stationary(mu1, n, z)["M"])
+    else:
+        why = "the torque has no maximum and minimum: needs mu1 > 3 n / (6 - 2 sqrt 5)"
+        out |= {f"{k}_status": why for k in ("z1", "M1", "z2", "M2")}
     # d has one maximum below z_helps: golden-section search on a bracketing grid
     zz = np.linspace(1e-3, 2 / mu1 + 1, 4001)
     i = int(np.argmax(stationary(mu1, n, zz)["d"]))

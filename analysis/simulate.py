@@ -223,6 +223,9 @@ def study(model: DynamicModel, cases: list, duration: float, points: int, integr
             "p3": X[:, model.index("psi3")] * sc["p_B"],
             "max_dz_um": float(np.abs(dz).max()), "final_dz_um": float(dz[-1]), "events": ev,
             "failure": r["failure"], "cpu_s": cpu, "t_end": float(t[-1]),
+            **({"failure_status": "none: the integrator reached the end time or a stop event"}
+               if r["failure"] is None else {}),
+            **({"frequency_status": "not a harmonic input"} if kind != "pressure_harmonic" else {}),
             "integrator_steps": r["steps"],
         })
     label = "nonlinear_chain" if model.form == "chain" else "nonlinear"

@@ -433,3 +433,103 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> Scenario:
 
 def shipped() -> list[Path]:
     return sorted(SCENARIO_DIR.glob("*.yaml"))
+
+
+# ---- predicted run time ----------------------------------------------------------------------------------
+# Seconds per unit of work on one core of the reference machine (a 2-core x86-64 laptop), calibrated on the
+# shipped scenes; an estimate within a factor of about 3, for warning before long runs, not a measurement.
+COST = {
+    "start": 1.0,  # building the solvers of an analysis
+    "ipopt_solve": 4e-3,  # one warm-started IPOPT solve of the device statics (sweep, force-gap point)
+    "mc_statics_sample": 3e-6,  # one Monte Carlo sample at one discharge ratio (mapped Newton)
+    "mc_afc_point": 3e-7,  # one Monte Carlo sample at one frequency (linear model)
+    "afc_point": 2e-4,  # one frequency of one model's AFC
+    "map_point": 3e-3,  # one point of a stability map, per model
+    "transient_point": 5e-4,  # one output time of one time response (CVODES)
+    "ocp_collocation_point": 5e-3,  # one collocation point of the spin-up OCP, per start
+    "reliability_node": 5e-7,  # one (time, load) node of the reliability integrals
+    "rotor_run": 0.5,  # one CVODES passage / step response of the rotor studies
+    "grid_point": 1e-5,  # one point of a dense cross-check grid
+    "fit": 2.0,  # one least-squares fit with its cross-checks
+}
+LONG_RUN_S = 60.0  # a run predicted to take longer says so first
+
+
+def estimate_seconds(scn: Scenario) -> dict[str, float]:
+    """Predicted wall time of each analysis of a scene, by a per-analysis cost model (:data:`COST`).
+
+    Parameters
+    ----------
+    scn : Scenario
+        A validated scene.
+
+    Returns
+    -------
+    dict
+        Analysis name -> predicted time, s (single core; an estimate within a factor of about 3).
+    """
+    from autobal.analysis.statics_study import PATH_NODES
+
+    c, a, out = COST, scn.analyses, {}
+    if a.statics is not None:
+        n = a.statics.discharge_ratio.points
+        out["statics"] = c["start"] + c["ipopt_solve"] * (n + (PATH_NODES if n > PATH_NODES else 0)
+                                                          + a.statics.force_gap_points)
+    if a.frequency is not None:
+        out["frequency"] = c["start"] + c["afc_point"] * a.frequency.omega.points * len(a.frequency.models)
+    if a.stability is not None:
+        m = a.stability.map
+        out["stability"] = c["start"] + (c["map_point"] * m.x.points * m.y.points * len(m.models) if m else 0.0)
+    if a.transient is not None:
+        out["transient"] = c["start"] + c["transient_point"] * a.transient.points * len(a.transient.cases)
+    if a.montecarlo is not None:
+        mc = a.montecarlo
+        t = c["start"] + c["mc_statics_sample"] * mc.samples * len(mc.discharge_ratio)
+        if mc.afc is not None:
+            t += c["start"] + c["mc_afc_point"] * mc.afc.samples * mc.afc.omega.points
+        out["montecarlo"] = t
+    if a.spinup is not None:
+        s = a.spinup
+        out["spinup"] = c["start"] + c["ocp_collocation_point"] * s.intervals * s.degree * (4 if s.multistart else 1)
+    if a.reliability is not None:
+        r = a.reliability
+        out["reliability"] = c["start"] + c["reliability_node"] * r.time_points * r.tau_nodes
+    if a.rotor_dynamics is not None:
+        rd, runs = a.rotor_dynamics, 0
+        runs += len(rd.steps.psi) * len(rd.steps.steps) if rd.steps else 0
+        runs += len(rd.passage.psi) * len(rd.passage.friction) * (2 if rd.passage.crossover else 1) if rd.passage else 0
+        runs += len(rd.lewis.zeta) * len(rd.lewis.accel_ratio) if rd.lewis else 0
+        runs += 1 if rd.motor_runup else 0
+        out["rotor_dynamics"] = c["start"] + c["rotor_run"] * runs
+    if a.liquid_balancer is not None:
+        lb = a.liquid_balancer
+        grid = sum(s.grid_points for s in (lb.height, lb.volume) if s is not None)
+        out["liquid_balancer"] = c["start"] + c["grid_point"] * grid * (1 + len(lb.unbalance_masses) + len(lb.liquids))
+    if a.estimation is not None:
+        out["estimation"] = c["start"] + c["fit"] * len(a.estimation.fits)
+    return out
+
+
+def long_run_note(scn: Scenario) -> str | None:
+    """One line to print before a run predicted to take more than :data:`LONG_RUN_S`, else None.
+
+    Parameters
+    ----------
+    scn : Scenario
+        A validated scene.
+
+    Returns
+    -------
+    str or None
+        E.g. "this run is estimated to take about 7 min (statics 6.8 min, ...)".
+    """
+    est = estimate_seconds(scn)
+    total = sum(est.values())
+    if total <= LONG_RUN_S:
+        return None
+
+    def fmt(s):
+        return f"{s / 60:.1f} min" if s >= 60 else f"{s:.0f} s"
+
+    parts = ", ".join(f"{k} {fmt(v)}" for k, v in sorted(est.items(), key=lambda kv: -kv[1]))
+    return f"this run is estimated to take about {fmt(total)} ({parts})"

@@ -312,3 +312,28 @@ def test_extreme_but_valid_values_run_to_a_result_or_a_failed_solve(tmp_path, ca
     assert code in (0, 3), err
     assert "Traceback" not in err
     assert os.listdir(tmp_path) == ["scene.yaml", "out"] or sorted(os.listdir(tmp_path)) == ["out", "scene.yaml"]
+
+
+# ---- work limits ---------------------------------------------------------------------------------------
+
+
+def test_shipped_scenes_are_not_predicted_long():
+    for p in scenario.shipped():
+        assert scenario.long_run_note(scenario.load(p)) is None, p.stem
+
+
+@pytest.mark.parametrize("base, path, value, analysis", [
+    (PUMP, "analyses.statics.discharge_ratio.points", 100_000, "statics"),
+    (MC, "analyses.montecarlo.samples", 2_000_000, "montecarlo"),
+    (SPIN, "analyses.spinup.intervals", 5000, "spinup"),
+    (DYN, "analyses.stability.map.x.points", 400, "stability"),
+])
+def test_a_run_at_the_size_bounds_is_announced_with_its_estimate(tmp_path, base, path, value, analysis):
+    p = tmp_path / "scene.yaml"
+    p.write_text(yaml.safe_dump(edited(base, path, value)))
+    scn = scenario.load(p)
+    small = scenario.estimate_seconds(scenario.load(scenario.resolve(base["name"])))[analysis]
+    big = scenario.estimate_seconds(scn)[analysis]
+    assert big > 60 and big > 10 * small
+    note = scenario.long_run_note(scn)
+    assert note.startswith("this run is estimated to take about") and f"{analysis} " in note
