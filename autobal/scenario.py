@@ -441,8 +441,8 @@ def shipped() -> list[Path]:
 COST = {
     "start": 1.0,  # building the solvers of an analysis
     "ipopt_solve": 4e-3,  # one warm-started IPOPT solve of the device statics (sweep, force-gap point)
-    "mc_statics_sample": 3e-6,  # one Monte Carlo sample at one discharge ratio (mapped Newton)
-    "mc_afc_point": 3e-7,  # one Monte Carlo sample at one frequency (linear model)
+    "mc_statics_sample": 1.5e-5,  # one Monte Carlo sample at one discharge ratio (mapped Newton)
+    "mc_afc_point": 1.5e-6,  # one Monte Carlo sample at one frequency (linear model)
     "afc_point": 2e-4,  # one frequency of one model's AFC
     "map_point": 3e-3,  # one point of a stability map, per model
     "transient_point": 5e-4,  # one output time of one time response (CVODES)
