@@ -84,7 +84,7 @@ class StaticsResult(Result):
         sw, fg = self.data["sweep"], self.data["force_gap"]
         cols = {k: sw[k] for k in ("psi1", *SWEEP_KEYS, "q_e", "q_T", "q_1", "Q_e", "Q_1", "Q_T",
                                    "kappa_s", "regulator_saturated", "contact")}
-        cols |= {f"closed_form_{k}": v for k, v in sw["closed_form"].items()}
+        cols |= {f"closed_form_{k}": v for k, v in sw["closed_form"].items() if not k.endswith("_status")}
         return {"statics_sweep.csv": cols,
                 "force_gap.csv": {"u": fg["u"], "phi_exact": fg["phi_exact"],
                                   "phi_closed_form": fg["phi_closed_form"]}}
