@@ -337,3 +337,16 @@ def test_a_run_at_the_size_bounds_is_announced_with_its_estimate(tmp_path, base,
     assert big > 60 and big > 5 * small
     note = scenario.long_run_note(scn)
     assert note.startswith("this run is estimated to take about") and f"{analysis} " in note
+
+
+@pytest.mark.parametrize("override, text", [
+    ("name=../../x", "set name=../../x: name:"),
+    ("device.disc.face.base_gap=inf mm", "set device.disc.face.base_gap=inf mm: device.disc.face.base_gap:"),
+    ("device.disc.face.base_gap=10**10**10 m", "is not a unit"),
+    ("device.barrier.margin_ratio=.nan", "set device.barrier.margin_ratio=.nan: device.barrier.margin_ratio:"),
+    ("analyses.statics.force_gap_points=1e12", "analyses.statics.force_gap_points"),
+])
+def test_hostile_overrides_are_refused_like_the_file(capsys, override, text):
+    assert cli.main(["check", "pump_pe600_statics", "--set", override]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and text in err, err
