@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from autobal.analysis import closed_form, workprecision
-from autobal.analysis.result import Result, fmt, new_figure
+from autobal.analysis.result import Result, fmt, new_figure, with_statuses
 from autobal.analysis.statics import StaticPoint, StaticsSolver
 from autobal.errors import SolveError
 from autobal.models.device import groups_by_name
@@ -354,7 +354,7 @@ def run(solver: StaticsSolver, settings, title: str = "") -> StaticsResult:
         "closed_form": closed, "exact": exact, "critical_exact": critical,
         "sweep": sweep, "force_gap": force_gap,
     }
-    return StaticsResult(_with_statuses(data, _null_reasons(g)))
+    return StaticsResult(with_statuses(data, _null_reasons(g), "the closed form has no physical value here"))
 
 
 def _null_reasons(g) -> dict:
@@ -369,19 +369,3 @@ def _null_reasons(g) -> dict:
                     else "the face is in contact (u = 0): the gap does not move with the force"),
         "phi_closed_form": "the closed form (2.35) is the liquid device's" if gas else None,
     }
-
-
-def _with_statuses(block: dict, reasons: dict, default: str = "the closed form has no physical value here") -> dict:
-    """``block`` with a ``<key>_status`` beside every value that is or holds NaN (null in results.json)."""
-    out = {}
-    for k, v in block.items():
-        out[k] = _with_statuses(v, reasons, default) if isinstance(v, dict) else v
-        if isinstance(v, dict | str | bool) or v is None and f"{k}_status" in block:
-            continue
-        try:
-            values = np.asarray(np.nan if v is None else v, float)
-        except (TypeError, ValueError):
-            continue
-        if not np.all(np.isfinite(values)) and f"{k}_status" not in block:
-            out[f"{k}_status"] = reasons.get(k) or default
-    return out

@@ -97,7 +97,7 @@ class MapAxis(Strict):
     @model_validator(mode="before")
     @classmethod
     def _to_si(cls, data):
-        if isinstance(data, dict) and data.get("parameter") in PARAMETERS:
+        if isinstance(data, dict) and isinstance(data.get("parameter"), str) and data["parameter"] in PARAMETERS:
             kind = PARAMETERS[data["parameter"]]
             data = dict(data)
             for k in ("start", "stop"):
