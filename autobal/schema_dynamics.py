@@ -82,7 +82,8 @@ class Frequency(Strict):
     # first model: the top-level keys (peaks, at_operating_speed); all are reported under `models`
     models: Annotated[list[ModelName], Field(min_length=1)] = ["program", "nonlinear", "nonlinear_chain"]
     forcing: Literal["appendix", "physical"] = Field("appendix", description="dtau = dpsi1 (App. A/B) or b dpsi1")
-    omega: OmegaGrid = OmegaGrid(start="10 rad/s", stop="8000 rad/s")
+    omega: OmegaGrid = Field(default_factory=lambda: OmegaGrid(start="10 rad/s", stop="8000 rad/s"),
+                             description="frequency grid; default 10 to 8000 rad/s, 600 points")
 
 
 class MapAxis(Strict):

@@ -176,7 +176,8 @@ class AfcMonteCarlo(Strict):
     operating_ratio: Positive = Field(1.0, description="psi1 of the operating point")
     forcing: Literal["appendix", "physical"] = Field(
         "appendix", description="dtau = dpsi1 (App. A/B, Fig. 3.7) or b dpsi1")
-    omega: OmegaGrid = OmegaGrid(start="100 rad/s", stop="6000 rad/s", points=120)
+    omega: OmegaGrid = Field(default_factory=lambda: OmegaGrid(start="100 rad/s", stop="6000 rad/s", points=120),
+                             description="frequency grid; default 100 to 6000 rad/s, 120 points")
     parameters: dict[str, Distribution] = Field(min_length=1)
 
 
