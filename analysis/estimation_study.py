@@ -200,7 +200,7 @@ def _fit_block(f: FitResult, curve: dict) -> dict:
                      "standard_error": st["standard_error"][i] if free else None,
                      "ci_low": st["ci_low"][i] if free else None, "ci_high": st["ci_high"][i] if free else None}
         for key in ("lower", "upper", "standard_error", "ci_low", "ci_high"):
-            if params[k][key] is None:
+            if params[k][key] is None or not np.isfinite(params[k][key]):
                 params[k][f"{key}_status"] = "a fixed parameter" if not free else "no bound given"
     data = {"load": f.load}
     for k in f.measured:

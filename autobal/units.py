@@ -134,9 +134,13 @@ def to_si(value: object, kind: str) -> float:
     if not unit:
         raise ValueError(f"{value!r} has no unit: write a {kind} with its unit, e.g. '{example}'")
     try:
-        si_value = number * unit_factor(unit, kind)
+        u = parse_unit(unit)
     except ValueError as exc:
         raise ValueError(f"{value!r}: {exc}") from None
+    if u.dimensionality != registry().get_dimensionality(dim):
+        raise ValueError(f"{value!r} is not a {kind}: expected a unit like '{example}' (SI: {si}), "
+                         f"got dimension {u.dimensionality}")
+    si_value = number * unit_factor(unit, kind)
     if not math.isfinite(number) or not math.isfinite(si_value):
         raise ValueError(f"{value!r}: a {kind} must be a finite number (it overflows in {si})")
     return si_value

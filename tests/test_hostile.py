@@ -52,7 +52,7 @@ VALUES = [
     ("parenthesised_unit", PUMP, "device.disc.face.base_gap", "0.15 (mm)", "not a unit"),
     ("unit_with_power_100", PUMP, "device.disc.face.base_gap", "0.15 mm^100", "not a unit"),
     ("unknown_unit", PUMP, "device.disc.face.base_gap", "0.15 furlongz", "not a known unit"),
-    ("wrong_dimension", PUMP, "device.disc.face.base_gap", "5 m*kg", "not a length unit"),
+    ("wrong_dimension", PUMP, "device.disc.face.base_gap", "5 m*kg", "is not a length: expected a unit like"),
     ("parsec_gap", PUMP, "device.disc.face.base_gap", "0.35 parsec", "outside the physical range"),
     ("kilometre_gap", PUMP, "device.disc.face.base_gap", "2 km", "outside the physical range"),
     ("negative_clearance", PUMP, "device.disc.inner_seal.clearance", "-0.35 mm", "must be positive"),
