@@ -199,7 +199,7 @@ def test_hostile_input_is_refused_with_one_line(tmp_path, capsys, monkeypatch, k
     assert len(lines) == 1, err
     assert "Traceback" not in err
     assert text in lines[0], lines[0]
-    assert elapsed < 5, f"validation took {elapsed:.1f} s"
+    assert elapsed < 30, f"validation took {elapsed:.1f} s (a hang?)"
     assert files_under(work) == set(), "check wrote files"
     assert not Path("/tmp/autobal_hostile_pwned").exists()
 
@@ -225,7 +225,7 @@ def test_a_unit_expression_is_never_evaluated():
     t0 = time.perf_counter()
     with pytest.raises(ValueError, match="is not a unit"):
         scenario.Scenario.model_validate(edited(PUMP, "device.operating.nominal_pressure", "10**10**10 Pa"))
-    assert time.perf_counter() - t0 < 1.0
+    assert time.perf_counter() - t0 < 5.0  # pint would not return at all
 
 
 # ---- mutations of the shipped scenes --------------------------------------------------------------------
