@@ -192,3 +192,30 @@ Density = quantity("density")
 Viscosity = quantity("viscosity")
 VolumeFlow = quantity("volume flow")
 AngularSpeed = quantity("angular speed")
+
+
+def si_unit_of(text: object) -> str:
+    """The SI unit of a value written with a unit ('0.35 mm' -> 'm'), read by the same strict grammar;
+    '' if it is not a number with a unit of one of the :data:`DIMENSIONS`.
+
+    Parameters
+    ----------
+    text : object
+        A scene value as written.
+
+    Returns
+    -------
+    str
+    """
+    m = _QUANTITY.fullmatch(text) if isinstance(text, str) else None
+    if m is None or not m.group(2):
+        return ""
+    try:
+        u = parse_unit(m.group(2))
+    except ValueError:
+        return ""
+    ureg = registry()
+    for dim, si, _, _ in DIMENSIONS.values():
+        if u.dimensionality == ureg.get_dimensionality(dim):
+            return si
+    return ""
