@@ -118,7 +118,7 @@ def call(function, *args, **kwargs):
     trace = os.environ.get("AUTOBAL_SOLVER_TRACE")
     if trace:  # a file that receives the name of each solver called (tests wait on it to interrupt a solve)
         with open(trace, "a") as fh:
-            fh.write(f"{function.name() if hasattr(function, 'name') else function}\n")
+            fh.write(f"{function.name() if callable(getattr(function, 'name', None)) else function.__name__}\n")
     try:
         out = function(*args, **kwargs)
     except BaseException:

@@ -61,14 +61,14 @@ def test_sigint_during_the_spinup_ipopt_solve(tmp_path):
 
 @pytest.mark.slow
 def test_sigint_during_the_monte_carlo(tmp_path):
-    code, lines, out, seconds = interrupted_run(tmp_path, "pump_pe600_montecarlo", "mapped_statics", signal.SIGINT)
+    code, lines, out, seconds = interrupted_run(tmp_path, "pump_pe600_montecarlo", "call_rows", signal.SIGINT)
     assert_interrupted(code, lines, out, seconds, 130, "SIGINT")
     assert json.loads((out / "interrupted.json").read_text())["analysis"] == "montecarlo"
 
 
 @pytest.mark.slow
 def test_sigterm_during_the_monte_carlo(tmp_path):
-    code, lines, out, seconds = interrupted_run(tmp_path, "pump_pe600_montecarlo", "mapped_statics", signal.SIGTERM)
+    code, lines, out, seconds = interrupted_run(tmp_path, "pump_pe600_montecarlo", "call_rows", signal.SIGTERM)
     assert_interrupted(code, lines, out, seconds, 143, "SIGTERM")
 
 
