@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from autobal.analysis.design import UNITS, DesignProblem, Evaluation, Spec
-from autobal.analysis.result import Result, fmt, new_figure
+from autobal.analysis.result import Result, fmt, new_figure, with_statuses
 from autobal.errors import SolveError
 from autobal.models.device import DeviceParams
 
@@ -68,7 +68,8 @@ class DesignResult(Result):
         return self.data["optimum"]["margin"]
 
     def to_dict(self) -> dict:
-        return self.data
+        return with_statuses(self.data, default="no value at this operating point: the design has no static "
+                             "solution or spectral abscissa there (NaN)")
 
     def summary(self) -> str:
         d = self.data

@@ -199,6 +199,9 @@ def _fit_block(f: FitResult, curve: dict) -> dict:
                      "lower": f.bounds[k][0] if free else None, "upper": f.bounds[k][1] if free else None,
                      "standard_error": st["standard_error"][i] if free else None,
                      "ci_low": st["ci_low"][i] if free else None, "ci_high": st["ci_high"][i] if free else None}
+        for key in ("lower", "upper", "standard_error", "ci_low", "ci_high"):
+            if params[k][key] is None or not np.isfinite(params[k][key]):
+                params[k][f"{key}_status"] = "a fixed parameter" if not free else "no bound given"
     data = {"load": f.load}
     for k in f.measured:
         data[k] = {"measured": f.measured[k], "fitted": f.fitted[k], "residual": f.fitted[k] - f.measured[k]}
@@ -365,7 +368,9 @@ def run(settings, device: DeviceParams | None = None, title: str = "") -> Estima
         "title": title,
         "data": {"file": data.path.name, "points": data.points, "columns": data.units,
                  "groups": int(len(np.unique(group))) if group is not None else None, "provenance": data.comments},
-        "bases": bases, "fits": fits, "closed_forms": closed, "adequacy_reference": reference,
+        "bases": bases | {f"{k}_status": "not given in the scene (not needed by its fits)" for k, v in bases.items()
+                          if v is None},
+        "fits": fits, "closed_forms": closed, "adequacy_reference": reference,
         "loss_coefficient": loss,
         "accuracy": {"estimate": max(diffs) if diffs else None,
                      "how": "largest difference of a fitted parameter between IPOPT and scipy least_squares on "

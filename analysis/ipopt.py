@@ -5,6 +5,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from autobal.analysis import interrupt
+
 # Tight tolerances: the statics are small, well-scaled (dimensionless) and solved to
 # machine-level residuals; bound_relax_factor = 0 keeps bounds (u >= 0, xi <= xi_max) exact.
 COLD = {
@@ -41,8 +43,12 @@ def nlpsol(name: str, x, p, f, g, warm: bool = False, hess_lag: ca.Function | No
 
 
 def solve(solver: ca.Function, **args) -> dict:
-    """Call ``solver``; return its outputs as numpy arrays plus status, success, iterations."""
-    out = solver(**args)
+    """Call ``solver``; return its outputs as numpy arrays plus status, success, iterations.
+
+    An interrupt (SIGINT, SIGTERM) during the solve raises :class:`autobal.analysis.interrupt.Interrupted`
+    instead of coming back as a solver status.
+    """
+    out = interrupt.call(solver, **args)
     stats = solver.stats()
     res = {k: np.asarray(v).ravel() for k, v in out.items()}
     res["status"] = stats["return_status"]

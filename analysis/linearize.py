@@ -221,5 +221,9 @@ def coefficient_table(setup: Setup) -> dict:
             diff.append(f"energy form: {e + 0.0:.4g} (sign differs)" if e * c < 0 else f"energy form: {e + 0.0:.4g}")
         if diff:
             notes[k] = "; ".join(diff)
-    return {"names": names, "columns": {m: [v.get(k, math.nan) for k in names] for m, v in cols.items()},
-            "notes": notes, "extra": extra}
+    columns = {m: [v.get(k, math.nan) for k in names] for m, v in cols.items()}
+    for m, v in cols.items():
+        if any(k not in v for k in names):
+            columns[f"{m}_status"] = (f"null where the {m} model has no such constant: "
+                                      + ", ".join(k for k in names if k not in v))
+    return {"names": names, "columns": columns, "notes": notes, "extra": extra}

@@ -19,8 +19,9 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from autobal.analysis import interrupt
 from autobal.analysis.liquid_balancer_optimum import crescent_volume, optimise
-from autobal.analysis.result import Result, fmt, new_figure
+from autobal.analysis.result import Result, fmt, new_figure, with_statuses
 from autobal.models import liquid_balancer as lb
 from autobal.models.liquid_balancer import System
 
@@ -128,6 +129,16 @@ def pashkov(system: System, kappa: float = 1.0) -> dict:
     return out
 
 
+NO_EQUILIBRIUM = "no equilibrium angle: (2.13) has no real root at this speed ratio (null)"
+# why a value of the block can be NaN (null in results.json); other nulls take their mapping's reason
+NULL_REASONS = {k: NO_EQUILIBRIUM for k in ("alpha0_deg", "lambda0", "lambda0_printed", "lambda0_program",
+                                            "lambda0_corrected", "lambda0_self_consistent",
+                                            "lambda0_self_consistent_minus", "lambda0_zone_min",
+                                            "lambda0_zone_max", "extremum_k_star", "extremum_lambda0_max")}
+NULL_REASONS |= {"upper_bound": "no upper bound", "optimum_over_R": "no optimum: the objective has no interior "
+                 "extremum", "chosen": "no candidate liquid has a finite viscous zone"}
+
+
 @dataclass
 class LiquidBalancerResult(Result):
     """The liquid auto-balancer study of one system (Khomyak (2020), ch. 2-3; Pashkov (2010), ch. 3).
@@ -157,7 +168,7 @@ class LiquidBalancerResult(Result):
         return None if o is None or not np.isfinite(o["optimum"]) else float(o["optimum"])
 
     def to_dict(self) -> dict:
-        return self.data
+        return with_statuses(self.data, NULL_REASONS)
 
     def summary(self) -> str:
         d = self.data
@@ -425,7 +436,7 @@ def accuracy(system: System, data: dict) -> dict:
             bounded.append(key)
     w, wcr, n = system.speed, system.omega_cr, system.n
     t_end = max(6.0, 40.0 / n)  # transient decays as exp(-n t) < 5e-18
-    xf = np.asarray(jeffcott_integrator(round(t_end, 3), 60)(x0=[0, 0, 0, 0], p=[w, wcr, n])["xf"])
+    xf = np.asarray(interrupt.call(jeffcott_integrator(round(t_end, 3), 60), x0=[0, 0, 0, 0], p=[w, wcr, n])["xf"])
     x, y = xf[0, -1], xf[1, -1]
     j = {k: float(v) for k, v in lb.jeffcott(w, wcr, n).items()}
     lag = (w * round(t_end, 3) - math.atan2(y, x)) % (2 * math.pi)

@@ -32,7 +32,7 @@ from autobal.analysis.montecarlo_statics import (
     sensitivities,
     simulate,
 )
-from autobal.analysis.result import Result, new_figure
+from autobal.analysis.result import Result, new_figure, with_statuses
 from autobal.analysis.sampling import Sampler, correlation_matrix, marginals, relative_standard_errors, statistics
 from autobal.analysis.statics import RESIDUAL_TOL, StaticsSolver
 from autobal.errors import ScenarioError
@@ -72,7 +72,9 @@ class MonteCarloResult(Result):
         return np.asarray(self.data["saturated_fraction"])
 
     def to_dict(self) -> dict:
-        return self.data
+        return with_statuses(self.data, {"correlation": "no correlations given: the parameters are independent"},
+                             "null where the valve opening xi has no spread (the valve on its stop at every "
+                             "sample) or the source's closed form has no valve opening (the valve saturates)")
 
     def summary(self) -> str:
         d = self.data

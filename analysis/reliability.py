@@ -275,6 +275,9 @@ def run(settings, title: str = "") -> ReliabilityResult:
             "mttf_infinite_h": model.sojourn() / HOUR,
             "time_at_h": model.time_at(settings.reliable_probability, horizon) / HOUR,
         }
+        if not np.isfinite(data[name]["time_at_h"]):
+            data[name]["time_at_h_status"] = (f"P(t) is not {settings.reliable_probability} at any time up to the "
+                                              f"horizon (P(0) = {data[name]['P0']:.4g})")
         data["curve"] = data.get("curve", {"t_h": t / HOUR}) | {f"P_{name}": p}
     data["curve"]["P_wear_le_base_gap"] = lit.wear.wear_probability(1.0, data["curve"]["t_h"] * HOUR)
     chi = np.linspace(0.5, 4.0 * derived["chi0"], 200)

@@ -152,3 +152,43 @@ class Result:
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.name}>"
+
+
+def with_statuses(block: dict, reasons: dict | None = None, default: str = "no value here (NaN)") -> dict:
+    """A copy of ``block`` with a ``<key>_status`` beside every value that is or holds NaN or None (null in
+    results.json), so that no null goes unexplained.  The status is ``reasons[key]``, else the mapping's own
+    non-empty ``reason``, else ``default``; nested mappings and lists of mappings are treated alike.
+
+    Parameters
+    ----------
+    block : dict
+        A results.json block.
+    reasons : dict, optional
+        Key -> why its value can be null.
+    default : str
+        The status where neither says why.
+
+    Returns
+    -------
+    dict
+    """
+    reasons = reasons or {}
+    own = block.get("reason") if isinstance(block.get("reason"), str) and block.get("reason") else None
+    out = {}
+    for k, v in block.items():
+        if isinstance(v, dict):
+            out[k] = with_statuses(v, reasons, default)
+            continue
+        if isinstance(v, list | tuple) and v and all(isinstance(x, dict) for x in v):
+            out[k] = [with_statuses(x, reasons, default) for x in v]
+            continue
+        out[k] = v
+        if isinstance(v, str | bool) or f"{k}_status" in block:
+            continue
+        try:
+            values = np.asarray(np.nan if v is None else v, float)
+        except (TypeError, ValueError):
+            continue
+        if not np.all(np.isfinite(values)):
+            out[f"{k}_status"] = reasons.get(k) or own or default
+    return out

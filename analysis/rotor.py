@@ -24,6 +24,7 @@ import casadi as ca
 import numpy as np
 from scipy.optimize import brentq
 
+from autobal.analysis import interrupt
 from autobal.models.rotor import RotorParams, rotor_model
 
 TOL = 1e-10  # CVODES relative and absolute tolerance of the studies (states are O(1)-O(100))
@@ -67,6 +68,9 @@ def stationary_points(mu1: float, n: float) -> dict:
         for key, sign in (("1", -1), ("2", 1)):
             z = (6 * mu1 - 3 * n + sign * np.sqrt(disc)) / (2 * mu1**2)
             out["z" + key], out["M" + key] = z, float(stationary(mu1, n, z)["M"])
+    else:
+        why = "the torque has no maximum and minimum: needs mu1 > 3 n / (6 - 2 sqrt 5)"
+        out |= {f"{k}_status": why for k in ("z1", "M1", "z2", "M2")}
     # d has one maximum below z_helps: golden-section search on a bracketing grid
     zz = np.linspace(1e-3, 2 / mu1 + 1, 4001)
     i = int(np.argmax(stationary(mu1, n, zz)["d"]))
@@ -155,7 +159,7 @@ def simulate(p: RotorParams, q0, a_seg, h_seg, points: int = 16, tol: float = TO
     pv = list(p.p)
     qs, taus, q, t0 = [np.asarray(q0, float)[:, None]], [np.zeros(1)], np.asarray(q0, float), 0.0
     for a, h in zip(a_seg, h_seg, strict=True):
-        out = np.array(F(x0=q, p=[a, h, *pv])["xf"])
+        out = np.array(interrupt.call(F, x0=q, p=[a, h, *pv])["xf"])
         qs.append(out)
         taus.append(t0 + h * np.linspace(0, 1, points + 1)[1:])
         q, t0 = out[:, -1], t0 + h
@@ -247,7 +251,7 @@ def motor_runup(p: RotorParams, stall: float, no_load: float, tau_end: float, q0
     F = ca.integrator("motor", "cvodes", {"x": q, "ode": m.ode_torque(q, L, p.p)}, 0, grid,
                       {"abstol": TOL, "reltol": TOL, "max_num_steps": 200000})
     q0 = [0, 0, 0, 0, 0] if q0 is None else q0
-    qq = np.hstack([np.asarray(q0, float)[:, None], np.array(F(x0=q0)["xf"])])
+    qq = np.hstack([np.asarray(q0, float)[:, None], np.array(interrupt.call(F, x0=q0)["xf"])])
     tau = np.concatenate([[0.0], grid])
     nu_cr = np.sqrt(p.psi)
     return {"tau": tau, "nu": qq[4], "delta": deflection(qq), "nu_final": float(qq[4, -1]),

@@ -177,7 +177,7 @@ def stationary_part(P: RotorParams, cases, z) -> tuple[dict, dict]:
     for mu1, n in cases:
         sp = R.stationary_points(mu1, n)
         rows.append({k: sp[k] for k in ("mu1", "n", "z_kp", "a_kp", "z_helps", "a_inf", "z1", "M1", "z2", "M2",
-                                        "d_max", "z_d_max")})
+                                        "d_max", "z_d_max")} | {k: v for k, v in sp.items() if k.endswith("_status")})
         curves[(mu1, n)] = R.stationary(mu1, n, z)
     nu = np.sqrt(np.asarray(z))
     ss = R.steady_state(P, nu)

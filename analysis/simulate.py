@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from autobal.analysis import interrupt
 from autobal.analysis.result import Result, new_figure
 from autobal.models.dynamics import DynamicModel
 
@@ -81,7 +82,7 @@ class Simulator:
         while k < n and stop is None:
             P[-1] = self.t[k]
             try:
-                X = np.array(self._f(x0=rows[-1], p=P)["xf"]).T
+                X = np.array(interrupt.call(self._f, x0=rows[-1], p=P)["xf"]).T
             except RuntimeError as exc:
                 failure = {"t": float(self.t[k]), "message": str(exc).splitlines()[-1][:200]}
                 break
@@ -222,6 +223,9 @@ def study(model: DynamicModel, cases: list, duration: float, points: int, integr
             "p3": X[:, model.index("psi3")] * sc["p_B"],
             "max_dz_um": float(np.abs(dz).max()), "final_dz_um": float(dz[-1]), "events": ev,
             "failure": r["failure"], "cpu_s": cpu, "t_end": float(t[-1]),
+            **({"failure_status": "none: the integrator reached the end time or a stop event"}
+               if r["failure"] is None else {}),
+            **({"frequency_status": "not a harmonic input"} if kind != "pressure_harmonic" else {}),
             "integrator_steps": r["steps"],
         })
     label = "nonlinear_chain" if model.form == "chain" else "nonlinear"

@@ -228,7 +228,8 @@ class StabilityResult(Result):
             out[f"poles_{m}.csv"] = {"real": v["poles"]["real"], "imag": v["poles"]["imag"],
                                      "damping_ratio": v["damping_ratio"], "natural_frequency": v["natural_frequency"]}
         co = self.data["coefficients"]
-        out["coefficients.csv"] = ({"name": co["names"]} | co["columns"]
+        columns = {m: v for m, v in co["columns"].items() if not m.endswith("_status")}
+        out["coefficients.csv"] = ({"name": co["names"]} | columns
                                    | {"note": [co["notes"].get(k, "") for k in co["names"]]})
         for m, mp in self.data.get("maps", {}).items():
             X, Y = np.meshgrid(mp["x"]["values"], mp["y"]["values"])

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from autobal.analysis import closed_form, ipopt
+from autobal.analysis import closed_form, interrupt, ipopt
 from autobal.errors import SolveError
 from autobal.models.device import DeviceDesign, StaticSystem, static_system
 
@@ -34,6 +34,10 @@ CONTINUATION_START, CONTINUATION_STEPS = 0.25, 16  # fallback path in psi1 when 
 NEWTON_ABSTOL = 1e-14  # the Newton rootfinder stops when every balance's |residual| is below this
 FAST_NEWTON_ITER = 12  # batched Newton evaluations before the points left go to CasADi's rootfinder
 RESIDUAL_TOL = 1e-10  # a Newton root is accepted below this largest absolute balance residual
+# IPOPT stalls (search direction too small) where a square-root throttle's flow reverses: its derivative is
+# ~1e5 there and the balance's own terms vanish.  Such a point is kept when every balance is within this of
+# its largest term (absolute error ~1e-12 of the flows), with IPOPT's status beside it.
+STALLED_RESIDUAL = 1e-6
 
 
 @dataclass
@@ -271,10 +275,11 @@ class ParametricStatics:
             b = min(a + self.chunk, m)
             size = self.chunk if b - a == self.chunk else max(16, 1 << (b - a - 1).bit_length())
             if size == b - a:
-                call_rows(self.mapped(kind, active, size), *[r[a:b] for r in rows], out=[o[a:b] for o in outs])
+                interrupt.call(call_rows, self.mapped(kind, active, size), *[r[a:b] for r in rows],
+                               out=[o[a:b] for o in outs])
             else:  # a remainder: padded with copies of its last point to a power of two, so few sizes are built
                 pad = [np.concatenate([r[a:b], np.repeat(r[b - 1:b], size - (b - a), axis=0)]) for r in rows]
-                for o, v in zip(outs, call_rows(self.mapped(kind, active, size), *pad), strict=True):
+                for o, v in zip(outs, interrupt.call(call_rows, self.mapped(kind, active, size), *pad), strict=True):
                     o[a:b] = v[:b - a]
         return outs
 
@@ -447,10 +452,13 @@ class StaticsSolver:
         if start is not None:
             res = self._check(ipopt.solve(self._warm, **args, x0=start.x, lam_x0=start.lam["x"],
                                           lam_g0=start.lam["g"]))
-            if res["success"]:
-                return self._point(psi1, dpsi, res)
+            point = self._point(psi1, dpsi, res)
+            if res["success"] or self._stalled_at_root(point):
+                return point
         res = self._check(ipopt.solve(self._cold, **args, x0=self.guess(psi1, dpsi)))
         point = self._point(psi1, dpsi, res)
+        if self._stalled_at_root(point):
+            return point
         if not res["success"] and start is None and psi1 > CONTINUATION_START:
             # homotopy in the discharge ratio from a low, regulated pressure, warm-started along the path
             try:
@@ -590,6 +598,11 @@ class StaticsSolver:
         return out[0] if np.ndim(x) == 1 else out
 
     # ---- internals ---------------------------------------------------------------------------
+    @staticmethod
+    def _stalled_at_root(point: StaticPoint) -> bool:
+        """IPOPT stopped for a too small search direction at a root to :data:`STALLED_RESIDUAL`."""
+        return point.status == "Search_Direction_Becomes_Too_Small" and point.max_residual <= STALLED_RESIDUAL
+
     def _bounds(self) -> dict:
         lo, hi = np.array(self.system.lower, float), np.array(self.system.upper, float)
         return {"lbx": lo, "ubx": hi, "lbg": 0, "ubg": 0}

@@ -12,12 +12,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from autobal.analysis import closed_form, workprecision
-from autobal.analysis.result import Result, fmt, new_figure
+from autobal.analysis.result import Result, fmt, new_figure, with_statuses
 from autobal.analysis.statics import StaticPoint, StaticsSolver
 from autobal.errors import SolveError
 from autobal.models.device import groups_by_name
 
 SWEEP_KEYS = ("psi_e", "psi2", "psi3", "psi_cam", "u", "xi")
+PATH_NODES = 257  # continuation nodes across a sweep's range, whatever the number of requested points
+MAX_HALVINGS = 6  # a failed continuation step is halved at most this many times
 
 
 @dataclass
@@ -82,7 +84,7 @@ class StaticsResult(Result):
         sw, fg = self.data["sweep"], self.data["force_gap"]
         cols = {k: sw[k] for k in ("psi1", *SWEEP_KEYS, "q_e", "q_T", "q_1", "Q_e", "Q_1", "Q_T",
                                    "kappa_s", "regulator_saturated", "contact")}
-        cols |= {f"closed_form_{k}": v for k, v in sw["closed_form"].items()}
+        cols |= {f"closed_form_{k}": v for k, v in sw["closed_form"].items() if not k.endswith("_status")}
         return {"statics_sweep.csv": cols,
                 "force_gap.csv": {"u": fg["u"], "phi_exact": fg["phi_exact"],
                                   "phi_closed_form": fg["phi_closed_form"]}}
@@ -203,6 +205,72 @@ def _criticals(solver: StaticsSolver, psi1: float, dpsi: float, psi1_guess: floa
     return out
 
 
+def continuation(solver: StaticsSolver, psi1s, dpsi: float,
+                 span: tuple[float, float] | None = None) -> list[StaticPoint]:
+    """Statics over the discharge ratios ``psi1s`` by a continuation that does not depend on their spacing.
+
+    A grid of at most :data:`PATH_NODES` points is solved as one continuation path, each point
+    warm-started from the one before.  A denser grid is not: a path of :data:`PATH_NODES` evenly
+    spaced nodes across ``span`` is solved first, and each requested point is warm-started from its
+    nearest node, so a 100,000-point sweep takes the same continuation steps as a 1,000-point one
+    (thousands of tiny warm-started steps drift into a point IPOPT cannot leave, e.g. the compressor
+    at psi1 = 1.26162 where its regulator saturates).  A step that fails is halved (at most
+    :data:`MAX_HALVINGS` times) before the sweep gives up.
+
+    Parameters
+    ----------
+    solver : StaticsSolver
+        The device's solver.
+    psi1s : array_like
+        Increasing discharge pressure ratios psi1 = p1/p_B, dimensionless.
+    dpsi : float
+        Margin ratio dpsi = (p_e - p1)/p_B, dimensionless.
+    span : (float, float), optional
+        The range the continuation path spans; default the ends of ``psi1s``.  A part of a dense grid
+        solved with the whole grid's span gives exactly the whole grid's values at those points.
+
+    Returns
+    -------
+    list of StaticPoint
+        One per requested point.
+
+    Raises
+    ------
+    SolveError
+        A point that no halving of its continuation step reaches.
+    """
+    psi1s = np.asarray(psi1s, float)
+    if span is None and len(psi1s) <= PATH_NODES:
+        return _path(solver, psi1s, dpsi)
+    lo, hi = span if span is not None else (psi1s[0], psi1s[-1])
+    nodes = _path(solver, np.linspace(lo, hi, PATH_NODES), dpsi)
+    at = np.array([p.psi1 for p in nodes])
+    out = []
+    for s in psi1s:
+        near = nodes[int(np.argmin(np.abs(at - s)))]
+        out.append(near if near.psi1 == s else _step(solver, near, float(s), dpsi))
+    return out
+
+
+def _path(solver: StaticsSolver, psi1s: np.ndarray, dpsi: float) -> list[StaticPoint]:
+    """A continuation path: the first point cold, each next one from the one before."""
+    points = [solver.solve(float(psi1s[0]), dpsi)]
+    for s in psi1s[1:]:
+        points.append(_step(solver, points[-1], float(s), dpsi))
+    return points
+
+
+def _step(solver: StaticsSolver, start: StaticPoint, psi1: float, dpsi: float, halvings: int = 0) -> StaticPoint:
+    """One continuation step from ``start`` to ``psi1``, halved while it fails."""
+    try:
+        return solver.solve(psi1, dpsi, start)
+    except SolveError:
+        if halvings >= MAX_HALVINGS:
+            raise
+    mid = _step(solver, start, 0.5 * (start.psi1 + psi1), dpsi, halvings + 1)
+    return _step(solver, mid, psi1, dpsi, halvings + 1)
+
+
 def run(solver: StaticsSolver, settings, title: str = "") -> StaticsResult:
     """Operating point, criticals, continuation sweep and force-gap curve of one device."""
     dev = solver.design
@@ -237,7 +305,7 @@ def run(solver: StaticsSolver, settings, title: str = "") -> StaticsResult:
     r = settings.discharge_ratio
     grid = np.linspace(r.start, r.stop, r.points)
     try:
-        points = solver.sweep(grid, dpsi)
+        points = continuation(solver, grid, dpsi)
     except SolveError as exc:
         reg = g.regulator
         xi = cf_xi(g, grid, dpsi) if reg is not None else np.zeros(1)
@@ -286,4 +354,18 @@ def run(solver: StaticsSolver, settings, title: str = "") -> StaticsResult:
         "closed_form": closed, "exact": exact, "critical_exact": critical,
         "sweep": sweep, "force_gap": force_gap,
     }
-    return StaticsResult(data)
+    return StaticsResult(with_statuses(data, _null_reasons(g), "the closed form has no physical value here"))
+
+
+def _null_reasons(g) -> dict:
+    """Why a value of the statics block is NaN (null in results.json), by key."""
+    no_reg = "the device has no regulator" if g.regulator is None else None
+    gas = g.medium == "gas"
+    return {
+        "xi": no_reg or "no valve opening of the ideal regulator (2.28) passes the barrier flow: the valve saturates",
+        "xi0": no_reg or "no valve opening of the ideal regulator (2.28) passes the barrier flow: the valve saturates",
+        "psi_cam": no_reg, "psi_cam0": no_reg, "x0": no_reg, "pcam": no_reg,
+        "kappa_s": ("no fixed-pressure closed form of the stiffness for the gas device (see kappa_u_2_162)" if gas
+                    else "the face is in contact (u = 0): the gap does not move with the force"),
+        "phi_closed_form": "the closed form (2.35) is the liquid device's" if gas else None,
+    }

@@ -122,7 +122,7 @@ def meta(scene: Scenario) -> dict:
     return {"autobal_version": __version__,
             "timestamp": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
             "python": sys.version.split()[0], "platform": platform.platform(),
-            **scene._origin, "scene_si": scene.model_dump(mode="json")}
+            **scene._origin, "scene_si": scene.model_dump(mode="json", exclude_none=True)}
 
 
 def analyses(scene: Scenario) -> list[str]:

@@ -20,7 +20,7 @@ import numpy as np
 
 from autobal.errors import ScenarioError
 from autobal.paths import SCENARIO_DIR
-from autobal.units import DIMENSIONS, UREG
+from autobal.units import DIMENSIONS, unit_factor
 
 # quantity name -> (role, unit kind or None when dimensionless, meaning)
 QUANTITIES = {
@@ -89,16 +89,10 @@ def _unit_factor(path: Path, name: str, unit: str) -> float:
         dimensional = next((k for k, v in QUANTITIES.items() if v[0] == role and v[1] is not None), None)
         hint = f", or '{dimensional} [{DIMENSIONS[QUANTITIES[dimensional][1]][1]}]'" if dimensional else ""
         raise ScenarioError(f"{path}: column {cell}: {name} is dimensionless: write '{name} [1]'{hint}")
-    dim, si, example = DIMENSIONS[kind]
     try:
-        q = UREG.Quantity(1.0, unit.strip())
-    except Exception:
-        raise ScenarioError(f"{path}: column {cell}: cannot read unit {unit!r} (a {kind}, e.g. "
-                            f"'{example.split()[-1]}')") from None
-    if q.dimensionality != UREG.get_dimensionality(dim):
-        raise ScenarioError(f"{path}: column {cell}: {unit!r} is not a {kind} unit "
-                            f"(e.g. '{example.split()[-1]}', SI {si})")
-    return float(q.to(si).magnitude)
+        return unit_factor(unit, kind)
+    except ValueError as exc:
+        raise ScenarioError(f"{path}: column {cell}: {exc} (a {kind})") from None
 
 
 def resolve(path: str | Path) -> Path:

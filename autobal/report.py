@@ -29,7 +29,7 @@ import yaml
 from autobal.analysis.result import plain
 from autobal.errors import ScenarioError
 from autobal.schema_dynamics import PARAMETERS
-from autobal.units import DIMENSIONS, UREG
+from autobal.units import DIMENSIONS, si_unit_of
 
 REPORT = "report.html"
 STATUS_FILES = ("failed_solve.json", "interrupted.json", "error.json")
@@ -945,18 +945,7 @@ def _flat(data, path: str = "") -> dict:
 
 def _si_unit_of(given) -> str:
     """The SI unit of a value written with a unit ('0.35 mm' -> 'm'), '' if it has none."""
-    if not isinstance(given, str):
-        return ""
-    try:
-        q = UREG.Quantity(given)
-    except Exception:  # noqa: BLE001 (words, not a quantity)
-        return ""
-    if q.dimensionless:
-        return ""
-    for dim, si, _ in DIMENSIONS.values():
-        if q.dimensionality == UREG.get_dimensionality(dim):
-            return si.replace("**", "^")
-    return ""
+    return si_unit_of(given).replace("**", "^")
 
 
 def inputs(meta: dict) -> tuple[list[list[dict]], str]:

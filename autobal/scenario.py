@@ -16,7 +16,7 @@ from pydantic import Field, PrivateAttr, ValidationError, model_validator
 
 from autobal.errors import ScenarioError
 from autobal.paths import SCENARIO_DIR
-from autobal.schema import NonNegative, Positive, Range, Strict
+from autobal.schema import MAX_FORCE_GAP_POINTS, NonNegative, Positive, PressureRatio, Range, Strict
 from autobal.schema_design import Design
 from autobal.schema_dynamics import Dynamics, Frequency, Stability, Transient
 from autobal.schema_estimation import Estimation
@@ -37,29 +37,40 @@ from autobal.units import (
 )
 
 
+def _d(text: str, default=..., **kw):
+    """A field with its meaning for the schema reference (units are added by the quantity types)."""
+    return Field(default, description=text, **kw)
+
+
 class Fluid(Strict):
-    density: Density  # liquid density, or gas density at normal conditions
-    viscosity: Viscosity
-    normal_pressure: Pressure | None = None  # gas only: pressure of normal conditions (2.128)
+    """The working fluid of the balancing device."""
+
+    density: Density = _d("liquid density, or gas density at normal conditions (rho)")
+    viscosity: Viscosity = _d("dynamic viscosity (mu)")
+    normal_pressure: Pressure | None = _d("gas only: pressure of the normal conditions of the density, "
+                                          "Pavlenko (2014), Eq. (2.128)", None)
 
 
 class Impeller(Strict):
-    """Impeller data for the axial-force ratio b (2.18), App. A L3125."""
+    """Impeller data for the axial-force ratio b, Pavlenko (2014), Eq. (2.18) and Appendix A."""
 
-    hub_radius: Length  # R0
-    shroud_radius: Length  # R1
-    outer_radius: Length  # R2
-    stages: Annotated[int, Field(ge=1)]
-    speed: AngularSpeed
+    hub_radius: Length = _d("hub radius R0")
+    shroud_radius: Length = _d("shroud seal radius R1")
+    outer_radius: Length = _d("impeller outer radius R2")
+    stages: Annotated[int, Field(ge=1, le=100)] = _d("number of stages, 1 to 100")
+    speed: AngularSpeed = _d("rotational speed")
 
 
 class Operating(Strict):
-    nominal_pressure: Pressure  # p_n = p_B
-    nominal_thrust: Force  # T_n; s_B = T_n / p_n
-    nominal_flow: VolumeFlow | None = None  # Q_n, for Q_e / Q_n
-    drain_pressure: PressureOrZero = 0.0  # p4
-    thrust_ratio: Positive | None = None  # b in tau = b psi1; from the impeller when omitted
-    impeller: Impeller | None = None
+    """Nominal operating data of the machine; the bases p_B and s_B of the dimensionless groups."""
+
+    nominal_pressure: Pressure = _d("nominal discharge pressure p_n = p_B, the pressure base")
+    nominal_thrust: Force = _d("nominal axial thrust T_n; the area base is s_B = T_n / p_n")
+    nominal_flow: VolumeFlow | None = _d("nominal flow Q_n of the machine, for Q_e / Q_n", None)
+    drain_pressure: PressureOrZero = _d("drain pressure p4 behind the outer seal", 0.0)
+    thrust_ratio: Positive | None = _d("b in tau = b psi1, dimensionless; computed from the impeller when "
+                                       "omitted", None)
+    impeller: Impeller | None = _d("impeller data, to compute thrust_ratio", None)
 
     @model_validator(mode="after")
     def _b_given(self):
@@ -71,28 +82,28 @@ class Operating(Strict):
 class InnerSeal(Strict):
     """Laminar annular bushing seal, g1 = pi d h^3 / (12 mu l)."""
 
-    diameter: Length
-    length: Length
-    clearance: Length
+    diameter: Length = _d("seal diameter d1")
+    length: Length = _d("seal length l1")
+    clearance: Length = _d("radial clearance h1")
 
 
 class OuterSeal(Strict):
     """Square-root-law annular seal, zeta = zeta_local + lambda l / (2h)."""
 
-    diameter: Length
-    length: Length
-    clearance: Length
-    local_loss: NonNegative = 1.5
-    friction: Positive = 0.06
+    diameter: Length = _d("seal diameter d3")
+    length: Length = _d("seal length l3")
+    clearance: Length = _d("radial clearance h3")
+    local_loss: NonNegative = _d("local loss coefficient zeta_local, dimensionless", 1.5)
+    friction: Positive = _d("friction factor lambda, dimensionless", 0.06)
 
 
 class Face(Strict):
     """Face throttle between the disc and the pad; conductance g_TB u^(3/2)."""
 
-    inner_diameter: Length
-    outer_diameter: Length
-    base_gap: Length  # z_B = h_TB
-    friction: Positive = 0.06
+    inner_diameter: Length = _d("inner diameter of the face annulus")
+    outer_diameter: Length = _d("outer diameter of the face annulus; larger than inner_diameter")
+    base_gap: Length = _d("base face gap z_B = h_TB, the gap base")
+    friction: Positive = _d("friction factor lambda of the face gap, dimensionless", 0.06)
 
     @model_validator(mode="after")
     def _annulus(self):
@@ -102,10 +113,12 @@ class Face(Strict):
 
 
 class Disc(Strict):
-    inner_seal: InnerSeal
-    face: Face
-    outer_seal: OuterSeal
-    pushoff_force: ForceOrZero = 0.0  # F_pr
+    """The balancing disc: inner seal, face throttle, outer seal and the push-off spring."""
+
+    inner_seal: InnerSeal = _d("laminar inner seal (throttle 1)")
+    face: Face = _d("face throttle (throttle T)")
+    outer_seal: OuterSeal = _d("square-root-law outer seal (throttle 3)")
+    pushoff_force: ForceOrZero = _d("push-off spring force F_pr", 0.0)
 
     @model_validator(mode="after")
     def _seal_inside_face(self):
@@ -115,39 +128,49 @@ class Disc(Strict):
 
 
 class Tube(Strict):
-    """Laminar round tube, g = pi d^4 / (192 mu l) (source coefficient)."""
+    """Laminar round tube, g = pi d^4 / (192 mu l) (the source's coefficient)."""
 
-    diameter: Length
-    length: Length
+    diameter: Length = _d("bore diameter")
+    length: Length = _d("tube length")
 
 
 class Barrier(Strict):
-    supply_throttle: Tube
-    margin_ratio: Positive  # dpsi = (p_e - p1) / p_B, the regulator set-point
+    """The barrier chamber fed through a supply throttle at a regulated margin above discharge."""
+
+    supply_throttle: Tube = _d("laminar supply throttle e")
+    margin_ratio: Annotated[float, Field(gt=0, le=10)] = _d(
+        "regulator set-point dpsi = (p_e - p1) / p_B, dimensionless, 0 to 10")
 
 
 class Valve(Strict):
-    seat_diameter: Length
-    base_opening: Length  # x_B
-    discharge_coefficient: Annotated[float, Field(gt=0, le=1)] = 0.54
-    max_opening: Length | None = None  # valve travel limit; unlimited when omitted
+    """The regulator's valve (an orifice)."""
+
+    seat_diameter: Length = _d("valve seat diameter d_c")
+    base_opening: Length = _d("base valve opening x_B, the opening base")
+    discharge_coefficient: Annotated[float, Field(gt=0, le=1)] = _d("discharge coefficient, 0 to 1", 0.54)
+    max_opening: Length | None = _d("valve travel limit; unlimited when omitted", None)
 
 
 class Regulator(Strict):
-    supply_pressure: Pressure  # p_in
-    inlet_throttle: Tube
-    valve: Valve
-    membrane_area: Area
+    """Pressure-drop regulator that holds the barrier pressure at a margin above discharge."""
+
+    supply_pressure: Pressure = _d("supply pressure p_in of the regulator")
+    inlet_throttle: Tube = _d("laminar inlet throttle")
+    valve: Valve = _d("the valve")
+    membrane_area: Area = _d("membrane area s_m")
 
 
 class Device(Strict):
-    medium: Literal["liquid", "gas"]
-    fluid: Fluid
-    operating: Operating
-    disc: Disc
-    barrier: Barrier
-    regulator: Regulator | None = None
-    dynamics: Dynamics | None = None  # masses, springs, volumes: analyses frequency/stability/transient
+    """The axial balancing device, Pavlenko (2014), ch. 2."""
+
+    medium: Literal["liquid", "gas"] = _d("working medium: liquid (pump) or gas (compressor)")
+    fluid: Fluid = _d("fluid properties")
+    operating: Operating = _d("nominal operating data and bases")
+    disc: Disc = _d("the balancing disc")
+    barrier: Barrier = _d("the barrier chamber")
+    regulator: Regulator | None = _d("pressure-drop regulator; none: the barrier at a fixed margin", None)
+    dynamics: Dynamics | None = _d("masses, springs, volumes for the frequency, stability and transient "
+                                   "analyses", None)
 
     @model_validator(mode="after")
     def _gas_needs_normal_pressure(self):
@@ -159,23 +182,33 @@ class Device(Strict):
 class Statics(Strict):
     """Static calculation: operating point, sweep over discharge pressure, criticals."""
 
-    operating_ratio: Positive = 1.0  # psi1 = p1 / p_B of the reported operating point
-    discharge_ratio: Range  # sweep of psi1 for Figs 2.4-2.6
-    force_gap_points: Annotated[int, Field(ge=2)] = 60  # phi(u) characteristic (2.35)
+    operating_ratio: PressureRatio = _d("psi1 = p1 / p_B of the reported operating point, 0 to 100", 1.0)
+    discharge_ratio: Range = _d("sweep of psi1 = p1 / p_B, Pavlenko (2014), Figs 2.4-2.6")
+    force_gap_points: Annotated[int, Field(ge=2, le=MAX_FORCE_GAP_POINTS)] = _d(
+        f"points of the force-gap characteristic phi(u), Eq. (2.35), 2 to {MAX_FORCE_GAP_POINTS}", 60)
+
+    @model_validator(mode="after")
+    def _ratios(self):
+        if self.discharge_ratio.stop > 100:
+            raise ValueError("discharge_ratio.stop: at most 100 (p1 / p_B)")
+        return self
 
 
 class Analyses(Strict):
-    statics: Statics | None = None
-    frequency: Frequency | None = None  # autobal/schema_dynamics.py; need device.dynamics
-    stability: Stability | None = None
-    transient: Transient | None = None
-    liquid_balancer: LiquidBalancerAnalysis | None = None  # autobal/schema_liquid_balancer.py; needs liquid_balancer
-    estimation: Estimation | None = None  # autobal/schema_estimation.py; device model fits need device
-    montecarlo: MonteCarlo | None = None  # autobal/schema_reliability.py; needs device
-    reliability: Reliability | None = None  # autobal/schema_reliability.py; traditional disc, ch. 1.2
-    rotor_dynamics: RotorDynamics | None = None  # autobal/schema_rotor.py; needs rotor
-    spinup: Spinup | None = None  # autobal/schema_rotor.py; optimal spin-up OCP, needs rotor
-    design: Design | None = None  # autobal/schema_design.py; stability-constrained design, needs device.dynamics
+    """The analyses to run; at least one."""
+
+    statics: Statics | None = _d("static calculation; needs device", None)
+    frequency: Frequency | None = _d("frequency response (AFC/Bode); needs device.dynamics", None)
+    stability: Stability | None = _d("poles, Hurwitz, stability maps; needs device.dynamics", None)
+    transient: Transient | None = _d("time responses; needs device.dynamics", None)
+    liquid_balancer: LiquidBalancerAnalysis | None = _d("liquid auto-balancer studies; needs liquid_balancer",
+                                                        None)
+    estimation: Estimation | None = _d("parameter fits to measured characteristics", None)
+    montecarlo: MonteCarlo | None = _d("Monte Carlo of the statics (and AFC); needs device", None)
+    reliability: Reliability | None = _d("traditional disc wear and time to failure", None)
+    rotor_dynamics: RotorDynamics | None = _d("Jeffcott rotor studies; needs rotor", None)
+    spinup: Spinup | None = _d("optimal spin-up through the critical speed; needs rotor", None)
+    design: Design | None = _d("stability-constrained design of the device; needs device.dynamics", None)
 
 
 # analysis -> the part of the scene it needs (a dotted path), checked at load time
@@ -184,21 +217,32 @@ NEEDS = {
     "transient": "device.dynamics", "montecarlo": "device", "liquid_balancer": "liquid_balancer",
     "rotor_dynamics": "rotor", "spinup": "rotor", "design": "device.dynamics",
 }
+# a scene's name names its output folder: a plain file name, never a path
+NAME_PATTERN = r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}$"
 
 
 class Scenario(Strict):
-    name: str
-    title: str
-    source: str = ""
-    device: Device | None = None  # the axial balancing device (statics, dynamics, Monte Carlo, fits)
-    liquid_balancer: LiquidBalancer | None = None  # liquid auto-balancer (autobal/schema_liquid_balancer.py)
-    rotor: Rotor | None = None  # Jeffcott rotor with optional liquid layer and drive (autobal/schema_rotor.py)
-    executor: Executor | None = None  # where sweeps and Monte Carlo run (autobal/schema_reliability.py)
-    analyses: Analyses
+    """A scene: the machine's parts and the analyses to run on them."""
+
+    name: Annotated[str, Field(pattern=NAME_PATTERN)] = _d(
+        "identifier of the scene and of its default output folder out/<name>: letters, digits, _ - . "
+        "(no path separators, no '..', at most 100 characters)")
+    title: Annotated[str, Field(max_length=500)] = _d("one-line title, printed on figures")
+    source: Annotated[str, Field(max_length=2000)] = _d("where the inputs come from", "")
+    device: Device | None = _d("the axial balancing device (statics, dynamics, Monte Carlo, fits)", None)
+    liquid_balancer: LiquidBalancer | None = _d("liquid auto-balancer", None)
+    rotor: Rotor | None = _d("Jeffcott rotor with optional liquid layer and drive", None)
+    executor: Executor | None = _d("where sweeps and Monte Carlo run", None)
+    analyses: Analyses = _d("the analyses to run")
     _origin: dict = PrivateAttr(default_factory=dict)  # file, sha256, overrides (set by load)
 
     @model_validator(mode="after")
     def _parts_for_analyses(self):
+        if ".." in self.name:
+            raise ValueError("name: must not contain '..' (a plain identifier: letters, digits, _ - .)")
+        if not any(v is not None for _, v in self.analyses):
+            raise ValueError(f"analyses: the scene names no analysis (one or more of "
+                             f"{', '.join(Analyses.model_fields)})")
         for analysis, path in NEEDS.items():
             if getattr(self.analyses, analysis) is None:
                 continue
@@ -210,24 +254,44 @@ class Scenario(Strict):
         return self
 
 
+MAX_FILE_BYTES = 1_000_000  # a scene is a page of YAML; anything larger is not a scene
+MAX_NODES = 100_000  # values in a scene after YAML aliases are expanded (refuses "billion laughs" files)
+
+
 def _one_line(err: ValidationError) -> str:
     e = err.errors()[0]
     where = ".".join(str(p) for p in e["loc"]) or "(top level)"
     msg = e["msg"].removeprefix("Value error, ")
     if e["type"] == "extra_forbidden":
         msg = "unknown key"
+    elif e["type"] == "string_pattern_mismatch" and e["loc"] == ("name",):
+        msg = f"{e['input']!r} is not a plain identifier (letters, digits, _ - .; no path separators)"
+    elif e["type"] == "finite_number":
+        msg = f"{e['input']!r}: must be a finite number"
     more = f" (and {err.error_count() - 1} more)" if err.error_count() > 1 else ""
     return f"{where}: {msg}{more}"
 
 
 def resolve(name_or_path: str | Path) -> Path:
-    """A scenario path, or the name of a shipped scenario (``scenarios/NAME.yaml``)."""
+    """A scenario path, or the name of a shipped scenario (``scenarios/NAME.yaml``).
+
+    Parameters
+    ----------
+    name_or_path : str or Path
+        A YAML file, or the name of a shipped scenario such as ``"pump_pe600_statics"``.
+
+    Returns
+    -------
+    Path
+    """
     p = Path(name_or_path)
     if p.is_file():
         return p
     shipped = SCENARIO_DIR / f"{p.stem}.yaml"
     if p.suffix in ("", ".yaml") and shipped.is_file() and p.parent == Path("."):
         return shipped
+    if p.is_dir():
+        raise ScenarioError(f"{name_or_path}: is a folder, not a scenario file")
     raise ScenarioError(f"{name_or_path}: no such scenario file or shipped scenario (see 'autobal list')")
 
 
@@ -259,6 +323,79 @@ def _set(data: dict, path: str, value) -> None:
             node = node[key]
 
 
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """A safe YAML loader that refuses a key given twice in one mapping (PyYAML keeps the last)."""
+
+    def construct_mapping(self, node, deep=False):
+        seen = {}
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=True)
+            try:
+                hash(key)
+            except TypeError:
+                raise yaml.constructor.ConstructorError(None, None, "a key must be a plain value",
+                                                        key_node.start_mark) from None
+            if key in seen:
+                raise ScenarioError(f"duplicate key {key!r} at line {key_node.start_mark.line + 1} "
+                                    f"(first at line {seen[key]})")
+            seen[key] = key_node.start_mark.line + 1
+        return super().construct_mapping(node, deep=deep)
+
+
+def _count(node, budget: list[int]) -> None:
+    budget[0] -= 1
+    if budget[0] < 0:
+        raise ScenarioError(f"more than {MAX_NODES} values (YAML aliases expanded): not a scene")
+    children = node.values() if isinstance(node, dict) else node if isinstance(node, list) else ()
+    for child in children:
+        _count(child, budget)
+
+
+def read(path: Path) -> dict:
+    """The YAML mapping of a scenario file, checked as text: UTF-8, not binary, at most
+    :data:`MAX_FILE_BYTES`, no duplicate keys; ScenarioError with one line otherwise.
+
+    Parameters
+    ----------
+    path : Path
+        The scenario file.
+
+    Returns
+    -------
+    dict
+        The parsed scene, not yet validated.
+    """
+    try:
+        size = path.stat().st_size
+        if size > MAX_FILE_BYTES:
+            raise ScenarioError(f"{path}: {size} bytes: a scenario is a YAML text of at most {MAX_FILE_BYTES} bytes")
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise ScenarioError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    if b"\0" in raw[:8192]:
+        raise ScenarioError(f"{path}: a binary file, not a YAML scenario")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(f"{path}: not UTF-8 text (byte 0x{raw[exc.start]:02x} at offset {exc.start}); "
+                            f"save the scenario as UTF-8") from None
+    try:
+        data = yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
+    except ScenarioError as exc:
+        raise ScenarioError(f"{path}: {exc}") from None
+    except yaml.YAMLError as exc:
+        raise ScenarioError(f"{path}: not valid YAML: {' '.join(str(exc).split())}") from None
+    except RecursionError:
+        raise ScenarioError(f"{path}: nested too deeply to be a scenario") from None
+    if not isinstance(data, dict):
+        raise ScenarioError(f"{path}: a scenario is a YAML mapping of keys to values")
+    try:
+        _count(data, [MAX_NODES])
+    except RecursionError:
+        raise ScenarioError(f"{path}: nested too deeply to be a scenario") from None
+    return data
+
+
 def load(name_or_path: str | Path, overrides: dict | None = None) -> Scenario:
     """Read, validate and convert a scenario to SI; raise ScenarioError with one line.
 
@@ -269,14 +406,14 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> Scenario:
     overrides : dict, optional
         Dotted scene paths -> values (``{"device.disc.face.base_gap": "0.18 mm"}``), applied to
         the file's content before validation, so they are checked exactly like YAML.
+
+    Returns
+    -------
+    Scenario
+        The validated scene, every quantity in SI.
     """
     path = resolve(name_or_path)
-    try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise ScenarioError(f"{path}: not valid YAML: {str(exc).splitlines()[0]}") from None
-    if not isinstance(data, dict):
-        raise ScenarioError(f"{path}: a scenario is a YAML mapping of keys to values")
+    data = read(path)
     overrides = dict(overrides or {})
     for key, value in overrides.items():
         _set(data, key, value)
@@ -287,6 +424,8 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> Scenario:
         hit = next((k for k in overrides if loc == k or loc.startswith(k + ".")), None)
         where = f"set {hit}={overrides[hit]}" if hit else str(path)
         raise ScenarioError(f"{where}: {_one_line(exc)}") from None
+    except RecursionError:
+        raise ScenarioError(f"{path}: nested too deeply to be a scenario") from None
     scn._origin = {"file": str(path), "sha256": hashlib.sha256(path.read_bytes()).hexdigest(),
                    "overrides": {k: str(v) for k, v in overrides.items()}}
     return scn
@@ -294,3 +433,103 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> Scenario:
 
 def shipped() -> list[Path]:
     return sorted(SCENARIO_DIR.glob("*.yaml"))
+
+
+# ---- predicted run time ----------------------------------------------------------------------------------
+# Seconds per unit of work on one core of the reference machine (a 2-core x86-64 laptop), calibrated on the
+# shipped scenes; an estimate within a factor of about 3, for warning before long runs, not a measurement.
+COST = {
+    "start": 1.0,  # building the solvers of an analysis
+    "ipopt_solve": 4e-3,  # one warm-started IPOPT solve of the device statics (sweep, force-gap point)
+    "mc_statics_sample": 1.5e-5,  # one Monte Carlo sample at one discharge ratio (mapped Newton)
+    "mc_afc_point": 1.5e-6,  # one Monte Carlo sample at one frequency (linear model)
+    "afc_point": 2e-4,  # one frequency of one model's AFC
+    "map_point": 3e-3,  # one point of a stability map, per model
+    "transient_point": 5e-4,  # one output time of one time response (CVODES)
+    "ocp_collocation_point": 5e-3,  # one collocation point of the spin-up OCP, per start
+    "reliability_node": 5e-7,  # one (time, load) node of the reliability integrals
+    "rotor_run": 0.5,  # one CVODES passage / step response of the rotor studies
+    "grid_point": 1e-5,  # one point of a dense cross-check grid
+    "fit": 2.0,  # one least-squares fit with its cross-checks
+}
+LONG_RUN_S = 60.0  # a run predicted to take longer says so first
+
+
+def estimate_seconds(scn: Scenario) -> dict[str, float]:
+    """Predicted wall time of each analysis of a scene, by a per-analysis cost model (:data:`COST`).
+
+    Parameters
+    ----------
+    scn : Scenario
+        A validated scene.
+
+    Returns
+    -------
+    dict
+        Analysis name -> predicted time, s (single core; an estimate within a factor of about 3).
+    """
+    from autobal.analysis.statics_study import PATH_NODES
+
+    c, a, out = COST, scn.analyses, {}
+    if a.statics is not None:
+        n = a.statics.discharge_ratio.points
+        out["statics"] = c["start"] + c["ipopt_solve"] * (n + (PATH_NODES if n > PATH_NODES else 0)
+                                                          + a.statics.force_gap_points)
+    if a.frequency is not None:
+        out["frequency"] = c["start"] + c["afc_point"] * a.frequency.omega.points * len(a.frequency.models)
+    if a.stability is not None:
+        m = a.stability.map
+        out["stability"] = c["start"] + (c["map_point"] * m.x.points * m.y.points * len(m.models) if m else 0.0)
+    if a.transient is not None:
+        out["transient"] = c["start"] + c["transient_point"] * a.transient.points * len(a.transient.cases)
+    if a.montecarlo is not None:
+        mc = a.montecarlo
+        t = c["start"] + c["mc_statics_sample"] * mc.samples * len(mc.discharge_ratio)
+        if mc.afc is not None:
+            t += c["start"] + c["mc_afc_point"] * mc.afc.samples * mc.afc.omega.points
+        out["montecarlo"] = t
+    if a.spinup is not None:
+        s = a.spinup
+        out["spinup"] = c["start"] + c["ocp_collocation_point"] * s.intervals * s.degree * (4 if s.multistart else 1)
+    if a.reliability is not None:
+        r = a.reliability
+        out["reliability"] = c["start"] + c["reliability_node"] * r.time_points * r.tau_nodes
+    if a.rotor_dynamics is not None:
+        rd, runs = a.rotor_dynamics, 0
+        runs += len(rd.steps.psi) * len(rd.steps.steps) if rd.steps else 0
+        runs += len(rd.passage.psi) * len(rd.passage.friction) * (2 if rd.passage.crossover else 1) if rd.passage else 0
+        runs += len(rd.lewis.zeta) * len(rd.lewis.accel_ratio) if rd.lewis else 0
+        runs += 1 if rd.motor_runup else 0
+        out["rotor_dynamics"] = c["start"] + c["rotor_run"] * runs
+    if a.liquid_balancer is not None:
+        lb = a.liquid_balancer
+        grid = sum(s.grid_points for s in (lb.height, lb.volume) if s is not None)
+        out["liquid_balancer"] = c["start"] + c["grid_point"] * grid * (1 + len(lb.unbalance_masses) + len(lb.liquids))
+    if a.estimation is not None:
+        out["estimation"] = c["start"] + c["fit"] * len(a.estimation.fits)
+    return out
+
+
+def long_run_note(scn: Scenario) -> str | None:
+    """One line to print before a run predicted to take more than :data:`LONG_RUN_S`, else None.
+
+    Parameters
+    ----------
+    scn : Scenario
+        A validated scene.
+
+    Returns
+    -------
+    str or None
+        E.g. "this run is estimated to take about 7 min (statics 6.8 min, ...)".
+    """
+    est = estimate_seconds(scn)
+    total = sum(est.values())
+    if total <= LONG_RUN_S:
+        return None
+
+    def fmt(s):
+        return f"{s / 60:.1f} min" if s >= 60 else f"{s:.0f} s"
+
+    parts = ", ".join(f"{k} {fmt(v)}" for k, v in sorted(est.items(), key=lambda kv: -kv[1]))
+    return f"this run is estimated to take about {fmt(total)} ({parts})"

@@ -14,7 +14,7 @@ from pydantic import Field, model_validator
 
 from autobal.models.dynamics import LONG_NAMES
 from autobal.schema import Positive, Strict
-from autobal.units import AngularSpeed, Area, Pressure, quantity, to_si
+from autobal.units import AngularSpeed, Area, quantity, to_si
 
 Mass = quantity("mass")
 Stiffness = quantity("stiffness")
@@ -22,36 +22,38 @@ Damping = quantity("damping")
 DampingOrZero = quantity("damping", "nonnegative")
 Volume = quantity("volume")
 Time = quantity("time")
+BulkModulus = quantity("bulk modulus")
 
 
 class RegulatorDynamics(Strict):
     """Stem of the pressure-drop regulator and its two chambers (Pavlenko (2014), App. A)."""
 
-    stem_mass: Mass  # m0
-    spring_stiffness: Stiffness  # k_reg
-    stem_damping: DampingOrZero = 0.0  # c_x (the source: 0)
-    valve_chamber_volume: Volume  # V_cam
-    membrane_chamber_volume: Volume  # V_m
-    seat_area: Area | None = None  # s_c; default pi d_c^2 / 4 from regulator.valve.seat_diameter
+    stem_mass: Mass = Field(description="m0")
+    spring_stiffness: Stiffness = Field(description="k_reg")
+    stem_damping: DampingOrZero = Field(0.0, description="c_x (the source: 0)")
+    valve_chamber_volume: Volume = Field(description="V_cam")
+    membrane_chamber_volume: Volume = Field(description="V_m")
+    seat_area: Area | None = Field(None, description="s_c; default pi d_c^2 / 4 from regulator.valve.seat_diameter")
 
 
 class Dynamics(Strict):
     """Dynamic data of the device (``device.dynamics``), Pavlenko (2014), App. A / App. B."""
 
-    rotor_mass: Mass  # m_p
-    pushoff_stiffness: Stiffness  # k_pr; preload deflection F_pr/k_pr + z0
-    rotor_damping: DampingOrZero | None = None  # c_z (0: undamped); default the squeeze film, Pavlenko (2014), App. A
-    bulk_modulus: Pressure  # E of the barrier medium (gas: the source's 1.42e5 Pa)
-    disc_chamber_volume: Volume  # V2, chamber before the face throttle
-    cavity_volume: Volume  # V3, cavity behind the disc
-    regulator: RegulatorDynamics | None = None  # needed when the device has a regulator
-    forcing_amplitude: Positive = 0.2  # delta psi_1a, amplitude of the harmonic discharge pressure
-    operating_speed: AngularSpeed | None = None  # omega0; default the impeller speed
+    rotor_mass: Mass = Field(description="m_p")
+    pushoff_stiffness: Stiffness = Field(description="k_pr; preload deflection F_pr/k_pr + z0")
+    rotor_damping: DampingOrZero | None = Field(
+        None, description="c_z (0: undamped); default the squeeze film, Pavlenko (2014), App. A")
+    bulk_modulus: BulkModulus = Field(description="E of the barrier medium (gas: the source's 1.42e5 Pa)")
+    disc_chamber_volume: Volume = Field(description="V2, chamber before the face throttle")
+    cavity_volume: Volume = Field(description="V3, cavity behind the disc")
+    regulator: RegulatorDynamics | None = Field(None, description="needed when the device has a regulator")
+    forcing_amplitude: Positive = Field(0.2, description="delta psi_1a, amplitude of the harmonic discharge pressure")
+    operating_speed: AngularSpeed | None = Field(None, description="omega0; default the impeller speed")
 
 
 # scenario key -> unit kind of each dynamic parameter a stability map may scan (models/dynamics.LONG_NAMES)
 PARAMETERS = {
-    "rotor_mass": "mass", "pushoff_stiffness": "stiffness", "rotor_damping": "damping", "bulk_modulus": "pressure",
+    "rotor_mass": "mass", "pushoff_stiffness": "stiffness", "rotor_damping": "damping", "bulk_modulus": "bulk modulus",
     "disc_chamber_volume": "volume", "cavity_volume": "volume", "stem_mass": "mass", "spring_stiffness": "stiffness",
     "stem_damping": "damping", "valve_chamber_volume": "volume", "membrane_chamber_volume": "volume",
     "seat_area": "area",
@@ -64,7 +66,7 @@ ModelName = Literal["nonlinear", "nonlinear_chain", "program", "thesis", "consis
 class OmegaGrid(Strict):
     start: AngularSpeed
     stop: AngularSpeed
-    points: Annotated[int, Field(ge=10, le=20000)] = 600
+    points: Annotated[int, Field(ge=10, le=20000)] = Field(600, description="frequencies, 10 to 20,000")
 
     @model_validator(mode="after")
     def _increasing(self):
@@ -76,11 +78,12 @@ class OmegaGrid(Strict):
 class Frequency(Strict):
     """AFC / Bode of the face gap for a harmonic discharge pressure (2.100)-(2.110)."""
 
-    operating_ratio: Positive = 1.0  # psi1 of the operating point
+    operating_ratio: Positive = Field(1.0, description="psi1 of the operating point")
     # first model: the top-level keys (peaks, at_operating_speed); all are reported under `models`
     models: Annotated[list[ModelName], Field(min_length=1)] = ["program", "nonlinear", "nonlinear_chain"]
-    forcing: Literal["appendix", "physical"] = "appendix"  # dtau = dpsi1 (App. A/B) or b dpsi1
-    omega: OmegaGrid = OmegaGrid(start="10 rad/s", stop="8000 rad/s")
+    forcing: Literal["appendix", "physical"] = Field("appendix", description="dtau = dpsi1 (App. A/B) or b dpsi1")
+    omega: OmegaGrid = Field(default_factory=lambda: OmegaGrid(start="10 rad/s", stop="8000 rad/s"),
+                             description="frequency grid; default 10 to 8000 rad/s, 600 points")
 
 
 class MapAxis(Strict):
@@ -89,13 +92,13 @@ class MapAxis(Strict):
     parameter: ParameterName
     start: str | float
     stop: str | float
-    points: Annotated[int, Field(ge=3, le=400)] = 41
+    points: Annotated[int, Field(ge=3, le=400)] = Field(41, description="values on this axis, 3 to 400")
     scale: Literal["log", "linear"] = "log"
 
     @model_validator(mode="before")
     @classmethod
     def _to_si(cls, data):
-        if isinstance(data, dict) and data.get("parameter") in PARAMETERS:
+        if isinstance(data, dict) and isinstance(data.get("parameter"), str) and data["parameter"] in PARAMETERS:
             kind = PARAMETERS[data["parameter"]]
             data = dict(data)
             for k in ("start", "stop"):
@@ -133,9 +136,9 @@ class TransientCase(Strict):
     """One time response from the static solution (2.111)."""
 
     input: Literal["force_step", "pressure_step", "pressure_harmonic"]
-    amplitude: float = 0.01  # dtau (force step) or dpsi1 (pressure), dimensionless
-    frequency: AngularSpeed | None = None  # harmonic input; default the operating speed
-    thrust_follows_pressure: bool = True  # with a pressure input, dtau = b dpsi1
+    amplitude: float = Field(0.01, description="dtau (force step) or dpsi1 (pressure), dimensionless")
+    frequency: AngularSpeed | None = Field(None, description="harmonic input; default the operating speed")
+    thrust_follows_pressure: bool = Field(True, description="with a pressure input, dtau = b dpsi1")
 
 
 class Transient(Strict):
@@ -143,5 +146,6 @@ class Transient(Strict):
     model: Literal["nonlinear", "nonlinear_chain"] = "nonlinear"
     integrator: Literal["cvodes", "idas"] = "cvodes"
     duration: Time = 0.05
-    points: Annotated[int, Field(ge=10, le=200000)] = 2001
-    cases: Annotated[list[TransientCase], Field(min_length=1)]
+    points: Annotated[int, Field(ge=10, le=200000)] = Field(2001, description="output times, 10 to 200,000")
+    cases: Annotated[list[TransientCase], Field(min_length=1, max_length=100)] = Field(
+        description="time responses to compute, 1 to 100")

@@ -155,7 +155,7 @@ class Estimation(Strict):
     data: Annotated[str, Field(
         description="CSV path: absolute, from the working folder, or from the shipped scenarios/ folder")]
     bases: Annotated[Bases, Field(description="base values of dimensional data columns")] = Bases()
-    fits: Annotated[list[Fit], Field(min_length=1, description="the fits")]
+    fits: Annotated[list[Fit], Field(min_length=1, max_length=100, description="the fits, 1 to 100")]
     closed_forms: Annotated[bool, Field(
         description="the source's estimators (4.23), (4.26)-(4.27), (4.35), (4.36)")] = True
     tau_max: Annotated[Positive | None, Field(

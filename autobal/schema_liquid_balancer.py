@@ -24,13 +24,13 @@ LengthOrZero = quantity("length", "nonnegative")
 class LBRotor(Strict):
     """Rotor with its unbalance (Table 3.1)."""
 
-    mass: Mass  # M_p, rotor mass
-    unbalance_mass: Mass  # m_d
-    unbalance_radius: Length  # e_d; D0 = m_d e_d
-    critical_speed: AngularSpeed  # omega_p (resonance speed)
-    log_decrement: Positive | None = None  # theta; n = theta omega_p / (2 pi) (erratum 1)
-    damping_coefficient: AngularSpeed | None = None  # n [1/s]; overrides log_decrement
-    stiffness: Stiffness | None = None  # c [N/m], for the chapter-3 / Pashkov calculators only
+    mass: Mass = Field(description="M_p, rotor mass")
+    unbalance_mass: Mass = Field(description="m_d")
+    unbalance_radius: Length = Field(description="e_d; D0 = m_d e_d")
+    critical_speed: AngularSpeed = Field(description="omega_p (resonance speed)")
+    log_decrement: Positive | None = Field(None, description="theta; n = theta omega_p / (2 pi) (erratum 1)")
+    damping_coefficient: AngularSpeed | None = Field(None, description="n [1/s]; overrides log_decrement")
+    stiffness: Stiffness | None = Field(None, description="c [N/m], for the chapter-3 / Pashkov calculators only")
 
     @model_validator(mode="after")
     def _damping(self):
@@ -40,29 +40,31 @@ class LBRotor(Strict):
 
 
 class LBChamber(Strict):
-    mass: Mass  # M_k
-    radius: Length  # R, inner radius of the (outer) chamber wall
-    height: Length  # h
-    inclination_deg: Annotated[float, Field(ge=0, le=90)] | None = None  # Omega_inc; 90 = vertical rotor
+    mass: Mass = Field(description="M_k")
+    radius: Length = Field(description="R, inner radius of the (outer) chamber wall")
+    height: Length = Field(description="h")
+    inclination_deg: Annotated[float, Field(ge=0, le=90)] | None = Field(
+        None, description="Omega_inc; 90 = vertical rotor")
 
 
 class LBLiquid(Strict):
-    volume: Volume  # V
-    density: Density  # rho
-    viscosity: Viscosity | None = None  # mu (viscous zone (2.15))
+    volume: Volume = Field(description="V")
+    density: Density = Field(description="rho")
+    viscosity: Viscosity | None = Field(None, description="mu (viscous zone (2.15))")
 
 
 class NestedChamber(Strict):
-    radius: Length  # R_i, wall radius
-    volume: Volume  # V_i, liquid in this chamber
+    radius: Length = Field(description="R_i, wall radius")
+    volume: Volume = Field(description="V_i, liquid in this chamber")
 
 
 class Nested(Strict):
     """Further concentric chambers inside the outer one, outermost first (Pashkov ch. 3, [T] (3.10)-(3.14))."""
 
-    wall_thickness: LengthOrZero  # t_w, partition thickness
-    hub_radius: LengthOrZero = 0.0  # inner wall of the innermost chamber
-    chambers: Annotated[list[NestedChamber], Field(min_length=1)]
+    wall_thickness: LengthOrZero = Field(description="t_w, partition thickness")
+    hub_radius: LengthOrZero = Field(0.0, description="inner wall of the innermost chamber")
+    chambers: Annotated[list[NestedChamber], Field(min_length=1, max_length=100)] = Field(
+        description="nested chambers, outermost first, 1 to 100")
 
 
 class LiquidBalancer(Strict):
@@ -71,7 +73,7 @@ class LiquidBalancer(Strict):
     rotor: LBRotor
     chamber: LBChamber
     liquid: LBLiquid
-    speed: AngularSpeed  # working angular speed omega
+    speed: AngularSpeed = Field(description="working angular speed omega")
     nested: Nested | None = None
 
     @model_validator(mode="after")
@@ -110,29 +112,35 @@ class Candidate(Strict):
 class HeightSearch(Strict):
     """Optimal chamber height for the given radius (App. В OPTIMUM_KAMERA) as an IPOPT problem."""
 
-    max_height: Length  # h_k, the largest height the design allows
-    min_height: Length | None = None  # h_p; default: just above V/(pi R^2)
-    grid_points: Annotated[int, Field(ge=3, le=2_000_001)] = 20001  # dense grid cross-check
+    max_height: Length = Field(description="h_k, the largest height the design allows")
+    min_height: Length | None = Field(None, description="h_p; default: just above V/(pi R^2)")
+    grid_points: Annotated[int, Field(ge=3, le=2_000_001)] = Field(
+        20001, description="dense grid cross-check, 3 to 2,000,001")
 
 
 class VolumeSearch(Strict):
     """Optimal liquid volume for the given unbalance (App. Г OPTIMUM_LIQUID) as an IPOPT problem."""
 
-    min_volume: Volume | None = None  # V0; default 1e-6 of the chamber volume
-    grid_points: Annotated[int, Field(ge=3, le=2_000_001)] = 20001
+    min_volume: Volume | None = Field(None, description="V0; default 1e-6 of the chamber volume")
+    grid_points: Annotated[int, Field(ge=3, le=2_000_001)] = Field(
+        20001, description="dense grid cross-check, 3 to 2,000,001")
 
 
 class LiquidBalancerAnalysis(Strict):
     """Efficiency vs speed ratio, extremum, optimal height / volume / liquid, Pashkov calculators."""
 
-    variant: Literal["printed", "program", "corrected"] = "corrected"  # equilibrium angle (2.13)
-    deflection: Literal["program", "system"] = "program"  # f = G D0/m_d (App. В code) or G D0/M_sys
-    speed_ratio: Range  # gamma = omega/omega_cr sweep for the efficiency curve
-    table_ratios: Annotated[list[Positive], Field(min_length=1)] = [0.4, 0.6, 0.8, 1.0, 1.2, 1.4]
-    arc_angle_deg: Annotated[float, Field(gt=0, le=360)] | None = None  # xi of (2.15); default: program Г
-    conversion_coefficient: Positive = 1.0  # kappa of (3.5), (3.6), (3.9), (3.13); 1 = sufficient liquid
+    variant: Literal["printed", "program", "corrected"] = Field("corrected", description="equilibrium angle (2.13)")
+    deflection: Literal["program", "system"] = Field("program", description="f = G D0/m_d (App. В code) or G D0/M_sys")
+    speed_ratio: Range = Field(description="gamma = omega/omega_cr sweep for the efficiency curve")
+    table_ratios: Annotated[list[Positive], Field(min_length=1, max_length=1000)] = [0.4, 0.6, 0.8, 1.0, 1.2, 1.4]
+    arc_angle_deg: Annotated[float, Field(gt=0, le=360)] | None = Field(
+        None, description="xi of (2.15); default: program Г")
+    conversion_coefficient: Positive = Field(
+        1.0, description="kappa of (3.5), (3.6), (3.9), (3.13); 1 = sufficient liquid")
     height: HeightSearch | None = None
     volume: VolumeSearch | None = None
-    liquids: list[Candidate] = []  # liquid choice by viscosity (App. Г)
-    unbalance_masses: list[Mass] = []  # optimal volume per unbalance (Table 3.3: 50/100/150/200 g at e_d)
-    thesis_comparison: bool = False  # compare with Tables 3.2 / 3.3 (only meaningful for the Table 3.1 system)
+    liquids: list[Candidate] = Field([], max_length=100, description="liquid choice by viscosity (App. Г), at most 100")
+    unbalance_masses: list[Mass] = Field(
+        [], max_length=100, description="optimal volume per unbalance (Table 3.3: 50/100/150/200 g at e_d)")
+    thesis_comparison: bool = Field(
+        False, description="compare with Tables 3.2 / 3.3 (only meaningful for the Table 3.1 system)")

@@ -21,6 +21,8 @@ from autobal.units import Length, quantity
 
 Time = quantity("time")
 Probability = Annotated[float, Field(gt=0, lt=1)]
+MAX_SAMPLES = 2_000_000  # statics Monte Carlo: ~0.2 kB a sample in memory (0.4 GB at the bound)
+MAX_AFC_SAMPLES = 1_000_000  # AFC Monte Carlo: a frequency response per sample
 
 # ---- chapter 1.2: traditional disc, wear and time to failure -------------------------------------
 
@@ -31,14 +33,14 @@ class HydroHeelDisc(Strict):
     The new seal is given by its clearance ``seal_clearance`` (h1, chi0 = h1/z_B) or by the face/seal
     conductance ratio ``conductance_ratio`` (alpha_T1, chi0 = cbrt(k/alpha_T1)), not both."""
 
-    seal_radius: Length  # r1
-    seal_length: Length  # l1
-    face_inner_radius: Length  # r2
-    face_outer_radius: Length  # r3
-    base_gap: Length  # h_TB = z_B
-    effective_area_ratio: Positive  # sigma = s_e/s_B
-    conductance_ratio: Positive | None = None  # alpha_T1
-    seal_clearance: Length | None = None  # h1
+    seal_radius: Length = Field(description="r1")
+    seal_length: Length = Field(description="l1")
+    face_inner_radius: Length = Field(description="r2")
+    face_outer_radius: Length = Field(description="r3")
+    base_gap: Length = Field(description="h_TB = z_B")
+    effective_area_ratio: Positive = Field(description="sigma = s_e/s_B")
+    conductance_ratio: Positive | None = Field(None, description="alpha_T1")
+    seal_clearance: Length | None = Field(None, description="h1")
 
     @model_validator(mode="after")
     def _one_clearance(self):
@@ -52,9 +54,9 @@ class HydroHeelDisc(Strict):
 class Wear(Strict):
     """Mean wear of the seal clearance read from the erosion curve (Fig. 1.25): ``depth`` per ``per``."""
 
-    depth: Length  # e.g. 0.05 mm
-    per: Time  # e.g. 1000 h
-    cv: NonNegative = 0.2  # kappa = sigma_b / b_mean (1.50)
+    depth: Length = Field(description="e.g. 0.05 mm")
+    per: Time = Field(description="e.g. 1000 h")
+    cv: NonNegative = Field(0.2, description="kappa = sigma_b / b_mean (1.50)")
 
     @field_validator("cv")
     @classmethod
@@ -65,14 +67,14 @@ class Wear(Strict):
 
 
 class Load(Strict):
-    mean: Positive  # tau_bar = T/(p_B s_B)
-    cv: Positive = 0.2  # kappa = sigma_tau / tau_bar (1.50)
-    discharge_ratio: Positive = 1.0  # psi1
+    mean: Positive = Field(description="tau_bar = T/(p_B s_B)")
+    cv: Positive = Field(0.2, description="kappa = sigma_tau / tau_bar (1.50)")
+    discharge_ratio: Positive = Field(1.0, description="psi1")
 
 
 class Limits(Strict):
-    min_gap: Positive  # u_min
-    max_flow: Positive  # q_max -> u_max (1.52)
+    min_gap: Positive = Field(description="u_min")
+    max_flow: Positive = Field(description="q_max -> u_max (1.52)")
 
 
 class Reliability(Strict):
@@ -82,11 +84,14 @@ class Reliability(Strict):
     wear: Wear
     load: Load
     limits: Limits
-    times: list[Time] = Field(default_factory=lambda: [7.2e6, 1.44e7], min_length=1)  # report P(t) at
-    horizon: Time = 1.44e8  # 40 000 h, upper limit of (1.49) by the trapezoid rule
-    time_points: Annotated[int, Field(ge=11, le=100001)] = 4001
-    tau_nodes: Annotated[int, Field(ge=101, le=200001)] = 20001
-    reliable_probability: Probability = 0.8  # Table 1.2: time of reliable operation at this P
+    times: list[Time] = Field(default_factory=lambda: [7.2e6, 1.44e7], min_length=1, max_length=1000,
+                             description="times at which P(t) is reported (at most 1000)")
+    horizon: Time = Field(1.44e8, description="40 000 h, upper limit of (1.49) by the trapezoid rule")
+    time_points: Annotated[int, Field(ge=11, le=100001)] = Field(
+        4001, description="points of the P(t) curve, 11 to 100,001")
+    tau_nodes: Annotated[int, Field(ge=101, le=200001)] = Field(
+        20001, description="nodes of the load integral, 101 to 200,001")
+    reliable_probability: Probability = Field(0.8, description="Table 1.2: time of reliable operation at this P")
 
     @model_validator(mode="after")
     def _limits(self):
@@ -165,11 +170,14 @@ class AfcMonteCarlo(Strict):
     m0, k_reg, c_x, V_cam, V_m, s_c (SI)."""
 
     model: Literal["program", "thesis", "consistent", "nonlinear", "nonlinear_chain"] = "program"
-    samples: Annotated[int, Field(ge=10, le=1_000_000)] = 20_000
-    chunk_size: Annotated[int, Field(ge=10, le=100_000)] = 5_000
-    operating_ratio: Positive = 1.0  # psi1 of the operating point
-    forcing: Literal["appendix", "physical"] = "appendix"  # dtau = dpsi1 (App. A/B, Fig. 3.7) or b dpsi1
-    omega: OmegaGrid = OmegaGrid(start="100 rad/s", stop="6000 rad/s", points=120)
+    samples: Annotated[int, Field(ge=10, le=MAX_AFC_SAMPLES)] = Field(
+        20_000, description=f"Monte Carlo samples of the AFC, 10 to {MAX_AFC_SAMPLES:,}")
+    chunk_size: Annotated[int, Field(ge=10, le=100_000)] = Field(5_000, description="samples per task, 10 to 100,000")
+    operating_ratio: Positive = Field(1.0, description="psi1 of the operating point")
+    forcing: Literal["appendix", "physical"] = Field(
+        "appendix", description="dtau = dpsi1 (App. A/B, Fig. 3.7) or b dpsi1")
+    omega: OmegaGrid = Field(default_factory=lambda: OmegaGrid(start="100 rad/s", stop="6000 rad/s", points=120),
+                             description="frequency grid; default 100 to 6000 rad/s, 120 points")
     parameters: dict[str, Distribution] = Field(min_length=1)
 
 
@@ -177,16 +185,24 @@ class AfcMonteCarlo(Strict):
 class MonteCarlo(Strict):
     """Monte Carlo over the device's uncertain dimensionless groups (ch. 3)."""
 
-    samples: Annotated[int, Field(ge=10, le=10_000_000)] = 100_000
+    samples: Annotated[int, Field(ge=10, le=MAX_SAMPLES)] = Field(
+        100_000, description=f"Monte Carlo samples, 10 to {MAX_SAMPLES:,}")
     seed: Annotated[int, Field(ge=0)] = 2014
-    chunk_size: Annotated[int, Field(ge=10, le=1_000_000)] = 25_000  # samples per executor task
-    discharge_ratio: list[Positive] = Field(default_factory=lambda: [0.5, 0.75, 1.0, 1.25, 1.5], min_length=1)
+    chunk_size: Annotated[int, Field(ge=10, le=1_000_000)] = Field(25_000, description="samples per executor task")
+    discharge_ratio: list[Annotated[float, Field(gt=0, le=100)]] = Field(
+        default_factory=lambda: [0.5, 0.75, 1.0, 1.25, 1.5], min_length=1, max_length=20,
+        description="discharge ratios psi1 = p1/p_B (0 to 100) at which the statics are sampled, at most 20")
     parameters: dict[str, Distribution] = Field(min_length=1)
-    correlations: list[Correlation] = Field(default_factory=list)
-    band_sigma: Positive = 3.0  # bands m +- k sigma (spec §3.1: k = 3 reproduces "20 %", "25 %")
-    quantiles: list[Probability] = Field(default_factory=lambda: [0.00135, 0.5, 0.99865])  # +-3 sigma normal
-    sensitivity_step: Positive = 1e-6  # relative step of the finite-difference check of the exact derivatives
-    afc: AfcMonteCarlo | None = None  # the AFC amplitude through a linear model of the dynamics (needs device.dynamics)
+    correlations: list[Correlation] = Field(default_factory=list, max_length=100)
+    band_sigma: Positive = Field(
+        3.0, description="bands m +- k sigma; k = 3 reproduces the source's \"20 %\", \"25 %\"")
+    quantiles: list[Probability] = Field(
+        default_factory=lambda: [0.00135, 0.5, 0.99865], max_length=100,
+        description="quantiles reported (at most 100); the default: +-3 sigma of a normal")
+    sensitivity_step: Positive = Field(
+        1e-6, description="relative step of the finite-difference check of the exact derivatives")
+    afc: AfcMonteCarlo | None = Field(
+        None, description="the AFC amplitude through a linear model of the dynamics (needs device.dynamics)")
 
     @model_validator(mode="after")
     def _names(self):
@@ -218,5 +234,5 @@ class MonteCarlo(Strict):
 class Executor(Strict):
     """Where studies run: in-process (default) or on a dask.distributed scheduler."""
 
-    scheduler: str | None = None  # e.g. "tcp://127.0.0.1:8786"; the CLI's --scheduler overrides it
-    progress: bool = True  # a progress bar on runs of more than one task (on a terminal)
+    scheduler: str | None = Field(None, description="e.g. \"tcp://127.0.0.1:8786\"; the CLI's --scheduler overrides it")
+    progress: bool = Field(True, description="a progress bar on runs of more than one task (on a terminal)")

@@ -59,8 +59,8 @@ class Motor(Strict):
 
 
 class Drive(Strict):
-    polar_inertia: Inertia  # J_p of rotor and drive
-    drag: RotationalDampingOrZero = 0.0  # b, N m s
+    polar_inertia: Inertia = Field(description="J_p of rotor and drive")
+    drag: RotationalDampingOrZero = Field(0.0, description="b, N m s")
     max_torque: Torque | None = None
     max_power: Power | None = None
     motor: Motor | None = None
@@ -69,10 +69,10 @@ class Drive(Strict):
 class Rotor(Strict):
     """Jeffcott (Laval) rotor on a flexible shaft, with optional liquid layer and drive."""
 
-    mass: Mass  # m1, without liquid
-    stiffness: Stiffness  # c
-    damping: DampingOrZero  # chi, external viscous friction
-    eccentricity: Length  # e
+    mass: Mass = Field(description="m1, without liquid")
+    stiffness: Stiffness = Field(description="c")
+    damping: DampingOrZero = Field(description="chi, external viscous friction")
+    eccentricity: Length = Field(description="e")
     liquid: Liquid | None = None
     drive: Drive | None = None
 
@@ -82,35 +82,36 @@ class Rotor(Strict):
 class Stationary(Strict):
     """Stationary curves (9) of Figs 5-6 over z = (omega/Omega0)^2 for pairs (mu1, n), n = chi^2/(c m1)."""
 
-    cases: list[tuple[Annotated[float, Field(ge=1)], Positive]] = [(2, 0.1), (2, 0.7), (4, 0.1), (4, 0.7)]
+    cases: Annotated[list[tuple[Annotated[float, Field(ge=1, le=1e6)], Positive]], Field(max_length=100)] = [
+        (2, 0.1), (2, 0.7), (4, 0.1), (4, 0.7)]
     z: Range = Range(start=0.01, stop=3.0, points=600)
 
 
 class Steps(Strict):
     """Speed steps (4)-(7), Figs 3-4: closed form beside CVODES, for each psi."""
 
-    psi: list[Fraction] = [1.0, 0.75, 0.5, 0.25]
-    steps: list[tuple[RateOrZero, RateOrZero]]  # (from, to) angular speeds
+    psi: Annotated[list[Fraction], Field(max_length=100)] = [1.0, 0.75, 0.5, 0.25]
+    steps: list[tuple[RateOrZero, RateOrZero]] = Field(max_length=100, description="(from, to) angular speeds")
     duration: Time = 0.6
 
 
 class Passage(Strict):
     """Uniform acceleration through the critical speed (8')-(9'), Figs 7-9."""
 
-    psi: list[Fraction] = [1.0, 0.75, 0.5, 0.25]
-    friction: list[RateOrZero]  # n = chi/m1 of section 3.7, 1/s
+    psi: Annotated[list[Fraction], Field(max_length=100)] = [1.0, 0.75, 0.5, 0.25]
+    friction: list[RateOrZero] = Field(max_length=100, description="n = chi/m1 of section 3.7, 1/s")
     start_speed: AngularSpeed
-    acceleration: AngularAcceleration  # beta'' = 2 eps
-    final_ratio: Positive = 2.0  # run to omega/Omega0
-    crossover: bool = True  # find n* where max d(psi) = max d(1)
-    sensitivity_acceleration: AngularAcceleration | None = None  # the 10 s^-2 variant
+    acceleration: AngularAcceleration = Field(description="beta'' = 2 eps")
+    final_ratio: Positive = Field(2.0, description="run to omega/Omega0")
+    crossover: bool = Field(True, description="find n* where max d(psi) = max d(1)")
+    sensitivity_acceleration: AngularAcceleration | None = Field(None, description="the 10 s^-2 variant")
 
 
 class Lewis(Strict):
     """Jeffcott rotor from rest at constant acceleration: table over zeta and a* = alpha/Omega^2."""
 
-    zeta: list[Annotated[float, Field(ge=0, lt=1)]] = [0.0, 0.01, 0.02, 0.05, 0.1]
-    accel_ratio: list[Positive] = [1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2]
+    zeta: Annotated[list[Annotated[float, Field(ge=0, lt=1)]], Field(max_length=100)] = [0.0, 0.01, 0.02, 0.05, 0.1]
+    accel_ratio: Annotated[list[Positive], Field(max_length=100)] = [1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2]
 
 
 class MotorRunup(Strict):
@@ -134,18 +135,19 @@ class Spinup(Strict):
 
     start_speed: RateOrZero
     final_speed: AngularSpeed
-    horizon: Time  # the deadline (the upper bound of the final time with the min_time objective)
+    horizon: Time = Field(description="the deadline: the final time (its upper bound with the min_time objective)")
     max_acceleration: AngularAcceleration
     max_speed: AngularSpeed | None = None
     objective: Literal["peak_deflection", "peak_unbalance", "integrated_deflection", "min_time"] = "peak_deflection"
     settling_time: TimeOrZero = 0.0
-    deflection_limit: Positive | None = None  # delta/e
-    max_jerk: AngularJerk | None = None  # bound on |d alpha/dt| between control intervals
-    jerk_penalty: Annotated[float, Field(ge=0)] = 1e-6  # weight of sum (Delta alpha/alpha_max)^2
+    deflection_limit: Positive | None = Field(None, description="bound on the deflection delta/e")
+    max_jerk: AngularJerk | None = Field(None, description="bound on |d alpha/dt| between control intervals")
+    jerk_penalty: Annotated[float, Field(ge=0, le=1e6)] = Field(
+        1e-6, description="weight of sum (Delta alpha/alpha_max)^2 in the objective")
     method: Literal["collocation", "multiple_shooting"] = "collocation"
     scheme: Literal["radau", "legendre"] = "radau"
-    degree: Annotated[int, Field(ge=1, le=9)] = 3
-    intervals: Annotated[int, Field(ge=4, le=5000)] = 200
+    degree: Annotated[int, Field(ge=1, le=9)] = Field(3, description="collocation degree, 1 to 9")
+    intervals: Annotated[int, Field(ge=4, le=5000)] = Field(200, description="control intervals, 4 to 5,000")
     multistart: bool = True
     max_iterations: Annotated[int, Field(ge=1, le=100000)] = 1000  # IPOPT iterations per solve
     tolerance: Annotated[float, Field(gt=0, lt=1)] = 1e-8  # IPOPT tol (and constraint violation)

@@ -1,72 +1,186 @@
-"""Physical quantities written as users write them ("32.3 MPa", "0.35 mm", "6300 rpm"), parsed
-with pint and converted to SI floats at load time."""
+"""Physical quantities written as users write them ("32.3 MPa", "0.35 mm", "6300 rpm"), converted to
+SI floats at load time.
+
+A quantity is read as a plain decimal number followed by a unit; only the unit is given to pint, and
+only after a strict grammar has accepted it (unit names joined by ``*``, ``/``, a space, and integer
+powers ``^n`` or ``**n``), so no text is ever evaluated as an arithmetic expression.  Values that are
+not finite, or that leave the physical range of their kind (:data:`DIMENSIONS`), are refused.
+The pint registry is built on first use, not at import.
+"""
 
 from __future__ import annotations
 
+import math
+import re
+from functools import cache
 from typing import Annotated
 
-import pint
-from pydantic import AfterValidator, BeforeValidator
+from pydantic import AfterValidator, BeforeValidator, Field
 
-UREG = pint.UnitRegistry()
-
-# name -> (pint dimensionality, SI unit used inside the toolkit, example)
+# name -> (pint dimensionality, SI unit used inside the toolkit, example, (smallest positive, largest) in SI).
+# The range is the physical one of a rotor machine and its balancing devices, kept wide: it refuses
+# values no device has (a 1 km gap, a 1 TPa pressure) before they overflow the equations.
 DIMENSIONS = {
-    "length": ("[length]", "m", "0.35 mm"),
-    "area": ("[length] ** 2", "m**2", "0.016 m^2"),
-    "volume": ("[length] ** 3", "m**3", "4.7e-5 m^3"),
-    "pressure": ("[mass] / [length] / [time] ** 2", "Pa", "32.3 MPa"),
-    "force": ("[mass] * [length] / [time] ** 2", "N", "3.3e5 N"),
-    "density": ("[mass] / [length] ** 3", "kg/m**3", "1000 kg/m^3"),
-    "viscosity": ("[mass] / [length] / [time]", "Pa*s", "1e-3 Pa*s"),
-    "volume flow": ("[length] ** 3 / [time]", "m**3/s", "0.167 m^3/s"),
-    "angular speed": ("1 / [time]", "rad/s", "6300 rpm"),
-    "mass": ("[mass]", "kg", "3000 kg"),  # dynamics (autobal/schema_dynamics.py)
-    "stiffness": ("[mass] / [time] ** 2", "N/m", "1e8 N/m"),
-    "damping": ("[mass] / [time]", "N*s/m", "8.9e4 N*s/m"),
-    "time": ("[time]", "s", "50 ms"),
-    "angular acceleration": ("1 / [time] ** 2", "rad/s**2", "40 rad/s^2"),  # rotor spin-up (schema_rotor.py)
-    "angular jerk": ("1 / [time] ** 3", "rad/s**3", "2000 rad/s^3"),  # spin-up jerk bound
-    "torque": ("[mass] * [length] ** 2 / [time] ** 2", "N*m", "0.04 N*m"),
-    "power": ("[mass] * [length] ** 2 / [time] ** 3", "W", "6 W"),
-    "moment of inertia": ("[mass] * [length] ** 2", "kg*m**2", "1e-3 kg*m^2"),
-    "rotational damping": ("[mass] * [length] ** 2 / [time]", "N*m*s", "1e-5 N*m*s"),
+    "length": ("[length]", "m", "0.35 mm", (1e-9, 1e3)),
+    "area": ("[length] ** 2", "m**2", "0.016 m^2", (1e-18, 1e6)),
+    "volume": ("[length] ** 3", "m**3", "4.7e-5 m^3", (1e-27, 1e9)),
+    "pressure": ("[mass] / [length] / [time] ** 2", "Pa", "32.3 MPa", (1e-3, 1e11)),
+    # bulk modulus of the barrier medium: up to 1e16 Pa, so that a scene can approach the incompressible limit
+    "bulk modulus": ("[mass] / [length] / [time] ** 2", "Pa", "1.42e5 Pa", (1e-3, 1e16)),
+    "force": ("[mass] * [length] / [time] ** 2", "N", "3.3e5 N", (1e-9, 1e10)),
+    "density": ("[mass] / [length] ** 3", "kg/m**3", "1000 kg/m^3", (1e-6, 1e5)),
+    "viscosity": ("[mass] / [length] / [time]", "Pa*s", "1e-3 Pa*s", (1e-8, 1e8)),
+    "volume flow": ("[length] ** 3 / [time]", "m**3/s", "0.167 m^3/s", (1e-15, 1e4)),
+    "angular speed": ("1 / [time]", "rad/s", "6300 rpm", (1e-9, 1e7)),
+    "mass": ("[mass]", "kg", "3000 kg", (1e-12, 1e8)),  # dynamics (autobal/schema_dynamics.py)
+    "stiffness": ("[mass] / [time] ** 2", "N/m", "1e8 N/m", (1e-9, 1e14)),
+    "damping": ("[mass] / [time]", "N*s/m", "8.9e4 N*s/m", (1e-12, 1e12)),
+    "time": ("[time]", "s", "50 ms", (1e-12, 1e10)),
+    "angular acceleration": ("1 / [time] ** 2", "rad/s**2", "40 rad/s^2", (1e-9, 1e10)),  # schema_rotor.py
+    "angular jerk": ("1 / [time] ** 3", "rad/s**3", "2000 rad/s^3", (1e-9, 1e12)),  # spin-up jerk bound
+    "torque": ("[mass] * [length] ** 2 / [time] ** 2", "N*m", "0.04 N*m", (1e-12, 1e9)),
+    "power": ("[mass] * [length] ** 2 / [time] ** 3", "W", "6 W", (1e-12, 1e10)),
+    "moment of inertia": ("[mass] * [length] ** 2", "kg*m**2", "1e-3 kg*m^2", (1e-15, 1e9)),
+    "rotational damping": ("[mass] * [length] ** 2 / [time]", "N*m*s", "1e-5 N*m*s", (1e-15, 1e9)),
 }
+
+_NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d{1,3})?"
+_NAME = r"(?:[A-Za-zµμΩ°%][A-Za-z_µμΩ°%]*)"
+_FACTOR = rf"(?:{_NAME}(?:\s*(?:\^|\*\*)\s*-?\d)?)"
+# unit := ["1" "/"] factor { ("*" | "/" | " ") factor }: names with single-digit integer powers, nothing else
+_UNIT = re.compile(rf"(?:1\s*/\s*)?{_FACTOR}(?:\s*(?:\*(?!\*)|/|\s)\s*{_FACTOR})*")
+_QUANTITY = re.compile(rf"\s*({_NUMBER})\s*(.*?)\s*")
+
+
+@cache
+def registry():
+    """The pint unit registry, built on first use (about 0.5 s)."""
+    import pint
+
+    return pint.UnitRegistry()
+
+
+def parse_unit(text: str):
+    """The pint unit of ``text`` after a strict check of its grammar; ValueError if it is not a unit.
+
+    Parameters
+    ----------
+    text : str
+        A unit such as ``"m^3/s"``, ``"N*s/m"``, ``"1/s"`` or ``"kg*m**2"``.
+
+    Returns
+    -------
+    pint.Unit
+    """
+    text = text.strip()
+    if len(text) > 64 or not _UNIT.fullmatch(text):
+        raise ValueError(f"{text!r} is not a unit (names joined by *, / and integer powers ^n)")
+    try:
+        return registry().parse_units(text)
+    except Exception:  # pint raises several unrelated types on unknown names
+        raise ValueError(f"{text!r} is not a known unit") from None
+
+
+def unit_factor(unit: str, kind: str) -> float:
+    """The factor that converts ``unit`` to the SI unit of ``kind``; ValueError on a wrong dimension.
+
+    Parameters
+    ----------
+    unit : str
+        A unit, e.g. ``"mm"``.
+    kind : str
+        A key of :data:`DIMENSIONS`, e.g. ``"length"``.
+
+    Returns
+    -------
+    float
+        SI value of one ``unit``, e.g. 0.001 for ``"mm"`` as a length.
+    """
+    dim, si, example, _ = DIMENSIONS[kind]
+    u = parse_unit(unit)
+    ureg = registry()
+    if u.dimensionality != ureg.get_dimensionality(dim):
+        raise ValueError(f"{unit!r} is not a {kind} unit (e.g. '{example.split()[-1]}', SI {si}), "
+                         f"its dimension is {u.dimensionality}")
+    return float(ureg.Quantity(1.0, u).to(si).magnitude)
 
 
 def to_si(value: object, kind: str) -> float:
-    """Convert ``value`` (a string with a unit) to a float in the SI unit of ``kind``."""
-    dim, si, example = DIMENSIONS[kind]
+    """Convert ``value`` (a string: a number and a unit) to a float in the SI unit of ``kind``.
+
+    Parameters
+    ----------
+    value : str
+        E.g. ``"32.3 MPa"``; a plain number without a unit is refused.
+    kind : str
+        A key of :data:`DIMENSIONS`.
+
+    Returns
+    -------
+    float
+        The value in the SI unit of ``kind``; finite.
+    """
+    dim, si, example, _ = DIMENSIONS[kind]
     if isinstance(value, bool) or not isinstance(value, str | int | float):
         raise ValueError(f"expected a {kind} with a unit, e.g. '{example}'")
     if not isinstance(value, str):
         raise ValueError(f"{value!r} has no unit: write a {kind} with its unit, e.g. '{example}'")
+    m = _QUANTITY.fullmatch(value)
+    if m is None:
+        word = value.strip().split(" ")[0].lower().lstrip("+-.")
+        if word in ("inf", "infinity", "nan"):
+            raise ValueError(f"{value!r}: a {kind} must be a finite number (e.g. '{example}')")
+        raise ValueError(f"cannot read {value!r} as a number and a unit (a {kind}, e.g. '{example}')")
+    number, unit = float(m.group(1)), m.group(2)
+    if not unit:
+        raise ValueError(f"{value!r} has no unit: write a {kind} with its unit, e.g. '{example}'")
     try:
-        q = UREG.Quantity(value)
-    except Exception as exc:  # pint raises several unrelated types on garbage
-        raise ValueError(f"cannot read {value!r} as a {kind} (e.g. '{example}'): {exc}") from None
-    if q.dimensionality != UREG.get_dimensionality(dim):
-        raise ValueError(f"{value!r} is not a {kind}: expected a unit like '{example}' "
-                         f"(SI: {si}), got dimension {q.dimensionality}")
-    return float(q.to(si).magnitude)
+        u = parse_unit(unit)
+    except ValueError as exc:
+        raise ValueError(f"{value!r}: {exc}") from None
+    if u.dimensionality != registry().get_dimensionality(dim):
+        raise ValueError(f"{value!r} is not a {kind}: expected a unit like '{example}' (SI: {si}), "
+                         f"got dimension {u.dimensionality}")
+    si_value = number * unit_factor(unit, kind)
+    if not math.isfinite(number) or not math.isfinite(si_value):
+        raise ValueError(f"{value!r}: a {kind} must be a finite number (it overflows in {si})")
+    return si_value
 
 
-def _positive(x: float) -> float:
-    if not x > 0:
-        raise ValueError(f"must be positive, got {x:g} (SI)")
-    return x
+def _bounded(kind: str, sign: str):
+    lo, hi = DIMENSIONS[kind][3]
+    si = DIMENSIONS[kind][1]
 
+    def check(x: float) -> float:
+        if sign == "positive" and not x > 0:
+            raise ValueError(f"must be positive, got {x:g} {si}")
+        if sign == "nonnegative" and not x >= 0:
+            raise ValueError(f"must not be negative, got {x:g} {si}")
+        if x != 0 and not lo <= abs(x) <= hi:
+            raise ValueError(f"{x:g} {si} is outside the physical range of a {kind} ({lo:g} to {hi:g} {si})")
+        return x
 
-def _nonnegative(x: float) -> float:
-    if not x >= 0:
-        raise ValueError(f"must not be negative, got {x:g} (SI)")
-    return x
+    return check
 
 
 def quantity(kind: str, sign: str = "positive"):
-    """An annotated float field holding a ``kind`` quantity in SI, checked for ``sign``."""
-    check = {"positive": _positive, "nonnegative": _nonnegative}[sign]
-    return Annotated[float, BeforeValidator(lambda v: to_si(v, kind)), AfterValidator(check)]
+    """An annotated float field holding a ``kind`` quantity in SI, checked for ``sign`` and the
+    physical range of :data:`DIMENSIONS`; its unit and range are added to the field's description
+    (:class:`autobal.schema.Strict`).
+
+    Parameters
+    ----------
+    kind : str
+        A key of :data:`DIMENSIONS`.
+    sign : {"positive", "nonnegative"}
+        Zero allowed or not.
+    """
+    dim, si, example, (lo, hi) = DIMENSIONS[kind]
+    article = "an" if kind[0] in "aeiou" else "a"
+    zero = ">= 0" if sign == "nonnegative" else "> 0"
+    text = f"{article} {kind} with its unit, e.g. '{example}' (SI: {si}); {zero}, magnitude {lo:g} to {hi:g} {si}"
+    return Annotated[float, BeforeValidator(lambda v: to_si(v, kind)), AfterValidator(_bounded(kind, sign)),
+                     Field(json_schema_extra={"unit": si, "kind": kind, "unit_text": text})]
 
 
 Length = quantity("length")
@@ -79,3 +193,30 @@ Density = quantity("density")
 Viscosity = quantity("viscosity")
 VolumeFlow = quantity("volume flow")
 AngularSpeed = quantity("angular speed")
+
+
+def si_unit_of(text: object) -> str:
+    """The SI unit of a value written with a unit ('0.35 mm' -> 'm'), read by the same strict grammar;
+    '' if it is not a number with a unit of one of the :data:`DIMENSIONS`.
+
+    Parameters
+    ----------
+    text : object
+        A scene value as written.
+
+    Returns
+    -------
+    str
+    """
+    m = _QUANTITY.fullmatch(text) if isinstance(text, str) else None
+    if m is None or not m.group(2):
+        return ""
+    try:
+        u = parse_unit(m.group(2))
+    except ValueError:
+        return ""
+    ureg = registry()
+    for dim, si, _, _ in DIMENSIONS.values():
+        if u.dimensionality == ureg.get_dimensionality(dim):
+            return si
+    return ""

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from autobal.analysis import interrupt
 from autobal.analysis.rotor import deflection, peak, unbalance
 from autobal.models.rotor import rotor_model
 from autobal.ocp.problem import SpinupOcp
@@ -25,7 +26,7 @@ def simulate_profile(ocp: SpinupOcp, u, h, fractions, tol: float = RESIM_TOL) ->
     F = interval_integrator(tuple(fractions), tol)
     q, out = np.asarray(ocp.q0, float), []
     for uk, hk in zip(u, h, strict=True):
-        xf = np.array(F(x0=q, p=[uk * ocp.a_max, hk, *ocp.params.p])["xf"])
+        xf = np.array(interrupt.call(F, x0=q, p=[uk * ocp.a_max, hk, *ocp.params.p])["xf"])
         out.append(xf.T)
         q = xf[:, -1]
     return np.array(out)

@@ -1,0 +1,128 @@
+"""Interrupts (SIGINT, SIGTERM) that no solver swallows.
+
+CasADi checks for signals inside IPOPT, CVODES and its rootfinders; the KeyboardInterrupt (or
+:class:`autobal.errors.Interrupted`) that the Python signal handler raises there is turned into a solver
+status ("NonIpopt_Exception_Thrown"), a RuntimeError ("CV_RHSFUNC_FAIL") or a SystemError, after which a
+study would carry on, or fail with the wrong message.  Here every raising signal handler is wrapped so
+that the signal is recorded, and :func:`call`, through which the solvers are called (IPOPT by
+:func:`autobal.analysis.ipopt.solve`), raises :class:`~autobal.errors.Interrupted` after the call
+whatever the solver made of the signal.
+
+The wrapping (:func:`ensure`) happens at the first solver call and keeps each handler's behaviour
+(Python's default SIGINT handler still raises KeyboardInterrupt; a run layer's SIGTERM handler still
+raises what it raises); a handler that does not raise is not an interrupt.  A run layer may call
+:func:`install` instead: both signals then raise Interrupted, and a watchdog ends a process whose
+solver has not stopped 2 s after the signal.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import threading
+
+from autobal.errors import Interrupted
+
+SIGNALS = (signal.SIGINT, signal.SIGTERM)
+_state = {"signum": None, "watchdog": None}
+
+
+def _raise(signum, frame):
+    raise Interrupted(signum)
+
+
+def _wrap(previous):
+    """A handler that records the signal when ``previous`` raises (the interrupt), then re-raises."""
+
+    def handler(signum, frame):
+        try:
+            previous(signum, frame)
+        except BaseException:
+            first = _state["signum"] is None
+            _state["signum"] = signum
+            if first and _state["watchdog"] is not None:
+                threading.Thread(target=_watchdog, args=(signum, _state["watchdog"]), daemon=True).start()
+            raise
+
+    handler.autobal_wrapped = True
+    return handler
+
+
+def _watchdog(signum: int, seconds: float) -> None:
+    """Last resort: a solver still running ``seconds`` after the signal ends the process."""
+    threading.Event().wait(seconds)
+    sys.stderr.write(f"autobal: interrupted ({signal.Signals(signum).name}); a solver did not stop, exiting\n")
+    sys.stderr.flush()
+    os._exit(128 + signum)
+
+
+def _main_thread() -> bool:
+    return threading.current_thread() is threading.main_thread()
+
+
+def install(watchdog_s: float | None = 2.0) -> None:
+    """Make SIGINT and SIGTERM raise :class:`~autobal.errors.Interrupted` (main thread only).
+
+    Parameters
+    ----------
+    watchdog_s : float or None
+        After a signal, end the process (exit code 128 + signal) if it has not stopped within this
+        many seconds, s; None: never.
+    """
+    if not _main_thread():
+        return
+    _state["watchdog"] = watchdog_s
+    for sig in SIGNALS:
+        signal.signal(sig, _wrap(_raise))
+
+
+def ensure() -> None:
+    """Wrap the current SIGINT and SIGTERM handlers that are Python functions (main thread only)."""
+    if not _main_thread():
+        return
+    for sig in SIGNALS:
+        current = signal.getsignal(sig)
+        if callable(current) and not getattr(current, "autobal_wrapped", False):
+            signal.signal(sig, _wrap(current))
+
+
+def requested() -> int | None:
+    """The number of the signal that interrupted the run and that no :func:`check` has raised yet, else None."""
+    return _state["signum"]
+
+
+def clear() -> None:
+    """Forget a received interrupt (a caller that handled it, or tests)."""
+    _state["signum"] = None
+
+
+def check() -> None:
+    """Raise :class:`~autobal.errors.Interrupted` (once) if a signal interrupted the run."""
+    signum, _state["signum"] = _state["signum"], None
+    if signum is not None:
+        raise Interrupted(signum)
+
+
+def call(function, *args, **kwargs):
+    """``function(*args, **kwargs)`` (a CasADi solver, integrator or rootfinder), then :func:`check`,
+    also when it raised: an interrupt turned into a solver error or status is an interrupt.  With the
+    environment variable ``AUTOBAL_SOLVER_TRACE`` set to a file, the solver's name is appended to it first.
+
+    Returns
+    -------
+    What ``function`` returns.
+    """
+    ensure()
+    check()
+    trace = os.environ.get("AUTOBAL_SOLVER_TRACE")
+    if trace:  # a file that receives the name of each solver called (tests wait on it to interrupt a solve)
+        with open(trace, "a") as fh:
+            fh.write(f"{function.name() if callable(getattr(function, 'name', None)) else function.__name__}\n")
+    try:
+        out = function(*args, **kwargs)
+    except BaseException:
+        check()
+        raise
+    check()
+    return out
