@@ -19,6 +19,7 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 from autobal import __version__, report, scenario
+from autobal.analysis import interrupt
 from autobal.analysis.result import Result, write_json
 from autobal.errors import AutobalError, SolveError
 from autobal.output import LOG, OutputFolder, SolverLog
@@ -171,6 +172,7 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
     """
     if not isinstance(scene, Scenario):
         scene = load(scene)
+    interrupt.clear()  # an interrupt of an earlier run in this process is not this run's
     folder = OutputFolder(out) if out is not None else None
     results, timing, current = {}, {}, None
     try:

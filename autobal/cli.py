@@ -42,6 +42,9 @@ def _out_folder(args, scn) -> Path:
 
 def _run(args, scn) -> int:
     out = _out_folder(args, scn)
+    note = scenario.long_run_note(scn)
+    if note and not args.quiet:
+        print(note, flush=True)
 
     def show(name, result, seconds):
         if not args.quiet:

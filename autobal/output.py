@@ -77,15 +77,24 @@ def _flush_c_stdout() -> None:
         ctypes.CDLL(None).fflush(None)
 
 
+def _on_fd(stream, fd: int) -> bool:
+    try:
+        return stream.fileno() == fd
+    except (AttributeError, OSError, ValueError):  # pytest's capture, io.StringIO ...
+        return False
+
+
 class SolverLog:
-    """Within ``with SolverLog(path):`` what solvers print (IPOPT, CasADi: C-level stdout) and
-    Python warnings go to ``path``; :meth:`terminal` gives the real stdout back for a moment."""
+    """Within ``with SolverLog(path):`` what solvers print (IPOPT, CasADi, CVODES: C-level stdout and
+    stderr) and Python warnings go to ``path``.  Python's own ``sys.stderr`` (progress bars, messages)
+    still reaches the terminal; :meth:`terminal` gives the real stdout back for a moment."""
 
     def __init__(self, path: str | Path):
         self.path = path
 
     def __enter__(self):
         sys.stdout.flush()
+        sys.stderr.flush()
         _flush_c_stdout()
         self._log = open(self.path, "a")  # noqa: SIM115 (closed in __exit__)
         self._warnings = warnings.catch_warnings()
@@ -94,14 +103,26 @@ class SolverLog:
         warnings.showwarning = lambda msg, cat, fname, line, file=None, text=None: self._log.write(
             warnings.formatwarning(msg, cat, fname, line, text))
         self._saved = os.dup(1)
+        self._saved_err = os.dup(2)
+        self._py_stderr = sys.stderr
+        if _on_fd(sys.stderr, 2):  # keep Python's stderr on the terminal while fd 2 goes to the log
+            sys.stderr = open(os.dup(self._saved_err), "w", buffering=1, encoding=sys.stderr.encoding,  # noqa: SIM115
+                              errors="backslashreplace")
         os.dup2(self._log.fileno(), 1)
+        os.dup2(self._log.fileno(), 2)
         return self
 
     def __exit__(self, *exc):
         sys.stdout.flush()
+        sys.stderr.flush()
         _flush_c_stdout()
         os.dup2(self._saved, 1)
+        os.dup2(self._saved_err, 2)
         os.close(self._saved)
+        os.close(self._saved_err)
+        if sys.stderr is not self._py_stderr:
+            sys.stderr.close()
+            sys.stderr = self._py_stderr
         self._warnings.__exit__(*exc)
         self._log.close()
 

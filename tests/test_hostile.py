@@ -22,7 +22,7 @@ HOSTILE = Path(__file__).parent / "hostile"
 PUMP = yaml.safe_load(scenario.resolve("pump_pe600_statics").read_text())
 MC = yaml.safe_load(scenario.resolve("pump_pe600_montecarlo").read_text())
 DYN = yaml.safe_load(scenario.resolve("pump_pe600_dynamics").read_text())
-SPIN = yaml.safe_load(scenario.resolve("spinup_jeffcott").read_text())
+SPIN = yaml.safe_load(scenario.resolve("spinup_jeffcott_deadline_5s").read_text())
 
 
 def edited(base: dict, path: str, value) -> dict:

@@ -54,7 +54,7 @@ def assert_interrupted(code, lines, out, seconds, expected_code, name):
 
 @pytest.mark.slow
 def test_sigint_during_the_spinup_ipopt_solve(tmp_path):
-    code, lines, out, seconds = interrupted_run(tmp_path, "spinup_jeffcott", "spinup", signal.SIGINT)
+    code, lines, out, seconds = interrupted_run(tmp_path, "spinup_jeffcott_deadline_5s", "spinup", signal.SIGINT)
     assert_interrupted(code, lines, out, seconds, 130, "SIGINT")
     assert json.loads((out / "interrupted.json").read_text())["analysis"] == "spinup"
 
