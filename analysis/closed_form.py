@@ -1,6 +1,6 @@
 """The source's closed-form static solutions, beside which the exact (IPOPT) solution is reported.
 
-Pump: Pavlenko (2014) Eqs. (2.22), (2.24)-(2.28), (2.30)-(2.32), (2.36), with the spec's
+Pump: Pavlenko (2014) Eqs. (2.22), (2.24)-(2.28), (2.30)-(2.32), (2.36), with the
 reconstructions of (2.27), (2.28) and the sign erratum of (2.32).  Compressor: (2.144)-(2.147),
 (2.156), (2.159), (2.160) and, as Appendix B does, the pump formulas (2.26), (2.28) for the
 regulator.  All functions take :class:`autobal.models.device.DeviceGroups` and numpy arrays.
@@ -75,7 +75,7 @@ def pump(g, psi1, dpsi) -> dict:
         "kappa_s": 3 * g.sigma / u * (psi1 - g.psi4 + k * dpsi) * ratio / (1 + ratio) ** 2,  # (2.36)
         "dpsi_kr": dpsi_kr,
         "psi1_kr": ((ae * dpsi / (a3 * (1 + ae))) ** 2 - k * dpsi - g.chi / g.sigma)
-        / (1 - g.b / g.sigma),  # (2.32), -chi/sigma (spec erratum 9)
+        / (1 - g.b / g.sigma),  # (2.32), -chi/sigma (the printed sign of chi is an erratum)
     }
     if g.regulator is not None:
         out["psi_cam"], out["xi"] = regulator(g, psi1, dpsi)
@@ -121,7 +121,7 @@ def compressor(g, psi1, dpsi) -> dict:
 
     Disc: :func:`compressor_disc`; flows (2.159) with the program's q1 denominator; psi1_kr and
     dpsi_kr (2.160); kappa (2.162) with a central difference of u(psi1); the regulator by the
-    pump formulas (2.26), (2.28) (spec §8, [program]).
+    pump formulas (2.26), (2.28) (the source's program model).
     """
     psi1 = np.asarray(psi1, float)
     ae, a3, at, c = _rel(g, psi1, dpsi)

@@ -9,7 +9,7 @@ with chi_j from (1.34), so (1.48):
 
     P(t) = int_0^{sigma psi1} [F_chi(chi2(tau), t) - F_chi(chi1(tau), t)] p_tau(tau) dtau
 
-(upper limit sigma psi1 as reconstructed by the spec, erratum 2), and the mean time to failure is
+(upper limit sigma psi1 as reconstructed here; see the validation ledger), and the mean time to failure is
 T = int_0^inf P(t) dt (1.49).  Both are implemented literally: trapezoid quadrature in tau on
 ``tau_nodes`` nodes and the exact CDF of chi(t).  An independent cross-check of (1.49): for fixed
 (tau, b) the time spent in region B up to a horizon is the length of the interval where
@@ -19,7 +19,7 @@ instead of in t (``sojourn``).
 Spec reliability-experiments-estimation.md §1.6: the literal model does not give the source's
 P(2000 h) = 0.75 and T = 2.7 thousand h; it gives 0.671 and 4.12 thousand h (see
 docs/validation.md).  The option ``renormalise`` divides p_tau by its mass on [0, sigma psi1],
-the other reading the spec lists.
+the other reading of the printed formula.
 """
 
 from __future__ import annotations
@@ -52,7 +52,7 @@ SOURCE = {
 }
 # Table 1.2 (L944-L951): mean time to failure and time of reliable operation at P = 0.8, thousand h, for
 # the bush materials; the meaning of the two rows is lost in the OCR and the wear rates of SCh20 and
-# 20Kh13 are not given, so the table is reference data only (spec §1.5-1.6).
+# 20Kh13 are not given, so the table is reference data only (Pavlenko 2014, ch. 1.2).
 TABLE_1_2 = {
     "materials": ["SCh20 (grey cast iron)", "20Kh13", "30Kh3MA"],
     "mttf_kh": [[1.6, 3.9, 5.8], [3.5, 8.7, 14.0]],

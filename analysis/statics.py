@@ -4,7 +4,7 @@ IPOPT solves the balances of :func:`autobal.models.device.static_system` as equa
 constraints with the physical bounds (pressures >= 0, gap u >= 0, valve 0 <= xi <= xi_max,
 stop reactions >= 0) and the stops' complementarity (sum of gap x reaction) as the objective,
 which is zero exactly at the physical solution and is checked to be so.  Regulator saturation
-(the valve on its open stop, spec §10.2) and face contact are part of the solution, reported
+(the valve on its open stop) and face contact are part of the solution, reported
 through their reactions, never a crash.
 
 Newton's method on the square system of the same balances (stops fixed: each reaction zero or

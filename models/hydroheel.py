@@ -7,7 +7,7 @@ chapter chi = h1/z_B is the dimensionless radial clearance of the inner seal (1.
 as the seal wears (1.38).
 
 Static model (1.22):  tau = sigma (psi2 - psi3) + chi_pr;  psi1 - psi2 = alpha_T1 u^3 (psi2 - psi3);
-psi1 - psi2 = alpha_31 (psi3 - psi4).  Closed forms (1.25)-(1.29) (spec reliability §1.2, with the
+psi1 - psi2 = alpha_31 (psi3 - psi4).  Closed forms (1.25)-(1.29) (Pavlenko 2014, ch. 1.2, with the
 psi4 terms re-derived), the geometry form (1.30)-(1.35), the failure-free region (1.36) and the
 flow characteristic (1.51)-(1.52).  Wear: chi(t) = chi0 + b t (1.38), b a normal wear rate
 truncated to b >= 0 (1.39)-(1.41).

@@ -74,7 +74,7 @@ class SpinupOcp:
         if self.jerk_max is not None and self.jerk_max <= 0:
             raise ValueError("jerk_max must be positive (rad/s^3)")
 
-    # dimensionless data (spec §3.2)
+    # dimensionless data (Pashkov 2010, Eq. (2))
     @property
     def free_time(self) -> bool:
         return self.objective == "min_time"

@@ -119,7 +119,7 @@ def resimulate(ocp: SpinupOcp, u, h, label: str, points: int = RESIM_POINTS, tol
     pk, tpk = peak(tau, dl)
     m = rotor_model()
     P = ocp.params
-    # the drive torque of spec §8.3 (without drive data J_p = b = 0: the unbalance reaction alone)
+    # the drive torque (without drive data J_p = b = 0: the unbalance reaction alone)
     torque = np.array(m.torque.map(q.shape[1])(q, a[None, :], ca.repmat(ca.DM(P.p), 1, q.shape[1]))).ravel() \
         * P.torque_scale
     Om = ocp.Om
