@@ -275,15 +275,7 @@ class DesignProblem:
 
     def _stiffness(self, W, psi1, dpsi, theta):
         """kappa_s = -sigma d(psi2 - psi3)/du with the other balances held (stops open)."""
-        sys_ = self.sys
-        r = sys_.residual(W, psi1, dpsi, theta)
-        J = ca.jacobian(r, W)
-        eqs = [i for i, e in enumerate(sys_.equations) if e != "disc force"]
-        held = {"u", "r_contact", "r_valve"}
-        cols = [i for i, k in enumerate(sys_.unknowns) if k not in held]
-        dx = -ca.solve(J[eqs, cols], J[eqs, sys_.index("u")])
-        names = [sys_.unknowns[i] for i in cols]
-        return -self.dev0.groups.sigma * (dx[names.index("psi2")] - dx[names.index("psi3")])
+        return self.sys.stiffness(ca.jacobian(self.sys.residual(W, psi1, dpsi, theta), W))
 
     def _build(self):
         sp, sys_, g = self.spec, self.sys, self.dev0.groups

@@ -535,15 +535,7 @@ class StaticsSolver:
         """
         if pt.contact:
             return float("nan")
-        sys_ = self.system
-        J = np.asarray(self._jacobian(pt.x, [pt.psi1, pt.dpsi]))
-        eqs = [i for i, e in enumerate(sys_.equations) if e != "disc force"]
-        held = {"u", "r_contact"} | {sys_.stops[r][0] if r in pt.active else r
-                                     for r in sys_.stops if r != "r_contact"}
-        cols = [i for i, k in enumerate(sys_.unknowns) if k not in held]
-        dx = -np.linalg.solve(J[np.ix_(eqs, cols)], J[eqs, sys_.index("u")])
-        d = dict(zip([sys_.unknowns[i] for i in cols], dx, strict=True))
-        return -self.design.groups.sigma * (d["psi2"] - d["psi3"])
+        return float(self.system.stiffness(np.asarray(self._jacobian(pt.x, [pt.psi1, pt.dpsi])), pt.active))
 
     def force_gap(self, psi1: float, dpsi: float, us) -> np.ndarray:
         """Balancing force phi = sigma (psi2 - psi3) against a prescribed gap u at fixed psi1:

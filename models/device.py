@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import casadi as ca
+import numpy as np
 
 from autobal.models import throttles as th
 from autobal.models.params import SIParams, si
@@ -355,6 +356,34 @@ class StaticSystem:
         """Unknowns a set of stops fixes: for a stop in ``active`` its coordinate on the stop,
         for every other stop its reaction at zero (name -> value)."""
         return {c if r in active else r: (at if r in active else 0.0) for r, (c, at, _) in self.stops.items()}
+
+    def stiffness(self, J, active=frozenset()):
+        """Static stiffness kappa_s = -d phi/du at fixed psi1, phi = sigma (psi2 - psi3), Pavlenko (2014),
+        Eq. (2.33): the implicit-function derivative of every balance but the disc's force balance.
+
+        Parameters
+        ----------
+        J : numpy.ndarray or CasADi matrix
+            Jacobian of ``residual`` with respect to the unknowns at a solution.
+        active : set of str
+            Stops the solution rests on (their coordinates are held); the other reactions are zero.
+
+        Returns
+        -------
+        float or CasADi expression
+            kappa_s, dimensionless (force over p_B s_B per unit u = z/z_B).
+        """
+        eqs = [i for i, e in enumerate(self.equations) if e != "disc force"]
+        held = {"u", "r_contact"} | {self.stops[r][0] if r in active else r for r in self.stops if r != "r_contact"}
+        cols = [i for i, k in enumerate(self.unknowns) if k not in held]
+        iu = self.index("u")
+        if isinstance(J, ca.SX | ca.MX | ca.DM):
+            dx = -ca.solve(J[eqs, cols], J[eqs, iu])
+        else:
+            J = np.asarray(J)
+            dx = -np.linalg.solve(J[np.ix_(eqs, cols)], J[eqs, iu])
+        names = [self.unknowns[i] for i in cols]
+        return -self.groups.sigma * (dx[names.index("psi2")] - dx[names.index("psi3")])
 
 
 def static_system(groups: DeviceGroups, parameters=()) -> StaticSystem:
