@@ -19,6 +19,14 @@ from scipy.optimize import minimize_scalar
 from autobal.analysis.linearize import LinearModel, Setup
 from autobal.analysis.result import Result, new_figure
 
+#: what each model is, for legends (Pavlenko (2014): chain form (2.40)/(2.111), App. A/B program model)
+MODEL_LABELS = {"nonlinear": "energy-consistent (nonlinear)", "nonlinear_chain": "chain form (2.40)/(2.111)",
+                "consistent": "hand model, chain form", "program": "source's program model (App. A/B)",
+                "thesis": "source's model as printed"}
+FORCING_LABELS = {"physical": r"physical forcing $\delta\tau = b\,\delta\psi_1$",
+                  "appendix": r"appendix forcing $\delta\tau = \delta\psi_1$"}
+HEADLINE = ("nonlinear", "physical")  # the energy-consistent model under the physical forcing
+
 
 def grid(lin: LinearModel, start: float, stop: float, points: int) -> np.ndarray:
     """Log grid from start to stop plus 81 points within +-8 |Re lambda| of each lightly damped
@@ -54,9 +62,12 @@ def characteristic(lin: LinearModel, omega_range: tuple, convention: str, amplit
     n = len(lin.states)
     siso = control.ss(lin.A, lin.forcing(convention)[:, None], np.eye(n)[[lin.u_out]], 0)
     fr = control.frequency_response(siso, om)
-    mag, phase = np.asarray(fr.magnitude).ravel() * scale, np.degrees(np.asarray(fr.phase).ravel())
+    mag, phase = np.asarray(fr.magnitude).ravel() * scale, np.degrees(np.unwrap(np.asarray(fr.phase).ravel()))
+    phase -= 360.0 * np.floor((phase[0] + 270.0) / 360.0)  # unwrapped, starting in [-270, 90): -180 for a negative gain
     w0 = lin.response([omega0], convention)[0] if np.isfinite(omega0) else np.nan
+    max_real = float(lin.poles().real.max())
     return {
+        "stable": max_real < 0, "max_real": max_real,
         "omega": om, "amplitude_um": mag, "phase_deg": phase,
         "peaks": peaks(lin, om, mag, convention, scale),
         "at_operating_speed": {"omega": omega0, "amplitude_um": abs(w0) * scale,
@@ -88,58 +99,129 @@ class FrequencyResult(Result):
         return self.data["at_operating_speed"]["amplitude_um"] * 1e-6
 
     def to_dict(self) -> dict:
-        d = {k: v for k, v in self.data.items() if k != "curves"}
-        d["models"] = {m: {k: v for k, v in c.items() if k not in ("omega", "amplitude_um", "phase_deg")}
+        arrays = ("omega", "amplitude_um", "phase_deg")
+        d = {k: v for k, v in self.data.items() if k not in ("curves", "headline")}
+        if "headline" in self.data:
+            d["headline"] = {k: v for k, v in self.data["headline"].items() if k not in arrays}
+        d["models"] = {m: {k: v for k, v in c.items() if k not in arrays}
                        for m, c in self.data["curves"].items()}
         return d
 
     def summary(self) -> str:
         lines = [f"frequency response (forcing {self.data['forcing']}, dpsi1a = {self.data['forcing_amplitude']:g}):"]
-        for m, c in self.data["curves"].items():
+        h = self.data.get("headline")
+        rows = ([(f"headline: {MODEL_LABELS.get(h['model'], h['model'])}, {h['forcing']} forcing"
+                  + ("" if h["stable"] else ", UNSTABLE"), h)] if h else [])
+        rows += [(m if c.get("stable", True) else f"{m} (unstable)", c) for m, c in self.data["curves"].items()]
+        for m, c in rows:
             pk = ", ".join(f"{p['omega']:.1f} rad/s {p['amplitude_um']:.2f} um" for p in c["peaks"]) or "none"
             a0 = c["at_operating_speed"]
             lines.append(f"  {m:16s} peaks: {pk}; at {a0['omega']:.1f} rad/s: {a0['amplitude_um']:.2f} um")
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
+        curves = dict(self.data["curves"])
+        h = self.data.get("headline")
+        if h is not None and (h["model"] not in curves or h["forcing"] != self.data["forcing"]):
+            curves[f"headline_{h['model']}_{h['forcing']}"] = h
         return {f"afc_{m}.csv": {"omega_rad_s": c["omega"], "amplitude_um": c["amplitude_um"],
-                                 "phase_deg": c["phase_deg"]} for m, c in self.data["curves"].items()}
+                                 "phase_deg": c["phase_deg"]} for m, c in curves.items()}
+
+    def _styles(self) -> list[tuple[str, dict, dict, str]]:
+        """(key, curve, line style, legend label) per drawn curve: the headline (energy-consistent model,
+        physical forcing) first and thick; unstable models thin dashed in red/grey shades; a curve that
+        coincides with one drawn before it dotted with markers and said so."""
+        d, out, drawn = self.data, [], []
+        h = d.get("headline")
+        curves = dict(d["curves"])
+        if h is not None and h.get("model") in curves and h.get("forcing") == d["forcing"]:
+            curves.pop(h["model"])  # the headline is that same curve
+        items = ([("headline", h)] if h is not None else []) + list(curves.items())
+        warm = iter(["tab:red", "0.45", "darkred", "0.65", "lightcoral"])
+        cool = iter(["tab:green", "tab:purple", "tab:cyan", "tab:olive", "tab:brown"])
+        for key, c in items:
+            model = h["model"] if key == "headline" else key
+            label = MODEL_LABELS.get(model, model)
+            if key == "headline":
+                style = {"color": "tab:blue", "lw": 2.4, "zorder": 4}
+                label += f", {FORCING_LABELS.get(h['forcing'], h['forcing'])} (headline)"
+            elif c.get("stable", True):
+                style = {"color": next(cool), "lw": 1.5, "zorder": 3}
+            else:
+                style = {"color": next(warm), "lw": 0.9, "ls": "--", "zorder": 2}
+            if not c.get("stable", True):
+                label += " — unstable"
+            twin = next((lab for om, amp, lab in drawn if _coincide(om, amp, c["omega"], c["amplitude_um"])), None)
+            if twin is not None:
+                style |= {"ls": (0, (1.5, 2.5)), "lw": 2.0, "marker": "o", "ms": 4, "mfc": "none",
+                          "markevery": 0.07, "zorder": 5}
+                label += f"; same curve as {twin}"
+            drawn.append((c["omega"], c["amplitude_um"], MODEL_LABELS.get(model, model)))
+            out.append((key, c, style, label))
+        return out
 
     def draw(self, ax) -> None:
-        """The amplitude curves of every model with their peaks; dotted: the operating speed."""
-        for m, c in self.data["curves"].items():
-            line, = ax.semilogy(c["omega"], c["amplitude_um"], label=m)
+        """The amplitude curves of every model with their peaks, the headline model first; the operating
+        speed dotted and its amplitude marked."""
+        for _key, c, style, label in self._styles():
+            ax.semilogy(c["omega"], c["amplitude_um"], label=label, **style)
             for p in c["peaks"]:
-                ax.plot(p["omega"], p["amplitude_um"], "o", ms=3, color=line.get_color())
-        ax.axvline(self.data["at_operating_speed"]["omega"], color="k", ls=":", lw=0.8)
+                ax.plot(p["omega"], p["amplitude_um"], "o", ms=3.5, color=style["color"], zorder=6)
+        h = self.data.get("headline") or {"at_operating_speed": self.data["at_operating_speed"]}
+        a0 = h["at_operating_speed"]
+        ax.axvline(a0["omega"], color="k", ls=":", lw=1.0,
+                   label=rf"operating speed $\omega_0$ = {a0['omega']:.0f} rad/s")
+        ax.plot(a0["omega"], a0["amplitude_um"], "D", color="k", ms=5, zorder=7,
+                label=rf"$A(\omega_0)$ = {a0['amplitude_um']:.3g} $\mu$m (headline); dots: peaks")
         ax.grid(alpha=0.3)
         ax.set_ylabel(r"gap amplitude $A_u$, $\mu$m")
-        ax.legend(fontsize=7)
 
     def figures(self) -> dict:
-        fig, (a1, a2) = new_figure(figsize=(7, 6.4), nrows=2, sharex=True)
+        from matplotlib.ticker import MultipleLocator
+
+        fig, (a1, a2) = new_figure(figsize=(9.5, 7.8), nrows=2, sharex=True)
         self.draw(a1)
-        for c in self.data["curves"].values():
-            a2.plot(c["omega"], c["phase_deg"])
-        a2.axvline(self.data["at_operating_speed"]["omega"], color="k", ls=":", lw=0.8)
+        for _key, c, style, _label in self._styles():
+            a2.plot(c["omega"], c["phase_deg"], **style)
+        a2.axvline(self.data["at_operating_speed"]["omega"], color="k", ls=":", lw=1.0)
         a2.grid(alpha=0.3)
-        a2.set_ylabel("phase, deg")
+        a2.set_ylabel("phase (unwrapped), deg")
         a2.set_xlabel(r"$\omega$, rad/s")
-        fig.suptitle(f"{self.data['title']}\nAFC/PFC of the face gap (Fig. 2.7/2.11); dotted: operating speed",
-                     fontsize=9)
+        span = max(np.ptp(c["phase_deg"]) for c in self.data["curves"].values())
+        a2.yaxis.set_major_locator(MultipleLocator(90 if span <= 720 else 180))
+        fig.legend(*a1.get_legend_handles_labels(), loc="outside lower center", ncols=2, fontsize=7.5,
+                   frameon=False)
+        h, forcing = self.data.get("headline"), self.data["forcing"]
+        rest = ("" if h is None or h["forcing"] == forcing else
+                f"\nthe other models under the {FORCING_LABELS.get(forcing, forcing)}, as in the source")
+        fig.suptitle(f"{self.data['title']}\nAFC/PFC of the face gap, forcing amplitude "
+                     rf"$\delta\psi_{{1a}}$ = {self.data['forcing_amplitude']:g} (Pavlenko (2014), Figs 2.7/2.11)"
+                     f"{rest}", fontsize=9)
         return {"fig_afc.png": fig}
 
 
+def _coincide(om1, a1, om2, a2, rtol: float = 2e-3) -> bool:
+    """Whether two amplitude curves agree to ``rtol`` over their common frequency range."""
+    lo, hi = max(om1[0], om2[0]), min(om1[-1], om2[-1])
+    w = om2[(om2 >= lo) & (om2 <= hi)]
+    return len(w) > 1 and bool(np.all(np.abs(np.interp(w, om1, a1) / np.interp(w, om2, a2) - 1) < rtol))
+
+
 def study(setup: Setup, models: list[str], convention: str, omega_range: tuple, title: str = "") -> FrequencyResult:
-    """AFC of each named model; the first one gives the top-level peaks and A(omega0)."""
+    """AFC of each named model; the first one gives the top-level peaks and A(omega0).  ``headline``
+    holds the energy-consistent model under the physical forcing (dtau = b dpsi1), whatever the scene
+    lists: the physically consistent result, the program model being the validation against the source."""
     d = setup.data
     curves = {m: characteristic(setup.linear(m), omega_range, convention, d.forcing_amplitude, d.omega0)
               for m in models}
     first = curves[models[0]]
+    model, forcing = HEADLINE
+    head = curves[model] if model in curves and convention == forcing else characteristic(
+        setup.linear(model), omega_range, forcing, d.forcing_amplitude, d.omega0)
     return FrequencyResult({
         "title": title, "model": models[0], "forcing": convention, "forcing_amplitude": d.forcing_amplitude,
         "z_B": setup.dev.scales["z_B"], "peaks": first["peaks"], "at_operating_speed": first["at_operating_speed"],
-        "curves": curves,
+        "headline": {"model": model} | head, "curves": curves,
     })
 
 

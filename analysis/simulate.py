@@ -23,6 +23,7 @@ import casadi as ca
 import numpy as np
 
 from autobal.analysis import interrupt
+from autobal.analysis.frequency import MODEL_LABELS
 from autobal.analysis.result import Result, new_figure
 from autobal.models.dynamics import DynamicModel
 
@@ -176,23 +177,29 @@ class TransientResult(Result):
 
     def figures(self) -> dict:
         n = len(self.data["series"])
-        fig, axes = new_figure(figsize=(9, 2.6 * n), nrows=n, ncols=2, squeeze=False)
+        fig, axes = new_figure(figsize=(9, 2.6 * n + 0.4), nrows=n, ncols=2, squeeze=False)
         for ax, c in zip(axes, self.data["series"], strict=True):
             t = c["t"] * 1e3
             ax[0].plot(t, (c["z"] - c["z"][0]) * 1e6)
-            ax[0].set_ylabel(r"$\delta z$, $\mu$m")
-            ax[0].set_title(f"{c['input']} ({c['amplitude']:g})", fontsize=8)
-            ax[1].plot(t, c["p2"] / 1e6, label="$p_2$")
-            ax[1].plot(t, c["p3"] / 1e6, label="$p_3$")
-            ax[1].set_ylabel("MPa")
-            ax[1].legend(fontsize=7)
+            ax[0].set_ylabel(r"gap change $\delta z$, $\mu$m")
+            ax[0].set_title(f"{c['input'].replace('_', ' ')} ({c['amplitude']:g}): face gap, "
+                            rf"$z_0$ = {c['z'][0] * 1e6:.1f} $\mu$m", fontsize=8)
+            dp2, dp3 = c["p2"] - c["p2"][0], c["p3"] - c["p3"][0]
+            big = max(np.abs(dp2).max(), np.abs(dp3).max())
+            unit, f = ("MPa", 1e6) if big >= 1e6 else ("kPa", 1e3) if big >= 1e3 else ("Pa", 1.0)
+            ax[1].plot(t, dp2 / f, label=rf"$\Delta p_2$ (static {c['p2'][0] / 1e6:.2f} MPa)")
+            ax[1].plot(t, dp3 / f, label=rf"$\Delta p_3$ (static {c['p3'][0] / 1e6:.2f} MPa)")
+            ax[1].set_ylabel(rf"pressure change $\Delta p$, {unit}")
+            ax[1].set_title("chamber pressures relative to their static values", fontsize=8)
+            ax[1].legend(fontsize=7, loc="best")
             for a in ax:
                 a.grid(alpha=0.3)
                 for e in c["events"]:
                     a.axvline(e["t"] * 1e3, color="r", ls=":", lw=0.8)
         for a in axes[-1]:
             a.set_xlabel("t, ms")
-        fig.suptitle(f"{self.data['title']}\ntime responses from the static solution", fontsize=9)
+        fig.suptitle(f"{self.data['title']}\ntime responses of the {MODEL_LABELS.get(self.data['model'], '')} model "
+                     "from the static solution (red dotted: events)", fontsize=9)
         return {"fig_transients.png": fig}
 
 

@@ -20,6 +20,7 @@ from fractions import Fraction
 import numpy as np
 import scipy.linalg
 
+from autobal.analysis.frequency import MODEL_LABELS
 from autobal.analysis.linearize import LinearModel, Setup, coefficient_table, jacobians, operator
 from autobal.analysis.result import Result, new_figure
 from autobal.models.dynamics import LONG_NAMES
@@ -204,6 +205,10 @@ class StabilityResult(Result):
     def summary(self) -> str:
         d = self.data
         lines = [f"stability ({d['model']} model first): stable = {d['stable']}"]
+        if "headline" in d:
+            h = d["headline"]
+            lines.append(f"  headline, {MODEL_LABELS['nonlinear']}: {'stable' if h['stable'] else 'UNSTABLE'}, "
+                         f"decay rate {h['margin']['decay_rate']:+.1f} 1/s")
         for m, v in d["models"].items():
             um = ", ".join(f"{x['real']:+.1f} +- {x['imag']:.1f}i" for x in v["unstable_modes"]) or "-"
             lines.append(f"  {m:16s} stable {str(v['stable']):5s} margin {v['margin']['decay_rate']:+.1f} 1/s; "
@@ -238,48 +243,131 @@ class StabilityResult(Result):
         return out
 
     def draw(self, ax) -> None:
-        """The poles of every model in the complex plane (symlog real axis)."""
-        for m, v in self.data["models"].items():
-            ax.plot(v["poles"]["real"], v["poles"]["imag"], "x", label=m)
+        """The poles of every model in the complex plane (symlog real axis, linear range set from the
+        data); nested hollow markers so that coinciding poles of several models stay visible; the
+        unstable half-plane shaded."""
+        from matplotlib.ticker import NullLocator
+
+        models = _headline_first(self.data["models"])
+        re = np.concatenate([np.asarray(v["poles"]["real"], float) for v in models.values()])
+        nz = np.abs(re[re != 0])
+        lo = 10.0 ** math.floor(math.log10(nz.min())) if nz.size else 1.0
+        hi = 10.0 ** math.ceil(math.log10(max(nz.max(), 10 * lo))) if nz.size else 10.0
+        right = 10.0 ** math.ceil(math.log10(max(re.max(), lo))) * 3 if re.max() > 0 else 3 * lo
+        ax.axvspan(0, right, color="tab:red", alpha=0.09, lw=0, label=r"unstable half-plane Re $\lambda$ > 0")
+        for i, (m, v) in enumerate(models.items()):
+            mk, size = POLE_MARKERS[i % len(POLE_MARKERS)]
+            label = MODEL_LABELS.get(m, m) + ("" if v["stable"] else " — unstable")
+            ax.plot(v["poles"]["real"], v["poles"]["imag"], mk, ms=size, mfc="none", mew=1.3, label=label,
+                    color=POLE_COLOURS[i % len(POLE_COLOURS)], zorder=3 + i)
         ax.axvline(0, color="k", lw=0.8)
-        ax.set_xscale("symlog", linthresh=1e3)
-        ax.set_xlabel(r"Re $\lambda$, 1/s")
+        ax.set_xscale("symlog", linthresh=lo, linscale=0.6)
+        ax.set_xlim(-1.5 * hi, right)
+        step = max(1, math.ceil(math.log10(hi / lo) / 4))
+        dec = [10.0 ** k for k in range(round(math.log10(lo)), round(math.log10(hi)) + 1, step)]
+        ax.set_xticks([-d for d in reversed(dec)] + [0.0] + [d for d in dec if d <= right])
+        ax.xaxis.set_minor_locator(NullLocator())
+        ax.set_xlabel(rf"Re $\lambda$, 1/s (symlog, linear within $\pm${lo:g})")
         ax.set_ylabel(r"Im $\lambda$, rad/s")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
 
     def figures(self) -> dict:
-        fig, ax = new_figure(figsize=(6.4, 4.8))
+        from matplotlib import colormaps
+        from matplotlib.colors import ListedColormap, SymLogNorm
+        from matplotlib.lines import Line2D
+
+        fig, ax = new_figure(figsize=(8.6, 4.8))
         self.draw(ax)
-        ax.set_title(f"{self.data['title']}\npoles", fontsize=9)
+        fig.legend(*ax.get_legend_handles_labels(), loc="outside right upper", fontsize=7.5, frameon=False)
+        ax.set_title(f"{self.data['title']}\npoles of the linearized models (energy-consistent first)", fontsize=9)
         figs = {"fig_poles.png": fig}
-        for m, mp in self.data.get("maps", {}).items():
-            fig, ax = new_figure(figsize=(6.4, 4.8))
-            X, Y = np.meshgrid(mp["x"]["values"], mp["y"]["values"])
+        maps = self.data.get("maps", {})
+        if not maps:
+            return figs
+        # one diverging scale for every map, centred on zero, symmetric, logarithmic beyond linthresh
+        allR = np.concatenate([np.asarray(mp["max_real"], float).ravel() for mp in maps.values()])
+        allR = np.abs(allR[np.isfinite(allR)])
+        lim = float(allR.max()) if allR.size else 1.0
+        lin = max(float(np.percentile(allR, 10)), lim * 1e-4, 1e-12) if allR.size else 1.0
+        lin = 10.0 ** math.floor(math.log10(lin))
+        norm = SymLogNorm(linthresh=lin, linscale=0.3, vmin=-lim, vmax=lim)
+        # RdBu_r without its white middle: a stable cell is clearly blue, an unstable one clearly red
+        cmap = ListedColormap(colormaps["RdBu_r"](np.r_[np.linspace(0.0, 0.4, 128), np.linspace(0.6, 1.0, 128)]))
+        for m, mp in maps.items():
+            fig, ax = new_figure(figsize=(6.8, 5.2))
+            (fx, _, lx), (fy, _, ly) = axis_label(mp["x"]["parameter"]), axis_label(mp["y"]["parameter"])
+            X, Y = np.meshgrid(np.asarray(mp["x"]["values"], float) / fx, np.asarray(mp["y"]["values"], float) / fy)
             R = np.asarray(mp["max_real"], float)
-            lim = np.nanmax(np.abs(R))
-            cs = ax.pcolormesh(X, Y, R, cmap="RdBu_r", vmin=-lim, vmax=lim, shading="auto")
-            fig.colorbar(cs, ax=ax, label=r"max Re $\lambda$, 1/s")
+            cs = ax.pcolormesh(X, Y, R, cmap=cmap, norm=norm, shading="auto")
+            fig.colorbar(cs, ax=ax, label=r"max Re $\lambda$, 1/s (blue: stable, red: unstable)")
+            handles = []
             if np.nanmin(R) < 0 < np.nanmax(R):
-                ax.contour(X, Y, R, levels=[0.0], colors="k", linewidths=1.5)
-            ax.plot(mp["x"]["nominal"], mp["y"]["nominal"], "k*", ms=10, label="scene (nominal)")
+                ax.contour(X, Y, R, levels=[0.0], colors="k", linewidths=1.8)
+                handles.append(Line2D([], [], color="k", lw=1.8, label=r"stability boundary max Re $\lambda$ = 0"))
+            st = ax.plot(mp["x"]["nominal"] / fx, mp["y"]["nominal"] / fy, "*", color="gold", mec="k", ms=16,
+                         clip_on=False, zorder=10, label="scene (nominal)")
+            handles += st
             for a, setter in ((mp["x"], ax.set_xscale), (mp["y"], ax.set_yscale)):
                 if a["scale"] == "log":
                     setter("log")
-            ax.set_xlabel(f"{mp['x']['parameter']} (SI)")
-            ax.set_ylabel(f"{mp['y']['parameter']} (SI)")
-            ax.legend(fontsize=7, loc="best")
-            ax.set_title(f"{self.data['title']}\nstability map, {m} model: boundary max Re = 0 (black); "
-                         "blue = stable", fontsize=8)
+            ax.set_xlabel(lx)
+            ax.set_ylabel(ly)
+            verdict = self.data["models"].get(m, {}).get("stable")
+            tag = "" if verdict is None else (" (stable at nominal)" if verdict else " (unstable at nominal)")
+            fig.legend(handles=handles, loc="outside lower center", ncols=2, fontsize=8, frameon=False)
+            ax.set_title(f"{self.data['title']}\nstability map, {MODEL_LABELS.get(m, m)}{tag}; "
+                         "colour scale shared by the maps", fontsize=8)
             figs[f"fig_stability_map_{m}.png"] = fig
         return figs
 
 
+#: marker and size per model in the pole plot: nested hollow markers keep coinciding poles visible
+POLE_MARKERS = (("o", 11), ("s", 8), ("D", 5.5), ("x", 7), ("+", 9), ("^", 4))
+POLE_COLOURS = ("tab:blue", "tab:green", "tab:purple", "tab:red", "0.35", "tab:orange")
+
+#: display name, unit and factor (SI value / factor = shown value) of each map parameter (LONG_NAMES symbols)
+DISPLAY = {"m_p": ("rotor mass $m_p$", "kg", 1.0), "k_pr": ("push-off stiffness $k_{pr}$", "MN/m", 1e6),
+           "c_z": ("rotor damping $c_z$", "kN·s/m", 1e3), "E": ("bulk modulus $E$", "MPa", 1e6),
+           "V2": ("disc-chamber volume $V_2$", "L", 1e-3), "V3": ("cavity volume $V_3$", "L", 1e-3),
+           "m0": ("regulator stem mass $m_0$", "kg", 1.0),
+           "k_reg": ("regulator spring stiffness $k_{reg}$", "MN/m", 1e6),
+           "c_x": ("stem damping $c_x$", "N·s/m", 1.0), "V_cam": ("valve-chamber volume $V_{cam}$", "cm³", 1e-6),
+           "V_m": ("membrane-chamber volume $V_m$", "cm³", 1e-6), "s_c": ("valve seat area $s_c$", "mm²", 1e-6)}
+assert set(DISPLAY) == set(LONG_NAMES.values())
+
+
+def axis_label(parameter: str) -> tuple[float, str, str]:
+    """(factor, unit, axis label) of a map parameter given by its scenario key (``cavity_volume``).
+
+    Parameters
+    ----------
+    parameter : str
+        Scenario key of a dynamic parameter (a key of ``LONG_NAMES``).
+
+    Returns
+    -------
+    (float, str, str)
+        SI value / factor is the value shown; the unit shown; the label "name symbol, unit".
+    """
+    name, unit, factor = DISPLAY[LONG_NAMES[parameter]]
+    return factor, unit, f"{name}, {unit}"
+
+
+def _headline_first(models: dict) -> dict:
+    """The models with the energy-consistent one first (the headline; the source's models validate)."""
+    return dict(sorted(models.items(), key=lambda kv: kv[0] != "nonlinear"))
+
+
 def study(setup: Setup, models: list[str], smap=None, title: str = "") -> StabilityResult:
+    """Verdict of each named model (the first gives the top-level keys), ``headline`` the energy-consistent
+    model's verdict, and the optional maps with their single-parameter scans."""
     res = {m: verdict(setup.linear(m)) for m in models}
     first = res[models[0]]
+    head = res.get("nonlinear") or verdict(setup.linear("nonlinear"))
     data = {"title": title, "model": models[0], "stable": first["stable"], "poles": first["poles"],
             "hurwitz": first["hurwitz"], "margin": first["margin"], "models": res,
+            "headline": {"model": "nonlinear", "stable": head["stable"], "margin": head["margin"],
+                         "unstable_modes": head["unstable_modes"]},
             "coefficients": coefficient_table(setup)}
     if smap is not None:
         data["maps"] = {m: stability_map(setup, smap.x, smap.y, m) for m in smap.models}
