@@ -25,6 +25,9 @@ MODEL_LABELS = {"nonlinear": "energy-consistent (nonlinear)", "nonlinear_chain":
                 "thesis": "source's model as printed"}
 FORCING_LABELS = {"physical": r"physical forcing $\delta\tau = b\,\delta\psi_1$",
                   "appendix": r"appendix forcing $\delta\tau = \delta\psi_1$"}
+#: colour per model in the AFC and pole plots (the headline curve is tab:blue); the hand/program models reddish
+MODEL_COLOURS = {"nonlinear": "tab:green", "nonlinear_chain": "0.45", "consistent": "darkred",
+                 "program": "tab:red", "thesis": "tab:purple"}
 HEADLINE = ("nonlinear", "physical")  # the energy-consistent model under the physical forcing
 
 
@@ -137,18 +140,17 @@ class FrequencyResult(Result):
         if h is not None and h.get("model") in curves and h.get("forcing") == d["forcing"]:
             curves.pop(h["model"])  # the headline is that same curve
         items = ([("headline", h)] if h is not None else []) + list(curves.items())
-        warm = iter(["tab:red", "0.45", "darkred", "0.65", "lightcoral"])
-        cool = iter(["tab:green", "tab:purple", "tab:cyan", "tab:olive", "tab:brown"])
+        spare = iter(["tab:olive", "tab:brown", "tab:cyan", "tab:pink"])
         for key, c in items:
             model = h["model"] if key == "headline" else key
             label = MODEL_LABELS.get(model, model)
             if key == "headline":
-                style = {"color": "tab:blue", "lw": 2.4, "zorder": 4}
+                style = {"color": "tab:blue", "lw": 2.4, "zorder": 4} | ({} if c["stable"] else {"ls": "--"})
                 label += f", {FORCING_LABELS.get(h['forcing'], h['forcing'])} (headline)"
             elif c.get("stable", True):
-                style = {"color": next(cool), "lw": 1.5, "zorder": 3}
+                style = {"color": MODEL_COLOURS.get(model) or next(spare), "lw": 1.5, "zorder": 3}
             else:
-                style = {"color": next(warm), "lw": 0.9, "ls": "--", "zorder": 2}
+                style = {"color": MODEL_COLOURS.get(model) or next(spare), "lw": 0.9, "ls": "--", "zorder": 2}
             if not c.get("stable", True):
                 label += " — unstable"
             twin = next((lab for om, amp, lab in drawn if _coincide(om, amp, c["omega"], c["amplitude_um"])), None)
@@ -166,7 +168,7 @@ class FrequencyResult(Result):
         for _key, c, style, label in self._styles():
             ax.semilogy(c["omega"], c["amplitude_um"], label=label, **style)
             for p in c["peaks"]:
-                ax.plot(p["omega"], p["amplitude_um"], "o", ms=3.5, color=style["color"], zorder=6)
+                ax.plot(p["omega"], p["amplitude_um"], "o", ms=5, mec="w", mew=0.6, color=style["color"], zorder=6)
         h = self.data.get("headline") or {"at_operating_speed": self.data["at_operating_speed"]}
         a0 = h["at_operating_speed"]
         ax.axvline(a0["omega"], color="k", ls=":", lw=1.0,
@@ -175,12 +177,14 @@ class FrequencyResult(Result):
                 label=rf"$A(\omega_0)$ = {a0['amplitude_um']:.3g} $\mu$m (headline); dots: peaks")
         ax.grid(alpha=0.3)
         ax.set_ylabel(r"gap amplitude $A_u$, $\mu$m")
+        ax.legend(fontsize=6.5)
 
     def figures(self) -> dict:
         from matplotlib.ticker import MultipleLocator
 
         fig, (a1, a2) = new_figure(figsize=(9.5, 7.8), nrows=2, sharex=True)
         self.draw(a1)
+        a1.get_legend().remove()  # one legend for both axes, below them
         for _key, c, style, _label in self._styles():
             a2.plot(c["omega"], c["phase_deg"], **style)
         a2.axvline(self.data["at_operating_speed"]["omega"], color="k", ls=":", lw=1.0)

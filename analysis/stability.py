@@ -20,7 +20,7 @@ from fractions import Fraction
 import numpy as np
 import scipy.linalg
 
-from autobal.analysis.frequency import MODEL_LABELS
+from autobal.analysis.frequency import MODEL_COLOURS, MODEL_LABELS
 from autobal.analysis.linearize import LinearModel, Setup, coefficient_table, jacobians, operator
 from autobal.analysis.result import Result, new_figure
 from autobal.models.dynamics import LONG_NAMES
@@ -259,7 +259,7 @@ class StabilityResult(Result):
             mk, size = POLE_MARKERS[i % len(POLE_MARKERS)]
             label = MODEL_LABELS.get(m, m) + ("" if v["stable"] else " — unstable")
             ax.plot(v["poles"]["real"], v["poles"]["imag"], mk, ms=size, mfc="none", mew=1.3, label=label,
-                    color=POLE_COLOURS[i % len(POLE_COLOURS)], zorder=3 + i)
+                    color="tab:blue" if m == "nonlinear" else MODEL_COLOURS.get(m, "tab:orange"), zorder=3 + i)
         ax.axvline(0, color="k", lw=0.8)
         ax.set_xscale("symlog", linthresh=lo, linscale=0.6)
         ax.set_xlim(-1.5 * hi, right)
@@ -270,6 +270,7 @@ class StabilityResult(Result):
         ax.set_xlabel(rf"Re $\lambda$, 1/s (symlog, linear within $\pm${lo:g})")
         ax.set_ylabel(r"Im $\lambda$, rad/s")
         ax.grid(alpha=0.3)
+        ax.legend(fontsize=6.5)
 
     def figures(self) -> dict:
         from matplotlib import colormaps
@@ -278,6 +279,7 @@ class StabilityResult(Result):
 
         fig, ax = new_figure(figsize=(8.6, 4.8))
         self.draw(ax)
+        ax.get_legend().remove()  # outside the data instead
         fig.legend(*ax.get_legend_handles_labels(), loc="outside right upper", fontsize=7.5, frameon=False)
         ax.set_title(f"{self.data['title']}\npoles of the linearized models (energy-consistent first)", fontsize=9)
         figs = {"fig_poles.png": fig}
@@ -323,7 +325,6 @@ class StabilityResult(Result):
 
 #: marker and size per model in the pole plot: nested hollow markers keep coinciding poles visible
 POLE_MARKERS = (("o", 11), ("s", 8), ("D", 5.5), ("x", 7), ("+", 9), ("^", 4))
-POLE_COLOURS = ("tab:blue", "tab:green", "tab:purple", "tab:red", "0.35", "tab:orange")
 
 #: display name, unit and factor (SI value / factor = shown value) of each map parameter (LONG_NAMES symbols)
 DISPLAY = {"m_p": ("rotor mass $m_p$", "kg", 1.0), "k_pr": ("push-off stiffness $k_{pr}$", "MN/m", 1e6),
