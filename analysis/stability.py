@@ -277,11 +277,13 @@ class StabilityResult(Result):
         from matplotlib.colors import ListedColormap, SymLogNorm
         from matplotlib.lines import Line2D
 
-        fig, ax = new_figure(figsize=(8.6, 4.8))
+        fig, ax = new_figure(figsize=(7.6, 5.6))
         self.draw(ax)
         ax.get_legend().remove()  # outside the data instead
-        fig.legend(*ax.get_legend_handles_labels(), loc="outside right upper", fontsize=7.5, frameon=False)
-        ax.set_title(f"{self.data['title']}\npoles of the linearized models (energy-consistent first)", fontsize=9)
+        fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", ncols=2, fontsize=7.5,
+                   frameon=False)
+        fig.suptitle(f"{self.data['title']}\npoles of the linearized models (energy-consistent first; nested "
+                     "markers: coinciding poles)", fontsize=9)
         figs = {"fig_poles.png": fig}
         maps = self.data.get("maps", {})
         if not maps:
@@ -324,7 +326,7 @@ class StabilityResult(Result):
 
 
 #: marker and size per model in the pole plot: nested hollow markers keep coinciding poles visible
-POLE_MARKERS = (("o", 11), ("s", 8), ("D", 5.5), ("x", 7), ("+", 9), ("^", 4))
+POLE_MARKERS = (("o", 12), ("s", 9), ("D", 7), ("x", 4.5), ("+", 9), ("^", 4))
 
 #: display name, unit and factor (SI value / factor = shown value) of each map parameter (LONG_NAMES symbols)
 DISPLAY = {"m_p": ("rotor mass $m_p$", "kg", 1.0), "k_pr": ("push-off stiffness $k_{pr}$", "MN/m", 1e6),
