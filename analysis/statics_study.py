@@ -20,6 +20,7 @@ from autobal.models.device import groups_by_name
 SWEEP_KEYS = ("psi_e", "psi2", "psi3", "psi_cam", "u", "xi")
 PATH_NODES = 257  # continuation nodes across a sweep's range, whatever the number of requested points
 MAX_HALVINGS = 6  # a failed continuation step is halved at most this many times
+REFINE_POINTS = 12  # extra points inside each sweep interval where a stop is reached or left (figures)
 
 
 @dataclass
@@ -102,6 +103,17 @@ class StaticsResult(Result):
             return base * 60, "m$^3$/min"
         return base * f, unit
 
+    def _curve(self, key: str, closed: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """psi1 and ``key`` over the sweep with the refined points near the kinks merged in, sorted."""
+        sw, rf = self.data["sweep"], self.data.get("sweep_refined") or {}
+        parts = [(sw["psi1"], (sw["closed_form"] if closed else sw)[key])]
+        if len(rf.get("psi1", [])):
+            parts.append((rf["psi1"], (rf["closed_form"] if closed else rf)[key]))
+        psi = np.concatenate([np.asarray(a, float) for a, _ in parts])
+        y = np.concatenate([np.asarray(b, float) for _, b in parts])
+        order = np.argsort(psi, kind="stable")
+        return psi[order], y[order]
+
     def _operating_x(self) -> float:
         return self.data["exact"]["psi1"] * self._base("p")[0]
 
@@ -111,11 +123,12 @@ class StaticsResult(Result):
         sw = self.data["sweep"]
         P, _ = self._base("p")
         p1 = np.asarray(sw["psi1"], float) * P
-        sat = np.asarray(sw["regulator_saturated"], bool)
+        x, sat = self._curve("regulator_saturated")
+        sat = sat > 0.5
         kr = self.data["critical_exact"]["psi1_kr"]
         kr_cf = self.data["closed_form"]["psi1_kr"]
         if sat.any():
-            lo = p1[sat].min()
+            lo = x[sat].min() * P
             ax.axvspan(lo, p1.max(), color="0.92", zorder=0)
             ax.text(lo, 0.03, " regulator saturated (valve on its stop)", transform=ax.get_xaxis_transform(),
                     va="bottom", ha="left", fontsize=7, color="0.3")
@@ -144,13 +157,14 @@ class StaticsResult(Result):
 
     def draw(self, ax) -> None:
         """Chamber pressures against the discharge pressure (Fig 2.4 / 2.9), MPa with psi on the right."""
-        sw, cf, ex = self.data["sweep"], self.data["sweep"]["closed_form"], self.data["exact"]
+        ex = self.data["exact"]
         P, _ = self._base("p")
-        p1 = np.asarray(sw["psi1"], float) * P
         for k, k0, lab in (("psi_e", "psi_e0", r"$p_e$ barrier"), ("psi2", "psi2_0", r"$p_2$ disc chamber"),
                            ("psi3", "psi3_0", r"$p_3$"), ("psi_cam", "psi_cam0", r"$p_{cam}$ regulator")):
-            line, = ax.plot(p1, np.asarray(sw[k], float) * P, label=f"{lab}, exact")
-            ax.plot(p1, np.asarray(cf[k], float) * P, ls="--", color=line.get_color())
+            x, y = self._curve(k)
+            line, = ax.plot(x * P, y * P, label=f"{lab}, exact")
+            x, y = self._curve(k, closed=True)
+            ax.plot(x * P, y * P, ls="--", color=line.get_color())
             if ex.get(k0) is not None:
                 ax.plot([self._operating_x()], [ex[k0] * P], "k*", ms=8, zorder=5)
         ax.plot([], [], "k--", label=f"{self._CF} (dashed)")
@@ -160,7 +174,7 @@ class StaticsResult(Result):
     def figures(self) -> dict:
         """Pressures (Fig 2.4/2.9), gap and valve (Fig 2.5), flows (Fig 2.6/2.10), phi(u) (2.35); dimensional
         axes (MPa, um, mm, L/min) with the source's groups on the secondary axes."""
-        sw, cf, ex = self.data["sweep"], self.data["sweep"]["closed_form"], self.data["exact"]
+        sw, ex = self.data["sweep"], self.data["exact"]
         psi1 = np.asarray(sw["psi1"], float)
         P, _ = self._base("p")
         p1 = psi1 * P
@@ -173,20 +187,25 @@ class StaticsResult(Result):
 
         fig, (a1, a2) = new_figure((8, 6.4), 2, 1, sharex=True)
         Z, _ = self._base("z")
-        a1.plot(p1, np.asarray(sw["u"], float) * Z, marker=".", ms=3, label="face gap $z$, exact")
-        a1.plot(p1, np.asarray(cf["u"], float) * Z, ls="--",
+        x, y = self._curve("u")
+        a1.plot(x * P, y * Z, label="face gap $z$, exact")
+        a1.plot(p1, np.asarray(sw["u"], float) * Z, ".", ms=4, color="C0")
+        x, y = self._curve("u", closed=True)
+        a1.plot(x * P, y * Z, ls="--",
                 label=f"face gap, {self._CF} Eq. ({'2.147' if self.data['medium'] == 'gas' else '2.27'})")
         self._operating_point(a1, ex["u0"] * Z)
         self._decorate(a1, "z", "face gap $z$")
         a1.set_xlabel("")
         X, _ = self._base("x")
-        xi, xi_cf = np.asarray(sw["xi"], float), np.asarray(cf["xi"], float)
-        a2.plot(p1, xi * X, color="C2", marker=".", ms=3, label=r"valve opening $x$, exact (dots: sweep points)")
+        x, xi = self._curve("xi")
+        a2.plot(x * P, xi * X, color="C2", label=r"valve opening $x$, exact (dots: sweep grid)")
+        a2.plot(p1, np.asarray(sw["xi"], float) * X, ".", ms=4, color="C2")
+        xc, xi_cf = self._curve("xi", closed=True)
         stop = ""
         if np.isfinite(xi_cf).any() and not np.isfinite(xi_cf).all():
-            last = psi1[np.isfinite(xi_cf)].max()
-            stop = f";\nends: no opening passes the flow beyond $\\psi_1$ = {last:.3g}"
-        a2.plot(p1, xi_cf * X, ls="--", color="C3", label=f"valve, {self._CF} Eq. (2.28) (ideal regulator){stop}")
+            last = xc[np.isfinite(xi_cf)].max()
+            stop = f";\nends: no opening passes the flow beyond $\\psi_1$ = {last:.4g}"
+        a2.plot(xc * P, xi_cf * X, ls="--", color="C3", label=f"valve, {self._CF} Eq. (2.28) (ideal regulator){stop}")
         self._operating_point(a2, ex["xi0"] * X if ex.get("xi0") is not None else None)
         self._decorate(a2, "x", "valve opening $x$", top=False)
         _legend(fig, a1, a2)
@@ -196,9 +215,11 @@ class StaticsResult(Result):
         Q, _ = self._base("Q")
         span = 0.0
         for k, lab in (("q_e", "$Q_e$ barrier leak"), ("q_T", "$Q_T$ face leak"), ("q_1", "$Q_1$ inner seal")):
-            y = np.asarray(sw[k], float) * Q
-            line, = ax.plot(p1, y, label=f"{lab}, exact")
-            ax.plot(p1, np.asarray(cf[k], float) * Q, ls="--", color=line.get_color())
+            x, y = self._curve(k)
+            y = y * Q
+            line, = ax.plot(x * P, y, label=f"{lab}, exact")
+            x, yc = self._curve(k, closed=True)
+            ax.plot(x * P, yc * Q, ls="--", color=line.get_color())
             span = max(span, np.nanmax(np.abs(y[y > 0])) if (y > 0).any() else 0.0)
         ax.plot([], [], "k--", label=f"{self._CF} (dashed)")
         self._operating_point(ax, ex["q_T"] * Q)
@@ -340,6 +361,39 @@ def continuation(solver: StaticsSolver, psi1s, dpsi: float,
     return out
 
 
+def refine(solver: StaticsSolver, points: list[StaticPoint], dpsi: float) -> list[StaticPoint]:
+    """Extra points inside each sweep interval whose ends have different stops reached (the regulator
+    saturates, the face closes): the kinks of the solution, drawn as chords on the sweep grid alone.
+
+    Parameters
+    ----------
+    solver : StaticsSolver
+        The device's solver.
+    points : list of StaticPoint
+        The sweep, increasing psi1.
+    dpsi : float
+        Margin ratio dpsi = (p_e - p1)/p_B, dimensionless.
+
+    Returns
+    -------
+    list of StaticPoint
+        :data:`REFINE_POINTS` points inside each such interval, by continuation from its left end
+        (empty where no stop changes; a point no continuation reaches is left out).
+    """
+    out = []
+    for a, b in zip(points[:-1], points[1:], strict=True):
+        if a.active == b.active:
+            continue
+        prev = a
+        for s in np.linspace(a.psi1, b.psi1, REFINE_POINTS + 2)[1:-1]:
+            try:
+                prev = _step(solver, prev, float(s), dpsi)
+            except SolveError:
+                continue
+            out.append(prev)
+    return out
+
+
 def _path(solver: StaticsSolver, psi1s: np.ndarray, dpsi: float) -> list[StaticPoint]:
     """A continuation path: the first point cold, each next one from the one before."""
     points = [solver.solve(float(psi1s[0]), dpsi)]
@@ -414,6 +468,14 @@ def run(solver: StaticsSolver, settings, title: str = "") -> StaticsResult:
     sweep["max_relative_residual"] = max(p.max_residual for p in points)
     sweep["closed_form"] = {k: np.broadcast_to(np.asarray(cfs.get(k, np.nan), float), grid.shape)
                             for k in (*SWEEP_KEYS, "q_e", "q_T", "q_1")}
+    extra = refine(solver, points, dpsi)
+    fine = np.array([p.psi1 for p in extra])
+    cff = closed_form.for_medium(g, fine, dpsi) if extra else {}
+    refined = {"psi1": fine, **{k: np.array([p.values.get(k, np.nan) for p in extra]) for k in SWEEP_KEYS}}
+    refined |= {f"q_{k}": np.array([p.flows[k] / q_base for p in extra], dtype=float) for k in ("e", "T", "1")}
+    refined["regulator_saturated"] = np.array([p.saturated for p in extra], dtype=float)
+    refined["closed_form"] = {k: np.broadcast_to(np.asarray(cff.get(k, np.nan), float), fine.shape)
+                              for k in (*SWEEP_KEYS, "q_e", "q_T", "q_1")}
 
     us = np.linspace(0.3, 2.0, settings.force_gap_points)
     force_gap = {"psi1": psi1, "u": us, "phi_exact": solver.force_gap(psi1, dpsi, us),
@@ -440,7 +502,7 @@ def run(solver: StaticsSolver, settings, title: str = "") -> StaticsResult:
         "groups": groups_by_name(g) | ({"xi_max": g.regulator.xi_max} if g.regulator else {}),
         "scales": sc, "conductances": dev.conductances, "derived": dev.extra,
         "closed_form": closed, "exact": exact, "critical_exact": critical,
-        "sweep": sweep, "force_gap": force_gap,
+        "sweep": sweep, "sweep_refined": refined, "force_gap": force_gap,
     }
     return StaticsResult(with_statuses(data, _null_reasons(g), "the closed form has no physical value here"))
 
