@@ -38,6 +38,20 @@ from autobal.analysis.statics import RESIDUAL_TOL, StaticsSolver
 from autobal.errors import ScenarioError
 from autobal.models.device import DeviceDesign
 
+OUTPUT_NAMES = {"u": r"face gap $u = z/z_B$", "q_T": r"face leak $q_T = Q_T/Q_B$"}
+PARAMETER_NAMES = {  # the random groups of (2.18) by what they are
+    "alpha_in1": r"inlet throttle $\alpha_{in1} = g_{in}/g_1$",
+    "alpha_B1": r"regulator valve $\alpha_{B1} = g_B/(g_1\sqrt{p_B})$",
+    "alpha_e1": r"barrier throttle $\alpha_{e1} = g_e/g_1$",
+    "alpha_TB1": r"face throttle $\alpha_{TB1}$ (at $u$ = 1)",
+    "alpha_31": r"outer seal $\alpha_{31} = g_3/g_1$",
+    "b": r"axial force law $b$ ($\tau = b\psi_1$)",
+    "sigma": r"barrier area $\sigma = s_e/s_B$",
+    "chi": r"push-off preload $\chi = F_{pr}/(p_B s_B)$",
+    "dpsi": r"barrier margin $\Delta\psi = (p_e - p_1)/p_B$",
+    "psi_in": r"supply pressure $\psi_{in} = p_{in}/p_B$",
+}
+
 
 @dataclass
 class MonteCarloResult(Result):
@@ -130,51 +144,105 @@ class MonteCarloResult(Result):
                                          "band_low_um": a["band_low"], "band_high_um": a["band_high"]}
         return out
 
+    def _band(self, s: dict) -> tuple[np.ndarray, np.ndarray, str]:
+        """The outer quantile band of a statistics block (respects skew), else mean +- k sigma."""
+        qs = s.get("quantiles", {})
+        if len(qs) >= 2:
+            lo, hi = min(qs, key=float), max(qs, key=float)
+            if float(lo) < 0.5 < float(hi):
+                return (np.asarray(qs[lo], float), np.asarray(qs[hi], float),
+                        f"{100 * float(lo):.3g}-{100 * float(hi):.5g} % quantiles")
+        k = self.data["band_sigma"]
+        return np.asarray(s["band_low"], float), np.asarray(s["band_high"], float), rf"mean $\pm {k:g}\sigma$"
+
+    def _reference(self) -> int:
+        d = self.data
+        return d["psi1"].index(d["reference_psi1"]) if d["reference_psi1"] in d["psi1"] else 0
+
     def figures(self) -> dict:
+        """Bands against the discharge ratio with the sensitivities (Figs 3.3-3.6), histograms of the
+        headline outputs at the reference discharge ratio with the fitted normal, and the AFC bands."""
         d = self.data
         psi1 = np.asarray(d["psi1"], float)
-        fig, axes = new_figure(figsize=(13, 4.2), ncols=3)
-        for ax, k, lab in ((axes[0], "u", r"face gap $u = z/z_B$"), (axes[1], "q_T", r"leak $q_T = Q_T/Q_B$")):
-            for part, ls in (("exact", "-"), ("source", "--")):
+        fig, axes = new_figure(figsize=(13, 4.6), ncols=3)
+        for ax, k, lab in ((axes[0], "u", OUTPUT_NAMES["u"]), (axes[1], "q_T", OUTPUT_NAMES["q_T"])):
+            for part, ls, fill, c in (("exact", "-", 0.15, "C0"), ("source", "--", 0.0, "C1")):
                 s = d[part][k]
-                line, = ax.plot(psi1, s["mean"], ls=ls, marker="o", ms=3, label=f"mean, {part}")
-                ax.fill_between(psi1, s["band_low"], s["band_high"], color=line.get_color(), alpha=0.15,
-                                label=rf"mean $\pm {d['band_sigma']:g}\sigma$, {part}")
+                lo, hi, what = self._band(s)
+                name = "exact statics" if part == "exact" else "source's closed forms"
+                ax.plot(psi1, s["mean"], ls=ls, color=c, marker="o", ms=3, label=f"mean, {name}")
+                if fill:
+                    ax.fill_between(psi1, lo, hi, color=c, alpha=fill, lw=0)
+                ax.plot(psi1, lo, color=c, ls=ls, lw=0.8, label=f"{what}, {name}")
+                ax.plot(psi1, hi, color=c, ls=ls, lw=0.8)
             ax.plot(psi1, d["exact"][k]["nominal"], "k:", label="deterministic (nominal groups)")
-            ax.set_xlabel(r"discharge pressure ratio $\psi_1$")
+            ax.set_xlabel(r"discharge pressure ratio $\psi_1 = p_1/p_B$")
             ax.set_ylabel(lab)
             ax.grid(alpha=0.3)
-            ax.legend(fontsize=7)
         sens = d["sensitivity"]
-        j = d["psi1"].index(d["reference_psi1"]) if d["reference_psi1"] in d["psi1"] else 0
+        j = self._reference()
         names = d["parameters"]
-        x = np.arange(len(names))
-        for off, k in ((-0.2, "u"), (0.2, "q_T")):
-            axes[2].bar(x + off, sens["variance_share"][k][j], width=0.4, label=k)
-        axes[2].set_xticks(x, names, rotation=60, fontsize=7)
-        axes[2].set_ylabel(f"share of first-order variance at $\\psi_1$ = {d['psi1'][j]:g}")
-        axes[2].legend(fontsize=7)
-        axes[2].grid(alpha=0.3, axis="y")
+        y = np.arange(len(names))
+        for off, k, c in ((-0.2, "u", "C0"), (0.2, "q_T", "C1")):
+            axes[2].barh(y + off, sens["variance_share"][k][j], height=0.4, color=c, label=OUTPUT_NAMES[k])
+        axes[2].set_yticks(y, [PARAMETER_NAMES.get(n, n) for n in names], fontsize=7)
+        axes[2].invert_yaxis()
+        axes[2].set_xlabel(f"share of first-order variance at $\\psi_1$ = {d['psi1'][j]:g}")
+        axes[2].legend(fontsize=7, loc="lower right")
+        axes[2].grid(alpha=0.3, axis="x")
+        seen = dict(zip(*reversed(axes[1].get_legend_handles_labels()), strict=True))
+        fig.legend(list(seen.values()), list(seen), loc="outside lower center", ncols=3, fontsize=7)
         fig.suptitle(d["title"], fontsize=9)
         figs = {"fig_montecarlo.png": fig}
+        if self.samples.get("exact"):
+            figs["fig_montecarlo_hist.png"] = self._histograms(j)
         if "afc" in d:
             a = d["afc"]
-            fig, ax = new_figure(figsize=(7, 4.4))
+            fig, ax = new_figure(figsize=(7, 4.8))
             ax.plot(a["omega"], a["nominal_um"], "k:", label=f"nominal ({a['model']} model)")
-            line, = ax.plot(a["omega"], a["mean"], label="mean")
-            ax.fill_between(a["omega"], np.maximum(a["band_low"], 0), a["band_high"], color=line.get_color(),
-                            alpha=0.2, label=rf"mean $\pm {d['band_sigma']:g}\sigma$")
-            for k in ("0.00135", "0.99865"):
-                if k in a["quantiles"]:
-                    ax.plot(a["omega"], a["quantiles"][k], color=line.get_color(), lw=0.6, ls="--")
-            ax.set_xlabel(r"$\omega$, rad/s")
+            line, = ax.plot(a["omega"], a["mean"], color="C0", label="mean")
+            lo, hi, what = self._band(a)
+            ax.fill_between(a["omega"], lo, hi, color="C0", alpha=0.15, lw=0.8, edgecolor="C0", label=what)
+            ax.plot(a["omega"], np.maximum(a["band_low"], 0), color="C1", lw=0.8, ls="--")
+            ax.plot(a["omega"], a["band_high"], color="C1", lw=0.8, ls="--",
+                    label=rf"mean $\pm {d['band_sigma']:g}\sigma$ (normal assumption)")
+            ax.set_xlabel(r"shaft speed $\omega$, rad/s")
             ax.set_ylabel(r"face-gap amplitude $A_u$, $\mu$m")
             ax.grid(alpha=0.3)
-            ax.legend(fontsize=7)
-            ax.set_title(f"{d['title']}\nAFC Monte Carlo (Fig. 3.7/3.10); dashed: 0.135 % and 99.865 % quantiles",
-                         fontsize=9)
+            fig.legend(loc="outside lower center", ncols=2, fontsize=7)
+            ax.set_title(f"{d['title']}\nAFC Monte Carlo, Pavlenko (2014) Figs 3.7/3.10", fontsize=9)
             figs["fig_montecarlo_afc.png"] = fig
         return figs
+
+    def _histograms(self, j: int):
+        """Histogram of each headline output (exact statics) at grid point j with the fitted normal,
+        the mean +- k sigma and the outer quantiles marked."""
+        d = self.data
+        k_sig = d["band_sigma"]
+        fig, axes = new_figure(figsize=(10, 4.8), ncols=2)
+        for ax, k in zip(axes, ("u", "q_T"), strict=True):
+            y = np.asarray(self.samples["exact"][k])[:, j]
+            y = y[np.isfinite(y)]
+            m, sd = float(y.mean()), float(y.std())
+            ax.hist(y, bins=80, density=True, color="C0", alpha=0.45, edgecolor="C0", lw=0.3,
+                    label=f"exact statics, {y.size} samples")
+            x = np.linspace(min(y.min(), m - k_sig * sd), max(y.max(), m + k_sig * sd), 400)
+            ax.plot(x, np.exp(-0.5 * ((x - m) / sd) ** 2) / (sd * np.sqrt(2 * np.pi)), "k-", lw=1.2,
+                    label=f"fitted normal (mean {m:.4g}, std {sd:.3g})")
+            for v in (m - k_sig * sd, m + k_sig * sd):
+                ax.axvline(v, color="k", ls="--", lw=0.8)
+            lo, hi, what = self._band(d["exact"][k])
+            for v in (lo[j], hi[j]):
+                ax.axvline(v, color="C3", ls="-", lw=1.0)
+            ax.plot([], [], "k--", lw=0.8, label=rf"mean $\pm {k_sig:g}\sigma$")
+            ax.plot([], [], color="C3", lw=1.0, label=what)
+            ax.set_xlabel(OUTPUT_NAMES[k])
+            ax.set_ylabel("probability density")
+            ax.grid(alpha=0.3)
+            ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncols=2)
+        fig.suptitle(f"{d['title']}\ndistribution at the reference discharge ratio $\\psi_1$ = {d['psi1'][j]:g}",
+                     fontsize=9)
+        return fig
 
 
 def run(dev: DeviceDesign, settings, executor, title: str = "", solver=None, device=None) -> MonteCarloResult:

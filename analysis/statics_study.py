@@ -20,6 +20,7 @@ from autobal.models.device import groups_by_name
 SWEEP_KEYS = ("psi_e", "psi2", "psi3", "psi_cam", "u", "xi")
 PATH_NODES = 257  # continuation nodes across a sweep's range, whatever the number of requested points
 MAX_HALVINGS = 6  # a failed continuation step is halved at most this many times
+REFINE_POINTS = 12  # extra points inside each sweep interval where a stop is reached or left (figures)
 
 
 @dataclass
@@ -89,73 +90,181 @@ class StaticsResult(Result):
                 "force_gap.csv": {"u": fg["u"], "phi_exact": fg["phi_exact"],
                                   "phi_closed_form": fg["phi_closed_form"]}}
 
-    def _decorate(self, ax, ylabel: str) -> None:
+    # dimensional axes: (key of the base in data["scales"] or "Q_B", factor SI -> shown unit, unit)
+    _BASES = {"p": ("p_B", 1e-6, "MPa"), "z": ("z_B", 1e6, r"$\mu$m"), "x": ("x_B", 1e3, "mm"),
+              "Q": ("Q_B", 6e4, "L/min")}
+    _CF = "closed form, Pavlenko (2014)"
+
+    def _base(self, kind: str) -> tuple[float, str]:
+        """The factor from a dimensionless group to the shown unit, and the unit (p_B, z_B, x_B, Q_B)."""
+        key, f, unit = self._BASES[kind]
+        base = self.data["closed_form"]["Q_B"] if key == "Q_B" else self.data["scales"][key]
+        if kind == "Q" and base * f > 5000:  # large flows (the compressor) in m^3/min
+            return base * 60, "m$^3$/min"
+        return base * f, unit
+
+    def _curve(self, key: str, closed: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """psi1 and ``key`` over the sweep with the refined points near the kinks merged in, sorted."""
+        sw, rf = self.data["sweep"], self.data.get("sweep_refined") or {}
+        parts = [(sw["psi1"], (sw["closed_form"] if closed else sw)[key])]
+        if len(rf.get("psi1", [])):
+            parts.append((rf["psi1"], (rf["closed_form"] if closed else rf)[key]))
+        psi = np.concatenate([np.asarray(a, float) for a, _ in parts])
+        y = np.concatenate([np.asarray(b, float) for _, b in parts])
+        order = np.argsort(psi, kind="stable")
+        return psi[order], y[order]
+
+    def _operating_x(self) -> float:
+        return self.data["exact"]["psi1"] * self._base("p")[0]
+
+    def _decorate(self, ax, kind: str, ylabel: str, top: bool = True) -> None:
+        """Dimensional x axis p1 (MPa), psi1 on top; y in the unit of ``kind`` with the group on the right;
+        the saturated range shaded and labelled, the critical discharge pressures marked."""
         sw = self.data["sweep"]
-        psi1 = np.asarray(sw["psi1"], float)
-        sat = np.asarray(sw["regulator_saturated"], bool)
+        P, _ = self._base("p")
+        p1 = np.asarray(sw["psi1"], float) * P
+        x, sat = self._curve("regulator_saturated")
+        sat = sat > 0.5
         kr = self.data["critical_exact"]["psi1_kr"]
         kr_cf = self.data["closed_form"]["psi1_kr"]
         if sat.any():
-            ax.axvspan(psi1[sat].min(), psi1.max(), color="0.9", label="regulator saturated")
+            lo = x[sat].min() * P
+            ax.axvspan(lo, p1.max(), color="0.92", zorder=0)
+            ax.text(lo, 0.03, " regulator saturated (valve on its stop)", transform=ax.get_xaxis_transform(),
+                    va="bottom", ha="left", fontsize=7, color="0.3")
         if kr is not None:
-            ax.axvline(kr, color="k", lw=0.8, ls=":", label=r"$\psi_1^{kr}$ exact")
-        ax.axvline(kr_cf, color="0.5", lw=0.8, ls="-.", label=r"$\psi_1^{kr}$ (2.32)/(2.160)")
-        ax.set_xlabel(r"discharge pressure ratio $\psi_1 = p_1/p_B$")
-        ax.set_ylabel(ylabel)
+            ax.axvline(kr * P, color="k", lw=0.8, ls=":", label=r"$p_1^{kr}$ (inner-seal flow reverses), exact")
+        if kr_cf is not None and np.isfinite(kr_cf):
+            ax.axvline(kr_cf * P, color="0.5", lw=0.8, ls="-.",
+                       label=rf"$p_1^{{kr}}$, {self._CF} Eq. ({'2.160' if self.data['medium'] == 'gas' else '2.32'})")
+        ax.set_xlim(p1.min(), p1.max())
+        if top:
+            ax.secondary_xaxis("top", functions=(lambda x: x / P, lambda s: s * P)).set_xlabel(
+                r"$\psi_1 = p_1/p_B$", fontsize=8)
+        ax.set_xlabel(rf"discharge pressure $p_1$, MPa  ($p_B$ = {P:.3g} MPa)")
+        if kind in self._BASES:
+            F, unit = self._base(kind)
+            ax.set_ylabel(f"{ylabel}, {unit}")
+            sym = {"p": r"$\psi$", "z": r"$u = z/z_B$", "x": r"$\xi = x/x_B$", "Q": r"$Q/Q_B$"}[kind]
+            ax.secondary_yaxis("right", functions=(lambda y: y / F, lambda g: g * F)).set_ylabel(sym, fontsize=8)
+        else:
+            ax.set_ylabel(ylabel)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
+
+    def _operating_point(self, ax, y: float | None) -> None:
+        if y is not None and np.isfinite(y):
+            ax.plot([self._operating_x()], [y], "k*", ms=9, zorder=5, label="operating point")
 
     def draw(self, ax) -> None:
-        """Chamber pressure ratios against the discharge ratio (Fig 2.4 / 2.9)."""
-        sw, cf = self.data["sweep"], self.data["sweep"]["closed_form"]
-        psi1 = np.asarray(sw["psi1"], float)
-        for k, lab in (("psi_e", r"$\psi_e$"), ("psi2", r"$\psi_2$"), ("psi3", r"$\psi_3$"),
-                       ("psi_cam", r"$\psi_{cam}$")):
-            line, = ax.plot(psi1, np.asarray(sw[k], float), label=f"{lab} exact")
-            ax.plot(psi1, np.asarray(cf[k], float), ls="--", color=line.get_color(), label=f"{lab} closed form")
-        self._decorate(ax, "pressure ratio")
+        """Chamber pressures against the discharge pressure (Fig 2.4 / 2.9), MPa with psi on the right."""
+        ex = self.data["exact"]
+        P, _ = self._base("p")
+        for k, k0, lab in (("psi_e", "psi_e0", r"$p_e$ barrier"), ("psi2", "psi2_0", r"$p_2$ disc chamber"),
+                           ("psi3", "psi3_0", r"$p_3$"), ("psi_cam", "psi_cam0", r"$p_{cam}$ regulator")):
+            x, y = self._curve(k)
+            line, = ax.plot(x * P, y * P, label=f"{lab}, exact")
+            x, y = self._curve(k, closed=True)
+            ax.plot(x * P, y * P, ls="--", color=line.get_color())
+            if ex.get(k0) is not None:
+                ax.plot([self._operating_x()], [ex[k0] * P], "k*", ms=8, zorder=5)
+        ax.plot([], [], "k--", label=f"{self._CF} (dashed)")
+        ax.plot([], [], "k*", ms=8, label="operating point")
+        self._decorate(ax, "p", "pressure")
 
     def figures(self) -> dict:
-        """Pressures (Fig 2.4/2.9), gap and valve (Fig 2.5), flows (Fig 2.6/2.10), phi(u) (2.35)."""
-        sw, cf = self.data["sweep"], self.data["sweep"]["closed_form"]
+        """Pressures (Fig 2.4/2.9), gap and valve (Fig 2.5), flows (Fig 2.6/2.10), phi(u) (2.35); dimensional
+        axes (MPa, um, mm, L/min) with the source's groups on the secondary axes."""
+        sw, ex = self.data["sweep"], self.data["exact"]
         psi1 = np.asarray(sw["psi1"], float)
+        P, _ = self._base("p")
+        p1 = psi1 * P
         figs = {}
 
-        fig, ax = new_figure()
+        fig, ax = new_figure((8, 4.6))
         self.draw(ax)
+        _legend(fig, ax)
         figs["fig_pressures.png"] = fig
 
-        fig, (a1, a2) = new_figure((6.4, 6), 2, 1, sharex=True)
-        a1.plot(psi1, np.asarray(sw["u"], float), label="u exact")
-        a1.plot(psi1, np.asarray(cf["u"], float), ls="--", label="u closed form")
-        self._decorate(a1, r"face gap $u = z/z_B$")
-        a2.plot(psi1, np.asarray(sw["xi"], float), label=r"$\xi$ exact")
-        a2.plot(psi1, np.asarray(cf["xi"], float), ls="--", label=r"$\xi$ closed form (2.28)")
-        self._decorate(a2, r"valve opening $\xi = x/x_B$")
+        fig, (a1, a2) = new_figure((8, 6.4), 2, 1, sharex=True)
+        Z, _ = self._base("z")
+        x, y = self._curve("u")
+        a1.plot(x * P, y * Z, label="face gap $z$, exact")
+        a1.plot(p1, np.asarray(sw["u"], float) * Z, ".", ms=4, color="C0")
+        x, y = self._curve("u", closed=True)
+        a1.plot(x * P, y * Z, ls="--",
+                label=f"face gap, {self._CF} Eq. ({'2.147' if self.data['medium'] == 'gas' else '2.27'})")
+        self._operating_point(a1, ex["u0"] * Z)
+        self._decorate(a1, "z", "face gap $z$")
+        a1.set_xlabel("")
+        X, _ = self._base("x")
+        x, xi = self._curve("xi")
+        a2.plot(x * P, xi * X, color="C2", label=r"valve opening $x$, exact (dots: sweep grid)")
+        a2.plot(p1, np.asarray(sw["xi"], float) * X, ".", ms=4, color="C2")
+        xc, xi_cf = self._curve("xi", closed=True)
+        stop = ""
+        if np.isfinite(xi_cf).any() and not np.isfinite(xi_cf).all():
+            last = xc[np.isfinite(xi_cf)].max()
+            stop = f";\nends: no opening passes the flow beyond $\\psi_1$ = {last:.4g}"
+        a2.plot(xc * P, xi_cf * X, ls="--", color="C3", label=f"valve, {self._CF} Eq. (2.28) (ideal regulator){stop}")
+        self._operating_point(a2, ex["xi0"] * X if ex.get("xi0") is not None else None)
+        self._decorate(a2, "x", "valve opening $x$", top=False)
+        _legend(fig, a1, a2)
         figs["fig_gap.png"] = fig
 
-        fig, ax = new_figure()
-        for k, lab in (("q_e", "$q_e$"), ("q_T", "$q_T$"), ("q_1", "$q_1$")):
-            line, = ax.plot(psi1, np.asarray(sw[k], float), label=f"{lab} exact")
-            ax.plot(psi1, np.asarray(cf[k], float), ls="--", color=line.get_color(), label=f"{lab} closed form")
+        fig, ax = new_figure((8, 4.6))
+        Q, _ = self._base("Q")
+        span = 0.0
+        for k, lab in (("q_e", "$Q_e$ barrier leak"), ("q_T", "$Q_T$ face leak"), ("q_1", "$Q_1$ inner seal")):
+            x, y = self._curve(k)
+            y = y * Q
+            line, = ax.plot(x * P, y, label=f"{lab}, exact")
+            x, yc = self._curve(k, closed=True)
+            ax.plot(x * P, yc * Q, ls="--", color=line.get_color())
+            span = max(span, np.nanmax(np.abs(y[y > 0])) if (y > 0).any() else 0.0)
+        ax.plot([], [], "k--", label=f"{self._CF} (dashed)")
+        self._operating_point(ax, ex["q_T"] * Q)
         ax.axhline(0, color="k", lw=0.5)
-        self._decorate(ax, r"flow / $Q_B$ (source's base flow)")
+        neg = min(np.nanmin(np.asarray(sw[k], float)) for k in ("q_e", "q_T", "q_1")) * Q
+        if neg < -0.3 * span:  # reversed flows: the axis kept to the normal range, the reversal marked
+            ax.set_ylim(-0.3 * span, 1.15 * span)
+            ax.axhspan(-0.3 * span, 0, color="C3", alpha=0.06, zorder=0)
+            ax.text(0.01, 0.1, f"below 0: reversed flow (axis cut; down to {neg:.3g} {self._base('Q')[1]} = "
+                    f"{neg / Q:.3g} $Q_B$)", transform=ax.transAxes, fontsize=7, color="C3")
+        self._decorate(ax, "Q", f"flow $Q$ ($Q_B$ = {Q:.3g} {self._base('Q')[1]})")
+        _legend(fig, ax)
         figs["fig_flows.png"] = fig
 
         fg = self.data["force_gap"]
-        fig, ax = new_figure()
-        ax.plot(fg["u"], fg["phi_exact"], label=r"$\varphi(u)$ exact network")
+        fig, ax = new_figure((8, 4.6))
+        Z, unit = self._base("z")
+        u = np.asarray(fg["u"], float)
+        ax.plot(u * Z, fg["phi_exact"], label=r"$\varphi(u)$, exact network")
         if any(v is not None for v in fg["phi_closed_form"]):
-            ax.plot(fg["u"], np.asarray(fg["phi_closed_form"], float), ls="--", label=r"$\varphi(u)$ (2.35)")
-        ax.axhline(fg["tau"], color="k", lw=0.8, ls=":", label=r"$\tau - \chi$ (load)")
-        ax.set_xlabel(r"face gap $u = z/z_B$")
+            ax.plot(u * Z, np.asarray(fg["phi_closed_form"], float), ls="--", label=f"{self._CF} Eq. (2.35)")
+        ax.axhline(fg["tau"], color="k", lw=0.8, ls=":", label=r"load $\tau - \chi$")
+        if fg["psi1"] == ex["psi1"]:
+            ax.plot([ex["u0"] * Z], [fg["tau"]], "k*", ms=9, zorder=5, label="operating point")
+        ax.set_xlabel(f"face gap $z$, {unit}  ($z_B$ = {Z:.3g} {unit})")
+        ax.secondary_xaxis("top", functions=(lambda x: x / Z, lambda v: v * Z)).set_xlabel(r"$u = z/z_B$", fontsize=8)
         ax.set_ylabel(r"balancing force $\varphi = F/(p_B s_B)$")
+        kN = self.data["scales"]["p_B"] * self.data["scales"]["s_B"] * 1e-3
+        ax.secondary_yaxis("right", functions=(lambda y: y * kN, lambda f: f / kN)).set_ylabel(
+            f"balancing force F, kN  ($p_B s_B$ = {kN:.3g} kN)")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
+        _legend(fig, ax)
         figs["fig_force_gap.png"] = fig
         for f in figs.values():
             f.suptitle(self.data["title"], fontsize=9)
         return figs
+
+
+def _legend(fig, *axes) -> None:
+    """One compact legend below the axes of ``fig``, each label once."""
+    seen = {}
+    for ax in axes:
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+            seen.setdefault(lab, h)
+    fig.legend(list(seen.values()), list(seen), loc="outside lower center", ncols=2, fontsize=7)
 
 
 def _state(solver: StaticsSolver, pt: StaticPoint, q_base: float) -> dict:
@@ -252,6 +361,39 @@ def continuation(solver: StaticsSolver, psi1s, dpsi: float,
     return out
 
 
+def refine(solver: StaticsSolver, points: list[StaticPoint], dpsi: float) -> list[StaticPoint]:
+    """Extra points inside each sweep interval whose ends have different stops reached (the regulator
+    saturates, the face closes): the kinks of the solution, drawn as chords on the sweep grid alone.
+
+    Parameters
+    ----------
+    solver : StaticsSolver
+        The device's solver.
+    points : list of StaticPoint
+        The sweep, increasing psi1.
+    dpsi : float
+        Margin ratio dpsi = (p_e - p1)/p_B, dimensionless.
+
+    Returns
+    -------
+    list of StaticPoint
+        :data:`REFINE_POINTS` points inside each such interval, by continuation from its left end
+        (empty where no stop changes; a point no continuation reaches is left out).
+    """
+    out = []
+    for a, b in zip(points[:-1], points[1:], strict=True):
+        if a.active == b.active:
+            continue
+        prev = a
+        for s in np.linspace(a.psi1, b.psi1, REFINE_POINTS + 2)[1:-1]:
+            try:
+                prev = _step(solver, prev, float(s), dpsi)
+            except SolveError:
+                continue
+            out.append(prev)
+    return out
+
+
 def _path(solver: StaticsSolver, psi1s: np.ndarray, dpsi: float) -> list[StaticPoint]:
     """A continuation path: the first point cold, each next one from the one before."""
     points = [solver.solve(float(psi1s[0]), dpsi)]
@@ -326,6 +468,14 @@ def run(solver: StaticsSolver, settings, title: str = "") -> StaticsResult:
     sweep["max_relative_residual"] = max(p.max_residual for p in points)
     sweep["closed_form"] = {k: np.broadcast_to(np.asarray(cfs.get(k, np.nan), float), grid.shape)
                             for k in (*SWEEP_KEYS, "q_e", "q_T", "q_1")}
+    extra = refine(solver, points, dpsi)
+    fine = np.array([p.psi1 for p in extra])
+    cff = closed_form.for_medium(g, fine, dpsi) if extra else {}
+    refined = {"psi1": fine, **{k: np.array([p.values.get(k, np.nan) for p in extra]) for k in SWEEP_KEYS}}
+    refined |= {f"q_{k}": np.array([p.flows[k] / q_base for p in extra], dtype=float) for k in ("e", "T", "1")}
+    refined["regulator_saturated"] = np.array([p.saturated for p in extra], dtype=float)
+    refined["closed_form"] = {k: np.broadcast_to(np.asarray(cff.get(k, np.nan), float), fine.shape)
+                              for k in (*SWEEP_KEYS, "q_e", "q_T", "q_1")}
 
     us = np.linspace(0.3, 2.0, settings.force_gap_points)
     force_gap = {"psi1": psi1, "u": us, "phi_exact": solver.force_gap(psi1, dpsi, us),
@@ -352,7 +502,7 @@ def run(solver: StaticsSolver, settings, title: str = "") -> StaticsResult:
         "groups": groups_by_name(g) | ({"xi_max": g.regulator.xi_max} if g.regulator else {}),
         "scales": sc, "conductances": dev.conductances, "derived": dev.extra,
         "closed_form": closed, "exact": exact, "critical_exact": critical,
-        "sweep": sweep, "force_gap": force_gap,
+        "sweep": sweep, "sweep_refined": refined, "force_gap": force_gap,
     }
     return StaticsResult(with_statuses(data, _null_reasons(g), "the closed form has no physical value here"))
 

@@ -130,6 +130,7 @@ UNIT_RULES: list[tuple[str, str]] = [
     # optimal spin-up: deflection over the eccentricity delta/e, unbalance d, psi, zeta0 dimensionless
     (r"^spinup\..*" + _P + r"(start_speed|final_speed|max_speed|omega_at_peak)$", "rad/s"),
     (r"^spinup\..*" + _P + r"max_acceleration$", "rad/s^2"),
+    (r"^spinup\.eccentricity_m$", "m"),
     (r"^spinup\.", "1"),
     # stability-constrained design: margins and spectral abscissae 1/s, leakage m^3/s, parameters by their path
     (r"^design\..*" + _P + r"(decay_rate|margin(\.[\d.]+)?|spectral_abscissa(\.[\d.]+)?)$", "1/s"),

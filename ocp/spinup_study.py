@@ -69,46 +69,60 @@ class SpinupResult(Result):
         return [(self.optimum, "C3", "-", 1.4)] + [(v, c, "--", 1.0) for v, c in zip(self.baselines.values(),
                                                                                      ("C0", "C2"), strict=False)]
 
+    def _mm_axis(self, ax) -> None:
+        """The deflection in mm on the right (delta = (delta/e) e), when the eccentricity is known."""
+        e = self.data.get("eccentricity_m")
+        if e:
+            ax.secondary_yaxis("right", functions=(lambda d: d * e * 1e3, lambda mm: mm / (e * 1e3))).set_ylabel(
+                f"deflection, mm  (e = {e * 1e3:.3g} mm)")
+
     def draw(self, ax) -> None:
-        """Deflection against time of the optimum and both ramps."""
+        """Deflection against time of the optimum and both ramps (delta/e, mm on the right)."""
         for tr, c, ls, lw in self._runs():
             lab = "optimum" if tr is self.optimum else tr.label
             ax.plot(tr.t, tr.delta, color=c, ls=ls, lw=lw, label=f"{lab} (peak {tr.peak_delta:.3f} e)")
-        ax.set_xlabel("t (s)")
+        ax.set_xlabel("time t, s")
         ax.set_ylabel(r"deflection $\delta/e$")
+        self._mm_axis(ax)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
 
     def figures(self) -> dict:
+        """Speed, acceleration (steps) and torque against time; deflection against time and speed."""
         title = self.data["title"]
-        fig, axes = new_figure((7, 8), 3, 1, sharex=True)
+        wc = self.data["omega_cr_rad_s"]
+        fig, axes = new_figure((8, 8), 3, 1, sharex=True)
         for tr, c, ls, lw in self._runs():
             lab = "optimum" if tr is self.optimum else tr.label
             axes[0].plot(tr.t, tr.omega, color=c, ls=ls, lw=lw, label=lab)
-            axes[1].step(np.append(tr.t_u, tr.t[-1]), np.append(tr.alpha, tr.alpha[-1]), where="post", color=c,
-                         ls=ls, lw=lw, label=lab)
-            axes[2].plot(tr.t, tr.torque, color=c, ls=ls, lw=lw, label=lab)
-        wc = self.data["omega_cr_rad_s"]
-        axes[0].axhline(wc, color="k", lw=0.6, ls=":", label=r"$\omega_{cr}=\Omega_0\sqrt{\psi}$")
-        axes[0].set_ylabel(r"$\omega$ (rad/s)")
-        axes[1].set_ylabel(r"$\alpha$ (rad/s$^2$)")
-        axes[2].set_ylabel("drive torque M (N m)")
+            axes[1].plot(np.append(tr.t_u, tr.t[-1]), np.append(tr.alpha, tr.alpha[-1]), drawstyle="steps-post",
+                         color=c, ls=ls, lw=lw)
+            axes[2].plot(tr.t, tr.torque, color=c, ls=ls, lw=lw)
+        axes[0].axhline(wc, color="k", lw=0.8, ls=":",
+                        label=rf"critical speed $\omega_{{cr}} = \Omega_0\sqrt{{\psi}}$ = {wc:.4g} rad/s")
+        axes[0].set_ylabel(r"speed $\omega$, rad/s")
+        axes[1].set_ylabel(r"acceleration $\alpha$, rad/s$^2$")
         if self.data["drive_polar_inertia_kg_m2"] == 0:
-            axes[2].set_ylabel("torque M (N m), no drive data:\nunbalance reaction only", fontsize=8)
-        axes[2].set_xlabel("t (s)")
+            axes[2].set_ylabel("torque M, N m")
+            axes[2].set_title("no drive data: the torque is the unbalance reaction only", fontsize=8, loc="left")
+        else:
+            axes[2].set_ylabel("drive torque M, N m")
+        axes[2].set_xlabel("time t, s")
         for ax in axes:
             ax.grid(alpha=0.3)
-            ax.legend(fontsize=7)
+        fig.legend(loc="outside lower center", ncols=2, fontsize=7)
         fig.suptitle(title, fontsize=9)
 
-        fig2, (a1, a2) = new_figure((7, 7), 2, 1)
+        fig2, (a1, a2) = new_figure((8, 7), 2, 1)
         self.draw(a1)
         for tr, c, ls, lw in self._runs():
             a2.plot(tr.omega, tr.delta, color=c, ls=ls, lw=lw)
-        a2.axvline(wc, color="k", lw=0.6, ls=":")
-        a2.set_xlabel(r"$\omega$ (rad/s)")
+        a2.axvline(wc, color="k", lw=0.8, ls=":", label=rf"critical speed $\omega_{{cr}}$ = {wc:.4g} rad/s")
+        a2.set_xlabel(r"speed $\omega$, rad/s")
         a2.set_ylabel(r"deflection $\delta/e$")
+        self._mm_axis(a2)
         a2.grid(alpha=0.3)
+        a2.legend(fontsize=7)
         fig2.suptitle(title, fontsize=9)
         return {"spinup_profiles.png": fig, "spinup_deflection.png": fig2}
 
@@ -167,7 +181,8 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
         "integral_deflection2_s": tr.integral_delta2, "final_time_s": sol.final_time_s,
         "build_time_s": opt.build_time_s, "total_solve_time_s": sum(r.get("solve_time_s", 0.0) for r in opt.starts),
         "starts": opt.starts, "baselines": {k: v.to_dict() | drive_use(v) for k, v in base.items()},
-        "psi": ocp.params.psi, "omega_cr_rad_s": ocp.params.omega_cr, "Omega0_rad_s": ocp.params.Omega0,
+        "psi": ocp.params.psi, "eccentricity_m": ocp.params.e,
+        "omega_cr_rad_s": ocp.params.omega_cr, "Omega0_rad_s": ocp.params.Omega0,
         "zeta0": ocp.params.zeta0, "drive_polar_inertia_kg_m2": ocp.params.J_p, **drive_use(tr),
         "accuracy": {"estimate": opt.resimulation_rel_error,
                      "how": "relative difference between the transcription's optimal objective and its CVODES "

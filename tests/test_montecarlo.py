@@ -177,7 +177,8 @@ def test_study_is_reproducible_and_seeded(scene, dev):
 
     backend = matplotlib.get_backend()
     figs = a.plot()
-    assert len(figs) == 1 and isinstance(figs[0], Figure) and matplotlib.get_backend() == backend
+    assert list(a.figures()) == ["fig_montecarlo.png", "fig_montecarlo_hist.png"]  # bands; histograms of the samples
+    assert all(isinstance(f, Figure) for f in figs) and matplotlib.get_backend() == backend
     assert_allclose(a.gap_spread, 3 * np.asarray(d["exact"]["u"]["cv"]))
     assert set(a.tables()) == {"montecarlo_statics.csv", "montecarlo_sensitivities.csv"}
 

@@ -245,3 +245,23 @@ def test_parametric_evaluator_equals_ipopt_in_chunks_and_on_the_stop(pump):
     other = StaticsSolver(dataclasses.replace(pump.design, groups=dataclasses.replace(g, sigma=1.1 * g.sigma)))
     assert_allclose(sol2["W"][2], other.solve(1.0, 0.04).x, atol=1e-8)
     assert np.abs(sol2["W"][2] - sol["W"][2]).max() > 1e-3
+
+
+def test_refinement_resolves_the_saturation_kink(pump):
+    """Refined points lie inside the one interval where the valve reaches its stop, each equal to a cold
+    solve there, and bracket the onset more tightly than the grid; no refinement where no stop changes."""
+    from autobal.analysis.statics_study import REFINE_POINTS, continuation, refine
+
+    grid = np.linspace(1.0, 1.5, 11)
+    pts = continuation(pump, grid, 0.04)
+    extra = refine(pump, pts, 0.04)
+    changes = [i for i in range(10) if pts[i].active != pts[i + 1].active]
+    assert len(changes) == 1 and len(extra) == REFINE_POINTS
+    lo, hi = grid[changes[0]], grid[changes[0] + 1]
+    psi = np.array([p.psi1 for p in extra])
+    assert np.all((psi > lo) & (psi < hi)) and np.all(np.diff(psi) > 0)
+    sat = np.array([p.saturated for p in extra])
+    assert sat[-1] and not sat[0] and np.all(np.diff(sat.astype(int)) >= 0)  # one onset inside
+    for p in (extra[0], extra[-1]):
+        assert_allclose(p.x, pump.solve(p.psi1, 0.04).x, atol=1e-8)
+    assert refine(pump, pts[:changes[0] + 1], 0.04) == []
