@@ -30,11 +30,19 @@ def default_scheduler() -> str | None:
     return _DEFAULT_SCHEDULER
 
 
+_PROGRESS = {"stream": None}
+
+
+def set_progress_stream(stream) -> None:
+    """Where progress bars go (the terminal while a run sends solver output to its log); None: stderr."""
+    _PROGRESS["stream"] = stream
+
+
 def _bar(total: int, desc: str, progress: bool):
     from tqdm import tqdm
 
     # disable=None: tqdm shows the bar only on a terminal
-    return tqdm(total=total, desc=desc, unit="task", file=sys.stderr, leave=False,
+    return tqdm(total=total, desc=desc, unit="task", file=_PROGRESS["stream"] or sys.stderr, leave=False,
                 disable=None if (progress and total > 1) else True)
 
 

@@ -173,13 +173,18 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
     if not isinstance(scene, Scenario):
         scene = load(scene)
     interrupt.clear()  # an interrupt of an earlier run in this process is not this run's
+    interrupt.ensure()  # record SIGINT/SIGTERM even when they arrive inside a solver
     folder = OutputFolder(out) if out is not None else None
     results, timing, current = {}, {}, None
     try:
         with SolverLog(folder.tmp / LOG if folder else os.devnull) as log:
             for current in analyses(scene):
                 t0 = time.perf_counter()
-                results[current] = RUNNERS[current](scene, getattr(scene.analyses, current))
+                try:
+                    results[current] = RUNNERS[current](scene, getattr(scene.analyses, current))
+                except Exception:
+                    interrupt.check()  # an interrupt that a solver turned into another error is an interrupt
+                    raise
                 timing[current] = time.perf_counter() - t0
                 if on_result is not None:
                     with log.terminal():

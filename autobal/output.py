@@ -26,6 +26,7 @@ import tempfile
 import warnings
 from pathlib import Path
 
+from autobal.analysis import executor
 from autobal.analysis.result import write_json
 from autobal.errors import ScenarioError
 
@@ -77,17 +78,10 @@ def _flush_c_stdout() -> None:
         ctypes.CDLL(None).fflush(None)
 
 
-def _on_fd(stream, fd: int) -> bool:
-    try:
-        return stream.fileno() == fd
-    except (AttributeError, OSError, ValueError):  # pytest's capture, io.StringIO ...
-        return False
-
-
 class SolverLog:
     """Within ``with SolverLog(path):`` what solvers print (IPOPT, CasADi, CVODES: C-level stdout and
-    stderr) and Python warnings go to ``path``.  Python's own ``sys.stderr`` (progress bars, messages)
-    still reaches the terminal; :meth:`terminal` gives the real stdout back for a moment."""
+    stderr, Python's stderr) and Python warnings go to ``path``; progress bars still reach the terminal,
+    and :meth:`terminal` gives the real stdout back for a moment."""
 
     def __init__(self, path: str | Path):
         self.path = path
@@ -105,9 +99,11 @@ class SolverLog:
         self._saved = os.dup(1)
         self._saved_err = os.dup(2)
         self._py_stderr = sys.stderr
-        if _on_fd(sys.stderr, 2):  # keep Python's stderr on the terminal while fd 2 goes to the log
-            sys.stderr = open(os.dup(self._saved_err), "w", buffering=1, encoding=sys.stderr.encoding,  # noqa: SIM115
-                              errors="backslashreplace")
+        # progress bars keep the terminal; Python's stderr (tracebacks a solver prints from a callback) and
+        # C-level stdout and stderr go to the log
+        self._terminal_err = open(os.dup(self._saved_err), "w", buffering=1, errors="backslashreplace")  # noqa: SIM115
+        executor.set_progress_stream(self._terminal_err)
+        sys.stderr = self._log
         os.dup2(self._log.fileno(), 1)
         os.dup2(self._log.fileno(), 2)
         return self
@@ -120,9 +116,9 @@ class SolverLog:
         os.dup2(self._saved_err, 2)
         os.close(self._saved)
         os.close(self._saved_err)
-        if sys.stderr is not self._py_stderr:
-            sys.stderr.close()
-            sys.stderr = self._py_stderr
+        sys.stderr = self._py_stderr
+        executor.set_progress_stream(None)
+        self._terminal_err.close()
         self._warnings.__exit__(*exc)
         self._log.close()
 

@@ -827,15 +827,17 @@ def design_section(sec: Section) -> None:
     sec.row("objective, optimum over nominal", "J/J_nom", "optimum.objective")
     for which in ("nominal", "optimum"):  # keys are the discharge ratios ("0.5"), so read them whole
         for p, margin in (sec.get(f"{which}.margin") or {}).items():
+            if p.endswith("_status"):
+                continue
             sec.row(f"decay-rate margin at ψ1 = {p}, {which}", "−max Re λ", "", "1/s", value=margin)
     st = sec.get("status")
     sec.verdict(st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"IPOPT: {st} ({sec.get('iterations')} "
                                                                          "iterations)")
     alpha = sec.get("decay_rate")
     for which in ("nominal", "optimum"):
-        margins = list((sec.get(f"{which}.margin") or {}).values())
+        margins = [m for m in (sec.get(f"{which}.margin") or {}).values() if isinstance(m, int | float)]
         if margins and alpha is not None:
-            worst = min(m for m in margins if m is not None)
+            worst = min(margins)
             sec.verdict(worst >= alpha * (1 - 1e-6), f"{which} design: every pole has Re λ ≤ −{number(alpha)} 1/s at "
                         f"every operating point" if worst >= alpha * (1 - 1e-6) else
                         f"{which} design: the decay-rate margin {number(alpha)} 1/s is NOT met "
