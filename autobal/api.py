@@ -185,6 +185,7 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
                 except Exception:
                     interrupt.check()  # an interrupt that a solver turned into another error is an interrupt
                     raise
+                interrupt.check()  # ... or that a solver swallowed without an error
                 timing[current] = time.perf_counter() - t0
                 if on_result is not None:
                     with log.terminal():

@@ -19,7 +19,7 @@ from autobal.analysis import interrupt
 from autobal.errors import Interrupted
 
 
-def interrupted_run(tmp_path: Path, scene: str, solver: str, sig: int, after: float = 0.5):
+def interrupted_run(tmp_path: Path, scene: str, solver: str, sig: int, after: float = 0.05):
     """Run ``autobal run scene``, send ``sig`` ``after`` s after the first call of ``solver``;
     returns (exit code, stderr lines without CasADi's warnings, output folder, s from signal to exit)."""
     trace, out = tmp_path / "trace.txt", tmp_path / "out"
