@@ -9,6 +9,8 @@ import pytest
 
 from autobal import cli
 
+pytestmark = pytest.mark.cli
+
 EXTREME = Path(__file__).resolve().parents[1] / "scenarios" / "extreme"
 
 

@@ -49,6 +49,7 @@ def test_c1_damping_from_decrement(tmp_path, scene_edit):
     assert_allclose(adapters.liquid_balancer(scenario.load(p).liquid_balancer).n, 7.8483, atol=5e-5)
 
 
+@pytest.mark.literature
 def test_c1_scene_uses_table_3_1(washer):
     assert_allclose([washer.D0, washer.m_l, washer.M_sys, washer.n], [0.03, 0.15, 7.3, 7.85], rtol=1e-12)
 
@@ -132,6 +133,7 @@ def test_c4_lambda0_at_alpha_pi():
     assert_allclose(np.asarray(lb.lambda0(k, -1.0)).ravel(), [1 / 3, 1.0, 3.0, 9.0, 11.0, 2.0], rtol=1e-12)
 
 
+@pytest.mark.literature
 def test_c4_extremum_table():
     # [derived] table: k* = -1/cos a0, lambda_max = 1/|sin a0| [T]
     a = np.radians([120.0, 150.0, 170.0, 179.0])
@@ -147,6 +149,7 @@ def test_c4_extremum_table():
     assert np.isnan(lb.extremum(math.radians(60.0))["k_star"])  # cos a0 > 0: no maximum for k >= 0
 
 
+@pytest.mark.literature
 def test_c4_derivatives_and_printed_second_derivative():
     fn = lb.lambda0_of_k_function()
     a = math.radians(150.0)
@@ -162,6 +165,7 @@ def test_c4_derivatives_and_printed_second_derivative():
     assert_allclose(lb.d2lambda0_dk2(ks, a, printed=True), lb.d2lambda0_dk2(ks, a), rtol=1e-12)
 
 
+@pytest.mark.literature
 def test_c4_corrected_branch_and_printed_defect():
     # corrected (2.13-corr) through (2.14) equals the closed form k/||cos d| - sqrt(k^2 - sin^2 d)|
     rng = np.random.default_rng(1)
@@ -224,6 +228,7 @@ def test_c5_system_eccentricity_check_of_8_1():
     assert_allclose(co, [1.1796, 1.7719, 3.3767, np.nan, np.nan, 1.6432], atol=5e-5, equal_nan=True)
 
 
+@pytest.mark.literature
 def test_c5_table_3_2_statistic_and_self_consistent_closure(washer):
     T, X = np.array(study.TABLE_3_2["theory"]), np.array(study.TABLE_3_2["experiment"])
     dev = 100 * (T - X) / T
@@ -242,6 +247,7 @@ def test_c5_table_3_2_statistic_and_self_consistent_closure(washer):
 
 # ---- C6 / C7: the optimisation problems (IPOPT against dense grids) ---------------------------
 
+@pytest.mark.literature
 @pytest.mark.parametrize("gamma, variant, deflection, h_ref", [
     # [derived] regression values, grid dh = 1e-5 m
     (0.4, "program", "program", 0.00764), (0.4, "printed", "program", 0.00774),
@@ -298,6 +304,8 @@ def washer_run(tmp_path_factory):
     return json.loads((out / "results.json").read_text())["liquid_balancer"], out
 
 
+@pytest.mark.literature
+@pytest.mark.cli
 def test_c7_table_3_3_derived_numbers(washer_run):
     # Khomyak (2020), Table 3.3 as the run reports it: the published capacity D implies k_D = D0/D
     # [derived], and the published V_opt differs from the experiment by -3.0 .. +4.1 %
@@ -327,6 +335,7 @@ def test_c8_sin_beta_star():
     assert lb.sin_beta_star(2e-3, 0.2, 90, 0.15, 23.88) > s[0] > lb.sin_beta_star(1e-3, 0.2, 90, 0.15, 50)
 
 
+@pytest.mark.literature
 def test_c8_program_sinus_example():
     # [derived]: Table 3.1, gamma = 0.4, f = 0.036489, water
     a = lb.program_arc(0.2, 0.05, 1.5e-4, 0.036489)
@@ -435,6 +444,7 @@ def test_pashkov_block_of_the_nested_scene():
 
 # ---- C11 -------------------------------------------------------------------------------------
 
+@pytest.mark.literature
 def test_c11_balancing_norms():
     n = np.array([500.0, 1000.0, 3000.0])
     assert_allclose(norms.permissible_specific_unbalance(n, "general"), [800, 200, 22.22], atol=5e-3)
@@ -497,6 +507,7 @@ def test_c12c_time_domain_jeffcott_confirms_phase_and_amplitude(gamma):
 
 # ---- C13: the study, results.json, plot, CLI ---------------------------------------------------
 
+@pytest.mark.cli
 def test_c13_run_washer_scene(washer_run):
     res, out = washer_run
     t = res["table"]
@@ -520,6 +531,7 @@ def test_c13_run_washer_scene(washer_run):
         assert (out / name).stat().st_size > 0
 
 
+@pytest.mark.cli
 def test_run_nested_scene(tmp_path):
     assert cli.main(["run", "washer_liquid_balancer_nested", "--out", str(tmp_path)]) == 0
     res = json.loads((tmp_path / "results.json").read_text())["liquid_balancer"]
@@ -530,6 +542,7 @@ def test_run_nested_scene(tmp_path):
 
 # ---- bad input -------------------------------------------------------------------------------
 
+@pytest.mark.cli
 @pytest.mark.parametrize("path, value, message", [
     ("liquid_balancer.liquid.volume", "7 L", "is not smaller than the chamber volume"),
     ("liquid_balancer.speed", "0 rad/s", "liquid_balancer.speed: must be positive"),
@@ -576,6 +589,7 @@ def test_model_never_raises_on_bad_points():
     assert np.isnan(lb.crescent(0.2, 0.05, 7e-3, 0.01)["x_p"])
 
 
+@pytest.mark.literature
 def test_resonance_efficiency_1_7_of_fig_3_6_differs(washer):
     # [T]: efficiency 1.7 at omega_cr for D0 = 2000 g cm, V = 100 mL; the documented pipeline gives
     # 0.0044 (printed/program) or no equilibrium (corrected); the extension 3.31 (validation ledger row)
