@@ -142,6 +142,7 @@ def test_liquid_balancer_block(tmp_path):
                                                        "jeffcott_ratio"}
 
 
+@pytest.mark.slow  # > 5 s; the capability is also checked by the default run
 @pytest.mark.cli
 def test_reliability_block(tmp_path):
     a = run_scene("hydroheel_wear", tmp_path)["reliability"]

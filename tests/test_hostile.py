@@ -278,6 +278,7 @@ def mutated_scene(draw):
     return data
 
 
+@pytest.mark.slow  # > 5 s; the capability is also checked by the default run
 @pytest.mark.cli
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
                                                                    HealthCheck.too_slow])

@@ -8,8 +8,6 @@ directly or through a helper or fixture of its module) is marked ``cli``, and th
 import ast
 from pathlib import Path
 
-import tomllib
-
 TESTS = Path(__file__).parent
 CATEGORIES = ("literature", "cli", "slow")
 
@@ -89,11 +87,10 @@ def marks_of(tree: ast.Module) -> dict[str, set[str]]:
             if name.startswith("test")}
 
 
-def test_markers_are_registered_and_strict():
-    ini = tomllib.loads((TESTS.parent / "pyproject.toml").read_text())["tool"]["pytest"]["ini_options"]
-    registered = {m.split(":")[0].strip() for m in ini["markers"]}
+def test_markers_are_registered_and_strict(pytestconfig):
+    registered = {m.split(":")[0].strip() for m in pytestconfig.getini("markers")}
     assert set(CATEGORIES) <= registered
-    assert "--strict-markers" in ini["addopts"]
+    assert "--strict-markers" in pytestconfig.getini("addopts")
 
 
 def test_every_category_is_non_empty():
