@@ -133,7 +133,6 @@ def test_c4_lambda0_at_alpha_pi():
     assert_allclose(np.asarray(lb.lambda0(k, -1.0)).ravel(), [1 / 3, 1.0, 3.0, 9.0, 11.0, 2.0], rtol=1e-12)
 
 
-@pytest.mark.literature
 def test_c4_extremum_table():
     # [derived] table: k* = -1/cos a0, lambda_max = 1/|sin a0| [T]
     a = np.radians([120.0, 150.0, 170.0, 179.0])
@@ -335,7 +334,6 @@ def test_c8_sin_beta_star():
     assert lb.sin_beta_star(2e-3, 0.2, 90, 0.15, 23.88) > s[0] > lb.sin_beta_star(1e-3, 0.2, 90, 0.15, 50)
 
 
-@pytest.mark.literature
 def test_c8_program_sinus_example():
     # [derived]: Table 3.1, gamma = 0.4, f = 0.036489, water
     a = lb.program_arc(0.2, 0.05, 1.5e-4, 0.036489)
@@ -589,7 +587,6 @@ def test_model_never_raises_on_bad_points():
     assert np.isnan(lb.crescent(0.2, 0.05, 7e-3, 0.01)["x_p"])
 
 
-@pytest.mark.literature
 def test_resonance_efficiency_1_7_of_fig_3_6_differs(washer):
     # [T]: efficiency 1.7 at omega_cr for D0 = 2000 g cm, V = 100 mL; the documented pipeline gives
     # 0.0044 (printed/program) or no equilibrium (corrected); the extension 3.31 (validation ledger row)

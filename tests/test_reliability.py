@@ -85,7 +85,6 @@ def test_p_of_t_and_mttf_literal_differ_from_source_as_spec_explains(example):
     assert abs(mttf / HOUR - 2700) > 1000
 
 
-@pytest.mark.literature
 def test_renormalised_load_density_matches_spec(example):
     # recomputed: p_tau renormalised on [0, sigma psi1]: P(0) = 0.99, P(2000) = 0.855, P(4000) = 0.495, T = 5.24 kh
     _, _, ren, _ = example

@@ -223,7 +223,6 @@ def test_uniform_passage_table_5_4_and_source_statements():
     assert all(peaks[100, psi][1] > peaks[100, 1.0][1] for psi in PSIS[1:])
 
 
-@pytest.mark.literature
 def test_crossover_n_star_near_5_per_second():
     """the behaviour of max d changes at n = 5 1/s; [derived] derives n* = 5.30 for psi = 0.5 (20 s^-2)."""
     n_star = R.crossover(105.0, 0.5, 40.0, 20.0)

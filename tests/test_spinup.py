@@ -55,7 +55,6 @@ def target():
     return run(ocp, S.DirectCollocation(200, 3, "radau"), multistart=False)
 
 
-@pytest.mark.literature
 def test_baseline_ramps_spec_8_7(target):
     # recomputed: 20 s^-2 ramp peaks at 16.39 e, the 40 s^-2 ramp + hold at 14.15 e
     b = target.data["baselines"]
@@ -233,7 +232,6 @@ def real_problem(alpha_max: float) -> S.SpinupOcp:
 CONVERGED = {40.0: 200, 20.0: 400}  # control intervals to the deadline: a 25 ms control step
 
 
-@pytest.mark.literature
 def test_search_integrator_reproduces_the_spec_ramp():
     # the global search's fixed-step exponential integrator against the spec's 20 rad/s^2 ramp (16.393 e,
     # CVODES), a step of 0.5 (dimensionless time, 4.8 ms)

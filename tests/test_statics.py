@@ -37,7 +37,6 @@ def test_pump_closed_form_reproduces_appendix_a(pump):
     assert_allclose(cf["kappa_s"], 1.2636, rtol=1e-4)  # recomputed check of (2.36)
 
 
-@pytest.mark.literature
 def test_pump_closed_form_curve_matches_spec_table(pump):
     # recomputed table of the Figs 2.4-2.6 curves (App. A formulas)
     psi1 = np.array([0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 1.7306])
@@ -64,7 +63,6 @@ def test_compressor_closed_form_reproduces_appendix_b(compressor):
     assert abs(cf["psi1_kr"] - 1.47) < 5e-3  # the chapter text's value
 
 
-@pytest.mark.literature
 def test_compressor_closed_form_curve_matches_spec_table(compressor):
     psi1 = np.array([0.25, 0.5, 0.75, 1.0, 1.25])
     cf = closed_form.compressor(compressor.design.groups, psi1, 0.025)
