@@ -64,6 +64,7 @@ def true_peak(lin, omega: float) -> float:
     return brentq(slope, omega * (1 - 1e-4), omega * (1 + 1e-4), xtol=1e-14 * omega, rtol=1e-15)
 
 
+@pytest.mark.cli
 def test_frequency_block(dynamics_run, pump_setup):
     a = dynamics_run["accuracy"]["frequency"]
     # peaks located by a bounded search with xatol 1e-6 omega; measured 1.2e-7 (Newton step on d|G|^2/d omega)
@@ -76,6 +77,7 @@ def test_frequency_block(dynamics_run, pump_setup):
     assert_allclose(a["peak_frequency_max_relative_error"], max(actual), rtol=1e-3)  # 1e-6 measured
 
 
+@pytest.mark.cli
 def test_stability_block(dynamics, pump_setup):
     import mpmath as mp
 
@@ -97,6 +99,7 @@ def test_stability_block(dynamics, pump_setup):
         assert err < 1e-9
 
 
+@pytest.mark.cli
 def test_transient_block(dynamics):
     a = dynamics["transient"]
     check(a, 1e-5)  # rtol 1e-9 against 1e-11: 7e-7 measured
@@ -130,6 +133,7 @@ def test_pencil_of_the_operator_has_the_hand_descriptor_poles():
     assert_allclose(mine, hand, rtol=1e-10)
 
 
+@pytest.mark.cli
 def test_liquid_balancer_block(tmp_path):
     a = run_scene("washer_liquid_balancer", tmp_path)["liquid_balancer"]
     # IPOPT optimum vs the analytic k_D = 1 point (1e-13 measured); CVODES vs (2.5) (7e-10 measured)
@@ -138,6 +142,8 @@ def test_liquid_balancer_block(tmp_path):
                                                        "jeffcott_ratio"}
 
 
+@pytest.mark.slow  # > 5 s; the capability is also checked by the default run
+@pytest.mark.cli
 def test_reliability_block(tmp_path):
     a = run_scene("hydroheel_wear", tmp_path)["reliability"]
     # dominated by the load quadrature of the MTTF to infinity: 1.3e-3 measured at 20001 nodes
@@ -147,6 +153,7 @@ def test_reliability_block(tmp_path):
     assert lit["mttf_tau"] < lit["mttf_infinite_tau"]
 
 
+@pytest.mark.cli
 def test_montecarlo_block_small_copy(tmp_path):
     d = yaml.safe_load(scenario.resolve("pump_pe600_montecarlo").read_text())
     d["analyses"]["montecarlo"] |= {"samples": 2000, "chunk_size": 1000, "discharge_ratio": [0.75, 1.0]}

@@ -11,6 +11,8 @@ from autobal import cli
 from autobal.analysis import ipopt
 from autobal.errors import ScenarioError, SolveError
 
+pytestmark = pytest.mark.cli
+
 GAP = {"device.disc.face.base_gap": "0.18 mm"}  # 0.15 mm in the scene (Pavlenko 2014, App. A)
 
 

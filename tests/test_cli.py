@@ -18,6 +18,7 @@ def write(tmp_path, data, name="scene.yaml"):
     return p
 
 
+@pytest.mark.cli
 @pytest.mark.parametrize(
     "path, value, message",
     [
@@ -51,6 +52,7 @@ def test_units_are_converted_to_si():
     assert s.device.operating.impeller.speed == pytest.approx(6300 * 2 * 3.141592653589793 / 60, rel=1e-12)
 
 
+@pytest.mark.cli
 def test_missing_file_and_bad_yaml(tmp_path, capsys):
     assert cli.main(["check", str(tmp_path / "nope.yaml")]) == 2
     bad = tmp_path / "bad.yaml"
@@ -59,12 +61,14 @@ def test_missing_file_and_bad_yaml(tmp_path, capsys):
     assert "not valid YAML" in capsys.readouterr().err
 
 
+@pytest.mark.cli
 def test_list_shows_shipped_scenarios(capsys):
     assert cli.main(["list"]) == 0
     out = capsys.readouterr().out
     assert "pump_pe600_statics" in out and "compressor_k180_statics" in out
 
 
+@pytest.mark.cli
 def test_run_pump_writes_documented_results(tmp_path):
     assert cli.main(["run", "pump_pe600_statics", "--out", str(tmp_path)]) == 0
     res = json.loads((tmp_path / "results.json").read_text())
@@ -82,6 +86,7 @@ def test_run_pump_writes_documented_results(tmp_path):
         assert (tmp_path / f).stat().st_size > 0
 
 
+@pytest.mark.cli
 def test_failed_solve_exits_3_with_status_and_last_iterate(tmp_path, capsys, monkeypatch):
     # an iteration limit the solve cannot meet: IPOPT really stops early
     monkeypatch.setitem(ipopt.COLD, "ipopt.max_iter", 1)

@@ -40,6 +40,7 @@ def afc(setup, model="program", convention="appendix"):
 
 # ---- literature validation: the appendix programs' hand-linear model ------------------------------
 
+@pytest.mark.literature
 def test_program_constants_match_appendix_a(pump):
     # App. A as recomputed [derived]: 0.5 %
     c = pump.constants("program").c
@@ -53,6 +54,7 @@ def test_program_constants_match_appendix_a(pump):
     assert c["T6"] < 0 and c["zeta2"] == 0
 
 
+@pytest.mark.literature
 def test_program_constants_match_appendix_b(comp):
     # App. B as recomputed [derived]: 0.5 %
     c = comp.constants("program").c
@@ -65,6 +67,7 @@ def test_program_constants_match_appendix_b(comp):
                     [8.19506e-7, 2.01217e-5, 5.32413e-8, 3.03069e-3, 0.0104507], rtol=5e-3)
 
 
+@pytest.mark.literature
 def test_published_pump_afc_reproduced(pump):
     # App. A, B = (-1, sigma_m, 0, 0, K11, 0): the thesis prints 1980/2920 rad/s, 25/10 um, 7 um at
     # 660 rad/s (read off a figure); [derived] reproduction 1977.2/25.20, 2912.5/9.90, 6.84 um
@@ -79,6 +82,7 @@ def test_published_pump_afc_reproduced(pump):
     assert abs(r["at_operating_speed"]["amplitude_um"] - 7) < 0.3
 
 
+@pytest.mark.literature
 def test_published_compressor_afc_reproduced(comp):
     # App. B: the thesis prints 2340/4810 rad/s, 33/18 um, 20 um at 1571 rad/s;
     # [derived] reproduction 2343.4/32.52, 4811.1/17.98, 19.97 um
@@ -98,6 +102,7 @@ def test_physical_forcing_does_not_give_the_published_afc(pump):
     assert_allclose(r["at_operating_speed"]["amplitude_um"], 2.27, atol=0.02)
 
 
+@pytest.mark.literature
 def test_published_pump_model_is_unstable(pump):
     # [derived]: det N(p) coefficients and roots with the App. A constants; a7 < 0
     c = pump.constants("program")
@@ -116,6 +121,7 @@ def test_published_pump_model_is_unstable(pump):
     assert_allclose(peaks, [1999.44, 2878.52], rtol=0.012)
 
 
+@pytest.mark.literature
 def test_published_compressor_model_is_unstable(comp):
     # [derived]: all coefficients positive, Hurwitz minors Delta4..Delta6 negative, roots
     v = stability.verdict(comp.linear("program"))
@@ -312,6 +318,7 @@ def test_gap_closure_is_reported_and_the_response_cut(comp):
 
 # ---- scenes, results.json keys, bad input ----------------------------------------------------------
 
+@pytest.mark.cli
 def test_pump_scene_results_keys(tmp_path):
     import json
 
@@ -331,6 +338,7 @@ def test_pump_scene_results_keys(tmp_path):
     assert (tmp_path / "fig_stability_map_program.png").is_file() and (tmp_path / "fig_afc.png").is_file()
 
 
+@pytest.mark.cli
 def test_dynamics_without_regulator_block_is_refused(tmp_path):
     data = yaml.safe_load(scenario.resolve("pump_pe600_dynamics").read_text())
     del data["device"]["dynamics"]["regulator"]
@@ -376,6 +384,7 @@ def test_results_plot_figures_without_touching_the_backend(pump, tmp_path):
     assert 0 < tr.max_gap_change[0] < 1e-4  # m
 
 
+@pytest.mark.cli
 def test_dynamics_without_the_regulator_block_is_refused_naming_the_field(tmp_path, scene_edit):
     import autobal
 

@@ -101,6 +101,7 @@ def test_corrected_4_36_is_stationarity_of_the_transformed_residual():
 
 # ---- Table 4.3 ----------------------------------------------------------------------------------
 
+@pytest.mark.literature
 def test_table43_data_file_is_the_source_table():
     """scenarios/data/table43.csv holds Table 4.3 of Pavlenko (2014): group means 1.12, 0.87, 0.68,
     0.62 to the printed digits; the printed theory u (1.14, 0.83, 0.65, 0.50) is (4.13) at sigma 2.75,
@@ -112,6 +113,7 @@ def test_table43_data_file_is_the_source_table():
                     atol=0.005)
 
 
+@pytest.mark.literature
 def test_table43_closed_forms():
     """The source's estimators on the Table 4.3 points: (4.23) with tau_max = 2.75 -> 1.7314; (4.26)-(4.27)
     -> tau_max = 2.5213, alpha^2 = 2.1819, alpha = 1.4771; on the group means 1.7549 and (4.239, 2.282)
@@ -130,6 +132,7 @@ def test_table43_closed_forms():
     assert_allclose(est.static_2p(mt, mu), (4.239, 2.282), atol=5e-4)
 
 
+@pytest.mark.literature
 def test_table43_least_squares_in_u():
     """Least squares in u of Table 4.3 with tau_max = 2.75 fixed gives alpha = 1.6643 (the printed 1.68
     came from other points), as a grid search of the sum of squares written again here."""
@@ -214,6 +217,7 @@ def test_confidence_intervals_cover_the_truth():
     assert np.all((hits / runs > 0.90) & (hits / runs < 0.99)), hits / runs
 
 
+@pytest.mark.literature
 def test_fisher_adequacy_table43():
     """(4.14)-(4.15) on Table 4.3 with the source's theory curve (sigma 2.75, alpha 1.75), l = 2:
     sigma1^2 = 8.72e-3 (printed 8.8e-3), sigma2^2 = 3.33e-3 (printed 2.9e-3: not reproducible),
@@ -226,6 +230,7 @@ def test_fisher_adequacy_table43():
     assert ad["dof"] == [2, 11] and ad["lack_of_fit"]["dof"] == [2, 8]
 
 
+@pytest.mark.literature
 def test_loss_coefficient_4_38():
     """(4.38) with the Sec. 4.3.3 geometry: alpha = 1.746 with zeta + 0.5 lambda l/h (the source prints
     1.75) and 1.713 with (4.38)'s printed lambda l/h; solving for each coefficient inverts it exactly."""
@@ -353,6 +358,7 @@ def test_device_fit_loss_coefficient_and_band(pump_truth):
     assert_allclose(band[2] - band[0], fit.stats["t_quantile"] * se * np.abs(J[[0, -1]]), rtol=1e-5)
 
 
+@pytest.mark.cli
 def test_device_scenario_with_dimensional_data(tmp_path, pump_truth):
     """A device scene whose CSV is in MPa, mm and L/min: bases from the device (p_B, z_B, g1 p_B);
     the pipeline recovers the ratios and writes the results block."""
@@ -374,6 +380,7 @@ def test_device_scenario_with_dimensional_data(tmp_path, pump_truth):
 
 # ---- the scenario, bad input, failed fit ------------------------------------------------------------
 
+@pytest.mark.cli
 def test_rig_scenario_results(tmp_path):
     """autobal run rig_table43_fit: results.json 'estimation' has estimates, errors, intervals, adequacy."""
     assert cli.main(["run", "rig_table43_fit", "--out", str(tmp_path)]) == 0
@@ -395,6 +402,7 @@ def test_rig_scenario_results(tmp_path):
         assert (tmp_path / f).stat().st_size > 0
 
 
+@pytest.mark.cli
 def test_estimation_result_object():
     """autobal.run without a folder: the estimation Result has typed headline numbers equal to the
     Table 4.3 least-squares value, and its plot() returns figures without touching pyplot's state."""
@@ -421,6 +429,7 @@ def _scene(tmp_path, csv_text=None, **estimation):
     return p
 
 
+@pytest.mark.cli
 @pytest.mark.parametrize("csv_text, message", [
     ("group [1],tau [1]\n1,0.5\n1,1\n2,1.5\n", "residual 'u' needs a measured gap column"),
     ("group [1],tau [1],gap [kg]\n1,0.5,1\n1,1,1\n2,1.5,1\n", "'kg' is not a length unit"),
@@ -474,6 +483,7 @@ def test_missing_data_file(tmp_path):
         scenario.load(_scene(tmp_path, data="nowhere/none.csv"))
 
 
+@pytest.mark.cli
 def test_device_fit_needs_device(tmp_path, capsys):
     fits = [{"name": "d", "model": "device", "parameters": {"alpha_TB1": {"value": 0.03}}}]
     scene = _scene(tmp_path, fits=fits, loss_coefficient=None)
@@ -481,6 +491,7 @@ def test_device_fit_needs_device(tmp_path, capsys):
     assert "the device model needs a device section" in capsys.readouterr().err
 
 
+@pytest.mark.cli
 def test_failed_fit_exits_3_with_solver_status(tmp_path, capsys):
     """A fit stopped after one iteration: exit 3, IPOPT's status printed and saved with the last iterate."""
     fits = [{"name": "short", "max_iterations": 1, "parameters": {"alpha": {"value": 5.0}, "tau_max": {"value": 9.0}}}]

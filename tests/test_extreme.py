@@ -9,6 +9,8 @@ import pytest
 
 from autobal import cli
 
+pytestmark = pytest.mark.cli
+
 EXTREME = Path(__file__).resolve().parents[1] / "scenarios" / "extreme"
 
 
@@ -106,6 +108,7 @@ def test_valve_driven_to_its_travel_limit(tmp_path):
     assert not any(e["event"] == "valve_closed" for e in down["events"])
 
 
+@pytest.mark.slow  # > 5 s; the capability is also checked by the default run
 def test_spinup_hundred_times_faster(tmp_path):
     code, res = run(tmp_path, "spinup_100x_faster")
     assert code == 0
@@ -115,6 +118,7 @@ def test_spinup_hundred_times_faster(tmp_path):
     assert sp["resimulation_rel_error"] < 1e-6
 
 
+@pytest.mark.slow  # > 5 s; the capability is also checked by the default run
 def test_spinup_hundred_times_slower_is_quasi_static(tmp_path):
     code, res = run(tmp_path, "spinup_100x_slower")
     assert code == 0

@@ -184,6 +184,7 @@ def files_under(folder: Path) -> set[Path]:
     return {p for p in folder.rglob("*")}
 
 
+@pytest.mark.cli
 @pytest.mark.parametrize("kind, case", ALL)
 def test_hostile_input_is_refused_with_one_line(tmp_path, capsys, monkeypatch, kind, case):
     work = tmp_path / "work"
@@ -204,6 +205,7 @@ def test_hostile_input_is_refused_with_one_line(tmp_path, capsys, monkeypatch, k
     assert not Path("/tmp/autobal_hostile_pwned").exists()
 
 
+@pytest.mark.cli
 @pytest.mark.parametrize("kind, case", [pytest.param("value", c, id=c[0]) for c in VALUES if c[0].startswith("name")]
                          + [pytest.param("file", c, id=c[0]) for c in FILES[:3]])
 def test_hostile_run_writes_nothing_outside_its_output_folder(tmp_path, capsys, monkeypatch, kind, case):
@@ -276,6 +278,8 @@ def mutated_scene(draw):
     return data
 
 
+@pytest.mark.slow  # > 5 s; the capability is also checked by the default run
+@pytest.mark.cli
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
                                                                    HealthCheck.too_slow])
 @given(data=mutated_scene())
@@ -295,6 +299,7 @@ def test_mutated_shipped_scenes_are_accepted_or_refused_in_one_line(tmp_path_fac
     assert "Traceback" not in err.getvalue()
 
 
+@pytest.mark.cli
 @pytest.mark.slow
 @pytest.mark.parametrize("path, value", [
     ("device.barrier.margin_ratio", 9.0),
@@ -339,6 +344,7 @@ def test_a_run_at_the_size_bounds_is_announced_with_its_estimate(tmp_path, base,
     assert note.startswith("this run is estimated to take about") and f"{analysis} " in note
 
 
+@pytest.mark.cli
 @pytest.mark.parametrize("override, text", [
     ("name=../../x", "set name=../../x: name:"),
     ("device.disc.face.base_gap=inf mm", "set device.disc.face.base_gap=inf mm: device.disc.face.base_gap:"),

@@ -52,6 +52,7 @@ def assert_interrupted(code, lines, out, seconds, expected_code, name):
     assert seconds < 10, f"took {seconds:.1f} s to stop"
 
 
+@pytest.mark.cli
 @pytest.mark.slow
 def test_sigint_during_the_spinup_ipopt_solve(tmp_path):
     code, lines, out, seconds = interrupted_run(tmp_path, "spinup_jeffcott_deadline_5s", "spinup", signal.SIGINT)
@@ -59,6 +60,7 @@ def test_sigint_during_the_spinup_ipopt_solve(tmp_path):
     assert json.loads((out / "interrupted.json").read_text())["analysis"] == "spinup"
 
 
+@pytest.mark.cli
 @pytest.mark.slow
 def test_sigint_during_the_monte_carlo(tmp_path):
     code, lines, out, seconds = interrupted_run(tmp_path, "pump_pe600_montecarlo", "call_rows", signal.SIGINT)
@@ -66,6 +68,7 @@ def test_sigint_during_the_monte_carlo(tmp_path):
     assert json.loads((out / "interrupted.json").read_text())["analysis"] == "montecarlo"
 
 
+@pytest.mark.cli
 @pytest.mark.slow
 def test_sigterm_during_the_monte_carlo(tmp_path):
     code, lines, out, seconds = interrupted_run(tmp_path, "pump_pe600_montecarlo", "call_rows", signal.SIGTERM)

@@ -49,6 +49,7 @@ def test_c1_damping_from_decrement(tmp_path, scene_edit):
     assert_allclose(adapters.liquid_balancer(scenario.load(p).liquid_balancer).n, 7.8483, atol=5e-5)
 
 
+@pytest.mark.literature
 def test_c1_scene_uses_table_3_1(washer):
     assert_allclose([washer.D0, washer.m_l, washer.M_sys, washer.n], [0.03, 0.15, 7.3, 7.85], rtol=1e-12)
 
@@ -147,6 +148,7 @@ def test_c4_extremum_table():
     assert np.isnan(lb.extremum(math.radians(60.0))["k_star"])  # cos a0 > 0: no maximum for k >= 0
 
 
+@pytest.mark.literature
 def test_c4_derivatives_and_printed_second_derivative():
     fn = lb.lambda0_of_k_function()
     a = math.radians(150.0)
@@ -162,6 +164,7 @@ def test_c4_derivatives_and_printed_second_derivative():
     assert_allclose(lb.d2lambda0_dk2(ks, a, printed=True), lb.d2lambda0_dk2(ks, a), rtol=1e-12)
 
 
+@pytest.mark.literature
 def test_c4_corrected_branch_and_printed_defect():
     # corrected (2.13-corr) through (2.14) equals the closed form k/||cos d| - sqrt(k^2 - sin^2 d)|
     rng = np.random.default_rng(1)
@@ -224,6 +227,7 @@ def test_c5_system_eccentricity_check_of_8_1():
     assert_allclose(co, [1.1796, 1.7719, 3.3767, np.nan, np.nan, 1.6432], atol=5e-5, equal_nan=True)
 
 
+@pytest.mark.literature
 def test_c5_table_3_2_statistic_and_self_consistent_closure(washer):
     T, X = np.array(study.TABLE_3_2["theory"]), np.array(study.TABLE_3_2["experiment"])
     dev = 100 * (T - X) / T
@@ -242,6 +246,7 @@ def test_c5_table_3_2_statistic_and_self_consistent_closure(washer):
 
 # ---- C6 / C7: the optimisation problems (IPOPT against dense grids) ---------------------------
 
+@pytest.mark.literature
 @pytest.mark.parametrize("gamma, variant, deflection, h_ref", [
     # [derived] regression values, grid dh = 1e-5 m
     (0.4, "program", "program", 0.00764), (0.4, "printed", "program", 0.00774),
@@ -298,6 +303,8 @@ def washer_run(tmp_path_factory):
     return json.loads((out / "results.json").read_text())["liquid_balancer"], out
 
 
+@pytest.mark.literature
+@pytest.mark.cli
 def test_c7_table_3_3_derived_numbers(washer_run):
     # Khomyak (2020), Table 3.3 as the run reports it: the published capacity D implies k_D = D0/D
     # [derived], and the published V_opt differs from the experiment by -3.0 .. +4.1 %
@@ -435,6 +442,7 @@ def test_pashkov_block_of_the_nested_scene():
 
 # ---- C11 -------------------------------------------------------------------------------------
 
+@pytest.mark.literature
 def test_c11_balancing_norms():
     n = np.array([500.0, 1000.0, 3000.0])
     assert_allclose(norms.permissible_specific_unbalance(n, "general"), [800, 200, 22.22], atol=5e-3)
@@ -497,6 +505,7 @@ def test_c12c_time_domain_jeffcott_confirms_phase_and_amplitude(gamma):
 
 # ---- C13: the study, results.json, plot, CLI ---------------------------------------------------
 
+@pytest.mark.cli
 def test_c13_run_washer_scene(washer_run):
     res, out = washer_run
     t = res["table"]
@@ -520,6 +529,7 @@ def test_c13_run_washer_scene(washer_run):
         assert (out / name).stat().st_size > 0
 
 
+@pytest.mark.cli
 def test_run_nested_scene(tmp_path):
     assert cli.main(["run", "washer_liquid_balancer_nested", "--out", str(tmp_path)]) == 0
     res = json.loads((tmp_path / "results.json").read_text())["liquid_balancer"]
@@ -530,6 +540,7 @@ def test_run_nested_scene(tmp_path):
 
 # ---- bad input -------------------------------------------------------------------------------
 
+@pytest.mark.cli
 @pytest.mark.parametrize("path, value, message", [
     ("liquid_balancer.liquid.volume", "7 L", "is not smaller than the chamber volume"),
     ("liquid_balancer.speed", "0 rad/s", "liquid_balancer.speed: must be positive"),

@@ -101,6 +101,7 @@ def test_samples_are_reproducible_and_have_the_asked_moments(ev):
 
 # ---- literature validation: the source's method reproduces its spreads ---------------------------
 
+@pytest.mark.literature
 def test_source_closed_forms_reproduce_spec_table_and_the_20_25_percent(ev):
     """Figs 3.3-3.4 method (closed forms (2.27), (2.30)) with the ten groups normal, cv 5 %, N = 1e5:
     recomputed table (regression values, +-0.002 MC noise); conclusion 4: 'the face gap may vary
@@ -192,6 +193,7 @@ def cluster():
         yield c
 
 
+@pytest.mark.cli
 def test_dask_cluster_gives_the_in_process_numbers(scene, dev, cluster, tmp_path):
     s = small(scene, samples=1200, chunk_size=300)
     local = mc.run(dev, s, ex.InProcess(progress=False))
@@ -242,6 +244,7 @@ def test_vectorised_afc_equals_the_linear_models_response(scene, model, names):
         assert_allclose(mine[0, 1:4], [6.84, 25.20, 9.90], atol=0.01)
 
 
+@pytest.mark.literature
 def test_afc_spread_of_the_program_model_matches_spec(scene):
     """Fig. 3.7: the 28 constants normal with cv 5 %: recomputed with N = 2e4: CV(A) = 0.30 at
     omega0 = 660 rad/s, 0.29 at omega_I, 0.51 at omega_II (the source: amplitude 'up to 40 %', conclusion 4,
@@ -275,6 +278,7 @@ def test_afc_bad_parameter_names_the_model(scene, dev):
 
 # ---- bad input --------------------------------------------------------------------------------------
 
+@pytest.mark.cli
 @pytest.mark.parametrize("change, message", [
     (lambda m: m["parameters"].update(alpha_e1={"distribution": "normal", "std": -0.1}),
      "analyses.montecarlo.parameters.alpha_e1: Value error, std must not be negative"),
@@ -299,6 +303,7 @@ def test_bad_input_is_one_line_naming_it(tmp_path, change, message):
     assert main(["check", str(path)]) == 2
 
 
+@pytest.mark.cli
 def test_bad_input_found_when_the_study_runs(tmp_path, scene, dev, capsys):
     # a regulator group on a device without regulator; a lognormal with a negative mean; no device
     no_reg = DeviceDesign(groups=dataclasses.replace(dev.groups, regulator=None), dpsi=dev.dpsi, scales=dev.scales,

@@ -54,6 +54,7 @@ def shipped_results():
     return {name: plain(api.run(api.load(name)).to_dict()) for name in SHIPPED}
 
 
+@pytest.mark.cli
 @pytest.mark.slow
 @pytest.mark.parametrize("name", SHIPPED)
 def test_every_null_has_a_status(shipped_results, name):

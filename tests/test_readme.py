@@ -3,6 +3,8 @@
 import re
 from pathlib import Path
 
+import pytest
+
 README = Path(__file__).resolve().parents[1] / "README.md"
 
 
@@ -10,6 +12,7 @@ def _blocks(lang: str) -> list[str]:
     return re.findall(rf"```{lang}\n(.*?)```", README.read_text(), flags=re.S)
 
 
+@pytest.mark.cli
 def test_readme_python_example_runs(tmp_path, monkeypatch):
     blocks = _blocks("python")
     assert len(blocks) == 1, "the README has one Python example"

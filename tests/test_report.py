@@ -108,11 +108,13 @@ def output(tmp_path_factory):
     return get
 
 
+@pytest.mark.cli
 @pytest.mark.parametrize("name", FAST)
 def test_report_of_a_fast_scene(output, name):
     check_report(output(name))
 
 
+@pytest.mark.cli
 @pytest.mark.slow
 @pytest.mark.parametrize("name", SLOW)
 def test_report_of_every_other_shipped_scene(output, name):
@@ -122,6 +124,7 @@ def test_report_of_every_other_shipped_scene(output, name):
         assert "Comparison with the source's published values" in body
 
 
+@pytest.mark.cli
 @pytest.mark.slow
 def test_dynamics_report_says_which_model_is_unstable(output):
     """Pavlenko (2014), App. A: the program model is unstable (+219.33 ± 1999.44i), the energy model stable."""
@@ -131,6 +134,7 @@ def test_dynamics_report_says_which_model_is_unstable(output):
     assert any(v.startswith("✔ nonlinear, energy-consistent: stable") for v in page.verdicts)
 
 
+@pytest.mark.cli
 def test_rerendering_gives_the_same_page(output):
     folder = output(FAST[0])
     first = (folder / "report.html").read_text()
@@ -138,6 +142,7 @@ def test_rerendering_gives_the_same_page(output):
     assert (folder / "report.html").read_text() == first
 
 
+@pytest.mark.cli
 def test_estimation_report_numbers(output):
     """Pavlenko (2014), Table 4.3: alpha = 1.6643 +- 0.0729 (least squares in u, tau_max = 2.75 fixed)."""
     page = check_report(output("rig_table43_fit"))
@@ -171,6 +176,7 @@ def test_cells_convert_to_the_display_unit():
     assert report.cell(0.96, "1")["unit"] == "dimensionless"
 
 
+@pytest.mark.cli
 def test_failed_run_gets_a_report(tmp_path, capsys):
     """A failed solve's folder (failed_solve.json) gets a report that says what failed and why."""
     scene = {"name": "spin_small", "title": "small spin-up", "source": "test",
@@ -189,6 +195,7 @@ def test_failed_run_gets_a_report(tmp_path, capsys):
     assert cli.main(["report", str(tmp_path / "out")]) == 0  # and again from the folder
 
 
+@pytest.mark.cli
 def test_report_of_a_folder_without_results_is_bad_input(tmp_path, capsys):
     assert cli.main(["report", str(tmp_path)]) == 2
     assert "results.json" in capsys.readouterr().err

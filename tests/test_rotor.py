@@ -90,6 +90,7 @@ TABLE_5_1 = [  # mu1, n, z_kp, a_kp, z1, M1, z2, M2, d_max, z_d_max
 ]
 
 
+@pytest.mark.literature
 @pytest.mark.parametrize("row", TABLE_5_1)
 def test_stationary_table_5_1(row):
     mu1, n, *vals = row
@@ -141,6 +142,7 @@ TABLE_5_3 = [
 ]
 
 
+@pytest.mark.literature
 @pytest.mark.parametrize("row", TABLE_5_3)
 def test_step_table_5_3(row):
     from autobal.analysis.rotor_study import step_case
@@ -204,6 +206,7 @@ TABLE_5_4 = {
 PSIS = (1.0, 0.75, 0.5, 0.25)
 
 
+@pytest.mark.literature
 def test_uniform_passage_table_5_4_and_source_statements():
     peaks = {}
     for n, row in TABLE_5_4.items():
@@ -238,6 +241,7 @@ TABLE_5_5 = {  # zeta -> peaks @ nu for a* = 1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2
 A_STARS = (1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2)
 
 
+@pytest.mark.literature
 @pytest.mark.parametrize("zeta", list(TABLE_5_5))
 def test_lewis_table_5_5(zeta):
     for a_star, (pk, nu) in zip(A_STARS, TABLE_5_5[zeta], strict=True):

@@ -18,6 +18,7 @@ from autobal.analysis.statics import ParametricStatics, StaticsSolver
 
 # ---- literature validation: the source's closed forms (App. A, App. B) ----
 
+@pytest.mark.literature
 def test_pump_closed_form_reproduces_appendix_a(pump):
     cf = closed_form.pump(pump.design.groups, 1.0, 0.04)
     # published values to the digits printed: half a unit of the last digit
@@ -46,6 +47,7 @@ def test_pump_closed_form_curve_matches_spec_table(pump):
     assert_allclose(cf["q_T"], [0.42125, 0.56244, 0.67471, 0.77079, 0.85616, 0.93375, 1.0], atol=2e-5)
 
 
+@pytest.mark.literature
 def test_compressor_closed_form_reproduces_appendix_b(compressor):
     cf = closed_form.compressor(compressor.design.groups, 1.0, 0.025)
     assert abs(cf["dpsi_kr"] - 0.017) < 5e-4

@@ -8,6 +8,7 @@ from numpy.testing import assert_allclose
 from autobal.models import throttles as th
 
 
+@pytest.mark.literature
 @pytest.mark.parametrize(
     "name, key, published",
     [  # [derived] (App. A and App. B), tolerance 0.5 %
@@ -26,6 +27,7 @@ def test_conductances_match_appendices(name, key, published):
     assert_allclose(design(scenario.load(name).device).conductances[key], published, rtol=5e-3)
 
 
+@pytest.mark.literature
 def test_groups_match_appendix_a():
     # [derived] recomputed column (App. A)
     from autobal import scenario

@@ -32,6 +32,7 @@ def test_ipopt_error_follows_its_tolerance(pump):
     assert cf["setting"] is None and cf["best_error"] == pytest.approx(0.341, abs=2e-3)  # xi0: 1.294 vs 1.964
 
 
+@pytest.mark.cli
 def test_accuracy_command_writes_figure_csv_and_summary(tmp_path, capsys):
     assert cli.main(["accuracy", "pump_pe600_statics", "--out", str(tmp_path)]) == 0
     rep = json.loads((tmp_path / "accuracy.json").read_text())
@@ -41,6 +42,7 @@ def test_accuracy_command_writes_figure_csv_and_summary(tmp_path, capsys):
     assert "setting for 1e-6" in capsys.readouterr().out
 
 
+@pytest.mark.cli
 def test_run_reports_timing_and_accuracy(tmp_path):
     assert cli.main(["run", "compressor_k180_statics", "--out", str(tmp_path)]) == 0
     res = json.loads((tmp_path / "results.json").read_text())
@@ -65,6 +67,7 @@ def test_dynamics_work_precision_orders_the_integrators():
     assert st["reference_difference_cvodes_vs_radau"] < 1e-10
 
 
+@pytest.mark.cli
 def test_estimation_work_precision_on_table_43(tmp_path):
     assert cli.main(["accuracy", "rig_table43_fit", "--out", str(tmp_path)]) == 0
     rows = json.loads((tmp_path / "accuracy.json").read_text())["studies"]["estimation"]["rows"]
