@@ -125,3 +125,12 @@ def test_version(capsys):
     with pytest.raises(SystemExit) as stop:
         cli.main(["--version"])
     assert stop.value.code == 0 and capsys.readouterr().out.strip() == f"autobal {autobal.__version__}"
+
+
+def test_public_names_resolve():
+    import autobal.models.device as device
+
+    assert sorted(autobal.__all__) == sorted(dir(autobal))
+    for name in autobal.__all__:
+        assert getattr(autobal, name) is not None
+    assert autobal.DeviceParams is device.DeviceParams
