@@ -94,25 +94,17 @@ class Run(Mapping):
         outputs = {name: [f.name for f in r.save(folder)] for name, r in self.results.items()}
         files = [name for names in outputs.values() for name in names]
         write_json(folder / "results.json", self.to_dict() | {"files": [*files, report.REPORT], "outputs": outputs})
-        try:
-            written = [report.render(folder)]
-        except Exception as exc:  # noqa: BLE001 (the results are written; a report must not lose them)
-            with open(folder / LOG, "a") as log:
-                log.write(f"report.html not written: {type(exc).__name__}: {exc}\n")
-            warnings.warn(f"report.html not written: {exc}", stacklevel=2)
-            written = []
+        written = _render_report(folder)
+        if not written:
+            warnings.warn("report.html not written (see autobal.log)", stacklevel=2)
         return [folder / f for f in files] + written
 
     def save(self, out: str | Path) -> Path:
         """Write the run into ``out`` atomically (see :mod:`autobal.output`); returns the folder."""
         folder = OutputFolder(out)
-        try:
-            self.write(folder.tmp)
-            (folder.tmp / LOG).touch()
-        except BaseException:
-            folder.discard()
-            raise
-        return folder.commit()
+        with folder as tmp:
+            self.write(tmp)
+        return folder.path
 
     def __repr__(self) -> str:
         return f"<Run {self.scene.name}: {', '.join(self.results)}>"
@@ -135,12 +127,19 @@ def _finish(folder: OutputFolder, scene: Scenario, name: str, data: dict) -> Non
     """Write a status file (with the scene and the run's provenance) and its report.html into the
     temporary folder, and commit it."""
     write_json(folder.tmp / name, data | {"scenario": scene.name, "title": scene.title, "meta": meta(scene)})
-    try:
-        report.render(folder.tmp)
-    except Exception as exc:  # noqa: BLE001 (the run's own error is being raised: a report must not replace it)
-        with open(folder.tmp / LOG, "a") as log:
-            log.write(f"report.html not written: {type(exc).__name__}: {exc}\n")
+    _render_report(folder.tmp)
     folder.commit()
+
+
+def _render_report(folder: Path) -> list[Path]:
+    """report.html of ``folder`` ([] when it cannot be rendered: the results or the run's own error matter
+    more than the page; why goes to autobal.log)."""
+    try:
+        return [report.render(folder)]
+    except Exception as exc:  # noqa: BLE001 (a report must not lose the results or replace the run's error)
+        with open(folder / LOG, "a") as log:
+            log.write(f"report.html not written: {type(exc).__name__}: {exc}\n")
+        return []
 
 
 def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=None) -> Run:
@@ -182,10 +181,8 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
                 t0 = time.perf_counter()
                 try:
                     results[current] = RUNNERS[current](scene, getattr(scene.analyses, current))
-                except Exception:
-                    interrupt.check()  # an interrupt that a solver turned into another error is an interrupt
-                    raise
-                interrupt.check()  # ... or that a solver swallowed without an error
+                finally:
+                    interrupt.check()  # an interrupt a solver swallowed, or turned into another error, is one
                 timing[current] = time.perf_counter() - t0
                 if on_result is not None:
                     with log.terminal():

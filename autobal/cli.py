@@ -9,7 +9,7 @@ from pathlib import Path
 
 from autobal import __version__, api, report, scenario
 from autobal.errors import Interrupted, ScenarioError, SolveError
-from autobal.output import LOG, OutputFolder
+from autobal.output import OutputFolder
 
 EXIT_OK, EXIT_BAD_INPUT, EXIT_SOLVE_FAILED = 0, 2, 3
 
@@ -67,21 +67,15 @@ def _accuracy(args, scn) -> int:
         raise ScenarioError(f"{scn.name}: none of its analyses has a work-precision study "
                             f"(available: {', '.join(ACCURACY)})")
     out = _out_folder(args, scn)
-    folder = OutputFolder(out)
-    try:
+    with OutputFolder(out) as tmp:
         report = {"status": "ok", "scenario": scn.name, "meta": api.meta(scn), "studies": {}, "files": []}
         for name, study in studies.items():
             wp = study(scn, getattr(scn.analyses, name))
             report["studies"][name] = wp.to_dict()
-            report["files"] += [f.name for f in wp.save(folder.tmp)]
+            report["files"] += [f.name for f in wp.save(tmp)]
             if not args.quiet:
                 print(wp.summary())
-        write_json(folder.tmp / "accuracy.json", report)
-        (folder.tmp / LOG).touch()
-    except BaseException:
-        folder.discard()
-        raise
-    folder.commit()
+        write_json(tmp / "accuracy.json", report)
     if not args.quiet:
         print(f"results: {out / 'accuracy.json'}")
     return EXIT_OK

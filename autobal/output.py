@@ -27,14 +27,14 @@ import warnings
 from pathlib import Path
 
 from autobal.analysis import executor
-from autobal.analysis.result import write_json
 from autobal.errors import ScenarioError
 
 LOG = "autobal.log"
 
 
 class OutputFolder:
-    """A temporary folder beside ``path`` that replaces ``path`` on :meth:`commit`.
+    """A temporary folder beside ``path`` that replaces ``path`` on :meth:`commit` (or at the end of a
+    ``with`` block).
 
     Raises :class:`~autobal.errors.ScenarioError` at once when ``path`` is a file, a folder that
     autobal did not write, or a place where no folder can be made.
@@ -67,10 +67,17 @@ class OutputFolder:
     def discard(self) -> None:
         shutil.rmtree(self.tmp, ignore_errors=True)
 
-    def finish(self, name: str, data: dict) -> Path:
-        """Write ``name`` (a status file) into the temporary folder and commit it."""
-        write_json(self.tmp / name, data)
-        return self.commit()
+    def __enter__(self) -> Path:
+        """``with OutputFolder(out) as tmp:`` write into ``tmp``; committed (with its ``autobal.log``) when
+        the block ends, discarded when it raises."""
+        return self.tmp
+
+    def __exit__(self, kind, exc, tb) -> None:
+        if kind is not None:
+            self.discard()
+            return
+        (self.tmp / LOG).touch()
+        self.commit()
 
 
 def _flush_c_stdout() -> None:
