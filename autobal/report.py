@@ -870,10 +870,13 @@ TITLES = {"statics": "Statics", "frequency": "Frequency response (AFC)", "stabil
 
 #: figure file name (regex) -> (analysis, caption)
 CAPTIONS = [
-    (r"fig_pressures", "statics", "Chamber pressure ratios ψ = p/p_B against the discharge ratio ψ1, exact (solid) "
-                                  "and the source's closed forms (dashed); Pavlenko (2014), Fig. 2.4 / 2.9"),
-    (r"fig_gap", "statics", "Face gap u = z/z_B and valve opening ξ = x/x_B against ψ1; Pavlenko (2014), Fig. 2.5"),
-    (r"fig_flows", "statics", "Flows relative to the base flow Q_B against ψ1; Pavlenko (2014), Fig. 2.6 / 2.10"),
+    (r"fig_pressures", "statics", "Chamber pressures (MPa; ψ = p/p_B on the right) against the discharge pressure, "
+                                  "exact (solid) and the source's closed forms (dashed); Pavlenko (2014), Fig. 2.4 / "
+                                  "2.9"),
+    (r"fig_gap", "statics", "Face gap z (u = z/z_B) and valve opening x (ξ = x/x_B) against the discharge pressure; "
+                            "Pavlenko (2014), Fig. 2.5"),
+    (r"fig_flows", "statics", "Flows (L/min; Q/Q_B on the right) against the discharge pressure, reversed flows cut "
+                              "and annotated; Pavlenko (2014), Fig. 2.6 / 2.10"),
     (r"fig_force_gap", "statics", "Balancing force φ(u) against the face gap at the operating ψ1 and the load τ − χ; "
                                   "Pavlenko (2014), Eq. (2.35)"),
     (r"fig_afc", "frequency", "Amplitude and phase of the face-gap response per model (AFC); Pavlenko (2014), §2.6"),
@@ -887,9 +890,12 @@ CAPTIONS = [
                                                "dense grid"),
     (r"fig_estimation_(\w+)", "estimation", "Fit {0}: data, fitted curve and its 95 % band; "
                                              "Pavlenko (2014), Table 4.3"),
-    (r"fig_montecarlo_afc", "montecarlo", "AFC amplitude over the sampled constants: nominal, mean and ±3σ band"),
-    (r"fig_montecarlo", "montecarlo", "Face gap, valve opening and leak over the samples against ψ1: mean and ±3σ "
-                                      "bands; Pavlenko (2014), Figs. 3.8-3.9"),
+    (r"fig_montecarlo_afc", "montecarlo", "AFC amplitude over the sampled constants: nominal, mean, the "
+                                          "0.135-99.865 % quantile band and the ±3σ lines"),
+    (r"fig_montecarlo_hist", "montecarlo", "Distribution of the face gap and the face leak at the reference "
+                                           "discharge ratio, with the fitted normal, ±3σ and the quantiles"),
+    (r"fig_montecarlo", "montecarlo", "Face gap, valve opening and leak over the samples against ψ1: mean and "
+                                      "0.135-99.865 % quantile bands; Pavlenko (2014), Figs. 3.8-3.9"),
     (r"fig_reliability", "reliability", "Reliability P(t) (literal and renormalised load density) and the wear "
                                         "probability; Pavlenko (2014), Figs. 1.27-1.28"),
     (r"fig_rotor_(\w+)", "rotor_dynamics", "Rotor with a liquid auto-balancer: {0} (Pashkov 2010)"),
