@@ -6,15 +6,15 @@ identical numbers whichever executor runs it and however many workers the cluste
 a picklable callable (plain data; CasADi Functions are rebuilt and cached on the worker).
 
 Choice of executor, first given wins: the CLI's ``--scheduler ADDRESS`` (:func:`set_default_scheduler`),
-the scene's ``executor: {scheduler: ADDRESS}``, else in-process.  A progress bar (tqdm, on
-standard error, shown on a terminal) follows runs of more than one task.
+the scene's ``executor: {scheduler: ADDRESS}``, else in-process.  A progress bar
+(analysis/progress.py: on a terminal, not when quiet) follows runs of more than one task.
 """
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Callable, Sequence
 
+from autobal.analysis import progress
 from autobal.errors import ScenarioError
 
 _DEFAULT_SCHEDULER: str | None = None
@@ -30,20 +30,8 @@ def default_scheduler() -> str | None:
     return _DEFAULT_SCHEDULER
 
 
-_PROGRESS = {"stream": None}
-
-
-def set_progress_stream(stream) -> None:
-    """Where progress bars go (the terminal while a run sends solver output to its log); None: stderr."""
-    _PROGRESS["stream"] = stream
-
-
-def _bar(total: int, desc: str, progress: bool):
-    from tqdm import tqdm
-
-    # disable=None: tqdm shows the bar only on a terminal
-    return tqdm(total=total, desc=desc, unit="task", file=_PROGRESS["stream"] or sys.stderr, leave=False,
-                disable=None if (progress and total > 1) else True)
+def _bar(total: int, desc: str, show: bool):
+    return progress.steps(total, desc, "task", show=show and total > 1)
 
 
 class InProcess:
@@ -59,7 +47,7 @@ class InProcess:
         with _bar(len(items), desc, self.progress) as bar:
             for item in items:
                 out.append(fn(item))
-                bar.update()
+                bar.tick()
         return out
 
     def close(self) -> None:
@@ -99,7 +87,7 @@ class DaskCluster:
         futures = self.client.map(fn, list(items), pure=False)
         with _bar(len(futures), desc, self.progress) as bar:
             for _ in as_completed(futures):
-                bar.update()
+                bar.tick()
         return self.client.gather(futures)
 
     def close(self) -> None:

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from autobal import __version__, api, report, scenario
+from autobal.analysis import progress
 from autobal.errors import Interrupted, ScenarioError, SolveError
 from autobal.output import OutputFolder
 
@@ -107,7 +108,8 @@ def parser() -> argparse.ArgumentParser:
     def out_args(p):
         p.add_argument("--out", type=Path, default=None, metavar="OUT",
                        help="output folder (default out/<scenario name>); replaced whole by each run")
-        p.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
+        p.add_argument("--quiet", "-q", action="store_true",
+                       help="print nothing but errors (no summaries, no progress bars)")
 
     p_run = sub.add_parser("run", help="run the analyses a scenario names", epilog=EPILOG,
                            formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -145,6 +147,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.cmd == "report":
         return _report(args)
     previous = signal.signal(signal.SIGTERM, _terminate)
+    progress.set_quiet(getattr(args, "quiet", False))  # bars: on a terminal unless --quiet
     try:
         scn = scenario.load(args.scenario, overrides=_overrides(args.set))
         if args.cmd == "check":
@@ -168,6 +171,7 @@ def main(argv: list[str] | None = None) -> int:
         return 128 + signum
     finally:
         signal.signal(signal.SIGTERM, previous)
+        progress.set_quiet(False)
 
 
 if __name__ == "__main__":

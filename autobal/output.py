@@ -26,7 +26,7 @@ import tempfile
 import warnings
 from pathlib import Path
 
-from autobal.analysis import executor
+from autobal.analysis import progress
 from autobal.errors import ScenarioError
 
 LOG = "autobal.log"
@@ -109,7 +109,8 @@ class SolverLog:
         # progress bars keep the terminal; Python's stderr (tracebacks a solver prints from a callback) and
         # C-level stdout and stderr go to the log
         self._terminal_err = open(os.dup(self._saved_err), "w", buffering=1, errors="backslashreplace")  # noqa: SIM115
-        executor.set_progress_stream(self._terminal_err)
+        self._bars = progress.output(self._terminal_err)
+        self._bars.__enter__()
         sys.stderr = self._log
         os.dup2(self._log.fileno(), 1)
         os.dup2(self._log.fileno(), 2)
@@ -124,7 +125,7 @@ class SolverLog:
         os.close(self._saved)
         os.close(self._saved_err)
         sys.stderr = self._py_stderr
-        executor.set_progress_stream(None)
+        self._bars.__exit__(None, None, None)
         self._terminal_err.close()
         self._warnings.__exit__(*exc)
         self._log.close()
