@@ -5,7 +5,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from autobal.analysis import interrupt
+from autobal.analysis import interrupt, progress
 
 # Tight tolerances: the statics are small, well-scaled (dimensionless) and solved to
 # machine-level residuals; bound_relax_factor = 0 keeps bounds (u >= 0, xi <= xi_max) exact.
@@ -54,4 +54,5 @@ def solve(solver: ca.Function, **args) -> dict:
     res["status"] = stats["return_status"]
     res["success"] = bool(stats["success"])
     res["iterations"] = int(stats.get("iter_count", -1))
+    progress.tick(note=f"last: {res['iterations']} iterations, {res['status']}")  # a bar counting solves
     return res

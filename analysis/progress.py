@@ -8,8 +8,10 @@
 A bar is drawn only on a terminal and not when quiet (``autobal --quiet``): off a terminal (a pipe,
 a file, a test's captured stream) nothing is written.  Bars go to standard error, or to the stream
 :func:`output` names (a run that sends solver output to ``autobal.log`` keeps the terminal for them).
-Code deep inside an analysis that does not own the bar (one IPOPT solve of many) calls the module's
-:func:`tick`, which advances the innermost open bar and does nothing when none is open.
+Code deep inside an analysis that does not own the bar calls the module's :func:`tick` (every IPOPT
+solve does, analysis/ipopt.py): it advances the innermost open bar if that bar was opened with
+``catch=True`` (a bar that counts solves, e.g. the spin-up's starts), and does nothing otherwise (no
+bar, or a bar that counts its own steps, such as a Monte Carlo's tasks).
 """
 
 from __future__ import annotations
@@ -63,7 +65,8 @@ def enabled(out=None) -> bool:
 class Steps:
     """One bar: ``tick(n=1, note="")`` after each step; ``elapsed`` is the wall time since it opened, s."""
 
-    def __init__(self, total: int | None, desc: str, unit: str = "step", show: bool = True):
+    def __init__(self, total: int | None, desc: str, unit: str = "step", show: bool = True, catch: bool = False):
+        self.catch = catch
         self.t0 = time.perf_counter()
         self.count = 0
         self._bar = None
@@ -88,7 +91,7 @@ class Steps:
 
 
 @contextlib.contextmanager
-def steps(total: int | None, desc: str, unit: str = "step", show: bool = True):
+def steps(total: int | None, desc: str, unit: str = "step", show: bool = True, catch: bool = False):
     """A bar of ``total`` steps (None: a counter with elapsed time) labelled ``desc``.
 
     Parameters
@@ -101,13 +104,15 @@ def steps(total: int | None, desc: str, unit: str = "step", show: bool = True):
         What a step is (``"point"``, ``"solve"``, ``"task"``).
     show : bool
         False: no bar whatever the stream (a caller's own switch, e.g. a scene's ``progress: false``).
+    catch : bool
+        The bar also counts the module-level :func:`tick` calls made inside it (IPOPT solves).
 
     Yields
     ------
     Steps
         Call ``tick()`` after each step.
     """
-    bar = Steps(total, desc, unit, show)
+    bar = Steps(total, desc, unit, show, catch)
     _STATE["open"].append(bar)
     try:
         yield bar
@@ -117,6 +122,6 @@ def steps(total: int | None, desc: str, unit: str = "step", show: bool = True):
 
 
 def tick(n: int = 1, note: str = "") -> None:
-    """Advance the innermost open bar (nothing when none is open)."""
-    if _STATE["open"]:
+    """Advance the innermost open bar if it was opened with ``catch=True`` (else nothing)."""
+    if _STATE["open"] and _STATE["open"][-1].catch:
         _STATE["open"][-1].tick(n, note)

@@ -31,6 +31,7 @@ import numpy as np
 from scipy.optimize import brentq
 from scipy.special import ndtr
 
+from autobal.analysis import progress
 from autobal.analysis.result import Result, new_figure
 from autobal.models.hydroheel import (
     WearModel,
@@ -267,25 +268,30 @@ def run(settings, title: str = "") -> ReliabilityResult:
     data = {"title": title, **derived, "a_tau": lit.a_tau, "load_mass_on_0_sigma_psi1": lit.load_mass,
             "times_h": times / HOUR, "horizon_h": horizon / HOUR, "reliable_probability": settings.reliable_probability,
             "wear_le_base_gap": lit.wear.wear_probability(1.0, times)}
-    for name, model in (("literal", lit), ("renormalised", ren)):
-        mttf, t, p = model.mttf(horizon, settings.time_points)
-        data[name] = {
-            "P0": float(model.probability(0.0)[0]), "P": model.probability(times),
-            "mttf_h": mttf / HOUR, "mttf_sojourn_h": model.sojourn(horizon) / HOUR,
-            "mttf_infinite_h": model.sojourn() / HOUR,
-            "time_at_h": model.time_at(settings.reliable_probability, horizon) / HOUR,
-        }
-        if not np.isfinite(data[name]["time_at_h"]):
-            data[name]["time_at_h_status"] = (f"P(t) is not {settings.reliable_probability} at any time up to the "
-                                              f"horizon (P(0) = {data[name]['P0']:.4g})")
-        data["curve"] = data.get("curve", {"t_h": t / HOUR}) | {f"P_{name}": p}
-    data["curve"]["P_wear_le_base_gap"] = lit.wear.wear_probability(1.0, data["curve"]["t_h"] * HOUR)
-    chi = np.linspace(0.5, 4.0 * derived["chi0"], 200)
-    data["region"] = {"chi": chi, "tau_u_min": lit.disc.load(chi, lit.u_min),
-                      "tau_u_max": lit.disc.load(chi, lit.u_max)}
-    data["source"] = SOURCE
-    data["table_1_2"] = TABLE_1_2
-    data["accuracy"] = accuracy({"literal": lit, "renormalised": ren}, settings, data)
+    with progress.steps(9, "reliability (P(t), MTTF, t(P), accuracy)", "stage") as bar:
+        for name, model in (("literal", lit), ("renormalised", ren)):
+            mttf, t, p = model.mttf(horizon, settings.time_points)
+            bar.tick(note=f"{name}: P(t)")
+            data[name] = {
+                "P0": float(model.probability(0.0)[0]), "P": model.probability(times),
+                "mttf_h": mttf / HOUR, "mttf_sojourn_h": model.sojourn(horizon) / HOUR}
+            bar.tick(note=f"{name}: MTTF (sojourn)")
+            data[name]["mttf_infinite_h"] = model.sojourn() / HOUR
+            bar.tick(note=f"{name}: MTTF to infinity")
+            data[name]["time_at_h"] = model.time_at(settings.reliable_probability, horizon) / HOUR
+            bar.tick(note=f"{name}: t(P)")
+            if not np.isfinite(data[name]["time_at_h"]):
+                data[name]["time_at_h_status"] = (f"P(t) is not {settings.reliable_probability} at any time up to the "
+                                                  f"horizon (P(0) = {data[name]['P0']:.4g})")
+            data["curve"] = data.get("curve", {"t_h": t / HOUR}) | {f"P_{name}": p}
+        data["curve"]["P_wear_le_base_gap"] = lit.wear.wear_probability(1.0, data["curve"]["t_h"] * HOUR)
+        chi = np.linspace(0.5, 4.0 * derived["chi0"], 200)
+        data["region"] = {"chi": chi, "tau_u_min": lit.disc.load(chi, lit.u_min),
+                          "tau_u_max": lit.disc.load(chi, lit.u_max)}
+        data["source"] = SOURCE
+        data["table_1_2"] = TABLE_1_2
+        data["accuracy"] = accuracy({"literal": lit, "renormalised": ren}, settings, data)
+        bar.tick(note="accuracy")
     return ReliabilityResult(data)
 
 

@@ -18,7 +18,7 @@ import casadi as ca
 import numpy as np
 from scipy.optimize import fsolve
 
-from autobal.analysis import closed_form, disc_fit, ipopt
+from autobal.analysis import closed_form, disc_fit, ipopt, progress
 from autobal.analysis.result import Result, new_figure
 from autobal.errors import ScenarioError
 
@@ -119,22 +119,25 @@ def study(analysis: str, methods: list[Method], reference: np.ndarray, reference
     (floor = 1 on O(1) scaled states gives an absolute error there).  ``references`` maps a method
     name to its own reference (a method is never judged against itself)."""
     wp = WorkPrecision(analysis, reference_how, outputs)
-    for m in methods:
-        ref = (references or {}).get(m.name, reference)
-        scale = np.maximum(np.abs(ref), floor)
-        for s in m.settings:
-            try:
-                t, y = timed(lambda m=m, s=s: m.run(s), repeats)
-                if not np.all(np.isfinite(y)):
-                    raise FloatingPointError("diverged: non-finite result")
-                err = float(np.max(np.abs(np.asarray(y, float) - ref) / scale))
-            except Exception as exc:  # a setting that fails is a result: recorded, not hidden
-                t, err = float("nan"), float("nan")
-                wp.rows.append({"method": m.name, "setting": s, "error": err, "time_s": t,
-                                "failed": str(exc).strip().splitlines()[-1][:200]})
-                continue
-            wp.rows.append({"method": m.name, "setting": s, "error": err if np.isfinite(err) else float("nan"),
-                            "time_s": t})
+    with progress.steps(sum(len(m.settings) for m in methods), f"accuracy {analysis}", "setting") as bar:
+        for m in methods:
+            ref = (references or {}).get(m.name, reference)
+            scale = np.maximum(np.abs(ref), floor)
+            for s in m.settings:
+                try:
+                    t, y = timed(lambda m=m, s=s: m.run(s), repeats)
+                    if not np.all(np.isfinite(y)):
+                        raise FloatingPointError("diverged: non-finite result")
+                    err = float(np.max(np.abs(np.asarray(y, float) - ref) / scale))
+                except Exception as exc:  # a setting that fails is a result: recorded, not hidden
+                    t, err = float("nan"), float("nan")
+                    wp.rows.append({"method": m.name, "setting": s, "error": err, "time_s": t,
+                                    "failed": str(exc).strip().splitlines()[-1][:200]})
+                    bar.tick(note=f"{m.name}, {s}: failed")
+                    continue
+                wp.rows.append({"method": m.name, "setting": s, "error": err if np.isfinite(err) else float("nan"),
+                                "time_s": t})
+                bar.tick(note=f"{m.name}, {s}")
     return wp
 
 

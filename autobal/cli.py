@@ -10,7 +10,7 @@ from pathlib import Path
 from autobal import __version__, api, report, scenario
 from autobal.analysis import progress
 from autobal.errors import Interrupted, ScenarioError, SolveError
-from autobal.output import OutputFolder
+from autobal.output import LOG, OutputFolder, SolverLog
 
 EXIT_OK, EXIT_BAD_INPUT, EXIT_SOLVE_FAILED = 0, 2, 3
 
@@ -68,14 +68,15 @@ def _accuracy(args, scn) -> int:
         raise ScenarioError(f"{scn.name}: none of its analyses has a work-precision study "
                             f"(available: {', '.join(ACCURACY)})")
     out = _out_folder(args, scn)
-    with OutputFolder(out) as tmp:
+    with OutputFolder(out) as tmp, SolverLog(tmp / LOG) as log:  # solver output to the log, bars on the terminal
         report = {"status": "ok", "scenario": scn.name, "meta": api.meta(scn), "studies": {}, "files": []}
         for name, study in studies.items():
             wp = study(scn, getattr(scn.analyses, name))
             report["studies"][name] = wp.to_dict()
             report["files"] += [f.name for f in wp.save(tmp)]
             if not args.quiet:
-                print(wp.summary())
+                with log.terminal():
+                    print(wp.summary())
         write_json(tmp / "accuracy.json", report)
     if not args.quiet:
         print(f"results: {out / 'accuracy.json'}")

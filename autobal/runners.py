@@ -8,6 +8,7 @@ no files and prints nothing.  ``RUNNERS`` order is the run order.
 from __future__ import annotations
 
 from autobal import adapters
+from autobal.analysis import progress
 from autobal.analysis.result import Result
 from autobal.errors import ScenarioError
 
@@ -17,7 +18,8 @@ def statics(scene, settings) -> Result:
     from autobal.analysis import statics_study
     from autobal.analysis.statics import StaticsSolver
 
-    return statics_study.run(StaticsSolver(adapters.design(scene.device)), settings, scene.title)
+    with progress.steps(None, "statics", "IPOPT solve", catch=True):
+        return statics_study.run(StaticsSolver(adapters.design(scene.device)), settings, scene.title)
 
 
 def frequency(scene, settings) -> Result:
@@ -103,8 +105,9 @@ def design(scene, settings) -> Result:
                    decay_rate=settings.decay_rate, gap=gap, valve_band=settings.valve_band,
                    min_stiffness=-float("inf") if settings.min_stiffness is None else settings.min_stiffness,
                    weights=weights, form=settings.model)
-    return design_study.run(adapters.dynamic_device(scene), spec, settings.samples, settings.seed,
-                            settings.sweep_points, scene.title)
+    with progress.steps(None, "design", "IPOPT solve", catch=True):
+        return design_study.run(adapters.dynamic_device(scene), spec, settings.samples, settings.seed,
+                                settings.sweep_points, scene.title)
 
 
 def reliability(scene, settings) -> Result:
@@ -119,7 +122,8 @@ def estimation(scene, settings) -> Result:
     from autobal.analysis import estimation_study
 
     device = adapters.device(scene.device) if scene.device is not None else None
-    return estimation_study.run(settings, device, scene.title)
+    with progress.steps(None, "estimation", "IPOPT solve", catch=True):
+        return estimation_study.run(settings, device, scene.title)
 
 
 def spinup_ocp(scene, settings):
@@ -148,8 +152,9 @@ def spinup(scene, settings) -> Result:
     from autobal.ocp import spinup_study
     from autobal.ocp.solve import ipopt_options
 
-    return spinup_study.run(spinup_ocp(scene, settings), spinup_study.method_of(settings), scene.title,
-                            settings.multistart, ipopt_options(settings.max_iterations, settings.tolerance))
+    with progress.steps(None, "spin-up (starts, mesh stages)", "IPOPT solve", catch=True):
+        return spinup_study.run(spinup_ocp(scene, settings), spinup_study.method_of(settings), scene.title,
+                                settings.multistart, ipopt_options(settings.max_iterations, settings.tolerance))
 
 
 RUNNERS = {
@@ -194,7 +199,8 @@ def spinup_accuracy(scene, settings):
     """Work-precision of the scene's spin-up OCP (collocation degree and intervals)."""
     from autobal.ocp.workprecision import spinup_study
 
-    return spinup_study(spinup_ocp(scene, settings))
+    with progress.steps(None, "accuracy spinup (degrees x intervals)", "IPOPT solve", catch=True):
+        return spinup_study(spinup_ocp(scene, settings))
 
 
 def estimation_accuracy(scene, settings):

@@ -7,6 +7,7 @@ optimum and both ramps on each plot).
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,8 +45,11 @@ class SpinupResult(Result):
         d = self.data
         b = d["baselines"]
         lines = [f"spin-up OCP ({d['objective']}), {d['method']}: {d['status']}, {d['ipopt_iterations']} IPOPT "
-                 f"iterations, {d['solve_time_s']:.2f} s (build {d['build_time_s']:.2f} s, "
-                 f"{len(d['starts'])} starts)",
+                 f"iterations in the final solve ({d['solve_time_s']:.2f} s)",
+                 f"  times: {len(d['starts'])} starts and mesh stages {d['total_solve_time_s']:.2f} s ("
+                 + ", ".join(f"{r['solve_time_s']:.2f}" for r in d["starts"] if "solve_time_s" in r)
+                 + f" s), NLP build {d['build_time_s']:.2f} s, wall {d['wall_time_s']:.2f} s (with the global "
+                 "search, re-simulations and baselines)",
                  f"  optimum: peak deflection {d['peak_deflection_over_e']:.4f} e (collocation "
                  f"{d['collocation_peak_over_e']:.4f} e, re-simulation difference {d['resimulation_rel_error']:.2e}),"
                  f" peak unbalance {d['peak_unbalance']:.4f}, final time {d['final_time_s']:.4g} s"]
@@ -154,6 +158,7 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
     SpinupResult
         The optimum's re-simulation beside the ramps; peaks in delta/e, times in s.
     """
+    t0 = time.perf_counter()
     opt = optimize(ocp, method, multistart, options)
     base = baselines(ocp)
     sol, tr = opt.solution, opt.trajectory
@@ -180,6 +185,7 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
         "omega_at_peak_rad_s": float(np.interp(tr.t_peak, tr.t, tr.omega)),
         "integral_deflection2_s": tr.integral_delta2, "final_time_s": sol.final_time_s,
         "build_time_s": opt.build_time_s, "total_solve_time_s": sum(r.get("solve_time_s", 0.0) for r in opt.starts),
+        "wall_time_s": time.perf_counter() - t0,
         "starts": opt.starts, "baselines": {k: v.to_dict() | drive_use(v) for k, v in base.items()},
         "psi": ocp.params.psi, "eccentricity_m": ocp.params.e,
         "omega_cr_rad_s": ocp.params.omega_cr, "Omega0_rad_s": ocp.params.Omega0,

@@ -5,6 +5,7 @@ import io
 import pytest
 
 from autobal.analysis import progress
+from autobal.cli import main
 
 
 class FakeTty(io.StringIO):
@@ -22,11 +23,13 @@ def tty():
 
 
 def test_bar_on_a_terminal_counts_the_ticks(tty):
-    with progress.steps(4, "sweep", "point") as bar:
+    with progress.steps(4, "sweep", "point", catch=True) as bar:
         for _ in range(3):
             bar.tick()
-        progress.tick(note="last")  # the innermost open bar
-    assert bar.count == 4
+        progress.tick(note="last")  # the innermost open bar counts ticks from inside
+        with progress.steps(2, "tasks") as inner:
+            progress.tick()  # a bar without catch ignores them
+    assert bar.count == 4 and inner.count == 0
     text = tty.getvalue()
     assert "sweep" in text and "/4 " in text and "point" in text
 
@@ -54,3 +57,20 @@ def test_tick_without_a_bar_does_nothing_and_output_keeps_an_explicit_stream(tty
         assert progress.stream() is other
     assert progress.stream() is not other
     assert tty.getvalue() == ""
+
+
+SMALL_RELIABILITY = ["--set", "analyses.reliability.tau_nodes=101", "--set", "analyses.reliability.time_points=201"]
+
+
+@pytest.mark.cli
+@pytest.mark.parametrize("quiet", [False, True])
+def test_cli_run_shows_the_reliability_bar_on_a_terminal_only_without_quiet(tty, tmp_path, capsys, quiet):
+    args = ["run", "hydroheel_wear", "--out", str(tmp_path / "out"), *SMALL_RELIABILITY]
+    args += ["--quiet"] if quiet else []
+    assert main(args) == 0
+    bar = tty.getvalue()
+    if quiet:
+        assert bar == "" and capsys.readouterr().out == ""
+    else:
+        assert "reliability (P(t), MTTF, t(P), accuracy)" in bar and "/9 " in bar
+    assert progress.enabled(tty)  # --quiet lasts for its run only
