@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from autobal.analysis import closed_form
+from autobal.analysis.frequency import MODEL_LABELS
 from autobal.analysis.montecarlo_afc import afc_names, afc_study
 from autobal.analysis.montecarlo_statics import (
     OUTPUTS,
@@ -199,7 +200,8 @@ class MonteCarloResult(Result):
         if "afc" in d:
             a = d["afc"]
             fig, ax = new_figure(figsize=(7, 4.8))
-            ax.plot(a["omega"], a["nominal_um"], "k:", label=f"nominal ({a['model']} model)")
+            ax.plot(a["omega"], a["nominal_um"], "k:", label=f"nominal: {MODEL_LABELS.get(a['model'], a['model'])}, "
+                                                            f"{a['forcing']} forcing")
             line, = ax.plot(a["omega"], a["mean"], color="C0", label="mean")
             lo, hi, what = self._band(a)
             ax.fill_between(a["omega"], lo, hi, color="C0", alpha=0.15, lw=0.8, edgecolor="C0", label=what)
@@ -210,7 +212,9 @@ class MonteCarloResult(Result):
             ax.set_ylabel(r"face-gap amplitude $A_u$, $\mu$m")
             ax.grid(alpha=0.3)
             fig.legend(loc="outside lower center", ncols=2, fontsize=7)
-            ax.set_title(f"{d['title']}\nAFC Monte Carlo, Pavlenko (2014) Figs 3.7/3.10", fontsize=9)
+            ax.set_title(f"{d['title']}\nAFC Monte Carlo of the {MODEL_LABELS.get(a['model'], a['model'])} model, "
+                         f"{len(a['parameters'])} uncertain parameters (Pavlenko (2014) Figs 3.7/3.10: program model)",
+                         fontsize=9)
             figs["fig_montecarlo_afc.png"] = fig
         return figs
 

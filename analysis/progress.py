@@ -71,7 +71,9 @@ class Steps:
         self.count = 0
         self._bar = None
         if show and enabled():
-            self._bar = tqdm(total=total, desc=desc, unit=unit, file=stream(), leave=False, dynamic_ncols=True)
+            counter = "{desc}: {n_fmt} " + unit + "s, {elapsed}{postfix}" if total is None else None
+            self._bar = tqdm(total=total, desc=desc, unit=unit, file=stream(), leave=False, dynamic_ncols=True,
+                             bar_format=counter)
 
     @property
     def elapsed(self) -> float:

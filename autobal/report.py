@@ -26,6 +26,7 @@ from pathlib import Path
 import jinja2
 import yaml
 
+from autobal.analysis.frequency import MODEL_LABELS
 from autobal.analysis.result import plain
 from autobal.errors import ScenarioError
 from autobal.schema_dynamics import PARAMETERS
@@ -300,6 +301,7 @@ class Section:
         self.warnings: list[str] = []
         self.notes: list[str] = []
         self.comparison: dict | None = None
+        self.validation: list[dict] = []  # verdicts on the source's own models (the validation part)
 
     def get(self, path: str, default=None):
         return _get(self.block, path, default)
@@ -434,6 +436,8 @@ def _comparison(sec: Section, scenario: str) -> None:
         return
     out = []
     for label, symbol, key, published, unit, where in rows:
+        if key and key.startswith("afc.") and sec.get("afc.model") not in SOURCE_MODELS:
+            continue  # the published AFC spread is the program model's (montecarlo_section says so)
         got = sec.get(key) if key else None
         rel = (got - published) / abs(published) if isinstance(got, int | float) and published else None
         out.append([text(label), text(symbol), cell(published, unit), cell(got, unit),
@@ -520,65 +524,112 @@ def _ordered(models: dict) -> list:
     return sorted(models.items(), key=lambda kv: rank.get(kv[0], len(rank)))
 
 
-MODEL_NAMES = {"program": "source's program model (App. A/B hand-linear)", "thesis": "source's model as printed",
-               "consistent": "consistent (chain form, hand-derived)",
-               "nonlinear_chain": "nonlinear, chain form (2.40)/(2.111)",
-               "nonlinear": "nonlinear, energy-consistent"}
+def _name(model: str) -> str:
+    """What a model is (analysis/frequency.py MODEL_LABELS, the one copy)."""
+    return MODEL_LABELS.get(model, model)
+
+
+#: the source's own models: reported in the validation part of a section
+SOURCE_MODELS = ("program", "thesis")
 
 
 def frequency_section(sec: Section) -> None:
-    """AFC peaks and the amplitude at the operating speed per model (Pavlenko 2014, §2.6)."""
+    """AFC of the face gap (Pavlenko 2014, §2.6): the headline model (energy-consistent, physical forcing)
+    first, every named model beside it, the source's program model as the validation."""
     stable = _stable_models(sec.results)
     models = sec.get("models", {})
-    lead = next((m for m in MODEL_ORDER if m in models), None)
-    if lead is not None:
-        what = MODEL_NAMES.get(lead, lead)
-        sec.row(f"first resonance ({what})", "ω_I", f"models.{lead}.peaks.0.omega")
-        sec.row(f"amplitude at the first resonance ({what})", "A_I", f"models.{lead}.peaks.0.amplitude_um")
-        sec.row("operating speed", "ω0", f"models.{lead}.at_operating_speed.omega")
-        sec.row(f"amplitude at the operating speed ({what})", "A(ω0)",
-                f"models.{lead}.at_operating_speed.amplitude_um")
+    h = sec.get("headline")
+    if h:
+        what = f"{_name(h['model'])}, {h['forcing']} forcing"
+        verdict = "stable" if h.get("stable") else "UNSTABLE"
+        sec.verdict(h.get("stable"), f"headline: {what}: {verdict} (max Re λ = {number(h.get('max_real'))} 1/s); "
+                                     f"first resonance {number(_get(h, 'peaks.0.omega'))} rad/s, amplitude "
+                                     f"{number(_get(h, 'at_operating_speed.amplitude_um'))} µm at the operating speed")
+        sec.row(f"first resonance ({what})", "ω_I", "headline.peaks.0.omega", "rad/s")
+        sec.row(f"amplitude at the first resonance ({what})", "A_I", "headline.peaks.0.amplitude_um", "um")
+        sec.row("operating speed", "ω0", "headline.at_operating_speed.omega", "rad/s")
+        sec.row(f"amplitude at the operating speed ({what})", "A(ω0)", "headline.at_operating_speed.amplitude_um", "um")
+        sec.row(f"static amplitude ({what})", "A(0)", "headline.static_amplitude_um", "um")
+    else:
+        lead = next((m for m in MODEL_ORDER if m in models), None)
+        if lead is not None:
+            what = _name(lead)
+            sec.row(f"first resonance ({what})", "ω_I", f"models.{lead}.peaks.0.omega")
+            sec.row(f"amplitude at the first resonance ({what})", "A_I", f"models.{lead}.peaks.0.amplitude_um")
+            sec.row("operating speed", "ω0", f"models.{lead}.at_operating_speed.omega")
+            sec.row(f"amplitude at the operating speed ({what})", "A(ω0)",
+                    f"models.{lead}.at_operating_speed.amplitude_um")
     sec.row("forcing amplitude", "δψ_1a", "forcing_amplitude")
     rows = []
-    for model, m in _ordered(sec.get("models", {})):
+    for model, m in _ordered(models):
         peaks = m.get("peaks", [])
         at = m.get("at_operating_speed", {})
         verdict = {True: "stable", False: "UNSTABLE", None: "—"}[stable.get(model)]
         for i, pk in enumerate(peaks or [{}]):
             first = i == 0
-            rows.append([text(MODEL_NAMES.get(model, model) if first else ""), text(m.get("forcing") if first else ""),
+            rows.append([text(_name(model) if first else ""), text(m.get("forcing") if first else ""),
                          text(verdict if first else ""), cell(pk.get("omega"), "rad/s"),
                          cell(pk.get("amplitude_um"), "um"),
                          cell(at.get("amplitude_um") if i == 0 else None, "um"),
                          cell(m.get("static_amplitude_um") if i == 0 else None, "um")])
-        if stable.get(model) is False:
-            sec.warnings.append(f"{model}: the model is unstable at this operating point; its AFC is the response of "
-                                "an unstable system (no steady state exists)")
-    sec.tables.append(table(f"AFC of the face gap at ω0 = {number(sec.get('at_operating_speed.omega'))} rad/s: peaks, "
-                            "amplitude at the operating speed and the static amplitude",
+        if stable.get(model) is False and model not in SOURCE_MODELS:
+            sec.warnings.append(f"{_name(model)}: the model is unstable at this operating point; its AFC is the "
+                                "response of an unstable system (no steady state exists)")
+    sec.tables.append(table(f"AFC of the face gap of every named model under the scene's '{sec.get('forcing')}' "
+                            f"forcing, ω0 = {number(sec.get('at_operating_speed.omega'))} rad/s: peaks, amplitude at "
+                            "the operating speed and the static amplitude",
                             ["model", "forcing", "stability", "peak ω", "peak amplitude", "amplitude at ω0",
                              "static amplitude"], rows, headline=True))
+    if "program" in models:
+        _program_validation(sec, "program", stable.get("program"), sec.get("models.program.forcing"))
     top = sec.get("model")
     if top:
-        sec.verdict(None, f"the top-level keys of the frequency block in results.json hold the "
-                          f"{MODEL_NAMES.get(top, top)}, forcing '{sec.get('forcing')}'")
+        sec.verdict(None, f"the top-level keys of the frequency block in results.json hold the {_name(top)}, "
+                          f"forcing '{sec.get('forcing')}'; the 'headline' block the "
+                          f"{_name((h or {}).get('model', top))} under the {(h or {}).get('forcing', '')} forcing")
+
+
+def _program_validation(sec: Section, model: str, stable: bool | None, forcing: str | None) -> None:
+    """The validation verdict of the source's program model: how closely it reproduces the published
+    values of the scene (the comparison table), and its stability."""
+    rows = PUBLISHED.get(sec.results.get("scenario", ""), {}).get(sec.name) or []
+    diffs = [abs(sec.get(key) - pub) / abs(pub) for _, _, key, pub, _, _ in rows
+             if key and isinstance(sec.get(key), int | float) and pub]
+    where = rows[0][5] if rows else "the source"
+    repro = (f"reproduces the published values ({where}) within {100 * max(diffs):.1f} % ({len(diffs)} values)"
+             if diffs else "no published values for this scene")
+    state = {True: "stable", False: "UNSTABLE: its AFC is not a steady response", None: "stability not computed"}
+    sec.validation.append({"ok": None if stable is None else stable and bool(diffs),
+                           "text": f"{_name(model)}, {forcing or ''} forcing: {repro}; {state[stable]}"})
 
 
 def stability_section(sec: Section) -> None:
-    """Poles, Hurwitz determinants and margins per model (Pavlenko 2014, §2.7)."""
+    """Poles, Hurwitz determinants and margins per model (Pavlenko 2014, §2.7): the headline model
+    (energy-consistent) first, the source's models as the validation."""
+    h = sec.get("headline")
+    if h:
+        decay = _get(h, "margin.decay_rate")
+        sec.verdict(h.get("stable"), f"headline: {_name(h['model'])}: {'stable' if h.get('stable') else 'UNSTABLE'}"
+                                     + ("" if decay is None else f", disturbances decay at {number(decay)} 1/s"
+                                        if decay > 0 else f", disturbances GROW at {number(-decay)} 1/s"))
+        sec.row(f"decay rate −max Re λ ({_name(h['model'])})", "η", "headline.margin.decay_rate", "1/s")
+        sec.row(f"smallest damping ratio ({_name(h['model'])})", "ζ_min", "headline.margin.min_damping_ratio", "1")
     rows = []
     for model, m in _ordered(sec.get("models", {})):
         poles = m.get("poles", {})
         lead = _leading(poles.get("real", []), poles.get("imag", []))
         st = m.get("stable")
-        rows.append([text(MODEL_NAMES.get(model, model)), text({True: "stable", False: "UNSTABLE"}.get(st, "—")),
+        rows.append([text(_name(model)), text({True: "stable", False: "UNSTABLE"}.get(st, "—")),
                      {"text": lead, "unit": "1/s", "num": True}, cell(_get(m, "margin.decay_rate"), "1/s"),
                      cell(_get(m, "margin.min_damping_ratio"), "1")])
         decay = _get(m, "margin.decay_rate")
         rate = ("" if decay is None else f"; disturbances decay at {number(decay)} 1/s" if decay > 0
                 else f"; disturbances GROW at {number(-decay)} 1/s")
-        sec.verdict(st, f"{MODEL_NAMES.get(model, model)}: {'stable' if st else 'UNSTABLE'}; leading poles "
-                        f"{lead} 1/s{rate}")
+        v = {"ok": st, "text": f"{_name(model)}: {'stable' if st else 'UNSTABLE'}; leading poles {lead} 1/s{rate}"}
+        if model in SOURCE_MODELS:
+            sec.validation.append(v)
+        elif model != (h or {}).get("model"):  # the headline model has its verdict above
+            sec.verdicts.append(v)
     sec.tables.append(table("Stability per model: leading poles (largest real part), decay rate −max Re λ and the "
                             "smallest damping ratio", ["model", "verdict", "leading poles", "decay rate",
                                                        "min damping ratio ζ"], rows, headline=True))
@@ -697,17 +748,26 @@ def montecarlo_section(sec: Section) -> None:
                 "every sample has a converged exact solution")
     at = sec.get("afc.at") or {}
     if at:
-        model = sec.get("afc.model")
+        model, forcing = sec.get("afc.model"), sec.get("afc.forcing")
         st = _stable_models(sec.results).get(model)
-        sec.tables.append(table(f"AFC amplitude spread ({model} model, {sec.get('afc.samples')} samples)",
-                                ["where", "ω", "nominal", "mean", "std", "cv"],
-                                [[text(k), cell(v.get("omega"), "rad/s"), cell(v.get("nominal_um"), "um"),
-                                  cell(v.get("mean_um"), "um"), cell(v.get("std_um"), "um"), cell(v.get("cv"), "1")]
+        sec.tables.append(table(f"AFC amplitude spread of the {_name(model)} model under the {forcing} forcing "
+                                f"({sec.get('afc.samples')} samples of {len(sec.get('afc.parameters') or [])} "
+                                "uncertain parameters)", ["where", "ω", "nominal", "mean", "std", "cv"],
+                                [[text(k.replace("_", " ")), cell(v.get("omega"), "rad/s"),
+                                  cell(v.get("nominal_um"), "um"), cell(v.get("mean_um"), "um"),
+                                  cell(v.get("std_um"), "um"), cell(v.get("cv"), "1")]
                                  for k, v in at.items()], headline=True))
-        if model == "program":
-            sec.warnings.append("the AFC spread is computed on the source's program model, which the stability "
-                                "analysis of the same device reports unstable (see the dynamics scenes)"
-                                if st is None else f"the AFC model '{model}' is {'stable' if st else 'UNSTABLE'}")
+        if model in SOURCE_MODELS:
+            sec.warnings.append(f"the AFC spread is computed on the {_name(model)}, which the stability analysis "
+                                "reports unstable at the pumps' operating points (see the dynamics scenes): a "
+                                "validation of the source's Fig. 3.7, not a prediction" if st is None else
+                                f"the AFC model '{_name(model)}' is {'stable' if st else 'UNSTABLE'}")
+        else:
+            sec.validation.append({"ok": None, "text": "the source's AFC spread (Fig. 3.7, 'up to 40 %') was "
+                                                       "computed on its program model, which is unstable; this run "
+                                                       f"uses the {_name(model)} (set analyses.montecarlo.afc.model: "
+                                                       "program, forcing: appendix and its 28 constants to "
+                                                       "reproduce the source)"})
 
 
 def reliability_section(sec: Section) -> None:
@@ -880,7 +940,9 @@ CAPTIONS = [
                               "and annotated; Pavlenko (2014), Fig. 2.6 / 2.10"),
     (r"fig_force_gap", "statics", "Balancing force φ(u) against the face gap at the operating ψ1 and the load τ − χ; "
                                   "Pavlenko (2014), Eq. (2.35)"),
-    (r"fig_afc", "frequency", "Amplitude and phase of the face-gap response per model (AFC); Pavlenko (2014), §2.6"),
+    (r"fig_afc", "frequency", "Amplitude and phase of the face-gap response (AFC): the headline energy-consistent "
+                              "model under the physical forcing (thick), the other models under the scene's forcing, "
+                              "unstable ones dashed and labelled; Pavlenko (2014), §2.6"),
     (r"fig_poles", "stability", "Poles per model (right half-plane = unstable)"),
     (r"fig_stability_map_(\w+)", "stability", "Stability map of the {0} model: largest real part of the poles over "
                                               "two parameters, the nominal design marked"),
@@ -891,8 +953,10 @@ CAPTIONS = [
                                                "dense grid"),
     (r"fig_estimation_(\w+)", "estimation", "Fit {0}: data, fitted curve and its 95 % band; "
                                              "Pavlenko (2014), Table 4.3"),
-    (r"fig_montecarlo_afc", "montecarlo", "AFC amplitude over the sampled constants: nominal, mean, the "
-                                          "0.135-99.865 % quantile band and the ±3σ lines"),
+    (r"fig_montecarlo_afc", "montecarlo", "AFC amplitude over the sampled parameters (by default the "
+                                          "energy-consistent model under the physical forcing, its dynamic data "
+                                          "uncertain): nominal, mean, the 0.135-99.865 % quantile band and the ±3σ "
+                                          "lines"),
     (r"fig_montecarlo_hist", "montecarlo", "Distribution of the face gap and the face leak at the reference "
                                            "discharge ratio, with the fitted normal, ±3σ and the quantiles"),
     (r"fig_montecarlo", "montecarlo", "Face gap, valve opening and leak over the samples against ψ1: mean and "
@@ -1002,7 +1066,8 @@ def _section(name: str, block: dict, results: dict, figures: list[dict], folder:
     acc = (results.get("accuracy") or {}).get(name) or block.get("accuracy") or {}
     tables = [t for t in (sec.headline(), *sec.tables) if t is not None]
     return {"name": name, "title": TITLES.get(name, name), "tables": tables, "verdicts": sec.verdicts,
-            "comparison": sec.comparison, "warnings": sec.warnings, "notes": sec.notes, "figures": figures,
+            "comparison": sec.comparison, "validation": sec.validation, "warnings": sec.warnings, "notes": sec.notes,
+            "figures": figures,
             "accuracy": {"estimate": acc.get("estimate"), "how": acc.get("how", "")},
             "run_time": (results.get("timing") or {}).get(name), "error": error}
 

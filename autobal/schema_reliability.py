@@ -163,19 +163,22 @@ PARAMETERS = (*DEVICE_GROUPS, "dpsi", *REGULATOR_GROUPS)
 class AfcMonteCarlo(Strict):
     """Monte Carlo of the face-gap amplitude A_u(omega) through a linear model of the dynamics (Fig. 3.7).
 
-    ``model``: a hand model of (2.43)/(2.101) ("program" as App. A/B and Fig. 3.7, "thesis",
-    "consistent"), whose uncertain parameters are its constants K1..K13, T1..T9, tau3, tau5, tau6,
-    tau7, zeta1, zeta2; or the exact linearization of the nonlinear model ("nonlinear",
-    "nonlinear_chain"), whose uncertain parameters are the dynamic data m_p, k_pr, c_z, E, V2, V3,
-    m0, k_reg, c_x, V_cam, V_m, s_c (SI)."""
+    ``model``: by default the exact linearization of the energy-consistent nonlinear model ("nonlinear";
+    or "nonlinear_chain"), whose uncertain parameters are the dynamic data m_p, k_pr, c_z, E, V2, V3,
+    m0, k_reg, c_x, V_cam, V_m, s_c (SI); or, for the validation against the source, a hand model of
+    (2.43)/(2.101) ("program" as App. A/B and Fig. 3.7, "thesis", "consistent"), whose uncertain
+    parameters are its constants K1..K13, T1..T9, tau3, tau5, tau6, tau7, zeta1, zeta2 (the program
+    model is unstable at the pumps' operating points: its AFC is not a steady response)."""
 
-    model: Literal["program", "thesis", "consistent", "nonlinear", "nonlinear_chain"] = "program"
+    model: Literal["program", "thesis", "consistent", "nonlinear", "nonlinear_chain"] = Field(
+        "nonlinear", description="linear model of the AFC: nonlinear (energy-consistent, default), nonlinear_chain, "
+                                 "or the source's hand models program, thesis, consistent (validation)")
     samples: Annotated[int, Field(ge=10, le=MAX_AFC_SAMPLES)] = Field(
         20_000, description=f"Monte Carlo samples of the AFC, 10 to {MAX_AFC_SAMPLES:,}")
     chunk_size: Annotated[int, Field(ge=10, le=100_000)] = Field(5_000, description="samples per task, 10 to 100,000")
     operating_ratio: Positive = Field(1.0, description="psi1 of the operating point")
     forcing: Literal["appendix", "physical"] = Field(
-        "appendix", description="dtau = dpsi1 (App. A/B, Fig. 3.7) or b dpsi1")
+        "physical", description="dtau = b dpsi1 (physical, default) or dpsi1 (App. A/B, Fig. 3.7)")
     omega: OmegaGrid = Field(default_factory=lambda: OmegaGrid(start="100 rad/s", stop="6000 rad/s", points=120),
                              description="frequency grid; default 100 to 6000 rad/s, 120 points")
     parameters: dict[str, Distribution] = Field(min_length=1)

@@ -325,11 +325,14 @@ def test_pump_scene_results_keys(tmp_path):
     assert main(["run", "pump_pe600_dynamics", "--out", str(tmp_path)]) == 0
     r = json.loads((tmp_path / "results.json").read_text())
     f, s = r["frequency"], r["stability"]
-    assert [round(p["omega"]) for p in f["peaks"]] == [1977, 2912]
+    # the energy-consistent model leads (top-level keys); the program model (App. A) is the validation
+    assert f["model"] == s["model"] == "nonlinear" and s["stable"] is True and f["headline"]["forcing"] == "physical"
+    fp, sp = f["models"]["program"], s["models"]["program"]
+    assert [round(p["omega"]) for p in fp["peaks"]] == [1977, 2912]
     assert set(f["peaks"][0]) == {"omega", "amplitude_um"}
-    assert abs(f["at_operating_speed"]["amplitude_um"] - 6.84) < 0.1
-    assert s["stable"] is False and len(s["poles"]["real"]) == len(s["poles"]["imag"]) == 8
-    assert s["hurwitz"]["negative_minors"] and s["models"]["nonlinear"]["stable"] is True
+    assert abs(fp["at_operating_speed"]["amplitude_um"] - 6.84) < 0.1
+    assert sp["stable"] is False and len(sp["poles"]["real"]) == len(sp["poles"]["imag"]) == 8
+    assert sp["hurwitz"]["negative_minors"] and s["models"]["nonlinear"]["stable"] is True
     assert "no single change" in s["restoring"]["program"] and "stem_damping" in s["restoring"]["program"]
     assert r["transient"]["cases"][0]["events"] == []
     # the K/T table: App. A's K8 is twice (2.44)'s at the same point, T6 changes sign in the energy form

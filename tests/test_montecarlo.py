@@ -244,12 +244,35 @@ def test_vectorised_afc_equals_the_linear_models_response(scene, model, names):
         assert_allclose(mine[0, 1:4], [6.84, 25.20, 9.90], atol=0.01)
 
 
+def program_afc(scene):
+    """The scene's AFC Monte Carlo on the source's program model (appendix forcing, its 28 constants at cv 5 %):
+    the validation of Fig. 3.7 (the shipped scene uses the energy-consistent model)."""
+    names = mcafc.afc_parameters("program")
+    return scene.analyses.montecarlo.afc.model_copy(update={
+        "model": "program", "forcing": "appendix", "parameters": {n: Distribution(cv=0.05) for n in names}})
+
+
+def test_shipped_afc_monte_carlo_is_the_energy_consistent_model_under_physical_forcing(scene):
+    a = scene.analyses.montecarlo.afc
+    assert (a.model, a.forcing) == ("nonlinear", "physical")
+    assert set(a.parameters) <= set(mcafc.afc_parameters(a.model))
+    r = mcafc.afc_study(adapters.device(scene.device), a.model_copy(update={"samples": 200, "chunk_size": 200}), 2014,
+                        ex.InProcess(progress=False), 3.0, [0.5])
+    # the nominal curve is the frequency analysis' headline (energy-consistent, physical): pump peak 987.0 rad/s,
+    # 15.82 um at dpsi1a = 0.2, 3.60 um at omega0 = 660 rad/s
+    assert list(r["at"]) == ["operating_speed", "peak_1"]
+    at = r["at"]
+    assert_allclose(at["peak_1"]["omega"], 987.0, atol=0.5)
+    assert_allclose([at["peak_1"]["nominal_um"], at["operating_speed"]["nominal_um"]], [15.82, 3.60], atol=0.01)
+    assert 0 < r["at"]["peak_1"]["cv"] < 1
+
+
 @pytest.mark.literature
 def test_afc_spread_of_the_program_model_matches_spec(scene):
     """Fig. 3.7: the 28 constants normal with cv 5 %: recomputed with N = 2e4: CV(A) = 0.30 at
     omega0 = 660 rad/s, 0.29 at omega_I, 0.51 at omega_II (the source: amplitude 'up to 40 %', conclusion 4,
     read off figures: same order, not a number to reproduce)."""
-    a = scene.analyses.montecarlo.afc.model_copy(update={"samples": 4000, "chunk_size": 2000})
+    a = program_afc(scene).model_copy(update={"samples": 4000, "chunk_size": 2000})
     r = mcafc.afc_study(adapters.device(scene.device), a, 2014, ex.InProcess(progress=False), 3.0, [0.5])
     at = r["at"]
     assert_allclose([at["peak_1"]["omega"], at["peak_2"]["omega"]], [1977.2, 2912.5], atol=1.0)
@@ -270,7 +293,7 @@ def test_afc_spread_of_the_program_model_matches_spec(scene):
 
 def test_afc_bad_parameter_names_the_model(scene, dev):
     # checked when the study runs (the schema does not import the analysis), before any sample is solved
-    a = scene.analyses.montecarlo.afc
+    a = program_afc(scene)
     bad = a.model_copy(update={"parameters": a.parameters | {"m_p": Distribution(cv=0.05)}})
     with pytest.raises(ScenarioError, match=r"afc\.parameters\.m_p: not a parameter of the program model"):
         mc.run(dev, small(scene, afc=bad), ex.InProcess(progress=False), device=adapters.device(scene.device))
