@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from autobal.analysis import progress
 from autobal.analysis import rotor as R
 from autobal.analysis.result import Result, new_figure
 from autobal.errors import ScenarioError
@@ -245,6 +246,7 @@ def run(P: RotorParams, settings, title: str = "", motor=None) -> RotorDynamicsR
         s = settings.stationary
         z = np.linspace(s.z.start, s.z.stop, s.z.points)
         data["stationary"], curves["stationary"] = stationary_part(P, s.cases, z)
+        progress.tick(note="stationary curves")
     if settings.steps is not None:
         s, rows, curves["steps"] = settings.steps, [], {}
         for w0, w1 in s.steps:
@@ -254,10 +256,12 @@ def run(P: RotorParams, settings, title: str = "", motor=None) -> RotorDynamicsR
                 r = step_case(P.with_psi(psi), w0, w1, s.duration)
                 curves["steps"][key][psi] = {"t": r.pop("_t"), "d": r.pop("_d")}
                 rows.append(r)
+                progress.tick(note=f"step {key}, psi {psi:g}")
         data["steps"] = {"table": rows, "closed_form_vs_cvodes_max_rel_diff": max(r["closed_form_vs_cvodes"]
                                                                                   for r in rows)}
     if settings.passage is not None:
         data["passage"], curves["passage"] = passage_part(P, settings.passage)
+        progress.tick(note="passage")
     if settings.lewis is not None:
         rows = []
         for z in settings.lewis.zeta:
@@ -265,6 +269,7 @@ def run(P: RotorParams, settings, title: str = "", motor=None) -> RotorDynamicsR
                 r = R.lewis(z, a)
                 rows.append({"zeta": z, "a_star": a, "peak_over_e": r["peak"], "nu_peak": r["nu_peak"],
                              "undamped_asymptote": r["asymptote"], "nu_asymptote": r["nu_asymptote"]})
+                progress.tick(note=f"Lewis zeta {z:g}, a* {a:g}")
         data["lewis"] = {"table": rows}
     if settings.motor_runup is not None:
         if motor is None:

@@ -73,7 +73,8 @@ def rotor_dynamics(scene, settings) -> Result:
     if scene.rotor is None:
         raise ScenarioError("analyses.rotor_dynamics needs a rotor section")
     drive = scene.rotor.drive
-    return rotor_study.run(adapters.rotor(scene.rotor), settings, scene.title, drive.motor if drive else None)
+    with progress.steps(None, "rotor dynamics (curves, steps, passage, Lewis cases)", "part", catch=True):
+        return rotor_study.run(adapters.rotor(scene.rotor), settings, scene.title, drive.motor if drive else None)
 
 
 def montecarlo(scene, settings) -> Result:
