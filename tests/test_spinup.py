@@ -184,6 +184,12 @@ def test_cli_run_writes_the_spinup_block(tmp_path):
                 "ipopt_iterations"):
         assert res[key] is not None
     assert res["peak_deflection_over_e"] <= res["baseline_ramp_peak_over_e"]
+    # the printed times are true: the run's own clock (timing) bounds the analysis' wall time, which holds the
+    # NLP builds and every solve; the final solve is one of the starts' solves
+    timing = json.loads((tmp_path / "out" / "results.json").read_text())["timing"]["spinup"]
+    assert timing >= res["wall_time_s"] >= res["build_time_s"] + res["total_solve_time_s"]
+    assert res["total_solve_time_s"] == pytest.approx(sum(r.get("solve_time_s", 0.0) for r in res["starts"]))
+    assert res["solve_time_s"] in [r.get("solve_time_s") for r in res["starts"]]
     for f in ("spinup_profiles.png", "spinup_deflection.png", "spinup_optimum.csv", "spinup_controls.csv"):
         assert (tmp_path / "out" / f).is_file()
 
