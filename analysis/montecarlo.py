@@ -212,9 +212,10 @@ class MonteCarloResult(Result):
             ax.set_ylabel(r"face-gap amplitude $A_u$, $\mu$m")
             ax.grid(alpha=0.3)
             fig.legend(loc="outside lower center", ncols=2, fontsize=7)
-            ax.set_title(f"{d['title']}\nAFC Monte Carlo of the {MODEL_LABELS.get(a['model'], a['model'])} model, "
-                         f"{len(a['parameters'])} uncertain parameters (Pavlenko (2014) Figs 3.7/3.10: program model)",
-                         fontsize=9)
+            src = ("Pavlenko (2014) Figs 3.7/3.10" if a["model"] == "program" else
+                   "the source's Figs 3.7/3.10 use its program model")
+            ax.set_title(f"{d['title']}\nAFC Monte Carlo: {MODEL_LABELS.get(a['model'], a['model'])} model, "
+                         f"{a['forcing']} forcing, {len(a['parameters'])} uncertain parameters\n({src})", fontsize=8)
             figs["fig_montecarlo_afc.png"] = fig
         return figs
 

@@ -765,9 +765,9 @@ def montecarlo_section(sec: Section) -> None:
         else:
             sec.validation.append({"ok": None, "text": "the source's AFC spread (Fig. 3.7, 'up to 40 %') was "
                                                        "computed on its program model, which is unstable; this run "
-                                                       f"uses the {_name(model)} (set analyses.montecarlo.afc.model: "
-                                                       "program, forcing: appendix and its 28 constants to "
-                                                       "reproduce the source)"})
+                                                       f"uses the {_name(model)} model (set "
+                                                       "analyses.montecarlo.afc.model: program, forcing: appendix "
+                                                       "and its 28 constants to reproduce the source)"})
 
 
 def reliability_section(sec: Section) -> None:
