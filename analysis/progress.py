@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import contextlib
 import sys
-import time
 
 from tqdm import tqdm
 
@@ -63,21 +62,16 @@ def enabled(out=None) -> bool:
 
 
 class Steps:
-    """One bar: ``tick(n=1, note="")`` after each step; ``elapsed`` is the wall time since it opened, s."""
+    """One bar: ``tick(n=1, note="")`` after each step; ``count`` is the steps ticked so far."""
 
     def __init__(self, total: int | None, desc: str, unit: str = "step", show: bool = True, catch: bool = False):
         self.catch = catch
-        self.t0 = time.perf_counter()
         self.count = 0
         self._bar = None
         if show and enabled():
             counter = "{desc}: {n_fmt} " + unit + "s, {elapsed}{postfix}" if total is None else None
             self._bar = tqdm(total=total, desc=desc, unit=unit, file=stream(), leave=False, dynamic_ncols=True,
                              bar_format=counter)
-
-    @property
-    def elapsed(self) -> float:
-        return time.perf_counter() - self.t0
 
     def tick(self, n: int = 1, note: str = "") -> None:
         self.count += n
