@@ -82,8 +82,35 @@ def new_figure(figsize: tuple[float, float] = (6.4, 4.4), nrows: int = 1, ncols:
 
 
 def save_figure(fig: Figure, path: Path, dpi: int = DPI) -> Path:
-    """Write a figure as PNG (or the format of ``path``'s suffix); returns ``path``."""
-    fig.savefig(path, dpi=dpi)
+    """Write a figure as PNG (or the format of ``path``'s suffix); returns ``path``.
+
+    A PNG is drawn once on an Agg canvas (``savefig`` draws a figure with a layout engine twice: once
+    to lay it out, once to render) and encoded at zlib level 1, which makes files of about the same
+    size as level 6 in a tenth of the time.
+
+    Parameters
+    ----------
+    fig : Figure
+        The figure (from :func:`new_figure`).
+    path : Path
+        The file to write; its suffix is the format.
+    dpi : int
+        Resolution, dots per inch.
+
+    Returns
+    -------
+    Path
+    """
+    if path.suffix.lower() != ".png":
+        fig.savefig(path, dpi=dpi)
+        return path
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.image import imsave
+
+    fig.set_dpi(dpi)
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    imsave(path, canvas.buffer_rgba(), format="png", dpi=dpi, pil_kwargs={"compress_level": 1})
     return path
 
 

@@ -16,9 +16,8 @@ from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
-from scipy.optimize import fsolve
 
-from autobal.analysis import closed_form, disc_fit, ipopt, progress
+from autobal.analysis import closed_form, ipopt, progress
 from autobal.analysis.result import Result, new_figure
 from autobal.errors import ScenarioError
 
@@ -180,6 +179,8 @@ def statics_methods(solver, psi1: float, dpsi: float) -> list[Method]:
     """IPOPT over its tolerance, CasADi's Newton over its tolerance, scipy fsolve (peer, same
     residual function) over xtol, and the source's closed form (2.24)-(2.28) (one setting).
     Every iterative method starts from that closed form, the engineer's first estimate."""
+    from scipy.optimize import fsolve  # the peer only: scipy.optimize is not imported by a plain statics run
+
     sys_ = solver.system
     idx = [sys_.unknowns.index(k) for k in STATICS_OUTPUTS]
     n = len(sys_.unknowns)
@@ -332,6 +333,8 @@ def estimation_study(load, u, free=("alpha", "tau_max"), values=None) -> WorkPre
     Gauss-Newton and with the exact Hessian over its tol, the mapped Gauss-Newton over its step
     tolerance, scipy.optimize.least_squares (trf and lm) over xtol = ftol = gtol.  Reference: the
     40-digit mpmath fit (:func:`~autobal.analysis.disc_fit.reference_fit`), independent of all of them."""
+    from autobal.analysis import disc_fit  # scipy.optimize and scipy.stats: only the estimation study needs them
+
     free, values = tuple(free), values or dict(disc_fit.START)
 
     def ipopt_at(hessian):

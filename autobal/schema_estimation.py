@@ -8,16 +8,18 @@ units, signs and the number of points against the free parameters of every fit.
 from __future__ import annotations
 
 import re
-from typing import Annotated, Literal
+from typing import TYPE_CHECKING, Annotated, Literal
 
 from pydantic import Field, model_validator
 
 from autobal.errors import ScenarioError
 from autobal.measurements import Measurements, check_fit, read_csv
 from autobal.models.device import DEVICE_GROUPS, PRESSURE_GROUPS, REGULATOR_GROUPS
-from autobal.models.hydroheel import DiscLosses
 from autobal.schema import NonNegative, Positive, Strict
 from autobal.units import Area, Length, Pressure, VolumeFlow
+
+if TYPE_CHECKING:
+    from autobal.models.hydroheel import DiscLosses
 
 # Parameters each model can fit.  traditional_disc: (4.16)-(4.31).  device: the groups (2.18) of the
 # full static model (models/device.py) and the loss coefficients they come from.
@@ -140,6 +142,8 @@ class LossCoefficient(Strict):
 
     def losses(self) -> DiscLosses:
         """The geometry and loss coefficients as the model's parameter object (SI)."""
+        from autobal.models.hydroheel import DiscLosses  # scipy.special: not at scene load
+
         return DiscLosses(**self.model_dump(exclude={"fit", "unknown"}))
 
 
