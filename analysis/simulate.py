@@ -39,11 +39,13 @@ class Simulator:
     Parameters of each call: the dynamic data (PARAM_NAMES order) and the input: step in psi1,
     step in tau, harmonic amplitude and frequency of psi1, the thrust coupling factor and a time
     offset.  The grid is integrated in chunks of ``chunk`` outputs so that a response stops where
-    the gap closes or runs away (u > U_RUNAWAY) instead of integrating an unphysical state.
+    the gap closes or runs away (u > U_RUNAWAY) instead of integrating an unphysical state.  Each
+    chunk restarts CVODES (order 1, a new initial step), which costs more than the outputs do: on the
+    pump's 2001-point force step, chunks of 100 take 2.2x the time of chunks of 500.
     """
 
     def __init__(self, model: DynamicModel, t_end: float, points: int, integrator: str = "cvodes",
-                 rtol: float = 1e-9, atol: float = 1e-11, chunk: int = 100, **opts):
+                 rtol: float = 1e-9, atol: float = 1e-11, chunk: int = 500, **opts):
         self.model = model
         self.rtol, self.atol = rtol, atol
         self.t = np.linspace(0.0, t_end, points)
