@@ -107,10 +107,15 @@ def save_figure(fig: Figure, path: Path, dpi: int = DPI) -> Path:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.image import imsave
 
-    fig.set_dpi(dpi)
-    canvas = FigureCanvasAgg(fig)
-    canvas.draw()
-    imsave(path, canvas.buffer_rgba(), format="png", dpi=dpi, pil_kwargs={"compress_level": 1})
+    own_canvas, own_dpi = fig.canvas, fig.dpi
+    try:
+        fig.set_dpi(dpi)
+        canvas = FigureCanvasAgg(fig)
+        canvas.draw()
+        imsave(path, canvas.buffer_rgba(), format="png", dpi=dpi, pil_kwargs={"compress_level": 1})
+    finally:  # the figure keeps its own canvas and resolution, as after savefig
+        fig.set_canvas(own_canvas)
+        fig.set_dpi(own_dpi)
     return path
 
 
