@@ -84,9 +84,9 @@ def new_figure(figsize: tuple[float, float] = (6.4, 4.4), nrows: int = 1, ncols:
 def save_figure(fig: Figure, path: Path, dpi: int = DPI) -> Path:
     """Write a figure as PNG (or the format of ``path``'s suffix); returns ``path``.
 
-    A PNG is drawn once on an Agg canvas (``savefig`` draws a figure with a layout engine twice: once
-    to lay it out, once to render) and encoded at zlib level 1, which makes files of about the same
-    size as level 6 in a tenth of the time.
+    A PNG is drawn once on an Agg canvas (``savefig`` first makes a layout pass with drawing disabled,
+    then draws) and encoded at zlib level 1, which makes files of about the same size as level 6 in
+    less time: 10-15 % less in all for the statics figures, the same pixels.
 
     Parameters
     ----------

@@ -99,7 +99,7 @@ def main(repeats: int = 3) -> list[dict]:
         "point, criticals, the continuation sweep, the force-gap curve and the 40-digit reference root); making the "
         f"{len(figs)} figures {t_figs:.2f} s; drawing and writing them as PNG at {DPI} dpi "
         f"{sum(t_png.values()):.2f} s (" + ", ".join(f"{k} {v:.2f} s" for k, v in t_png.items())
-        + f"; with Figure.savefig, which draws a constrained-layout figure twice and compresses at zlib level 6: "
+        + f"; with Figure.savefig, which makes a layout pass before it draws and compresses at zlib level 6: "
         f"{t_savefig:.2f} s). The first figure of a process also loads the fonts and builds the mathtext parser.",
         f"No longer in a statics run: scipy.optimize and scipy.stats ({t_scipy:.2f} s alone; the work-precision "
         "peers and the disc fits import them where they are used) and scipy.special at scene load.",
