@@ -26,7 +26,6 @@ from pathlib import Path
 import jinja2
 import yaml
 
-from autobal.analysis.frequency import MODEL_LABELS
 from autobal.analysis.result import plain
 from autobal.errors import ScenarioError
 from autobal.schema_dynamics import PARAMETERS
@@ -526,6 +525,8 @@ def _ordered(models: dict) -> list:
 
 def _name(model: str) -> str:
     """What a model is (analysis/frequency.py MODEL_LABELS, the one copy)."""
+    from autobal.analysis.frequency import MODEL_LABELS  # python-control and scipy: only a dynamics report needs it
+
     return MODEL_LABELS.get(model, model)
 
 

@@ -101,3 +101,20 @@ def test_no_private_imports_across_modules():
                 private += [f"{path.relative_to(ROOT)}: {node.module}.{a.name}" for a in node.names
                             if a.name.startswith("_") and not a.name.startswith("__")]
     assert private == []
+
+
+def test_a_statics_run_imports_no_heavy_optional_package():
+    # the CLI, a scene load and the statics study's modules leave out what only other analyses need
+    # (the start-up goal of `autobal run pump_pe600_statics`, docs/benchmarks.md): scipy's optimize,
+    # stats and special (work-precision peers, fits, the disc-loss model), python-control (dynamics)
+    code = (
+        "import sys\n"
+        "import autobal.cli\n"
+        "from autobal import scenario\n"
+        "from autobal.analysis import statics, statics_study, workprecision\n"
+        "scenario.load('pump_pe600_statics')\n"
+        "heavy = ('scipy.optimize', 'scipy.stats', 'scipy.special', 'scipy.linalg', 'control')\n"
+        "print(' '.join(m for m in heavy if m in sys.modules))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == []
