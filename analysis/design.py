@@ -12,8 +12,8 @@ supply pressure) are found by IPOPT together with the static unknowns at a set o
   symbolic static state, so A is a CasADi expression of the variables;
 * every eigenvalue must satisfy Re lambda <= -alpha: the Routh-Hurwitz conditions (Gantmacher
   (1959), ch. XV; Pavlenko (2014), Eqs. (2.97)-(2.99)) of det(sI - A - alpha I) = s^n + a1 s^(n-1)
-  + ... + an, as the first column r_1..r_n of the Routh array, every r_k >= 0 (the Hurwitz
-  determinants are Delta_k = r_1 ... r_k, and r_n = a_n).  The coefficients are built exactly and
+  + ... + an, as the first column r_1..r_(n-1) of the Routh array and a_n, every one >= 0 (the
+  Hurwitz determinants are Delta_k = r_1 ... r_k, and r_n = a_n).  The coefficients are built exactly and
   smoothly: a fixed numeric balancing D, a symbolic Householder reduction to Hessenberg form, then
   La Budde's recursion (Rehman & Ipsen (2011)), which keeps them accurate over the 7 decades of
   time scales of the device (a direct Faddeev-LeVerrier or Berkowitz expansion loses them all);
@@ -40,20 +40,35 @@ from autobal.analysis import ipopt
 from autobal.analysis.linearize import exact, jacobians
 from autobal.analysis.statics import StaticsSolver
 from autobal.errors import SolveError
-from autobal.models import throttles as th
-from autobal.models.device import DeviceParams, design, static_system
+from autobal.models.device import REGULATOR_GROUPS, DeviceParams, design, groups_by_name, static_system
 from autobal.models.dynamics import PARAM_NAMES, build
 
-# design keys: dynamic data (models/dynamics.PARAM_NAMES) and the two static parameters
-DYNAMIC_KEYS = ("V2", "V3", "c_z", "c_x", "k_reg", "V_cam", "V_m")
-STATIC_KEYS = ("dpsi", "p_in", "s_m", "d_e", "l_e", "d_in", "l_in")
+# design key -> the DeviceParams fields it sets (dotted paths) and its SI unit
+FIELDS = {
+    "V2": ("dynamics.V2",), "V3": ("dynamics.V3",), "c_z": ("dynamics.c_z",), "c_x": ("dynamics.c_x",),
+    "k_reg": ("dynamics.k_reg",), "V_cam": ("dynamics.V_cam",), "V_m": ("dynamics.V_m",),
+    "dpsi": ("barrier.margin_ratio",), "p_in": ("regulator.supply_pressure",),
+    "s_m": ("regulator.membrane_area", "dynamics.s_m"),  # the regulator's and the dynamic data's
+    "d_e": ("barrier.supply_throttle.diameter",), "l_e": ("barrier.supply_throttle.length",),
+    "d_in": ("regulator.inlet_throttle.diameter",), "l_in": ("regulator.inlet_throttle.length",),
+    "h_3": ("disc.outer_seal.clearance",), "l_3": ("disc.outer_seal.length",), "d_3": ("disc.outer_seal.diameter",),
+    "zeta_3": ("disc.outer_seal.local_loss",), "lambda_3": ("disc.outer_seal.friction",),
+    "lambda_T": ("disc.face.friction",), "phi_B": ("regulator.valve.discharge_coefficient",),
+}
 UNITS = {"V2": "m**3", "V3": "m**3", "V_cam": "m**3", "V_m": "m**3", "c_z": "N*s/m", "c_x": "N*s/m",
-         "k_reg": "N/m", "dpsi": "", "p_in": "Pa", "s_m": "m**2", "d_e": "m", "l_e": "m", "d_in": "m", "l_in": "m"}
-# the laminar throttles a design may size: key prefix -> (group, where the tube is in DeviceParams)
-TUBES = {"e": "alpha_e1", "in": "alpha_in1"}
+         "k_reg": "N/m", "dpsi": "", "p_in": "Pa", "s_m": "m**2", "d_e": "m", "l_e": "m", "d_in": "m", "l_in": "m",
+         "h_3": "m", "l_3": "m", "d_3": "m", "zeta_3": "", "lambda_3": "", "lambda_T": "", "phi_B": ""}
+# groups the dynamic model is affine in, jointly (see DesignProblem.linearisation); psi_in does not enter A
+AFFINE_GROUPS = ("sigma_m", "alpha_e1", "alpha_in1", "alpha_TB1", "alpha_31", "alpha_B1")
 OMEGA_REF = 1000.0  # rad/s, time scale of the characteristic polynomial
 ACTIVE_TOL = 1e-6  # a constraint within this (scaled) distance of its bound ...
 MULTIPLIER_TOL = 1e-3  # ... and with a multiplier above this (relative to the objective, O(1)) is active
+# mu_strategy adaptive: the dynamic data the objective does not see (volumes, damping, spring) make the
+# optimum a manifold and the reduced Hessian singular; IPOPT's monotone barrier decrease then stalls near
+# mu ~ 1e-6 and falls into restoration (the pump with the outer-seal clearance or the supply-throttle
+# diameter as variables, 500 iterations); the adaptive rule converges in tens of iterations
+IPOPT_OPTIONS = {"mu_strategy": "adaptive", "tol": 1e-8, "constr_viol_tol": 1e-10, "compl_inf_tol": 1e-8,
+                 "acceptable_tol": 1e-6, "acceptable_iter": 5, "max_iter": 500}
 
 
 @dataclass(frozen=True)
@@ -102,36 +117,28 @@ class Spec:
     form: str = "energy"
 
 
+def _replace(obj, path: str, value):
+    head, _, rest = path.partition(".")
+    return dataclasses.replace(obj, **{head: _replace(getattr(obj, head), rest, value) if rest else value})
+
+
 def apply(device: DeviceParams, values: dict) -> DeviceParams:
-    """The device with design values (key -> SI float) substituted."""
-    dyn = {k: v for k, v in values.items() if k in DYNAMIC_KEYS}
-    out = dataclasses.replace(device, dynamics=dataclasses.replace(device.dynamics, **dyn))
-    if "dpsi" in values:
-        out = dataclasses.replace(out, barrier=dataclasses.replace(out.barrier, margin_ratio=values["dpsi"]))
-    if "p_in" in values:
-        out = dataclasses.replace(out, regulator=dataclasses.replace(out.regulator, supply_pressure=values["p_in"]))
-    for t in TUBES:
-        if f"d_{t}" in values or f"l_{t}" in values:
-            old = out.barrier.supply_throttle if t == "e" else out.regulator.inlet_throttle
-            tube = dataclasses.replace(old, diameter=values.get(f"d_{t}", old.diameter),
-                                       length=values.get(f"l_{t}", old.length))
-            if t == "e":
-                out = dataclasses.replace(out, barrier=dataclasses.replace(out.barrier, supply_throttle=tube))
-            else:
-                out = dataclasses.replace(out, regulator=dataclasses.replace(out.regulator, inlet_throttle=tube))
-    if "s_m" in values:  # the membrane area is the regulator's and the dynamic data's
-        out = dataclasses.replace(out, regulator=dataclasses.replace(out.regulator, membrane_area=values["s_m"]),
-                                  dynamics=dataclasses.replace(out.dynamics, s_m=values["s_m"]))
-    return out
+    """The device with design values (key -> SI number or CasADi expression) substituted."""
+    for k, v in values.items():
+        for path in FIELDS[k]:
+            device = _replace(device, path, v)
+    return device
 
 
 def nominal_values(device: DeviceParams, keys) -> dict:
     """Key -> SI value of the design keys in ``device``."""
-    get = {"dpsi": lambda d: d.barrier.margin_ratio, "p_in": lambda d: d.regulator.supply_pressure,
-           "s_m": lambda d: d.regulator.membrane_area,
-           "d_e": lambda d: d.barrier.supply_throttle.diameter, "l_e": lambda d: d.barrier.supply_throttle.length,
-           "d_in": lambda d: d.regulator.inlet_throttle.diameter, "l_in": lambda d: d.regulator.inlet_throttle.length}
-    return {k: float(get[k](device) if k in get else getattr(device.dynamics, k)) for k in keys}
+    out = {}
+    for k in keys:
+        v = device
+        for name in FIELDS[k][0].split("."):
+            v = getattr(v, name)
+        out[k] = float(v)
+    return out
 
 
 # ---- the characteristic polynomial and the Lienard-Chipart conditions, symbolically -------------
@@ -189,10 +196,12 @@ def routh_column(a: list) -> list:
 
 
 def stability_conditions(A, alpha: float, balance: np.ndarray):
-    """Routh-Hurwitz conditions of the shifted matrix A + alpha I: the first column r_1..r_n of the
-    Routh array of det(sI - A - alpha I), every entry >= 0 iff every eigenvalue of A has
-    Re <= -alpha (the Hurwitz determinants are Delta_k = r_1 ... r_k, r_n = a_n), as CasADi
-    expressions: (names, expressions).
+    """Routh-Hurwitz conditions of the shifted matrix A + alpha I: the first column r_1..r_(n-1) of the
+    Routh array of det(sI - A - alpha I) and its constant coefficient a_n, every entry >= 0 iff every
+    eigenvalue of A has Re <= -alpha (the Hurwitz determinants are Delta_k = r_1 ... r_k, and
+    r_n = a_n), as CasADi expressions: (names, expressions).  At the stability boundary only
+    r_(n-1) (a complex pair on Re = -alpha) or a_n (a real root there) vanishes, and both are smooth
+    there; the Routh quotient for r_n would be 0/0.
 
     Parameters
     ----------
@@ -208,8 +217,11 @@ def stability_conditions(A, alpha: float, balance: np.ndarray):
     Di = ca.diag(ca.DM(1.0 / balance))
     As = ca.mtimes(ca.mtimes(Di, A + alpha * ca.SX.eye(n)), D) / OMEGA_REF
     a = charpoly_hessenberg(hessenberg(As))
-    r = routh_column(a)
-    return [f"routh{k}" for k in range(1, n + 1)], r
+    # r_n = a_n Delta_(n-1) / Delta_(n-1) is computed by the Routh array as a quotient by r_(n-1), which
+    # vanishes where a complex pair crosses Re = -alpha (the boundary an optimum rests on): 0/0 there.
+    # The constant coefficient a_n itself is the same condition, and a polynomial.
+    r = routh_column(a)[:-1] + [a[-1]]
+    return [f"routh{k}" for k in range(1, n)] + [f"a{n}"], r
 
 
 # ---- the NLP -------------------------------------------------------------------------------------
@@ -251,7 +263,9 @@ class DesignProblem:
         self.scale = np.array([max(abs(v.upper), abs(v.lower)) for v in spec.variables])
         self.dev0 = design(device)
         g = self.dev0.groups
-        self.sys = static_system(g, parameters=("psi_in", "alpha_e1", "alpha_in1"))
+        self.moved = self._moved_groups()
+        self.parameters = ("psi_in", *[k for k in self.moved if k != "psi_in"])
+        self.sys = static_system(g, parameters=self.parameters)
         self.solver0 = StaticsSolver(self.dev0)
         self.statics0 = {p: self.solver0.solve(p, self.dev0.dpsi) for p in self.points}
         ref = self.statics0[spec.nominal_ratio]
@@ -262,6 +276,24 @@ class DesignProblem:
     # the SI values of the scaled variables y (symbolic or numeric)
     def _si(self, y):
         return {k: self.scale[i] * y[i] for i, k in enumerate(self.keys)}
+
+    def _moved_groups(self) -> tuple:
+        """The dimensionless groups the design variables change (found by moving each by half its
+        value); ValueError for a variable that changes a scale (p_B, s_B, z_B, x_B, g1) or a group
+        the linearisation cannot take exactly."""
+        g0, out = groups_by_name(self.dev0.groups), []
+        for k in self.keys:
+            if FIELDS[k][0].startswith("dynamics.") or k == "dpsi":
+                continue
+            v0 = self.nominal[k]
+            moved = design(apply(self.device, {k: 1.5 * v0 if v0 else 1.0}))
+            changed = [n for n, v in groups_by_name(moved.groups).items() if v != g0[n]]
+            scales = [n for n, v in moved.scales.items() if not (v == self.dev0.scales[n] or v != v)]
+            bad = scales + [n for n in changed if n not in AFFINE_GROUPS + ("psi_in",)]
+            if bad:
+                raise ValueError(f"design variable {k!r} changes {', '.join(bad)}: not a design variable yet")
+            out += [n for n in changed if n not in out]
+        return tuple(out)
 
     def _reference(self):
         """Nominal objective terms (leakage, stiffness) for scaling."""
@@ -283,11 +315,9 @@ class DesignProblem:
         y = ca.SX.sym("y", nv)
         W = ca.SX.sym("W", nw, m)
         si = self._si(y)
-        p_b = self.dev0.scales["p_B"]
         dpsi = si.get("dpsi", self.dev0.dpsi)
         groups = self.groups(si)
-        theta = ca.vertcat(si["p_in"] / p_b if "p_in" in si else g.regulator.psi_in,
-                           groups["alpha_e1"], groups["alpha_in1"])
+        theta = ca.vertcat(*[groups[n] for n in self.parameters])
         pvec = ca.vertcat(*[si.get(k, self.model.p0[i]) for i, k in enumerate(PARAM_NAMES)])
         jac = self.linearisation(si, groups)
         cons, lo, hi, names = [], [], [], []
@@ -333,46 +363,48 @@ class DesignProblem:
         self._x, self._f, self._g = x, f, g_all / s
         self.q_e = ca.Function("q_e", [x], [q_e * self.dev0.scales["Q_scale"]])
         self.objective_fn = ca.Function("objective", [x], [f])
-        self.solver = ipopt.nlpsol("design", x, ca.SX.sym("none", 0), f, self._g, warm=False,
-                                   tol=1e-8, constr_viol_tol=1e-10, compl_inf_tol=1e-8, acceptable_tol=1e-6,
-                                   acceptable_iter=5, max_iter=500)
+        self.solver = ipopt.nlpsol("design", x, ca.SX.sym("none", 0), f, self._g, warm=False, **IPOPT_OPTIONS)
 
     def groups(self, si: dict) -> dict:
-        """The groups a design changes, from the SI values (CasADi or numbers): alpha_e1, alpha_in1
-        (laminar throttles over g1, :func:`autobal.models.throttles.laminar_tube`) and s_m (m^2)."""
-        mu, g1 = self.device.fluid.viscosity, self.dev0.scales["g1"]
-        out = {"s_m": si.get("s_m", self.device.regulator.membrane_area)}
-        for t, name in TUBES.items():
-            tube = self.device.barrier.supply_throttle if t == "e" else self.device.regulator.inlet_throttle
-            out[name] = th.laminar_tube(si.get(f"d_{t}", tube.diameter), si.get(f"l_{t}", tube.length), mu) / g1
-        return out
+        """Every dimensionless group (name -> value) of the design ``si`` (key -> SI number or CasADi
+        expression), by :func:`autobal.models.device.design` itself: symbolic where the design is."""
+        return groups_by_name(design(apply(self.device, si)).groups)
+
+    def _moved_jacobian(self, name: str):
+        """Jacobians of the model built with group ``name`` at 1.5 times its nominal value (the
+        membrane area s_m of the dynamic data moves with sigma_m = s_m / s_B)."""
+        cache = self.__dict__.setdefault("_moved_jac", {})
+        if name not in cache:
+            g, data = self.dev0.groups, self.device.dynamics
+            value = 1.5 * groups_by_name(g)[name]
+            if name in REGULATOR_GROUPS:
+                g = dataclasses.replace(g, regulator=dataclasses.replace(g.regulator, **{name: value}))
+            else:
+                g = dataclasses.replace(g, **{name: value})
+            if name == "sigma_m":
+                data = dataclasses.replace(data, s_m=1.5 * data.s_m)
+            ref = self.statics0[self.spec.nominal_ratio]
+            point = ref.values | {"psi1": ref.psi1, "dpsi": ref.dpsi}
+            cache[name] = jacobians(build(dataclasses.replace(self.dev0, groups=g), data, point, self.spec.form))
+        return cache[name]
 
     def linearisation(self, si: dict, groups: dict | None = None):
-        """(x, w, p) -> A of the model, with s_m, alpha_e1 and alpha_in1 symbolic when the design changes them.
+        """(x, w, p) -> A of the model, with the groups the design moves symbolic.
 
-        The model is affine in each of them jointly (the membrane force sigma_m (psi_e - psi1 - dpsi) of
-        the stem and the displacement flow s_m dx/dt of the barrier chamber; the laminar flows
-        alpha (psi_a - psi_b); the mass matrix contains none of them, and no product of two appears), so
+        The model is affine in the groups of AFFINE_GROUPS jointly: the membrane force
+        sigma_m (psi_e - psi1 - dpsi) of the stem and the displacement flow s_m dx/dt of the barrier
+        chamber, the throttle flows alpha f(psi_a, psi_b) (laminar, square-root and valve laws); the
+        mass matrix contains none of them, and no product of two appears.  So
         A = A(nominal) + sum_i t_i (A(moved i) - A(nominal)), t_i = (theta_i - theta_i0)/(theta_i1 -
         theta_i0), exactly, from one extra built model per group.  The static point off the valve stop
         does not depend on s_m (psi_e = psi1 + dpsi); it does on the alphas, through the statics' symbols.
+        psi_in does not enter A (only the state it sets).
         """
         groups = self.groups(si) if groups is None else groups
         jac0 = jacobians(self.model)
-        ref = self.statics0[self.spec.nominal_ratio]
-        point = ref.values | {"psi1": ref.psi1, "dpsi": ref.dpsi}
-        nominal = self.groups({})
-        terms = []
-        moves = {"s_m": ("s_m",), "alpha_e1": ("d_e", "l_e"), "alpha_in1": ("d_in", "l_in")}
-        for name, keys in moves.items():
-            if not any(k in si for k in keys):
-                continue
-            key = keys[0]
-            v0 = nominal_values(self.device, [key])[key]
-            dev1 = apply(self.device, {key: 1.5 * v0})
-            moved = self.groups({key: 1.5 * v0})[name]
-            jac1 = jacobians(build(design(dev1), dev1.dynamics, point, self.spec.form))
-            terms.append(((groups[name] - nominal[name]) / (moved - nominal[name]), jac1))
+        nominal = groups_by_name(self.dev0.groups)
+        terms = [((groups[n] - nominal[n]) / (0.5 * nominal[n]), self._moved_jacobian(n))
+                 for n in self.moved if n != "psi_in"]
 
         def A(x, w, p):
             a0 = jac0(x, w, p)[0]

@@ -9,11 +9,15 @@ range before and after.
 from __future__ import annotations
 
 import math
+import textwrap
 
 import numpy as np
+import scipy.linalg
 
-from autobal.analysis.design import UNITS, DesignProblem, Evaluation, Spec
+from autobal.analysis.design import IPOPT_OPTIONS, UNITS, DesignProblem, Evaluation, Spec, apply
+from autobal.analysis.linearize import Setup, finite_difference, jacobians, operator
 from autobal.analysis.result import Result, fmt, new_figure, with_statuses
+from autobal.analysis.stability import pencil
 from autobal.errors import SolveError
 from autobal.models.device import DeviceParams
 
@@ -85,6 +89,9 @@ class DesignResult(Result):
         lines.append(f"  {cmp['model']} model: max Re lambda nominal "
                      + ", ".join(fmt(v) for v in cmp["nominal"].values()) + "; optimum "
                      + ", ".join(fmt(v) for v in cmp["optimum"].values()) + " 1/s")
+        prg = d["program_model"]
+        lines.append("  program model: max Re lambda nominal " + ", ".join(fmt(v) for v in prg["nominal"].values())
+                     + "; optimum " + ", ".join(fmt(v) for v in prg["optimum"].values()) + " 1/s")
         lines.append("  active: " + (", ".join(a["constraint"] for a in d["active"]) or "-"))
         c = d["certification"]
         lines.append(f"  certified: eigenvalues {c['eigenvalues_ok']}; random search {c['samples']} samples, "
@@ -105,17 +112,18 @@ class DesignResult(Result):
         ax.legend()
 
     def figures(self) -> dict:
+        d = self.data
         fig1, ax = new_figure()
         self.draw(ax)
-        ax.set_title(self.title)
         fig2, ax2 = new_figure()
-        o, n = self.data["optimum"]["values_si"], self.data["nominal"]["values_si"]
+        o, n = d["optimum"]["values_si"], d["nominal"]["values_si"]
         names = list(o)
         ratio = [o[k] / n[k] if n[k] else math.nan for k in names]
         ax2.barh(range(len(names)), ratio)
-        ax2.set_yticks(range(len(names)), [k.rsplit(".", 1)[-1] for k in names])
+        ax2.set_xscale("log")
+        ax2.set_yticks(range(len(names)), [".".join(k.split(".")[-2:]) for k in names], fontsize=8)
         ax2.axvline(1.0, color="k", lw=0.8)
-        ax2.set_xlabel("optimum / nominal")
+        ax2.set_xlabel("optimum / nominal (a zero nominal value: no bar)")
         fig3, ax3 = new_figure()
         h = self.history
         if h.get("obj"):
@@ -124,7 +132,99 @@ class DesignResult(Result):
             ax3.semilogy(np.maximum(h["inf_du"], 1e-18), label="dual infeasibility")
             ax3.legend()
         ax3.set_xlabel("IPOPT iteration")
+        model = {"energy": "energy-consistent", "chain": "chain (printed)"}[d["form"]]
+        what = {fig1: f"spectral abscissa over the operating range ({model} model)",
+                fig2: "design variables, optimum against the starting design",
+                fig3: f"IPOPT convergence ({d['status']}, {d['iterations']} iterations)"}
+        for fig, sub in what.items():
+            fig.suptitle(textwrap.fill(self.title, 80) + "\n" + sub if self.title else sub, fontsize=9)
         return {"design_abscissa.png": fig1, "design_parameters.png": fig2, "design_convergence.png": fig3}
+
+
+def accuracy(problem: DesignProblem, out: dict, opt: Evaluation, best: float, samples: int) -> dict:
+    """Error estimate of the design result.
+
+    * ``abscissa``: at each operating point of the optimum, the spectral abscissa (1/s) from the
+      eigenvalues (QR) of the exact Jacobian, from the generalized eigenvalues (QZ) of the pencil of the
+      model's implicit rows (independent of the explicit form) and from a central finite-difference
+      Jacobian (independent of CasADi's derivatives), and their relative differences;
+    * ``constraints``: the largest violation of the NLP's scaled constraint rows and variable bounds at
+      IPOPT's solution, and the tolerances it was solved to;
+    * ``objective``: the NLP's objective against the ordinary path's (statics solver), relative;
+    * ``search``: the random search's resolution, samples^(-1/d) of each variable's range (d variables).
+
+    Parameters
+    ----------
+    problem : DesignProblem
+    out : dict
+        :meth:`DesignProblem.solve`'s result.
+    opt : Evaluation
+        The optimum by the ordinary path.
+    best : float
+        Objective of the best feasible sample (NaN: none).
+    samples : int
+
+    Returns
+    -------
+    dict
+        With ``estimate`` (largest relative difference of the spectral abscissa between QR and QZ)
+        and ``how``.
+    """
+    dev = apply(problem.device, out["values"])
+    per = {}
+    for p in problem.points:
+        try:
+            model = Setup(dev, p).nonlinear(problem.spec.form)
+        except SolveError:
+            continue
+        qr = np.linalg.eigvals(np.array(jacobians(model)(model.x0, model.w0, model.p0)[0])).real.max()
+        E, Ad = pencil(*operator(model)[:3])
+        mu = scipy.linalg.eig(Ad, E, right=False)
+        qz = mu[np.isfinite(mu)].real.max()
+        fd = np.linalg.eigvals(finite_difference(model)).real.max()
+        per[f"{p:g}"] = {"qr": float(qr), "qz": float(qz), "finite_difference": float(fd),
+                         "relative_difference_qz": float(abs(qr - qz) / abs(qr)),
+                         "relative_difference_finite_difference": float(abs(qr - fd) / abs(qr))}
+    res = out["res"]
+    lbx, ubx = problem.bounds()
+    g, x = res["g"], res["x"]
+    viol_g = float(np.max(np.maximum(problem.lbg - g, 0) + np.maximum(g - problem.ubg, 0), initial=0.0))
+    viol_x = float(np.max(np.maximum(lbx - x, 0) + np.maximum(x - ubx, 0), initial=0.0))
+    f_nlp = float(problem.objective_fn(x))
+    d = len(problem.keys)
+    est = max((v["relative_difference_qz"] for v in per.values()), default=math.nan)
+    return {
+        "abscissa": per,
+        "constraints": {"max_scaled_violation": viol_g, "max_bound_violation": viol_x,
+                        "ipopt_tol": IPOPT_OPTIONS["tol"],
+                        "ipopt_constr_viol_tol": IPOPT_OPTIONS["constr_viol_tol"]},
+        "objective": {"nlp": f_nlp, "statics_path": opt.objective,
+                      "relative_difference": float(abs(f_nlp - opt.objective) / abs(opt.objective))},
+        "search": {"samples": samples, "variables": d,
+                   "resolution": float(samples ** (-1.0 / d)) if samples and d else math.nan,
+                   "best_sample_gap": float((best - opt.objective) / abs(opt.objective))
+                   if math.isfinite(best) else math.nan},
+        "estimate": float(est),
+        "how": ("largest relative difference of the spectral abscissa at an operating point of the optimum "
+                "between the eigenvalues (QR) of the exact Jacobian and the generalized eigenvalues (QZ) of the "
+                "pencil of the model's implicit rows; the finite-difference Jacobian's abscissa, the constraint "
+                "violation at IPOPT's solution, the NLP's objective against the statics solver's and the random "
+                "search's resolution are reported beside it"),
+    }
+
+
+def program_abscissa(problem: DesignProblem, values: dict) -> dict:
+    """Spectral abscissa (1/s) of the source's program model (the hand model (2.43)/(2.101) at the
+    closed-form point, :meth:`autobal.analysis.linearize.Setup.linear`) of one design at each operating
+    point; NaN where the statics rest on a stop.  For comparison only: its constants are numbers computed
+    at a closed-form point, not expressions of the NLP's static state (see docs/design.md)."""
+    dev, out = apply(problem.device, values), {}
+    for p in problem.points:
+        try:
+            out[f"{p:g}"] = float(Setup(dev, p).linear("program").poles().real.max())
+        except (SolveError, ValueError):
+            out[f"{p:g}"] = math.nan
+    return out
 
 
 def abscissa_sweep(problem: DesignProblem, values: dict, psi1s) -> list[float]:
@@ -174,6 +274,8 @@ def run(device: DeviceParams, spec: Spec, samples: int = 200, seed: int = 0, swe
     other = "chain" if spec.form == "energy" else "energy"
     compare = {"model": other} | {k: {f"{p:g}": a for p, a in prob.evaluate(v, form=other).abscissa.items()}
                                   for k, v in (("nominal", prob.nominal), ("optimum", out["values"]))}
+    program = {"model": "program"} | {k: program_abscissa(prob, v) for k, v in (("nominal", prob.nominal),
+                                                                               ("optimum", out["values"]))}
     data = {
         "form": spec.form, "decay_rate": spec.decay_rate, "points": prob.points,
         "status": out["res"]["status"], "iterations": out["res"]["iterations"],
@@ -185,6 +287,8 @@ def run(device: DeviceParams, spec: Spec, samples: int = 200, seed: int = 0, swe
             "beaten": bool(math.isfinite(best) and best < opt.objective - CERTIFY_TOL * abs(opt.objective)),
         },
         "other_model": compare,  # spectral abscissa (1/s) of the same designs in the other chamber form
+        "program_model": program,  # the same for the source's program model (hand constants, closed-form point)
         "abscissa_sweep": {"psi1": psi1s, "nominal": sweep["nominal"], "optimum": sweep["optimum"]},
     }
+    data["accuracy"] = accuracy(prob, out, opt, best, samples)
     return DesignResult(data, sweep, out["history"], title)

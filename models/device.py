@@ -497,10 +497,16 @@ def face_area(face: Face) -> float:
 def design(device: DeviceParams) -> DeviceDesign:
     """Dimensionless groups of a device (Pavlenko (2014), Eqs. (2.16), (2.18), (2.135), (2.137)).
 
+    The one place the groups are computed from the SI parameters, numerically and symbolically: the
+    geometry and loss fields of the throttles (clearances, lengths, diameters, loss coefficients),
+    the margin, the supply pressure and the membrane area may be CasADi expressions, and so are then
+    the groups they enter (a design NLP gets their exact derivatives).  The scales (p_B, s_B, z_B,
+    x_B, g1) must stay numbers.
+
     Parameters
     ----------
     device : DeviceParams
-        The device in SI.
+        The device in SI (numbers, or CasADi expressions as above).
 
     Returns
     -------

@@ -22,6 +22,12 @@ SQRT_SMOOTHING = 1e-10
 LAWS = ("laminar", "turbulent", "gas_turbulent")
 
 
+def sqrt(x):
+    """Square root of a number (math.sqrt) or of a CasADi expression (casadi.sqrt): the conductances
+    below take either, so that the groups of models/device.design stay symbolic in a design NLP."""
+    return math.sqrt(x) if isinstance(x, int | float) else ca.sqrt(x)
+
+
 def signed_sqrt(x, eps: float = SQRT_SMOOTHING):
     """sign(x) sqrt(|x|), made smooth at x = 0: x / (x^2 + eps^2)^(1/4).
 
@@ -79,8 +85,8 @@ def turbulent(area: float, loss: float, density: float, medium: str, normal_pres
     gas:    g = f / sqrt(p_n rho_n zeta), m^3/(Pa s)       (2.135) as corrected in App. B.
     """
     if medium == "liquid":
-        return area / math.sqrt(0.5 * density * loss)
-    return area / math.sqrt(normal_pressure * density * loss)
+        return area / sqrt(0.5 * density * loss)
+    return area / sqrt(normal_pressure * density * loss)
 
 
 def annulus_loss(local_loss: float, friction: float, length: float, clearance: float) -> float:
@@ -95,4 +101,4 @@ def face_loss(friction: float, inner_diameter: float, outer_diameter: float, bas
 
 def orifice(discharge_coefficient: float, seat_diameter: float, base_opening: float, density: float) -> float:
     """Valve conductance g_B = phi pi d_c x_B sqrt(2/rho), m^3/(Pa^0.5 s) (2.16)."""
-    return discharge_coefficient * math.pi * seat_diameter * base_opening * math.sqrt(2.0 / density)
+    return discharge_coefficient * math.pi * seat_diameter * base_opening * sqrt(2.0 / density)

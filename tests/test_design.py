@@ -161,10 +161,13 @@ def test_symbolic_stiffness_and_leakage_match_the_statics():
 
 @pytest.mark.parametrize("path, key", [("device.regulator.membrane_area", "s_m"),
                                        ("device.barrier.supply_throttle.diameter", "d_e"),
-                                       ("device.regulator.inlet_throttle.length", "l_in")])
+                                       ("device.regulator.inlet_throttle.length", "l_in"),
+                                       ("device.disc.outer_seal.clearance", "h_3"),
+                                       ("device.disc.face.friction", "lambda_T"),
+                                       ("device.regulator.valve.discharge_coefficient", "phi_B")])
 def test_group_variables_enter_the_linearisation_exactly(path, key):
-    """A from the affine form (membrane area, laminar throttles) equals the Jacobian of a model built
-    with that design, at the same state."""
+    """A from the affine form (membrane area, laminar, square-root and valve throttles) equals the
+    Jacobian of a model built with that design, at the same state."""
     dev = adapters.dynamic_device(autobal.load("pump_pe600_dynamics"))
     s0 = ds.nominal_values(dev, [key])[key]
     spec = ds.Spec(variables=(ds.Variable(path, key, 0.5 * s0, 3 * s0),), points=(1.0,), decay_rate=50.0)
