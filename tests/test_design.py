@@ -184,3 +184,92 @@ def test_group_variables_enter_the_linearisation_exactly(path, key):
     ref = np.array(jacobians(model)(model.x0, model.w0, model.p0)[0])
     assert np.allclose(A, ref, rtol=1e-10, atol=1e-10 * np.abs(ref).max())
     assert not np.allclose(A, np.array(jacobians(prob.model)(model.x0, model.w0, model.p0)[0]), rtol=1e-3)
+
+
+def test_stability_conditions_are_smooth_on_the_boundary():
+    """A pair exactly on Re lambda = -alpha: r_(n-1) = 0, and every condition and its gradient is finite
+    (the Routh quotient for r_n would be 0/0 there; a_n replaces it)."""
+    rng = np.random.default_rng(3)
+    A, lam = _stiff_matrix(rng)
+    lam_real = lam[2:].real
+    lam_real[lam_real > -200] = -200.0  # every other eigenvalue left of -alpha
+    blk = np.zeros((8, 8))
+    blk[:2, :2] = [[-80, 900], [-900, -80]]
+    blk[2:, 2:] = np.diag(lam_real)
+    T = np.linalg.qr(rng.normal(size=(8, 8)))[0] @ np.diag(rng.uniform(0.5, 2, 8))
+    A = T @ blk @ np.linalg.inv(T)
+    As = ca.SX.sym("A", 8, 8)
+    import scipy.linalg
+
+    _, (scale, _) = scipy.linalg.matrix_balance(A + 80.0 * np.eye(8), permute=False, separate=True)
+    names, r = ds.stability_conditions(As, 80.0, scale)
+    assert names[-1] == "a8" and names[-2] == "routh7"
+    f = ca.Function("f", [As], [ca.vertcat(*r), ca.jacobian(ca.vertcat(*r), ca.vec(As))])
+    val, jac = (np.array(m) for m in f(A))
+    assert np.all(np.isfinite(val)) and np.all(np.isfinite(jac))
+    val = val.ravel()
+    assert abs(val[-2]) < 1e-8 * np.abs(val).max()  # the pair on the shifted imaginary axis
+    assert np.all(val[:-2] > 0) and val[-1] > 0
+
+
+def test_groups_of_the_design_are_symbolic_and_exact():
+    """models/device.design with a CasADi outer-seal clearance gives the groups of the numeric design at
+    any value, and the NLP's static balances vanish at the statics solver's solution of the moved design."""
+    dev = adapters.dynamic_device(autobal.load("pump_pe600_dynamics"))
+    spec = ds.Spec(variables=(ds.Variable("device.disc.outer_seal.clearance", "h_3", 1e-4, 6e-4),
+                              ds.Variable("device.barrier.supply_throttle.diameter", "d_e", 1.5e-3, 6e-3)),
+                   points=(1.0,), decay_rate=50.0)
+    prob = ds.DesignProblem(dev, spec)
+    assert set(prob.moved) == {"alpha_31", "alpha_e1"}
+    h, d = ca.SX.sym("h"), ca.SX.sym("d")
+    sym = prob.groups({"h_3": h, "d_e": d})
+    moved = ds.apply(dev, {"h_3": 2.2e-4, "d_e": 2.5e-3})
+    from autobal.analysis.statics import StaticsSolver
+    from autobal.models.device import design, groups_by_name
+
+    num = groups_by_name(design(moved).groups)
+    f = ca.Function("g", [h, d], [ca.vertcat(*[sym[k] for k in num])])
+    assert np.allclose(np.array(f(2.2e-4, 2.5e-3)).ravel(), list(num.values()), rtol=1e-13, atol=0)
+    # d alpha_31 / d h by CasADi against a central difference
+    da = float(ca.Function("da", [h, d], [ca.jacobian(sym["alpha_31"], h)])(2.2e-4, 2.5e-3))
+    step = 1e-9
+    fd = (groups_by_name(design(ds.apply(dev, {"h_3": 2.2e-4 + step})).groups)["alpha_31"]
+          - groups_by_name(design(ds.apply(dev, {"h_3": 2.2e-4 - step})).groups)["alpha_31"]) / (2 * step)
+    assert da == pytest.approx(fd, rel=1e-6)
+    st = StaticsSolver(design(moved)).solve(1.0, design(moved).dpsi)
+    theta = [num[n] for n in prob.parameters]
+    r = np.array(prob.sys.residual(st.x, 1.0, st.dpsi, theta)).ravel()
+    assert np.abs(r).max() < 1e-9
+
+
+@pytest.mark.parametrize("path, match", [("device.disc.inner_seal.clearance", "flow scale of every group"),
+                                         ("device.disc.face.base_gap", "scale of the face gap")])
+def test_variables_not_supported_yet_say_why(path, match):
+    with pytest.raises(ScenarioError, match=match):
+        autobal.load("pump_pe600_design", set={"analyses.design.variables": {path: {
+            "lower": "0.1 mm", "upper": "0.5 mm"}}})
+
+
+def test_program_model_is_refused_with_the_reason():
+    with pytest.raises(ScenarioError, match="program.*closed-form point"):
+        autobal.load("pump_pe600_design", set={"analyses.design.model": "program"})
+
+
+@pytest.mark.slow
+def test_supply_throttle_diameter_converges():
+    """The supply-throttle diameter as a variable (it did not converge with IPOPT's monotone barrier: the
+    dynamic data the objective does not see leave the reduced Hessian singular): the NLP converges, its
+    optimum is feasible by eigenvalues and its objective is the statics solver's."""
+    dev = adapters.dynamic_device(autobal.load("pump_pe600_dynamics"))
+    spec = ds.Spec(variables=(ds.Variable("device.barrier.supply_throttle.diameter", "d_e", 1.5e-3, 6e-3),
+                              ds.Variable("device.dynamics.cavity_volume", "V3", 1e-6, 1e-3),
+                              ds.Variable("device.dynamics.regulator.stem_damping", "c_x", 0.0, 2e4),
+                              ds.Variable("device.barrier.margin_ratio", "dpsi", 0.002, 0.1)),
+                   points=(0.5, 1.0), decay_rate=90.0, gap=(5e-5, 3e-4))
+    prob = ds.DesignProblem(dev, spec)
+    out = prob.solve()
+    assert out["res"]["status"] == "Solve_Succeeded"
+    ev = prob.evaluate(out["values"])
+    assert ev.feasible, ev.reason
+    assert float(prob.objective_fn(out["x"])) == pytest.approx(ev.objective, rel=1e-9)
+    assert 1.5e-3 < out["values"]["d_e"] < 6e-3
