@@ -106,6 +106,23 @@ def test_no_sample_beats_the_optimum(pump_design):
     assert not c["beaten"]
 
 
+@pytest.mark.slow
+def test_accuracy_block(pump_design):
+    """Spectral abscissa by QR, QZ of the implicit rows' pencil and a finite-difference Jacobian agree; the
+    NLP's constraints and objective agree with the statics solver's at IPOPT's tolerance."""
+    _, res = pump_design
+    acc = res.to_dict()["accuracy"]
+    assert set(acc["abscissa"]) == {"0.5", "0.75", "1", "1.25"}
+    assert acc["estimate"] < 1e-8
+    assert all(v["relative_difference_finite_difference"] < 1e-6 for v in acc["abscissa"].values())
+    assert all(v["qr"] == pytest.approx(-res.margin[k], rel=1e-9) for k, v in acc["abscissa"].items())
+    assert acc["constraints"]["max_scaled_violation"] < 1e-8
+    assert acc["objective"]["relative_difference"] < 1e-8
+    assert acc["search"]["resolution"] == pytest.approx(80 ** (-1 / 10))
+    # the new variables are in the design (the outer seal's square-root law, the supply throttle)
+    assert {"device.disc.outer_seal.clearance", "device.barrier.supply_throttle.diameter"} <= set(res.parameters)
+
+
 def ds_tol():
     from autobal.analysis.design_study import CERTIFY_TOL
 
