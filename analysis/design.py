@@ -527,15 +527,21 @@ class DesignProblem:
                                 - sp.weights[1] * ev.stiffness[p] / abs(self.ref0["kappa"]))
         return ev
 
-    def sample(self, n: int, seed: int = 0) -> list[Evaluation]:
+    def sample(self, n: int, seed: int = 0, around: dict | None = None, radius: float = 0.02) -> list[Evaluation]:
         """Random search: ``n`` designs uniform in the variables' box (log-uniform where the bounds
-        span more than a decade and are positive), each evaluated by :meth:`evaluate`."""
+        span more than a decade and are positive), or, with ``around`` (key -> SI), uniform in a box of
+        +-``radius`` of each variable's range about that design (clipped to the bounds), each evaluated
+        by :meth:`evaluate`."""
         rng = np.random.default_rng(seed)
         out = []
         for _ in range(n):
             vals = {}
             for v in self.spec.variables:
-                if v.lower > 0 and v.upper / v.lower > 10:
+                if around is not None:
+                    half = radius * (v.upper - v.lower)
+                    lo, hi = max(v.lower, around[v.key] - half), min(v.upper, around[v.key] + half)
+                    vals[v.key] = float(rng.uniform(lo, hi))
+                elif v.lower > 0 and v.upper / v.lower > 10:
                     vals[v.key] = float(np.exp(rng.uniform(math.log(v.lower), math.log(v.upper))))
                 else:
                     vals[v.key] = float(rng.uniform(v.lower, v.upper))
