@@ -121,12 +121,17 @@ class DesignResult(Result):
         fig2, ax2 = new_figure()
         o, n = d["optimum"]["values_si"], d["nominal"]["values_si"]
         names = list(o)
-        ratio = [o[k] / n[k] if n[k] else math.nan for k in names]
-        ax2.barh(range(len(names)), ratio)
+        ratio = np.array([o[k] / n[k] if n[k] else math.nan for k in names])
+        ax2.barh(range(len(names)), ratio - 1.0, left=1.0, color=np.where(ratio >= 1, "C0", "C1"))
         ax2.set_xscale("log")
         ax2.set_yticks(range(len(names)), [".".join(k.split(".")[-2:]) for k in names], fontsize=8)
         ax2.axvline(1.0, color="k", lw=0.8)
-        ax2.set_xlabel("optimum / nominal (a zero nominal value: no bar)")
+        for i, k in enumerate(names):
+            if not n[k]:  # no ratio: the values themselves
+                unit = d["optimum"]["parameters"][k].partition(" ")[2]
+                ax2.text(0.98, i, f"{n[k]:.3g} -> {o[k]:.3g} {unit}", transform=ax2.get_yaxis_transform(),
+                         ha="right", va="center", fontsize=7)
+        ax2.set_xlabel("optimum / nominal")
         fig3, ax3 = new_figure()
         h = self.history
         if h.get("obj"):
