@@ -69,6 +69,9 @@ MULTIPLIER_TOL = 1e-3  # ... and with a multiplier above this (relative to the o
 # diameter as variables, 500 iterations); the adaptive rule converges in tens of iterations
 IPOPT_OPTIONS = {"mu_strategy": "adaptive", "tol": 1e-8, "constr_viol_tol": 1e-10, "compl_inf_tol": 1e-8,
                  "acceptable_tol": 1e-6, "acceptable_iter": 5, "max_iter": 500}
+# ... and where the adaptive rule fails (the pump designed for the chain model, whose stability
+# constraints are active), the monotone one converges: the solve tries it second
+FALLBACK_OPTIONS = {"mu_strategy": "monotone", "max_iter": 1000}
 
 
 @dataclass(frozen=True)
@@ -364,6 +367,7 @@ class DesignProblem:
         self.q_e = ca.Function("q_e", [x], [q_e * self.dev0.scales["Q_scale"]])
         self.objective_fn = ca.Function("objective", [x], [f])
         self.solver = ipopt.nlpsol("design", x, ca.SX.sym("none", 0), f, self._g, warm=False, **IPOPT_OPTIONS)
+        self._fallback = None
 
     def groups(self, si: dict) -> dict:
         """Every dimensionless group (name -> value) of the design ``si`` (key -> SI number or CasADi
@@ -448,12 +452,25 @@ class DesignProblem:
         yhi = [v.upper / s for v, s in zip(sp.variables, self.scale, strict=True)]
         return np.concatenate([ylo, np.tile(lb, m)]), np.concatenate([yhi, np.tile(ub, m)])
 
+    def fallback_solver(self):
+        """The same NLP with IPOPT's monotone barrier (FALLBACK_OPTIONS), built on first use."""
+        if self._fallback is None:
+            self._fallback = ipopt.nlpsol("design_monotone", self._x, ca.SX.sym("none", 0), self._f, self._g,
+                                          warm=False, **(IPOPT_OPTIONS | FALLBACK_OPTIONS))
+        return self._fallback
+
     def solve(self, start: Evaluation | None = None) -> dict:
-        """Solve the design NLP from the starting design (or from ``start``); SolveError if IPOPT fails."""
+        """Solve the design NLP from the starting design (or from ``start``) with the adaptive barrier and,
+        if that fails, with the monotone one; SolveError if both fail (the status is the last one's)."""
         lbx, ubx = self.bounds()
         x0 = np.clip(self.start(start), lbx, ubx)
-        res = ipopt.solve(self.solver, x0=x0, lbx=lbx, ubx=ubx, lbg=self.lbg, ubg=self.ubg)
-        hist = self.solver.stats().get("iterations", {})
+        for solver in (self.solver, None):
+            solver = solver or self.fallback_solver()
+            res = ipopt.solve(solver, x0=x0, lbx=lbx, ubx=ubx, lbg=self.lbg, ubg=self.ubg)
+            hist = solver.stats().get("iterations", {})
+            if res["success"]:
+                break
+        res["barrier"] = "adaptive" if solver is self.solver else "monotone"
         if not res["success"]:
             raise SolveError("the design NLP did not converge", res["status"],
                              dict(zip(self.keys, self.scale * res["x"][:len(self.keys)], strict=True)))

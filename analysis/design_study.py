@@ -22,6 +22,7 @@ from autobal.errors import SolveError
 from autobal.models.device import DeviceParams
 
 CERTIFY_TOL = 0.005  # a sampled feasible design may not beat the optimum by more than this (relative)
+ACTIVE_MARGIN = 1e-6  # a decay-rate constraint is active where -max Re lambda <= alpha (1 + this) + this
 LOCAL_RADIUS = 0.005  # half-width of the local search box about the optimum, fraction of each variable's range
 
 
@@ -143,7 +144,7 @@ class DesignResult(Result):
         model = {"energy": "energy-consistent", "chain": "chain (printed)"}[d["form"]]
         what = {fig1: f"spectral abscissa over the operating range ({model} model)",
                 fig2: "design variables, optimum against the starting design",
-                fig3: f"IPOPT convergence ({d['status']}, {d['iterations']} iterations)"}
+                fig3: f"IPOPT convergence ({d['status']}, {d['iterations']} iterations, {d['barrier']} barrier)"}
         for fig, sub in what.items():
             fig.suptitle(textwrap.fill(self.title, 80) + "\n" + sub if self.title else sub, fontsize=9)
         return {"design_abscissa.png": fig1, "design_parameters.png": fig2, "design_convergence.png": fig3}
@@ -221,6 +222,24 @@ def accuracy(problem: DesignProblem, out: dict, opt: Evaluation, best: float, sa
     }
 
 
+def decay_rate_active(problem: DesignProblem, out: dict, opt: Evaluation) -> list[dict]:
+    """The decay-rate constraints active at the optimum by its eigenvalues (max Re lambda within
+    ACTIVE_MARGIN of -alpha) that the multiplier test of :meth:`DesignProblem.active` did not list: the
+    stability rows are scaled by their magnitude at the start, which can be far from the optimum's, so
+    their multipliers are no measure of activity.  Each with the row nearest zero and its multiplier."""
+    alpha, res, listed = problem.spec.decay_rate, out["res"], {a["constraint"] for a in out["active"]}
+    found = []
+    for p, a in opt.abscissa.items():
+        if not (math.isfinite(a) and -a <= alpha * (1 + ACTIVE_MARGIN) + ACTIVE_MARGIN):
+            continue
+        rows = [i for i, n in enumerate(problem.names) if n.startswith(f"psi1={p:g}: stability")]
+        i = min(rows, key=lambda i: abs(res["g"][i]))
+        if problem.names[i] not in listed:
+            found.append({"constraint": f"psi1={p:g}: decay rate (eigenvalues; row {problem.names[i].split()[-1]})",
+                          "multiplier": float(res["lam_g"][i]), "value": float(-a)})
+    return found
+
+
 def program_abscissa(problem: DesignProblem, values: dict) -> dict:
     """Spectral abscissa (1/s) of the source's program model (the hand model (2.43)/(2.101) at the
     closed-form point, :meth:`autobal.analysis.linearize.Setup.linear`) of one design at each operating
@@ -289,9 +308,9 @@ def run(device: DeviceParams, spec: Spec, samples: int = 200, seed: int = 0, swe
                                                                                ("optimum", out["values"]))}
     data = {
         "form": spec.form, "decay_rate": spec.decay_rate, "points": prob.points,
-        "status": out["res"]["status"], "iterations": out["res"]["iterations"],
+        "status": out["res"]["status"], "iterations": out["res"]["iterations"], "barrier": out["res"]["barrier"],
         "optimum": block(prob, opt), "nominal": block(prob, nominal),
-        "active": out["active"],
+        "active": out["active"] + decay_rate_active(prob, out, opt),
         "certification": {
             "eigenvalues_ok": bool(opt.feasible), "samples": samples, "feasible_samples": len(feasible),
             "best_sample": best, "tolerance": CERTIFY_TOL,

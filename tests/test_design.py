@@ -293,3 +293,18 @@ def test_supply_throttle_diameter_converges():
     assert ev.feasible, ev.reason
     assert float(prob.objective_fn(out["x"])) == pytest.approx(ev.objective, rel=1e-9)
     assert 1.5e-3 < out["values"]["d_e"] < 6e-3
+
+
+@pytest.mark.slow
+def test_chain_model_design_converges_with_the_decay_rate_active():
+    """Designed for the source's chain form the pump's stability constraint binds (at psi1 = 1.25): the
+    adaptive barrier fails there and the monotone fallback converges; the eigenvalues put the spectral
+    abscissa on -alpha, and the decay rate is reported active."""
+    scn = autobal.load("pump_pe600_design", set={"analyses.design.samples": 0, "analyses.design.model": "chain",
+                                                 "analyses.design.decay_rate": 10.0})
+    res = runners.design(scn, scn.analyses.design)
+    d = res.to_dict()
+    assert d["status"] == "Solve_Succeeded" and d["certification"]["eigenvalues_ok"]
+    assert res.margin["1.25"] == pytest.approx(10.0, rel=1e-6)
+    assert any(a["constraint"].startswith("psi1=1.25: decay rate") for a in d["active"])
+    assert all(m >= 10.0 * (1 - 1e-6) for m in res.margin.values())
