@@ -18,8 +18,14 @@ cross-check of IPOPT), :meth:`StaticsSolver.fast_sweep`, the Monte Carlo and the
 
 from __future__ import annotations
 
+import hashlib
 import math
+import os
+import shutil
+import subprocess
+import tempfile
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
@@ -38,6 +44,10 @@ RESIDUAL_TOL = 1e-10  # a Newton root is accepted below this largest absolute ba
 # ~1e5 there and the balance's own terms vanish.  Such a point is kept when every balance is within this of
 # its largest term (absolute error ~1e-12 of the flows), with IPOPT's status beside it.
 STALLED_RESIDUAL = 1e-6
+# Batches of at least COMPILED_MIN points are evaluated by the point Function mapped over COMPILED_SIZE points and
+# compiled to C with the loop inside (one C call per block, the last block padded): 3x CasADi's virtual machine.
+COMPILED_SIZE, COMPILED_MIN = 1024, 256
+COMPILER_FLAGS = ("-O2", "-fPIC", "-shared")  # no -ffast-math, no -march: the VM's floating-point results, bit for bit
 
 
 @dataclass
@@ -105,18 +115,63 @@ def call_rows(f: ca.Function, *rows: np.ndarray, out: list | None = None) -> lis
     return outs
 
 
+def compiler() -> str | None:
+    """The C compiler of the compiled maps: ``$CC``, else ``cc`` or ``gcc`` on the path; None (the virtual
+    machine is used) when there is none or ``AUTOBAL_COMPILE=0``."""
+    if os.environ.get("AUTOBAL_COMPILE", "1") == "0":
+        return None
+    return os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
+
+
+def _cache_dir() -> Path:
+    """Where compiled maps are kept between runs: ``$AUTOBAL_CACHE``, else ``$XDG_CACHE_HOME/autobal`` or
+    ``~/.cache/autobal``, subfolder ``compiled``."""
+    xdg = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    root = os.environ.get("AUTOBAL_CACHE") or Path(xdg) / "autobal"
+    return Path(root) / "compiled"
+
+
+def compiled_map(f: ca.Function, m: int) -> ca.Function | None:
+    """``f`` mapped over ``m`` points as C code with the loop inside, compiled once per machine and loaded as a
+    CasADi external Function (the shared library is cached on disk under the hash of its C source, compiler
+    and flags, so a second process only loads it).  None when no C compiler is found or compiling fails: the
+    caller then uses CasADi's virtual machine, with the same results."""
+    cc = compiler()
+    if cc is None:
+        return None
+    ins = [ca.MX.sym(f.name_in(i), f.size1_in(i), m) for i in range(f.n_in())]
+    name = f"{f.name()}_map{m}"
+    cg = ca.CodeGenerator(f"{name}.c")
+    cg.add(ca.Function(name, ins, f.map(m).call(ins), [f"i{i}" for i in range(f.n_in())],
+                       [f"o{j}" for j in range(f.n_out())]))
+    source = cg.dump()
+    key = hashlib.sha256("\0".join([source, cc, *COMPILER_FLAGS]).encode()).hexdigest()[:20]
+    lib = _cache_dir() / f"{name}_{key}.so"
+    if not lib.exists():
+        try:
+            lib.parent.mkdir(parents=True, exist_ok=True)
+            with tempfile.TemporaryDirectory(dir=lib.parent) as tmp:
+                src, out = Path(tmp) / f"{name}.c", Path(tmp) / lib.name
+                src.write_text(source)
+                subprocess.run([cc, *COMPILER_FLAGS, str(src), "-o", str(out), "-lm"], check=True,
+                               capture_output=True, timeout=120)
+                os.replace(out, lib)  # atomic: a concurrent process sees no half-written library
+        except (OSError, subprocess.SubprocessError):
+            return None
+    return ca.external(name, str(lib))
+
+
 def _solve_each(J: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """J^-1 r for a stack of square systems (LAPACK LU, partial pivoting); NaN rows where singular."""
+    """J^-1 r for a stack of square systems (LAPACK LU with partial pivoting, one system after another,
+    so a system's solution does not depend on the others); NaN rows where singular (an exact zero
+    pivot, which fails the whole stack in numpy: found by the same LU's sign of the determinant)."""
     with np.errstate(all="ignore"):
         try:
             return np.linalg.solve(J, r[..., None])[..., 0]
-        except np.linalg.LinAlgError:  # one singular system fails the batch: solve one by one
+        except np.linalg.LinAlgError:
             out = np.full(r.shape, np.nan)
-            for i in range(len(J)):
-                try:
-                    out[i] = np.linalg.solve(J[i], r[i])
-                except np.linalg.LinAlgError:
-                    pass
+            ok = np.linalg.slogdet(J)[0] != 0
+            out[ok] = np.linalg.solve(J[ok], r[ok][..., None])[..., 0]
             return out
 
 
@@ -160,9 +215,13 @@ class ParametricStatics:
         self._newton: dict = {}
         self._square: dict = {}
         self._maps: dict = {}
-        self.parallel, self.threads = "serial", 2  # map mode of the batch evaluations (CasADi map)
-        self.jit = False  # compile the balance check to C (needs a C compiler; build about 0.5 s)
-        self.chunk = 8192  # points per mapped call
+        self._compiled: dict = {}
+        self.parallel, self.threads = "serial", 2  # map mode of the virtual machine's maps (CasADi map)
+        self.chunk = 8192  # points per mapped call on the virtual machine
+        #: evaluate batches of COMPILED_MIN points or more by maps compiled to C (:func:`compiled_map`), in
+        #: blocks of ``block`` points; default: when a C compiler is found
+        self.jit = compiler() is not None
+        self.block = COMPILED_SIZE
 
     def _relative(self, groups, w, psi1, dpsi, theta, q) -> ca.Function:
         """Each balance's |residual| over its scale, the largest absolute term in it (the groups in
@@ -228,18 +287,17 @@ class ParametricStatics:
         "relative" (w, p) -> relative |r| per balance; "step" (w_free, p) -> (r, J row by row) of the
         square system with the stops fixed as ``active`` says; "newton" (w_free0, p) -> w_free, its
         root by CasADi's rootfinder."""
-        key = (kind, active, self.jit)
+        key = (kind, active)
         if key not in self._maps:
             free = self.newton(active)[1]
             if kind in ("check", "relative"):
                 w, p = ca.SX.sym("w", len(self.system.unknowns)), ca.SX.sym("p", 2 + len(self.names))
                 args = (w, p[0], p[1], p[2:])
-                jit = {"jit": True, "compiler": "shell", "jit_options": {"flags": ["-O2"], "verbose": False}}
                 out = [self.relative(*args)] if kind == "relative" else [
                     ca.mmax(ca.fabs(self.residual(*args))), ca.mmax(self.relative(*args)), self.flows(*args),
                     self.pressures(*args)]
                 # cse: the residual, the flows and the scales share their throttle flows (215 -> 111 instructions)
-                self._maps[key] = ca.Function(kind, [w, p], out, {"cse": True} | (jit if self.jit else {}))
+                self._maps[key] = ca.Function(kind, [w, p], out, {"cse": True})
             elif kind == "newton":  # CasADi's rootfinder (with its line search) from w_free
                 solver = self.newton(active)[0]
                 wf, p = ca.MX.sym("wf", len(free)), ca.MX.sym("p", 2 + len(self.names))
@@ -252,34 +310,51 @@ class ParametricStatics:
         return self._maps[key]
 
     def mapped(self, kind: str, active: frozenset, m: int) -> ca.Function:
-        """:meth:`function` mapped over ``m`` points (``parallel``: CasADi's map mode), built once per size."""
-        key = (kind, active, m, self.parallel, self.jit)
+        """:meth:`function` mapped over ``m`` points on CasADi's virtual machine (``parallel``: CasADi's map
+        mode), built once per size."""
+        key = (kind, active, m, self.parallel)
         if key not in self._maps:
             f = self.function(kind, active)
             self._maps[key] = f.map(m, self.parallel, self.threads) if self.parallel != "serial" else f.map(m)
-            sized = [k for k in self._maps if len(k) == 5]
+            sized = [k for k in self._maps if len(k) == 4]
             if len(sized) > 32:  # keep the cache small: sizes of the fallback passes vary
                 self._maps.pop(sized[0])
         return self._maps[key]
 
+    def compiled(self, kind: str, active: frozenset) -> ca.Function | None:
+        """:meth:`function` mapped over ``block`` points and compiled to C (:func:`compiled_map`), built or
+        loaded once; None without a C compiler."""
+        key = (kind, active, self.block)
+        if key not in self._compiled:
+            self._compiled[key] = compiled_map(self.function(kind, active), self.block)
+        return self._compiled[key]
+
     def evaluate(self, kind: str, active: frozenset, *rows: np.ndarray) -> list[np.ndarray]:
-        """:meth:`function` on every row of ``rows`` (points x entries each) by :func:`call_rows`, in
-        chunks of at most ``chunk`` points: a CasADi map takes time to build in proportion to its
-        size (about 3 us per point), so one map of the chunk size is built once and called repeatedly,
-        and a remainder is padded to a power of two.  Returns one array (points x entries) per output."""
+        """:meth:`function` on every row of ``rows`` (points x entries each) by :func:`call_rows`: batches of
+        COMPILED_MIN points or more (with ``jit``) by the compiled map (:meth:`compiled`), block after block,
+        the last one padded with copies of its last point; the others on the virtual machine in chunks of at
+        most ``chunk`` points: a CasADi map takes time to build in proportion to its size (about 3 us per
+        point), so one map of the chunk size is built once and called repeatedly, and a remainder is padded
+        to a power of two.  Returns one array (points x entries) per output."""
         m = rows[0].shape[0]
         rows = [np.ascontiguousarray(r, dtype=float) for r in rows]
         f = self.function(kind, active)
         outs = [np.empty((m, f.nnz_out(j))) for j in range(f.n_out())]
-        for a in range(0, m, self.chunk):
-            b = min(a + self.chunk, m)
-            size = self.chunk if b - a == self.chunk else max(16, 1 << (b - a - 1).bit_length())
+        fc = self.compiled(kind, active) if self.jit and kind != "newton" and m >= COMPILED_MIN else None
+        block = self.block if fc is not None else self.chunk
+        for a in range(0, m, block):
+            b = min(a + block, m)
+            if fc is not None:
+                fm, size = fc, block
+            else:
+                # the rootfinder's map is cheap to build and each point costs up to 50 iterations: never padded
+                size = b - a if b - a == block or kind == "newton" else max(16, 1 << (b - a - 1).bit_length())
+                fm = self.mapped(kind, active, size)
             if size == b - a:
-                interrupt.call(call_rows, self.mapped(kind, active, size), *[r[a:b] for r in rows],
-                               out=[o[a:b] for o in outs])
-            else:  # a remainder: padded with copies of its last point to a power of two, so few sizes are built
+                interrupt.call(call_rows, fm, *[r[a:b] for r in rows], out=[o[a:b] for o in outs])
+            else:  # a remainder: padded with copies of its last point, so few sizes are built
                 pad = [np.concatenate([r[a:b], np.repeat(r[b - 1:b], size - (b - a), axis=0)]) for r in rows]
-                for o, v in zip(outs, interrupt.call(call_rows, self.mapped(kind, active, size), *pad), strict=True):
+                for o, v in zip(outs, interrupt.call(call_rows, fm, *pad), strict=True):
                     o[a:b] = v[:b - a]
         return outs
 
