@@ -47,7 +47,9 @@ STALLED_RESIDUAL = 1e-6
 # Batches of at least COMPILED_MIN points are evaluated by the point Function mapped over COMPILED_SIZE points and
 # compiled to C with the loop inside (one C call per block, the last block padded): 3x CasADi's virtual machine.
 COMPILED_SIZE, COMPILED_MIN = 1024, 256
-COMPILER_FLAGS = ("-O2", "-fPIC", "-shared")  # no -ffast-math, no -march: the VM's floating-point results, bit for bit
+# no -ffast-math, no -march: the virtual machine's floating-point results, bit for bit; -fno-semantic-interposition
+# lets the compiler inline CasADi's helpers (fmax, fabs, sq) into the loop (1.3x)
+COMPILER_FLAGS = ("-O2", "-fPIC", "-shared", "-fno-semantic-interposition", "-fno-math-errno")
 
 
 @dataclass
@@ -131,21 +133,24 @@ def _cache_dir() -> Path:
     return Path(root) / "compiled"
 
 
-def compiled_map(f: ca.Function, m: int) -> ca.Function | None:
+def compiled_map(f: ca.Function, m: int, parallel: str = "serial", threads: int = 2) -> ca.Function | None:
     """``f`` mapped over ``m`` points as C code with the loop inside, compiled once per machine and loaded as a
     CasADi external Function (the shared library is cached on disk under the hash of its C source, compiler
     and flags, so a second process only loads it).  None when no C compiler is found or compiling fails: the
-    caller then uses CasADi's virtual machine, with the same results."""
+    caller then uses CasADi's virtual machine, with the same results.  ``parallel``: "serial", or "thread"
+    (POSIX threads) or "openmp", each over ``threads`` threads, CasADi's map modes in the generated code."""
     cc = compiler()
     if cc is None:
         return None
     ins = [ca.MX.sym(f.name_in(i), f.size1_in(i), m) for i in range(f.n_in())]
-    name = f"{f.name()}_map{m}"
+    name = f"{f.name()}_map{m}" + ("" if parallel == "serial" else f"_{parallel}{threads}")
+    mapped = f.map(m) if parallel == "serial" else f.map(m, parallel, threads)
     cg = ca.CodeGenerator(f"{name}.c")
-    cg.add(ca.Function(name, ins, f.map(m).call(ins), [f"i{i}" for i in range(f.n_in())],
+    cg.add(ca.Function(name, ins, mapped.call(ins), [f"i{i}" for i in range(f.n_in())],
                        [f"o{j}" for j in range(f.n_out())]))
     source = cg.dump()
-    key = hashlib.sha256("\0".join([source, cc, *COMPILER_FLAGS]).encode()).hexdigest()[:20]
+    flags = [*COMPILER_FLAGS] + {"serial": [], "thread": ["-pthread"], "openmp": ["-fopenmp"]}[parallel]
+    key = hashlib.sha256("\0".join([source, cc, *flags]).encode()).hexdigest()[:20]
     lib = _cache_dir() / f"{name}_{key}.so"
     if not lib.exists():
         try:
@@ -153,7 +158,7 @@ def compiled_map(f: ca.Function, m: int) -> ca.Function | None:
             with tempfile.TemporaryDirectory(dir=lib.parent) as tmp:
                 src, out = Path(tmp) / f"{name}.c", Path(tmp) / lib.name
                 src.write_text(source)
-                subprocess.run([cc, *COMPILER_FLAGS, str(src), "-o", str(out), "-lm"], check=True,
+                subprocess.run([cc, *flags, str(src), "-o", str(out), "-lm"], check=True,
                                capture_output=True, timeout=120)
                 os.replace(out, lib)  # atomic: a concurrent process sees no half-written library
         except (OSError, subprocess.SubprocessError):
@@ -216,6 +221,7 @@ class ParametricStatics:
         self._square: dict = {}
         self._maps: dict = {}
         self._compiled: dict = {}
+        self._free: dict = {}
         self.parallel, self.threads = "serial", 2  # map mode of the virtual machine's maps (CasADi map)
         self.chunk = 8192  # points per mapped call on the virtual machine
         #: evaluate batches of COMPILED_MIN points or more by maps compiled to C (:func:`compiled_map`), in
@@ -253,9 +259,12 @@ class ParametricStatics:
     def free(self, active: frozenset = frozenset()) -> tuple[list[int], dict]:
         """Indices of the unknowns left free when each stop is fixed (in ``active``: coordinate on
         its stop; otherwise reaction 0), and the fixed values by index."""
-        sys_ = self.system
-        fixed = {sys_.index(k): v for k, v in sys_.fixed_by_stops(active).items()}
-        return [i for i in range(len(sys_.unknowns)) if i not in fixed], fixed
+        if active not in self._free:
+            sys_ = self.system
+            fixed = {sys_.index(k): v for k, v in sys_.fixed_by_stops(active).items()}
+            self._free[active] = ([i for i in range(len(sys_.unknowns)) if i not in fixed], fixed)
+        free, fixed = self._free[active]
+        return list(free), dict(fixed)
 
     def newton(self, active: frozenset = frozenset()) -> tuple[ca.Function, list[int], ca.Function]:
         """The square system with the stops fixed as in :meth:`free` as CasADi's Newton rootfinder
@@ -283,7 +292,8 @@ class ParametricStatics:
         return ca.Function("dW_dp", [wf, p], [ca.jacobian(solver(wf, p), p)])
 
     def function(self, kind: str, active: frozenset) -> ca.Function:
-        """One point's Function: "check" (w, p) -> (largest |r|, largest relative |r|, q, psi);
+        """One point's Function: "check" (w, p) -> (largest |r|, largest relative |r|, q, psi, the number
+        of bounds w satisfies: 2 x unknowns inside, fewer outside or NaN);
         "relative" (w, p) -> relative |r| per balance; "step" (w_free, p) -> (r, J row by row) of the
         square system with the stops fixed as ``active`` says; "newton" (w_free0, p) -> w_free, its
         root by CasADi's rootfinder."""
@@ -295,7 +305,7 @@ class ParametricStatics:
                 args = (w, p[0], p[1], p[2:])
                 out = [self.relative(*args)] if kind == "relative" else [
                     ca.mmax(ca.fabs(self.residual(*args))), ca.mmax(self.relative(*args)), self.flows(*args),
-                    self.pressures(*args)]
+                    self.pressures(*args), ca.sum1(ca.vertcat(w >= self.lower, w <= self.upper))]
                 # cse: the residual, the flows and the scales share their throttle flows (215 -> 111 instructions)
                 self._maps[key] = ca.Function(kind, [w, p], out, {"cse": True})
             elif kind == "newton":  # CasADi's rootfinder (with its line search) from w_free
@@ -322,11 +332,11 @@ class ParametricStatics:
         return self._maps[key]
 
     def compiled(self, kind: str, active: frozenset) -> ca.Function | None:
-        """:meth:`function` mapped over ``block`` points and compiled to C (:func:`compiled_map`), built or
-        loaded once; None without a C compiler."""
-        key = (kind, active, self.block)
+        """:meth:`function` mapped over ``block`` points and compiled to C (:func:`compiled_map`, in the map
+        mode ``parallel``), built or loaded once; None without a C compiler."""
+        key = (kind, active, self.block, self.parallel)
         if key not in self._compiled:
-            self._compiled[key] = compiled_map(self.function(kind, active), self.block)
+            self._compiled[key] = compiled_map(self.function(kind, active), self.block, self.parallel, self.threads)
         return self._compiled[key]
 
     def evaluate(self, kind: str, active: frozenset, *rows: np.ndarray) -> list[np.ndarray]:
@@ -445,41 +455,44 @@ class ParametricStatics:
         sys_ = self.system
         P = np.ascontiguousarray(P, dtype=float)
         n = P.shape[0]
-        W = np.full((n, len(sys_.unknowns)), np.nan)
-        q = np.full((n, len(sys_.throttles)), np.nan)
-        psi = np.full((n, 4), np.nan)
-        resid = np.full(n, np.nan)
-        relative = np.full(n, np.nan)
+        out = None  # W, q, psi, residual, relative residual: the first pass's arrays, the rejected rows blanked
         which = np.full(n, -1)
-        todo = np.arange(n)
+        todo = None  # indices of the points not accepted yet (None: all of them)
 
         def accept(Wk, active, k, tol):
-            nonlocal todo, W, q, psi, resid, relative
-            r, rel, qk, pk = self.evaluate("check", active, Wk, P if todo.size == n else P[todo])
-            r, rel = r[:, 0], rel[:, 0]
-            with np.errstate(invalid="ignore"):
-                ok = np.all((Wk >= self.lower) & (Wk <= self.upper), axis=1) & (r <= tol)
-            if todo.size == n:  # the first pass: take the arrays as they are, blank the rejected points
-                W, q, psi, resid, relative = Wk, qk, pk, r, rel
-                W[~ok], q[~ok], psi[~ok], resid[~ok], relative[~ok] = np.nan, np.nan, np.nan, np.nan, np.nan
+            nonlocal todo, out
+            r, rel, qk, pk, inside = self.evaluate("check", active, Wk, P if todo is None else P[todo])
+            part = [Wk, qk, pk, r[:, 0], rel[:, 0]]
+            ok = (inside[:, 0] == 2 * Wk.shape[1]) & (part[3] <= tol)  # finite, inside every bound, a root
+            bad = ~ok
+            if todo is None:  # the first pass: take the arrays as they are, blank the rejected points
+                out, todo = part, np.flatnonzero(bad)
+                if todo.size:
+                    for a in out:
+                        a[bad] = np.nan
                 which[ok] = k
             else:
                 idx = todo[ok]
-                W[idx], q[idx], psi[idx], resid[idx], relative[idx], which[idx] = (Wk[ok], qk[ok], pk[ok], r[ok],
-                                                                                   rel[ok], k)
-            todo = todo[~ok]
+                for a, v in zip(out, part, strict=True):
+                    a[idx] = v[ok]
+                which[idx] = k
+                todo = todo[bad]
 
         for k, (active, starts) in enumerate(attempts):
-            if todo.size == 0:
+            if todo is not None and todo.size == 0:
                 break
             fixed = self.free(active)[1]
-            start = np.array(starts[todo], float)
+            start = np.array(starts if todo is None else starts[todo], float)
             start[:, list(fixed)] = list(fixed.values())
             # a start may be a root already (the closed form is exact when no stop is reached): accepted by
             # the Newton method's own first test, |r| <= its abstol, without a step
             accept(start, active, k, min(tol, NEWTON_ABSTOL))
             if todo.size:
                 accept(self.roots(active, starts[todo], P[todo]), active, k, tol)
+        if out is None:  # no attempt
+            out = [np.full((n, len(sys_.unknowns)), np.nan), np.full((n, len(sys_.throttles)), np.nan),
+                   np.full((n, 4), np.nan), np.full(n, np.nan), np.full(n, np.nan)]
+        W, q, psi, resid, relative = out
         return {"W": W, "q": q, "psi": psi, "residual": resid, "relative_residual": relative, "valid": which >= 0,
                 "active": which}
 
