@@ -14,7 +14,7 @@ from numpy.testing import assert_allclose
 from autobal import scenario
 from autobal.adapters import design
 from autobal.analysis import closed_form
-from autobal.analysis.statics import ParametricStatics, StaticsSolver
+from autobal.analysis.statics import ParametricStatics, StaticsSolver, ideal_guess
 
 # ---- literature validation: the source's closed forms (App. A, App. B) ----
 
@@ -247,6 +247,43 @@ def test_parametric_evaluator_equals_ipopt_in_chunks_and_on_the_stop(pump):
     other = StaticsSolver(dataclasses.replace(pump.design, groups=dataclasses.replace(g, sigma=1.1 * g.sigma)))
     assert_allclose(sol2["W"][2], other.solve(1.0, 0.04).x, atol=1e-8)
     assert np.abs(sol2["W"][2] - sol["W"][2]).max() > 1e-3
+
+
+def test_compiled_batch_path_equals_the_virtual_machine_and_ipopt_over_a_parameter_range(pump):
+    """The batch path at the size where its maps are compiled to C (COMPILED_MIN points or more, a padded last
+    block) against CasADi's virtual machine on the same points (bit for bit: same operations, no fast-math) and
+    against IPOPT point by point: psi1 across regulation and saturation (App. A: the valve reaches its stop
+    near psi1 = 1.2), sigma and psi_in over +-10 %."""
+    from autobal.analysis.statics import COMPILED_MIN, compiler
+
+    if compiler() is None:
+        pytest.skip("no C compiler: the batch path runs on CasADi's virtual machine only")
+    g = pump.design.groups
+    n = COMPILED_MIN + 45
+    rng = np.random.default_rng(17)
+    psi1 = np.linspace(0.4, 1.6, n)
+    theta = np.column_stack([g.sigma * rng.uniform(0.9, 1.1, n), g.regulator.psi_in * rng.uniform(0.9, 1.1, n)])
+    P = np.column_stack([psi1, np.full(n, 0.04), theta])
+    # each point's start from its own groups (the closed form takes arrays of groups)
+    gs = dataclasses.replace(g, sigma=theta[:, 0], regulator=dataclasses.replace(g.regulator, psi_in=theta[:, 1]))
+    sols = []
+    for jit in (True, False):
+        ps = ParametricStatics(g, ["sigma", "psi_in"])
+        ps.jit = jit
+        W0 = np.clip(ideal_guess(gs, ps.system.unknowns, psi1, 0.04), ps.lower, ps.upper)
+        sols.append(ps.solve(P, [(a, W0) for a in ps.active_sets]))
+        assert ps._compiled if jit else not ps._compiled  # the compiled maps were (not) used
+    fast, vm = sols
+    for k in fast:
+        assert np.array_equal(fast[k], vm[k], equal_nan=True), k
+    assert fast["valid"].all() and np.nanmax(fast["residual"]) < 1e-10
+    assert 0 < (fast["active"] == 1).sum() < n  # both stop sets occur
+    for i in np.linspace(0, n - 1, 7).astype(int):
+        other = StaticsSolver(dataclasses.replace(pump.design, groups=dataclasses.replace(
+            g, sigma=theta[i, 0], regulator=dataclasses.replace(g.regulator, psi_in=theta[i, 1]))))
+        pt = other.solve(float(psi1[i]), 0.04)
+        assert_allclose(fast["W"][i], pt.x, atol=1e-8)
+        assert (fast["active"][i] == 1) == pt.saturated
 
 
 def test_refinement_resolves_the_saturation_kink(pump):
