@@ -9,8 +9,9 @@ through their reactions, never a crash.
 
 Newton's method on the square system of the same balances (stops fixed: each reaction zero or
 its coordinate on the stop) is the one batch solver, :class:`ParametricStatics`: the balances
-with any groups as parameters, solved for many points at once (mapped CasADi Functions called
-through buffers, batched linear solves), behind :meth:`StaticsSolver.newton` (an independent
+with any groups as parameters, solved for many points at once (CasADi Functions mapped over the
+points, generated as C and compiled where a C compiler is found, called through buffers; batched
+linear solves), behind :meth:`StaticsSolver.newton` (an independent
 cross-check of IPOPT), :meth:`StaticsSolver.fast_sweep`, the Monte Carlo and the estimation.
 :meth:`StaticsSolver.sweep` continues over the discharge ratio with warm starts and
 :meth:`StaticsSolver.batch` solves a whole sweep as one NLP.
@@ -118,8 +119,14 @@ def call_rows(f: ca.Function, *rows: np.ndarray, out: list | None = None) -> lis
 
 
 def compiler() -> str | None:
-    """The C compiler of the compiled maps: ``$CC``, else ``cc`` or ``gcc`` on the path; None (the virtual
-    machine is used) when there is none or ``AUTOBAL_COMPILE=0``."""
+    """The C compiler of the compiled maps.
+
+    Returns
+    -------
+    str or None
+        ``$CC``, else ``cc`` or ``gcc`` on the path; None (CasADi's virtual machine is used) when there
+        is none or the environment sets ``AUTOBAL_COMPILE=0``.
+    """
     if os.environ.get("AUTOBAL_COMPILE", "1") == "0":
         return None
     return os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
@@ -133,12 +140,32 @@ def _cache_dir() -> Path:
     return Path(root) / "compiled"
 
 
+_FAILED: set = set()  # keys of the maps this process could not compile (not tried again)
+
+
 def compiled_map(f: ca.Function, m: int, parallel: str = "serial", threads: int = 2) -> ca.Function | None:
     """``f`` mapped over ``m`` points as C code with the loop inside, compiled once per machine and loaded as a
-    CasADi external Function (the shared library is cached on disk under the hash of its C source, compiler
-    and flags, so a second process only loads it).  None when no C compiler is found or compiling fails: the
-    caller then uses CasADi's virtual machine, with the same results.  ``parallel``: "serial", or "thread"
-    (POSIX threads) or "openmp", each over ``threads`` threads, CasADi's map modes in the generated code."""
+    CasADi external Function: the shared library is cached on disk under the hash of its C source, compiler
+    and flags, so a second process only loads it.  Compiled without fast-math or machine-specific flags, it
+    gives the virtual machine's results bit for bit.
+
+    Parameters
+    ----------
+    f : casadi.Function
+        One point's Function (dense column inputs and outputs).
+    m : int
+        Points per call: inputs and outputs are (entries x m), one point a column.
+    parallel : {"serial", "thread", "openmp"}
+        CasADi's map mode in the generated code (POSIX threads or OpenMP over ``threads`` threads).
+    threads : int
+        Threads of a parallel map.
+
+    Returns
+    -------
+    casadi.Function or None
+        The compiled map; None when no C compiler is found or compiling fails (the caller then uses
+        CasADi's virtual machine, with the same results).
+    """
     cc = compiler()
     if cc is None:
         return None
@@ -151,6 +178,8 @@ def compiled_map(f: ca.Function, m: int, parallel: str = "serial", threads: int 
     source = cg.dump()
     flags = [*COMPILER_FLAGS] + {"serial": [], "thread": ["-pthread"], "openmp": ["-fopenmp"]}[parallel]
     key = hashlib.sha256("\0".join([source, cc, *flags]).encode()).hexdigest()[:20]
+    if key in _FAILED:
+        return None
     lib = _cache_dir() / f"{name}_{key}.so"
     if not lib.exists():
         try:
@@ -162,6 +191,7 @@ def compiled_map(f: ca.Function, m: int, parallel: str = "serial", threads: int 
                                capture_output=True, timeout=120)
                 os.replace(out, lib)  # atomic: a concurrent process sees no half-written library
         except (OSError, subprocess.SubprocessError):
+            _FAILED.add(key)
             return None
     return ca.external(name, str(lib))
 
