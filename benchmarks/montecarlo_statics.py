@@ -30,36 +30,10 @@ from autobal.analysis.sampling import Sampler, marginals
 from autobal.analysis.statics import FAST_NEWTON_ITER, ideal_guess
 from benchmarks import _numpy_statics as ns
 from benchmarks._results import case, write
-from benchmarks._timing import best_of
+from benchmarks._timing import best_of, cpu_best_of
+from benchmarks.statics_sweep import LEVERS, settings
 
 SAMPLES, FSOLVE_SAMPLES, BIG, PSI1 = 100_000, 2_000, 1_000_000, 1.0
-
-
-def cpu_best_of(n: int, fn) -> float:
-    """The shortest CPU time of ``n`` calls of ``fn()`` (this process, all threads), s."""
-    best = float("inf")
-    for _ in range(n):
-        t = time.process_time()
-        fn()
-        best = min(best, time.process_time() - t)
-    return best
-
-
-# (label, ParametricStatics settings): the levers measured on SampledStatics.solve, the default first
-LEVERS = [
-    ("compiled maps, serial, 1024-point blocks (default)", {}),
-    ("compiled maps, 2 OpenMP threads", {"parallel": "openmp"}),
-    ("compiled maps, 2 POSIX threads (CasADi thread map)", {"parallel": "thread"}),
-    ("compiled maps, 4096-point blocks", {"block": 4096}),
-    ("virtual machine maps, serial (no C compiler)", {"jit": False}),
-    ("virtual machine maps, 2 threads", {"jit": False, "parallel": "thread"}),
-]
-DEFAULT = {"jit": True, "parallel": "serial", "block": 1024}
-
-
-def settings(ps, **kw):
-    for k, v in (DEFAULT | kw).items():
-        setattr(ps, k, v)
 
 
 def main(repeats: int = 5) -> list[dict]:

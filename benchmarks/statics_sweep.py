@@ -28,20 +28,9 @@ from autobal.adapters import design
 from autobal.analysis.statics import StaticsSolver, call_rows
 from benchmarks import _numpy_statics as ns
 from benchmarks._results import case, write
-from benchmarks._timing import best_of
+from benchmarks._timing import best_of, cpu_best_of
 
 DPSI = 0.04
-
-
-def cpu_best_of(n: int, fn) -> float:
-    """The shortest CPU time of ``n`` calls of ``fn()`` (this process, all threads), s: less sensitive than
-    the wall time to other processes on a shared machine."""
-    best = float("inf")
-    for _ in range(n):
-        t = time.process_time()
-        fn()
-        best = min(best, time.process_time() - t)
-    return best
 
 
 # (label, ParametricStatics settings): the levers measured on fast_sweep, the default first
@@ -58,6 +47,7 @@ DEFAULT = {"jit": True, "parallel": "serial", "block": 1024}
 
 
 def settings(par, **kw):
+    """Set the evaluator ``par`` (a ParametricStatics) to the default, changed by ``kw``."""
     for k, v in (DEFAULT | kw).items():
         setattr(par, k, v)
 
