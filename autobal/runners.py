@@ -158,6 +158,39 @@ def spinup(scene, settings) -> Result:
                                 settings.multistart, ipopt_options(settings.max_iterations, settings.tolerance))
 
 
+def spinup_robust(scene, settings) -> Result:
+    """One spin-up profile minimising the worst-case peak over a set of rotors, validated on a random sample
+    (on the executor the CLI or the scene names)."""
+    from autobal.analysis import executor
+    from autobal.ocp import robust, robust_study
+    from autobal.ocp.solve import ipopt_options
+    from autobal.ocp.transcription import DirectCollocation
+
+    ocp = spinup_ocp(scene, settings)
+    liquid = settings.liquid_mass_factor
+    if liquid is not None and ocp.params.m2_star == 0:
+        raise ScenarioError("analyses.spinup_robust.liquid_mass_factor: the rotor has no liquid block (rotor.liquid)")
+    unc = robust.Uncertainty(settings.critical_speed_spread, tuple(settings.damping_factor),
+                             tuple(liquid) if liquid is not None else None)
+    with executor.make(scene_executor=getattr(scene, "executor", None)) as exe:
+        return robust_study.run(ocp, DirectCollocation(settings.intervals, settings.degree, settings.scheme), unc,
+                                settings.design_points, settings.validation_samples, settings.seed, settings.ramps,
+                                exe, scene.title, settings.multistart,
+                                ipopt_options(settings.max_iterations, settings.tolerance))
+
+
+def spinup_time_optimal(scene, settings) -> Result:
+    """The earliest arrival with the peak bounded, and the front of peak against arrival time."""
+    from autobal.ocp import time_optimal_study
+    from autobal.ocp.solve import ipopt_options
+    from autobal.ocp.transcription import DirectCollocation
+
+    return time_optimal_study.run(spinup_ocp(scene, settings),
+                                  DirectCollocation(settings.intervals, settings.degree, settings.scheme),
+                                  settings.front_points, scene.title, settings.multistart,
+                                  ipopt_options(settings.max_iterations, settings.tolerance))
+
+
 RUNNERS = {
     "statics": statics,
     "frequency": frequency,
@@ -169,6 +202,8 @@ RUNNERS = {
     "montecarlo": montecarlo,
     "rotor_dynamics": rotor_dynamics,
     "spinup": spinup,
+    "spinup_robust": spinup_robust,
+    "spinup_time_optimal": spinup_time_optimal,
     "design": design,
 }
 

@@ -22,7 +22,7 @@ from autobal.schema_dynamics import Dynamics, Frequency, Stability, Transient
 from autobal.schema_estimation import Estimation
 from autobal.schema_liquid_balancer import LiquidBalancer, LiquidBalancerAnalysis
 from autobal.schema_reliability import Executor, MonteCarlo, Reliability
-from autobal.schema_rotor import Rotor, RotorDynamics, Spinup
+from autobal.schema_rotor import Rotor, RotorDynamics, Spinup, SpinupRobust, SpinupTimeOptimal
 from autobal.units import (
     AngularSpeed,
     Area,
@@ -208,6 +208,10 @@ class Analyses(Strict):
     reliability: Reliability | None = _d("traditional disc wear and time to failure", None)
     rotor_dynamics: RotorDynamics | None = _d("Jeffcott rotor studies; needs rotor", None)
     spinup: Spinup | None = _d("optimal spin-up through the critical speed; needs rotor", None)
+    spinup_robust: SpinupRobust | None = _d("one spin-up profile for a set of rotors (worst case); needs rotor",
+                                            None)
+    spinup_time_optimal: SpinupTimeOptimal | None = _d("earliest arrival with the peak bounded, and the front of "
+                                                       "peak against arrival time; needs rotor", None)
     design: Design | None = _d("stability-constrained design of the device; needs device.dynamics", None)
 
 
@@ -215,7 +219,8 @@ class Analyses(Strict):
 NEEDS = {
     "statics": "device", "frequency": "device.dynamics", "stability": "device.dynamics",
     "transient": "device.dynamics", "montecarlo": "device", "liquid_balancer": "liquid_balancer",
-    "rotor_dynamics": "rotor", "spinup": "rotor", "design": "device.dynamics",
+    "rotor_dynamics": "rotor", "spinup": "rotor", "spinup_robust": "rotor",
+    "spinup_time_optimal": "rotor", "design": "device.dynamics",
 }
 # a scene's name names its output folder: a plain file name, never a path
 NAME_PATTERN = r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}$"
@@ -491,6 +496,13 @@ def estimate_seconds(scn: Scenario) -> dict[str, float]:
     if a.spinup is not None:
         s = a.spinup
         out["spinup"] = c["start"] + c["ocp_collocation_point"] * s.intervals * s.degree * (4 if s.multistart else 1)
+    if a.spinup_robust is not None:
+        s = a.spinup_robust
+        out["spinup_robust"] = c["start"] + c["ocp_collocation_point"] * s.intervals * s.degree * 12
+    if a.spinup_time_optimal is not None:
+        s = a.spinup_time_optimal
+        out["spinup_time_optimal"] = c["start"] + c["ocp_collocation_point"] * s.intervals * s.degree * (
+            4 + 2 * s.front_points)
     if a.reliability is not None:
         r = a.reliability
         out["reliability"] = c["start"] + c["reliability_node"] * r.time_points * r.tau_nodes

@@ -161,3 +161,49 @@ class Spinup(Strict):
         if self.method == "multiple_shooting" and self.objective == "integrated_deflection":
             raise ValueError("multiple_shooting supports the peak and min_time objectives")
         return self
+
+
+class SpinupRobust(Spinup):
+    """Robust spin-up: one profile minimising the worst-case re-simulated peak over a set of rotors around the
+    scene's (critical speed, damping and, with a liquid block, liquid mass), checked on a random validation
+    sample beside the nominal optimum and the constant ramps."""
+
+    critical_speed_spread: Annotated[float, Field(ge=0, le=0.5)] = Field(
+        0.05, description="the critical speed within (1 +- spread) of the scene's (stiffness scaled), dimensionless")
+    damping_factor: Annotated[list[Positive], Field(min_length=2, max_length=2)] = Field(
+        [0.5, 2.0], description="range [lo, hi] of the factor on the damping chi, dimensionless")
+    liquid_mass_factor: Annotated[list[Annotated[float, Field(ge=0, le=100)]], Field(
+        min_length=2, max_length=2)] | None = Field(
+        None, description="range [lo, hi] of the factor on the liquid mass (scenes with a liquid block), dimensionless")
+    design_points: Annotated[int, Field(ge=1, le=9)] = Field(
+        3, description="grid points per uncertain quantity in the design set, 1 to 9")
+    validation_samples: Annotated[int, Field(ge=1, le=1_000_000)] = Field(
+        1000, description="rotors drawn from the same ranges to validate the profiles, 1 to 1,000,000")
+    seed: Annotated[int, Field(ge=0)] = Field(1, description="seed of the validation sample")
+    ramps: Annotated[int, Field(ge=2, le=50)] = Field(
+        8, description="constant ramps compared, from the slowest meeting the deadline to max_acceleration")
+
+    @model_validator(mode="after")
+    def _robust(self):
+        if self.objective != "peak_deflection" or self.method != "collocation":
+            raise ValueError("spinup_robust minimises the worst-case peak_deflection by collocation")
+        for name in ("damping_factor", "liquid_mass_factor"):
+            v = getattr(self, name)
+            if v is not None and v[0] > v[1]:
+                raise ValueError(f"{name}: [lo, hi] with lo <= hi (dimensionless)")
+        return self
+
+
+class SpinupTimeOptimal(Spinup):
+    """Time-optimal spin-up: the earliest arrival at ``final_speed`` with the peak deflection bounded (the
+    settling window still counts), and the Pareto front of peak against arrival time up to the deadline
+    ``horizon``."""
+
+    front_points: Annotated[int, Field(ge=2, le=50)] = Field(
+        6, description="points of the front between the minimum-peak profile and the fastest ramp, 2 to 50")
+
+    @model_validator(mode="after")
+    def _time_optimal(self):
+        if self.method != "collocation":
+            raise ValueError("spinup_time_optimal is built on collocation")
+        return self

@@ -1,0 +1,438 @@
+"""Robust spin-up: one speed profile for a set of rotors (the multi-stage idea of do-mpc, Lucia et al. (2013),
+with one stage: a control shared by every scenario).
+
+The uncertain rotor (:class:`Uncertainty`): the critical speed within +-``critical_speed_spread`` (the shaft
+stiffness c scaled by the square of a factor, so omega_cr = sqrt(c/m) scales by it), the damping chi scaled
+by a factor in ``damping_factor`` and, with a liquid block, the full-chamber liquid mass m2* scaled by a factor
+in ``liquid_mass_factor``.  The design set is a grid over these ranges; the validation sample draws rotors
+uniformly from the same ranges (the damping factor log-uniformly).
+
+The robust OCP (:class:`RobustSolver`): every scenario transcribed by the same method on the same mesh in SI
+time (each scenario's dimensionless time tau = Omega0 t differs), the controls u = alpha/alpha_max and the
+epigraph level S shared: minimise S subject to delta_i^2 <= S at every collocation point of every scenario.
+The speed, the same in SI for every scenario, is kept once: the speed states of the other scenarios are the
+first one's scaled by Omega0_1/Omega0_i, so the final-speed condition, the speed cap and the jerk bound appear
+once (no duplicated constraints, no degenerate multipliers).
+
+The validation of a profile on many rotors (:func:`fast_peaks`) uses the exponential integrator of the global
+search (:func:`autobal.ocp.search.simulate_steps`), checked against CVODES (:func:`cvodes_peaks`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from autobal.analysis import ipopt
+from autobal.errors import SolveError
+from autobal.models.rotor import RotorParams
+from autobal.ocp.problem import SpinupOcp
+from autobal.ocp.search import ModalRotor, simulate_steps
+from autobal.ocp.simulation import initial_guess, ramp_profile, resimulate
+from autobal.ocp.solve import IPOPT_OPTIONS
+from autobal.ocp.transcription import DirectCollocation, mesh, transcribe
+
+FAST_STEP = 0.5  # dimensionless step of the validation integrator (peak within 1e-4 of CVODES, tested)
+
+
+@dataclass(frozen=True)
+class Uncertainty:
+    """Ranges of the uncertain rotor, as factors on the nominal values.
+
+    Attributes
+    ----------
+    critical_speed_spread : float
+        omega_cr within (1 +- spread) of nominal (the stiffness scaled by the factor squared), 1.
+    damping_factor : tuple
+        chi within [lo, hi] times nominal, 1.
+    liquid_mass_factor : tuple or None
+        m2* within [lo, hi] times nominal (a rotor with a liquid block only), 1.
+    """
+
+    critical_speed_spread: float = 0.05
+    damping_factor: tuple = (0.5, 2.0)
+    liquid_mass_factor: tuple | None = None
+
+    def __post_init__(self):
+        if not 0 <= self.critical_speed_spread < 1:
+            raise ValueError("critical_speed_spread must be in [0, 1)")
+        lo, hi = self.damping_factor
+        if not 0 < lo <= hi:
+            raise ValueError("damping_factor must be 0 < lo <= hi")
+        if self.liquid_mass_factor is not None and not 0 <= self.liquid_mass_factor[0] <= self.liquid_mass_factor[1]:
+            raise ValueError("liquid_mass_factor must be 0 <= lo <= hi")
+
+    @property
+    def dims(self) -> int:
+        return 3 if self.liquid_mass_factor is not None else 2
+
+    def grid(self, points: int) -> np.ndarray:
+        """The design set: ``points`` values of each factor (the range ends included), (S, 3)
+        columns critical-speed, damping and liquid-mass factors; a zero-width range gives one value."""
+        s = self.critical_speed_spread
+        axes = [np.unique(np.linspace(1 - s, 1 + s, points)),
+                np.unique(np.geomspace(*self.damping_factor, points)),
+                np.unique(np.linspace(*self.liquid_mass_factor, points)) if self.liquid_mass_factor else [1.0]]
+        return np.array(np.meshgrid(*axes, indexing="ij")).reshape(3, -1).T
+
+    def sample(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        """``n`` rotors drawn from the ranges (uniform; the damping factor log-uniform), (n, 3)."""
+        s = self.critical_speed_spread
+        lo, hi = self.damping_factor
+        liq = self.liquid_mass_factor or (1.0, 1.0)
+        return np.column_stack([rng.uniform(1 - s, 1 + s, n), np.exp(rng.uniform(np.log(lo), np.log(hi), n)),
+                                rng.uniform(*liq, n)])
+
+
+def perturbed(params: RotorParams, factors) -> RotorParams:
+    """The rotor with the factors (critical speed, damping, liquid mass) applied: c (cr)^2, chi d, m2* l.
+
+    Parameters
+    ----------
+    params : RotorParams
+        The nominal rotor (SI).
+    factors : sequence of 3 floats
+        Critical-speed, damping and liquid-mass factors (1: nominal).
+
+    Returns
+    -------
+    RotorParams
+        The perturbed rotor (SI).
+    """
+    cr, dmp, liq = (float(f) for f in factors)
+    return dataclasses.replace(params, c=params.c * cr**2, chi=params.chi * dmp, m2_star=params.m2_star * liq)
+
+
+def scenario_ocps(ocp: SpinupOcp, factors: np.ndarray) -> list[SpinupOcp]:
+    """The spin-up problem of each perturbed rotor (same drive, speeds, deadline and limits)."""
+    return [dataclasses.replace(ocp, params=perturbed(ocp.params, f)) for f in factors]
+
+
+@dataclass(frozen=True)
+class Profile:
+    """A speed profile in SI: u = alpha/alpha_max on ``n`` equal control intervals of the horizon (then held)."""
+
+    label: str
+    u: np.ndarray  # (n,) control intervals of the horizon
+
+    def on(self, ocp: SpinupOcp) -> tuple[np.ndarray, np.ndarray]:
+        """(u, h) of the profile on ``ocp``'s mesh (dimensionless interval lengths, settling window appended)."""
+        ms = mesh(ocp, self.u.size)
+        return (np.concatenate([self.u, np.zeros(ms.ns)]),
+                np.concatenate([np.full(ms.n, ms.h), np.full(ms.ns, ms.hs)]))
+
+
+def cvodes_peaks(ocp: SpinupOcp, factors: np.ndarray, profile: Profile, points: int = 8) -> np.ndarray:
+    """Peak delta/e of the profile on each perturbed rotor, CVODES at tight tolerance (the reference)."""
+    out = []
+    for o in scenario_ocps(ocp, factors):
+        u, h = profile.on(o)
+        out.append(resimulate(o, u, h, profile.label, points=points).peak_delta)
+    return np.array(out)
+
+
+def steps_of(ocp: SpinupOcp, u: np.ndarray, dt: float) -> np.ndarray:
+    """The piecewise-constant profile u (n control intervals of the horizon, then held) averaged over steps
+    of ``dt`` (dimensionless time of ``ocp``'s rotor), horizon and settling window covered."""
+    n = u.size
+    T = ocp.tau_h + ocp.tau_s
+    steps = int(np.ceil(T / dt))
+    edges = np.minimum(np.arange(steps + 1) * dt, T) / ocp.tau_h * n  # in control intervals
+    cum = np.concatenate([[0.0], np.cumsum(u)])
+    U = np.interp(edges, np.arange(n + 1), cum, right=cum[-1])  # integral of u, in control intervals
+    return np.diff(U) / (dt / ocp.tau_h * n)
+
+
+def fast_peaks(ocp: SpinupOcp, factors: np.ndarray, profiles: list[Profile], dt: float = FAST_STEP) -> np.ndarray:
+    """Peak delta/e of every profile on every perturbed rotor by the exponential integrator of the global
+    search (:func:`autobal.ocp.search.simulate_steps`), all profiles of one rotor at once.
+
+    Parameters
+    ----------
+    ocp : SpinupOcp
+        The nominal problem (SI).
+    factors : ndarray, shape (R, 3)
+        The rotors (:func:`perturbed`).
+    profiles : list of Profile
+        The speed profiles (same number of control intervals).
+    dt : float
+        Step, dimensionless time of each rotor.
+
+    Returns
+    -------
+    ndarray, shape (R, P)
+        Peak delta/e.
+    """
+    out = np.empty((len(factors), len(profiles)))
+    U = np.array([p.u for p in profiles])
+    for i, o in enumerate(scenario_ocps(ocp, factors)):
+        steps = np.array([steps_of(o, u, dt) for u in U])
+        out[i] = simulate_steps(o, steps, dt, ModalRotor.of(o))
+    return out
+
+
+@dataclass(frozen=True)
+class ValidationTask:
+    """One chunk of the validation sample (plain data, picklable for a Dask worker): its rotors are drawn
+    from ``SeedSequence(seed, spawn_key=(chunk,))``, so the sample is the same on any executor."""
+
+    ocp: SpinupOcp
+    uncertainty: Uncertainty
+    profiles: tuple
+    seed: int
+    chunk: int
+    size: int
+
+    def __call__(self) -> tuple[np.ndarray, np.ndarray]:
+        rng = np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(self.chunk,)))
+        factors = self.uncertainty.sample(self.size, rng)
+        return factors, fast_peaks(self.ocp, factors, list(self.profiles))
+
+
+def run_task(task: ValidationTask):
+    return task()
+
+
+def validate(ocp: SpinupOcp, uncertainty: Uncertainty, profiles: list[Profile], samples: int, seed: int,
+             executor, chunk: int = 100) -> tuple[np.ndarray, np.ndarray]:
+    """Peaks of every profile over ``samples`` rotors drawn from the ranges, on ``executor`` in chunks.
+
+    Returns
+    -------
+    factors : ndarray, shape (samples, 3)
+    peaks : ndarray, shape (samples, len(profiles))
+        delta/e.
+    """
+    tasks = [ValidationTask(ocp, uncertainty, tuple(profiles), seed, k, min(chunk, samples - k * chunk))
+             for k in range((samples + chunk - 1) // chunk)]
+    res = executor.map(run_task, tasks, desc="validation")
+    return np.concatenate([r[0] for r in res]), np.concatenate([r[1] for r in res])
+
+
+def ramp_family(ocp: SpinupOcp, n: int, count: int = 8) -> list[Profile]:
+    """Constant ramps from the slowest that reaches omega_final by the deadline to alpha_max (then held)."""
+    lo = min(abs(ocp.omega_final - ocp.omega_start) / ocp.horizon, ocp.alpha_max)
+    return [Profile(f"ramp {a:.4g} rad/s^2", ramp_profile(ocp, n, a)) for a in np.linspace(lo, ocp.alpha_max, count)]
+
+
+class RobustSolver:
+    """The multi-scenario NLP: one transcription per scenario, controls and epigraph level shared,
+    the speed states kept once (see the module docstring)."""
+
+    def __init__(self, ocps: list[SpinupOcp], method: DirectCollocation, ref: float, options: dict | None = None):
+        if not isinstance(method, DirectCollocation):
+            raise ValueError("the robust spin-up OCP is built on direct collocation")
+        if any(o.objective != "peak_deflection" for o in ocps):
+            raise ValueError("the robust spin-up OCP minimises the worst-case peak deflection (peak_deflection)")
+        t0 = time.perf_counter()
+        self.ocps, self.method = ocps, method
+        self.nlps = [transcribe(o, method, ref) for o in ocps]
+        first = self.nlps[0]
+        K = first.index["u"].size
+        n = first.mesh.n
+        u, z = ca.SX.sym("u", K), ca.SX.sym("S")
+        nu_idx = np.concatenate([first.index["X"][:, 4], first.index["Xc"][..., 4].ravel()])
+        parts, lbx, ubx, g, lbg, ubg = [u, z], [first.lbx[first.index["u"]], [0.0]], \
+            [first.ubx[first.index["u"]], [np.inf]], [], [], []
+        self.maps = []  # per scenario: (its variables' expressions in x) as a Function later
+        w_exprs = []
+        nu_first = None
+        for i, (o, nlp) in enumerate(zip(ocps, self.nlps, strict=True)):
+            N = nlp.x.numel()
+            own = np.ones(N, bool)
+            own[nlp.index["u"]] = False
+            own[nlp.index["v"]] = False
+            if i > 0:
+                own[nu_idx] = False
+            rest = ca.SX.sym(f"w{i}", int(own.sum()))
+            parts.append(rest)
+            lbx.append(nlp.lbx[own])
+            ubx.append(nlp.ubx[own])
+            el = [None] * N
+            for k, j in enumerate(np.flatnonzero(own)):
+                el[j] = rest[k]
+            for k, j in enumerate(nlp.index["u"]):
+                el[j] = u[k]
+            el[nlp.index["v"][0]] = z
+            if i == 0:
+                w = ca.vertcat(*el)
+                nu_first = [w[j] for j in nu_idx]
+            else:
+                scale = ocps[0].Om / o.Om
+                for k, j in enumerate(nu_idx):
+                    el[j] = scale * nu_first[k]
+                w = ca.vertcat(*el)
+            w_exprs.append(w)
+            gi = ca.Function("g", [nlp.x], [nlp.g])(w)
+            keep = np.ones(gi.numel(), bool)
+            if i > 0:  # rows that repeat the first scenario's: speed dynamics, final speed, jerk bound
+                for name, a, b in nlp.blocks:
+                    if name == "dynamics":
+                        keep[a:b][np.arange(b - a) % 5 == 4] = False
+                    elif name.startswith(("final speed", "jerk limit")):
+                        keep[a:b] = False
+            rows = np.flatnonzero(keep)
+            g.append(gi[rows.tolist()])
+            lbg.append(nlp.lbg[rows])
+            ubg.append(nlp.ubg[rows])
+        x = ca.vertcat(*parts)
+        f = z
+        pen = ocps[0].jerk_penalty
+        if pen and n > 1:
+            f = f + pen * ca.sumsqr(u[1:n] - u[:n - 1])
+        self.x, self.K, self.n = x, K, n
+        self.lbx, self.ubx = np.concatenate(lbx), np.concatenate(ubx)
+        self.lbg, self.ubg = np.concatenate(lbg), np.concatenate(ubg)
+        self.unpack = ca.Function("unpack", [x], w_exprs)
+        self.solver = ipopt.nlpsol("robust_spinup", x, ca.SX.sym("p", 0), f, ca.vertcat(*g),
+                                   **(IPOPT_OPTIONS | (options or {})))
+        self.ref = ref
+        self.build_time_s = time.perf_counter() - t0
+
+    @property
+    def variables(self) -> int:
+        return self.x.numel()
+
+    def guess(self, u: np.ndarray) -> np.ndarray:
+        """All variables from the control profile u (n control intervals): each scenario simulated."""
+        x0 = [np.concatenate([u, np.zeros(self.K - u.size)]), [0.0]]
+        for i, (o, nlp) in enumerate(zip(self.ocps, self.nlps, strict=True)):
+            w0 = initial_guess(o, nlp, u)
+            x0[1][0] = max(x0[1][0], w0[nlp.index["v"][0]])
+            own = np.ones(w0.size, bool)
+            own[nlp.index["u"]] = False
+            own[nlp.index["v"]] = False
+            if i > 0:
+                own[np.concatenate([nlp.index["X"][:, 4], nlp.index["Xc"][..., 4].ravel()])] = False
+            x0.append(w0[own])
+        return np.concatenate(x0)
+
+    def solve(self, u: np.ndarray) -> dict:
+        """One IPOPT solve from the control profile u; returns the profile, the worst-case collocation peak
+        (delta/e), status, iterations and the solve time (s).  Raises SolveError when IPOPT fails."""
+        x0 = self.guess(u)
+        t0 = time.perf_counter()
+        r = ipopt.solve(self.solver, x0=x0, lbx=self.lbx, ubx=self.ubx, lbg=self.lbg, ubg=self.ubg)
+        dt = time.perf_counter() - t0
+        if not r["success"]:
+            raise SolveError(f"robust spin-up OCP not solved: {r['status']} after {r['iterations']} iterations "
+                             f"({len(self.ocps)} scenarios, {self.method.label})", r["status"],
+                             {"alpha_rad_s2": list(r["x"][:self.n] * self.ocps[0].alpha_max)})
+        ws = [np.asarray(w).ravel() for w in self.unpack.call([r["x"]])]
+        peaks = [float(np.sqrt(np.max(np.sum(w[nlp.index["Xc"]][..., :2] ** 2, axis=-1))))
+                 for w, nlp in zip(ws, self.nlps, strict=True)]
+        return {"u": np.asarray(r["x"][:self.n]), "collocation_peaks": np.array(peaks), "status": r["status"],
+                "iterations": r["iterations"], "solve_time_s": dt}
+
+
+@dataclass
+class RobustOptimum:
+    """The robust profile and how it was found (scenario generation over the design set)."""
+
+    profile: Profile
+    design_peaks: np.ndarray  # (S,) delta/e of the robust profile on the design set, fast integrator
+    active: list  # indices of the design scenarios in the final NLP
+    rounds: list  # one dict per NLP solve
+    build_time_s: float
+    solve_time_s: float
+    collocation_worst: float  # the NLP's worst-case peak, delta/e
+
+
+def optimize_robust(ocp: SpinupOcp, factors: np.ndarray, method: DirectCollocation, starts: list[Profile],
+                    ref: float, options: dict | None = None, tol: float = 1e-3, max_rounds: int = 8,
+                    active: list | None = None) -> RobustOptimum:
+    """Minimise the worst-case peak over the design set ``factors`` by scenario generation: the NLP holds the
+    scenarios that bind (first the worst one of the start); after each solve every design scenario is
+    simulated (:func:`fast_peaks`) and those above the NLP's worst case by more than ``tol`` (relative) join
+    it, until none does.  The optimum of the final NLP is then the optimum over the whole design set.
+
+    Parameters
+    ----------
+    ocp : SpinupOcp
+        The nominal problem (SI), objective ``peak_deflection``.
+    factors : ndarray, shape (S, 3)
+        The design set (:meth:`Uncertainty.grid`).
+    method : DirectCollocation
+        The transcription (the same mesh for every scenario).
+    starts : list of Profile
+        Initial profiles; the best robust optimum (worst case over the design set) is kept.
+    ref : float
+        Scale of the epigraph level, (delta/e)^2.
+    options : dict, optional
+        IPOPT options.
+    tol : float
+        Relative excess over the NLP's worst case that adds a scenario.
+    max_rounds : int
+        Solves per start at most.
+    active : list of int, optional
+        The scenarios to start with (default: the worst one of each start).
+
+    Returns
+    -------
+    RobustOptimum
+        Peaks in delta/e, times in s.
+    """
+    ocps = scenario_ocps(ocp, factors)
+    best, rounds, build, solve_t, error = None, [], 0.0, 0.0, None
+    for start in starts:
+        u = start.u
+        peaks = fast_peaks(ocp, factors, [start])[:, 0]
+        act = list(active) if active else [int(np.argmax(peaks))]
+        for _ in range(max_rounds):
+            solver = RobustSolver([ocps[i] for i in act], method, ref, options)
+            build += solver.build_time_s
+            try:
+                r = solver.solve(u)
+            except SolveError as exc:
+                error = exc
+                rounds.append({"start": start.label, "scenarios": len(act), "status": exc.status})
+                break
+            solve_t += r["solve_time_s"]
+            u = r["u"]
+            peaks = fast_peaks(ocp, factors, [Profile("robust", u)])[:, 0]
+            worst_active = peaks[act].max()
+            add = [i for i in np.argsort(-peaks) if i not in act and peaks[i] > worst_active * (1 + tol)][:2]
+            rounds.append({"start": start.label, "intervals": method.intervals, "scenarios": len(act),
+                           "status": r["status"],
+                           "iterations": r["iterations"], "solve_time_s": r["solve_time_s"],
+                           "build_time_s": solver.build_time_s, "worst_design_peak_over_e": float(peaks.max()),
+                           "collocation_worst_over_e": float(r["collocation_peaks"].max())})
+            if not add:
+                if best is None or peaks.max() < best.design_peaks.max():
+                    best = RobustOptimum(Profile("robust optimum", u), peaks, list(act), rounds, 0.0, 0.0,
+                                         float(r["collocation_peaks"].max()))
+                break
+            act += [int(i) for i in add]
+    if best is None:
+        raise error or SolveError("robust spin-up OCP: scenario generation did not settle within "
+                                  f"{max_rounds} solves", "scenario_generation", {"rounds": rounds})
+    best.build_time_s, best.solve_time_s, best.rounds = build, solve_t, rounds
+    return best
+
+
+COARSE = 50  # control intervals of the coarse stage (at least)
+
+
+def optimize_robust_refined(ocp: SpinupOcp, factors: np.ndarray, method: DirectCollocation, starts: list[Profile],
+                            ref: float, options: dict | None = None) -> RobustOptimum:
+    """:func:`optimize_robust` by mesh continuation: every start and the scenario generation on N / 2^k
+    intervals (the fewest still at least COARSE), then the best coarse optimum refined on N intervals with
+    the coarse active scenarios (more join if the fine profile needs them).  Arguments as there."""
+    n, nc = method.intervals, method.intervals
+    while nc % 2 == 0 and nc // 2 >= COARSE:
+        nc //= 2
+    if nc == n:
+        return optimize_robust(ocp, factors, method, starts, ref, options)
+    r = n // nc
+    coarse = optimize_robust(ocp, factors, dataclasses.replace(method, intervals=nc),
+                             [Profile(p.label, p.u.reshape(nc, r).mean(axis=1)) for p in starts], ref, options)
+    fine = optimize_robust(ocp, factors, method, [Profile("coarse robust optimum", np.repeat(coarse.profile.u, r))],
+                           ref, options, active=coarse.active)
+    fine.rounds = coarse.rounds + fine.rounds
+    fine.build_time_s += coarse.build_time_s
+    fine.solve_time_s += coarse.solve_time_s
+    return fine

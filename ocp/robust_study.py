@@ -1,0 +1,225 @@
+"""The ``spinup_robust`` analysis of a scene: the robust profile beside the nominal optimum and the constant
+ramps, on the design set (CVODES) and on a random validation sample (the exponential integrator, checked
+against CVODES on a few rotors).
+
+``run(...)`` returns a :class:`RobustResult` (results.json block, CSV tables, figures: the profiles and their
+deflection on the worst design rotor, the distribution of the validation peaks, the peak against the
+critical-speed factor).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from autobal.analysis.result import Result, new_figure, with_statuses
+from autobal.ocp import robust as rb
+from autobal.ocp.problem import SpinupOcp
+from autobal.ocp.simulation import Trajectory, resimulate
+from autobal.ocp.solve import optimize
+from autobal.ocp.transcription import DirectCollocation
+
+QUANTILES = (0.5, 0.9, 0.99)
+CHECKED = 4  # validation rotors re-simulated with CVODES to check the fast integrator
+
+
+@dataclass
+class RobustResult(Result):
+    """The robust profile, the nominal optimum and the best constant ramp, each on the design set and on the
+    validation sample (peaks delta/e)."""
+
+    data: dict
+    nominal_runs: dict  # key -> Trajectory on the nominal rotor
+    worst_runs: dict  # key -> Trajectory on the robust profile's worst design rotor
+    validation: dict  # key -> (samples,) peaks; "factors" -> (samples, 3)
+    name = "spinup_robust"
+
+    KEYS = ("robust", "nominal", "ramp")
+    COLORS = {"robust": "C3", "nominal": "C0", "ramp": "C2"}
+
+    @property
+    def worst_validation(self) -> dict:
+        """Worst peak over the validation sample of each profile (robust, nominal, ramp), delta/e."""
+        return {k: self.data["profiles"][k]["validation_worst_over_e"] for k in self.KEYS}
+
+    @property
+    def worst_design(self) -> dict:
+        """Worst CVODES peak over the design set of each profile, delta/e."""
+        return {k: self.data["profiles"][k]["design_worst_over_e"] for k in self.KEYS}
+
+    def to_dict(self) -> dict:
+        return self.data
+
+    def summary(self) -> str:
+        d = self.data
+        lines = [f"robust spin-up over {d['design_scenarios']} design rotors ({d['active_scenarios']} in the final "
+                 f"NLP), {d['method']}: build {d['build_time_s']:.2f} s, solve {d['solve_time_s']:.2f} s; "
+                 f"validation on {d['validation_samples']} rotors ({d['executor']}, {d['validation_time_s']:.2f} s)"]
+        for k in self.KEYS:
+            p = d["profiles"][k]
+            lines.append(f"  {p['label']:28s} nominal rotor {p['nominal_peak_over_e']:.4f} e, worst design "
+                         f"{p['design_worst_over_e']:.4f} e, validation worst {p['validation_worst_over_e']:.4f} e "
+                         f"(median {p['validation_quantiles_over_e']['0.5']:.4f}, 99 % "
+                         f"{p['validation_quantiles_over_e']['0.99']:.4f})")
+        return "\n".join(lines)
+
+    def tables(self) -> dict[str, dict]:
+        f = self.validation["factors"]
+        cols = {"critical_speed_factor": f[:, 0], "damping_factor": f[:, 1], "liquid_mass_factor": f[:, 2]}
+        cols |= {f"{k}_peak_over_e": self.validation[k] for k in self.KEYS}
+        r = self.nominal_runs["robust"]
+        design = {"critical_speed_factor": [], "damping_factor": [], "liquid_mass_factor": []}
+        for row in self.data["design_set"]:
+            for key, v in zip(design, row, strict=True):
+                design[key].append(v)
+        design |= {f"{k}_peak_over_e": self.data["profiles"][k]["design_peaks_over_e"] for k in self.KEYS}
+        return {"spinup_robust_validation.csv": cols, "spinup_robust_design.csv": design,
+                "spinup_robust_controls.csv": {"t_start_s": r.t_u, "alpha_rad_s2": r.alpha},
+                "spinup_robust_ramps.csv": {k: [row[k] for row in self.data["ramps"]] for k in self.data["ramps"][0]}}
+
+    def draw(self, ax) -> None:
+        """Empirical distribution of the validation peaks of the three profiles."""
+        for k in self.KEYS:
+            v = np.sort(self.validation[k])
+            lab = self.data["profiles"][k]["label"]
+            ax.step(v, np.arange(1, v.size + 1) / v.size, where="post", color=self.COLORS[k],
+                    label=f"{lab} (worst {v[-1]:.3f} e)")
+        ax.set_xlabel(r"peak deflection $\delta^*/e$")
+        ax.set_ylabel(f"fraction of the {self.validation['factors'].shape[0]} validation rotors")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+
+    def figures(self) -> dict:
+        """Profiles and the deflection on the worst design rotor; validation distribution; peak against the
+        critical-speed factor."""
+        title = self.data["title"]
+        fig, (a0, a1) = new_figure((8, 7), 2, 1, sharex=True)
+        for k in self.KEYS:
+            tr, tw = self.nominal_runs[k], self.worst_runs[k]
+            lab = self.data["profiles"][k]["label"]
+            a0.plot(tr.t, tr.omega, color=self.COLORS[k], label=lab)
+            a1.plot(tw.t, tw.delta, color=self.COLORS[k], label=f"{lab} (peak {tw.peak_delta:.3f} e)")
+        a0.axhline(self.data["omega_cr_rad_s"], color="k", ls=":", lw=0.8,
+                   label=rf"nominal critical speed {self.data['omega_cr_rad_s']:.4g} rad/s")
+        a0.set_ylabel(r"speed $\omega$, rad/s")
+        w = self.data["worst_design_rotor"]
+        a1.set_title(f"on the robust profile's worst design rotor (critical speed x{w[0]:.3g}, damping x{w[1]:.3g}"
+                     + (f", liquid x{w[2]:.3g}" if self.data["liquid"] else "") + ")", fontsize=8, loc="left")
+        a1.set_ylabel(r"deflection $\delta/e$")
+        a1.set_xlabel("time t, s")
+        for ax in (a0, a1):
+            ax.grid(alpha=0.3)
+            ax.legend(fontsize=7)
+        fig.suptitle(title, fontsize=9)
+        fig2, ax2 = new_figure((7, 4.5))
+        self.draw(ax2)
+        fig2.suptitle(title, fontsize=9)
+        fig3, ax3 = new_figure((7, 4.5))
+        f = self.validation["factors"]
+        for k in self.KEYS:
+            ax3.scatter(f[:, 0], self.validation[k], s=3, color=self.COLORS[k], alpha=0.5,
+                        label=self.data["profiles"][k]["label"])
+        ax3.set_xlabel("critical-speed factor (1 = nominal)")
+        ax3.set_ylabel(r"peak deflection $\delta^*/e$")
+        ax3.grid(alpha=0.3)
+        ax3.legend(fontsize=7, markerscale=4)
+        fig3.suptitle(title, fontsize=9)
+        return {"spinup_robust_profiles.png": fig, "spinup_robust_distribution.png": fig2,
+                "spinup_robust_scatter.png": fig3}
+
+
+def _on(ocp: SpinupOcp, factors, profile: rb.Profile) -> Trajectory:
+    o = rb.scenario_ocps(ocp, np.atleast_2d(factors))[0]
+    u, h = profile.on(o)
+    return resimulate(o, u, h, profile.label, points=8)
+
+
+def run(ocp: SpinupOcp, method: DirectCollocation, uncertainty: rb.Uncertainty, design_points: int,
+        samples: int, seed: int, ramps: int, executor, title: str = "", multistart: bool = True,
+        options: dict | None = None) -> RobustResult:
+    """Nominal optimum, robust optimum over the design grid, constant ramps; all validated on a sample.
+
+    Parameters
+    ----------
+    ocp : SpinupOcp
+        The nominal problem (SI), objective peak_deflection.
+    method : DirectCollocation
+        The transcription of every scenario.
+    uncertainty : Uncertainty
+        The ranges of the rotor (factors).
+    design_points : int
+        Grid points per uncertain quantity.
+    samples, seed : int
+        Size and seed of the validation sample.
+    ramps : int
+        Constant ramps compared.
+    executor
+        Where the validation chunks run (:func:`autobal.analysis.executor.make`).
+    title : str
+        The scene's title.
+    multistart : bool
+        Multi-start of the nominal optimum.
+    options : dict, optional
+        IPOPT options.
+
+    Returns
+    -------
+    RobustResult
+        Peaks in delta/e, times in s.
+    """
+    n = method.intervals
+    nominal = optimize(ocp, method, multistart, options)
+    pn = rb.Profile("nominal optimum", nominal.solution.u[:n])
+    family = rb.ramp_family(ocp, n, ramps)
+    F = uncertainty.grid(design_points)
+    design_ramps = rb.fast_peaks(ocp, F, family).max(axis=0)
+    start_ramp = family[int(np.argmin(design_ramps))]
+    ro = rb.optimize_robust_refined(ocp, F, method, [pn, start_ramp], nominal.score**2, options)
+    profiles = [ro.profile, pn, *family]
+    t0 = time.perf_counter()
+    factors, peaks = rb.validate(ocp, uncertainty, profiles, samples, seed, executor)
+    t_val = time.perf_counter() - t0
+    ramp_worst = peaks[:, 2:].max(axis=0)
+    ib = int(np.argmin(ramp_worst))
+    chosen = {"robust": (ro.profile, peaks[:, 0]), "nominal": (pn, peaks[:, 1]),
+              "ramp": (rb.Profile(f"best {family[ib].label}", family[ib].u), peaks[:, 2 + ib])}
+    design = {k: rb.cvodes_peaks(ocp, F, p) for k, (p, _) in chosen.items()}
+    worst_rotor = F[int(np.argmax(design["robust"]))]
+    check = rb.cvodes_peaks(ocp, factors[:CHECKED], ro.profile)
+    fast_err = float(np.max(np.abs(peaks[:CHECKED, 0] / check - 1)))
+    nominal_runs = {k: _on(ocp, [1.0, 1.0, 1.0], p) for k, (p, _) in chosen.items()}
+    worst_runs = {k: _on(ocp, worst_rotor, p) for k, (p, _) in chosen.items()}
+    prof = {}
+    for k, (p, v) in chosen.items():
+        prof[k] = {"label": p.label, "nominal_peak_over_e": nominal_runs[k].peak_delta,
+                   "design_peaks_over_e": design[k].tolist(), "design_worst_over_e": float(design[k].max()),
+                   "validation_worst_over_e": float(v.max()), "validation_mean_over_e": float(v.mean()),
+                   "validation_quantiles_over_e": {str(q): float(np.quantile(v, q)) for q in QUANTILES}}
+    data = {
+        "title": title, "method": method.label, "omega_cr_rad_s": ocp.params.omega_cr,
+        "critical_speed_spread": uncertainty.critical_speed_spread,
+        "damping_factor": list(uncertainty.damping_factor), "liquid": uncertainty.liquid_mass_factor is not None,
+        "liquid_mass_factor": list(uncertainty.liquid_mass_factor) if uncertainty.liquid_mass_factor else None,
+        "design_set": F.tolist(), "design_scenarios": len(F), "active_scenarios": len(ro.active),
+        "active_design_rotors": F[ro.active].tolist(), "worst_design_rotor": worst_rotor.tolist(),
+        "robust_collocation_worst_over_e": ro.collocation_worst,
+        "resimulation_rel_error": abs(ro.collocation_worst - design["robust"].max()) / design["robust"].max(),
+        "build_time_s": ro.build_time_s, "solve_time_s": ro.solve_time_s, "rounds": ro.rounds,
+        "nominal_build_time_s": nominal.build_time_s,
+        "nominal_solve_time_s": sum(r.get("solve_time_s", 0.0) for r in nominal.starts),
+        "validation_samples": int(samples), "seed": int(seed), "executor": executor.name,
+        "validation_time_s": t_val, "validation_step_tau": rb.FAST_STEP,
+        "validation_check_rel_error": fast_err,
+        "profiles": prof,
+        "ramps": [{"label": p.label, "alpha_rad_s2": float(p.u[0] * ocp.alpha_max),
+                   "design_worst_over_e": float(d), "validation_worst_over_e": float(w)}
+                  for p, d, w in zip(family, design_ramps, ramp_worst, strict=True)],
+        "accuracy": {"estimate": fast_err,
+                     "how": f"largest relative difference of the validation integrator (exponential, step "
+                            f"{rb.FAST_STEP} in Omega0 t) against CVODES on {CHECKED} validation rotors"},
+    }
+    validation = {"factors": factors} | {k: v for k, (_, v) in chosen.items()}
+    data = with_statuses(data, {"liquid_mass_factor": "the rotor has no liquid block (or its mass is not uncertain)"})
+    return RobustResult(data, nominal_runs, worst_runs, validation)

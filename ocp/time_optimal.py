@@ -1,0 +1,173 @@
+"""Time-optimal spin-up: the earliest arrival at the final speed with the peak deflection bounded (the settling
+window still counted), and the Pareto front of peak against arrival time.
+
+The front is computed as its dual: for a deadline T, the smallest peak P*(T) by the minimum-peak OCP of
+:mod:`autobal.ocp.solve` (global search, multi-start, collocation, CVODES re-simulation), the control step
+kept as the scene's.  P* does not increase with T (a profile that arrives by T also arrives by any later
+deadline and holds), so the earliest arrival with the peak at most L is the smallest T with P*(T) <= L:
+found by regula falsi on T between two points of the front that bracket L.  The fast end of the front is
+the maximum-acceleration ramp (the earliest arrival the acceleration limit allows); the slow end is the
+scene's horizon.  Every point is re-simulated with CVODES.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from autobal.errors import SolveError
+from autobal.ocp.problem import SpinupOcp
+from autobal.ocp.simulation import Trajectory, baselines
+from autobal.ocp.solve import Optimum, optimize
+from autobal.ocp.transcription import DirectCollocation
+
+
+@dataclass
+class FrontPoint:
+    """One point of the front: the smallest peak for an arrival deadline."""
+
+    arrival_time_s: float  # s, the deadline
+    optimum: Optimum  # the minimum-peak OCP for that deadline (re-simulated)
+    intervals: int  # control intervals up to the deadline
+
+    @property
+    def peak(self) -> float:
+        """Re-simulated peak deflection, delta/e."""
+        return self.optimum.score
+
+    @property
+    def trajectory(self) -> Trajectory:
+        return self.optimum.trajectory
+
+    @property
+    def resimulation_rel_error(self) -> float:
+        """|collocation peak - re-simulated peak| / re-simulated peak."""
+        return self.optimum.resimulation_rel_error
+
+    def to_dict(self) -> dict:
+        o = self.optimum
+        return {"arrival_time_s": self.arrival_time_s, "resimulated_peak_over_e": self.peak,
+                "collocation_peak_over_e": o.collocation_value, "resimulation_rel_error": self.resimulation_rel_error,
+                "intervals": self.intervals,
+                "iterations": o.solution.iterations, "build_time_s": o.build_time_s,
+                "solve_time_s": sum(r.get("solve_time_s", 0.0) for r in o.starts)}
+
+
+def deadline_point(ocp: SpinupOcp, method: DirectCollocation, deadline: float, options: dict | None = None,
+                   multistart: bool = True) -> FrontPoint:
+    """The smallest re-simulated peak when omega_final must be reached by ``deadline`` (s), on the control step
+    of ``method`` over ``ocp.horizon``.
+
+    Parameters
+    ----------
+    ocp : SpinupOcp
+        The problem (SI).
+    method : DirectCollocation
+        The transcription over the scene's horizon (its control step is kept).
+    deadline : float
+        Arrival deadline, s.
+    options : dict, optional
+        IPOPT options.
+    multistart : bool
+        Multi-start of the minimum-peak OCP.
+
+    Returns
+    -------
+    FrontPoint
+        Peak in delta/e.
+    """
+    o = dataclasses.replace(ocp, horizon=float(deadline), objective="peak_deflection", deflection_limit=None)
+    m = dataclasses.replace(method, intervals=max(MIN_INTERVALS, round(method.intervals * deadline / ocp.horizon)))
+    return FrontPoint(float(deadline), optimize(o, m, multistart, options), m.intervals)
+
+
+MIN_INTERVALS = 20
+
+
+@dataclass
+class Front:
+    """The Pareto front of peak deflection against arrival time, with its fast end."""
+
+    points: list  # FrontPoint, arrival times increasing (peaks decreasing)
+    ramp: Trajectory  # the maximum-acceleration ramp: the earliest arrival at all
+    ramp_arrival_time_s: float
+
+
+def front(ocp: SpinupOcp, method: DirectCollocation, count: int = 6, options: dict | None = None,
+          multistart: bool = True) -> Front:
+    """The front: ``count`` deadlines evenly between the maximum-acceleration ramp's arrival (excluded) and
+    the horizon (included), each solved by :func:`deadline_point`.
+
+    Parameters
+    ----------
+    ocp : SpinupOcp
+        The problem (SI): its horizon is the slow end of the front, s.
+    method : DirectCollocation
+        The transcription over the horizon.
+    count : int
+        Points of the front.
+    options : dict, optional
+        IPOPT options.
+    multistart : bool
+        Multi-start of each minimum-peak OCP.
+
+    Returns
+    -------
+    Front
+        Arrival times in s, peaks in delta/e.
+    """
+    t_ramp = abs(ocp.omega_final - ocp.omega_start) / ocp.alpha_max
+    if t_ramp >= ocp.horizon:
+        raise SolveError(f"time-optimal front: the maximum-acceleration ramp arrives at {t_ramp:.4g} s, not before "
+                         f"the horizon {ocp.horizon:g} s", "no_front", {})
+    peak_ocp = dataclasses.replace(ocp, objective="peak_deflection", deflection_limit=None)
+    ramp = baselines(peak_ocp, intervals=4 * method.intervals)["max_acceleration_ramp"]
+    deadlines = t_ramp + (ocp.horizon - t_ramp) * np.arange(1, count + 1) / count
+    return Front([deadline_point(ocp, method, T, options, multistart) for T in deadlines], ramp, t_ramp)
+
+
+def earliest_arrival(ocp: SpinupOcp, method: DirectCollocation, limit: float, fr: Front,
+                     options: dict | None = None, multistart: bool = True, rtol: float = 1e-3,
+                     ttol: float = 0.01, max_solves: int = 8) -> tuple[FrontPoint | None, float]:
+    """The earliest arrival with the re-simulated peak at most ``limit`` (delta/e): regula falsi on the
+    deadline (each step kept in the middle half of the bracket, so the bracket shrinks by at least a quarter)
+    between the two points of the front ``fr`` that bracket the limit, until the peak is within ``rtol`` below
+    the limit or the bracket is shorter than ``ttol`` (s; where the minimum peak jumps between two basins, the
+    earliest arrival is at the jump and the limit does not bind).
+
+    Returns
+    -------
+    point : FrontPoint or None
+        The deadline (s) and its minimum-peak optimum; None when the maximum-acceleration ramp already keeps
+        the limit (it arrives first).
+    lower : float
+        The latest deadline known to exceed the limit, s (the arrival time is in (lower, point's deadline]).
+
+    Raises
+    ------
+    SolveError
+        When even the horizon does not keep the limit.
+    """
+    if fr.ramp.peak_delta <= limit:
+        return None, fr.ramp_arrival_time_s
+    pts = [(fr.ramp_arrival_time_s, fr.ramp.peak_delta, None)] + [(p.arrival_time_s, p.peak, p) for p in fr.points]
+    if min(p[1] for p in pts) > limit:
+        raise SolveError(f"time-optimal spin-up infeasible: binding constraint: deflection limit delta/e <= "
+                         f"{limit:g}; the smallest peak reachable by the horizon {ocp.horizon:g} s is "
+                         f"{min(p[1] for p in pts):.4g} e", "Infeasible_Problem_Detected",
+                         {"smallest_peak_over_e": min(p[1] for p in pts)})
+    k = next(i for i, p in enumerate(pts) if p[1] <= limit)
+    (ta, pa, _), (tb, pb, best) = pts[k - 1], pts[k]
+    for _ in range(max_solves):
+        if pb >= limit * (1 - rtol) or tb - ta < ttol:
+            break
+        w = tb - ta
+        t = min(max(tb - w * (limit - pb) / (pa - pb), ta + 0.25 * w), tb - 0.25 * w)
+        p = deadline_point(ocp, method, t, options, multistart)
+        if p.peak <= limit:
+            tb, pb, best = t, p.peak, p
+        else:
+            ta, pa = t, p.peak
+    return best, ta

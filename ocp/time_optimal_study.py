@@ -1,0 +1,158 @@
+"""The ``spinup_time_optimal`` analysis of a scene: the earliest arrival at the final speed with the peak
+bounded (when the scene gives ``deflection_limit``) and the Pareto front of peak against arrival time, each
+point re-simulated (:mod:`autobal.ocp.time_optimal`).
+
+``run(...)`` returns a :class:`TimeOptimalResult` (results.json block, the front as a CSV table, figures: the
+front, and the profiles of the front's points).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from autobal.analysis.result import Result, new_figure, with_statuses
+from autobal.ocp import time_optimal as to
+from autobal.ocp.problem import SpinupOcp
+from autobal.ocp.solve import TIE
+from autobal.ocp.transcription import DirectCollocation
+
+
+@dataclass
+class TimeOptimalResult(Result):
+    """The front of peak deflection against arrival time (every point re-simulated) and its two ends."""
+
+    data: dict
+    front: to.Front
+    limited: to.FrontPoint | None  # the earliest arrival at the scene's deflection_limit (None: the ramp)
+    name = "spinup_time_optimal"
+
+    @property
+    def arrival_times(self) -> np.ndarray:
+        """Arrival times of the front's points, s (limits increasing)."""
+        return np.array([p["arrival_time_s"] for p in self.data["front"]])
+
+    @property
+    def peaks(self) -> np.ndarray:
+        """Re-simulated peaks of the front's points, delta/e."""
+        return np.array([p["resimulated_peak_over_e"] for p in self.data["front"]])
+
+    def to_dict(self) -> dict:
+        return self.data
+
+    def summary(self) -> str:
+        d = self.data
+        lines = [f"time-optimal spin-up, {d['method']}: front of {len(d['front'])} points, build "
+                 f"{d['build_time_s']:.2f} s, solve {d['solve_time_s']:.2f} s",
+                 f"  fast end: {d['ramp_label']} arrives at {d['ramp_arrival_time_s']:.4g} s, peak "
+                 f"{d['ramp_peak_over_e']:.4f} e"]
+        for p in d["front"]:
+            lines.append(f"  arrival by {p['arrival_time_s']:.4f} s: peak {p['resimulated_peak_over_e']:.4f} e "
+                         f"(collocation {p['collocation_peak_over_e']:.4f} e, "
+                         f"{100 * p['resimulation_rel_error']:.2f} %)")
+        if d.get("deflection_limit_over_e") is not None:
+            lines.append(f"  earliest arrival with the peak <= {d['deflection_limit_over_e']:.4g} e: "
+                         f"{d['arrival_time_s']:.4f} s (peak {d['peak_deflection_over_e']:.4f} e; a deadline of "
+                         f"{d.get('arrival_time_lower_bound_s', float('nan')):.4f} s exceeds the limit)")
+        return "\n".join(lines)
+
+    def tables(self) -> dict[str, dict]:
+        f = self.data["front"]
+        out = {"spinup_time_optimal_front.csv": {k: [p[k] for p in f] for k in f[0]}}
+        if self.limited is not None:
+            tr = self.limited.trajectory
+            out["spinup_time_optimal_profile.csv"] = {"t_s": tr.t, "omega_rad_s": tr.omega,
+                                                      "deflection_over_e": tr.delta}
+        return out
+
+    def draw(self, ax) -> None:
+        """The front: re-simulated peak against arrival time, with the two ends."""
+        d = self.data
+        ax.plot([d["ramp_arrival_time_s"], *self.arrival_times], [d["ramp_peak_over_e"], *self.peaks], "-",
+                color="0.6", lw=0.8)
+        ax.plot(self.arrival_times, self.peaks, "o", color="C3", label="minimum peak for an arrival deadline")
+        ax.plot(d["ramp_arrival_time_s"], d["ramp_peak_over_e"], "s", color="C2", label=d["ramp_label"])
+        if d.get("deflection_limit_over_e") is not None:
+            ax.axhline(d["deflection_limit_over_e"], color="k", ls=":", lw=0.8)
+            ax.plot(d["arrival_time_s"], d["peak_deflection_over_e"], "*", ms=12, color="k",
+                    label=f"earliest arrival with the peak <= {d['deflection_limit_over_e']:.4g} e")
+        ax.set_xlabel("arrival time at the final speed, s")
+        ax.set_ylabel(r"peak deflection $\delta^*/e$ (re-simulated)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+
+    def figures(self) -> dict:
+        """The front; the speed and deflection of its points."""
+        title = self.data["title"]
+        fig, ax = new_figure((7, 4.5))
+        self.draw(ax)
+        fig.suptitle(title, fontsize=9)
+        fig2, (a0, a1) = new_figure((8, 7), 2, 1, sharex=True)
+        cmap = [f"C{i % 10}" for i in range(len(self.front.points))]
+        for p, c in zip(self.front.points, cmap, strict=True):
+            a0.plot(p.trajectory.t, p.trajectory.omega, color=c, lw=0.9, label=f"arrival by {p.arrival_time_s:.3g} s")
+            a1.plot(p.trajectory.t, p.trajectory.delta, color=c, lw=0.9, label=f"peak {p.peak:.3f} e")
+        a0.set_ylabel(r"speed $\omega$, rad/s")
+        a1.set_ylabel(r"deflection $\delta/e$")
+        a1.set_xlabel("time t, s")
+        for a in (a0, a1):
+            a.grid(alpha=0.3)
+            a.legend(fontsize=6, ncols=2)
+        fig2.suptitle(title, fontsize=9)
+        return {"spinup_time_optimal_front.png": fig, "spinup_time_optimal_profiles.png": fig2}
+
+
+def run(ocp: SpinupOcp, method: DirectCollocation, points: int, title: str = "", multistart: bool = True,
+        options: dict | None = None) -> TimeOptimalResult:
+    """The front of peak against arrival time and, when ``ocp.deflection_limit`` is set, the earliest arrival
+    at that limit.
+
+    Parameters
+    ----------
+    ocp : SpinupOcp
+        The problem (SI); its horizon is the latest arrival (the front's slow end), s.
+    method : DirectCollocation
+        The transcription.
+    points : int
+        Points of the front between its ends.
+    title : str
+        The scene's title.
+    multistart : bool
+        Multi-start of the minimum-peak problem at the slow end.
+    options : dict, optional
+        IPOPT options.
+
+    Returns
+    -------
+    TimeOptimalResult
+        Arrival times in s, peaks in delta/e.
+    """
+    fr = to.front(ocp, method, points, options, multistart)
+    limited = None
+    if ocp.deflection_limit is not None:
+        limited, lower = to.earliest_arrival(ocp, method, ocp.deflection_limit, fr, options, multistart)
+    every = fr.points + ([limited] if limited else [])
+    data = {
+        "title": title, "method": method.label, "horizon_s": ocp.horizon, "ramp_label": fr.ramp.label,
+        "ramp_arrival_time_s": fr.ramp_arrival_time_s, "ramp_peak_over_e": fr.ramp.peak_delta,
+        "front": [p.to_dict() for p in fr.points],
+        # non-increasing up to the multi-start's tie tolerance (beyond some deadline the peak no longer falls)
+        "monotone": bool(np.all(np.diff(pk := [fr.ramp.peak_delta] + [p.peak for p in fr.points])
+                                <= TIE * np.array(pk[1:]))),
+        "build_time_s": sum(p.optimum.build_time_s for p in every),
+        "solve_time_s": sum(p.to_dict()["solve_time_s"] for p in every),
+        "resimulation_rel_error": max(p.resimulation_rel_error for p in every),
+        "accuracy": {"estimate": max(p.resimulation_rel_error for p in every),
+                     "how": "largest relative difference between a point's collocation peak and its CVODES "
+                            "re-simulation"},
+        "deflection_limit_over_e": ocp.deflection_limit,
+    }
+    if ocp.deflection_limit is not None:
+        data |= ({"arrival_time_s": limited.arrival_time_s, "peak_deflection_over_e": limited.peak,
+                  "arrival_time_lower_bound_s": lower, "limited": limited.to_dict()} if limited else
+                 {"arrival_time_s": fr.ramp_arrival_time_s, "peak_deflection_over_e": fr.ramp.peak_delta,
+                  "limited": None})
+    data = with_statuses(data, {"deflection_limit_over_e": "no deflection_limit in the scene: the front only",
+                                "limited": "the maximum-acceleration ramp keeps the limit: it arrives first"})
+    return TimeOptimalResult(data, fr, limited)

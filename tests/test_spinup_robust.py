@@ -1,0 +1,152 @@
+"""Robust spin-up (one profile for a set of rotors) and time-optimal spin-up (earliest arrival, the front of
+peak against arrival time) on the Jeffcott rotor of the shipped deadline scene (Omega0 = 105 rad/s,
+n = 5 1/s, |alpha| <= 40 rad/s^2, 40 -> 210 rad/s, 3 s hold, never above 210 rad/s)."""
+
+from __future__ import annotations
+
+import dataclasses
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from autobal import api, runners
+from autobal.analysis.executor import InProcess
+from autobal.errors import ScenarioError
+from autobal.models.rotor import RotorParams
+from autobal.ocp import robust as rb
+from autobal.ocp import robust_study, time_optimal, time_optimal_study
+from autobal.ocp.problem import SpinupOcp
+from autobal.ocp.simulation import ramp_profile
+from autobal.ocp.solve import starts
+from autobal.ocp.transcription import DirectCollocation
+
+ROTOR = RotorParams(m1=1.0, c=11025.0, chi=5.0, e=1e-4)
+
+
+def jeffcott(horizon: float = 5.0) -> SpinupOcp:
+    return SpinupOcp(ROTOR, 40.0, 210.0, horizon, 40.0, settling_time=3.0, omega_max=210.0)
+
+
+def test_perturbed_rotor_scales_the_critical_speed_and_the_damping():
+    p = rb.perturbed(ROTOR, [1.05, 0.5, 1.0])
+    assert p.omega_cr == pytest.approx(1.05 * ROTOR.omega_cr, rel=1e-12)
+    assert p.chi == pytest.approx(0.5 * ROTOR.chi, rel=1e-12)
+    liquid = ROTOR.with_psi(0.5)
+    q = rb.perturbed(liquid, [1.0, 1.0, 1.2])
+    assert q.m2_star == pytest.approx(1.2 * liquid.m2_star, rel=1e-12)
+    assert q.psi == pytest.approx(1 / 2.2, rel=1e-12)
+
+
+def test_design_grid_and_validation_sample_cover_the_ranges():
+    unc = rb.Uncertainty(0.05, (0.5, 2.0))
+    g = unc.grid(3)
+    assert g.shape == (9, 3)
+    assert set(np.round(g[:, 0], 12)) == {0.95, 1.0, 1.05} and set(np.round(g[:, 1], 12)) == {0.5, 1.0, 2.0}
+    assert np.all(g[:, 2] == 1.0)  # no liquid block: the liquid mass is not varied
+    s = unc.sample(2000, np.random.default_rng(3))
+    assert s[:, 0].min() >= 0.95 and s[:, 0].max() <= 1.05 and s[:, 1].min() >= 0.5 and s[:, 1].max() <= 2.0
+    assert abs(np.median(np.log(s[:, 1]))) < 0.05  # log-uniform in [0.5, 2]: median 1
+    with pytest.raises(ValueError, match="damping_factor"):
+        rb.Uncertainty(0.05, (2.0, 0.5))
+
+
+def test_validation_integrator_matches_cvodes():
+    ocp = jeffcott()
+    factors = np.array([[0.95, 0.5, 1.0], [1.05, 2.0, 1.0], [1.0, 1.0, 1.0]])
+    profiles = [rb.Profile("ramp 40", ramp_profile(ocp, 40, 40.0)), rb.Profile("ramp 36", ramp_profile(ocp, 40, 36.0))]
+    fast = rb.fast_peaks(ocp, factors, profiles)
+    ref = np.column_stack([rb.cvodes_peaks(ocp, factors, p) for p in profiles])
+    np.testing.assert_allclose(fast, ref, rtol=2e-4)
+
+
+def test_validation_sample_is_the_same_in_any_chunking():
+    ocp = jeffcott()
+    unc = rb.Uncertainty()
+    prof = [rb.Profile("ramp", ramp_profile(ocp, 20, 40.0))]
+    f1, p1 = rb.validate(ocp, unc, prof, 12, 7, InProcess(progress=False), chunk=5)
+    f2, p2 = rb.validate(ocp, unc, prof, 12, 7, InProcess(progress=False), chunk=5)
+    np.testing.assert_array_equal(f1, f2)
+    np.testing.assert_array_equal(p1, p2)
+    assert f1.shape == (12, 3) and p1.shape == (12, 1)
+    assert not np.allclose(f1[:5], f1[5:10])  # each chunk its own stream
+
+
+def test_robust_nlp_beats_every_ramp_on_both_rotors():
+    """Two rotors, critical speed -5 % and +5 % at half damping, 50 intervals (100 ms): the shared profile's worst
+    peak is below the best constant ramp's worst case, and its CVODES re-simulation on both rotors agrees with
+    the collocation within 1 %."""
+    ocp = jeffcott()
+    factors = np.array([[0.95, 0.5, 1.0], [1.05, 0.5, 1.0]])
+    n = 50
+    ramps = rb.ramp_family(ocp, n, 4)
+    ramp_worst = rb.fast_peaks(ocp, factors, ramps).max(axis=0).min()
+    solver = rb.RobustSolver(rb.scenario_ocps(ocp, factors), DirectCollocation(n), ramp_worst**2)
+    r = solver.solve(starts(ocp, n, multistart=False)[0][1])  # the nominal rotor's global-search start
+    assert r["status"] == "Solve_Succeeded"
+    resim = rb.cvodes_peaks(ocp, factors, rb.Profile("robust", r["u"]))
+    np.testing.assert_allclose(resim, r["collocation_peaks"], rtol=0.01)
+    assert resim.max() < 0.99 * ramp_worst
+
+
+def test_shipped_scenes_load_and_bad_ranges_are_refused():
+    rob = api.load("spinup_robust_jeffcott")
+    assert rob.analyses.spinup_robust.validation_samples >= 1000
+    tim = api.load("spinup_time_optimal")
+    assert tim.analyses.spinup_time_optimal.deflection_limit == 13
+    with pytest.raises(ScenarioError, match="damping_factor"):
+        api.load("spinup_robust_jeffcott", {"analyses.spinup_robust.damping_factor": [2, 0.5]})
+    scene = api.load("spinup_robust_jeffcott", {"analyses.spinup_robust.liquid_mass_factor": [0.8, 1.2]})
+    with pytest.raises(ScenarioError, match="liquid"):  # refused before any solve
+        runners.spinup_robust(scene, scene.analyses.spinup_robust)
+
+
+@pytest.mark.slow
+def test_robust_profile_beats_nominal_optimum_and_every_ramp_on_1000_rotors():
+    """The must-show of the robust study: over 1000 validation rotors (critical speed +-5 %, damping x0.5-2)
+    the robust profile's worst peak is below the nominal optimum's and below the best constant ramp's."""
+    ocp = dataclasses.replace(jeffcott(), jerk_penalty=0.0)
+    res = robust_study.run(ocp, DirectCollocation(50), rb.Uncertainty(), 3, 1000, 1, 6, InProcess(progress=False))
+    w = res.worst_validation
+    assert w["robust"] < w["nominal"]
+    assert w["robust"] < w["ramp"]
+    assert res.worst_design["robust"] < min(res.worst_design["nominal"], res.worst_design["ramp"])
+    assert all(r["validation_worst_over_e"] > w["robust"] for r in res.data["ramps"])
+    assert res.data["validation_check_rel_error"] < 2e-4
+    assert res.data["resimulation_rel_error"] < 0.01  # 100 ms control step
+    assert res.nominal_runs["nominal"].peak_delta < res.nominal_runs["robust"].peak_delta  # the price on nominal
+    assert set(res.figures()) == {"spinup_robust_profiles.png", "spinup_robust_distribution.png",
+                                  "spinup_robust_scatter.png"}
+
+
+@pytest.mark.slow
+def test_time_optimal_front_is_monotone_and_every_point_resimulates_within_half_a_percent():
+    """Deadlines from the 40 rad/s^2 ramp's arrival (4.25 s) to 6 s at a 50 ms control step: the smallest peak
+    does not rise as the deadline grows (up to the multi-start's tie tolerance 1e-4; it falls by percents
+    near the ramp), every point's collocation peak is within 0.5 % of its CVODES re-simulation, and the
+    earliest arrival with the peak at most 13 e lies between the front's points that bracket 13 e, the
+    limit binding or the bracket shorter than 10 ms."""
+    ocp = dataclasses.replace(jeffcott(6.0), jerk_penalty=0.0, deflection_limit=13.0)
+    res = time_optimal_study.run(ocp, DirectCollocation(120), 4, multistart=False)
+    t, pk = res.arrival_times, res.peaks
+    assert np.all(np.diff(t) > 0)
+    steps = np.diff(np.concatenate([[res.data["ramp_peak_over_e"]], pk]))
+    assert np.all(steps <= 1e-4 * pk)
+    assert steps[0] < -0.01 * pk[0]  # the first deadline after the ramp lowers the peak by more than 1 %
+    assert res.data["monotone"]
+    for p in res.data["front"]:
+        assert p["resimulation_rel_error"] < 0.005
+    T, lower = res.data["arrival_time_s"], res.data["arrival_time_lower_bound_s"]
+    peak = res.data["peak_deflection_over_e"]
+    assert peak <= 13.0
+    assert peak >= 13.0 * (1 - 1e-3) or T - lower < 0.01
+    above = np.concatenate([[res.data["ramp_arrival_time_s"]], t[pk > 13.0]])
+    assert above.max() <= lower < T <= t[pk <= 13.0].min()
+    assert res.limited.resimulation_rel_error < 0.005
+
+
+def test_earliest_arrival_of_a_limit_the_ramp_keeps_is_the_ramp():
+    ocp = jeffcott()
+    ramp = rb.cvodes_peaks(ocp, np.array([[1.0, 1.0, 1.0]]), rb.Profile("r", ramp_profile(ocp, 200, 40.0)))[0]
+    fr = time_optimal.Front([], SimpleNamespace(peak_delta=ramp), 4.25)
+    assert time_optimal.earliest_arrival(ocp, DirectCollocation(50), ramp * 1.01, fr) == (None, 4.25)
