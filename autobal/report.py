@@ -132,6 +132,9 @@ UNIT_RULES: list[tuple[str, str]] = [
     (r"^spinup\..*" + _P + r"max_acceleration$", "rad/s^2"),
     (r"^spinup\.eccentricity_m$", "m"),
     (r"^spinup\.", "1"),
+    # robust and time-optimal spin-up: peaks delta/e, factors on the nominal rotor dimensionless
+    (r"^spinup_time_optimal\.horizon_s$", "s"),
+    (r"^spinup_(robust|time_optimal)\.", "1"),
     # stability-constrained design: margins and spectral abscissae 1/s, leakage m^3/s, parameters by their path
     (r"^design\..*" + _P + r"(decay_rate|margin(\.[\d.]+)?|spectral_abscissa(\.[\d.]+)?)$", "1/s"),
     (r"^design\.(abscissa_sweep\.(nominal|optimum)|other_model\.(nominal|optimum))", "1/s"),
@@ -887,6 +890,67 @@ def _spinup_binding(sec: Section) -> list[str]:
     return out
 
 
+def spinup_robust_section(sec: Section) -> None:
+    """Robust spin-up: the robust profile, the nominal optimum and the best ramp on the design set and on the
+    validation sample."""
+    sec.row("design rotors (grid)", "", "design_scenarios")
+    sec.row("design rotors in the final NLP (binding)", "", "active_scenarios")
+    sec.row("validation rotors", "", "validation_samples")
+    sec.row("build time (robust NLPs)", "", "build_time_s")
+    sec.row("solve time (robust NLPs)", "", "solve_time_s")
+    sec.row("validation time", "", "validation_time_s")
+    sec.row("validation integrator against CVODES (largest relative difference)", "", "validation_check_rel_error")
+    prof = sec.get("profiles") or {}
+    rows = []
+    for key in ("robust", "nominal", "ramp"):
+        p = prof.get(key) or {}
+        q = p.get("validation_quantiles_over_e") or {}
+        rows.append([text(p.get("label")), cell(p.get("nominal_peak_over_e"), "1"),
+                     cell(p.get("design_worst_over_e"), "1"), cell(q.get("0.5"), "1"), cell(q.get("0.99"), "1"),
+                     cell(p.get("validation_worst_over_e"), "1")])
+    if prof:
+        sec.tables.append(table("Peak deflection δ*/e of each profile: on the nominal rotor, worst over the design "
+                                "set (CVODES), and over the validation sample", ["profile", "nominal rotor",
+                                                                                  "design worst", "validation median",
+                                                                                  "validation 99 %",
+                                                                                  "validation worst"], rows,
+                                headline=True))
+        w = {k: (prof.get(k) or {}).get("validation_worst_over_e") for k in ("robust", "nominal", "ramp")}
+        if None not in w.values():
+            sec.verdict(w["robust"] < min(w["nominal"], w["ramp"]),
+                        f"validation worst case: robust {number(w['robust'])} e, nominal optimum "
+                        f"{number(w['nominal'])} e, best ramp {number(w['ramp'])} e")
+    rows = [[text(r.get("start")), cell(r.get("intervals"), "1"), cell(r.get("scenarios"), "1"), text(r.get("status")),
+             cell(r.get("iterations"), "1"), cell(r.get("build_time_s"), "s"), cell(r.get("solve_time_s"), "s"),
+             cell(r.get("worst_design_peak_over_e"), "1")] for r in sec.get("rounds", [])]
+    if rows:
+        sec.tables.append(table("Scenario generation: each NLP solve", ["start", "intervals", "scenarios", "status",
+                                                                        "iterations", "build", "solve",
+                                                                        "worst design δ*/e"], rows))
+
+
+def spinup_time_optimal_section(sec: Section) -> None:
+    """Time-optimal spin-up: the earliest arrival under the peak limit and the front."""
+    sec.row("peak limit", "δ/e", "deflection_limit_over_e")
+    sec.row("earliest arrival at the final speed", "T", "arrival_time_s")
+    sec.row("latest deadline known to exceed the limit", "", "arrival_time_lower_bound_s")
+    sec.row("peak deflection of the earliest arrival (re-simulated)", "δ*/e", "peak_deflection_over_e")
+    sec.row("arrival of the maximum-acceleration ramp", "", "ramp_arrival_time_s")
+    sec.row("peak of the maximum-acceleration ramp", "δ*/e", "ramp_peak_over_e")
+    sec.row("largest relative difference, collocation vs CVODES re-simulation", "", "resimulation_rel_error")
+    sec.row("build time", "", "build_time_s")
+    sec.row("solve time", "", "solve_time_s")
+    sec.verdict(sec.get("monotone"), "the front's peak does not rise with the arrival deadline" if sec.get("monotone")
+                else "the front is NOT monotone (a local optimum)")
+    rows = [[cell(p.get("arrival_time_s"), "s"), cell(p.get("resimulated_peak_over_e"), "1"),
+             cell(p.get("collocation_peak_over_e"), "1"), cell(p.get("resimulation_rel_error"), "1"),
+             cell(p.get("intervals"), "1"), cell(p.get("solve_time_s"), "s")] for p in sec.get("front", [])]
+    if rows:
+        sec.tables.append(table("Front: the smallest peak for each arrival deadline",
+                                ["arrival by", "δ*/e (re-simulated)", "δ*/e (collocation)", "difference",
+                                 "intervals", "solve time"], rows, headline=True))
+
+
 def design_section(sec: Section) -> None:
     """Stability-constrained design: the optimum against the nominal design, its certificate and limits."""
     sec.row("required decay rate", "α", "decay_rate")
@@ -929,12 +993,15 @@ def design_section(sec: Section) -> None:
 SECTIONS = {"statics": statics_section, "frequency": frequency_section, "stability": stability_section,
             "transient": transient_section, "liquid_balancer": liquid_balancer_section,
             "estimation": estimation_section, "reliability": reliability_section, "montecarlo": montecarlo_section,
-            "rotor_dynamics": rotor_dynamics_section, "spinup": spinup_section, "design": design_section}
+            "rotor_dynamics": rotor_dynamics_section, "spinup": spinup_section,
+            "spinup_robust": spinup_robust_section, "spinup_time_optimal": spinup_time_optimal_section,
+            "design": design_section}
 
 TITLES = {"statics": "Statics", "frequency": "Frequency response (AFC)", "stability": "Stability",
           "transient": "Transients", "liquid_balancer": "Liquid auto-balancer", "estimation": "Parameter estimation",
           "reliability": "Reliability", "montecarlo": "Monte Carlo", "rotor_dynamics": "Rotor dynamics",
-          "spinup": "Optimal spin-up", "design": "Stability-constrained design"}
+          "spinup": "Optimal spin-up", "spinup_robust": "Robust spin-up", "spinup_time_optimal": "Time-optimal spin-up",
+          "design": "Stability-constrained design"}
 
 #: figure file name (regex) -> (analysis, caption)
 CAPTIONS = [
@@ -971,6 +1038,17 @@ CAPTIONS = [
     (r"fig_reliability", "reliability", "Reliability P(t) (literal and renormalised load density) and the wear "
                                         "probability; Pavlenko (2014), Figs. 1.27-1.28"),
     (r"fig_rotor_(\w+)", "rotor_dynamics", "Rotor with a liquid auto-balancer: {0} (Pashkov 2010)"),
+    (r"spinup_robust_profiles", "spinup_robust", "Robust spin-up: speed of the robust profile, the nominal optimum "
+                                                 "and the best ramp, and their deflection on the worst design rotor"),
+    (r"spinup_robust_distribution", "spinup_robust", "Robust spin-up: distribution of the peak deflection over the "
+                                                     "validation rotors, each profile"),
+    (r"spinup_robust_scatter", "spinup_robust", "Robust spin-up: peak deflection of each validation rotor against "
+                                                "its critical-speed factor"),
+    (r"spinup_time_optimal_front", "spinup_time_optimal", "Time-optimal spin-up: the smallest re-simulated peak "
+                                                          "against the arrival deadline, the ramp and the earliest "
+                                                          "arrival under the limit"),
+    (r"spinup_time_optimal_profiles", "spinup_time_optimal", "Time-optimal spin-up: speed and deflection of the "
+                                                             "front's points"),
     (r"spinup_(\w+)", "spinup", "Optimal spin-up: {0} of the optimum beside the ramps"),
     (r"design_abscissa", "design", "Spectral abscissa max Re λ against the discharge ratio, nominal and optimum "
                                    "designs, with the required −α"),
