@@ -944,11 +944,13 @@ def spinup_time_optimal_section(sec: Section) -> None:
                 else "the front is NOT monotone (a local optimum)")
     rows = [[cell(p.get("arrival_time_s"), "s"), cell(p.get("resimulated_peak_over_e"), "1"),
              cell(p.get("collocation_peak_over_e"), "1"), cell(p.get("resimulation_rel_error"), "1"),
-             cell(p.get("intervals"), "1"), cell(p.get("solve_time_s"), "s")] for p in sec.get("front", [])]
+             cell(p.get("intervals"), "1"), cell(p.get("solve_time_s"), "s"),
+             text(f"held from {number(p['held_from_s'])} s" if p.get("held_from_s") else "")]
+            for p in sec.get("front", [])]
     if rows:
         sec.tables.append(table("Front: the smallest peak for each arrival deadline",
                                 ["arrival by", "δ*/e (re-simulated)", "δ*/e (collocation)", "difference",
-                                 "intervals", "solve time"], rows, headline=True))
+                                 "intervals", "solve time", "profile"], rows, headline=True))
 
 
 def design_section(sec: Section) -> None:

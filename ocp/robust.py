@@ -135,16 +135,20 @@ def cvodes_peaks(ocp: SpinupOcp, factors: np.ndarray, profile: Profile, points: 
     return np.array(out)
 
 
+def averaged(u: np.ndarray, duration: float, edges: np.ndarray) -> np.ndarray:
+    """The piecewise-constant profile u (equal intervals over ``duration``, zero after) averaged over the
+    steps between ``edges`` (same time unit as ``duration``): the speed at every edge is kept exactly."""
+    n = u.size
+    cum = np.concatenate([[0.0], np.cumsum(u)])
+    U = np.interp(np.asarray(edges) / duration * n, np.arange(n + 1), cum, right=cum[-1])
+    return np.diff(U) / (np.diff(edges) / duration * n)
+
+
 def steps_of(ocp: SpinupOcp, u: np.ndarray, dt: float) -> np.ndarray:
     """The piecewise-constant profile u (n control intervals of the horizon, then held) averaged over steps
     of ``dt`` (dimensionless time of ``ocp``'s rotor), horizon and settling window covered."""
-    n = u.size
-    T = ocp.tau_h + ocp.tau_s
-    steps = int(np.ceil(T / dt))
-    edges = np.minimum(np.arange(steps + 1) * dt, T) / ocp.tau_h * n  # in control intervals
-    cum = np.concatenate([[0.0], np.cumsum(u)])
-    U = np.interp(edges, np.arange(n + 1), cum, right=cum[-1])  # integral of u, in control intervals
-    return np.diff(U) / (dt / ocp.tau_h * n)
+    steps = int(np.ceil((ocp.tau_h + ocp.tau_s) / dt))
+    return averaged(u, ocp.tau_h, np.arange(steps + 1) * dt)
 
 
 def fast_peaks(ocp: SpinupOcp, factors: np.ndarray, profiles: list[Profile], dt: float = FAST_STEP) -> np.ndarray:

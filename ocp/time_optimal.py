@@ -19,8 +19,9 @@ import numpy as np
 
 from autobal.errors import SolveError
 from autobal.ocp.problem import SpinupOcp
-from autobal.ocp.simulation import Trajectory, baselines
-from autobal.ocp.solve import Optimum, optimize
+from autobal.ocp.robust import averaged
+from autobal.ocp.simulation import Trajectory, baselines, resimulate
+from autobal.ocp.solve import TIE, Optimum, Solver, optimize, resimulated_scores
 from autobal.ocp.transcription import DirectCollocation
 
 
@@ -31,6 +32,7 @@ class FrontPoint:
     arrival_time_s: float  # s, the deadline
     optimum: Optimum  # the minimum-peak OCP for that deadline (re-simulated)
     intervals: int  # control intervals up to the deadline
+    held_from_s: float | None = None  # the profile is an earlier deadline's, held from then (s)
 
     @property
     def peak(self) -> float:
@@ -50,7 +52,7 @@ class FrontPoint:
         o = self.optimum
         return {"arrival_time_s": self.arrival_time_s, "resimulated_peak_over_e": self.peak,
                 "collocation_peak_over_e": o.collocation_value, "resimulation_rel_error": self.resimulation_rel_error,
-                "intervals": self.intervals,
+                "intervals": self.intervals, "held_from_s": self.held_from_s,
                 "iterations": o.solution.iterations, "build_time_s": o.build_time_s,
                 "solve_time_s": sum(r.get("solve_time_s", 0.0) for r in o.starts)}
 
@@ -124,8 +126,45 @@ def front(ocp: SpinupOcp, method: DirectCollocation, count: int = 6, options: di
                          f"the horizon {ocp.horizon:g} s", "no_front", {})
     peak_ocp = dataclasses.replace(ocp, objective="peak_deflection", deflection_limit=None)
     ramp = baselines(peak_ocp, intervals=4 * method.intervals)["max_acceleration_ramp"]
-    deadlines = t_ramp + (ocp.horizon - t_ramp) * np.arange(1, count + 1) / count
-    return Front([deadline_point(ocp, method, T, options, multistart) for T in deadlines], ramp, t_ramp)
+    # deadlines on the control grid of the horizon, so that every earlier profile, held, is one of the later
+    # deadline's profiles (the meshes nest)
+    dt = ocp.horizon / method.intervals
+    deadlines = np.unique(np.ceil((t_ramp + (ocp.horizon - t_ramp) * np.arange(1, count + 1) / count) / dt - 1e-9)
+                          * dt)
+    points = []
+    for T in deadlines:
+        p = deadline_point(ocp, method, T, options, multistart)
+        if points and p.peak > points[-1].peak * (1 + TIE):
+            q = extended(ocp, method, points[-1], T, options)
+            p = q if q is not None and q.peak < p.peak else p
+        if points and p.peak > points[-1].peak * (1 + TIE):
+            # the discretisation error of the later mesh: the earlier profile, held, is the better one
+            p = dataclasses.replace(points[-1], arrival_time_s=float(T),
+                                    held_from_s=points[-1].held_from_s or points[-1].arrival_time_s)
+        points.append(p)
+    return Front(points, ramp, t_ramp)
+
+
+def extended(ocp: SpinupOcp, method: DirectCollocation, earlier: FrontPoint, deadline: float,
+             options: dict | None = None) -> FrontPoint | None:
+    """The minimum-peak OCP for ``deadline`` solved from the ``earlier`` point's profile (arrive by the earlier
+    deadline, then hold; the deadlines on one control grid): a later deadline admits every earlier profile,
+    so this start keeps the front from rising where the multi-start finds a worse local optimum.  None when
+    IPOPT fails from it."""
+    o = dataclasses.replace(ocp, horizon=float(deadline), objective="peak_deflection", deflection_limit=None)
+    m = dataclasses.replace(method, intervals=max(MIN_INTERVALS, round(method.intervals * deadline / ocp.horizon)))
+    n0 = earlier.intervals
+    u = averaged(earlier.optimum.solution.u[:n0], earlier.arrival_time_s, np.linspace(0.0, deadline, m.intervals + 1))
+    solver = Solver(o, m, options=options)
+    try:
+        sol = solver.solve(np.clip(u, -1.0, 1.0))
+    except SolveError:
+        return None
+    tr = resimulate(o, sol.u, sol.h, "optimum")
+    score, own = resimulated_scores(o, sol, tr)
+    row = {"start": f"the {earlier.arrival_time_s:.4g} s point's profile, then held", "status": sol.status,
+           "success": True, "iterations": sol.iterations, "solve_time_s": sol.solve_time_s, "objective": score}
+    return FrontPoint(float(deadline), Optimum(o, sol, tr, score, [row], own, solver.build_time_s), m.intervals)
 
 
 def earliest_arrival(ocp: SpinupOcp, method: DirectCollocation, limit: float, fr: Front,
