@@ -452,6 +452,7 @@ COST = {
     "map_point": 3e-3,  # one point of a stability map, per model
     "transient_point": 5e-4,  # one output time of one time response (CVODES)
     "ocp_collocation_point": 5e-3,  # one collocation point of the spin-up OCP, per start
+    "robust_validation_run": 4e-3,  # one profile on one validation rotor (exponential integrator)
     "reliability_node": 5e-7,  # one (time, load) node of the reliability integrals
     "rotor_run": 0.5,  # one CVODES passage / step response of the rotor studies
     "grid_point": 1e-5,  # one point of a dense cross-check grid
@@ -498,7 +499,8 @@ def estimate_seconds(scn: Scenario) -> dict[str, float]:
         out["spinup"] = c["start"] + c["ocp_collocation_point"] * s.intervals * s.degree * (4 if s.multistart else 1)
     if a.spinup_robust is not None:
         s = a.spinup_robust
-        out["spinup_robust"] = c["start"] + c["ocp_collocation_point"] * s.intervals * s.degree * 12
+        out["spinup_robust"] = (c["start"] + c["ocp_collocation_point"] * s.intervals * s.degree * 12
+                                + c["robust_validation_run"] * s.validation_samples * (s.ramps + 2))
     if a.spinup_time_optimal is not None:
         s = a.spinup_time_optimal
         out["spinup_time_optimal"] = c["start"] + c["ocp_collocation_point"] * s.intervals * s.degree * (

@@ -49,6 +49,16 @@ def test_design_grid_and_validation_sample_cover_the_ranges():
     assert abs(np.median(np.log(s[:, 1]))) < 0.05  # log-uniform in [0.5, 2]: median 1
     with pytest.raises(ValueError, match="damping_factor"):
         rb.Uncertainty(0.05, (2.0, 0.5))
+    liquid = rb.Uncertainty(0.05, (0.5, 2.0), (0.8, 1.2)).grid(2)
+    assert liquid.shape == (8, 3) and set(liquid[:, 2]) == {0.8, 1.2}
+
+
+def test_validation_integrator_matches_cvodes_with_a_liquid_layer():
+    ocp = dataclasses.replace(jeffcott(), params=ROTOR.with_psi(0.5))
+    factors = np.array([[1.0, 0.5, 1.2]])
+    prof = [rb.Profile("ramp 40", ramp_profile(ocp, 40, 40.0))]
+    np.testing.assert_allclose(rb.fast_peaks(ocp, factors, prof)[:, 0], rb.cvodes_peaks(ocp, factors, prof[0]),
+                               rtol=2e-4)
 
 
 def test_validation_integrator_matches_cvodes():
