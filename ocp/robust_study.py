@@ -113,11 +113,11 @@ class RobustResult(Result):
         for ax in (a0, a1):
             ax.grid(alpha=0.3)
             ax.legend(fontsize=7)
-        fig.suptitle(title, fontsize=9)
-        fig2, ax2 = new_figure((7, 4.5))
+        fig.suptitle(title, fontsize=8)
+        fig2, ax2 = new_figure((8.5, 4.8))
         self.draw(ax2)
-        fig2.suptitle(title, fontsize=9)
-        fig3, ax3 = new_figure((7, 4.5))
+        fig2.suptitle(title, fontsize=8)
+        fig3, ax3 = new_figure((8.5, 4.8))
         f = self.validation["factors"]
         for k in self.KEYS:
             ax3.scatter(f[:, 0], self.validation[k], s=3, color=self.COLORS[k], alpha=0.5,
@@ -126,7 +126,7 @@ class RobustResult(Result):
         ax3.set_ylabel(r"peak deflection $\delta^*/e$")
         ax3.grid(alpha=0.3)
         ax3.legend(fontsize=7, markerscale=4)
-        fig3.suptitle(title, fontsize=9)
+        fig3.suptitle(title, fontsize=8)
         return {"spinup_robust_profiles.png": fig, "spinup_robust_distribution.png": fig2,
                 "spinup_robust_scatter.png": fig3}
 

@@ -85,9 +85,9 @@ class TimeOptimalResult(Result):
     def figures(self) -> dict:
         """The front; the speed and deflection of its points."""
         title = self.data["title"]
-        fig, ax = new_figure((7, 4.5))
+        fig, ax = new_figure((8.5, 4.8))
         self.draw(ax)
-        fig.suptitle(title, fontsize=9)
+        fig.suptitle(title, fontsize=8)
         fig2, (a0, a1) = new_figure((8, 7), 2, 1, sharex=True)
         cmap = [f"C{i % 10}" for i in range(len(self.front.points))]
         for p, c in zip(self.front.points, cmap, strict=True):
@@ -99,7 +99,7 @@ class TimeOptimalResult(Result):
         for a in (a0, a1):
             a.grid(alpha=0.3)
             a.legend(fontsize=6, ncols=2)
-        fig2.suptitle(title, fontsize=9)
+        fig2.suptitle(title, fontsize=8)
         return {"spinup_time_optimal_front.png": fig, "spinup_time_optimal_profiles.png": fig2}
 
 
