@@ -160,3 +160,22 @@ def test_earliest_arrival_of_a_limit_the_ramp_keeps_is_the_ramp():
     ramp = rb.cvodes_peaks(ocp, np.array([[1.0, 1.0, 1.0]]), rb.Profile("r", ramp_profile(ocp, 200, 40.0)))[0]
     fr = time_optimal.Front([], SimpleNamespace(peak_delta=ramp), 4.25)
     assert time_optimal.earliest_arrival(ocp, DirectCollocation(50), ramp * 1.01, fr) == (None, 4.25)
+
+
+@pytest.mark.slow
+@pytest.mark.cli
+def test_validation_on_a_dask_cluster_gives_the_in_process_numbers():
+    from distributed import LocalCluster
+
+    from autobal.analysis import executor
+
+    ocp = jeffcott()
+    unc = rb.Uncertainty()
+    prof = [rb.Profile("ramp", ramp_profile(ocp, 20, 40.0))]
+    local = rb.validate(ocp, unc, prof, 24, 5, InProcess(progress=False), chunk=8)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address="127.0.0.1:0") as c, executor.make(c.scheduler_address, progress=False) as exe:
+        assert exe.name.startswith("dask tcp://127.0.0.1:")
+        remote = rb.validate(ocp, unc, prof, 24, 5, exe, chunk=8)
+    np.testing.assert_array_equal(local[0], remote[0])
+    np.testing.assert_array_equal(local[1], remote[1])
