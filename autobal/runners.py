@@ -172,7 +172,8 @@ def spinup_robust(scene, settings) -> Result:
         raise ScenarioError("analyses.spinup_robust.liquid_mass_factor: the rotor has no liquid block (rotor.liquid)")
     unc = robust.Uncertainty(settings.critical_speed_spread, tuple(settings.damping_factor),
                              tuple(liquid) if liquid is not None else None)
-    with executor.make(scene_executor=getattr(scene, "executor", None)) as exe:
+    with executor.make(scene_executor=getattr(scene, "executor", None)) as exe, \
+            progress.steps(None, "robust spin-up (nominal, scenario generation)", "IPOPT solve", catch=True):
         return robust_study.run(ocp, DirectCollocation(settings.intervals, settings.degree, settings.scheme), unc,
                                 settings.design_points, settings.validation_samples, settings.seed, settings.ramps,
                                 exe, scene.title, settings.multistart,
@@ -185,10 +186,11 @@ def spinup_time_optimal(scene, settings) -> Result:
     from autobal.ocp.solve import ipopt_options
     from autobal.ocp.transcription import DirectCollocation
 
-    return time_optimal_study.run(spinup_ocp(scene, settings),
-                                  DirectCollocation(settings.intervals, settings.degree, settings.scheme),
-                                  settings.front_points, scene.title, settings.multistart,
-                                  ipopt_options(settings.max_iterations, settings.tolerance))
+    with progress.steps(None, "time-optimal spin-up (front deadlines)", "IPOPT solve", catch=True):
+        return time_optimal_study.run(spinup_ocp(scene, settings),
+                                      DirectCollocation(settings.intervals, settings.degree, settings.scheme),
+                                      settings.front_points, scene.title, settings.multistart,
+                                      ipopt_options(settings.max_iterations, settings.tolerance))
 
 
 RUNNERS = {
