@@ -5,7 +5,8 @@ A quantity is read as a plain decimal number followed by a unit; only the unit i
 only after a strict grammar has accepted it (unit names joined by ``*``, ``/``, a space, and integer
 powers ``^n`` or ``**n``), so no text is ever evaluated as an arithmetic expression.  Values that are
 not finite, or that leave the physical range of their kind (:data:`DIMENSIONS`), are refused.
-The pint registry is built on first use, not at import.
+The plain SI-prefixed units (``mm``, ``MPa``, ``kg/m^3``, ``rpm``, ...) are read from a small table; pint's
+registry is built on first use of any other unit, or to explain an error.
 """
 
 from __future__ import annotations
@@ -50,6 +51,60 @@ _FACTOR = rf"(?:{_NAME}(?:\s*(?:\^|\*\*)\s*-?\d)?)"
 # unit := ["1" "/"] factor { ("*" | "/" | " ") factor }: names with single-digit integer powers, nothing else
 _UNIT = re.compile(rf"(?:1\s*/\s*)?{_FACTOR}(?:\s*(?:\*(?!\*)|/|\s)\s*{_FACTOR})*")
 _QUANTITY = re.compile(rf"\s*({_NUMBER})\s*(.*?)\s*")
+
+
+# The plain SI-prefixed units read without pint (pint's import and registry take about 0.3 s of CPU, a
+# tenth of a statics run): name -> (SI factor, exponents of (mass, length, time)), with the names that
+# take an SI prefix. The same factors as pint's registry (tests/test_units_table.py checks every entry).
+_TABLE = {"m": (1.0, (0, 1, 0)), "g": (1e-3, (1, 0, 0)), "s": (1.0, (0, 0, 1)), "Pa": (1.0, (1, -1, -2)),
+          "bar": (1e5, (1, -1, -2)), "N": (1.0, (1, 1, -2)), "J": (1.0, (1, 2, -2)), "W": (1.0, (1, 2, -3)),
+          "L": (1e-3, (0, 3, 0)), "l": (1e-3, (0, 3, 0)), "Hz": (1.0, (0, 0, -1)), "rad": (1.0, (0, 0, 0)),
+          "min": (60.0, (0, 0, 1)), "h": (3600.0, (0, 0, 1)), "rpm": (2 * math.pi / 60, (0, 0, -1))}
+_PREFIXED = ("m", "g", "s", "Pa", "bar", "N", "J", "W", "L", "l", "Hz", "rad")
+_PREFIXES = {"T": 1e12, "G": 1e9, "M": 1e6, "k": 1e3, "h": 1e2, "da": 1e1, "d": 1e-1, "c": 1e-2, "m": 1e-3,
+             "u": 1e-6, "µ": 1e-6, "μ": 1e-6, "n": 1e-9, "p": 1e-12}
+
+
+def _name(name: str) -> tuple[float, tuple[int, int, int]] | None:
+    """SI factor and dimension of one unit name from :data:`_TABLE`, or None (unknown or ambiguous)."""
+    if name in _TABLE:
+        return _TABLE[name]
+    if name == "hbar":  # pint's reduced Planck constant, not a hectobar
+        return None
+    found = [(f * _TABLE[name[len(p):]][0], _TABLE[name[len(p):]][1]) for p, f in _PREFIXES.items()
+             if name.startswith(p) and name[len(p):] in _PREFIXED]
+    return found[0] if len(found) == 1 else None
+
+
+@cache
+def _table_unit(text: str) -> tuple[float, tuple[int, int, int]] | None:
+    """SI factor and dimension of a unit made of :data:`_TABLE` names joined by ``*``, ``/`` and integer
+    powers (read left to right, as pint reads them), or None: then pint reads it."""
+    s = re.sub(r"\s*(\^|\*\*|\*|/)\s*", lambda m: "^" if m.group(1) == "**" else m.group(1), text.strip())
+    if " " in s:
+        return None
+    factor, dims, sign = 1.0, (0, 0, 0), 1
+    if s.startswith("1/"):
+        s, sign = s[2:], -1
+    for op, item in re.findall(r"([*/]?)([^*/]+)", s):
+        name, _, power = item.partition("^")
+        unit = _name(name)
+        if unit is None:
+            return None
+        n = (int(power) if power else 1) * (-1 if op == "/" else 1) * (sign if not op else 1)
+        factor *= unit[0] ** n
+        dims = tuple(d + n * e for d, e in zip(dims, unit[1], strict=True))
+    return factor, dims
+
+
+def _fast(unit: str, kind: str) -> float | None:
+    """The factor from ``unit`` to the SI unit of ``kind`` read from :data:`_TABLE`; None where the table
+    does not know ``unit`` or its dimension is not that of ``kind`` (pint then reads it and explains)."""
+    text = unit.strip()
+    if len(text) > 64 or not _UNIT.fullmatch(text):
+        return None
+    mine, si = _table_unit(text), _table_unit(DIMENSIONS[kind][1])
+    return mine[0] / si[0] if mine is not None and mine[1] == si[1] else None
 
 
 @cache
@@ -97,6 +152,9 @@ def unit_factor(unit: str, kind: str) -> float:
         SI value of one ``unit``, e.g. 0.001 for ``"mm"`` as a length.
     """
     dim, si, example, _ = DIMENSIONS[kind]
+    fast = _fast(unit, kind)
+    if fast is not None:
+        return fast
     u = parse_unit(unit)
     ureg = registry()
     if u.dimensionality != ureg.get_dimensionality(dim):
@@ -134,6 +192,9 @@ def to_si(value: object, kind: str) -> float:
     number, unit = float(m.group(1)), m.group(2)
     if not unit:
         raise ValueError(f"{value!r} has no unit: write a {kind} with its unit, e.g. '{example}'")
+    fast = _fast(unit, kind)
+    if fast is not None:
+        return _finite(value, kind, number, number * fast)
     try:
         u = parse_unit(unit)
     except ValueError as exc:
@@ -141,9 +202,12 @@ def to_si(value: object, kind: str) -> float:
     if u.dimensionality != registry().get_dimensionality(dim):
         raise ValueError(f"{value!r} is not a {kind}: expected a unit like '{example}' (SI: {si}), "
                          f"got dimension {u.dimensionality}")
-    si_value = number * unit_factor(unit, kind)
+    return _finite(value, kind, number, number * unit_factor(unit, kind))
+
+
+def _finite(value: str, kind: str, number: float, si_value: float) -> float:
     if not math.isfinite(number) or not math.isfinite(si_value):
-        raise ValueError(f"{value!r}: a {kind} must be a finite number (it overflows in {si})")
+        raise ValueError(f"{value!r}: a {kind} must be a finite number (it overflows in {DIMENSIONS[kind][1]})")
     return si_value
 
 
@@ -211,6 +275,9 @@ def si_unit_of(text: object) -> str:
     m = _QUANTITY.fullmatch(text) if isinstance(text, str) else None
     if m is None or not m.group(2):
         return ""
+    for kind, (_, si, _, _) in DIMENSIONS.items():
+        if _fast(m.group(2), kind) is not None:
+            return si
     try:
         u = parse_unit(m.group(2))
     except ValueError:
