@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from autobal.analysis import closed_form, workprecision
-from autobal.analysis.result import Result, fmt, new_figure, with_statuses
+from autobal.analysis.result import Result, fixed_layout, fmt, new_figure, with_statuses
 from autobal.analysis.statics import StaticPoint, StaticsSolver
 from autobal.errors import SolveError
 from autobal.models.device import groups_by_name
@@ -91,16 +91,18 @@ class StaticsResult(Result):
                                   "phi_closed_form": fg["phi_closed_form"]}}
 
     # dimensional axes: (key of the base in data["scales"] or "Q_B", factor SI -> shown unit, unit)
-    _BASES = {"p": ("p_B", 1e-6, "MPa"), "z": ("z_B", 1e6, r"$\mu$m"), "x": ("x_B", 1e3, "mm"),
+    _BASES = {"p": ("p_B", 1e-6, "MPa"), "z": ("z_B", 1e6, "µm"), "x": ("x_B", 1e3, "mm"),
               "Q": ("Q_B", 6e4, "L/min")}
     _CF = "closed form, Pavlenko (2014)"
+    # inches: tick labels and label on the left, the group's axis on the right, suptitle and group's axis on top
+    _MARGINS = {"left": 0.75, "right": 0.75, "top": 0.7, "bottom": 0.55, "hspace": 0.08}
 
     def _base(self, kind: str) -> tuple[float, str]:
         """The factor from a dimensionless group to the shown unit, and the unit (p_B, z_B, x_B, Q_B)."""
         key, f, unit = self._BASES[kind]
         base = self.data["closed_form"]["Q_B"] if key == "Q_B" else self.data["scales"][key]
         if kind == "Q" and base * f > 5000:  # large flows (the compressor) in m^3/min
-            return base * 60, "m$^3$/min"
+            return base * 60, "m³/min"
         return base * f, unit
 
     def _curve(self, key: str, closed: bool = False) -> tuple[np.ndarray, np.ndarray]:
@@ -141,11 +143,11 @@ class StaticsResult(Result):
         if top:
             ax.secondary_xaxis("top", functions=(lambda x: x / P, lambda s: s * P)).set_xlabel(
                 r"$\psi_1 = p_1/p_B$", fontsize=8)
-        ax.set_xlabel(rf"discharge pressure $p_1$, MPa  ($p_B$ = {P:.3g} MPa)")
+        ax.set_xlabel(rf"discharge pressure p₁, MPa  ($p_B$ = {P:.3g} MPa)")
         if kind in self._BASES:
             F, unit = self._base(kind)
             ax.set_ylabel(f"{ylabel}, {unit}")
-            sym = {"p": r"$\psi$", "z": r"$u = z/z_B$", "x": r"$\xi = x/x_B$", "Q": r"$Q/Q_B$"}[kind]
+            sym = {"p": "ψ", "z": r"$u = z/z_B$", "x": r"$\xi = x/x_B$", "Q": r"$Q/Q_B$"}[kind]
             ax.secondary_yaxis("right", functions=(lambda y: y / F, lambda g: g * F)).set_ylabel(sym, fontsize=8)
         else:
             ax.set_ylabel(ylabel)
@@ -159,8 +161,8 @@ class StaticsResult(Result):
         """Chamber pressures against the discharge pressure (Fig 2.4 / 2.9), MPa with psi on the right."""
         ex = self.data["exact"]
         P, _ = self._base("p")
-        for k, k0, lab in (("psi_e", "psi_e0", r"$p_e$ barrier"), ("psi2", "psi2_0", r"$p_2$ disc chamber"),
-                           ("psi3", "psi3_0", r"$p_3$"), ("psi_cam", "psi_cam0", r"$p_{cam}$ regulator")):
+        for k, k0, lab in (("psi_e", "psi_e0", "pₑ barrier"), ("psi2", "psi2_0", "p₂ disc chamber"),
+                           ("psi3", "psi3_0", "p₃"), ("psi_cam", "psi_cam0", r"$p_{cam}$ regulator")):
             x, y = self._curve(k)
             line, = ax.plot(x * P, y * P, label=f"{lab}, exact")
             x, y = self._curve(k, closed=True)
@@ -188,33 +190,33 @@ class StaticsResult(Result):
         fig, (a1, a2) = new_figure((8, 6.4), 2, 1, sharex=True)
         Z, _ = self._base("z")
         x, y = self._curve("u")
-        a1.plot(x * P, y * Z, label="face gap $z$, exact")
+        a1.plot(x * P, y * Z, label="face gap z, exact")
         a1.plot(p1, np.asarray(sw["u"], float) * Z, ".", ms=4, color="C0")
         x, y = self._curve("u", closed=True)
         a1.plot(x * P, y * Z, ls="--",
                 label=f"face gap, {self._CF} Eq. ({'2.147' if self.data['medium'] == 'gas' else '2.27'})")
         self._operating_point(a1, ex["u0"] * Z)
-        self._decorate(a1, "z", "face gap $z$")
+        self._decorate(a1, "z", "face gap z")
         a1.set_xlabel("")
         X, _ = self._base("x")
         x, xi = self._curve("xi")
-        a2.plot(x * P, xi * X, color="C2", label=r"valve opening $x$, exact (dots: sweep grid)")
+        a2.plot(x * P, xi * X, color="C2", label="valve opening x, exact (dots: sweep grid)")
         a2.plot(p1, np.asarray(sw["xi"], float) * X, ".", ms=4, color="C2")
         xc, xi_cf = self._curve("xi", closed=True)
         stop = ""
         if np.isfinite(xi_cf).any() and not np.isfinite(xi_cf).all():
             last = xc[np.isfinite(xi_cf)].max()
-            stop = f";\nends: no opening passes the flow beyond $\\psi_1$ = {last:.4g}"
+            stop = f";\nends: no opening passes the flow beyond ψ₁ = {last:.4g}"
         a2.plot(xc * P, xi_cf * X, ls="--", color="C3", label=f"valve, {self._CF} Eq. (2.28) (ideal regulator){stop}")
         self._operating_point(a2, ex["xi0"] * X if ex.get("xi0") is not None else None)
-        self._decorate(a2, "x", "valve opening $x$", top=False)
+        self._decorate(a2, "x", "valve opening x", top=False)
         _legend(fig, a1, a2)
         figs["fig_gap.png"] = fig
 
         fig, ax = new_figure((8, 4.6))
         Q, _ = self._base("Q")
         span = 0.0
-        for k, lab in (("q_e", "$Q_e$ barrier leak"), ("q_T", "$Q_T$ face leak"), ("q_1", "$Q_1$ inner seal")):
+        for k, lab in (("q_e", "Qₑ barrier leak"), ("q_T", "$Q_T$ face leak"), ("q_1", "Q₁ inner seal")):
             x, y = self._curve(k)
             y = y * Q
             line, = ax.plot(x * P, y, label=f"{lab}, exact")
@@ -230,7 +232,7 @@ class StaticsResult(Result):
             ax.axhspan(-0.3 * span, 0, color="C3", alpha=0.06, zorder=0)
             ax.text(0.01, 0.1, f"below 0: reversed flow (axis cut; down to {neg:.3g} {self._base('Q')[1]} = "
                     f"{neg / Q:.3g} $Q_B$)", transform=ax.transAxes, fontsize=7, color="C3")
-        self._decorate(ax, "Q", f"flow $Q$ ($Q_B$ = {Q:.3g} {self._base('Q')[1]})")
+        self._decorate(ax, "Q", f"flow Q ($Q_B$ = {Q:.3g} {self._base('Q')[1]})")
         _legend(fig, ax)
         figs["fig_flows.png"] = fig
 
@@ -238,13 +240,13 @@ class StaticsResult(Result):
         fig, ax = new_figure((8, 4.6))
         Z, unit = self._base("z")
         u = np.asarray(fg["u"], float)
-        ax.plot(u * Z, fg["phi_exact"], label=r"$\varphi(u)$, exact network")
+        ax.plot(u * Z, fg["phi_exact"], label="φ(u), exact network")
         if any(v is not None for v in fg["phi_closed_form"]):
             ax.plot(u * Z, np.asarray(fg["phi_closed_form"], float), ls="--", label=f"{self._CF} Eq. (2.35)")
-        ax.axhline(fg["tau"], color="k", lw=0.8, ls=":", label=r"load $\tau - \chi$")
+        ax.axhline(fg["tau"], color="k", lw=0.8, ls=":", label="load τ − χ")
         if fg["psi1"] == ex["psi1"]:
             ax.plot([ex["u0"] * Z], [fg["tau"]], "k*", ms=9, zorder=5, label="operating point")
-        ax.set_xlabel(f"face gap $z$, {unit}  ($z_B$ = {Z:.3g} {unit})")
+        ax.set_xlabel(f"face gap z, {unit}  ($z_B$ = {Z:.3g} {unit})")
         ax.secondary_xaxis("top", functions=(lambda x: x / Z, lambda v: v * Z)).set_xlabel(r"$u = z/z_B$", fontsize=8)
         ax.set_ylabel(r"balancing force $\varphi = F/(p_B s_B)$")
         kN = self.data["scales"]["p_B"] * self.data["scales"]["s_B"] * 1e-3
@@ -255,6 +257,7 @@ class StaticsResult(Result):
         figs["fig_force_gap.png"] = fig
         for f in figs.values():
             f.suptitle(self.data["title"], fontsize=9)
+            fixed_layout(f, **self._MARGINS)
         return figs
 
 
