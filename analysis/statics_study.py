@@ -94,8 +94,8 @@ class StaticsResult(Result):
     _BASES = {"p": ("p_B", 1e-6, "MPa"), "z": ("z_B", 1e6, "µm"), "x": ("x_B", 1e3, "mm"),
               "Q": ("Q_B", 6e4, "L/min")}
     _CF = "closed form, Pavlenko (2014)"
-    # inches: tick labels and label on the left, the group's axis on the right, suptitle and group's axis on top
-    _MARGINS = {"left": 0.75, "right": 0.75, "top": 0.7, "bottom": 0.55, "hspace": 0.08}
+    # inches: tick labels and the two-line label on the left, the suptitle on top, tick labels and label below
+    _MARGINS = {"left": 0.95, "right": 0.25, "top": 0.4, "bottom": 0.55, "hspace": 0.08}
 
     def _base(self, kind: str) -> tuple[float, str]:
         """The factor from a dimensionless group to the shown unit, and the unit (p_B, z_B, x_B, Q_B)."""
@@ -119,9 +119,10 @@ class StaticsResult(Result):
     def _operating_x(self) -> float:
         return self.data["exact"]["psi1"] * self._base("p")[0]
 
-    def _decorate(self, ax, kind: str, ylabel: str, top: bool = True) -> None:
-        """Dimensional x axis p1 (MPa), psi1 on top; y in the unit of ``kind`` with the group on the right;
-        the saturated range shaded and labelled, the critical discharge pressures marked."""
+    def _decorate(self, ax, kind: str, ylabel: str, xlabel: bool = True) -> None:
+        """Dimensional axes, p1 (MPa) and y in the unit of ``kind``, their labels naming the source's groups
+        and bases (psi1 = p1/p_B, u = z/z_B ...); the saturated range shaded and labelled, the critical
+        discharge pressures marked."""
         sw = self.data["sweep"]
         P, _ = self._base("p")
         p1 = np.asarray(sw["psi1"], float) * P
@@ -140,15 +141,13 @@ class StaticsResult(Result):
             ax.axvline(kr_cf * P, color="0.5", lw=0.8, ls="-.",
                        label=rf"$p_1^{{kr}}$, {self._CF} Eq. ({'2.160' if self.data['medium'] == 'gas' else '2.32'})")
         ax.set_xlim(p1.min(), p1.max())
-        if top:
-            ax.secondary_xaxis("top", functions=(lambda x: x / P, lambda s: s * P)).set_xlabel(
-                r"$\psi_1 = p_1/p_B$", fontsize=8)
-        ax.set_xlabel(rf"discharge pressure p₁, MPa  ($p_B$ = {P:.3g} MPa)")
+        if xlabel:  # the groups in the labels: a secondary axis costs about a tenth of a draw
+            ax.set_xlabel(rf"discharge pressure p₁, MPa  (ψ₁ = p₁/$p_B$, $p_B$ = {P:.3g} MPa)")
         if kind in self._BASES:
             F, unit = self._base(kind)
-            ax.set_ylabel(f"{ylabel}, {unit}")
-            sym = {"p": "ψ", "z": r"$u = z/z_B$", "x": r"$\xi = x/x_B$", "Q": r"$Q/Q_B$"}[kind]
-            ax.secondary_yaxis("right", functions=(lambda y: y / F, lambda g: g * F)).set_ylabel(sym, fontsize=8)
+            group = {"p": "ψ = p/$p_B$", "z": "u = z/$z_B$", "x": "ξ = x/$x_B$", "Q": "Q/$Q_B$"}[kind]
+            base = "" if kind == "p" else f", ${self._BASES[kind][0]}$ = {F:.3g} {unit}"
+            ax.set_ylabel(f"{ylabel}, {unit}\n{group}{base}")
         else:
             ax.set_ylabel(ylabel)
         ax.grid(alpha=0.3)
@@ -175,7 +174,7 @@ class StaticsResult(Result):
 
     def figures(self) -> dict:
         """Pressures (Fig 2.4/2.9), gap and valve (Fig 2.5), flows (Fig 2.6/2.10), phi(u) (2.35); dimensional
-        axes (MPa, um, mm, L/min) with the source's groups on the secondary axes."""
+        axes (MPa, um, mm, L/min, kN) whose labels name the source's groups and their bases."""
         sw, ex = self.data["sweep"], self.data["exact"]
         psi1 = np.asarray(sw["psi1"], float)
         P, _ = self._base("p")
@@ -196,8 +195,7 @@ class StaticsResult(Result):
         a1.plot(x * P, y * Z, ls="--",
                 label=f"face gap, {self._CF} Eq. ({'2.147' if self.data['medium'] == 'gas' else '2.27'})")
         self._operating_point(a1, ex["u0"] * Z)
-        self._decorate(a1, "z", "face gap z")
-        a1.set_xlabel("")
+        self._decorate(a1, "z", "face gap z", xlabel=False)
         X, _ = self._base("x")
         x, xi = self._curve("xi")
         a2.plot(x * P, xi * X, color="C2", label="valve opening x, exact (dots: sweep grid)")
@@ -209,7 +207,7 @@ class StaticsResult(Result):
             stop = f";\nends: no opening passes the flow beyond ψ₁ = {last:.4g}"
         a2.plot(xc * P, xi_cf * X, ls="--", color="C3", label=f"valve, {self._CF} Eq. (2.28) (ideal regulator){stop}")
         self._operating_point(a2, ex["xi0"] * X if ex.get("xi0") is not None else None)
-        self._decorate(a2, "x", "valve opening x", top=False)
+        self._decorate(a2, "x", "valve opening x")
         _legend(fig, a1, a2)
         figs["fig_gap.png"] = fig
 
@@ -232,7 +230,7 @@ class StaticsResult(Result):
             ax.axhspan(-0.3 * span, 0, color="C3", alpha=0.06, zorder=0)
             ax.text(0.01, 0.1, f"below 0: reversed flow (axis cut; down to {neg:.3g} {self._base('Q')[1]} = "
                     f"{neg / Q:.3g} $Q_B$)", transform=ax.transAxes, fontsize=7, color="C3")
-        self._decorate(ax, "Q", f"flow Q ($Q_B$ = {Q:.3g} {self._base('Q')[1]})")
+        self._decorate(ax, "Q", "flow Q")
         _legend(fig, ax)
         figs["fig_flows.png"] = fig
 
@@ -240,18 +238,15 @@ class StaticsResult(Result):
         fig, ax = new_figure((8, 4.6))
         Z, unit = self._base("z")
         u = np.asarray(fg["u"], float)
-        ax.plot(u * Z, fg["phi_exact"], label="φ(u), exact network")
-        if any(v is not None for v in fg["phi_closed_form"]):
-            ax.plot(u * Z, np.asarray(fg["phi_closed_form"], float), ls="--", label=f"{self._CF} Eq. (2.35)")
-        ax.axhline(fg["tau"], color="k", lw=0.8, ls=":", label="load τ − χ")
-        if fg["psi1"] == ex["psi1"]:
-            ax.plot([ex["u0"] * Z], [fg["tau"]], "k*", ms=9, zorder=5, label="operating point")
-        ax.set_xlabel(f"face gap z, {unit}  ($z_B$ = {Z:.3g} {unit})")
-        ax.secondary_xaxis("top", functions=(lambda x: x / Z, lambda v: v * Z)).set_xlabel(r"$u = z/z_B$", fontsize=8)
-        ax.set_ylabel(r"balancing force $\varphi = F/(p_B s_B)$")
         kN = self.data["scales"]["p_B"] * self.data["scales"]["s_B"] * 1e-3
-        ax.secondary_yaxis("right", functions=(lambda y: y * kN, lambda f: f / kN)).set_ylabel(
-            f"balancing force F, kN  ($p_B s_B$ = {kN:.3g} kN)")
+        ax.plot(u * Z, np.asarray(fg["phi_exact"], float) * kN, label="φ(u), exact network")
+        if any(v is not None for v in fg["phi_closed_form"]):
+            ax.plot(u * Z, np.asarray(fg["phi_closed_form"], float) * kN, ls="--", label=f"{self._CF} Eq. (2.35)")
+        ax.axhline(fg["tau"] * kN, color="k", lw=0.8, ls=":", label="load τ − χ")
+        if fg["psi1"] == ex["psi1"]:
+            ax.plot([ex["u0"] * Z], [fg["tau"] * kN], "k*", ms=9, zorder=5, label="operating point")
+        ax.set_xlabel(f"face gap z, {unit}  (u = z/$z_B$, $z_B$ = {Z:.3g} {unit})")
+        ax.set_ylabel(f"balancing force F, kN\nφ = F/($p_B s_B$), $p_B s_B$ = {kN:.3g} kN")
         ax.grid(alpha=0.3)
         _legend(fig, ax)
         figs["fig_force_gap.png"] = fig

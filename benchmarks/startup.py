@@ -54,6 +54,8 @@ def main(repeats: int = 3) -> list[dict]:
     imports = {what: min(in_process(f"import {what}") for _ in range(repeats))
                for what in ("autobal.cli", "matplotlib.figure")}
     t_registry = min(in_process("import autobal.units as u; u.registry()") for _ in range(repeats))
+    t_table = min(in_process("import autobal.units as u; u.to_si('32.3 MPa', 'pressure'); u.to_si('6300 rpm', "
+                             "'angular speed')") for _ in range(repeats))
     t_scipy = min(in_process("import scipy.optimize, scipy.stats") for _ in range(repeats))
 
     from autobal import scenario
@@ -94,7 +96,9 @@ def main(repeats: int = 3) -> list[dict]:
         "the stable measures.",
         f"Best of {repeats} fresh processes; the Python interpreter alone starts in {t_python:.2f} s wall.",
         f"Where the CPU time goes (each measured alone): import autobal.cli {imports['autobal.cli']:.2f} s; the unit "
-        f"registry, built at scene load (pint, which also imports dask) {t_registry:.2f} s; import of "
+        f"table (autobal/units.py) reads the scene's units without pint: {t_table:.3f} s with the import of "
+        f"autobal.units (pint's import and registry, which also imports dask, {t_registry:.2f} s, are left for "
+        f"other units and error messages); import of "
         f"matplotlib.figure {imports['matplotlib.figure']:.2f} s; the statics study {t_solve:.2f} s (IPOPT operating "
         "point, criticals, the continuation sweep, the force-gap curve and the 40-digit reference root); making the "
         f"{len(figs)} figures {t_figs:.2f} s; drawing and writing them as PNG at {DPI} dpi "
@@ -103,9 +107,13 @@ def main(repeats: int = 3) -> list[dict]:
         f"{t_savefig:.2f} s). The first figure of a process also loads the fonts and builds the mathtext parser.",
         f"No longer in a statics run: scipy.optimize and scipy.stats ({t_scipy:.2f} s alone; the work-precision "
         "peers and the disc fits import them where they are used) and scipy.special at scene load.",
-        "Left (files of other owners): the pint registry (a cache folder, or the unit table without pint for the "
-        "plain SI-prefixed units); the statics study's 100-odd warm-started IPOPT solves; the figures' text "
-        "(constrained layout and mathtext take most of a draw).",
+        "The figures have a fixed layout (margins in inches, the legend measured: analysis/result.py fixed_layout) "
+        "instead of constrained layout, and plain unicode labels where they read the same; mathtext is left "
+        "for the subscripts unicode lacks (p_B, z_B, Q_T, p_cam, p1^kr).",
+        "Left: the statics study's 100-odd warm-started IPOPT solves (the force-gap curve about 40 % of the "
+        "study, in analysis/statics.py); the schema modules' pydantic models built at import (autobal/report.py "
+        "imports autobal.schema_dynamics and the dynamics model); the draw itself (tick labels, the four "
+        "secondary axes' ticks).",
     ]
     write("startup", f"Start-up: autobal run {SCENE}", cases, notes)
     return cases
