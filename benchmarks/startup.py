@@ -108,12 +108,13 @@ def main(repeats: int = 3) -> list[dict]:
         f"No longer in a statics run: scipy.optimize and scipy.stats ({t_scipy:.2f} s alone; the work-precision "
         "peers and the disc fits import them where they are used) and scipy.special at scene load.",
         "The figures have a fixed layout (margins in inches, the legend measured: analysis/result.py fixed_layout) "
-        "instead of constrained layout, and plain unicode labels where they read the same; mathtext is left "
-        "for the subscripts unicode lacks (p_B, z_B, Q_T, p_cam, p1^kr).",
+        "instead of constrained layout, plain unicode labels where they read the same (mathtext is left for the "
+        "subscripts unicode lacks: p_B, z_B, Q_T, p_cam, p1^kr) and the source's groups and bases in the axis "
+        "labels instead of secondary axes.",
         "Left: the statics study's 100-odd warm-started IPOPT solves (the force-gap curve about 40 % of the "
         "study, in analysis/statics.py); the schema modules' pydantic models built at import (autobal/report.py "
-        "imports autobal.schema_dynamics and the dynamics model); the draw itself (tick labels, the four "
-        "secondary axes' ticks).",
+        "imports autobal.schema_dynamics and the dynamics model); the draw itself (tick labels, lines, "
+        "legends); the floor.",
     ]
     write("startup", f"Start-up: autobal run {SCENE}", cases, notes)
     return cases
