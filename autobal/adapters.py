@@ -12,6 +12,7 @@ import math
 
 from autobal.errors import ScenarioError
 from autobal.models import device as dv
+from autobal.models import ross_rotor as rr
 from autobal.models.dynamics import DynamicData, squeeze_damping
 from autobal.models.liquid_balancer import System, n_from_decrement
 from autobal.models.rotor import LiquidLayer, RotorParams
@@ -168,3 +169,29 @@ def liquid_balancer(part) -> System:
                   nested_volumes=tuple(c.volume for c in nest.chambers) if nest else (),
                   wall_thickness=nest.wall_thickness if nest else 0.0,
                   hub_radius=nest.hub_radius if nest else 0.0)
+
+
+def ross_rotor(r):
+    """The scene's ``ross_rotor`` section as :class:`autobal.models.ross_rotor.RossRotorSpec` (SI) and its
+    unbalances.
+
+    Parameters
+    ----------
+    r : autobal.schema_ross.RossRotor
+        The validated section (phases in degrees).
+
+    Returns
+    -------
+    (RossRotorSpec, tuple of Unbalance)
+        Elements in SI; unbalance m e in kg m, phase in rad.
+    """
+    ub = tuple(rr.Unbalance(u.node, u.magnitude, math.radians(u.phase)) for u in r.unbalance)
+    if r.example is not None:
+        return rr.RossRotorSpec(example=r.example), ub
+    m = r.material
+    shaft = tuple(rr.Shaft(s.length, s.inner_diameter, s.outer_diameter) for s in r.shaft for _ in range(s.count))
+    disks = tuple(rr.Disk(d.node, d.mass, d.diametral_inertia, d.polar_inertia) for d in r.disks)
+    brgs = tuple(rr.Bearing(b.node, b.kxx, b.kxx if b.kyy is None else b.kyy, b.cxx, b.cxx if b.cyy is None else b.cyy,
+                            b.kxy, b.kyx) for b in r.bearings)
+    return rr.RossRotorSpec(shaft=shaft, disks=disks, bearings=brgs,
+                            material=rr.Material(m.density, m.young_modulus, m.shear_modulus)), ub

@@ -193,6 +193,28 @@ def spinup_time_optimal(scene, settings) -> Result:
                                       ipopt_options(settings.max_iterations, settings.tolerance))
 
 
+def ross_spinup(scene, settings) -> Result:
+    """Optimal spin-up of a ROSS rotor reduced to its modes, through its critical speeds, with the reduced
+    model's critical speeds checked against ROSS's own (needs the ross extra)."""
+    from autobal.models import ross_rotor as rr
+    from autobal.ocp import modal
+
+    spec, unbalances = adapters.ross_rotor(scene.ross_rotor)
+    rotor = rr.ross_rotor(spec)
+    reduced = rr.reduce(rr.lateral_matrices(rotor), unbalances, settings.final_speed, settings.mode_cutoff,
+                        settings.gyroscopic_tolerance)
+    ross_cs = rr.ross_critical_speeds(rotor, settings.final_speed) if settings.validate_with_ross else None
+    kw = {"omega_start": settings.start_speed, "omega_final": settings.final_speed, "horizon": settings.horizon,
+          "alpha_max": settings.max_acceleration, "nodes": tuple(settings.nodes),
+          "settling_time": settings.settling_time, "omega_max": settings.max_speed, "intervals": settings.intervals,
+          "degree": settings.degree}
+    try:
+        with progress.steps(None, "multi-mode spin-up (starts)", "IPOPT solve", catch=True):
+            return modal.run(reduced, kw, scene.title, ross_cs, {"max_iter": settings.max_iterations})
+    except ValueError as exc:
+        raise ScenarioError(f"analyses.ross_spinup: {exc}") from None
+
+
 RUNNERS = {
     "statics": statics,
     "frequency": frequency,
@@ -207,6 +229,7 @@ RUNNERS = {
     "spinup_robust": spinup_robust,
     "spinup_time_optimal": spinup_time_optimal,
     "design": design,
+    "ross_spinup": ross_spinup,
 }
 
 

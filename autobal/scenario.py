@@ -22,6 +22,7 @@ from autobal.schema_dynamics import Dynamics, Frequency, Stability, Transient
 from autobal.schema_estimation import Estimation
 from autobal.schema_liquid_balancer import LiquidBalancer, LiquidBalancerAnalysis
 from autobal.schema_reliability import Executor, MonteCarlo, Reliability
+from autobal.schema_ross import RossRotor, RossSpinup
 from autobal.schema_rotor import Rotor, RotorDynamics, Spinup, SpinupRobust, SpinupTimeOptimal
 from autobal.units import (
     AngularSpeed,
@@ -213,6 +214,8 @@ class Analyses(Strict):
     spinup_time_optimal: SpinupTimeOptimal | None = _d("earliest arrival with the peak bounded, and the front of "
                                                        "peak against arrival time; needs rotor", None)
     design: Design | None = _d("stability-constrained design of the device; needs device.dynamics", None)
+    ross_spinup: RossSpinup | None = _d("optimal spin-up of a ROSS rotor reduced to its modes; needs ross_rotor "
+                                        "and the ross extra", None)
 
 
 # analysis -> the part of the scene it needs (a dotted path), checked at load time
@@ -220,7 +223,7 @@ NEEDS = {
     "statics": "device", "frequency": "device.dynamics", "stability": "device.dynamics",
     "transient": "device.dynamics", "montecarlo": "device", "liquid_balancer": "liquid_balancer",
     "rotor_dynamics": "rotor", "spinup": "rotor", "spinup_robust": "rotor",
-    "spinup_time_optimal": "rotor", "design": "device.dynamics",
+    "spinup_time_optimal": "rotor", "design": "device.dynamics", "ross_spinup": "ross_rotor",
 }
 # a scene's name names its output folder: a plain file name, never a path
 NAME_PATTERN = r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}$"
@@ -237,6 +240,7 @@ class Scenario(Strict):
     device: Device | None = _d("the axial balancing device (statics, dynamics, Monte Carlo, fits)", None)
     liquid_balancer: LiquidBalancer | None = _d("liquid auto-balancer", None)
     rotor: Rotor | None = _d("Jeffcott rotor with optional liquid layer and drive", None)
+    ross_rotor: RossRotor | None = _d("a rotor as ROSS elements or a ROSS example rotor (the ross extra)", None)
     executor: Executor | None = _d("where sweeps and Monte Carlo run", None)
     analyses: Analyses = _d("the analyses to run")
     _origin: dict = PrivateAttr(default_factory=dict)  # file, sha256, overrides (set by load)
@@ -505,6 +509,9 @@ def estimate_seconds(scn: Scenario) -> dict[str, float]:
         s = a.spinup_time_optimal
         out["spinup_time_optimal"] = c["start"] + c["ocp_collocation_point"] * s.intervals * s.degree * (
             4 + 2 * s.front_points)
+    if a.ross_spinup is not None:
+        s = a.ross_spinup
+        out["ross_spinup"] = 60.0 + c["ocp_collocation_point"] * s.intervals * s.degree * 3
     if a.reliability is not None:
         r = a.reliability
         out["reliability"] = c["start"] + c["reliability_node"] * r.time_points * r.tau_nodes

@@ -77,7 +77,7 @@ def import_ross():
     module
         ``ross`` (ross-rotordynamics 2.3).
     """
-    if "ross" in sys.modules:
+    if sys.modules.get("ross") is not None:
         return sys.modules["ross"]
     try:
         with _quiet():
@@ -323,8 +323,12 @@ def critical_speeds(A_of, n: int, guess: np.ndarray, upper: float | None = None)
             return w - _modes(A_of, w, n)[0][k]
 
         lo, hi = 0.5 * w0, 1.5 * w0
-        while g(hi) < 0:
-            hi *= 1.5
+        for _ in range(40):  # bracket the root; a forward branch rising faster than omega has none
+            if g(lo) < 0 < g(hi):
+                break
+            lo, hi = (0.5 * lo, hi) if g(lo) >= 0 else (lo, 1.5 * hi)
+        else:
+            continue
         r = brentq(g, lo, hi, xtol=1e-12, rtol=1e-12)
         lam = _modes(A_of, r, n)[1][k]
         if upper is not None and r > upper:

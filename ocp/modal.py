@@ -381,3 +381,212 @@ def optimize(ocp: ModalSpinupOcp, options: dict | None = None) -> ModalOptimum:
     if best is None:
         raise err
     return ModalOptimum(best[0], best[1], rows, solver.build_time_s)
+
+
+# ---- the study of a scene: reduction, critical speeds vs ROSS, optimum vs ramps ------------------------
+
+@dataclass
+class ModalSpinupResult(Result):
+    """The optimal spin-up of a reduced ROSS rotor beside the constant ramps (every peak re-simulated), with
+    the reduced model's critical speeds beside ROSS's own."""
+
+    data: dict  # the results.json block
+    optimum: ModalTrajectory
+    baselines: dict  # key -> ModalTrajectory
+    campbell: dict  # "omega" (rad/s), "wd" (rad/s, speeds x modes) of the reduced model
+    name = "ross_spinup"
+
+    @property
+    def peak_deflection(self) -> float:
+        """Re-simulated peak deflection of the optimum over the nodes of interest, m."""
+        return self.data["peak_deflection_m"]
+
+    @property
+    def best_ramp_peak(self) -> float:
+        """Re-simulated peak deflection of the better constant ramp, m."""
+        return self.data["baseline_ramp_peak_m"]
+
+    @property
+    def critical_speed_rel_error(self) -> float | None:
+        """Largest relative difference between the reduced model's critical speeds and ROSS's (None unchecked)."""
+        return self.data["critical_speeds"]["max_rel_error_vs_ross"]
+
+    def to_dict(self) -> dict:
+        return self.data
+
+    def summary(self) -> str:
+        d, cs = self.data, self.data["critical_speeds"]
+        ross = cs["ross_wd_rad_s"]
+        lines = [f"multi-mode spin-up ({d['modes']} modes up to {d['mode_cutoff_rad_s']:.4g} rad/s, gyroscopic "
+                 f"terms {'kept' if d['gyroscopic'] else 'dropped'}: they move a critical speed by "
+                 f"{100 * d['gyroscopic_shift']:.3g} %)",
+                 "  critical speeds (reduced): " + ", ".join(f"{w:.2f}" for w in cs["reduced_wd_rad_s"]) + " rad/s"
+                 + ("" if ross is None else "; ROSS: " + ", ".join(f"{w:.2f}" for w in ross)
+                    + f" rad/s (largest difference {100 * cs['max_rel_error_vs_ross']:.3f} %)"),
+                 f"  optimum: peak {d['peak_deflection_m'] * 1e6:.3f} um at node {d['node_of_peak']} "
+                 f"(collocation {d['collocation_peak_m'] * 1e6:.3f} um, difference {d['resimulation_rel_error']:.2e}),"
+                 f" {d['status']}, {d['ipopt_iterations']} IPOPT iterations, {d['solve_time_s']:.2f} s "
+                 f"(build {d['build_time_s']:.2f} s)"]
+        for v in d["baselines"].values():
+            lines.append(f"  {v['label']:40s} peak {v['peak_deflection_m'] * 1e6:.3f} um at node {v['node_of_peak']}")
+        return "\n".join(lines)
+
+    def tables(self) -> dict[str, dict]:
+        o, cs = self.optimum, self.data["critical_speeds"]
+        cols = {}
+        for k, v in self.baselines.items():
+            cols |= {f"{k}_t_s": v.t, f"{k}_omega_rad_s": v.omega, f"{k}_deflection_m": v.deflection.max(axis=0)}
+        n = min(len(c) for c in cols.values())
+        out = {"ross_spinup_optimum.csv": {"t_s": o.t, "omega_rad_s": o.omega} | {
+                   f"deflection_node{nd}_m": o.deflection[i] for i, nd in enumerate(o.nodes)},
+               "ross_spinup_controls.csv": {"t_start_s": o.t_u, "alpha_rad_s2": o.alpha},
+               "ross_spinup_baselines.csv": {k: np.asarray(v)[:n] for k, v in cols.items()},
+               "ross_modes.csv": {"mode": np.arange(1, self.data["modes"] + 1),
+                                  "natural_frequency_rad_s": self.data["natural_frequencies_rad_s"]}}
+        m = len(cs["reduced_wd_rad_s"])
+        ross = cs["ross_wd_rad_s"]
+        out["ross_critical_speeds.csv"] = {"reduced_wd_rad_s": cs["reduced_wd_rad_s"],
+                                           "reduced_damping_ratio": cs["reduced_damping_ratio"],
+                                           "ross_wd_rad_s": (ross[:m] + [np.nan] * (m - len(ross))) if ross is not None
+                                           else [np.nan] * m}
+        return out
+
+    def _runs(self):
+        return [(self.optimum, "C3", "-", 1.4)] + [(v, c, "--", 1.0) for v, c in zip(self.baselines.values(),
+                                                                                     ("C0", "C2"), strict=False)]
+
+    def _criticals(self, ax, vertical: bool) -> None:
+        for i, w in enumerate(self.data["critical_speeds"]["reduced_wd_rad_s"]):
+            (ax.axvline if vertical else ax.axhline)(w, color="k", lw=0.6, ls=":",
+                                                     label="critical speeds (reduced model)" if i == 0 else None)
+
+    def draw(self, ax) -> None:
+        """Largest deflection over the nodes of interest against speed, optimum and ramps, in um."""
+        for tr, c, ls, lw in self._runs():
+            lab = "optimum" if tr is self.optimum else tr.label
+            ax.plot(tr.omega, tr.deflection.max(axis=0) * 1e6, color=c, ls=ls, lw=lw,
+                    label=f"{lab} (peak {tr.peak * 1e6:.2f} um)")
+        self._criticals(ax, True)
+        ax.set_xlabel(r"speed $\omega$, rad/s")
+        ax.set_ylabel(r"deflection $\max_{nodes}\sqrt{x^2+y^2}$, $\mu$m")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+
+    def figures(self) -> dict:
+        """Speed and acceleration against time; deflection against time and speed; Campbell diagram."""
+        title = self.data["title"]
+        fig, axes = new_figure((8, 6), 2, 1, sharex=True)
+        for tr, c, ls, lw in self._runs():
+            lab = "optimum" if tr is self.optimum else tr.label
+            axes[0].plot(tr.t, tr.omega, color=c, ls=ls, lw=lw, label=lab)
+            axes[1].plot(np.append(tr.t_u, tr.t[-1]), np.append(tr.alpha, tr.alpha[-1]), drawstyle="steps-post",
+                         color=c, ls=ls, lw=lw)
+        self._criticals(axes[0], False)
+        axes[0].set_ylabel(r"speed $\omega$, rad/s")
+        axes[1].set_ylabel(r"acceleration $\alpha$, rad/s$^2$")
+        axes[1].set_xlabel("time t, s")
+        for ax in axes:
+            ax.grid(alpha=0.3)
+        axes[0].legend(fontsize=7)
+        fig.suptitle(title, fontsize=9)
+
+        fig2, (a1, a2) = new_figure((8, 7), 2, 1)
+        for tr, c, ls, lw in self._runs():
+            a1.plot(tr.t, tr.deflection.max(axis=0) * 1e6, color=c, ls=ls, lw=lw)
+        a1.set_xlabel("time t, s")
+        a1.set_ylabel(r"deflection, $\mu$m")
+        a1.grid(alpha=0.3)
+        self.draw(a2)
+        fig2.suptitle(title, fontsize=9)
+
+        fig3, ax = new_figure((7, 5))
+        cb, cs = self.campbell, self.data["critical_speeds"]
+        for k in range(cb["wd"].shape[1]):
+            ax.plot(cb["omega"], cb["wd"][:, k], color="C0", lw=1.0, label="damped natural frequencies (reduced)"
+                    if k == 0 else None)
+        ax.plot(cb["omega"], cb["omega"], color="k", lw=0.8, label="synchronous line")
+        ax.plot(cs["reduced_wd_rad_s"], cs["reduced_wd_rad_s"], "o", mfc="none", color="C3",
+                label="critical speeds (reduced)")
+        if cs["ross_wd_rad_s"] is not None:
+            ax.plot(cs["ross_wd_rad_s"], cs["ross_wd_rad_s"], "x", color="k", label="critical speeds (ROSS)")
+        ax.set_xlabel(r"speed $\omega$, rad/s")
+        ax.set_ylabel("frequency, rad/s")
+        ax.set_ylim(0, 1.2 * cb["omega"][-1])
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+        ax.set_title("Campbell diagram of the reduced rotor", fontsize=9)
+        return {"ross_spinup_profiles.png": fig, "ross_spinup_deflection.png": fig2, "ross_campbell.png": fig3}
+
+
+def campbell(rotor: ModalRotor, omega_top: float, points: int = 200) -> dict:
+    """Damped natural frequencies (rad/s) of the reduced rotor against speed, 0 to omega_top."""
+    w = np.linspace(0, omega_top, points)
+    wd = np.array([np.sort(np.linalg.eigvals(rotor.state_matrix(x)).imag)[rotor.n:] for x in w])
+    return {"omega": w, "wd": wd}
+
+
+def compare_critical_speeds(reduced: np.ndarray, ross: np.ndarray | None) -> float | None:
+    """Largest relative difference of paired critical speeds (ascending), None without ROSS's."""
+    if ross is None:
+        return None
+    m = min(len(reduced), len(ross))
+    if m == 0 or len(reduced) != len(ross):
+        return float("inf")
+    return float(np.max(np.abs(np.asarray(reduced[:m]) - np.asarray(ross[:m])) / np.asarray(ross[:m])))
+
+
+def run(rotor: ModalRotor, ocp_kw: dict, title: str = "", ross_critical: dict | None = None,
+        options: dict | None = None) -> ModalSpinupResult:
+    """Optimise the spin-up of the reduced rotor (multi-start), re-simulate, compare with the ramps.
+
+    Parameters
+    ----------
+    rotor : ModalRotor
+        The reduced rotor (:func:`autobal.models.ross_rotor.reduce`).
+    ocp_kw : dict
+        Keyword arguments of :class:`ModalSpinupOcp` (SI: rad/s, rad/s^2, s).
+    title : str
+        For the figures.
+    ross_critical : dict, optional
+        ROSS's own critical speeds (:func:`autobal.models.ross_rotor.ross_critical_speeds`).
+    options : dict, optional
+        IPOPT options.
+
+    Returns
+    -------
+    ModalSpinupResult
+        Peaks in m, times in s, speeds in rad/s.
+    """
+    ocp = ModalSpinupOcp(rotor, **ocp_kw)
+    opt = optimize(ocp, options)
+    base = baselines(ocp)
+    sol, tr = opt.solution, opt.trajectory
+    cs = rotor.critical_speeds(ocp.omega_final)
+    ross = None if ross_critical is None else list(ross_critical["wd"])
+    best_ramp = min(base.values(), key=lambda b: b.peak)
+    data = {
+        "title": title, "objective": "peak deflection over the nodes " + ", ".join(map(str, ocp.nodes)),
+        "method": f"Radau collocation (degree {ocp.degree}, {ocp.intervals} intervals + "
+                  f"{ocp.settling_intervals} settling) of the complex envelope",
+        "status": sol.status, "ipopt_iterations": sol.iterations, "solve_time_s": sol.solve_time_s,
+        "build_time_s": opt.build_time_s, "total_solve_time_s": sum(r.get("solve_time_s", 0.0) for r in opt.starts),
+        "peak_deflection_m": tr.peak, "collocation_peak_m": sol.collocation_peak,
+        "resimulation_rel_error": opt.resimulation_rel_error, "node_of_peak": tr.node_of_peak,
+        "time_of_peak_s": tr.t_peak, "omega_at_peak_rad_s": float(np.interp(tr.t_peak, tr.t, tr.omega)),
+        "baseline_ramp_peak_m": best_ramp.peak, "improvement_over_best_ramp": 1 - tr.peak / best_ramp.peak,
+        "starts": opt.starts, "baselines": {k: v.to_dict() for k, v in base.items()},
+        "modes": rotor.n, "natural_frequencies_rad_s": list(rotor.omega_n), "mode_cutoff_rad_s": rotor.cutoff_rad_s,
+        "lowest_dropped_natural_frequency_rad_s": rotor.dropped_omega_n,
+        "gyroscopic": rotor.gyroscopic, "gyroscopic_shift": rotor.gyroscopic_shift,
+        "unbalance": [{"node": u.node, "magnitude_kg_m": u.magnitude, "phase_rad": u.phase} for u in rotor.unbalances],
+        "critical_speeds": {"reduced_wd_rad_s": list(cs["wd"]), "reduced_damping_ratio": list(cs["damping_ratio"]),
+                            "ross_wd_rad_s": ross,
+                            "ross_damping_ratio": None if ross_critical is None else
+                            list(ross_critical["damping_ratio"]),
+                            "max_rel_error_vs_ross": compare_critical_speeds(cs["wd"], ross_critical and
+                                                                             ross_critical["wd"])},
+        "accuracy": {"estimate": opt.resimulation_rel_error,
+                     "how": "relative difference between the collocation's peak envelope and the CVODES re-simulation "
+                            f"of the physical response (rtol {RESIM_TOL:g}, {POINTS_PER_REV} samples per revolution)"},
+    }
+    return ModalSpinupResult(data, tr, base, campbell(rotor, 1.2 * ocp.omega_final))

@@ -1,0 +1,181 @@
+"""Multi-mode rotors from ROSS: the modal reduction, its spin-up OCP, and the validation against ROSS itself.
+
+Fast tests use a hand-built one-node rotor (a Jeffcott disk with tilt) in ROSS's lateral layout; the
+tests marked slow build the shipped scene's rotor with ROSS and compare critical speeds (ROSS's
+``run_critical_speed``) and a linear-ramp run-up (ROSS's ``run_time_response``, Newmark on the full
+model) with the reduced model, within 1 %.
+"""
+
+import importlib.util
+import sys
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from autobal import adapters, cli, scenario
+from autobal.errors import ScenarioError
+from autobal.models import ross_rotor as rr
+from autobal.ocp import modal
+
+HAS_ROSS = importlib.util.find_spec("ross") is not None
+needs_ross = pytest.mark.skipif(not HAS_ROSS, reason="ross-rotordynamics is not installed (pip install -e '.[ross]')")
+
+# one node: x, y (mass m on stiffness k, damping c) and the tilts alpha, beta (I_d on k_t, polar I_p)
+m, k, c, Id, Ip, kt = 10.0, 1e5, 20.0, 0.05, 0.08, 4e4
+
+
+def disk_rotor() -> rr.LateralMatrices:
+    M = np.diag([m, m, Id, Id])
+    K = np.diag([k, k, kt, kt])
+    C = np.diag([c, c, 0.0, 0.0])
+    G = np.zeros((4, 4))
+    G[2, 3], G[3, 2] = Ip, -Ip
+    return rr.LateralMatrices(M, K, C, G, np.zeros((4, 4)), nodes=1)
+
+
+def test_translational_critical_speed_is_the_damped_natural_frequency():
+    """Jeffcott rotor: the synchronous critical speed omega = omega_d = sqrt(k/m - (c/2m)^2) (no gyroscopic
+    coupling of the translation), twice (x and y); the tilt modes are not below 1.5 x the final speed."""
+    red = rr.reduce(disk_rotor(), [rr.Unbalance(0, 1e-4)], omega_final=120.0, cutoff=1.5)
+    assert red.n == 2
+    wd = red.critical_speeds(120.0)["wd"]
+    assert_allclose(wd, np.sqrt(k / m - (c / (2 * m)) ** 2), rtol=1e-10)
+    assert not red.gyroscopic  # G acts on the tilts only: no shift of a translational critical speed
+
+
+def test_gyroscopic_terms_kept_where_they_move_a_critical_speed():
+    """The tilt mode (sqrt(kt/Id) = 894 rad/s) is split by I_p omega: kept.  The disk's tilt whirls at w with
+    I_d w^2 -+ I_p omega w - k_t = 0; synchronous (w = omega) only backward, (I_d + I_p) omega^2 = k_t, since
+    I_p > I_d leaves the forward branch no crossing."""
+    red = rr.reduce(disk_rotor(), [rr.Unbalance(0, 1e-4)], omega_final=1000.0, cutoff=1.5)
+    assert red.gyroscopic and red.gyroscopic_shift > 1e-3
+    wd = red.critical_speeds(3000.0)["wd"]
+    assert len(wd) == 3
+    assert_allclose(wd[-1], np.sqrt(kt / (Id + Ip)), rtol=1e-9)
+
+
+def test_steady_response_and_fixed_frame_simulation_agree():
+    """At constant speed the re-simulated orbit radius is the closed form m e omega^2 / |k - m w^2 + i c w|."""
+    red = rr.reduce(disk_rotor(), [rr.Unbalance(0, 1e-4)], omega_final=120.0, cutoff=1.5)
+    w = 80.0
+    t, om, xy = modal.simulate_fixed(red, w, np.zeros(1), np.array([0.5]), [0])
+    r = np.hypot(xy[0, 0], xy[0, 1])
+    exact = 1e-4 * w**2 / abs(k - m * w**2 + 1j * c * w)
+    assert_allclose(r, exact, rtol=1e-7)
+
+
+@pytest.fixture(scope="module")
+def small_ocp():
+    red = rr.reduce(disk_rotor(), [rr.Unbalance(0, 1e-4)], omega_final=150.0, cutoff=1.5)
+    return modal.ModalSpinupOcp(red, 50.0, 150.0, 1.5, 100.0, (0,), settling_time=0.3, omega_max=150.0,
+                                intervals=30)
+
+
+def test_envelope_peak_matches_the_physical_response(small_ocp):
+    """The envelope state simulated on the collocation mesh bounds the fixed-frame deflection and its peak
+    agrees with the re-simulated one within 0.5 % (one copy of the equations, two frames)."""
+    u = np.concatenate([modal.ramp_controls(small_ocp, 60.0), np.zeros(small_ocp.settling_intervals)])
+    env = modal.simulate_envelope(small_ocp, u, np.linspace(0, 1, 41)[1:])
+    e2 = np.array(small_ocp.envelope2().map(env.shape[0] * env.shape[1])(env.reshape(-1, env.shape[2]).T))
+    env_peak = np.sqrt(e2.max()) * small_ocp.amplitude_scale
+    tr = modal.resimulate(small_ocp, u, "ramp")
+    assert_allclose(env_peak, tr.peak, rtol=5e-3)
+
+
+def test_ocp_beats_the_ramps_and_resimulates(small_ocp):
+    """The multi-start optimum, re-simulated, is no worse than either ramp, and its collocation peak is within
+    1 % of the re-simulation; it reaches the final speed by the deadline and keeps the speed cap."""
+    opt = modal.optimize(small_ocp, {"max_iter": 300})
+    base = modal.baselines(small_ocp)
+    tr = opt.trajectory
+    assert tr.peak <= min(b.peak for b in base.values()) * (1 + 1e-4)
+    assert opt.resimulation_rel_error < 1e-2
+    i = np.searchsorted(tr.t, small_ocp.horizon)
+    assert_allclose(tr.omega[i:], 150.0, rtol=1e-6)
+    assert tr.omega.max() <= 150.0 * (1 + 1e-6)
+    assert np.all(np.abs(opt.solution.u) <= 1 + 1e-9)
+
+
+def test_missing_ross_names_the_extra(monkeypatch):
+    monkeypatch.setitem(sys.modules, "ross", None)  # import ross -> ImportError
+    with pytest.raises(ScenarioError, match=r"pip install -e '\.\[ross\]'"):
+        rr.import_ross()
+
+
+def test_scene_without_ross_exits_2_naming_the_extra(monkeypatch, capsys, tmp_path):
+    monkeypatch.setitem(sys.modules, "ross", None)
+    assert cli.main(["run", "spinup_ross_rotor", "--out", str(tmp_path / "out"), "-q"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "pip install -e '.[ross]'" in err[0]
+
+
+def test_scene_schema_refuses_a_node_off_the_shaft(tmp_path):
+    with pytest.raises(ScenarioError, match=r"disks\.0\.node: 9 is not a node"):
+        scenario.load("spinup_ross_rotor", {"ross_rotor.disks.0.node": 9})
+
+
+def test_adapter_expands_repeated_elements():
+    spec, ub = adapters.ross_rotor(scenario.load("spinup_ross_rotor").ross_rotor)
+    assert len(spec.shaft) == 6 and spec.bearings[0].kyy == 0.8e6 and spec.bearings[0].cyy == 500.0
+    assert_allclose([u.phase for u in ub], [0.0, np.pi / 2])
+
+
+# ---- against ROSS itself (slow: ROSS's import and numba compilation take about a minute) ----------------
+
+@pytest.fixture(scope="module")
+def scene_rotor():
+    scn = scenario.load("spinup_ross_rotor")
+    spec, ub = adapters.ross_rotor(scn.ross_rotor)
+    rotor = rr.ross_rotor(spec)
+    s = scn.analyses.ross_spinup
+    return rotor, rr.reduce(rr.lateral_matrices(rotor), ub, s.final_speed, s.mode_cutoff), ub
+
+
+@pytest.mark.slow
+@needs_ross
+def test_critical_speeds_match_ross(scene_rotor):
+    """The reduced model's critical speeds below the final speed (four: two bearing-mode pairs of the
+    anisotropic bearings) are ROSS's run_critical_speed ones within 1 % (measured: < 0.3 %)."""
+    rotor, red, _ = scene_rotor
+    ross = rr.ross_critical_speeds(rotor, 350.0)["wd"]
+    mine = red.critical_speeds(350.0)["wd"]
+    assert len(mine) == len(ross) == 4
+    assert_allclose(mine, ross, rtol=1e-2)
+    assert modal.compare_critical_speeds(mine, ross) < 3e-3
+
+
+@pytest.mark.slow
+@needs_ross
+def test_ramp_run_up_matches_ross_time_response(scene_rotor):
+    """A linear run-up 0 -> 350 rad/s in 3.5 s from rest: the peak deflection at midspan (node 3) of the
+    reduced model (CVODES) is ROSS's own run_time_response (Newmark on the full 42-dof model, dt 0.1 ms)
+    within 1 % (measured: < 0.2 %), and so is the time of the peak."""
+    rotor, red, ub = scene_rotor
+    T, wf = 3.5, 350.0
+    t = np.linspace(0, T, 35001)
+    xy = rr.ross_time_response(rotor, ub, t, wf * t / T, 3)
+    r_ross = np.hypot(xy[:, 0], xy[:, 1])
+    ts, _, xy2 = modal.simulate_fixed(red, 0.0, np.array([wf / T]), np.array([T]), [3], from_rest=True)
+    r = np.hypot(xy2[0, 0], xy2[0, 1])
+    assert_allclose(r.max(), r_ross.max(), rtol=1e-2)
+    assert_allclose(ts[np.argmax(r)], t[np.argmax(r_ross)], rtol=1e-2)
+
+
+@pytest.mark.slow
+@needs_ross
+def test_shipped_scene_end_to_end(tmp_path):
+    """spinup_ross_rotor through autobal.run: two or more critical speeds below the final speed, matching ROSS
+    within 1 %; the optimum re-simulated no worse than the ramps; files written."""
+    import autobal
+
+    run = autobal.run("spinup_ross_rotor")
+    res = run["ross_spinup"]
+    d = res.to_dict()
+    assert len(d["critical_speeds"]["reduced_wd_rad_s"]) >= 2
+    assert res.critical_speed_rel_error < 1e-2
+    assert res.peak_deflection <= res.best_ramp_peak * (1 + 1e-4)
+    assert d["resimulation_rel_error"] < 1e-2
+    paths = res.save(tmp_path)
+    assert {p.name for p in paths} >= {"ross_campbell.png", "ross_spinup_deflection.png", "ross_critical_speeds.csv"}
+    assert "ROSS" in res.summary()
