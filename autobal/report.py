@@ -992,18 +992,53 @@ def design_section(sec: Section) -> None:
                                 "optimum)", ["scene path", "nominal", "optimum"], rows))
 
 
+def ross_spinup_section(sec: Section) -> None:
+    """Optimal spin-up of a ROSS rotor reduced to its modes: the reduction checked against ROSS, optimum vs ramps."""
+    sec.row("peak deflection of the optimum (re-simulated)", "r*", "peak_deflection_m")
+    sec.row("peak deflection of the best ramp", "r*", "baseline_ramp_peak_m")
+    sec.row("improvement over the best ramp", "", "improvement_over_best_ramp", "1")
+    sec.row("node of the peak", "", "node_of_peak", "1")
+    sec.row("time of the peak", "t*", "time_of_peak_s")
+    sec.row("modes kept", "", "modes", "1")
+    sec.row("mode cutoff", "ω_c", "mode_cutoff_rad_s")
+    sec.row("shift of a critical speed by the gyroscopic terms", "", "gyroscopic_shift", "1")
+    sec.row("largest critical-speed difference vs ROSS", "", "critical_speeds.max_rel_error_vs_ross", "1")
+    sec.row("relative difference, CVODES re-simulation vs collocation", "", "resimulation_rel_error", "1")
+    sec.row("build time", "", "build_time_s")
+    sec.row("solve time (all starts)", "", "total_solve_time_s")
+    st = sec.get("status")
+    sec.verdict(st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"IPOPT: {st} ({sec.get('method')})")
+    err = sec.get("critical_speeds.max_rel_error_vs_ross")
+    if err is not None:
+        sec.verdict(err <= 0.01, f"critical speeds of the reduced model within {number(100 * err)} % of ROSS's")
+    best, ramp = sec.get("peak_deflection_m"), sec.get("baseline_ramp_peak_m")
+    if best is not None and ramp:
+        sec.verdict(best <= ramp * (1 + 1e-4), f"optimum peak {number(best * 1e6)} µm vs the best ramp "
+                                               f"{number(ramp * 1e6)} µm")
+    cs = sec.get("critical_speeds") or {}
+    ross = cs.get("ross_wd_rad_s") or []
+    rows = [[text(str(i + 1)), cell(w, "rad/s"), cell(ross[i] if i < len(ross) else None, "rad/s"),
+             cell((cs.get("reduced_damping_ratio") or [None] * (i + 1))[i], "1")]
+            for i, w in enumerate(cs.get("reduced_wd_rad_s") or [])]
+    if rows:
+        sec.tables.append(table("Critical speeds below the final speed", ["#", "reduced model", "ROSS",
+                                                                          "damping ratio"], rows))
+
+
 SECTIONS = {"statics": statics_section, "frequency": frequency_section, "stability": stability_section,
             "transient": transient_section, "liquid_balancer": liquid_balancer_section,
             "estimation": estimation_section, "reliability": reliability_section, "montecarlo": montecarlo_section,
             "rotor_dynamics": rotor_dynamics_section, "spinup": spinup_section,
             "spinup_robust": spinup_robust_section, "spinup_time_optimal": spinup_time_optimal_section,
-            "design": design_section}
+            "design": design_section,
+            "ross_spinup": ross_spinup_section}
 
 TITLES = {"statics": "Statics", "frequency": "Frequency response (AFC)", "stability": "Stability",
           "transient": "Transients", "liquid_balancer": "Liquid auto-balancer", "estimation": "Parameter estimation",
           "reliability": "Reliability", "montecarlo": "Monte Carlo", "rotor_dynamics": "Rotor dynamics",
           "spinup": "Optimal spin-up", "spinup_robust": "Robust spin-up", "spinup_time_optimal": "Time-optimal spin-up",
-          "design": "Stability-constrained design"}
+          "design": "Stability-constrained design",
+          "ross_spinup": "Optimal spin-up of a ROSS rotor (multi-mode)"}
 
 #: figure file name (regex) -> (analysis, caption)
 CAPTIONS = [
@@ -1051,6 +1086,10 @@ CAPTIONS = [
                                                           "arrival under the limit"),
     (r"spinup_time_optimal_profiles", "spinup_time_optimal", "Time-optimal spin-up: speed and deflection of the "
                                                              "front's points"),
+    (r"ross_spinup_(\w+)", "ross_spinup", "Multi-mode spin-up: {0} of the optimum beside the ramps, critical "
+                                          "speeds of the reduced model dotted"),
+    (r"ross_campbell", "ross_spinup", "Campbell diagram of the reduced rotor: damped natural frequencies against "
+                                      "speed, critical speeds of the reduced model (o) and of ROSS (x)"),
     (r"spinup_(\w+)", "spinup", "Optimal spin-up: {0} of the optimum beside the ramps"),
     (r"design_abscissa", "design", "Spectral abscissa max Re λ against the discharge ratio, nominal and optimum "
                                    "designs, with the required −α"),

@@ -28,7 +28,7 @@ import casadi as ca
 import numpy as np
 
 from autobal.analysis import ipopt
-from autobal.analysis.result import Result, new_figure
+from autobal.analysis.result import Result, new_figure, with_statuses
 from autobal.errors import SolveError
 from autobal.models.ross_rotor import ModalRotor
 from autobal.ocp.transcription import collocation_data
@@ -412,7 +412,11 @@ class ModalSpinupResult(Result):
         return self.data["critical_speeds"]["max_rel_error_vs_ross"]
 
     def to_dict(self) -> dict:
-        return self.data
+        return with_statuses(self.data, {
+            "ross_wd_rad_s": "not compared with ROSS (validate_with_ross: false)",
+            "ross_damping_ratio": "not compared with ROSS (validate_with_ross: false)",
+            "max_rel_error_vs_ross": "not compared with ROSS (validate_with_ross: false)",
+            "lowest_dropped_natural_frequency_rad_s": "no mode was left out: all lateral modes are below the cutoff"})
 
     def summary(self) -> str:
         d, cs = self.data, self.data["critical_speeds"]
