@@ -511,7 +511,9 @@ def estimate_seconds(scn: Scenario) -> dict[str, float]:
             4 + 2 * s.front_points)
     if a.ross_spinup is not None:
         s = a.ross_spinup
-        out["ross_spinup"] = 60.0 + c["ocp_collocation_point"] * s.intervals * s.degree * 3
+        # ROSS's import, numba compilation and critical speeds (about 30 s), then three starts
+        out["ross_spinup"] = 30.0 * s.validate_with_ross + c["start"] + c["ocp_collocation_point"] * s.intervals \
+            * s.degree * 3
     if a.reliability is not None:
         r = a.reliability
         out["reliability"] = c["start"] + c["reliability_node"] * r.time_points * r.tau_nodes

@@ -103,6 +103,7 @@ def test_missing_ross_names_the_extra(monkeypatch):
         rr.import_ross()
 
 
+@pytest.mark.cli
 def test_scene_without_ross_exits_2_naming_the_extra(monkeypatch, capsys, tmp_path):
     monkeypatch.setitem(sys.modules, "ross", None)
     assert cli.main(["run", "spinup_ross_rotor", "--out", str(tmp_path / "out"), "-q"]) == 2
@@ -162,6 +163,7 @@ def test_ramp_run_up_matches_ross_time_response(scene_rotor):
     assert_allclose(ts[np.argmax(r)], t[np.argmax(r_ross)], rtol=1e-2)
 
 
+@pytest.mark.cli
 @pytest.mark.slow
 @needs_ross
 def test_shipped_scene_end_to_end(tmp_path):
