@@ -329,12 +329,12 @@ class ModalSolver:
 
 
 def starts(ocp: ModalSpinupOcp) -> list[tuple[str, np.ndarray]]:
-    """Initial profiles: the maximum-acceleration ramp and hold, the constant ramp to the deadline, and the
-    ramp at the mean of both."""
+    """Initial profiles: the constant ramp to the deadline and the maximum-acceleration ramp with hold (on the
+    shipped scene the first reaches the 14 % better optimum in about 400 IPOPT iterations, the second stops
+    near itself in about 30; the ramp at the mean of both did not converge within 1000 iterations)."""
     const = abs(ocp.omega_final - ocp.omega_start) / ocp.horizon
-    return [("maximum-acceleration ramp", ramp_controls(ocp, ocp.alpha_max)),
-            ("constant ramp", ramp_controls(ocp, const)),
-            ("ramp at the mean of both", ramp_controls(ocp, 0.5 * (const + ocp.alpha_max)))]
+    return [("constant ramp", ramp_controls(ocp, const)),
+            ("maximum-acceleration ramp", ramp_controls(ocp, ocp.alpha_max))]
 
 
 def baselines(ocp: ModalSpinupOcp) -> dict[str, ModalTrajectory]:
