@@ -57,10 +57,9 @@ def _quiet():
     try:
         os.dup2(devnull, 1)
         os.dup2(devnull, 2)
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), open(os.devnull, "w") as sink, contextlib.redirect_stdout(sink):
             warnings.simplefilter("ignore")
-            with contextlib.redirect_stdout(open(os.devnull, "w")):  # noqa: SIM115 (closed with the process)
-                yield
+            yield
     finally:
         sys.stdout.flush()
         os.dup2(saved[0], 1)
