@@ -37,8 +37,6 @@ from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
-import scipy.linalg as sla
-from scipy.optimize import brentq
 
 from autobal.errors import ScenarioError
 
@@ -313,6 +311,8 @@ def _modes(A_of, omega: float, n: int) -> tuple[np.ndarray, np.ndarray]:
 
 def critical_speeds(A_of, n: int, guess: np.ndarray, upper: float | None = None) -> dict:
     """Solve omega = Im lambda_k(A(omega)) for each of the n modes (bracketed root search)."""
+    from scipy.optimize import brentq  # here: a scene load must not pull scipy.optimize (tests/test_layers.py)
+
     wd, wn, zeta = [], [], []
     for k, w0 in enumerate(guess):
         if upper is not None and w0 > 1.5 * upper:
@@ -361,7 +361,10 @@ def reduce(lat: LateralMatrices, unbalances, omega_final: float, cutoff: float =
     ModalRotor
     """
     Ks = 0.5 * (lat.K + lat.K.T)
-    w2, V = sla.eigh(Ks, lat.M)
+    L = np.linalg.cholesky(lat.M)  # K v = w^2 M v as a symmetric standard problem in L' v
+    Li = np.linalg.inv(L)
+    w2, Y = np.linalg.eigh(Li @ Ks @ Li.T)
+    V = Li.T @ Y
     w = np.sqrt(np.clip(w2, 0.0, None))
     keep = w <= cutoff * omega_final
     keep[0] = True
