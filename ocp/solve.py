@@ -24,7 +24,7 @@ from autobal.ocp.simulation import (
     resimulate,
     simulate_profile,
 )
-from autobal.ocp.transcription import DirectCollocation, MultipleShooting, Nlp, transcribe
+from autobal.ocp.transcription import DirectCollocation, MultipleShooting, Nlp, interpolate, transcribe
 
 IPOPT_OPTIONS = {"tol": 1e-8, "constr_viol_tol": 1e-8, "compl_inf_tol": 1e-8, "acceptable_iter": 0,
                  "max_iter": 1000, "mu_strategy": "adaptive", "bound_relax_factor": 1e-10}
@@ -36,6 +36,11 @@ def ipopt_options(max_iterations: int = 1000, tolerance: float = 1e-8) -> dict:
     return {"max_iter": int(max_iterations), "tol": tolerance, "constr_viol_tol": tolerance,
             "compl_inf_tol": tolerance}
 
+
+# the fine stages of the mesh continuation start from the coarser optimum and its multipliers: the
+# barrier parameter starts small, the iterate and multipliers are pushed only slightly off their bounds
+WARM_OPTIONS = {"warm_start_init_point": "yes", "mu_init": 1e-8, "warm_start_bound_push": 1e-9,
+                "warm_start_slack_bound_push": 1e-9, "warm_start_mult_bound_push": 1e-9}
 
 INFEASIBLE = ("Infeasible_Problem_Detected", "Restoration_Failed")
 TIE = 1e-4  # relative: optima closer than this are equal, the first start is kept
@@ -58,6 +63,8 @@ class SpinupSolution:
     points: np.ndarray  # (K, npath, 5) states at the path points (collocation or shooting outputs)
     peak_collocation: float  # largest delta/e at the path points (or d for peak_unbalance)
     w: np.ndarray = field(repr=False, default=None)
+    lam_g: np.ndarray = field(repr=False, default=None)  # IPOPT's multipliers of the constraints
+    lam_x: np.ndarray = field(repr=False, default=None)  # and of the variable bounds
 
 
 def _objective_value(ocp: SpinupOcp, nlp: Nlp, wopt: np.ndarray, f: float) -> float:
@@ -84,22 +91,25 @@ def _controls(nlp: Nlp, wopt: np.ndarray, ocp: SpinupOcp) -> tuple[np.ndarray, n
     return wopt[nlp.index["u"]], np.concatenate([np.full(ms.n, hn), np.full(ms.ns, ms.hs)])
 
 
+def reference_level(ocp: SpinupOcp) -> float:
+    """Scale of the objective (the maximum-acceleration ramp's peak squared, or its integral of delta^2)."""
+    if ocp.objective not in ("peak_deflection", "peak_unbalance", "integrated_deflection"):
+        return 1.0
+    base = resimulate(ocp, ramp_profile(ocp, 50, ocp.alpha_max), np.full(50, ocp.tau_h / 50), "ref", 8, 1e-8)
+    return {"peak_deflection": base.peak_delta**2, "peak_unbalance": base.peak_d**2,
+            "integrated_deflection": base.integral_delta2 * ocp.Om}[ocp.objective]
+
+
 class Solver:
     """The NLP of one (problem, method) pair, built once and solved from any guess."""
 
-    def __init__(self, ocp: SpinupOcp, method, ref: float | None = None, options: dict | None = None):
+    def __init__(self, ocp: SpinupOcp, method, ref: float | None = None, options: dict | None = None,
+                 warm: bool = False):
         t0 = time.perf_counter()
         self.ocp, self.method = ocp, method
-        if ref is None:
-            ref = 1.0
-            if ocp.objective in ("peak_deflection", "peak_unbalance", "integrated_deflection"):
-                base = resimulate(ocp, ramp_profile(ocp, 50, ocp.alpha_max), np.full(50, ocp.tau_h / 50), "ref", 8,
-                                  1e-8)
-                ref = {"peak_deflection": base.peak_delta**2, "peak_unbalance": base.peak_d**2,
-                       "integrated_deflection": base.integral_delta2 * ocp.Om}[ocp.objective]
-        self.nlp = transcribe(ocp, method, ref)
+        self.nlp = transcribe(ocp, method, reference_level(ocp) if ref is None else ref)
         nlp = self.nlp
-        extra = IPOPT_OPTIONS | (options or {})
+        extra = IPOPT_OPTIONS | (WARM_OPTIONS if warm else {}) | (options or {})
         if isinstance(method, MultipleShooting):
             extra["hessian_approximation"] = method.hessian
         self.solver = ipopt.nlpsol("spinup", nlp.x, ca.SX.sym("p", 0) if isinstance(nlp.x, ca.SX) else ca.MX.sym(
@@ -107,11 +117,13 @@ class Solver:
         self.build_time_s = time.perf_counter() - t0
 
     def solve(self, u_guess: np.ndarray | None = None, w0: np.ndarray | None = None, raise_on_failure=True,
-              hold_states: bool = False) -> SpinupSolution:
+              hold_states: bool = False, lam_g0: np.ndarray | None = None,
+              lam_x0: np.ndarray | None = None) -> SpinupSolution:
         """One IPOPT solve from the control profile ``u_guess`` (over alpha_max, the n control intervals;
         the states simulated from it) or from the full NLP guess ``w0``.  ``hold_states``: the
         collocation states start at the interval-start values (rockit's guess) instead of the simulated
-        ones: from a coarse mesh this reaches a better basin (measured in benchmarks/spinup_ocp.md)."""
+        ones: from a coarse mesh this reaches a better basin (measured in benchmarks/spinup_ocp.md).
+        ``lam_g0``, ``lam_x0``: initial multipliers (with ``w0``; a solver built with ``warm=True`` uses them)."""
         ocp, nlp = self.ocp, self.nlp
         if w0 is None:
             if u_guess is None:
@@ -121,7 +133,8 @@ class Solver:
             if hold_states and nlp.index["Xc"] is not None:
                 w0[nlp.index["Xc"]] = w0[nlp.index["X"]][:-1, None, :]
         t0 = time.perf_counter()
-        r = ipopt.solve(self.solver, x0=w0, lbx=nlp.lbx, ubx=nlp.ubx, lbg=nlp.lbg, ubg=nlp.ubg)
+        duals = {k: v for k, v in (("lam_g0", lam_g0), ("lam_x0", lam_x0)) if v is not None}
+        r = ipopt.solve(self.solver, x0=w0, lbx=nlp.lbx, ubx=nlp.ubx, lbg=nlp.lbg, ubg=nlp.ubg, **duals)
         dt = time.perf_counter() - t0
         wopt = r["x"]
         if not r["success"] and raise_on_failure:
@@ -134,7 +147,7 @@ class Solver:
             pk = float(np.max(np.hypot(pts[..., 0], pts[..., 1])))
         return SpinupSolution(self.method.label, r["status"], r["success"], r["iterations"], dt, self.build_time_s,
                               _objective_value(ocp, nlp, wopt, float(r["f"][0])), float(np.sum(h[:nlp.mesh.n]))
-                              / ocp.Om, u, h, pts, pk, wopt)
+                              / ocp.Om, u, h, pts, pk, wopt, r["lam_g"], r["lam_x"])
 
 
 def infeasibility_error(ocp: SpinupOcp, nlp: Nlp, wopt: np.ndarray, r: dict) -> SolveError:
@@ -256,16 +269,38 @@ def resimulated_scores(ocp: SpinupOcp, sol: SpinupSolution, tr: Trajectory) -> t
     return tr.peak_delta, sol.peak_collocation
 
 
+def refine(ocp: SpinupOcp, method, coarse: Solver, sol: SpinupSolution, options: dict | None, rows: list
+           ) -> tuple[Solver, SpinupSolution]:
+    """Mesh continuation from the coarse optimum ``sol`` to ``method``'s mesh by doubling the intervals;
+    each stage starts from the previous optimum and its multipliers (:func:`interpolate`) with a small
+    barrier parameter.  Returns the finest stage's solver and solution (a failed last stage raises)."""
+    prev, n = coarse, coarse.nlp.mesh.n
+    while n < method.intervals:
+        n *= 2
+        stage = Solver(ocp, dataclasses.replace(method, intervals=n), prev.nlp.ref, options, warm=True)
+        w0, lg0, lx0 = interpolate(prev.nlp, sol.w, sol.lam_g, sol.lam_x, stage.nlp)
+        last = n >= method.intervals
+        sol = stage.solve(w0=w0, lam_g0=lg0, lam_x0=lx0, raise_on_failure=last)
+        rows.append({"start": "mesh continuation", "stage": f"{n} intervals", "status": sol.status,
+                     "success": sol.success, "iterations": sol.iterations, "solve_time_s": sol.solve_time_s,
+                     "build_time_s": stage.build_time_s})
+        prev = stage
+    return prev, sol
+
+
 def optimize(ocp: SpinupOcp, method, multistart: bool = True, options: dict | None = None) -> Optimum:
     """Solve from every start; keep the best optimum by its re-simulated objective (for min_time: the
     shortest time whose re-simulated peak keeps the deflection limit within 1 %).
 
-    min_time is solved by continuation: first the smallest peak over the full horizon (if even that
-    exceeds the deflection limit, the limit is the binding constraint and no time is feasible), then
-    the minimum time started from that profile."""
-    solver = Solver(ocp, method, options=options)
-    rows, best, first_error = [], None, None
-    start_list = starts(ocp, solver.nlp.mesh.n, multistart)
+    With several starts and a collocation mesh of at least 2 x COARSE intervals, every start is solved on
+    the coarse mesh and the best re-simulated coarse optimum is refined by mesh continuation
+    (:func:`refine`).  min_time is solved by continuation: first the smallest peak over the full horizon
+    (if even that exceeds the deflection limit, the limit is the binding constraint and no time is
+    feasible), then the minimum time started from that profile."""
+    ref = reference_level(ocp)
+    n_ctrl = method.intervals
+    rows, best, first_error, build = [], None, None, 0.0
+    start_list = starts(ocp, n_ctrl, multistart)
     if ocp.free_time:
         peak_ocp = dataclasses.replace(ocp, objective="peak_deflection", deflection_limit=None)
         pk = optimize(peak_ocp, method, multistart, options)
@@ -275,9 +310,12 @@ def optimize(ocp: SpinupOcp, method, multistart: bool = True, options: dict | No
                              f"{ocp.horizon:g} s is {pk.score:.4g} e", "Infeasible_Problem_Detected",
                              {"smallest_peak_over_e": pk.score, "t_s": list(pk.trajectory.t),
                               "omega_rad_s": list(pk.trajectory.omega)})
-        start_list = [("minimum-peak profile over the horizon", pk.solution.u[:solver.nlp.mesh.n])]
-    coarse = coarse_solver(ocp, method, solver.nlp.ref, options) if len(start_list) > 1 else None
+        start_list = [("minimum-peak profile over the horizon", pk.solution.u[:n_ctrl])]
+    coarse = coarse_solver(ocp, method, ref, options) if len(start_list) > 1 else None
+    solved = []  # (label, solution) of the finest mesh
+    solver = None
     if coarse is not None:  # mesh continuation: every start on the coarse mesh, the best one refined
+        build += coarse.build_time_s
         nc, ranked = coarse.nlp.mesh.n, []
         for label, u in start_list:
             cu = u.reshape(nc, -1).mean(axis=1) if u.size % nc == 0 else np.interp(
@@ -290,16 +328,27 @@ def optimize(ocp: SpinupOcp, method, multistart: bool = True, options: dict | No
                          "success": sc.success, "iterations": sc.iterations, "solve_time_s": sc.solve_time_s})
         if ranked:
             _, label, sc = min(ranked, key=lambda r: r[0])
-            start_list = [(f"{label}, refined from {nc} intervals", np.repeat(sc.u[:nc], solver.nlp.mesh.n // nc))]
+            start_list = []
+            try:
+                solver, sol = refine(ocp, method, coarse, sc, options, rows)
+                solved.append((f"{label}, refined from {nc} intervals", sol))
+            except SolveError as exc:
+                if exc.status in INFEASIBLE:
+                    raise
+                first_error = exc
+            build += sum(r.get("build_time_s", 0.0) for r in rows)
+    if start_list:
+        solver = Solver(ocp, method, ref, options)
+        build += solver.build_time_s
     for label, u in start_list:
         try:
-            sol = solver.solve(u)
+            solved.append((label, solver.solve(u)))
         except SolveError as exc:
             if exc.status in INFEASIBLE:  # no other start can fix the limits
                 raise
             first_error = first_error or exc
             rows.append({"start": label, "status": exc.status, "success": False})
-            continue
+    for label, sol in solved:
         tr = resimulate(ocp, sol.u, sol.h, "optimum")
         score, own = resimulated_scores(ocp, sol, tr)
         ok = ocp.deflection_limit is None or tr.peak_delta <= 1.01 * ocp.deflection_limit
@@ -312,4 +361,4 @@ def optimize(ocp: SpinupOcp, method, multistart: bool = True, options: dict | No
     if best is None:
         raise first_error or SolveError("no start keeps the deflection limit after re-simulation", "limit_violated")
     score, own, sol, tr = best
-    return Optimum(ocp, sol, tr, score, rows, own, solver.build_time_s + (coarse.build_time_s if coarse else 0.0))
+    return Optimum(ocp, sol, tr, score, rows, own, build)

@@ -134,9 +134,11 @@ def transcribe(ocp: SpinupOcp, method, ref: float) -> Nlp:
     lbx, ubx = np.full(w.numel(), -np.inf), np.full(w.numel(), np.inf)
     # speed bounds on the horizon only: at its end omega_final is imposed, and over the settling window
     # the speed is held by the dynamics (a bound there would duplicate an equality: degenerate multipliers)
+    # and at the nodes only: with a piecewise-constant acceleration the speed is linear in each interval
+    # (exact in any collocation), so a bound at the collocation points would duplicate the node bounds
+    # (the last Radau point is the next node): on an arc held at the cap that fails LICQ
     nlo, nhi = ocp.nu_bounds()
-    for rows in (idx_X[1:ms.n], idx_Xc[:ms.n].reshape(-1, 5) if collocation else idx_X[1:ms.n]):
-        lbx[rows[:, 4]], ubx[rows[:, 4]] = nlo, nhi
+    lbx[idx_X[1:ms.n, 4]], ubx[idx_X[1:ms.n, 4]] = nlo, nhi
     lbx[idx_X[0]] = ubx[idx_X[0]] = ocp.q0
     lbx[idx_u[:ms.n]], ubx[idx_u[:ms.n]] = -1.0, 1.0
     lbx[idx_u[ms.n:]] = ubx[idx_u[ms.n:]] = 0.0  # settling window: held speed
@@ -208,3 +210,88 @@ def transcribe(ocp: SpinupOcp, method, ref: float) -> Nlp:
     index = {"X": idx_X, "Xc": idx_Xc, "u": idx_u, "v": idx_v}
     return Nlp(w, obj, ca.vertcat(*g), lbx, ubx, np.concatenate(lbg), np.concatenate(ubg), blocks, index, ms,
                frac, method, ref)
+
+
+def point_times(nlp: Nlp) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Node times (K+1,), interval lengths (K,) and collocation-point times (K, d) of a collocation NLP, tau."""
+    ms = nlp.mesh
+    h = np.concatenate([np.full(ms.n, ms.h), np.full(ms.ns, ms.hs)])
+    t0 = np.concatenate([[0.0], np.cumsum(h)])
+    tau = np.array(collocation_data(nlp.method.degree, nlp.method.scheme)[0])
+    return t0, h, t0[:-1, None] + h[:, None] * tau[None, :]
+
+
+def _lagrange(nodes: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Lagrange basis on ``nodes`` at the points s: (len(s), len(nodes))."""
+    L = np.ones((len(s), len(nodes)))
+    for r, nr in enumerate(nodes):
+        for q, nq in enumerate(nodes):
+            if q != r:
+                L[:, r] *= (s - nq) / (nr - nq)
+    return L
+
+
+def interpolate(coarse: Nlp, w: np.ndarray, lam_g: np.ndarray, lam_x: np.ndarray, fine: Nlp
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Primal and dual guess of the ``fine`` collocation NLP from a solution of the ``coarse`` one (same
+    problem, a finer mesh): the states by the coarse collocation polynomials, the controls held.
+
+    The multipliers of the collocation equations are B_j p(t) (quadrature weight times the costate, the
+    same on any mesh) and those of the continuity equations p(t): both interpolated in time; the path
+    multipliers are a measure (the peak's), each moved to the nearest fine point; the control-bound
+    multipliers scale with the interval length.  With them IPOPT starts at a small barrier parameter
+    near the coarse optimum: from its own least-squares multipliers (spread evenly over the thousands of
+    epigraph points) the barrier's central path lifts the peak level far above the optimum first
+    (benchmarks/spinup_ocp.md)."""
+    d, scheme = coarse.method.degree, coarse.method.scheme
+    tau, _, _, B = collocation_data(d, scheme)
+    tc0, hc, tcc = point_times(coarse)
+    tf0, hf, tfc = point_times(fine)
+    Kc, Kf = len(hc), len(hf)
+    Xc, Zc = w[coarse.index["X"]], w[coarse.index["Xc"]]
+    nodes = np.concatenate([[0.0], tau])
+
+    def interval(t):
+        return np.clip(np.searchsorted(tc0, t, side="right") - 1, 0, Kc - 1)
+
+    def state_at(t):
+        k = interval(t)
+        Z = np.concatenate([Xc[k][:, None, :], Zc[k]], axis=1)  # (P, d+1, 5)
+        return np.einsum("pr,pri->pi", _lagrange(nodes, (t - tc0[k]) / hc[k]), Z)
+
+    wf = np.zeros(fine.x.numel())
+    wf[fine.index["X"]] = state_at(tf0)
+    wf[fine.index["X"][-1]] = Xc[-1]
+    wf[fine.index["Xc"]] = state_at(tfc.ravel()).reshape((Kf, d, 5))
+    kc = interval(tf0[:-1] + 0.5 * hf)
+    wf[fine.index["u"]] = w[coarse.index["u"]][kc]
+    wf[fine.index["v"]] = w[coarse.index["v"]]
+
+    def block(nlp, name):
+        return next(((a, b) for n, a, b in nlp.blocks if n == name), None)
+
+    lg = np.zeros(fine.g.numel())
+    per = 5 * (d + 1)
+    a, _ = block(coarse, "dynamics")
+    Dc = lam_g[a:a + Kc * per].reshape(Kc, d + 1, 5)
+    colloc = (Dc[:, :d, :] / np.asarray(B)[None, :, None]).reshape(-1, 5)
+    pc = np.stack([np.interp(tfc.ravel(), tcc.ravel(), colloc[:, i]) for i in range(5)], -1).reshape(Kf, d, 5)
+    pn = np.stack([np.interp(tf0[1:], tc0[1:], Dc[:, d, i]) for i in range(5)], -1)
+    a, _ = block(fine, "dynamics")
+    lg[a:a + Kf * per] = np.concatenate([pc * np.asarray(B)[None, :, None], pn[:, None, :]], axis=1).ravel()
+    npath = len(coarse.fractions)
+    tcp = np.concatenate([tcc, tc0[1:, None]], axis=1)[:, :npath].ravel() if npath > d else tcc.ravel()
+    tfp = np.concatenate([tfc, tf0[1:, None]], axis=1)[:, :npath].ravel() if npath > d else tfc.ravel()
+    for name, a, b in coarse.blocks:
+        fb = block(fine, name)
+        if name == "dynamics" or fb is None:
+            continue
+        if b - a == 1 and fb[1] - fb[0] == 1:
+            lg[fb[0]] = lam_g[a]
+        elif b - a == tcp.size and fb[1] - fb[0] == tfp.size:  # path constraints at the path points
+            for i in np.nonzero(lam_g[a:b])[0]:
+                lg[fb[0] + np.argmin(np.abs(tfp - tcp[i]))] += lam_g[a + i]
+    lx = np.zeros(fine.x.numel())
+    lx[fine.index["X"][0]] = lam_x[coarse.index["X"][0]]
+    lx[fine.index["u"]] = lam_x[coarse.index["u"]][kc] * hf / hc[kc]
+    return wf, lg, lx
