@@ -149,8 +149,10 @@ class Spinup(Strict):
     degree: Annotated[int, Field(ge=1, le=9)] = Field(3, description="collocation degree, 1 to 9")
     intervals: Annotated[int, Field(ge=4, le=5000)] = Field(200, description="control intervals, 4 to 5,000")
     multistart: bool = True
-    max_iterations: Annotated[int, Field(ge=1, le=100000)] = 1000  # IPOPT iterations per solve
-    tolerance: Annotated[float, Field(gt=0, lt=1)] = 1e-8  # IPOPT tol (and constraint violation)
+    max_iterations: Annotated[int, Field(ge=1, le=100000)] = Field(
+        1000, description="IPOPT's iteration limit per solve (each start and each mesh-continuation stage)")
+    tolerance: Annotated[float, Field(gt=0, lt=1)] = Field(
+        1e-8, description="IPOPT's tolerance (dimensionless): optimality, constraint violation and complementarity")
 
     @model_validator(mode="after")
     def _consistent(self):
