@@ -14,7 +14,8 @@ Objectives: ``peak_deflection`` (epigraph: delta^2 <= S at every collocation poi
 delta^2 over the horizon and the settling window), ``min_time`` (free final time subject to
 delta <= deflection_limit).  Limits: |alpha| <= alpha_max, 0 <= omega <= omega_max, |M| <= M_max,
 M omega <= P_max, the motor characteristic M <= L_s (1 - omega/omega_nl), and optionally the jerk
-|d alpha/dt| <= jerk_max between intervals; a jerk penalty (weight ``jerk_penalty``) regularises
+|d alpha/dt| <= jerk_max between intervals; a jerk penalty (weight ``jerk_penalty`` on the sum of
+squared changes, or ``jerk_variation`` on the smoothed total variation of alpha/alpha_max) regularises
 the profile where the peak does not fix it.
 """
 
@@ -60,6 +61,9 @@ class SpinupOcp:
     deflection_limit: float | None = None  # delta/e (min_time, or an extra limit for any objective)
     jerk_max: float | None = None  # rad/s^3, bound on the change of alpha between control intervals
     jerk_penalty: float = 0.0  # weight of sum (Delta u)^2, u = alpha/alpha_max, relative to the objective
+    # weight of the total variation of u = alpha/alpha_max (sum |Delta u|, smoothed below |Delta u| = 0.01),
+    # relative to the objective: removes one-interval pulses without rounding the switches
+    jerk_variation: float = 0.0
 
     def __post_init__(self):
         if self.objective not in OBJECTIVES:
@@ -69,8 +73,8 @@ class SpinupOcp:
         if (self.torque_max or self.power_max or self.motor_stall_torque) and \
                 self.params.J_p + self.params.m1 * self.params.e**2 * (1 - self.params.psi) <= 0:
             raise ValueError("torque and power limits need the drive's polar inertia J_p > 0")
-        if self.jerk_penalty < 0:
-            raise ValueError("jerk_penalty must not be negative")
+        if self.jerk_penalty < 0 or self.jerk_variation < 0:
+            raise ValueError("jerk_penalty and jerk_variation must not be negative")
         if self.jerk_max is not None and self.jerk_max <= 0:
             raise ValueError("jerk_max must be positive (rad/s^3)")
 

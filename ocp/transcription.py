@@ -20,6 +20,8 @@ import numpy as np
 from autobal.models.rotor import rotor_model
 from autobal.ocp.problem import SpinupOcp
 
+TV_SMOOTHING = 1e-2  # |Delta u| below which the total-variation penalty is quadratic
+
 
 @dataclass(frozen=True)
 class DirectCollocation:
@@ -207,6 +209,9 @@ def transcribe(ocp: SpinupOcp, method, ref: float) -> Nlp:
         obj = quad / ref
     if ocp.jerk_penalty and du:
         obj = obj + ocp.jerk_penalty * ca.sumsqr(ca.vertcat(*du))
+    if ocp.jerk_variation and du:
+        dv = ca.vertcat(*du)
+        obj = obj + ocp.jerk_variation * ca.sum1(ca.sqrt(dv**2 + TV_SMOOTHING**2) - TV_SMOOTHING)
     index = {"X": idx_X, "Xc": idx_Xc, "u": idx_u, "v": idx_v}
     return Nlp(w, obj, ca.vertcat(*g), lbx, ubx, np.concatenate(lbg), np.concatenate(ubg), blocks, index, ms,
                frac, method, ref)
