@@ -1,6 +1,6 @@
 import pytest
 
-from autobal import scenario
+from autobal import api, scenario
 from autobal.adapters import design
 from autobal.analysis.statics import StaticsSolver
 
@@ -35,3 +35,20 @@ def _edit(data: dict, path: str, value) -> dict:
 def scene_edit():
     """``scene_edit(data, "a.b.c", value)``: a copy of a scene dict with one key changed or removed."""
     return _edit
+
+
+_SHIPPED_RUNS: dict = {}
+
+
+@pytest.fixture(scope="session")
+def shipped_run(tmp_path_factory):
+    """``shipped_run(name) -> (Run, folder)``: one run of a shipped scene, saved to a folder, shared by every
+    test of the session that needs that scene (the report, the null check, the scene tests)."""
+
+    def get(name: str):
+        if name not in _SHIPPED_RUNS:
+            folder = tmp_path_factory.mktemp("shipped") / name
+            _SHIPPED_RUNS[name] = (api.run(name, out=folder), folder)
+        return _SHIPPED_RUNS[name]
+
+    return get

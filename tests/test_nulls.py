@@ -7,7 +7,7 @@ A value that is NaN (written as null), or a list holding nulls, under key ``k`` 
 
 import pytest
 
-from autobal import api, scenario
+from autobal import scenario
 from autobal.analysis.result import plain
 
 
@@ -48,14 +48,8 @@ def test_the_checker_finds_unexplained_nulls():
 SHIPPED = [p.stem for p in scenario.shipped()]
 
 
-@pytest.fixture(scope="session")
-def shipped_results():
-    """results.json content of every shipped scene, each run once."""
-    return {name: plain(api.run(api.load(name)).to_dict()) for name in SHIPPED}
-
-
 @pytest.mark.cli
 @pytest.mark.slow
 @pytest.mark.parametrize("name", SHIPPED)
-def test_every_null_has_a_status(shipped_results, name):
-    assert unexplained_nulls(shipped_results[name]) == []
+def test_every_null_has_a_status(shipped_run, name):
+    assert unexplained_nulls(plain(shipped_run(name)[0].to_dict())) == []

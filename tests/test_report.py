@@ -11,7 +11,6 @@ from pathlib import Path
 import pytest
 import yaml
 
-import autobal
 from autobal import cli, report, scenario
 
 FAST = ("rig_table43_fit", "washer_liquid_balancer_nested")
@@ -92,20 +91,10 @@ def check_report(folder: Path) -> Page:
     return page
 
 
-_RUNS: dict[str, Path] = {}
-
-
 @pytest.fixture(scope="session")
-def output(tmp_path_factory):
-    """``output(name)``: the output folder of one run of a shipped scene (run once per session)."""
-
-    def get(name: str) -> Path:
-        if name not in _RUNS:
-            _RUNS[name] = tmp_path_factory.mktemp("report") / name
-            autobal.run(name, out=_RUNS[name])
-        return _RUNS[name]
-
-    return get
+def output(shipped_run):
+    """``output(name)``: the output folder of the session's one run of a shipped scene."""
+    return lambda name: shipped_run(name)[1]
 
 
 @pytest.mark.cli

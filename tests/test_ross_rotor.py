@@ -166,12 +166,11 @@ def test_ramp_run_up_matches_ross_time_response(scene_rotor):
 @pytest.mark.cli
 @pytest.mark.slow
 @needs_ross
-def test_shipped_scene_end_to_end(tmp_path):
+def test_shipped_scene_end_to_end(shipped_run, tmp_path):
     """spinup_ross_rotor through autobal.run: two or more critical speeds below the final speed, matching ROSS
     within 1 %; the optimum re-simulated no worse than the ramps; files written."""
-    import autobal
 
-    run = autobal.run("spinup_ross_rotor")
+    run = shipped_run("spinup_ross_rotor")[0]
     res = run["ross_spinup"]
     d = res.to_dict()
     assert len(d["critical_speeds"]["reduced_wd_rad_s"]) >= 2
