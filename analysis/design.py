@@ -40,7 +40,7 @@ from autobal.analysis import ipopt
 from autobal.analysis.linearize import exact, jacobians
 from autobal.analysis.statics import StaticsSolver
 from autobal.errors import SolveError
-from autobal.models.device import REGULATOR_GROUPS, DeviceParams, design, groups_by_name, static_system
+from autobal.models.device import DeviceParams, design, groups_by_name, static_system
 from autobal.models.dynamics import PARAM_NAMES, build
 
 # design key -> the DeviceParams fields it sets (dotted paths) and its SI unit
@@ -54,12 +54,16 @@ FIELDS = {
     "h_3": ("disc.outer_seal.clearance",), "l_3": ("disc.outer_seal.length",), "d_3": ("disc.outer_seal.diameter",),
     "zeta_3": ("disc.outer_seal.local_loss",), "lambda_3": ("disc.outer_seal.friction",),
     "lambda_T": ("disc.face.friction",), "phi_B": ("regulator.valve.discharge_coefficient",),
+    "h_1": ("disc.inner_seal.clearance",), "l_1": ("disc.inner_seal.length",), "d_1": ("disc.inner_seal.diameter",),
+    "z_B": ("disc.face.base_gap",), "x_B": ("regulator.valve.base_opening",),
+    "d_T2": ("disc.face.inner_diameter",), "d_T3": ("disc.face.outer_diameter",),
 }
 UNITS = {"V2": "m**3", "V3": "m**3", "V_cam": "m**3", "V_m": "m**3", "c_z": "N*s/m", "c_x": "N*s/m",
          "k_reg": "N/m", "dpsi": "", "p_in": "Pa", "s_m": "m**2", "d_e": "m", "l_e": "m", "d_in": "m", "l_in": "m",
-         "h_3": "m", "l_3": "m", "d_3": "m", "zeta_3": "", "lambda_3": "", "lambda_T": "", "phi_B": ""}
-# groups the dynamic model is affine in, jointly (see DesignProblem.linearisation); psi_in does not enter A
-AFFINE_GROUPS = ("sigma_m", "alpha_e1", "alpha_in1", "alpha_TB1", "alpha_31", "alpha_B1")
+         "h_3": "m", "l_3": "m", "d_3": "m", "zeta_3": "", "lambda_3": "", "lambda_T": "", "phi_B": "",
+         "h_1": "m", "l_1": "m", "d_1": "m", "z_B": "m", "x_B": "m", "d_T2": "m", "d_T3": "m"}
+# scales a design variable may move (symbolic in the NLP); p_B and s_B are the operating point's
+DESIGN_SCALES = ("g1", "Q_scale", "z_B", "x_B", "s_e")
 OMEGA_REF = 1000.0  # rad/s, time scale of the characteristic polynomial
 ACTIVE_TOL = 1e-6  # a constraint within this (scaled) distance of its bound ...
 MULTIPLIER_TOL = 1e-3  # ... and with a multiplier above this (relative to the objective, O(1)) is active
@@ -266,13 +270,19 @@ class DesignProblem:
         self.scale = np.array([max(abs(v.upper), abs(v.lower)) for v in spec.variables])
         self.dev0 = design(device)
         g = self.dev0.groups
-        self.moved = self._moved_groups()
+        self.moved, self.moved_scales = self._moved_groups()
         self.parameters = ("psi_in", *[k for k in self.moved if k != "psi_in"])
         self.sys = static_system(g, parameters=self.parameters)
         self.solver0 = StaticsSolver(self.dev0)
         self.statics0 = {p: self.solver0.solve(p, self.dev0.dpsi) for p in self.points}
         ref = self.statics0[spec.nominal_ratio]
-        self.model = build(self.dev0, device.dynamics, ref.values | {"psi1": ref.psi1, "dpsi": ref.dpsi}, spec.form)
+        point = ref.values | {"psi1": ref.psi1, "dpsi": ref.dpsi}
+        self.model = build(self.dev0, device.dynamics, point, spec.form)
+        # the same model with the design variables as symbols d (SI): groups and scales symbolic; the
+        # dynamic data of PARAM_NAMES enter through its parameter vector p instead
+        self.d = ca.SX.sym("d", len(self.keys))
+        sym = apply(device, {k: self.d[i] for i, k in enumerate(self.keys) if not FIELDS[k][0].startswith("dynamics.")})
+        self.model_d = build(design(sym), sym.dynamics, point, spec.form, symbols=self.d)
         self.ref0 = self._reference()
         self._build()
 
@@ -281,22 +291,23 @@ class DesignProblem:
         return {k: self.scale[i] * y[i] for i, k in enumerate(self.keys)}
 
     def _moved_groups(self) -> tuple:
-        """The dimensionless groups the design variables change (found by moving each by half its
-        value); ValueError for a variable that changes a scale (p_B, s_B, z_B, x_B, g1) or a group
-        the linearisation cannot take exactly."""
-        g0, out = groups_by_name(self.dev0.groups), []
+        """(groups, scales) the design variables change, found by moving each by a tenth of its value;
+        ValueError for a variable that changes the pressure or force scale (p_B, s_B) or the
+        axial-force ratio b (the operating point's, not the device's)."""
+        g0, out, scales_out = groups_by_name(self.dev0.groups), [], []
         for k in self.keys:
             if FIELDS[k][0].startswith("dynamics.") or k == "dpsi":
                 continue
             v0 = self.nominal[k]
-            moved = design(apply(self.device, {k: 1.5 * v0 if v0 else 1.0}))
+            moved = design(apply(self.device, {k: 1.1 * v0 if v0 else 1.0}))
             changed = [n for n, v in groups_by_name(moved.groups).items() if v != g0[n]]
             scales = [n for n, v in moved.scales.items() if not (v == self.dev0.scales[n] or v != v)]
-            bad = scales + [n for n in changed if n not in AFFINE_GROUPS + ("psi_in",)]
+            bad = [n for n in scales if n not in DESIGN_SCALES] + [n for n in changed if n == "b"]
             if bad:
                 raise ValueError(f"design variable {k!r} changes {', '.join(bad)}: not a design variable yet")
             out += [n for n in changed if n not in out]
-        return tuple(out)
+            scales_out += [n for n in scales if n not in scales_out]
+        return tuple(out), tuple(scales_out)
 
     def _reference(self):
         """Nominal objective terms (leakage, stiffness) for scaling."""
@@ -308,9 +319,11 @@ class DesignProblem:
         v = dict(zip(self.sys.unknowns, ca.vertsplit(W), strict=True))
         return ca.vertcat(*[0 if k in ("v", "w") else v[k] for k in self.model.states])
 
-    def _stiffness(self, W, psi1, dpsi, theta):
-        """kappa_s = -sigma d(psi2 - psi3)/du with the other balances held (stops open)."""
-        return self.sys.stiffness(ca.jacobian(self.sys.residual(W, psi1, dpsi, theta), W))
+    def _stiffness(self, W, psi1, dpsi, theta, sigma=None, z_b=None):
+        """kappa_s = -sigma d(psi2 - psi3)/du with the other balances held (stops open), per unit
+        z / z_B of the starting design (times z_B0 / ``z_b``: the same SI stiffness when z_B moves)."""
+        kappa = self.sys.stiffness(ca.jacobian(self.sys.residual(W, psi1, dpsi, theta), W), sigma=sigma)
+        return kappa if z_b is None else kappa * self.dev0.scales["z_B"] / z_b
 
     def _build(self):
         sp, sys_, g = self.spec, self.sys, self.dev0.groups
@@ -319,10 +332,13 @@ class DesignProblem:
         W = ca.SX.sym("W", nw, m)
         si = self._si(y)
         dpsi = si.get("dpsi", self.dev0.dpsi)
-        groups = self.groups(si)
+        dd = design(apply(self.device, si))
+        groups, scales = groups_by_name(dd.groups), dd.scales
         theta = ca.vertcat(*[groups[n] for n in self.parameters])
+        sigma = groups["sigma"]
         pvec = ca.vertcat(*[si.get(k, self.model.p0[i]) for i, k in enumerate(PARAM_NAMES)])
-        jac = self.linearisation(si, groups)
+        jac = self.linearisation(si)
+        z0, reg0 = self.dev0.scales["z_B"], self.dev0.groups.regulator
         cons, lo, hi, names = [], [], [], []
 
         def add(name, expr, lower, upper):
@@ -346,11 +362,20 @@ class DesignProblem:
             for name, expr in zip(cn, ce, strict=True):
                 add(f"psi1={p:g}: stability {name}", expr, 0.0, math.inf)
             if math.isfinite(sp.min_stiffness):
-                add(f"psi1={p:g}: stiffness", self._stiffness(Wj, p, dpsi, theta), sp.min_stiffness, math.inf)
+                add(f"psi1={p:g}: stiffness", self._stiffness(Wj, p, dpsi, theta, sigma, scales["z_B"]), sp.min_stiffness,
+                    math.inf)
+            # a moved scale turns the face-gap and valve-band bounds into constraints (see bounds())
+            if "z_B" in self.moved_scales:
+                add(f"psi1={p:g}: face gap", Wj[sys_.index("u")] * scales["z_B"] / z0, sp.gap[0] / z0,
+                    sp.gap[1] / z0)
+            if "x_B" in self.moved_scales and math.isfinite(reg0.xi_max):
+                add(f"psi1={p:g}: valve band", Wj[sys_.index("xi")] / dd.groups.regulator.xi_max,
+                    sp.valve_band, 1 - sp.valve_band)
         jn = self.points.index(sp.nominal_ratio)
         q = sys_.flows(W[:, jn], sp.nominal_ratio, dpsi, theta)[0]
-        q_e = q[sys_.throttles.index("e")]
-        kappa = self._stiffness(W[:, jn], sp.nominal_ratio, dpsi, theta)
+        # the leakage in SI over its nominal value: the flow scale g1 p_B may be a design expression
+        q_e = q[sys_.throttles.index("e")] * scales["Q_scale"] / self.dev0.scales["Q_scale"]
+        kappa = self._stiffness(W[:, jn], sp.nominal_ratio, dpsi, theta, sigma, scales["z_B"])
         f = sp.weights[0] * q_e / self.ref0["q_e"] - sp.weights[1] * kappa / abs(self.ref0["kappa"])
         x = ca.vertcat(y, ca.vec(W))
         g_all = ca.vertcat(*cons)
@@ -374,49 +399,22 @@ class DesignProblem:
         expression), by :func:`autobal.models.device.design` itself: symbolic where the design is."""
         return groups_by_name(design(apply(self.device, si)).groups)
 
-    def _moved_jacobian(self, name: str):
-        """Jacobians of the model built with group ``name`` at 1.5 times its nominal value (the
-        membrane area s_m of the dynamic data moves with sigma_m = s_m / s_B)."""
-        cache = self.__dict__.setdefault("_moved_jac", {})
-        if name not in cache:
-            g, data = self.dev0.groups, self.device.dynamics
-            value = 1.5 * groups_by_name(g)[name]
-            if name in REGULATOR_GROUPS:
-                g = dataclasses.replace(g, regulator=dataclasses.replace(g.regulator, **{name: value}))
-            else:
-                g = dataclasses.replace(g, **{name: value})
-            if name == "sigma_m":
-                data = dataclasses.replace(data, s_m=1.5 * data.s_m)
-            ref = self.statics0[self.spec.nominal_ratio]
-            point = ref.values | {"psi1": ref.psi1, "dpsi": ref.dpsi}
-            cache[name] = jacobians(build(dataclasses.replace(self.dev0, groups=g), data, point, self.spec.form))
-        return cache[name]
+    def linearisation(self, si: dict):
+        """(x, w, p) -> A = df/dx of the dynamic model at the design ``si`` (key -> SI number or CasADi
+        expression; keys not given: the starting design's).
 
-    def linearisation(self, si: dict, groups: dict | None = None):
-        """(x, w, p) -> A of the model, with the groups the design moves symbolic.
-
-        The model is affine in the groups of AFFINE_GROUPS jointly: the membrane force
-        sigma_m (psi_e - psi1 - dpsi) of the stem and the displacement flow s_m dx/dt of the barrier
-        chamber, the throttle flows alpha f(psi_a, psi_b) (laminar, square-root and valve laws); the
-        mass matrix contains none of them, and no product of two appears.  So
-        A = A(nominal) + sum_i t_i (A(moved i) - A(nominal)), t_i = (theta_i - theta_i0)/(theta_i1 -
-        theta_i0), exactly, from one extra built model per group.  The static point off the valve stop
-        does not depend on s_m (psi_e = psi1 + dpsi); it does on the alphas, through the statics' symbols.
-        psi_in does not enter A (only the state it sets).
+        The model is built once with the design variables as symbols (:func:`autobal.models.dynamics.build`
+        with ``symbols``): its groups and scales (g1, z_B, x_B, s_e) are the expressions of
+        :func:`autobal.models.device.design`, so A is exact in every variable.  The dynamic data of
+        PARAM_NAMES enter through ``p``.
         """
-        groups = self.groups(si) if groups is None else groups
-        jac0 = jacobians(self.model)
-        nominal = groups_by_name(self.dev0.groups)
-        terms = [((groups[n] - nominal[n]) / (0.5 * nominal[n]), self._moved_jacobian(n))
-                 for n in self.moved if n != "psi_in"]
-
-        def A(x, w, p):
-            a0 = jac0(x, w, p)[0]
-            for t, j in terms:
-                a0 = a0 + t * (j(x, w, p)[0] - jac0(x, w, p)[0])
-            return a0
-
-        return A
+        cache = self.__dict__.setdefault("_jac", [])
+        if not cache:
+            m = self.model_d
+            x, w, p = ca.SX.sym("x", len(m.states)), ca.SX.sym("w", 2), ca.SX.sym("p", len(m.p0))
+            cache.append(ca.Function("A", [x, w, p, self.d], [ca.jacobian(m.ode(x, w, p, self.d), x)]))
+        d = ca.vertcat(*[si.get(k, self.nominal[k]) for k in self.keys])
+        return lambda x, w, p: cache[0](x, w, p, d)
 
     def static_state(self, p):
         """The dynamic model's state at the starting design's static solution at psi1 = ``p``."""
@@ -444,6 +442,11 @@ class DesignProblem:
         fix = {"r_contact": (0.0, 0.0), "r_valve": (0.0, 0.0),
                "u": (sp.gap[0] / z_b, sp.gap[1] / z_b),
                "xi": (sp.valve_band * xi_max, (1 - sp.valve_band) * xi_max)}
+        # a moved scale: these bands are constraints of the NLP (_build), the unknowns only nonnegative
+        if "z_B" in self.moved_scales:
+            fix["u"] = (0.0, math.inf)
+        if "x_B" in self.moved_scales:
+            fix["xi"] = (0.0, math.inf)
         for k, (lo, hi) in fix.items():
             if k in sys_.unknowns:
                 lb[sys_.index(k)], ub[sys_.index(k)] = lo, hi
@@ -527,7 +530,8 @@ class DesignProblem:
                 continue
             model = build(dd, dev_p.dynamics, st.values | {"psi1": p, "dpsi": dd.dpsi}, form or sp.form)
             ev.abscissa[p] = float(exact(model).poles().real.max())
-            ev.stiffness[p] = solver.stiffness(st)
+            # per unit z / z_B of the starting design (the same SI stiffness when z_B moves)
+            ev.stiffness[p] = solver.stiffness(st) * self.dev0.scales["z_B"] / dd.scales["z_B"]
             tol = 1e-6
             checks = {
                 "decay rate": ev.abscissa[p] <= -sp.decay_rate * (1 - tol) + tol,
@@ -540,7 +544,7 @@ class DesignProblem:
                 ev.feasible, ev.reason = False, f"psi1={p:g}: {', '.join(bad)}"
             if p == sp.nominal_ratio:
                 ev.leakage = st.flows["e"] * dd.scales["Q_scale"]
-                ev.objective = (sp.weights[0] * st.flows["e"] / self.ref0["q_e"]
+                ev.objective = (sp.weights[0] * ev.leakage / (self.ref0["q_e"] * self.dev0.scales["Q_scale"])
                                 - sp.weights[1] * ev.stiffness[p] / abs(self.ref0["kappa"]))
         return ev
 

@@ -37,16 +37,18 @@ VARIABLES = {
     "device.disc.outer_seal.friction": ("lambda_3", None),
     "device.disc.face.friction": ("lambda_T", None),
     "device.regulator.valve.discharge_coefficient": ("phi_B", None),
+    "device.disc.inner_seal.clearance": ("h_1", "length"),  # g1: the flow scale, symbolic in the NLP
+    "device.disc.inner_seal.length": ("l_1", "length"),
+    "device.disc.inner_seal.diameter": ("d_1", "length"),  # also s_e
+    "device.disc.face.base_gap": ("z_B", "length"),  # the scale of u = z/z_B, symbolic in the NLP
+    "device.disc.face.inner_diameter": ("d_T2", "length"),  # s_e: sigma and the displacement flows
+    "device.disc.face.outer_diameter": ("d_T3", "length"),
+    "device.regulator.valve.base_opening": ("x_B", "length"),  # the scale of xi = x/x_B
 }
 # scene paths a designer may ask for that this version cannot take, and why
 NOT_YET = {
-    "device.disc.inner_seal": "the inner seal's conductance g1 is the flow scale of every group and of the "
-                              "dynamic model's compliance and displacement terms",
-    "device.disc.face.base_gap": "the base gap z_B is the scale of the face gap u = z/z_B in the dynamic model",
-    "device.disc.face.inner_diameter": "the face diameters set the disc area sigma = s_e/s_B",
-    "device.disc.face.outer_diameter": "the face diameters set the disc area sigma = s_e/s_B",
-    "device.regulator.valve.base_opening": "the base opening x_B is the scale of the valve travel xi = x/x_B",
-    "device.regulator.valve.seat_diameter": "the seat diameter also sets the dynamic data's seat area s_c",
+    "device.regulator.valve.seat_diameter": "the seat diameter also sets the dynamic data's seat area s_c, "
+                                            "which a scene may give on its own (device.dynamics.regulator.seat_area)",
 }
 
 

@@ -357,7 +357,7 @@ class StaticSystem:
         for every other stop its reaction at zero (name -> value)."""
         return {c if r in active else r: (at if r in active else 0.0) for r, (c, at, _) in self.stops.items()}
 
-    def stiffness(self, J, active=frozenset()):
+    def stiffness(self, J, active=frozenset(), sigma=None):
         """Static stiffness kappa_s = -d phi/du at fixed psi1, phi = sigma (psi2 - psi3), Pavlenko (2014),
         Eq. (2.33): the implicit-function derivative of every balance but the disc's force balance.
 
@@ -367,6 +367,8 @@ class StaticSystem:
             Jacobian of ``residual`` with respect to the unknowns at a solution.
         active : set of str
             Stops the solution rests on (their coordinates are held); the other reactions are zero.
+        sigma : float or CasADi expression, optional
+            The disc area ratio s_e/s_B where it is a design symbol; default: the groups' own.
 
         Returns
         -------
@@ -383,7 +385,8 @@ class StaticSystem:
             J = np.asarray(J)
             dx = -np.linalg.solve(J[np.ix_(eqs, cols)], J[eqs, iu])
         names = [self.unknowns[i] for i in cols]
-        return -self.groups.sigma * (dx[names.index("psi2")] - dx[names.index("psi3")])
+        sigma = self.groups.sigma if sigma is None else sigma
+        return -sigma * (dx[names.index("psi2")] - dx[names.index("psi3")])
 
 
 def static_system(groups: DeviceGroups, parameters=()) -> StaticSystem:
@@ -497,11 +500,12 @@ def face_area(face: Face) -> float:
 def design(device: DeviceParams) -> DeviceDesign:
     """Dimensionless groups of a device (Pavlenko (2014), Eqs. (2.16), (2.18), (2.135), (2.137)).
 
-    The one place the groups are computed from the SI parameters, numerically and symbolically: the
-    geometry and loss fields of the throttles (clearances, lengths, diameters, loss coefficients),
-    the margin, the supply pressure and the membrane area may be CasADi expressions, and so are then
-    the groups they enter (a design NLP gets their exact derivatives).  The scales (p_B, s_B, z_B,
-    x_B, g1) must stay numbers.
+    The one place the groups and the scales are computed from the SI parameters, numerically and
+    symbolically: the geometry and loss fields of the throttles (clearances, lengths, diameters, loss
+    coefficients, the face base gap z_B, the valve base opening x_B), the margin, the supply pressure
+    and the membrane area may be CasADi expressions, and so are then the groups and the scales they
+    enter (g1, z_B, x_B, s_e, Q_scale; a design NLP gets their exact derivatives).  The pressure and
+    force scales p_B, s_B (and the axial-force ratio b) must stay numbers.
 
     Parameters
     ----------

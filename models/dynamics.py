@@ -167,7 +167,7 @@ class DynamicModel:
 
 
 def build(dev: DeviceDesign, data: DynamicData, point: dict, form: str = "energy",
-          preload: str = "static") -> DynamicModel:
+          preload: str = "static", symbols=None) -> DynamicModel:
     """Build the nonlinear model at the static ``point`` (Pavlenko (2014), Eqs. (2.40), (2.111), (2.167)).
 
     The throttle flows are those of the statics (:func:`autobal.models.device.network`).
@@ -187,6 +187,11 @@ def build(dev: DeviceDesign, data: DynamicData, point: dict, form: str = "energy
         "static": Delta = F_pr/k_pr + z0, Delta_reg = F_reg/k_reg + x0, so the equilibrium is the static
         point; "literal": Delta = F_pr/k_pr as (2.37) reads, the equilibrium moves and is found by a
         Newton solve from the static point (it replaces ``point``).
+    symbols : casadi.SX or None
+        Design symbols: the groups and scales of ``dev`` (g1, z_B, x_B, s_e, ...) and the membrane area
+        ``data.s_m`` may be CasADi expressions of these; every Function then takes them as a last input
+        ``d`` (e.g. ``ode(x, w, p, d)``), so a design NLP differentiates the model exactly.  Only with
+        ``preload="static"``.
 
     Returns
     -------
@@ -195,6 +200,9 @@ def build(dev: DeviceDesign, data: DynamicData, point: dict, form: str = "energy
     """
     if form not in FORMS:
         raise ValueError(f"unknown chamber form {form!r}; expected one of {FORMS}")
+    if symbols is not None and preload != "static":
+        raise ValueError("a model with design symbols takes preload='static' only")
+    extra, extra_names = ([symbols], ["d"]) if symbols is not None else ([], [])
     g, sc = dev.groups, dev.scales
     reg = g.regulator
     if (reg is not None) != data.has_regulator:
@@ -263,11 +271,12 @@ def build(dev: DeviceDesign, data: DynamicData, point: dict, form: str = "energy
     q0 = [float(point[k]) for k in coords]
     w_eq = [psi10, g.b * psi10]
     for k in coords[1 + bool(reg):]:
-        own = ca.Function("own", [q, qd, w, p], [ca.jacobian(balances[k], Q[k])])
-        rows.append(balances[k] / float(own(q0, [0.0] * n, w_eq, data.vector())))
+        own = ca.Function("own", [q, qd, w, p, *extra], [ca.jacobian(balances[k], Q[k])])
+        scale = own(q0, [0.0] * n, w_eq, data.vector(), *extra)
+        rows.append(balances[k] / (scale if symbols is not None else float(scale)))
 
     R = ca.vertcat(*rows)
-    rows_f = ca.Function("rows", [q, qd, qdd, w, p], [R], ["q", "qd", "qdd", "w", "p"], ["r"])
+    rows_f = ca.Function("rows", [q, qd, qdd, w, p, *extra], [R], ["q", "qd", "qdd", "w", "p", *extra_names], ["r"])
 
     # explicit first-order form: the rows are affine in qdd (mechanics) and qd (chambers)
     vel = ["u", "xi"] if reg else ["u"]
@@ -284,7 +293,7 @@ def build(dev: DeviceDesign, data: DynamicData, point: dict, form: str = "energy
     unk = ca.SX.sym("unk", n)
     qd_x = ca.vertcat(*[qd_known[k] if k in vel else unk[i] for i, k in enumerate(coords)])
     qdd_x = ca.vertcat(*[unk[i] if k in vel else 0 for i, k in enumerate(coords)])
-    r_x = rows_f(q_of_x, qd_x, qdd_x, w, p)
+    r_x = rows_f(q_of_x, qd_x, qdd_x, w, p, *extra)
     M = ca.jacobian(r_x, unk)
     sol = -ca.solve(M, ca.substitute(r_x, unk, ca.DM.zeros(n)))  # exact: r is affine in unk
     xdot = []
@@ -293,9 +302,9 @@ def build(dev: DeviceDesign, data: DynamicData, point: dict, form: str = "energy
             xdot += [qd_known[k], t_ref * sol[i]]
         else:
             xdot.append(sol[i])
-    ode = ca.Function("ode", [x, w, p], [ca.vertcat(*xdot)], ["x", "w", "p"], ["xdot"])
+    ode = ca.Function("ode", [x, w, p, *extra], [ca.vertcat(*xdot)], ["x", "w", "p", *extra_names], ["xdot"])
     fl_x = ca.substitute(ca.vertcat(*fl.values()), q, q_of_x)
-    flows = ca.Function("flows", [x, w], [fl_x], ["x", "w"], ["q"])
+    flows = ca.Function("flows", [x, w, *extra], [fl_x], ["x", "w", *extra_names], ["q"])
 
     vals = {"u": u0, "v": 0.0, "w": 0.0, "psi2": point["psi2"], "psi3": point["psi3"]}
     if reg:
