@@ -1,15 +1,17 @@
 """Stability-constrained design of the balancing device: one NLP over design variables and statics.
 
 The design variables (chamber volumes, damping, regulator spring, the margin dpsi, the regulator
-supply pressure) are found by IPOPT together with the static unknowns at a set of operating points
+supply pressure, throttle and seal geometry, the face base gap and diameters, the valve base opening)
+are found by IPOPT together with the static unknowns at a set of operating points
 (discharge ratios psi1).  At each point:
 
 * the static balances of :func:`autobal.models.device.static_system` are equality constraints, the
   margin dpsi and the supply pressure psi_in entering as symbols; both stops are held open
   (contact and valve reactions fixed at zero, the valve inside a band of its travel, the face gap
   inside the scene's bounds);
-* the exact linearisation A = df/dx of :func:`autobal.models.dynamics.build` is evaluated at the
-  symbolic static state, so A is a CasADi expression of the variables;
+* the exact linearisation A = df/dx of :func:`autobal.models.dynamics.build`, built with the design
+  variables as symbols (groups and scales g1, z_B, x_B, s_e as :func:`autobal.models.device.design`
+  gives them), is evaluated at the symbolic static state, so A is a CasADi expression of the variables;
 * every eigenvalue must satisfy Re lambda <= -alpha: the Routh-Hurwitz conditions (Gantmacher
   (1959), ch. XV; Pavlenko (2014), Eqs. (2.97)-(2.99)) of det(sI - A - alpha I) = s^n + a1 s^(n-1)
   + ... + an, as the first column r_1..r_(n-1) of the Routh array and a_n, every one >= 0 (the
@@ -40,7 +42,7 @@ from autobal.analysis import ipopt
 from autobal.analysis.linearize import exact, jacobians
 from autobal.analysis.statics import StaticsSolver
 from autobal.errors import SolveError
-from autobal.models.device import DeviceParams, design, groups_by_name, static_system
+from autobal.models.device import REGULATOR_GROUPS, DeviceParams, design, groups_by_name, static_system
 from autobal.models.dynamics import PARAM_NAMES, build
 
 # design key -> the DeviceParams fields it sets (dotted paths) and its SI unit
@@ -62,6 +64,8 @@ UNITS = {"V2": "m**3", "V3": "m**3", "V_cam": "m**3", "V_m": "m**3", "c_z": "N*s
          "k_reg": "N/m", "dpsi": "", "p_in": "Pa", "s_m": "m**2", "d_e": "m", "l_e": "m", "d_in": "m", "l_in": "m",
          "h_3": "m", "l_3": "m", "d_3": "m", "zeta_3": "", "lambda_3": "", "lambda_T": "", "phi_B": "",
          "h_1": "m", "l_1": "m", "d_1": "m", "z_B": "m", "x_B": "m", "d_T2": "m", "d_T3": "m"}
+# groups the dynamic model is affine in, jointly (see DesignProblem.linearisation); psi_in does not enter A
+AFFINE_GROUPS = ("sigma_m", "alpha_e1", "alpha_in1", "alpha_TB1", "alpha_31", "alpha_B1")
 # scales a design variable may move (symbolic in the NLP); p_B and s_B are the operating point's
 DESIGN_SCALES = ("g1", "Q_scale", "z_B", "x_B", "s_e")
 OMEGA_REF = 1000.0  # rad/s, time scale of the characteristic polynomial
@@ -276,13 +280,7 @@ class DesignProblem:
         self.solver0 = StaticsSolver(self.dev0)
         self.statics0 = {p: self.solver0.solve(p, self.dev0.dpsi) for p in self.points}
         ref = self.statics0[spec.nominal_ratio]
-        point = ref.values | {"psi1": ref.psi1, "dpsi": ref.dpsi}
-        self.model = build(self.dev0, device.dynamics, point, spec.form)
-        # the same model with the design variables as symbols d (SI): groups and scales symbolic; the
-        # dynamic data of PARAM_NAMES enter through its parameter vector p instead
-        self.d = ca.SX.sym("d", len(self.keys))
-        sym = apply(device, {k: self.d[i] for i, k in enumerate(self.keys) if not FIELDS[k][0].startswith("dynamics.")})
-        self.model_d = build(design(sym), sym.dynamics, point, spec.form, symbols=self.d)
+        self.model = build(self.dev0, device.dynamics, ref.values | {"psi1": ref.psi1, "dpsi": ref.dpsi}, spec.form)
         self.ref0 = self._reference()
         self._build()
 
@@ -323,7 +321,7 @@ class DesignProblem:
         """kappa_s = -sigma d(psi2 - psi3)/du with the other balances held (stops open), per unit
         z / z_B of the starting design (times z_B0 / ``z_b``: the same SI stiffness when z_B moves)."""
         kappa = self.sys.stiffness(ca.jacobian(self.sys.residual(W, psi1, dpsi, theta), W), sigma=sigma)
-        return kappa if z_b is None else kappa * self.dev0.scales["z_B"] / z_b
+        return kappa if z_b is None else kappa * (self.dev0.scales["z_B"] / z_b)
 
     def _build(self):
         sp, sys_, g = self.spec, self.sys, self.dev0.groups
@@ -335,7 +333,8 @@ class DesignProblem:
         dd = design(apply(self.device, si))
         groups, scales = groups_by_name(dd.groups), dd.scales
         theta = ca.vertcat(*[groups[n] for n in self.parameters])
-        sigma = groups["sigma"]
+        sigma = groups["sigma"] if "sigma" in self.moved else None
+        z_b = scales["z_B"] if "z_B" in self.moved_scales else None
         pvec = ca.vertcat(*[si.get(k, self.model.p0[i]) for i, k in enumerate(PARAM_NAMES)])
         jac = self.linearisation(si)
         z0, reg0 = self.dev0.scales["z_B"], self.dev0.groups.regulator
@@ -362,8 +361,8 @@ class DesignProblem:
             for name, expr in zip(cn, ce, strict=True):
                 add(f"psi1={p:g}: stability {name}", expr, 0.0, math.inf)
             if math.isfinite(sp.min_stiffness):
-                add(f"psi1={p:g}: stiffness", self._stiffness(Wj, p, dpsi, theta, sigma, scales["z_B"]), sp.min_stiffness,
-                    math.inf)
+                kappa_j = self._stiffness(Wj, p, dpsi, theta, sigma, z_b)
+                add(f"psi1={p:g}: stiffness", kappa_j, sp.min_stiffness, math.inf)
             # a moved scale turns the face-gap and valve-band bounds into constraints (see bounds())
             if "z_B" in self.moved_scales:
                 add(f"psi1={p:g}: face gap", Wj[sys_.index("u")] * scales["z_B"] / z0, sp.gap[0] / z0,
@@ -374,8 +373,10 @@ class DesignProblem:
         jn = self.points.index(sp.nominal_ratio)
         q = sys_.flows(W[:, jn], sp.nominal_ratio, dpsi, theta)[0]
         # the leakage in SI over its nominal value: the flow scale g1 p_B may be a design expression
-        q_e = q[sys_.throttles.index("e")] * scales["Q_scale"] / self.dev0.scales["Q_scale"]
-        kappa = self._stiffness(W[:, jn], sp.nominal_ratio, dpsi, theta, sigma, scales["z_B"])
+        q_e = q[sys_.throttles.index("e")]
+        if "Q_scale" in self.moved_scales:
+            q_e = q_e * (scales["Q_scale"] / self.dev0.scales["Q_scale"])
+        kappa = self._stiffness(W[:, jn], sp.nominal_ratio, dpsi, theta, sigma, z_b)
         f = sp.weights[0] * q_e / self.ref0["q_e"] - sp.weights[1] * kappa / abs(self.ref0["kappa"])
         x = ca.vertcat(y, ca.vec(W))
         g_all = ca.vertcat(*cons)
@@ -399,22 +400,67 @@ class DesignProblem:
         expression), by :func:`autobal.models.device.design` itself: symbolic where the design is."""
         return groups_by_name(design(apply(self.device, si)).groups)
 
+    def _moved_jacobian(self, name: str):
+        """Jacobians of the model built with group ``name`` at 1.5 times its nominal value (the
+        membrane area s_m of the dynamic data moves with sigma_m = s_m / s_B)."""
+        cache = self.__dict__.setdefault("_moved_jac", {})
+        if name not in cache:
+            g, data = self.dev0.groups, self.device.dynamics
+            value = 1.5 * groups_by_name(g)[name]
+            if name in REGULATOR_GROUPS:
+                g = dataclasses.replace(g, regulator=dataclasses.replace(g.regulator, **{name: value}))
+            else:
+                g = dataclasses.replace(g, **{name: value})
+            if name == "sigma_m":
+                data = dataclasses.replace(data, s_m=1.5 * data.s_m)
+            ref = self.statics0[self.spec.nominal_ratio]
+            point = ref.values | {"psi1": ref.psi1, "dpsi": ref.dpsi}
+            cache[name] = jacobians(build(dataclasses.replace(self.dev0, groups=g), data, point, self.spec.form))
+        return cache[name]
+
     def linearisation(self, si: dict):
         """(x, w, p) -> A = df/dx of the dynamic model at the design ``si`` (key -> SI number or CasADi
         expression; keys not given: the starting design's).
 
-        The model is built once with the design variables as symbols (:func:`autobal.models.dynamics.build`
-        with ``symbols``): its groups and scales (g1, z_B, x_B, s_e) are the expressions of
-        :func:`autobal.models.device.design`, so A is exact in every variable.  The dynamic data of
-        PARAM_NAMES enter through ``p``.
+        Where a variable moves a scale (g1, z_B, x_B, s_e) or a group outside AFFINE_GROUPS (sigma),
+        the model built once with the design variables as symbols
+        (:func:`autobal.models.dynamics.build` with ``symbols``) gives A exactly.  Otherwise the
+        cheaper, better-conditioned affine form is used: the model is affine in the groups of
+        AFFINE_GROUPS jointly (the membrane force sigma_m (psi_e - psi1 - dpsi) and displacement flow
+        s_m dx/dt, the throttle flows alpha f(psi_a, psi_b); the mass matrix contains none of them,
+        no product of two appears), so A = A(nominal) + sum_i t_i (A(moved i) - A(nominal)),
+        t_i = (theta_i - theta_i0)/(theta_i1 - theta_i0), exactly, from one extra built model per group
+        (the same IPOPT path as before the scales could move: the chain-form designs sit at the edge
+        of what IPOPT converges, and the symbolic model's different rounding tips them over).
         """
-        cache = self.__dict__.setdefault("_jac", [])
-        if not cache:
-            m = self.model_d
-            x, w, p = ca.SX.sym("x", len(m.states)), ca.SX.sym("w", 2), ca.SX.sym("p", len(m.p0))
-            cache.append(ca.Function("A", [x, w, p, self.d], [ca.jacobian(m.ode(x, w, p, self.d), x)]))
-        d = ca.vertcat(*[si.get(k, self.nominal[k]) for k in self.keys])
-        return lambda x, w, p: cache[0](x, w, p, d)
+        if self.moved_scales or any(n not in AFFINE_GROUPS + ("psi_in",) for n in self.moved):
+            cache = self.__dict__.setdefault("_jac", [])
+            if not cache:
+                # the model with the design variables as symbols d (SI): groups and scales symbolic; the
+                # dynamic data of PARAM_NAMES enter through its parameter vector p instead
+                d = ca.SX.sym("d", len(self.keys))
+                sym = apply(self.device, {k: d[i] for i, k in enumerate(self.keys)
+                                          if not FIELDS[k][0].startswith("dynamics.")})
+                ref = self.statics0[self.spec.nominal_ratio]
+                m = build(design(sym), sym.dynamics, ref.values | {"psi1": ref.psi1, "dpsi": ref.dpsi},
+                          self.spec.form, symbols=d, values=[self.nominal[k] for k in self.keys])
+                x, w, p = ca.SX.sym("x", len(m.states)), ca.SX.sym("w", 2), ca.SX.sym("p", len(m.p0))
+                cache.append(ca.Function("A", [x, w, p, d], [ca.jacobian(m.ode(x, w, p, d), x)]))
+            d = ca.vertcat(*[si.get(k, self.nominal[k]) for k in self.keys])
+            return lambda x, w, p: cache[0](x, w, p, d)
+        groups = self.groups(si)
+        jac0 = jacobians(self.model)
+        nominal = groups_by_name(self.dev0.groups)
+        terms = [((groups[n] - nominal[n]) / (0.5 * nominal[n]), self._moved_jacobian(n))
+                 for n in self.moved if n != "psi_in"]
+
+        def A(x, w, p):
+            a0 = jac0(x, w, p)[0]
+            for t, j in terms:
+                a0 = a0 + t * (j(x, w, p)[0] - jac0(x, w, p)[0])
+            return a0
+
+        return A
 
     def static_state(self, p):
         """The dynamic model's state at the starting design's static solution at psi1 = ``p``."""

@@ -167,7 +167,7 @@ class DynamicModel:
 
 
 def build(dev: DeviceDesign, data: DynamicData, point: dict, form: str = "energy",
-          preload: str = "static", symbols=None) -> DynamicModel:
+          preload: str = "static", symbols=None, values=None) -> DynamicModel:
     """Build the nonlinear model at the static ``point`` (Pavlenko (2014), Eqs. (2.40), (2.111), (2.167)).
 
     The throttle flows are those of the statics (:func:`autobal.models.device.network`).
@@ -192,6 +192,9 @@ def build(dev: DeviceDesign, data: DynamicData, point: dict, form: str = "energy
         ``data.s_m`` may be CasADi expressions of these; every Function then takes them as a last input
         ``d`` (e.g. ``ode(x, w, p, d)``), so a design NLP differentiates the model exactly.  Only with
         ``preload="static"``.
+    values : array_like, optional
+        With ``symbols``: their nominal values, at which the chamber rows' normalisation (a constant
+        per row, which the ODE does not see) is taken as a number; default: symbolic.
 
     Returns
     -------
@@ -273,7 +276,9 @@ def build(dev: DeviceDesign, data: DynamicData, point: dict, form: str = "energy
     for k in coords[1 + bool(reg):]:
         own = ca.Function("own", [q, qd, w, p, *extra], [ca.jacobian(balances[k], Q[k])])
         scale = own(q0, [0.0] * n, w_eq, data.vector(), *extra)
-        rows.append(balances[k] / (scale if symbols is not None else float(scale)))
+        if symbols is not None and values is not None:
+            scale = ca.Function("own_d", [symbols], [scale])(values)
+        rows.append(balances[k] / (scale if symbols is not None and values is None else float(scale)))
 
     R = ca.vertcat(*rows)
     rows_f = ca.Function("rows", [q, qd, qdd, w, p, *extra], [R], ["q", "qd", "qdd", "w", "p", *extra_names], ["r"])
