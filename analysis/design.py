@@ -336,7 +336,7 @@ class DesignProblem:
         sigma = groups["sigma"] if "sigma" in self.moved else None
         z_b = scales["z_B"] if "z_B" in self.moved_scales else None
         pvec = ca.vertcat(*[si.get(k, self.model.p0[i]) for i, k in enumerate(PARAM_NAMES)])
-        jac = self.linearisation(si)
+        jac = self.linearisation(si, groups)
         z0, reg0 = self.dev0.scales["z_B"], self.dev0.groups.regulator
         cons, lo, hi, names = [], [], [], []
 
@@ -418,9 +418,10 @@ class DesignProblem:
             cache[name] = jacobians(build(dataclasses.replace(self.dev0, groups=g), data, point, self.spec.form))
         return cache[name]
 
-    def linearisation(self, si: dict):
+    def linearisation(self, si: dict, groups: dict | None = None):
         """(x, w, p) -> A = df/dx of the dynamic model at the design ``si`` (key -> SI number or CasADi
-        expression; keys not given: the starting design's).
+        expression; keys not given: the starting design's); ``groups``: its groups, if built already
+        (the same expressions, so the NLP's graph shares them).
 
         Where a variable moves a scale (g1, z_B, x_B, s_e) or a group outside AFFINE_GROUPS (sigma),
         the model built once with the design variables as symbols
@@ -448,7 +449,7 @@ class DesignProblem:
                 cache.append(ca.Function("A", [x, w, p, d], [ca.jacobian(m.ode(x, w, p, d), x)]))
             d = ca.vertcat(*[si.get(k, self.nominal[k]) for k in self.keys])
             return lambda x, w, p: cache[0](x, w, p, d)
-        groups = self.groups(si)
+        groups = self.groups(si) if groups is None else groups
         jac0 = jacobians(self.model)
         nominal = groups_by_name(self.dev0.groups)
         terms = [((groups[n] - nominal[n]) / (0.5 * nominal[n]), self._moved_jacobian(n))
