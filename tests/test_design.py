@@ -318,17 +318,11 @@ def test_scale_variables_give_the_rebuilt_model(path, key, scales):
     assert float(prob.q_e(x)) == pytest.approx(ev.leakage, rel=1e-10)
 
 
-@pytest.mark.parametrize("path, key, lower, upper", [
-    ("device.disc.inner_seal.clearance", "h_1", 2e-4, 5e-4),
-    ("device.disc.face.base_gap", "z_B", 8e-5, 3e-4),
-    ("device.regulator.valve.base_opening", "x_B", 5e-4, 2e-3),
-    ("device.disc.face.inner_diameter", "d_T2", 0.15, 0.2),
-    ("device.disc.face.outer_diameter", "d_T3", 0.21, 0.28)])
-def test_scale_variable_design_converges_and_moves(path, key, lower, upper):
-    """A small design (two operating points, decay rate 90 1/s) with a scale variable: IPOPT converges, the
-    variable moves off its starting value, and the optimum is feasible by eigenvalues with the NLP's objective."""
+def _small_design(variable):
+    """The pump with ``variable``, V3, c_x and dpsi over psi1 = 0.5, 1 at alpha = 90 1/s: solved (IPOPT must
+    succeed) and the optimum evaluated by the ordinary path (it must be feasible): (problem, solve, Evaluation)."""
     dev = adapters.dynamic_device(autobal.load("pump_pe600_dynamics"))
-    spec = ds.Spec(variables=(ds.Variable(path, key, lower, upper),
+    spec = ds.Spec(variables=(variable,
                               ds.Variable("device.dynamics.cavity_volume", "V3", 1e-6, 1e-3),
                               ds.Variable("device.dynamics.regulator.stem_damping", "c_x", 0.0, 2e4),
                               ds.Variable("device.barrier.margin_ratio", "dpsi", 0.002, 0.1)),
@@ -338,6 +332,19 @@ def test_scale_variable_design_converges_and_moves(path, key, lower, upper):
     assert out["res"]["status"] == "Solve_Succeeded"
     ev = prob.evaluate(out["values"])
     assert ev.feasible, ev.reason
+    return prob, out, ev
+
+
+@pytest.mark.parametrize("path, key, lower, upper", [
+    ("device.disc.inner_seal.clearance", "h_1", 2e-4, 5e-4),
+    ("device.disc.face.base_gap", "z_B", 8e-5, 3e-4),
+    ("device.regulator.valve.base_opening", "x_B", 5e-4, 2e-3),
+    ("device.disc.face.inner_diameter", "d_T2", 0.15, 0.2),
+    ("device.disc.face.outer_diameter", "d_T3", 0.21, 0.28)])
+def test_scale_variable_design_converges_and_moves(path, key, lower, upper):
+    """A small design (two operating points, decay rate 90 1/s) with a scale variable: IPOPT converges, the
+    variable moves off its starting value, and the optimum is feasible by eigenvalues with the NLP's objective."""
+    prob, out, ev = _small_design(ds.Variable(path, key, lower, upper))
     assert all(a <= -90.0 * (1 - 1e-6) for a in ev.abscissa.values())
     assert float(prob.objective_fn(out["x"])) == pytest.approx(ev.objective, rel=1e-9)
     assert abs(out["values"][key] / prob.nominal[key] - 1) > 0.02
@@ -353,17 +360,7 @@ def test_supply_throttle_diameter_converges():
     """The supply-throttle diameter as a variable (it did not converge with IPOPT's monotone barrier: the
     dynamic data the objective does not see leave the reduced Hessian singular): the NLP converges, its
     optimum is feasible by eigenvalues and its objective is the statics solver's."""
-    dev = adapters.dynamic_device(autobal.load("pump_pe600_dynamics"))
-    spec = ds.Spec(variables=(ds.Variable("device.barrier.supply_throttle.diameter", "d_e", 1.5e-3, 6e-3),
-                              ds.Variable("device.dynamics.cavity_volume", "V3", 1e-6, 1e-3),
-                              ds.Variable("device.dynamics.regulator.stem_damping", "c_x", 0.0, 2e4),
-                              ds.Variable("device.barrier.margin_ratio", "dpsi", 0.002, 0.1)),
-                   points=(0.5, 1.0), decay_rate=90.0, gap=(5e-5, 3e-4))
-    prob = ds.DesignProblem(dev, spec)
-    out = prob.solve()
-    assert out["res"]["status"] == "Solve_Succeeded"
-    ev = prob.evaluate(out["values"])
-    assert ev.feasible, ev.reason
+    prob, out, ev = _small_design(ds.Variable("device.barrier.supply_throttle.diameter", "d_e", 1.5e-3, 6e-3))
     assert float(prob.objective_fn(out["x"])) == pytest.approx(ev.objective, rel=1e-9)
     assert 1.5e-3 < out["values"]["d_e"] < 6e-3
 
