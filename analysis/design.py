@@ -9,9 +9,9 @@ are found by IPOPT together with the static unknowns at a set of operating point
   margin dpsi and the supply pressure psi_in entering as symbols; both stops are held open
   (contact and valve reactions fixed at zero, the valve inside a band of its travel, the face gap
   inside the scene's bounds);
-* the exact linearisation A = df/dx of :func:`autobal.models.dynamics.build`, built with the design
-  variables as symbols (groups and scales g1, z_B, x_B, s_e as :func:`autobal.models.device.design`
-  gives them), is evaluated at the symbolic static state, so A is a CasADi expression of the variables;
+* the exact linearisation A = df/dx of :func:`autobal.models.dynamics.build` (built with the design
+  variables as symbols where they move a scale g1, z_B, x_B, s_e; see DesignProblem.linearisation) is
+  evaluated at the symbolic static state, so A is a CasADi expression of the variables;
 * every eigenvalue must satisfy Re lambda <= -alpha: the Routh-Hurwitz conditions (Gantmacher
   (1959), ch. XV; Pavlenko (2014), Eqs. (2.97)-(2.99)) of det(sI - A - alpha I) = s^n + a1 s^(n-1)
   + ... + an, as the first column r_1..r_(n-1) of the Routh array and a_n, every one >= 0 (the
