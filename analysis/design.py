@@ -110,7 +110,7 @@ class Spec:
     valve_band : float
         Fraction of the valve travel kept free at each end (off its seat and off its open stop).
     min_stiffness : float
-        Lower bound of kappa_s (dimensionless); -inf: none.
+        Lower bound of kappa_s (dimensionless, per unit z / z_B of the starting design); -inf: none.
     weights : (float, float)
         Objective weights of Q_e / Q_e,nominal and of -kappa_s / kappa_s,nominal.
     form : {"energy", "chain"}
