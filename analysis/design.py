@@ -41,7 +41,7 @@ import scipy.linalg
 from autobal.analysis import ipopt
 from autobal.analysis.linearize import exact, jacobians
 from autobal.analysis.statics import StaticsSolver
-from autobal.errors import SolveError
+from autobal.errors import ScenarioError, SolveError
 from autobal.models.device import REGULATOR_GROUPS, DeviceParams, design, groups_by_name, static_system
 from autobal.models.dynamics import PARAM_NAMES, build
 
@@ -59,11 +59,14 @@ FIELDS = {
     "h_1": ("disc.inner_seal.clearance",), "l_1": ("disc.inner_seal.length",), "d_1": ("disc.inner_seal.diameter",),
     "z_B": ("disc.face.base_gap",), "x_B": ("regulator.valve.base_opening",),
     "d_T2": ("disc.face.inner_diameter",), "d_T3": ("disc.face.outer_diameter",),
+    "d_c": ("regulator.valve.seat_diameter",),  # and the seat area s_c = pi d_c^2 / 4 (SEAT_AREA)
 }
+# the dynamic data's seat area follows the valve seat diameter where the scene derives it (adapters)
+SEAT_AREA = "dynamics.s_c"
 UNITS = {"V2": "m**3", "V3": "m**3", "V_cam": "m**3", "V_m": "m**3", "c_z": "N*s/m", "c_x": "N*s/m",
          "k_reg": "N/m", "dpsi": "", "p_in": "Pa", "s_m": "m**2", "d_e": "m", "l_e": "m", "d_in": "m", "l_in": "m",
          "h_3": "m", "l_3": "m", "d_3": "m", "zeta_3": "", "lambda_3": "", "lambda_T": "", "phi_B": "",
-         "h_1": "m", "l_1": "m", "d_1": "m", "z_B": "m", "x_B": "m", "d_T2": "m", "d_T3": "m"}
+         "h_1": "m", "l_1": "m", "d_1": "m", "z_B": "m", "x_B": "m", "d_T2": "m", "d_T3": "m", "d_c": "m"}
 # groups the dynamic model is affine in, jointly (see DesignProblem.linearisation); psi_in does not enter A
 AFFINE_GROUPS = ("sigma_m", "alpha_e1", "alpha_in1", "alpha_TB1", "alpha_31", "alpha_B1")
 # scales a design variable may move (symbolic in the NLP); p_B and s_B are the operating point's
@@ -134,10 +137,13 @@ def _replace(obj, path: str, value):
 
 
 def apply(device: DeviceParams, values: dict) -> DeviceParams:
-    """The device with design values (key -> SI number or CasADi expression) substituted."""
+    """The device with design values (key -> SI number or CasADi expression) substituted; the valve
+    seat diameter d_c also sets the dynamic data's seat area s_c = pi d_c^2 / 4 (the adapters' default)."""
     for k, v in values.items():
         for path in FIELDS[k]:
             device = _replace(device, path, v)
+        if k == "d_c" and device.dynamics is not None:
+            device = _replace(device, SEAT_AREA, math.pi * v**2 / 4)
     return device
 
 
@@ -269,6 +275,11 @@ class DesignProblem:
             raise ValueError("the design needs a device with a regulator and dynamic data")
         self.device, self.spec = device, spec
         self.keys = [v.key for v in spec.variables]
+        d_c = device.regulator.valve.seat_diameter
+        if "d_c" in self.keys and not math.isclose(device.dynamics.s_c, math.pi * d_c**2 / 4, rel_tol=1e-12):
+            raise ScenarioError("device.regulator.valve.seat_diameter: not a design variable where the scene gives "
+                                "device.dynamics.regulator.seat_area (m^2) on its own: the design would move s_c "
+                                "with d_c and --set would not")
         self.points = sorted(set(spec.points) | {spec.nominal_ratio})
         self.nominal = nominal_values(device, self.keys)
         self.scale = np.array([max(abs(v.upper), abs(v.lower)) for v in spec.variables])
@@ -330,12 +341,13 @@ class DesignProblem:
         W = ca.SX.sym("W", nw, m)
         si = self._si(y)
         dpsi = si.get("dpsi", self.dev0.dpsi)
-        dd = design(apply(self.device, si))
+        dev_si = apply(self.device, si)
+        dd = design(dev_si)
         groups, scales = groups_by_name(dd.groups), dd.scales
         theta = ca.vertcat(*[groups[n] for n in self.parameters])
         sigma = groups["sigma"] if "sigma" in self.moved else None
         z_b = scales["z_B"] if "z_B" in self.moved_scales else None
-        pvec = ca.vertcat(*[si.get(k, self.model.p0[i]) for i, k in enumerate(PARAM_NAMES)])
+        pvec = ca.vertcat(*[getattr(dev_si.dynamics, k) for k in PARAM_NAMES])
         jac = self.linearisation(si, groups)
         z0, reg0 = self.dev0.scales["z_B"], self.dev0.groups.regulator
         cons, lo, hi, names = [], [], [], []
@@ -442,6 +454,7 @@ class DesignProblem:
                 d = ca.SX.sym("d", len(self.keys))
                 sym = apply(self.device, {k: d[i] for i, k in enumerate(self.keys)
                                           if not FIELDS[k][0].startswith("dynamics.")})
+                sym = _replace(sym, SEAT_AREA, self.device.dynamics.s_c)  # s_c enters through p
                 ref = self.statics0[self.spec.nominal_ratio]
                 m = build(design(sym), sym.dynamics, ref.values | {"psi1": ref.psi1, "dpsi": ref.dpsi},
                           self.spec.form, symbols=d, values=[self.nominal[k] for k in self.keys])

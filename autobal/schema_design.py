@@ -44,11 +44,7 @@ VARIABLES = {
     "device.disc.face.inner_diameter": ("d_T2", "length"),  # s_e: sigma and the displacement flows
     "device.disc.face.outer_diameter": ("d_T3", "length"),
     "device.regulator.valve.base_opening": ("x_B", "length"),  # the scale of xi = x/x_B
-}
-# scene paths a designer may ask for that this version cannot take, and why
-NOT_YET = {
-    "device.regulator.valve.seat_diameter": "the seat diameter also sets the dynamic data's seat area s_c, "
-                                            "which a scene may give on its own (device.dynamics.regulator.seat_area)",
+    "device.regulator.valve.seat_diameter": ("d_c", "length"),  # and s_c = pi d_c^2/4 (refused if the scene gives s_c)
 }
 
 
@@ -89,9 +85,6 @@ class Design(Strict):
                              "(2.24)-(2.28), not expressions of the NLP's statics; use 'energy' or 'chain' (its "
                              "spectral abscissa is reported for comparison as program_model)")
         for path in self.variables:
-            why = next((w for p, w in NOT_YET.items() if path.startswith(p)), None)
-            if why:
-                raise ValueError(f"design variable {path!r} is not supported yet: {why}")
             if path not in VARIABLES:
                 raise ValueError(f"design variable {path!r} is not one of {sorted(VARIABLES)}")
         return self
