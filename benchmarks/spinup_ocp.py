@@ -1,87 +1,116 @@
-"""Benchmark: the spin-up OCP as a drive is specified, by autobal and by rockit (``expand=True``) in the
-same run.
+"""Benchmark: the spin-up OCP of the shipped scene ``spinup_jeffcott_deadline_5s``, solved by autobal and by
+rockit (``expand=True``) in the same run, at 200, 400, 800 and 1600 control intervals.
 
-The problem: Jeffcott rotor (psi = 1, Omega0 = 105 rad/s, chi/m1 = 5 1/s), 40 -> 210 rad/s by a 5 s
-deadline with |alpha| <= 40 rad/s^2, then a 3 s hold at 210 rad/s over which the peak counts, never
-above 210 rad/s; minimum peak deflection (epigraph at every Radau point).  Both transcribe the same
-dimensionless model (the same CasADi Function), Radau collocation of degree 3 on the same mesh
-(N control intervals to the deadline, the hold on intervals of the same length), the same IPOPT
-options, and start from the same guess: the best profile of autobal's global search, its states
-at the interval starts (rockit's ``set_initial`` fills the collocation points with them, so autobal
-gets the same crude guess).  Build = transcription and solver construction; solve = one IPOPT
-solve (median of ``REPEATS``; rockit re-solves with its built solver).  Each solve is capped at
-``WALL`` seconds (IPOPT ``max_wall_time``).  Every optimum is re-simulated with CVODES.
+The problem, as a drive is specified: Jeffcott rotor (psi = 1, Omega0 = 105 rad/s, n = 5 1/s),
+40 -> 210 rad/s by a 5 s deadline with |alpha| <= 40 rad/s^2, then a 3 s hold at 210 rad/s over which
+the peak counts, never above 210 rad/s; minimum peak deflection (epigraph delta^2 <= S at every Radau
+point).  Both sides transcribe the same dimensionless model (the rotor model's CasADi Function) by
+Radau collocation of degree 3 on the same uniform mesh (N intervals to the deadline, 0.6 N more over the
+hold), use the same IPOPT options (autobal's ``IPOPT_OPTIONS``, MUMPS) and start from the same guess:
+the best profile of autobal's global search (the first of its starts) on the N intervals, the states
+simulated to the interval ends and held over each interval at the collocation points (rockit's
+``set_initial`` of interval values; autobal's ``hold_states``; a simulated guess at the collocation
+points, or one interpolated linearly, stops at the iteration limit at N = 200), written into both
+NLPs' variables; both initial objectives are recorded as a check.
 
-Run: ``python -m benchmarks spinup_ocp``.  Writes benchmarks/results/spinup_ocp.md, .json and a scaling
-figure spinup_ocp.png.
+Times: build = declaration, transcription and solver construction (rockit: its ``solve()`` call's
+wall time minus the IPOPT solve inside it); solve = the wall time of the IPOPT call itself, function
+evaluations included (autobal: around the solver call; rockit: CasADi's ``t_wall_total`` of it), one
+solve each; the profile splits it
+into function evaluations (objective, constraints, gradients, Jacobian, Hessian) and IPOPT's own
+work (the linear algebra).  Each solve is capped at ``WALL`` seconds (IPOPT ``max_wall_time``).
+Every optimum is re-simulated with CVODES (rtol 1e-12, 24 points per interval).
+
+Run: ``python -m benchmarks spinup_ocp`` (all sizes, about 10 min on an idle 2-core machine) or
+``python -m benchmarks.spinup_ocp 200 400`` (some sizes).  Writes benchmarks/results/spinup_ocp.json
+and .md, and docs/figures/benchmark_spinup_scaling.png.
 """
 
 from __future__ import annotations
 
-import json
-import statistics
+import sys
 import time
+import traceback
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
-from autobal.models.rotor import RotorParams, rotor_model
-from autobal.ocp import search
-from autobal.ocp import spinup as S
+from autobal import api
+from autobal.models.rotor import rotor_model
+from autobal.ocp import solve as osolve
+from autobal.ocp.simulation import initial_guess, resimulate
+from autobal.ocp.transcription import DirectCollocation, mesh
+from autobal.runners import spinup_ocp
+from benchmarks._results import case, write
 
-OUT = Path(__file__).resolve().parent / "results"
+SCENE = "spinup_jeffcott_deadline_5s"
 INTERVALS = (200, 400, 800, 1600)
-REPEATS = 1
-WALL = 240.0  # s, per solve
+DEGREE, SCHEME = 3, "radau"
+WALL = 300.0  # s, cap of each IPOPT solve
+REF = 200.0  # scale of the epigraph level delta^2 (both sides)
+FIGURE = Path(__file__).resolve().parent.parent / "docs" / "figures" / "benchmark_spinup_scaling.png"
+PEER = "rockit-meco DirectCollocation, expand=True"
+EVALS = ("nlp_f", "nlp_g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l")
 
 
-def problem() -> S.SpinupOcp:
-    return S.SpinupOcp(RotorParams.from_groups(105.0, 5.0, 1.0), 40.0, 210.0, 5.0, 40.0, settling_time=3.0,
-                       omega_max=210.0)
+def problem():
+    """The shipped scene's SpinupOcp (the real problem: deadline, settling window, speed cap)."""
+    scene = api.load(SCENE)
+    return spinup_ocp(scene, scene.analyses.spinup)
 
 
-def guess(ocp, N):
-    """The global search's best profile on N intervals, and its states at the interval starts."""
-    best = search.grid_search(ocp, keep=1)
-    u = search.controls_on_mesh(ocp, best.params[0], N)
-    ms = S.mesh(ocp, N)
-    uu = np.concatenate([u, np.zeros(ms.ns)])
-    h = np.concatenate([np.full(ms.n, ms.h), np.full(ms.ns, ms.hs)])
-    X = np.vstack([np.asarray(ocp.q0)[None, :], S.simulate_profile(ocp, uu, h, [1.0], tol=1e-8)[:, -1, :]])
-    return uu, h, X
+def guess(ocp, nlp):
+    """The common start on the N intervals of ``nlp``: autobal's own (``Solver.solve(u, hold_states=True)``):
+    the global search's best profile, the states simulated at the collocation points and interval ends,
+    then the collocation states held at the interval-start values.  Returns the start's label, the full
+    NLP guess, and its parts for rockit: controls (horizon and hold), interval lengths (tau), states at
+    the interval ends (N + Ns + 1, 5) and at the collocation points (N + Ns, d, 5), epigraph level."""
+    label, u = osolve.starts(ocp, nlp.mesh.n, multistart=False)[0]
+    ms = nlp.mesh
+    if abs(ms.hs - ms.h) > 1e-12 * ms.h:
+        raise ValueError(f"N = {ms.n}: the hold does not fit whole intervals of the horizon's length")
+    w0 = initial_guess(ocp, nlp, u)
+    w0[nlp.index["Xc"]] = w0[nlp.index["X"]][:-1, None, :]
+    h = np.full(ms.n + ms.ns, ms.h)
+    return label, w0, w0[nlp.index["u"]], h, w0[nlp.index["X"]], w0[nlp.index["Xc"]], float(w0[nlp.index["v"][0]])
 
 
-def timed(fn):
-    times, out = [], None
-    for _ in range(REPEATS):
-        t = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t)
-    return statistics.median(times), out
+def profile(stats: dict, total: float) -> dict:
+    """Where the solve's wall time ``total`` went (s): each function evaluation and IPOPT's own work."""
+    out = {k: float(stats.get(f"t_wall_{k}", 0.0)) for k in EVALS}
+    out["ipopt_internal"] = total - sum(out.values())
+    return out
 
 
-def autobal_run(ocp, N, uu, h, X, ref):
+def outcome(ocp, stats, u, h, objective, build, solve):
+    tr = resimulate(ocp, u, h, "optimum")
+    it = stats.get("iterations") or {}
+    return {"build_s": build, "solve_s": solve,
+            "iterations": int(stats["iter_count"]), "status": stats["return_status"],
+            "success": bool(stats["success"]), "optimum_over_e": objective, "resimulated_peak_over_e": tr.peak_delta,
+            "initial_objective": float(it["obj"][0]) if it.get("obj") else None, "profile_s": profile(stats, solve)}
+
+
+def autobal_run(ocp, N):
+    """Build and solve autobal's NLP from its start; the outcome and the start (for rockit)."""
     t = time.perf_counter()
-    solver = S.Solver(ocp, S.DirectCollocation(N, 3, "radau"), ref, {"max_wall_time": WALL})
+    solver = osolve.Solver(ocp, DirectCollocation(N, DEGREE, SCHEME), REF, {"max_wall_time": WALL})
     build = time.perf_counter() - t
-    w0 = S.initial_guess(ocp, solver.nlp, uu[:N])
-    w0[solver.nlp.index["X"]] = X
-    w0[solver.nlp.index["Xc"]] = X[:-1, None, :]  # rockit's guess: the interval-start states
-    solve, sol = timed(lambda: solver.solve(w0=w0.copy(), raise_on_failure=False))
-    tr = S.resimulate(ocp, sol.u, sol.h, "autobal")
-    return {"build": build, "solve": solve, "iterations": sol.iterations, "status": sol.status,
-            "objective": sol.objective, "resim": tr.peak_delta}
+    g = guess(ocp, solver.nlp)
+    sol = solver.solve(w0=g[1].copy(), raise_on_failure=False)
+    return outcome(ocp, solver.solver.stats(), sol.u, sol.h, sol.objective, build, sol.solve_time_s), g
 
 
-def rockit_run(ocp, N, uu, h, X, ref):
-    """The same problem in rockit's declaration API, ``expand=True``."""
-    from rockit import DirectCollocation, Ocp
+def rockit_run(ocp, N, g):
+    """The same problem in rockit's declaration API, ``expand=True`` (a competent rockit user's setting)."""
+    from rockit import DirectCollocation as RockitCollocation
+    from rockit import Ocp
 
-    ms = S.mesh(ocp, N)
-    T_end = ocp.tau_h + ocp.tau_s
+    _, _, uu, h, X, Xc, level = g
+    ms = mesh(ocp, N)
     t = time.perf_counter()
-    r = Ocp(t0=0, T=T_end)
+    r = Ocp(t0=0, T=ocp.tau_h + ocp.tau_s)
     qs = [r.state() for _ in range(5)]
     q = ca.vertcat(*qs)
     u = r.control()
@@ -89,120 +118,200 @@ def rockit_run(ocp, N, uu, h, X, ref):
     f = rotor_model().ode(q, u * ocp.a_max, ocp.params.p)
     for i in range(5):
         r.set_der(qs[i], f[i])
-    free = ca.if_else(r.t < ocp.tau_h - 1e-9, 1, 0)  # 0 in the settling window: speed held, no speed bound
+    free = ca.if_else(r.t < ocp.tau_h - 1e-9, 1, 0)  # 0 over the hold: speed held, no speed bound
     r.subject_to(-free <= (u <= free), grid="control")
-    r.subject_to(qs[4] <= ocp.nuf + (1 - free), grid="integrator_roots")
+    r.subject_to(0 <= (qs[4] <= ocp.nuf + (1 - free)), grid="integrator_roots")
     r.subject_to(r.at_t0(q) == ocp.q0)
-    r.subject_to(r.at_tf(qs[4]) == ocp.nuf)
-    r.subject_to((qs[0] ** 2 + qs[1] ** 2 - s * ref) / ref <= 0, grid="integrator_roots")
+    r.subject_to(r.at_tf(qs[4]) == ocp.nuf)  # = omega_final at the deadline: the hold keeps the speed
+    r.subject_to((qs[0] ** 2 + qs[1] ** 2 - s * REF) / REF <= 0, grid="integrator_roots")
     r.subject_to(s >= 0)
     r.add_objective(s)
-    opts = {f"ipopt.{k}": v for k, v in S.IPOPT_OPTIONS.items()} | {
-        "ipopt.print_level": 0, "ipopt.sb": "yes", "print_time": False, "expand": True,
+    opts = {f"ipopt.{k}": v for k, v in osolve.IPOPT_OPTIONS.items()} | {
+        "ipopt.print_level": 0, "ipopt.sb": "yes", "print_time": False, "record_time": True, "expand": True,
         "ipopt.max_wall_time": WALL}
     r.solver("ipopt", opts)
-    r.method(DirectCollocation(N=ms.n + ms.ns, M=1, degree=3, scheme="radau"))
-    tg = np.concatenate([[0.0], np.cumsum(h)])
-    for i in range(5):  # rockit 0.6's set_initial of a numeric matrix fails for collocation
-        r.set_initial(qs[i], ca.interpolant(f"g{i}", "linear", [tg], X[:, i])(r.t))
+    r.method(RockitCollocation(N=ms.n + ms.ns, M=1, degree=DEGREE, scheme=SCHEME))
     r.set_initial(u, uu)
-    r.set_initial(s, 1.05 * np.max(X[:, 0] ** 2 + X[:, 1] ** 2) / ref)
-    declare = time.perf_counter() - t
-
-    def solve():
-        try:
-            return r.solve()
-        except RuntimeError:  # not converged: rockit raises; its last iterate is still there
-            return r.non_converged_solution
-
-    t = time.perf_counter()
-    solve()  # transcription + nlpsol construction + first solve
-    first = time.perf_counter() - t
-    dt, sol = timed(solve)  # re-solves reuse the built solver: the solve time
-    st = sol.stats
+    r.set_initial(s, level)
+    r.transcribe()  # then the states' guess goes straight into rockit's Opti variables
+    m = r._method
+    for k in range(len(h)):
+        m.opti.set_initial(m.X[k], X[k])
+        m.opti.set_initial(m.Xc_pure[k], Xc[k].T)
+    m.opti.set_initial(m.X[-1], X[-1])
+    try:
+        sol = r.solve()
+    except RuntimeError:  # not converged: rockit raises, its last iterate is kept
+        sol = r.non_converged_solution
+    end = time.perf_counter()
+    stats = sol.stats
     _, us = sol.sample(u, grid="control")
-    tr = S.resimulate(ocp, np.asarray(us, float)[:len(h)], h, "rockit")
-    return {"build": declare + max(first - dt, 0.0), "solve": dt, "iterations": st["iter_count"],
-            "status": st["return_status"], "objective": float(np.sqrt(max(sol.value(s), 0) * ref)),
-            "resim": tr.peak_delta}
+    solve = float(stats["t_wall_total"])  # the IPOPT call inside solve()
+    return outcome(ocp, stats, np.asarray(us, float)[:len(h)], h, float(np.sqrt(max(sol.value(s), 0) * REF)),
+                   end - t - solve, solve)
 
 
-def figure(rows, path):
+def slope(n, y) -> float | None:
+    """Least-squares exponent p of y ~ N^p (None with fewer than two points)."""
+    ok = [(a, b) for a, b in zip(n, y, strict=True) if b and b > 0]
+    if len(ok) < 2:
+        return None
+    x, z = np.log([a for a, _ in ok]), np.log([b for _, b in ok])
+    return float(np.polyfit(x, z, 1)[0])
+
+
+def figure(rows, path: Path) -> None:
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(6, 4), layout="constrained")
-    ax = fig.subplots()
-    for key, label, mk in (("autobal", "autobal solve", "o-"), ("peer", "rockit (expand=True) solve", "s--")):
-        pts = [(r["N"], r[key]["solve"]) for r in rows if r.get(key)]
-        if pts:
-            ax.loglog(*zip(*pts, strict=True), mk, label=label)
-    pts = [(r["N"], r["autobal"]["build"]) for r in rows if r.get("autobal")]
-    ax.loglog(*zip(*pts, strict=True), "o:", label="autobal build")
+    fig = Figure(figsize=(8.0, 3.4), layout="constrained")
+    ax_t, ax_i = fig.subplots(1, 2)
     n = np.array([r["N"] for r in rows], float)
-    if len(n):
-        a0 = rows[0]["autobal"]["solve"]
-        ax.loglog(n, a0 * n / n[0], "k:", lw=0.8, label="linear in N")
-    ax.set_xlabel("control intervals N to the deadline")
-    ax.set_ylabel("time (s)")
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
+    for side, label, mk in (("autobal", "autobal", "o-"), ("rockit", "rockit (expand=True)", "s--")):
+        pts = [(r["N"], r[side]) for r in rows if r.get(side)]
+        if not pts:
+            continue
+        N_, v = zip(*pts, strict=True)
+        ax_t.loglog(N_, [x["solve_s"] for x in v], mk, label=f"{label} solve")
+        ax_t.loglog(N_, [x["build_s"] for x in v], mk.replace("-", ":").replace("::", ":"), alpha=0.6,
+                    label=f"{label} build")
+        ax_i.loglog(N_, [x["iterations"] for x in v], mk, label=label)
+        for x_, x in zip(N_, v, strict=True):
+            if not x["success"]:
+                ax_t.annotate(x["status"].replace("_", " "), (x_, x["solve_s"]), fontsize=6)
+    for ax, key in ((ax_t, "solve_s"), (ax_i, "iterations")):
+        if len(n) and rows[0].get("autobal"):
+            y0 = rows[0]["autobal"][key]
+            ax.loglog(n, y0 * n / n[0], "k:", lw=0.8, label="$\\propto N$")
+        ax.set_xlabel("control intervals N to the deadline")
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=7)
+    ax_t.set_ylabel("wall time (s)")
+    ax_i.set_ylabel("IPOPT iterations")
+    fig.suptitle("Spin-up OCP (deadline 5 s, hold 3 s, Radau 3): autobal and rockit, same mesh and guess",
+                 fontsize=9)
+    path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
 
 
-def main(intervals=INTERVALS) -> str:
-    from benchmarks.__main__ import machine
-
-    ocp = problem()
-    ref = 200.0  # scale of the epigraph level delta^2 (both)
-    rows = []
-    for N in intervals:
-        uu, h, X = guess(ocp, N)
-        row = {"N": N}
-        for key, fn in (("autobal", autobal_run), ("peer", rockit_run)):
-            try:
-                row[key] = fn(ocp, N, uu, h, X, ref)
-            except Exception as exc:  # report exactly why a side could not run
-                row[key], row[f"{key}_error"] = None, f"{type(exc).__name__}: {str(exc)[:200]}"
-        rows.append(row)
-        print(f"spinup_ocp N={N}: {row}", flush=True)
+def report(ocp, rows, start_label) -> list[dict]:
     cases = []
     for r in rows:
-        a, p = r.get("autobal"), r.get("peer")
-        cases.append({"case": f"spin-up OCP, a_max 40 rad/s^2, deadline 5 s, hold 3 s, Radau 3, N = {r['N']}",
-                      "autobal_s": a["solve"] if a else None, "autobal_build_s": a["build"] if a else None,
-                      "peer": "rockit DirectCollocation, expand=True", "peer_s": p["solve"] if p else None,
-                      "ratio": p["solve"] / a["solve"] if a and p else None,
-                      "autobal_error": r.get("autobal_error") or (None if a and a["status"] == "Solve_Succeeded"
-                                                                   else a and a["status"]),
-                      "peer_error": r.get("peer_error") or (None if p and p["status"] == "Solve_Succeeded"
-                                                             else p and p["status"]),
-                      "autobal": a, "rockit": p})
-    OUT.mkdir(exist_ok=True)
-    (OUT / "spinup_ocp.json").write_text(json.dumps({"name": "spinup_ocp", "machine": machine(), "cases": cases},
-                                                    indent=2))
-    figure(rows, OUT / "spinup_ocp.png")
-    lines = ["# Spin-up OCP: autobal vs rockit (expand=True)", "",
-             "Jeffcott rotor, 40 -> 210 rad/s by a 5 s deadline, |alpha| <= 40 rad/s^2, 3 s hold at 210 rad/s, "
-             "speed cap 210 rad/s; minimum peak deflection; Radau degree 3; same mesh, same IPOPT options "
-             f"(tol {S.IPOPT_OPTIONS['tol']:g}, MUMPS, each solve capped at {WALL:g} s), same initial guess (the "
-             "global search's best profile, interval-start states); peaks re-simulated with CVODES (rtol 1e-12).",
-             f"Machine: {machine()}.", "",
-             "| N | side | build (s) | solve (s) | iterations | status | optimum (e) | re-simulated peak (e) |",
-             "|---|---|---|---|---|---|---|---|"]
+        a, p = r.get("autobal"), r.get("rockit")
+        err = {}
+        for side, x in (("autobal", a), ("peer", p)):
+            err[side] = r.get(f"{side}_error") or (None if x and x["success"] else x and x["status"])
+        row = case(f"N = {r['N']} (+{r['Ns']} hold)", a["solve_s"] if a else np.nan, a["build_s"] if a else None,
+                   PEER, p["solve_s"] if p else np.nan,
+                   autobal_iterations=a and a["iterations"], peer_iterations=p and p["iterations"],
+                   autobal_status=a and a["status"], peer_status=p and p["status"],
+                   autobal_optimum=a and a["optimum_over_e"], peer_optimum=p and p["optimum_over_e"],
+                   autobal_resimulated_peak=a and a["resimulated_peak_over_e"],
+                   peer_resimulated_peak=p and p["resimulated_peak_over_e"],
+                   peer_build_s=p and p["build_s"], autobal=a, rockit=p)
+        row["autobal_error"], row["peer_error"] = err["autobal"], err["peer"]
+        cases.append(row)
+    return cases
+
+
+def markdown(rows, exps) -> list[str]:
+    t = ["| N | side | build (s) | solve (s) | IPOPT iterations | solve / iteration (ms) | status | optimum (e) "
+         "| re-simulated peak (e) | initial objective |", "|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        for key, label in (("autobal", "autobal"), ("peer", "rockit")):
-            v = r.get(key)
+        for side in ("autobal", "rockit"):
+            v = r.get(side)
             if v is None:
-                lines.append(f"| {r['N']} | {label} | not run: {r.get(key + '_error')} | | | | | |")
-            else:
-                b = f"{v['build']:.2f}"
-                lines.append(f"| {r['N']} | {label} | {b} | {v['solve']:.2f} | {v['iterations']} | {v['status']} | "
-                             f"{v['objective']:.5f} | {v['resim']:.5f} |")
-    lines += ["", "![scaling](spinup_ocp.png)", ""]
-    text = "\n".join(lines) + "\n"
-    (OUT / "spinup_ocp.md").write_text(text)
-    return text
+                t.append(f"| {r['N']} | {side} | not run: {r.get(('peer' if side == 'rockit' else side) + '_error')} "
+                         "| | | | | | | |")
+                continue
+            t.append(f"| {r['N']} | {side} | {v['build_s']:.2f} | {v['solve_s']:.2f} | {v['iterations']} | "
+                     f"{1e3 * v['solve_s'] / max(v['iterations'], 1):.1f} | {v['status']} | "
+                     f"{v['optimum_over_e']:.5f} | {v['resimulated_peak_over_e']:.5f} | "
+                     f"{v['initial_objective']:.6g} |")
+    p = ["| N | side | objective + constraints (s) | gradient + Jacobian (s) | Hessian (s) | IPOPT's own work "
+         "(s) | share in IPOPT |", "|---|---|---|---|---|---|---|"]
+    for r in rows:
+        for side in ("autobal", "rockit"):
+            v = r.get(side)
+            if v is None:
+                continue
+            pr = v["profile_s"]
+            own = pr["ipopt_internal"]
+            p.append(f"| {r['N']} | {side} | {pr['nlp_f'] + pr['nlp_g']:.3f} | "
+                     f"{pr['nlp_grad_f'] + pr['nlp_jac_g']:.3f} | {pr['nlp_hess_l']:.3f} | {own:.2f} | "
+                     f"{100 * own / max(v['solve_s'], 1e-12):.0f} % |")
+    e = ["| exponent p of y ~ N^p (least squares over the sizes run) | autobal | rockit |", "|---|---|---|"]
+    for key, label in (("solve_s", "solve time"), ("iterations", "IPOPT iterations"),
+                       ("per_iteration", "solve time per iteration"), ("build_s", "build time")):
+        e.append(f"| {label} | {_f(exps['autobal'].get(key))} | {_f(exps['rockit'].get(key))} |")
+    return ["Per side:\n\n" + "\n".join(t), "Where the solve time goes (CasADi's timers):\n\n" + "\n".join(p),
+            "Scaling with the number of intervals:\n\n" + "\n".join(e)]
+
+
+def _f(x):
+    return "-" if x is None else f"{x:.2f}"
+
+
+def exponents(rows) -> dict:
+    out = {}
+    for side in ("autobal", "rockit"):
+        pts = [(r["N"], r[side]) for r in rows if r.get(side) and r[side]["success"]]
+        n = [a for a, _ in pts]
+        out[side] = {k: slope(n, [v[k] for _, v in pts]) for k in ("solve_s", "iterations", "build_s")}
+        out[side]["per_iteration"] = slope(n, [v["solve_s"] / max(v["iterations"], 1) for _, v in pts])
+    return out
+
+
+def main(intervals=INTERVALS) -> list[dict]:
+    ocp = problem()
+    rows, start_label = [], None
+    for N in intervals:
+        row = {"N": N, "Ns": mesh(ocp, N).ns}
+        try:
+            row["autobal"], g = autobal_run(ocp, N)
+            start_label = g[0]
+        except Exception as exc:  # report exactly why a side could not run
+            traceback.print_exc()
+            row["autobal"], row["autobal_error"], g = None, f"{type(exc).__name__}: {str(exc)[:200]}", None
+        print(f"spinup_ocp N={N} autobal: {row['autobal']}", flush=True)
+        try:
+            row["rockit"] = rockit_run(ocp, N, g)
+        except Exception as exc:
+            traceback.print_exc()
+            row["rockit"], row["peer_error"] = None, f"{type(exc).__name__}: {str(exc)[:200]}"
+        print(f"spinup_ocp N={N} rockit: {row['rockit']}", flush=True)
+        rows.append(row)
+        save(ocp, rows, start_label)
+    return save(ocp, rows, start_label)
+
+
+def save(ocp, rows, start_label) -> list[dict]:
+    cases = report(ocp, rows, start_label)
+    exps = exponents(rows)
+    a = [c["ratio"] for c in cases if c["ratio"]]
+    goal = (f"Goal (issue 14): >= 3x faster than rockit expand=True on the same problem, mesh and guess: "
+            f"{'met' if a and min(a) >= 3 else 'missed'} (peer / autobal solve {', '.join(f'{x:.2f}' for x in a)} "
+            "at the sizes run); the solve-time split below shows where the time goes.")
+    notes = [goal,
+             f"Scene {SCENE}: Jeffcott rotor (psi = 1, Omega0 = 105 rad/s, n = 5 1/s), 40 -> 210 rad/s by a 5 s "
+             "deadline, |alpha| <= 40 rad/s^2, 3 s hold at 210 rad/s over which the peak counts, speed cap 210 rad/s; "
+             f"minimum peak deflection (epigraph at every Radau point). Radau collocation degree {DEGREE} on the same "
+             "uniform mesh (N intervals to the deadline, 0.6 N over the hold); the same IPOPT options "
+             f"(tol {osolve.IPOPT_OPTIONS['tol']:g}, adaptive barrier, MUMPS, each solve capped at {WALL:g} s); the "
+             f"same guess: autobal's global-search start ({start_label}), states simulated to the interval ends "
+             "and held over each interval at the collocation points (the initial objectives agree).",
+             "Solve = wall time of the one IPOPT call, function evaluations included (rockit: CasADi's "
+             "t_wall_total); build = declaration, transcription and solver construction (rockit: its solve() "
+             "call minus the IPOPT solve in it), not in the ratio. Errors: the solver status when not "
+             "Solve_Succeeded. Optima and peaks in delta/e; the re-simulated peak is CVODES at rtol 1e-12 with "
+             "the optimal controls.",
+             "Exponents: autobal solve ~ N^" + _f(exps["autobal"]["solve_s"]) + ", iterations ~ N^"
+             + _f(exps["autobal"]["iterations"]) + "; rockit solve ~ N^" + _f(exps["rockit"]["solve_s"])
+             + ", iterations ~ N^" + _f(exps["rockit"]["iterations"]) + " (successful solves only)."]
+    write("spinup_ocp", "Spin-up OCP (deadline 5 s, hold 3 s): autobal vs rockit expand=True, 200-1600 intervals",
+          cases, notes, tables=markdown(rows, exps))
+    figure(rows, FIGURE)
+    return cases
 
 
 if __name__ == "__main__":
-    print(main())
+    main(tuple(int(a) for a in sys.argv[1:]) or INTERVALS)
