@@ -132,11 +132,12 @@ def rockit_run(ocp, N, g):
         "ipopt.max_wall_time": WALL}
     r.solver("ipopt", opts)
     r.method(RockitCollocation(N=ms.n + ms.ns, M=1, degree=DEGREE, scheme=SCHEME))
-    r.set_initial(u, uu)
-    r.set_initial(s, level)
-    r.transcribe()  # then the states' guess goes straight into rockit's Opti variables
-    m = r._method  # one call: rockit's Opti wrapper hashes every variable on each set_initial
-    m.opti.set_initial(ca.veccat(*m.X, *m.Xc_pure), np.concatenate([X.ravel(), Xc.ravel()]))
+    r.transcribe()
+    # the guess goes straight into rockit's Opti variables, in one call: its set_initial of a profile
+    # makes one Opti call per interval, each hashing every variable (O(N^2); minutes at N = 200)
+    m = r._method
+    m.opti.set_initial(ca.veccat(*m.X, *m.Xc_pure, *m.U, m.eval(r, s)),
+                       np.concatenate([X.ravel(), Xc.ravel(), uu, [level]]))
     try:
         sol = r.solve()
     except RuntimeError:  # not converged: rockit raises, its last iterate is kept
