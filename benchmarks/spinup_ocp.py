@@ -10,16 +10,16 @@ hold), use the same IPOPT options (autobal's ``IPOPT_OPTIONS``, MUMPS) and start
 the best profile of autobal's global search (the first of its starts) on the N intervals, the states
 simulated to the interval ends and held over each interval at the collocation points (rockit's
 ``set_initial`` of interval values; autobal's ``hold_states``; a simulated guess at the collocation
-points, or one interpolated linearly, stops at the iteration limit at N = 200), written into both
-NLPs' variables; both initial objectives are recorded as a check.
+points, or one interpolated linearly, takes autobal to the iteration limit at N = 200), written into both
+NLPs' variables (rockit's: into its Opti variables after ``transcribe()``, in one call, because its
+``set_initial`` of a profile costs O(N^2)); both initial objectives are recorded as a check.
 
 Times: build = declaration, transcription and solver construction (rockit: its ``solve()`` call's
 wall time minus the IPOPT solve inside it); solve = the wall time of the IPOPT call itself, function
 evaluations included (autobal: around the solver call; rockit: CasADi's ``t_wall_total`` of it), one
-solve each; the profile splits it
-into function evaluations (objective, constraints, gradients, Jacobian, Hessian) and IPOPT's own
-work (the linear algebra).  Each solve is capped at ``WALL`` seconds (IPOPT ``max_wall_time``).
-Every optimum is re-simulated with CVODES (rtol 1e-12, 24 points per interval).
+solve each; the profile splits it into function evaluations (objective, constraints, gradients,
+Jacobian, Hessian) and IPOPT's own work (the linear algebra).  Each solve is capped at ``WALL``
+seconds (IPOPT ``max_wall_time``).  Every optimum is re-simulated with CVODES (rtol 1e-12, 24 points per interval).
 
 Run: ``python -m benchmarks spinup_ocp`` (all sizes, about 10 min on an idle 2-core machine) or
 ``python -m benchmarks.spinup_ocp 200 400`` (some sizes).  Writes benchmarks/results/spinup_ocp.json
@@ -219,7 +219,8 @@ def markdown(rows, exps) -> list[str]:
         for side in ("autobal", "rockit"):
             v = r.get(side)
             if v is None:
-                t.append(f"| {r['N']} | {side} | not run: {r.get(('peer' if side == 'rockit' else side) + '_error')} "
+                why = r.get(("peer" if side == "rockit" else side) + "_error") or "not reached"
+                t.append(f"| {r['N']} | {side} | not run: {why} "
                          "| | | | | | | |")
                 continue
             t.append(f"| {r['N']} | {side} | {v['build_s']:.2f} | {v['solve_s']:.2f} | {v['iterations']} | "
@@ -265,20 +266,24 @@ def main(intervals=INTERVALS) -> list[dict]:
     rows, start_label = [], None
     for N in intervals:
         row = {"N": N, "Ns": mesh(ocp, N).ns}
-        try:
-            row["autobal"], g = autobal_run(ocp, N)
-            start_label = g[0]
-        except Exception as exc:  # report exactly why a side could not run
-            traceback.print_exc()
-            row["autobal"], row["autobal_error"], g = None, f"{type(exc).__name__}: {str(exc)[:200]}", None
-        print(f"spinup_ocp N={N} autobal: {row['autobal']}", flush=True)
-        try:
-            row["rockit"] = rockit_run(ocp, N, g)
-        except Exception as exc:
-            traceback.print_exc()
-            row["rockit"], row["peer_error"] = None, f"{type(exc).__name__}: {str(exc)[:200]}"
-        print(f"spinup_ocp N={N} rockit: {row['rockit']}", flush=True)
         rows.append(row)
+        g = None
+        for side, key in (("autobal", "autobal"), ("rockit", "peer")):
+            t = time.perf_counter()
+            try:
+                if side == "autobal":
+                    row[side], g = autobal_run(ocp, N)
+                    start_label = g[0]
+                else:
+                    row[side] = rockit_run(ocp, N, g)
+            except KeyboardInterrupt:  # stopped by hand: the sizes done so far and this one's wall time are kept
+                row[side], row[f"{key}_error"] = None, f"interrupted after {time.perf_counter() - t:.0f} s"
+                save(ocp, rows, start_label)
+                raise
+            except Exception as exc:  # report exactly why a side could not run
+                traceback.print_exc()
+                row[side], row[f"{key}_error"] = None, f"{type(exc).__name__}: {str(exc)[:200]}"
+            print(f"spinup_ocp N={N} {side}: {row[side]}", flush=True)
         save(ocp, rows, start_label)
     return save(ocp, rows, start_label)
 
