@@ -218,30 +218,28 @@ def report(ocp, rows, start_label) -> list[dict]:
     return cases
 
 
+def _sides(rows):
+    """(row, side, outcome or None) for each size and side, in table order."""
+    return [(r, side, r.get(side)) for r in rows for side in ("autobal", "rockit")]
+
+
 def markdown(rows, exps) -> list[str]:
     t = ["| N | side | build (s) | solve (s) | IPOPT iterations | solve / iteration (ms) | status | optimum (e) "
          "| re-simulated peak (e) | initial objective |", "|---|---|---|---|---|---|---|---|---|---|"]
-    for r in rows:
-        for side in ("autobal", "rockit"):
-            v = r.get(side)
-            if v is None:
-                why = r.get(("peer" if side == "rockit" else side) + "_error") or "not reached"
-                t.append(f"| {r['N']} | {side} | not run: {why} "
-                         "| | | | | | | |")
-                continue
+    for r, side, v in _sides(rows):
+        if v is None:
+            why = r.get(("peer" if side == "rockit" else side) + "_error") or "not reached"
+            t.append(f"| {r['N']} | {side} | not run: {why} | | | | | | | |")
+        else:
             t.append(f"| {r['N']} | {side} | {v['build_s']:.2f} | {v['solve_s']:.2f} | {v['iterations']} | "
                      f"{1e3 * v['solve_s'] / max(v['iterations'], 1):.1f} | {v['status']} | "
                      f"{v['optimum_over_e']:.5f} | {v['resimulated_peak_over_e']:.5f} | "
                      f"{v['initial_objective']:.6g} |")
     p = ["| N | side | objective + constraints (s) | gradient + Jacobian (s) | Hessian (s) | IPOPT's own work "
          "(s) | share in IPOPT |", "|---|---|---|---|---|---|---|"]
-    for r in rows:
-        for side in ("autobal", "rockit"):
-            v = r.get(side)
-            if v is None:
-                continue
-            pr = v["profile_s"]
-            own = pr["ipopt_internal"]
+    for r, side, v in _sides(rows):
+        if v is not None:
+            pr, own = v["profile_s"], v["profile_s"]["ipopt_internal"]
             p.append(f"| {r['N']} | {side} | {pr['nlp_f'] + pr['nlp_g']:.3f} | "
                      f"{pr['nlp_grad_f'] + pr['nlp_jac_g']:.3f} | {pr['nlp_hess_l']:.3f} | {own:.2f} | "
                      f"{100 * own / max(v['solve_s'], 1e-12):.0f} % |")
