@@ -127,7 +127,8 @@ def test_spinup_hundred_times_slower_is_quasi_static(tmp_path):
     resonance = 1 / (2 * zeta * np.sqrt(1 - zeta**2))  # steady-state peak of the unbalance response
     assert sp["peak_deflection_over_e"] == pytest.approx(resonance, rel=2e-3)
     # 13 000 whirl periods on 200 intervals: the mesh cannot follow the whirl; the re-simulation says by how much
-    assert 1e-3 < sp["resimulation_rel_error"] < 1e-2
+    # (1.4 % since the mesh continuation by doubling; 0.8 % before): the reported peak is the re-simulated one
+    assert 1e-3 < sp["resimulation_rel_error"] < 2e-2
 
 
 def test_liquid_filling_the_chamber_cannot_balance(tmp_path):
