@@ -24,7 +24,7 @@ from autobal.analysis.result import Result, write_json
 from autobal.errors import AutobalError, SolveError
 from autobal.output import LOG, OutputFolder, SolverLog
 from autobal.runners import RUNNERS
-from autobal.scenario import Scenario
+from autobal.scenario import BaseScenario as Scenario  # every scene model (see scenario.model_for)
 
 NO_ACCURACY = {"estimate": None, "how": "this analysis reports no error estimate"}
 

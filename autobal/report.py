@@ -28,7 +28,6 @@ import yaml
 
 from autobal.analysis.result import plain
 from autobal.errors import ScenarioError
-from autobal.schema_dynamics import PARAMETERS
 from autobal.units import DIMENSIONS, si_unit_of
 
 REPORT = "report.html"
@@ -208,6 +207,8 @@ def _parameter_unit(path: str, results: dict) -> str | None:
     m = re.search(r"\.(\w+)\.(values|nominal)$", path) or re.search(r"nearest_stable\.(\w+)$", path)
     if m is None or not path.startswith("stability."):
         return None
+    from autobal.schema_dynamics import PARAMETERS  # a stability report only: a statics run builds no dynamics schema
+
     name = m.group(1)
     if name in ("x", "y"):  # maps: the axis names its parameter
         name = _get(results, path.rsplit(".", 1)[0] + ".parameter")

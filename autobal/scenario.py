@@ -8,22 +8,17 @@ expected unit.
 from __future__ import annotations
 
 import hashlib
+import importlib
+from functools import cache
 from pathlib import Path
 from typing import Annotated, Literal
 
 import yaml
-from pydantic import Field, PrivateAttr, ValidationError, model_validator
+from pydantic import Field, PrivateAttr, ValidationError, create_model, model_validator
 
 from autobal.errors import ScenarioError
 from autobal.paths import SCENARIO_DIR
 from autobal.schema import MAX_FORCE_GAP_POINTS, NonNegative, Positive, PressureRatio, Range, Strict
-from autobal.schema_design import Design
-from autobal.schema_dynamics import Dynamics, Frequency, Stability, Transient
-from autobal.schema_estimation import Estimation
-from autobal.schema_liquid_balancer import LiquidBalancer, LiquidBalancerAnalysis
-from autobal.schema_reliability import Executor, MonteCarlo, Reliability
-from autobal.schema_ross import RossRotor, RossSpinup
-from autobal.schema_rotor import Rotor, RotorDynamics, Spinup, SpinupRobust, SpinupTimeOptimal
 from autobal.units import (
     AngularSpeed,
     Area,
@@ -161,8 +156,8 @@ class Regulator(Strict):
     membrane_area: Area = _d("membrane area s_m")
 
 
-class Device(Strict):
-    """The axial balancing device, Pavlenko (2014), ch. 2."""
+class DeviceParts(Strict):
+    """The axial balancing device without its dynamics section (see :func:`device_model`)."""
 
     medium: Literal["liquid", "gas"] = _d("working medium: liquid (pump) or gas (compressor)")
     fluid: Fluid = _d("fluid properties")
@@ -170,8 +165,6 @@ class Device(Strict):
     disc: Disc = _d("the balancing disc")
     barrier: Barrier = _d("the barrier chamber")
     regulator: Regulator | None = _d("pressure-drop regulator; none: the barrier at a fixed margin", None)
-    dynamics: Dynamics | None = _d("masses, springs, volumes for the frequency, stability and transient "
-                                   "analyses", None)
 
     @model_validator(mode="after")
     def _gas_needs_normal_pressure(self):
@@ -195,27 +188,73 @@ class Statics(Strict):
         return self
 
 
-class Analyses(Strict):
-    """The analyses to run; at least one."""
+# The schema of each analysis and optional scene part, as (module, class, description), in the scene's order.
+# A schema module is imported, and its pydantic models built, only when a scene names that analysis or part
+# (see :func:`model_for`); ``Scenario`` (all of them) is built on first use, for the schema reference.
+ANALYSES = {
+    "statics": (__name__, "Statics", "static calculation; needs device"),
+    "frequency": ("autobal.schema_dynamics", "Frequency", "frequency response (AFC/Bode); needs device.dynamics"),
+    "stability": ("autobal.schema_dynamics", "Stability", "poles, Hurwitz, stability maps; needs device.dynamics"),
+    "transient": ("autobal.schema_dynamics", "Transient", "time responses; needs device.dynamics"),
+    "liquid_balancer": ("autobal.schema_liquid_balancer", "LiquidBalancerAnalysis",
+                        "liquid auto-balancer studies; needs liquid_balancer"),
+    "estimation": ("autobal.schema_estimation", "Estimation", "parameter fits to measured characteristics"),
+    "montecarlo": ("autobal.schema_reliability", "MonteCarlo", "Monte Carlo of the statics (and AFC); needs device"),
+    "reliability": ("autobal.schema_reliability", "Reliability", "traditional disc wear and time to failure"),
+    "rotor_dynamics": ("autobal.schema_rotor", "RotorDynamics", "Jeffcott rotor studies; needs rotor"),
+    "spinup": ("autobal.schema_rotor", "Spinup", "optimal spin-up through the critical speed; needs rotor"),
+    "spinup_robust": ("autobal.schema_rotor", "SpinupRobust",
+                      "one spin-up profile for a set of rotors (worst case); needs rotor"),
+    "spinup_time_optimal": ("autobal.schema_rotor", "SpinupTimeOptimal",
+                            "earliest arrival with the peak bounded, and the front of peak against arrival time; "
+                            "needs rotor"),
+    "design": ("autobal.schema_design", "Design", "stability-constrained design of the device; needs device.dynamics"),
+    "ross_spinup": ("autobal.schema_ross", "RossSpinup",
+                    "optimal spin-up of a ROSS rotor reduced to its modes; needs ross_rotor and the ross extra"),
+}
+PARTS = {
+    "device": (__name__, "Device", "the axial balancing device (statics, dynamics, Monte Carlo, fits)"),
+    "liquid_balancer": ("autobal.schema_liquid_balancer", "LiquidBalancer", "liquid auto-balancer"),
+    "rotor": ("autobal.schema_rotor", "Rotor", "Jeffcott rotor with optional liquid layer and drive"),
+    "ross_rotor": ("autobal.schema_ross", "RossRotor",
+                   "a rotor as ROSS elements or a ROSS example rotor (the ross extra)"),
+    "executor": ("autobal.schema_reliability", "Executor", "where sweeps and Monte Carlo run"),
+}
+DYNAMICS = ("autobal.schema_dynamics", "Dynamics",
+            "masses, springs, volumes for the frequency, stability and transient analyses")
 
-    statics: Statics | None = _d("static calculation; needs device", None)
-    frequency: Frequency | None = _d("frequency response (AFC/Bode); needs device.dynamics", None)
-    stability: Stability | None = _d("poles, Hurwitz, stability maps; needs device.dynamics", None)
-    transient: Transient | None = _d("time responses; needs device.dynamics", None)
-    liquid_balancer: LiquidBalancerAnalysis | None = _d("liquid auto-balancer studies; needs liquid_balancer",
-                                                        None)
-    estimation: Estimation | None = _d("parameter fits to measured characteristics", None)
-    montecarlo: MonteCarlo | None = _d("Monte Carlo of the statics (and AFC); needs device", None)
-    reliability: Reliability | None = _d("traditional disc wear and time to failure", None)
-    rotor_dynamics: RotorDynamics | None = _d("Jeffcott rotor studies; needs rotor", None)
-    spinup: Spinup | None = _d("optimal spin-up through the critical speed; needs rotor", None)
-    spinup_robust: SpinupRobust | None = _d("one spin-up profile for a set of rotors (worst case); needs rotor",
-                                            None)
-    spinup_time_optimal: SpinupTimeOptimal | None = _d("earliest arrival with the peak bounded, and the front of "
-                                                       "peak against arrival time; needs rotor", None)
-    design: Design | None = _d("stability-constrained design of the device; needs device.dynamics", None)
-    ross_spinup: RossSpinup | None = _d("optimal spin-up of a ROSS rotor reduced to its modes; needs ross_rotor "
-                                        "and the ross extra", None)
+
+def _field(entry: tuple[str, str, str], named: bool):
+    """An optional field with its schema when the scene names it, else one that admits only its absence."""
+    module, cls, text = entry
+    return (getattr(importlib.import_module(module), cls) | None if named else None, _d(text, None))
+
+
+@cache
+def device_model(dynamics: bool = True) -> type[DeviceParts]:
+    """The ``Device`` model, with the schema of its ``dynamics`` section or (False) without it.
+
+    Parameters
+    ----------
+    dynamics : bool
+        Build the schema of ``device.dynamics`` (imports autobal.schema_dynamics).
+
+    Returns
+    -------
+    type
+        A pydantic model named ``Device``.
+    """
+    return create_model("Device", __base__=DeviceParts, __module__=__name__,
+                        __doc__="The axial balancing device, Pavlenko (2014), ch. 2.",
+                        dynamics=_field(DYNAMICS, dynamics))
+
+
+@cache
+def analyses_model(named: frozenset[str]) -> type[Strict]:
+    """The ``Analyses`` model with the schemas of the analyses in ``named``; the others must be absent."""
+    return create_model("Analyses", __base__=Strict, __module__=__name__,
+                        __doc__="The analyses to run; at least one.",
+                        **{k: _field(v, k in named) for k, v in ANALYSES.items()})
 
 
 # analysis -> the part of the scene it needs (a dotted path), checked at load time
@@ -229,20 +268,18 @@ NEEDS = {
 NAME_PATTERN = r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}$"
 
 
-class Scenario(Strict):
-    """A scene: the machine's parts and the analyses to run on them."""
+class BaseScenario(Strict):
+    """What every scene model shares: its identity and the check that each analysis has its parts.
+
+    The concrete models (``Scenario``, and the slimmer ones :func:`model_for` builds for one scene)
+    add the parts and the analyses.
+    """
 
     name: Annotated[str, Field(pattern=NAME_PATTERN)] = _d(
         "identifier of the scene and of its default output folder out/<name>: letters, digits, _ - . "
         "(no path separators, no '..', at most 100 characters)")
     title: Annotated[str, Field(max_length=500)] = _d("one-line title, printed on figures")
     source: Annotated[str, Field(max_length=2000)] = _d("where the inputs come from", "")
-    device: Device | None = _d("the axial balancing device (statics, dynamics, Monte Carlo, fits)", None)
-    liquid_balancer: LiquidBalancer | None = _d("liquid auto-balancer", None)
-    rotor: Rotor | None = _d("Jeffcott rotor with optional liquid layer and drive", None)
-    ross_rotor: RossRotor | None = _d("a rotor as ROSS elements or a ROSS example rotor (the ross extra)", None)
-    executor: Executor | None = _d("where sweeps and Monte Carlo run", None)
-    analyses: Analyses = _d("the analyses to run")
     _origin: dict = PrivateAttr(default_factory=dict)  # file, sha256, overrides (set by load)
 
     @model_validator(mode="after")
@@ -251,7 +288,7 @@ class Scenario(Strict):
             raise ValueError("name: must not contain '..' (a plain identifier: letters, digits, _ - .)")
         if not any(v is not None for _, v in self.analyses):
             raise ValueError(f"analyses: the scene names no analysis (one or more of "
-                             f"{', '.join(Analyses.model_fields)})")
+                             f"{', '.join(ANALYSES)})")
         for analysis, path in NEEDS.items():
             if getattr(self.analyses, analysis) is None:
                 continue
@@ -261,6 +298,65 @@ class Scenario(Strict):
             if node is None:
                 raise ValueError(f"analyses.{analysis} needs a {path} section")
         return self
+
+
+@cache
+def scenario_model(parts: frozenset[str], analyses: frozenset[str], dynamics: bool) -> type[BaseScenario]:
+    """A ``Scenario`` model with the schemas of the named scene ``parts``, ``analyses`` and (True) of
+    ``device.dynamics``; every part or analysis not named must be absent from the scene.
+
+    Parameters
+    ----------
+    parts : frozenset of str
+        Keys of :data:`PARTS` to validate.
+    analyses : frozenset of str
+        Keys of :data:`ANALYSES` to validate.
+    dynamics : bool
+        Validate ``device.dynamics``.
+
+    Returns
+    -------
+    type
+        A pydantic model named ``Scenario``.
+    """
+    fields = {k: _field(v, k in parts and k != "device") for k, v in PARTS.items()}
+    if "device" in parts:  # Device is built here, with or without its dynamics
+        fields["device"] = (device_model(dynamics) | None, fields["device"][1])
+    fields["analyses"] = (analyses_model(analyses), _d("the analyses to run"))
+    return create_model("Scenario", __base__=BaseScenario, __module__=__name__,
+                        __doc__="A scene: the machine's parts and the analyses to run on them.", **fields)
+
+
+def model_for(data) -> type[BaseScenario]:
+    """The model that validates a scene mapping exactly as ``Scenario`` does, built from the schemas of
+    the parts and analyses it names only (all of them when it is not a mapping of mappings).
+
+    Parameters
+    ----------
+    data : dict
+        A scene as read from YAML.
+
+    Returns
+    -------
+    type
+        A subclass of :class:`BaseScenario`.
+    """
+    if not isinstance(data, dict) or not isinstance(data.get("analyses"), dict):
+        return scenario_model(frozenset(PARTS), frozenset(ANALYSES), True)
+    device = data.get("device")
+    return scenario_model(frozenset(PARTS).intersection(data), frozenset(ANALYSES).intersection(data["analyses"]),
+                          not isinstance(device, dict) or "dynamics" in device)
+
+
+def __getattr__(name: str):
+    """``Scenario``, ``Analyses`` and ``Device`` with every schema, built on first use."""
+    if name == "Scenario":
+        return scenario_model(frozenset(PARTS), frozenset(ANALYSES), True)
+    if name == "Analyses":
+        return analyses_model(frozenset(ANALYSES))
+    if name == "Device":
+        return device_model(True)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 MAX_FILE_BYTES = 1_000_000  # a scene is a page of YAML; anything larger is not a scene
@@ -405,7 +501,7 @@ def read(path: Path) -> dict:
     return data
 
 
-def load(name_or_path: str | Path, overrides: dict | None = None) -> Scenario:
+def load(name_or_path: str | Path, overrides: dict | None = None) -> BaseScenario:
     """Read, validate and convert a scenario to SI; raise ScenarioError with one line.
 
     Parameters
@@ -427,7 +523,7 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> Scenario:
     for key, value in overrides.items():
         _set(data, key, value)
     try:
-        scn = Scenario.model_validate(data)
+        scn = model_for(data).model_validate(data)
     except ValidationError as exc:
         loc = ".".join(str(p) for p in exc.errors()[0]["loc"])
         hit = next((k for k in overrides if loc == k or loc.startswith(k + ".")), None)
@@ -466,7 +562,7 @@ COST = {
 LONG_RUN_S = 60.0  # a run predicted to take longer says so first
 
 
-def estimate_seconds(scn: Scenario) -> dict[str, float]:
+def estimate_seconds(scn: BaseScenario) -> dict[str, float]:
     """Predicted wall time of each analysis of a scene, by a per-analysis cost model (:data:`COST`).
 
     Parameters
@@ -535,7 +631,7 @@ def estimate_seconds(scn: Scenario) -> dict[str, float]:
     return out
 
 
-def long_run_note(scn: Scenario) -> str | None:
+def long_run_note(scn: BaseScenario) -> str | None:
     """One line to print before a run predicted to take more than :data:`LONG_RUN_S`, else None.
 
     Parameters
