@@ -118,3 +118,33 @@ def test_a_statics_run_imports_no_heavy_optional_package():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.split() == []
+
+
+def _schema_modules(code: str) -> list[str]:
+    code = "import sys\n" + code + "print(' '.join(m for m in sorted(sys.modules) if m.startswith('autobal.schema_')))"
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+
+
+def test_a_scene_builds_only_the_schemas_it_names(tmp_path):
+    # scenario.model_for imports the schema module of an analysis or a part only when the scene names it
+    # (the start-up goal, docs/benchmarks.md): a statics run with its report builds none of them ...
+    argv = ["run", "pump_pe600_statics", "--quiet", "--out", str(tmp_path)]
+    assert _schema_modules(f"from autobal import cli\nassert cli.main({argv!r}) == 0\n") == []
+    assert (tmp_path / "report.html").is_file()
+    # ... a dynamics scene the dynamics schema only, and the full Scenario (the schema reference) all of them
+    assert _schema_modules("from autobal import scenario\nscenario.load('pump_pe600_dynamics')\n") == [
+        "autobal.schema_dynamics"]
+    assert len(_schema_modules("from autobal import scenario\nscenario.Scenario\n")) == 7
+
+
+def test_the_slim_scene_models_validate_as_the_full_one():
+    # cross-check: every shipped scene validates to the same values with the model built for it as with
+    # Scenario, which holds every schema
+    from autobal import scenario
+
+    for path in scenario.shipped():
+        data = scenario.read(path)
+        slim = scenario.model_for(data)
+        assert slim.model_validate(data).model_dump() == scenario.Scenario.model_validate(data).model_dump(), path
+    statics = scenario.read(scenario.resolve("pump_pe600_statics"))
+    assert scenario.model_for(statics).model_fields["rotor"].annotation is type(None)
