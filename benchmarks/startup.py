@@ -38,9 +38,10 @@ def wall(args: list[str], repeats: int = 3) -> tuple[float, float]:
     return best, cpu
 
 
-def in_process(code: str) -> float:
-    """CPU time of ``code`` in a fresh process (its own clock, so interpreter start is excluded)."""
-    out = subprocess.run([sys.executable, "-c", f"import time; t = time.process_time(); {code}; "
+def in_process(code: str, setup: str = "pass") -> float:
+    """CPU time of ``code`` after ``setup`` in a fresh process (its own clock, so interpreter start and
+    ``setup`` are excluded)."""
+    out = subprocess.run([sys.executable, "-c", f"import time; {setup}; t = time.process_time(); {code}; "
                           "print(time.process_time() - t)"], check=True, capture_output=True, text=True)
     return float(out.stdout.split()[-1])
 
@@ -56,6 +57,8 @@ def main(repeats: int = 3) -> list[dict]:
     t_registry = min(in_process("import autobal.units as u; u.registry()") for _ in range(repeats))
     t_table = min(in_process("import autobal.units as u; u.to_si('32.3 MPa', 'pressure'); u.to_si('6300 rpm', "
                              "'angular speed')") for _ in range(repeats))
+    t_load = min(in_process(f"autobal.scenario.load({SCENE!r})", "import autobal.cli, autobal.scenario")
+                 for _ in range(repeats))
     t_scipy = min(in_process("import scipy.optimize, scipy.stats") for _ in range(repeats))
 
     from autobal import scenario
@@ -95,7 +98,9 @@ def main(repeats: int = 3) -> list[dict]:
         "that only imports numpy, casadi and matplotlib's Figure, which any CasADi toolkit that plots pays) are "
         "the stable measures.",
         f"Best of {repeats} fresh processes; the Python interpreter alone starts in {t_python:.2f} s wall.",
-        f"Where the CPU time goes (each measured alone): import autobal.cli {imports['autobal.cli']:.2f} s; the unit "
+        f"Where the CPU time goes (each measured alone): import autobal.cli {imports['autobal.cli']:.2f} s; the "
+        f"scene load {t_load:.3f} s (YAML, units, and the pydantic models of the scene's own parts and analyses "
+        "only: autobal/scenario.py imports a schema module when a scene names it); the unit "
         f"table (autobal/units.py) reads the scene's units without pint: {t_table:.3f} s with the import of "
         f"autobal.units (pint's import and registry, which also imports dask, {t_registry:.2f} s, are left for "
         f"other units and error messages); import of "
@@ -112,9 +117,10 @@ def main(repeats: int = 3) -> list[dict]:
         "subscripts unicode lacks: p_B, z_B, Q_T, p_cam, p1^kr) and the source's groups and bases in the axis "
         "labels instead of secondary axes.",
         "Left: the statics study's 100-odd warm-started IPOPT solves (the force-gap curve about 40 % of the "
-        "study, in analysis/statics.py); the schema modules' pydantic models built at import (autobal/report.py "
-        "imports autobal.schema_dynamics and the dynamics model); the draw itself (tick labels, lines, "
-        "legends); the floor.",
+        "study, in analysis/statics.py); in import autobal.cli: pydantic and jinja2 themselves, the device's "
+        "pydantic models, autobal/report.py compiling its 89 unit-rule patterns at import, the models "
+        "autobal/adapters.py imports for other analyses (rotor, liquid balancer, ROSS rotor); the draw itself "
+        "(tick labels, lines, legends); the floor.",
     ]
     write("startup", f"Start-up: autobal run {SCENE}", cases, notes)
     return cases
