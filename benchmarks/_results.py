@@ -57,12 +57,14 @@ def _num(x):
     return x if math.isfinite(x) else None
 
 
-def case(name: str, autobal_s: float, autobal_build_s: float | None, peer: str, peer_s: float,
+def case(name: str, autobal_s: float, autobal_build_s: float | None, peer: str | None, peer_s: float | None,
          autobal_error: float | None = None, peer_error: float | None = None, **extra) -> dict:
     """One row: autobal's solve time and build time (s), the peer's name and time (s), both errors;
-    ``ratio`` = peer_s / autobal_s.  ``extra`` keys (plain values) are kept beside them."""
+    ``ratio`` = peer_s / autobal_s (None for a study without a peer: peer and peer_s None).  ``extra`` keys
+    (plain values) are kept beside them."""
+    ratio = peer_s / autobal_s if autobal_s and peer_s is not None else None
     row = {"case": name, "autobal_s": _num(autobal_s), "autobal_build_s": _num(autobal_build_s), "peer": peer,
-           "peer_s": _num(peer_s), "ratio": _num(peer_s / autobal_s) if autobal_s else None,
+           "peer_s": _num(peer_s), "ratio": _num(ratio),
            "autobal_error": _num(autobal_error), "peer_error": _num(peer_error)}
     return row | extra
 
