@@ -91,7 +91,8 @@ def main() -> list[dict]:
         "Per study (table below): validation is the re-simulation of the validation sample where the Result "
         "records it (robust: 10 profiles x the validation rotors, exponential integrator); rest = wall - build - "
         "solve - validation: the global searches, the CVODES re-simulations of every optimum and ramp, the "
-        "reduction and ROSS's critical speeds (ross). One run each, through autobal.api.run: no files written, no figures made.",
+        "reduction and ROSS's critical speeds (ross). One run each, through autobal.api.run: no files written, "
+        "no figures made.",
         "The machine is shared (2 cores, up to 8 jobs): wall times stretch with the load average shown per study.",
     ] + notes
     table = ("| scene | build (s) | IPOPT solve (s) | validation (s) | rest (s) | wall (s) | load (1 min, before → "
