@@ -16,6 +16,7 @@ import control
 import numpy as np
 from scipy.optimize import minimize_scalar
 
+from autobal.analysis import progress
 from autobal.analysis.linearize import LinearModel, Setup
 from autobal.analysis.result import Result, new_figure
 
@@ -216,8 +217,11 @@ def study(setup: Setup, models: list[str], convention: str, omega_range: tuple, 
     holds the energy-consistent model under the physical forcing (dtau = b dpsi1), whatever the scene
     lists: the physically consistent result, the program model being the validation against the source."""
     d = setup.data
-    curves = {m: characteristic(setup.linear(m), omega_range, convention, d.forcing_amplitude, d.omega0)
-              for m in models}
+    curves = {}
+    with progress.steps(len(models), "frequency response", "model", delay=progress.AFTER_S) as bar:
+        for m in models:
+            curves[m] = characteristic(setup.linear(m), omega_range, convention, d.forcing_amplitude, d.omega0)
+            bar.tick(note=m)
     first = curves[models[0]]
     model, forcing = HEADLINE
     head = curves[model] if model in curves and convention == forcing else characteristic(

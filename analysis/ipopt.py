@@ -1,6 +1,14 @@
-"""IPOPT options in one place, and a solve call that reports status and keeps the last iterate."""
+"""IPOPT options in one place, and a solve call that reports status and keeps the last iterate.
+
+On a terminal (analysis/progress.py: not quiet, not a pipe) a solver gets an iteration callback, and a
+solve that runs longer than ``progress.AFTER_S`` draws its own bar: one step per IPOPT iteration, the
+objective and the primal infeasibility in its note.  A solver built off a terminal has no callback and
+pays nothing.
+"""
 
 from __future__ import annotations
+
+import time
 
 import casadi as ca
 import numpy as np
@@ -27,6 +35,54 @@ WARM = COLD | {
     "ipopt.warm_start_mult_bound_push": 1e-10,
     "ipopt.mu_init": 1e-8,
 }
+NOTE_EVERY_S = 0.2  # the bar's note (objective, infeasibility) is refreshed at most this often, s
+
+
+class IterationBar(ca.Callback):
+    """IPOPT's iteration callback (CasADi's nlpsol option ``iteration_callback``): advances the running
+    solve's bar to IPOPT's iteration count with the objective and primal infeasibility as its note, and
+    stops IPOPT at the next iteration after an interrupt (the solve then raises Interrupted).
+
+    Parameters
+    ----------
+    name : str
+        The solver's name.
+    sizes : dict
+        Number of entries of each nlpsol output (x, f, g, lam_x, lam_g, lam_p).
+    """
+
+    def __init__(self, name: str, sizes: dict):
+        ca.Callback.__init__(self)
+        self.sizes, self.solver, self.bar, self.calls, self.next_note = sizes, None, None, 0, 0.0
+        self.construct(f"{name}_iterations", {})
+
+    def get_n_in(self):
+        return ca.nlpsol_n_out()
+
+    def get_n_out(self):
+        return 1
+
+    def get_name_in(self, i):
+        return ca.nlpsol_out(i)
+
+    def get_name_out(self, i):
+        return "stop"
+
+    def get_sparsity_in(self, i):
+        return ca.Sparsity.dense(self.sizes[ca.nlpsol_out(i)], 1)
+
+    def eval(self, arg):
+        if interrupt.requested() is not None:
+            return [1]  # nonzero: IPOPT stops now (User_Requested_Stop); interrupt.call raises after the call
+        if self.bar is not None:
+            self.bar.tick(self.calls > 0)  # the first call is IPOPT's iteration 0, the starting point
+            self.calls += 1
+            now = time.monotonic()
+            if now >= self.next_note:  # the solver's statistics cost about as much as the call: now and then
+                self.next_note = now + NOTE_EVERY_S
+                it = self.solver.stats()["iterations"]
+                self.bar.tick(0, f"f {it['obj'][-1]:.6g}, inf_pr {it['inf_pr'][-1]:.1e}")
+        return [0]
 
 
 def nlpsol(name: str, x, p, f, g, warm: bool = False, hess_lag: ca.Function | None = None,
@@ -34,12 +90,21 @@ def nlpsol(name: str, x, p, f, g, warm: bool = False, hess_lag: ca.Function | No
     """An IPOPT solver for min f(x; p) s.t. g(x; p) in [lbg, ubg], x in [lbx, ubx].
 
     ``hess_lag``: a user Hessian of the Lagrangian, (x, p, lam_f, lam_g) -> its upper triangle,
-    e.g. the Gauss-Newton lam_f J'J of a least-squares fit (analysis/least_squares.py).
+    e.g. the Gauss-Newton lam_f J'J of a least-squares fit (analysis/least_squares.py).  Built while bars
+    are drawn (a terminal, not quiet), the solver carries an :class:`IterationBar`.
     """
     opts = (WARM if warm else COLD) | {f"ipopt.{k}": v for k, v in extra.items()}
     if hess_lag is not None:
         opts["hess_lag"] = hess_lag
-    return ca.nlpsol(name, "ipopt", {"x": x, "p": p, "f": f, "g": g}, opts)
+    bar = None
+    if progress.enabled():  # a terminal: long solves show their iterations
+        nx, ng, n_p = (int(np.prod(e.shape)) for e in (x, g, p))
+        bar = IterationBar(name, {"x": nx, "f": 1, "g": ng, "lam_x": nx, "lam_g": ng, "lam_p": n_p})
+        opts["iteration_callback"] = bar
+    solver = ca.nlpsol(name, "ipopt", {"x": x, "p": p, "f": f, "g": g}, opts)
+    if bar is not None:
+        solver.autobal_iterations, bar.solver = bar, solver  # the callback lives as long as the solver
+    return solver
 
 
 def solve(solver: ca.Function, **args) -> dict:
@@ -48,7 +113,16 @@ def solve(solver: ca.Function, **args) -> dict:
     An interrupt (SIGINT, SIGTERM) during the solve raises :class:`autobal.analysis.interrupt.Interrupted`
     instead of coming back as a solver status.
     """
-    out = interrupt.call(solver, **args)
+    bar = getattr(solver, "autobal_iterations", None)
+    if bar is None or not progress.enabled():
+        out = interrupt.call(solver, **args)
+    else:
+        with progress.steps(None, f"IPOPT {solver.name()}", "iteration", delay=progress.AFTER_S) as bar.bar:
+            bar.calls, bar.next_note = 0, 0.0
+            try:
+                out = interrupt.call(solver, **args)
+            finally:
+                bar.bar = None
     stats = solver.stats()
     res = {k: np.asarray(v).ravel() for k, v in out.items()}
     res["status"] = stats["return_status"]

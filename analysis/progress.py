@@ -11,7 +11,9 @@ a file, a test's captured stream) nothing is written.  Bars go to standard error
 Code deep inside an analysis that does not own the bar calls the module's :func:`tick` (every IPOPT
 solve does, analysis/ipopt.py): it advances the innermost open bar if that bar was opened with
 ``catch=True`` (a bar that counts solves, e.g. the spin-up's starts), and does nothing otherwise (no
-bar, or a bar that counts its own steps, such as a Monte Carlo's tasks).
+bar, or a bar that counts its own steps, such as a Monte Carlo's tasks).  A bar opened with ``delay``
+is drawn only once its work has lasted that long (``delay=AFTER_S``: an IPOPT solve's iteration bar,
+a stability map, a frequency sweep; short work draws nothing).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ import sys
 
 from tqdm import tqdm
 
+AFTER_S = 1.0  # work whose length is not known in advance opens its bar with this delay, s
 _STATE: dict = {"stream": None, "quiet": False, "open": []}
 
 
@@ -64,14 +67,15 @@ def enabled(out=None) -> bool:
 class Steps:
     """One bar: ``tick(n=1, note="")`` after each step; ``count`` is the steps ticked so far."""
 
-    def __init__(self, total: int | None, desc: str, unit: str = "step", show: bool = True, catch: bool = False):
+    def __init__(self, total: int | None, desc: str, unit: str = "step", show: bool = True, catch: bool = False,
+                 delay: float = 0.0):
         self.catch = catch
         self.count = 0
         self._bar = None
         if show and enabled():
             counter = "{desc}: {n_fmt} " + unit + "s, {elapsed}{postfix}" if total is None else None
             self._bar = tqdm(total=total, desc=desc, unit=unit, file=stream(), leave=False, dynamic_ncols=True,
-                             bar_format=counter)
+                             bar_format=counter, delay=delay)
 
     def tick(self, n: int = 1, note: str = "") -> None:
         self.count += n
@@ -87,7 +91,8 @@ class Steps:
 
 
 @contextlib.contextmanager
-def steps(total: int | None, desc: str, unit: str = "step", show: bool = True, catch: bool = False):
+def steps(total: int | None, desc: str, unit: str = "step", show: bool = True, catch: bool = False,
+          delay: float = 0.0):
     """A bar of ``total`` steps (None: a counter with elapsed time) labelled ``desc``.
 
     Parameters
@@ -102,13 +107,15 @@ def steps(total: int | None, desc: str, unit: str = "step", show: bool = True, c
         False: no bar whatever the stream (a caller's own switch, e.g. a scene's ``progress: false``).
     catch : bool
         The bar also counts the module-level :func:`tick` calls made inside it (IPOPT solves).
+    delay : float
+        Draw the bar only once it has been open this long, s (0: at once).
 
     Yields
     ------
     Steps
         Call ``tick()`` after each step.
     """
-    bar = Steps(total, desc, unit, show, catch)
+    bar = Steps(total, desc, unit, show, catch, delay)
     _STATE["open"].append(bar)
     try:
         yield bar

@@ -20,6 +20,7 @@ from fractions import Fraction
 import numpy as np
 import scipy.linalg
 
+from autobal.analysis import progress
 from autobal.analysis.frequency import MODEL_COLOURS, MODEL_LABELS
 from autobal.analysis.linearize import LinearModel, Setup, coefficient_table, jacobians, operator
 from autobal.analysis.result import Result, new_figure
@@ -97,9 +98,11 @@ def max_real(setup: Setup, model: str, changes: list[dict]) -> np.ndarray:
         A = J.reshape(n, len(changes), n).transpose(1, 0, 2)
         return np.linalg.eigvals(A).real.max(axis=1)
     out = []
-    for ch in changes:
-        lin = setup.linear(model, setup.data.with_(**ch))
-        out.append(lin.poles().real.max())
+    with progress.steps(len(changes), f"max Re lambda, {model} model", "point", delay=progress.AFTER_S) as bar:
+        for ch in changes:  # one linearisation each (a bar once the grid takes more than progress.AFTER_S)
+            lin = setup.linear(model, setup.data.with_(**ch))
+            out.append(lin.poles().real.max())
+            bar.tick()
     return np.array(out)
 
 
