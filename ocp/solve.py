@@ -26,8 +26,14 @@ from autobal.ocp.simulation import (
 )
 from autobal.ocp.transcription import DirectCollocation, MultipleShooting, Nlp, interpolate, transcribe
 
+# mumps_permuting_scaling 0: no maximum-weight matching and scaling of the KKT matrix in MUMPS (its
+# ICNTL(6); IPOPT's default 7 lets MUMPS choose).  With it, from 800 collocation intervals on, MUMPS'
+# factorisation of the spin-up KKT system delays so many pivots that it runs out of its estimated workspace
+# (INFO(1) = -9) and one IPOPT iteration takes minutes; without it one takes about a second and N = 800
+# solves in 71 iterations (benchmarks/spinup_ocp.md, "MUMPS levers at N = 800").
 IPOPT_OPTIONS = {"tol": 1e-8, "constr_viol_tol": 1e-8, "compl_inf_tol": 1e-8, "acceptable_iter": 0,
-                 "max_iter": 1000, "mu_strategy": "adaptive", "bound_relax_factor": 1e-10}
+                 "max_iter": 1000, "mu_strategy": "adaptive", "bound_relax_factor": 1e-10,
+                 "mumps_permuting_scaling": 0}
 
 
 def ipopt_options(max_iterations: int = 1000, tolerance: float = 1e-8) -> dict:
