@@ -22,8 +22,8 @@ Jacobian, Hessian) and IPOPT's own work (the linear algebra).  Each solve is cap
 seconds (IPOPT ``max_wall_time``).  Every optimum is re-simulated with CVODES (rtol 1e-12, 24 points per interval).
 
 Run: ``python -m benchmarks spinup_ocp`` (all sizes; ``max_wall_time`` is only checked between
-iterations: stopped by hand, the sizes done are kept) or ``python -m benchmarks.spinup_ocp 200 400`` (some sizes).  Writes benchmarks/results/spinup_ocp.json
-and .md, and docs/figures/benchmark_spinup_scaling.png.
+iterations: stopped by hand, the sizes done are kept) or ``python -m benchmarks.spinup_ocp 200 400``
+(some sizes).  Writes benchmarks/results/spinup_ocp.json and .md, and docs/figures/benchmark_spinup_scaling.png.
 """
 
 from __future__ import annotations
