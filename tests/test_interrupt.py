@@ -24,8 +24,10 @@ def interrupted_run(tmp_path: Path, scene: str, solver: str, sig: int, after: fl
     returns (exit code, stderr lines without CasADi's warnings, output folder, s from signal to exit)."""
     trace, out = tmp_path / "trace.txt", tmp_path / "out"
     env = os.environ | {"AUTOBAL_SOLVER_TRACE": str(trace)}
+    # SIGINT at its default in the child, as on a terminal (a shell starts background jobs with SIGINT ignored)
     proc = subprocess.Popen([sys.executable, "-m", "autobal", "run", scene, "--out", str(out)], cwd=tmp_path,
-                            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+                            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.monotonic() + 300
     while not (trace.exists() and solver in trace.read_text().split()):
         assert proc.poll() is None, f"the run ended before {solver} was called"

@@ -123,8 +123,13 @@ def test_an_interrupt_during_a_solve_with_a_bar_stops_it_at_once(tty, ticks, mon
             signal.raise_signal(signal.SIGINT)
 
     monkeypatch.setattr(progress.Steps, "tick", interrupt_at_5)
-    with pytest.raises(Interrupted):
-        ipopt.solve(solver, x0=np.full(30, -1.2), lbg=[], ubg=[])
+    # Python's own SIGINT handler, as on a terminal (a shell starts background jobs with SIGINT ignored)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.raises(Interrupted):
+            ipopt.solve(solver, x0=np.full(30, -1.2), lbg=[], ubg=[])
+    finally:
+        signal.signal(signal.SIGINT, previous)
     assert solver.stats()["iter_count"] <= 6 and solver.stats()["return_status"] == "User_Requested_Stop"
     assert interrupt.requested() is None
 
