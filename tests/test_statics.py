@@ -254,7 +254,8 @@ def test_compiled_batch_path_equals_the_virtual_machine_and_ipopt_over_a_paramet
     block) against CasADi's virtual machine on the same points (bit for bit: same operations, no fast-math) and
     against IPOPT point by point: psi1 across regulation and saturation (App. A: the valve reaches its stop
     near psi1 = 1.2), sigma and psi_in over +-10 %."""
-    from autobal.analysis.statics import COMPILED_MIN, compiler
+    from autobal.analysis.compiled import compiler
+    from autobal.analysis.statics import COMPILED_MIN
 
     if compiler() is None:
         pytest.skip("no C compiler: the batch path runs on CasADi's virtual machine only")
