@@ -188,29 +188,30 @@ class Statics(Strict):
         return self
 
 
-# The schema of each analysis and optional scene part, as (module, class, description), in the scene's order.
+# The schema of each analysis and optional scene part, as (module, class, description), in the scene's order;
+# an analysis also names the part of the scene it needs (a dotted path, checked at load time), or None.
 # A schema module is imported, and its pydantic models built, only when a scene names that analysis or part
 # (see :func:`model_for`); ``Scenario`` (all of them) is built on first use, for the schema reference.
 ANALYSES = {
-    "statics": (__name__, "Statics", "static calculation; needs device"),
-    "frequency": ("autobal.schema_dynamics", "Frequency", "frequency response (AFC/Bode); needs device.dynamics"),
-    "stability": ("autobal.schema_dynamics", "Stability", "poles, Hurwitz, stability maps; needs device.dynamics"),
-    "transient": ("autobal.schema_dynamics", "Transient", "time responses; needs device.dynamics"),
-    "liquid_balancer": ("autobal.schema_liquid_balancer", "LiquidBalancerAnalysis",
-                        "liquid auto-balancer studies; needs liquid_balancer"),
-    "estimation": ("autobal.schema_estimation", "Estimation", "parameter fits to measured characteristics"),
-    "montecarlo": ("autobal.schema_reliability", "MonteCarlo", "Monte Carlo of the statics (and AFC); needs device"),
-    "reliability": ("autobal.schema_reliability", "Reliability", "traditional disc wear and time to failure"),
-    "rotor_dynamics": ("autobal.schema_rotor", "RotorDynamics", "Jeffcott rotor studies; needs rotor"),
-    "spinup": ("autobal.schema_rotor", "Spinup", "optimal spin-up through the critical speed; needs rotor"),
-    "spinup_robust": ("autobal.schema_rotor", "SpinupRobust",
-                      "one spin-up profile for a set of rotors (worst case); needs rotor"),
+    "statics": (__name__, "Statics", "static calculation", "device"),
+    "frequency": ("autobal.schema_dynamics", "Frequency", "frequency response (AFC/Bode)", "device.dynamics"),
+    "stability": ("autobal.schema_dynamics", "Stability", "poles, Hurwitz, stability maps", "device.dynamics"),
+    "transient": ("autobal.schema_dynamics", "Transient", "time responses", "device.dynamics"),
+    "liquid_balancer": ("autobal.schema_liquid_balancer", "LiquidBalancerAnalysis", "liquid auto-balancer studies",
+                        "liquid_balancer"),
+    "estimation": ("autobal.schema_estimation", "Estimation", "parameter fits to measured characteristics", None),
+    "montecarlo": ("autobal.schema_reliability", "MonteCarlo", "Monte Carlo of the statics (and AFC)", "device"),
+    "reliability": ("autobal.schema_reliability", "Reliability", "traditional disc wear and time to failure", None),
+    "rotor_dynamics": ("autobal.schema_rotor", "RotorDynamics", "Jeffcott rotor studies", "rotor"),
+    "spinup": ("autobal.schema_rotor", "Spinup", "optimal spin-up through the critical speed", "rotor"),
+    "spinup_robust": ("autobal.schema_rotor", "SpinupRobust", "one spin-up profile for a set of rotors (worst case)",
+                      "rotor"),
     "spinup_time_optimal": ("autobal.schema_rotor", "SpinupTimeOptimal",
-                            "earliest arrival with the peak bounded, and the front of peak against arrival time; "
-                            "needs rotor"),
-    "design": ("autobal.schema_design", "Design", "stability-constrained design of the device; needs device.dynamics"),
+                            "earliest arrival with the peak bounded, and the front of peak against arrival time",
+                            "rotor"),
+    "design": ("autobal.schema_design", "Design", "stability-constrained design of the device", "device.dynamics"),
     "ross_spinup": ("autobal.schema_ross", "RossSpinup",
-                    "optimal spin-up of a ROSS rotor reduced to its modes; needs ross_rotor and the ross extra"),
+                    "optimal spin-up of a ROSS rotor reduced to its modes (the ross extra)", "ross_rotor"),
 }
 PARTS = {
     "device": (__name__, "Device", "the axial balancing device (statics, dynamics, Monte Carlo, fits)"),
@@ -224,9 +225,11 @@ DYNAMICS = ("autobal.schema_dynamics", "Dynamics",
             "masses, springs, volumes for the frequency, stability and transient analyses")
 
 
-def _field(entry: tuple[str, str, str], named: bool):
+def _field(entry: tuple, named: bool):
     """An optional field with its schema when the scene names it, else one that admits only its absence."""
-    module, cls, text = entry
+    module, cls, text, *needs = entry
+    if needs and needs[0]:
+        text = f"{text}; needs {needs[0]}"
     return (getattr(importlib.import_module(module), cls) | None if named else None, _d(text, None))
 
 
@@ -257,13 +260,6 @@ def analyses_model(named: frozenset[str]) -> type[Strict]:
                         **{k: _field(v, k in named) for k, v in ANALYSES.items()})
 
 
-# analysis -> the part of the scene it needs (a dotted path), checked at load time
-NEEDS = {
-    "statics": "device", "frequency": "device.dynamics", "stability": "device.dynamics",
-    "transient": "device.dynamics", "montecarlo": "device", "liquid_balancer": "liquid_balancer",
-    "rotor_dynamics": "rotor", "spinup": "rotor", "spinup_robust": "rotor",
-    "spinup_time_optimal": "rotor", "design": "device.dynamics", "ross_spinup": "ross_rotor",
-}
 # a scene's name names its output folder: a plain file name, never a path
 NAME_PATTERN = r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}$"
 
@@ -289,8 +285,8 @@ class BaseScenario(Strict):
         if not any(v is not None for _, v in self.analyses):
             raise ValueError(f"analyses: the scene names no analysis (one or more of "
                              f"{', '.join(ANALYSES)})")
-        for analysis, path in NEEDS.items():
-            if getattr(self.analyses, analysis) is None:
+        for analysis, (*_, path) in ANALYSES.items():
+            if path is None or getattr(self.analyses, analysis) is None:
                 continue
             node = self
             for part in path.split("."):
