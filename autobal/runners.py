@@ -143,7 +143,7 @@ def spinup_ocp(scene, settings):
             motor_stall_torque=drive.motor.stall_torque if drive and drive.motor else None,
             motor_no_load_speed=drive.motor.no_load_speed if drive and drive.motor else None,
             deflection_limit=settings.deflection_limit, jerk_max=settings.max_jerk,
-            jerk_penalty=settings.jerk_penalty)
+            jerk_penalty=settings.jerk_penalty, jerk_variation=settings.jerk_variation)
     except ValueError as exc:
         raise ScenarioError(f"analyses.spinup: {exc}") from None
 

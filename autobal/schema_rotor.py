@@ -143,7 +143,12 @@ class Spinup(Strict):
     deflection_limit: Positive | None = Field(None, description="bound on the deflection delta/e")
     max_jerk: AngularJerk | None = Field(None, description="bound on |d alpha/dt| between control intervals")
     jerk_penalty: Annotated[float, Field(ge=0, le=1e6)] = Field(
-        1e-6, description="weight of sum (Delta alpha/alpha_max)^2 in the objective")
+        0.0, description="weight of sum (Delta alpha/alpha_max)^2 over the control intervals in the objective "
+        "(scaled by the maximum-acceleration ramp's), dimensionless")
+    jerk_variation: Annotated[float, Field(ge=0, le=1e6)] = Field(
+        1e-4, description="weight of the total variation sum |Delta alpha/alpha_max| over the control intervals "
+        "(smoothed below 0.01) in the objective (scaled by the maximum-acceleration ramp's), dimensionless: "
+        "removes one-interval pulses (chattering), keeps the switches sharp; 0 switches it off")
     method: Literal["collocation", "multiple_shooting"] = "collocation"
     scheme: Literal["radau", "legendre"] = "radau"
     degree: Annotated[int, Field(ge=1, le=9)] = Field(3, description="collocation degree, 1 to 9")
