@@ -2,7 +2,6 @@
 the issue's target case, collocation vs multiple shooting, every objective against its ramp baselines,
 drive limits kept by the re-simulated optimum, infeasible limits -> exit 3 naming the binding constraint."""
 
-import dataclasses
 import json
 
 import numpy as np
@@ -323,20 +322,3 @@ def test_real_problem_control_step_converged(real):
     fine = S.Solver(ocp, S.DirectCollocation(2 * n, 3, "radau")).solve(np.repeat(opt.solution.u[:n], 2))
     peak = S.resimulate(ocp, fine.u, fine.h, "fine").peak_delta
     assert abs(peak / opt.score - 1) < 1e-3
-
-
-@pytest.mark.slow
-def test_total_variation_penalty_removes_the_pulses_and_keeps_the_peak(real):
-    """a_max 40 rad/s^2, 5 s: without a penalty the optimum has one-interval pulses (e.g. -40 rad/s^2 for 25 ms
-    inside a full-acceleration arc); 1e-4 x the smoothed total variation of alpha/alpha_max removes them (at most
-    three sign changes of the acceleration's jumps: up, down, up) and changes the re-simulated peak by < 0.1 %."""
-    ocp, opt = real
-    if ocp.alpha_max != 40.0:
-        pytest.skip("measured at a_max 40 rad/s^2 only (benchmarks/spinup_ocp.md, levers)")
-    n = CONVERGED[40.0]
-    pen = S.optimize(dataclasses.replace(ocp, jerk_variation=1e-4), S.DirectCollocation(n, 3, "radau"))
-    jumps = np.diff(pen.solution.u[:n])
-    jumps = jumps[np.abs(jumps) > 0.02]
-    assert np.count_nonzero(np.diff(np.sign(jumps))) <= 3
-    assert np.abs(np.diff(pen.solution.u[:n])).sum() < 0.6 * np.abs(np.diff(opt.solution.u[:n])).sum()
-    assert abs(pen.score / opt.score - 1) < 1e-3
