@@ -68,7 +68,7 @@ def rodas4_step(rhs: ca.Function) -> ca.Function:
     -------
     casadi.Function
         ``(x, h) -> (x_next, err)``: the state after a step of ``h`` (units of the time in ``rhs``) and the
-        embedded local error estimate, the largest entry of the last stage in magnitude (units of ``x``).
+        embedded local error estimate, the last stage (a vector, units of ``x``).
     """
     n = rhs.size1_in(0)
     x, h = ca.SX.sym("x", n), ca.SX.sym("h")
@@ -79,7 +79,7 @@ def rodas4_step(rhs: ca.Function) -> ca.Function:
         u = x + sum((a * gj for a, gj in zip(A[i], g, strict=True)), ca.SX.zeros(n))
         coupling = sum((c / h * gj for c, gj in zip(C[i], g, strict=True)), ca.SX.zeros(n))
         g.append(solve((fx if i == 0 else rhs(u)) + coupling))
-    return ca.Function("rodas4_step", [x, h], [u + g[5], ca.mmax(ca.fabs(g[5]))], ["x", "h"], ["x_next", "err"])
+    return ca.Function("rodas4_step", [x, h], [u + g[5], g[5]], ["x", "h"], ["x_next", "err"])
 
 
 def rodas4_fixed(rhs: ca.Function, n_steps: int, t_end: float) -> ca.Function:
@@ -101,9 +101,56 @@ def rodas4_fixed(rhs: ca.Function, n_steps: int, t_end: float) -> ca.Function:
         ``x0 -> (xf, est_max, est_sum)``: the final state, the largest and the summed embedded local error
         estimates over the steps (max over the states), units of ``x``.
     """
-    step = rodas4_step(rhs)
     n = rhs.size1_in(0)
+    x, h = ca.SX.sym("x", n), ca.SX.sym("h")
+    x_next, err = rodas4_step(rhs)(x, h)
+    step = ca.Function("rodas4_step_max", [x, h], [x_next, ca.mmax(ca.fabs(err))])
     x0 = ca.MX.sym("x0", n)
     xs, errs = step.mapaccum("rodas4_steps", n_steps, [0], [0])(x0, ca.DM.ones(1, n_steps) * (t_end / n_steps))
     return ca.Function(f"rodas4_{n_steps}", [x0], [xs[:, -1], ca.mmax(errs), ca.sum2(errs)], ["x0"],
                        ["xf", "est_max", "est_sum"])
+
+
+def rodas4_adaptive(rhs: ca.Function, t_end: float, rtol: float, atol: float, attempts: int) -> ca.Function:
+    """RODAS4 with step-size control on its embedded error estimate, as one Function of ``attempts`` step attempts
+    (``mapaccum``), each skipped once ``t_end`` is reached (CasADi's conditional: a branch in the generated code,
+    so spare attempts cost almost nothing); call it again from where it stopped while ``t < t_end``.  Error norm:
+    the root mean square of ``err / (atol + rtol max(|x|, |x_next|))``; a step is accepted when it is at most 1;
+    the next step is this one times ``min(6, max(0.2, 0.9 norm^(-1/4)))`` (Hairer & Wanner 1996, Sect. IV.8).
+
+    Parameters
+    ----------
+    rhs : casadi.Function
+        ``x -> dx/dt`` of the autonomous ODE.
+    t_end : float
+        Final time, units of the time in ``rhs`` (s).
+    rtol, atol : float
+        Relative tolerance (-) and absolute tolerance (units of ``x``).
+    attempts : int
+        Step attempts (accepted plus rejected) in one call.
+
+    Returns
+    -------
+    casadi.Function
+        ``(x0, t0, h0) -> (xf, t, h, accepted, rejected)``: the state at time ``t`` (``t_end`` unless the attempts
+        ran out), the next step size (units of time), and the numbers of accepted and rejected steps.
+    """
+    n = rhs.size1_in(0)
+    step = rodas4_step(rhs)
+    z = ca.SX.sym("z", n + 4)  # t, h, accepted, rejected, x
+    t, h, x = z[0], z[1], z[4:]
+    hu = ca.fmin(h, t_end - t)
+    x_next, err = step(x, hu)
+    norm = ca.fmax(ca.sqrt(ca.sumsqr(err / (atol + rtol * ca.fmax(ca.fabs(x), ca.fabs(x_next)))) / n), 1e-10)
+    ok = norm <= 1
+    attempt = ca.Function("attempt", [z], [ca.vertcat(ca.if_else(ok, t + hu, t),
+                                                      hu * ca.fmin(6.0, ca.fmax(0.2, 0.9 * norm ** -0.25)),
+                                                      z[2] + ok, z[3] + 1 - ok, ca.if_else(ok, x_next, x))])
+    zz = ca.SX.sym("z", n + 4)
+    skip = ca.Function.conditional("attempt_or_skip", [attempt], ca.Function("skip", [zz], [zz]))
+    zm = ca.MX.sym("z", n + 4)
+    loop = ca.Function("attempt_loop", [zm], [skip(t_end - zm[0] <= 1e-12 * t_end, zm)]).mapaccum("attempts", attempts)
+    x0, t0, h0 = ca.MX.sym("x0", n), ca.MX.sym("t0"), ca.MX.sym("h0")
+    zf = loop(ca.vertcat(t0, h0, 0.0, 0.0, x0))[:, -1]
+    return ca.Function("rodas4_adaptive", [x0, t0, h0], [zf[4:], zf[0], zf[1], zf[2], zf[3]], ["x0", "t0", "h0"],
+                       ["xf", "t", "h", "accepted", "rejected"])
