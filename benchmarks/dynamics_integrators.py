@@ -43,7 +43,8 @@ DTAU = 0.01
 RTOLS = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10]
 N_STEPS = [round(25 * 10 ** (k / 4)) for k in range(8)]  # 25, 44, 79, 141, 250, 445, 791, 1406
 TARGETS = [1e-4, 1e-6, 1e-8]
-ROUNDS = 7  # timed calls of every run (after one warm-up call), interleaved
+ROUNDS = 7  # rounds of timed calls of every run (after one warm-up call), interleaved
+IN_ROUND = 2  # back-to-back timed calls of a run in a round (the second with the caches warm from the first)
 LEVER_ROUNDS = 15
 CV = "CVODES (autobal)"
 RODAS_VM = "RODAS4 fixed step, CasADi VM"
@@ -56,7 +57,8 @@ H0 = 1e-8  # s, first step of adaptive RODAS4
 
 def timed_rounds(runners: dict, rounds: int) -> dict:
     """Time every runner by the same rule: one untimed warm-up call each (its RuntimeError marks the runner
-    failed), then ``rounds`` rounds calling every runner once, the order rotated each round.
+    failed), then ``rounds`` rounds calling every runner IN_ROUND times back to back, the order rotated each
+    round.
 
     Returns ``{key: {"wall", "wall_median", "cpu", "out"}}`` (s; cpu: the calling thread's CPU time,
     best of the rounds) or ``{key: {"error": message}}``."""
@@ -69,10 +71,11 @@ def timed_rounds(runners: dict, rounds: int) -> dict:
     keys = [k for k in runners if "error" not in res[k]]
     for r in range(rounds):
         for k in keys[r % len(keys):] + keys[:r % len(keys)]:
-            t, c = time.perf_counter(), time.thread_time()
-            runners[k]()
-            res[k]["cpus"].append(time.thread_time() - c)
-            res[k]["walls"].append(time.perf_counter() - t)
+            for _ in range(IN_ROUND):
+                t, c = time.perf_counter(), time.thread_time()
+                runners[k]()
+                res[k]["cpus"].append(time.thread_time() - c)
+                res[k]["walls"].append(time.perf_counter() - t)
     for k in keys:
         walls, cpus = res[k].pop("walls"), res[k].pop("cpus")
         res[k] |= {"wall": min(walls), "wall_median": float(np.median(walls)), "cpu": min(cpus)}
@@ -427,7 +430,8 @@ def _main() -> list[dict]:
         f"1e-12 agrees to {ref_diff:.1e}). Each method over a ladder of rtol (atol = rtol x 1e-2), RODAS4 over step "
         f"counts {', '.join(map(str, N_STEPS))} (a decade of error a rung, as the rtol ladder); per target error, "
         f"the fastest run that meets it. Timing, the same for every run: one warm-up call, then {ROUNDS} rounds "
-        "calling every run of every method once (order rotated); times in the cases are the best CPU time of the "
+        f"calling every run of every method {IN_ROUND} times back to back (order rotated); times in the cases are "
+        "the best CPU time of the "
         "calling thread (time.thread_time), best and median wall times beside in the tables; build time = "
         "constructing the integrator (CVODES) or Function plus C compilation (RODAS4; load = a later process "
         "loading the cached library). scipy gets the "
