@@ -470,7 +470,7 @@ def _main() -> list[dict]:
           notes, tables=["Other integrators at matched final error (benchmark code, not in the toolkit):\n\n"
                          + "\n".join(other),
                          "CVODES levers tried (same problem, same reference, interleaved, best of "
-                         f"{LEVER_ROUNDS}):\n\n" + "\n".join(lever_rows),
+                         f"{LEVER_ROUNDS * IN_ROUND}):\n\n" + "\n".join(lever_rows),
                          "All runs:\n\n" + "\n".join(runs)])
     return cases
 
