@@ -1,10 +1,11 @@
-"""Time responses of the nonlinear device model (Pavlenko (2014), Eq. (2.111)) with CVODES/IDAS.
+"""Time responses of the nonlinear device model (Pavlenko (2014), Eq. (2.111)) with CVODES/IDAS or RODAS4.
 
 The model (models/dynamics.py) starts from its equilibrium, the IPOPT static solution, and is
 driven by a step in axial force (dtau), a step in discharge pressure (dpsi1) or a harmonic
 discharge pressure dpsi1a sin(omega t); with a pressure input the axial force follows it,
 dtau = b dpsi1, unless the case says otherwise.  CasADi's CVODES (BDF, Newton with the exact
-symbolic Jacobian) or IDAS integrates it on an output grid in one call.
+symbolic Jacobian) or IDAS integrates it on an output grid in one call, or RODAS4 (an L-stable
+Rosenbrock method, analysis/rosenbrock.py) as one compiled loop of step attempts.
 
 Reported, not hidden: the face gap reaching zero (u <= 0: the disc touches the pad; the model
 has no contact force, so the response is cut there and the time is reported), the valve closing
@@ -23,8 +24,10 @@ import casadi as ca
 import numpy as np
 
 from autobal.analysis import interrupt
+from autobal.analysis.compiled import compiled_map
 from autobal.analysis.frequency import MODEL_LABELS
 from autobal.analysis.result import Result, new_figure
+from autobal.analysis.rosenbrock import STATUS, rodas4_grid
 from autobal.models.dynamics import DynamicModel
 
 KINDS = ("force_step", "pressure_step", "pressure_harmonic")
@@ -42,10 +45,39 @@ class Simulator:
     the gap closes or runs away (u > U_RUNAWAY) instead of integrating an unphysical state.  Each
     chunk restarts CVODES (order 1, a new initial step), which costs more than the outputs do: on the
     pump's 2001-point force step, chunks of 100 take 2.2x the time of chunks of 500.
+
+    ``integrator="rodas4"``: RODAS4 (Hairer & Wanner (1996), Sect. IV.7) with step-size control on its
+    embedded error estimate, every step clipped to the next output time, as one CasADi Function of
+    ``attempts`` step attempts (default 2 chunk + 100) compiled to C through
+    :func:`autobal.analysis.compiled.compiled_map` (cached on disk; CasADi's virtual machine without a C
+    compiler or with ``AUTOBAL_COMPILE=0``), called again until the chunk's last output is reached.  Its
+    options: ``max_num_steps`` (step attempts allowed between two outputs, default 20000, as CVODES'),
+    ``attempts``, ``h0`` (first step, default 1e-4 of the output spacing, s) and ``linear_solver``
+    (``"lu"``, default, or ``"qr"``).  A step size underflow or an exhausted step budget is a failure
+    reported like a CVODES failure: the time reached and a message.
     """
 
     def __init__(self, model: DynamicModel, t_end: float, points: int, integrator: str = "cvodes",
                  rtol: float = 1e-9, atol: float = 1e-11, chunk: int = 500, **opts):
+        """Build the integrator.
+
+        Parameters
+        ----------
+        model : DynamicModel
+            The device model (scaled states).
+        t_end : float
+            End time of the output grid, s.
+        points : int
+            Output times, uniform from 0 to ``t_end``.
+        integrator : {"cvodes", "idas", "rodas4"}
+            CasADi's CVODES or IDAS, or the compiled RODAS4 of analysis/rosenbrock.py.
+        rtol, atol : float
+            Relative (-) and absolute tolerance (units of the scaled states, -).
+        chunk : int
+            Outputs integrated in one call, between the checks of the stop events.
+        **opts
+            CasADi integrator options (CVODES, IDAS) or the RODAS4 options above.
+        """
         self.model = model
         self.rtol, self.atol = rtol, atol
         self.t = np.linspace(0.0, t_end, points)
@@ -61,7 +93,59 @@ class Simulator:
         self.name = integrator
         self.chunk = max(1, min(chunk, points - 1))
         dt = self.t[1] - self.t[0]
+        if integrator == "rodas4":
+            self._rodas4(x, t, p, s, w, dt, opts)
+            return
         self._f = ca.integrator("sim", integrator, dae, 0.0, list(dt * np.arange(1, self.chunk + 1)), o)
+
+    def _rodas4(self, x, t, p, s, w, dt: float, opts: dict) -> None:
+        """Build the RODAS4 loop of step attempts (compiled when a C compiler is found)."""
+        o = {"max_num_steps": 20000, "attempts": 2 * self.chunk + 100, "h0": 1e-4 * dt, "linear_solver": "lu"}
+        unknown = set(opts) - set(o)
+        if unknown:
+            raise ValueError(f"unknown RODAS4 options {sorted(unknown)}; expected some of {sorted(o)}")
+        o |= opts
+        rhs = ca.Function("transient_rhs", [t, x, ca.vertcat(p, s)], [self.model.ode(x, w, p)])
+        f = rodas4_grid(rhs, int(o["attempts"]), o["linear_solver"])
+        self._f = compiled_map(f, 1) or f
+        self.compiled = self._f is not f
+        self.h0 = float(o["h0"])
+        # the call through a buffer on numpy arrays (converting the attempts' DM output costs more than the loop)
+        self._args = [np.zeros(8 + len(self.model.states)), np.array([dt]), np.zeros(1),
+                      np.array([self.rtol, self.atol, float(o["max_num_steps"])]), np.zeros(p.numel() + s.numel())]
+        self._W = np.zeros((int(o["attempts"]), 8 + len(self.model.states)))
+        buf, self._eval = self._f.buffer()
+        for i, a in enumerate(self._args):
+            buf.set_arg(i, memoryview(a))
+        buf.set_res(0, memoryview(self._W))
+        self._buf = buf
+
+    def _run_rodas4(self, x: np.ndarray, P: np.ndarray) -> dict:
+        """The RODAS4 loop over the grid, chunk by chunk (see :meth:`run`)."""
+        w, k_end, W = self._args[0], self._args[2], self._W
+        self._args[4][:] = P
+        self._args[4][-1] = 0.0  # RODAS4 integrates in absolute time
+        n, iu = len(self.t) - 1, self.model.index("u")
+        w[:] = np.concatenate([[0.0, self.h0, 0, 0, 0, 0, 0, 0], x])
+        rows, stop, failure = [x], None, None
+        while w[2] < n and stop is None and failure is None:
+            k_end[0], got = min(int(w[2]) + self.chunk, n), []
+            while w[2] < k_end[0] and w[7] == 0:
+                interrupt.call(self._eval)
+                got.append(W[W[:, 3] == 1, 8:])
+                w[:] = W[-1]
+            X = np.concatenate(got)
+            rows.extend(X)
+            if w[7] != 0:
+                failure = {"t": float(w[0]), "message": f"RODAS4: {STATUS[int(w[7])]} at t = {w[0]:.6g} s (step "
+                                                        f"size {w[1]:.3g} s, {int(w[6])} attempts since the "
+                                                        f"output at t = {self.t[int(w[2])]:.6g} s)"}
+            if len(X) and (X[:, iu] <= 0).any():
+                stop = "gap_closed"
+            elif len(X) and ((X[:, iu] > U_RUNAWAY).any() or not np.isfinite(X).all()):
+                stop = "gap_runaway"
+        return {"t": self.t[: len(rows)], "X": np.array(rows), "stopped": stop, "failure": failure,
+                "steps": int(w[4]), "rejected": int(w[5])}
 
     def input_vector(self, kind: str, amplitude: float, omega: float = math.nan, couple: bool = True) -> list:
         b = self.model.design.groups.b if couple else 0.0
@@ -79,6 +163,8 @@ class Simulator:
         m = self.model
         x = m.x0 if x_start is None else np.asarray(x_start, float)
         P = np.concatenate([m.p0 if p is None else p, s])
+        if self.name == "rodas4":
+            return self._run_rodas4(x, P)
         rows, k, stop, failure, steps = [x], 0, None, None, 0
         iu = m.index("u")
         n = len(self.t) - 1
