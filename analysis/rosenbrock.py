@@ -9,11 +9,11 @@ start of the step; a non-autonomous ``x' = f(t, x, p)`` is integrated as the aut
 ``t' = 1`` (Hairer & Wanner 1996, Sect. IV.7, the autonomous form from which Eq. (7.4') follows), so the time
 derivative of ``f`` enters through the Jacobian.  The matrix is factored once a step, written out
 symbolically so that the structural zeros of the Jacobian drop out of the code: by LU without pivoting
-(default) with its largest multiplier max |L_ik| as a check (partial pivoting keeps it at 1; above
-``GROWTH_MAX`` the adaptive loop rejects the step, and a smaller step makes the matrix diagonally dominant,
-where no pivoting is needed), or by Householder QR (CasADi's ``qr_sparse``: stable without pivoting, 1.5x
-the instructions; on the pump's 8-state model 0.138 ms against 0.096 ms for 141 compiled steps).  Step-size
-control: Hairer & Wanner (1996), Sect. IV.8, Eq. (8.21)
+(default) with its growth factor max |U_ij| / max |W_ij| as a check (partial pivoting keeps it near 1;
+above ``GROWTH_MAX``, or not finite, the adaptive loop rejects the step, and a smaller step makes the matrix
+diagonally dominant, where no pivoting is needed), or by Householder QR (CasADi's ``qr_sparse``: stable
+without pivoting, 1.4x the instructions; on the pump's 8-state model 141 compiled steps take 0.137 ms against
+0.094 ms with LU).  Step-size control: Hairer & Wanner (1996), Sect. IV.8, Eq. (8.21)
 with the error norm of Sect. II.4, Eq. (4.11).
 """
 
@@ -36,7 +36,7 @@ C = [[],
      [7.496443313967647, -10.24680431464352, -33.99990352819905, 11.70890893206160],
      [8.083246795921522, -7.981132988064893, -31.52159432874371, 16.31930543123136, -6.058818238834054]]
 FAC_MIN, FAC_MAX, SAFETY = 0.2, 6.0, 0.9  # step-size controller of rodas.f (Hairer & Wanner 1996, Sect. IV.8)
-GROWTH_MAX = 1e3  # largest LU multiplier accepted (no pivoting); a larger one rejects the step: h shrinks
+GROWTH_MAX = 1e4  # largest LU growth factor accepted (no pivoting); a larger one rejects the step: h shrinks
 H_MIN = 1e-14  # relative to the time reached: smaller step sizes are an underflow (a failure)
 STATUS = {1: "step size underflow", 2: "step budget of an output interval exhausted"}
 
@@ -50,21 +50,19 @@ def _qr_solver(W: ca.SX):
 
 def _lu_solver(W: ca.SX):
     """A solve with the square SX matrix ``W`` through its LU factors written out once (Doolittle, no pivoting;
-    the structural zeros drop out), and the largest multiplier max |L_ik|: partial pivoting would keep it at
-    most 1, so a large one flags a factorisation that needed pivoting."""
+    the structural zeros drop out), and the growth factor max |U_ij| / max |W_ij| as a check: partial pivoting
+    bounds it by 2^(n-1) and keeps it near 1 in practice, so a large one (or a non-finite one: a zero pivot)
+    flags a factorisation that needed pivoting."""
     n = W.shape[0]
     U = [[W[i, j] for j in range(n)] for i in range(n)]
     L = [[None] * n for _ in range(n)]
-    growth = ca.SX(0)
     for k in range(n):
         for i in range(k + 1, n):
-            if ca.is_equal(U[i][k], 0):
-                L[i][k] = ca.SX(0)
-                continue
             L[i][k] = U[i][k] / U[k][k]
-            growth = ca.fmax(growth, ca.fabs(L[i][k]))
             for j in range(k + 1, n):
                 U[i][j] = U[i][j] - L[i][k] * U[k][j]
+    u_max = ca.mmax(ca.fabs(ca.vertcat(*[U[i][j] for i in range(n) for j in range(i, n)])))
+    growth = u_max / ca.mmax(ca.fabs(W))
 
     def solve(b: ca.SX) -> ca.SX:
         y = [b[i] for i in range(n)]
@@ -88,7 +86,7 @@ def rodas4_step(rhs: ca.Function, linear_solver: str = "lu") -> ca.Function:
     rhs : casadi.Function
         ``(t, x, p) -> dx/dt`` (dense columns; ``p`` may be empty; SX-expandable), any units.
     linear_solver : {"lu", "qr"}
-        The factorisation of ``I / (h gamma) - J``: LU without pivoting (its largest multiplier returned as a
+        The factorisation of ``I / (h gamma) - J``: LU without pivoting (its growth factor returned as a
         check) or Householder QR (stable without pivoting; the check output is then 0).
 
     Returns
@@ -96,7 +94,7 @@ def rodas4_step(rhs: ca.Function, linear_solver: str = "lu") -> ca.Function:
     casadi.Function
         ``(t, x, p, h) -> (x_next, err, growth)``: the state after a step of ``h`` from time ``t`` (units of
         the time in ``rhs``), the embedded local error estimate, the last stage (units of ``x``), and the
-        largest LU multiplier (-).
+        growth factor of the LU factorisation (-).
     """
     n, m = rhs.size1_in(1), rhs.size1_in(2)
     t, x, p, h = ca.SX.sym("t"), ca.SX.sym("x", n), ca.SX.sym("p", m), ca.SX.sym("h")
@@ -155,7 +153,7 @@ def rodas4_grid(rhs: ca.Function, attempts: int, linear_solver: str = "lu") -> c
     Every step is clipped to the next output time ``t_k = k dt`` (so the outputs are states of the method, not
     interpolants), and the controller's step size survives the clipping.  Error norm (Hairer & Wanner (1996),
     Sect. II.4, Eq. (4.11)): the root mean square of ``err / (atol + rtol max(|x|, |x_next|))``; a step is
-    accepted when the norm is at most 1 (a non-finite one is not) and the largest LU multiplier at most
+    accepted when the norm is at most 1 (a non-finite one is not) and the LU growth factor at most
     ``GROWTH_MAX``; the next step size is the step times ``min(6, max(0.2, 0.9 norm^(-1/4)))`` (Sect. IV.8,
     the factors of rodas.f).  Once the output ``k_end`` is reached, or on a failure, the remaining attempts are
     skipped (CasADi's conditional: a branch in the generated code).  Tolerances are inputs, so one compiled
