@@ -35,6 +35,22 @@ C = [[],
      [-0.1073529058151375, -9.594562251023355, -20.47028614809616],
      [7.496443313967647, -10.24680431464352, -33.99990352819905, 11.70890893206160],
      [8.083246795921522, -7.981132988064893, -31.52159432874371, 16.31930543123136, -6.058818238834054]]
+# RODASP of Steinebach (1995), "Order-reduction of ROW-methods for DAEs and method of lines applications",
+# Preprint 1741, TH Darmstadt: the same structure and gamma, coefficients chosen so that a stiff component driven
+# by a time-dependent input (the Prothero-Robinson problem) keeps order 4, where RODAS4 drops to about 2
+A_P = [[],
+       [3.0],
+       [1.831036793486759, 0.4955183967433795],
+       [2.304376582692669, -0.05249275245743001, -1.176798761832782],
+       [-7.170454962423024, -4.741636671481785, -16.31002631330971, -1.062004044111401],
+       [-7.170454962423024, -4.741636671481785, -16.31002631330971, -1.062004044111401, 1.0]]
+C_P = [[],
+       [-12.0],
+       [-8.791795173947035, -2.207865586973518],
+       [10.81793056857153, 6.780270611428266, 19.53485944642410],
+       [34.19095006749676, 15.49671153725963, 54.74760875964130, 14.16005392148534],
+       [34.62605830930532, 15.30084976114473, 56.99955578662667, 18.40807009793095, -5.714285714285717]]
+TABLEAUS = {"rodas4": (A, C), "rodas4p": (A_P, C_P)}
 FAC_MIN, FAC_MAX, SAFETY = 0.2, 6.0, 0.9  # step-size controller of rodas.f (Hairer & Wanner 1996, Sect. IV.8)
 GROWTH_MAX = 1e4  # largest LU growth factor accepted (no pivoting); a larger one rejects the step: h shrinks
 H_MIN = 1e-14  # relative to the time reached: smaller step sizes are an underflow (a failure)
@@ -78,8 +94,9 @@ def _lu_solver(W: ca.SX):
     return solve, growth
 
 
-def rodas4_step(rhs: ca.Function, linear_solver: str = "lu") -> ca.Function:
-    """One RODAS4 step of ``x' = f(t, x, p)`` (Hairer & Wanner (1996), Sect. IV.7).
+def rodas4_step(rhs: ca.Function, linear_solver: str = "lu", method: str = "rodas4") -> ca.Function:
+    """One RODAS4 step of ``x' = f(t, x, p)`` (Hairer & Wanner (1996), Sect. IV.7), or one RODASP step
+    (Steinebach 1995).
 
     Parameters
     ----------
@@ -88,6 +105,8 @@ def rodas4_step(rhs: ca.Function, linear_solver: str = "lu") -> ca.Function:
     linear_solver : {"lu", "qr"}
         The factorisation of ``I / (h gamma) - J``: LU without pivoting (its growth factor returned as a
         check) or Householder QR (stable without pivoting; the check output is then 0).
+    method : {"rodas4", "rodas4p"}
+        The coefficients: RODAS4 of rodas.f, or RODASP (``TABLEAUS``).
 
     Returns
     -------
@@ -106,16 +125,18 @@ def rodas4_step(rhs: ca.Function, linear_solver: str = "lu") -> ca.Function:
     Fz = F(z)
     W = ca.densify(ca.SX.eye(n + 1) / (h * GAMMA) - ca.jacobian(Fz, z))
     solve, growth = {"lu": _lu_solver, "qr": _qr_solver}[linear_solver](W)
+    a_, c_ = TABLEAUS[method]
     g, u = [], z
     for i in range(6):
-        u = z + sum((a * gj for a, gj in zip(A[i], g, strict=True)), ca.SX.zeros(n + 1))
-        coupling = sum((c / h * gj for c, gj in zip(C[i], g, strict=True)), ca.SX.zeros(n + 1))
+        u = z + sum((a * gj for a, gj in zip(a_[i], g, strict=True)), ca.SX.zeros(n + 1))
+        coupling = sum((c / h * gj for c, gj in zip(c_[i], g, strict=True)), ca.SX.zeros(n + 1))
         g.append(solve((Fz if i == 0 else F(u)) + coupling))
     return ca.Function("rodas4_step", [t, x, p, h], [u[:n] + g[5][:n], g[5][:n], growth], ["t", "x", "p", "h"],
                        ["x_next", "err", "growth"])
 
 
-def rodas4_fixed(rhs: ca.Function, n_steps: int, t_end: float, linear_solver: str = "lu") -> ca.Function:
+def rodas4_fixed(rhs: ca.Function, n_steps: int, t_end: float, linear_solver: str = "lu",
+                 method: str = "rodas4") -> ca.Function:
     """RODAS4 over ``n_steps`` equal steps from 0 to ``t_end`` as one Function (CasADi's ``mapaccum``: a loop
     in generated code).
 
@@ -127,6 +148,8 @@ def rodas4_fixed(rhs: ca.Function, n_steps: int, t_end: float, linear_solver: st
         Number of steps.
     t_end : float
         Final time, units of the time in ``rhs`` (s).
+    linear_solver, method : str
+        As in :func:`rodas4_step`.
 
     Returns
     -------
@@ -135,7 +158,7 @@ def rodas4_fixed(rhs: ca.Function, n_steps: int, t_end: float, linear_solver: st
         error estimates over the steps (max over the states), units of ``x``.
     """
     n, m = rhs.size1_in(1), rhs.size1_in(2)
-    step = rodas4_step(rhs, linear_solver)
+    step = rodas4_step(rhs, linear_solver, method)
     zt, p = ca.SX.sym("z", n + 1), ca.SX.sym("p", m)
     h = t_end / n_steps
     x_next, err, _ = step(zt[n], zt[:n], p, h)
@@ -146,7 +169,7 @@ def rodas4_fixed(rhs: ca.Function, n_steps: int, t_end: float, linear_solver: st
                        ["xf", "est_max", "est_sum"])
 
 
-def rodas4_grid(rhs: ca.Function, attempts: int, linear_solver: str = "lu") -> ca.Function:
+def rodas4_grid(rhs: ca.Function, attempts: int, linear_solver: str = "lu", method: str = "rodas4") -> ca.Function:
     """RODAS4 with step-size control towards the points of a uniform output grid, as one Function of
     ``attempts`` step attempts (``mapaccum``: a loop in generated code).
 
@@ -165,8 +188,8 @@ def rodas4_grid(rhs: ca.Function, attempts: int, linear_solver: str = "lu") -> c
         ``(t, x, p) -> dx/dt``.
     attempts : int
         Step attempts (accepted plus rejected) in one call.
-    linear_solver : {"lu", "qr"}
-        The stage solves (see :func:`rodas4_step`).
+    linear_solver, method : str
+        As in :func:`rodas4_step`.
 
     Returns
     -------
@@ -180,7 +203,7 @@ def rodas4_grid(rhs: ca.Function, attempts: int, linear_solver: str = "lu") -> c
         done), 1 (step size underflow) or 2 (step budget of an output interval exhausted).
     """
     n, m = rhs.size1_in(1), rhs.size1_in(2)
-    step = rodas4_step(rhs, linear_solver)
+    step = rodas4_step(rhs, linear_solver, method)
     w, dt, k_end, tol, p = ca.SX.sym("w", 8 + n), ca.SX.sym("dt"), ca.SX.sym("k_end"), ca.SX.sym("tol", 3), \
         ca.SX.sym("p", m)
     t, h, k, acc, rej, tries, x = w[0], w[1], w[2], w[4], w[5], w[6], w[8:]

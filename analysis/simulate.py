@@ -33,6 +33,7 @@ from autobal.models.dynamics import DynamicModel
 KINDS = ("force_step", "pressure_step", "pressure_harmonic")
 
 
+ROSENBROCK = ("rodas4", "rodas4p")  # the compiled Rosenbrock integrators (analysis/rosenbrock.py)
 U_RUNAWAY = 20.0  # gap over base gap beyond which a response is reported as a runaway and stopped
 
 
@@ -46,9 +47,10 @@ class Simulator:
     chunk restarts CVODES (order 1, a new initial step), which costs more than the outputs do: on the
     pump's 2001-point force step, chunks of 100 take 2.2x the time of chunks of 500.
 
-    ``integrator="rodas4"``: RODAS4 (Hairer & Wanner (1996), Sect. IV.7) with step-size control on its
-    embedded error estimate, every step clipped to the next output time, as one CasADi Function of
-    ``attempts`` step attempts (default 2 chunk + 100) compiled to C through
+    ``integrator="rodas4"``: RODAS4 (Hairer & Wanner (1996), Sect. IV.7), or ``"rodas4p"``: RODASP
+    (Steinebach 1995; no order reduction where a stiff mode is driven by a harmonic input), with
+    step-size control on the embedded error estimate, every step clipped to the next output time, as one
+    CasADi Function of ``attempts`` step attempts (default 2 chunk + 100) compiled to C through
     :func:`autobal.analysis.compiled.compiled_map` (cached on disk; CasADi's virtual machine without a C
     compiler or with ``AUTOBAL_COMPILE=0``), called again until the chunk's last output is reached.  Its
     options: ``max_num_steps`` (step attempts allowed between two outputs, default 20000, as CVODES'),
@@ -69,8 +71,8 @@ class Simulator:
             End time of the output grid, s.
         points : int
             Output times, uniform from 0 to ``t_end``.
-        integrator : {"cvodes", "idas", "rodas4"}
-            CasADi's CVODES or IDAS, or the compiled RODAS4 of analysis/rosenbrock.py.
+        integrator : {"cvodes", "idas", "rodas4", "rodas4p"}
+            CasADi's CVODES or IDAS, or the compiled RODAS4 / RODASP of analysis/rosenbrock.py.
         rtol, atol : float
             Relative (-) and absolute tolerance (units of the scaled states, -).
         chunk : int
@@ -93,7 +95,7 @@ class Simulator:
         self.name = integrator
         self.chunk = max(1, min(chunk, points - 1))
         dt = self.t[1] - self.t[0]
-        if integrator == "rodas4":
+        if integrator in ROSENBROCK:
             self._rodas4(x, t, p, s, w, dt, opts)
             return
         self._f = ca.integrator("sim", integrator, dae, 0.0, list(dt * np.arange(1, self.chunk + 1)), o)
@@ -106,7 +108,7 @@ class Simulator:
             raise ValueError(f"unknown RODAS4 options {sorted(unknown)}; expected some of {sorted(o)}")
         o |= opts
         rhs = ca.Function("transient_rhs", [t, x, ca.vertcat(p, s)], [self.model.ode(x, w, p)])
-        f = rodas4_grid(rhs, int(o["attempts"]), o["linear_solver"])
+        f = rodas4_grid(rhs, int(o["attempts"]), o["linear_solver"], self.name)
         self._f = compiled_map(f, 1) or f
         self.compiled = self._f is not f
         self.h0 = float(o["h0"])
@@ -137,9 +139,10 @@ class Simulator:
             X = np.concatenate(got)
             rows.extend(X)
             if w[7] != 0:
-                failure = {"t": float(w[0]), "message": f"RODAS4: {STATUS[int(w[7])]} at t = {w[0]:.6g} s (step "
-                                                        f"size {w[1]:.3g} s, {int(w[6])} attempts since the "
-                                                        f"output at t = {self.t[int(w[2])]:.6g} s)"}
+                failure = {"t": float(w[0]),
+                           "message": f"{self.name.upper()}: {STATUS[int(w[7])]} at t = {w[0]:.6g} s (step size "
+                                      f"{w[1]:.3g} s, {int(w[6])} attempts since the output at t = "
+                                      f"{self.t[int(w[2])]:.6g} s)"}
             if len(X) and (X[:, iu] <= 0).any():
                 stop = "gap_closed"
             elif len(X) and ((X[:, iu] > U_RUNAWAY).any() or not np.isfinite(X).all()):
@@ -163,7 +166,7 @@ class Simulator:
         m = self.model
         x = m.x0 if x_start is None else np.asarray(x_start, float)
         P = np.concatenate([m.p0 if p is None else p, s])
-        if self.name == "rodas4":
+        if self.name in ROSENBROCK:
             return self._run_rodas4(x, P)
         rows, k, stop, failure, steps = [x], 0, None, None, 0
         iu = m.index("u")

@@ -46,7 +46,7 @@ def stability(scene, settings) -> Result:
 
 
 def transient(scene, settings) -> Result:
-    """Time responses of the nonlinear device model from its static solution (CVODES / IDAS)."""
+    """Time responses of the nonlinear device model from its static solution (CVODES / IDAS / RODAS4)."""
     from autobal.analysis import simulate as sim
     from autobal.analysis.linearize import Setup
 

@@ -144,10 +144,12 @@ class TransientCase(Strict):
 class Transient(Strict):
     operating_ratio: Positive = 1.0
     model: Literal["nonlinear", "nonlinear_chain"] = "nonlinear"
-    integrator: Literal["cvodes", "idas", "rodas4"] = Field(
-        "cvodes", description="cvodes (BDF, Newton with the exact Jacobian; default), idas, or rodas4: the "
+    integrator: Literal["cvodes", "idas", "rodas4", "rodas4p"] = Field(
+        "cvodes", description="cvodes (BDF, Newton with the exact Jacobian; default), idas, rodas4: the "
         "L-stable Rosenbrock method RODAS4 (Hairer & Wanner 1996, Sect. IV.7) with step-size control, its steps "
-        "clipped to the output times, compiled to C (cached; CasADi's virtual machine without a C compiler)")
+        "clipped to the output times, compiled to C (cached; CasADi's virtual machine without a C compiler), or "
+        "rodas4p: the same with Steinebach's (1995) RODASP coefficients, which keep order 4 where a stiff mode "
+        "is driven by a harmonic input (RODAS4 drops towards order 2 there)")
     duration: Time = 0.05
     points: Annotated[int, Field(ge=10, le=200000)] = Field(2001, description="output times, 10 to 200,000")
     cases: Annotated[list[TransientCase], Field(min_length=1, max_length=100)] = Field(

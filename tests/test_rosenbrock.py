@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from autobal import adapters, scenario
+from autobal import adapters, runners, scenario
 from autobal.analysis import rosenbrock, simulate
 from autobal.analysis.linearize import Setup
 
@@ -145,8 +145,45 @@ def test_virtual_machine_and_compiled_give_the_same_numbers(pump, monkeypatch):
     assert np.abs(a["X"] - b["X"]).max() <= 1e-12
 
 
-def test_accuracy_block_works_for_rodas4(pump):
-    cases = [{"input": "force_step", "amplitude": 0.01}]
-    res = simulate.study(pump, cases, 0.01, 101, "rodas4")
-    acc = simulate.accuracy(pump, res, cases, 0.01, 101, "rodas4")
-    assert 0 < acc["estimate"] < 1e-6 and "rodas4" in acc["how"]
+@pytest.mark.parametrize("integrator", ["rodas4", "rodas4p"])
+def test_scene_key_and_accuracy_block(integrator):
+    # the scene's transient (3 cases, 2001 outputs) with integrator: rodas4 / rodas4p, through the runner
+    scene = scenario.load("pump_pe600_dynamics")
+    settings = scene.analyses.transient.model_copy(update={"integrator": integrator})
+    res = runners.transient(scene, settings)
+    acc = res.data["accuracy"]
+    assert res.data["integrator"] == integrator and integrator in acc["how"]
+    assert all(c["failure"] is None and len(c["t"]) == 2001 for c in res.data["series"])
+    assert 0 < acc["estimate"] < 1e-5  # rtol 1e-9 against 1e-11 (CVODES' block: 7e-7 measured)
+
+
+def test_prothero_robinson_order_reduction():
+    # y' = lam (y - sin t) + cos t, y = sin t, lam = -1e6 (Hairer & Wanner 1996, Sect. IV.15): RODAS4 drops to
+    # order 1 in the stiff limit, RODASP keeps order 3 at errors 1000x smaller
+    x, t, p = ca.SX.sym("x"), ca.SX.sym("t"), ca.SX.sym("p", 0)
+    f = ca.Function("f", [t, x, p], [-1e6 * (x - ca.sin(t)) + ca.cos(t)])
+    orders = {}
+    for method in ("rodas4", "rodas4p"):
+        e = [abs(float(rosenbrock.rodas4_fixed(f, n, 1.0, method=method)(0.0, [])[0]) - np.sin(1.0))
+             for n in (10, 20, 40)]
+        orders[method] = np.log2(e[0] / e[1]), np.log2(e[1] / e[2]), e[-1]
+    assert all(0.8 < q < 1.4 for q in orders["rodas4"][:2])
+    assert all(2.7 < q < 3.5 for q in orders["rodas4p"][:2])
+    assert orders["rodas4p"][2] < 1e-3 * orders["rodas4"][2]
+
+
+def test_rodasp_keeps_order_four_on_the_harmonic_input(pump):
+    # the pump driven by dpsi1 = 0.01 sin(omega0 t): RODAS4's fixed-step order drops to 2-3, RODASP's stays 4
+    s = [0.0, 0.0, 0.01, pump.data.omega0, pump.design.groups.b, 0.0]
+    x, t, p = ca.SX.sym("x", len(pump.states)), ca.SX.sym("t"), ca.SX.sym("p", 0)
+    dpsi1 = s[2] * ca.sin(s[3] * t)
+    w = ca.vertcat(pump.w0[0] + dpsi1, pump.w0[1] + s[4] * dpsi1)
+    f = ca.Function("f", [t, x, p], [pump.ode(x, w, pump.p0)])
+    ref = ca.integrator("ref", "cvodes", {"x": x, "t": t, "ode": pump.ode(x, w, pump.p0)}, 0.0, 0.05,
+                        {"reltol": 1e-13, "abstol": 1e-15})(x0=pump.x0)["xf"]
+    order = {}
+    for method in ("rodas4", "rodas4p"):
+        e = [float(np.abs(rosenbrock.rodas4_fixed(f, n, 0.05, method=method)(pump.x0, [])[0] - ref).max())
+             for n in (282, 564)]
+        order[method] = np.log2(e[0] / e[1])
+    assert order["rodas4"] < 3.0 and 3.6 < order["rodas4p"] < 4.4, order
