@@ -1,7 +1,8 @@
 """Benchmark: the stiff nonlinear device model integrated by CasADi's CVODES (BDF, Newton with the
 exact symbolic Jacobian) against scipy.integrate.solve_ivp (Radau, BDF, LSODA), at matched final
-error, in one run; beside them a fixed-step RODAS4 written as one CasADi Function (benchmarks/_rosenbrock.py),
-on CasADi's virtual machine and compiled to C.
+error, in one run; beside them the toolkit's compiled Rosenbrock integrators (analysis/rosenbrock.py): RODAS4 and
+RODASP with step-size control through the transient Simulator (scene keys ``integrator: rodas4`` / ``rodas4p``),
+and RODAS4 with fixed steps, on CasADi's virtual machine and compiled to C.
 
 Problem: the pump PE 600-300 device (App. A data, energy-consistent chamber balances), a step of the
 axial force dtau = 0.01 from the static solution, 50 ms; eigenvalues from -8e8 to -81 +- 986i 1/s
@@ -35,8 +36,9 @@ from scipy.integrate import solve_ivp
 from autobal import adapters, scenario
 from autobal.analysis.compiled import compiled_map
 from autobal.analysis.linearize import Setup
+from autobal.analysis.rosenbrock import rodas4_fixed, rodas4_step
+from autobal.analysis.simulate import Simulator
 from benchmarks._results import case, write
-from benchmarks._rosenbrock import rodas4_adaptive, rodas4_fixed, rodas4_step
 
 T_END = 0.05
 DTAU = 0.01
@@ -49,10 +51,10 @@ LEVER_ROUNDS = 15
 CV = "CVODES (autobal)"
 RODAS_VM = "RODAS4 fixed step, CasADi VM"
 RODAS_C = "RODAS4 fixed step, compiled C"
-RODAS_AVM = "RODAS4 adaptive, CasADi VM"
-RODAS_AC = "RODAS4 adaptive, compiled C"
-ATTEMPTS = 256  # step attempts in one call of adaptive RODAS4 (called again while t < T_END)
-H0 = 1e-8  # s, first step of adaptive RODAS4
+RODAS_AVM = "RODAS4 adaptive (Simulator, integrator: rodas4), CasADi VM"
+RODAS_AC = "RODAS4 adaptive (Simulator, integrator: rodas4), compiled C"
+RODASP_AC = "RODASP adaptive (Simulator, integrator: rodas4p), compiled C"
+ADAPTIVE = {RODAS_AVM: ("rodas4", False), RODAS_AC: ("rodas4", True), RODASP_AC: ("rodas4p", True)}
 
 
 def timed_rounds(runners: dict, rounds: int) -> dict:
@@ -92,6 +94,12 @@ def problem():
     return m, w, f, jac
 
 
+def library_rhs(m, w) -> ca.Function:
+    """The right-hand side as analysis/rosenbrock.py takes it: ``(t, x, p) -> dx/dt`` (no parameters)."""
+    x, t = ca.SX.sym("x", len(m.states)), ca.SX.sym("t")
+    return ca.Function("f", [t, x, ca.SX.sym("p", 0)], [m.ode(x, w, m.p0)])
+
+
 def cvodes_runner(m, w, rtol, opts=None):
     x = ca.SX.sym("x", len(m.states))
     dae = {"x": x, "ode": m.ode(x, w, m.p0)}
@@ -123,41 +131,37 @@ def scipy_runner(m, f, jac, method, rtol):
 
 def rodas_runner(F, x0, n):
     def run():
-        xf, _, _ = F(x0)
+        xf, _, _ = F(x0, [])
         return np.array(xf).ravel(), n
 
     return run
 
 
-def rodas_adaptive_runner(F, x0):
+def simulator_runner(sim: Simulator, s: list):
+    """The toolkit's path: the transient Simulator on the output grid (0, T_END), from the equilibrium."""
     def run():
-        x, t, h, acc, rej = x0, 0.0, H0, 0, 0
-        for _ in range(1000):
-            x, t, h, a, r = F(x, t, h)
-            acc, rej = acc + int(a), rej + int(r)
-            if T_END - float(t) <= 1e-12 * T_END:
-                return np.array(x).ravel(), f"{acc} (+{rej} rejected)"
-        raise RuntimeError("adaptive RODAS4: too many steps")
+        r = sim.run(s)
+        if r["failure"]:
+            raise RuntimeError(r["failure"]["message"])
+        return r["X"][-1], f"{r['steps']} (+{r['rejected']} rejected)"
 
     return run
 
 
 def rodas_runners(m, f) -> tuple[dict, dict]:
-    """RODAS4 over the step ladder: on the virtual machine, and compiled through analysis/compiled.py's
+    """RODAS4 (library, fixed steps) over the step ladder and the Simulator's RODAS4 / RODASP over the rtol ladder:
+    on the virtual machine (``AUTOBAL_COMPILE=0`` while building) and compiled through analysis/compiled.py's
     ``compiled_map`` into a fresh cache (``$AUTOBAL_CACHE`` set to a temporary folder for this process), so the
-    compile time is measured, then loaded again from that cache (the time a later process pays).
+    compile time is measured, then built again from that cache (the time a later process pays: code generation
+    for the hash, then loading the library).
 
-    Returns the runners and ``{(method, n): (build_s, load_s)}``."""
+    Returns the runners and ``{(method, setting): (build_s, load_s)}``."""
     runners, builds = {}, {}
-    ladders = [(RODAS_VM, RODAS_C, n, lambda n: rodas4_fixed(f, n, T_END), lambda F, n: rodas_runner(F, m.x0, n))
-               for n in N_STEPS]
-    ladders += [(RODAS_AVM, RODAS_AC, r, lambda r: rodas4_adaptive(f, T_END, r, r * 1e-2, ATTEMPTS),
-                 lambda F, r: rodas_adaptive_runner(F, m.x0)) for r in RTOLS]
-    for vm, cc, setting, build, runner in ladders:
+    for n in N_STEPS:
         t0 = time.perf_counter()
-        F = build(setting)
-        builds[vm, setting] = (time.perf_counter() - t0, None)
-        runners[vm, setting] = runner(F, setting)
+        F = rodas4_fixed(f, n, T_END)
+        builds[RODAS_VM, n] = (time.perf_counter() - t0, None)
+        runners[RODAS_VM, n] = rodas_runner(F, m.x0, n)
         t0 = time.perf_counter()
         Fc = compiled_map(F, 1)
         t_build = time.perf_counter() - t0
@@ -165,8 +169,24 @@ def rodas_runners(m, f) -> tuple[dict, dict]:
             continue
         t0 = time.perf_counter()
         Fc = compiled_map(F, 1)
-        builds[cc, setting] = (builds[vm, setting][0] + t_build, time.perf_counter() - t0)
-        runners[cc, setting] = runner(Fc, setting)
+        builds[RODAS_C, n] = (builds[RODAS_VM, n][0] + t_build, time.perf_counter() - t0)
+        runners[RODAS_C, n] = rodas_runner(Fc, m.x0, n)
+    for name, (integrator, compiled) in ADAPTIVE.items():
+        old = os.environ.get("AUTOBAL_COMPILE")
+        os.environ["AUTOBAL_COMPILE"] = "1" if compiled else "0"
+        try:
+            t0 = time.perf_counter()  # the first build compiles; the tolerances are inputs of the one library
+            Simulator(m, T_END, 2, integrator)
+            t_build = time.perf_counter() - t0
+            for r in RTOLS:
+                t0 = time.perf_counter()
+                sim = Simulator(m, T_END, 2, integrator, rtol=r, atol=r * 1e-2)
+                t_load = time.perf_counter() - t0
+                if sim.compiled == compiled:
+                    builds[name, r] = (t_build, t_load if compiled else None)
+                    runners[name, r] = simulator_runner(sim, sim.input_vector("force_step", DTAU))
+        finally:
+            os.environ.pop("AUTOBAL_COMPILE") if old is None else os.environ.update(AUTOBAL_COMPILE=old)
     return runners, builds
 
 
@@ -177,14 +197,14 @@ def estimate_check(f, n, x0, ref) -> dict:
     step = rodas4_step(f)
     h, x, ratios, est, loc = T_END / n, np.asarray(x0, float), [], [], []
     for _ in range(n):
-        xn, e = step(x, h)
+        xn, e, _ = step(0.0, x, [], h)
         xn, xs = np.array(xn).ravel(), x
         for _ in range(16):
-            xs = np.array(step(xs, h / 16)[0]).ravel()
+            xs = np.array(step(0.0, xs, [], h / 16)[0]).ravel()
         est.append(float(np.abs(np.array(e)).max()))
         loc.append(float(np.abs(xn - xs).max()))
         x = xn
-    x2 = np.array(rodas4_fixed(f, 2 * n, T_END)(x0)[0]).ravel()
+    x2 = np.array(rodas4_fixed(f, 2 * n, T_END)(x0, [])[0]).ravel()
     ratios = np.array(est) / np.maximum(loc, 1e-300)
     return {"ratio_min": float(ratios.min()), "ratio_max": float(ratios.max()), "est_sum": float(np.sum(est)),
             "loc_sum": float(np.sum(loc)), "first_est": est[0], "first_loc": loc[0],
@@ -362,7 +382,7 @@ def _main() -> list[dict]:
         builds[CV, rtol] = (time.perf_counter() - t0, None)
         for k in ("Radau", "BDF", "LSODA"):
             runners[f"scipy {k}", rtol] = scipy_runner(m, f, jac, k, rtol)
-    rodas, rodas_builds = rodas_runners(m, f)
+    rodas, rodas_builds = rodas_runners(m, library_rhs(m, w))
     runners |= rodas
     builds |= rodas_builds
     res = timed_rounds(runners, ROUNDS)
@@ -381,41 +401,50 @@ def _main() -> list[dict]:
             ok = [r for r in rows if r[0] == name and np.isfinite(r[2]) and r[2] <= target]
             best[name, target] = min(ok, key=lambda r: r[3], default=None)
     cases = []
+    toolkit = {CV: "CVODES", RODAS_AC if (RODAS_AC, RTOLS[0]) in runners else RODAS_AVM: "rodas4", RODASP_AC: "rodas4p"}
     for target in TARGETS:
-        a = best[CV, target]
-        for name in ("scipy Radau", "scipy BDF", "scipy LSODA"):
-            b = best[name, target]
-            if a is None or b is None:
-                continue
-            cases.append(case(f"final error <= {target:.0e}", a[3], builds[CV, a[1]][0], f"{name} (rtol {b[1]:.0e})",
-                              b[3], a[2], b[2], autobal_rtol=a[1], autobal_wall_s=a[4], peer_wall_s=b[4],
-                              ratio_wall=b[4] / a[4], ratio_median_wall=b[5] / a[5]))
+        for method, key in toolkit.items():
+            a = best.get((method, target))
+            for name in ("scipy Radau", "scipy BDF", "scipy LSODA"):
+                b = best[name, target]
+                if a is None or b is None:
+                    continue
+                cases.append(case(f"final error <= {target:.0e}, {key}", a[3], builds[method, a[1]][0],
+                                  f"{name} (rtol {b[1]:.0e})", b[3], a[2], b[2], integrator=key, autobal_rtol=a[1],
+                                  autobal_wall_s=a[4], peer_wall_s=b[4], ratio_wall=b[4] / a[4],
+                                  ratio_median_wall=b[5] / a[5]))
     other = ["| target | method | steps | CPU (ms) | wall (ms) | median wall (ms) | build (s) | load (s) | final error "
              "| LSODA / method (CPU; wall) | CVODES / method (CPU) |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     rodas_best = {}
     for target in TARGETS:
         lsoda, cv = best["scipy LSODA", target], best[CV, target]
-        for name in (RODAS_VM, RODAS_C, RODAS_AVM, RODAS_AC):
+        for name in (RODAS_VM, RODAS_C, *ADAPTIVE):
             r = best.get((name, target))
             if r is None:
                 continue
             rodas_best[name, target] = r
             b, ld = builds[name, r[1]]
-            setting = f"{r[6]} (rtol {r[1]:.0e})" if name in (RODAS_AVM, RODAS_AC) else r[6]
+            setting = f"{r[6]} (rtol {r[1]:.0e})" if name in ADAPTIVE else r[6]
             other.append(f"| {target:.0e} | {name} | {setting} | {r[3] * 1e3:.3f} | {r[4] * 1e3:.3f} "
                          f"| {r[5] * 1e3:.3f} | {b:.2f} | {'-' if ld is None else f'{ld:.3f}'} | {r[2]:.2e} | "
                          f"{lsoda[3] / r[3]:.0f}x; {lsoda[4] / r[4]:.0f}x | {cv[3] / r[3]:.1f}x |")
     lever_rows, lever_times = levers(m, w, ref)
     prof, prof_data = profile(m, w, runners[CV, 1e-6])
     chosen = rodas_best.get((RODAS_C, 1e-6)) or rodas_best.get((RODAS_VM, 1e-6))
-    chk = estimate_check(f, chosen[1], m.x0, ref) if chosen else None
+    chk = estimate_check(library_rhs(m, w), chosen[1], m.x0, ref) if chosen else None
     runs = ["| method | rtol / steps | final error | CPU (s) | wall (s) | median wall (s) | steps (CVODES, RODAS4) / "
             "RHS calls (scipy) |", "|---|---|---|---|---|---|---|"]
     runs += [f"| {n} | {s_:.3g} | {e:.2e} | {c:.5f} | {t:.5f} | {md:.5f} | {wk} |" for n, s_, e, c, t, md, wk in rows]
     load1 = os.getloadavg()
-    lsoda6 = next(c for c in cases if c["case"] == "final error <= 1e-06" and "LSODA" in c["peer"])
+    at6 = {c["integrator"]: c for c in cases if c["case"].startswith("final error <= 1e-06") and "LSODA" in c["peer"]}
+    lsoda6 = at6["CVODES"]
+    goal = "; ".join(f"integrator: {k}: {'met' if c['ratio'] >= 100 else 'missed'}, {c['ratio']:.0f}x in CPU time "
+                     f"({c['autobal_s'] * 1e3:.3f} ms, rtol {c['autobal_rtol']:.0e}, error {c['autobal_error']:.1e}, "
+                     f"build {c['autobal_build_s']:.2f} s), {c['ratio_wall']:.0f}x on best wall times"
+                     for k, c in at6.items() if k != "CVODES")
     notes = [
-        f"Goal (issue 17): >= 100x LSODA at final error 1e-6 with the toolkit's integrator (CVODES): "
+        f"Goal (issue 17): >= 100x LSODA at final error 1e-6 with the toolkit's integrators, each through the "
+        f"transient Simulator (scene key analyses.transient.integrator): {goal}. With the default integrator: "
         f"{'met' if lsoda6['ratio'] >= 100 else 'missed'}: {lsoda6['ratio']:.0f}x in CPU time (CVODES "
         f"{lsoda6['autobal_s'] * 1e3:.3f} ms, LSODA {lsoda6['peer_s'] * 1e3:.1f} ms), {lsoda6['ratio_wall']:.0f}x on "
         f"best wall times, {lsoda6['ratio_median_wall']:.0f}x on median wall times; load average {load0[0]:.2f} at "
@@ -434,7 +463,9 @@ def _main() -> list[dict]:
         "the best CPU time of the "
         "calling thread (time.thread_time), best and median wall times beside in the tables; build time = "
         "constructing the integrator (CVODES) or Function plus C compilation (RODAS4; load = a later process "
-        "loading the cached library). scipy gets the "
+        "building it from the cached library: code generation for the hash, then loading). The adaptive Rosenbrock "
+        "rows are the toolkit's Simulator with an output grid of two points (0 and 50 ms), the force step as its "
+        "input vector, called from Python like a scene's transient. scipy gets the "
         "same RHS and exact Jacobian as CasADi Functions called from Python.",
         "Profile: " + prof,
     ]
@@ -447,9 +478,9 @@ def _main() -> list[dict]:
     if chosen:
         t_c = chosen[3]
         notes.append(
-            f"A different integrator: RODAS4 (Hairer & Wanner 1996, Sect. IV.7; L-stable, order 4) with {chosen[1]} "
-            f"fixed steps written once as a CasADi Function (benchmarks/_rosenbrock.py: exact Jacobian and LU "
-            f"written out symbolically, mapaccum over the steps) reaches final error {chosen[2]:.1e} in "
+            f"RODAS4 (Hairer & Wanner 1996, Sect. IV.7; L-stable, order 4) with {chosen[1]} "
+            f"fixed steps written once as a CasADi Function (analysis/rosenbrock.py's rodas4_fixed: exact Jacobian and "
+            f"LU written out symbolically, mapaccum over the steps) reaches final error {chosen[2]:.1e} in "
             f"{t_c * 1e3:.3f} ms CPU ({chosen[0]}): {lsoda6['peer_s'] / t_c:.0f}x LSODA, "
             f"{lsoda6['autobal_s'] / t_c:.1f}x CVODES (build {builds[chosen[0], chosen[1]][0]:.2f} s). Its embedded "
             f"error estimate against the true local error of each step: {chk['ratio_min']:.2f} to "
@@ -457,17 +488,18 @@ def _main() -> list[dict]:
             f"{chk['first_loc']:.1e} true); summed over the steps {chk['est_sum']:.1e} against a final error of "
             f"{chk['error']:.1e} (stiff components' local errors decay), so a controller on it is conservative; "
             f"Richardson's estimate from {chosen[1]} and {2 * chosen[1]} steps: {chk['richardson']:.1e}.")
-    adaptive = rodas_best.get((RODAS_AC, 1e-6)) or rodas_best.get((RODAS_AVM, 1e-6))
-    if adaptive:
-        notes.append(
-            f"With step-size control on that estimate (benchmarks/_rosenbrock.py, the same rtol ladder as the "
-            f"others, atol = rtol x 1e-2, {ATTEMPTS} step attempts a compiled call, spare ones skipped, first step "
-            f"{H0:g} s), RODAS4 meets 1e-6 at rtol {adaptive[1]:.0e} with {adaptive[6]} steps, error "
-            f"{adaptive[2]:.1e}, in {adaptive[3] * 1e3:.3f} ms CPU ({adaptive[0]}): "
-            f"{lsoda6['peer_s'] / adaptive[3]:.0f}x LSODA, build {builds[adaptive[0], adaptive[1]][0]:.2f} s; no "
-            "reference needed to choose the steps.")
-    write("dynamics_integrators", "Stiff transient: CVODES vs scipy solve_ivp at matched final error", cases,
-          notes, tables=["Other integrators at matched final error (benchmark code, not in the toolkit):\n\n"
+    for name in ADAPTIVE:
+        a = rodas_best.get((name, 1e-6))
+        if a:
+            notes.append(
+                f"With step-size control (the toolkit's transient Simulator, analysis/rosenbrock.py's rodas4_grid; the "
+                f"same rtol ladder as the others, atol = rtol x 1e-2), {name} meets 1e-6 at rtol {a[1]:.0e} with "
+                f"{a[6]} steps, error {a[2]:.1e}, in {a[3] * 1e3:.3f} ms CPU: {lsoda6['peer_s'] / a[3]:.0f}x LSODA, "
+                f"{lsoda6['autobal_s'] / a[3]:.1f}x CVODES, build {builds[name, a[1]][0]:.2f} s; no reference needed "
+                "to choose the steps.")
+    write("dynamics_integrators", "Stiff transient: CVODES and RODAS4 vs scipy solve_ivp at matched final error",
+          cases, notes, tables=["Rosenbrock integrators at matched final error (analysis/rosenbrock.py; adaptive: the "
+                                "transient Simulator):\n\n"
                          + "\n".join(other),
                          "CVODES levers tried (same problem, same reference, interleaved, best of "
                          f"{LEVER_ROUNDS * IN_ROUND}):\n\n" + "\n".join(lever_rows),
