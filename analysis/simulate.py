@@ -50,7 +50,7 @@ class Simulator:
     ``integrator="rodas4"``: RODAS4 (Hairer & Wanner (1996), Sect. IV.7), or ``"rodas4p"``: RODASP
     (Steinebach 1995; no order reduction where a stiff mode is driven by a harmonic input), with
     step-size control on the embedded error estimate, every step clipped to the next output time, as one
-    CasADi Function of ``attempts`` step attempts (default 2 chunk + 100) compiled to C through
+    CasADi Function of ``attempts`` step attempts (default 2 chunk + 254) compiled to C through
     :func:`autobal.analysis.compiled.compiled_map` (cached on disk; CasADi's virtual machine without a C
     compiler or with ``AUTOBAL_COMPILE=0``), called again until the chunk's last output is reached.  Its
     options: ``max_num_steps`` (step attempts allowed between two outputs, default 20000, as CVODES'),
@@ -102,7 +102,7 @@ class Simulator:
 
     def _rodas4(self, x, t, p, s, w, dt: float, opts: dict) -> None:
         """Build the RODAS4 loop of step attempts (compiled when a C compiler is found)."""
-        o = {"max_num_steps": 20000, "attempts": 2 * self.chunk + 100, "h0": 1e-4 * dt, "linear_solver": "lu"}
+        o = {"max_num_steps": 20000, "attempts": 2 * self.chunk + 254, "h0": 1e-4 * dt, "linear_solver": "lu"}
         unknown = set(opts) - set(o)
         if unknown:
             raise ValueError(f"unknown RODAS4 options {sorted(unknown)}; expected some of {sorted(o)}")
