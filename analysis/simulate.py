@@ -93,6 +93,7 @@ class Simulator:
         dae = {"x": x, "t": t, "p": ca.vertcat(p, s), "ode": model.ode(x, w, p)}
         o = {"reltol": rtol, "abstol": atol, "max_num_steps": 20000, "disable_internal_warnings": True} | opts
         self.name = integrator
+        self.compiled = False  # a compiled Rosenbrock loop (set by the RODAS4 build)
         self.chunk = max(1, min(chunk, points - 1))
         dt = self.t[1] - self.t[0]
         if integrator in ROSENBROCK:

@@ -109,6 +109,18 @@ def test_growth_check_rejects_a_factorisation_that_needed_pivoting():
     assert np.abs(qr[8:] - exact).max() < 1e-7 * np.abs(exact).max()
 
 
+def test_non_finite_right_hand_side_is_a_step_size_underflow():
+    # x' = -x + sqrt(0.5 - t): not a number past t = 0.5; every step across is rejected until the step size
+    # underflows, reported with the time reached (0.5 to the last accepted step) and a finite state
+    x, t, p = ca.SX.sym("x"), ca.SX.sym("t"), ca.SX.sym("p", 0)
+    f = ca.Function("f", [t, x, p], [-x + ca.sqrt(0.5 - t)])
+    W = np.array(rosenbrock.rodas4_grid(f, 2000)(np.r_[0.0, 1e-3, 0, 0, 0, 0, 0, 0, 1.0], 1.0, 1,
+                                                 [1e-6, 1e-8, 1e5], []))
+    w = W[:, -1]
+    assert rosenbrock.STATUS[int(w[7])] == "step size underflow"
+    assert 0.49 < w[0] <= 0.5 and np.isfinite(w[8]) and w[1] < 1e-13
+
+
 def test_failure_reports_the_time_reached(pump):
     sim = simulate.Simulator(pump, 0.05, 51, "rodas4", max_num_steps=3)
     r = sim.run(sim.input_vector("force_step", 0.01))
