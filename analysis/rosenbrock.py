@@ -36,8 +36,9 @@ C = [[],
      [7.496443313967647, -10.24680431464352, -33.99990352819905, 11.70890893206160],
      [8.083246795921522, -7.981132988064893, -31.52159432874371, 16.31930543123136, -6.058818238834054]]
 # RODASP of Steinebach (1995), "Order-reduction of ROW-methods for DAEs and method of lines applications",
-# Preprint 1741, TH Darmstadt: the same structure and gamma, coefficients chosen so that a stiff component driven
-# by a time-dependent input (the Prothero-Robinson problem) keeps order 4, where RODAS4 drops to about 2
+# Preprint 1741, TH Darmstadt: the same structure and gamma, coefficients chosen against the order reduction of a
+# stiff component driven by a time-dependent input (tests: order 3 against RODAS4's 1 on the Prothero-Robinson
+# problem, order 4 against 2-3 on the pump driven by a harmonic pressure)
 A_P = [[],
        [3.0],
        [1.831036793486759, 0.4955183967433795],
