@@ -22,7 +22,6 @@ from functools import cache
 
 import casadi as ca
 import numpy as np
-from scipy.optimize import brentq
 
 from autobal.analysis import interrupt
 from autobal.models.rotor import RotorParams, rotor_model
@@ -223,6 +222,8 @@ def crossover(Omega0: float, psi: float, omega0: float, alpha: float, nu_end: fl
         r1 = passage(RotorParams.from_groups(Omega0, n, psi), omega0 / Omega0, alpha / Omega0**2, nu_end)
         r0 = passage(RotorParams.from_groups(Omega0, n, 1.0), omega0 / Omega0, alpha / Omega0**2, nu_end)
         return r1["d_max"] - r0["d_max"]
+
+    from scipy.optimize import brentq  # heavy (0.45 s to import): only this study needs it
 
     return float(brentq(gap, *bracket, xtol=xtol))
 
