@@ -31,12 +31,10 @@ from autobal.analysis import ipopt
 from autobal.errors import SolveError
 from autobal.models.rotor import RotorParams
 from autobal.ocp.problem import SpinupOcp
-from autobal.ocp.search import ModalRotor, simulate_steps
+from autobal.ocp.search import FAST_STEP, ModalRotor, simulate_steps, steps_of
 from autobal.ocp.simulation import initial_guess, ramp_profile, resimulate
 from autobal.ocp.solve import IPOPT_OPTIONS
 from autobal.ocp.transcription import DirectCollocation, mesh, transcribe
-
-FAST_STEP = 0.5  # dimensionless step of the validation integrator (peak within 1e-4 of CVODES, tested)
 
 
 @dataclass(frozen=True)
@@ -133,22 +131,6 @@ def cvodes_peaks(ocp: SpinupOcp, factors: np.ndarray, profile: Profile, points: 
         u, h = profile.on(o)
         out.append(resimulate(o, u, h, profile.label, points=points).peak_delta)
     return np.array(out)
-
-
-def averaged(u: np.ndarray, duration: float, edges: np.ndarray) -> np.ndarray:
-    """The piecewise-constant profile u (equal intervals over ``duration``, zero after) averaged over the
-    steps between ``edges`` (same time unit as ``duration``): the speed at every edge is kept exactly."""
-    n = u.size
-    cum = np.concatenate([[0.0], np.cumsum(u)])
-    U = np.interp(np.asarray(edges) / duration * n, np.arange(n + 1), cum, right=cum[-1])
-    return np.diff(U) / (np.diff(edges) / duration * n)
-
-
-def steps_of(ocp: SpinupOcp, u: np.ndarray, dt: float) -> np.ndarray:
-    """The piecewise-constant profile u (n control intervals of the horizon, then held) averaged over steps
-    of ``dt`` (dimensionless time of ``ocp``'s rotor), horizon and settling window covered."""
-    steps = int(np.ceil((ocp.tau_h + ocp.tau_s) / dt))
-    return averaged(u, ocp.tau_h, np.arange(steps + 1) * dt)
 
 
 def fast_peaks(ocp: SpinupOcp, factors: np.ndarray, profiles: list[Profile], dt: float = FAST_STEP) -> np.ndarray:

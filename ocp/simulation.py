@@ -4,6 +4,7 @@ every optimum at tight tolerance (the reported peak), and the constant-ramp base
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
 
 import casadi as ca
 import numpy as np
@@ -18,18 +19,75 @@ RESIM_TOL = 1e-12  # CVODES tolerance of the re-simulation
 RESIM_POINTS = 24  # re-simulation samples per interval
 
 
-def simulate_profile(ocp: SpinupOcp, u, h, fractions, tol: float = RESIM_TOL) -> np.ndarray:
-    """CVODES run of piecewise-constant u (over alpha_max) on intervals of lengths h (tau):
-    states (K, len(fractions), 5) at the fractions of each interval."""
+@cache
+def chained_integrator(fractions: tuple, tol: float, intervals: int, multistep: str) -> ca.Function:
+    """:func:`interval_integrator` chained over ``intervals`` intervals in one CasADi call (``mapaccum``: CVODES
+    restarts at every interval, as the control jumps there): (q0 (5), [a*, h, p] (6, K)) -> (q(T), states
+    (5, K len(fractions)))."""
+    F = interval_integrator(fractions, tol, multistep)
+    q, par = ca.MX.sym("q", 5), ca.MX.sym("par", 6)
+    xf = F(x0=q, p=par)["xf"]
+    return ca.Function("spinup_interval_step", [q, par], [xf[:, -1], xf]).mapaccum("spinup_chain", intervals, [0], [0])
+
+
+def runs(u: np.ndarray, h: np.ndarray) -> list[tuple[int, int]]:
+    """(first interval, length) of the maximal runs of consecutive intervals with equal control and length."""
+    change = np.flatnonzero((np.diff(u) != 0) | (np.diff(h) != 0)) + 1
+    starts = np.concatenate([[0], change])
+    return list(zip(starts.tolist(), np.diff(np.append(starts, len(u))).tolist(), strict=True))
+
+
+def simulate_profile(ocp: SpinupOcp, u, h, fractions, tol: float = RESIM_TOL, multistep: str = "bdf",
+                     merge: bool = False) -> np.ndarray:
+    """CVODES run of piecewise-constant u (over alpha_max) on intervals of lengths h (tau).
+
+    Parameters
+    ----------
+    ocp : SpinupOcp
+        The problem (rotor, start state).
+    u, h : array_like, shape (K,)
+        Acceleration over alpha_max and length (tau) of each interval.
+    fractions : sequence of float
+        Output instants as fractions of each interval, the last one 1.
+    tol : float
+        CVODES relative and absolute tolerance.
+    multistep : str
+        "bdf" or "adams" (:func:`autobal.ocp.transcription.interval_integrator`).
+    merge : bool
+        Integrate each run of equal intervals (a held speed, a full-acceleration arc) in one CVODES call, with
+        restarts only where the control jumps (otherwise at every interval, as the multiple shooting does).
+
+    Returns
+    -------
+    ndarray, shape (K, len(fractions), 5)
+        The states at the fractions of each interval.
+    """
     if abs(fractions[-1] - 1) > 1e-14:
         raise ValueError("the last output fraction must be the interval end (1)")
-    F = interval_integrator(tuple(fractions), tol)
-    q, out = np.asarray(ocp.q0, float), []
-    for uk, hk in zip(u, h, strict=True):
-        xf = np.array(interrupt.call(F, x0=q, p=[uk * ocp.a_max, hk, *ocp.params.p])["xf"])
-        out.append(xf.T)
-        q = xf[:, -1]
-    return np.array(out)
+    u, h = np.asarray(u, float), np.asarray(h, float)
+    K, nf, fr, p = len(u), len(fractions), tuple(float(f) for f in fractions), list(ocp.params.p)
+    if len(h) != K:
+        raise ValueError(f"{K} controls for {len(h)} intervals")
+    pieces = runs(u, h) if merge else [(0, K)]
+    q, out, i = np.asarray(ocp.q0, float), [], 0
+    while i < len(pieces):
+        k, m = pieces[i]
+        if merge and m > 1:  # one call over the run, outputs at the fractions of each of its intervals
+            F = interval_integrator(tuple((r + f) / m for r in range(m) for f in fr), tol, multistep)
+            xs = np.array(interrupt.call(F, x0=q, p=[u[k] * ocp.a_max, m * h[k], *p])["xf"])
+            i += 1
+        else:  # single intervals (or all, without merge): one chained call restarting at each
+            j = i
+            while j < len(pieces) and (not merge or pieces[j][1] == 1):
+                j += 1
+            m = sum(r[1] for r in pieces[i:j])
+            F = chained_integrator(fr, tol, m, multistep)
+            par = np.vstack([u[k:k + m] * ocp.a_max, h[k:k + m], np.tile(np.array(p)[:, None], m)])
+            xs = np.array(interrupt.call(F, q, par)[1])
+            i = j
+        out.append(xs.T.reshape(m, nf, 5))
+        q = xs[:, -1]
+    return np.concatenate(out)
 
 
 def ramp_profile(ocp: SpinupOcp, n: int, alpha: float, hold_at: float | None = None,
@@ -62,12 +120,13 @@ def initial_guess(ocp: SpinupOcp, nlp: Nlp, u: np.ndarray) -> np.ndarray:
     h = np.concatenate([np.full(ms.n, ms.h), np.full(ms.ns, ms.hs)])
     w0 = np.zeros(nlp.x.numel())
     if nlp.index["Xc"] is not None:
-        sim = simulate_profile(ocp, uu, h, path_fractions(nlp.method.degree, nlp.method.scheme), tol=1e-8)
+        sim = simulate_profile(ocp, uu, h, path_fractions(nlp.method.degree, nlp.method.scheme), 1e-8, "adams",
+                               merge=True)
         d = nlp.method.degree
         w0[nlp.index["Xc"]] = sim[:, :d, :]
         w0[nlp.index["X"][1:]] = sim[:, -1, :]
     else:
-        sim = simulate_profile(ocp, uu, h, [1.0], tol=1e-8)
+        sim = simulate_profile(ocp, uu, h, [1.0], 1e-8, "adams", merge=True)
         w0[nlp.index["X"][1:]] = sim[:, -1, :]
     w0[nlp.index["X"][0]] = ocp.q0
     w0[nlp.index["u"]] = uu
@@ -108,7 +167,7 @@ class Trajectory:
 def resimulate(ocp: SpinupOcp, u, h, label: str, points: int = RESIM_POINTS, tol: float = RESIM_TOL) -> Trajectory:
     """CVODES at tight tolerance with the piecewise-constant profile u (over alpha_max) on intervals h."""
     frac = list(np.linspace(0, 1, points + 1)[1:])
-    sim = simulate_profile(ocp, u, h, frac, tol=tol)
+    sim = simulate_profile(ocp, u, h, frac, tol, "adams", merge=True)
     K = len(u)
     t0 = np.concatenate([[0.0], np.cumsum(h)[:-1]])
     tau = np.concatenate([[0.0], (t0[:, None] + np.asarray(h)[:, None] * np.array(frac)[None, :]).ravel()])

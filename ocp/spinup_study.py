@@ -50,6 +50,8 @@ class SpinupResult(Result):
                  + ", ".join(f"{r['solve_time_s']:.2f}" for r in d["starts"] if "solve_time_s" in r)
                  + f" s), NLP build {d['build_time_s']:.2f} s, wall {d['wall_time_s']:.2f} s (with the global "
                  "search, re-simulations and baselines)",
+                 "  wall time split: " + ", ".join(f"{k.replace('_', ' ')} {v:.2f} s" for k, v in
+                                                   d.get("time_split_s", {}).items()),
                  f"  optimum: peak deflection {d['peak_deflection_over_e']:.4f} e (collocation "
                  f"{d['collocation_peak_over_e']:.4f} e, re-simulation difference {d['resimulation_rel_error']:.2e}),"
                  f" peak unbalance {d['peak_unbalance']:.4f}, final time {d['final_time_s']:.4g} s"]
@@ -160,7 +162,9 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
     """
     t0 = time.perf_counter()
     opt = optimize(ocp, method, multistart, options)
+    t1 = time.perf_counter()
     base = baselines(ocp)
+    t_base = time.perf_counter() - t1
     sol, tr = opt.solution, opt.trajectory
     best_ramp = min(base.values(), key=lambda b: b.peak_delta)
 
@@ -196,4 +200,9 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
     }
     if ocp.objective == "peak_unbalance":
         data["collocation_peak_unbalance"] = opt.collocation_value
+    split = {"global_search": opt.times.get("global_search", 0.0), "guesses": opt.times.get("guesses", 0.0),
+             "build": opt.build_time_s, "solve": data["total_solve_time_s"],
+             "resimulation": opt.times.get("resimulation", 0.0), "baselines": t_base}
+    data["wall_time_s"] = time.perf_counter() - t0
+    data["time_split_s"] = split | {"rest": data["wall_time_s"] - sum(split.values())}
     return SpinupResult(data, tr, base)

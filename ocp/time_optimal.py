@@ -19,7 +19,7 @@ import numpy as np
 
 from autobal.errors import SolveError
 from autobal.ocp.problem import SpinupOcp
-from autobal.ocp.robust import averaged
+from autobal.ocp.search import averaged
 from autobal.ocp.simulation import Trajectory, baselines, resimulate
 from autobal.ocp.solve import TIE, Optimum, Solver, optimize, resimulated_scores
 from autobal.ocp.transcription import DirectCollocation

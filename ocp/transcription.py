@@ -66,13 +66,16 @@ def path_fractions(degree: int, scheme: str) -> list[float]:
 
 
 @cache
-def interval_integrator(fractions: tuple, tol: float) -> ca.Function:
+def interval_integrator(fractions: tuple, tol: float, multistep: str = "bdf") -> ca.Function:
     """CVODES over one interval in s in [0, 1]: dq/ds = h f(q, a*, p), outputs at ``fractions``.
-    Parameters [a*, h, p(4)]."""
+    Parameters [a*, h, p(4)].  ``multistep``: "bdf" (Newton iteration) or "adams" (functional iteration,
+    non-stiff: the re-simulation at tight tolerance, benchmarks/spinup_ocp.md "Study time")."""
     m = rotor_model()
     q, par = ca.SX.sym("q", 5), ca.SX.sym("par", 6)
+    adams = {"linear_multistep_method": "adams", "nonlinear_solver_iteration": "functional"}
     return ca.integrator("spinup_interval", "cvodes", {"x": q, "p": par, "ode": par[1] * m.ode(q, par[0], par[2:])},
-                         0, list(fractions), {"abstol": tol, "reltol": tol, "max_num_steps": 20000})
+                         0, list(fractions), {"abstol": tol, "reltol": tol, "max_num_steps": 20000}
+                         | (adams if multistep == "adams" else {}))
 
 
 @dataclass
