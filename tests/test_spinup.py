@@ -80,6 +80,50 @@ def test_optimum_beats_both_ramps_and_resimulates(target):
         assert key in d
 
 
+def test_time_split_adds_up_to_the_wall_time(target):
+    # the study's wall time by part (global search, guesses, builds, solves, re-simulations, baselines, rest)
+    # is what the summary prints: every part is non-negative and they add up to the reported wall time
+    d = target.data
+    split = d["time_split"]
+    assert set(split) == {f"{k}_time_s" for k in ("global_search", "guesses", "build", "solve", "resimulation",
+                                                  "baselines", "rest")}
+    assert all(v >= 0 for v in split.values())
+    assert_allclose(sum(split.values()), d["wall_time_s"], rtol=1e-12)
+    assert split["build_time_s"] == d["build_time_s"] and split["solve_time_s"] == d["total_solve_time_s"]
+    assert "wall time split: global search" in target.summary()
+
+
+def test_resimulation_options_do_not_change_the_judge():
+    """The re-simulation (CVODES Adams with functional iteration, each run of equal intervals in one call)
+    against CVODES BDF restarted at every interval, same tolerance: a ramp that holds below the critical
+    speed (runs of equal intervals and jumps) on the 5 s deadline problem; peaks and states agree to 1e-9."""
+    ocp = real_problem(40.0)
+    ms = S.mesh(ocp, 50)
+    u = np.concatenate([S.ramp_profile(ocp, 50, 40.0, hold_at=75.0), np.zeros(ms.ns)]).round(12)
+    h = np.concatenate([np.full(50, ms.h), np.full(ms.ns, ms.hs)])
+    frac = list(np.linspace(0, 1, 9)[1:])
+    judge = S.simulate_profile(ocp, u, h, frac, 1e-12, "adams", merge=True)
+    every = S.simulate_profile(ocp, u, h, frac, 1e-12, "bdf", merge=False)
+    assert len(S.runs(u, h)) < 10  # the profile has runs to merge
+    assert np.abs(judge - every).max() < 1e-9 * np.abs(every).max()
+    assert_allclose(S.resimulate(ocp, u, h, "r", 8).delta[1:], np.hypot(every[..., 0], every[..., 1]).ravel(),
+                    rtol=0, atol=1e-9 * np.abs(every).max())
+    # the coarse optima's ranking integrator (fixed step FAST_STEP) within 1e-4 of CVODES
+    assert_allclose(search.profile_peak(ocp, u[:50]), S.resimulate(ocp, u, h, "r", 24).peak_delta, rtol=1e-4)
+
+
+def test_ramps_left_out_when_the_global_search_leads():
+    # 40 rad/s^2, 5 s: the search's best profile (12.69 e) is more than 5 % below the three constant ramps
+    # (14.15 e and up); the ramp that holds below the critical speed stays
+    labels = [lab for lab, _ in S.starts(real_problem(40.0), 50)]
+    assert len(labels) == 3 and labels[0].startswith("global search") and labels[1].startswith("global search")
+    assert labels[2] == "ramp, hold at 0.8 omega_cr, ramp"
+    # no search (another objective): all ramps
+    labels = [lab for lab, _ in S.starts(dataclasses.replace(real_problem(40.0), objective="integrated_deflection"),
+                                         50)]
+    assert "constant ramp" in labels and "maximum-acceleration ramp and hold" in labels
+
+
 def test_collocation_and_multiple_shooting_same_optimum():
     """The same declared problem by two transcriptions: multiple shooting (CVODES) started from the collocation
     optimum's controls converges to the same point (objective within 1e-4, the issue), with the path constraints at
