@@ -86,25 +86,33 @@ def simulate_steps(ocp: SpinupOcp, u: np.ndarray, dt: float = STEP, rotor: Modal
     beta = np.concatenate([np.zeros((C, 1)), np.cumsum(num * dt, axis=1)], axis=1)
     f0, f2, fa = rotor.f
     c = (f0 + f2 * num**2 + fa * a) * np.exp(1j * beta[:, :-1])  # force at each step start
-    lam, W = rotor.lam, rotor.W
+    lam, W, V = rotor.lam, rotor.W, rotor.V
+    # z is real: the modal coordinates of a complex-conjugate pair of eigenvalues are conjugate, so one mode of
+    # each pair is advanced and the deflection is twice its real part (every mode when some are real)
+    upper = np.flatnonzero(lam.imag > 0)
+    half = 2 * upper.size == lam.size
+    if half:
+        lam, W, V = lam[upper], W[upper], V[:, upper]
     gp = W[:, 2] - 1j * W[:, 3]  # W [0, 0, 1, -i]
     gm = W[:, 2] + 1j * W[:, 3]
     E = np.exp(lam * dt)
     x, y, vx, vy, nu0 = ocp.q0
     z0 = np.array([x, y, vx - nu0 * y, vy + nu0 * x])  # rotating -> fixed frame at beta = 0
-    mdl = np.tile(W @ z0, (C, 1)).astype(complex)  # (C, 4)
+    mdl = np.tile(W @ z0, (C, 1)).astype(complex)  # (C, modes)
+    vx_, vy_ = V[0] * (2 if half else 1), V[1] * (2 if half else 1)
     best = np.full(C, np.hypot(x, y))
     for k0 in range(0, S, block):
         k1 = min(S, k0 + block)
         sp = 1j * num[:, k0:k1, None]  # (C, B, 1)
         ck = c[:, k0:k1, None]
-        inc = 0.5 * (ck * gp * (np.exp(sp * dt) - E) / (sp - lam)
-                     + np.conj(ck) * gm * (np.exp(-sp * dt) - E) / (-sp - lam))  # (C, B, 4)
+        ep = np.exp(sp * dt)
+        inc = 0.5 * (ck * gp * (ep - E) / (sp - lam)
+                     + np.conj(ck) * gm * (np.conj(ep) - E) / (-sp - lam))  # (C, B, modes)
         # m_{j+1} = E m_j + inc_j  =>  m_j = E^j (m_0 + sum_{i<j} E^{-(i+1)} inc_i) within the block
         j = np.arange(1, k1 - k0 + 1)[:, None]
-        Ej = E[None, :] ** j  # (B, 4)
+        Ej = E[None, :] ** j  # (B, modes)
         m = Ej[None] * (mdl[:, None, :] + np.cumsum(inc / Ej[None], axis=1))
-        X, Y = (m @ rotor.V[0]).real, (m @ rotor.V[1]).real
+        X, Y = (m @ vx_).real, (m @ vy_).real
         best = np.maximum(best, np.hypot(X, Y).max(axis=1))
         mdl = m[:, -1]
     return best
