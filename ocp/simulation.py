@@ -116,19 +116,19 @@ def ramp_profile(ocp: SpinupOcp, n: int, alpha: float, hold_at: float | None = N
 
 
 def initial_guess(ocp: SpinupOcp, nlp: Nlp, u: np.ndarray) -> np.ndarray:
-    """Fill all NLP variables by simulating the control profile u (n control intervals)."""
+    """Fill all NLP variables by simulating the control profile u (n control intervals).  CVODES BDF restarted
+    at every interval: from the Adams guess (1e-8 apart) the robust study's NLP lands in another local optimum."""
     ms = nlp.mesh
     uu = np.concatenate([u, np.zeros(ms.ns)])
     h = np.concatenate([np.full(ms.n, ms.h), np.full(ms.ns, ms.hs)])
     w0 = np.zeros(nlp.x.numel())
     if nlp.index["Xc"] is not None:
-        sim = simulate_profile(ocp, uu, h, path_fractions(nlp.method.degree, nlp.method.scheme), 1e-8, "adams",
-                               merge=True)
+        sim = simulate_profile(ocp, uu, h, path_fractions(nlp.method.degree, nlp.method.scheme), tol=1e-8)
         d = nlp.method.degree
         w0[nlp.index["Xc"]] = sim[:, :d, :]
         w0[nlp.index["X"][1:]] = sim[:, -1, :]
     else:
-        sim = simulate_profile(ocp, uu, h, [1.0], 1e-8, "adams", merge=True)
+        sim = simulate_profile(ocp, uu, h, [1.0], tol=1e-8)
         w0[nlp.index["X"][1:]] = sim[:, -1, :]
     w0[nlp.index["X"][0]] = ocp.q0
     w0[nlp.index["u"]] = uu
@@ -166,10 +166,12 @@ class Trajectory:
                 "time_of_peak_s": self.t_peak, "integral_deflection2_s": self.integral_delta2}
 
 
-def resimulate(ocp: SpinupOcp, u, h, label: str, points: int = RESIM_POINTS, tol: float = RESIM_TOL) -> Trajectory:
-    """CVODES at tight tolerance with the piecewise-constant profile u (over alpha_max) on intervals h."""
+def resimulate(ocp: SpinupOcp, u, h, label: str, points: int = RESIM_POINTS, tol: float = RESIM_TOL,
+               multistep: str = "adams", merge: bool = True) -> Trajectory:
+    """CVODES at tight tolerance with the piecewise-constant profile u (over alpha_max) on intervals h
+    (``multistep``, ``merge``: :func:`simulate_profile`)."""
     frac = list(np.linspace(0, 1, points + 1)[1:])
-    sim = simulate_profile(ocp, u, h, frac, tol, "adams", merge=True)
+    sim = simulate_profile(ocp, u, h, frac, tol, multistep, merge)
     K = len(u)
     t0 = np.concatenate([[0.0], np.cumsum(h)[:-1]])
     tau = np.concatenate([[0.0], (t0[:, None] + np.asarray(h)[:, None] * np.array(frac)[None, :]).ravel()])
