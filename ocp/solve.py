@@ -247,9 +247,9 @@ def starts(ocp: SpinupOcp, n: int, multistart: bool = True) -> list[tuple[str, n
 SEARCH_STEPS = 20000  # longer passages (quasi-static, thousands of whirl periods) skip the global search
 COARSE = 50  # control intervals of the coarse stage of the mesh continuation (at least)
 # IPOPT iterations a start may take on the coarse mesh: a screening, not the answer.  The starts that reach
-# the best basins converge in 13-60 (benchmarks/spinup_ocp.md, "Study time"); on the liquid balancer the
-# hold-below-critical start took 715 iterations (8 s) to the worst of its six optima.
-COARSE_ITERATIONS = 150
+# the best basins converge in 13-99 (benchmarks/spinup_ocp.md, "Study time"); on the liquid balancer the
+# hold-below-critical start took 433 iterations (715 without the jerk penalty) to the worst of its six optima.
+COARSE_ITERATIONS = 200
 AHEAD = 0.05  # the constant ramps are not solved when the search's best is this far below them
 RANK_TIE = 2e-3  # relative: coarse optima this close to the best by the fast integrator are ranked by CVODES
 
