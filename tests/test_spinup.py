@@ -2,6 +2,7 @@
 the issue's target case, collocation vs multiple shooting, every objective against its ramp baselines,
 drive limits kept by the re-simulated optimum, infeasible limits -> exit 3 naming the binding constraint."""
 
+import dataclasses
 import json
 
 import numpy as np
