@@ -117,7 +117,9 @@ class Solver:
                  warm: bool = False):
         t0 = time.perf_counter()
         self.ocp, self.method = ocp, method
-        self.nlp = transcribe(ocp, method, reference_level(ocp) if ref is None else ref)
+        # MX: the interval Function mapped over the intervals; the solver's derivatives are maps too, so
+        # its construction hardly grows with N (SX: 1.8 s at N = 200; benchmarks/spinup_ocp.md, "Levers")
+        self.nlp = transcribe(ocp, method, reference_level(ocp) if ref is None else ref, "MX")
         nlp = self.nlp
         extra = IPOPT_OPTIONS | (WARM_OPTIONS if warm else {}) | (options or {})
         if isinstance(method, MultipleShooting):

@@ -78,6 +78,28 @@ def interval_integrator(fractions: tuple, tol: float, multistep: str = "bdf") ->
                          | (adams if multistep == "adams" else {}))
 
 
+def interval_function(ocp: SpinupOcp, d: int, scheme: str, ref: float) -> ca.Function:
+    """One collocation interval as an SX Function (x_k (5), the collocation states (5 d), u_k, x_(k+1) (5),
+    h, v) -> (collocation and continuity residuals (5 (d+1)), one column per path constraint (its values at
+    the interval start when it uses the control, then at the path points), h sum_j B_j delta^2 (the
+    quadrature of the integrated objective)).  Mapped over the intervals it is the whole transcription."""
+    tau, C, D, B = collocation_data(d, scheme)
+    frac = path_fractions(d, scheme)
+    f, m = ocp.dynamics(), rotor_model()
+    x0, xc, u, x1, h = ca.SX.sym("x0", 5), ca.SX.sym("xc", 5 * d), ca.SX.sym("u"), ca.SX.sym("x1", 5), ca.SX.sym("h")
+    v = ca.SX.sym("v", ocp.n_extra)
+    Z = [x0] + [xc[5 * j:5 * j + 5] for j in range(d)]
+    res, quad = [], 0
+    for j in range(d):
+        res.append(sum(C[r, j] * Z[r] for r in range(d + 1)) - f(Z[j + 1], u, h))
+        quad = quad + h * B[j] * m.delta2(Z[j + 1])
+    res.append(x1 - sum(D[r] * Z[r] for r in range(d + 1)))
+    pts = Z[1:] + ([x1] if len(frac) > d else [])
+    paths = [ca.vertcat(*[pc.expr(q, u * ocp.a_max, v) for q in ([x0] if pc.uses_control else []) + pts])
+             for pc in ocp.path_constraints(ref)]
+    return ca.Function("spinup_interval", [x0, xc, u, x1, h, v], [ca.vertcat(*res), *paths, quad])
+
+
 @dataclass
 class Mesh:
     """Interval lengths (tau): ``n`` control intervals of the horizon, then ``ns`` settling intervals."""
@@ -113,28 +135,44 @@ class Nlp:
     ref: float
 
 
-def transcribe(ocp: SpinupOcp, method, ref: float) -> Nlp:
-    """The NLP of ``ocp`` by ``method`` (DirectCollocation or MultipleShooting)."""
+def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
+    """The NLP of ``ocp`` by ``method`` (DirectCollocation or MultipleShooting).
+
+    Parameters
+    ----------
+    ocp : SpinupOcp
+        The declared problem.
+    method : DirectCollocation or MultipleShooting
+        The transcription.
+    ref : float
+        Scale of the objective (delta^2 or d^2 for the epigraph, (delta/e)^2 s for the integral).
+    symbolic : {"SX", "MX"}
+        The collocation NLP's expression graph: "SX" (scalar, each interval's expressions inlined) or "MX"
+        (the interval Function mapped over the intervals; its derivatives are maps too, so the solver's
+        construction hardly grows with the intervals).  Multiple shooting is always MX.
+
+    Returns
+    -------
+    Nlp
+        Variables, objective, constraints, bounds, the named constraint blocks and the index of each variable.
+    """
     collocation = isinstance(method, DirectCollocation)
     ms = mesh(ocp, method.intervals)
     K = ms.n + ms.ns
     d = method.degree
-    tau, C, D, B = collocation_data(d, method.scheme)
     frac = path_fractions(d, method.scheme)
-    Sym = ca.SX if collocation else ca.MX
+    Sym = ca.MX if symbolic == "MX" or not collocation else ca.SX
     nv = ocp.n_extra
     # variables: per interval [X_k (5), Xc_k (d*5, collocation only), u_k], then X_K, then v
     per = 5 + (5 * d if collocation else 0) + 1
     w = Sym.sym("w", K * per + 5 + nv)
-    X = [w[k * per:k * per + 5] for k in range(K)] + [w[K * per:K * per + 5]]
-    Xc = [[w[k * per + 5 + 5 * j:k * per + 10 + 5 * j] for j in range(d)] for k in range(K)] if collocation else None
-    U = [w[k * per + per - 1] for k in range(K)]
-    v = w[K * per + 5:]
-    idx_X = np.array([[k * per + i for i in range(5)] for k in range(K)] + [[K * per + i for i in range(5)]])
-    idx_Xc = (np.array([[[k * per + 5 + 5 * j + i for i in range(5)] for j in range(d)] for k in range(K)])
-              if collocation else None)
-    idx_u = np.array([k * per + per - 1 for k in range(K)])
+    starts = per * np.arange(K)
+    idx_X = np.concatenate([starts[:, None] + np.arange(5), K * per + np.arange(5)[None, :]])
+    idx_Xc = starts[:, None, None] + 5 + 5 * np.arange(d)[:, None] + np.arange(5) if collocation else None
+    idx_u = starts + per - 1
     idx_v = list(range(K * per + 5, K * per + 5 + nv))
+    U = w[idx_u.tolist()]
+    v = w[K * per + 5:]
 
     lbx, ubx = np.full(w.numel(), -np.inf), np.full(w.numel(), np.inf)
     # speed bounds on the horizon only: at its end omega_final is imposed, and over the settling window
@@ -155,25 +193,24 @@ def transcribe(ocp: SpinupOcp, method, ref: float) -> Nlp:
             return ms.hs
         return v[0] * ocp.tau_h / ms.n if ocp.free_time else ms.h
 
-    f = ocp.dynamics()
     paths = ocp.path_constraints(ref)
     rows: dict[str, list] = {"dynamics": []}
     rows |= {pc.name: [] for pc in paths}
     bounds: dict[str, tuple] = {pc.name: (pc.lb, pc.ub) for pc in paths}
     quad = 0
-    m = rotor_model()
-    if collocation:
-        for k in range(K):
-            h, Z = h_of(k), [X[k], *Xc[k]]
-            for j in range(d):
-                dx = sum(C[r, j] * Z[r] for r in range(d + 1))
-                rows["dynamics"].append(dx - f(Xc[k][j], U[k], h))
-                quad = quad + h * B[j] * m.delta2(Xc[k][j])
-            rows["dynamics"].append(X[k + 1] - sum(D[r] * Z[r] for r in range(d + 1)))
-            pts = list(Xc[k]) + ([X[k + 1]] if len(frac) > d else [])
-            for pc in paths:
-                rows[pc.name] += [pc.expr(qj, U[k] * ocp.a_max, v) for qj in ([X[k]] if pc.uses_control else []) + pts]
+    if collocation:  # one SX Function per interval, mapped over the K intervals (C++, no Python loop)
+        W = ca.reshape(w[:K * per], per, K)
+        Xn = ca.horzcat(W[:5, 1:], w[K * per:K * per + 5])  # each interval's end node
+        hn = v[0] * ocp.tau_h / ms.n if ocp.free_time else ms.h
+        hrow = ca.horzcat(*([ca.repmat(hn, 1, ms.n)] + ([ca.repmat(ms.hs, 1, ms.ns)] if ms.ns else [])))
+        out = interval_function(ocp, d, method.scheme, ref).map(K)(W[:5, :], W[5:per - 1, :], W[per - 1, :], Xn,
+                                                                    hrow, v)
+        rows["dynamics"].append(ca.vec(out[0]))
+        for pc, o in zip(paths, out[1:-1], strict=True):
+            rows[pc.name].append(ca.vec(o))
+        quad = ca.sum2(out[-1])
     else:
+        X = [w[k * per:k * per + 5] for k in range(K + 1)]
         F = interval_integrator(tuple(frac), method.tol)
         for k in range(K):
             h = h_of(k)
@@ -184,7 +221,7 @@ def transcribe(ocp: SpinupOcp, method, ref: float) -> Nlp:
                                   + [out[:, j] for j in range(len(frac))]]
         if ocp.objective == "integrated_deflection":
             raise ValueError("multiple shooting supports the peak and min_time objectives (no quadrature)")
-    rows["final speed omega(T) = omega_final"] = [X[ms.n][4] - ocp.nuf]
+    rows["final speed omega(T) = omega_final"] = [w[int(idx_X[ms.n, 4])] - ocp.nuf]
     du = [U[k + 1] - U[k] for k in range(ms.n - 1)]
     if ocp.jerk_max is not None:
         name = f"jerk limit |d alpha/dt| <= {ocp.jerk_max:g} rad/s^3"
