@@ -86,16 +86,19 @@ class IterationBar(ca.Callback):
 
 
 def nlpsol(name: str, x, p, f, g, warm: bool = False, hess_lag: ca.Function | None = None,
-           **extra) -> ca.Function:
+           jac_g: ca.Function | None = None, **extra) -> ca.Function:
     """An IPOPT solver for min f(x; p) s.t. g(x; p) in [lbg, ubg], x in [lbx, ubx].
 
     ``hess_lag``: a user Hessian of the Lagrangian, (x, p, lam_f, lam_g) -> its upper triangle,
-    e.g. the Gauss-Newton lam_f J'J of a least-squares fit (analysis/least_squares.py).  Built while bars
+    e.g. the Gauss-Newton lam_f J'J of a least-squares fit (analysis/least_squares.py).  ``jac_g``: a user
+    Jacobian of the constraints, (x, p) -> (g, dg/dx).  Built while bars
     are drawn (a terminal, not quiet), the solver carries an :class:`IterationBar`.
     """
     opts = (WARM if warm else COLD) | {f"ipopt.{k}": v for k, v in extra.items()}
     if hess_lag is not None:
         opts["hess_lag"] = hess_lag
+    if jac_g is not None:
+        opts["jac_g"] = jac_g
     bar = None
     if progress.enabled():  # a terminal: long solves show their iterations
         nx, ng, n_p = (int(np.prod(e.shape)) for e in (x, g, p))
