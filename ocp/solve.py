@@ -24,7 +24,14 @@ from autobal.ocp.simulation import (
     resimulate,
     simulate_profile,
 )
-from autobal.ocp.transcription import DirectCollocation, MultipleShooting, Nlp, interpolate, transcribe
+from autobal.ocp.transcription import (
+    DirectCollocation,
+    MultipleShooting,
+    Nlp,
+    interpolate,
+    structured_derivatives,
+    transcribe,
+)
 
 # mumps_permuting_scaling 0: no maximum-weight matching and scaling of the KKT matrix in MUMPS (its
 # ICNTL(6); IPOPT's default 7 lets MUMPS choose).  With it, from 800 collocation intervals on, MUMPS'
@@ -47,11 +54,6 @@ def ipopt_options(max_iterations: int = 1000, tolerance: float = 1e-8) -> dict:
 # barrier parameter starts small, the iterate and multipliers are pushed only slightly off their bounds
 WARM_OPTIONS = {"warm_start_init_point": "yes", "mu_init": 1e-8, "warm_start_bound_push": 1e-9,
                 "warm_start_slack_bound_push": 1e-9, "warm_start_mult_bound_push": 1e-9}
-
-# intervals (horizon and hold) from which the collocation NLP's Jacobian and Hessian are expanded to SX: per
-# IPOPT iteration the MX ones cost ~4.6 ms more at 320 intervals and ~20 ms at 1280, their expansion 0.3 and
-# 1.1 s CPU more build (benchmarks/spinup_ocp.md, "Levers"); the study's stages (<= 320) stay MX
-EXPAND_FROM = 600
 
 INFEASIBLE = ("Infeasible_Problem_Detected", "Restoration_Failed")
 TIE = 1e-4  # relative: optima closer than this are equal, the first start is kept
@@ -115,30 +117,6 @@ def reference_level(ocp: SpinupOcp) -> float:
             "integrated_deflection": base.integral_delta2 * ocp.Om}[ocp.objective]
 
 
-def expanded_derivatives(nlp: Nlp) -> dict:
-    """The constraint Jacobian and the Hessian of the Lagrangian of an MX collocation NLP, differentiated in MX
-    (the mapped interval Function's derivatives are maps) and then expanded to SX: built in a fraction of the
-    time CasADi's SX differentiation of the whole NLP takes, evaluated as fast (a plain MX Jacobian and
-    Hessian cost 4-6x more per call; benchmarks/spinup_ocp.md, "Levers").
-
-    Parameters
-    ----------
-    nlp : Nlp
-        A transcription with MX variables.
-
-    Returns
-    -------
-    dict
-        ``jac_g`` (x, p) -> (g, dg/dx) and ``hess_lag`` (x, p, lam_f, lam_g) -> the upper triangle of the
-        Hessian of lam_f f + lam_g' g, for :func:`autobal.analysis.ipopt.nlpsol`.
-    """
-    x, f, g = nlp.x, nlp.f, nlp.g
-    p, lam_f, lam_g = ca.MX.sym("p", 0), ca.MX.sym("lam_f"), ca.MX.sym("lam_g", g.numel())
-    jac = ca.Function("spinup_jac_g", [x, p], [g, ca.jacobian(g, x)])
-    hess = ca.Function("spinup_hess_l", [x, p, lam_f, lam_g], [ca.triu(ca.hessian(lam_f * f + ca.dot(lam_g, g), x)[0])])
-    return {"jac_g": jac.expand(), "hess_lag": hess.expand()}
-
-
 class Solver:
     """The NLP of one (problem, method) pair, built once and solved from any guess."""
 
@@ -146,16 +124,15 @@ class Solver:
                  warm: bool = False):
         t0 = time.perf_counter()
         self.ocp, self.method = ocp, method
-        # MX: the interval Function mapped over the intervals; the solver's derivatives are maps too, so
-        # its construction hardly grows with N (SX: 1.8 s at N = 200; benchmarks/spinup_ocp.md, "Levers")
+        # MX: the interval Function mapped over the intervals, so the construction hardly grows with N
+        # (SX: 1.7 s at N = 200; benchmarks/spinup_ocp.md, "Levers")
         self.nlp = transcribe(ocp, method, reference_level(ocp) if ref is None else ref, "MX")
         nlp = self.nlp
         extra = IPOPT_OPTIONS | (WARM_OPTIONS if warm else {}) | (options or {})
         if isinstance(method, MultipleShooting):
             extra["hessian_approximation"] = method.hessian
-        # from EXPAND_FROM intervals the expanded derivatives' faster evaluation outweighs their build
-        big = isinstance(method, DirectCollocation) and nlp.index["u"].size >= EXPAND_FROM
-        derivatives = expanded_derivatives(nlp) if big else {}
+        # collocation: the Jacobian and Hessian from the interval Function's SX derivatives, mapped
+        derivatives = structured_derivatives(nlp) if nlp.intervals is not None else {}
         self.solver = ipopt.nlpsol("spinup", nlp.x, ca.SX.sym("p", 0) if isinstance(nlp.x, ca.SX) else ca.MX.sym(
             "p", 0), nlp.f, nlp.g, **derivatives, **extra)
         self.build_time_s = time.perf_counter() - t0

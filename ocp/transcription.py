@@ -133,6 +133,9 @@ class Nlp:
     fractions: list
     method: object
     ref: float
+    # collocation: the interval Function, its mapped arguments and where each interval's inputs and rows sit
+    # in x and g (see :func:`structured_derivatives`); None for multiple shooting
+    intervals: dict | None = None
 
 
 def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
@@ -203,8 +206,21 @@ def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
         Xn = ca.horzcat(W[:5, 1:], w[K * per:K * per + 5])  # each interval's end node
         hn = v[0] * ocp.tau_h / ms.n if ocp.free_time else ms.h
         hrow = ca.horzcat(*([ca.repmat(hn, 1, ms.n)] + ([ca.repmat(ms.hs, 1, ms.ns)] if ms.ns else [])))
-        out = interval_function(ocp, d, method.scheme, ref).map(K)(W[:5, :], W[5:per - 1, :], W[per - 1, :], Xn,
-                                                                    hrow, v)
+        fi = interval_function(ocp, d, method.scheme, ref)
+        args = [W[:5, :], W[5:per - 1, :], W[per - 1, :], Xn, hrow, v]
+        out = fi.map(K)(*args)
+        # each interval input's variable (-1: a constant) and its coefficient (the interval length h is
+        # v_0 tau_h / n when the time is free)
+        cols = np.full((fi.nnz_in(), K), -1)
+        coefs = np.ones((fi.nnz_in(), K))
+        cols[:5] = idx_X[:-1].T
+        cols[5:5 + 5 * d] = idx_Xc.reshape(K, -1).T
+        cols[5 + 5 * d] = idx_u
+        cols[6 + 5 * d:11 + 5 * d] = idx_X[1:].T
+        if ocp.free_time:
+            cols[11 + 5 * d, :ms.n], coefs[11 + 5 * d, :ms.n] = idx_v[0], ocp.tau_h / ms.n
+        cols[12 + 5 * d:] = np.array(idx_v, int)[:, None]
+        intervals = {"function": fi, "args": args, "cols": cols, "coefs": coefs}
         rows["dynamics"].append(ca.vec(out[0]))
         for pc, o in zip(paths, out[1:-1], strict=True):
             rows[pc.name].append(ca.vec(o))
@@ -232,6 +248,8 @@ def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
     bounds["dynamics"] = (0.0, 0.0)
     bounds["final speed omega(T) = omega_final"] = (0.0, 0.0)
 
+    if not collocation:
+        intervals = None
     g, lbg, ubg, blocks, start = [], [], [], [], 0
     for name, r in rows.items():
         if not r:
@@ -253,8 +271,79 @@ def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
         dv = ca.vertcat(*du)
         obj = obj + ocp.jerk_variation * ca.sum1(ca.sqrt(dv**2 + TV_SMOOTHING**2) - TV_SMOOTHING)
     index = {"X": idx_X, "Xc": idx_Xc, "u": idx_u, "v": idx_v}
+    if intervals is not None:  # g row of each interval output: the dynamics and path blocks come first
+        sizes = [fi.nnz_out(i) for i in range(fi.n_out() - 1)]
+        first = [a for _, a, _ in blocks[:len(sizes)]]
+        intervals["rows"] = np.concatenate([a + n * np.arange(K)[None, :] + np.arange(n)[:, None]
+                                            for a, n in zip(first, sizes, strict=True)])
+        intervals["tail"] = ca.vertcat(*g[len(sizes):])  # the rows outside the intervals
     return Nlp(w, obj, ca.vertcat(*g), lbx, ubx, np.concatenate(lbg), np.concatenate(ubg), blocks, index, ms,
-               frac, method, ref)
+               frac, method, ref, intervals)
+
+
+def _assemble(vals: ca.MX, rows: np.ndarray, cols: np.ndarray, src: np.ndarray, coef: np.ndarray,
+              shape: tuple) -> ca.MX:
+    """The sparse matrix sum_t coef_t vals[src_t] e_(rows_t) e_(cols_t)' (duplicates summed)."""
+    key = cols.astype(np.int64) * shape[0] + rows
+    uniq, at = np.unique(key, return_inverse=True)
+    colind = np.searchsorted(uniq // shape[0], np.arange(shape[1] + 1))
+    sp = ca.Sparsity(shape[0], shape[1], colind.tolist(), (uniq % shape[0]).tolist())
+    A = ca.DM.triplet(at.tolist(), src.tolist(), coef.tolist(), uniq.size, vals.numel())
+    return ca.MX(sp, ca.mtimes(A, vals))
+
+
+def structured_derivatives(nlp: Nlp) -> dict:
+    """The constraint Jacobian and the Hessian of the Lagrangian of a collocation NLP from the interval
+    Function's own SX derivatives, mapped over the intervals and scattered into place by a constant sparse
+    matrix; the rows outside the intervals (final speed, jerk) and the objective by MX differentiation.
+    Built in about constant time in N and evaluated about as fast as a whole-NLP SX graph (an MX Jacobian
+    of the map costs 4-6x more per call; benchmarks/spinup_ocp.md, "Levers").
+
+    Parameters
+    ----------
+    nlp : Nlp
+        A collocation transcription (``nlp.intervals`` set).
+
+    Returns
+    -------
+    dict
+        ``jac_g`` (x, p) -> (g, dg/dx) and ``hess_lag`` (x, p, lam_f, lam_g) -> the upper triangle of the
+        Hessian of lam_f f + lam_g' g, for :func:`autobal.analysis.ipopt.nlpsol`.
+    """
+    s = nlp.intervals
+    fi, args, cols, coefs, rows = s["function"], s["args"], s["cols"], s["coefs"], s["rows"]
+    K = cols.shape[1]
+    x, f, g, tail = nlp.x, nlp.f, nlp.g, s["tail"]
+    nx, ng = x.numel(), g.numel()
+    zs = fi.sx_in()
+    z = ca.vertcat(*[ca.vec(a) for a in zs])
+    y = ca.vertcat(*fi.call(zs)[:-1])  # the interval's g rows (the quadrature output is the objective's)
+    k = np.arange(K)[None, :]
+
+    J = ca.jacobian(y, z)
+    ji, jj = (np.array(a) for a in J.sparsity().get_triplet())
+    jv = ca.Function("spinup_interval_jac", zs, [ca.vertcat(*J.nonzeros())]).map(K)(*args)
+    R, C, CO = rows[ji], cols[jj], coefs[jj]
+    src = np.arange(ji.size)[:, None] + ji.size * k
+    ok = C >= 0
+    jac_head = _assemble(ca.vec(jv), R[ok], C[ok], src[ok], CO[ok], (rows.size, nx))
+
+    mu = ca.SX.sym("mu", y.numel())
+    H = ca.hessian(ca.dot(mu, y), z)[0]
+    hi, hj = (np.array(a) for a in H.sparsity().get_triplet())
+    p, lam_f, lam_g = ca.MX.sym("p", 0), ca.MX.sym("lam_f"), ca.MX.sym("lam_g", ng)
+    mus = ca.reshape(lam_g[rows.ravel(order="F").tolist()], y.numel(), K)
+    hv = ca.Function("spinup_interval_hess", [*zs, mu], [ca.vertcat(*H.nonzeros())]).map(K)(*args, mus)
+    C1, C2, CO = cols[hi], cols[hj], coefs[hi] * coefs[hj]
+    src = np.arange(hi.size)[:, None] + hi.size * k
+    ok = (C1 >= 0) & (C2 >= 0) & (C1 <= C2)
+    hess_head = _assemble(ca.vec(hv), C1[ok], C2[ok], src[ok], CO[ok], (nx, nx))
+    nt = tail.numel()
+    rest = lam_f * f + (ca.dot(lam_g[rows.size:], tail) if nt else 0)
+    hess = hess_head + ca.triu(ca.hessian(rest, x)[0])
+    jac = ca.vertcat(jac_head, ca.jacobian(tail, x)) if nt else jac_head
+    return {"jac_g": ca.Function("spinup_jac_g", [x, p], [g, jac]),
+            "hess_lag": ca.Function("spinup_hess_l", [x, p, lam_f, lam_g], [hess])}
 
 
 def point_times(nlp: Nlp) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
