@@ -12,7 +12,9 @@ simulated to the interval ends and held over each interval at the collocation po
 ``set_initial`` of interval values; autobal's ``hold_states``; a simulated guess at the collocation
 points, or one interpolated linearly, takes autobal to the iteration limit at N = 200), written into both
 NLPs' variables (rockit's: into its Opti variables after ``transcribe()``, in one call, because its
-``set_initial`` of a profile costs O(N^2)); both initial objectives are recorded as a check.
+``set_initial`` of a profile costs O(N^2)); both initial objectives are recorded as a check.  autobal's NLP
+has no separate node states: its last Radau point is the interval end, which starts held like rockit's
+last point; rockit's separate node variables start at the simulated values.
 
 Times: build = declaration, transcription and solver construction (rockit: its ``solve()`` call's
 wall time minus the IPOPT solve inside it); solve = the wall time of the IPOPT call itself, function
@@ -72,9 +74,10 @@ def guess(ocp, nlp):
     if abs(ms.hs - ms.h) > 1e-12 * ms.h:
         raise ValueError(f"N = {ms.n}: the hold does not fit whole intervals of the horizon's length")
     w0 = initial_guess(ocp, nlp, u)
-    w0[nlp.index["Xc"]] = w0[nlp.index["X"]][:-1, None, :]
+    X = w0[nlp.index["X"]]  # simulated nodes (rockit's node variables)
+    w0[nlp.index["Xc"]] = X[:-1, None, :]  # autobal's last Radau point, its node, is held like rockit's
     h = np.full(ms.n + ms.ns, ms.h)
-    return label, w0, w0[nlp.index["u"]], h, w0[nlp.index["X"]], w0[nlp.index["Xc"]], float(w0[nlp.index["v"][0]])
+    return label, w0, w0[nlp.index["u"]], h, X, w0[nlp.index["Xc"]], float(w0[nlp.index["v"][0]])
 
 
 def profile(stats: dict, total: float) -> dict:
@@ -305,7 +308,8 @@ def save(ocp, rows, start_label) -> list[dict]:
              "uniform mesh (N intervals to the deadline, 0.6 N over the hold); the same IPOPT options "
              f"(tol {osolve.IPOPT_OPTIONS['tol']:g}, adaptive barrier, MUMPS, each solve capped at {WALL:g} s); the "
              f"same guess: autobal's global-search start ({start_label}), states simulated to the interval ends "
-             "and held over each interval at the collocation points (the initial objectives agree).",
+             "and held over each interval at the collocation points (autobal's last Radau point is the node "
+             "itself, held like rockit's; rockit's node variables start simulated).",
              "Solve = wall time of the one IPOPT call, function evaluations included (rockit: CasADi's "
              "t_wall_total); build = declaration, transcription and solver construction (rockit: its solve() "
              "call minus the IPOPT solve in it), not in the ratio. Errors: the solver status when not "

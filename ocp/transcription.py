@@ -78,11 +78,12 @@ def interval_integrator(fractions: tuple, tol: float, multistep: str = "bdf") ->
                          | (adams if multistep == "adams" else {}))
 
 
-def interval_function(ocp: SpinupOcp, d: int, scheme: str, ref: float) -> ca.Function:
+def interval_function(ocp: SpinupOcp, d: int, scheme: str, ref: float, continuity: bool = True) -> ca.Function:
     """One collocation interval as an SX Function (x_k (5), the collocation states (5 d), u_k, x_(k+1) (5),
-    h, v) -> (collocation and continuity residuals (5 (d+1)), one column per path constraint (its values at
-    the interval start when it uses the control, then at the path points), h sum_j B_j delta^2 (the
-    quadrature of the integrated objective)).  Mapped over the intervals it is the whole transcription."""
+    h, v) -> (collocation residuals (5 d) and, with ``continuity``, the continuity residual (5), one column
+    per path constraint (its values at the interval start when it uses the control, then at the path points),
+    h sum_j B_j delta^2 (the quadrature of the integrated objective)).  Mapped over the intervals it is the
+    whole transcription."""
     tau, C, D, B = collocation_data(d, scheme)
     frac = path_fractions(d, scheme)
     f, m = ocp.dynamics(), rotor_model()
@@ -93,7 +94,8 @@ def interval_function(ocp: SpinupOcp, d: int, scheme: str, ref: float) -> ca.Fun
     for j in range(d):
         res.append(sum(C[r, j] * Z[r] for r in range(d + 1)) - f(Z[j + 1], u, h))
         quad = quad + h * B[j] * m.delta2(Z[j + 1])
-    res.append(x1 - sum(D[r] * Z[r] for r in range(d + 1)))
+    if continuity:
+        res.append(x1 - sum(D[r] * Z[r] for r in range(d + 1)))
     pts = Z[1:] + ([x1] if len(frac) > d else [])
     paths = [ca.vertcat(*[pc.expr(q, u * ocp.a_max, v) for q in ([x0] if pc.uses_control else []) + pts])
              for pc in ocp.path_constraints(ref)]
@@ -166,12 +168,19 @@ def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
     frac = path_fractions(d, method.scheme)
     Sym = ca.MX if symbolic == "MX" or not collocation else ca.SX
     nv = ocp.n_extra
-    # variables: per interval [X_k (5), Xc_k (d*5, collocation only), u_k], then X_K, then v
-    per = 5 + (5 * d if collocation else 0) + 1
+    # variables: per interval [X_k (5), Xc_k (d*5, collocation only), u_k], then X_K, then v.  When the
+    # last collocation point is the interval end (Radau) it is the next node: X_0, per interval [Xc_k, u_k],
+    # then v; the node states and their continuity equations drop out (a fifth of the KKT system and most
+    # of its zero-diagonal pairs: half the time per IPOPT iteration at N = 200, benchmarks/spinup_ocp.md)
+    merged = collocation and abs(collocation_data(d, method.scheme)[0][-1] - 1) < 1e-12
+    per = (0 if merged else 5) + (5 * d if collocation else 0) + 1
     w = Sym.sym("w", K * per + 5 + nv)
-    starts = per * np.arange(K)
-    idx_X = np.concatenate([starts[:, None] + np.arange(5), K * per + np.arange(5)[None, :]])
-    idx_Xc = starts[:, None, None] + 5 + 5 * np.arange(d)[:, None] + np.arange(5) if collocation else None
+    b0 = 5 if merged else 0  # where the interval blocks start
+    starts = b0 + per * np.arange(K)
+    idx_Xc = (starts[:, None, None] + per - 1 - 5 * d + 5 * np.arange(d)[:, None] + np.arange(5)
+              if collocation else None)
+    idx_X = (np.concatenate([np.arange(5)[None, :], idx_Xc[:, -1, :]]) if merged else
+             np.concatenate([starts[:, None] + np.arange(5), K * per + np.arange(5)[None, :]]))
     idx_u = starts + per - 1
     idx_v = list(range(K * per + 5, K * per + 5 + nv))
     U = w[idx_u.tolist()]
@@ -202,12 +211,14 @@ def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
     bounds: dict[str, tuple] = {pc.name: (pc.lb, pc.ub) for pc in paths}
     quad = 0
     if collocation:  # one SX Function per interval, mapped over the K intervals (C++, no Python loop)
-        W = ca.reshape(w[:K * per], per, K)
-        Xn = ca.horzcat(W[:5, 1:], w[K * per:K * per + 5])  # each interval's end node
+        W = ca.reshape(w[b0:b0 + K * per], per, K)
+        last = W[per - 6:per - 1, :]  # the last collocation point
+        X0 = ca.horzcat(w[:5], last[:, :-1]) if merged else W[:5, :]  # each interval's start and end node
+        Xn = last if merged else ca.horzcat(W[:5, 1:], w[K * per:K * per + 5])
         hn = v[0] * ocp.tau_h / ms.n if ocp.free_time else ms.h
         hrow = ca.horzcat(*([ca.repmat(hn, 1, ms.n)] + ([ca.repmat(ms.hs, 1, ms.ns)] if ms.ns else [])))
-        fi = interval_function(ocp, d, method.scheme, ref)
-        args = [W[:5, :], W[5:per - 1, :], W[per - 1, :], Xn, hrow, v]
+        fi = interval_function(ocp, d, method.scheme, ref, continuity=not merged)
+        args = [X0, W[per - 1 - 5 * d:per - 1, :], W[per - 1, :], Xn, hrow, v]
         out = fi.map(K)(*args)
         # each interval input's variable (-1: a constant) and its coefficient (the interval length h is
         # v_0 tau_h / n when the time is free)
@@ -226,7 +237,7 @@ def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
             rows[pc.name].append(ca.vec(o))
         quad = ca.sum2(out[-1])
     else:
-        X = [w[k * per:k * per + 5] for k in range(K + 1)]
+        X = [w[k * per:k * per + 5] for k in range(K + 1)]  # shooting: [X_k, u_k] per interval
         F = interval_integrator(tuple(frac), method.tol)
         for k in range(K):
             h = h_of(k)
@@ -405,14 +416,16 @@ def interpolate(coarse: Nlp, w: np.ndarray, lam_g: np.ndarray, lam_x: np.ndarray
         return next(((a, b) for n, a, b in nlp.blocks if n == name), None)
 
     lg = np.zeros(fine.g.numel())
-    per = 5 * (d + 1)
-    a, _ = block(coarse, "dynamics")
-    Dc = lam_g[a:a + Kc * per].reshape(Kc, d + 1, 5)
+    a, b = block(coarse, "dynamics")
+    per = (b - a) // (5 * Kc)  # d + 1 equations per interval, d when the nodes are the last points (Radau)
+    Dc = lam_g[a:b].reshape(Kc, per, 5)
     colloc = (Dc[:, :d, :] / np.asarray(B)[None, :, None]).reshape(-1, 5)
     pc = np.stack([np.interp(tfc.ravel(), tcc.ravel(), colloc[:, i]) for i in range(5)], -1).reshape(Kf, d, 5)
-    pn = np.stack([np.interp(tf0[1:], tc0[1:], Dc[:, d, i]) for i in range(5)], -1)
-    a, _ = block(fine, "dynamics")
-    lg[a:a + Kf * per] = np.concatenate([pc * np.asarray(B)[None, :, None], pn[:, None, :]], axis=1).ravel()
+    parts = [pc * np.asarray(B)[None, :, None]]
+    if per > d:
+        parts.append(np.stack([np.interp(tf0[1:], tc0[1:], Dc[:, d, i]) for i in range(5)], -1)[:, None, :])
+    a, b = block(fine, "dynamics")
+    lg[a:b] = np.concatenate(parts, axis=1).ravel()
     npath = len(coarse.fractions)
     tcp = np.concatenate([tcc, tc0[1:, None]], axis=1)[:, :npath].ravel() if npath > d else tcc.ravel()
     tfp = np.concatenate([tfc, tf0[1:, None]], axis=1)[:, :npath].ravel() if npath > d else tfc.ravel()
