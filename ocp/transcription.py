@@ -294,11 +294,16 @@ def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
 
 def _assemble(vals: ca.MX, rows: np.ndarray, cols: np.ndarray, src: np.ndarray, coef: np.ndarray,
               shape: tuple) -> ca.MX:
-    """The sparse matrix sum_t coef_t vals[src_t] e_(rows_t) e_(cols_t)' (duplicates summed)."""
+    """The sparse matrix sum_t coef_t vals[src_t] e_(rows_t) e_(cols_t)' (duplicates summed; a plain
+    permutation of ``vals`` when there are none and every coefficient is 1)."""
     key = cols.astype(np.int64) * shape[0] + rows
     uniq, at = np.unique(key, return_inverse=True)
     colind = np.searchsorted(uniq // shape[0], np.arange(shape[1] + 1))
     sp = ca.Sparsity(shape[0], shape[1], colind.tolist(), (uniq % shape[0]).tolist())
+    if uniq.size == key.size and np.all(coef == 1):
+        order = np.empty_like(at)
+        order[at] = np.arange(at.size)
+        return ca.MX(sp, vals[src[order].tolist()])
     A = ca.DM.triplet(at.tolist(), src.tolist(), coef.tolist(), uniq.size, vals.numel())
     return ca.MX(sp, ca.mtimes(A, vals))
 
@@ -333,7 +338,8 @@ def structured_derivatives(nlp: Nlp) -> dict:
 
     J = ca.jacobian(y, z)
     ji, jj = (np.array(a) for a in J.sparsity().get_triplet())
-    jv = ca.Function("spinup_interval_jac", zs, [ca.vertcat(*J.nonzeros())]).map(K)(*args)
+    # one map gives the interval rows and their Jacobian: jac_g returns g too, without a second pass
+    *ys, jv = ca.Function("spinup_interval_jac", zs, [*fi.call(zs)[:-1], ca.vertcat(*J.nonzeros())]).map(K)(*args)
     R, C, CO = rows[ji], cols[jj], coefs[jj]
     src = np.arange(ji.size)[:, None] + ji.size * k
     ok = C >= 0
@@ -353,6 +359,7 @@ def structured_derivatives(nlp: Nlp) -> dict:
     rest = lam_f * f + (ca.dot(lam_g[rows.size:], tail) if nt else 0)
     hess = hess_head + ca.triu(ca.hessian(rest, x)[0])
     jac = ca.vertcat(jac_head, ca.jacobian(tail, x)) if nt else jac_head
+    g = ca.vertcat(*[ca.vec(a) for a in ys], tail)
     return {"jac_g": ca.Function("spinup_jac_g", [x, p], [g, jac]),
             "hess_lag": ca.Function("spinup_hess_l", [x, p, lam_f, lam_g], [hess])}
 
