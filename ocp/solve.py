@@ -39,8 +39,8 @@ from autobal.ocp.transcription import (
 # (INFO(1) = -9) and one IPOPT iteration takes minutes; without it one takes about a second and N = 800
 # solves in 71 iterations (benchmarks/spinup_ocp.md, "MUMPS levers at N = 800").  mumps_pivot_order 6: MUMPS'
 # approximate minimum degree with quasi-dense row detection (QAMD) instead of the automatic choice (METIS
-# here): the epigraph level's dense column; per IPOPT iteration 5-28 % less CPU at 200-1600 intervals and
-# the same optima (benchmarks/spinup_ocp.md, "Levers").
+# here): per IPOPT iteration 5-28 % less CPU at 200-1600 intervals, the same optima (measured before the
+# Radau node states were eliminated; benchmarks/spinup_ocp.md, "Levers").
 IPOPT_OPTIONS = {"tol": 1e-8, "constr_viol_tol": 1e-8, "compl_inf_tol": 1e-8, "acceptable_iter": 0,
                  "max_iter": 1000, "mu_strategy": "adaptive", "bound_relax_factor": 1e-10,
                  "mumps_permuting_scaling": 0, "mumps_pivot_order": 6}
