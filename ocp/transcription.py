@@ -249,7 +249,9 @@ def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
         if ocp.objective == "integrated_deflection":
             raise ValueError("multiple shooting supports the peak and min_time objectives (no quadrature)")
     rows["final speed omega(T) = omega_final"] = [w[int(idx_X[ms.n, 4])] - ocp.nuf]
-    du = [U[k + 1] - U[k] for k in range(ms.n - 1)]
+    # one vector expression, not n scalar ones: the MX Hessian of a sum of n scalar nodes costs ~n^2 to build
+    # (the study's NLP build at N = 1600: 6.6 s; benchmarks/spinup_ocp.md, "Study scaling with N")
+    du = [U[1:ms.n] - U[:ms.n - 1]] if ms.n > 1 else []
     if ocp.jerk_max is not None:
         name = f"jerk limit |d alpha/dt| <= {ocp.jerk_max:g} rad/s^3"
         step = ocp.jerk_max / ocp.alpha_max / ocp.Om * (ocp.tau_h / ms.n if not ocp.free_time else 1.0)
