@@ -21,7 +21,7 @@ import time
 
 from autobal import api
 from autobal.errors import ScenarioError
-from benchmarks._results import case, write
+from benchmarks._results import HERE, RESULTS, case, write
 
 NO_PEER = "no peer: no other tool solves these problems (robust, time-optimal, multi-mode spin-up)"
 
@@ -104,7 +104,7 @@ def main() -> list[dict]:
              "after) | what |\n|---|---|---|---|---|---|---|---|\n" + "\n".join(rows))
     write("spinup_studies", "Spin-up studies: robust, time-optimal, multi-mode ROSS rotor (solve times)", cases,
           notes, [table])
-    return cases + study_time()
+    return cases + study_time() + study_scaling()
 
 
 SCENES = ("spinup_jeffcott_deadline_5s", "spinup_jeffcott_horizon_10s", "spinup_liquid_balancer")
@@ -157,5 +157,161 @@ def study_time() -> list[dict]:
     return cases
 
 
+
+# ---- study scaling with N (issue 14, item 4: solve time at most linear in the intervals) -----------------
+SCALING_SCENE = "spinup_jeffcott_deadline_5s"
+SCALING_N = (200, 400, 800, 1600)
+# one fresh process per N: the scene with `intervals` overridden, the spinup analysis as `autobal run` does it;
+# every IPOPT solve of the study timed (wall and CPU of the process) by wrapping Solver.solve; argv[3]: a JSON
+# dict naming a lever measured side by side ({} = the study as shipped): "warm", WARM_OPTIONS overrides;
+# "stage_tol", the IPOPT tolerance of the intermediate mesh stages (the finest keeps the scene's)
+SCALING_CHILD = """
+import json, os, sys, time
+from autobal import api
+from autobal.ocp import solve as S
+from autobal.runners import RUNNERS
+lever, n_final = json.loads(sys.argv[3]), int(sys.argv[2])
+S.WARM_OPTIONS = S.WARM_OPTIONS | lever.get("warm", {})
+stages, solve, init = [], S.Solver.solve, S.Solver.__init__
+def looser(self, ocp, method, ref=None, options=None, warm=False):
+    tol = lever.get("stage_tol")  # the intermediate warm stages (not the final mesh) to a looser tolerance
+    if tol and warm and method.intervals < n_final:
+        options = (options or {}) | {"tol": tol, "constr_viol_tol": tol, "compl_inf_tol": tol}
+    init(self, ocp, method, ref, options, warm)
+S.Solver.__init__ = looser
+def timed(self, *a, **k):
+    w, c = time.perf_counter(), time.process_time()
+    sol = solve(self, *a, **k)
+    stages.append({"intervals": self.nlp.mesh.n, "iterations": sol.iterations, "solve_s": sol.solve_time_s,
+                   "solve_cpu_s": time.process_time() - c - sol.guess_time_s, "build_s": self.build_time_s,
+                   "success": bool(sol.success)})
+    return sol
+S.Solver.solve = timed
+scene = api.load(sys.argv[1], set={"analyses.spinup.intervals": int(sys.argv[2])})
+w, c, load = time.perf_counter(), time.process_time(), os.getloadavg()[0]
+d = RUNNERS["spinup"](scene, scene.analyses.spinup).to_dict()
+print(json.dumps({"wall_s": time.perf_counter() - w, "cpu_s": time.process_time() - c, "load_before": load,
+                  "load_after": os.getloadavg()[0], "peak": d["peak_deflection_over_e"],
+                  "collocation_peak": d["collocation_peak_over_e"], "split": d["time_split"], "stages": stages}))
+"""
+
+
+def slope(n, t) -> float:
+    """Least-squares exponent p of t ~ n^p (log-log fit)."""
+    import numpy as np
+
+    return float(np.polyfit(np.log(n), np.log(t), 1)[0])
+
+
+def scaling_run(n: int, lever: dict | None = None) -> dict:
+    """The study at ``n`` intervals in a fresh process (``lever``: see SCALING_CHILD); the child's record."""
+    out = subprocess.run([sys.executable, "-c", SCALING_CHILD, SCALING_SCENE, str(n), json.dumps(lever or {})],
+                         capture_output=True, text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def study_scaling(ns=SCALING_N, lever: dict | None = None, name: str = "spinup_study_scaling") -> list[dict]:
+    """The toolkit's own spin-up study (screening on the coarse mesh, mesh doubling with primal-dual warm
+    starts) at each N in ``ns`` intervals, each in a fresh process (``lever``: see SCALING_CHILD): per mesh
+    stage its iterations, solve (wall, CPU) and build time; the study's total solve and wall time; exponents
+    fitted over ``ns``.  Writes results/NAME.json."""
+    cases, rows, recs = [], [], []
+    for n in ns:
+        r = scaling_run(n, lever)
+        recs.append(r)
+        st = r["stages"]
+        fine = st[-1]
+        total = sum(s["solve_s"] for s in st)
+        cases.append(case(f"N = {n} (study)", total, sum({s["intervals"]: s["build_s"] for s in st}.values()), None,
+                          None, abs(r["collocation_peak"] - r["peak"]) / r["peak"], wall_s=r["wall_s"],
+                          cpu_s=r["cpu_s"], intervals=n, peak_deflection_over_e=r["peak"],
+                          collocation_peak_over_e=r["collocation_peak"], total_solve_cpu_s=sum(s["solve_cpu_s"]
+                                                                                               for s in st),
+                          finest_solve_s=fine["solve_s"], finest_solve_cpu_s=fine["solve_cpu_s"],
+                          finest_iterations=fine["iterations"], stages=st, split_s=r["split"],
+                          load_average_before=round(r["load_before"], 2),
+                          load_average_after=round(r["load_after"], 2), lever=lever or {}, note=NO_PEER))
+        rows.append(f"| {n} | " + ", ".join(f"{s['intervals']}: {s['iterations']} / {s['solve_s']:.2f} / "
+                                            f"{s['solve_cpu_s']:.2f}" for s in st)
+                    + f" | {total:.2f} | {r['split']['build_time_s']:.2f} | {r['wall_s']:.2f} | {r['peak']:.7f} | "
+                      f"{r['load_before']:.1f} → {r['load_after']:.1f} |")
+    fits = []
+    if len(ns) > 1:
+        c = cases
+        fit = {"total solve (wall)": [x["autobal_s"] for x in c],
+               "total solve (CPU)": [x["total_solve_cpu_s"] for x in c],
+               "finest stage solve (wall)": [x["finest_solve_s"] for x in c],
+               "finest stage solve (CPU)": [x["finest_solve_cpu_s"] for x in c],
+               "finest stage iterations": [x["finest_iterations"] for x in c],
+               "finest stage CPU per iteration": [x["finest_solve_cpu_s"] / x["finest_iterations"] for x in c],
+               "study wall": [x["wall_s"] for x in c], "builds": [x["autobal_build_s"] for x in c]}
+        fits = [f"| {k} | {slope(ns, v):.2f} |" for k, v in fit.items()]
+        for x in cases:
+            x["exponents"] = {k: slope(ns, v) for k, v in fit.items()}
+    table = ("| N | stages: intervals: iterations / solve wall (s) / solve CPU (s) | total solve (s) | builds (s) | "
+             "study wall (s) | peak, re-simulated (e) | load (1 min) |\n|---|---|---|---|---|---|---|\n"
+             + "\n".join(rows))
+    tables = [table] + (["| fitted exponent p (t ~ N^p, over N = " + ", ".join(map(str, ns)) + ") | p |\n|---|---|\n"
+                         + "\n".join(fits)] if fits else [])
+    write(name, f"Spin-up study scaling with N ({SCALING_SCENE}"
+          + (f", lever {lever}" if lever else "") + ")", cases, [
+        "The toolkit's own study (autobal run's spinup analysis): every start screened on the coarse mesh "
+        "(N / 2^k >= 50 intervals), the best refined by doubling the intervals, each stage warm-started with the "
+        "coarser optimum's primal and dual values. autobal (s): wall time of every IPOPT solve of the study; "
+        "autobal build (s): the NLP builds; error: collocation vs re-simulated peak. No peer.",
+        "Each N in a fresh Python process; solve CPU is the process's CPU time over each IPOPT solve (the "
+        "steadier measure on the shared 2-core machine; wall times stretch with the load shown)."], tables)
+    if not lever and len(ns) > 1:
+        scaling_figure()
+    return cases
+
+
+SCALING_FIGURE = HERE.parent / "docs" / "figures" / "benchmark_spinup_study_scaling.png"
+
+
+def scaling_figure(path=SCALING_FIGURE) -> None:
+    """Log-log solve time against N: the study (results/spinup_study_scaling.json: every solve, the finest
+    stage, the whole study's wall time) beside the single solve from one guess, autobal and rockit
+    (results/spinup_ocp.json)."""
+    from matplotlib.figure import Figure
+
+    study = json.loads((RESULTS / "spinup_study_scaling.json").read_text())["cases"]
+    single = json.loads((RESULTS / "spinup_ocp.json").read_text())["cases"]
+    fig = Figure(figsize=(6.4, 4.2), layout="constrained")
+    ax = fig.subplots()
+    n = [c["intervals"] for c in study]
+    exps = study[0].get("exponents", {})
+    for key, y, label, mk in (
+            ("study wall", "wall_s", "study, whole (wall: search, builds, solves, re-sim.)", "o-"),
+            ("total solve (wall)", "autobal_s", "study, every IPOPT solve", "o-"),
+            ("finest stage solve (wall)", "finest_solve_s", "study, finest stage only", "o--")):
+        ax.loglog(n, [c[y] for c in study], mk, label=f"{label}: N^{exps.get(key, float('nan')):.2f}")
+    ns = [int(c["case"].split()[2]) for c in single]
+    for side, label, mk in (("autobal", "single solve from one guess, autobal", "s:"),
+                            ("rockit", "single solve, rockit (expand=True)", "^:")):
+        pts = [(m, c[side]["solve_s"]) for m, c in zip(ns, single, strict=True) if c.get(side)]
+        if len(pts) > 1:
+            m, t = zip(*pts, strict=True)
+            ax.loglog(m, t, mk, label=f"{label}: N^{slope(m, t):.2f}")
+    t0 = study[0]["autobal_s"]
+    ax.loglog(n, [t0 * x / n[0] for x in n], "k:", lw=0.8, label="$\\propto N$ (from the study's solve at N = "
+              f"{n[0]})")
+    ax.set_xticks(n, [str(x) for x in n])
+    ax.minorticks_off()
+    ax.grid(alpha=0.3, which="both")
+    ax.set_xlabel("control intervals N to the deadline")
+    ax.set_ylabel("wall time (s)")
+    ax.legend(fontsize=7)
+    load = [c["load_average_before"] for c in study]
+    ax.set_title(f"Spin-up, spinup_jeffcott_deadline_5s: the study's mesh continuation against one solve\n"
+                 f"(wall times, exponents fitted over 200-1600; load {min(load):.1f}-{max(load):.1f} on 2 cores)",
+                 fontsize=8)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+
+
 if __name__ == "__main__":
-    study_time() if sys.argv[1:] == ["study-time"] else main()
+    if sys.argv[1:2] == ["study-scaling"]:
+        study_scaling(tuple(int(a) for a in sys.argv[2:]) or SCALING_N)
+    else:
+        study_time() if sys.argv[1:] == ["study-time"] else main()
