@@ -284,6 +284,7 @@ def scaling_figure(path=SCALING_FIGURE) -> None:
     for key, y, label, mk in (
             ("study wall", "wall_s", "study, whole (wall: search, builds, solves, re-sim.)", "o-"),
             ("total solve (wall)", "autobal_s", "study, every IPOPT solve", "o-"),
+            ("total solve (CPU)", "total_solve_cpu_s", "study, every IPOPT solve, CPU s", "o:"),
             ("finest stage solve (wall)", "finest_solve_s", "study, finest stage only", "o--")):
         ax.loglog(n, [c[y] for c in study], mk, label=f"{label}: N^{exps.get(key, float('nan')):.2f}")
     ns = [int(c["case"].split()[2]) for c in single]
@@ -300,11 +301,12 @@ def scaling_figure(path=SCALING_FIGURE) -> None:
     ax.minorticks_off()
     ax.grid(alpha=0.3, which="both")
     ax.set_xlabel("control intervals N to the deadline")
-    ax.set_ylabel("wall time (s)")
+    ax.set_ylabel("time (s)")
     ax.legend(fontsize=7)
     load = [c["load_average_before"] for c in study]
     ax.set_title(f"Spin-up, spinup_jeffcott_deadline_5s: the study's mesh continuation against one solve\n"
-                 f"(wall times, exponents fitted over 200-1600; load {min(load):.1f}-{max(load):.1f} on 2 cores)",
+                 f"(wall times unless named, exponents fitted over 200-1600; load {min(load):.1f}-"
+                 f"{max(load):.1f} on 2 cores)",
                  fontsize=8)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
