@@ -34,7 +34,7 @@ from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.search import FAST_STEP, ModalRotor, simulate_steps, steps_of
 from autobal.ocp.simulation import initial_guess, ramp_profile, resimulate
 from autobal.ocp.solve import IPOPT_OPTIONS
-from autobal.ocp.transcription import DirectCollocation, mesh, transcribe
+from autobal.ocp.transcription import DirectCollocation, jerk_regulariser, mesh, structured_derivatives, transcribe
 
 
 @dataclass(frozen=True)
@@ -207,7 +207,14 @@ def ramp_family(ocp: SpinupOcp, n: int, count: int = 8) -> list[Profile]:
 
 class RobustSolver:
     """The multi-scenario NLP: one transcription per scenario, controls and epigraph level shared,
-    the speed states kept once (see the module docstring)."""
+    the speed states kept once (see the module docstring).
+
+    Each scenario's variables are a constant selection of the robust ones, w_i = P_i x (one entry per row:
+    a shared control, the level S, the scenario's own states, or the first scenario's speed state scaled by
+    Omega0_1/Omega0_i).  The derivatives are the scenarios' structured ones
+    (:func:`autobal.ocp.transcription.structured_derivatives`: the interval Function's SX derivatives mapped
+    over the intervals) carried through P_i: dg_i/dx = (dg_i/dw_i) P_i and the Hessian sum_i P_i' H_i P_i, so
+    the construction hardly grows with the intervals or the scenarios."""
 
     def __init__(self, ocps: list[SpinupOcp], method: DirectCollocation, ref: float, options: dict | None = None):
         if not isinstance(method, DirectCollocation):
@@ -216,65 +223,64 @@ class RobustSolver:
             raise ValueError("the robust spin-up OCP minimises the worst-case peak deflection (peak_deflection)")
         t0 = time.perf_counter()
         self.ocps, self.method = ocps, method
-        self.nlps = [transcribe(o, method, ref) for o in ocps]
+        self.nlps = [transcribe(o, method, ref, "MX") for o in ocps]
         first = self.nlps[0]
         K = first.index["u"].size
         n = first.mesh.n
-        u, z = ca.SX.sym("u", K), ca.SX.sym("S")
         nu_idx = np.concatenate([first.index["X"][:, 4], first.index["Xc"][..., 4].ravel()])
-        parts, lbx, ubx, g, lbg, ubg = [u, z], [first.lbx[first.index["u"]], [0.0]], \
-            [first.ubx[first.index["u"]], [np.inf]], [], [], []
-        self.maps = []  # per scenario: (its variables' expressions in x) as a Function later
-        w_exprs = []
-        nu_first = None
+        lbx, ubx = [first.lbx[first.index["u"]], [0.0]], [first.ubx[first.index["u"]], [np.inf]]
+        cols, scales, keeps, offset = [], [], [], K + 1
         for i, (o, nlp) in enumerate(zip(ocps, self.nlps, strict=True)):
             N = nlp.x.numel()
             own = np.ones(N, bool)
             own[nlp.index["u"]] = False
             own[nlp.index["v"]] = False
-            if i > 0:
+            col, sc = np.empty(N, int), np.ones(N)
+            col[nlp.index["u"]] = np.arange(K)
+            col[nlp.index["v"][0]] = K
+            if i > 0:  # the speed: the first scenario's, scaled to this one's dimensionless time
                 own[nu_idx] = False
-            rest = ca.SX.sym(f"w{i}", int(own.sum()))
-            parts.append(rest)
+                col[nu_idx], sc[nu_idx] = cols[0][nu_idx], ocps[0].Om / o.Om
+            col[own] = offset + np.arange(own.sum())
+            offset += int(own.sum())
             lbx.append(nlp.lbx[own])
             ubx.append(nlp.ubx[own])
-            el = [None] * N
-            for k, j in enumerate(np.flatnonzero(own)):
-                el[j] = rest[k]
-            for k, j in enumerate(nlp.index["u"]):
-                el[j] = u[k]
-            el[nlp.index["v"][0]] = z
-            if i == 0:
-                w = ca.vertcat(*el)
-                nu_first = [w[j] for j in nu_idx]
-            else:
-                scale = ocps[0].Om / o.Om
-                for k, j in enumerate(nu_idx):
-                    el[j] = scale * nu_first[k]
-                w = ca.vertcat(*el)
-            w_exprs.append(w)
-            gi = ca.Function("g", [nlp.x], [nlp.g])(w)
-            keep = np.ones(gi.numel(), bool)
+            keep = np.ones(nlp.g.numel(), bool)
             if i > 0:  # rows that repeat the first scenario's: speed dynamics, final speed, jerk bound
                 for name, a, b in nlp.blocks:
                     if name == "dynamics":
                         keep[a:b][np.arange(b - a) % 5 == 4] = False
                     elif name.startswith(("final speed", "jerk limit")):
                         keep[a:b] = False
-            rows = np.flatnonzero(keep)
-            g.append(gi[rows.tolist()])
+            cols.append(col)
+            scales.append(sc)
+            keeps.append(np.flatnonzero(keep))
+        x, p = ca.MX.sym("x", offset), ca.MX.sym("p", 0)
+        lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", sum(r.size for r in keeps))
+        self.P = [ca.DM.triplet(np.arange(c.size).tolist(), c.tolist(), s.tolist(), c.size, offset)
+                  for c, s in zip(cols, scales, strict=True)]
+        g, gj, jac, hess, lbg, ubg, at = [], [], [], 0, [], [], 0
+        for nlp, P, rows in zip(self.nlps, self.P, keeps, strict=True):
+            w = ca.mtimes(P, x)
+            der = structured_derivatives(nlp)
+            g.append(ca.Function("g", [nlp.x], [nlp.g])(w)[rows.tolist()])
+            gi, Ji = der["jac_g"](w, p)
+            gj.append(gi[rows.tolist()])
+            jac.append(ca.mtimes(Ji[rows.tolist(), :], P))
+            Q = ca.DM.triplet(rows.tolist(), list(range(rows.size)), [1.0] * rows.size, nlp.g.numel(), rows.size)
+            Hu = der["hess_lag"](w, p, 0.0, ca.mtimes(Q, lam_g[at:at + rows.size]))  # upper triangle in w
+            hess = hess + ca.mtimes([P.T, Hu + ca.tril(Hu.T, False), P])
             lbg.append(nlp.lbg[rows])
             ubg.append(nlp.ubg[rows])
-        x = ca.vertcat(*parts)
-        f = z
-        pen = ocps[0].jerk_penalty
-        if pen and n > 1:
-            f = f + pen * ca.sumsqr(u[1:n] - u[:n - 1])
-        self.x, self.K, self.n = x, K, n
+            at += rows.size
+        f = x[K] + (jerk_regulariser(ocps[0], x[1:n] - x[:n - 1]) if n > 1 else 0)
+        hess = ca.triu(hess) + ca.triu(ca.hessian(lam_f * f, x)[0])
+        derivatives = {"jac_g": ca.Function("robust_jac_g", [x, p], [ca.vertcat(*gj), ca.vertcat(*jac)]),
+                       "hess_lag": ca.Function("robust_hess_l", [x, p, lam_f, lam_g], [hess])}
+        self.x, self.f, self.derivatives, self.K, self.n = x, f, derivatives, K, n
         self.lbx, self.ubx = np.concatenate(lbx), np.concatenate(ubx)
         self.lbg, self.ubg = np.concatenate(lbg), np.concatenate(ubg)
-        self.unpack = ca.Function("unpack", [x], w_exprs)
-        self.solver = ipopt.nlpsol("robust_spinup", x, ca.SX.sym("p", 0), f, ca.vertcat(*g),
+        self.solver = ipopt.nlpsol("robust_spinup", x, p, f, ca.vertcat(*g), **derivatives,
                                    **(IPOPT_OPTIONS | (options or {})))
         self.ref = ref
         self.build_time_s = time.perf_counter() - t0
@@ -308,7 +314,7 @@ class RobustSolver:
             raise SolveError(f"robust spin-up OCP not solved: {r['status']} after {r['iterations']} iterations "
                              f"({len(self.ocps)} scenarios, {self.method.label})", r["status"],
                              {"alpha_rad_s2": list(r["x"][:self.n] * self.ocps[0].alpha_max)})
-        ws = [np.asarray(w).ravel() for w in self.unpack.call([r["x"]])]
+        ws = [np.asarray(P @ ca.DM(r["x"])).ravel() for P in self.P]
         peaks = [float(np.sqrt(np.max(np.sum(w[nlp.index["Xc"]][..., :2] ** 2, axis=-1))))
                  for w, nlp in zip(ws, self.nlps, strict=True)]
         return {"u": np.asarray(r["x"][:self.n]), "collocation_peaks": np.array(peaks), "status": r["status"],

@@ -102,6 +102,31 @@ def interval_function(ocp: SpinupOcp, d: int, scheme: str, ref: float, continuit
     return ca.Function("spinup_interval", [x0, xc, u, x1, h, v], [ca.vertcat(*res), *paths, quad])
 
 
+def jerk_regulariser(ocp: SpinupOcp, du):
+    """The objective's jerk terms: ``jerk_penalty`` sum (Delta u)^2 plus ``jerk_variation`` times the total
+    variation sum |Delta u|, smoothed as sqrt(Delta u^2 + s^2) - s with s = TV_SMOOTHING (Huber-like: quadratic
+    below s, so one-interval pulses cost and the switches stay sharp).
+
+    Parameters
+    ----------
+    ocp : SpinupOcp
+        The problem (its weights, dimensionless, relative to the scaled objective).
+    du : SX or MX column
+        Changes of u = alpha/alpha_max between consecutive control intervals of the horizon, dimensionless.
+
+    Returns
+    -------
+    SX or MX
+        The regulariser, in units of the scaled objective (0 when both weights are 0).
+    """
+    reg = 0
+    if ocp.jerk_penalty:
+        reg = reg + ocp.jerk_penalty * ca.sumsqr(du)
+    if ocp.jerk_variation:
+        reg = reg + ocp.jerk_variation * ca.sum1(ca.sqrt(du**2 + TV_SMOOTHING**2) - TV_SMOOTHING)
+    return reg
+
+
 @dataclass
 class Mesh:
     """Interval lengths (tau): ``n`` control intervals of the horizon, then ``ns`` settling intervals."""
@@ -278,11 +303,8 @@ def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
         obj = v[0]
     else:
         obj = quad / ref
-    if ocp.jerk_penalty and du:
-        obj = obj + ocp.jerk_penalty * ca.sumsqr(ca.vertcat(*du))
-    if ocp.jerk_variation and du:
-        dv = ca.vertcat(*du)
-        obj = obj + ocp.jerk_variation * ca.sum1(ca.sqrt(dv**2 + TV_SMOOTHING**2) - TV_SMOOTHING)
+    if du:
+        obj = obj + jerk_regulariser(ocp, ca.vertcat(*du))
     index = {"X": idx_X, "Xc": idx_Xc, "u": idx_u, "v": idx_v}
     if intervals is not None:  # g row of each interval output: the dynamics and path blocks come first
         sizes = [fi.nnz_out(i) for i in range(fi.n_out() - 1)]

@@ -7,6 +7,7 @@ from __future__ import annotations
 import dataclasses
 from types import SimpleNamespace
 
+import casadi as ca
 import numpy as np
 import pytest
 
@@ -15,7 +16,7 @@ from autobal.analysis.executor import InProcess
 from autobal.errors import ScenarioError
 from autobal.models.rotor import RotorParams
 from autobal.ocp import robust as rb
-from autobal.ocp import robust_study, time_optimal, time_optimal_study
+from autobal.ocp import robust_study, time_optimal, time_optimal_study, transcription
 from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.simulation import ramp_profile
 from autobal.ocp.solve import starts
@@ -179,3 +180,44 @@ def test_validation_on_a_dask_cluster_gives_the_in_process_numbers():
         remote = rb.validate(ocp, unc, prof, 24, 5, exe, chunk=8)
     np.testing.assert_array_equal(local[0], remote[0])
     np.testing.assert_array_equal(local[1], remote[1])
+
+
+def test_robust_objective_holds_the_scenes_jerk_regulariser():
+    """The robust NLP's objective is S + jerk_penalty sum du^2 + jerk_variation sum (sqrt(du^2 + s^2) - s) over the
+    shared controls (the scene's regulariser, the same as the nominal transcription's), evaluated here in numpy."""
+    ocp = dataclasses.replace(jeffcott(), jerk_penalty=0.3, jerk_variation=0.02)
+    n = 10
+    pair = np.array([[0.95, 0.5, 1.0], [1.05, 1.0, 1.0]])
+    s = rb.RobustSolver(rb.scenario_ocps(ocp, pair), DirectCollocation(n), 1.0)
+    x = np.random.default_rng(0).uniform(-1, 1, s.variables)
+    du = np.diff(x[:n])
+    tv = 0.01  # autobal.ocp.transcription.TV_SMOOTHING
+    expected = x[s.K] + 0.3 * np.sum(du**2) + 0.02 * np.sum(np.sqrt(du**2 + tv**2) - tv)
+    f = float(ca.Function("f", [s.x], [s.f])(x))
+    assert f == pytest.approx(expected, rel=1e-12)
+    nominal = transcription.transcribe(ocp, DirectCollocation(n), 1.0)
+    w = np.zeros(nominal.x.numel())
+    w[nominal.index["u"][:n]] = x[:n]
+    w[nominal.index["v"][0]] = x[s.K]
+    assert float(ca.Function("f", [nominal.x], [nominal.f])(w)) == pytest.approx(expected, rel=1e-12)
+
+
+def test_robust_derivatives_match_casadis_on_the_whole_nlp():
+    """The robust NLP's Jacobian and Hessian (the scenarios' structured derivatives carried through the shared
+    variables) equal CasADi's own on the constraint expression, at a random point."""
+    ocp = dataclasses.replace(jeffcott(), jerk_variation=0.01)
+    pair = np.array([[0.95, 0.5, 1.0], [1.05, 2.0, 1.0]])
+    s = rb.RobustSolver(rb.scenario_ocps(ocp, pair), DirectCollocation(8), 2.0)
+    rng = np.random.default_rng(1)
+    x, lam = rng.uniform(0.5, 1.5, s.variables), rng.normal(size=s.lbg.size)
+    nlp = s.solver.oracle()  # (x, p) -> (f, g), the NLP's own expressions
+    X = nlp.mx_in(0)
+    f, g = nlp.call([X, nlp.mx_in(1)])
+    L = ca.MX.sym("l", s.lbg.size)
+    J_ref = ca.Function("J", [X], [ca.jacobian(g, X)])(x)
+    H_ref = ca.Function("H", [X, L], [ca.triu(ca.hessian(0.7 * f + ca.dot(L, g), X)[0])])(x, lam)
+    J = s.derivatives["jac_g"](x, [])[1]
+    H = s.derivatives["hess_lag"](x, [], 0.7, lam)
+    assert ca.DM(J).nnz() > 0 and ca.DM(H).nnz() > 0
+    np.testing.assert_allclose(ca.DM(J).full(), ca.DM(J_ref).full(), rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(ca.DM(H).full(), ca.DM(H_ref).full(), rtol=1e-9, atol=1e-9)
