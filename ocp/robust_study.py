@@ -17,6 +17,7 @@ import numpy as np
 from autobal.analysis.result import Result, new_figure, with_statuses
 from autobal.ocp import robust as rb
 from autobal.ocp.problem import SpinupOcp
+from autobal.ocp.search import controls_on_mesh, grid_search
 from autobal.ocp.simulation import Trajectory, resimulate
 from autobal.ocp.solve import optimize
 from autobal.ocp.transcription import DirectCollocation
@@ -175,9 +176,16 @@ def run(ocp: SpinupOcp, method: DirectCollocation, uncertainty: rb.Uncertainty, 
     pn = rb.Profile("nominal optimum", nominal.solution.u[:n])
     family = rb.ramp_family(ocp, n, ramps)
     F = uncertainty.grid(design_points)
-    design_ramps = rb.fast_peaks(ocp, F, family).max(axis=0)
-    start_ramp = family[int(np.argmin(design_ramps))]
-    ro = rb.optimize_robust_refined(ocp, F, method, [pn, start_ramp], nominal.score**2, options)
+    ramp_peaks = rb.fast_peaks(ocp, F, family)
+    design_ramps = ramp_peaks.max(axis=0)
+    ib = int(np.argmin(design_ramps))
+    # starts: the nominal optimum, the best ramp and the global search's profiles on the best ramp's worst
+    # design rotor (the robust optimum depends on the start: docs/theory/spinup_robust.md, "Build and solve")
+    worst = int(np.argmax(ramp_peaks[:, ib]))
+    o = rb.scenario_ocps(ocp, F[[worst]])[0]
+    searched = [rb.Profile(f"global search on design rotor {worst}", controls_on_mesh(o, p, n))
+                for p in grid_search(o, keep=2).params]
+    ro = rb.optimize_robust_refined(ocp, F, method, [pn, family[ib], *searched], nominal.score**2, options)
     profiles = [ro.profile, pn, *family]
     t0 = time.perf_counter()
     factors, peaks = rb.validate(ocp, uncertainty, profiles, samples, seed, executor)
