@@ -31,7 +31,8 @@ def robust(d: dict) -> dict:
     return {"build": d["build_time_s"] + d["nominal_build_time_s"],
             "solve": d["solve_time_s"] + d["nominal_solve_time_s"], "validation": d["validation_time_s"],
             "detail": f"nominal optimum: build {d['nominal_build_time_s']:.1f} s, solve "
-                      f"{d['nominal_solve_time_s']:.1f} s; robust NLPs ({len(d['rounds'])} NLP solves): build "
+                      f"{d['nominal_solve_time_s']:.1f} s; robust NLPs ({len(d['rounds'])} NLP solves from "
+                      f"{len({r['start'] for r in d['rounds']})} starts and refinements): build "
                       f"{d['build_time_s']:.1f} s, solve {d['solve_time_s']:.1f} s; validation on "
                       f"{d['validation_samples']} rotors ({d['executor']})"}
 

@@ -415,16 +415,17 @@ def optimize_robust(ocp: SpinupOcp, factors: np.ndarray, method: DirectCollocati
 
 
 COARSE = 50  # control intervals of the coarse stage (at least)
-# coarse optima refined on the fine mesh: the coarse ranking does not predict the fine one (docs/theory/
-# spinup_robust.md, "Build and solve"), so the answer is the best of several refinements, not of one
-REFINED = 2
+# coarse optima refined on the fine mesh.  The coarse ranking need not predict the fine one (it did not for
+# some starts, docs/theory/spinup_robust.md, "Build and solve"); on the shipped scene a second refinement
+# never won and cost 14 s more of IPOPT, so one
+REFINED = 1
 
 
 def optimize_robust_refined(ocp: SpinupOcp, factors: np.ndarray, method: DirectCollocation, starts: list[Profile],
                             ref: float, options: dict | None = None) -> RobustOptimum:
     """:func:`optimize_robust` by mesh continuation: every start and the scenario generation on N / 2^k
     intervals (the fewest still at least COARSE), then the REFINED best coarse optima (their worst design
-    peak more than 1e-4 apart: distinct optima) each refined on N intervals with the union of their active
+    peaks more than 1e-4 apart: distinct optima) each refined on N intervals with the union of their active
     scenarios (more join if a fine profile needs them); the best fine optimum is kept.  Arguments as there."""
     n, nc = method.intervals, method.intervals
     while nc % 2 == 0 and nc // 2 >= COARSE:
