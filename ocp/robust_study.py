@@ -138,6 +138,38 @@ def _on(ocp: SpinupOcp, factors, profile: rb.Profile) -> Trajectory:
     return resimulate(o, u, h, profile.label, points=8)
 
 
+def robust_starts(ocp: SpinupOcp, factors: np.ndarray, nominal: rb.Profile, ramps: list[rb.Profile],
+                  ramp_peaks: np.ndarray) -> list[rb.Profile]:
+    """Starts of the robust NLP: the nominal optimum, the ramp with the smallest worst design peak and the
+    global search's two best three-phase profiles on that ramp's worst design rotor (the robust optimum
+    depends on the start: docs/theory/spinup_robust.md, "Build and solve").
+
+    Parameters
+    ----------
+    ocp : SpinupOcp
+        The nominal problem (SI).
+    factors : ndarray, shape (S, 3)
+        The design set.
+    nominal : Profile
+        The nominal optimum.
+    ramps : list of Profile
+        The constant ramps.
+    ramp_peaks : ndarray, shape (S, len(ramps))
+        Their peaks on the design set (:func:`autobal.ocp.robust.fast_peaks`), delta/e.
+
+    Returns
+    -------
+    list of Profile
+        On the ramps' control intervals.
+    """
+    ib = int(np.argmin(ramp_peaks.max(axis=0)))
+    worst = int(np.argmax(ramp_peaks[:, ib]))
+    o = rb.scenario_ocps(ocp, factors[[worst]])[0]
+    n = ramps[ib].u.size
+    return [nominal, ramps[ib], *[rb.Profile(f"global search on design rotor {worst}", controls_on_mesh(o, p, n))
+                                  for p in grid_search(o, keep=2).params]]
+
+
 def run(ocp: SpinupOcp, method: DirectCollocation, uncertainty: rb.Uncertainty, design_points: int,
         samples: int, seed: int, ramps: int, executor, title: str = "", multistart: bool = True,
         options: dict | None = None) -> RobustResult:
@@ -178,14 +210,8 @@ def run(ocp: SpinupOcp, method: DirectCollocation, uncertainty: rb.Uncertainty, 
     F = uncertainty.grid(design_points)
     ramp_peaks = rb.fast_peaks(ocp, F, family)
     design_ramps = ramp_peaks.max(axis=0)
-    ib = int(np.argmin(design_ramps))
-    # starts: the nominal optimum, the best ramp and the global search's profiles on the best ramp's worst
-    # design rotor (the robust optimum depends on the start: docs/theory/spinup_robust.md, "Build and solve")
-    worst = int(np.argmax(ramp_peaks[:, ib]))
-    o = rb.scenario_ocps(ocp, F[[worst]])[0]
-    searched = [rb.Profile(f"global search on design rotor {worst}", controls_on_mesh(o, p, n))
-                for p in grid_search(o, keep=2).params]
-    ro = rb.optimize_robust_refined(ocp, F, method, [pn, family[ib], *searched], nominal.score**2, options)
+    ro = rb.optimize_robust_refined(ocp, F, method, robust_starts(ocp, F, pn, family, ramp_peaks), nominal.score**2,
+                                    options)
     profiles = [ro.profile, pn, *family]
     t0 = time.perf_counter()
     factors, peaks = rb.validate(ocp, uncertainty, profiles, samples, seed, executor)
