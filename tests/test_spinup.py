@@ -11,11 +11,12 @@ import yaml
 from numpy.testing import assert_allclose
 from scipy.integrate import solve_ivp
 
-from autobal import adapters, cli, scenario
+from autobal import adapters, api, cli, runners, scenario
 from autobal.errors import ScenarioError, SolveError
 from autobal.models.rotor import RotorParams, rotor_model
 from autobal.ocp import search
 from autobal.ocp import spinup as S
+from autobal.ocp.solve import drive_acceleration
 from autobal.ocp.spinup_study import run
 
 JEFFCOTT = RotorParams.from_groups(105.0, 5.0, 1.0)  # psi = 1, n = chi/m1 = 5 1/s, Omega0 = 105 1/s
@@ -281,6 +282,20 @@ def real_problem(alpha_max: float) -> S.SpinupOcp:
 
 
 CONVERGED = {40.0: 200, 20.0: 400}  # control intervals to the deadline: a 25 ms control step
+
+
+def test_hold_start_respects_the_drive():
+    # the liquid balancer's drive (J_p 1e-3 kg m^2, 0.05 N m, 6 W, motor 0.12 N m stall, 250 rad/s no load):
+    # the largest acceleration by hand, with the inertia J_p + m1 e^2 (1 - psi)
+    scene = api.load("spinup_liquid_balancer")
+    ocp = runners.spinup_ocp(scene, scene.analyses.spinup)
+    inertia = 1e-3 + 1.0 * 1e-6 * (1 - ocp.params.psi)
+    assert_allclose(drive_acceleration(ocp, 100.0), 40.0)  # alpha_max binds
+    assert_allclose(drive_acceleration(ocp, 180.0), 6.0 / 180.0 / inertia)  # power
+    assert_allclose(drive_acceleration(ocp, 210.0), 0.12 * (1 - 210 / 250) / inertia)  # motor: 19.19 rad/s^2
+    assert drive_acceleration(real_problem(40.0), 210.0) == 40.0  # no drive data
+    # at 19.19 rad/s^2 from 0.8 omega_cr the final speed needs 8.3 s of the 8.5 s horizon: no time to hold
+    assert "ramp, hold at 0.8 omega_cr, ramp" not in [lab for lab, _ in S.starts(ocp, 50)]
 
 
 def test_search_integrator_reproduces_the_spec_ramp():
