@@ -299,8 +299,7 @@ def drive_acceleration(ocp: SpinupOcp, omega: float) -> float:
 SEARCH_STEPS = 20000  # longer passages (quasi-static, thousands of whirl periods) skip the global search
 COARSE = 50  # control intervals of the coarse stage of the mesh continuation (at least)
 # IPOPT iterations a start may take on the coarse mesh: a screening, not the answer.  The starts that reach
-# the best basins converge in 13-99 (benchmarks/spinup_ocp.md, "Study time"); on the liquid balancer the
-# hold-below-critical start took 433 iterations (715 without the jerk penalty) to the worst of its six optima.
+# the best basins converge in 13-111 (benchmarks/spinup_ocp.md, "Study time" and "Liquid balancer convergence").
 COARSE_ITERATIONS = 200
 AHEAD = 0.05  # the constant ramps are not solved when the search's best is this far below them
 RANK_TIE = 2e-3  # relative: coarse optima this close to the best by the fast integrator are ranked by CVODES
