@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from autobal.analysis.result import Result, new_figure
-from autobal.ocp.problem import SpinupOcp
+from autobal.ocp.problem import SpinupOcp, pulse_variation
 from autobal.ocp.simulation import RESIM_POINTS, RESIM_TOL, Trajectory, baselines
 from autobal.ocp.solve import optimize
 from autobal.ocp.transcription import DirectCollocation, MultipleShooting
@@ -54,7 +54,8 @@ class SpinupResult(Result):
                                                    d.get("time_split", {}).items()),
                  f"  optimum: peak deflection {d['peak_deflection_over_e']:.4f} e (collocation "
                  f"{d['collocation_peak_over_e']:.4f} e, re-simulation difference {d['resimulation_rel_error']:.2e}),"
-                 f" peak unbalance {d['peak_unbalance']:.4f}, final time {d['final_time_s']:.4g} s"]
+                 f" peak unbalance {d['peak_unbalance']:.4f}, final time {d['final_time_s']:.4g} s, chattering "
+                 f"(pulse variation of alpha/alpha_max) {d['control_pulse_variation']:.3g}"]
         for v in b.values():
             lim = {True: "", False: " (exceeds the drive limits)", None: ""}[v["within_drive_limits"]]
             lines.append(f"  {v['label']:40s} peak deflection {v['peak_deflection_over_e']:.4f} e, "
@@ -186,6 +187,8 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
         "collocation_peak_over_e": sol.peak_collocation if ocp.objective != "peak_unbalance" else None,
         "objective_value": opt.score, "objective_value_transcription": opt.collocation_value,
         "peak_unbalance": tr.peak_d, "time_of_peak_s": tr.t_peak,
+        # chattering of the optimal acceleration: the one-interval pulses' total variation (alpha/alpha_max)
+        "control_pulse_variation": pulse_variation(sol.u[:method.intervals]),
         "omega_at_peak_rad_s": float(np.interp(tr.t_peak, tr.t, tr.omega)),
         "integral_deflection2_s": tr.integral_delta2, "final_time_s": sol.final_time_s,
         "build_time_s": opt.build_time_s, "total_solve_time_s": sum(r.get("solve_time_s", 0.0) for r in opt.starts),

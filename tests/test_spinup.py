@@ -16,6 +16,7 @@ from autobal.errors import ScenarioError, SolveError
 from autobal.models.rotor import RotorParams, rotor_model
 from autobal.ocp import search
 from autobal.ocp import spinup as S
+from autobal.ocp.problem import pulse_variation
 from autobal.ocp.solve import drive_acceleration
 from autobal.ocp.spinup_study import run
 
@@ -80,6 +81,9 @@ def test_optimum_beats_both_ramps_and_resimulates(target):
     for key in ("peak_deflection_over_e", "baseline_ramp_peak_over_e", "resimulation_rel_error", "solve_time_s",
                 "ipopt_iterations"):
         assert key in d
+    # the chattering measure of the reported controls is the measure of the optimum's own steps
+    assert d["control_pulse_variation"] == pytest.approx(pulse_variation(target.optimum.alpha[:200] / 40.0), abs=1e-12)
+    assert "chattering (pulse variation of alpha/alpha_max)" in target.summary()
 
 
 def test_time_split_adds_up_to_the_wall_time(target):
