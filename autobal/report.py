@@ -837,6 +837,8 @@ def spinup_section(sec: Section) -> None:
     sec.row("largest drive torque", "M_max", "max_torque_N_m")
     sec.row("largest drive power", "P_max", "max_power_W")
     sec.row("relative difference, CVODES re-simulation vs transcription", "", "resimulation_rel_error")
+    sec.row("chattering of the optimal acceleration (pulse variation of α/α_max; 0: none)", "",
+            "control_pulse_variation")
     sec.row("NLP build time", "", "build_time_s")
     sec.row("IPOPT time, all starts and mesh stages", "", "total_solve_time_s")
     sec.row("wall time of the analysis (search, solves, re-simulations)", "", "wall_time_s")
