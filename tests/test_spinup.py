@@ -176,6 +176,12 @@ def test_min_time_keeps_the_deflection_limit():
     assert (1.5 - 0.5) / 0.03 < T < 50.0
     assert res.data["peak_deflection_over_e"] <= 5.8 * 1.01
     assert res.data["baselines"]["max_acceleration_ramp"]["peak_deflection_over_e"] > 5.8
+    # the minimum-peak stage it starts from is part of the study: its solves are listed and timed, so the wall
+    # time split leaves little to "rest" (before, the whole stage fell there)
+    d = res.data
+    assert any(r["start"].startswith("minimum-peak stage: ") and r.get("solve_time_s", 0) > 0 for r in d["starts"])
+    assert d["total_solve_time_s"] == pytest.approx(sum(r.get("solve_time_s", 0.0) for r in d["starts"]))
+    assert 0 <= d["time_split"]["rest_time_s"] < 0.2 * d["wall_time_s"]
     # below the smallest peak reachable in the horizon the limit itself is the binding constraint
     with pytest.raises(SolveError, match=r"binding constraint: deflection limit delta/e <= 5"):
         S.optimize(small(objective="min_time", deflection_limit=5.0), S.DirectCollocation(40, 3, "radau"), False)
