@@ -822,7 +822,7 @@ def spinup_section(sec: Section) -> None:
     """Optimal spin-up through the critical speed (direct collocation, CVODES re-simulation)."""
     sec.verdict(None, f"objective: {str(sec.get('objective', '')).replace('_', ' ')}; {sec.get('method')}; "
                       f"wall time {number(sec.get('wall_time_s'))} s (NLP build {number(sec.get('build_time_s'))} s, "
-                      f"IPOPT {number(sec.get('total_solve_time_s'))} s over {len(sec.get('starts', []))} solves, "
+                      f"NLP solves {number(sec.get('total_solve_time_s'))} s over {len(sec.get('starts', []))} solves, "
                       "the rest global search, re-simulations and baselines)")
     sec.row("peak deflection of the optimum (re-simulated)", "δ*/e", "peak_deflection_over_e")
     e = _get(sec.results, "meta.scene_si.rotor.eccentricity")
@@ -840,10 +840,10 @@ def spinup_section(sec: Section) -> None:
     sec.row("chattering of the optimal acceleration (pulse variation of α/α_max; 0: none)", "",
             "control_pulse_variation")
     sec.row("NLP build time", "", "build_time_s")
-    sec.row("IPOPT time, all starts and mesh stages", "", "total_solve_time_s")
+    sec.row("NLP solve time (IPOPT or fatrop), all starts and mesh stages", "", "total_solve_time_s")
     sec.row("wall time of the analysis (search, solves, re-simulations)", "", "wall_time_s")
     st = sec.get("status")
-    sec.verdict(st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"IPOPT: {st} ({sec.get('method')})")
+    sec.verdict(st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"NLP solver: {st} ({sec.get('method')})")
     best, ramp = sec.get("peak_deflection_over_e"), sec.get("baseline_ramp_peak_over_e")
     if best is not None and ramp:
         sec.verdict(best <= ramp, f"optimum peak {number(best)} e vs the best ramp {number(ramp)} e "
@@ -861,7 +861,7 @@ def spinup_section(sec: Section) -> None:
              text(s.get("iterations", "—")), cell(s.get("solve_time_s"), "s"), cell(s.get("objective"), "1"),
              text(keeps[s.get("keeps_limit")])] for s in sec.get("starts", [])]
     if rows:
-        sec.tables.append(table("IPOPT solves of the multi-start: every start on the coarse mesh, the best one "
+        sec.tables.append(table("NLP solves of the multi-start: every start on the coarse mesh, the best one "
                                 "refined on the final mesh and judged by its CVODES re-simulation",
                                 ["start", "stage", "status", "iterations", "solve time", "re-simulated objective",
                                  "keeps limit"], rows))

@@ -153,6 +153,9 @@ class Spinup(Strict):
     scheme: Literal["radau", "legendre"] = "radau"
     degree: Annotated[int, Field(ge=1, le=9)] = Field(3, description="collocation degree, 1 to 9")
     intervals: Annotated[int, Field(ge=4, le=5000)] = Field(200, description="control intervals, 4 to 5,000")
+    nlp_solver: Literal["ipopt", "fatrop"] = Field(
+        "ipopt", description="the NLP solver of the collocation: ipopt (MUMPS), or fatrop (a Riccati recursion over "
+        "the stages; Radau collocation only)")
     multistart: bool = True
     max_iterations: Annotated[int, Field(ge=1, le=100000)] = Field(
         1000, description="IPOPT's iteration limit per solve (each start and each mesh-continuation stage)")
@@ -167,6 +170,8 @@ class Spinup(Strict):
             raise ValueError("max_speed must not be below start_speed and final_speed")
         if self.method == "multiple_shooting" and self.objective == "integrated_deflection":
             raise ValueError("multiple_shooting supports the peak and min_time objectives")
+        if self.nlp_solver == "fatrop" and (self.method != "collocation" or self.scheme != "radau"):
+            raise ValueError("nlp_solver fatrop needs method collocation with scheme radau")
         return self
 
 
@@ -194,6 +199,8 @@ class SpinupRobust(Spinup):
     def _robust(self):
         if self.objective != "peak_deflection" or self.method != "collocation":
             raise ValueError("spinup_robust minimises the worst-case peak_deflection by collocation")
+        if self.nlp_solver != "ipopt":
+            raise ValueError("spinup_robust solves its multi-rotor NLP with nlp_solver ipopt")
         for name in ("damping_factor", "liquid_mass_factor"):
             v = getattr(self, name)
             if v is not None and v[0] > v[1]:
@@ -213,4 +220,6 @@ class SpinupTimeOptimal(Spinup):
     def _time_optimal(self):
         if self.method != "collocation":
             raise ValueError("spinup_time_optimal is built on collocation")
+        if self.nlp_solver != "ipopt":
+            raise ValueError("spinup_time_optimal solves with nlp_solver ipopt")
         return self

@@ -247,11 +247,11 @@ class RobustSolver:
             ubx.append(nlp.ubx[own])
             keep = np.ones(nlp.g.numel(), bool)
             if i > 0:  # rows that repeat the first scenario's: speed dynamics, final speed, jerk bound
-                for name, a, b in nlp.blocks:
+                for name, rows in nlp.blocks:
                     if name == "dynamics":
-                        keep[a:b][np.arange(b - a) % 5 == 4] = False
+                        keep[rows[np.arange(rows.size) % 5 == 4]] = False
                     elif name.startswith(("final speed", "jerk limit")):
-                        keep[a:b] = False
+                        keep[rows] = False
             cols.append(col)
             scales.append(sc)
             keeps.append(np.flatnonzero(keep))

@@ -28,9 +28,11 @@ from autobal.ocp.transcription import (
     DirectCollocation,
     MultipleShooting,
     Nlp,
+    complete_stage_guess,
     interpolate,
     structured_derivatives,
     transcribe,
+    transcribe_stages,
 )
 
 # mumps_permuting_scaling 0: no maximum-weight matching and scaling of the KKT matrix in MUMPS (its
@@ -64,6 +66,12 @@ def ipopt_options(max_iterations: int = 1000, tolerance: float = 1e-8) -> dict:
 WARM_OPTIONS = {"warm_start_init_point": "yes", "mu_strategy": "monotone", "mu_init": 1e-6,
                 "warm_start_bound_push": 1e-9,
                 "warm_start_slack_bound_push": 1e-9, "warm_start_mult_bound_push": 1e-9}
+
+# fatrop on the stage form (transcribe_stages): its barrier parameter starts at 1e-5.  From the benchmark's
+# guess at 200-800 intervals that takes 28-32 iterations; fatrop's default (1e-2) 145-553, 1e-4 81-153 and
+# 1e-6 34-60 (benchmarks/spinup_ocp.md, "fatrop")
+FATROP_OPTIONS = {"mu_init": 1e-5, "print_level": 0}
+FATROP_STATUS = {0: "Solve_Succeeded", 1: "Maximum_Iterations_Exceeded"}  # fatrop's return flags
 
 INFEASIBLE = ("Infeasible_Problem_Detected", "Restoration_Failed")
 TIE = 1e-4  # relative: optima closer than this are equal, the first start is kept
@@ -136,7 +144,13 @@ class Solver:
         self.ocp, self.method = ocp, method
         # MX: the interval Function mapped over the intervals, so the construction hardly grows with N
         # (SX: 1.7 s at N = 200; benchmarks/spinup_ocp.md, "Levers")
-        self.nlp = transcribe(ocp, method, reference_level(ocp) if ref is None else ref, "MX")
+        ref = reference_level(ocp) if ref is None else ref
+        if getattr(method, "solver", "ipopt") == "fatrop":
+            self.nlp = transcribe_stages(ocp, method, ref)
+            self.solver = fatrop_solver(self.nlp, options)
+            self.build_time_s = time.perf_counter() - t0
+            return
+        self.nlp = transcribe(ocp, method, ref, "MX")
         nlp = self.nlp
         extra = IPOPT_OPTIONS | (WARM_OPTIONS if warm else {}) | (options or {})
         if isinstance(method, MultipleShooting):
@@ -166,8 +180,11 @@ class Solver:
                 w0[nlp.index["Xc"]] = w0[nlp.index["X"]][:-1, None, :]
         t_guess = time.perf_counter() - t0
         t0 = time.perf_counter()
-        duals = {k: v for k, v in (("lam_g0", lam_g0), ("lam_x0", lam_x0)) if v is not None}
-        r = ipopt.solve(self.solver, x0=w0, lbx=nlp.lbx, ubx=nlp.ubx, lbg=nlp.lbg, ubg=nlp.ubg, **duals)
+        duals = {k: v for k, v in (("lam_g0", lam_g0), ("lam_x0", lam_x0)) if v is not None and nlp.stages is None}
+        r = ipopt.solve(self.solver, x0=complete_stage_guess(nlp, w0), lbx=nlp.lbx, ubx=nlp.ubx, lbg=nlp.lbg,
+                        ubg=nlp.ubg, **duals)
+        if nlp.stages is not None:
+            r["status"] = FATROP_STATUS.get(r["status"], f"fatrop return flag {r['status']}")
         dt = time.perf_counter() - t0
         wopt = r["x"]
         if not r["success"] and raise_on_failure:
@@ -181,6 +198,21 @@ class Solver:
         return SpinupSolution(self.method.label, r["status"], r["success"], r["iterations"], dt, self.build_time_s,
                               _objective_value(ocp, nlp, wopt, float(r["f"][0])), float(np.sum(h[:nlp.mesh.n]))
                               / ocp.Om, u, h, pts, pk, wopt, r["lam_g"], r["lam_x"], t_guess)
+
+
+def fatrop_solver(nlp: Nlp, options: dict | None = None) -> ca.Function:
+    """fatrop (through CasADi, structure given stage by stage) for the stage form ``nlp``; of ``options`` (IPOPT's
+    names, as :func:`ipopt_options` writes them) it takes ``tol``, ``max_iter`` and ``mu_init``."""
+    opts = FATROP_OPTIONS | {k: v for k, v in (options or {}).items() if k in ("tol", "max_iter", "mu_init")}
+    opts.setdefault("tol", IPOPT_OPTIONS["tol"])
+    opts.setdefault("max_iter", IPOPT_OPTIONS["max_iter"])
+    return ca.nlpsol("spinup", "fatrop", {"x": nlp.x, "p": ca.MX.sym("p", 0), "f": nlp.f, "g": nlp.g},
+                     {"structure_detection": "manual", **nlp.stages, "fatrop": opts, "print_time": False,
+                      # CasADi's fatrop plugin takes no user derivatives (IPOPT's hess_lag, jac_g), so the stage
+                      # form is expanded to SX and differentiated whole: builds of 1.1 / 3.4 / 11 s at 200 / 400 /
+                      # 800 intervals; the MX derivatives of the mapped stage instead cost 3x more per evaluation
+                      # (benchmarks/spinup_ocp.md, "fatrop")
+                      "record_time": True, "expand": True})
 
 
 def infeasibility_error(ocp: SpinupOcp, nlp: Nlp, wopt: np.ndarray, r: dict) -> SolveError:
@@ -198,9 +230,9 @@ def infeasibility_error(ocp: SpinupOcp, nlp: Nlp, wopt: np.ndarray, r: dict) -> 
     if ocp.omega_max is not None:
         active[f"speed limit omega <= {ocp.omega_max:g} rad/s"] = float(np.mean(X[1:, 4] * ocp.Om >
                                                                               ocp.omega_max * (1 - 1e-6)))
-    for name, a, b in nlp.blocks:
+    for name, rows in nlp.blocks:
         if "limit" in name or "characteristic" in name:
-            gap = np.minimum(g[a:b] - nlp.lbg[a:b], nlp.ubg[a:b] - g[a:b])
+            gap = np.minimum(g[rows] - nlp.lbg[rows], nlp.ubg[rows] - g[rows])
             active[name] = float(np.mean(gap < 1e-6))
     binding = max(active, key=active.get)
     status, its = r["status"], r.get("iterations", -1)
@@ -219,13 +251,13 @@ def infeasibility_error(ocp: SpinupOcp, nlp: Nlp, wopt: np.ndarray, r: dict) -> 
                          f"{abs(ocp.omega_final - ocp.omega_start):.4g} rad/s needed")
         else:
             parts.append(f"the last iterate ends at omega = {X[n, 4] * ocp.Om:.4g} rad/s")
-    bad = [(name, float(viol[a:b].max(initial=0.0))) for name, a, b in nlp.blocks]
+    bad = [(name, float(viol[rows].max(initial=0.0))) for name, rows in nlp.blocks]
     bad = [f"'{k}' by {v:.3g}" for k, v in bad if v > 1e-6]
     if bad:
         parts.append("the last iterate violates " + ", ".join(bad))
     last = {"t_s": list(np.concatenate([[0.0], np.cumsum(h)]) / ocp.Om), "omega_rad_s": list(X[:, 4] * ocp.Om),
             "deflection_over_e": list(np.hypot(X[:, 0], X[:, 1])), "alpha_rad_s2": list(u * ocp.alpha_max),
-            "constraint_violation": {b[0]: float(viol[b[1]:b[2]].max(initial=0.0)) for b in nlp.blocks},
+            "constraint_violation": {name: float(viol[rows].max(initial=0.0)) for name, rows in nlp.blocks},
             "active_fraction": active}
     return SolveError("; ".join(parts), r["status"], last)
 

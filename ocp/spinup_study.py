@@ -44,7 +44,7 @@ class SpinupResult(Result):
     def summary(self) -> str:
         d = self.data
         b = d["baselines"]
-        lines = [f"spin-up OCP ({d['objective']}), {d['method']}: {d['status']}, {d['ipopt_iterations']} IPOPT "
+        lines = [f"spin-up OCP ({d['objective']}), {d['method']}: {d['status']}, {d['ipopt_iterations']} "
                  f"iterations in the final solve ({d['solve_time_s']:.2f} s)",
                  f"  times: {len(d['starts'])} starts and mesh stages {d['total_solve_time_s']:.2f} s ("
                  + ", ".join(f"{r['solve_time_s']:.2f}" for r in d["starts"] if "solve_time_s" in r)
@@ -135,8 +135,9 @@ class SpinupResult(Result):
 
 
 def method_of(settings):
-    cls = DirectCollocation if settings.method == "collocation" else MultipleShooting
-    return cls(settings.intervals, settings.degree, settings.scheme)
+    if settings.method == "collocation":
+        return DirectCollocation(settings.intervals, settings.degree, settings.scheme, settings.nlp_solver)
+    return MultipleShooting(settings.intervals, settings.degree, settings.scheme)
 
 
 def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, options: dict | None = None

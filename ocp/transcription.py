@@ -30,10 +30,14 @@ class DirectCollocation:
     intervals: int = 200
     degree: int = 3
     scheme: str = "radau"
+    # the NLP solver: "ipopt" (MUMPS) on the interval layout of :func:`transcribe`, or "fatrop" (a Riccati
+    # recursion over the stages) on the stage form of :func:`transcribe_stages` (Radau only)
+    solver: str = "ipopt"
 
     @property
     def label(self) -> str:
-        return f"direct collocation ({self.scheme}, degree {self.degree}, {self.intervals} intervals)"
+        via = "" if self.solver == "ipopt" else f", {self.solver}"
+        return f"direct collocation ({self.scheme}, degree {self.degree}, {self.intervals} intervals{via})"
 
 
 @dataclass(frozen=True)
@@ -154,7 +158,7 @@ class Nlp:
     ubx: np.ndarray
     lbg: np.ndarray
     ubg: np.ndarray
-    blocks: list  # (name, start, stop) rows of g
+    blocks: list  # (name, rows of g as an index array)
     index: dict  # "X" (n+ns+1, 5), "Xc" (n+ns, d, 5) or None, "u" (n+ns,), "v" list of indices
     mesh: Mesh
     fractions: list
@@ -163,6 +167,8 @@ class Nlp:
     # collocation: the interval Function, its mapped arguments and where each interval's inputs and rows sit
     # in x and g (see :func:`structured_derivatives`); None for multiple shooting
     intervals: dict | None = None
+    # the stage form (:func:`transcribe_stages`): fatrop's nx, nu, ng per stage; None for the other layouts
+    stages: dict | None = None
 
 
 def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
@@ -297,7 +303,7 @@ def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
         g.append(e)
         lbg.append(np.full(n, bounds[name][0]))
         ubg.append(np.full(n, bounds[name][1]))
-        blocks.append((name, start, start + n))
+        blocks.append((name, np.arange(start, start + n)))
         start += n
     if ocp.objective in ("peak_deflection", "peak_unbalance", "min_time"):
         obj = v[0]
@@ -308,12 +314,140 @@ def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
     index = {"X": idx_X, "Xc": idx_Xc, "u": idx_u, "v": idx_v}
     if intervals is not None:  # g row of each interval output: the dynamics and path blocks come first
         sizes = [fi.nnz_out(i) for i in range(fi.n_out() - 1)]
-        first = [a for _, a, _ in blocks[:len(sizes)]]
+        first = [r[0] for _, r in blocks[:len(sizes)]]
         intervals["rows"] = np.concatenate([a + n * np.arange(K)[None, :] + np.arange(n)[:, None]
                                             for a, n in zip(first, sizes, strict=True)])
         intervals["tail"] = ca.vertcat(*g[len(sizes):])  # the rows outside the intervals
     return Nlp(w, obj, ca.vertcat(*g), lbx, ubx, np.concatenate(lbg), np.concatenate(ubg), blocks, index, ms,
                frac, method, ref, intervals)
+
+
+def stage_function(ocp: SpinupOcp, d: int, scheme: str, ref: float, jerk: bool) -> ca.Function:
+    """One stage of the stage form (:func:`transcribe_stages`) as an SX Function (x_k (5), the collocation
+    states (5 d), u_k, h, v_k, p_k, x_(k+1) (5), v_(k+1), p_(k+1)) -> (the gap rows x_(k+1) - Z_d, v_(k+1) - v_k
+    and, with ``jerk``, p_(k+1) - u_k; the collocation residuals; one column per path constraint; the speed
+    x_k[4]; with a jerk limit (u_k - p_k)/h; the quadrature).  The equations are :func:`interval_function`'s."""
+    fi = interval_function(ocp, d, scheme, ref, continuity=False)
+    nv, jp = ocp.n_extra, int(jerk)
+    x0, xc, u, h = ca.SX.sym("x0", 5), ca.SX.sym("xc", 5 * d), ca.SX.sym("u"), ca.SX.sym("h")
+    v, p, x1, v1, p1 = (ca.SX.sym(n, k) for n, k in (("v", nv), ("p", jp), ("x1", 5), ("v1", nv), ("p1", jp)))
+    res, *paths, quad = fi(x0, xc, u, xc[-5:], h, v)
+    gap = ca.vertcat(x1 - xc[-5:], v1 - v, p1 - u if jerk else ca.SX(0, 1))
+    rows = [gap, res, *paths, x0[4]]
+    if ocp.jerk_max is not None:
+        rows.append((u - p) / (ocp.jerk_max / ocp.alpha_max / ocp.Om * h))
+    return ca.Function("spinup_stage", [x0, xc, u, h, v, p, x1, v1, p1], [*rows, quad])
+
+
+def transcribe_stages(ocp: SpinupOcp, method: DirectCollocation, ref: float) -> Nlp:
+    """The collocation NLP of ``ocp`` in the stage form of a structure-exploiting solver (fatrop: Vanroye et
+    al. (2023), a Riccati recursion over the stages, linear in their number).
+
+    The same discrete problem as :func:`transcribe` (Radau points): stage k < K has the states
+    x_k = [X_k (5), v_k (the epigraph level or the time scale, one copy per stage), p_k (the previous control,
+    when the objective or a limit uses the jerk)] and the controls [u_k, the collocation states (5 d)]; stage 0
+    has only controls (X_0 fixed by its bounds); stage K only its states.  Each stage's rows follow its gap
+    rows (x_(k+1) as the last collocation point, v and p carried): the collocation residuals, the path
+    constraints, the speed (the bounds on the horizon, omega_final at the deadline, free elsewhere) and the
+    jerk limit.  No row or Hessian entry couples two stages but through the gap rows, as fatrop requires.
+
+    Parameters
+    ----------
+    ocp : SpinupOcp
+        The declared problem.
+    method : DirectCollocation
+        Radau collocation (the last point is the interval end, the next stage's state).
+    ref : float
+        Scale of the objective, as for :func:`transcribe`.
+
+    Returns
+    -------
+    Nlp
+        With ``stages`` (fatrop's N, nx, nu, ng), ``index["v_copies"]`` (K+1, nv) and ``index["p"]`` (K+1,) or
+        None; ``index["v"]`` is stage 0's copy.
+    """
+    if not isinstance(method, DirectCollocation) or abs(collocation_data(method.degree, method.scheme)[0][-1]
+                                                        - 1) > 1e-12:
+        raise ValueError(f"the stage form (fatrop) needs Radau collocation, got {method.label}")
+    ms = mesh(ocp, method.intervals)
+    K, n, d, nv = ms.n + ms.ns, ms.n, method.degree, ocp.n_extra
+    jerk = n > 1 and bool(ocp.jerk_penalty or ocp.jerk_variation or ocp.jerk_max is not None)
+    jp = int(jerk)
+    nxs = 5 + nv + jp  # the states of a stage
+    per = nxs + 1 + 5 * d  # stage k < K: [X_k, v_k, p_k, u_k, Xc_k]; then stage K: [X_K, v_K, p_K]
+    w = ca.MX.sym("w", K * per + nxs)
+    start = per * np.arange(K + 1)
+    idx_X = start[:, None] + np.arange(5)
+    idx_vc = start[:, None] + 5 + np.arange(nv)
+    idx_p = start + 5 + nv if jerk else None
+    idx_u = start[:K] + nxs
+    idx_Xc = start[:K, None, None] + nxs + 1 + 5 * np.arange(d)[:, None] + np.arange(5)
+    W = ca.reshape(w[:K * per], per, K)
+    nxt = ca.horzcat(W[:nxs, 1:], w[K * per:])
+    scale = ocp.tau_h / n  # h = v_0 tau_h / n on the horizon when the time is free
+    hrow = ca.horzcat(W[5, :n] * scale if ocp.free_time else ca.repmat(ms.h, 1, n), ca.repmat(ms.hs, 1, ms.ns))
+    fs = stage_function(ocp, d, method.scheme, ref, jerk)
+    out = fs.map(K)(W[:5, :], W[nxs + 1:, :], W[nxs, :], hrow, W[5:5 + nv, :], W[5 + nv:nxs, :], nxt[:5, :],
+                    nxt[5:5 + nv, :], nxt[5 + nv:, :])
+    sizes = [fs.nnz_out(i) for i in range(fs.n_out() - 1)]
+    nrow = sum(sizes)
+    rows = np.arange(nrow)[:, None] + nrow * np.arange(K)[None, :]  # stage by stage
+    g = ca.vec(ca.vertcat(*out[:-1]))
+
+    paths = ocp.path_constraints(ref)
+    speed_name = "speed: omega <= omega_max on the horizon, final speed omega(T) = omega_final"
+    names = ["dynamics", "dynamics"] + [pc.name for pc in paths] + [speed_name]
+    bounds = [(0.0, 0.0), (0.0, 0.0)] + [(pc.lb, pc.ub) for pc in paths] + [(-np.inf, np.inf)]
+    if ocp.jerk_max is not None:
+        names.append(f"jerk limit |d alpha/dt| <= {ocp.jerk_max:g} rad/s^3")
+        bounds.append((-np.inf, np.inf))
+    block = np.repeat(np.arange(len(sizes)), sizes)  # the output of each row of a stage
+    lo = np.repeat(np.array(bounds)[block, :1], K, axis=1)
+    hi = np.repeat(np.array(bounds)[block, 1:], K, axis=1)
+    speed = np.flatnonzero(block == names.index(speed_name))[0]
+    lo[speed, 1:n], hi[speed, 1:n] = ocp.nu_bounds()
+    if ocp.jerk_max is not None:
+        lo[-1, 1:n], hi[-1, 1:n] = -1.0, 1.0
+    lo, hi = lo.ravel(order="F"), hi.ravel(order="F")
+    blocks = {name: rows[np.isin(block, [i for i, m in enumerate(names) if m == name])].ravel() for name in names}
+    if ms.ns:
+        lo[rows[speed, n]] = hi[rows[speed, n]] = ocp.nuf
+    else:  # the deadline is the last stage's: its one row
+        g = ca.vertcat(g, w[int(idx_X[K, 4])])
+        lo, hi = np.append(lo, ocp.nuf), np.append(hi, ocp.nuf)
+        blocks[speed_name] = np.append(blocks[speed_name], g.numel() - 1)
+    blocks = [(name, np.sort(r)) for name, r in blocks.items()]
+
+    lbx, ubx = np.full(w.numel(), -np.inf), np.full(w.numel(), np.inf)
+    lbx[idx_X[0]] = ubx[idx_X[0]] = ocp.q0
+    lbx[idx_u[:n]], ubx[idx_u[:n]] = -1.0, 1.0
+    lbx[idx_u[n:]] = ubx[idx_u[n:]] = 0.0
+    if jerk:
+        lbx[idx_p[0]] = ubx[idx_p[0]] = 0.0
+    if nv:
+        lbx[idx_vc[0, 0]], ubx[idx_vc[0, 0]] = (0.0, 1.0) if ocp.free_time else (0.0, np.inf)
+    if ocp.objective in ("peak_deflection", "peak_unbalance", "min_time"):
+        obj = w[int(idx_vc[0, 0])]
+    else:
+        obj = ca.sum2(out[-1]) / ref
+    if jerk:
+        obj = obj + jerk_regulariser(ocp, w[idx_u[1:n].tolist()] - w[idx_p[1:n].tolist()])
+    index = {"X": idx_X, "Xc": idx_Xc, "u": idx_u, "v": list(idx_vc[0]), "v_copies": idx_vc, "p": idx_p}
+    stages = {"N": K, "nx": [0] + [nxs] * K, "nu": [nxs + 1 + 5 * d] + [1 + 5 * d] * (K - 1) + [0],
+              "ng": [nrow - nxs] * K + [0 if ms.ns else 1]}
+    return Nlp(w, obj, g, lbx, ubx, lo, hi, blocks, index, ms,
+               path_fractions(d, method.scheme), method, ref, None, stages)
+
+
+def complete_stage_guess(nlp: Nlp, w: np.ndarray) -> np.ndarray:
+    """A guess of the stage form with its carried copies filled: every stage's v is stage 0's, p_(k+1) = u_k."""
+    w = np.array(w, float)
+    if nlp.stages is None:
+        return w
+    w[nlp.index["v_copies"]] = w[nlp.index["v"]]
+    if nlp.index["p"] is not None:
+        w[nlp.index["p"][1:]] = w[nlp.index["u"]]
+    return w
 
 
 def _assemble(vals: ca.MX, rows: np.ndarray, cols: np.ndarray, src: np.ndarray, coef: np.ndarray,
@@ -443,32 +577,34 @@ def interpolate(coarse: Nlp, w: np.ndarray, lam_g: np.ndarray, lam_x: np.ndarray
     wf[fine.index["u"]] = w[coarse.index["u"]][kc]
     wf[fine.index["v"]] = w[coarse.index["v"]]
 
+    if lam_g is None or coarse.stages or fine.stages:  # the stage form (fatrop) starts from the primal guess
+        return wf, None, None
+
     def block(nlp, name):
-        return next(((a, b) for n, a, b in nlp.blocks if n == name), None)
+        return next((r for n, r in nlp.blocks if n == name), None)
 
     lg = np.zeros(fine.g.numel())
-    a, b = block(coarse, "dynamics")
-    per = (b - a) // (5 * Kc)  # d + 1 equations per interval, d when the nodes are the last points (Radau)
-    Dc = lam_g[a:b].reshape(Kc, per, 5)
+    rows = block(coarse, "dynamics")
+    per = rows.size // (5 * Kc)  # d + 1 equations per interval, d when the nodes are the last points (Radau)
+    Dc = lam_g[rows].reshape(Kc, per, 5)
     colloc = (Dc[:, :d, :] / np.asarray(B)[None, :, None]).reshape(-1, 5)
     pc = np.stack([np.interp(tfc.ravel(), tcc.ravel(), colloc[:, i]) for i in range(5)], -1).reshape(Kf, d, 5)
     parts = [pc * np.asarray(B)[None, :, None]]
     if per > d:
         parts.append(np.stack([np.interp(tf0[1:], tc0[1:], Dc[:, d, i]) for i in range(5)], -1)[:, None, :])
-    a, b = block(fine, "dynamics")
-    lg[a:b] = np.concatenate(parts, axis=1).ravel()
+    lg[block(fine, "dynamics")] = np.concatenate(parts, axis=1).ravel()
     npath = len(coarse.fractions)
     tcp = np.concatenate([tcc, tc0[1:, None]], axis=1)[:, :npath].ravel() if npath > d else tcc.ravel()
     tfp = np.concatenate([tfc, tf0[1:, None]], axis=1)[:, :npath].ravel() if npath > d else tfc.ravel()
-    for name, a, b in coarse.blocks:
+    for name, rows in coarse.blocks:
         fb = block(fine, name)
         if name == "dynamics" or fb is None:
             continue
-        if b - a == 1 and fb[1] - fb[0] == 1:
-            lg[fb[0]] = lam_g[a]
-        elif b - a == tcp.size and fb[1] - fb[0] == tfp.size:  # path constraints at the path points
-            for i in np.nonzero(lam_g[a:b])[0]:
-                lg[fb[0] + np.argmin(np.abs(tfp - tcp[i]))] += lam_g[a + i]
+        if rows.size == 1 and fb.size == 1:
+            lg[fb] = lam_g[rows]
+        elif rows.size == tcp.size and fb.size == tfp.size:  # path constraints at the path points
+            for i in np.nonzero(lam_g[rows])[0]:
+                lg[fb[np.argmin(np.abs(tfp - tcp[i]))]] += lam_g[rows[i]]
     lx = np.zeros(fine.x.numel())
     lx[fine.index["X"][0]] = lam_x[coarse.index["X"][0]]
     lx[fine.index["u"]] = lam_x[coarse.index["u"]][kc] * hf / hc[kc]
