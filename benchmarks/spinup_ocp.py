@@ -16,6 +16,9 @@ NLPs' variables (rockit's: into its Opti variables after ``transcribe()``, in on
 has no separate node states: its last Radau point is the interval end, which starts held like rockit's
 last point; rockit's separate node variables start at the simulated values.
 
+A third side, autobal with fatrop (``nlp_solver: fatrop``: the same discrete problem in the stage form of
+``transcribe_stages``, a Riccati recursion over the stages instead of MUMPS), starts from the same guess.
+
 Times: build = declaration, transcription and solver construction (rockit: its ``solve()`` call's
 wall time minus the IPOPT solve inside it); solve = the wall time of the IPOPT call itself, function
 evaluations included (autobal: around the solver call; rockit: CasADi's ``t_wall_total`` of it), one
@@ -56,6 +59,7 @@ REF = 200.0  # scale of the epigraph level delta^2 (both sides)
 FIGURE = Path(__file__).resolve().parent.parent / "docs" / "figures" / "benchmark_spinup_scaling.png"
 PEER = "rockit-meco DirectCollocation, expand=True"
 EVALS = ("nlp_f", "nlp_g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l")
+SIDES = ("autobal", "fatrop", "rockit")  # autobal with IPOPT, autobal with fatrop, the peer
 
 
 def problem():
@@ -90,23 +94,36 @@ def profile(stats: dict, total: float) -> dict:
     return out
 
 
-def outcome(ocp, stats, u, h, objective, build, solve):
+def outcome(ocp, stats, u, h, objective, build, solve, status=None):
     tr = resimulate(ocp, u, h, "optimum")
     it = stats.get("iterations") or {}
     return {"build_s": build, "solve_s": solve,
-            "iterations": int(stats["iter_count"]), "status": stats["return_status"],
+            "iterations": int(stats["iter_count"]), "status": status or stats["return_status"],
             "success": bool(stats["success"]), "optimum_over_e": objective, "resimulated_peak_over_e": tr.peak_delta,
             "initial_objective": float(it["obj"][0]) if it.get("obj") else None, "profile_s": profile(stats, solve)}
 
 
 def autobal_run(ocp, N):
-    """Build and solve autobal's NLP from its start; the outcome and the start (for rockit)."""
+    """Build and solve autobal's NLP (IPOPT) from its start; the outcome and the start (for the others)."""
     t = time.perf_counter()
     solver = osolve.Solver(ocp, DirectCollocation(N, DEGREE, SCHEME), REF, {"max_wall_time": WALL})
     build = time.perf_counter() - t
     g = guess(ocp, solver.nlp)
     sol = solver.solve(w0=g[1].copy(), raise_on_failure=False)
     return outcome(ocp, solver.solver.stats(), sol.u, sol.h, sol.objective, build, sol.solve_time_s), g
+
+
+def fatrop_run(ocp, N, g):
+    """The same problem, mesh and guess in autobal's stage form, solved by fatrop (``nlp_solver: fatrop``); its
+    node states start simulated and its collocation points held, as rockit's."""
+    t = time.perf_counter()
+    solver = osolve.Solver(ocp, DirectCollocation(N, DEGREE, SCHEME, "fatrop"), REF)
+    build = time.perf_counter() - t
+    _, _, uu, _, X, Xc, level = g
+    nlp, w0 = solver.nlp, np.zeros(solver.nlp.x.numel())
+    w0[nlp.index["X"]], w0[nlp.index["Xc"]], w0[nlp.index["u"]], w0[nlp.index["v"]] = X, Xc, uu, level
+    sol = solver.solve(w0=w0, raise_on_failure=False)
+    return outcome(ocp, solver.solver.stats(), sol.u, sol.h, sol.objective, build, sol.solve_time_s, sol.status)
 
 
 def rockit_run(ocp, N, g):
@@ -171,7 +188,8 @@ def figure(rows, path: Path) -> None:
     fig = Figure(figsize=(8.0, 3.4), layout="constrained")
     ax_t, ax_i = fig.subplots(1, 2)
     n = np.array([r["N"] for r in rows], float)
-    for side, label, mk in (("autobal", "autobal", "o-"), ("rockit", "rockit (expand=True)", "s--")):
+    for side, label, mk in (("autobal", "autobal (IPOPT)", "o-"), ("fatrop", "autobal (fatrop)", "^-"),
+                            ("rockit", "rockit (expand=True)", "s--")):
         pts = [(r["N"], r[side]) for r in rows if r.get(side)]
         if not pts:
             continue
@@ -196,7 +214,7 @@ def figure(rows, path: Path) -> None:
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=7)
     ax_t.set_ylabel("wall time (s)")
-    ax_i.set_ylabel("IPOPT iterations")
+    ax_i.set_ylabel("solver iterations")
     fig.suptitle("Spin-up OCP (deadline 5 s, hold 3 s, Radau 3): autobal and rockit, same mesh and guess",
                  fontsize=9)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -204,13 +222,16 @@ def figure(rows, path: Path) -> None:
 
 
 def report(ocp, rows, start_label) -> list[dict]:
+    """One case per size and autobal solver (IPOPT, fatrop), each against rockit's solve of the same size."""
     cases = []
-    for r in rows:
-        a, p = r.get("autobal"), r.get("rockit")
+    for r, mine in ((r, mine) for r in rows for mine in ("autobal", "fatrop")):
+        a, p = r.get(mine), r.get("rockit")
         err = {}
-        for side, x in (("autobal", a), ("peer", p)):
+        for side, x in ((mine, a), ("peer", p)):
             err[side] = r.get(f"{side}_error") or (None if x and x["success"] else x and x["status"])
-        row = case(f"N = {r['N']} (+{r['Ns']} hold)", a["solve_s"] if a else np.nan, a["build_s"] if a else None,
+        via = "IPOPT" if mine == "autobal" else "fatrop"
+        row = case(f"N = {r['N']} (+{r['Ns']} hold), autobal {via}", a["solve_s"] if a else np.nan,
+                   a["build_s"] if a else None,
                    PEER, p["solve_s"] if p else np.nan,
                    autobal_iterations=a and a["iterations"], peer_iterations=p and p["iterations"],
                    autobal_status=a and a["status"], peer_status=p and p["status"],
@@ -218,18 +239,18 @@ def report(ocp, rows, start_label) -> list[dict]:
                    autobal_resimulated_peak=a and a["resimulated_peak_over_e"],
                    peer_resimulated_peak=p and p["resimulated_peak_over_e"],
                    peer_build_s=p and p["build_s"], autobal=a, rockit=p)
-        row["autobal_error"], row["peer_error"] = err["autobal"], err["peer"]
+        row["autobal_error"], row["peer_error"] = err[mine], err["peer"]
         cases.append(row)
     return cases
 
 
 def _sides(rows):
     """(row, side, outcome or None) for each size and side, in table order."""
-    return [(r, side, r.get(side)) for r in rows for side in ("autobal", "rockit")]
+    return [(r, side, r.get(side)) for r in rows for side in SIDES]
 
 
 def markdown(rows, exps) -> list[str]:
-    t = ["| N | side | build (s) | solve (s) | IPOPT iterations | solve / iteration (ms) | status | optimum (e) "
+    t = ["| N | side | build (s) | solve (s) | iterations | solve / iteration (ms) | status | optimum (e) "
          "| re-simulated peak (e) | initial objective |", "|---|---|---|---|---|---|---|---|---|---|"]
     for r, side, v in _sides(rows):
         if v is None:
@@ -239,19 +260,20 @@ def markdown(rows, exps) -> list[str]:
             t.append(f"| {r['N']} | {side} | {v['build_s']:.2f} | {v['solve_s']:.2f} | {v['iterations']} | "
                      f"{1e3 * v['solve_s'] / max(v['iterations'], 1):.1f} | {v['status']} | "
                      f"{v['optimum_over_e']:.5f} | {v['resimulated_peak_over_e']:.5f} | "
-                     f"{v['initial_objective']:.6g} |")
-    p = ["| N | side | objective + constraints (s) | gradient + Jacobian (s) | Hessian (s) | IPOPT's own work "
-         "(s) | share in IPOPT |", "|---|---|---|---|---|---|---|"]
+                     f"{'-' if v['initial_objective'] is None else format(v['initial_objective'], '.6g')} |")
+    p = ["| N | side | objective + constraints (s) | gradient + Jacobian (s) | Hessian (s) | the solver's own work "
+         "(s) | share in the solver |", "|---|---|---|---|---|---|---|"]
     for r, side, v in _sides(rows):
         if v is not None:
             pr, own = v["profile_s"], v["profile_s"]["ipopt_internal"]
             p.append(f"| {r['N']} | {side} | {pr['nlp_f'] + pr['nlp_g']:.3f} | "
                      f"{pr['nlp_grad_f'] + pr['nlp_jac_g']:.3f} | {pr['nlp_hess_l']:.3f} | {own:.2f} | "
                      f"{100 * own / max(v['solve_s'], 1e-12):.0f} % |")
-    e = ["| exponent p of y ~ N^p (least squares over the sizes run) | autobal | rockit |", "|---|---|---|"]
-    for key, label in (("solve_s", "solve time"), ("iterations", "IPOPT iterations"),
+    e = ["| exponent p of y ~ N^p (least squares over the sizes run) | autobal (IPOPT) | autobal (fatrop) | rockit |",
+         "|---|---|---|---|"]
+    for key, label in (("solve_s", "solve time"), ("iterations", "solver iterations"),
                        ("per_iteration", "solve time per iteration"), ("build_s", "build time")):
-        e.append(f"| {label} | {_f(exps['autobal'].get(key))} | {_f(exps['rockit'].get(key))} |")
+        e.append(f"| {label} | " + " | ".join(_f(exps[side].get(key)) for side in SIDES) + " |")
     return ["Per side:\n\n" + "\n".join(t), "Where the solve time goes (CasADi's timers):\n\n" + "\n".join(p),
             "Scaling with the number of intervals:\n\n" + "\n".join(e)]
 
@@ -262,7 +284,7 @@ def _f(x):
 
 def exponents(rows) -> dict:
     out = {}
-    for side in ("autobal", "rockit"):
+    for side in SIDES:
         pts = [(r["N"], r[side]) for r in rows if r.get(side) and r[side]["success"]]
         n = [a for a, _ in pts]
         out[side] = {k: slope(n, [v[k] for _, v in pts]) for k in ("solve_s", "iterations", "build_s")}
@@ -277,12 +299,14 @@ def main(intervals=INTERVALS) -> list[dict]:
         row = {"N": N, "Ns": mesh(ocp, N).ns}
         rows.append(row)
         g = None
-        for side, key in (("autobal", "autobal"), ("rockit", "peer")):
+        for side, key in (("autobal", "autobal"), ("fatrop", "fatrop"), ("rockit", "peer")):
             t = time.perf_counter()
             try:
                 if side == "autobal":
                     row[side], g = autobal_run(ocp, N)
                     start_label = g[0]
+                elif side == "fatrop":
+                    row[side] = fatrop_run(ocp, N, g)
                 else:
                     row[side] = rockit_run(ocp, N, g)
             except KeyboardInterrupt:  # stopped by hand: the sizes done so far and this one's wall time are kept
@@ -300,10 +324,12 @@ def main(intervals=INTERVALS) -> list[dict]:
 def save(ocp, rows, start_label) -> list[dict]:
     cases = report(ocp, rows, start_label)
     exps = exponents(rows)
-    a = [c["ratio"] for c in cases if c["ratio"]]
-    goal = (f"Goal (issue 14): >= 3x faster than rockit expand=True on the same problem, mesh and guess: "
-            f"{'met' if a and min(a) >= 3 else 'missed'} (peer / autobal solve {', '.join(f'{x:.2f}' for x in a)} "
-            "at the sizes run); the solve-time split below shows where the time goes.")
+    ratios = {via: [c["ratio"] for c in cases if c["case"].endswith(via) and c["ratio"]] for via in ("IPOPT", "fatrop")}
+    best = [max(x, y) for x, y in zip(ratios["IPOPT"], ratios["fatrop"], strict=False)]
+    goal = ("Goal (issue 14): >= 3x faster than rockit expand=True on the same problem, mesh and guess: "
+            f"{'met' if best and min(best) >= 3 else 'missed'} (peer / autobal solve "
+            + "; ".join(f"with {via} {', '.join(f'{x:.2f}' for x in r)}" for via, r in ratios.items())
+            + " at the sizes run); the solve-time split below shows where the time goes.")
     notes = [goal,
              f"Scene {SCENE}: Jeffcott rotor (psi = 1, Omega0 = 105 rad/s, n = 5 1/s), 40 -> 210 rad/s by a 5 s "
              "deadline, |alpha| <= 40 rad/s^2, 3 s hold at 210 rad/s over which the peak counts, speed cap 210 rad/s; "
@@ -313,14 +339,19 @@ def save(ocp, rows, start_label) -> list[dict]:
              f"same guess: autobal's global-search start ({start_label}), states simulated to the interval ends "
              "and held over each interval at the collocation points (autobal's last Radau point is the node "
              "itself, held like rockit's; rockit's node variables start simulated).",
-             "Solve = wall time of the one IPOPT call, function evaluations included (rockit: CasADi's "
+             "autobal (fatrop): the same discrete problem in autobal's stage form (nlp_solver: fatrop; the node "
+             f"states and the collocation points start as rockit's), fatrop with mu_init "
+             f"{osolve.FATROP_OPTIONS['mu_init']:g} and tol {osolve.IPOPT_OPTIONS['tol']:g}; its build includes "
+             "CasADi's SX expansion and fatrop's setup.",
+             "Solve = wall time of the one solver call, function evaluations included (rockit: CasADi's "
              "t_wall_total); build = declaration, transcription and solver construction (rockit: its solve() "
              "call minus the IPOPT solve in it), not in the ratio. Errors: the solver status when not "
              "Solve_Succeeded. Optima and peaks in delta/e; the re-simulated peak is CVODES at rtol 1e-12 with "
              "the optimal controls.",
-             "Exponents: autobal solve ~ N^" + _f(exps["autobal"]["solve_s"]) + ", iterations ~ N^"
-             + _f(exps["autobal"]["iterations"]) + "; rockit solve ~ N^" + _f(exps["rockit"]["solve_s"])
-             + ", iterations ~ N^" + _f(exps["rockit"]["iterations"]) + " (successful solves only)."]
+             "Exponents: " + "; ".join(f"{label} solve ~ N^{_f(exps[side]['solve_s'])}, iterations ~ N^"
+                                       f"{_f(exps[side]['iterations'])}" for side, label in
+                                       (("autobal", "autobal (IPOPT)"), ("fatrop", "autobal (fatrop)"),
+                                        ("rockit", "rockit"))) + " (successful solves only)."]
     md = RESULTS / "spinup_ocp.md"
     old = md.read_text() if md.exists() else ""
     kept = next((old[m.start():] for m in re.finditer(r"^#+ .*lever", old, re.I | re.M)), "")
