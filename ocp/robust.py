@@ -205,6 +205,34 @@ def ramp_family(ocp: SpinupOcp, n: int, count: int = 8) -> list[Profile]:
     return [Profile(f"ramp {a:.4g} rad/s^2", ramp_profile(ocp, n, a)) for a in np.linspace(lo, ocp.alpha_max, count)]
 
 
+def scenario_nlp(ocp: SpinupOcp, method: DirectCollocation, ref: float) -> tuple:
+    """The parts of :class:`RobustSolver` made per scenario: its collocation NLP (MX), the Function of its
+    constraints and its structured derivatives (:func:`autobal.ocp.transcription.structured_derivatives`).
+    They do not depend on the other scenarios, so a scenario generation makes them once per scenario and
+    every NLP of its rounds and starts reuses them (benchmarks/spinup_ocp.md, "Robust study builds").
+
+    Parameters
+    ----------
+    ocp : SpinupOcp
+        The scenario's problem (SI), objective ``peak_deflection``.
+    method : DirectCollocation
+        The transcription.
+    ref : float
+        Scale of the epigraph level, (delta/e)^2.
+
+    Returns
+    -------
+    tuple
+        (Nlp, g Function (w) -> g, dict of the ``jac_g`` and ``hess_lag`` Functions).
+    """
+    if not isinstance(method, DirectCollocation):
+        raise ValueError("the robust spin-up OCP is built on direct collocation")
+    if ocp.objective != "peak_deflection":
+        raise ValueError("the robust spin-up OCP minimises the worst-case peak deflection (peak_deflection)")
+    nlp = transcribe(ocp, method, ref, "MX")
+    return nlp, ca.Function("g", [nlp.x], [nlp.g]), structured_derivatives(nlp)
+
+
 class RobustSolver:
     """The multi-scenario NLP: one transcription per scenario, controls and epigraph level shared,
     the speed states kept once (see the module docstring).
@@ -214,16 +242,15 @@ class RobustSolver:
     Omega0_1/Omega0_i).  The derivatives are the scenarios' structured ones
     (:func:`autobal.ocp.transcription.structured_derivatives`: the interval Function's SX derivatives mapped
     over the intervals) carried through P_i: dg_i/dx = (dg_i/dw_i) P_i and the Hessian sum_i P_i' H_i P_i, so
-    the construction hardly grows with the intervals or the scenarios."""
+    the construction hardly grows with the intervals or the scenarios.  ``parts``: the scenarios'
+    :func:`scenario_nlp` when already made (default: made here)."""
 
-    def __init__(self, ocps: list[SpinupOcp], method: DirectCollocation, ref: float, options: dict | None = None):
-        if not isinstance(method, DirectCollocation):
-            raise ValueError("the robust spin-up OCP is built on direct collocation")
-        if any(o.objective != "peak_deflection" for o in ocps):
-            raise ValueError("the robust spin-up OCP minimises the worst-case peak deflection (peak_deflection)")
+    def __init__(self, ocps: list[SpinupOcp], method: DirectCollocation, ref: float, options: dict | None = None,
+                 parts: list | None = None):
         t0 = time.perf_counter()
+        parts = parts or [scenario_nlp(o, method, ref) for o in ocps]
         self.ocps, self.method = ocps, method
-        self.nlps = [transcribe(o, method, ref, "MX") for o in ocps]
+        self.nlps = [nlp for nlp, _, _ in parts]
         first = self.nlps[0]
         K = first.index["u"].size
         n = first.mesh.n
@@ -260,10 +287,9 @@ class RobustSolver:
         self.P = [ca.DM.triplet(np.arange(c.size).tolist(), c.tolist(), s.tolist(), c.size, offset)
                   for c, s in zip(cols, scales, strict=True)]
         g, gj, jac, hess, lbg, ubg, at = [], [], [], 0, [], [], 0
-        for nlp, P, rows in zip(self.nlps, self.P, keeps, strict=True):
+        for (nlp, gf, der), P, rows in zip(parts, self.P, keeps, strict=True):
             w = ca.mtimes(P, x)
-            der = structured_derivatives(nlp)
-            g.append(ca.Function("g", [nlp.x], [nlp.g])(w)[rows.tolist()])
+            g.append(gf(w)[rows.tolist()])
             gi, Ji = der["jac_g"](w, p)
             gj.append(gi[rows.tolist()])
             jac.append(ca.mtimes(Ji[rows.tolist(), :], P))
@@ -346,7 +372,9 @@ def optimize_robust(ocp: SpinupOcp, factors: np.ndarray, method: DirectCollocati
     """Minimise the worst-case peak over the design set ``factors`` by scenario generation: the NLP holds the
     scenarios that bind (first the worst one of the start); after each solve every design scenario is
     simulated (:func:`fast_peaks`) and those above the NLP's worst case by more than ``tol`` (relative) join
-    it, until none does.  The optimum of the final NLP is then the optimum over the whole design set.
+    it, until none does.  The optimum of the final NLP is then the optimum over the whole design set.  Each
+    design scenario is transcribed once (:func:`scenario_nlp`), every NLP that holds it reuses its parts, and
+    an active set met again (another start's round) reuses its NLP.
 
     Parameters
     ----------
@@ -377,13 +405,20 @@ def optimize_robust(ocp: SpinupOcp, factors: np.ndarray, method: DirectCollocati
     """
     ocps = scenario_ocps(ocp, factors)
     found, rounds, build, solve_t, error = [], [], 0.0, 0.0, None
+    made, solvers = {}, {}  # design index -> its scenario_nlp; active list -> its NLP: each made once
     for start in starts:
         u = start.u
         peaks = fast_peaks(ocp, factors, [start])[:, 0]
         act = list(active) if active else [int(np.argmax(peaks))]
         for _ in range(max_rounds):
-            solver = RobustSolver([ocps[i] for i in act], method, ref, options)
-            build += solver.build_time_s
+            t0 = time.perf_counter()
+            if tuple(act) not in solvers:
+                made |= {i: scenario_nlp(ocps[i], method, ref) for i in act if i not in made}
+                solvers[tuple(act)] = RobustSolver([ocps[i] for i in act], method, ref, options,
+                                                   [made[i] for i in act])
+            solver = solvers[tuple(act)]
+            t_build = time.perf_counter() - t0
+            build += t_build
             try:
                 r = solver.solve(u)
             except SolveError as exc:
@@ -396,9 +431,9 @@ def optimize_robust(ocp: SpinupOcp, factors: np.ndarray, method: DirectCollocati
             worst_active = peaks[act].max()
             add = [i for i in np.argsort(-peaks) if i not in act and peaks[i] > worst_active * (1 + tol)][:2]
             rounds.append({"start": start.label, "intervals": method.intervals, "scenarios": len(act),
-                           "status": r["status"],
+                           "active": list(act), "status": r["status"],
                            "iterations": r["iterations"], "solve_time_s": r["solve_time_s"],
-                           "build_time_s": solver.build_time_s, "worst_design_peak_over_e": float(peaks.max()),
+                           "build_time_s": t_build, "worst_design_peak_over_e": float(peaks.max()),
                            "collocation_worst_over_e": float(r["collocation_peaks"].max())})
             if not add:
                 found.append(RobustOptimum(Profile("robust optimum", u), peaks, list(act), [], 0.0, 0.0,

@@ -266,3 +266,34 @@ def test_robust_optimum_of_the_shipped_scene_does_not_move_with_its_starts():
         worst.append(rb.optimize_robust_refined(ocp, F, method, moved, nominal.score**2, options).worst)
     assert worst[0] == pytest.approx(worst[1], rel=1e-6)
     assert worst[0] == pytest.approx(18.5715, rel=2e-4)
+
+
+def test_scenario_generation_transcribes_each_scenario_once_and_reuses_an_active_sets_nlp(monkeypatch):
+    """Two rotors, three starts (the ramp twice): four NLP solves hold five scenarios in all, but each of the two
+    scenarios is transcribed once (counted at transcribe) and the three distinct active sets make three NLPs (the
+    repeated ramp's first round reuses the first one's); the repeated start gives the same optimum to the last bit."""
+    calls = {"transcribe": 0, "nlp": 0}
+
+    def transcribe(*args, **kw):
+        calls["transcribe"] += 1
+        return transcription.transcribe(*args, **kw)
+
+    class Counted(rb.RobustSolver):
+        def __init__(self, *args, **kw):
+            calls["nlp"] += 1
+            super().__init__(*args, **kw)
+
+    monkeypatch.setattr(rb, "transcribe", transcribe)
+    monkeypatch.setattr(rb, "RobustSolver", Counted)
+    ocp = jeffcott()
+    factors = np.array([[0.95, 0.5, 1.0], [1.05, 0.5, 1.0]])
+    n = 25
+    ramp = rb.Profile("ramp 40", ramp_profile(ocp, n, 40.0))
+    search = rb.Profile("global search", starts(ocp, n, multistart=False)[0][1])
+    ro = rb.optimize_robust(ocp, factors, DirectCollocation(n), [ramp, search, ramp], 300.0)
+    actives = [tuple(r["active"]) for r in ro.rounds]
+    assert sum(len(a) for a in actives) == 5 and len(actives) == 4
+    assert calls["transcribe"] == len(set().union(*actives)) == 2
+    assert calls["nlp"] == len(set(actives)) == 3
+    assert ro.worst < 0.99 * ro.others[0].worst  # 18.69 e against the ramp-like 19.19 e
+    np.testing.assert_array_equal(ro.others[0].profile.u, ro.others[1].profile.u)
