@@ -58,7 +58,9 @@ class RobustResult(Result):
         d = self.data
         lines = [f"robust spin-up over {d['design_scenarios']} design rotors ({d['active_scenarios']} in the final "
                  f"NLP), {d['method']}: build {d['build_time_s']:.2f} s, solve {d['solve_time_s']:.2f} s; "
-                 f"validation on {d['validation_samples']} rotors ({d['executor']}, {d['validation_time_s']:.2f} s)"]
+                 f"validation on {d['validation_samples']} rotors ({d['executor']}, {d['validation_time_s']:.2f} s)",
+                 "  wall time split: " + ", ".join(f"{k[:-7].replace('_', ' ')} {v:.2f} s" for k, v in
+                                                   d.get("time_split", {}).items())]
         for k in self.KEYS:
             p = d["profiles"][k]
             lines.append(f"  {p['label']:28s} nominal rotor {p['nominal_peak_over_e']:.4f} e, worst design "
@@ -204,14 +206,18 @@ def run(ocp: SpinupOcp, method: DirectCollocation, uncertainty: rb.Uncertainty, 
         Peaks in delta/e, times in s.
     """
     n = method.intervals
+    t_start = time.perf_counter()
     nominal = optimize(ocp, method, multistart, options)
+    t_nominal = time.perf_counter() - t_start
     pn = rb.Profile("nominal optimum", nominal.solution.u[:n])
     family = rb.ramp_family(ocp, n, ramps)
     F = uncertainty.grid(design_points)
+    t0 = time.perf_counter()
     ramp_peaks = rb.fast_peaks(ocp, F, family)
     design_ramps = ramp_peaks.max(axis=0)
-    ro = rb.optimize_robust_refined(ocp, F, method, robust_starts(ocp, F, pn, family, ramp_peaks), nominal.score**2,
-                                    options)
+    starts = robust_starts(ocp, F, pn, family, ramp_peaks)
+    t_starts = time.perf_counter() - t0
+    ro = rb.optimize_robust_refined(ocp, F, method, starts, nominal.score**2, options)
     profiles = [ro.profile, pn, *family]
     t0 = time.perf_counter()
     factors, peaks = rb.validate(ocp, uncertainty, profiles, samples, seed, executor)
@@ -262,5 +268,13 @@ def run(ocp: SpinupOcp, method: DirectCollocation, uncertainty: rb.Uncertainty, 
                             f"{rb.FAST_STEP} in Omega0 t) against CVODES on {CHECKED} validation rotors"},
     }
     validation = {"factors": factors} | {k: v for k, (_, v) in chosen.items()}
+    # the wall time by part (s): the nominal optimum (global search, multi-start, its builds and solves), the
+    # robust starts (the ramps on the design set, the global search), the robust NLPs' builds and solves, the
+    # validation; rest: the scenario generation's design-set checks and the CVODES re-simulations
+    split = {"nominal_optimum": t_nominal, "robust_starts": t_starts, "robust_build": ro.build_time_s,
+             "robust_solve": ro.solve_time_s, "validation": t_val}
+    data["wall_time_s"] = time.perf_counter() - t_start
+    split["rest"] = data["wall_time_s"] - sum(split.values())
+    data["time_split"] = {f"{k}_time_s": v for k, v in split.items()}
     data = with_statuses(data, {"liquid_mass_factor": "the rotor has no liquid block (or its mass is not uncertain)"})
     return RobustResult(data, nominal_runs, worst_runs, validation)
