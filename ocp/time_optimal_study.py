@@ -52,9 +52,13 @@ class TimeOptimalResult(Result):
                          f"(collocation {p['collocation_peak_over_e']:.4f} e, "
                          f"{100 * p['resimulation_rel_error']:.2f} %)")
         if d.get("deflection_limit_over_e") is not None:
+            by = (d["limited"] or {}).get("objective")
+            how = {"min_time": "by the min_time OCP", "peak_deflection": "by regula falsi on the minimum-peak "
+                   "deadline"}.get(by, "the ramp")
             lines.append(f"  earliest arrival with the peak <= {d['deflection_limit_over_e']:.4g} e: "
-                         f"{d['arrival_time_s']:.4f} s (peak {d['peak_deflection_over_e']:.4f} e; a deadline of "
-                         f"{d.get('arrival_time_lower_bound_s', float('nan')):.4f} s exceeds the limit)")
+                         f"{d['arrival_time_s']:.4f} s {how} (peak {d['peak_deflection_over_e']:.4f} e; the "
+                         f"minimum-peak OCP exceeds the limit by "
+                         f"{d.get('arrival_time_lower_bound_s', float('nan')):.4f} s)")
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
@@ -138,9 +142,10 @@ def run(ocp: SpinupOcp, method: DirectCollocation, points: int, title: str = "",
         "title": title, "method": method.label, "horizon_s": ocp.horizon, "ramp_label": fr.ramp.label,
         "ramp_arrival_time_s": fr.ramp_arrival_time_s, "ramp_peak_over_e": fr.ramp.peak_delta,
         "front": [p.to_dict() for p in fr.points],
-        # non-increasing up to the multi-start's tie tolerance (beyond some deadline the peak no longer falls)
-        "monotone": bool(np.all(np.diff(pk := [fr.ramp.peak_delta] + [p.peak for p in fr.points])
-                                <= TIE * np.array(pk[1:]))),
+        # the ramp, the front and the earliest arrival by arrival time: the peak non-increasing up to the
+        # multi-start's tie tolerance (beyond some deadline the peak no longer falls)
+        "monotone": bool(np.all(np.diff(pk := [fr.ramp.peak_delta] + [p.peak for p in sorted(
+            every, key=lambda p: p.arrival_time_s)]) <= TIE * np.array(pk[1:]))),
         "build_time_s": sum(p.optimum.build_time_s for p in own),
         "solve_time_s": sum(p.to_dict()["solve_time_s"] for p in own),
         "resimulation_rel_error": max(p.resimulation_rel_error for p in every),
