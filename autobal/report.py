@@ -936,7 +936,7 @@ def spinup_time_optimal_section(sec: Section) -> None:
     """Time-optimal spin-up: the earliest arrival under the peak limit and the front."""
     sec.row("peak limit", "δ/e", "deflection_limit_over_e")
     sec.row("earliest arrival at the final speed", "T", "arrival_time_s")
-    sec.row("latest deadline known to exceed the limit", "", "arrival_time_lower_bound_s")
+    sec.row("latest front deadline whose minimum peak exceeds the limit", "", "arrival_time_lower_bound_s")
     sec.row("peak deflection of the earliest arrival (re-simulated)", "δ*/e", "peak_deflection_over_e")
     sec.row("arrival of the maximum-acceleration ramp", "", "ramp_arrival_time_s")
     sec.row("peak of the maximum-acceleration ramp", "δ*/e", "ramp_peak_over_e")

@@ -198,9 +198,9 @@ def min_time_point(ocp: SpinupOcp, method: DirectCollocation, limit: float, star
     Parameters
     ----------
     ocp : SpinupOcp
-        The problem (SI).
+        The spin-up problem, SI (its objective and limit are replaced).
     method : DirectCollocation
-        The transcription over the scene's horizon (its control step is kept).
+        Collocation over the scene's horizon: its control step is the one kept at the arrival.
     limit : float
         Largest peak deflection delta/e.
     start : FrontPoint
@@ -304,7 +304,7 @@ def earliest_arrival(ocp: SpinupOcp, method: DirectCollocation, limit: float, fr
     if q is not None and q.arrival_time_s < tb:
         tb, pb, best = q.arrival_time_s, q.peak, q
         # the bracket's lower end below the new arrival (a front point past it is then not Pareto-optimal)
-        ta, pa = max((t, p) for t, p, _ in pts if p > limit and t < tb)
+        ta, pa = max(((t, p) for t, p, _ in pts if p > limit and t < tb), default=pts[0][:2])
     for _ in range(max_solves):
         if pb >= limit * (1 - rtol) or tb - ta < ttol:
             break
