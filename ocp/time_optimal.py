@@ -234,7 +234,7 @@ def min_time_point(ocp: SpinupOcp, method: DirectCollocation, limit: float, star
         m = dataclasses.replace(method, intervals=n)
         cold, warm = Solver(o, m, options=options), Solver(o, m, options=options, warm=True)
         build += cold.build_time_s + warm.build_time_s
-        a, b = next((a, b) for name, a, b in cold.nlp.blocks if name.startswith("deflection limit"))
+        rows_limit = next(r for name, r in cold.nlp.blocks if name.startswith("deflection limit"))
         for s in (cold, warm):
             s.nlp.ubx[s.nlp.index["v"][0]] = arrival / t  # the final time up to the start's arrival
         try:
@@ -256,7 +256,7 @@ def min_time_point(ocp: SpinupOcp, method: DirectCollocation, limit: float, star
         slope = (tried[-1][1] - tried[-2][1]) / (tried[-1][0] - tried[-2][0]) if len(tried) > 1 else 1.0
         level -= (tr.peak_delta - limit * (1 - AIM)) / (slope if slope > 0 else 1.0)
         for s in (cold, warm):
-            s.nlp.ubg[a:b] = (level / limit) ** 2
+            s.nlp.ubg[rows_limit] = (level / limit) ** 2
         try:
             sol = warm.solve(w0=sol.w, lam_g0=sol.lam_g, lam_x0=sol.lam_x)
         except SolveError:
