@@ -73,8 +73,11 @@ class TimeOptimalResult(Result):
     def draw(self, ax) -> None:
         """The front: re-simulated peak against arrival time, with the two ends."""
         d = self.data
-        ax.plot([d["ramp_arrival_time_s"], *self.arrival_times], [d["ramp_peak_over_e"], *self.peaks], "-",
-                color="0.6", lw=0.8)
+        # the front through the ramp, its points and the earliest arrival
+        line = np.array(sorted([(d["ramp_arrival_time_s"], d["ramp_peak_over_e"]),
+                                *zip(self.arrival_times, self.peaks, strict=True)]
+                               + ([(d["arrival_time_s"], d["peak_deflection_over_e"])] if self.limited else [])))
+        ax.plot(line[:, 0], line[:, 1], "-", color="0.6", lw=0.8)
         ax.plot(self.arrival_times, self.peaks, "o", color="C3", label="minimum peak for an arrival deadline")
         ax.plot(d["ramp_arrival_time_s"], d["ramp_peak_over_e"], "s", color="C2", label=d["ramp_label"])
         if d.get("deflection_limit_over_e") is not None:
