@@ -163,13 +163,17 @@ class Solver:
 
     def solve(self, u_guess: np.ndarray | None = None, w0: np.ndarray | None = None, raise_on_failure=True,
               hold_states: bool = False, lam_g0: np.ndarray | None = None,
-              lam_x0: np.ndarray | None = None) -> SpinupSolution:
+              lam_x0: np.ndarray | None = None, bounds: dict | None = None) -> SpinupSolution:
         """One IPOPT solve from the control profile ``u_guess`` (over alpha_max, the n control intervals;
         the states simulated from it) or from the full NLP guess ``w0``.  ``hold_states``: the
         collocation states start at the interval-start values (rockit's guess) instead of the simulated
         ones: from a coarse mesh this reaches a better basin (measured in benchmarks/spinup_ocp.md).
-        ``lam_g0``, ``lam_x0``: initial multipliers (with ``w0``; a solver built with ``warm=True`` uses them)."""
+        ``lam_g0``, ``lam_x0``: initial multipliers (with ``w0``; a solver built with ``warm=True`` uses them).
+        ``bounds``: any of ``lbx``, ``ubx``, ``lbg``, ``ubg`` for this solve instead of the NLP's (e.g. a
+        tightened limit row), used by the error message too."""
         ocp, nlp = self.ocp, self.nlp
+        if bounds:
+            nlp = dataclasses.replace(nlp, **bounds)
         t0 = time.perf_counter()
         if w0 is None:
             if u_guess is None:

@@ -235,10 +235,10 @@ def min_time_point(ocp: SpinupOcp, method: DirectCollocation, limit: float, star
         cold, warm = Solver(o, m, options=options), Solver(o, m, options=options, warm=True)
         build += cold.build_time_s + warm.build_time_s
         rows_limit = next(r for name, r in cold.nlp.blocks if name.startswith("deflection limit"))
-        for s in (cold, warm):
-            s.nlp.ubx[s.nlp.index["v"][0]] = arrival / t  # the final time up to the start's arrival
+        ubx, ubg = cold.nlp.ubx.copy(), cold.nlp.ubg.copy()
+        ubx[cold.nlp.index["v"][0]] = arrival / t  # the final time up to the start's arrival
         try:
-            sol = cold.solve(np.clip(u, -1.0, 1.0))
+            sol = cold.solve(np.clip(u, -1.0, 1.0), bounds={"ubx": ubx})
         except SolveError:
             return None
         tr = record(label)
@@ -255,10 +255,9 @@ def min_time_point(ocp: SpinupOcp, method: DirectCollocation, limit: float, star
         tried.append((level, tr.peak_delta))
         slope = (tried[-1][1] - tried[-2][1]) / (tried[-1][0] - tried[-2][0]) if len(tried) > 1 else 1.0
         level -= (tr.peak_delta - limit * (1 - AIM)) / (slope if slope > 0 else 1.0)
-        for s in (cold, warm):
-            s.nlp.ubg[rows_limit] = (level / limit) ** 2
+        ubg[rows_limit] = (level / limit) ** 2
         try:
-            sol = warm.solve(w0=sol.w, lam_g0=sol.lam_g, lam_x0=sol.lam_x)
+            sol = warm.solve(w0=sol.w, lam_g0=sol.lam_g, lam_x0=sol.lam_x, bounds={"ubx": ubx, "ubg": ubg})
         except SolveError:
             return None
         tr = record("the previous optimum")
