@@ -11,9 +11,14 @@ envelope S of the modal state (s = Re(S e^{i phi}), :mod:`autobal.models.ross_ro
 the rotor whirls at the running speed; control alpha/alpha_max piecewise constant per interval.  The
 deflection envelope of a node with complex amplitudes (X, Y) is the major half-axis of its orbit,
 r^2 = (|X|^2 + |Y|^2 + |X^2 + Y^2|)/2 (smoothed: |W| -> sqrt(|W|^2 + eps^2)); epigraph r^2 <= S ref at every
-collocation point, minimise S.  The spin-up transcription of the Jeffcott rotor (ocp/transcription.py)
-is written for its five states, so this module has its own small collocation; it reuses the
-collocation coefficients and the IPOPT wrapper.
+collocation point, minimise S.  As the Jeffcott spin-up (:mod:`autobal.ocp.transcription`): one SX Function
+per interval mapped over the intervals, the Radau node states eliminated (the last collocation point is the
+next node), the Jacobian and Hessian assembled from the interval's own SX derivatives
+(:func:`autobal.ocp.transcription.structured_derivatives`), IPOPT with
+:data:`autobal.ocp.solve.IPOPT_OPTIONS`.  Starts: a grid of four-phase speed profiles (full acceleration to w1,
+a middle phase, full acceleration to w3, then the constant acceleration that arrives at the deadline),
+screened by a fixed-step Runge-Kutta integration of the same envelope equation (:func:`screen`); the best
+distinct ones are solved.
 
 Every reported peak is the CVODES re-simulation of the physical (fixed-frame) response, max_t sqrt(x^2 + y^2).
 """
@@ -31,7 +36,8 @@ from autobal.analysis import ipopt
 from autobal.analysis.result import Result, new_figure, with_statuses
 from autobal.errors import SolveError
 from autobal.models.ross_rotor import ModalRotor
-from autobal.ocp.transcription import collocation_data
+from autobal.ocp.solve import IPOPT_OPTIONS
+from autobal.ocp.transcription import Nlp, collocation_data, structured_derivatives
 
 RESIM_TOL = 1e-9  # CVODES relative tolerance of the re-simulation
 POINTS_PER_REV = 64  # output points per revolution of the re-simulation (peak between them: < 1e-3)
@@ -246,95 +252,339 @@ class ModalSolution:
     solve_time_s: float
     collocation_peak: float  # m, largest envelope at the collocation points
     start: str
+    w: np.ndarray = field(repr=False, default=None)  # the NLP's variables
+
+
+def interval_function(ocp: ModalSpinupOcp, ref: float) -> ca.Function:
+    """One Radau interval as an SX Function (x_k (nx), the collocation states (nx d), u_k, S) -> (collocation
+    residuals (nx d), epigraph rows r^2/(a^2 ref) - S at the collocation points (nodes x d), 0 (no quadrature)).
+    The last Radau point is the interval end, so the next node is the last collocation state and there is
+    no continuity equation.  Mapped over the intervals it is the whole transcription."""
+    d = ocp.degree
+    _, C, _, _ = collocation_data(d, "radau")
+    f, env = ocp.envelope_rhs(), ocp.envelope2()
+    nx = f.size1_in(0)
+    x0, xc, u, s = ca.SX.sym("x0", nx), ca.SX.sym("xc", nx * d), ca.SX.sym("u"), ca.SX.sym("S")
+    Z = [x0] + [xc[nx * j:nx * (j + 1)] for j in range(d)]
+    res = [sum(C[r, j] * Z[r] for r in range(d + 1)) - ocp.h * f(Z[j + 1], u) for j in range(d)]
+    epi = [env(Z[j + 1]) / ref - s for j in range(d)]
+    return ca.Function("modal_interval", [x0, xc, u, s], [ca.vertcat(*res), ca.vertcat(*epi), ca.SX(1, 1)])
+
+
+def transcribe(ocp: ModalSpinupOcp) -> Nlp:
+    """The Radau collocation NLP of ``ocp`` in the layout of :func:`autobal.ocp.transcription.transcribe`
+    (x_0, then per interval the collocation states and u_k, then the epigraph level S; the Radau node
+    states eliminated), with the interval Function's data that
+    :func:`autobal.ocp.transcription.structured_derivatives` assembles the derivatives from.
+
+    Parameters
+    ----------
+    ocp : ModalSpinupOcp
+        The problem.
+
+    Returns
+    -------
+    Nlp
+        Variables (MX), objective S, constraints (collocation residuals, then epigraph rows) and bounds;
+        ``index`` "X" (K+1, nx), "Xc" (K, d, nx), "u" (K,), "v" [S]; ``ref`` the epigraph scale.
+    """
+    d, N, K = ocp.degree, ocp.intervals, ocp.intervals + ocp.settling_intervals
+    ref = ocp.peak_scale2
+    fi = interval_function(ocp, ref)
+    nx = fi.size1_in(0)
+    per = nx * d + 1
+    w = ca.MX.sym("w", nx + K * per + 1)
+    starts_ = nx + per * np.arange(K)
+    idx_Xc = starts_[:, None, None] + nx * np.arange(d)[:, None] + np.arange(nx)
+    idx_X = np.concatenate([np.arange(nx)[None, :], idx_Xc[:, -1, :]])
+    idx_u = starts_ + per - 1
+    iS = nx + K * per
+    W = ca.reshape(w[nx:iS], per, K)
+    X0 = ca.horzcat(w[:nx], W[nx * (d - 1):nx * d, :K - 1])
+    args = [X0, W[:nx * d, :], W[per - 1, :], w[iS]]
+    dyn, epi, _ = fi.map(K)(*args)
+    ndyn, nepi = fi.nnz_out(0), fi.nnz_out(1)
+    g = ca.vertcat(ca.vec(dyn), ca.vec(epi))
+    lbg = np.concatenate([np.zeros(ndyn * K), np.full(nepi * K, -np.inf)])
+    ubg = np.zeros(g.numel())
+    lbx, ubx = np.full(w.numel(), -np.inf), np.full(w.numel(), np.inf)
+    lbx[idx_X[0]] = ubx[idx_X[0]] = ocp.x0()
+    lbx[idx_u[:N]], ubx[idx_u[:N]] = -1.0, 1.0
+    lbx[idx_u[N:]] = ubx[idx_u[N:]] = 0.0  # settling window: held speed
+    # the speed is linear in each interval (exact in the collocation): bounded at the nodes of the horizon,
+    # omega_final at the deadline as a bound, free over the settling window (held by the dynamics)
+    lbx[idx_X[1:N, -1]] = 0.0
+    ubx[idx_X[1:N, -1]] = (ocp.omega_max / ocp.omega_final) if ocp.omega_max is not None else np.inf
+    lbx[idx_X[N, -1]] = ubx[idx_X[N, -1]] = 1.0
+    lbx[iS] = 0.0
+    cols = np.full((fi.nnz_in(), K), -1)
+    cols[:nx] = idx_X[:-1].T
+    cols[nx:nx + nx * d] = idx_Xc.reshape(K, -1).T
+    cols[nx + nx * d] = idx_u
+    cols[nx + nx * d + 1] = iS
+    rows = np.concatenate([np.arange(ndyn)[:, None] + ndyn * np.arange(K)[None, :],
+                           ndyn * K + np.arange(nepi)[:, None] + nepi * np.arange(K)[None, :]])
+    intervals = {"function": fi, "args": args, "cols": cols, "coefs": np.ones(cols.shape), "rows": rows,
+                 "tail": ca.MX(0, 1)}
+    blocks = [("dynamics", np.arange(ndyn * K)), ("deflection epigraph r^2 <= S", ndyn * K + np.arange(nepi * K))]
+    index = {"X": idx_X, "Xc": idx_Xc, "u": idx_u, "v": [iS]}
+    tau = collocation_data(d, "radau")[0]
+    return Nlp(w, w[iS], g, lbx, ubx, lbg, ubg, blocks, index, None, tau, None, ref, intervals)
 
 
 class ModalSolver:
-    """The collocation NLP of a ModalSpinupOcp, built once, solved from any control profile."""
+    """The collocation NLP of a ModalSpinupOcp, built once, solved from any control profile.  The Jacobian and
+    the Hessian of the Lagrangian come from the interval Function's own SX derivatives, mapped over the
+    intervals (:func:`autobal.ocp.transcription.structured_derivatives`); IPOPT with the Jeffcott spin-up's
+    options (:data:`autobal.ocp.solve.IPOPT_OPTIONS`)."""
 
     def __init__(self, ocp: ModalSpinupOcp, options: dict | None = None):
         t0 = time.perf_counter()
         self.ocp = ocp
-        d = ocp.degree
-        tau, C, D, _ = collocation_data(d, "radau")
-        self.fractions = tau
-        f, env = ocp.envelope_rhs(), ocp.envelope2()
-        nx, N, Ns = f.size1_in(0), ocp.intervals, ocp.settling_intervals
-        K = N + Ns
-        self.K = K
-        self.ref = ocp.peak_scale2
-        per = nx * (d + 1) + 1
-        w = ca.MX.sym("w", K * per + nx + 1)
-        Wk = ca.reshape(w[:K * per], per, K)  # column k: X_k, Xc_k (d nx), u_k
-        X = ca.horzcat(Wk[:nx, :], w[K * per:K * per + nx])  # (nx, K + 1)
-        S = w[-1]
-        self.idx_X = np.array([np.arange(nx) + k * per for k in range(K)] + [np.arange(nx) + K * per])
-        self.idx_Xc = np.array([[np.arange(nx) + k * per + nx * (j + 1) for j in range(d)] for k in range(K)])
-        self.idx_u = np.array([k * per + per - 1 for k in range(K)])
-        lbx, ubx = np.full(w.numel(), -np.inf), np.full(w.numel(), np.inf)
-        lbx[self.idx_X[0]] = ubx[self.idx_X[0]] = ocp.x0()
-        lbx[self.idx_u[:N]], ubx[self.idx_u[:N]] = -1.0, 1.0
-        lbx[self.idx_u[N:]] = ubx[self.idx_u[N:]] = 0.0
-        nu_max = (ocp.omega_max / ocp.omega_final) if ocp.omega_max is not None else np.inf
-        for rows in (self.idx_X[1:N, -1], self.idx_Xc[:N, :, -1].ravel()):
-            lbx[rows], ubx[rows] = 0.0, nu_max
-        lbx[-1] = 0.0
-        # one interval as a Function (collocation equations, continuity, epigraph), mapped over the mesh
-        xk, xn, uk, s = ca.SX.sym("xk", nx), ca.SX.sym("xn", nx), ca.SX.sym("u"), ca.SX.sym("S")
-        zc = [ca.SX.sym(f"z{j}", nx) for j in range(d)]
-        Z = [xk, *zc]
-        eqs = [sum(C[r, j] * Z[r] for r in range(d + 1)) - ocp.h * f(zc[j], uk) for j in range(d)]
-        eqs.append(xn - sum(D[r] * Z[r] for r in range(d + 1)))
-        epi = ca.vertcat(*[env(zc[j]) / self.ref - s for j in range(d)])
-        interval = ca.Function("interval", [xk, ca.vertcat(*zc), uk, xn, s], [ca.vertcat(*eqs), epi])
-        dyn, ep = interval.map(K)(X[:, :K], Wk[nx:nx * (d + 1), :], Wk[per - 1, :], X[:, 1:], S)
-        g = [ca.vec(dyn), X[-1, N] - 1.0, ca.vec(ep)]  # omega(T) = omega_final
-        ndyn, nep = dyn.numel(), ep.numel()
-        lbg = [np.zeros(ndyn), [0.0], np.full(nep, -np.inf)]
-        ubg = [np.zeros(ndyn), [0.0], np.zeros(nep)]
-        self.nlp = {"x": w, "f": S, "g": ca.vertcat(*g)}
-        self.lbx, self.ubx = lbx, ubx
-        self.lbg, self.ubg = np.concatenate(lbg), np.concatenate(ubg)
-        opts = {"tol": 1e-8, "constr_viol_tol": 1e-8, "max_iter": 1000, "mu_strategy": "adaptive"} | (options or {})
-        self.solver = ipopt.nlpsol("modal_spinup", w, ca.MX.sym("p", 0), S, ca.vertcat(*g), **opts)
-        self.env = env
+        self.nlp = nlp = transcribe(ocp)
+        self.K = ocp.intervals + ocp.settling_intervals
+        self.ref = nlp.ref
+        self.fractions = nlp.fractions
+        self.env = ocp.envelope2()
+        opts = IPOPT_OPTIONS | (options or {})
+        self.solver = ipopt.nlpsol("modal_spinup", nlp.x, ca.MX.sym("p", 0), nlp.f, nlp.g,
+                                   **structured_derivatives(nlp), **opts)
         self.build_time_s = time.perf_counter() - t0
 
     def guess(self, u: np.ndarray) -> np.ndarray:
         """All NLP variables from a control profile u (n control intervals): the envelope simulated."""
-        ocp = self.ocp
+        ocp, idx = self.ocp, self.nlp.index
         uu = np.concatenate([u, np.zeros(self.K - len(u))])
         sim = simulate_envelope(ocp, uu, self.fractions)
-        w0 = np.zeros(self.nlp["x"].numel())
-        w0[self.idx_Xc] = sim
-        w0[self.idx_X[1:]] = sim[:, -1, :]
-        w0[self.idx_X[0]] = ocp.x0()
-        w0[self.idx_u] = uu
+        w0 = np.zeros(self.nlp.x.numel())
+        w0[idx["Xc"]] = sim
+        w0[idx["X"][0]] = ocp.x0()
+        w0[idx["u"]] = uu
         lev = np.array(self.env.map(sim.shape[0] * sim.shape[1])(sim.reshape(-1, sim.shape[2]).T))
-        w0[-1] = 1.05 * lev.max() / self.ref
+        w0[idx["v"][0]] = 1.05 * lev.max() / self.ref
         return w0
 
     def solve(self, u: np.ndarray, label: str) -> ModalSolution:
         """IPOPT from the control profile u; SolveError with the status when it fails."""
+        nlp = self.nlp
         w0 = self.guess(u)
         t0 = time.perf_counter()
-        r = ipopt.solve(self.solver, x0=w0, lbx=self.lbx, ubx=self.ubx, lbg=self.lbg, ubg=self.ubg)
+        r = ipopt.solve(self.solver, x0=w0, lbx=nlp.lbx, ubx=nlp.ubx, lbg=nlp.lbg, ubg=nlp.ubg)
         dt = time.perf_counter() - t0
+        iu = nlp.index["u"]
         if not r["success"]:
             raise SolveError(f"multi-mode spin-up OCP not solved from the {label}: IPOPT {r['status']} after "
                              f"{r['iterations']} iterations", r["status"], {"alpha_rad_s2": list(
-                                 r["x"][self.idx_u] * self.ocp.alpha_max)})
+                                 r["x"][iu] * self.ocp.alpha_max)})
         wopt = r["x"]
-        peak = float(np.sqrt(wopt[-1] * self.ref)) * self.ocp.amplitude_scale
-        return ModalSolution(wopt[self.idx_u], r["status"], r["iterations"], dt, peak, label)
+        peak = float(np.sqrt(wopt[nlp.index["v"][0]] * self.ref)) * self.ocp.amplitude_scale
+        return ModalSolution(wopt[iu], r["status"], r["iterations"], dt, peak, label, wopt)
 
 
-def starts(ocp: ModalSpinupOcp) -> list[tuple[str, np.ndarray]]:
-    """Initial profiles: the constant ramp to the deadline and the maximum-acceleration ramp with hold (on the
-    shipped scene the first reaches the 14 % better optimum in about 400 IPOPT iterations, the second stops
-    near itself in about 30; the ramp at the mean of both did not converge within 1000 iterations)."""
+# ---- starts: a cheap global search over multi-phase speed profiles ------------------------------------
+
+# the screening integrator: RK4 steps of at most RK4_STEP / (largest |eigenvalue| of the envelope equation), at
+# least SAMPLES per control interval (on the shipped scene 20 per 50 ms: the peak within 1e-5 of 40 per interval
+# and 0.3 % of CVODES; 10 per interval is unstable), the envelope sampled SAMPLES times per interval
+RK4_STEP = 1.5  # |lambda| dt; RK4 is stable on the imaginary axis up to 2.83
+SAMPLES = 10
+KEEP = 2  # distinct search profiles solved by IPOPT
+TIE = 2e-3  # relative: screened peaks this close tie (broken by the peak of the last phase)
+AHEAD = 0.05  # the ramps are not solved when the search's best profile is this far below both of their peaks
+
+
+@dataclass(frozen=True)
+class LinearEnvelope:
+    """The scaled envelope equation of :meth:`ModalSpinupOcp.envelope_rhs` as it is: affine in the modal
+    part y of the state for a given speed and control, y' = (M0 + nu M1 + u M2) y + b0 + nu^2 b2 + u bu,
+    nu' = u c.  Taken from the CasADi Function by differentiation (no second copy of the equation) and
+    checked at a random point when built."""
+
+    M: tuple  # M0, M1, M2 (m x m)
+    b: tuple  # b0, b2, bu (m,)
+    c: float  # nu' per unit u
+
+    @classmethod
+    def of(cls, ocp: ModalSpinupOcp) -> LinearEnvelope:
+        f = ocp.envelope_rhs()
+        nx = f.size1_in(0)
+        m = nx - 1
+        x, u = ca.SX.sym("x", nx), ca.SX.sym("u")
+        fx = ca.Function("envelope_jacobian", [x, u], [ca.jacobian(f(x, u)[:m], x[:m])])
+
+        def at(nu, uu, y=None):
+            z = np.concatenate([np.zeros(m) if y is None else y, [nu]])
+            return np.array(fx(z, uu)), np.array(f(z, uu)).ravel()
+
+        (A0, b0), (A1, b1), (A2, b2) = at(0.0, 0.0), at(1.0, 0.0), at(0.0, 1.0)
+        lin = cls((A0, A1 - A0, A2 - A0), (b0[:m], b1[:m] - b0[:m], b2[:m] - b0[:m]), float(b2[m] - b0[m]))
+        y = np.random.default_rng(0).standard_normal(m)
+        _, exact = at(0.7, -0.4, y)
+        if np.abs(lin.rhs(y[None], np.array([0.7]), np.array([-0.4]))[0] - exact[:m]).max() > 1e-9 * (
+                1 + np.abs(exact).max()):
+            raise ValueError("the screening integrator needs an envelope equation affine in the state")
+        return lin
+
+    def rhs(self, y: np.ndarray, nu: np.ndarray, u: np.ndarray) -> np.ndarray:
+        (M0, M1, M2), (b0, b2, bu) = self.M, self.b
+        return (y @ M0.T + nu[:, None] * (y @ M1.T) + u[:, None] * (y @ M2.T) + b0
+                + (nu**2)[:, None] * b2 + u[:, None] * bu)
+
+
+def screen(ocp: ModalSpinupOcp, u: np.ndarray, substeps: int | None = None, samples: int = SAMPLES,
+           lin: LinearEnvelope | None = None, by_interval: bool = False) -> np.ndarray:
+    """Peak deflection (m) of many control profiles at once: classical Runge-Kutta (fixed step) of the
+    envelope equation on the control mesh, the deflection envelope (:meth:`ModalSpinupOcp.envelope2`)
+    sampled ``samples`` times per interval.
+
+    Parameters
+    ----------
+    ocp : ModalSpinupOcp
+        The problem.
+    u : ndarray, shape (C, n)
+        Acceleration over alpha_max on the n <= intervals + settling intervals control intervals of C
+        candidates (zero after them).
+    substeps : int, optional
+        Runge-Kutta steps per interval (by default the fewest multiple of ``samples`` that keeps |lambda| dt
+        below RK4_STEP).
+    samples : int
+        Envelope samples per interval (divides ``substeps``).
+    by_interval : bool
+        Return the largest deflection of every interval instead of the peak.
+
+    Returns
+    -------
+    ndarray, shape (C,) or (C, intervals + settling intervals)
+        Largest deflection over the nodes of interest (over the run or in each interval), m.
+    """
+    lin = lin or LinearEnvelope.of(ocp)
+    env = ocp.envelope2()
+    u = np.atleast_2d(u)
+    Cn, n = u.shape
+    K = ocp.intervals + ocp.settling_intervals
+    u = np.concatenate([u, np.zeros((Cn, K - n))], axis=1)
+    x0 = ocp.x0()
+    y, nu = np.tile(x0[:-1], (Cn, 1)), np.full(Cn, x0[-1])
+    if substeps is None:
+        top = (ocp.omega_max or ocp.omega_final) / ocp.omega_final
+        rho = max(np.abs(np.linalg.eigvals(lin.M[0] + nu * lin.M[1] + a * lin.M[2])).max()
+                  for nu in (0.0, top) for a in (-1.0, 1.0))
+        substeps = samples * int(np.ceil(ocp.h * rho / RK4_STEP / samples))
+    dt = ocp.h / substeps
+    envm = env.map(Cn)
+    best = np.zeros((Cn, K))
+    for k in range(K):
+        uk = u[:, k]
+        dnu = uk * lin.c
+        for s in range(substeps):
+            k1 = lin.rhs(y, nu, uk)
+            k2 = lin.rhs(y + 0.5 * dt * k1, nu + 0.5 * dt * dnu, uk)
+            k3 = lin.rhs(y + 0.5 * dt * k2, nu + 0.5 * dt * dnu, uk)
+            k4 = lin.rhs(y + dt * k3, nu + dt * dnu, uk)
+            y = y + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+            nu = nu + dt * dnu
+            if (s + 1) % (substeps // samples) == 0:
+                r2 = np.array(envm(np.vstack([y.T, nu[None]])))
+                best[:, k] = np.maximum(best[:, k], r2.max(axis=0))
+    out = np.sqrt(best) * ocp.amplitude_scale
+    return out if by_interval else out.max(axis=1)
+
+
+def phase_profiles(ocp: ModalSpinupOcp, w1, u_b, d, w3) -> np.ndarray:
+    """Controls (over alpha_max, averaged exactly onto the control intervals of the horizon) of the
+    four-phase profiles: full acceleration to ``w1`` (rad/s), acceleration ``u_b`` alpha_max for ``d`` (s),
+    full acceleration to ``w3`` (rad/s), then the constant acceleration that reaches omega_final at the
+    deadline (``w3`` = omega_final: full acceleration and hold).  Arrays of parameters, one row each."""
+    w1, u_b, d, w3 = (np.atleast_1d(np.asarray(v, float)) for v in (w1, u_b, d, w3))
+    a, w0, wf, T = ocp.alpha_max, ocp.omega_start, ocp.omega_final, ocp.horizon
+    t1 = (w1 - w0) / a
+    w2 = w1 + u_b * a * d
+    t3 = t1 + d + (w3 - w2) / a
+    tk = np.arange(ocp.intervals + 1) * ocp.h
+    out = np.empty((w1.size, tk.size - 1))
+    for i in range(w1.size):
+        bt = [0.0, t1[i], t1[i] + d[i], t3[i], T if w3[i] < wf else t3[i], T + 1.0]
+        bw = [w0, w1[i], w2[i], w3[i], wf, wf]
+        out[i] = np.diff(np.interp(tk, bt, bw)) / (ocp.h * a)
+    return out
+
+
+@dataclass
+class SearchResult:
+    """The best profiles of the grid, distinct basins first."""
+
+    params: np.ndarray  # (k, 4): w1 (rad/s), u_b, d (s), w3 (rad/s)
+    peaks: np.ndarray  # (k,) m, by the screening integrator
+    evaluated: int
+
+
+def grid_search(ocp: ModalSpinupOcp, n_w: int = 12, n_u: int = 4, n_d: int = 6, n_w3: int = 6,
+                keep: int = KEEP) -> SearchResult:
+    """Screen the four-phase family (:func:`phase_profiles`) on a grid: w1 between the start and the final
+    speed or 1.25 x the first critical speed above the start (the passage of the first critical group), u_b in
+    [-1, 0.5], d up to what the horizon leaves, w3 between the speed after the middle phase and omega_final;
+    return the ``keep`` best whose first phases differ by more than a grid cell."""
+    w0, wf, a, T = ocp.omega_start, ocp.omega_final, ocp.alpha_max, ocp.horizon
+    wc = [w for w in ocp.rotor.critical_speeds(wf)["wd"] if w > w0]
+    top = min(wf, 1.25 * wc[0]) if wc else wf  # the first phase ends near the first critical speed above the start
+    W1, UB, D, F3 = np.meshgrid(np.linspace(w0, top, n_w + 1)[1:], np.linspace(-1.0, 0.5, n_u),
+                                np.linspace(0, 1, n_d + 1)[1:], np.linspace(0, 1, n_w3 + 1)[1:], indexing="ij")
+    W1, UB, D, F3 = W1.ravel(), UB.ravel(), D.ravel(), F3.ravel()
+    slack = T - (wf - w0) / a
+    D = D * slack / (1 - UB)  # the middle phase lasts at most what the horizon leaves
+    W2 = W1 + UB * a * D
+    W3 = W2 + F3 * (wf - W2)
+    ok = (W2 >= 0) & (W2 <= wf) & (D > 0) & ((W1 - w0) / a + D + (wf - W2) / a <= T * (1 + 1e-9))
+    if ocp.omega_max is not None:
+        ok &= W1 <= ocp.omega_max
+    W1, UB, D, W3 = W1[ok], UB[ok], D[ok], W3[ok]
+    U = phase_profiles(ocp, W1, UB, D, W3)
+    E = screen(ocp, U, by_interval=True)
+    peaks = E.max(axis=1)
+    # the peak past the first passage (after the middle phase, above ``top``): the first passage usually sets
+    # the peak, so profiles that differ in w3 only tie; among ties (TIE) the lower later peak wins
+    K = E.shape[1]
+    speed = np.concatenate([w0 + np.cumsum(U * a * ocp.h, axis=1) - U * a * ocp.h,
+                            np.full((U.shape[0], K - U.shape[1]), wf)], axis=1)  # at each interval start
+    t2 = (W1 - w0) / a + D
+    past = (speed >= top) & (np.arange(K)[None, :] * ocp.h >= t2[:, None] - 1e-12)
+    late = np.where(past, E, 0.0).max(axis=1)
+    cell = (top - w0) / n_w
+    chosen = []
+    free = np.ones(peaks.size, bool)
+    picks = 0
+    while picks < keep and free.any():
+        low = peaks[free].min()
+        pool = np.flatnonzero(free & (peaks <= low * (1 + TIE)))
+        i = pool[np.argmin(late[pool])]
+        if picks == 0:  # the best first phase with every w3 of the grid: the later passage is multimodal
+            same = pool[(W1[pool] == W1[i]) & (UB[pool] == UB[i]) & (D[pool] == D[i])]
+            chosen += list(same[np.argsort(late[same], kind="stable")])
+        else:
+            chosen.append(i)
+        picks += 1
+        free &= np.abs(W1 - W1[i]) > 1.5 * cell
+    idx = np.array(chosen, int)
+    return SearchResult(np.column_stack([W1[idx], UB[idx], D[idx], W3[idx]]), peaks[idx], int(ok.sum()))
+
+
+def starts(ocp: ModalSpinupOcp, search: bool = True) -> list[tuple[str, np.ndarray]]:
+    """Initial profiles: the ``KEEP`` best four-phase profiles of the screening (:func:`grid_search`), then the
+    constant ramp to the deadline and the maximum-acceleration ramp with hold unless the search's best is
+    AHEAD below both of their (screened) peaks."""
     const = abs(ocp.omega_final - ocp.omega_start) / ocp.horizon
-    return [("constant ramp", ramp_controls(ocp, const)),
-            ("maximum-acceleration ramp", ramp_controls(ocp, ocp.alpha_max))]
+    ramps = [("constant ramp", ramp_controls(ocp, const)),
+             ("maximum-acceleration ramp", ramp_controls(ocp, ocp.alpha_max))]
+    if not search or ocp.omega_final <= ocp.omega_start:
+        return ramps
+    found = grid_search(ocp)
+    a = ocp.alpha_max
+    out = [(f"search: {a:.3g} rad/s^2 to {p[0]:.4g} rad/s, {p[1] * a:.3g} rad/s^2 for {p[2]:.3g} s, {a:.3g} "
+            f"rad/s^2 to {p[3]:.4g} rad/s, then constant (screened peak {pk * 1e6:.4g} um)",
+            phase_profiles(ocp, *p)[0]) for p, pk in zip(found.params, found.peaks, strict=True)]
+    if not found.peaks.size or screen(ocp, np.array([u for _, u in ramps])).min() * (1 - AHEAD) < found.peaks[0]:
+        out += ramps
+    return out
 
 
 def baselines(ocp: ModalSpinupOcp) -> dict[str, ModalTrajectory]:
@@ -354,6 +604,7 @@ class ModalOptimum:
     trajectory: ModalTrajectory
     starts: list
     build_time_s: float
+    search_time_s: float = 0.0  # the screening of the starts (grid search), s
 
     @property
     def resimulation_rel_error(self) -> float:
@@ -363,9 +614,12 @@ class ModalOptimum:
 
 def optimize(ocp: ModalSpinupOcp, options: dict | None = None) -> ModalOptimum:
     """Solve from every start; keep the best optimum by its re-simulated peak."""
+    clock = time.perf_counter()
+    start_list = starts(ocp)
+    search_time = time.perf_counter() - clock
     solver = ModalSolver(ocp, options)
     rows, best, err = [], None, None
-    for label, u in starts(ocp):
+    for label, u in start_list:
         try:
             sol = solver.solve(u, label)
         except SolveError as exc:
@@ -380,7 +634,7 @@ def optimize(ocp: ModalSpinupOcp, options: dict | None = None) -> ModalOptimum:
             best = (sol, tr)
     if best is None:
         raise err
-    return ModalOptimum(best[0], best[1], rows, solver.build_time_s)
+    return ModalOptimum(best[0], best[1], rows, solver.build_time_s, search_time)
 
 
 # ---- the study of a scene: reduction, critical speeds vs ROSS, optimum vs ramps ------------------------
@@ -430,7 +684,7 @@ class ModalSpinupResult(Result):
                  f"  optimum: peak {d['peak_deflection_m'] * 1e6:.3f} um at node {d['node_of_peak']} "
                  f"(collocation {d['collocation_peak_m'] * 1e6:.3f} um, difference {d['resimulation_rel_error']:.2e}),"
                  f" {d['status']}, {d['ipopt_iterations']} IPOPT iterations, {d['solve_time_s']:.2f} s "
-                 f"(build {d['build_time_s']:.2f} s)"]
+                 f"(build {d['build_time_s']:.2f} s, search for starts {d['search_time_s']:.2f} s)"]
         for v in d["baselines"].values():
             lines.append(f"  {v['label']:40s} peak {v['peak_deflection_m'] * 1e6:.3f} um at node {v['node_of_peak']}")
         return "\n".join(lines)
@@ -573,7 +827,8 @@ def run(rotor: ModalRotor, ocp_kw: dict, title: str = "", ross_critical: dict | 
         "method": f"Radau collocation (degree {ocp.degree}, {ocp.intervals} intervals + "
                   f"{ocp.settling_intervals} settling) of the complex envelope",
         "status": sol.status, "ipopt_iterations": sol.iterations, "solve_time_s": sol.solve_time_s,
-        "build_time_s": opt.build_time_s, "total_solve_time_s": sum(r.get("solve_time_s", 0.0) for r in opt.starts),
+        "build_time_s": opt.build_time_s, "search_time_s": opt.search_time_s,
+        "total_solve_time_s": sum(r.get("solve_time_s", 0.0) for r in opt.starts),
         "peak_deflection_m": tr.peak, "collocation_peak_m": sol.collocation_peak,
         "resimulation_rel_error": opt.resimulation_rel_error, "node_of_peak": tr.node_of_peak,
         "time_of_peak_s": tr.t_peak, "omega_at_peak_rad_s": float(np.interp(tr.t_peak, tr.t, tr.omega)),
