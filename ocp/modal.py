@@ -259,7 +259,21 @@ def interval_function(ocp: ModalSpinupOcp, ref: float) -> ca.Function:
     """One Radau interval as an SX Function (x_k (nx), the collocation states (nx d), u_k, S) -> (collocation
     residuals (nx d), epigraph rows r^2/(a^2 ref) - S at the collocation points (nodes x d), 0 (no quadrature)).
     The last Radau point is the interval end, so the next node is the last collocation state and there is
-    no continuity equation.  Mapped over the intervals it is the whole transcription."""
+    no continuity equation.  Mapped over the intervals it is the whole transcription.
+
+    Parameters
+    ----------
+    ocp : ModalSpinupOcp
+        The problem (its interval length h, s, and the scaled envelope equation).
+    ref : float
+        Scale of the epigraph level (:attr:`ModalSpinupOcp.peak_scale2`), dimensionless.
+
+    Returns
+    -------
+    casadi.Function
+        With the calling convention :func:`autobal.ocp.transcription.structured_derivatives` expects (the last
+        output is the objective's quadrature, here none).
+    """
     d = ocp.degree
     _, C, _, _ = collocation_data(d, "radau")
     f, env = ocp.envelope_rhs(), ocp.envelope2()
@@ -494,7 +508,21 @@ def phase_profiles(ocp: ModalSpinupOcp, w1, u_b, d, w3) -> np.ndarray:
     """Controls (over alpha_max, averaged exactly onto the control intervals of the horizon) of the
     four-phase profiles: full acceleration to ``w1`` (rad/s), acceleration ``u_b`` alpha_max for ``d`` (s),
     full acceleration to ``w3`` (rad/s), then the constant acceleration that reaches omega_final at the
-    deadline (``w3`` = omega_final: full acceleration and hold).  Arrays of parameters, one row each."""
+    deadline (``w3`` = omega_final: full acceleration and hold).
+
+    Parameters
+    ----------
+    ocp : ModalSpinupOcp
+        The problem (speeds, alpha_max, horizon, control intervals).
+    w1, u_b, d, w3 : array_like
+        Speed at the end of the first phase (rad/s), acceleration of the middle phase over alpha_max, its
+        duration (s), speed at the end of the third phase (rad/s); one profile per element.
+
+    Returns
+    -------
+    ndarray, shape (profiles, intervals)
+        alpha/alpha_max on each control interval of the horizon.
+    """
     w1, u_b, d, w3 = (np.atleast_1d(np.asarray(v, float)) for v in (w1, u_b, d, w3))
     a, w0, wf, T = ocp.alpha_max, ocp.omega_start, ocp.omega_final, ocp.horizon
     t1 = (w1 - w0) / a
@@ -523,7 +551,24 @@ def grid_search(ocp: ModalSpinupOcp, n_w: int = 12, n_u: int = 4, n_d: int = 6, 
     """Screen the four-phase family (:func:`phase_profiles`) on a grid: w1 between the start and the final
     speed or 1.25 x the first critical speed above the start (the passage of the first critical group), u_b in
     [-1, 0.5], d up to what the horizon leaves, w3 between the speed after the middle phase and omega_final;
-    return the ``keep`` best whose first phases differ by more than a grid cell."""
+    return the ``keep`` best whose first phases differ by more than a grid cell, the best first phase with each
+    w3 that ties with it (the later passage is multimodal: they lead IPOPT to different optima); none when the
+    horizon leaves no time for a middle phase.
+
+    Parameters
+    ----------
+    ocp : ModalSpinupOcp
+        The problem.
+    n_w, n_u, n_d, n_w3 : int
+        Grid points of w1, u_b, d and w3.
+    keep : int
+        Distinct first phases returned.
+
+    Returns
+    -------
+    SearchResult
+        Parameters (w1 rad/s, u_b, d s, w3 rad/s) and screened peaks (m), best first.
+    """
     w0, wf, a, T = ocp.omega_start, ocp.omega_final, ocp.alpha_max, ocp.horizon
     wc = [w for w in ocp.rotor.critical_speeds(wf)["wd"] if w > w0]
     top = min(wf, 1.25 * wc[0]) if wc else wf  # the first phase ends near the first critical speed above the start
@@ -538,6 +583,8 @@ def grid_search(ocp: ModalSpinupOcp, n_w: int = 12, n_u: int = 4, n_d: int = 6, 
     if ocp.omega_max is not None:
         ok &= W1 <= ocp.omega_max
     W1, UB, D, W3 = W1[ok], UB[ok], D[ok], W3[ok]
+    if not ok.any():
+        return SearchResult(np.empty((0, 4)), np.empty(0), 0)
     U = phase_profiles(ocp, W1, UB, D, W3)
     E = screen(ocp, U, by_interval=True)
     peaks = E.max(axis=1)
@@ -571,7 +618,20 @@ def grid_search(ocp: ModalSpinupOcp, n_w: int = 12, n_u: int = 4, n_d: int = 6, 
 def starts(ocp: ModalSpinupOcp, search: bool = True) -> list[tuple[str, np.ndarray]]:
     """Initial profiles: the ``KEEP`` best four-phase profiles of the screening (:func:`grid_search`), then the
     constant ramp to the deadline and the maximum-acceleration ramp with hold unless the search's best is
-    AHEAD below both of their (screened) peaks."""
+    AHEAD below both of their (screened) peaks.
+
+    Parameters
+    ----------
+    ocp : ModalSpinupOcp
+        The problem.
+    search : bool
+        Screen the four-phase family (otherwise the two ramps only).
+
+    Returns
+    -------
+    list of (str, ndarray)
+        Label and alpha/alpha_max on each control interval of the horizon.
+    """
     const = abs(ocp.omega_final - ocp.omega_start) / ocp.horizon
     ramps = [("constant ramp", ramp_controls(ocp, const)),
              ("maximum-acceleration ramp", ramp_controls(ocp, ocp.alpha_max))]
@@ -825,7 +885,8 @@ def run(rotor: ModalRotor, ocp_kw: dict, title: str = "", ross_critical: dict | 
     data = {
         "title": title, "objective": "peak deflection over the nodes " + ", ".join(map(str, ocp.nodes)),
         "method": f"Radau collocation (degree {ocp.degree}, {ocp.intervals} intervals + "
-                  f"{ocp.settling_intervals} settling) of the complex envelope",
+                  f"{ocp.settling_intervals} settling) of the complex envelope, structured derivatives; starts "
+                  "from a screened grid of four-phase profiles",
         "status": sol.status, "ipopt_iterations": sol.iterations, "solve_time_s": sol.solve_time_s,
         "build_time_s": opt.build_time_s, "search_time_s": opt.search_time_s,
         "total_solve_time_s": sum(r.get("solve_time_s", 0.0) for r in opt.starts),

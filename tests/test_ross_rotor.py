@@ -141,6 +141,14 @@ def test_phase_profiles_reach_the_final_speed_at_the_deadline(small_ocp):
     assert_allclose(w.max(axis=1), 150.0, rtol=1e-12)
 
 
+def test_no_search_when_the_horizon_leaves_no_time(small_ocp):
+    """With alpha_max x horizon exactly the speed change there is no room for a middle phase: the starts are
+    the two ramps."""
+    tight = modal.ModalSpinupOcp(small_ocp.rotor, 50.0, 150.0, 1.0, 100.0, (0,), intervals=20)
+    assert modal.grid_search(tight).evaluated == 0
+    assert [lab for lab, _ in modal.starts(tight)] == ["constant ramp", "maximum-acceleration ramp"]
+
+
 def test_missing_ross_names_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "ross", None)  # import ross -> ImportError
     with pytest.raises(ScenarioError, match=r"pip install -e '\.\[ross\]'"):
