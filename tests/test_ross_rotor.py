@@ -229,6 +229,10 @@ def test_shipped_scene_end_to_end(shipped_run, tmp_path):
     assert res.critical_speed_rel_error < 1e-2
     assert res.peak_deflection <= res.best_ramp_peak * (1 + 1e-4)
     assert d["resimulation_rel_error"] < 1e-2
+    # 160 intervals, the starts solved on 80 and the best refined: measured 19.575 um (re-simulated), 1.9e-4 from
+    # the collocation; the 160-interval mesh solved directly from every start reaches 19.52-19.57 um
+    assert_allclose(res.peak_deflection, 19.57e-6, rtol=5e-3)
+    assert [r["stage"] for r in d["starts"]][-1] == "160 intervals"
     paths = res.save(tmp_path)
     assert {p.name for p in paths} >= {"ross_campbell.png", "ross_spinup_deflection.png", "ross_critical_speeds.csv"}
     assert "ROSS" in res.summary()
@@ -237,14 +241,15 @@ def test_shipped_scene_end_to_end(shipped_run, tmp_path):
 @pytest.mark.slow
 @needs_ross
 def test_shipped_optimum_does_not_depend_on_the_ramps(scene_rotor):
-    """The shipped problem from the screened four-phase starts reaches an optimum below those IPOPT reaches from
-    either ramp (measured, re-simulated: 19.65 um; from the constant ramp 24.99 um, from the
-    maximum-acceleration ramp 28.79 um), its collocation peak within 1 % of the re-simulation."""
+    """The shipped problem on 80 control intervals (solved there directly): from the screened four-phase starts
+    IPOPT reaches an optimum below those it reaches from either ramp (measured, re-simulated: 19.65 um; from
+    the constant ramp 24.99 um, from the maximum-acceleration ramp 28.79 um), its collocation peak within 1 %
+    of the re-simulation."""
     s = scenario.load("spinup_ross_rotor").analyses.ross_spinup
     ocp = modal.ModalSpinupOcp(scene_rotor[1], s.start_speed, s.final_speed, s.horizon, s.max_acceleration,
-                               tuple(s.nodes), s.settling_time, s.max_speed, s.intervals, s.degree)
+                               tuple(s.nodes), s.settling_time, s.max_speed, 80, s.degree)
     opt = modal.optimize(ocp)
-    assert opt.starts[0]["start"].startswith("search")
+    assert opt.starts[0]["start"].startswith("search") and len(opt.starts) >= 3
     assert opt.resimulation_rel_error < 1e-2
     solver = modal.ModalSolver(ocp)
     const = (s.final_speed - s.start_speed) / s.horizon
