@@ -549,7 +549,7 @@ COST = {
     "transient_point": 5e-4,  # one output time of one time response (CVODES)
     "ocp_collocation_point": 5e-3,  # one collocation point of the spin-up OCP, per start
     "robust_validation_run": 4e-3,  # one profile on one validation rotor (exponential integrator)
-    "modal_ocp_point": 0.05,  # one collocation point of the multi-mode (ROSS) spin-up OCP, per start
+    "modal_ocp_point": 0.02,  # one collocation point of the multi-mode (ROSS) spin-up OCP, per start
     "reliability_node": 5e-7,  # one (time, load) node of the reliability integrals
     "rotor_run": 0.5,  # one CVODES passage / step response of the rotor studies
     "grid_point": 1e-5,  # one point of a dense cross-check grid
@@ -604,8 +604,8 @@ def estimate_seconds(scn: BaseScenario) -> dict[str, float]:
             4 + 2 * s.front_points)
     if a.ross_spinup is not None:
         s = a.ross_spinup
-        # ROSS's import, numba compilation and critical speeds (about 30 s), then two starts of a few hundred
-        # iterations each on the modal envelope (4 modes: ~25 s for 80 intervals of degree 3)
+        # ROSS's import, numba compilation and critical speeds (about 30 s), then the four-phase search (about
+        # 5 s) and its starts on the modal envelope (4 modes, 160 intervals of degree 3: about 24 s measured)
         out["ross_spinup"] = 30.0 * s.validate_with_ross + c["start"] + c["modal_ocp_point"] * s.intervals \
             * s.degree * 2
     if a.reliability is not None:
