@@ -188,16 +188,16 @@ def figure(rows, path: Path) -> None:
     fig = Figure(figsize=(8.0, 3.4), layout="constrained")
     ax_t, ax_i = fig.subplots(1, 2)
     n = np.array([r["N"] for r in rows], float)
-    for side, label, mk in (("autobal", "autobal (IPOPT)", "o-"), ("fatrop", "autobal (fatrop)", "^-"),
-                            ("rockit", "rockit (expand=True)", "s--")):
+    for side, label, mk, c in (("autobal", "autobal (IPOPT)", "o-", "C0"), ("fatrop", "autobal (fatrop)", "^-", "C2"),
+                               ("rockit", "rockit (expand=True)", "s--", "C3")):
         pts = [(r["N"], r[side]) for r in rows if r.get(side)]
         if not pts:
             continue
         N_, v = zip(*pts, strict=True)
-        ax_t.loglog(N_, [x["solve_s"] for x in v], mk, label=f"{label} solve")
-        ax_t.loglog(N_, [x["build_s"] for x in v], mk.replace("-", ":").replace("::", ":"), alpha=0.6,
-                    label=f"{label} build")
-        ax_i.loglog(N_, [x["iterations"] for x in v], mk, label=label)
+        ax_t.loglog(N_, [x["solve_s"] for x in v], mk, color=c, label=f"{label} solve")
+        ax_t.loglog(N_, [x["build_s"] for x in v], mk.replace("-", ":").replace("::", ":"), color=c, alpha=0.5,
+                    mfc="none", label=f"{label} build")
+        ax_i.loglog(N_, [x["iterations"] for x in v], mk, color=c, label=label)
         for x_, x in zip(N_, v, strict=True):
             if not x["success"]:
                 ax_t.annotate(x["status"].replace("_", " "), (x_, x["solve_s"]), fontsize=6)
