@@ -61,7 +61,7 @@ FIELDS = {
     "d_T2": ("disc.face.inner_diameter",), "d_T3": ("disc.face.outer_diameter",),
     "d_c": ("regulator.valve.seat_diameter",),  # and the seat area s_c = pi d_c^2 / 4 (SEAT_AREA)
 }
-# the dynamic data's seat area follows the valve seat diameter where the scene derives it (adapters)
+# the dynamic data's seat area follows the valve seat diameter where the scene derives it (autobal/parts/device.py)
 SEAT_AREA = "dynamics.s_c"
 UNITS = {"V2": "m**3", "V3": "m**3", "V_cam": "m**3", "V_m": "m**3", "c_z": "N*s/m", "c_x": "N*s/m",
          "k_reg": "N/m", "dpsi": "", "p_in": "Pa", "s_m": "m**2", "d_e": "m", "l_e": "m", "d_in": "m", "l_in": "m",
@@ -138,7 +138,7 @@ def _replace(obj, path: str, value):
 
 def apply(device: DeviceParams, values: dict) -> DeviceParams:
     """The device with design values (key -> SI number or CasADi expression) substituted; the valve
-    seat diameter d_c also sets the dynamic data's seat area s_c = pi d_c^2 / 4 (the adapters' default)."""
+    seat diameter d_c also sets the dynamic data's seat area s_c = pi d_c^2 / 4 (the device adapter's default)."""
     for k, v in values.items():
         for path in FIELDS[k]:
             device = _replace(device, path, v)

@@ -5,7 +5,7 @@ convention, or dtau = b dpsi1) the gap amplitude in micrometres is
 A_u(omega) = |W_u(i omega)| dpsi1a z_B 1e6 (Pavlenko (2014), App. A and B).  The Bode data come
 from python-control (``control.frequency_response``) on a grid refined near every lightly damped
 pole; peaks are local maxima refined with a bounded scalar search.  The runner of ``analyses.frequency`` is
-:func:`autobal.runners.frequency`.
+:func:`autobal.analyses.frequency.run`.
 """
 
 from __future__ import annotations

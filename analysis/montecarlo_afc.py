@@ -34,7 +34,7 @@ def afc_parameters(model: str) -> tuple:
 
 
 def afc_names(settings) -> list[str]:
-    """The uncertain parameters of an AFC Monte Carlo (autobal.schema_reliability.AfcMonteCarlo), each
+    """The uncertain parameters of an AFC Monte Carlo (autobal.analyses.montecarlo.AfcMonteCarlo), each
     checked to be one of its model's (:func:`afc_parameters`); ScenarioError naming the first that is not."""
     allowed = afc_parameters(settings.model)
     for name in settings.parameters:

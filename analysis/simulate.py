@@ -11,7 +11,7 @@ Reported, not hidden: the face gap reaching zero (u <= 0: the disc touches the p
 has no contact force, so the response is cut there and the time is reported), the valve closing
 (xi <= 0) or passing its travel limit, a reversal of the inner-seal flow (process fluid entering
 the barrier chamber), and an integrator failure (the time reached and the solver's message).
-The runner of ``analyses.transient`` is :func:`autobal.runners.transient`.
+The runner of ``analyses.transient`` is :func:`autobal.analyses.transient.run`.
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ exactly in rational arithmetic from those coefficients (their signs are reliable
 dynamic range; positive scalings of p and of the polynomial do not change them).
 ``stability_map``: max Re lambda over a grid of two dynamic parameters, for the hand models
 (constants recomputed at each point) or the nonlinear model (its exact Jacobian mapped over the
-grid in one CasADi call).  The runner of ``analyses.stability`` is :func:`autobal.runners.stability`.
+grid in one CasADi call).  The runner of ``analyses.stability`` is :func:`autobal.analyses.stability.run`.
 """
 
 from __future__ import annotations

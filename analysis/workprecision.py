@@ -4,8 +4,8 @@ computed by a different method, and a summary of the cheapest setting that reach
 A :class:`Method` runs one solver at one setting and returns the main outputs; :func:`study`
 runs every method over its ladder of settings against a reference and returns a
 :class:`WorkPrecision` result (rows of method, setting, error, time; figure; CSV; summary).
-The studies of a scene (``autobal accuracy``) are in :mod:`autobal.runners` (``ACCURACY``); the
-spin-up's is in :mod:`autobal.ocp.workprecision`.
+The studies of a scene (``autobal accuracy``) are the ``accuracy`` functions of the analyses' modules
+(:mod:`autobal.analyses`); the spin-up's is in :mod:`autobal.ocp.workprecision`.
 """
 
 from __future__ import annotations

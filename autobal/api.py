@@ -18,12 +18,11 @@ import warnings
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 
-from autobal import __version__, report, scenario
+from autobal import __version__, analyses, report, scenario
 from autobal.analysis import interrupt
 from autobal.analysis.result import Result, write_json
 from autobal.errors import AutobalError, SolveError
 from autobal.output import LOG, OutputFolder, SolverLog
-from autobal.runners import RUNNERS
 from autobal.scenario import BaseScenario as Scenario  # every scene model (see scenario.model_for)
 
 NO_ACCURACY = {"estimate": None, "how": "this analysis reports no error estimate"}
@@ -118,11 +117,6 @@ def meta(scene: Scenario) -> dict:
             **scene._origin, "scene_si": scene.model_dump(mode="json", exclude_none=True)}
 
 
-def analyses(scene: Scenario) -> list[str]:
-    """The analyses the scene names, in run order."""
-    return [name for name in RUNNERS if getattr(scene.analyses, name, None) is not None]
-
-
 def _finish(folder: OutputFolder, scene: Scenario, name: str, data: dict) -> None:
     """Write a status file (with the scene and the run's provenance) and its report.html into the
     temporary folder, and commit it."""
@@ -177,10 +171,10 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
     results, timing, current = {}, {}, None
     try:
         with SolverLog(folder.tmp / LOG if folder else os.devnull) as log:
-            for current in analyses(scene):
+            for current in analyses.named(scene):
                 t0 = time.perf_counter()
                 try:
-                    results[current] = RUNNERS[current](scene, getattr(scene.analyses, current))
+                    results[current] = analyses.module(current).run(scene, getattr(scene.analyses, current))
                 finally:
                     interrupt.check()  # an interrupt a solver swallowed, or turned into another error, is one
                 timing[current] = time.perf_counter() - t0

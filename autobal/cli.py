@@ -7,7 +7,7 @@ import signal
 import sys
 from pathlib import Path
 
-from autobal import __version__, api, report, scenario
+from autobal import __version__, analyses, api, report, scenario
 from autobal.analysis import progress
 from autobal.errors import Interrupted, ScenarioError, SolveError
 from autobal.output import LOG, OutputFolder, SolverLog
@@ -43,7 +43,7 @@ def _out_folder(args, scn) -> Path:
 
 def _run(args, scn) -> int:
     out = _out_folder(args, scn)
-    note = scenario.long_run_note(scn)
+    note = analyses.long_run_note(scn)
     if note and not args.quiet:
         print(note, flush=True)
 
@@ -61,12 +61,12 @@ def _run(args, scn) -> int:
 def _accuracy(args, scn) -> int:
     """Work-precision of every analysis of the scene that has a provider: figure, CSV, summary."""
     from autobal.analysis.result import write_json
-    from autobal.runners import ACCURACY
 
-    studies = {name: study for name, study in ACCURACY.items() if getattr(scn.analyses, name, None) is not None}
+    studies = {name: analyses.module(name).accuracy for name in analyses.named(scn)
+               if hasattr(analyses.module(name), "accuracy")}
     if not studies:
         raise ScenarioError(f"{scn.name}: none of its analyses has a work-precision study "
-                            f"(available: {', '.join(ACCURACY)})")
+                            f"(available: {', '.join(analyses.accuracy_studies())})")
     out = _out_folder(args, scn)
     with OutputFolder(out) as tmp, SolverLog(tmp / LOG) as log:  # solver output to the log, bars on the terminal
         report = {"status": "ok", "scenario": scn.name, "meta": api.meta(scn), "studies": {}, "files": []}
@@ -152,7 +152,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         scn = scenario.load(args.scenario, overrides=_overrides(args.set))
         if args.cmd == "check":
-            print(f"{scn.name}: valid; analyses: {', '.join(api.analyses(scn)) or 'none'}")
+            print(f"{scn.name}: valid; analyses: {', '.join(analyses.named(scn)) or 'none'}")
             return EXIT_OK
         if args.cmd == "run":
             from autobal.analysis.executor import set_default_scheduler

@@ -207,7 +207,9 @@ def _parameter_unit(path: str, results: dict) -> str | None:
     m = re.search(r"\.(\w+)\.(values|nominal)$", path) or re.search(r"nearest_stable\.(\w+)$", path)
     if m is None or not path.startswith("stability."):
         return None
-    from autobal.schema_dynamics import PARAMETERS  # a stability report only: a statics run builds no dynamics schema
+    from autobal.parts.device_dynamics import (
+        PARAMETERS,  # a stability report only: a statics run builds no dynamics schema
+    )
 
     name = m.group(1)
     if name in ("x", "y"):  # maps: the axis names its parameter

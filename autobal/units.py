@@ -33,11 +33,11 @@ DIMENSIONS = {
     "viscosity": ("[mass] / [length] / [time]", "Pa*s", "1e-3 Pa*s", (1e-8, 1e8)),
     "volume flow": ("[length] ** 3 / [time]", "m**3/s", "0.167 m^3/s", (1e-15, 1e4)),
     "angular speed": ("1 / [time]", "rad/s", "6300 rpm", (1e-9, 1e7)),
-    "mass": ("[mass]", "kg", "3000 kg", (1e-12, 1e8)),  # dynamics (autobal/schema_dynamics.py)
+    "mass": ("[mass]", "kg", "3000 kg", (1e-12, 1e8)),  # dynamics (autobal/parts/device_dynamics.py)
     "stiffness": ("[mass] / [time] ** 2", "N/m", "1e8 N/m", (1e-9, 1e14)),
     "damping": ("[mass] / [time]", "N*s/m", "8.9e4 N*s/m", (1e-12, 1e12)),
     "time": ("[time]", "s", "50 ms", (1e-12, 1e10)),
-    "angular acceleration": ("1 / [time] ** 2", "rad/s**2", "40 rad/s^2", (1e-9, 1e10)),  # schema_rotor.py
+    "angular acceleration": ("1 / [time] ** 2", "rad/s**2", "40 rad/s^2", (1e-9, 1e10)),  # autobal/analyses/spinup.py
     "angular jerk": ("1 / [time] ** 3", "rad/s**3", "2000 rad/s^3", (1e-9, 1e12)),  # spin-up jerk bound
     "torque": ("[mass] * [length] ** 2 / [time] ** 2", "N*m", "0.04 N*m", (1e-12, 1e9)),
     "power": ("[mass] * [length] ** 2 / [time] ** 3", "W", "6 W", (1e-12, 1e10)),

@@ -33,11 +33,12 @@ import casadi as ca
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from autobal import adapters, scenario
+from autobal import scenario
 from autobal.analysis.compiled import compiled_map
 from autobal.analysis.linearize import Setup
 from autobal.analysis.rosenbrock import rodas4_fixed, rodas4_step
 from autobal.analysis.simulate import Simulator
+from autobal.parts import device as device_part
 from benchmarks._results import case, write
 
 T_END = 0.05
@@ -85,7 +86,7 @@ def timed_rounds(runners: dict, rounds: int) -> dict:
 
 
 def problem():
-    setup = Setup(adapters.device(scenario.load("pump_pe600_dynamics").device))
+    setup = Setup(device_part.adapt(scenario.load("pump_pe600_dynamics").device))
     m = setup.nonlinear("energy")
     w = m.w0 + np.array([0.0, DTAU])
     x = ca.SX.sym("x", len(m.states))

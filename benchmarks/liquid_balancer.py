@@ -16,9 +16,10 @@ import time
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from autobal import adapters, scenario
+from autobal import scenario
 from autobal.analysis import liquid_balancer_optimum as optimum
 from autobal.models import liquid_balancer as lb
+from autobal.parts import liquid_balancer as liquid_balancer_part
 from benchmarks._results import case, write
 from benchmarks._timing import best_of
 
@@ -37,7 +38,7 @@ def numpy_lambda0(omega, omega_cr, n, R, h, V, rho, D0, e_f):
 
 
 def main(repeats: int = 3) -> list[dict]:
-    sysm = adapters.liquid_balancer(scenario.load("washer_liquid_balancer").liquid_balancer)
+    sysm = liquid_balancer_part.adapt(scenario.load("washer_liquid_balancer").liquid_balancer)
     p = sysm.inputs("program")
     g = np.linspace(0.3, 1.6, 100_000)
     lb.evaluate("corrected", **(p | {"omega": g[:10] * sysm.omega_cr}))  # build once

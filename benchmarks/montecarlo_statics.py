@@ -21,13 +21,13 @@ import time
 import numpy as np
 
 from autobal import scenario
-from autobal.adapters import design
 from autobal.analysis import closed_form
 from autobal.analysis import executor as ex
 from autobal.analysis import montecarlo as mc
 from autobal.analysis.montecarlo_statics import SampledStatics
 from autobal.analysis.sampling import Sampler, marginals
 from autobal.analysis.statics import FAST_NEWTON_ITER, ideal_guess
+from autobal.parts.device import design
 from benchmarks import _numpy_statics as ns
 from benchmarks._results import case, write
 from benchmarks._timing import best_of, cpu_best_of

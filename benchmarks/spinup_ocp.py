@@ -44,11 +44,11 @@ import casadi as ca
 import numpy as np
 
 from autobal import api
+from autobal.analyses.spinup import ocp as spinup_ocp
 from autobal.models.rotor import rotor_model
 from autobal.ocp import solve as osolve
 from autobal.ocp.simulation import initial_guess, resimulate
 from autobal.ocp.transcription import DirectCollocation, mesh
-from autobal.runners import spinup_ocp
 from benchmarks._results import RESULTS, case, write
 
 SCENE = "spinup_jeffcott_deadline_5s"

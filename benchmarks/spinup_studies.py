@@ -58,11 +58,11 @@ STUDIES = {"spinup_robust_jeffcott": ("spinup_robust", robust),
 
 def ross_critical_speeds_time(scene) -> float:
     """Wall time (s) of ROSS's own critical speeds of the scene's rotor (the runner's validation step), alone."""
-    from autobal import adapters
     from autobal.models import ross_rotor as rr
+    from autobal.parts import ross_rotor as ross_rotor_part
 
     t0 = time.perf_counter()
-    rotor = rr.ross_rotor(adapters.ross_rotor(scene.ross_rotor)[0])
+    rotor = rr.ross_rotor(ross_rotor_part.adapt(scene.ross_rotor)[0])
     rr.ross_critical_speeds(rotor, scene.analyses.ross_spinup.final_speed)
     return time.perf_counter() - t0
 
@@ -114,12 +114,12 @@ CHILD = """
 import json, os, sys, time
 w, c = time.perf_counter(), time.process_time()
 from autobal import api
-from autobal.runners import RUNNERS
+from autobal import analyses
 import autobal.ocp.spinup_study
 imp = (time.perf_counter() - w, time.process_time() - c)
 scene = api.load(sys.argv[1])
 w, c, load = time.perf_counter(), time.process_time(), os.getloadavg()[0]
-d = RUNNERS["spinup"](scene, scene.analyses.spinup).to_dict()
+d = analyses.module("spinup").run(scene, scene.analyses.spinup).to_dict()
 print(json.dumps({"import_wall_s": imp[0], "import_cpu_s": imp[1], "wall_s": time.perf_counter() - w,
                   "cpu_s": time.process_time() - c, "load_before": load, "load_after": os.getloadavg()[0],
                   "peak": d["peak_deflection_over_e"], "resimulation_rel_error": d["resimulation_rel_error"],
@@ -170,7 +170,7 @@ SCALING_CHILD = """
 import json, os, sys, time
 from autobal import api
 from autobal.ocp import solve as S
-from autobal.runners import RUNNERS
+from autobal import analyses
 lever, n_final = json.loads(sys.argv[3]), int(sys.argv[2])
 S.WARM_OPTIONS = S.WARM_OPTIONS | lever.get("warm", {})
 stages, solve, init = [], S.Solver.solve, S.Solver.__init__
@@ -190,7 +190,7 @@ def timed(self, *a, **k):
 S.Solver.solve = timed
 scene = api.load(sys.argv[1], set={"analyses.spinup.intervals": int(sys.argv[2])})
 w, c, load = time.perf_counter(), time.process_time(), os.getloadavg()[0]
-d = RUNNERS["spinup"](scene, scene.analyses.spinup).to_dict()
+d = analyses.module("spinup").run(scene, scene.analyses.spinup).to_dict()
 print(json.dumps({"wall_s": time.perf_counter() - w, "cpu_s": time.process_time() - c, "load_before": load,
                   "load_after": os.getloadavg()[0], "peak": d["peak_deflection_over_e"],
                   "collocation_peak": d["collocation_peak_over_e"], "split": d["time_split"], "stages": stages}))

@@ -62,8 +62,8 @@ def main(repeats: int = 3) -> list[dict]:
     t_scipy = min(in_process("import scipy.optimize, scipy.stats") for _ in range(repeats))
 
     from autobal import scenario
+    from autobal.analyses.statics import run as statics
     from autobal.analysis.result import save_figure
-    from autobal.runners import statics
 
     scn = scenario.load(SCENE)
     statics(scn, scn.analyses.statics)  # imports and first builds
@@ -118,9 +118,8 @@ def main(repeats: int = 3) -> list[dict]:
         "labels instead of secondary axes.",
         "Left: the statics study's 100-odd warm-started IPOPT solves (the force-gap curve about 40 % of the "
         "study, in analysis/statics.py); in import autobal.cli: pydantic and jinja2 themselves, the device's "
-        "pydantic models, autobal/report.py compiling its 89 unit-rule patterns at import, the models "
-        "autobal/adapters.py imports for other analyses (rotor, liquid balancer, ROSS rotor); the draw itself "
-        "(tick labels, lines, legends); the floor.",
+        "pydantic models (autobal/parts/device.py, imported with the scene's device), autobal/report.py "
+        "compiling its 89 unit-rule patterns at import; the draw itself (tick labels, lines, legends); the floor.",
     ]
     write("startup", f"Start-up: autobal run {SCENE}", cases, notes)
     return cases

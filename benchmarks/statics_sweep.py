@@ -24,8 +24,8 @@ import casadi as ca
 import numpy as np
 
 from autobal import scenario
-from autobal.adapters import design
 from autobal.analysis.statics import StaticsSolver, call_rows
+from autobal.parts.device import design
 from benchmarks import _numpy_statics as ns
 from benchmarks._results import case, write
 from benchmarks._timing import best_of, cpu_best_of

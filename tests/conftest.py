@@ -1,8 +1,8 @@
 import pytest
 
 from autobal import api, scenario
-from autobal.adapters import design
 from autobal.analysis.statics import StaticsSolver
+from autobal.parts.device import design
 
 
 @pytest.fixture(scope="session")

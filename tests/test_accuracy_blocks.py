@@ -12,10 +12,11 @@ import pytest
 import yaml
 from numpy.testing import assert_allclose
 
-from autobal import adapters, scenario
+from autobal import scenario
 from autobal.analysis import frequency, sampling, stability, statics
 from autobal.analysis.linearize import Setup
 from autobal.cli import main
+from autobal.parts import device as device_part
 
 
 def run_scene(scene, out):
@@ -45,7 +46,7 @@ def dynamics(dynamics_run):
 
 @pytest.fixture(scope="module")
 def pump_setup():
-    return Setup(adapters.device(scenario.load("pump_pe600_dynamics").device), 1.0)
+    return Setup(device_part.adapt(scenario.load("pump_pe600_dynamics").device), 1.0)
 
 
 def true_peak(lin, omega: float) -> float:
@@ -109,7 +110,7 @@ def test_transient_block(dynamics):
 def test_peak_error_measures_a_known_offset():
     # a peak moved by 1e-5 (relative) from the refined one: the Newton step reports that distance, to the
     # refined peak's own error (<= 2e-7), and the amplitude lost ~ quadratically
-    setup = Setup(adapters.device(scenario.load("pump_pe600_dynamics").device), 1.0)
+    setup = Setup(device_part.adapt(scenario.load("pump_pe600_dynamics").device), 1.0)
     lin = setup.linear("program")
     c = frequency.characteristic(lin, (10.0, 8000.0, 800), "appendix", 0.2, 659.734)
     for p in c["peaks"]:
@@ -124,7 +125,7 @@ def test_peak_error_measures_a_known_offset():
 def test_pencil_of_the_operator_has_the_hand_descriptor_poles():
     import scipy.linalg
 
-    setup = Setup(adapters.device(scenario.load("pump_pe600_dynamics").device), 1.0)
+    setup = Setup(device_part.adapt(scenario.load("pump_pe600_dynamics").device), 1.0)
     c = setup.constants("program")
     E, A = stability.pencil(*c.operator()[:3])
     Eh, Ah = c.descriptor()[:2]

@@ -6,11 +6,12 @@ import numpy as np
 import pytest
 
 import autobal
-from autobal import adapters, runners
+from autobal.analyses import design as design_analysis
 from autobal.analysis import design as ds
 from autobal.analysis.linearize import Setup
 from autobal.analysis.stability import verdict
 from autobal.errors import ScenarioError
+from autobal.parts import device as device_part
 
 
 def _stiff_matrix(rng, n=8):
@@ -44,7 +45,7 @@ def test_charpoly_matches_eigenvalues_over_seven_decades():
 def test_routh_conditions_agree_with_eigenvalues_at_the_pump_point(alpha, stable):
     """Every Routh entry of det(sI - A - alpha I) >= 0 exactly when max Re lambda <= -alpha: the pump's
     exact linearisation at psi1 = 1 has max Re lambda = -80.62 1/s."""
-    dev = adapters.dynamic_device(autobal.load("pump_pe600_dynamics"))
+    dev = device_part.dynamic_device(autobal.load("pump_pe600_dynamics"))
     A = Setup(dev, 1.0).linear("nonlinear").A
     assert np.linalg.eigvals(A).real.max() == pytest.approx(-80.623, abs=1e-3)
     As = ca.SX.sym("A", *A.shape)
@@ -71,13 +72,13 @@ def test_unknown_design_variable_is_one_line(scene_edit):
         "device.dynamics.cavity_volume": scn.analyses.design.variables["device.dynamics.cavity_volume"].model_copy(
             update={"lower": "1 bar"})}})
     with pytest.raises(ScenarioError, match="cavity_volume.*volume"):
-        runners.design(scn, bad)
+        design_analysis.run(scn, bad)
 
 
 @pytest.fixture(scope="module")
 def pump_design():
     scn = autobal.load("pump_pe600_design", set={"analyses.design.samples": 80})
-    return scn, runners.design(scn, scn.analyses.design)
+    return scn, design_analysis.run(scn, scn.analyses.design)
 
 
 @pytest.mark.slow
@@ -136,7 +137,7 @@ def ds_tol():
 def test_optimum_through_set_gives_a_stable_verdict_with_the_same_margin(pump_design):
     scn, res = pump_design
     dyn = autobal.load("pump_pe600_dynamics", set=res.parameters)
-    dev = adapters.dynamic_device(dyn)
+    dev = device_part.dynamic_device(dyn)
     for p in scn.analyses.design.operating_ratios:
         v = verdict(Setup(dev, p).linear("nonlinear"))
         assert v["stable"] and v["hurwitz"]["stable"]
@@ -156,7 +157,7 @@ def test_result_figures_and_tables(pump_design):
 @pytest.mark.slow
 def test_compressor_design_is_stable_with_margin():
     scn = autobal.load("compressor_k180_design", set={"analyses.design.samples": 30})
-    res = runners.design(scn, scn.analyses.design)
+    res = design_analysis.run(scn, scn.analyses.design)
     d = res.to_dict()
     assert d["certification"]["eigenvalues_ok"] and not d["certification"]["beaten"]
     assert min(res.margin.values()) >= scn.analyses.design.decay_rate * (1 - 1e-6)
@@ -166,7 +167,7 @@ def test_compressor_design_is_stable_with_margin():
 def test_symbolic_stiffness_and_leakage_match_the_statics():
     """The NLP's kappa_s (implicit-function derivative in CasADi) and Q_e at the starting design equal
     the statics solver's (StaticsSolver.stiffness, the flow through the barrier throttle)."""
-    dev = adapters.dynamic_device(autobal.load("pump_pe600_dynamics"))
+    dev = device_part.dynamic_device(autobal.load("pump_pe600_dynamics"))
     spec = ds.Spec(variables=(ds.Variable("device.barrier.margin_ratio", "dpsi", 0.01, 0.1),),
                    points=(1.0,), decay_rate=50.0, weights=(0.0, 1.0))
     prob = ds.DesignProblem(dev, spec)
@@ -188,7 +189,7 @@ def test_symbolic_stiffness_and_leakage_match_the_statics():
 def test_group_variables_enter_the_linearisation_exactly(path, key):
     """A of the symbolic model (membrane area, laminar, square-root and valve throttles) equals the
     Jacobian of a model built with that design, at the same state."""
-    dev = adapters.dynamic_device(autobal.load("pump_pe600_dynamics"))
+    dev = device_part.dynamic_device(autobal.load("pump_pe600_dynamics"))
     s0 = ds.nominal_values(dev, [key])[key]
     spec = ds.Spec(variables=(ds.Variable(path, key, 0.5 * s0, 3 * s0),), points=(1.0,), decay_rate=50.0)
     prob = ds.DesignProblem(dev, spec)
@@ -235,7 +236,7 @@ def test_stability_conditions_are_smooth_on_the_boundary():
 def test_groups_of_the_design_are_symbolic_and_exact():
     """models/device.design with a CasADi outer-seal clearance gives the groups of the numeric design at
     any value, and the NLP's static balances vanish at the statics solver's solution of the moved design."""
-    dev = adapters.dynamic_device(autobal.load("pump_pe600_dynamics"))
+    dev = device_part.dynamic_device(autobal.load("pump_pe600_dynamics"))
     spec = ds.Spec(variables=(ds.Variable("device.disc.outer_seal.clearance", "h_3", 1e-4, 6e-4),
                               ds.Variable("device.barrier.supply_throttle.diameter", "d_e", 1.5e-3, 6e-3)),
                    points=(1.0,), decay_rate=50.0)
@@ -269,7 +270,7 @@ def test_seat_diameter_with_a_seat_area_of_its_own_is_refused():
         "analyses.design.variables": {"device.regulator.valve.seat_diameter": {"lower": "20 mm", "upper": "40 mm"}},
         "device.dynamics.regulator.seat_area": "7e-4 m^2"})
     with pytest.raises(ScenarioError, match="seat_area.*m\\^2"):
-        runners.design(scn, scn.analyses.design)
+        design_analysis.run(scn, scn.analyses.design)
 
 
 # the variables that move a scale of the dimensionless model: g1 (inner seal), z_B, x_B, s_e (face diameters)
@@ -294,7 +295,7 @@ def test_scale_variables_give_the_rebuilt_model(path, key, scales):
     from autobal.models.device import design, groups_by_name
     from autobal.models.dynamics import build
 
-    dev = adapters.dynamic_device(autobal.load("pump_pe600_dynamics"))
+    dev = device_part.dynamic_device(autobal.load("pump_pe600_dynamics"))
     s0 = ds.nominal_values(dev, [key])[key]
     spec = ds.Spec(variables=(ds.Variable(path, key, 0.8 * s0, 1.2 * s0),), points=(1.0,), decay_rate=50.0,
                    min_stiffness=0.1, weights=(1.0, 0.5))
@@ -325,7 +326,7 @@ def test_scale_variables_give_the_rebuilt_model(path, key, scales):
 def _small_design(variable):
     """The pump with ``variable``, V3, c_x and dpsi over psi1 = 0.5, 1 at alpha = 90 1/s: solved (IPOPT must
     succeed) and the optimum evaluated by the ordinary path (it must be feasible): (problem, solve, Evaluation)."""
-    dev = adapters.dynamic_device(autobal.load("pump_pe600_dynamics"))
+    dev = device_part.dynamic_device(autobal.load("pump_pe600_dynamics"))
     spec = ds.Spec(variables=(variable,
                               ds.Variable("device.dynamics.cavity_volume", "V3", 1e-6, 1e-3),
                               ds.Variable("device.dynamics.regulator.stem_damping", "c_x", 0.0, 2e4),
@@ -380,7 +381,7 @@ def test_chain_model_design_converges_with_the_decay_rate_active():
     is a converged solve, and the eigenvalue certification below judges the answer."""
     scn = autobal.load("pump_pe600_design", set={"analyses.design.samples": 0, "analyses.design.model": "chain",
                                                  "analyses.design.decay_rate": 10.0})
-    res = runners.design(scn, scn.analyses.design)
+    res = design_analysis.run(scn, scn.analyses.design)
     d = res.to_dict()
     assert d["status"] in ("Solve_Succeeded", "Solved_To_Acceptable_Level") and d["certification"]["eigenvalues_ok"]
     assert res.margin["1.25"] == pytest.approx(10.0, rel=1e-6)

@@ -9,27 +9,28 @@ import pytest
 import yaml
 from numpy.testing import assert_allclose
 
-from autobal import adapters, scenario
+from autobal import scenario
 from autobal.analysis import frequency, hand_linear, linearize, simulate, stability
 from autobal.analysis.linearize import Setup
 from autobal.cli import main
 from autobal.errors import ScenarioError
 from autobal.models import dynamics as dy
+from autobal.parts import device as device_part
 
 
 @pytest.fixture(scope="module")
 def pump():
-    return Setup(adapters.device(scenario.load("pump_pe600_dynamics").device))
+    return Setup(device_part.adapt(scenario.load("pump_pe600_dynamics").device))
 
 
 @pytest.fixture(scope="module")
 def comp():
-    return Setup(adapters.device(scenario.load("compressor_k180_dynamics").device))
+    return Setup(device_part.adapt(scenario.load("compressor_k180_dynamics").device))
 
 
 @pytest.fixture(scope="module")
 def simple():
-    return Setup(adapters.device(scenario.load("pump_pe600_simplified").device))
+    return Setup(device_part.adapt(scenario.load("pump_pe600_simplified").device))
 
 
 def afc(setup, model="program", convention="appendix"):
@@ -396,7 +397,7 @@ def test_dynamics_without_the_regulator_block_is_refused_naming_the_field(tmp_pa
     p.write_text(yaml.safe_dump(scene_edit(data, "device.dynamics.regulator", None)))
     scene = scenario.load(p)
     with pytest.raises(ScenarioError, match=r"^device\.dynamics\.regulator: give it exactly when the device has"):
-        adapters.device(scene.device)
+        device_part.adapt(scene.device)
     with pytest.raises(ScenarioError, match=r"device\.dynamics\.regulator"):
         autobal.run(scene)
     assert main(["run", str(p), "--out", str(tmp_path / "out")]) == 2
@@ -413,7 +414,7 @@ def test_device_dynamics_defaults_filled_by_the_adapter(tmp_path, scene_edit):
             data = scene_edit(data, key, None)
     p = tmp_path / "defaults.yaml"
     p.write_text(yaml.safe_dump(data))
-    dev = adapters.device(scenario.load(p).device)
+    dev = device_part.adapt(scenario.load(p).device)
     d = dev.dynamics
     assert_allclose(d.c_z, 8.936e4, rtol=5e-4)
     assert_allclose(d.omega0, 6300 * 2 * math.pi / 60, rtol=1e-12)

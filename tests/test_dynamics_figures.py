@@ -4,14 +4,15 @@ unstable curves marked, one colour scale for the stability maps, maps in physica
 import numpy as np
 import pytest
 
-from autobal import adapters, scenario
+from autobal import scenario
 from autobal.analysis import frequency, stability
 from autobal.analysis.linearize import Setup
+from autobal.parts import device as device_part
 
 
 @pytest.fixture(scope="module")
 def pump():
-    return Setup(adapters.device(scenario.load("pump_pe600_dynamics").device))
+    return Setup(device_part.adapt(scenario.load("pump_pe600_dynamics").device))
 
 
 @pytest.fixture(scope="module")

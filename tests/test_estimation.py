@@ -24,7 +24,6 @@ from scipy.optimize import least_squares, minimize_scalar
 
 import autobal
 from autobal import cli, scenario
-from autobal.adapters import device as device_params
 from autobal.analysis import device_fit
 from autobal.analysis import disc_fit as est
 from autobal.analysis.adequacy import fisher_adequacy
@@ -33,6 +32,7 @@ from autobal.errors import ScenarioError, SolveError
 from autobal.measurements import read_csv
 from autobal.models.device import design, static_system
 from autobal.models.hydroheel import LOSS_NAMES, TurbulentDisc, base_flow, load_from_gap
+from autobal.parts.device import adapt as device_params
 
 TABLE = read_csv("data/table43.csv")
 TAU, U, GROUP = TABLE.columns["tau"], TABLE.columns["u"], TABLE.columns["group"]
@@ -471,9 +471,9 @@ def test_bad_fit_settings(tmp_path, fits, message):
 
 
 def test_data_reader_does_not_import_the_scenario_loader():
-    """No import cycle scenario -> schema_estimation -> measurements -> scenario: the data reader and
+    """No import cycle scenario -> analyses.estimation -> measurements -> scenario: the data reader and
     the estimation schema load, and a shipped data file is found and read, without the scenario loader."""
-    code = ("import sys, autobal.schema_estimation, autobal.measurements as m; m.read_csv('data/table43.csv'); "
+    code = ("import sys, autobal.analyses.estimation, autobal.measurements as m; m.read_csv('data/table43.csv'); "
             "sys.exit('autobal.scenario' in sys.modules)")
     assert subprocess.run([sys.executable, "-c", code], check=False).returncode == 0
 

@@ -16,7 +16,7 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from autobal import cli, scenario
+from autobal import analyses, cli, scenario
 
 HOSTILE = Path(__file__).parent / "hostile"
 PUMP = yaml.safe_load(scenario.resolve("pump_pe600_statics").read_text())
@@ -324,7 +324,7 @@ def test_extreme_but_valid_values_run_to_a_result_or_a_failed_solve(tmp_path, ca
 
 def test_shipped_scenes_are_not_predicted_long():
     for p in scenario.shipped():
-        assert scenario.long_run_note(scenario.load(p)) is None, p.stem
+        assert analyses.long_run_note(scenario.load(p)) is None, p.stem
 
 
 @pytest.mark.parametrize("base, path, value, analysis", [
@@ -337,10 +337,10 @@ def test_a_run_at_the_size_bounds_is_announced_with_its_estimate(tmp_path, base,
     p = tmp_path / "scene.yaml"
     p.write_text(yaml.safe_dump(edited(base, path, value)))
     scn = scenario.load(p)
-    small = scenario.estimate_seconds(scenario.load(scenario.resolve(base["name"])))[analysis]
-    big = scenario.estimate_seconds(scn)[analysis]
+    small = analyses.estimate_seconds(scenario.load(scenario.resolve(base["name"])))[analysis]
+    big = analyses.estimate_seconds(scn)[analysis]
     assert big > 60 and big > 5 * small
-    note = scenario.long_run_note(scn)
+    note = analyses.long_run_note(scn)
     assert note.startswith("this run is estimated to take about") and f"{analysis} " in note
 
 

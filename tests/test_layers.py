@@ -89,7 +89,8 @@ def test_no_import_cycles(installed_tree):
 
 
 def _sources():
-    for folder in ["autobal", *(f for n, f in PACKAGE_DIR.items() if n.count(".") == 1)]:
+    yield from (ROOT / "autobal").rglob("*.py")  # the front door with its analyses/ and parts/
+    for folder in (f for n, f in PACKAGE_DIR.items() if n.count(".") == 1):
         yield from (ROOT / folder).glob("*.py")
 
 
@@ -120,21 +121,29 @@ def test_a_statics_run_imports_no_heavy_optional_package():
     assert out.stdout.split() == []
 
 
-def _schema_modules(code: str) -> list[str]:
-    code = "import sys\n" + code + "print(' '.join(m for m in sorted(sys.modules) if m.startswith('autobal.schema_')))"
+def _rooms(code: str) -> list[str]:
+    """The analysis and part modules (autobal/analyses/<key>.py, autobal/parts/<part>.py) ``code`` imports."""
+    code = "import sys\n" + code + ("print(' '.join(m for m in sorted(sys.modules) "
+                                    "if m.startswith(('autobal.analyses.', 'autobal.parts.'))))")
     return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
 
 
 def test_a_scene_builds_only_the_schemas_it_names(tmp_path):
-    # scenario.model_for imports the schema module of an analysis or a part only when the scene names it
-    # (the start-up goal, docs/benchmarks.md): a statics run with its report builds none of them ...
+    # scenario.model_for imports the module of an analysis or a part only when the scene names it
+    # (the start-up goal, docs/benchmarks.md): a statics run with its report imports the statics and the device ...
     argv = ["run", "pump_pe600_statics", "--quiet", "--out", str(tmp_path)]
-    assert _schema_modules(f"from autobal import cli\nassert cli.main({argv!r}) == 0\n") == []
+    assert _rooms(f"from autobal import cli\nassert cli.main({argv!r}) == 0\n") == [
+        "autobal.analyses.statics", "autobal.parts.device"]
     assert (tmp_path / "report.html").is_file()
-    # ... a dynamics scene the dynamics schema only, and the full Scenario (the schema reference) all of them
-    assert _schema_modules("from autobal import scenario\nscenario.load('pump_pe600_dynamics')\n") == [
-        "autobal.schema_dynamics"]
-    assert len(_schema_modules("from autobal import scenario\nscenario.Scenario\n")) == 7
+    # ... a dynamics scene its three analyses and the device with its dynamics schema, and the full Scenario
+    # (the schema reference) every analysis and part of the registries
+    assert _rooms("from autobal import scenario\nscenario.load('pump_pe600_dynamics')\n") == [
+        "autobal.analyses.frequency", "autobal.analyses.stability", "autobal.analyses.transient",
+        "autobal.parts.device", "autobal.parts.device_dynamics"]
+    from autobal import analyses, parts
+
+    assert set(_rooms("from autobal import scenario\nscenario.Scenario\n")) == {
+        *analyses.MODULES.values(), *parts.MODULES.values(), "autobal.parts.device_dynamics"}
 
 
 def test_the_slim_scene_models_validate_as_the_full_one():

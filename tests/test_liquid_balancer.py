@@ -10,7 +10,7 @@ import pytest
 import yaml
 from numpy.testing import assert_allclose
 
-from autobal import adapters, cli, scenario
+from autobal import cli, scenario
 from autobal.analysis import liquid_balancer as study
 from autobal.analysis import liquid_balancer_optimum as optimum
 from autobal.analysis import rotor_identification as rid
@@ -18,6 +18,7 @@ from autobal.errors import ScenarioError
 from autobal.models import balancing_norms as norms
 from autobal.models import liquid_balancer as lb
 from autobal.models.rotor import RotorParams
+from autobal.parts import liquid_balancer as liquid_balancer_part
 
 WCR, N = 59.7, 7.85  # Table 3.1
 GAMMAS = np.array([0.4, 0.6, 0.8, 1.0, 1.2, 1.4])
@@ -26,7 +27,7 @@ WASHER = yaml.safe_load(scenario.resolve("washer_liquid_balancer").read_text())
 
 @pytest.fixture(scope="module")
 def washer():
-    return adapters.liquid_balancer(scenario.load("washer_liquid_balancer").liquid_balancer)
+    return liquid_balancer_part.adapt(scenario.load("washer_liquid_balancer").liquid_balancer)
 
 
 def table31(variant, gammas=GAMMAS, e_f=0.2, **kw):
@@ -46,7 +47,7 @@ def test_c1_damping_from_decrement(tmp_path, scene_edit):
     # a scene that gives only the decrement gets that n through the adapter
     p = tmp_path / "decrement.yaml"
     p.write_text(yaml.safe_dump(scene_edit(WASHER, "liquid_balancer.rotor.damping_coefficient", None)))
-    assert_allclose(adapters.liquid_balancer(scenario.load(p).liquid_balancer).n, 7.8483, atol=5e-5)
+    assert_allclose(liquid_balancer_part.adapt(scenario.load(p).liquid_balancer).n, 7.8483, atol=5e-5)
 
 
 @pytest.mark.literature
@@ -430,7 +431,7 @@ def test_pashkov_fill_level_independence(washer):
 
 
 def test_pashkov_block_of_the_nested_scene():
-    sysn = adapters.liquid_balancer(scenario.load("washer_liquid_balancer_nested").liquid_balancer)
+    sysn = liquid_balancer_part.adapt(scenario.load("washer_liquid_balancer_nested").liquid_balancer)
     pk = study.pashkov(sysn)
     assert_allclose(pk["single"]["efficiency"], 1 + 1000 * math.pi * 0.05 * 0.04 / 7.15, rtol=1e-12)
     assert_allclose(pk["multi"]["efficiency"], 3.15298, atol=5e-6)

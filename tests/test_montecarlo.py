@@ -11,8 +11,8 @@ import pytest
 import yaml
 from numpy.testing import assert_allclose
 
-from autobal import adapters, scenario
-from autobal.adapters import design
+from autobal import scenario
+from autobal.analyses.montecarlo import Correlation, Distribution
 from autobal.analysis import executor as ex
 from autobal.analysis import montecarlo as mc
 from autobal.analysis import montecarlo_afc as mcafc
@@ -22,7 +22,8 @@ from autobal.analysis.statics import StaticsSolver
 from autobal.cli import main
 from autobal.errors import ScenarioError
 from autobal.models.device import DeviceDesign, static_system
-from autobal.schema_reliability import Correlation, Distribution
+from autobal.parts import device as device_part
+from autobal.parts.device import design
 
 THESIS = ["alpha_in1", "alpha_B1", "alpha_e1", "alpha_TB1", "alpha_31", "b", "sigma", "chi", "dpsi", "psi_in"]
 
@@ -235,7 +236,7 @@ def test_dask_cluster_gives_the_in_process_numbers(scene, dev, cluster, tmp_path
 def test_vectorised_afc_equals_the_linear_models_response(scene, model, names):
     # the Monte Carlo's batched solves / mapped Jacobians against linearize.LinearModel.response at the
     # nominal parameters; program model: App. A peaks 1977 rad/s 25.20 um, 2912 rad/s 9.90 um, A(660) 6.84 um
-    am = mcafc.afc_model(adapters.device(scene.device), 1.0, model, names, "appendix")
+    am = mcafc.afc_model(device_part.adapt(scene.device), 1.0, model, names, "appendix")
     om = np.array([300.0, 659.734, 1977.15, 2912.49, 4000.0])
     mine = am.amplitude(np.array([[am.nominal()[n] for n in names]] * 3), om)
     theirs = np.abs(am.setup.linear(model).response(om, "appendix")) * am.scale
@@ -256,7 +257,7 @@ def test_shipped_afc_monte_carlo_is_the_energy_consistent_model_under_physical_f
     a = scene.analyses.montecarlo.afc
     assert (a.model, a.forcing) == ("nonlinear", "physical")
     assert set(a.parameters) <= set(mcafc.afc_parameters(a.model))
-    r = mcafc.afc_study(adapters.device(scene.device), a.model_copy(update={"samples": 200, "chunk_size": 200}), 2014,
+    r = mcafc.afc_study(device_part.adapt(scene.device), a.model_copy(update={"samples": 200, "chunk_size": 200}), 2014,
                         ex.InProcess(progress=False), 3.0, [0.5])
     # the nominal curve is the frequency analysis' headline (energy-consistent, physical): pump peak 987.0 rad/s,
     # 15.82 um at dpsi1a = 0.2, 3.60 um at omega0 = 660 rad/s
@@ -273,7 +274,7 @@ def test_afc_spread_of_the_program_model_matches_spec(scene):
     omega0 = 660 rad/s, 0.29 at omega_I, 0.51 at omega_II (the source: amplitude 'up to 40 %', conclusion 4,
     read off figures: same order, not a number to reproduce)."""
     a = program_afc(scene).model_copy(update={"samples": 4000, "chunk_size": 2000})
-    r = mcafc.afc_study(adapters.device(scene.device), a, 2014, ex.InProcess(progress=False), 3.0, [0.5])
+    r = mcafc.afc_study(device_part.adapt(scene.device), a, 2014, ex.InProcess(progress=False), 3.0, [0.5])
     at = r["at"]
     assert_allclose([at["peak_1"]["omega"], at["peak_2"]["omega"]], [1977.2, 2912.5], atol=1.0)
     # MC noise of a cv from 4000 samples: about cv / sqrt(2 N) = 0.004-0.006
@@ -285,7 +286,7 @@ def test_afc_spread_of_the_program_model_matches_spec(scene):
     assert a.model == "program" and a.forcing == "appendix"
     assert_allclose([at["operating_speed"]["nominal_um"], at["peak_1"]["nominal_um"], at["peak_2"]["nominal_um"]],
                     [6.84, 25.20, 9.90], atol=0.01)
-    am = mcafc.afc_model(adapters.device(scene.device), a.operating_ratio, a.model, list(a.parameters), a.forcing)
+    am = mcafc.afc_model(device_part.adapt(scene.device), a.operating_ratio, a.model, list(a.parameters), a.forcing)
     ctrl = np.abs(am.setup.linear("program").response(r["omega"], "appendix")) * am.scale
     assert_allclose(r["nominal_um"], ctrl, rtol=1e-9)
     assert np.all(r["mean"] > 0) and r["valid"].min() == 4000
@@ -296,7 +297,7 @@ def test_afc_bad_parameter_names_the_model(scene, dev):
     a = program_afc(scene)
     bad = a.model_copy(update={"parameters": a.parameters | {"m_p": Distribution(cv=0.05)}})
     with pytest.raises(ScenarioError, match=r"afc\.parameters\.m_p: not a parameter of the program model"):
-        mc.run(dev, small(scene, afc=bad), ex.InProcess(progress=False), device=adapters.device(scene.device))
+        mc.run(dev, small(scene, afc=bad), ex.InProcess(progress=False), device=device_part.adapt(scene.device))
 
 
 # ---- bad input --------------------------------------------------------------------------------------

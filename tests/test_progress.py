@@ -7,12 +7,13 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from autobal import adapters, scenario
+from autobal import scenario
 from autobal.analysis import interrupt, ipopt, progress
 from autobal.analysis.linearize import Setup
 from autobal.analysis.stability import max_real
 from autobal.cli import main
 from autobal.errors import Interrupted
+from autobal.parts import device as device_part
 
 
 class FakeTty(io.StringIO):
@@ -135,7 +136,7 @@ def test_an_interrupt_during_a_solve_with_a_bar_stops_it_at_once(tty, ticks, mon
 
 
 def test_a_stability_map_grid_shows_its_bar(tty, ticks):
-    setup = Setup(adapters.device(scenario.load("pump_pe600_simplified").device))
+    setup = Setup(device_part.adapt(scenario.load("pump_pe600_simplified").device))
     r = max_real(setup, "program", [{"V2": v} for v in (1e-5, 2e-5, 4e-5)])
     assert r.shape == (3,)
     assert [c for desc, c, _ in ticks if desc == "max Re lambda, program model"] == [1, 2, 3]

@@ -8,10 +8,11 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from autobal import adapters, scenario
+from autobal import scenario
 from autobal.analysis import linearize
 from autobal.analysis.simulate import Simulator, equilibrium_residual
 from autobal.models.dynamics import build
+from autobal.parts import device as device_part
 
 FACTOR = st.floats(0.2, 5.0)
 SCALED = ("m_p", "c_z", "V2", "V3", "m0", "k_reg", "V_cam", "V_m")
@@ -20,7 +21,7 @@ SCALED = ("m_p", "c_z", "V2", "V3", "m0", "k_reg", "V_cam", "V_m")
 @functools.cache
 def setup() -> linearize.Setup:
     """The pump's device at psi1 = 1 (solved once, on first use: nothing solves at import)."""
-    return linearize.Setup(adapters.device(scenario.load("pump_pe600_dynamics").device))
+    return linearize.Setup(device_part.adapt(scenario.load("pump_pe600_dynamics").device))
 
 
 def scaled_data(factors):

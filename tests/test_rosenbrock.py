@@ -9,16 +9,18 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from autobal import adapters, runners, scenario
+from autobal import scenario
+from autobal.analyses import transient as transient_analysis
 from autobal.analysis import rosenbrock, simulate
 from autobal.analysis.linearize import Setup
+from autobal.parts import device as device_part
 
 KINDS = ("force_step", "pressure_step", "pressure_harmonic")
 
 
 @pytest.fixture(scope="module")
 def pump():
-    return Setup(adapters.device(scenario.load("pump_pe600_dynamics").device)).nonlinear("energy")
+    return Setup(device_part.adapt(scenario.load("pump_pe600_dynamics").device)).nonlinear("energy")
 
 
 @pytest.fixture(scope="module")
@@ -135,7 +137,7 @@ def test_failure_reports_the_time_reached(pump):
 
 def test_gap_closure_stops_a_rodas4_run():
     # the energy-consistent compressor model is unstable: a force step grows until the face gap closes
-    comp = Setup(adapters.device(scenario.load("compressor_k180_dynamics").device)).nonlinear("energy")
+    comp = Setup(device_part.adapt(scenario.load("compressor_k180_dynamics").device)).nonlinear("energy")
     res = simulate.study(comp, [{"input": "force_step", "amplitude": 0.01}], 0.05, 1001, "rodas4")
     ref = simulate.study(comp, [{"input": "force_step", "amplitude": 0.01}], 0.05, 1001, "cvodes")
     case, cv = res.data["series"][0], ref.data["series"][0]
@@ -163,7 +165,7 @@ def test_scene_key_and_accuracy_block(integrator):
     # the scene's transient (3 cases, 2001 outputs) with integrator: rodas4 / rodas4p, through the runner
     scene = scenario.load("pump_pe600_dynamics")
     settings = scene.analyses.transient.model_copy(update={"integrator": integrator})
-    res = runners.transient(scene, settings)
+    res = transient_analysis.run(scene, settings)
     acc = res.data["accuracy"]
     assert res.data["integrator"] == integrator and integrator in acc["how"]
     assert all(c["failure"] is None and len(c["t"]) == 2001 for c in res.data["series"])

@@ -14,11 +14,12 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from autobal import adapters, cli, scenario
+from autobal import cli, scenario
 from autobal.errors import ScenarioError
 from autobal.models import ross_rotor as rr
 from autobal.ocp import modal
 from autobal.ocp.transcription import structured_derivatives
+from autobal.parts import ross_rotor as ross_rotor_part
 
 HAS_ROSS = importlib.util.find_spec("ross") is not None
 needs_ross = pytest.mark.skipif(not HAS_ROSS, reason="ross-rotordynamics is not installed (pip install -e '.[ross]')")
@@ -169,7 +170,7 @@ def test_scene_schema_refuses_a_node_off_the_shaft(tmp_path):
 
 
 def test_adapter_expands_repeated_elements():
-    spec, ub = adapters.ross_rotor(scenario.load("spinup_ross_rotor").ross_rotor)
+    spec, ub = ross_rotor_part.adapt(scenario.load("spinup_ross_rotor").ross_rotor)
     assert len(spec.shaft) == 6 and spec.bearings[0].kyy == 0.8e6 and spec.bearings[0].cyy == 500.0
     assert_allclose([u.phase for u in ub], [0.0, np.pi / 2])
 
@@ -179,7 +180,7 @@ def test_adapter_expands_repeated_elements():
 @pytest.fixture(scope="module")
 def scene_rotor():
     scn = scenario.load("spinup_ross_rotor")
-    spec, ub = adapters.ross_rotor(scn.ross_rotor)
+    spec, ub = ross_rotor_part.adapt(scn.ross_rotor)
     rotor = rr.ross_rotor(spec)
     s = scn.analyses.ross_spinup
     return rotor, rr.reduce(rr.lateral_matrices(rotor), ub, s.final_speed, s.mode_cutoff), ub

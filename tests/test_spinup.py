@@ -11,7 +11,8 @@ import yaml
 from numpy.testing import assert_allclose
 from scipy.integrate import solve_ivp
 
-from autobal import adapters, api, cli, runners, scenario
+from autobal import api, cli, scenario
+from autobal.analyses.spinup import ocp as spinup_ocp
 from autobal.errors import ScenarioError, SolveError
 from autobal.models.rotor import RotorParams, rotor_model
 from autobal.ocp import search
@@ -19,6 +20,7 @@ from autobal.ocp import spinup as S
 from autobal.ocp.problem import pulse_variation
 from autobal.ocp.solve import drive_acceleration
 from autobal.ocp.spinup_study import run
+from autobal.parts import rotor as rotor_part
 
 JEFFCOTT = RotorParams.from_groups(105.0, 5.0, 1.0)  # psi = 1, n = chi/m1 = 5 1/s, Omega0 = 105 1/s
 # a small dimensionless problem (Omega0 = 1): zeta0 = 0.05, a* <= 0.03, nu 0.5 -> 1.5 in tau = 50
@@ -279,7 +281,7 @@ def test_shipped_scenes_validate(name):
     scn = scenario.load(name)
     assert scn.rotor is not None
     if name == "spinup_liquid_balancer":
-        assert_allclose(adapters.rotor(scn.rotor).psi, 0.5, rtol=1e-4)  # rho pi R^2 h = 1 kg = m1
+        assert_allclose(rotor_part.adapt(scn.rotor).psi, 0.5, rtol=1e-4)  # rho pi R^2 h = 1 kg = m1
 
 
 # ---- the problem as a drive is specified (issue 14) ----------------------------------------------------
@@ -298,7 +300,7 @@ def test_hold_start_respects_the_drive():
     # the liquid balancer's drive (J_p 1e-3 kg m^2, 0.05 N m, 6 W, motor 0.12 N m stall, 250 rad/s no load):
     # the largest acceleration by hand, with the inertia J_p + m1 e^2 (1 - psi)
     scene = api.load("spinup_liquid_balancer")
-    ocp = runners.spinup_ocp(scene, scene.analyses.spinup)
+    ocp = spinup_ocp(scene, scene.analyses.spinup)
     inertia = 1e-3 + 1.0 * 1e-6 * (1 - ocp.params.psi)
     assert_allclose(drive_acceleration(ocp, 100.0), 40.0)  # alpha_max binds
     assert_allclose(drive_acceleration(ocp, 180.0), 6.0 / 180.0 / inertia)  # power

@@ -10,11 +10,11 @@ import pytest
 from numpy.testing import assert_allclose
 
 from autobal import api
+from autobal.analyses.spinup import ocp as spinup_ocp
 from autobal.errors import ScenarioError, SolveError
 from autobal.ocp import solve as osolve
 from autobal.ocp import spinup_study
 from autobal.ocp.transcription import DirectCollocation, complete_stage_guess, transcribe, transcribe_stages
-from autobal.runners import spinup_ocp
 from tests.test_spinup_derivatives import VARIANTS
 
 

@@ -10,14 +10,15 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from autobal import api, runners
+from autobal import api
+from autobal.analyses.spinup import Spinup
+from autobal.analyses.spinup import ocp as spinup_ocp
 from autobal.errors import ScenarioError
 from autobal.models.rotor import RotorParams
 from autobal.ocp import spinup as S
 from autobal.ocp.problem import JERK_VARIATION, pulse_variation
 from autobal.ocp.solve import ipopt_options
 from autobal.ocp.transcription import TV_SMOOTHING
-from autobal.schema_rotor import Spinup
 
 NO_CHATTER = 0.05  # pulse variation (units of alpha_max) below which a profile has no chattering
 SCENES = ("spinup_jeffcott_deadline_5s", "spinup_jeffcott_horizon_10s", "spinup_liquid_balancer")
@@ -50,9 +51,9 @@ def test_the_default_is_the_same_in_the_scene_and_the_python_api():
 
 def test_jerk_variation_is_a_scene_key():
     scene = api.load("spinup_jeffcott_deadline_5s", {"analyses.spinup.jerk_variation": "3e-4"})
-    assert runners.spinup_ocp(scene, scene.analyses.spinup).jerk_variation == 3e-4
+    assert spinup_ocp(scene, scene.analyses.spinup).jerk_variation == 3e-4
     scene = api.load("spinup_jeffcott_deadline_5s")
-    assert runners.spinup_ocp(scene, scene.analyses.spinup).jerk_variation == JERK_VARIATION
+    assert spinup_ocp(scene, scene.analyses.spinup).jerk_variation == JERK_VARIATION
     with pytest.raises(ScenarioError, match="jerk_variation"):
         api.load("spinup_jeffcott_deadline_5s", {"analyses.spinup.jerk_variation": "-1"})
 
@@ -76,7 +77,7 @@ def test_the_total_variation_term_of_the_objective():
 def solve_scene(name: str, **kw):
     scene = api.load(name)
     st = scene.analyses.spinup
-    ocp = dataclasses.replace(runners.spinup_ocp(scene, st), **kw)
+    ocp = dataclasses.replace(spinup_ocp(scene, st), **kw)
     return S.optimize(ocp, S.DirectCollocation(st.intervals, st.degree, st.scheme), st.multistart,
                       ipopt_options(st.max_iterations, st.tolerance))
 

@@ -11,7 +11,9 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from autobal import api, runners
+from autobal import api
+from autobal.analyses import spinup_robust as spinup_robust_analysis
+from autobal.analyses.spinup import ocp as spinup_ocp
 from autobal.analysis.executor import InProcess
 from autobal.errors import ScenarioError
 from autobal.models.rotor import RotorParams
@@ -109,7 +111,7 @@ def test_shipped_scenes_load_and_bad_ranges_are_refused():
         api.load("spinup_robust_jeffcott", {"analyses.spinup_robust.damping_factor": [2, 0.5]})
     scene = api.load("spinup_robust_jeffcott", {"analyses.spinup_robust.liquid_mass_factor": [0.8, 1.2]})
     with pytest.raises(ScenarioError, match="liquid"):  # refused before any solve
-        runners.spinup_robust(scene, scene.analyses.spinup_robust)
+        spinup_robust_analysis.run(scene, scene.analyses.spinup_robust)
 
 
 @pytest.mark.slow
@@ -252,7 +254,7 @@ def test_robust_optimum_of_the_shipped_scene_does_not_move_with_its_starts():
     spinup_robust.md, "Build and solve")."""
     scene = api.load("spinup_robust_jeffcott")
     st = scene.analyses.spinup_robust
-    ocp = runners.spinup_ocp(scene, st)
+    ocp = spinup_ocp(scene, st)
     method = DirectCollocation(st.intervals)
     options = ipopt_options(st.max_iterations, st.tolerance)
     nominal = optimize(ocp, method, st.multistart, options)

@@ -12,9 +12,9 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from autobal import scenario
-from autobal.adapters import design
 from autobal.analysis import closed_form
 from autobal.analysis.statics import ParametricStatics, StaticsSolver, ideal_guess
+from autobal.parts.device import design
 
 # ---- literature validation: the source's closed forms (App. A, App. B) ----
 

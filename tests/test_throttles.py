@@ -22,7 +22,7 @@ from autobal.models import throttles as th
 )
 def test_conductances_match_appendices(name, key, published):
     from autobal import scenario
-    from autobal.adapters import design
+    from autobal.parts.device import design
 
     assert_allclose(design(scenario.load(name).device).conductances[key], published, rtol=5e-3)
 
@@ -31,7 +31,7 @@ def test_conductances_match_appendices(name, key, published):
 def test_groups_match_appendix_a():
     # [derived] recomputed column (App. A)
     from autobal import scenario
-    from autobal.adapters import design
+    from autobal.parts.device import design
 
     d = design(scenario.load("pump_pe600_statics").device)
     g = d.groups
@@ -72,8 +72,8 @@ def test_closed_valve_passes_no_flow():
     # Pavlenko (2014), Eq. (2.15): Q_c = g_B xi sqrt(p_cam - p_e) holds for an open valve; on its seat
     # (xi <= 0) it passes nothing, in either direction (xi sqrt(dp) with xi < 0 would reverse the flow)
     from autobal import scenario
-    from autobal.adapters import design
     from autobal.models.device import groups_by_name, network
+    from autobal.parts.device import design
 
     g = design(scenario.load("pump_pe600_statics").device).groups
     v = {"psi2": 0.8, "psi3": 0.4, "u": 1.0, "psi_e": 1.05, "psi_cam": 1.1}
@@ -83,10 +83,11 @@ def test_closed_valve_passes_no_flow():
 
 
 def test_dynamics_flows_at_equilibrium_are_the_statics_flows():
-    from autobal import adapters, scenario
+    from autobal import scenario
     from autobal.analysis.linearize import Setup
+    from autobal.parts import device as device_part
 
-    setup = Setup(adapters.device(scenario.load("pump_pe600_dynamics").device), 1.0)
+    setup = Setup(device_part.adapt(scenario.load("pump_pe600_dynamics").device), 1.0)
     for form in ("energy", "chain"):
         m = setup.nonlinear(form)
         assert_allclose(np.array(m.flows(m.x0, m.w0)).ravel(), list(setup.static.flows.values()), rtol=1e-12)

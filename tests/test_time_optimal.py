@@ -6,7 +6,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from autobal import api, runners
+from autobal import api
+from autobal.analyses.spinup import ocp as spinup_ocp
 from autobal.ocp import time_optimal as to
 from autobal.ocp import time_optimal_study
 from autobal.ocp.solve import TIE, ipopt_options, optimize
@@ -16,7 +17,7 @@ from autobal.ocp.transcription import DirectCollocation
 def shipped():
     scene = api.load("spinup_time_optimal")
     s = scene.analyses.spinup_time_optimal
-    return (runners.spinup_ocp(scene, s), DirectCollocation(s.intervals, s.degree, s.scheme), s,
+    return (spinup_ocp(scene, s), DirectCollocation(s.intervals, s.degree, s.scheme), s,
             ipopt_options(s.max_iterations, s.tolerance))
 
 

@@ -52,10 +52,11 @@ def test_run_reports_timing_and_accuracy(tmp_path):
 
 
 def test_dynamics_work_precision_orders_the_integrators():
-    from autobal import adapters, scenario
+    from autobal import scenario
     from autobal.analysis.linearize import Setup
+    from autobal.parts import device as device_part
 
-    model = Setup(adapters.device(scenario.load("pump_pe600_dynamics").device)).nonlinear("energy")
+    model = Setup(device_part.adapt(scenario.load("pump_pe600_dynamics").device)).nonlinear("energy")
     study = wp.dynamics_study(model, 0.005, 0.01, quick=True)
     err = {(r["method"], r["setting"]): r["error"] for r in study.rows}
     # CVODES converges with its tolerance, against a Radau reference

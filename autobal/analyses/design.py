@@ -1,4 +1,4 @@
-"""Scenario schema of ``analyses.design``: stability-constrained design of the balancing device.
+"""``analyses.design``: stability-constrained design of the balancing device.
 
 Each design variable is a scene path with bounds in units, e.g.
 ``device.dynamics.disc_chamber_volume: {lower: 1e-6 m^3, upper: 2e-3 m^3}``; the analysis is
@@ -11,8 +11,14 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
+from autobal.analyses import COST
+from autobal.errors import ScenarioError
 from autobal.schema import NonNegative, Positive, Strict
 from autobal.units import Length, to_si
+
+DESCRIPTION = "stability-constrained design of the device"
+NEEDS = "device.dynamics"
+REPORT_SECTION = "design_section"
 
 # scene path -> (design key of analysis/design.py, unit kind; None: dimensionless)
 VARIABLES = {
@@ -103,3 +109,34 @@ class Design(Strict):
                 raise ValueError(f"analyses.design.variables.{path}: upper must exceed lower")
             out[path] = (key, lo, hi)
         return out
+
+
+SETTINGS = Design
+
+
+def run(scene, settings: Design):
+    """Stability-constrained design of the balancing device (analysis/design.py)."""
+    from autobal.analysis import design as ds
+    from autobal.analysis import design_study, progress
+    from autobal.parts.device import dynamic_device
+
+    try:
+        bounds = settings.bounds_si()
+    except ValueError as exc:
+        raise ScenarioError(str(exc)) from None
+    variables = tuple(ds.Variable(path, key, lo, hi) for path, (key, lo, hi) in bounds.items())
+    gap = (settings.face_gap.lower, settings.face_gap.upper)
+    weights = {"leakage": (1.0, 0.0), "stiffness": (0.0, 1.0), "mix": tuple(settings.weights)}[settings.objective]
+    spec = ds.Spec(variables=variables, points=tuple(settings.operating_ratios), nominal_ratio=settings.nominal_ratio,
+                   decay_rate=settings.decay_rate, gap=gap, valve_band=settings.valve_band,
+                   min_stiffness=-float("inf") if settings.min_stiffness is None else settings.min_stiffness,
+                   weights=weights, form=settings.model)
+    with progress.steps(None, "design", "IPOPT solve", catch=True):
+        return design_study.run(dynamic_device(scene), spec, settings.samples, settings.seed,
+                                settings.sweep_points, scene.title)
+
+
+def estimate_seconds(settings: Design) -> float:
+    """Not modelled: the design's cost (its NLP starts and certification samples) has no calibrated constant
+    yet; the start-up cost only, as before the analyses had rooms."""
+    return COST["start"]

@@ -1,6 +1,5 @@
-"""Scenario schema of a rotor given as ROSS elements (optional top-level part ``ross_rotor:``) and of its
-analysis ``ross_spinup``: the minimum-peak spin-up of the rotor reduced to its modes, through two or
-more critical speeds (:mod:`autobal.ocp.modal`).
+"""Scene part ``ross_rotor``: a rotor given as ROSS elements or a ROSS example rotor, its schema and its
+adapter to :class:`autobal.models.ross_rotor.RossRotorSpec` (SI); ``analyses.ross_spinup`` is built on it.
 
 Needs the optional ROSS package (``pip install -e '.[ross]'``); a scene naming it without the package
 installed exits 2 with one line naming the extra.
@@ -8,21 +7,19 @@ installed exits 2 with one line naming the extra.
 
 from __future__ import annotations
 
+import math
 from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
+from autobal.models import ross_rotor as rr
 from autobal.schema import Strict
-from autobal.units import AngularSpeed, Density, Length, Pressure, quantity
+from autobal.units import Density, Length, Pressure, quantity
 
 Mass = quantity("mass")
 Inertia = quantity("moment of inertia")
 StiffnessOrZero = quantity("stiffness", "nonnegative")
 DampingOrZero = quantity("damping", "nonnegative")
-Time = quantity("time")
-TimeOrZero = quantity("time", "nonnegative")
-AngularAcceleration = quantity("angular acceleration")
-SpeedOrZero = quantity("angular speed", "nonnegative")
 LengthOrZero = quantity("length", "nonnegative")
 Node = Annotated[int, Field(ge=0, le=10_000)]
 EXAMPLES = ("rotor_example", "compressor_example", "rotor_example_with_damping", "rotor_example_6dof",
@@ -101,32 +98,31 @@ class RossRotor(Strict):
         return self
 
 
-class RossSpinup(Strict):
-    """Minimum-peak spin-up of the ROSS rotor reduced to its modes, posed as a drive is specified (as the
-    Jeffcott ``spinup``): reach ``final_speed`` by the deadline ``horizon``, hold it over ``settling_time``
-    (the peak counts over the whole window), never exceed ``max_speed``, |alpha| <= ``max_acceleration``."""
+SCHEMA = RossRotor
+DESCRIPTION = "a rotor as ROSS elements or a ROSS example rotor (the ross extra)"
 
-    start_speed: SpeedOrZero = Field(description="speed at t = 0 (steady state there)")
-    final_speed: AngularSpeed = Field(description="reached by the deadline")
-    horizon: Time = Field(description="the deadline")
-    max_acceleration: AngularAcceleration = Field(description="bound on |alpha|")
-    settling_time: TimeOrZero = Field(0.0, description="held at final_speed after the deadline")
-    max_speed: AngularSpeed | None = Field(None, description="speed cap")
-    nodes: Annotated[list[Node], Field(min_length=1, max_length=50)] = Field(
-        description="nodes whose lateral deflection sqrt(x^2 + y^2) counts (the peak is the largest)")
-    mode_cutoff: Annotated[float, Field(ge=1.0, le=10.0)] = Field(
-        1.5, description="modes with natural frequency up to mode_cutoff x final_speed are kept, 1 to 10")
-    gyroscopic_tolerance: Annotated[float, Field(ge=0, le=1)] = Field(
-        1e-3, description="the gyroscopic terms are kept when they move a critical speed by more than this fraction")
-    intervals: Annotated[int, Field(ge=4, le=2000)] = Field(160, description="control intervals over the horizon")
-    degree: Annotated[int, Field(ge=1, le=9)] = Field(3, description="Radau collocation degree, 1 to 9")
-    max_iterations: Annotated[int, Field(ge=1, le=100000)] = Field(1000, description="IPOPT iterations per solve")
-    validate_with_ross: bool = Field(True, description="compare the reduced critical speeds with ROSS's own")
 
-    @model_validator(mode="after")
-    def _consistent(self):
-        if self.max_speed is not None and self.max_speed < max(self.start_speed, self.final_speed):
-            raise ValueError("max_speed must not be below start_speed and final_speed")
-        if self.final_speed - self.start_speed > self.max_acceleration * self.horizon:
-            raise ValueError("max_acceleration x horizon is less than the speed change: the deadline cannot be met")
-        return self
+def adapt(r: RossRotor):
+    """The scene's ``ross_rotor`` section as :class:`autobal.models.ross_rotor.RossRotorSpec` (SI) and its
+    unbalances.
+
+    Parameters
+    ----------
+    r : RossRotor
+        The validated section (phases in degrees).
+
+    Returns
+    -------
+    (RossRotorSpec, tuple of Unbalance)
+        Elements in SI; unbalance m e in kg m, phase in rad.
+    """
+    ub = tuple(rr.Unbalance(u.node, u.magnitude, math.radians(u.phase)) for u in r.unbalance)
+    if r.example is not None:
+        return rr.RossRotorSpec(example=r.example), ub
+    m = r.material
+    shaft = tuple(rr.Shaft(s.length, s.inner_diameter, s.outer_diameter) for s in r.shaft for _ in range(s.count))
+    disks = tuple(rr.Disk(d.node, d.mass, d.diametral_inertia, d.polar_inertia) for d in r.disks)
+    brgs = tuple(rr.Bearing(b.node, b.kxx, b.kxx if b.kyy is None else b.kyy, b.cxx, b.cxx if b.cyy is None else b.cyy,
+                            b.kxy, b.kyx) for b in r.bearings)
+    return rr.RossRotorSpec(shaft=shaft, disks=disks, bearings=brgs,
+                            material=rr.Material(m.density, m.young_modulus, m.shear_modulus)), ub

@@ -1,5 +1,5 @@
-"""Scenario schema of ``analyses.estimation``: fitting device parameters to measured static and
-flow characteristics (Pavlenko (2014), Sec. 4.4).
+"""``analyses.estimation``: fitting device parameters to measured static and flow characteristics (Pavlenko
+(2014), Sec. 4.4); the device section is optional (the device model's fits need it).
 
 The data file is read and checked at load time (``autobal check`` catches a bad CSV): columns,
 units, signs and the number of points against the free parameters of every fit.
@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Annotated, Literal
 
 from pydantic import Field, model_validator
 
+from autobal.analyses import COST
 from autobal.errors import ScenarioError
 from autobal.measurements import Measurements, check_fit, read_csv
 from autobal.models.device import DEVICE_GROUPS, PRESSURE_GROUPS, REGULATOR_GROUPS
@@ -20,6 +21,10 @@ from autobal.units import Area, Length, Pressure, VolumeFlow
 
 if TYPE_CHECKING:
     from autobal.models.hydroheel import DiscLosses
+
+DESCRIPTION = "parameter fits to measured characteristics"
+NEEDS = None
+REPORT_SECTION = "estimation_section"
 
 # Parameters each model can fit.  traditional_disc: (4.16)-(4.31).  device: the groups (2.18) of the
 # full static model (models/device.py) and the loss coefficients they come from.
@@ -204,3 +209,34 @@ class Estimation(Strict):
         if self.adequacy is not None and data.has("group") is None:
             raise ValueError(f"adequacy: needs a 'group [1]' column in {data.path.name}")
         return self
+
+
+SETTINGS = Estimation
+
+
+def run(scene, settings: Estimation):
+    """Parameter estimation from measured static and flow characteristics (Pavlenko (2014), Sec. 4.4)."""
+    from autobal.analysis import estimation_study, progress
+    from autobal.parts.device import adapt
+
+    device = adapt(scene.device) if scene.device is not None else None
+    with progress.steps(None, "estimation", "IPOPT solve", catch=True):
+        return estimation_study.run(settings, device, scene.title)
+
+
+def estimate_seconds(settings: Estimation) -> float:
+    """One least-squares fit with its cross-checks per fit."""
+    return COST["start"] + COST["fit"] * len(settings.fits)
+
+
+def accuracy(scene, settings: Estimation):
+    """Work-precision of the scene's first traditional-disc fit in u (its data, its free parameters)."""
+    from autobal.analysis import workprecision
+
+    fit = next((f for f in settings.fits if f.model == "traditional_disc" and f.residual == "u"), None)
+    if fit is None:
+        raise ScenarioError("work-precision of the estimation needs a traditional_disc fit with residual u")
+    data = settings.measurements()
+    bases = settings.bases.values()
+    return workprecision.estimation_study(data.dimensionless("load", bases), data.dimensionless("gap", bases),
+                                          fit.free(), {k: p.value for k, p in fit.parameters.items()})

@@ -1,5 +1,5 @@
-"""Scenario schema of the liquid auto-balancer (top-level part ``liquid_balancer:``) and of its analysis
-(``analyses.liquid_balancer:``).  Quantities carry units and are converted to SI at load time.
+"""Scene part ``liquid_balancer``: the liquid auto-balancer's schema and its adapter to
+:class:`autobal.models.liquid_balancer.System` (SI).  Quantities carry units and are converted to SI at load time.
 
 Sources: Khomyak 2020 (Table 3.1 system, App. В/Г programs), Pashkov 2010 ch. 3 (nested chambers);
 Khomyak (2020), Pashkov (2010).
@@ -8,11 +8,12 @@ Khomyak (2020), Pashkov (2010).
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal
+from typing import Annotated
 
 from pydantic import Field, model_validator
 
-from autobal.schema import Positive, Range, Strict
+from autobal.models.liquid_balancer import System, n_from_decrement
+from autobal.schema import Positive, Strict
 from autobal.units import AngularSpeed, Density, Length, Viscosity, quantity
 
 Mass = quantity("mass")
@@ -103,44 +104,26 @@ class LiquidBalancer(Strict):
         return self
 
 
-class Candidate(Strict):
-    name: str
-    density: Density
-    viscosity: Viscosity
+SCHEMA = LiquidBalancer
+DESCRIPTION = "liquid auto-balancer"
 
 
-class HeightSearch(Strict):
-    """Optimal chamber height for the given radius (App. В OPTIMUM_KAMERA) as an IPOPT problem."""
+def adapt(part: LiquidBalancer) -> System:
+    """The scene's ``liquid_balancer`` section as :class:`autobal.models.liquid_balancer.System` (SI).
 
-    max_height: Length = Field(description="h_k, the largest height the design allows")
-    min_height: Length | None = Field(None, description="h_p; default: just above V/(pi R^2)")
-    grid_points: Annotated[int, Field(ge=3, le=2_000_001)] = Field(
-        20001, description="dense grid cross-check, 3 to 2,000,001")
-
-
-class VolumeSearch(Strict):
-    """Optimal liquid volume for the given unbalance (App. Г OPTIMUM_LIQUID) as an IPOPT problem."""
-
-    min_volume: Volume | None = Field(None, description="V0; default 1e-6 of the chamber volume")
-    grid_points: Annotated[int, Field(ge=3, le=2_000_001)] = Field(
-        20001, description="dense grid cross-check, 3 to 2,000,001")
-
-
-class LiquidBalancerAnalysis(Strict):
-    """Efficiency vs speed ratio, extremum, optimal height / volume / liquid, Pashkov calculators."""
-
-    variant: Literal["printed", "program", "corrected"] = Field("corrected", description="equilibrium angle (2.13)")
-    deflection: Literal["program", "system"] = Field("program", description="f = G D0/m_d (App. В code) or G D0/M_sys")
-    speed_ratio: Range = Field(description="gamma = omega/omega_cr sweep for the efficiency curve")
-    table_ratios: Annotated[list[Positive], Field(min_length=1, max_length=1000)] = [0.4, 0.6, 0.8, 1.0, 1.2, 1.4]
-    arc_angle_deg: Annotated[float, Field(gt=0, le=360)] | None = Field(
-        None, description="xi of (2.15); default: program Г")
-    conversion_coefficient: Positive = Field(
-        1.0, description="kappa of (3.5), (3.6), (3.9), (3.13); 1 = sufficient liquid")
-    height: HeightSearch | None = None
-    volume: VolumeSearch | None = None
-    liquids: list[Candidate] = Field([], max_length=100, description="liquid choice by viscosity (App. Г), at most 100")
-    unbalance_masses: list[Mass] = Field(
-        [], max_length=100, description="optimal volume per unbalance (Table 3.3: 50/100/150/200 g at e_d)")
-    thesis_comparison: bool = Field(
-        False, description="compare with Tables 3.2 / 3.3 (only meaningful for the Table 3.1 system)")
+    The damping constant n is the section's ``damping_coefficient`` or, from the log decrement,
+    n = theta omega_cr / (2 pi) (:func:`autobal.models.liquid_balancer.n_from_decrement`).
+    """
+    ro, ch, li = part.rotor, part.chamber, part.liquid
+    n = ro.damping_coefficient if ro.damping_coefficient is not None else n_from_decrement(
+        ro.log_decrement, ro.critical_speed)
+    nest = part.nested
+    return System(rotor_mass=ro.mass, chamber_mass=ch.mass, unbalance_mass=ro.unbalance_mass,
+                  unbalance_radius=ro.unbalance_radius, omega_cr=ro.critical_speed, n=n, R=ch.radius,
+                  h=ch.height, V=li.volume, rho=li.density, speed=part.speed, mu=li.viscosity,
+                  stiffness=ro.stiffness,
+                  inclination=None if ch.inclination_deg is None else math.radians(ch.inclination_deg),
+                  nested_radii=tuple(c.radius for c in nest.chambers) if nest else (),
+                  nested_volumes=tuple(c.volume for c in nest.chambers) if nest else (),
+                  wall_thickness=nest.wall_thickness if nest else 0.0,
+                  hub_radius=nest.hub_radius if nest else 0.0)

@@ -1,0 +1,91 @@
+"""``analyses.ross_spinup``: the minimum-peak spin-up of a ROSS rotor reduced to its modes, through two or more
+critical speeds (:mod:`autobal.ocp.modal`), with the reduced model's critical speeds checked against ROSS's own.
+
+Needs the optional ROSS package (``pip install -e '.[ross]'``); a scene naming it without the package
+installed exits 2 with one line naming the extra.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from pydantic import Field, model_validator
+
+from autobal.analyses import COST
+from autobal.errors import ScenarioError
+from autobal.parts.ross_rotor import Node
+from autobal.schema import Strict
+from autobal.units import AngularSpeed, quantity
+
+DESCRIPTION = "optimal spin-up of a ROSS rotor reduced to its modes (the ross extra)"
+NEEDS = "ross_rotor"
+REPORT_SECTION = "ross_spinup_section"
+Time = quantity("time")
+TimeOrZero = quantity("time", "nonnegative")
+AngularAcceleration = quantity("angular acceleration")
+SpeedOrZero = quantity("angular speed", "nonnegative")
+
+
+class RossSpinup(Strict):
+    """Minimum-peak spin-up of the ROSS rotor reduced to its modes, posed as a drive is specified (as the
+    Jeffcott ``spinup``): reach ``final_speed`` by the deadline ``horizon``, hold it over ``settling_time``
+    (the peak counts over the whole window), never exceed ``max_speed``, |alpha| <= ``max_acceleration``."""
+
+    start_speed: SpeedOrZero = Field(description="speed at t = 0 (steady state there)")
+    final_speed: AngularSpeed = Field(description="reached by the deadline")
+    horizon: Time = Field(description="the deadline")
+    max_acceleration: AngularAcceleration = Field(description="bound on |alpha|")
+    settling_time: TimeOrZero = Field(0.0, description="held at final_speed after the deadline")
+    max_speed: AngularSpeed | None = Field(None, description="speed cap")
+    nodes: Annotated[list[Node], Field(min_length=1, max_length=50)] = Field(
+        description="nodes whose lateral deflection sqrt(x^2 + y^2) counts (the peak is the largest)")
+    mode_cutoff: Annotated[float, Field(ge=1.0, le=10.0)] = Field(
+        1.5, description="modes with natural frequency up to mode_cutoff x final_speed are kept, 1 to 10")
+    gyroscopic_tolerance: Annotated[float, Field(ge=0, le=1)] = Field(
+        1e-3, description="the gyroscopic terms are kept when they move a critical speed by more than this fraction")
+    intervals: Annotated[int, Field(ge=4, le=2000)] = Field(160, description="control intervals over the horizon")
+    degree: Annotated[int, Field(ge=1, le=9)] = Field(3, description="Radau collocation degree, 1 to 9")
+    max_iterations: Annotated[int, Field(ge=1, le=100000)] = Field(1000, description="IPOPT iterations per solve")
+    validate_with_ross: bool = Field(True, description="compare the reduced critical speeds with ROSS's own")
+
+    @model_validator(mode="after")
+    def _consistent(self):
+        if self.max_speed is not None and self.max_speed < max(self.start_speed, self.final_speed):
+            raise ValueError("max_speed must not be below start_speed and final_speed")
+        if self.final_speed - self.start_speed > self.max_acceleration * self.horizon:
+            raise ValueError("max_acceleration x horizon is less than the speed change: the deadline cannot be met")
+        return self
+
+
+SETTINGS = RossSpinup
+
+
+def run(scene, settings: RossSpinup):
+    """Optimal spin-up of a ROSS rotor reduced to its modes, through its critical speeds, with the reduced
+    model's critical speeds checked against ROSS's own (needs the ross extra)."""
+    from autobal.analysis import progress
+    from autobal.models import ross_rotor as rr
+    from autobal.ocp import modal
+    from autobal.parts.ross_rotor import adapt
+
+    spec, unbalances = adapt(scene.ross_rotor)
+    rotor = rr.ross_rotor(spec)
+    reduced = rr.reduce(rr.lateral_matrices(rotor), unbalances, settings.final_speed, settings.mode_cutoff,
+                        settings.gyroscopic_tolerance)
+    ross_cs = rr.ross_critical_speeds(rotor, settings.final_speed) if settings.validate_with_ross else None
+    kw = {"omega_start": settings.start_speed, "omega_final": settings.final_speed, "horizon": settings.horizon,
+          "alpha_max": settings.max_acceleration, "nodes": tuple(settings.nodes),
+          "settling_time": settings.settling_time, "omega_max": settings.max_speed, "intervals": settings.intervals,
+          "degree": settings.degree}
+    try:
+        with progress.steps(None, "multi-mode spin-up (starts)", "IPOPT solve", catch=True):
+            return modal.run(reduced, kw, scene.title, ross_cs, {"max_iter": settings.max_iterations})
+    except ValueError as exc:
+        raise ScenarioError(f"analyses.ross_spinup: {exc}") from None
+
+
+def estimate_seconds(settings: RossSpinup) -> float:
+    """ROSS's import, numba compilation and critical speeds (about 30 s), then the four-phase search (about
+    5 s) and its starts on the modal envelope (4 modes, 160 intervals of degree 3: about 24 s measured)."""
+    return 30.0 * settings.validate_with_ross + COST["start"] + COST["modal_ocp_point"] * settings.intervals \
+        * settings.degree * 2

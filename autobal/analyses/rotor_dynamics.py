@@ -1,0 +1,95 @@
+"""``analyses.rotor_dynamics``: the source's studies of the Jeffcott rotor with a liquid auto-balancer
+(Pashkov (2010)): stationary curves, speed steps, passage through the critical speed, Lewis' table, motor run-up."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from pydantic import Field
+
+from autobal.analyses import COST
+from autobal.errors import ScenarioError
+from autobal.schema import Positive, Range, Strict
+from autobal.units import AngularSpeed, quantity
+
+DESCRIPTION = "Jeffcott rotor studies"
+NEEDS = "rotor"
+REPORT_SECTION = "rotor_dynamics_section"
+Time = quantity("time")
+AngularAcceleration = quantity("angular acceleration")
+RateOrZero = quantity("angular speed", "nonnegative")  # 1/s: speeds that may be 0 and chi/m1 rates
+Fraction = Annotated[float, Field(gt=0, le=1)]
+
+
+class Stationary(Strict):
+    """Stationary curves (9) of Figs 5-6 over z = (omega/Omega0)^2 for pairs (mu1, n), n = chi^2/(c m1)."""
+
+    cases: Annotated[list[tuple[Annotated[float, Field(ge=1, le=1e6)], Positive]], Field(max_length=100)] = [
+        (2, 0.1), (2, 0.7), (4, 0.1), (4, 0.7)]
+    z: Range = Range(start=0.01, stop=3.0, points=600)
+
+
+class Steps(Strict):
+    """Speed steps (4)-(7), Figs 3-4: closed form beside CVODES, for each psi."""
+
+    psi: Annotated[list[Fraction], Field(max_length=100)] = [1.0, 0.75, 0.5, 0.25]
+    steps: list[tuple[RateOrZero, RateOrZero]] = Field(max_length=100, description="(from, to) angular speeds")
+    duration: Time = 0.6
+
+
+class Passage(Strict):
+    """Uniform acceleration through the critical speed (8')-(9'), Figs 7-9."""
+
+    psi: Annotated[list[Fraction], Field(max_length=100)] = [1.0, 0.75, 0.5, 0.25]
+    friction: list[RateOrZero] = Field(max_length=100, description="n = chi/m1 of section 3.7, 1/s")
+    start_speed: AngularSpeed
+    acceleration: AngularAcceleration = Field(description="beta'' = 2 eps")
+    final_ratio: Positive = Field(2.0, description="run to omega/Omega0")
+    crossover: bool = Field(True, description="find n* where max d(psi) = max d(1)")
+    sensitivity_acceleration: AngularAcceleration | None = Field(None, description="the 10 s^-2 variant")
+
+
+class Lewis(Strict):
+    """Jeffcott rotor from rest at constant acceleration: table over zeta and a* = alpha/Omega^2."""
+
+    zeta: Annotated[list[Annotated[float, Field(ge=0, lt=1)]], Field(max_length=100)] = [0.0, 0.01, 0.02, 0.05, 0.1]
+    accel_ratio: Annotated[list[Positive], Field(max_length=100)] = [1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2]
+
+
+class MotorRunup(Strict):
+    """Run-up with the scene's motor characteristic: passes, or is captured (Sommerfeld)."""
+
+    duration: Time
+
+
+class RotorDynamics(Strict):
+    stationary: Stationary | None = None
+    steps: Steps | None = None
+    passage: Passage | None = None
+    lewis: Lewis | None = None
+    motor_runup: MotorRunup | None = None
+
+
+SETTINGS = RotorDynamics
+
+
+def run(scene, settings: RotorDynamics):
+    """The source's studies of the Jeffcott rotor with a liquid auto-balancer (Pashkov (2010))."""
+    from autobal.analysis import progress, rotor_study
+    from autobal.parts.rotor import adapt
+
+    if scene.rotor is None:
+        raise ScenarioError("analyses.rotor_dynamics needs a rotor section")
+    drive = scene.rotor.drive
+    with progress.steps(None, "rotor dynamics (curves, steps, passage, Lewis cases)", "part", catch=True):
+        return rotor_study.run(adapt(scene.rotor), settings, scene.title, drive.motor if drive else None)
+
+
+def estimate_seconds(settings: RotorDynamics) -> float:
+    """One integrator run per step response, passage (twice with the crossover search), Lewis case and run-up."""
+    rd, runs = settings, 0
+    runs += len(rd.steps.psi) * len(rd.steps.steps) if rd.steps else 0
+    runs += len(rd.passage.psi) * len(rd.passage.friction) * (2 if rd.passage.crossover else 1) if rd.passage else 0
+    runs += len(rd.lewis.zeta) * len(rd.lewis.accel_ratio) if rd.lewis else 0
+    runs += 1 if rd.motor_runup else 0
+    return COST["start"] + COST["rotor_run"] * runs

@@ -1,0 +1,84 @@
+"""``analyses.stability``: poles, damping, Hurwitz determinants and margin of the device's linear models, and
+an optional stability map over two dynamic parameters (Pavlenko (2014), §2.6)."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import Field, model_validator
+
+from autobal.analyses import COST
+from autobal.parts.device_dynamics import PARAMETERS, ModelName, ParameterName
+from autobal.schema import Positive, Strict
+from autobal.units import to_si
+
+DESCRIPTION = "poles, Hurwitz, stability maps"
+NEEDS = "device.dynamics"
+REPORT_SECTION = "stability_section"
+
+
+class MapAxis(Strict):
+    """One axis of a stability map: a dynamic parameter from ``start`` to ``stop`` (with units)."""
+
+    parameter: ParameterName
+    start: str | float
+    stop: str | float
+    points: Annotated[int, Field(ge=3, le=400)] = Field(41, description="values on this axis, 3 to 400")
+    scale: Literal["log", "linear"] = "log"
+
+    @model_validator(mode="before")
+    @classmethod
+    def _to_si(cls, data):
+        if isinstance(data, dict) and isinstance(data.get("parameter"), str) and data["parameter"] in PARAMETERS:
+            kind = PARAMETERS[data["parameter"]]
+            data = dict(data)
+            for k in ("start", "stop"):
+                if k in data:
+                    try:
+                        data[k] = to_si(data[k], kind)
+                    except ValueError as exc:
+                        raise ValueError(f"{k}: {exc}") from None
+        return data
+
+    @model_validator(mode="after")
+    def _range(self):
+        if not float(self.stop) > float(self.start) >= 0:
+            raise ValueError("need 0 <= start < stop")
+        if self.scale == "log" and float(self.start) <= 0:
+            raise ValueError("a log axis needs start > 0")
+        return self
+
+
+class StabilityMap(Strict):
+    x: MapAxis
+    y: MapAxis
+    models: Annotated[list[ModelName], Field(min_length=1)] = ["program", "nonlinear"]
+
+
+class Stability(Strict):
+    """Poles, damping, Hurwitz determinants, margin; optional map over two parameters."""
+
+    operating_ratio: Positive = 1.0
+    models: Annotated[list[ModelName], Field(min_length=1)] = ["program", "nonlinear", "nonlinear_chain"]
+    map: StabilityMap | None = None
+
+
+SETTINGS = Stability
+
+
+def run(scene, settings: Stability):
+    """Poles, damping, Hurwitz determinants, margin and the optional stability map."""
+    from autobal.analysis import stability as st
+    from autobal.analysis.linearize import Setup
+    from autobal.parts.device import dynamic_device
+
+    setup = Setup(dynamic_device(scene), settings.operating_ratio)
+    res = st.study(setup, list(settings.models), settings.map, scene.title)
+    res.data["accuracy"] = st.accuracy(setup, list(settings.models))
+    return res
+
+
+def estimate_seconds(settings: Stability) -> float:
+    """One map point per grid point and model (the poles themselves are cheap)."""
+    m = settings.map
+    return COST["start"] + (COST["map_point"] * m.x.points * m.y.points * len(m.models) if m else 0.0)

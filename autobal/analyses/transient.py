@@ -1,0 +1,78 @@
+"""``analyses.transient``: time responses of the nonlinear device model from its static solution (Pavlenko
+(2014), Eq. (2.111)), by CVODES, IDAS or the Rosenbrock methods RODAS4 / RODAS4P."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import Field
+
+from autobal.analyses import COST
+from autobal.schema import Positive, Strict
+from autobal.units import AngularSpeed, quantity
+
+DESCRIPTION = "time responses"
+NEEDS = "device.dynamics"
+REPORT_SECTION = "transient_section"
+Time = quantity("time")
+
+
+class TransientCase(Strict):
+    """One time response from the static solution (2.111)."""
+
+    input: Literal["force_step", "pressure_step", "pressure_harmonic"]
+    amplitude: float = Field(0.01, description="dtau (force step) or dpsi1 (pressure), dimensionless")
+    frequency: AngularSpeed | None = Field(None, description="harmonic input; default the operating speed")
+    thrust_follows_pressure: bool = Field(True, description="with a pressure input, dtau = b dpsi1")
+
+
+class Transient(Strict):
+    operating_ratio: Positive = 1.0
+    model: Literal["nonlinear", "nonlinear_chain"] = "nonlinear"
+    integrator: Literal["cvodes", "idas", "rodas4", "rodas4p"] = Field(
+        "cvodes", description="cvodes (BDF, Newton with the exact Jacobian; default), idas, rodas4: the "
+        "L-stable Rosenbrock method RODAS4 (Hairer & Wanner 1996, Sect. IV.7) with step-size control, its steps "
+        "clipped to the output times, compiled to C (cached; CasADi's virtual machine without a C compiler), or "
+        "rodas4p: the same with Steinebach's (1995) RODASP coefficients, which keep order 4 where a stiff mode "
+        "is driven by a harmonic input (RODAS4 drops towards order 2 there)")
+    duration: Time = 0.05
+    points: Annotated[int, Field(ge=10, le=200000)] = Field(2001, description="output times, 10 to 200,000")
+    cases: Annotated[list[TransientCase], Field(min_length=1, max_length=100)] = Field(
+        description="time responses to compute, 1 to 100")
+
+
+SETTINGS = Transient
+
+
+def _model(scene, settings: Transient):
+    """The scene's nonlinear device model at the settings' operating point."""
+    from autobal.analysis.linearize import Setup
+    from autobal.parts.device import dynamic_device
+
+    setup = Setup(dynamic_device(scene), settings.operating_ratio)
+    return setup.nonlinear("chain" if settings.model == "nonlinear_chain" else "energy")
+
+
+def run(scene, settings: Transient):
+    """Time responses of the nonlinear device model from its static solution (CVODES / IDAS / RODAS4)."""
+    from autobal.analysis import simulate as sim
+
+    model = _model(scene, settings)
+    cases = [{"input": c.input, "amplitude": c.amplitude, "frequency": c.frequency,
+              "couple": c.thrust_follows_pressure} for c in settings.cases]
+    res = sim.study(model, cases, settings.duration, settings.points, settings.integrator, scene.title)
+    res.data["accuracy"] = sim.accuracy(model, res, cases, settings.duration, settings.points, settings.integrator)
+    return res
+
+
+def estimate_seconds(settings: Transient) -> float:
+    """One integrator output time per point and case."""
+    return COST["start"] + COST["transient_point"] * settings.points * len(settings.cases)
+
+
+def accuracy(scene, settings: Transient):
+    """Work-precision of the time integration of the scene's transient (first force step, or dtau = 0.01)."""
+    from autobal.analysis import workprecision
+
+    dtau = next((c.amplitude for c in settings.cases if c.input == "force_step"), 0.01)
+    return workprecision.dynamics_study(_model(scene, settings), settings.duration, dtau)

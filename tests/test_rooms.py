@@ -1,0 +1,155 @@
+"""One room per analysis (docs/contributing.md): every module of the registries defines what the registries
+read, and a new analysis is one file and one line, followed here once with a throwaway analysis."""
+
+import json
+import math
+import sys
+import textwrap
+
+import pytest
+
+import autobal
+from autobal import analyses, parts, report, scenario
+from autobal.errors import ScenarioError
+from autobal.schema import Strict
+
+
+@pytest.mark.parametrize("key", list(analyses.MODULES))
+def test_every_analysis_room_defines_what_the_registry_reads(key):
+    room = analyses.module(key)
+    assert issubclass(room.SETTINGS, Strict)
+    assert isinstance(room.DESCRIPTION, str) and room.DESCRIPTION
+    # the part it needs is a part of the registry (or device.dynamics), checked at load time
+    assert room.NEEDS is None or room.NEEDS.split(".")[0] in parts.MODULES
+    assert callable(room.run) and callable(room.estimate_seconds)
+    # its report section: the function it names is the one report.py draws its results with
+    assert getattr(report, room.REPORT_SECTION) is report.SECTIONS[key]
+    assert scenario.Scenario.model_fields["analyses"].annotation.model_fields[key].description.startswith(
+        room.DESCRIPTION)
+
+
+@pytest.mark.parametrize("key", list(parts.MODULES))
+def test_every_part_room_defines_its_schema(key):
+    part = parts.module(key)
+    assert isinstance(part.DESCRIPTION, str) and part.DESCRIPTION
+    assert issubclass(part.device_model(True) if key == "device" else part.SCHEMA, Strict)
+
+
+def test_the_estimates_of_the_shipped_scenes_are_positive_and_finite():
+    named = set()
+    for path in scenario.shipped():
+        scene = scenario.load(path)
+        est = analyses.estimate_seconds(scene)
+        assert list(est) == analyses.named(scene), path.stem
+        assert all(1.0 <= t < 3600 and math.isfinite(t) for t in est.values()), (path.stem, est)
+        named |= set(est)
+    assert named == set(analyses.MODULES)  # every analysis has a shipped scene that prices it
+
+
+def test_the_accuracy_studies_are_those_of_the_rooms():
+    assert set(analyses.accuracy_studies()) == {"statics", "transient", "estimation", "spinup"}
+
+
+# ---- docs/contributing.md followed once: a throwaway analysis, one file and one line --------------------
+
+ROOM = '''
+"""``analyses.area_base``: the area s = T_n / p over which a pressure p carries the nominal thrust T_n;
+at the nominal pressure, the area base s_B of the dimensionless groups (Pavlenko (2014), Eq. (2.18))."""
+
+from pydantic import Field
+
+from autobal.analyses import COST
+from autobal.analysis.result import Result
+from autobal.schema import Strict
+from autobal.units import Pressure
+
+DESCRIPTION = "area carrying the nominal thrust"
+NEEDS = "device"
+REPORT_SECTION = "area_base_section"
+
+
+class AreaBase(Strict):
+    """The pressure at which the area is reported."""
+
+    pressure: Pressure | None = Field(None, description="p; default the nominal pressure p_n")
+
+
+SETTINGS = AreaBase
+
+
+class AreaBaseResult(Result):
+    name = "area_base"
+
+    def __init__(self, area: float):
+        self.area = area
+
+    def to_dict(self) -> dict:
+        return {"area": self.area}
+
+    def summary(self) -> str:
+        return f"area carrying the nominal thrust: {self.area * 1e4:.4g} cm^2"
+
+
+def run(scene, settings: AreaBase) -> AreaBaseResult:
+    from autobal.parts.device import adapt
+
+    op = adapt(scene.device).operating
+    return AreaBaseResult(op.nominal_thrust / (settings.pressure or op.nominal_pressure))
+
+
+def estimate_seconds(settings: AreaBase) -> float:
+    return COST["start"]
+'''
+
+
+@pytest.fixture
+def area_base(tmp_path, monkeypatch):
+    """The throwaway room written as a file and registered with its one line of ``analyses.MODULES``."""
+    (tmp_path / "area_base_room.py").write_text(textwrap.dedent(ROOM))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setitem(analyses.MODULES, "area_base", "area_base_room")
+    scenario.analyses_model.cache_clear()  # the scene models are built from the registry once per combination
+    scenario.scenario_model.cache_clear()
+    yield
+    scenario.analyses_model.cache_clear()
+    scenario.scenario_model.cache_clear()
+    sys.modules.pop("area_base_room", None)
+
+
+def _scene(tmp_path, settings, device=True) -> str:
+    data = scenario.read(scenario.resolve("pump_pe600_statics"))
+    data["name"] = "area_base"
+    data["analyses"] = {"area_base": settings}
+    if not device:
+        del data["device"]
+    path = tmp_path / "area_base.yaml"
+    path.write_text(json.dumps(data))  # JSON is YAML
+    return str(path)
+
+
+@pytest.mark.cli
+def test_a_new_analysis_is_one_file_and_one_line(area_base, tmp_path):
+    scene = autobal.load(_scene(tmp_path, {"pressure": "20 MPa"}))
+    assert scene.analyses.area_base.pressure == 2e7  # validated by its schema, in SI
+    assert analyses.estimate_seconds(scene) == {"area_base": 1.0}
+    run = autobal.run(scene, out=tmp_path / "out")
+    # independent of the room: the thrust over 20 MPa from the scene's own numbers
+    thrust = scenario.read(scenario.resolve("pump_pe600_statics"))["device"]["operating"]["nominal_thrust"]
+    assert thrust == "3.3e5 N"
+    assert run["area_base"].area == pytest.approx(3.3e5 / 20e6, rel=1e-12)
+    out = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert out["area_base"]["area"] == pytest.approx(0.0165, rel=1e-12) and out["status"] == "ok"
+    # at the nominal pressure the area is the area base s_B of the device's dimensionless groups
+    nominal = autobal.run(autobal.load(_scene(tmp_path, {})))
+    from autobal.parts.device import design
+
+    assert nominal["area_base"].area == pytest.approx(design(scene.device).scales["s_B"], rel=1e-12)
+
+
+def test_a_new_analysis_has_its_settings_and_its_part_checked(area_base, tmp_path):
+    with pytest.raises(ScenarioError, match=r"analyses\.area_base\.pressure: .*pressure"):
+        autobal.load(_scene(tmp_path, {"pressure": "20 kg"}))
+    with pytest.raises(ScenarioError, match=r"analyses\.area_base\.thrust: unknown key"):
+        autobal.load(_scene(tmp_path, {"thrust": "1 kN"}))
+    with pytest.raises(ScenarioError, match=r"analyses\.area_base needs a device section"):
+        autobal.load(_scene(tmp_path, {}, device=False))
