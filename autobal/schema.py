@@ -11,9 +11,10 @@ from typing import Annotated, get_args
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 from pydantic.fields import FieldInfo
 
+from autobal.models.params import BIG
+
 # Dimensionless numbers: finite (every model refuses inf and nan) and at most 1e6 in magnitude, far beyond
 # any ratio, coefficient or weight of the sources; tighter bounds where physics gives them (PressureRatio).
-BIG = 1e6
 Positive = Annotated[float, Field(gt=0, le=BIG)]
 NonNegative = Annotated[float, Field(ge=0, le=BIG)]
 # p / p_B of a machine working near its nominal pressure p_B: 100 p_B is far beyond any discharge surge

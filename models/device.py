@@ -25,7 +25,7 @@ import casadi as ca
 import numpy as np
 
 from autobal.models import throttles as th
-from autobal.models.params import SIParams, si
+from autobal.models.params import BIG, SIParams, numbers, section, si
 from autobal.models.throttles import face_opening, flow, valve_opening
 
 if TYPE_CHECKING:
@@ -36,7 +36,7 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True)
 class Fluid(SIParams):
-    """Working fluid.
+    """The working fluid of the balancing device.
 
     Attributes
     ----------
@@ -48,9 +48,10 @@ class Fluid(SIParams):
         Gas only: pressure of normal conditions (Pavlenko (2014), Eq. (2.128)), Pa; NaN for a liquid.
     """
 
-    density: float = si("kg/m**3")
-    viscosity: float = si("Pa*s")
-    normal_pressure: float = si("Pa", math.nan)
+    density: float = si("kg/m**3", kind="density", doc="liquid density, or gas density at normal conditions (rho)")
+    viscosity: float = si("Pa*s", kind="viscosity", doc="dynamic viscosity (mu)")
+    normal_pressure: float = si("Pa", math.nan, kind="pressure", doc="gas only: pressure of the normal conditions "
+                                "of the density, Pavlenko (2014), Eq. (2.128)")
 
 
 @dataclass(frozen=True)
@@ -67,16 +68,16 @@ class Impeller(SIParams):
         Angular speed, rad/s.
     """
 
-    hub_radius: float = si("m")
-    shroud_radius: float = si("m")
-    outer_radius: float = si("m")
-    stages: int = si("")
-    speed: float = si("rad/s")
+    hub_radius: float = si("m", kind="length", doc="hub radius R0")
+    shroud_radius: float = si("m", kind="length", doc="shroud seal radius R1")
+    outer_radius: float = si("m", kind="length", doc="impeller outer radius R2")
+    stages: int = si("", doc="number of stages, 1 to 100", ge=1, le=100)
+    speed: float = si("rad/s", kind="angular speed", doc="rotational speed")
 
 
 @dataclass(frozen=True)
 class Operating(SIParams):
-    """Base values of the operating regime.
+    """Nominal operating data of the machine; the bases p_B and s_B of the dimensionless groups.
 
     Attributes
     ----------
@@ -94,12 +95,18 @@ class Operating(SIParams):
         Q_n, m^3/s (NaN if unknown; only for reporting Q_e / Q_n).
     """
 
-    nominal_pressure: float = si("Pa")
-    nominal_thrust: float = si("N")
-    drain_pressure: float = si("Pa", 0.0)
-    thrust_ratio: float = si("", math.nan)
-    impeller: Impeller | None = None
-    nominal_flow: float = si("m**3/s", math.nan)
+    nominal_pressure: float = si("Pa", kind="pressure", doc="nominal discharge pressure p_n = p_B, the pressure base")
+    nominal_thrust: float = si("N", kind="force", doc="nominal axial thrust T_n; the area base is s_B = T_n / p_n")
+    drain_pressure: float = si("Pa", 0.0, kind="pressure", doc="drain pressure p4 behind the outer seal", ge=0)
+    thrust_ratio: float = si("", math.nan, doc="b in tau = b psi1, dimensionless; computed from the impeller when "
+                             "omitted", gt=0, le=BIG)
+    impeller: Impeller | None = section("impeller data, to compute thrust_ratio", None)
+    nominal_flow: float = si("m**3/s", math.nan, kind="volume flow", doc="nominal flow Q_n of the machine, for "
+                             "Q_e / Q_n")
+
+    def __post_init__(self):
+        if numbers(self.thrust_ratio) and math.isnan(self.thrust_ratio) and self.impeller is None:
+            raise ValueError("give thrust_ratio (b) or impeller data to compute it")
 
 
 @dataclass(frozen=True)
@@ -112,9 +119,9 @@ class InnerSeal(SIParams):
         d, l, h, m.
     """
 
-    diameter: float = si("m")
-    length: float = si("m")
-    clearance: float = si("m")
+    diameter: float = si("m", kind="length", doc="seal diameter d1")
+    length: float = si("m", kind="length", doc="seal length l1")
+    clearance: float = si("m", kind="length", doc="radial clearance h1")
 
 
 @dataclass(frozen=True)
@@ -131,11 +138,11 @@ class OuterSeal(SIParams):
         lambda, dimensionless.
     """
 
-    diameter: float = si("m")
-    length: float = si("m")
-    clearance: float = si("m")
-    local_loss: float = si("", 1.5)
-    friction: float = si("", 0.06)
+    diameter: float = si("m", kind="length", doc="seal diameter d3")
+    length: float = si("m", kind="length", doc="seal length l3")
+    clearance: float = si("m", kind="length", doc="radial clearance h3")
+    local_loss: float = si("", 1.5, doc="local loss coefficient zeta_local, dimensionless", ge=0, le=BIG)
+    friction: float = si("", 0.06, doc="friction factor lambda, dimensionless", gt=0, le=BIG)
 
 
 @dataclass(frozen=True)
@@ -152,41 +159,53 @@ class Face(SIParams):
         lambda_T, dimensionless.
     """
 
-    inner_diameter: float = si("m")
-    outer_diameter: float = si("m")
-    base_gap: float = si("m")
-    friction: float = si("", 0.06)
+    inner_diameter: float = si("m", kind="length", doc="inner diameter of the face annulus")
+    outer_diameter: float = si("m", kind="length", doc="outer diameter of the face annulus; larger than "
+                               "inner_diameter")
+    base_gap: float = si("m", kind="length", doc="base face gap z_B = h_TB, the gap base")
+    friction: float = si("", 0.06, doc="friction factor lambda of the face gap, dimensionless", gt=0, le=BIG)
+
+    def __post_init__(self):
+        if numbers(self.outer_diameter, self.inner_diameter) and self.outer_diameter <= self.inner_diameter:
+            raise ValueError("outer_diameter must be larger than inner_diameter")
 
 
 @dataclass(frozen=True)
 class Disc(SIParams):
-    """Balance disc: its three throttles and the push-off preload F_pr (N)."""
+    """The balancing disc: inner seal, face throttle, outer seal and the push-off spring (preload F_pr, N)."""
 
-    inner_seal: InnerSeal
-    face: Face
-    outer_seal: OuterSeal
-    pushoff_force: float = si("N", 0.0)
+    inner_seal: InnerSeal = section("laminar inner seal (throttle 1)")
+    face: Face = section("face throttle (throttle T)")
+    outer_seal: OuterSeal = section("square-root-law outer seal (throttle 3)")
+    pushoff_force: float = si("N", 0.0, kind="force", doc="push-off spring force F_pr", ge=0)
+
+    def __post_init__(self):
+        d1, d2 = self.inner_seal.diameter, self.face.inner_diameter
+        if numbers(d1, d2) and d1 >= d2:
+            raise ValueError("inner_seal.diameter must be smaller than face.inner_diameter")
 
 
 @dataclass(frozen=True)
 class Tube(SIParams):
-    """Laminar round tube, g = pi d^4 / (192 mu l): diameter and length, m."""
+    """Laminar round tube, g = pi d^4 / (192 mu l) (the source's coefficient): diameter and length, m."""
 
-    diameter: float = si("m")
-    length: float = si("m")
+    diameter: float = si("m", kind="length", doc="bore diameter")
+    length: float = si("m", kind="length", doc="tube length")
 
 
 @dataclass(frozen=True)
 class Barrier(SIParams):
-    """Barrier supply: its throttle and the margin dpsi = (p_e - p1)/p_B (dimensionless set-point)."""
+    """The barrier chamber fed through a supply throttle at a regulated margin dpsi = (p_e - p1)/p_B above
+    discharge."""
 
-    supply_throttle: Tube
-    margin_ratio: float = si("")
+    supply_throttle: Tube = section("laminar supply throttle e")
+    margin_ratio: float = si("", doc="regulator set-point dpsi = (p_e - p1) / p_B, dimensionless, 0 to 10",
+                             gt=0, le=10)
 
 
 @dataclass(frozen=True)
 class Valve(SIParams):
-    """Regulator valve.
+    """The regulator's valve (an orifice).
 
     Attributes
     ----------
@@ -200,20 +219,21 @@ class Valve(SIParams):
         Travel limit, m; inf: unlimited.
     """
 
-    seat_diameter: float = si("m")
-    base_opening: float = si("m")
-    discharge_coefficient: float = si("", 0.54)
-    max_opening: float = si("m", math.inf)
+    seat_diameter: float = si("m", kind="length", doc="valve seat diameter d_c")
+    base_opening: float = si("m", kind="length", doc="base valve opening x_B, the opening base")
+    discharge_coefficient: float = si("", 0.54, doc="discharge coefficient, 0 to 1", gt=0, le=1)
+    max_opening: float = si("m", math.inf, kind="length", doc="valve travel limit; unlimited when omitted")
 
 
 @dataclass(frozen=True)
 class Regulator(SIParams):
-    """Pressure-drop regulator: supply pressure p_in (Pa), inlet throttle, valve, membrane area s_m (m^2)."""
+    """Pressure-drop regulator that holds the barrier pressure at a margin above discharge: supply pressure
+    p_in (Pa), inlet throttle, valve, membrane area s_m (m^2)."""
 
-    supply_pressure: float = si("Pa")
-    inlet_throttle: Tube
-    valve: Valve
-    membrane_area: float = si("m**2")
+    supply_pressure: float = si("Pa", kind="pressure", doc="supply pressure p_in of the regulator")
+    inlet_throttle: Tube = section("laminar inlet throttle")
+    valve: Valve = section("the valve")
+    membrane_area: float = si("m**2", kind="area", doc="membrane area s_m")
 
 
 @dataclass(frozen=True)
@@ -230,13 +250,18 @@ class DeviceParams(SIParams):
         Masses, springs, damping and volumes for the dynamic analyses (models/dynamics.py).
     """
 
-    medium: str
-    fluid: Fluid
-    operating: Operating
-    disc: Disc
-    barrier: Barrier
-    regulator: Regulator | None = None
+    medium: str = section("working medium: liquid (pump) or gas (compressor)", choices=("liquid", "gas"))
+    fluid: Fluid = section("fluid properties")
+    operating: Operating = section("nominal operating data and bases")
+    disc: Disc = section("the balancing disc")
+    barrier: Barrier = section("the barrier chamber")
+    regulator: Regulator | None = section("pressure-drop regulator; none: the barrier at a fixed margin", None)
     dynamics: DynamicData | None = None
+
+    def __post_init__(self):
+        p_n = self.fluid.normal_pressure
+        if self.medium == "gas" and numbers(p_n) and math.isnan(p_n):
+            raise ValueError("fluid.normal_pressure is required for a gas (Pa, e.g. '0.1 MPa')")
 
 
 @dataclass(frozen=True)

@@ -10,14 +10,46 @@ from __future__ import annotations
 import dataclasses
 
 _NO_DEFAULT = dataclasses.MISSING
+BIG = 1e6  # bound of a dimensionless number where physics gives none (the front door's autobal.schema.BIG)
 
 
-def si(unit: str, default=_NO_DEFAULT):
+def si(unit: str, default=_NO_DEFAULT, *, kind: str | None = None, doc: str = "", **bounds):
     """A dataclass field holding a float in the SI unit ``unit`` (e.g. "m", "Pa", "kg/m**3"; "" for a
-    dimensionless number)."""
+    dimensionless number), with what a scene schema derived from the class needs (autobal/parts/device.py).
+
+    Parameters
+    ----------
+    unit : str
+        The SI unit.
+    default : float, optional
+        The default; NaN (or inf where it means "unlimited") makes the field optional in a scene.
+    kind : str, optional
+        The quantity kind of a dimensional field ("length", "pressure", ...: the keys of the front door's
+        unit table), whose SI unit is ``unit``.
+    doc : str
+        Its meaning, with the source's symbol, for the schema reference.
+    **bounds
+        ``gt``, ``ge``, ``lt``, ``le``: its bounds; ``ge=0`` on a dimensional field admits zero.
+    """
+    metadata = {"unit": unit, "kind": kind, "doc": doc, "bounds": bounds}
     if default is _NO_DEFAULT:
-        return dataclasses.field(metadata={"unit": unit})
-    return dataclasses.field(default=default, metadata={"unit": unit})
+        return dataclasses.field(metadata=metadata)
+    return dataclasses.field(default=default, metadata=metadata)
+
+
+def numbers(*values) -> bool:
+    """All ``values`` are plain numbers (not CasADi expressions: a design substitutes symbols into the
+    parameter objects, and the checks across fields of ``__post_init__`` apply to numbers only)."""
+    return all(isinstance(v, int | float) for v in values)
+
+
+def section(doc: str, default=_NO_DEFAULT, choices: tuple | None = None):
+    """A dataclass field holding a part (a nested parameter object) or a choice among ``choices``, with its
+    meaning ``doc`` for the schema reference; default None: the part is optional."""
+    metadata = {"doc": doc, "choices": choices}
+    if default is _NO_DEFAULT:
+        return dataclasses.field(metadata=metadata)
+    return dataclasses.field(default=default, metadata=metadata)
 
 
 class SIParams:

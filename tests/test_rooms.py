@@ -153,3 +153,70 @@ def test_a_new_analysis_has_its_settings_and_its_part_checked(area_base, tmp_pat
         autobal.load(_scene(tmp_path, {"thrust": "1 kN"}))
     with pytest.raises(ScenarioError, match=r"analyses\.area_base needs a device section"):
         autobal.load(_scene(tmp_path, {}, device=False))
+
+
+# ---- each device parameter declared once: the scene schema derived from models/device.py ----------------
+
+def _device_dataclasses():
+    import dataclasses
+
+    from autobal.models import device as dv
+
+    seen, queue = [], [dv.DeviceParams]
+    while queue:
+        cls = queue.pop()
+        seen.append(cls)
+        for f in dataclasses.fields(cls):
+            part = getattr(dv, str(f.type).split(" ")[0], None)
+            if dataclasses.is_dataclass(part) and part not in seen:
+                queue.append(part)
+    return seen
+
+
+def test_every_device_parameter_is_declared_with_its_unit_kind_and_meaning():
+    import dataclasses
+
+    from autobal.units import DIMENSIONS
+
+    classes = _device_dataclasses()
+    assert {c.__name__ for c in classes} >= {"Fluid", "Impeller", "Operating", "InnerSeal", "OuterSeal", "Face",
+                                             "Disc", "Tube", "Barrier", "Valve", "Regulator", "DeviceParams"}
+    for cls in classes:
+        for f in dataclasses.fields(cls):
+            if f.name == "dynamics":
+                continue
+            assert f.metadata.get("doc"), f"{cls.__name__}.{f.name}"
+            if f.metadata.get("kind"):  # the declared SI unit is the unit of its quantity kind
+                assert DIMENSIONS[f.metadata["kind"]][1] == f.metadata["unit"], f"{cls.__name__}.{f.name}"
+            elif "unit" in f.metadata:
+                assert f.metadata["unit"] == "" and f.metadata["bounds"], f"{cls.__name__}.{f.name}"
+
+
+def test_the_device_schema_is_the_dataclasses_and_the_adapter_builds_them(tmp_path):
+    from autobal.models import device as dv
+    from autobal.parts import device
+
+    scene = scenario.load("compressor_k180_dynamics")  # a gas device with a regulator and a travel limit
+    params = device.adapt(scene.device)
+    assert isinstance(params, dv.DeviceParams) and params.dynamics is not None
+    assert params.regulator.valve.max_opening == scene.device.regulator.valve.max_opening
+    # an omitted optional value is the dataclass' default: the thrust ratio NaN (from the impeller), no travel
+    # limit inf, no normal pressure (a liquid) NaN
+    data = scenario.read(scenario.resolve("pump_pe600_statics"))
+    del data["device"]["operating"]["thrust_ratio"], data["device"]["regulator"]["valve"]["max_opening"]
+    path = tmp_path / "omitted.yaml"
+    path.write_text(json.dumps(data))
+    omitted = device.adapt(scenario.load(path).device)
+    assert math.isnan(omitted.operating.thrust_ratio) and math.isnan(omitted.fluid.normal_pressure)
+    assert omitted.regulator.valve.max_opening == math.inf
+    assert device.design(scenario.load(path).device).groups.b == pytest.approx(0.8327, abs=5e-5)  # App. A data
+    assert set(device.schema(dv.Face).model_fields) == {"inner_diameter", "outer_diameter", "base_gap", "friction"}
+    # the checks across fields live with the dataclass and refuse a scene with one line naming the section
+    data = scenario.read(scenario.resolve("pump_pe600_statics"))
+    data["device"]["disc"]["face"]["outer_diameter"] = data["device"]["disc"]["face"]["inner_diameter"]
+    path = tmp_path / "bad.yaml"
+    path.write_text(json.dumps(data))
+    with pytest.raises(ScenarioError, match=r"device\.disc\.face: outer_diameter must be larger than inner_diameter"):
+        scenario.load(path)
+    with pytest.raises(ValueError, match="outer_diameter must be larger"):
+        dv.Face(0.2, 0.1, 1e-4)

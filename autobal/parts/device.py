@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import typing
 from functools import cache
 from typing import Annotated, Literal
 
@@ -19,166 +20,76 @@ from pydantic import Field, create_model, model_validator
 from autobal.errors import ScenarioError
 from autobal.models import device as dv
 from autobal.models.dynamics import DynamicData, squeeze_damping
-from autobal.schema import NonNegative, Positive, Strict
-from autobal.units import (
-    AngularSpeed,
-    Area,
-    Density,
-    Force,
-    ForceOrZero,
-    Length,
-    Pressure,
-    PressureOrZero,
-    Viscosity,
-    VolumeFlow,
-)
+from autobal.schema import Strict
+from autobal.units import quantity
 
 DESCRIPTION = "the axial balancing device (statics, dynamics, Monte Carlo, fits)"
 DYNAMICS_DESCRIPTION = "masses, springs, volumes for the frequency, stability and transient analyses"
 
 
-def _d(text: str, default=..., **kw):
-    """A field with its meaning for the schema reference (units are added by the quantity types)."""
-    return Field(default, description=text, **kw)
+# The schema of each section is derived from the SI parameter dataclass of autobal.models.device, the one
+# declaration of each parameter: its unit and quantity kind, meaning, bounds and default (``si(...)``,
+# ``section(...)``) and the checks across its fields (``__post_init__``).  A NaN or inf default (a value the
+# model reads as "not given" or "unlimited") is an optional key of the scene; None in the scene is that default.
+_PARAMS: dict[type, type] = {}  # derived schema -> its dataclass
 
 
-class Fluid(Strict):
-    """The working fluid of the balancing device."""
-
-    density: Density = _d("liquid density, or gas density at normal conditions (rho)")
-    viscosity: Viscosity = _d("dynamic viscosity (mu)")
-    normal_pressure: Pressure | None = _d("gas only: pressure of the normal conditions of the density, "
-                                          "Pavlenko (2014), Eq. (2.128)", None)
-
-
-class Impeller(Strict):
-    """Impeller data for the axial-force ratio b, Pavlenko (2014), Eq. (2.18) and Appendix A."""
-
-    hub_radius: Length = _d("hub radius R0")
-    shroud_radius: Length = _d("shroud seal radius R1")
-    outer_radius: Length = _d("impeller outer radius R2")
-    stages: Annotated[int, Field(ge=1, le=100)] = _d("number of stages, 1 to 100")
-    speed: AngularSpeed = _d("rotational speed")
-
-
-class Operating(Strict):
-    """Nominal operating data of the machine; the bases p_B and s_B of the dimensionless groups."""
-
-    nominal_pressure: Pressure = _d("nominal discharge pressure p_n = p_B, the pressure base")
-    nominal_thrust: Force = _d("nominal axial thrust T_n; the area base is s_B = T_n / p_n")
-    nominal_flow: VolumeFlow | None = _d("nominal flow Q_n of the machine, for Q_e / Q_n", None)
-    drain_pressure: PressureOrZero = _d("drain pressure p4 behind the outer seal", 0.0)
-    thrust_ratio: Positive | None = _d("b in tau = b psi1, dimensionless; computed from the impeller when "
-                                       "omitted", None)
-    impeller: Impeller | None = _d("impeller data, to compute thrust_ratio", None)
+class _Derived(Strict):
+    """A section whose schema is derived from a parameter dataclass; its values are checked by building it."""
 
     @model_validator(mode="after")
-    def _b_given(self):
-        if self.thrust_ratio is None and self.impeller is None:
-            raise ValueError("give thrust_ratio (b) or impeller data to compute it")
+    def _dataclass_checks(self):
+        to_params(self)
         return self
 
 
-class InnerSeal(Strict):
-    """Laminar annular bushing seal, g1 = pi d h^3 / (12 mu l)."""
-
-    diameter: Length = _d("seal diameter d1")
-    length: Length = _d("seal length l1")
-    clearance: Length = _d("radial clearance h1")
-
-
-class OuterSeal(Strict):
-    """Square-root-law annular seal, zeta = zeta_local + lambda l / (2h)."""
-
-    diameter: Length = _d("seal diameter d3")
-    length: Length = _d("seal length l3")
-    clearance: Length = _d("radial clearance h3")
-    local_loss: NonNegative = _d("local loss coefficient zeta_local, dimensionless", 1.5)
-    friction: Positive = _d("friction factor lambda, dimensionless", 0.06)
-
-
-class Face(Strict):
-    """Face throttle between the disc and the pad; conductance g_TB u^(3/2)."""
-
-    inner_diameter: Length = _d("inner diameter of the face annulus")
-    outer_diameter: Length = _d("outer diameter of the face annulus; larger than inner_diameter")
-    base_gap: Length = _d("base face gap z_B = h_TB, the gap base")
-    friction: Positive = _d("friction factor lambda of the face gap, dimensionless", 0.06)
-
-    @model_validator(mode="after")
-    def _annulus(self):
-        if self.outer_diameter <= self.inner_diameter:
-            raise ValueError("outer_diameter must be larger than inner_diameter")
-        return self
-
-
-class Disc(Strict):
-    """The balancing disc: inner seal, face throttle, outer seal and the push-off spring."""
-
-    inner_seal: InnerSeal = _d("laminar inner seal (throttle 1)")
-    face: Face = _d("face throttle (throttle T)")
-    outer_seal: OuterSeal = _d("square-root-law outer seal (throttle 3)")
-    pushoff_force: ForceOrZero = _d("push-off spring force F_pr", 0.0)
-
-    @model_validator(mode="after")
-    def _seal_inside_face(self):
-        if self.inner_seal.diameter >= self.face.inner_diameter:
-            raise ValueError("inner_seal.diameter must be smaller than face.inner_diameter")
-        return self
-
-
-class Tube(Strict):
-    """Laminar round tube, g = pi d^4 / (192 mu l) (the source's coefficient)."""
-
-    diameter: Length = _d("bore diameter")
-    length: Length = _d("tube length")
-
-
-class Barrier(Strict):
-    """The barrier chamber fed through a supply throttle at a regulated margin above discharge."""
-
-    supply_throttle: Tube = _d("laminar supply throttle e")
-    margin_ratio: Annotated[float, Field(gt=0, le=10)] = _d(
-        "regulator set-point dpsi = (p_e - p1) / p_B, dimensionless, 0 to 10")
-
-
-class Valve(Strict):
-    """The regulator's valve (an orifice)."""
-
-    seat_diameter: Length = _d("valve seat diameter d_c")
-    base_opening: Length = _d("base valve opening x_B, the opening base")
-    discharge_coefficient: Annotated[float, Field(gt=0, le=1)] = _d("discharge coefficient, 0 to 1", 0.54)
-    max_opening: Length | None = _d("valve travel limit; unlimited when omitted", None)
-
-
-class Regulator(Strict):
-    """Pressure-drop regulator that holds the barrier pressure at a margin above discharge."""
-
-    supply_pressure: Pressure = _d("supply pressure p_in of the regulator")
-    inlet_throttle: Tube = _d("laminar inlet throttle")
-    valve: Valve = _d("the valve")
-    membrane_area: Area = _d("membrane area s_m")
-
-
-class DeviceParts(Strict):
-    """The axial balancing device without its dynamics section (see :func:`device_model`)."""
-
-    medium: Literal["liquid", "gas"] = _d("working medium: liquid (pump) or gas (compressor)")
-    fluid: Fluid = _d("fluid properties")
-    operating: Operating = _d("nominal operating data and bases")
-    disc: Disc = _d("the balancing disc")
-    barrier: Barrier = _d("the barrier chamber")
-    regulator: Regulator | None = _d("pressure-drop regulator; none: the barrier at a fixed margin", None)
-
-    @model_validator(mode="after")
-    def _gas_needs_normal_pressure(self):
-        if self.medium == "gas" and self.fluid.normal_pressure is None:
-            raise ValueError("fluid.normal_pressure is required for a gas (Pa, e.g. '0.1 MPa')")
-        return self
+def _optional(value) -> bool:
+    return isinstance(value, float) and not math.isfinite(value)
 
 
 @cache
-def device_model(dynamics: bool = True) -> type[DeviceParts]:
+def schema(cls: type) -> type[Strict]:
+    """The pydantic schema of a scene section derived from the parameter dataclass ``cls`` of
+    :mod:`autobal.models.device` (its ``dynamics`` field left out: see :func:`device_model`)."""
+    hints = typing.get_type_hints(cls, localns={"DynamicData": object})
+    fields = {}
+    for f in dataclasses.fields(cls):
+        if f.name == "dynamics":
+            continue
+        meta, hint = f.metadata, hints[f.name]
+        default = ... if f.default is dataclasses.MISSING else f.default
+        if meta.get("choices"):
+            typ = Literal[meta["choices"]]
+        elif "unit" in meta:  # a number: a quantity of its kind, or a dimensionless number within its bounds
+            bounds = meta["bounds"]
+            typ = (quantity(meta["kind"], "nonnegative" if bounds.get("ge") == 0 else "positive") if meta["kind"]
+                   else Annotated[hint, Field(**bounds)])
+            if _optional(default):
+                typ, default = typ | None, None
+        else:  # a part: its own derived schema
+            part = next((a for a in typing.get_args(hint) if a is not type(None)), hint)
+            typ = schema(part) | None if default is None else schema(part)
+        fields[f.name] = (typ, Field(default, description=meta.get("doc")))
+    model = create_model(cls.__name__, __base__=_Derived, __module__=__name__, __doc__=cls.__doc__, **fields)
+    _PARAMS[model] = cls
+    return model
+
+
+def to_params(section: Strict):
+    """A validated section of a derived schema as its parameter dataclass (SI): None becomes the
+    dataclass' default; ``device.dynamics`` is left out (:func:`dynamic_data`)."""
+    cls = next(_PARAMS[c] for c in type(section).__mro__ if c in _PARAMS)
+    kw = {}
+    for f in dataclasses.fields(cls):
+        value = getattr(section, f.name, None)
+        if f.name == "dynamics" or value is None:
+            continue
+        kw[f.name] = to_params(value) if isinstance(value, Strict) else value
+    return cls(**kw)
+
+
+@cache
+def device_model(dynamics: bool = True) -> type[Strict]:
     """The ``Device`` model, with the schema of its ``dynamics`` section or (False) without it.
 
     Parameters
@@ -191,19 +102,15 @@ def device_model(dynamics: bool = True) -> type[DeviceParts]:
     type
         A pydantic model named ``Device``.
     """
-    schema = None
+    section = None
     if dynamics:
         from autobal.parts.device_dynamics import Dynamics
 
-        schema = Dynamics | None
-    return create_model("Device", __base__=DeviceParts, __module__=__name__,
+        section = Dynamics | None
+    return create_model("Device", __base__=schema(dv.DeviceParams), __module__=__name__,
                         __doc__="The axial balancing device, Pavlenko (2014), ch. 2.",
-                        dynamics=(schema, _d(DYNAMICS_DESCRIPTION, None)))
+                        dynamics=(section, Field(None, description=DYNAMICS_DESCRIPTION)))
 
-
-
-def _opt(v, default=math.nan) -> float:
-    return default if v is None else v
 
 
 def adapt(d) -> dv.DeviceParams:
@@ -219,36 +126,10 @@ def adapt(d) -> dv.DeviceParams:
     DeviceParams
         With ``dynamics`` when the section has ``device.dynamics``.
     """
-    fl, op, disc = d.fluid, d.operating, d.disc
-    imp = op.impeller
-    params = dv.DeviceParams(
-        medium=d.medium,
-        fluid=dv.Fluid(density=fl.density, viscosity=fl.viscosity, normal_pressure=_opt(fl.normal_pressure)),
-        operating=dv.Operating(
-            nominal_pressure=op.nominal_pressure, nominal_thrust=op.nominal_thrust,
-            drain_pressure=op.drain_pressure, thrust_ratio=_opt(op.thrust_ratio),
-            impeller=None if imp is None else dv.Impeller(hub_radius=imp.hub_radius, shroud_radius=imp.shroud_radius,
-                                                          outer_radius=imp.outer_radius, stages=imp.stages,
-                                                          speed=imp.speed),
-            nominal_flow=_opt(op.nominal_flow)),
-        disc=dv.Disc(inner_seal=dv.InnerSeal(**disc.inner_seal.model_dump()), face=dv.Face(**disc.face.model_dump()),
-                     outer_seal=dv.OuterSeal(**disc.outer_seal.model_dump()), pushoff_force=disc.pushoff_force),
-        barrier=dv.Barrier(supply_throttle=dv.Tube(**d.barrier.supply_throttle.model_dump()),
-                           margin_ratio=d.barrier.margin_ratio),
-        regulator=None if d.regulator is None else _regulator(d.regulator),
-    )
+    params = to_params(d)
     if d.dynamics is None:
         return params
     return dataclasses.replace(params, dynamics=dynamic_data(d, params))
-
-
-def _regulator(r) -> dv.Regulator:
-    v = r.valve
-    return dv.Regulator(supply_pressure=r.supply_pressure, inlet_throttle=dv.Tube(**r.inlet_throttle.model_dump()),
-                        valve=dv.Valve(seat_diameter=v.seat_diameter, base_opening=v.base_opening,
-                                       discharge_coefficient=v.discharge_coefficient,
-                                       max_opening=_opt(v.max_opening, math.inf)),
-                        membrane_area=r.membrane_area)
 
 
 def dynamic_data(d, params: dv.DeviceParams) -> DynamicData:
