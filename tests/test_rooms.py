@@ -220,3 +220,12 @@ def test_the_device_schema_is_the_dataclasses_and_the_adapter_builds_them(tmp_pa
         scenario.load(path)
     with pytest.raises(ValueError, match="outer_diameter must be larger"):
         dv.Face(0.2, 0.1, 1e-4)
+
+
+def test_a_design_at_its_sample_bound_is_announced_as_long():
+    # the design's estimate (it had none before the rooms): the shipped scenes are short, 100,000 samples not
+    small = scenario.load("pump_pe600_design")
+    big = scenario.load("pump_pe600_design", overrides={"analyses.design.samples": 100_000})
+    assert analyses.long_run_note(small) is None
+    assert analyses.estimate_seconds(big)["design"] > 400 * analyses.estimate_seconds(small)["design"] / 2
+    assert analyses.long_run_note(big).startswith("this run is estimated to take about")
