@@ -207,9 +207,8 @@ def _parameter_unit(path: str, results: dict) -> str | None:
     m = re.search(r"\.(\w+)\.(values|nominal)$", path) or re.search(r"nearest_stable\.(\w+)$", path)
     if m is None or not path.startswith("stability."):
         return None
-    from autobal.parts.device_dynamics import (
-        PARAMETERS,  # a stability report only: a statics run builds no dynamics schema
-    )
+    # a stability report only: a statics run builds no dynamics schema
+    from autobal.parts.device_dynamics import PARAMETERS
 
     name = m.group(1)
     if name in ("x", "y"):  # maps: the axis names its parameter

@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 
 _NO_DEFAULT = dataclasses.MISSING
-BIG = 1e6  # bound of a dimensionless number where physics gives none (the front door's autobal.schema.BIG)
+BIG = 1e6  # bound of a dimensionless number where physics gives none (autobal.schema's too)
 
 
 def si(unit: str, default=_NO_DEFAULT, *, kind: str | None = None, doc: str = "", **bounds):
