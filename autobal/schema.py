@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Annotated, get_args
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 from pydantic.fields import FieldInfo
 
 # Dimensionless numbers: finite (every model refuses inf and nan) and at most 1e6 in magnitude, far beyond
@@ -37,10 +37,40 @@ def _unit_text(extra, annotation) -> str | None:
     return None
 
 
+def _has_bool(value) -> bool:
+    """A boolean in ``value``, or in its lists, tuples and mapping values."""
+    if isinstance(value, bool):
+        return True
+    items = value.values() if isinstance(value, dict) else value if isinstance(value, list | tuple) else ()
+    return any(_has_bool(v) for v in items)
+
+
+def _numbers_only(annotation) -> bool:
+    """int or float appear in the type ``annotation`` and bool does not."""
+    seen = set()
+
+    def walk(a):
+        seen.add("bool" if a is bool else "number" if a in (int, float) else "")
+        for arg in get_args(a):
+            walk(arg)
+
+    walk(annotation)
+    return "number" in seen and "bool" not in seen
+
+
 class Strict(BaseModel):
-    """A scene section: unknown keys are refused, values are frozen, inf and nan refused."""
+    """A scene section: unknown keys are refused, values are frozen, inf and nan refused, and so are
+    booleans where a number is expected (pydantic's lax mode reads YAML's yes/on/true as 1)."""
 
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _no_boolean_numbers(cls, value, info: ValidationInfo):
+        if _has_bool(value) and _numbers_only(cls.model_fields[info.field_name].annotation):
+            raise ValueError("a boolean where a number is expected (YAML reads yes/no, on/off, true/false as "
+                             "booleans)")
+        return value
 
     @classmethod
     def __pydantic_init_subclass__(cls, **kwargs):
