@@ -23,18 +23,38 @@ MAX_SWEEP_POINTS = 100_000  # a sweep of the statics: ~2 ms per point
 MAX_FORCE_GAP_POINTS = 10_000  # the force-gap characteristic: one IPOPT solve per point
 
 
-def _unit_text(extra, annotation) -> str | None:
-    """The unit text of a quantity field, also inside ``X | None`` and lists."""
-    if isinstance(extra, dict) and "unit_text" in extra:
-        return extra["unit_text"]
+def _quantity_extra(extra, annotation, key: str) -> str | None:
+    """``key`` ("unit_text", "kind") of a quantity field (:func:`autobal.units.quantity`), also inside
+    ``X | None`` and lists."""
+    if isinstance(extra, dict) and key in extra:
+        return extra[key]
     for meta in getattr(annotation, "__metadata__", ()):
         if isinstance(meta, FieldInfo) and isinstance(meta.json_schema_extra, dict):
-            return meta.json_schema_extra.get("unit_text")
+            return meta.json_schema_extra.get(key)
     for arg in get_args(annotation):
-        text = _unit_text(None, arg)
+        text = _quantity_extra(None, arg, key)
         if text:
             return text
     return None
+
+
+def quantities(model: BaseModel, kinds, path: str = "") -> list[tuple[str, object, str]]:
+    """(dotted path, value in SI, kind) of every quantity field of ``model`` (a validated scene or a part
+    of it) whose kind is one of ``kinds``; a list field gives its list."""
+    out = []
+    for name, field in type(model).model_fields.items():
+        value, where = getattr(model, name), f"{path}{name}"
+        kind = _quantity_extra(field.json_schema_extra, field.annotation, "kind")
+        if isinstance(value, BaseModel):
+            out += quantities(value, kinds, where + ".")
+            continue
+        if isinstance(value, dict | list | tuple):
+            for k, v in value.items() if isinstance(value, dict) else enumerate(value):
+                if isinstance(v, BaseModel):
+                    out += quantities(v, kinds, f"{where}.{k}.")
+        if value is not None and kind in kinds:
+            out.append((where, value, kind))
+    return out
 
 
 def _has_bool(value) -> bool:
@@ -79,7 +99,7 @@ class Strict(BaseModel):
         super().__pydantic_init_subclass__(**kwargs)
         changed = False
         for f in cls.model_fields.values():
-            text = _unit_text(f.json_schema_extra, f.annotation)
+            text = _quantity_extra(f.json_schema_extra, f.annotation, "unit_text")
             if text and text not in (f.description or ""):
                 f.description = f"{f.description}; {text}" if f.description else text
                 changed = True

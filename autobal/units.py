@@ -92,9 +92,15 @@ def _a(kind: str) -> str:
     return f"{'an' if kind[0] in 'aeiou' else 'a'} {kind}"
 
 
+def clip(text: str, width: int = 40) -> str:
+    """``text`` for a one-line message: control characters escaped (a newline as \\n), cut to its first
+    30 characters and its length if longer than ``width``."""
+    one = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text[:width + 1])
+    return one if len(text) <= width else f"{one[:30]}... ({len(text)} characters)"
+
+
 def _shown(text: str) -> str:
-    """``text`` quoted for a one-line message, cut to 40 characters (with its length) if longer."""
-    return repr(text) if len(text) <= 40 else f"{text[:30]!r}... ({len(text)} characters)"
+    return f"'{clip(text)}'"
 
 
 @cache
@@ -145,12 +151,14 @@ def _fast(unit: str, kind: str) -> float | None:
 TURN = 2 * math.pi  # rad in one revolution
 # angular kind -> the power k of its SI unit rad/s^k
 ANGULAR = {"angular speed": 1, "angular acceleration": 2, "angular jerk": 3}
-# angles in rad, and rotational frequencies n in rad/s (one revolution per unit time is 2 pi rad)
-_ANGLES = {"rad": 1.0, "deg": math.pi / 180, "°": math.pi / 180, "r": TURN, "rev": TURN, "turn": TURN}
-_ROTATIONAL_FREQUENCIES = {"Hz": TURN, "rps": TURN, "rpm": TURN / 60}
-# names (also pint's long ones) of angles and rotational frequencies, refused on a rate in 1/s
-_ROTATIONAL_NAMES = {*_ANGLES, *_ROTATIONAL_FREQUENCIES, "radian", "degree", "revolution", "cycle", "hertz",
-                     "revolutions_per_minute", "revolutions_per_second"}
+# angles in rad, and rotational frequencies n in rad/s (one revolution per unit time is 2 pi rad), with the
+# long names pint writes (the unit of a pint Quantity given to autobal.load(set=...)) and its time units
+_ANGLES = {"rad": 1.0, "deg": math.pi / 180, "°": math.pi / 180, "r": TURN, "rev": TURN, "turn": TURN,
+           "radian": 1.0, "degree": math.pi / 180, "revolution": TURN}
+_ROTATIONAL_FREQUENCIES = {"Hz": TURN, "rps": TURN, "rpm": TURN / 60, "hertz": TURN,
+                           "revolutions_per_second": TURN, "revolutions_per_minute": TURN / 60}
+_LONG_TIMES = {"second": 1.0, "millisecond": 1e-3, "minute": 60.0, "hour": 3600.0}
+_ROTATIONAL_NAMES = {*_ANGLES, *_ROTATIONAL_FREQUENCIES, "cycle"}  # refused on a rate in 1/s
 _WRITE = {1: "rad/s, deg/s, or a rotational frequency n in Hz, rps, rpm, r/min or 1/min (omega = 2 pi n)",
           2: "rad/s^2, deg/s^2, or Hz/s, rpm/s (2 pi times the rate of change of n)",
           3: "rad/s^3, deg/s^3, or Hz/s^2, rpm/s^2 (2 pi times the second derivative of n)"}
@@ -181,12 +189,12 @@ def _angular(unit: str, kind: str) -> float:
         raise ValueError(f"{_shown(text)} is not a unit of {_a(kind)}: write {_WRITE[k]}")
     factor, angle, time, per_minute = 1.0, 0, 0, False
     for name, n in powers:
-        rotation, plain = _rotation(name), _name(name)
+        rotation, plain = _rotation(name), (_LONG_TIMES[name], (0, 0, 1)) if name in _LONG_TIMES else _name(name)
         if rotation is not None:
             factor, angle, time = factor * rotation[0] ** n, angle + n, time + rotation[1] * n
         elif plain is not None and plain[1] == (0, 0, 1):
             factor, time = factor * plain[0] ** n, time + n
-            per_minute = per_minute or (name == "min" and n == -1)
+            per_minute = per_minute or (name in ("min", "minute") and n == -1)
         else:
             raise ValueError(f"{name!r} is not a unit of {_a(kind)}: write {_WRITE[k]}")
     if angle == 0 and per_minute:  # min^-1 is rpm as datasheets write it (DIN 1301-2): revolutions per minute
@@ -198,6 +206,18 @@ def _angular(unit: str, kind: str) -> float:
     if (angle, time) != (1, -k):
         raise ValueError(f"{text!r} is not a unit of {_a(kind)}: write {_WRITE[k]}")
     return factor
+
+
+def angular_text(value, kind: str) -> str:
+    """An angular ``value`` in SI (a number, or a list of them) as a person reads it: in rad/s and rpm
+    (rad/s^2 and rpm/s, rad/s^3 and rpm/s^2), e.g. ``"659.73 rad/s (6300 rpm)"``."""
+    k = ANGULAR[kind]
+    si, rpm = ("rad/s", "rpm") if k == 1 else (f"rad/s^{k}", "rpm/s" if k == 2 else f"rpm/s^{k - 1}")
+
+    def shown(v, scale):
+        return f"[{', '.join(shown(x, scale) for x in v)}]" if isinstance(v, list | tuple) else f"{v * scale:.5g}"
+
+    return f"{shown(value, 1.0)} {si} ({shown(value, 60 / TURN)} {rpm})"
 
 
 def _refuse_rotational(unit: str, kind: str) -> None:
