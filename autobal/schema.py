@@ -66,11 +66,13 @@ def _has_bool(value) -> bool:
 
 
 def _numbers_only(annotation) -> bool:
-    """int or float appear in the type ``annotation`` and bool does not."""
+    """int or float appear in the type ``annotation``, and neither bool nor a model (which checks its own
+    fields) does."""
     seen = set()
 
     def walk(a):
-        seen.add("bool" if a is bool else "number" if a in (int, float) else "")
+        model = isinstance(a, type) and issubclass(a, BaseModel)
+        seen.add("bool" if a is bool or model else "number" if a in (int, float) else "")
         for arg in get_args(a):
             walk(arg)
 

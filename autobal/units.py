@@ -62,7 +62,7 @@ _FACTOR = rf"(?:{_NAME}(?: *(?:\^|\*\*) *-?\d)?)"
 # only plain spaces, and no two ways to read a run of them (linear time)
 _UNIT = re.compile(rf"(?:1 */ *)?{_FACTOR}(?:(?: *(?:\*(?!\*)|/) *| +){_FACTOR})*")
 # applied to the stripped text: the number, then the unit (everything after it, newlines included)
-_QUANTITY = re.compile(rf"({_NUMBER}) *(.*)", re.DOTALL)
+_QUANTITY = re.compile(rf"({_NUMBER})\s*(.*)", re.DOTALL)
 
 
 # The plain SI-prefixed units read without pint (pint's import and registry take about 0.3 s of CPU, a
@@ -323,15 +323,12 @@ def to_si(value: object, kind: str) -> float:
     number, unit = float(m.group(1)), m.group(2)
     if not unit:
         raise ValueError(f"{_shown(text)} has no unit: write {_a(kind)} with its unit, e.g. '{example}'")
-    if kind in ANGULAR:
-        try:
-            return _finite(text, kind, number, number * _angular(unit, kind))
-        except ValueError as exc:
-            raise ValueError(f"{_shown(text)}: {exc}") from None
     try:
-        _refuse_rotational(unit, kind)
+        factor = _angular(unit, kind) if kind in ANGULAR else _refuse_rotational(unit, kind)
     except ValueError as exc:
         raise ValueError(f"{_shown(text)}: {exc}") from None
+    if factor is not None:
+        return _finite(text, kind, number, number * factor)
     fast = _fast(unit, kind)
     if fast is not None:
         return _finite(text, kind, number, number * fast)
