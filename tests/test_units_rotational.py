@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 import yaml
+from pydantic import ValidationError
 
 from autobal import api, cli, scenario, units
 from autobal.errors import ScenarioError
@@ -231,6 +232,40 @@ def test_a_boolean_is_refused_where_a_number_is_expected(tmp_path, capsys, path,
     assert cli.main(["check", str(p)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and f"{path}: " in err[0] and ("boolean" in err[0] or "with a unit" in err[0]), err
+
+
+def _strict_models():
+    import importlib
+
+    from autobal.schema import Strict
+
+    for name in ("scenario", "schema_rotor", "schema_dynamics", "schema_design", "schema_estimation",
+                 "schema_liquid_balancer", "schema_reliability", "schema_ross"):
+        importlib.import_module(f"autobal.{name}")
+    todo, seen = [Strict], set()
+    while todo:
+        for sub in todo.pop().__subclasses__():
+            if sub not in seen:
+                seen.add(sub)
+                todo.append(sub)
+    return sorted(seen, key=lambda c: (c.__module__, c.__qualname__))
+
+
+def test_every_numeric_field_of_every_scene_section_refuses_a_boolean():
+    from autobal.schema import _numbers_only
+
+    checked = 0
+    for cls in _strict_models():
+        for name, field in cls.model_fields.items():
+            if not _numbers_only(field.annotation):
+                continue
+            with pytest.raises(ValidationError) as err:
+                cls.model_validate({name: True})
+            mine = [e for e in err.value.errors() if e["loc"][:1] == (name,)]
+            assert mine and ("a boolean where a number is expected" in mine[0]["msg"]
+                             or "with a unit" in mine[0]["msg"]), (cls.__qualname__, name, mine)
+            checked += 1
+    assert checked > 150  # the sections' int, float, ratio and quantity fields
 
 
 def test_an_integer_still_passes_for_a_float_field():
