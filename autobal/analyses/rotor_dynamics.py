@@ -17,7 +17,8 @@ NEEDS = "rotor"
 REPORT_SECTION = "rotor_dynamics_section"
 Time = quantity("time")
 AngularAcceleration = quantity("angular acceleration")
-RateOrZero = quantity("angular speed", "nonnegative")  # 1/s: speeds that may be 0 and chi/m1 rates
+SpeedOrZero = quantity("angular speed", "nonnegative")
+RateOrZero = quantity("rate", "nonnegative")  # n = chi/m1, 1/s
 Fraction = Annotated[float, Field(gt=0, le=1)]
 
 
@@ -33,7 +34,7 @@ class Steps(Strict):
     """Speed steps (4)-(7), Figs 3-4: closed form beside CVODES, for each psi."""
 
     psi: Annotated[list[Fraction], Field(max_length=100)] = [1.0, 0.75, 0.5, 0.25]
-    steps: list[tuple[RateOrZero, RateOrZero]] = Field(max_length=100, description="(from, to) angular speeds")
+    steps: list[tuple[SpeedOrZero, SpeedOrZero]] = Field(max_length=100, description="(from, to) angular speeds")
     duration: Time = 0.6
 
 

@@ -20,7 +20,7 @@ Time = quantity("time")
 TimeOrZero = quantity("time", "nonnegative")
 AngularAcceleration = quantity("angular acceleration")
 AngularJerk = quantity("angular jerk")
-RateOrZero = quantity("angular speed", "nonnegative")  # 1/s: speeds that may be 0
+SpeedOrZero = quantity("angular speed", "nonnegative")
 
 
 class Spinup(Strict):
@@ -28,7 +28,7 @@ class Spinup(Strict):
     by the deadline ``horizon``, hold it over ``settling_time`` (the peak counts over the whole window),
     never exceed ``max_speed``."""
 
-    start_speed: RateOrZero
+    start_speed: SpeedOrZero
     final_speed: AngularSpeed
     horizon: Time = Field(description="the deadline: the final time (its upper bound with the min_time objective)")
     max_acceleration: AngularAcceleration
