@@ -156,10 +156,43 @@ def flow_2p(tau, q, start: tuple[float, float] | None = None) -> tuple[float, fl
 # ---- nonlinear least squares of (4.18) and (4.31) ---------------------------------------------------
 
 def _bounds(tau, free, bounds: dict | None) -> dict:
-    """Bounds of the free parameters: given ones, else alpha > 0 and tau_max > max tau."""
-    default = {"alpha": (1e-8, math.inf), "tau_max": (np.max(tau) * (1 + 1e-9), math.inf)}
-    return {k: tuple(d if b is None else b for b, d in zip((bounds or {}).get(k, (None, None)), default[k],
-                                                          strict=True)) for k in free}
+    """Bounds of the free parameters: given ones, else alpha > 0; tau_max above max tau always
+    (the gap (4.18) is undefined at and below the largest load)."""
+    floor = np.max(tau) * (1 + 1e-9)
+    default = {"alpha": (1e-8, math.inf), "tau_max": (floor, math.inf)}
+    out = {k: tuple(d if b is None else b for b, d in zip((bounds or {}).get(k, (None, None)), default[k],
+                                                         strict=True)) for k in free}
+    if "tau_max" in out:
+        out["tau_max"] = (max(out["tau_max"][0], floor), out["tau_max"][1])
+    return out
+
+
+def feasible_start(tau, values: dict, bnd: dict) -> tuple[dict, dict]:
+    """The initial guess moved to where the model is defined and inside the bounds ``bnd`` (free
+    parameters): tau_max not above the largest load -> 1.05 times it (or the middle of its bounds);
+    any other free value outside its bounds -> the middle of its bounds, or just inside the one bound.
+
+    Returns
+    -------
+    (values, moved): the start, and name -> {"from", "to", "why"} for each value moved.
+    """
+    out, moved = dict(values), {}
+    top = float(np.max(tau))
+    for k, (lo, hi) in bnd.items():
+        v = out[k]
+        if k == "tau_max" and v <= top:
+            new = 1.05 * top if 1.05 * top < hi else 0.5 * (lo + hi)
+            why = (f"the initial tau_max {v:g} is not above the largest load {top:g}, where the gap (4.18) is "
+                   f"undefined; started at {new:.6g} (1.05 x the largest load, within the bounds)")
+        elif not lo < v < hi:
+            new = 0.5 * (lo + hi) if math.isfinite(lo + hi) else \
+                lo + 0.01 * max(abs(lo), 1.0) if v <= lo else hi - 0.01 * max(abs(hi), 1.0)
+            why = f"the initial {k} {v:g} is outside its bounds [{lo:g}, {hi:g}]; started at {new:.6g}"
+        else:
+            continue
+        out[k] = float(new)
+        moved[k] = {"from": v, "to": float(new), "why": why}
+    return out, moved
 
 
 class DiscFitter:
@@ -193,9 +226,9 @@ class DiscFitter:
         self._batch: GaussNewtonBatch | None = None
 
     def _setup(self, tau, values, bounds, weights):
-        values = START | (values or {})
         weights = {"u": 1.0, "q": 1.0} | (weights or {})
         bnd = _bounds(tau, self.free, bounds)
+        values, self.moved = feasible_start(tau, START | (values or {}), bnd)
         scale = np.array([scale_of(values[k]) for k in DISC])
         sc = np.array([scale[DISC.index(k)] for k in self.free])
         return values, weights, bnd, scale, sc
@@ -254,7 +287,8 @@ class DiscFitter:
             weights={k: weights[k] for k in parts},
             stats=uncertainty(res["r"], res["J"] / sc, [est[k] for k in self.free], confidence),
             solver={"status": res["status"], "iterations": res["iterations"], "success": res["success"],
-                    "objective": float(res["f"][0])})
+                    "objective": float(res["f"][0])},
+            extra={"start_moved": self.moved} if self.moved else {})
 
     def fit_many(self, tau, u=None, q=None, values: dict | None = None, bounds: dict | None = None,
                  weights: dict | None = None) -> dict:
