@@ -208,20 +208,23 @@ class DiscFitter:
     def __init__(self, n: int, residual: str = "u", free: tuple[str, ...] = DISC, hessian: str = "gauss-newton",
                  max_iter: int = 300, tol: float | None = None, batch: dict | None = None):
         self.n, self.residual, self.free, self.hessian = n, residual, tuple(free), hessian
-        x = ca.SX.sym("x", len(self.free))
-        tau, um, qm = ca.SX.sym("tau", n), ca.SX.sym("u", n), ca.SX.sym("q", n)
+        # the residual of one point, mapped over the n points: the graph's size does not grow with n
+        xs, point = ca.SX.sym("x", len(self.free)), ca.SX.sym("point", 3)  # tau, u, q of a point
         w, fixed, scale = ca.SX.sym("w", 2), ca.SX.sym("fixed", 2), ca.SX.sym("scale", 2)
-        disc = TurbulentDisc(*[scale[j] * x[self.free.index(k)] if k in self.free else fixed[j]
+        disc = TurbulentDisc(*[scale[j] * xs[self.free.index(k)] if k in self.free else fixed[j]
                                for j, k in enumerate(DISC)])
         parts = []
         if residual in ("u", "both"):
-            parts.append(w[0] * (disc.gap(tau) - um))
+            parts.append(w[0] * (disc.gap(point[0]) - point[1]))
         if residual in ("q", "both"):
-            parts.append(w[1] * (disc.flow(tau) - qm))
-        p = ca.vertcat(tau, um, qm, w, fixed, scale)
-        self.residual_function = ca.Function("disc_residual", [x, p], [ca.vertcat(*parts)], ["x", "p"], ["r"])
-        self.ls = LeastSquares(f"fit_disc_{residual}", x, p, self.residual_function(x, p), ca.SX(0, 1),
-                               len(self.free), hessian, max_iter, tol)
+            parts.append(w[1] * (disc.flow(point[0]) - point[2]))
+        one = ca.Function("disc_point_residual", [xs, point, w, fixed, scale], [ca.vertcat(*parts)])
+        x, p = ca.MX.sym("x", len(self.free)), ca.MX.sym("p", 3 * n + 6)
+        data = ca.reshape(p[:3 * n], n, 3).T  # one column per point
+        common = [p[3 * n + 2 * j:3 * n + 2 * j + 2] for j in range(3)]
+        r = ca.vec(one.map(n)(x, data, *common).T)  # every point's u residual, then every point's q residual
+        self.residual_function = ca.Function("disc_residual", [x, p], [r], ["x", "p"], ["r"])
+        self.ls = LeastSquares(f"fit_disc_{residual}", x, p, r, ca.MX(0, 1), len(self.free), hessian, max_iter, tol)
         self.batch_options = dict(batch or {})
         self._batch: GaussNewtonBatch | None = None
 

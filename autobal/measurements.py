@@ -13,7 +13,6 @@ with one line naming the file, the line or column and the expected unit.
 from __future__ import annotations
 
 import csv
-import math
 import re
 import stat
 from dataclasses import dataclass, field
@@ -241,30 +240,46 @@ def read_csv(path: str | Path, columns: dict | None = None, folder: Path | None 
         raise ScenarioError(f"{path}: no data rows")
     if len(body) > MAX_POINTS:
         raise ScenarioError(f"{path}: {len(body)} data rows; a data file holds at most {MAX_POINTS}")
-    decimal_comma = sep != ","
-    values = np.empty((len(body), len(names)))
-    for i, (lineno, row) in enumerate(body):
+    for lineno, row in body:
         if len(row) != len(header):
             raise ScenarioError(f"{path}: line {lineno}: {len(row)} values, the header has {len(header)}")
-        for k, (j, name, _) in enumerate(selected):
-            cell = row[j]
-            where = f"{path}: line {lineno}, column '{name} [{units[name]}]'"
-            try:
-                v = float(cell.replace(",", ".") if decimal_comma else cell)
-            except ValueError:
-                raise ScenarioError(f"{where}: {_short(cell)} is not a number") from None
-            if not math.isfinite(v):
-                raise ScenarioError(f"{where}: {_short(cell)} is not a finite number")
-            role = QUANTITIES[name][0]
-            if role == "load" and not v > 0:
-                raise ScenarioError(f"{where}: a load must be positive, got {v:g}")
-            if role in ("gap", "flow") and v < 0:
-                raise ScenarioError(f"{where}: a measured {role} must not be negative, got {v:g}")
-            if role == "group" and v != int(v):
-                raise ScenarioError(f"{where}: a group label is an integer, got {v:g}")
-            values[i, k] = v * factors[k]
+    values = np.empty((len(body), len(names)))
+    for k, (j, name, _) in enumerate(selected):
+        cells = [row[j].replace(",", ".") for _, row in body] if sep != "," else [row[j] for _, row in body]
+        values[:, k] = _numbers(path, cells, [lineno for lineno, _ in body], f"{name} [{units[name]}]",
+                                QUANTITIES[name][0]) * factors[k]
     return Measurements(path=path, columns={n: values[:, j] for j, n in enumerate(names)}, units=units,
                         comments=comments)
+
+
+def _numbers(path: Path, cells: list[str], lines: list[int], column: str, role: str) -> np.ndarray:
+    """The numbers of one column, checked for its role; one line naming the first bad cell."""
+    try:
+        v = np.asarray(cells, dtype=float)
+    except ValueError:
+        i = next(i for i, c in enumerate(cells) if not _is_number(c))
+        raise ScenarioError(f"{path}: line {lines[i]}, column '{column}': {_short(cells[i])} is not a number") from None
+    checks = [(~np.isfinite(v), "is not a finite number")]
+    if role == "load":
+        checks.append((~(v > 0), "a load must be positive, got {v:g}"))
+    if role in ("gap", "flow"):
+        checks.append((v < 0, f"a measured {role} must not be negative, got {{v:g}}"))
+    if role == "group":
+        checks.append((v != np.round(v), "a group label is an integer, got {v:g}"))
+    for bad, what in checks:
+        if bad.any():
+            i = int(np.argmax(bad))
+            text = f"{_short(cells[i])} {what}" if "{" not in what else what.format(v=v[i])
+            raise ScenarioError(f"{path}: line {lines[i]}, column '{column}': {text}")
+    return v
+
+
+def _is_number(cell: str) -> bool:
+    try:
+        float(cell)
+    except ValueError:
+        return False
+    return True
 
 
 def check_fit(data: Measurements, residual: str, free: int, where: str) -> None:

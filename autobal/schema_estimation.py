@@ -163,11 +163,16 @@ class LossCoefficient(Strict):
         return DiscLosses(**self.model_dump(exclude={"fit", "unknown"}))
 
 
+BOOTSTRAP_POINTS = 2_000_000  # bootstrap samples x data rows: about 50 MB of data sets, 3 s of refits
+
+
 class Bootstrap(Strict):
     """Residual-bootstrap confidence intervals of the traditional_disc fits (refits batched in one
     mapped Gauss-Newton call); percentile intervals at the estimation's ``confidence``."""
 
-    samples: Annotated[int, Field(ge=20, le=1_000_000, description="number of bootstrap data sets")] = 2000
+    samples: Annotated[int, Field(ge=20, le=1_000_000, description=(
+        "number of bootstrap data sets; samples x data rows at most 2,000,000 (the refits are held in memory "
+        "together)"))] = 2000
     seed: Annotated[int, Field(ge=0, description="seed of the resampling")] = 0
 
 
@@ -201,6 +206,12 @@ class Estimation(Strict):
         description="residual-bootstrap intervals of the traditional_disc fits")] = None
 
     _folder: Path | None = PrivateAttr(default=None)  # folder of a relative data path, fixed at validation
+    _points: int = PrivateAttr(default=0)
+
+    @property
+    def points(self) -> int:
+        """Number of data rows of the data file (read at validation)."""
+        return self._points
 
     def measurements(self) -> Measurements:
         """The data file, read and checked (values in SI or dimensionless)."""
@@ -219,6 +230,15 @@ class Estimation(Strict):
         self._folder = Path.cwd() if overridden or ctx.get("folder") is None else Path(ctx["folder"])
         try:
             data = self.measurements()
+            self._points = data.points
+            bs = self.bootstrap
+            if bs is not None and bs.samples * data.points > BOOTSTRAP_POINTS:
+                most = BOOTSTRAP_POINTS // data.points
+                raise ScenarioError(f"bootstrap.samples: {bs.samples} data sets of {data.points} rows exceed "
+                                    f"{BOOTSTRAP_POINTS:,} rows in all; "
+                                    + (f"use at most {most} samples" if most >= 20 else
+                                       "leave the bootstrap out (with this many rows the linearised intervals "
+                                       "hold)"))
             for i, fit in enumerate(self.fits):
                 check_fit(data, fit.residual, len(fit.free()), f"fits.{i}")
                 if fit.model == "traditional_disc" and data.has("load") in ("psi1", "discharge_pressure"):
