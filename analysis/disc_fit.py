@@ -69,12 +69,14 @@ def static_2p(tau, u) -> tuple[float, float]:
 
     Returns
     -------
-    tau_max (1), alpha (1; NaN when the fitted alpha^2 is not positive).
+    tau_max (1), alpha (1; NaN when the fitted alpha^2 is not positive); both NaN when every load is the same.
     """
     tau, u = np.asarray(tau, float), np.asarray(u, float)
     n = len(tau)
     s0, s1, s2, s3 = tau.sum(), (u**3 * tau).sum(), (u**6 * tau**2).sum(), (u**3 * tau**2).sum()
     det = n * s2 - s1**2
+    if det == 0:  # one load only: (4.25) is singular
+        return math.nan, math.nan
     alpha2 = (s0 * s1 - n * s3) / det
     return (s0 * s2 - s1 * s3) / det, math.sqrt(alpha2) if alpha2 > 0 else math.nan
 
