@@ -181,6 +181,8 @@ def feasible_start(tau, values: dict, bnd: dict) -> tuple[dict, dict]:
     out, moved = dict(values), {}
     top = float(np.max(tau))
     for k, (lo, hi) in bnd.items():
+        if not lo < hi:
+            raise ValueError(f"{k}: no value between its bounds [{lo:g}, {hi:g}] where the model is defined")
         v = out[k]
         if k == "tau_max" and v <= top:
             new = 1.05 * top if 1.05 * top < hi else 0.5 * (lo + hi)

@@ -99,7 +99,8 @@ class Fit(Strict):
 
 def _disc_defined(fit: Fit, top: float, where: str) -> None:
     """Refuse traditional_disc settings under which the gap (4.18) is undefined at a data point:
-    tau_max fixed at or below the largest load tau, or bounded there from above; alpha fixed at 0."""
+    tau_max fixed at or below the largest load tau, or bounded there from above; alpha fixed at 0 or
+    bounded from above at or below 0."""
     t, a = fit.parameters["tau_max"], fit.parameters["alpha"]
     if not t.free and t.value <= top:
         raise ScenarioError(f"{where}.parameters.tau_max: fixed at {t.value:g}, not above the largest measured load "
@@ -110,6 +111,9 @@ def _disc_defined(fit: Fit, top: float, where: str) -> None:
     if not a.free and a.value == 0:
         raise ScenarioError(f"{where}.parameters.alpha: fixed at 0, where the gap (4.18) is undefined; give a "
                             f"positive conductance ratio")
+    if a.free and a.upper is not None and a.upper <= 0:
+        raise ScenarioError(f"{where}.parameters.alpha: upper = {a.upper:g}; alpha = g_TB/g1 is a positive conductance "
+                            f"ratio: give a positive upper bound")
 
 
 class Bases(Strict):
