@@ -38,10 +38,10 @@ QUANTITIES = {
 }
 DIMENSIONLESS = ("1", "-", "")
 _HEADER = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_]*)\s*\[([^\]]*)\]\s*$")
-# base value needed to make a dimensional column dimensionless: quantity -> base key
-_UNIT_AT_END = re.compile(r"(?:\[([^\]]*)\]|\(([^)]*)\))\s*$")
+_UNIT_AT_END = re.compile(r"(?:\[([^\]]*)\]|\(([^)]*)\))\s*$")  # 'name [unit]' or 'name (unit)'
 MAX_DATA_BYTES = 20_000_000  # a data file is a text of at most 20 MB
 MAX_POINTS = 100_000  # data rows of one file
+# base value needed to make a dimensional column dimensionless: quantity -> base key
 BASE_OF = {"axial_force": "force", "discharge_pressure": "pressure", "gap": "gap", "flow": "flow"}
 
 
@@ -259,18 +259,17 @@ def _numbers(path: Path, cells: list[str], lines: list[int], column: str, role: 
     except ValueError:
         i = next(i for i, c in enumerate(cells) if not _is_number(c))
         raise ScenarioError(f"{path}: line {lines[i]}, column '{column}': {_short(cells[i])} is not a number") from None
-    checks = [(~np.isfinite(v), "is not a finite number")]
+    checks = [(~np.isfinite(v), lambda i: f"{_short(cells[i])} is not a finite number")]
     if role == "load":
-        checks.append((~(v > 0), "a load must be positive, got {v:g}"))
+        checks.append((~(v > 0), lambda i: f"a load must be positive, got {v[i]:g}"))
     if role in ("gap", "flow"):
-        checks.append((v < 0, f"a measured {role} must not be negative, got {{v:g}}"))
+        checks.append((v < 0, lambda i: f"a measured {role} must not be negative, got {v[i]:g}"))
     if role == "group":
-        checks.append((v != np.round(v), "a group label is an integer, got {v:g}"))
-    for bad, what in checks:
+        checks.append((v != np.round(v), lambda i: f"a group label is an integer, got {v[i]:g}"))
+    for bad, message in checks:
         if bad.any():
             i = int(np.argmax(bad))
-            text = f"{_short(cells[i])} {what}" if "{" not in what else what.format(v=v[i])
-            raise ScenarioError(f"{path}: line {lines[i]}, column '{column}': {text}")
+            raise ScenarioError(f"{path}: line {lines[i]}, column '{column}': {message(i)}")
     return v
 
 
