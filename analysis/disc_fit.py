@@ -161,7 +161,9 @@ def _bounds(tau, free, bounds: dict | None) -> dict:
     """Bounds of the free parameters: given ones, else alpha > 0; tau_max above max tau always
     (the gap (4.18) is undefined at and below the largest load)."""
     floor = np.max(tau) * (1 + 1e-9)
-    default = {"alpha": (1e-8, math.inf), "tau_max": (floor, math.inf)}
+    upper = ((bounds or {}).get("alpha") or (None, None))[1]
+    tiny = 1e-8 if upper is None or upper <= 0 else min(1e-8, 1e-3 * upper)  # alpha > 0, below a tiny upper bound
+    default = {"alpha": (tiny, math.inf), "tau_max": (floor, math.inf)}
     out = {k: tuple(d if b is None else b for b, d in zip((bounds or {}).get(k, (None, None)), default[k],
                                                          strict=True)) for k in free}
     if "tau_max" in out:
@@ -191,7 +193,7 @@ def feasible_start(tau, values: dict, bnd: dict) -> tuple[dict, dict]:
         elif not lo < v < hi:
             new = 0.5 * (lo + hi) if math.isfinite(lo + hi) else \
                 lo + 0.01 * max(abs(lo), 1.0) if v <= lo else hi - 0.01 * max(abs(hi), 1.0)
-            why = f"the initial {k} {v:g} is outside its bounds [{lo:g}, {hi:g}]; started at {new:.6g}"
+            why = f"the initial {k} {v:g} is not inside its bounds [{lo:g}, {hi:g}]; started at {new:.6g}"
         else:
             continue
         out[k] = float(new)

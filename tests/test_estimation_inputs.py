@@ -267,3 +267,16 @@ def test_estimation_scenes_across_the_bounds_never_trace_back(tmp_path, case):
         block = json.loads((out / "results.json").read_text())["estimation"]
         assert all(f["status"] in ("ok", "failed") for f in block["fits"].values())
         assert block["status"] == "ok" or block["failures"]
+
+
+@pytest.mark.cli
+def test_alpha_bounded_below_the_default_lower_bound(tmp_path):
+    """alpha bounded above by 1e-12, under the default lower bound 1e-8 (a traceback found by the
+    test above): the default lower bound goes below the upper one, the start (on the bound) moves
+    inside, and the fit ends on the bounds (alpha as small as allowed, tau_max at the largest load)."""
+    fits = [{"name": "a", "parameters": {"alpha": {"value": 1e-12, "upper": 1e-12}, "tau_max": {"value": 2.75}}}]
+    assert cli.main(["run", str(_scene(tmp_path, str(TABLE), fits)), "--out", str(tmp_path / "out")]) == 0
+    fit = json.loads((tmp_path / "out" / "results.json").read_text())["estimation"]["fits"]["a"]
+    assert fit["extra"]["start_moved"]["alpha"]["to"] < 1e-12
+    assert_allclose(fit["parameters"]["alpha"]["estimate"], 1e-12, rtol=1e-6)
+    assert_allclose(fit["parameters"]["tau_max"]["estimate"], 2.0, rtol=1e-6)
