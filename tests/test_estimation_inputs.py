@@ -249,6 +249,7 @@ def _rows(kind: str) -> str:
     return "tau [1],u [1]\n" + "".join(f"{t},{float(disc.gap(t)) if kind == 'noiseless' else 0.8}\n" for t in tau)
 
 
+@pytest.mark.cli
 @settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
                                                                  HealthCheck.too_slow])
 @given(case=estimation_scene())
