@@ -313,7 +313,7 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> BaseScenari
     for key, value in overrides.items():
         _set(data, key, value)
     try:
-        scn = model_for(data).model_validate(data)
+        scn = model_for(data).model_validate(data, context={"folder": path.absolute().parent, "overrides": overrides})
     except ValidationError as exc:
         loc = ".".join(str(p) for p in exc.errors()[0]["loc"])
         hit = next((k for k in overrides if loc == k or loc.startswith(k + ".")), None)

@@ -73,6 +73,8 @@ COST = {
     "rotor_run": 0.5,  # one CVODES passage / step response of the rotor studies
     "grid_point": 1e-5,  # one point of a dense cross-check grid
     "fit": 2.0,  # one least-squares fit with its cross-checks
+    "fit_point": 1e-4,  # one data row of a fit, its cross-check and its results (100,000 rows: 10 s CPU measured)
+    "bootstrap_point": 1.5e-6,  # one data row of one bootstrap refit (1000 rows x 2000 samples: 2.7 s CPU)
     # one statics solve with the eigenvalues of the design at one operating point (the shipped design scenes:
     # 32 s and 15 s of CPU for about 1230 and 930 of them, on a loaded machine)
     "design_point": 0.02,
