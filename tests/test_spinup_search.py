@@ -1,4 +1,4 @@
-"""The best known optimum of the real spin-up problem (issue 26, item 5) against the study's own.
+"""The best profiles of an independent search on the real spin-up problem (issue 26, item 5) against the study.
 
 The reference profiles are the best of an independent search over full-braking back-offs with switching instants
 free in continuous time (differential evolution on the modal integrator, `python -m benchmarks spinup_search`;
@@ -18,7 +18,7 @@ BEST = {
                                      0.843241, 0.001221], 12.30351),
     "spinup_jeffcott_horizon_10s": ([3.016849, 5.6e-05, 0.002098, 0.247027, 0.533299, 0.500742], 15.23318),
 }
-# how far the shipped study stays above the best known profile (relative): 0.047 % and 0.030 % measured, the
+# how far the shipped study stays above the search's profile (relative): 0.047 % and 0.030 % measured, the
 # control step (40 rad/s^2) and the default regulariser (20 rad/s^2) holding it there; the next basins the
 # study's solve path reaches are 0.051 % and more above (benchmarks/spinup_ocp.md)
 GAP = {"spinup_jeffcott_deadline_5s": 5e-4, "spinup_jeffcott_horizon_10s": 4e-4}
@@ -44,7 +44,7 @@ def profile(ocp: S.SpinupOcp, durations) -> tuple[np.ndarray, np.ndarray, np.nda
 
 
 @pytest.mark.parametrize("name", list(BEST))
-def test_best_known_profile_is_feasible_and_resimulates(name):
+def test_search_profile_is_feasible_and_resimulates(name):
     ocp = scene_ocp(name)
     durations, peak = BEST[name]
     u, h, w = profile(ocp, durations)
@@ -53,12 +53,12 @@ def test_best_known_profile_is_feasible_and_resimulates(name):
     t = np.cumsum(h) / ocp.Om
     assert np.all(np.abs(w[t >= ocp.horizon - 1e-9] - ocp.omega_final) < 1e-9 * ocp.omega_final)  # deadline, held
     assert abs(t[-1] - ocp.horizon - ocp.settling_time) < 1e-9
-    assert S.resimulate(ocp, u, h, "best known").peak_delta == pytest.approx(peak, rel=2e-6)
+    assert S.resimulate(ocp, u, h, "search profile").peak_delta == pytest.approx(peak, rel=2e-6)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(BEST))
-def test_study_within_its_measured_gap_of_the_best_known_profile(name):
+def test_study_within_its_measured_gap_of_the_search_profile(name):
     ocp = scene_ocp(name)
     scene = api.load(name)
     opt = S.optimize(ocp, S.DirectCollocation(scene.analyses.spinup.intervals, 3, "radau"))
