@@ -22,11 +22,11 @@ import numpy as np
 from scipy.optimize import differential_evolution
 
 from autobal import api
+from autobal.analyses.spinup import ocp as spinup_ocp
 from autobal.ocp import search
 from autobal.ocp.simulation import resimulate
 from autobal.ocp.solve import optimize
 from autobal.ocp.spinup_study import method_of
-from autobal.runners import spinup_ocp
 from benchmarks._results import case, write
 
 SCENES = {"spinup_jeffcott_deadline_5s": (1, 2, 3), "spinup_jeffcott_horizon_10s": (1, 2, 3)}

@@ -8,7 +8,8 @@ are re-simulated by CVODES and checked feasible, and the shipped scenes' studies
 import numpy as np
 import pytest
 
-from autobal import api, runners
+from autobal import api
+from autobal.analyses.spinup import ocp as spinup_ocp
 from autobal.ocp import spinup as S
 
 # phase durations (s), alternately full acceleration and full braking from the first; then full acceleration to
@@ -26,7 +27,7 @@ GAP = {"spinup_jeffcott_deadline_5s": 5e-4, "spinup_jeffcott_horizon_10s": 4e-4}
 
 def scene_ocp(name: str) -> S.SpinupOcp:
     scene = api.load(name)
-    return runners.spinup_ocp(scene, scene.analyses.spinup)
+    return spinup_ocp(scene, scene.analyses.spinup)
 
 
 def profile(ocp: S.SpinupOcp, durations) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
