@@ -140,6 +140,8 @@ def spinup_ocp(scene, settings):
             settings.max_acceleration,
             objective=settings.objective, settling_time=settings.settling_time, omega_max=settings.max_speed,
             torque_max=drive.max_torque if drive else None, power_max=drive.max_power if drive else None,
+            braking_torque_max=drive.max_braking_torque if drive else None,
+            alpha_min=-drive.max_deceleration if drive and drive.max_deceleration is not None else None,
             motor_stall_torque=drive.motor.stall_torque if drive and drive.motor else None,
             motor_no_load_speed=drive.motor.no_load_speed if drive and drive.motor else None,
             deflection_limit=settings.deflection_limit, jerk_max=settings.max_jerk,
@@ -155,7 +157,8 @@ def spinup(scene, settings) -> Result:
 
     with progress.steps(None, "spin-up (starts, mesh stages)", "IPOPT solve", catch=True):
         return spinup_study.run(spinup_ocp(scene, settings), spinup_study.method_of(settings), scene.title,
-                                settings.multistart, ipopt_options(settings.max_iterations, settings.tolerance))
+                                settings.multistart, ipopt_options(settings.max_iterations, settings.tolerance),
+                                settings.segments)
 
 
 def spinup_robust(scene, settings) -> Result:
