@@ -7,6 +7,8 @@ no files and prints nothing.  ``RUNNERS`` order is the run order.
 
 from __future__ import annotations
 
+import math
+
 from autobal import adapters
 from autobal.analysis import progress
 from autobal.analysis.result import Result
@@ -72,9 +74,19 @@ def rotor_dynamics(scene, settings) -> Result:
 
     if scene.rotor is None:
         raise ScenarioError("analyses.rotor_dynamics needs a rotor section")
-    drive = scene.rotor.drive
+    from autobal.ocp.problem import MAX_PERIODS
+
+    drive, params = scene.rotor.drive, adapters.rotor(scene.rotor)
+    ps = settings.passage
+    for key in ("acceleration", "sensitivity_acceleration"):
+        a = getattr(ps, key, None)
+        periods = (ps.final_ratio * params.Omega0 - ps.start_speed) / a * params.Omega0 / (2 * math.pi) if a else 0
+        if periods > MAX_PERIODS:  # CVODES over the passage would not finish
+            raise ScenarioError(f"analyses.rotor_dynamics.passage.{key}: {a:g} rad/s^2 takes {periods:.3g} natural "
+                                f"periods of the rotor to reach final_ratio, more than {MAX_PERIODS:.0e}: give at "
+                                f"least {a * periods / MAX_PERIODS:.3g} rad/s^2")
     with progress.steps(None, "rotor dynamics (curves, steps, passage, Lewis cases)", "part", catch=True):
-        return rotor_study.run(adapters.rotor(scene.rotor), settings, scene.title, drive.motor if drive else None)
+        return rotor_study.run(params, settings, scene.title, drive.motor if drive else None)
 
 
 def montecarlo(scene, settings) -> Result:
@@ -135,7 +147,7 @@ def spinup_ocp(scene, settings):
         raise ScenarioError("analyses.spinup needs a rotor section")
     drive = scene.rotor.drive
     try:
-        return SpinupOcp(
+        ocp = SpinupOcp(
             adapters.rotor(scene.rotor), settings.start_speed, settings.final_speed, settings.horizon,
             settings.max_acceleration,
             objective=settings.objective, settling_time=settings.settling_time, omega_max=settings.max_speed,
@@ -148,6 +160,10 @@ def spinup_ocp(scene, settings):
             jerk_penalty=settings.jerk_penalty, jerk_variation=settings.jerk_variation)
     except ValueError as exc:
         raise ScenarioError(f"analyses.spinup: {exc}") from None
+    why = ocp.ill_posed()
+    if why:
+        raise ScenarioError(f"analyses.spinup: {why}")
+    return ocp
 
 
 def spinup(scene, settings) -> Result:

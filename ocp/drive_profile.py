@@ -148,7 +148,7 @@ def segment_profile(ocp: SpinupOcp, optimum: Trajectory, K: int, evaluations: in
         bad = max(0.0, -dt.min() / T) + max(0.0, t[-1] / T - 1) + max(0.0, -w.min() / wf)
         if bad > 0 or dt.min() <= 1e-9 * T:
             return 1e3 * (1 + bad)
-        tr = simulate_segments(ocp, t, w, intervals=SEARCH_INTERVALS, tol=1e-8)
+        tr = simulate_segments(ocp, t, w, intervals=SEARCH_INTERVALS, tol=1e-6)
         excess = drive_excess(ocp, tr)
         return objective_of(ocp, tr) * (1 + PENALTY * sum(excess.values()))
 

@@ -38,6 +38,11 @@ OBJECTIVES = ("peak_deflection", "peak_unbalance", "integrated_deflection", "min
 # minimum-peak optimum and changes its re-simulated peak by < 0.05 % on the shipped scenes (measured in
 # docs/theory/spinup.md, "Drivable controls")
 JERK_VARIATION = 1e-4
+# a posed spin-up passes near the critical speed (the top speed at least 1/CRITICAL_RATIO of it) within at most
+# MAX_PERIODS natural periods of the rotor (horizon and settling window): beyond, CVODES cannot follow the whirl
+# over the window in reasonable time, and the passage is quasi-static anyway (the steady response)
+CRITICAL_RATIO = 2.0
+MAX_PERIODS = 1e4
 
 
 @dataclass(frozen=True)
@@ -92,6 +97,24 @@ class SpinupOcp:
             raise ValueError("the minimum acceleration must not be positive (rad/s^2): the speed is held at the end")
         if self.jerk_max is not None and self.jerk_max <= 0:
             raise ValueError("jerk_max must be positive (rad/s^3)")
+
+    def ill_posed(self) -> str | None:
+        """Why the problem cannot be posed as a spin-up through the critical speed (one line), or None."""
+        P = self.params
+        wc = P.omega_cr
+        top = max(self.omega_start, self.omega_final, self.omega_max or 0.0)
+        if wc > CRITICAL_RATIO * top:
+            d = top**2 / abs(wc**2 - top**2)
+            return (f"the critical speed {wc:.4g} rad/s ({wc * 30 / np.pi:.4g} rpm) is {wc / top:.3g} times the "
+                    f"highest speed {top:.4g} rad/s: the spin-up never nears it, its peak is about the steady "
+                    f"deflection at the top speed (delta/e = {d:.3g}), which no profile changes (check the rotor's "
+                    "stiffness or critical speed)")
+        periods = (self.horizon + self.settling_time) * wc / (2 * np.pi)
+        if periods > MAX_PERIODS:
+            return (f"horizon + settling_time = {self.horizon + self.settling_time:.4g} s span {periods:.3g} natural "
+                    f"periods of the rotor (2 pi/omega_cr = {2 * np.pi / wc:.3g} s), more than {MAX_PERIODS:.0e}: "
+                    "shorten them (the passage is quasi-static long before)")
+        return None
 
     # dimensionless data (Pashkov 2010, Eq. (2))
     @property

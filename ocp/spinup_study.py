@@ -75,8 +75,8 @@ class SpinupResult(Result):
             lines.append(f"  API 684: amplification factor {r['amplification_factor']:.4g}, separation margin of the "
                          f"final speed {r['separation_margin_percent']:.3g} % from the critical speed")
         if d["min_torque_N_m"] is not None:
-            lines.append(f"  braking: the optimum {'brakes' if d['brakes'] else 'does not brake'} (smallest torque "
-                         f"{d['min_torque_N_m']:.4g} N m)")
+            brakes = {True: "brakes", False: "does not brake", None: "(no drive data)"}[d["brakes"]]
+            lines.append(f"  braking: the optimum {brakes} (smallest torque {d['min_torque_N_m']:.4g} N m)")
         for k, v in b.items():
             lim = {True: "", False: " (outside the drive limits: " + ", ".join(v["violated"]) + ")",
                    None: ""}[v["within_drive_limits"]]
@@ -263,7 +263,7 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
         "zeta0": ocp.params.zeta0, "drive_polar_inertia_kg_m2": ocp.params.J_p, **opt_use,
         "braking_torque_limit_N_m": -ocp.torque_bounds[0] if np.isfinite(ocp.torque_bounds[0]) else None,
         # the optimum brakes when its smallest torque is below zero by more than the limit check's tolerance
-        "brakes": None if opt_use["min_torque_N_m"] is None else
+        "brakes": None if opt_use["min_torque_N_m"] is None or P.J_p == 0 else
         bool(opt_use["min_torque_N_m"] < -DRIVE_TOL * torque_reference(ocp)),
         "accuracy": {"estimate": opt.resimulation_rel_error,
                      "how": "relative difference between the transcription's optimal objective and its CVODES "
