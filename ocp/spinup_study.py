@@ -69,11 +69,11 @@ class SpinupResult(Result):
         r = d["rotor"]
         lines.append(f"  rotor: m1 {r['mass_kg']:.4g} kg, c {r['stiffness_N_per_m']:.4g} N/m, chi "
                      f"{r['damping_N_s_per_m']:.4g} N s/m, e {r['eccentricity_m'] * 1e6:.4g} um; critical speed "
-                     f"{r['critical_speed_rpm']:.5g} rpm ({d['omega_cr_rad_s']:.4g} rad/s), damping ratio "
-                     f"{r['damping_ratio']:.4g}; peak deflection {d['peak_deflection_m'] * 1e6:.4g} um (0-peak)")
+                     f"{r['critical_speed_rad_s'] * 30 / np.pi:.5g} rpm ({d['omega_cr_rad_s']:.4g} rad/s), damping "
+                     f"ratio {r['damping_ratio']:.4g}; peak deflection {d['peak_deflection_m'] * 1e6:.4g} um (0-peak)")
         if r["amplification_factor"] is not None:
             lines.append(f"  API 684: amplification factor {r['amplification_factor']:.4g}, separation margin of the "
-                         f"final speed {r['separation_margin_percent']:.3g} % from the critical speed")
+                         f"final speed {r['separation_margin_pct']:.3g} % from the critical speed")
         if d["min_torque_N_m"] is not None:
             brakes = {True: "brakes", False: "does not brake", None: "(no drive data)"}[d["brakes"]]
             lines.append(f"  braking: the optimum {brakes} (smallest torque {d['min_torque_N_m']:.4g} N m)")
@@ -83,16 +83,16 @@ class SpinupResult(Result):
             ref = " [reference]" if k == d["baseline_ramp_key"] else ""
             lines.append(f"  {v['label']:40s} peak deflection {v['peak_deflection_over_e']:.4f} e, "
                          f"peak unbalance {v['peak_unbalance']:.4f}{lim}{ref}")
-        if d["gain_vs_best_feasible_ramp_percent"] is not None:
-            lines.append(f"  gain: {d['gain_vs_best_feasible_ramp_percent']:+.2f} % against the best ramp within the "
-                         "drive limits" + ("" if d["gain_vs_constant_ramp_percent"] is None else
-                                           f", {d['gain_vs_constant_ramp_percent']:+.2f} % against the constant ramp"))
+        if d["gain_vs_best_feasible_ramp_pct"] is not None:
+            lines.append(f"  gain: {d['gain_vs_best_feasible_ramp_pct']:+.2f} % against the best ramp within the "
+                         "drive limits" + ("" if d["gain_vs_constant_ramp_pct"] is None else
+                                           f", {d['gain_vs_constant_ramp_pct']:+.2f} % against the constant ramp"))
         else:
             lines.append("  gain: no ramp baseline keeps the drive limits, so none is quoted")
         sg = d.get("segments")
         if sg:
             lines.append(f"  {sg['segments']}-segment ramp table: peak {sg['peak_deflection_over_e']:.4f} e, "
-                         f"{sg['loss_vs_optimum_percent']:+.2f} % against the full optimum"
+                         f"{sg['loss_vs_optimum_pct']:+.2f} % against the full optimum"
                          + ("" if sg["within_drive_limits"] else " (outside the drive limits)"))
         return "\n".join(lines)
 
@@ -184,7 +184,7 @@ def method_of(settings):
     return MultipleShooting(settings.intervals, settings.degree, settings.scheme)
 
 
-def _percent(x: float, ref: float | None) -> float | None:
+def _pct(x: float, ref: float | None) -> float | None:
     return None if not ref else 100 * (x - ref) / ref
 
 
@@ -231,18 +231,18 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
     zeta = P.chi / (2 * (P.c * P.m) ** 0.5)  # of the rotor with its liquid mass: u'' + 2 zeta w u' + w^2 u
     opt_use = drive_use(ocp, tr)
     rotor = {"mass_kg": P.m1, "stiffness_N_per_m": P.c, "damping_N_s_per_m": P.chi, "eccentricity_m": P.e,
-             "liquid_mass_kg": P.m2_star, "critical_speed_rpm": P.omega_cr * 30 / np.pi, "damping_ratio": zeta,
+             "liquid_mass_kg": P.m2_star, "critical_speed_rad_s": P.omega_cr, "damping_ratio": zeta,
              # API 684 (2005): AF = N_c/(N_2 - N_1) at the half-power points, 1/(2 zeta) for the linear rotor;
              # separation margin SM = |N_service - N_c|/N_c of the final (service) speed
              "amplification_factor": 1 / (2 * zeta) if zeta > 0 else None,
-             "separation_margin_percent": 100 * abs(ocp.omega_final - P.omega_cr) / P.omega_cr,
+             "separation_margin_pct": 100 * abs(ocp.omega_final - P.omega_cr) / P.omega_cr,
              "amplitude_convention": "0-peak (the radius of the whirl orbit)"}
     data = {
         "title": title, "objective": ocp.objective, "method": method.label, "status": sol.status,
         "peak_deflection_over_e": tr.peak_delta,
         "baseline_ramp_peak_over_e": ref_peak, "baseline_ramp_key": ref_key,
-        "gain_vs_best_feasible_ramp_percent": _percent(tr.peak_delta, ref_peak),
-        "gain_vs_constant_ramp_percent": _percent(tr.peak_delta, base["constant_ramp"].peak_delta)
+        "gain_vs_best_feasible_ramp_pct": _pct(tr.peak_delta, ref_peak),
+        "gain_vs_constant_ramp_pct": _pct(tr.peak_delta, base["constant_ramp"].peak_delta)
         if use["constant_ramp"]["within_drive_limits"] is not False else None,
         "peak_deflection_m": tr.peak_delta * P.e, "rotor": rotor,
         "resimulation_rel_error": opt.resimulation_rel_error,
@@ -274,7 +274,7 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
     if seg is not None:
         data["segments"] = {"segments": segments, "peak_deflection_over_e": seg.trajectory.peak_delta,
                             "peak_unbalance": seg.trajectory.peak_d, "objective_value": seg.objective,
-                            "loss_vs_optimum_percent": _percent(seg.objective, opt.score),
+                            "loss_vs_optimum_pct": _pct(seg.objective, opt.score),
                             "evaluations": seg.evaluations, **seg.drive}
     # the wall time by part (s): what the global search, the initial guesses, the NLP builds, the IPOPT solves,
     # the CVODES re-simulations (reference ramp, ranking near-ties, the optimum) and the baselines took
