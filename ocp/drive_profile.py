@@ -20,10 +20,10 @@ from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.simulation import RESIM_TOL, Trajectory, drive_excess, drive_use, resimulate
 
 RPM = 60 / (2 * math.pi)  # rpm per rad/s
-SEGMENT_INTERVALS = 200  # the reported re-simulation is sampled as a profile on 200 control intervals is
-SEARCH_INTERVALS = 50  # and the search's, 4 times coarser, at CVODES tolerance 1e-8
+SEGMENT_INTERVALS = 200  # the reported re-simulation is sampled as that of a profile on 200 control intervals
+SEARCH_INTERVALS = 25  # and the search's, 8 times coarser, at CVODES tolerance 1e-6 (its peak within 1e-5)
 PENALTY = 10.0  # exact penalty on the relative excess over the drive limits (a fraction of the objective)
-SEGMENT_EVALUATIONS = 120  # Nelder-Mead's budget of re-simulations
+SEGMENT_EVALUATIONS = 200  # Nelder-Mead's budget of re-simulations
 
 
 def drive_table(tr: Trajectory) -> dict[str, np.ndarray]:
