@@ -52,7 +52,7 @@ class Segments:
     omega: np.ndarray  # speeds at the breakpoints, rad/s
     trajectory: Trajectory
     objective: float
-    fitted_objective: float  # the start: the segments fitted to the full optimum
+    fitted_objective: float  # the search's start, the segments fitted to the full optimum: its penalised objective
     evaluations: int
     drive: dict
 
@@ -85,8 +85,8 @@ def _profile(ocp: SpinupOcp, t, w, step: float):
 def simulate_segments(ocp: SpinupOcp, t, w, label: str = "segments", intervals: int = SEGMENT_INTERVALS,
                       tol: float = RESIM_TOL) -> Trajectory:
     """CVODES re-simulation of the piecewise-linear speed profile through (t, w) (s, rad/s), held after, sampled
-    as a profile on ``intervals`` control intervals over the horizon is (RESIM_POINTS per interval; one CVODES
-    call per segment)."""
+    as densely as a profile on ``intervals`` control intervals over the horizon (RESIM_POINTS per interval; one
+    CVODES call per segment)."""
     u, h = _profile(ocp, t, w, ocp.horizon / intervals)
     return resimulate(ocp, u, h, label, tol=tol)
 
