@@ -62,6 +62,7 @@ def run(tmp_path_factory):
     return out, json.loads((out / "results.json").read_text())["spinup"]
 
 
+@pytest.mark.cli
 def test_drive_profile_csv_integrated_independently_matches_the_reported_peak(run):
     out, res = run
     rows = _rows(out / "drive_profile.csv")
@@ -78,6 +79,7 @@ def test_drive_profile_csv_integrated_independently_matches_the_reported_peak(ru
     assert_allclose(jeffcott_peak(t, w, res["rotor"]), res["peak_deflection_over_e"], rtol=1e-3)
 
 
+@pytest.mark.cli
 def test_segment_table_integrated_independently_matches_the_reported_peak(run):
     out, res = run
     rows = _rows(out / "drive_segments.csv")
@@ -98,6 +100,7 @@ def test_segment_table_integrated_independently_matches_the_reported_peak(run):
     assert seg["max_power_W"] <= 45e3 * 1.001 and seg["min_torque_N_m"] >= -0.15
 
 
+@pytest.mark.cli
 def test_every_baseline_a_percentage_refers_to_keeps_the_drive_limits(run):
     out, res = run
     J, tmax, pmax = 2.0, 150.0, 45e3
@@ -130,6 +133,7 @@ def test_every_baseline_a_percentage_refers_to_keeps_the_drive_limits(run):
     assert gain < 0
 
 
+@pytest.mark.cli
 def test_no_braking_keeps_the_torque_nonnegative_and_the_summary_says_so(run):
     out, res = run
     assert res["braking_torque_limit_N_m"] == 0.0
