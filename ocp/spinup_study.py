@@ -125,7 +125,7 @@ class SpinupResult(Result):
         e = self.data.get("eccentricity_m")
         if e:
             ax.secondary_yaxis("right", functions=(lambda d: d * e * 1e3, lambda mm: mm / (e * 1e3))).set_ylabel(
-                f"deflection, mm  (e = {e * 1e3:.3g} mm)")
+                f"deflection, mm 0-peak  (e = {e * 1e3:.3g} mm)")
 
     def draw(self, ax) -> None:
         """Deflection against time of the optimum and both ramps (delta/e, mm on the right)."""
