@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Annotated
 
 from pydantic import Field
@@ -77,13 +78,22 @@ SETTINGS = RotorDynamics
 def run(scene, settings: RotorDynamics):
     """The source's studies of the Jeffcott rotor with a liquid auto-balancer (Pashkov (2010))."""
     from autobal.analysis import progress, rotor_study
+    from autobal.ocp.problem import MAX_PERIODS
     from autobal.parts.rotor import adapt
 
     if scene.rotor is None:
         raise ScenarioError("analyses.rotor_dynamics needs a rotor section")
-    drive = scene.rotor.drive
+    drive, params = scene.rotor.drive, adapt(scene.rotor)
+    ps = settings.passage
+    for key in ("acceleration", "sensitivity_acceleration"):
+        a = getattr(ps, key, None)
+        periods = (ps.final_ratio * params.Omega0 - ps.start_speed) / a * params.Omega0 / (2 * math.pi) if a else 0
+        if periods > MAX_PERIODS:  # CVODES over the passage would not finish
+            raise ScenarioError(f"analyses.rotor_dynamics.passage.{key}: {a:g} rad/s^2 takes {periods:.3g} natural "
+                                f"periods of the rotor to reach final_ratio, more than {MAX_PERIODS:.0e}: give at "
+                                f"least {a * periods / MAX_PERIODS:.3g} rad/s^2")
     with progress.steps(None, "rotor dynamics (curves, steps, passage, Lewis cases)", "part", catch=True):
-        return rotor_study.run(adapt(scene.rotor), settings, scene.title, drive.motor if drive else None)
+        return rotor_study.run(params, settings, scene.title, drive.motor if drive else None)
 
 
 def estimate_seconds(settings: RotorDynamics) -> float:

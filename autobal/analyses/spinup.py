@@ -52,6 +52,9 @@ class Spinup(Strict):
         "ipopt", description="the NLP solver of the collocation: ipopt (MUMPS), or fatrop (a Riccati recursion over "
         "the stages; Radau collocation only)")
     multistart: bool = True
+    segments: Annotated[int, Field(ge=0, le=12)] = Field(
+        4, description="ramp segments of the drive's table (drive_segments.csv), optimised for the same objective "
+        "under the same limits, 1 to 12; 0: no table")
     max_iterations: Annotated[int, Field(ge=1, le=100000)] = Field(
         1000, description="IPOPT's iteration limit per solve (each start and each mesh-continuation stage)")
     tolerance: Annotated[float, Field(gt=0, lt=1)] = Field(
@@ -82,17 +85,23 @@ def ocp(scene, settings: Spinup):
         raise ScenarioError("analyses.spinup needs a rotor section")
     drive = scene.rotor.drive
     try:
-        return SpinupOcp(
+        problem = SpinupOcp(
             adapt(scene.rotor), settings.start_speed, settings.final_speed, settings.horizon,
             settings.max_acceleration,
             objective=settings.objective, settling_time=settings.settling_time, omega_max=settings.max_speed,
             torque_max=drive.max_torque if drive else None, power_max=drive.max_power if drive else None,
+            braking_torque_max=drive.max_braking_torque if drive else None,
+            alpha_min=-drive.max_deceleration if drive and drive.max_deceleration is not None else None,
             motor_stall_torque=drive.motor.stall_torque if drive and drive.motor else None,
             motor_no_load_speed=drive.motor.no_load_speed if drive and drive.motor else None,
             deflection_limit=settings.deflection_limit, jerk_max=settings.max_jerk,
             jerk_penalty=settings.jerk_penalty, jerk_variation=settings.jerk_variation)
     except ValueError as exc:
         raise ScenarioError(f"analyses.spinup: {exc}") from None
+    why = problem.ill_posed()
+    if why:
+        raise ScenarioError(f"analyses.spinup: {why}")
+    return problem
 
 
 def run(scene, settings: Spinup):
@@ -103,7 +112,8 @@ def run(scene, settings: Spinup):
 
     with progress.steps(None, "spin-up (starts, mesh stages)", "IPOPT solve", catch=True):
         return spinup_study.run(ocp(scene, settings), spinup_study.method_of(settings), scene.title,
-                                settings.multistart, ipopt_options(settings.max_iterations, settings.tolerance))
+                                settings.multistart, ipopt_options(settings.max_iterations, settings.tolerance),
+                                settings.segments)
 
 
 def estimate_seconds(settings: Spinup) -> float:

@@ -43,6 +43,8 @@ class SpinupRobust(Spinup):
             raise ValueError("spinup_robust minimises the worst-case peak_deflection by collocation")
         if self.nlp_solver != "ipopt":
             raise ValueError("spinup_robust solves its multi-rotor NLP with nlp_solver ipopt")
+        if "segments" in self.model_fields_set:
+            raise ValueError("segments: the ramp table is written by the spinup analysis only")
         for name in ("damping_factor", "liquid_mass_factor"):
             v = getattr(self, name)
             if v is not None and v[0] > v[1]:

@@ -29,6 +29,8 @@ class SpinupTimeOptimal(Spinup):
             raise ValueError("spinup_time_optimal is built on collocation")
         if self.nlp_solver != "ipopt":
             raise ValueError("spinup_time_optimal solves with nlp_solver ipopt")
+        if "segments" in self.model_fields_set:
+            raise ValueError("segments: the ramp table is written by the spinup analysis only")
         return self
 
 
