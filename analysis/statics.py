@@ -15,6 +15,11 @@ linear solves), behind :meth:`StaticsSolver.newton` (an independent
 cross-check of IPOPT), :meth:`StaticsSolver.fast_sweep`, the Monte Carlo and the estimation.
 :meth:`StaticsSolver.sweep` continues over the discharge ratio with warm starts and
 :meth:`StaticsSolver.batch` solves a whole sweep as one NLP.
+
+Status: a point counts as solved only when every balance is within :data:`MAX_RELATIVE_RESIDUAL` of its
+largest term, whatever IPOPT's return status says; otherwise :meth:`StaticsSolver.solve` raises SolveError
+(the statics analysis is a failed solve, exit 3) with the status ``Residual_Above_Tolerance`` and the last
+iterate.
 """
 
 from __future__ import annotations
