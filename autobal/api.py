@@ -81,7 +81,7 @@ class Run(Mapping):
 
     @property
     def status(self) -> str:
-        """"ok" when every analysis solved what it reports, else "failed" (the results are kept)."""
+        """The run's status: "ok" when every analysis solved what it reports, else "failed" (results kept)."""
         return "failed" if self.failures else "ok"
 
     def to_dict(self) -> dict:
