@@ -315,7 +315,8 @@ def study(model: DynamicModel, cases: list, duration: float, points: int, integr
         cpu = time.perf_counter() - t0
         t, X = r["t"], r["X"]
         ev = events(model, t, X, sim.inputs(s, t)[:, 0])
-        cut = next((e["t"] for e in ev if e["event"] == "gap_closed"), None)
+        # the response ends where the gap closes or runs away (the rest of the chunk beyond is not the device's)
+        cut = min((e["t"] for e in ev if e["event"] in ("gap_closed", "gap_runaway")), default=None)
         if cut is not None:
             keep = t <= cut
             t, X = t[keep], X[keep]

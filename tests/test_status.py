@@ -131,6 +131,21 @@ def test_a_run_without_failures_is_ok(tmp_path):
     assert res["transient"]["equilibrium_residual"] < 1e-9
 
 
+@pytest.mark.cli
+def test_the_issues_pump_force_step_is_a_runaway_reported_and_cut_there():
+    # the PE 600 with a force step of -50 (the issue's case): the gap runs away (unstable), a stop event, not a
+    # solver failure: status ok, the event reported, the response cut at the first sample past 20 z_B (before,
+    # the rest of the chunk was kept: max |dz| 0.24 m)
+    run = autobal.run(autobal.load("pump_pe600_dynamics", set={"analyses": {"transient": {
+        "cases": [{"input": "force_step", "amplitude": -50}]}}}))
+    assert run.status == "ok"
+    [case] = run["transient"].data["series"]
+    assert [e["event"] for e in case["events"]] == ["gap_runaway"] and case["failure"] is None
+    z_b = 0.15e-3
+    assert case["z"][-2] <= 20 * z_b < case["z"][-1] < 21 * z_b
+    assert case["t_end"] == pytest.approx(case["events"][0]["t"]) and case["t_end"] < 2e-3
+
+
 def test_a_casadi_function_that_raises_is_a_failed_solve():
     # CVODES allowed one step cannot reach t = 1: CasADi raises RuntimeError; through interrupt.call it is a
     # SolverFailure: a SolveError (exit 3, failed_solve.json) with CVODES' flag as status, still a RuntimeError
