@@ -622,7 +622,11 @@ class StaticsSolver:
             raise SolveError(f"critical {unknown} (q1 = 0) did not converge", res["status"])
         value = float(res["x"][-1])
         res |= {"x": res["x"][:-1], "lam_x": res["lam_x"][:-1], "lam_g": res["lam_g"][:-1]}
-        return self._point(*((value, fixed) if unknown == "psi1" else (fixed, value)), res)
+        point = self._point(*((value, fixed) if unknown == "psi1" else (fixed, value)), res)
+        if not point.max_residual <= MAX_RELATIVE_RESIDUAL:
+            raise SolveError(f"critical {unknown} (q1 = 0): the balances do not hold", f"Residual_Above_Tolerance "
+                             f"({point.max_residual:.1e} relative, IPOPT said {res['status']})")
+        return point
 
     def relative_residual(self, x: np.ndarray, psi1, dpsi: float) -> np.ndarray:
         """Each balance's residual divided by its largest term; rows of ``x`` for arrays of psi1
