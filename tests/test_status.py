@@ -146,6 +146,27 @@ def test_the_issues_pump_force_step_is_a_runaway_reported_and_cut_there():
     assert case["t_end"] == pytest.approx(case["events"][0]["t"]) and case["t_end"] < 2e-3
 
 
+def test_monte_carlo_with_many_samples_unsolved_is_failed():
+    # a supply pressure psi_in with cv 0.9: about 13 % of the devices drawn cannot feed the barrier chamber and
+    # have no static solution; the statistics of the others are kept, the result says failed
+    scn = autobal.load("pump_pe600_montecarlo", set={
+        "analyses.montecarlo.samples": 1000, "analyses.montecarlo.chunk_size": 1000, "analyses.montecarlo.afc": None,
+        "analyses.montecarlo.discharge_ratio": [1.0],
+        "analyses.montecarlo.parameters": {"psi_in": {"distribution": "normal", "cv": 0.9}}})
+    res = autobal.run(scn)
+    [invalid] = res["montecarlo"].data["exact"]["u"]["invalid"]
+    assert 0.05 * 1000 < invalid < 0.3 * 1000
+    assert res.status == "failed"
+    assert res.failures["montecarlo"] == [f"psi1 = 1: the exact statics did not solve for {invalid} of 1000 samples "
+                                          "(more than 1 %: the statistics would be of a selection)"]
+    assert res["montecarlo"].summary().startswith("FAILED: psi1 = 1: ")
+    # the same study with the scene's 5 %: nothing unsolved, ok
+    ok = autobal.run(autobal.load("pump_pe600_montecarlo", set={
+        "analyses.montecarlo.samples": 1000, "analyses.montecarlo.chunk_size": 1000, "analyses.montecarlo.afc": None,
+        "analyses.montecarlo.discharge_ratio": [1.0]}))
+    assert ok.status == "ok" and ok["montecarlo"].data["exact"]["u"]["invalid"] == [0]
+
+
 def test_a_casadi_function_that_raises_is_a_failed_solve():
     # CVODES allowed one step cannot reach t = 1: CasADi raises RuntimeError; through interrupt.call it is a
     # SolverFailure: a SolveError (exit 3, failed_solve.json) with CVODES' flag as status, still a RuntimeError
