@@ -556,7 +556,8 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> BaseScenari
         scn = model_for(data).model_validate(data)
     except ValidationError as exc:
         loc = ".".join(str(p) for p in exc.errors()[0]["loc"])
-        hit = next((k for k in overrides if loc == k or loc.startswith(k + ".")), None)
+        hit = next((k for k in overrides if loc == k or loc.startswith(k + ".") or (loc and k.startswith(loc + "."))),
+                   None)
         where = f"set {hit}={overrides[hit]}" if hit else str(path)
         raise ScenarioError(f"{where}: {_one_line(exc)}") from None
     except RecursionError:
