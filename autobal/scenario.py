@@ -32,6 +32,7 @@ from autobal.units import (
     PressureOrZero,
     Viscosity,
     VolumeFlow,
+    clip,
 )
 
 
@@ -558,7 +559,7 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> BaseScenari
         loc = ".".join(str(p) for p in exc.errors()[0]["loc"])
         hit = next((k for k in overrides if loc == k or loc.startswith(k + ".") or (loc and k.startswith(loc + "."))),
                    None)
-        where = f"set {hit}={overrides[hit]}" if hit else str(path)
+        where = f"set {hit}={clip(str(overrides[hit]))}" if hit else str(path)
         raise ScenarioError(f"{where}: {_one_line(exc)}") from None
     except RecursionError:
         raise ScenarioError(f"{path}: nested too deeply to be a scenario") from None
