@@ -146,6 +146,7 @@ def test_the_issues_pump_force_step_is_a_runaway_reported_and_cut_there():
     assert case["t_end"] == pytest.approx(case["events"][0]["t"]) and case["t_end"] < 2e-3
 
 
+@pytest.mark.cli
 def test_monte_carlo_with_many_samples_unsolved_is_failed():
     # a supply pressure psi_in with cv 0.9: about 13 % of the devices drawn cannot feed the barrier chamber and
     # have no static solution; the statistics of the others are kept, the result says failed
