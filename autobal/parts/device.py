@@ -34,12 +34,28 @@ DYNAMICS_DESCRIPTION = "masses, springs, volumes for the frequency, stability an
 _PARAMS: dict[type, type] = {}  # derived schema -> its dataclass
 
 
+def _drain_below_nominal(op: dv.Operating) -> None:
+    """A scene's drain pressure is below its nominal discharge pressure (the model itself solves a drain above:
+    the face pressed shut, nothing balanced)."""
+    if op.drain_pressure >= op.nominal_pressure:
+        raise ValueError(f"drain_pressure: {op.drain_pressure / 1e6:g} MPa is not below the nominal discharge "
+                         f"pressure {op.nominal_pressure / 1e6:g} MPa; the device leaks from the discharge to "
+                         "the drain (above it the face is pressed shut and nothing is balanced)")
+
+
+# what a scene must satisfy beyond the checks of the dataclasses themselves
+SCENE_CHECKS = {dv.Operating: _drain_below_nominal}
+
+
 class _Derived(Strict):
-    """A section whose schema is derived from a parameter dataclass; its values are checked by building it."""
+    """A section whose schema is derived from a parameter dataclass; its values are checked by building it
+    (the dataclass' own checks) and by :data:`SCENE_CHECKS`."""
 
     @model_validator(mode="after")
     def _dataclass_checks(self):
-        to_params(self)
+        params = to_params(self)
+        if type(params) in SCENE_CHECKS:
+            SCENE_CHECKS[type(params)](params)
         return self
 
 
