@@ -19,6 +19,7 @@ from pydantic import Field, PrivateAttr, ValidationError, create_model, model_va
 from autobal.errors import ScenarioError
 from autobal.paths import SCENARIO_DIR
 from autobal.schema import MAX_FORCE_GAP_POINTS, NonNegative, Positive, PressureRatio, Range, Strict
+from autobal.text import LIMIT, clean
 from autobal.units import (
     AngularSpeed,
     Area,
@@ -361,14 +362,14 @@ MAX_NODES = 100_000  # values in a scene after YAML aliases are expanded (refuse
 
 def _one_line(err: ValidationError) -> str:
     e = err.errors()[0]
-    where = ".".join(str(p) for p in e["loc"]) or "(top level)"
-    msg = e["msg"].removeprefix("Value error, ")
+    where = clean(".".join(str(p) for p in e["loc"]) or "(top level)")
+    msg = clean(e["msg"].removeprefix("Value error, "), 2 * LIMIT)
     if e["type"] == "extra_forbidden":
         msg = "unknown key"
     elif e["type"] == "string_pattern_mismatch" and e["loc"] == ("name",):
-        msg = f"{e['input']!r} is not a plain identifier (letters, digits, _ - .; no path separators)"
+        msg = f"{clean(repr(e['input']))} is not a plain identifier (letters, digits, _ - .; no path separators)"
     elif e["type"] == "finite_number":
-        msg = f"{e['input']!r}: must be a finite number"
+        msg = f"{clean(repr(e['input']))}: must be a finite number"
     more = f" (and {err.error_count() - 1} more)" if err.error_count() > 1 else ""
     return f"{where}: {msg}{more}"
 
@@ -386,14 +387,17 @@ def resolve(name_or_path: str | Path) -> Path:
     Path
     """
     p = Path(name_or_path)
-    if p.is_file():
-        return p
-    shipped = SCENARIO_DIR / f"{p.stem}.yaml"
-    if p.suffix in ("", ".yaml") and shipped.is_file() and p.parent == Path("."):
-        return shipped
-    if p.is_dir():
-        raise ScenarioError(f"{name_or_path}: is a folder, not a scenario file")
-    raise ScenarioError(f"{name_or_path}: no such scenario file or shipped scenario (see 'autobal list')")
+    try:
+        if p.is_file():
+            return p
+        shipped = SCENARIO_DIR / f"{p.stem}.yaml"
+        if p.suffix in ("", ".yaml") and shipped.is_file() and p.parent == Path("."):
+            return shipped
+        if p.is_dir():
+            raise ScenarioError(f"{clean(name_or_path)}: is a folder, not a scenario file")
+    except OSError as exc:  # a name too long for the file system, a folder that cannot be searched
+        raise ScenarioError(f"{clean(name_or_path)}: cannot be read ({exc.strerror})") from None
+    raise ScenarioError(f"{clean(name_or_path)}: no such scenario file or shipped scenario (see 'autobal list')")
 
 
 def _set(data: dict, path: str, value) -> None:
@@ -523,7 +527,7 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> BaseScenari
     except ValidationError as exc:
         loc = ".".join(str(p) for p in exc.errors()[0]["loc"])
         hit = next((k for k in overrides if loc == k or loc.startswith(k + ".")), None)
-        where = f"set {hit}={overrides[hit]}" if hit else str(path)
+        where = f"set {clean(hit)}={clean(overrides[hit])}" if hit else clean(path)
         raise ScenarioError(f"{where}: {_one_line(exc)}") from None
     except RecursionError:
         raise ScenarioError(f"{path}: nested too deeply to be a scenario") from None
