@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import re
 import signal
@@ -77,6 +78,19 @@ def _overrides(pairs: list[str]) -> dict:
     return out
 
 
+@contextlib.contextmanager
+def _writing(out: Path):
+    """An OSError without a file name, or naming a file of a temporary folder of ``out`` (a full disk while
+    the run writes its files) says that the output folder cannot be written; the previous one is intact."""
+    try:
+        yield
+    except OSError as exc:
+        if exc.filename is None or f"{os.sep}.{Path(out).name}." in str(exc.filename):
+            raise ScenarioError(f"output folder {out}: cannot be written ({exc.strerror or exc}); "
+                                f"what it held before is left as it was") from None
+        raise
+
+
 def _run(args, scn) -> int:
     from autobal import api, scenario
 
@@ -89,7 +103,8 @@ def _run(args, scn) -> int:
         if not args.quiet:
             _say(f"{result.summary()}\n  ({name}: {seconds:.2f} s)")
 
-    api.run(scn, out, on_result=show)
+    with _writing(out):
+        api.run(scn, out, on_result=show)
     if not args.quiet:
         _say(f"results: {out / 'results.json'}")
     return EXIT_OK
@@ -98,9 +113,6 @@ def _run(args, scn) -> int:
 def _accuracy(args, scn) -> int:
     """Work-precision of every analysis of the scene that has a provider: figure, CSV, summary; into
     ``out/NAME-accuracy`` unless ``--out`` (never the run's folder), interrupted.json on an interrupt."""
-    from autobal import api
-    from autobal.analysis.result import write_json
-    from autobal.output import LOG, OutputFolder, SolverLog, signals_held
     from autobal.runners import ACCURACY
 
     studies = {name: study for name, study in ACCURACY.items() if getattr(scn.analyses, name, None) is not None}
@@ -108,6 +120,15 @@ def _accuracy(args, scn) -> int:
         raise ScenarioError(f"{scn.name}: none of its analyses has a work-precision study "
                             f"(available: {', '.join(ACCURACY)})")
     out = args.out if args.out is not None else Path("out") / f"{scn.name}-accuracy"
+    with _writing(out):
+        return _write_accuracy(args, scn, studies, out)
+
+
+def _write_accuracy(args, scn, studies: dict, out: Path) -> int:
+    from autobal import api
+    from autobal.analysis.result import write_json
+    from autobal.output import LOG, OutputFolder, SolverLog, signals_held
+
     folder = OutputFolder(out)
     report = {"status": "ok", "scenario": scn.name, "meta": api.meta(scn), "studies": {}, "files": []}
     current = None
@@ -238,7 +259,8 @@ def main(argv: list[str] | None = None) -> int:
         _error(_os_error(exc))
         code = EXIT_BAD_INPUT
     finally:
-        _end(previous)
+        # the command line (argv None) is about to exit: a late Ctrl-C must not raise in the interpreter's exit
+        _end(previous if argv is not None else dict.fromkeys(previous, signal.SIG_IGN))
     if _stdout["lost"] is not None and code == EXIT_OK:
         if isinstance(_stdout["lost"], BrokenPipeError):
             return EXIT_BROKEN_PIPE

@@ -60,7 +60,7 @@ def read_json(path: Path) -> dict:
     try:
         data = json.loads(text)
     except json.JSONDecodeError as exc:
-        raise ScenarioError(f"{clean(path)}: not valid JSON ({exc.msg} at line {exc.lineno}, column {exc.colno}); "
+        raise ScenarioError(f"{clean(path)}: not valid JSON ({exc.msg}: line {exc.lineno}, column {exc.colno}); "
                             f"truncated or damaged?") from None
     except RecursionError:
         raise ScenarioError(f"{clean(path)}: nested too deeply to be a file autobal wrote") from None
