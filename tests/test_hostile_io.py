@@ -341,9 +341,9 @@ def test_double_ctrl_c_leaves_interrupted_json_and_nothing_beside(tmp_path):
 
 
 # ---- output folders: accuracy's own folder, symbolic links -------------------------------------------------------
-def test_accuracy_never_removes_the_runs_files(tmp_path, capsys, monkeypatch):
+def test_accuracy_never_removes_the_runs_files(run_folder, tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    assert cli.main(["run", FAST, "-q"]) == 0
+    shutil.copytree(run_folder, tmp_path / "out" / FAST)  # what `autobal run FAST` wrote
     run_files = sorted(p.name for p in (tmp_path / "out" / FAST).iterdir())
     assert cli.main(["accuracy", FAST, "-q"]) == 0
     assert sorted(p.name for p in (tmp_path / "out" / FAST).iterdir()) == run_files
@@ -370,12 +370,11 @@ def test_interrupted_accuracy_leaves_interrupted_json(tmp_path, capsys, monkeypa
     assert beside(out) == []
 
 
-def test_symlinked_out_keeps_the_link_and_leaves_nothing_beside(tmp_path, capsys):
+def test_symlinked_out_keeps_the_link_and_leaves_nothing_beside(run_folder, tmp_path, capsys):
     target, link = tmp_path / "target", tmp_path / "link"
-    target.mkdir()
+    shutil.copytree(run_folder, target)  # an earlier run
     link.symlink_to(target)
-    for _ in range(2):  # the second run replaces the first through the link
-        assert cli.main(["run", FAST, "--out", str(link), "-q"]) == 0
+    assert cli.main(["run", FAST, "--out", str(link), "-q", "--set", "title=through the link"]) == 0
     assert link.is_symlink() and link.resolve() == target.resolve()
-    assert json.loads((target / "results.json").read_text())["status"] == "ok"
+    assert json.loads((target / "results.json").read_text())["title"] == "through the link"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["link", "target"]
