@@ -162,6 +162,10 @@ class SolverLog:
         self.path = path
 
     def __enter__(self):
+        with signals_held():  # an interrupt between the redirections would leave the terminal in the log
+            return self._enter()
+
+    def _enter(self):
         sys.stdout.flush()
         sys.stderr.flush()
         _flush_c_stdout()
@@ -185,6 +189,10 @@ class SolverLog:
         return self
 
     def __exit__(self, *exc):
+        with signals_held():
+            self._exit(*exc)
+
+    def _exit(self, *exc):
         sys.stdout.flush()
         sys.stderr.flush()
         _flush_c_stdout()
