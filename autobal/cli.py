@@ -160,7 +160,7 @@ def _write_accuracy(args, scn, studies: dict, out: Path) -> int:
 
 def _report(args) -> int:
     """Render report.html of an existing output folder; files that results.json names outside the
-    folder are not embedded, with one warning line each."""
+    folder are not embedded, and one warning line says so."""
     import warnings
 
     from autobal import report
@@ -271,9 +271,8 @@ def main(argv: list[str] | None = None) -> int:
 
 def _end(previous: dict) -> None:
     """Remove temporary folders no run will commit, flush standard output, give the signals back."""
-    from autobal import output
-
-    output.discard_uncommitted()
+    if "autobal.output" in sys.modules:  # else no output folder was begun (and nothing is imported now)
+        sys.modules["autobal.output"].discard_uncommitted()
     try:
         sys.stdout.flush()
     except OSError as exc:

@@ -169,6 +169,23 @@ def test_report_embeds_no_file_from_outside_its_folder(copy_of_run, tmp_path, ca
     assert page.count("data:image/png;base64,") == len(inside)  # the folder's own figures are still embedded
 
 
+def test_report_reads_no_pipe_named_as_the_scene_file_and_survives_wrong_types(copy_of_run, tmp_path):
+    """results.json's meta.file naming a named pipe is not read (no hang); wrong types where a list or a
+    mapping belongs are skipped."""
+    os.mkfifo(tmp_path / "scene.yaml")
+    results = json.loads((copy_of_run / "results.json").read_text())
+    results["meta"]["file"] = str(tmp_path / "scene.yaml")
+    results["outputs"] = ["not", "a", "mapping"]
+    (copy_of_run / "results.json").write_text(json.dumps(results))
+    code, err, seconds = command(["report", str(copy_of_run)], tmp_path)
+    assert_clean(code, err, seconds, 0)
+    results["meta"], results["files"] = ["not a mapping"], {"not": "a list"}
+    (copy_of_run / "results.json").write_text(json.dumps(results))
+    code, err, seconds = command(["report", str(copy_of_run)], tmp_path)
+    assert_clean(code, err, seconds, 0)
+    assert "data:image/png;base64," in (copy_of_run / "report.html").read_text()
+
+
 def test_html_of_a_tampered_title_holds_no_control_characters(copy_of_run, capsys):
     results = json.loads((copy_of_run / "results.json").read_text())
     results["title"] = "\x1b]0;PWNED\x07<script>alert(1)</script>" + "t" * 100_000
@@ -275,6 +292,22 @@ def test_full_disk_while_writing_leaves_the_previous_folder(run_folder, tmp_path
 
 
 # ---- signals -----------------------------------------------------------------------------------------------------
+def start_run(cwd: Path, out: str = "out", env: dict | None = None) -> subprocess.Popen:
+    return subprocess.Popen([*AUTOBAL, "run", FAST, "--out", out], cwd=cwd, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True, preexec_fn=sigint_default, env=env)
+
+
+def interrupt(proc: subprocess.Popen, times: int = 1) -> str:
+    """Send SIGINT ``times`` times 20 ms apart; stderr once the process has ended."""
+    for i in range(times):
+        time.sleep(0.02 if i else 0)
+        proc.send_signal(signal.SIGINT)
+    try:
+        return proc.communicate(timeout=WALL_S)[1]
+    finally:
+        proc.kill()
+
+
 def _loaded(pid: int, library: str) -> bool:
     try:
         return library in Path(f"/proc/{pid}/maps").read_text()
@@ -286,30 +319,20 @@ def _loaded(pid: int, library: str) -> bool:
 def test_ctrl_c_while_the_solvers_are_imported(tmp_path):
     """SIGINT while numpy/CasADi are being imported (seen in /proc/PID/maps): exit 130 and one line."""
     t0 = time.monotonic()
-    proc = subprocess.Popen([*AUTOBAL, "run", FAST, "--out", "out"], cwd=tmp_path, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE, text=True, preexec_fn=sigint_default)
+    proc = start_run(tmp_path)
     while not _loaded(proc.pid, "numpy") and proc.poll() is None and time.monotonic() - t0 < WALL_S:
         time.sleep(0.002)
     assert not _loaded(proc.pid, "casadi"), "too late: the imports were over"
-    proc.send_signal(signal.SIGINT)
-    try:
-        _, err = proc.communicate(timeout=WALL_S)
-    finally:
-        proc.kill()
+    err = interrupt(proc)
     assert_clean(proc.returncode, err, time.monotonic() - t0, 130, "autobal: interrupted (SIGINT)")
     assert list(tmp_path.iterdir()) == []  # nothing written: the run had not started
 
 
 def test_ctrl_c_a_tenth_of_a_second_after_start(tmp_path):
-    proc = subprocess.Popen([*AUTOBAL, "run", FAST, "--out", "out"], cwd=tmp_path, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE, text=True, preexec_fn=sigint_default)
+    proc = start_run(tmp_path)
     t0 = time.monotonic()
     time.sleep(0.1)
-    proc.send_signal(signal.SIGINT)
-    try:
-        _, err = proc.communicate(timeout=WALL_S)
-    finally:
-        proc.kill()
+    err = interrupt(proc)
     if proc.returncode == -signal.SIGINT and "autobal/__main__.py" not in err:
         pytest.skip("the signal came before Python had started autobal's code (a loaded machine)")
     assert_clean(proc.returncode, err, time.monotonic() - t0, 130, "autobal: interrupted (SIGINT)")
@@ -320,20 +343,12 @@ def test_double_ctrl_c_leaves_interrupted_json_and_nothing_beside(tmp_path):
     """Two SIGINTs 20 ms apart once the solver runs: exit 130, one line, OUT holds interrupted.json, no
     temporary folder beside it."""
     trace, out = tmp_path / "trace.txt", tmp_path / "out"
-    proc = subprocess.Popen([*AUTOBAL, "run", FAST, "--out", str(out)], cwd=tmp_path, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE, text=True, preexec_fn=sigint_default,
-                            env=os.environ | {"AUTOBAL_SOLVER_TRACE": str(trace)})
+    proc = start_run(tmp_path, str(out), env=os.environ | {"AUTOBAL_SOLVER_TRACE": str(trace)})
     t0 = time.monotonic()
     while not trace.exists() and proc.poll() is None and time.monotonic() - t0 < WALL_S:
         time.sleep(0.01)
     assert proc.poll() is None, "the run ended before its solver was called"
-    proc.send_signal(signal.SIGINT)
-    time.sleep(0.02)
-    proc.send_signal(signal.SIGINT)
-    try:
-        _, err = proc.communicate(timeout=WALL_S)
-    finally:
-        proc.kill()
+    err = interrupt(proc, times=2)
     assert_clean(proc.returncode, err, time.monotonic() - t0, 130, "autobal: interrupted (SIGINT)")
     assert json.loads((out / "interrupted.json").read_text())["status"] == "interrupted"
     assert not (out / "results.json").exists()
