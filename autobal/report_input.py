@@ -49,8 +49,9 @@ def read_regular(path: Path, limit: int) -> bytes:
 
 
 def read_json(path: Path) -> dict:
-    """The JSON object in ``path`` (results.json or a status file); ScenarioError with one line when it
-    is not a regular file, not UTF-8, not JSON, nested too deeply or not an object."""
+    """The JSON object in ``path`` (results.json or a status file), its strings :func:`printable`;
+    ScenarioError with one line when it is not a regular file, not UTF-8, not JSON, nested too deeply or
+    not an object."""
     raw = read_regular(path, MAX_JSON_BYTES)
     try:
         text = raw.decode("utf-8")
@@ -66,6 +67,21 @@ def read_json(path: Path) -> dict:
         raise ScenarioError(f"{clean(path)}: nested too deeply to be a file autobal wrote") from None
     if not isinstance(data, dict):
         raise ScenarioError(f"{clean(path)}: a JSON {type(data).__name__}, not the object autobal writes")
+    try:
+        return printable(data)
+    except RecursionError:
+        raise ScenarioError(f"{clean(path)}: nested too deeply to be a file autobal wrote") from None
+
+
+def printable(data):
+    """``data`` (parsed JSON) with every string stripped of control characters and escape sequences
+    (:func:`autobal.text.clean`, not cut): what the page shows of it is text, never a terminal command."""
+    if isinstance(data, str):
+        return clean(data, None)
+    if isinstance(data, list):
+        return [printable(v) for v in data]
+    if isinstance(data, dict):
+        return {printable(k): printable(v) for k, v in data.items()}
     return data
 
 

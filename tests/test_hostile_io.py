@@ -189,10 +189,11 @@ def test_report_reads_no_pipe_named_as_the_scene_file_and_survives_wrong_types(c
 def test_html_of_a_tampered_title_holds_no_control_characters(copy_of_run, capsys):
     results = json.loads((copy_of_run / "results.json").read_text())
     results["title"] = "\x1b]0;PWNED\x07<script>alert(1)</script>" + "t" * 100_000
+    results["meta"]["overrides"] = {"title": "\x1b[2Jcleared\x9b31m"}
     (copy_of_run / "results.json").write_text(json.dumps(results))
     assert cli.main(["report", str(copy_of_run)]) == 0
     page = (copy_of_run / "report.html").read_text()
-    assert "\x1b" not in page and "\x07" not in page and "PWNED" not in page
+    assert "\x1b" not in page and "\x07" not in page and "\x9b" not in page and "PWNED" not in page
     assert "<script>alert(1)" not in page
     assert "t" * 600 not in page  # cut
 
