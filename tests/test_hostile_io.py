@@ -242,7 +242,7 @@ def test_bad_option_or_name_is_one_line(tmp_path, capsys, monkeypatch, args, tex
 
 def test_scheduler_addresses_of_dask_are_accepted():
     for address in ["tcp://localhost:8786", "tcp://10.0.0.5:8786", "tls://scheduler.example.org:8786",
-                    "tcp://[::1]:8786", "inproc://192.168.1.2/1234/1"[:-7]]:
+                    "tcp://[::1]:8786", "inproc://192.168.1.2"]:
         assert cli.SCHEDULER.fullmatch(address), address
     for address in ["garbage", "localhost:8786", "tcp://", "tcp://a b:1", "tcp://x:99999999", "http://x:1"]:
         assert not cli.SCHEDULER.fullmatch(address), address
