@@ -285,8 +285,9 @@ def _end(previous: dict) -> None:
 
 
 def _main(args) -> int:
-    from autobal import api, scenario
+    from autobal import api, scenario, units
     from autobal.analysis import progress
+    from autobal.schema import quantities
 
     if args.cmd == "list":
         for p in scenario.shipped():
@@ -298,6 +299,8 @@ def _main(args) -> int:
     scn = scenario.load(args.scenario, overrides=_overrides(args.set))
     if args.cmd == "check":
         _say(f"{scn.name}: valid; analyses: {', '.join(api.analyses(scn)) or 'none'}")
+        for path, value, kind in quantities(scn, units.ANGULAR):  # the speeds as read: rad/s and rpm
+            _say(f"  {path} = {units.angular_text(value, kind)}")
         return EXIT_OK
     if args.cmd == "run":
         from autobal.analysis.executor import set_default_scheduler
