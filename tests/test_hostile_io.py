@@ -11,6 +11,7 @@ import base64
 import errno
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -337,8 +338,9 @@ def test_ctrl_c_a_tenth_of_a_second_after_start(tmp_path):
     t0 = time.monotonic()
     time.sleep(0.1)
     err = interrupt(proc)
-    if proc.returncode == -signal.SIGINT and "autobal/__main__.py" not in err:
-        pytest.skip("the signal came before Python had started autobal's code (a loaded machine)")
+    if proc.returncode != 130 and not re.search(r"/autobal/[\w/]*\.py", err):  # no frame of autobal's
+        pytest.skip("the signal came while Python itself was starting, before any code of autobal ran "
+                    "(a loaded machine); test_ctrl_c_while_the_solvers_are_imported covers the imports")
     assert_clean(proc.returncode, err, time.monotonic() - t0, 130, "autobal: interrupted (SIGINT)")
     assert [p.name for p in tmp_path.iterdir() if p.name != "out"] == []
 
