@@ -264,6 +264,8 @@ def analyses_model(named: frozenset[str]) -> type[Strict]:
 
 # a scene's name names its output folder: a plain file name, never a path
 NAME_PATTERN = r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}$"
+PRINTABLE = r"^[^\x00-\x1f\x7f-\x9f]*$"  # one line of text: no control characters (C0, DEL, C1)
+PRINTABLE_LINES = r"^[^\x00-\x08\x0b\x0c\x0e-\x1f\x7f-\x9f]*$"  # text: tabs and line breaks allowed, no escapes
 
 
 class BaseScenario(Strict):
@@ -276,8 +278,10 @@ class BaseScenario(Strict):
     name: Annotated[str, Field(pattern=NAME_PATTERN)] = _d(
         "identifier of the scene and of its default output folder out/<name>: letters, digits, _ - . "
         "(no path separators, no '..', at most 100 characters)")
-    title: Annotated[str, Field(max_length=500)] = _d("one-line title, printed on figures")
-    source: Annotated[str, Field(max_length=2000)] = _d("where the inputs come from", "")
+    title: Annotated[str, Field(max_length=500, pattern=PRINTABLE)] = _d(
+        "one line of text (no control characters), printed on figures")
+    source: Annotated[str, Field(max_length=2000, pattern=PRINTABLE_LINES)] = _d(
+        "where the inputs come from: plain text (line breaks allowed, no terminal escapes)", "")
     _origin: dict = PrivateAttr(default_factory=dict)  # file, sha256, overrides (set by load)
 
     @model_validator(mode="after")
@@ -369,6 +373,10 @@ def _one_line(err: ValidationError) -> str:
         msg = "unknown key"
     elif e["type"] == "string_pattern_mismatch" and e["loc"] == ("name",):
         msg = f"{clean(repr(e['input']))} is not a plain identifier (letters, digits, _ - .; no path separators)"
+    elif e["type"] == "string_pattern_mismatch" and e["loc"] == ("title",):
+        msg = "control characters (terminal escapes, tabs, line breaks) are not allowed; write one line of text"
+    elif e["type"] == "string_pattern_mismatch" and e["loc"] == ("source",):
+        msg = "control characters (terminal escapes) are not allowed; write plain text"
     elif e["type"] == "finite_number":
         msg = f"{clean(repr(e['input']))}: must be a finite number"
     more = f" (and {err.error_count() - 1} more)" if err.error_count() > 1 else ""
