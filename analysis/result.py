@@ -169,6 +169,9 @@ class Result:
 
     #: the analysis key of results.json (``"statics"``, ``"frequency"`` ...)
     name: str = ""
+    #: every number of :meth:`to_dict`, declared (:class:`~autobal.analysis.quantities.Declarations`); None:
+    #: not declared yet (the report's allow-list ``UNDECLARED`` names these analyses)
+    quantities = None
 
     def to_dict(self) -> dict:
         """The results.json block: plain numbers in SI or named dimensionless groups."""

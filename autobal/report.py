@@ -16,7 +16,9 @@ from __future__ import annotations
 
 import base64
 import csv
+import functools
 import hashlib
+import importlib
 import json
 import math
 import re
@@ -26,6 +28,15 @@ from pathlib import Path
 import jinja2
 import yaml
 
+from autobal.analysis.quantities import (
+    DISPLAY_UNITS,
+    Declarations,
+    Quantity,
+    display_unit_of,
+    flatten,
+    is_number,
+    leaf_paths,
+)
 from autobal.analysis.result import plain
 from autobal.errors import ScenarioError
 from autobal.units import DIMENSIONS, si_unit_of
@@ -34,13 +45,19 @@ REPORT = "report.html"
 STATUS_FILES = ("failed_solve.json", "interrupted.json", "error.json")
 
 # --------------------------------------------------------------------------------------------
-# units of the results.json keys: (regex on "analysis.dotted.path", SI unit); the first match wins
+# units of the results.json keys: the declarations of each Result class (analysis/quantities.py)
 # --------------------------------------------------------------------------------------------
+#: analysis -> the module whose QUANTITIES declare every number of its block (imported when a report needs it)
+DECLARED = {"statics": "autobal.analysis.statics_study"}
+
+#: analyses whose numbers are not declared yet: their units still come from the name rules below.  This
+#: allow-list only shrinks (tests/test_quantities.py fails on an analysis that is in neither).
+UNDECLARED = ("frequency", "stability", "transient", "liquid_balancer", "estimation", "reliability", "montecarlo",
+              "rotor_dynamics", "spinup", "spinup_robust", "spinup_time_optimal", "design", "ross_spinup")
+
 _P = r"(^|\.)"  # start of a key
-# A key named with its unit (``_s``, ``_um``, ``_rad_s`` ...) is caught by the suffix rules; the last rule
-# of each analysis marks the rest as the source's dimensionless groups, so an owner who adds a
-# dimensional key without a unit suffix adds its rule here.
-UNIT_RULES: list[tuple[str, str]] = [
+# (regex on "analysis.dotted.path", SI unit), the first match wins: for the UNDECLARED analyses only
+_UNDECLARED_RULES: list[tuple[str, str]] = [
     # bookkeeping and keys that carry their unit in the name
     (r"(run_time_s|time_s|time_monte_carlo_s|cpu_s|build_s|solve_s|total_s|seconds)$", "s"),
     (r"\.accuracy\.", "1"),
@@ -69,15 +86,6 @@ UNIT_RULES: list[tuple[str, str]] = [
     (r"(^|\.)(cv|spread|std_ratio|stable_fraction|saturated_fraction|max_rel_diff|\w+_max_rel_diff)$", "1"),
     (r"(iterations|points|samples|seed|chunk_size|dof|groups|valid|invalid|count|integrator_steps"
      r"|zone_without_equilibrium|n_starts|intervals|degree|index|stages)$", "1"),
-    # statics (Pavlenko 2014, ch. 2: groups (2.18), ratios psi = p/p_B, u = z/z_B, xi = x/x_B, q = Q/Q_B)
-    (r"^statics\..*(z0|x0|z_B|x_B)$", "m"),
-    (r"^statics\..*" + _P + r"(p1|p2|p3|pe|pcam|p1_kr|dp_kr|p_B)$", "Pa"),
-    (r"^statics\..*(s_B|s_e|s_T|f_TB)$", "m^2"),
-    (r"^statics\.conductances\.", "m^3/(Pa*s)"),
-    (r"^statics\.scales\.g1$", "m^3/(Pa*s)"),
-    (r"^statics\..*Q_e_over_Q_n$", "1"),
-    (r"^statics\..*" + _P + r"Q_\w+$", "m^3/s"),
-    (r"^statics\.", "1"),
     # dynamics (§2.4-2.7): frequencies rad/s, amplitudes micrometres, poles 1/s
     (r"(^|\.)(omega|omega_ref|natural_frequency|imag|frequency)$", "rad/s"),
     (r"(^|\.)(real|decay_rate|max_real|growth_rate)$", "1/s"),
@@ -149,39 +157,30 @@ UNIT_RULES: list[tuple[str, str]] = [
 ]
 
 
-def _leaf_paths(value, path: str):
-    """(dotted path, value) of every numeric leaf; lists of records are walked as ``key[]``."""
-    if isinstance(value, dict):
-        for k, v in value.items():
-            yield from _leaf_paths(v, f"{path}.{k}" if path else str(k))
-    elif isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
-        for v in value:
-            yield from _leaf_paths(v, path + "[]")
-    elif isinstance(value, list):
-        flat = _flatten(value)
-        if any(_is_number(v) for v in flat):
-            yield path, value
-    elif _is_number(value):
-        yield path, value
+@functools.cache
+def declarations(analysis: str) -> Declarations | None:
+    """The declared quantities of an analysis, None for one of :data:`UNDECLARED`."""
+    if analysis not in DECLARED:
+        return None
+    return importlib.import_module(DECLARED[analysis]).QUANTITIES
 
 
-def _flatten(seq):
-    for v in seq:
-        if isinstance(v, list):
-            yield from _flatten(v)
-        else:
-            yield v
-
-
-def _is_number(v) -> bool:
-    return isinstance(v, int | float) and not isinstance(v, bool)
+def quantity(path: str) -> Quantity | None:
+    """The declaration of a results.json key ``analysis.dotted.path``, or None."""
+    analysis, _, rest = path.partition(".")
+    decl = declarations(analysis)
+    return None if decl is None else decl.find(rest)
 
 
 def unit_of(path: str) -> str | None:
-    """SI unit of a results.json key ``analysis.dotted.path`` ("1" when dimensionless), or None."""
-    for pattern, unit in _RULES:
-        if pattern.search(path):
-            return unit
+    """SI unit of a results.json key ``analysis.dotted.path`` ("1" when dimensionless), or None: its
+    declaration, or for an analysis of :data:`UNDECLARED` the first name rule that matches."""
+    analysis = path.partition(".")[0]
+    if analysis in DECLARED:
+        q = quantity(path)
+        return None if q is None else q.unit
+    if analysis in UNDECLARED:
+        return next((unit for pattern, unit in _RULES if pattern.search(path)), None)
     return None
 
 
@@ -191,7 +190,7 @@ def units(results: dict, analyses: list[str] | None = None) -> dict[str, str]:
     names = analyses if analyses is not None else [k for k in results if k in SECTIONS]
     out = {}
     for name in names:
-        for path, _ in _leaf_paths(plain(results.get(name, {})), name):
+        for path, _ in leaf_paths(plain(results.get(name, {})), name):
             unit = _parameter_unit(path, results) or unit_of(path)
             if unit is not None:
                 out.setdefault(path, unit)
@@ -228,13 +227,11 @@ def _get(data, path: str, default=None):
     return data
 
 
-_RULES = [(re.compile(p), u) for p, u in UNIT_RULES]
+_RULES = [(re.compile(p), u) for p, u in _UNDECLARED_RULES]
 
 # --------------------------------------------------------------------------------------------
 # numbers and cells
 # --------------------------------------------------------------------------------------------
-# SI unit -> (unit shown, factor): designers read MPa, mm and L/s
-DISPLAY = {"Pa": ("MPa", 1e-6), "m^3/s": ("L/s", 1e3), "m": ("mm", 1e3), "m^3": ("L", 1e3)}
 PRETTY = (("um", "µm"), ("^2", "²"), ("^3", "³"), ("*", "·"))
 
 
@@ -259,20 +256,21 @@ def number(v) -> str:
     return f"{v:.5g}" if a == 0 or 1e-3 <= a < 1e6 else f"{v:.4e}"
 
 
-def cell(v, unit: str | None = None) -> dict:
-    """A table cell: a number (or null) with its unit, converted to the display unit of DISPLAY;
-    words and yes/no without a unit."""
+def cell(v, unit: str | None = None, shown: str | None = None) -> dict:
+    """A table cell: a number (or null) with its unit, converted from the SI ``unit`` to the display unit
+    ``shown`` (default: the field's unit of analysis/quantities.py, µm for lengths below 10 µm); words and
+    yes/no without a unit."""
     if isinstance(v, bool | str):
         return text(v)
     unit = unit or "?"
+    if shown is None:
+        shown = "µm" if unit == "m" and v is not None and abs(v) < 1e-5 else display_unit_of(unit)
+    base, factor = DISPLAY_UNITS.get(shown, (unit, 1.0))
+    if base != unit:  # a unit of an undeclared analysis that has no display unit: shown as it is
+        shown, factor = unit, 1.0
     if v is None:
-        return {"text": "—", "unit": pretty_unit(unit), "num": True, "null": True}
-    if unit in DISPLAY:
-        shown, factor = DISPLAY[unit]
-        if unit == "m" and abs(v) < 1e-5:
-            shown, factor = "um", 1e6
-        return {"text": number(v * factor), "unit": pretty_unit(shown), "num": True}
-    return {"text": number(v), "unit": pretty_unit(unit), "num": True}
+        return {"text": "—", "unit": pretty_unit(shown), "num": True, "null": True}
+    return {"text": number(v / factor), "unit": pretty_unit(shown), "num": True}
 
 
 def text(v) -> dict:
@@ -312,13 +310,20 @@ class Section:
     def unit(self, path: str) -> str | None:
         return _parameter_unit(_unit_path(self.name, path), self.results) or unit_of(_unit_path(self.name, path))
 
+    def cell(self, path: str, value=None) -> dict:
+        """The cell of the block's value at ``path`` (or ``value``) in the display unit of its declaration."""
+        q = quantity(_unit_path(self.name, path))
+        v = self.get(path) if value is None else value
+        return cell(v, q.unit, q.display) if q is not None else cell(v, self.unit(path) or "?")
+
     def row(self, label: str, symbol: str, path: str, unit: str | None = None, value=None) -> None:
-        """One headline row; the value is the block's at ``path`` unless given, its unit the units map's.
-        A key the block lacks (the analysis did not compute it) gives no row."""
+        """One headline row; the value is the block's at ``path`` unless given, its unit and display unit
+        its declaration's.  A key the block lacks (the analysis did not compute it) gives no row."""
         if value is None and not _has(self.block, path):
             return
         v = self.get(path) if value is None else value
-        c = cell(v, unit or self.unit(path) or "?")
+        c = cell(v, unit) if unit else self.cell(path, v)
+        c["key"] = _unit_path(self.name, path)
         self.rows.append([text(label), text(symbol), c, text(c["unit"]), text(self.get(path + "_status") or "")])
 
     def verdict(self, ok: bool | None, message: str) -> None:
@@ -1168,8 +1173,8 @@ def inputs(meta: dict) -> tuple[list[list[dict]], str]:
         unit = _si_unit_of(g.removesuffix(" (--set)") if isinstance(g, str) else g)
         shown = json.dumps(si) if isinstance(si, list | dict) else si
         rows.append([text(key), text("(default)" if g is None else json.dumps(g) if isinstance(g, list | dict) else g),
-                     {"text": number(shown) if _is_number(shown) else str(shown), "unit": pretty_unit(unit) if unit
-                      else "", "num": _is_number(shown)}, text(pretty_unit(unit) if unit else "")])
+                     {"text": number(shown) if is_number(shown) else str(shown), "unit": pretty_unit(unit) if unit
+                      else "", "num": is_number(shown)}, text(pretty_unit(unit) if unit else "")])
     return rows, where
 
 
@@ -1206,11 +1211,11 @@ def _iterate_rows(it) -> list[list[str]]:
     rows = []
     for key, v in _flat(it if isinstance(it, dict) else {"x": it}).items():
         if isinstance(v, list):
-            flat = list(_flatten(v))
-            ends = f"{number(flat[0])} … {number(flat[-1])}" if flat and all(_is_number(x) for x in flat) else ""
+            flat = list(flatten(v))
+            ends = f"{number(flat[0])} … {number(flat[-1])}" if flat and all(is_number(x) for x in flat) else ""
             rows.append([key, f"{len(flat)} values {ends}".strip()])
         else:
-            rows.append([key, number(v) if _is_number(v) else str(v)])
+            rows.append([key, number(v) if is_number(v) else str(v)])
     return rows
 
 
