@@ -32,6 +32,7 @@ from autobal.analysis.quantities import (
     DISPLAY_UNITS,
     Declarations,
     Quantity,
+    convert,
     display_unit_of,
     flatten,
     is_number,
@@ -302,7 +303,10 @@ class Section:
         self.warnings: list[str] = []
         self.notes: list[str] = []
         self.comparison: dict | None = None
-        self.validation: list[dict] = []  # verdicts on the source's own models (the validation part)
+        self.validation: list[dict] = []  # what the source's own models show (the validation part)
+        self.validation_tables: list[dict] = []
+        self.validation_notes: list[str] = []
+        self.main: dict | None = None  # the one verdict of the analysis (the summary shows it)
 
     def get(self, path: str, default=None):
         return _get(self.block, path, default)
@@ -324,11 +328,24 @@ class Section:
         v = self.get(path) if value is None else value
         c = cell(v, unit) if unit else self.cell(path, v)
         c["key"] = _unit_path(self.name, path)
-        self.rows.append([text(label), text(symbol), c, text(c["unit"]), text(self.get(path + "_status") or "")])
+        note = self.get(path + "_status") or ""
+        if c["unit"] == "rad/s" and is_number(v):  # speeds in rpm and frequencies in Hz beside rad/s
+            note = f"{number(convert(v, 'rad/s', 'rpm'))} rpm = {number(convert(v, 'rad/s', 'Hz'))} Hz " + note
+        self.rows.append([text(label), text(symbol), c, text(c["unit"]), text(note.strip())])
 
     def verdict(self, ok: bool | None, message: str) -> None:
-        """ok True (good), False (bad), None (information)."""
+        """A check of the section: ok True (good), False (bad), None (information)."""
         self.verdicts.append({"ok": ok, "text": message})
+
+    def conclude(self, ok: bool | None, message: str) -> None:
+        """The one verdict of the analysis (the headline model's): first in the section and in the summary."""
+        self.main = {"ok": ok, "text": message}
+        self.verdicts.insert(0, self.main)
+
+    def overall(self) -> dict | None:
+        """The summary's verdict: the one concluded, else the first failed check, else the first check."""
+        checks = [v for v in self.verdicts if v["ok"] is not None]
+        return self.main or next((v for v in checks if v["ok"] is False), None) or (checks[0] if checks else None)
 
     def headline(self) -> dict | None:
         if not self.rows:
@@ -482,6 +499,15 @@ def statics_section(sec: Section) -> None:
     sec.row("critical barrier pressure margin", "Δp_kr", "critical_exact.dp_kr")
     ex, sw = sec.get("exact", {}), sec.get("sweep", {})
     sat, contact, psi1 = sw.get("regulator_saturated", []), sw.get("contact", []), sw.get("psi1", [])
+    q1, kr = ex.get("Q_1"), sec.get("critical_exact.psi1_kr")
+    if "regulator_saturated" in ex and "contact" in ex and q1 is not None:
+        problems = [w for w, bad in (("regulator SATURATED", ex["regulator_saturated"]),
+                                     ("face CONTACT", ex["contact"]), ("inner-seal flow REVERSED", q1 <= 0)) if bad]
+        z0 = sec.cell("exact.z0")
+        margin = f"; the inner-seal flow reverses at {number(kr / ex['psi1'])} × the operating discharge pressure" \
+            if kr is not None and ex.get("psi1") else ""
+        sec.conclude(not problems, "operating point: " + (", ".join(problems) if problems else
+                     f"regulating, face gap {z0['text']} {z0['unit']}, inner-seal flow towards the disc") + margin)
     if "regulator_saturated" in ex:
         sec.verdict(not ex["regulator_saturated"], "regulator at the operating point: " +
                     ("SATURATED (valve on its open stop)" if ex["regulator_saturated"] else "regulating"))
@@ -495,11 +521,9 @@ def statics_section(sec: Section) -> None:
                                                                                   if ex["contact"] else "none"))
     if any(contact):
         sec.verdict(False, f"face contact in the sweep from ψ1 = {number(psi1[contact.index(True)])}")
-    kr = sec.get("critical_exact.psi1_kr")
     if kr is not None and ex.get("psi1"):
         sec.verdict(kr > ex["psi1"], f"inner-seal flow reverses at ψ1_kr = {number(kr)} "
                     f"({number(kr / ex['psi1'])} × the operating ratio)")
-    q1 = ex.get("Q_1")
     if q1 is not None:
         sec.verdict(q1 > 0, f"inner-seal flow at the operating point: {number(q1 * 1e3)} L/s "
                     + ("(towards the disc, as designed)" if q1 > 0 else "(REVERSED)"))
@@ -539,42 +563,50 @@ def _name(model: str) -> str:
     return MODEL_LABELS.get(model, model)
 
 
-#: the source's own models: reported in the validation part of a section
-SOURCE_MODELS = ("program", "thesis")
+#: the source's own models (its printed chain form, its hand model, the appendix program, the thesis as printed):
+#: reported in the validation part of a section, never as a verdict of the machine
+SOURCE_MODELS = ("nonlinear_chain", "consistent", "program", "thesis")
+HEADLINE_MODEL = "nonlinear"
+
+#: why a source's model is unstable where the energy-consistent model is not (docs/theory/dynamics.md)
+WHY_UNSTABLE = {
+    "nonlinear_chain": "its chamber balances are the printed chain form, whose displacement flows do not match the "
+                       "volume changes to the forces (not energy-consistent)",
+    "consistent": "it is the linearisation of the printed chain form (equal to it to 1e-9)",
+    "program": "the published AFC peaks are the magnitudes of its unstable modes (Pavlenko 2014, App. A/B)",
+    "thesis": "the hand model (2.43)-(2.45) with the constants as printed",
+}
+
+
+def _rate(decay) -> str:
+    return ("" if decay is None else f"disturbances decay at {number(decay)} 1/s" if decay > 0
+            else f"disturbances GROW at {number(-decay)} 1/s")
 
 
 def frequency_section(sec: Section) -> None:
     """AFC of the face gap (Pavlenko 2014, §2.6): the headline model (energy-consistent, physical forcing)
-    first, every named model beside it, the source's program model as the validation."""
+    gives the verdict; the source's models are the validation part."""
     stable = _stable_models(sec.results)
     models = sec.get("models", {})
     h = sec.get("headline")
     if h:
         what = f"{_name(h['model'])}, {h['forcing']} forcing"
         verdict = "stable" if h.get("stable") else "UNSTABLE"
-        sec.verdict(h.get("stable"), f"headline: {what}: {verdict} (max Re λ = {number(h.get('max_real'))} 1/s); "
-                                     f"first resonance at {number(_get(h, 'peaks.0.omega'))} rad/s; amplitude at "
-                                     f"the operating speed {number(_get(h, 'at_operating_speed.amplitude_um'))} µm")
+        sec.conclude(h.get("stable"), f"{what}: {verdict} (max Re λ = {number(h.get('max_real'))} 1/s); first "
+                                      f"resonance at {number(_get(h, 'peaks.0.omega'))} rad/s; amplitude at the "
+                                      f"operating speed {number(_get(h, 'at_operating_speed.amplitude_um'))} µm")
         sec.row(f"first resonance ({what})", "ω_I", "headline.peaks.0.omega", "rad/s")
         sec.row(f"amplitude at the first resonance ({what})", "A_I", "headline.peaks.0.amplitude_um", "um")
         sec.row("operating speed", "ω0", "headline.at_operating_speed.omega", "rad/s")
         sec.row(f"amplitude at the operating speed ({what})", "A(ω0)", "headline.at_operating_speed.amplitude_um", "um")
         sec.row(f"static amplitude ({what})", "A(0)", "headline.static_amplitude_um", "um")
-    else:
-        lead = next((m for m in MODEL_ORDER if m in models), None)
-        if lead is not None:
-            what = _name(lead)
-            sec.row(f"first resonance ({what})", "ω_I", f"models.{lead}.peaks.0.omega")
-            sec.row(f"amplitude at the first resonance ({what})", "A_I", f"models.{lead}.peaks.0.amplitude_um")
-            sec.row("operating speed", "ω0", f"models.{lead}.at_operating_speed.omega")
-            sec.row(f"amplitude at the operating speed ({what})", "A(ω0)",
-                    f"models.{lead}.at_operating_speed.amplitude_um")
     sec.row("forcing amplitude", "δψ_1a", "forcing_amplitude")
-    rows = []
+    own, source = [], []
     for model, m in _ordered(models):
         peaks = m.get("peaks", [])
         at = m.get("at_operating_speed", {})
         verdict = {True: "stable", False: "UNSTABLE", None: "—"}[stable.get(model)]
+        rows = own if model not in SOURCE_MODELS else source
         for i, pk in enumerate(peaks or [{}]):
             first = i == 0
             rows.append([text(_name(model) if first else ""), text(m.get("forcing") if first else ""),
@@ -585,65 +617,72 @@ def frequency_section(sec: Section) -> None:
         if stable.get(model) is False and model not in SOURCE_MODELS:
             sec.warnings.append(f"{_name(model)}: the model is unstable at this operating point; its AFC is the "
                                 "response of an unstable system (no steady state exists)")
-    sec.tables.append(table(f"AFC of the face gap of every named model under the scene's '{sec.get('forcing')}' "
-                            f"forcing, ω0 = {number(sec.get('at_operating_speed.omega'))} rad/s: peaks, amplitude at "
-                            "the operating speed and the static amplitude",
-                            ["model", "forcing", "stability", "peak ω", "peak amplitude", "amplitude at ω0",
-                             "static amplitude"], rows, headline=True))
-    if "program" in models:
-        _program_validation(sec, "program", stable.get("program"), sec.get("models.program.forcing"))
-    top = sec.get("model")
-    if top:
-        sec.verdict(None, f"the top-level keys of the frequency block in results.json hold the {_name(top)}, "
-                          f"forcing '{sec.get('forcing')}'; the 'headline' block the "
-                          f"{_name((h or {}).get('model', top))} under the {(h or {}).get('forcing', '')} forcing")
+        if model in SOURCE_MODELS:
+            _source_model(sec, model, stable.get(model), m.get("forcing"))
+    columns = ["model", "forcing", "stability", "peak ω", "peak amplitude", "amplitude at ω0", "static amplitude"]
+    caption = (f"under the scene's '{sec.get('forcing')}' forcing, ω0 = {number(sec.get('at_operating_speed.omega'))} "
+               "rad/s: peaks, amplitude at the operating speed and the static amplitude")
+    if own:
+        sec.tables.append(table(f"AFC of the face gap, {caption}", columns, own, headline=True))
+    if source:
+        sec.validation_tables.append(table(f"AFC of the face gap of the source's models, {caption}", columns, source))
 
 
-def _program_validation(sec: Section, model: str, stable: bool | None, forcing: str | None) -> None:
-    """The validation verdict of the source's program model: how closely it reproduces the published
-    values of the scene (the comparison table), and its stability."""
+def _source_model(sec: Section, model: str, stable: bool | None, forcing: str | None = None) -> None:
+    """The validation line of one of the source's models: how closely it reproduces the scene's published
+    values (the comparison table, program model), whether it is stable, and why not."""
     rows = PUBLISHED.get(sec.results.get("scenario", ""), {}).get(sec.name) or []
     diffs = [abs(sec.get(key) - pub) / abs(pub) for _, _, key, pub, _, _ in rows
-             if key and isinstance(sec.get(key), int | float) and pub]
+             if key and key.startswith(f"models.{model}.") and isinstance(sec.get(key), int | float) and pub]
     where = rows[0][5] if rows else "the source"
-    repro = (f"reproduces the published values ({where}) within {100 * max(diffs):.1f} % ({len(diffs)} values)"
-             if diffs else "no published values for this scene")
-    state = {True: "stable", False: "UNSTABLE: its AFC is not a steady response", None: "stability not computed"}
-    sec.validation.append({"ok": None,  # information: how the source's model compares, not a pass/fail of this run
-                           "text": f"{_name(model)}, {forcing or ''} forcing: {repro}; {state[stable]}"})
+    repro = (f"reproduces the published values ({where}) within {100 * max(diffs):.1f} % ({len(diffs)} values); "
+             if diffs else "")
+    m = sec.get(f"models.{model}") or {}
+    poles = m.get("poles") or _get(sec.results, f"stability.models.{model}.poles") or {}
+    lead = _leading(poles.get("real", []), poles.get("imag", [])) if poles else ""
+    state = {True: "stable", None: "stability not computed",
+             False: f"UNSTABLE (leading poles {lead} 1/s): {WHY_UNSTABLE.get(model, '')}"}[stable]
+    if stable is False and sec.name == "frequency":
+        state += "; its AFC is not a steady response"
+    text_ = f"{_name(model)}{f', {forcing} forcing' if forcing else ''}: {repro}{state}"
+    if text_ not in [v["text"] for v in sec.validation]:
+        sec.validation.append({"ok": None, "text": text_})  # what the source's model shows, not a verdict
 
 
 def stability_section(sec: Section) -> None:
-    """Poles, Hurwitz determinants and margins per model (Pavlenko 2014, §2.7): the headline model
-    (energy-consistent) first, the source's models as the validation."""
+    """Poles, Hurwitz determinants and margins (Pavlenko 2014, §2.7): the headline model (energy-consistent)
+    gives the verdict; the source's models are the validation part."""
     h = sec.get("headline")
     if h:
         decay = _get(h, "margin.decay_rate")
-        sec.verdict(h.get("stable"), f"headline: {_name(h['model'])}: {'stable' if h.get('stable') else 'UNSTABLE'}"
-                                     + ("" if decay is None else f", disturbances decay at {number(decay)} 1/s"
-                                        if decay > 0 else f", disturbances GROW at {number(-decay)} 1/s"))
+        sec.conclude(h.get("stable"), f"{_name(h['model'])}: {'stable' if h.get('stable') else 'UNSTABLE'}"
+                                      + (f", {_rate(decay)}" if decay is not None else ""))
         sec.row(f"decay rate −max Re λ ({_name(h['model'])})", "η", "headline.margin.decay_rate", "1/s")
         sec.row(f"smallest damping ratio ({_name(h['model'])})", "ζ_min", "headline.margin.min_damping_ratio", "1")
-    rows = []
+    own, source = [], []
     for model, m in _ordered(sec.get("models", {})):
         poles = m.get("poles", {})
         lead = _leading(poles.get("real", []), poles.get("imag", []))
         st = m.get("stable")
-        rows.append([text(_name(model)), text({True: "stable", False: "UNSTABLE"}.get(st, "—")),
-                     {"text": lead, "unit": "1/s", "num": True}, cell(_get(m, "margin.decay_rate"), "1/s"),
-                     cell(_get(m, "margin.min_damping_ratio"), "1")])
-        decay = _get(m, "margin.decay_rate")
-        rate = ("" if decay is None else f"; disturbances decay at {number(decay)} 1/s" if decay > 0
-                else f"; disturbances GROW at {number(-decay)} 1/s")
-        v = {"ok": st, "text": f"{_name(model)}: {'stable' if st else 'UNSTABLE'}; leading poles {lead} 1/s{rate}"}
+        row = [text(_name(model)), text({True: "stable", False: "UNSTABLE"}.get(st, "—")),
+               {"text": lead, "unit": "1/s", "num": True}, cell(_get(m, "margin.decay_rate"), "1/s"),
+               cell(_get(m, "margin.min_damping_ratio"), "1")]
         if model in SOURCE_MODELS:
-            sec.validation.append(v)
-        elif model != (h or {}).get("model"):  # the headline model has its verdict above
-            sec.verdicts.append(v)
-    sec.tables.append(table("Stability per model: leading poles (largest real part), decay rate −max Re λ and the "
-                            "smallest damping ratio", ["model", "verdict", "leading poles", "decay rate",
-                                                       "min damping ratio ζ"], rows, headline=True))
-    sec.notes.extend(f"{_name(m)}: {t.removeprefix(m + ': ')}" for m, t in (sec.get("restoring") or {}).items())
+            source.append(row)
+            _source_model(sec, model, st)
+            continue
+        own.append(row)
+        if model != (h or {}).get("model"):  # another model of the toolkit's own: a check, not the verdict
+            sec.verdict(st, f"{_name(model)}: {'stable' if st else 'UNSTABLE'}; leading poles {lead} 1/s; "
+                            f"{_rate(_get(m, 'margin.decay_rate'))}")
+    columns = ["model", "verdict", "leading poles", "decay rate", "min damping ratio ζ"]
+    caption = "leading poles (largest real part), decay rate −max Re λ and the smallest damping ratio"
+    if own:
+        sec.tables.append(table(f"Stability: {caption}", columns, own, headline=True))
+    if source:
+        sec.validation_tables.append(table(f"Stability of the source's models: {caption}", columns, source))
+    for m, t in (sec.get("restoring") or {}).items():
+        (sec.validation_notes if m in SOURCE_MODELS else sec.notes).append(f"{_name(m)}: {t.removeprefix(m + ': ')}")
 
 
 def transient_section(sec: Section) -> None:
@@ -976,14 +1015,22 @@ def design_section(sec: Section) -> None:
     sec.verdict(st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"IPOPT: {st} ({sec.get('iterations')} "
                                                                          "iterations)")
     alpha = sec.get("decay_rate")
-    for which in ("nominal", "optimum"):
+    for which in ("optimum", "nominal"):
         margins = [m for m in (sec.get(f"{which}.margin") or {}).values() if isinstance(m, int | float)]
-        if margins and alpha is not None:
-            worst = min(margins)
-            sec.verdict(worst >= alpha * (1 - 1e-6), f"{which} design: every pole has Re λ ≤ −{number(alpha)} 1/s at "
-                        f"every operating point" if worst >= alpha * (1 - 1e-6) else
-                        f"{which} design: the decay-rate margin {number(alpha)} 1/s is NOT met "
-                        f"(worst {number(worst)} 1/s)")
+        if not margins or alpha is None:
+            continue
+        worst = min(margins)
+        met = worst >= alpha * (1 - 1e-6)
+        model = {"energy": HEADLINE_MODEL, "chain": "nonlinear_chain"}.get(sec.get("form"), HEADLINE_MODEL)
+        words = (f"{which} design, {_name(model)}: " + ("stable" if worst > 0 else "UNSTABLE")
+                 + f", decay rate ≥ {number(worst)} 1/s at every operating point, "
+                 + (f"{number(worst - alpha)} 1/s above the required {number(alpha)} 1/s" if met else
+                    f"the required {number(alpha)} 1/s is NOT met"))
+        if which == "optimum" and st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"):
+            sec.conclude(met, words)
+        else:
+            sec.verdict(met, words)
+    _design_validation(sec)
     cert = sec.get("certification") or {}
     if cert:
         sec.verdict(bool(cert.get("eigenvalues_ok")), "eigenvalues confirm every constraint at the optimum"
@@ -998,6 +1045,29 @@ def design_section(sec: Section) -> None:
     if rows:
         sec.tables.append(table("Design parameters (scene paths; `autobal run SCENE --set PATH=VALUE` reproduces the "
                                 "optimum)", ["scene path", "nominal", "optimum"], rows))
+
+
+def _design_validation(sec: Section) -> None:
+    """The designs under the source's models (chain form, program model): where they disagree with the
+    headline model's verdict, the validation part says so."""
+    for key in ("other_model", "program_model"):
+        block = sec.get(key) or {}
+        model = {"chain": "nonlinear_chain"}.get(block.get("model"), block.get("model"))
+        if not model:
+            continue
+        values = {w: [v for v in (block.get(w) or {}).values() if isinstance(v, int | float)]
+                  for w in ("nominal", "optimum")}
+        if not values["optimum"]:
+            continue
+        lo, hi = min(values["optimum"]), max(values["optimum"])
+        nom = values["nominal"]
+        worse = bool(nom) and hi > max(nom)
+        words = (f"{_name(model)}: spectral abscissa max Re λ of the optimum {number(lo)} to {number(hi)} 1/s over "
+                 "the operating points" + (f" (nominal {number(min(nom))} to {number(max(nom))} 1/s)" if nom else ""))
+        if lo > 0:
+            words += (": UNSTABLE under this model, " + ("MORE unstable than the nominal design" if worse else
+                      "as the nominal design") + f"; the headline verdict stands: {WHY_UNSTABLE.get(model, '')}")
+        sec.validation.append({"ok": None, "text": words})
 
 
 def ross_spinup_section(sec: Section) -> None:
@@ -1199,8 +1269,11 @@ def _section(name: str, block: dict, results: dict, figures: list[dict], folder:
     _null_warnings(block, name, sec.warnings)
     acc = (results.get("accuracy") or {}).get(name) or block.get("accuracy") or {}
     tables = [t for t in (sec.headline(), *sec.tables) if t is not None]
+    overall = {"ok": False, "text": error} if error else sec.overall()
     return {"name": name, "title": TITLES.get(name, name), "tables": tables, "verdicts": sec.verdicts,
-            "comparison": sec.comparison, "validation": sec.validation, "warnings": sec.warnings, "notes": sec.notes,
+            "overall": overall, "comparison": sec.comparison, "validation": sec.validation,
+            "validation_tables": sec.validation_tables, "validation_notes": sec.validation_notes,
+            "warnings": sec.warnings, "notes": sec.notes,
             "figures": figures,
             "accuracy": {"estimate": acc.get("estimate"), "how": acc.get("how", "")},
             "run_time": (results.get("timing") or {}).get(name), "error": error}
@@ -1241,7 +1314,7 @@ def context(folder: Path) -> dict:
     meta = results.get("meta") or (failure or {}).get("meta") or {}
     rows, where = inputs(meta)
     others = [f for figs in figures.values() for f in figs]
-    summary = [{"section": sec["title"], **v} for sec in sections for v in sec["verdicts"] if v["ok"] is not None]
+    summary = [{"section": sec["title"], "name": sec["name"], **sec["overall"]} for sec in sections if sec["overall"]]
     return {"results": results, "failure": failure, "sections": sections, "summary": summary, "other_figures": others,
             "inputs": rows, "inputs_where": where, "meta": meta, "overrides": meta.get("overrides") or {},
             "title": results.get("title") or (failure or {}).get("title") or "autobal run",
