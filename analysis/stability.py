@@ -205,11 +205,16 @@ class StabilityResult(Result):
     def to_dict(self) -> dict:
         return self.data
 
+    def verdict(self) -> tuple[bool, str]:
+        """The headline (energy-consistent) model's: stable or not, and its decay rate."""
+        h = self.data["headline"]
+        decay = h["margin"]["decay_rate"]
+        rate = f"disturbances decay at {decay:.5g} 1/s" if decay > 0 else f"disturbances GROW at {-decay:.5g} 1/s"
+        return h["stable"], f"{MODEL_LABELS[h['model']]}: {'stable' if h['stable'] else 'UNSTABLE'}, {rate}"
+
     def summary(self) -> str:
         d = self.data
-        h = d["headline"]
-        lines = [f"stability: {MODEL_LABELS['nonlinear']}: {'stable' if h['stable'] else 'UNSTABLE'}, "
-                 f"decay rate {h['margin']['decay_rate']:+.1f} 1/s",
+        lines = [f"stability: {self.verdict()[1]}",
                  "  validation against the source (its models do not judge the machine):"]
         for m, v in d["models"].items():
             if m == "nonlinear":

@@ -136,11 +136,27 @@ class StaticsResult(Result):
     def to_dict(self) -> dict:
         return self.data
 
+    def verdict(self) -> tuple[bool, str]:
+        """At the operating point: regulating, no face contact, inner-seal flow towards the disc; and how far
+        the discharge pressure is from the one that reverses the inner-seal flow."""
+        ex, kr = self.data["exact"], self.data["critical_exact"].get("psi1_kr")
+        problems = [w for w, bad in (("regulator SATURATED", ex["regulator_saturated"]),
+                                     ("face CONTACT", ex["contact"]),
+                                     ("inner-seal flow REVERSED", not ex["Q_1"] > 0)) if bad]
+        words = "operating point: " + (", ".join(problems) if problems else
+                                       f"regulating, face gap {QUANTITIES.find('exact.z0').text(ex['z0'])}, "
+                                       "inner-seal flow towards the disc")
+        if kr is not None and ex["psi1"]:
+            words += f"; the inner-seal flow reverses at {kr / ex['psi1']:.3g} × the operating discharge pressure"
+        return not problems, words
+
     def summary(self) -> str:
         ex, cf = self.data["exact"], self.data["closed_form"]
         crit = self.data["critical_exact"]
+        ok, words = self.verdict()
         lines = [f"statics at p1 = {QUANTITIES.find('exact.p1').text(ex['p1'])} (psi1 = {ex['psi1']:g}): IPOPT "
                  f"{ex['solver']['status']}, max relative residual {ex['solver']['max_relative_residual']:.1e}",
+                 f"  {'ok' if ok else 'NOT OK'}: {words}",
                  *QUANTITIES.lines(self.data),
                  "  the source's dimensionless groups (Pavlenko 2014, Eqs. (2.24)-(2.36)):",
                  f"  {'':10s}{'exact':>12s}{'closed form':>14s}"]

@@ -22,6 +22,7 @@ import importlib
 import json
 import math
 import re
+from html import escape as html_escape
 from importlib import resources
 from pathlib import Path
 
@@ -38,7 +39,7 @@ from autobal.analysis.quantities import (
     is_number,
     leaf_paths,
 )
-from autobal.analysis.result import plain
+from autobal.analysis.result import html_verdict, plain
 from autobal.errors import ScenarioError
 from autobal.units import DIMENSIONS, si_unit_of
 
@@ -500,14 +501,9 @@ def statics_section(sec: Section) -> None:
     ex, sw = sec.get("exact", {}), sec.get("sweep", {})
     sat, contact, psi1 = sw.get("regulator_saturated", []), sw.get("contact", []), sw.get("psi1", [])
     q1, kr = ex.get("Q_1"), sec.get("critical_exact.psi1_kr")
-    if "regulator_saturated" in ex and "contact" in ex and q1 is not None:
-        problems = [w for w, bad in (("regulator SATURATED", ex["regulator_saturated"]),
-                                     ("face CONTACT", ex["contact"]), ("inner-seal flow REVERSED", q1 <= 0)) if bad]
-        z0 = sec.cell("exact.z0")
-        margin = f"; the inner-seal flow reverses at {number(kr / ex['psi1'])} × the operating discharge pressure" \
-            if kr is not None and ex.get("psi1") else ""
-        sec.conclude(not problems, "operating point: " + (", ".join(problems) if problems else
-                     f"regulating, face gap {z0['text']} {z0['unit']}, inner-seal flow towards the disc") + margin)
+    from autobal.analysis.statics_study import StaticsResult  # the verdict's one copy
+
+    sec.conclude(*StaticsResult(sec.block).verdict())
     if "regulator_saturated" in ex:
         sec.verdict(not ex["regulator_saturated"], "regulator at the operating point: " +
                     ("SATURATED (valve on its open stop)" if ex["regulator_saturated"] else "regulating"))
@@ -654,9 +650,9 @@ def stability_section(sec: Section) -> None:
     gives the verdict; the source's models are the validation part."""
     h = sec.get("headline")
     if h:
-        decay = _get(h, "margin.decay_rate")
-        sec.conclude(h.get("stable"), f"{_name(h['model'])}: {'stable' if h.get('stable') else 'UNSTABLE'}"
-                                      + (f", {_rate(decay)}" if decay is not None else ""))
+        from autobal.analysis.stability import StabilityResult  # the verdict's one copy
+
+        sec.conclude(*StabilityResult(sec.block).verdict())
         sec.row(f"decay rate −max Re λ ({_name(h['model'])})", "η", "headline.margin.decay_rate", "1/s")
         sec.row(f"smallest damping ratio ({_name(h['model'])})", "ζ_min", "headline.margin.min_damping_ratio", "1")
     own, source = [], []
@@ -1320,6 +1316,33 @@ def context(folder: Path) -> dict:
             "title": results.get("title") or (failure or {}).get("title") or "autobal run",
             "scenario": results.get("scenario") or (failure or {}).get("scenario") or "—",
             "log": (folder / "autobal.log").exists()}
+
+
+def sections(results: dict) -> list[dict]:
+    """The report's section of every analysis of a results.json mapping, without figures: its one verdict
+    (``overall``), tables in display units, validation part, warnings."""
+    return [_section(n, results[n], results, [], None) for n in results if n in SECTIONS]
+
+
+def notebook(results: dict, figures: dict[str, list[str]] | None = None) -> str:
+    """A run as a notebook cell's HTML: per analysis its one verdict, its headline table in display units and
+    ``figures[analysis]`` (HTML ``<img>`` elements)."""
+    results = plain(results)
+    out = [f"<div><h2>{html_escape(results.get('title') or '')}</h2>"
+           f"<p>scene <b>{html_escape(results.get('scenario', ''))}</b></p>"]
+    for sec in sections(results):
+        out.append(f"<h3>{html_escape(sec['title'])}</h3>")
+        if sec["overall"]:
+            out.append(html_verdict((sec["overall"]["ok"], sec["overall"]["text"])))
+        for t in sec["tables"][:1]:
+            head = "".join(f"<th>{html_escape(c)}</th>" for c in t["columns"])
+            body = "".join("<tr>" + "".join(f"<td>{html_escape(c['text'])}"
+                                            + (f" {html_escape(c['unit'])}" if c.get("num") and not t["unit_column"]
+                                               and c["unit"] != "dimensionless" else "") + "</td>" for c in row)
+                           + "</tr>" for row in t["rows"])
+            out.append(f"<table><caption>{html_escape(t['caption'])}</caption><tr>{head}</tr>{body}</table>")
+        out.extend((figures or {}).get(sec["name"], []))
+    return "".join(out) + "</div>"
 
 
 def html(folder: str | Path) -> str:
