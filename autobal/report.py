@@ -38,6 +38,7 @@ from autobal.analysis.quantities import (
     flatten,
     is_number,
     leaf_paths,
+    significant,
 )
 from autobal.analysis.result import html_verdict, plain
 from autobal.errors import ScenarioError
@@ -321,7 +322,7 @@ class Section:
         v = self.get(path) if value is None else value
         return cell(v, q.unit, q.display) if q is not None else cell(v, self.unit(path) or "?")
 
-    def row(self, label: str, symbol: str, path: str, unit: str | None = None, value=None) -> None:
+    def row(self, label: str, symbol: str, path: str, unit: str | None = None, value=None, note: str = "") -> None:
         """One headline row; the value is the block's at ``path`` unless given, its unit and display unit
         its declaration's.  A key the block lacks (the analysis did not compute it) gives no row."""
         if value is None and not _has(self.block, path):
@@ -329,7 +330,7 @@ class Section:
         v = self.get(path) if value is None else value
         c = cell(v, unit) if unit else self.cell(path, v)
         c["key"] = _unit_path(self.name, path)
-        note = self.get(path + "_status") or ""
+        note = f"{note} {self.get(path + '_status') or ''}"
         if c["unit"] == "rad/s" and is_number(v):  # speeds in rpm and frequencies in Hz beside rad/s
             note = f"{number(convert(v, 'rad/s', 'rpm'))} rpm = {number(convert(v, 'rad/s', 'Hz'))} Hz " + note
         self.rows.append([text(label), text(symbol), c, text(c["unit"]), text(note.strip())])
@@ -375,18 +376,31 @@ def _leading(real: list, imag: list, count: int = 2) -> str:
     return ", ".join(out)
 
 
-def _null_warnings(block, path: str, out: list[str]) -> None:
-    """'key is null: status' for every null that carries a ``key_status`` beside it."""
+def _nulls(block, path: str, out: dict[str, list[str]]) -> dict[str, list[str]]:
+    """reason -> the paths of the nulls that carry it as their ``key_status``."""
     if isinstance(block, dict):
         for k, v in block.items():
             if k.endswith("_status") and isinstance(v, str) and block.get(k[:-7], 0) is None:
-                out.append(f"{path}.{k[:-7]} is null: {v}")
+                out.setdefault(v, []).append(f"{path}.{k[:-7]}")
             elif isinstance(v, dict | list):
-                _null_warnings(v, f"{path}.{k}", out)
+                _nulls(v, f"{path}.{k}", out)
     elif isinstance(block, list):
         for i, v in enumerate(block):
             if isinstance(v, dict):
-                _null_warnings(v, f"{path}[{i}]", out)
+                _nulls(v, f"{path}[{i}]", out)
+    return out
+
+
+def _null_note(block, path: str) -> str | None:
+    """One line on the block's nulls, grouped by reason (each has its ``key_status`` in results.json): not
+    a warning, a reader has nothing to act on."""
+    groups = _nulls(block, path, {})
+    if not groups:
+        return None
+    parts = [f"{reason}: {', '.join(p.removeprefix(path + '.') for p in paths)}" if len(paths) <= 2 else
+             f"{reason} ({len(paths)} values)" for reason, paths in groups.items()]
+    return f"{sum(map(len, groups.values()))} values are null (no number), each with its reason in results.json: " \
+        + "; ".join(parts)
 
 
 # --------------------------------------------------------------------------------------------
@@ -711,8 +725,15 @@ def liquid_balancer_section(sec: Section) -> None:
     sec.row("capacity ratio", "k_D", f"{op}.k_D")
     sec.row("efficiency (the source's algorithm)", "λ0", f"{op}.lambda0")
     sec.row("efficiency (self-consistent closure, toolkit extension)", "λ0", f"{op}.lambda0_self_consistent")
-    sec.row("optimal liquid height", "h_opt", "optimal_height.optimum")
-    sec.row("optimal liquid volume", "V_opt", "optimal_volume.optimum")
+    for key, label, symbol in (("optimal_height", "optimal liquid height", "h_opt"),
+                               ("optimal_volume", "optimal liquid volume", "V_opt")):
+        why = ""
+        if sec.get(f"{key}.singular"):  # orders of magnitude from the published optimum: the row says why
+            why = (f"complete balancing (k_D = 1) is reached here, where λ0 is unbounded: "
+                   f"λ0 = {number(sec.get(f'{key}.lambda0_max'))} says how close IPOPT came to k_D = 1, not how "
+                   "efficient the machine is; Khomyak (2020), Table 3.3 publishes optimal volumes of 0.05-0.18 L, "
+                   "the documented algorithm differs there (the Table 3.3 comparison below, docs/validation.md)")
+        sec.row(label, symbol, f"{key}.optimum", note=why)
     o = sec.get(op, {})
     if "equilibrium_exists" in o:
         sec.verdict(o["equilibrium_exists"], "balancing equilibrium " + ("exists" if o["equilibrium_exists"] else
@@ -742,24 +763,50 @@ def liquid_balancer_section(sec: Section) -> None:
 
 
 def estimation_section(sec: Section) -> None:
-    """Least-squares fits with standard errors and adequacy (Pavlenko 2014, §4.3-4.4)."""
-    rows = []
+    """Least-squares fits with standard errors, bootstrap intervals, parameter correlation and adequacy
+    (Pavlenko 2014, §4.3-4.4): one verdict over the fits (solved and adequate)."""
+    rows, adequacy, verdicts = [], [], []
     for fit, f in sec.get("fits", {}).items():
-        for pname, p in f.get("parameters", {}).items():
-            if not p.get("free"):
-                continue
+        boot = _get(f, "bootstrap.parameters") or {}
+        free = [p for p, v in f.get("parameters", {}).items() if v.get("free")]
+        for pname in free:
+            p, b = f["parameters"][pname], boot.get(pname) or {}
             rows.append([text(fit), text(pname), cell(p.get("estimate"), "1"), cell(p.get("standard_error"), "1"),
-                         cell(p.get("ci_low"), "1"), cell(p.get("ci_high"), "1"), cell(f.get("residual_std"), "1")])
-        st = _get(f, "solver.status")
-        sec.verdict(_get(f, "solver.success"), f"{fit}: solver {st}")
+                         cell(p.get("ci_low"), "1"), cell(p.get("ci_high"), "1"), cell(b.get("ci_low"), "1"),
+                         cell(b.get("ci_high"), "1")])
+        corr = f.get("correlation") or []
+        pairs = [(free[i], free[j], corr[i][j]) for i in range(len(free)) for j in range(i + 1, len(free))
+                 if i < len(corr) and j < len(corr[i]) and is_number(corr[i][j])]
+        for a, b, r in pairs:
+            sec.verdict(None,
+                        f"{fit}: correlation of {a} and {b} {number(r)}" + (
+                            ": the data hardly separate them (the intervals are wide along the ridge)"
+                            if abs(r) >= 0.9 else ""))
+        solved = bool(_get(f, "solver.success"))
         ad = f.get("adequacy") or {}
+        lof = ad.get("lack_of_fit") or {}
         if "adequate" in ad:
-            sec.verdict(ad["adequate"], f"{fit}: Fisher adequacy F = {number(ad.get('F'))} vs F_crit = "
-                                        f"{number(ad.get('F_crit'))}: " + ("adequate" if ad["adequate"] else
-                                                                           "NOT adequate"))
-    sec.tables.append(table("Fitted parameters (the source's dimensionless groups): estimate, standard error, "
-                            "confidence interval", ["fit", "parameter", "estimate", "standard error", "CI low",
-                                                    "CI high", "residual std"], rows, headline=True))
+            adequacy.append([text(fit), *(cell(ad.get(k), "1") for k in ("F", "F_crit", "p_value")),
+                             text(ad["adequate"]), *(cell(lof.get(k), "1") for k in ("F", "F_crit", "p_value")),
+                             text(lof.get("adequate"))])
+        words = (f"{fit} ({', '.join(free)}): " + ("" if solved else f"solver FAILED ({_get(f, 'solver.status')}); ")
+                 + ({True: f"adequate (F = {number(ad.get('F'))} ≤ F_crit = {number(ad.get('F_crit'))})",
+                     False: f"NOT adequate (F = {number(ad.get('F'))} > F_crit = {number(ad.get('F_crit'))})",
+                     None: "adequacy not tested"}[ad.get("adequate")]))
+        if lof.get("adequate") is False:
+            words += f", lack of fit at p = {number(lof.get('p_value'))}"
+        verdicts.append((solved and ad.get("adequate") is not False, words))
+    if verdicts:
+        sec.conclude(all(ok for ok, _ in verdicts), "; ".join(w for _, w in verdicts))
+    sec.tables.append(table("Fitted parameters (the source's dimensionless groups): estimate, standard error, the "
+                            "linearised confidence interval and the bootstrap percentile interval",
+                            ["fit", "parameter", "estimate", "standard error", "CI low", "CI high", "bootstrap low",
+                             "bootstrap high"], rows, headline=True))
+    if adequacy:
+        sec.tables.append(table("Adequacy: Fisher test of the fit against the scatter within the load groups, and "
+                                "the lack-of-fit test (Pavlenko 2014, §4.4; adequate when F ≤ F_crit)",
+                                ["fit", "F", "F_crit", "p", "adequate", "lack-of-fit F", "F_crit", "p",
+                                 "adequate"], adequacy))
 
 
 def montecarlo_section(sec: Section) -> None:
@@ -1036,11 +1083,20 @@ def design_section(sec: Section) -> None:
                     + ("(none better by more than 0.5 %)" if not cert.get("beaten") else "BEATS the optimum"))
     for a in sec.get("active", []):
         sec.verdict(None, f"active constraint: {a.get('constraint')} (multiplier {number(a.get('multiplier'))})")
-    nominal, optimum = sec.get("nominal.parameters") or {}, sec.get("optimum.parameters") or {}
-    rows = [[text(path), text(nominal.get(path, "")), text(value)] for path, value in optimum.items()]
+    from autobal.analysis.design_study import shown  # display units and digits of the design variables
+
+    nominal, optimum = sec.get("nominal.values_si") or {}, sec.get("optimum.values_si") or {}
+    given = sec.get("optimum.parameters") or {}
+    rows = []
+    for path, value in optimum.items():
+        unit, n = given.get(path, "").partition(" ")[2], nominal.get(path)
+        ratio = value / n if is_number(n) and n and is_number(value) else None
+        rows.append([text(path), text(shown(unit, n)), text(shown(unit, value)),
+                     text("—" if ratio is None else f"× {significant(ratio, 3)}")])
     if rows:
-        sec.tables.append(table("Design parameters (scene paths; `autobal run SCENE --set PATH=VALUE` reproduces the "
-                                "optimum)", ["scene path", "nominal", "optimum"], rows))
+        sec.tables.append(table("Design parameters to 4 significant digits (results.json optimum.parameters holds "
+                                "them in full: `autobal run SCENE --set PATH=VALUE` reproduces the optimum)",
+                                ["scene path", "nominal", "optimum", "optimum / nominal"], rows))
 
 
 def _design_validation(sec: Section) -> None:
@@ -1262,7 +1318,9 @@ def _section(name: str, block: dict, results: dict, figures: list[dict], folder:
         _comparison(sec, results.get("scenario", ""))
     except Exception as exc:  # noqa: BLE001 (a report must not fail a run; it says what it could not show)
         error = f"this section could not be rendered: {type(exc).__name__}: {exc}"
-    _null_warnings(block, name, sec.warnings)
+    note = _null_note(block, name)
+    if note:
+        sec.notes.append(note)
     acc = (results.get("accuracy") or {}).get(name) or block.get("accuracy") or {}
     tables = [t for t in (sec.headline(), *sec.tables) if t is not None]
     overall = {"ok": False, "text": error} if error else sec.overall()
