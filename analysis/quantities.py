@@ -46,17 +46,28 @@ DEFAULT_DISPLAY = {"m": "mm", "m^2": "mm²", "m^3": "L", "Pa": "MPa", "N": "kN",
 BESIDE = {"rad/s": "rpm"}
 
 
+def spelled(unit: str) -> str:
+    """A unit as engineers write it: "m^3/s" -> "m³/s", "um" -> "µm", "N*m" -> "N·m"."""
+    for a, b in (("um", "µm"), ("^2", "²"), ("^3", "³"), ("*", "·")):
+        unit = unit.replace(a, b)
+    return unit
+
+
 def display_unit_of(si: str) -> str:
-    """The default display unit of an SI unit (the SI unit itself, engineer-spelled, when it has none)."""
-    return DEFAULT_DISPLAY.get(si, si)
+    """The default display unit of a unit of results.json (the unit itself, engineer-spelled, when it has none)."""
+    return DEFAULT_DISPLAY.get(si, spelled(si))
+
+
+def is_display_unit(shown: str, si: str) -> bool:
+    """Whether ``shown`` is a display unit of the results.json unit ``si`` (the unit itself, spelled, is one)."""
+    return shown == spelled(si) or DISPLAY_UNITS.get(shown, (None,))[0] == si
 
 
 def convert(value: float, si: str, shown: str) -> float:
-    """An SI value in the display unit ``shown``; ValueError if ``shown`` is not a unit of ``si``."""
-    base, factor = DISPLAY_UNITS.get(shown, (None, None))
-    if base != si:
+    """A value of results.json unit ``si`` in the display unit ``shown``; ValueError if it is not one of ``si``."""
+    if not is_display_unit(shown, si):
         raise ValueError(f"'{shown}' is not a display unit of '{si}'")
-    return value / factor
+    return value if shown == spelled(si) else value / DISPLAY_UNITS[shown][1]
 
 
 def significant(value, digits: int = 4) -> str:
@@ -108,7 +119,7 @@ class Quantity:
 
     def __post_init__(self):
         shown = self.display or display_unit_of(self.unit)
-        if DISPLAY_UNITS.get(shown, (self.unit,))[0] != self.unit:
+        if not is_display_unit(shown, self.unit):
             raise ValueError(f"{self.key}: display unit '{shown}' is not a unit of '{self.unit}'")
         object.__setattr__(self, "display", shown)
 
@@ -118,7 +129,7 @@ class Quantity:
 
     def shown(self, value) -> float | None:
         """``value`` (SI) in the display unit."""
-        return None if value is None else convert(value, self.unit, self.display) if self.unit != "1" else value
+        return None if value is None else convert(value, self.unit, self.display)
 
     def text(self, value, digits: int = 4) -> str:
         """'value unit' in the display unit, speeds with rpm beside: '143.9 µm', '1977 rad/s (18 880 rpm)'."""

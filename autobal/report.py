@@ -30,15 +30,16 @@ import jinja2
 import yaml
 
 from autobal.analysis.quantities import (
-    DISPLAY_UNITS,
     Declarations,
     Quantity,
     convert,
     display_unit_of,
     flatten,
+    is_display_unit,
     is_number,
     leaf_paths,
     significant,
+    spelled,
 )
 from autobal.analysis.result import html_verdict, plain
 from autobal.errors import ScenarioError
@@ -51,11 +52,12 @@ STATUS_FILES = ("failed_solve.json", "interrupted.json", "error.json")
 # units of the results.json keys: the declarations of each Result class (analysis/quantities.py)
 # --------------------------------------------------------------------------------------------
 #: analysis -> the module whose QUANTITIES declare every number of its block (imported when a report needs it)
-DECLARED = {"statics": "autobal.analysis.statics_study"}
+DECLARED = {"statics": "autobal.analysis.statics_study", "frequency": "autobal.analysis.frequency",
+            "transient": "autobal.analysis.simulate"}
 
 #: analyses whose numbers are not declared yet: their units still come from the name rules below.  This
 #: allow-list only shrinks (tests/test_quantities.py fails on an analysis that is in neither).
-UNDECLARED = ("frequency", "stability", "transient", "liquid_balancer", "estimation", "reliability", "montecarlo",
+UNDECLARED = ("stability", "liquid_balancer", "estimation", "reliability", "montecarlo",
               "rotor_dynamics", "spinup", "spinup_robust", "spinup_time_optimal", "design", "ross_spinup")
 
 _P = r"(^|\.)"  # start of a key
@@ -93,12 +95,8 @@ _UNDECLARED_RULES: list[tuple[str, str]] = [
     (r"(^|\.)(omega|omega_ref|natural_frequency|imag|frequency)$", "rad/s"),
     (r"(^|\.)(real|decay_rate|max_real|growth_rate)$", "1/s"),
     (r"(^|\.)phase_deg$", "deg"),
-    (r"^frequency\..*z_B$", "m"),
     (r"^stability\.coefficients\.(columns|extra)\.", "per coefficient: K, zeta 1; T, tau s (App. A/B)"),
-    (r"^transient\..*" + _P + r"(z|z0)$", "m"),
-    (r"^transient\..*" + _P + r"(p1|p2|p3|pe|pcam)$", "Pa"),
-    (r"^transient\..*" + _P + r"(t|t_end)$", "s"),
-    (r"^(frequency|stability|transient)\.", "1"),
+    (r"^stability\.", "1"),
     # liquid auto-balancer (Khomyak 2020; Pashkov 2010): efficiency lambda0, k_D, gamma = omega/omega_cr
     (r"^liquid_balancer\..*(_gcm)$", "g*cm"),
     (r"^liquid_balancer\..*" + _P + r"(D0|D)$", "kg*m"),
@@ -235,16 +233,9 @@ _RULES = [(re.compile(p), u) for p, u in _UNDECLARED_RULES]
 # --------------------------------------------------------------------------------------------
 # numbers and cells
 # --------------------------------------------------------------------------------------------
-PRETTY = (("um", "µm"), ("^2", "²"), ("^3", "³"), ("*", "·"))
-
-
 def pretty_unit(unit: str) -> str:
     """A unit as printed in the report ("1" -> "dimensionless")."""
-    if unit == "1":
-        return "dimensionless"
-    for a, b in PRETTY:
-        unit = unit.replace(a, b)
-    return unit
+    return "dimensionless" if unit == "1" else spelled(unit)
 
 
 def number(v) -> str:
@@ -268,12 +259,12 @@ def cell(v, unit: str | None = None, shown: str | None = None) -> dict:
     unit = unit or "?"
     if shown is None:
         shown = "µm" if unit == "m" and v is not None and abs(v) < 1e-5 else display_unit_of(unit)
-    base, factor = DISPLAY_UNITS.get(shown, (unit, 1.0))
-    if base != unit:  # a unit of an undeclared analysis that has no display unit: shown as it is
-        shown, factor = unit, 1.0
+    if not is_display_unit(shown, unit):  # a unit of an undeclared analysis that has no display unit
+        shown = unit
     if v is None:
         return {"text": "—", "unit": pretty_unit(shown), "num": True, "null": True}
-    return {"text": number(v / factor), "unit": pretty_unit(shown), "num": True}
+    return {"text": number(convert(v, unit, shown) if is_display_unit(shown, unit) else v),
+            "unit": pretty_unit(shown), "num": True}
 
 
 def text(v) -> dict:
@@ -605,11 +596,11 @@ def frequency_section(sec: Section) -> None:
         sec.conclude(h.get("stable"), f"{what}: {verdict} (max Re λ = {number(h.get('max_real'))} 1/s); first "
                                       f"resonance at {number(_get(h, 'peaks.0.omega'))} rad/s; amplitude at the "
                                       f"operating speed {number(_get(h, 'at_operating_speed.amplitude_um'))} µm")
-        sec.row(f"first resonance ({what})", "ω_I", "headline.peaks.0.omega", "rad/s")
-        sec.row(f"amplitude at the first resonance ({what})", "A_I", "headline.peaks.0.amplitude_um", "um")
-        sec.row("operating speed", "ω0", "headline.at_operating_speed.omega", "rad/s")
-        sec.row(f"amplitude at the operating speed ({what})", "A(ω0)", "headline.at_operating_speed.amplitude_um", "um")
-        sec.row(f"static amplitude ({what})", "A(0)", "headline.static_amplitude_um", "um")
+        sec.row(f"first resonance ({what})", "ω_I", "headline.peaks.0.omega")
+        sec.row(f"amplitude at the first resonance ({what})", "A_I", "headline.peaks.0.amplitude_um")
+        sec.row("operating speed", "ω0", "headline.at_operating_speed.omega")
+        sec.row(f"amplitude at the operating speed ({what})", "A(ω0)", "headline.at_operating_speed.amplitude_um")
+        sec.row(f"static amplitude ({what})", "A(0)", "headline.static_amplitude_um")
     sec.row("forcing amplitude", "δψ_1a", "forcing_amplitude")
     own, source = [], []
     for model, m in _ordered(models):
