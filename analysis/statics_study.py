@@ -139,7 +139,7 @@ class StaticsResult(Result):
     def verdict(self) -> tuple[bool, str]:
         """At the operating point: regulating, no face contact, inner-seal flow towards the disc; and how far
         the discharge pressure is from the one that reverses the inner-seal flow."""
-        ex, kr = self.data["exact"], self.data["critical_exact"].get("psi1_kr")
+        ex, kr = self.data["exact"], (self.data.get("critical_exact") or {}).get("psi1_kr")
         problems = [w for w, bad in (("regulator SATURATED", ex["regulator_saturated"]),
                                      ("face CONTACT", ex["contact"]),
                                      ("inner-seal flow REVERSED", not ex["Q_1"] > 0)) if bad]

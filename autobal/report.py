@@ -38,6 +38,7 @@ from autobal.analysis.quantities import (
     is_display_unit,
     is_number,
     leaf_paths,
+    lookup,
     significant,
     spelled,
 )
@@ -218,14 +219,7 @@ def _parameter_unit(path: str, results: dict) -> str | None:
 
 def _get(data, path: str, default=None):
     """``data`` at a dotted path (``a.b.c``; an integer picks a list item), or ``default``."""
-    for key in path.split("."):
-        if isinstance(data, dict) and key in data:
-            data = data[key]
-        elif isinstance(data, list) and key.isdigit() and int(key) < len(data):
-            data = data[int(key)]
-        else:
-            return default
-    return data
+    return lookup(data, path, default)
 
 
 _RULES = [(re.compile(p), u) for p, u in _UNDECLARED_RULES]
@@ -505,29 +499,17 @@ def statics_section(sec: Section) -> None:
     sec.row("critical barrier pressure margin", "Δp_kr", "critical_exact.dp_kr")
     ex, sw = sec.get("exact", {}), sec.get("sweep", {})
     sat, contact, psi1 = sw.get("regulator_saturated", []), sw.get("contact", []), sw.get("psi1", [])
-    q1, kr = ex.get("Q_1"), sec.get("critical_exact.psi1_kr")
     from autobal.analysis.statics_study import StaticsResult  # the verdict's one copy
 
-    sec.conclude(*StaticsResult(sec.block).verdict())
-    if "regulator_saturated" in ex:
-        sec.verdict(not ex["regulator_saturated"], "regulator at the operating point: " +
-                    ("SATURATED (valve on its open stop)" if ex["regulator_saturated"] else "regulating"))
+    if {"regulator_saturated", "contact", "Q_1", "z0", "psi1"} <= set(ex):
+        sec.conclude(*StaticsResult(sec.block).verdict())  # the operating point: regulator, contact, inner seal
     if any(sat):
         first = psi1[sat.index(True)]
         sec.verdict(False, f"regulator saturated (valve on its stop) from ψ1 = {number(first)} in the sweep")
         sec.warnings.append(f"regulator saturation from ψ1 = {number(first)}: the closed forms assume an ideal "
                             "regulator and are not valid there")
-    if "contact" in ex:
-        sec.verdict(not ex["contact"], "face contact at the operating point: " + ("YES (disc on the seat)"
-                                                                                  if ex["contact"] else "none"))
     if any(contact):
         sec.verdict(False, f"face contact in the sweep from ψ1 = {number(psi1[contact.index(True)])}")
-    if kr is not None and ex.get("psi1"):
-        sec.verdict(kr > ex["psi1"], f"inner-seal flow reverses at ψ1_kr = {number(kr)} "
-                    f"({number(kr / ex['psi1'])} × the operating ratio)")
-    if q1 is not None:
-        sec.verdict(q1 > 0, f"inner-seal flow at the operating point: {number(q1 * 1e3)} L/s "
-                    + ("(towards the disc, as designed)" if q1 > 0 else "(REVERSED)"))
     cf = sec.get("closed_form", {})
     rows = []
     for key, sym, path in (("u0", "u0", "exact.u0"), ("xi0", "ξ0", "exact.xi0"), ("psi2_0", "ψ20", "exact.psi2_0"),
@@ -601,6 +583,15 @@ def frequency_section(sec: Section) -> None:
         sec.row("operating speed", "ω0", "headline.at_operating_speed.omega")
         sec.row(f"amplitude at the operating speed ({what})", "A(ω0)", "headline.at_operating_speed.amplitude_um")
         sec.row(f"static amplitude ({what})", "A(0)", "headline.static_amplitude_um")
+    else:  # no headline block: the toolkit's own first model, never one of the source's
+        lead = next((m for m in MODEL_ORDER if m in models and m not in SOURCE_MODELS), None)
+        if lead is not None:
+            what = _name(lead)
+            sec.row(f"first resonance ({what})", "ω_I", f"models.{lead}.peaks.0.omega")
+            sec.row(f"amplitude at the first resonance ({what})", "A_I", f"models.{lead}.peaks.0.amplitude_um")
+            sec.row("operating speed", "ω0", f"models.{lead}.at_operating_speed.omega")
+            sec.row(f"amplitude at the operating speed ({what})", "A(ω0)",
+                    f"models.{lead}.at_operating_speed.amplitude_um")
     sec.row("forcing amplitude", "δψ_1a", "forcing_amplitude")
     own, source = [], []
     for model, m in _ordered(models):
@@ -1095,7 +1086,7 @@ def _design_validation(sec: Section) -> None:
     headline model's verdict, the validation part says so."""
     for key in ("other_model", "program_model"):
         block = sec.get(key) or {}
-        model = {"chain": "nonlinear_chain"}.get(block.get("model"), block.get("model"))
+        model = {"chain": "nonlinear_chain", "energy": HEADLINE_MODEL}.get(block.get("model"), block.get("model"))
         if not model:
             continue
         values = {w: [v for v in (block.get(w) or {}).values() if isinstance(v, int | float)]
