@@ -139,7 +139,7 @@ class DesignResult(Result):
         d = self.data
         fig1, ax = new_figure()
         self.draw(ax)
-        fig2, ax2 = new_figure()
+        fig2, ax2 = new_figure((8.0, 4.4))
         o, n = d["optimum"]["values_si"], d["nominal"]["values_si"]
         names = list(o)
         ratio = np.array([o[k] / n[k] if n[k] else math.nan for k in names])
@@ -153,10 +153,12 @@ class DesignResult(Result):
         ax2.xaxis.set_minor_formatter(NullFormatter())
         ax2.set_yticks(range(len(names)), [".".join(k.split(".")[-2:]) for k in names], fontsize=8)
         ax2.axvline(1.0, color="k", lw=0.8)
-        for i, k in enumerate(names):  # the values themselves, in display units, beside each bar
-            unit = d["optimum"]["parameters"][k].partition(" ")[2]
-            ax2.text(0.99, i, f"{shown(unit, n[k])} → {shown(unit, o[k])}", transform=ax2.get_yaxis_transform(),
-                     ha="right", va="center", fontsize=7, color="0.25")
+        values = ax2.twinx()  # the values themselves, in display units, as the right-hand tick labels
+        values.set_ylim(ax2.get_ylim())
+        units = [d["optimum"]["parameters"][k].partition(" ")[2] for k in names]
+        values.set_yticks(range(len(names)), [f"{shown(u, n[k])} → {shown(u, o[k])}" for u, k in zip(units, names,
+                                                                                                     strict=True)],
+                          fontsize=7)
         ax2.set_xlabel("optimum / nominal (log scale)")
         fig3, ax3 = new_figure()
         h = self.history
