@@ -329,10 +329,13 @@ class Section:
         self.main = {"ok": ok, "text": message}
         self.verdicts.insert(0, self.main)
 
-    def overall(self) -> dict | None:
-        """The summary's verdict: the one concluded, else the first failed check, else the first check."""
+    def overall(self) -> dict:
+        """The summary's verdict: the one concluded, else the first failed check, else the first check, else
+        the first piece of information (an analysis without a pass/fail criterion says what it found)."""
         checks = [v for v in self.verdicts if v["ok"] is not None]
-        return self.main or next((v for v in checks if v["ok"] is False), None) or (checks[0] if checks else None)
+        return (self.main or next((v for v in checks if v["ok"] is False), None) or (checks[0] if checks else None)
+                or (self.verdicts[0] if self.verdicts else
+                    {"ok": None, "text": "computed; this analysis has no pass/fail criterion (the section below)"}))
 
     def headline(self) -> dict | None:
         if not self.rows:

@@ -95,3 +95,15 @@ def test_design_report_says_the_optimum_is_more_unstable_under_the_source_models
     for label in ("chain form (2.40)/(2.111): spectral abscissa", "source's program model (App. A/B): spectral"):
         line = inside[inside.index(label):].split("\n")[0]
         assert "MORE unstable than the nominal design" in line, line
+
+
+def test_an_analysis_without_a_criterion_still_has_one_summary_line():
+    sec = report.Section("x", {}, {})
+    assert sec.overall()["ok"] is None and "no pass/fail criterion" in sec.overall()["text"]
+    sec.verdict(None, "objective: peak deflection")
+    assert sec.overall() == {"ok": None, "text": "objective: peak deflection"}
+    sec.verdict(True, "re-simulated within 1 %")
+    sec.verdict(False, "limit violated")
+    assert sec.overall()["text"] == "limit violated"  # a failed check before a passed one
+    sec.conclude(True, "the headline")
+    assert sec.overall()["text"] == "the headline" and sec.verdicts[0]["text"] == "the headline"
