@@ -93,7 +93,7 @@ def test_design_report_says_the_optimum_is_more_unstable_under_the_source_models
     assert dict(parts.summary)["design"].startswith("✔ optimum design, energy-consistent (nonlinear): stable")
     inside = " ".join(parts.inside)
     for label in ("chain form (2.40)/(2.111): spectral abscissa", "source's program model (App. A/B): spectral"):
-        line = inside[inside.index(label):].split("\n")[0]
+        line = inside[inside.index(label):].split("•")[0]
         assert "MORE unstable than the nominal design" in line, line
 
 
