@@ -7,10 +7,11 @@ import signal
 import sys
 from pathlib import Path
 
-from autobal import __version__, api, report, scenario
+from autobal import __version__, api, report, scenario, units
 from autobal.analysis import progress
 from autobal.errors import Interrupted, ScenarioError, SolveError
 from autobal.output import LOG, OutputFolder, SolverLog
+from autobal.schema import quantities
 
 EXIT_OK, EXIT_BAD_INPUT, EXIT_SOLVE_FAILED = 0, 2, 3
 
@@ -153,6 +154,8 @@ def main(argv: list[str] | None = None) -> int:
         scn = scenario.load(args.scenario, overrides=_overrides(args.set))
         if args.cmd == "check":
             print(f"{scn.name}: valid; analyses: {', '.join(api.analyses(scn)) or 'none'}")
+            for path, value, kind in quantities(scn, units.ANGULAR):  # the speeds as read: rad/s and rpm
+                print(f"  {path} = {units.angular_text(value, kind)}")
             return EXIT_OK
         if args.cmd == "run":
             from autobal.analysis.executor import set_default_scheduler

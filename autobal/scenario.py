@@ -30,6 +30,7 @@ from autobal.units import (
     PressureOrZero,
     Viscosity,
     VolumeFlow,
+    clip,
 )
 
 
@@ -523,7 +524,7 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> BaseScenari
     except ValidationError as exc:
         loc = ".".join(str(p) for p in exc.errors()[0]["loc"])
         hit = next((k for k in overrides if loc == k or loc.startswith(k + ".")), None)
-        where = f"set {hit}={overrides[hit]}" if hit else str(path)
+        where = f"set {hit}={clip(str(overrides[hit]))}" if hit else str(path)
         raise ScenarioError(f"{where}: {_one_line(exc)}") from None
     except RecursionError:
         raise ScenarioError(f"{path}: nested too deeply to be a scenario") from None

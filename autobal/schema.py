@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Annotated, get_args
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 from pydantic.fields import FieldInfo
 
 # Dimensionless numbers: finite (every model refuses inf and nan) and at most 1e6 in magnitude, far beyond
@@ -23,24 +23,76 @@ MAX_SWEEP_POINTS = 100_000  # a sweep of the statics: ~2 ms per point
 MAX_FORCE_GAP_POINTS = 10_000  # the force-gap characteristic: one IPOPT solve per point
 
 
-def _unit_text(extra, annotation) -> str | None:
-    """The unit text of a quantity field, also inside ``X | None`` and lists."""
-    if isinstance(extra, dict) and "unit_text" in extra:
-        return extra["unit_text"]
+def _quantity_extra(extra, annotation, key: str) -> str | None:
+    """``key`` ("unit_text", "kind") of a quantity field (:func:`autobal.units.quantity`), also inside
+    ``X | None`` and lists."""
+    if isinstance(extra, dict) and key in extra:
+        return extra[key]
     for meta in getattr(annotation, "__metadata__", ()):
         if isinstance(meta, FieldInfo) and isinstance(meta.json_schema_extra, dict):
-            return meta.json_schema_extra.get("unit_text")
+            return meta.json_schema_extra.get(key)
     for arg in get_args(annotation):
-        text = _unit_text(None, arg)
+        text = _quantity_extra(None, arg, key)
         if text:
             return text
     return None
 
 
+def quantities(model: BaseModel, kinds, path: str = "") -> list[tuple[str, object, str]]:
+    """(dotted path, value in SI, kind) of every quantity field of ``model`` (a validated scene or a part
+    of it) whose kind is one of ``kinds``; a list field gives its list."""
+    out = []
+    for name, field in type(model).model_fields.items():
+        value, where = getattr(model, name), f"{path}{name}"
+        kind = _quantity_extra(field.json_schema_extra, field.annotation, "kind")
+        if isinstance(value, BaseModel):
+            out += quantities(value, kinds, where + ".")
+            continue
+        if isinstance(value, dict | list | tuple):
+            for k, v in value.items() if isinstance(value, dict) else enumerate(value):
+                if isinstance(v, BaseModel):
+                    out += quantities(v, kinds, f"{where}.{k}.")
+        if value is not None and kind in kinds:
+            out.append((where, value, kind))
+    return out
+
+
+def _has_bool(value) -> bool:
+    """A boolean in ``value``, or in its lists, tuples and mapping values."""
+    if isinstance(value, bool):
+        return True
+    items = value.values() if isinstance(value, dict) else value if isinstance(value, list | tuple) else ()
+    return any(_has_bool(v) for v in items)
+
+
+def _numbers_only(annotation) -> bool:
+    """int or float appear in the type ``annotation``, and neither bool nor a model (which checks its own
+    fields) does."""
+    seen = set()
+
+    def walk(a):
+        model = isinstance(a, type) and issubclass(a, BaseModel)
+        seen.add("bool" if a is bool or model else "number" if a in (int, float) else "")
+        for arg in get_args(a):
+            walk(arg)
+
+    walk(annotation)
+    return "number" in seen and "bool" not in seen
+
+
 class Strict(BaseModel):
-    """A scene section: unknown keys are refused, values are frozen, inf and nan refused."""
+    """A scene section: unknown keys are refused, values are frozen, inf and nan refused, and so are
+    booleans where a number is expected (pydantic's lax mode reads YAML's yes/on/true as 1)."""
 
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _no_boolean_numbers(cls, value, info: ValidationInfo):
+        if _has_bool(value) and _numbers_only(cls.model_fields[info.field_name].annotation):
+            raise ValueError("a boolean where a number is expected (YAML reads yes/no, on/off, true/false as "
+                             "booleans)")
+        return value
 
     @classmethod
     def __pydantic_init_subclass__(cls, **kwargs):
@@ -49,7 +101,7 @@ class Strict(BaseModel):
         super().__pydantic_init_subclass__(**kwargs)
         changed = False
         for f in cls.model_fields.values():
-            text = _unit_text(f.json_schema_extra, f.annotation)
+            text = _quantity_extra(f.json_schema_extra, f.annotation, "unit_text")
             if text and text not in (f.description or ""):
                 f.description = f"{f.description}; {text}" if f.description else text
                 changed = True

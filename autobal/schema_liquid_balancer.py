@@ -19,6 +19,7 @@ Mass = quantity("mass")
 Volume = quantity("volume")
 Stiffness = quantity("stiffness")
 LengthOrZero = quantity("length", "nonnegative")
+Rate = quantity("rate")
 
 
 class LBRotor(Strict):
@@ -29,7 +30,7 @@ class LBRotor(Strict):
     unbalance_radius: Length = Field(description="e_d; D0 = m_d e_d")
     critical_speed: AngularSpeed = Field(description="omega_p (resonance speed)")
     log_decrement: Positive | None = Field(None, description="theta; n = theta omega_p / (2 pi) (erratum 1)")
-    damping_coefficient: AngularSpeed | None = Field(None, description="n [1/s]; overrides log_decrement")
+    damping_coefficient: Rate | None = Field(None, description="n; overrides log_decrement")
     stiffness: Stiffness | None = Field(None, description="c [N/m], for the chapter-3 / Pashkov calculators only")
 
     @model_validator(mode="after")

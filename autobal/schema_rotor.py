@@ -25,7 +25,8 @@ Torque = quantity("torque")
 Power = quantity("power")
 Inertia = quantity("moment of inertia")
 RotationalDampingOrZero = quantity("rotational damping", "nonnegative")
-RateOrZero = quantity("angular speed", "nonnegative")  # 1/s: speeds that may be 0 and chi/m1 rates
+SpeedOrZero = quantity("angular speed", "nonnegative")
+RateOrZero = quantity("rate", "nonnegative")  # n = chi/m1, 1/s
 Fraction = Annotated[float, Field(gt=0, le=1)]
 
 
@@ -91,7 +92,7 @@ class Steps(Strict):
     """Speed steps (4)-(7), Figs 3-4: closed form beside CVODES, for each psi."""
 
     psi: Annotated[list[Fraction], Field(max_length=100)] = [1.0, 0.75, 0.5, 0.25]
-    steps: list[tuple[RateOrZero, RateOrZero]] = Field(max_length=100, description="(from, to) angular speeds")
+    steps: list[tuple[SpeedOrZero, SpeedOrZero]] = Field(max_length=100, description="(from, to) angular speeds")
     duration: Time = 0.6
 
 
@@ -133,7 +134,7 @@ class Spinup(Strict):
     by the deadline ``horizon``, hold it over ``settling_time`` (the peak counts over the whole window),
     never exceed ``max_speed``."""
 
-    start_speed: RateOrZero
+    start_speed: SpeedOrZero
     final_speed: AngularSpeed
     horizon: Time = Field(description="the deadline: the final time (its upper bound with the min_time objective)")
     max_acceleration: AngularAcceleration

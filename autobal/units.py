@@ -5,8 +5,16 @@ A quantity is read as a plain decimal number followed by a unit; only the unit i
 only after a strict grammar has accepted it (unit names joined by ``*``, ``/``, a space, and integer
 powers ``^n`` or ``**n``), so no text is ever evaluated as an arithmetic expression.  Values that are
 not finite, or that leave the physical range of their kind (:data:`DIMENSIONS`), are refused.
-The plain SI-prefixed units (``mm``, ``MPa``, ``kg/m^3``, ``rpm``, ...) are read from a small table; pint's
-registry is built on first use of any other unit, or to explain an error.
+The plain SI-prefixed units (``mm``, ``MPa``, ``kg/m^3``, ...) are read from a small table; pint's
+registry is built on first use of any other unit, or to explain an error.  A quantity is at most
+:data:`MAX_CHARS` characters, so that reading it takes linear time.
+
+Rotational quantities follow ISO 80000-3: a speed written as a rotational frequency n (``Hz``, ``rps``,
+``rpm``, ``r/min``, or ``1/min`` as datasheets write rpm, DIN 1301-2) is the angular speed omega = 2 pi n;
+``Hz/s`` and ``rpm/s`` are angular accelerations likewise; ``rad/s`` and ``deg/s`` are read as written.
+A bare ``1/s`` on an angular field is refused: physicists write omega in 1/s meaning rad/s, engineers
+write n in 1/s meaning r/s.  Prefixed hertz (``kHz``) is a rotational frequency as well.  These
+fields are read by :func:`_angular`, never by pint, which reads Hz as 1/s.
 """
 
 from __future__ import annotations
@@ -33,6 +41,7 @@ DIMENSIONS = {
     "viscosity": ("[mass] / [length] / [time]", "Pa*s", "1e-3 Pa*s", (1e-8, 1e8)),
     "volume flow": ("[length] ** 3 / [time]", "m**3/s", "0.167 m^3/s", (1e-15, 1e4)),
     "angular speed": ("1 / [time]", "rad/s", "6300 rpm", (1e-9, 1e7)),
+    "rate": ("1 / [time]", "1/s", "7.85 1/s", (1e-9, 1e7)),  # a decay rate n, chi/m1: not an angle per time
     "mass": ("[mass]", "kg", "3000 kg", (1e-12, 1e8)),  # dynamics (autobal/schema_dynamics.py)
     "stiffness": ("[mass] / [time] ** 2", "N/m", "1e8 N/m", (1e-9, 1e14)),
     "damping": ("[mass] / [time]", "N*s/m", "8.9e4 N*s/m", (1e-12, 1e12)),
@@ -45,12 +54,15 @@ DIMENSIONS = {
     "rotational damping": ("[mass] * [length] ** 2 / [time]", "N*m*s", "1e-5 N*m*s", (1e-15, 1e9)),
 }
 
-_NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d{1,3})?"
+MAX_CHARS = 100  # a quantity as written, spaces at its ends stripped: "6300 rpm" is 8
+_NUMBER = r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d{1,3})?"
 _NAME = r"(?:[A-Za-zµμΩ°%][A-Za-z_µμΩ°%]*)"
-_FACTOR = rf"(?:{_NAME}(?:\s*(?:\^|\*\*)\s*-?\d)?)"
-# unit := ["1" "/"] factor { ("*" | "/" | " ") factor }: names with single-digit integer powers, nothing else
-_UNIT = re.compile(rf"(?:1\s*/\s*)?{_FACTOR}(?:\s*(?:\*(?!\*)|/|\s)\s*{_FACTOR})*")
-_QUANTITY = re.compile(rf"\s*({_NUMBER})\s*(.*?)\s*")
+_FACTOR = rf"(?:{_NAME}(?: *(?:\^|\*\*) *-?\d)?)"
+# unit := ["1" "/"] factor { ("*" | "/" | " ") factor }: names with single-digit integer powers, nothing else;
+# only plain spaces, and no two ways to read a run of them (linear time)
+_UNIT = re.compile(rf"(?:1 */ *)?{_FACTOR}(?:(?: *(?:\*(?!\*)|/) *| +){_FACTOR})*")
+# applied to the stripped text: the number, then the unit (everything after it, newlines included)
+_QUANTITY = re.compile(rf"({_NUMBER})\s*(.*)", re.DOTALL)
 
 
 # The plain SI-prefixed units read without pint (pint's import and registry take about 0.3 s of CPU, a
@@ -58,9 +70,8 @@ _QUANTITY = re.compile(rf"\s*({_NUMBER})\s*(.*?)\s*")
 # take an SI prefix. The same factors as pint's registry (tests/test_units_table.py checks every entry).
 _TABLE = {"m": (1.0, (0, 1, 0)), "g": (1e-3, (1, 0, 0)), "s": (1.0, (0, 0, 1)), "Pa": (1.0, (1, -1, -2)),
           "bar": (1e5, (1, -1, -2)), "N": (1.0, (1, 1, -2)), "J": (1.0, (1, 2, -2)), "W": (1.0, (1, 2, -3)),
-          "L": (1e-3, (0, 3, 0)), "l": (1e-3, (0, 3, 0)), "Hz": (1.0, (0, 0, -1)), "rad": (1.0, (0, 0, 0)),
-          "min": (60.0, (0, 0, 1)), "h": (3600.0, (0, 0, 1)), "rpm": (2 * math.pi / 60, (0, 0, -1))}
-_PREFIXED = ("m", "g", "s", "Pa", "bar", "N", "J", "W", "L", "l", "Hz", "rad")
+          "L": (1e-3, (0, 3, 0)), "l": (1e-3, (0, 3, 0)), "min": (60.0, (0, 0, 1)), "h": (3600.0, (0, 0, 1))}
+_PREFIXED = ("m", "g", "s", "Pa", "bar", "N", "J", "W", "L", "l")
 _PREFIXES = {"T": 1e12, "G": 1e9, "M": 1e6, "k": 1e3, "h": 1e2, "da": 1e1, "d": 1e-1, "c": 1e-2, "m": 1e-3,
              "u": 1e-6, "µ": 1e-6, "μ": 1e-6, "n": 1e-9, "p": 1e-12}
 
@@ -76,22 +87,50 @@ def _name(name: str) -> tuple[float, tuple[int, int, int]] | None:
     return found[0] if len(found) == 1 else None
 
 
+def _a(kind: str) -> str:
+    """``kind`` with its indefinite article: "a length", "an angular speed"."""
+    return f"{'an' if kind[0] in 'aeiou' else 'a'} {kind}"
+
+
+def clip(text: str, width: int = 40) -> str:
+    """``text`` for a one-line message: control characters escaped (a newline as \\n), cut to its first
+    30 characters and its length if longer than ``width``."""
+    one = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text[:width + 1])
+    return one if len(text) <= width else f"{one[:30]}... ({len(text)} characters)"
+
+
+def _shown(text: str) -> str:
+    return f"'{clip(text)}'"
+
+
 @cache
-def _table_unit(text: str) -> tuple[float, tuple[int, int, int]] | None:
-    """SI factor and dimension of a unit made of :data:`_TABLE` names joined by ``*``, ``/`` and integer
-    powers (read left to right, as pint reads them), or None: then pint reads it."""
-    s = re.sub(r"\s*(\^|\*\*|\*|/)\s*", lambda m: "^" if m.group(1) == "**" else m.group(1), text.strip())
+def _powers(text: str) -> tuple[tuple[str, int], ...] | None:
+    """The names of a unit accepted by :data:`_UNIT` with their integer powers, read left to right as
+    pint reads them ("1/min/s" -> (("min", -1), ("s", -1))); None if a space joins two names (pint reads it)."""
+    s = re.sub(r" *(\^|\*\*|\*|/) *", lambda m: "^" if m.group(1) == "**" else m.group(1), text.strip())
     if " " in s:
         return None
-    factor, dims, sign = 1.0, (0, 0, 0), 1
+    sign, out = 1, []
     if s.startswith("1/"):
         s, sign = s[2:], -1
     for op, item in re.findall(r"([*/]?)([^*/]+)", s):
         name, _, power = item.partition("^")
+        out.append((name, (int(power) if power else 1) * (-1 if op == "/" else 1) * (sign if not op else 1)))
+    return tuple(out)
+
+
+@cache
+def _table_unit(text: str) -> tuple[float, tuple[int, int, int]] | None:
+    """SI factor and dimension of a unit made of :data:`_TABLE` names joined by ``*``, ``/`` and integer
+    powers (read left to right, as pint reads them), or None: then pint reads it."""
+    powers = _powers(text)
+    if powers is None:
+        return None
+    factor, dims = 1.0, (0, 0, 0)
+    for name, n in powers:
         unit = _name(name)
         if unit is None:
             return None
-        n = (int(power) if power else 1) * (-1 if op == "/" else 1) * (sign if not op else 1)
         factor *= unit[0] ** n
         dims = tuple(d + n * e for d, e in zip(dims, unit[1], strict=True))
     return factor, dims
@@ -99,12 +138,96 @@ def _table_unit(text: str) -> tuple[float, tuple[int, int, int]] | None:
 
 def _fast(unit: str, kind: str) -> float | None:
     """The factor from ``unit`` to the SI unit of ``kind`` read from :data:`_TABLE`; None where the table
-    does not know ``unit`` or its dimension is not that of ``kind`` (pint then reads it and explains)."""
+    does not know ``unit`` or its dimension is not that of ``kind`` (pint then reads it and explains), and
+    for the angular kinds (read by :func:`_angular`)."""
     text = unit.strip()
-    if len(text) > 64 or not _UNIT.fullmatch(text):
+    if kind in ANGULAR or len(text) > 64 or not _UNIT.fullmatch(text):
         return None
     mine, si = _table_unit(text), _table_unit(DIMENSIONS[kind][1])
     return mine[0] / si[0] if mine is not None and mine[1] == si[1] else None
+
+
+# ---- rotational quantities (ISO 80000-3): omega = 2 pi n ------------------------------------------------
+TURN = 2 * math.pi  # rad in one revolution
+# angular kind -> the power k of its SI unit rad/s^k
+ANGULAR = {"angular speed": 1, "angular acceleration": 2, "angular jerk": 3}
+# angles in rad, and rotational frequencies n in rad/s (one revolution per unit time is 2 pi rad), with the
+# long names pint writes (the unit of a pint Quantity given to autobal.load(set=...)) and its time units
+_ANGLES = {"rad": 1.0, "deg": math.pi / 180, "°": math.pi / 180, "r": TURN, "rev": TURN, "turn": TURN,
+           "radian": 1.0, "degree": math.pi / 180, "revolution": TURN}
+_ROTATIONAL_FREQUENCIES = {"Hz": TURN, "rps": TURN, "rpm": TURN / 60, "hertz": TURN,
+                           "revolutions_per_second": TURN, "revolutions_per_minute": TURN / 60}
+_LONG_TIMES = {"second": 1.0, "millisecond": 1e-3, "minute": 60.0, "hour": 3600.0}
+_ROTATIONAL_NAMES = {*_ANGLES, *_ROTATIONAL_FREQUENCIES, "cycle"}  # refused on a rate in 1/s
+_WRITE = {1: "rad/s, deg/s, or a rotational frequency n in Hz, rps, rpm, r/min or 1/min (omega = 2 pi n)",
+          2: "rad/s^2, deg/s^2, or Hz/s, rpm/s (2 pi times the rate of change of n)",
+          3: "rad/s^3, deg/s^3, or Hz/s^2, rpm/s^2 (2 pi times the second derivative of n)"}
+
+
+def _rotation(name: str) -> tuple[float, int] | None:
+    """rad per unit and the power of 1/s of an angle or rotational frequency (kHz, mrad with an SI
+    prefix), or None."""
+    if name in _ANGLES:
+        return _ANGLES[name], 0
+    if name in _ROTATIONAL_FREQUENCIES:
+        return _ROTATIONAL_FREQUENCIES[name], -1
+    for p, f in _PREFIXES.items():
+        if name.startswith(p) and name[len(p):] in ("Hz", "rad"):
+            return (f * TURN, -1) if name.endswith("Hz") else (f, 0)
+    return None
+
+
+@cache
+def _angular(unit: str, kind: str) -> float:
+    """The factor from ``unit`` to rad/s^k of the angular ``kind`` (:data:`ANGULAR`); ValueError naming
+    the units to write.  An angle (rad, deg, r) over a time, or a rotational frequency n (Hz, rps, rpm,
+    min^-1) over a time; a unit of 1/time alone (1/s) is refused as ambiguous."""
+    k = ANGULAR[kind]
+    text = unit.strip()
+    powers = _powers(text) if len(text) <= 64 and _UNIT.fullmatch(text) else None
+    if powers is None:
+        raise ValueError(f"{_shown(text)} is not a unit of {_a(kind)}: write {_WRITE[k]}")
+    factor, angle, time, per_minute = 1.0, 0, 0, False
+    for name, n in powers:
+        rotation, plain = _rotation(name), (_LONG_TIMES[name], (0, 0, 1)) if name in _LONG_TIMES else _name(name)
+        if rotation is not None:
+            factor, angle, time = factor * rotation[0] ** n, angle + n, time + rotation[1] * n
+        elif plain is not None and plain[1] == (0, 0, 1):
+            factor, time = factor * plain[0] ** n, time + n
+            per_minute = per_minute or (name in ("min", "minute") and n == -1)
+        else:
+            raise ValueError(f"{name!r} is not a unit of {_a(kind)}: write {_WRITE[k]}")
+    if angle == 0 and per_minute:  # min^-1 is rpm as datasheets write it (DIN 1301-2): revolutions per minute
+        factor, angle = factor * TURN, 1
+    if (angle, time) == (0, -k):
+        si, hz = ("rad/s", "Hz") if k == 1 else (f"rad/s^{k}", "Hz/s" if k == 2 else f"Hz/s^{k - 1}")
+        raise ValueError(f"{text!r} is ambiguous for {_a(kind)}: write {si} (radians) or {hz} (revolutions, "
+                         f"omega = 2 pi n)")
+    if (angle, time) != (1, -k):
+        raise ValueError(f"{text!r} is not a unit of {_a(kind)}: write {_WRITE[k]}")
+    return factor
+
+
+def angular_text(value, kind: str) -> str:
+    """An angular ``value`` in SI (a number, or a list of them) as a person reads it: in rad/s and rpm
+    (rad/s^2 and rpm/s, rad/s^3 and rpm/s^2), e.g. ``"659.73 rad/s (6300 rpm)"``."""
+    k = ANGULAR[kind]
+    si, rpm = ("rad/s", "rpm") if k == 1 else (f"rad/s^{k}", "rpm/s" if k == 2 else f"rpm/s^{k - 1}")
+
+    def shown(v, scale):
+        return f"[{', '.join(shown(x, scale) for x in v)}]" if isinstance(v, list | tuple) else f"{v * scale:.5g}"
+
+    return f"{shown(value, 1.0)} {si} ({shown(value, 60 / TURN)} {rpm})"
+
+
+def _refuse_rotational(unit: str, kind: str) -> None:
+    """Refuse an angle or a rotational frequency on a field of 1/time that is not an angular kind (a rate):
+    pint would read Hz and rpm there as 1/s and 2 pi/60 1/s."""
+    if DIMENSIONS[kind][0].startswith("1 / [time]"):
+        for name in re.findall(_NAME, unit):
+            if name in _ROTATIONAL_NAMES or _rotation(name) is not None:
+                raise ValueError(f"{name!r} is a rotational unit, not one of {_a(kind)}: write "
+                                 f"{DIMENSIONS[kind][1]}, e.g. '{DIMENSIONS[kind][2]}'")
 
 
 @cache
@@ -129,7 +252,7 @@ def parse_unit(text: str):
     """
     text = text.strip()
     if len(text) > 64 or not _UNIT.fullmatch(text):
-        raise ValueError(f"{text!r} is not a unit (names joined by *, / and integer powers ^n)")
+        raise ValueError(f"{_shown(text)} is not a unit (names joined by *, / and integer powers ^n)")
     try:
         return registry().parse_units(text)
     except Exception:  # pint raises several unrelated types on unknown names
@@ -144,21 +267,24 @@ def unit_factor(unit: str, kind: str) -> float:
     unit : str
         A unit, e.g. ``"mm"``.
     kind : str
-        A key of :data:`DIMENSIONS`, e.g. ``"length"``.
+        A key of :data:`DIMENSIONS`.
 
     Returns
     -------
     float
-        SI value of one ``unit``, e.g. 0.001 for ``"mm"`` as a length.
+        SI value of one ``unit``, e.g. 0.001 for ``"mm"`` as a length, 2 pi for ``"Hz"`` as an angular speed.
     """
     dim, si, example, _ = DIMENSIONS[kind]
+    if kind in ANGULAR:
+        return _angular(unit, kind)
+    _refuse_rotational(unit, kind)
     fast = _fast(unit, kind)
     if fast is not None:
         return fast
     u = parse_unit(unit)
     ureg = registry()
     if u.dimensionality != ureg.get_dimensionality(dim):
-        raise ValueError(f"{unit!r} is not a {kind} unit (e.g. '{example.split()[-1]}', SI {si}), "
+        raise ValueError(f"{unit!r} is not {_a(kind)} unit (e.g. '{example.split()[-1]}', SI {si}), "
                          f"its dimension is {u.dimensionality}")
     return float(ureg.Quantity(1.0, u).to(si).magnitude)
 
@@ -169,7 +295,8 @@ def to_si(value: object, kind: str) -> float:
     Parameters
     ----------
     value : str
-        E.g. ``"32.3 MPa"``; a plain number without a unit is refused.
+        E.g. ``"32.3 MPa"``; a plain number without a unit is refused, and so is a text longer than
+        :data:`MAX_CHARS` characters (spaces at its ends stripped).
     kind : str
         A key of :data:`DIMENSIONS`.
 
@@ -180,34 +307,45 @@ def to_si(value: object, kind: str) -> float:
     """
     dim, si, example, _ = DIMENSIONS[kind]
     if isinstance(value, bool) or not isinstance(value, str | int | float):
-        raise ValueError(f"expected a {kind} with a unit, e.g. '{example}'")
+        raise ValueError(f"expected {_a(kind)} with a unit, e.g. '{example}'")
     if not isinstance(value, str):
-        raise ValueError(f"{value!r} has no unit: write a {kind} with its unit, e.g. '{example}'")
-    m = _QUANTITY.fullmatch(value)
+        raise ValueError(f"{value!r} has no unit: write {_a(kind)} with its unit, e.g. '{example}'")
+    text = value.strip()
+    if len(text) > MAX_CHARS:
+        raise ValueError(f"{_shown(text)}: {_a(kind)} is a number and a unit of at most {MAX_CHARS} characters, "
+                         f"e.g. '{example}'")
+    m = _QUANTITY.fullmatch(text)
     if m is None:
-        word = value.strip().split(" ")[0].lower().lstrip("+-.")
+        word = text.split(" ")[0].lower().lstrip("+-.")
         if word in ("inf", "infinity", "nan"):
-            raise ValueError(f"{value!r}: a {kind} must be a finite number (e.g. '{example}')")
-        raise ValueError(f"cannot read {value!r} as a number and a unit (a {kind}, e.g. '{example}')")
+            raise ValueError(f"{_shown(text)}: {_a(kind)} must be a finite number (e.g. '{example}')")
+        raise ValueError(f"cannot read {_shown(text)} as a number and a unit ({_a(kind)}, e.g. '{example}')")
     number, unit = float(m.group(1)), m.group(2)
     if not unit:
-        raise ValueError(f"{value!r} has no unit: write a {kind} with its unit, e.g. '{example}'")
+        raise ValueError(f"{_shown(text)} has no unit: write {_a(kind)} with its unit, e.g. '{example}'")
+    try:
+        factor = _angular(unit, kind) if kind in ANGULAR else _refuse_rotational(unit, kind)
+    except ValueError as exc:
+        raise ValueError(f"{_shown(text)}: {exc}") from None
+    if factor is not None:
+        return _finite(text, kind, number, number * factor)
     fast = _fast(unit, kind)
     if fast is not None:
-        return _finite(value, kind, number, number * fast)
+        return _finite(text, kind, number, number * fast)
     try:
         u = parse_unit(unit)
     except ValueError as exc:
-        raise ValueError(f"{value!r}: {exc}") from None
+        raise ValueError(f"{_shown(text)}: {exc}") from None
     if u.dimensionality != registry().get_dimensionality(dim):
-        raise ValueError(f"{value!r} is not a {kind}: expected a unit like '{example}' (SI: {si}), "
+        raise ValueError(f"{_shown(text)} is not {_a(kind)}: expected a unit like '{example}' (SI: {si}), "
                          f"got dimension {u.dimensionality}")
-    return _finite(value, kind, number, number * unit_factor(unit, kind))
+    return _finite(text, kind, number, number * unit_factor(unit, kind))
 
 
 def _finite(value: str, kind: str, number: float, si_value: float) -> float:
     if not math.isfinite(number) or not math.isfinite(si_value):
-        raise ValueError(f"{value!r}: a {kind} must be a finite number (it overflows in {DIMENSIONS[kind][1]})")
+        raise ValueError(f"{_shown(value)}: {_a(kind)} must be a finite number (it overflows in "
+                         f"{DIMENSIONS[kind][1]})")
     return si_value
 
 
@@ -221,7 +359,7 @@ def _bounded(kind: str, sign: str):
         if sign == "nonnegative" and not x >= 0:
             raise ValueError(f"must not be negative, got {x:g} {si}")
         if x != 0 and not lo <= abs(x) <= hi:
-            raise ValueError(f"{x:g} {si} is outside the physical range of a {kind} ({lo:g} to {hi:g} {si})")
+            raise ValueError(f"{x:g} {si} is outside the physical range of {_a(kind)} ({lo:g} to {hi:g} {si})")
         return x
 
     return check
@@ -240,9 +378,10 @@ def quantity(kind: str, sign: str = "positive"):
         Zero allowed or not.
     """
     dim, si, example, (lo, hi) = DIMENSIONS[kind]
-    article = "an" if kind[0] in "aeiou" else "a"
     zero = ">= 0" if sign == "nonnegative" else "> 0"
-    text = f"{article} {kind} with its unit, e.g. '{example}' (SI: {si}); {zero}, magnitude {lo:g} to {hi:g} {si}"
+    text = f"{_a(kind)} with its unit, e.g. '{example}' (SI: {si}); {zero}, magnitude {lo:g} to {hi:g} {si}"
+    if kind in ANGULAR:
+        text += "; a rotational frequency n (Hz, rpm, 1/min) is omega = 2 pi n, 1/s is refused as ambiguous"
     return Annotated[float, BeforeValidator(lambda v: to_si(v, kind)), AfterValidator(_bounded(kind, sign)),
                      Field(json_schema_extra={"unit": si, "kind": kind, "unit_text": text})]
 
@@ -272,10 +411,17 @@ def si_unit_of(text: object) -> str:
     -------
     str
     """
-    m = _QUANTITY.fullmatch(text) if isinstance(text, str) else None
+    text = text.strip() if isinstance(text, str) else ""
+    m = _QUANTITY.fullmatch(text) if len(text) <= MAX_CHARS else None
     if m is None or not m.group(2):
         return ""
     for kind, (_, si, _, _) in DIMENSIONS.items():
+        if kind in ANGULAR:
+            try:
+                _angular(m.group(2), kind)
+                return si
+            except ValueError:
+                continue
         if _fast(m.group(2), kind) is not None:
             return si
     try:
@@ -283,7 +429,7 @@ def si_unit_of(text: object) -> str:
     except ValueError:
         return ""
     ureg = registry()
-    for dim, si, _, _ in DIMENSIONS.values():
-        if u.dimensionality == ureg.get_dimensionality(dim):
+    for kind, (dim, si, _, _) in DIMENSIONS.items():
+        if kind not in ANGULAR and u.dimensionality == ureg.get_dimensionality(dim):
             return si
     return ""

@@ -252,8 +252,8 @@ def test_cli_run_writes_the_spinup_block(tmp_path):
 
 @pytest.mark.cli
 @pytest.mark.parametrize("path, value, message", [
-    ("analyses.spinup.max_acceleration", "40 kg", "analyses.spinup.max_acceleration: '40 kg' is not a angular "
-                                                  "acceleration"),
+    ("analyses.spinup.max_acceleration", "40 kg", "analyses.spinup.max_acceleration: '40 kg': 'kg' is not a "
+                                                  "unit of an angular acceleration"),
     ("analyses.spinup.horizon", "-1 s", "analyses.spinup.horizon: must be positive"),
     ("rotor.stiffness", "11025 N", "rotor.stiffness: '11025 N' is not a stiffness"),
     ("rotor.liquid", {"psi": 0.5, "density": "1000 kg/m^3"}, "give either the chamber"),
@@ -261,7 +261,8 @@ def test_cli_run_writes_the_spinup_block(tmp_path):
     ("rotor", None, "analyses.spinup needs a rotor section"),
     ("analyses.spinup.max_iterations", 0, "analyses.spinup.max_iterations"),
     ("analyses.spinup.tolerance", 0, "analyses.spinup.tolerance"),
-    ("analyses.spinup.max_jerk", "100 rad/s", "analyses.spinup.max_jerk: '100 rad/s' is not a angular jerk"),
+    ("analyses.spinup.max_jerk", "100 rad/s",
+     "analyses.spinup.max_jerk: '100 rad/s': 'rad/s' is not a unit of an angular jerk"),
 ])
 def test_bad_input_one_line_naming_the_field(tmp_path, capsys, scene_edit, path, value, message):
     data = scene_edit(SCENE, path, value)
