@@ -160,11 +160,16 @@ class Declarations:
         return iter(self.quantities)
 
     def find(self, path: str) -> Quantity | None:
-        """The declaration of a key path (list indices written as ``[]``), or None."""
-        path = re.sub(r"\.\d+(?=\.|$)", "[]", path)
-        if path in self._exact:
-            return self._exact[path]
-        return next((q for p, q in self._patterns if p.fullmatch(path)), None)
+        """The declaration of a key path, or None; an integer key picks an item of a list of records
+        (``peaks.0.omega`` is ``peaks[].omega``) or, last, an element of a list of numbers (``P.0`` is ``P``)."""
+        records = re.sub(r"\.\d+(?=\.)", "[]", path)
+        for candidate in (path, re.sub(r"\.\d+$", "[]", records), re.sub(r"\.\d+$", "", records)):
+            if candidate in self._exact:
+                return self._exact[candidate]
+            q = next((q for p, q in self._patterns if p.fullmatch(candidate)), None)
+            if q is not None:
+                return q
+        return None
 
     def headline(self, block: dict) -> list[tuple[Quantity, str, object]]:
         """(declaration, key, value) of the headline quantities ``block`` holds, in declaration order."""

@@ -54,11 +54,11 @@ STATUS_FILES = ("failed_solve.json", "interrupted.json", "error.json")
 # --------------------------------------------------------------------------------------------
 #: analysis -> the module whose QUANTITIES declare every number of its block (imported when a report needs it)
 DECLARED = {"statics": "autobal.analysis.statics_study", "frequency": "autobal.analysis.frequency",
-            "transient": "autobal.analysis.simulate"}
+            "transient": "autobal.analysis.simulate", "reliability": "autobal.analysis.reliability"}
 
 #: analyses whose numbers are not declared yet: their units still come from the name rules below.  This
 #: allow-list only shrinks (tests/test_quantities.py fails on an analysis that is in neither).
-UNDECLARED = ("stability", "liquid_balancer", "estimation", "reliability", "montecarlo",
+UNDECLARED = ("stability", "liquid_balancer", "estimation", "montecarlo",
               "rotor_dynamics", "spinup", "spinup_robust", "spinup_time_optimal", "design", "ross_spinup")
 
 _P = r"(^|\.)"  # start of a key
@@ -128,11 +128,6 @@ _UNDECLARED_RULES: list[tuple[str, str]] = [
     (r"^montecarlo\.afc\.(nominal_um|mean|std|band_low|band_high|quantiles\..*)$", "um"),
     (r"^montecarlo\..*" + _P + r"Q_\w+(\..*)?$", "m^3/s"),
     (r"^montecarlo\.", "1"),
-    # reliability of the traditional disc (Pavlenko 2014, ch. 1.2): u, chi, tau dimensionless
-    (r"^reliability\..*" + _P + r"t_h$", "h"),
-    (r"^reliability\..*(b_mean|b_std|_per_s)$", "1/s"),
-    (r"^reliability\..*z_B$", "m"),
-    (r"^reliability\.", "1"),
     # rotor with a liquid auto-balancer (Pashkov 2010): z = Omega/omega_cr, a/e, d dimensionless
     (r"^rotor_dynamics\.passage\.(table\[\]\.n|crossover_n_star.*)$", "1/s"),
     (r"^rotor_dynamics\.", "1"),
@@ -303,7 +298,7 @@ class Section:
 
     def cell(self, path: str, value=None) -> dict:
         """The cell of the block's value at ``path`` (or ``value``) in the display unit of its declaration."""
-        q = quantity(_unit_path(self.name, path))
+        q = quantity(f"{self.name}.{path}")
         v = self.get(path) if value is None else value
         return cell(v, q.unit, q.display) if q is not None else cell(v, self.unit(path) or "?")
 
@@ -314,7 +309,7 @@ class Section:
             return
         v = self.get(path) if value is None else value
         c = cell(v, unit) if unit else self.cell(path, v)
-        c["key"] = _unit_path(self.name, path)
+        c["key"] = f"{self.name}.{path}"
         note = f"{note} {self.get(path + '_status') or ''}"
         if c["unit"] == "rad/s" and is_number(v):  # speeds in rpm and frequencies in Hz beside rad/s
             note = f"{number(convert(v, 'rad/s', 'rpm'))} rpm = {number(convert(v, 'rad/s', 'Hz'))} Hz " + note

@@ -62,7 +62,9 @@ def test_an_undeclared_key_is_found():
     block = {"exact": {"z0": 1e-4, "p2": 3e7, "ok": True, "why": "text"}, "fits": {"a": {"estimate": 1.0}},
              "peaks": [{"omega": 1.0, "amplitude": 2.0}], "accuracy": {"estimate": 1e-9, "parts": {"x": 1.0}}}
     assert decl.undeclared(block) == ["exact.p2", "peaks[].amplitude"]
-    assert decl.find("peaks.0.omega").unit == "rad/s"
+    assert decl.find("peaks.0.omega").unit == "rad/s" and decl.find("exact.z0").unit == "m"
+    curve = Declarations(Quantity("literal.P", "1"), Quantity("table[]", "h"))
+    assert curve.find("literal.P.2").unit == "1" and curve.find("table.0").unit == "h"  # list elements, records
 
 
 def test_a_display_unit_must_be_a_unit_of_the_si_unit():
