@@ -174,11 +174,28 @@ class StaticsResult(Result):
             lines.append("  the operating point itself has the regulator saturated")
         return "\n".join(lines)
 
+    #: sweep column -> (its base in data["scales"], the operating-point quantity whose display unit it takes)
+    _DIMENSIONAL = {"psi1": ("p_B", "exact.p1", "p1"), "psi_e": ("p_B", "exact.pe", "pe"),
+                    "psi2": ("p_B", "exact.p2", "p2"), "psi3": ("p_B", "exact.p3", "p3"),
+                    "psi_cam": ("p_B", "exact.pcam", "pcam"), "u": ("z_B", "exact.z0", "z"),
+                    "xi": ("x_B", "exact.x0", "x")}
+
     def tables(self) -> dict[str, dict]:
-        sw, fg = self.data["sweep"], self.data["force_gap"]
-        cols = {k: sw[k] for k in ("psi1", *SWEEP_KEYS, "q_e", "q_T", "q_1", "Q_e", "Q_1", "Q_T",
-                                   "kappa_s", "regulator_saturated", "contact")}
-        cols |= {f"closed_form_{k}": v for k, v in sw["closed_form"].items() if not k.endswith("_status")}
+        """statics_sweep.csv: every pressure, gap and flow in the units of the field (MPa, µm, mm, L/s; the
+        header names it) beside the source's dimensionless group; force_gap.csv in the groups of (2.35)."""
+        sw, fg, sc = self.data["sweep"], self.data["force_gap"], self.data["scales"]
+        cols = {}
+        for k in ("psi1", *SWEEP_KEYS):
+            base, key, name = self._DIMENSIONAL[k]
+            q = QUANTITIES.find(key)
+            cols[f"{name} [{q.display}]"] = [None if v is None else q.shown(v * sc[base]) for v in sw[k]]
+            cols[f"{k} [1]"] = sw[k]
+        for k in ("Q_e", "Q_1", "Q_T"):
+            q = QUANTITIES.find(f"exact.{k}")
+            cols[f"{k} [{q.display}]"] = [None if v is None else q.shown(v) for v in sw[k]]
+        cols |= {f"{k} [1]": sw[k] for k in ("q_e", "q_T", "q_1", "kappa_s")}
+        cols |= {k: sw[k] for k in ("regulator_saturated", "contact")}
+        cols |= {f"closed_form_{k} [1]": v for k, v in sw["closed_form"].items() if not k.endswith("_status")}
         return {"statics_sweep.csv": cols,
                 "force_gap.csv": {"u": fg["u"], "phi_exact": fg["phi_exact"],
                                   "phi_closed_form": fg["phi_closed_form"]}}

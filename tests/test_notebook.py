@@ -41,7 +41,8 @@ def test_tables_as_dataframes(statics_run):
     res = statics_run["statics"]
     frame = res.to_dataframe("statics_sweep.csv")
     assert isinstance(frame, pd.DataFrame) and list(frame.columns) == list(res.tables()["statics_sweep.csv"])
-    assert len(frame) == len(res.tables()["statics_sweep.csv"]["psi1"])
+    assert len(frame) == len(res.to_dict()["sweep"]["psi1"])
+    assert frame["p1 [MPa]"].iloc[0] == pytest.approx(8.0687, rel=1e-4)  # psi1 = 0.25 of p_B = 32.27 MPa
     assert set(statics_run.to_dataframe()) == set(statics_run.tables()) == {"statics_sweep.csv", "force_gap.csv"}
     with pytest.raises(KeyError, match="has no table 'nope.csv'; it has: statics_sweep.csv, force_gap.csv"):
         res.to_dataframe("nope.csv")

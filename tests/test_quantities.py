@@ -119,3 +119,20 @@ def test_statics_prints_engineering_units_first(capsys, tmp_path):
         assert re.search(r"\d L/s$", line(q)), line(q)
     assert line("z0") in lines[: lines.index(next(x for x in lines if "dimensionless groups" in x))]
     assert "m**3" not in out and "m3/s" not in out
+
+
+@pytest.mark.cli
+def test_statics_csv_headers_name_engineering_units(shipped_run):
+    """statics_sweep.csv: p1 in MPa beside psi1 = p1/p_B, z in µm beside u = z/z_B, flows in L/s."""
+    import csv
+
+    run, folder = shipped_run("pump_pe600_statics")
+    with (folder / "statics_sweep.csv").open(encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    assert {"p1 [MPa]", "psi1 [1]", "z [µm]", "u [1]", "x [mm]", "Q_e [L/s]", "Q_T [L/s]"} <= set(rows[0])
+    st = run["statics"].to_dict()
+    for row in rows:
+        assert float(row["p1 [MPa]"]) == pytest.approx(float(row["psi1 [1]"]) * st["scales"]["p_B"] / 1e6, rel=1e-12)
+        assert float(row["z [µm]"]) == pytest.approx(float(row["u [1]"]) * st["scales"]["z_B"] * 1e6, rel=1e-12)
+    at = next(r for r in rows if float(r["psi1 [1]"]) == st["exact"]["psi1"])
+    assert float(at["Q_e [L/s]"]) == pytest.approx(st["exact"]["Q_e"] * 1e3, rel=1e-9)
