@@ -183,7 +183,7 @@ class Declarations:
 
     def undeclared(self, block: dict) -> list[str]:
         """The key paths of ``block``'s numeric leaves that have no declaration."""
-        return [p for p, _ in leaf_paths(block, "") if self.find(p) is None]
+        return list(dict.fromkeys(p for p, _ in leaf_paths(block, "") if self.find(p) is None))
 
 
 MISSING = object()

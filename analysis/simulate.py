@@ -233,6 +233,7 @@ QUANTITIES = Declarations(
     Quantity("cases[].amplitude", "1", "δψ1, δτ", "input amplitude, ratio of the discharge pressure or the load"),
     Quantity("cases[].frequency", "rad/s", "ω", "frequency of a harmonic input", "rad/s"),
     Quantity("cases[].t_end", "s", "t_end", "time reached", "ms"),
+    Quantity("cases[].events[].t", "s", "t", "time of an event (gap closed, valve at a stop, flow reversed)", "ms"),
     Quantity("cases[].cpu_s", "s", "", "CPU time of the integration"),
     Quantity("cases[].integrator_steps", "1", "", "integrator steps"),
     Quantity("equilibrium_residual", "1", "", "residual of the nonlinear model at the static solution"),
