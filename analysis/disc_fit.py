@@ -69,12 +69,14 @@ def static_2p(tau, u) -> tuple[float, float]:
 
     Returns
     -------
-    tau_max (1), alpha (1; NaN when the fitted alpha^2 is not positive).
+    tau_max (1), alpha (1; NaN when the fitted alpha^2 is not positive); both NaN when every load is the same.
     """
     tau, u = np.asarray(tau, float), np.asarray(u, float)
     n = len(tau)
     s0, s1, s2, s3 = tau.sum(), (u**3 * tau).sum(), (u**6 * tau**2).sum(), (u**3 * tau**2).sum()
     det = n * s2 - s1**2
+    if det == 0:  # one load only: (4.25) is singular
+        return math.nan, math.nan
     alpha2 = (s0 * s1 - n * s3) / det
     return (s0 * s2 - s1 * s3) / det, math.sqrt(alpha2) if alpha2 > 0 else math.nan
 
@@ -156,10 +158,47 @@ def flow_2p(tau, q, start: tuple[float, float] | None = None) -> tuple[float, fl
 # ---- nonlinear least squares of (4.18) and (4.31) ---------------------------------------------------
 
 def _bounds(tau, free, bounds: dict | None) -> dict:
-    """Bounds of the free parameters: given ones, else alpha > 0 and tau_max > max tau."""
-    default = {"alpha": (1e-8, math.inf), "tau_max": (np.max(tau) * (1 + 1e-9), math.inf)}
-    return {k: tuple(d if b is None else b for b, d in zip((bounds or {}).get(k, (None, None)), default[k],
-                                                          strict=True)) for k in free}
+    """Bounds of the free parameters: given ones, else alpha > 0; tau_max above max tau always
+    (the gap (4.18) is undefined at and below the largest load)."""
+    floor = np.max(tau) * (1 + 1e-9)
+    upper = ((bounds or {}).get("alpha") or (None, None))[1]
+    tiny = 1e-8 if upper is None or upper <= 0 else min(1e-8, 1e-3 * upper)  # alpha > 0, below a tiny upper bound
+    default = {"alpha": (tiny, math.inf), "tau_max": (floor, math.inf)}
+    out = {k: tuple(d if b is None else b for b, d in zip((bounds or {}).get(k, (None, None)), default[k],
+                                                         strict=True)) for k in free}
+    if "tau_max" in out:
+        out["tau_max"] = (max(out["tau_max"][0], floor), out["tau_max"][1])
+    return out
+
+
+def feasible_start(tau, values: dict, bnd: dict) -> tuple[dict, dict]:
+    """The initial guess moved to where the model is defined and inside the bounds ``bnd`` (free
+    parameters): tau_max not above the largest load -> 1.05 times it (or the middle of its bounds);
+    any other free value outside its bounds -> the middle of its bounds, or just inside the one bound.
+
+    Returns
+    -------
+    (values, moved): the start, and name -> {"from", "to", "why"} for each value moved.
+    """
+    out, moved = dict(values), {}
+    top = float(np.max(tau))
+    for k, (lo, hi) in bnd.items():
+        if not lo < hi:
+            raise ValueError(f"{k}: no value between its bounds [{lo:g}, {hi:g}] where the model is defined")
+        v = out[k]
+        if k == "tau_max" and v <= top:
+            new = 1.05 * top if 1.05 * top < hi else 0.5 * (lo + hi)
+            why = (f"the initial tau_max {v:g} is not above the largest load {top:g}, where the gap (4.18) is "
+                   f"undefined; started at {new:.6g} (1.05 x the largest load, within the bounds)")
+        elif not lo < v < hi:
+            new = 0.5 * (lo + hi) if math.isfinite(lo + hi) else \
+                lo + 0.01 * max(abs(lo), 1.0) if v <= lo else hi - 0.01 * max(abs(hi), 1.0)
+            why = f"the initial {k} {v:g} is not inside its bounds [{lo:g}, {hi:g}]; started at {new:.6g}"
+        else:
+            continue
+        out[k] = float(new)
+        moved[k] = {"from": v, "to": float(new), "why": why}
+    return out, moved
 
 
 class DiscFitter:
@@ -175,27 +214,30 @@ class DiscFitter:
     def __init__(self, n: int, residual: str = "u", free: tuple[str, ...] = DISC, hessian: str = "gauss-newton",
                  max_iter: int = 300, tol: float | None = None, batch: dict | None = None):
         self.n, self.residual, self.free, self.hessian = n, residual, tuple(free), hessian
-        x = ca.SX.sym("x", len(self.free))
-        tau, um, qm = ca.SX.sym("tau", n), ca.SX.sym("u", n), ca.SX.sym("q", n)
+        # the residual of one point, mapped over the n points: the graph's size does not grow with n
+        xs, point = ca.SX.sym("x", len(self.free)), ca.SX.sym("point", 3)  # tau, u, q of a point
         w, fixed, scale = ca.SX.sym("w", 2), ca.SX.sym("fixed", 2), ca.SX.sym("scale", 2)
-        disc = TurbulentDisc(*[scale[j] * x[self.free.index(k)] if k in self.free else fixed[j]
+        disc = TurbulentDisc(*[scale[j] * xs[self.free.index(k)] if k in self.free else fixed[j]
                                for j, k in enumerate(DISC)])
         parts = []
         if residual in ("u", "both"):
-            parts.append(w[0] * (disc.gap(tau) - um))
+            parts.append(w[0] * (disc.gap(point[0]) - point[1]))
         if residual in ("q", "both"):
-            parts.append(w[1] * (disc.flow(tau) - qm))
-        p = ca.vertcat(tau, um, qm, w, fixed, scale)
-        self.residual_function = ca.Function("disc_residual", [x, p], [ca.vertcat(*parts)], ["x", "p"], ["r"])
-        self.ls = LeastSquares(f"fit_disc_{residual}", x, p, self.residual_function(x, p), ca.SX(0, 1),
-                               len(self.free), hessian, max_iter, tol)
+            parts.append(w[1] * (disc.flow(point[0]) - point[2]))
+        one = ca.Function("disc_point_residual", [xs, point, w, fixed, scale], [ca.vertcat(*parts)])
+        x, p = ca.MX.sym("x", len(self.free)), ca.MX.sym("p", 3 * n + 6)
+        data = ca.reshape(p[:3 * n], n, 3).T  # one column per point
+        common = [p[3 * n + 2 * j:3 * n + 2 * j + 2] for j in range(3)]
+        r = ca.vec(one.map(n)(x, data, *common).T)  # every point's u residual, then every point's q residual
+        self.residual_function = ca.Function("disc_residual", [x, p], [r], ["x", "p"], ["r"])
+        self.ls = LeastSquares(f"fit_disc_{residual}", x, p, r, ca.MX(0, 1), len(self.free), hessian, max_iter, tol)
         self.batch_options = dict(batch or {})
         self._batch: GaussNewtonBatch | None = None
 
     def _setup(self, tau, values, bounds, weights):
-        values = START | (values or {})
         weights = {"u": 1.0, "q": 1.0} | (weights or {})
         bnd = _bounds(tau, self.free, bounds)
+        values, self.moved = feasible_start(tau, START | (values or {}), bnd)
         scale = np.array([scale_of(values[k]) for k in DISC])
         sc = np.array([scale[DISC.index(k)] for k in self.free])
         return values, weights, bnd, scale, sc
@@ -254,7 +296,8 @@ class DiscFitter:
             weights={k: weights[k] for k in parts},
             stats=uncertainty(res["r"], res["J"] / sc, [est[k] for k in self.free], confidence),
             solver={"status": res["status"], "iterations": res["iterations"], "success": res["success"],
-                    "objective": float(res["f"][0])})
+                    "objective": float(res["f"][0])},
+            extra={"start_moved": self.moved} if self.moved else {})
 
     def fit_many(self, tau, u=None, q=None, values: dict | None = None, bounds: dict | None = None,
                  weights: dict | None = None) -> dict:

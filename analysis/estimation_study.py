@@ -17,7 +17,7 @@ from autobal.analysis.adequacy import fisher_adequacy
 from autobal.analysis.device_fit import DeviceFitter
 from autobal.analysis.least_squares import FitResult
 from autobal.analysis.result import Result, fmt, new_figure, plain
-from autobal.errors import ScenarioError
+from autobal.errors import ScenarioError, SolveError
 from autobal.models.device import DeviceParams, design
 from autobal.models.hydroheel import TurbulentDisc
 
@@ -47,21 +47,26 @@ class EstimationResult(Result):
     name = "estimation"
 
     @property
+    def solved(self) -> dict[str, dict]:
+        """Fit name -> results block, of the fits that converged (a failed fit's block has status "failed")."""
+        return {n: f for n, f in self.data["fits"].items() if f.get("status") != "failed"}
+
+    @property
     def estimates(self) -> dict[str, dict[str, float]]:
-        """Fit name -> parameter -> estimate (dimensionless groups, or loss coefficients)."""
-        return {n: {k: p["estimate"] for k, p in f["parameters"].items()} for n, f in self.data["fits"].items()}
+        """Fit name -> parameter -> estimate (dimensionless groups, or loss coefficients), of the solved fits."""
+        return {n: {k: p["estimate"] for k, p in f["parameters"].items()} for n, f in self.solved.items()}
 
     @property
     def intervals(self) -> dict[str, dict[str, tuple[float, float]]]:
         """Fit name -> free parameter -> linearised (Student-t) confidence interval, in the parameter's unit."""
         return {n: {k: (p["ci_low"], p["ci_high"]) for k, p in f["parameters"].items() if p["free"]}
-                for n, f in self.data["fits"].items()}
+                for n, f in self.solved.items()}
 
     @property
     def bootstrap_intervals(self) -> dict[str, dict[str, tuple[float, float]]]:
         """Fit name -> free parameter -> bootstrap percentile interval (fits that have one)."""
         return {n: {k: (p["ci_low"], p["ci_high"]) for k, p in f["bootstrap"]["parameters"].items()}
-                for n, f in self.data["fits"].items() if "parameters" in (f.get("bootstrap") or {})}
+                for n, f in self.solved.items() if "parameters" in (f.get("bootstrap") or {})}
 
     def to_dict(self) -> dict:
         return self.data
@@ -69,10 +74,13 @@ class EstimationResult(Result):
     def summary(self) -> str:
         d = self.data
         lines = [f"estimation on {d['data']['file']} ({d['data']['points']} points)"]
-        for name, f in d["fits"].items():
+        lines += [f"  FAILED {x}" for x in d.get("failures", [])]
+        for name, f in self.solved.items():
             lines.append(f"  fit {name} ({f['model']}, residual in {f['residual']}, {f['hessian']} Hessian): "
                          f"IPOPT {f['solver']['status']} in {f['solver']['iterations']} iterations, "
                          f"residual std {f['residual_std']:.4g}")
+            for m in f["extra"].get("start_moved", {}).values():
+                lines.append(f"    start moved: {m['why']}")
             for k, p in f["parameters"].items():
                 if p["free"]:
                     lines.append(f"    {k:16s} {p['estimate']:.6g} +- {p['standard_error']:.3g}  "
@@ -100,8 +108,12 @@ class EstimationResult(Result):
                          f"{ref['sigma2_sq']:.3g}, F = {ref['F']:.3g}, F_crit = {ref['F_crit']:.3g} -> "
                          f"{'adequate' if ref['adequate'] else 'not adequate'} (source's rule: "
                          f"{'adequate' if ref['source_rule_adequate'] else 'not adequate'})")
+        if "status" in cf:
+            lines.append(f"  closed forms {cf['status']}")
         lc = d.get("loss_coefficient")
-        if lc:
+        if lc and "status" in lc:
+            lines.append(f"  (4.38) {lc['status']}")
+        elif lc:
             lines.append(f"  (4.38): {lc['unknown']} = {lc['value']:.4g} [{lc['ci_low']:.4g}, {lc['ci_high']:.4g}] "
                          f"from alpha = {lc['alpha']:.5g} of fit {lc['fit']} (nominal alpha {lc['alpha_nominal']:.4g})")
         return "\n".join(lines)
@@ -111,7 +123,7 @@ class EstimationResult(Result):
         out = {}
         rows = {"fit": [], "parameter": [], "free": [], "estimate": [], "standard_error": [], "ci_low": [],
                 "ci_high": []}
-        for name, f in self.data["fits"].items():
+        for name, f in self.solved.items():
             for k, p in f["parameters"].items():
                 for col in rows:
                     rows[col].append({"fit": name, "parameter": k}.get(col, p.get(col)))
@@ -128,7 +140,7 @@ class EstimationResult(Result):
 
     def draw(self, ax) -> None:
         """The first fit's first measured variable: data, fitted curve and its confidence band."""
-        name, f = next(iter(self.data["fits"].items()))
+        name, f = next(iter(self.solved.items()))
         self._draw_fit(ax, name, f, next(k for k in ("u", "q") if k in f["data"]))
 
     def _draw_fit(self, ax, name: str, f: dict, k: str) -> None:
@@ -160,7 +172,7 @@ class EstimationResult(Result):
         """One figure per fit: data, fitted curve, confidence band (and the closed forms' curves for
         the traditional disc), and the residuals below."""
         figs = {}
-        for name, f in self.data["fits"].items():
+        for name, f in self.solved.items():
             parts = [k for k in ("u", "q") if k in f["data"]]
             fig, axes = new_figure((6.4 * len(parts), 6.4), 2, len(parts), squeeze=False,
                                    gridspec_kw={"height_ratios": [3, 1]}, sharex="col")
@@ -206,7 +218,7 @@ def _fit_block(f: FitResult, curve: dict) -> dict:
     for k in f.measured:
         data[k] = {"measured": f.measured[k], "fitted": f.fitted[k], "residual": f.fitted[k] - f.measured[k]}
     return {
-        "model": f.model, "residual": f.residual, "hessian": f.hessian, "weights": f.weights,
+        "status": "ok", "model": f.model, "residual": f.residual, "hessian": f.hessian, "weights": f.weights,
         "load_kind": f.extra.get("load_kind", "tau"),
         "parameters": params, "free": f.free, "correlation": st["correlation"], "covariance": st["covariance"],
         "residual_std": st["residual_std"], "ssr": st["ssr"], "dof": st["dof"], "points": st["points"],
@@ -256,6 +268,88 @@ def _closed_forms(tau, u, q, group, tau_max: float) -> dict:
     return out
 
 
+def _one_fit(fit, settings, data, bases: dict, device) -> tuple[dict, FitResult]:
+    """One fit of the scene: its results block (with the cross-check, bootstrap and adequacy test)
+    and its FitResult; SolveError when it does not converge or the data do not identify it."""
+    group = data.columns.get("group")
+    fb = bases
+    if fit.model == "device":
+        if device is None:
+            raise ScenarioError(f"analyses.estimation.fits.{fit.name}: the device model needs a device section")
+        dev = design(device)
+        fb = _device_bases(bases, dev)
+    load = data.dimensionless("load", fb)
+    u = data.dimensionless("gap", fb) if fit.residual in ("u", "both") else None
+    q = data.dimensionless("flow", fb) if fit.residual in ("q", "both") else None
+    values = {k: p.value for k, p in fit.parameters.items()}
+    weights = {"u": fit.weights.u, "q": fit.weights.q}
+    grid = np.linspace(load.min(), load.max(), settings.band_points)
+    if fit.model == "traditional_disc":
+        free = tuple(fit.free())
+        bounds = {k: (fit.parameters[k].lower, fit.parameters[k].upper) for k in free}
+        fitter = disc_fit.DiscFitter(len(load), fit.residual, free, fit.hessian, fit.max_iterations)
+        res = fitter.fit(load, u, q, values=values, bounds=bounds, weights=weights, name=fit.name,
+                         confidence=settings.confidence)
+        _identified(res)
+        curve = disc_fit.disc_curve(grid, res.estimate, res.free, res.stats["covariance"], res.stats["t_quantile"])
+        block = _fit_block(res, curve)
+        if settings.cross_check:
+            sp = disc_fit.scipy_disc_fit(load, u, q, fit.residual, res.initial, free, bounds, weights)
+            block["cross_check_scipy"] = sp | {"max_abs_difference": max(
+                abs(sp["estimate"][k] - res.estimate[k]) for k in free)}
+        if settings.bootstrap is not None:
+            block["bootstrap"] = _bootstrap_block(fitter, res, settings.bootstrap, settings.confidence)
+    else:
+        params = {k: (p.value, p.free, p.lower, p.upper) for k, p in fit.parameters.items()}
+        kind = "tau" if data.has("load") in ("tau", "axial_force") else "psi1"
+        fitter = DeviceFitter(device, dev, params, fit.residual, fit.flow_throttle, fit.hessian, fit.max_iterations)
+        res = fitter.fit(load, kind, u, q, weights=weights, name=fit.name, confidence=settings.confidence)
+        _identified(res)
+        curve = fitter.curve(res, grid)
+        block = _fit_block(res, curve)
+        block["bases"] = fb
+        if settings.bootstrap is not None:
+            block["bootstrap"] = {"status": "not available",
+                                  "note": "bootstrap intervals are computed for traditional_disc fits only"}
+    if settings.adequacy is not None and group is not None:
+        var = "u" if "u" in res.measured else "q"
+        fitted, meas = res.fitted[var], res.measured[var]
+
+        def theory(loads, fitted=fitted, load=load):
+            return np.array([fitted[np.isclose(load, x, rtol=1e-12)].mean() for x in loads])
+
+        block["adequacy"] = fisher_adequacy(load, meas, group, theory, len(res.free),
+                                            settings.adequacy.significance) | {"variable": var}
+    return block, res
+
+
+def _identified(res: FitResult) -> None:
+    """SolveError when the Jacobian at the optimum does not identify the free parameters (J'J
+    singular to working precision: no covariance, any value along a direction fits as well)."""
+    if not np.all(np.isfinite(res.stats["covariance"])):
+        raise SolveError(f"fit {res.name!r}: the data do not identify its free parameters {', '.join(res.free)} "
+                         f"(J'J condition {res.stats['jtj_condition']:.1e} at the optimum)", "Not_Identifiable",
+                         {k: res.estimate[k] for k in res.free})
+
+
+HINTS = {
+    "Maximum_Iterations_Exceeded": "raise max_iterations, or start nearer the data (the closed forms' estimates "
+                                   "are a start)",
+    "Invalid_Number_Detected": "the model is undefined at an iterate: bound the parameters where it is defined "
+                               "(tau_max above the largest load, ratios positive)",
+    "Not_Identifiable": "measure at more different loads, or fix one of the parameters",
+}
+
+
+def _failed_block(fit, exc: SolveError) -> dict:
+    """The results block of a fit that failed: its status, IPOPT's status, the last iterate and a hint."""
+    return {"status": "failed", "model": fit.model, "residual": fit.residual, "reason": exc.message,
+            "solver": {"status": exc.status, "success": False,
+                       "iterations": exc.last_iterate.get("iterations")},
+            "last_iterate": {k: v for k, v in exc.last_iterate.items() if k != "iterations"},
+            "hint": HINTS.get(exc.status, "check the initial values and bounds of its parameters")}
+
+
 def run(settings, device: DeviceParams | None = None, title: str = "") -> EstimationResult:
     """Every fit of the scene's ``analyses.estimation`` block, the closed forms, the adequacy tests,
     bootstrap intervals and (4.38).
@@ -278,63 +372,27 @@ def run(settings, device: DeviceParams | None = None, title: str = "") -> Estima
     bases = settings.bases.values()
     role_load = data.has("load")
     group = data.columns.get("group")
-    fits, solvers = {}, {}
+    fits, solvers, failures = {}, {}, []
     for fit in settings.fits:
-        fb = bases
-        if fit.model == "device":
-            if device is None:
-                raise ScenarioError(f"analyses.estimation.fits.{fit.name}: the device model needs a device section")
-            dev = design(device)
-            fb = _device_bases(bases, dev)
-        load = data.dimensionless("load", fb)
-        u = data.dimensionless("gap", fb) if fit.residual in ("u", "both") else None
-        q = data.dimensionless("flow", fb) if fit.residual in ("q", "both") else None
-        values = {k: p.value for k, p in fit.parameters.items()}
-        weights = {"u": fit.weights.u, "q": fit.weights.q}
-        grid = np.linspace(load.min(), load.max(), settings.band_points)
-        if fit.model == "traditional_disc":
-            free = tuple(fit.free())
-            bounds = {k: (fit.parameters[k].lower, fit.parameters[k].upper) for k in free}
-            fitter = disc_fit.DiscFitter(len(load), fit.residual, free, fit.hessian, fit.max_iterations)
-            res = fitter.fit(load, u, q, values=values, bounds=bounds, weights=weights, name=fit.name,
-                             confidence=settings.confidence)
-            curve = disc_fit.disc_curve(grid, res.estimate, res.free, res.stats["covariance"], res.stats["t_quantile"])
-            block = _fit_block(res, curve)
-            if settings.cross_check:
-                sp = disc_fit.scipy_disc_fit(load, u, q, fit.residual, values, free, bounds, weights)
-                block["cross_check_scipy"] = sp | {"max_abs_difference": max(
-                    abs(sp["estimate"][k] - res.estimate[k]) for k in free)}
-            if settings.bootstrap is not None:
-                block["bootstrap"] = _bootstrap_block(fitter, res, settings.bootstrap, settings.confidence)
-        else:
-            params = {k: (p.value, p.free, p.lower, p.upper) for k, p in fit.parameters.items()}
-            kind = "tau" if role_load in ("tau", "axial_force") else "psi1"
-            fitter = DeviceFitter(device, dev, params, fit.residual, fit.flow_throttle, fit.hessian,
-                                      fit.max_iterations)
-            res = fitter.fit(load, kind, u, q, weights=weights, name=fit.name, confidence=settings.confidence)
-            curve = fitter.curve(res, grid)
-            block = _fit_block(res, curve)
-            block["bases"] = fb
-            if settings.bootstrap is not None:
-                block["bootstrap"] = {"status": "not available",
-                                      "note": "bootstrap intervals are computed for traditional_disc fits only"}
-        if settings.adequacy is not None and group is not None:
-            var = "u" if "u" in res.measured else "q"
-            fitted, meas = res.fitted[var], res.measured[var]
-
-            def theory(loads, fitted=fitted, load=load):
-                return np.array([fitted[np.isclose(load, x, rtol=1e-12)].mean() for x in loads])
-
-            block["adequacy"] = fisher_adequacy(load, meas, group, theory, len(res.free),
-                                                    settings.adequacy.significance) | {"variable": var}
-        fits[fit.name] = block
-        solvers[fit.name] = res
+        try:
+            fits[fit.name], solvers[fit.name] = _one_fit(fit, settings, data, bases, device)
+        except SolveError as exc:
+            fits[fit.name] = _failed_block(fit, exc)
+            failures.append(f"{exc.message} (status {exc.status}); {fits[fit.name]['hint']}")
+    if not solvers:
+        first = fits[settings.fits[0].name]
+        head = "" if len(failures) == 1 else f"all {len(failures)} fits failed: "
+        raise SolveError(head + "; ".join(failures), first["solver"]["status"], first["last_iterate"])
 
     first_disc = next((f for f in settings.fits if f.model == "traditional_disc"), None)
     closed = None
     if settings.closed_forms and role_load in ("tau", "axial_force"):
         tau_max = settings.tau_max or (first_disc.parameters["tau_max"].value if first_disc else None)
-        if tau_max is not None:
+        top = float(data.dimensionless("load", bases).max())
+        if tau_max is not None and tau_max <= top:
+            closed = {"status": f"not computed: their fixed tau_max {tau_max:g} is not above the largest load "
+                                f"{top:.6g}, where (4.18) is undefined; give analyses.estimation.tau_max"}
+        elif tau_max is not None:
             tau = data.dimensionless("load", bases)
             u = data.dimensionless("gap", bases) if data.has("gap") else None
             q = data.dimensionless("flow", bases) if data.has("flow") else None
@@ -350,7 +408,9 @@ def run(settings, device: DeviceParams | None = None, title: str = "") -> Estima
 
     loss = None
     lc = settings.loss_coefficient
-    if lc is not None:
+    if lc is not None and lc.fit not in solvers:
+        loss = {"fit": lc.fit, "status": f"not computed: fit {lc.fit} failed"}
+    elif lc is not None:
         f = solvers[lc.fit]
         alpha = f.estimate["alpha"]
         lo, hi = f.interval("alpha")
@@ -366,10 +426,11 @@ def run(settings, device: DeviceParams | None = None, title: str = "") -> Estima
     diffs = [b["cross_check_scipy"]["max_abs_difference"] for b in fits.values() if "cross_check_scipy" in b]
     block = {
         "title": title,
-        "data": {"file": data.path.name, "points": data.points, "columns": data.units,
+        "data": {"file": data.path.name, "path": str(data.path), "points": data.points, "columns": data.units,
                  "groups": int(len(np.unique(group))) if group is not None else None, "provenance": data.comments},
         "bases": bases | {f"{k}_status": "not given in the scene (not needed by its fits)" for k, v in bases.items()
                           if v is None},
+        "status": f"{len(failures)} of {len(fits)} fits failed" if failures else "ok", "failures": failures,
         "fits": fits, "closed_forms": closed, "adequacy_reference": reference,
         "loss_coefficient": loss,
         "accuracy": {"estimate": max(diffs) if diffs else None,

@@ -83,7 +83,8 @@ class LeastSquares:
         opts = {"max_iter": max_iter} | ({"tol": tol, "constr_viol_tol": tol, "compl_inf_tol": tol} if tol else {})
         if hessian == "gauss-newton":
             J = ca.jacobian(r, x)
-            lam_f, lam_g = ca.SX.sym("lam_f"), ca.SX.sym("lam_g", g.numel())
+            sym = type(x)  # SX or MX, as the model is built
+            lam_f, lam_g = sym.sym("lam_f"), sym.sym("lam_g", g.numel())
             hess = ca.Function("gauss_newton_hessian", [x, p, lam_f, lam_g], [ca.triu(lam_f * ca.mtimes(J.T, J))],
                                ["x", "p", "lam_f", "lam_g"], ["hess_gamma_x_x"])
             self.solver = ipopt.nlpsol(name, x, p, f, g, hess_lag=hess, **opts)

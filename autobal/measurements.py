@@ -2,24 +2,25 @@
 
 A header cell is ``quantity [unit]``: ``tau [1]``, ``axial_force [kN]``, ``u [1]``, ``gap [mm]``,
 ``q [1]``, ``flow [L/min]``, ``group [1]``.  Lines starting with ``#`` are comments (the file's
-provenance).  Dimensional columns are converted to SI on reading and made dimensionless with the
-base values of the scene (p_B, s_B, z_B, Q_B), as the source does (Pavlenko 2014, (1.17)-(1.21),
-(4.29)).  Every problem is a :class:`autobal.errors.ScenarioError` with one line naming the file,
-the line or column and the expected unit.
+provenance).  Spreadsheet exports are read as written: UTF-8 with a byte-order mark, ';' as the
+separator with decimal commas, and extra columns when the scene names the columns to take by their
+headers (``analyses.estimation.columns``).  Dimensional columns are converted to SI on reading and
+made dimensionless with the base values of the scene (p_B, s_B, z_B, Q_B), as the source does
+(Pavlenko 2014, (1.17)-(1.21), (4.29)).  Every problem is a :class:`autobal.errors.ScenarioError`
+with one line naming the file, the line or column and the expected unit.
 """
 
 from __future__ import annotations
 
 import csv
-import math
 import re
+import stat
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from autobal.errors import ScenarioError
-from autobal.paths import SCENARIO_DIR
 from autobal.units import DIMENSIONS, unit_factor
 
 # quantity name -> (role, unit kind or None when dimensionless, meaning)
@@ -37,6 +38,9 @@ QUANTITIES = {
 }
 DIMENSIONLESS = ("1", "-", "")
 _HEADER = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_]*)\s*\[([^\]]*)\]\s*$")
+_UNIT_AT_END = re.compile(r"(?:\[([^\]]*)\]|\(([^)]*)\))\s*$")  # 'name [unit]' or 'name (unit)'
+MAX_DATA_BYTES = 20_000_000  # a data file is a text of at most 20 MB
+MAX_POINTS = 100_000  # data rows of one file
 # base value needed to make a dimensional column dimensionless: quantity -> base key
 BASE_OF = {"axial_force": "force", "discharge_pressure": "pressure", "gap": "gap", "flow": "flow"}
 
@@ -95,37 +99,127 @@ def _unit_factor(path: Path, name: str, unit: str) -> float:
         raise ScenarioError(f"{path}: column {cell}: {exc} (a {kind})") from None
 
 
-def resolve(path: str | Path) -> Path:
-    """A data path as written in a scene: absolute, relative to the working folder, or relative
-    to the shipped ``scenarios/`` folder."""
+def resolve(path: str | Path, folder: Path | None = None) -> Path:
+    """A data path as written in a scene: absolute, or relative to ``folder`` (the scene file's
+    folder; the working folder when None).  Only a readable regular file of at most
+    :data:`MAX_DATA_BYTES` is taken: a folder, device, FIFO, socket or system file (/proc, /sys,
+    /dev) is refused with one line."""
     p = Path(path)
-    for candidate in (p, SCENARIO_DIR / p):
-        if candidate.is_file():
-            return candidate
-    raise ScenarioError(f"{path}: no such data file (relative paths are tried from the working folder "
-                        f"and from {SCENARIO_DIR})")
+    if not p.is_absolute():
+        p = (folder if folder is not None else Path.cwd()) / p
+    where = f"relative paths are read from {folder}" if folder is not None else \
+        "relative paths are read from the working folder"
+    try:
+        st = p.stat()
+        real = p.resolve()
+    except FileNotFoundError:
+        raise ScenarioError(f"{path}: no such data file ({where})") from None
+    except (OSError, RuntimeError) as exc:
+        raise ScenarioError(f"{path}: cannot read: {getattr(exc, 'strerror', None) or exc}") from None
+    if stat.S_ISDIR(st.st_mode):
+        raise ScenarioError(f"{path}: is a folder, not a data file")
+    if not stat.S_ISREG(st.st_mode):
+        raise ScenarioError(f"{path}: not a regular file (a device, FIFO or socket); name a CSV file")
+    if real.parts[:2] in (("/", "proc"), ("/", "sys"), ("/", "dev")):
+        raise ScenarioError(f"{path}: a system file ({real.parts[1]}), not a data file; name a CSV file")
+    if st.st_size > MAX_DATA_BYTES:
+        raise ScenarioError(f"{path}: {st.st_size} bytes: a data file is a CSV text of at most {MAX_DATA_BYTES} bytes")
+    return p
 
 
-def read_csv(path: str | Path) -> Measurements:
-    """Read and check a measured-data CSV; values converted to SI (or dimensionless)."""
-    path = resolve(path)
-    comments, rows = [], []
-    with path.open(newline="") as fh:
-        for lineno, line in enumerate(fh, start=1):
-            if line.lstrip().startswith("#"):
-                comments.append(line.strip().lstrip("#").strip())
-            elif line.strip():
-                rows.append((lineno, next(csv.reader([line]))))
+def _text(path: Path) -> str:
+    """The file's text: UTF-8 with or without a byte-order mark (spreadsheets write one)."""
+    try:
+        with path.open("rb") as fh:
+            raw = fh.read(MAX_DATA_BYTES + 1)
+    except OSError as exc:
+        raise ScenarioError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    if len(raw) > MAX_DATA_BYTES:
+        raise ScenarioError(f"{path}: more than {MAX_DATA_BYTES} bytes: a data file is a CSV text of at most "
+                            f"{MAX_DATA_BYTES} bytes")
+    if b"\0" in raw[:8192]:
+        raise ScenarioError(f"{path}: a binary file, not a CSV text")
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(f"{path}: not UTF-8 text (byte 0x{raw[exc.start]:02x} at offset {exc.start}); save it "
+                            f"as 'CSV UTF-8'") from None
+
+
+def _delimiter(header: str) -> str:
+    """The separator of a file, from its header line: ';' (spreadsheets in locales with decimal
+    commas), else a tab, else ','."""
+    return ";" if ";" in header else "\t" if "\t" in header else ","
+
+
+def _short(cell: str) -> str:
+    cell = cell.strip()
+    return repr(cell if len(cell) <= 40 else cell[:40] + "...")
+
+
+def _header_unit(cell: str) -> str:
+    """The unit a free-form header carries at its end, ``name [unit]`` or ``name (unit)``; '1' when none."""
+    m = _UNIT_AT_END.search(cell)
+    return (m.group(1) if m.group(1) is not None else m.group(2)).strip() if m else "1"
+
+
+def _select(path: Path, head_line: int, header: list[str], columns: dict | None) -> list[tuple[int, str, str]]:
+    """(column index, quantity, unit as written) of the columns to read.  Without ``columns`` every
+    header cell must read 'quantity [unit]'; with it, the named headers are taken and others skipped."""
+    if columns is None:
+        out = []
+        for j, cell in enumerate(header):
+            m = _HEADER.match(cell)
+            if m is None:
+                raise ScenarioError(f"{path}: line {head_line}, column {j + 1}: header {_short(cell)} must read "
+                                    f"'quantity [unit]', e.g. 'u [1]' or 'gap [mm]' (or name the columns to read "
+                                    f"in analyses.estimation.columns)")
+            out.append((j, m.group(1), m.group(2).strip()))
+        return out
+    norm = [" ".join(c.split()).casefold() for c in header]
+    out = []
+    for name, head in columns.items():
+        key = " ".join(head.split()).casefold()
+        if norm.count(key) != 1:
+            what = "no column" if key not in norm else "two columns"
+            raise ScenarioError(f"{path}: {what} headed {head!r} (analyses.estimation.columns.{name}); the headers "
+                                f"are {', '.join(_short(c) for c in header)}")
+        out.append((norm.index(key), name, _header_unit(head)))
+    return out
+
+
+def read_csv(path: str | Path, columns: dict | None = None, folder: Path | None = None) -> Measurements:
+    """Read and check a measured-data CSV; values converted to SI (or dimensionless).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file: absolute, or relative to ``folder``.
+    columns : dict, optional
+        Quantity -> header of its column (other columns are skipped); the unit is the header's
+        trailing ``[unit]`` or ``(unit)``.  Default: every header cell reads ``quantity [unit]``.
+    folder : Path, optional
+        Folder of relative paths (the scene file's folder); default the working folder.
+
+    The text is UTF-8 (a byte-order mark is dropped); the separator is ',' or, when the header
+    holds one, ';' or a tab (then a decimal comma is read as a decimal point).
+    """
+    path = resolve(path, folder)
+    comments, rows, sep = [], [], None
+    for lineno, line in enumerate(_text(path).splitlines(), start=1):
+        if line.lstrip().startswith("#"):
+            comments.append(line.strip().lstrip("#").strip())
+        elif line.strip():
+            sep = sep or _delimiter(line)
+            row = next(csv.reader([line], delimiter=sep))
+            if any(c.strip() for c in row):  # a spreadsheet's empty row ';;;' is no row
+                rows.append((lineno, row))
     if not rows:
         raise ScenarioError(f"{path}: no header row (expected e.g. 'tau [1],u [1]')")
     (head_line, header), body = rows[0], rows[1:]
+    selected = _select(path, head_line, header, columns)
     names, units, factors = [], {}, []
-    for j, cell in enumerate(header):
-        m = _HEADER.match(cell)
-        if m is None:
-            raise ScenarioError(f"{path}: line {head_line}, column {j + 1}: header {cell.strip()!r} must read "
-                                f"'quantity [unit]', e.g. 'u [1]' or 'gap [mm]'")
-        name, unit = m.group(1), m.group(2).strip()
+    for j, name, unit in selected:
         if name not in QUANTITIES:
             raise ScenarioError(f"{path}: column {j + 1}: unknown quantity {name!r}; expected one of "
                                 f"{', '.join(QUANTITIES)}")
@@ -144,34 +238,54 @@ def read_csv(path: str | Path) -> Measurements:
                             f"'discharge_pressure [MPa]'")
     if not body:
         raise ScenarioError(f"{path}: no data rows")
+    if len(body) > MAX_POINTS:
+        raise ScenarioError(f"{path}: {len(body)} data rows; a data file holds at most {MAX_POINTS}")
+    for lineno, row in body:
+        if len(row) != len(header):
+            raise ScenarioError(f"{path}: line {lineno}: {len(row)} values, the header has {len(header)}")
     values = np.empty((len(body), len(names)))
-    for i, (lineno, row) in enumerate(body):
-        if len(row) != len(names):
-            raise ScenarioError(f"{path}: line {lineno}: {len(row)} values, the header has {len(names)}")
-        for j, (cell, name) in enumerate(zip(row, names, strict=True)):
-            where = f"{path}: line {lineno}, column '{name} [{units[name]}]'"
-            try:
-                v = float(cell)
-            except ValueError:
-                raise ScenarioError(f"{where}: {cell.strip()!r} is not a number") from None
-            if not math.isfinite(v):
-                raise ScenarioError(f"{where}: {cell.strip()!r} is not a finite number")
-            role = QUANTITIES[name][0]
-            if role == "load" and not v > 0:
-                raise ScenarioError(f"{where}: a load must be positive, got {v:g}")
-            if role in ("gap", "flow") and v < 0:
-                raise ScenarioError(f"{where}: a measured {role} must not be negative, got {v:g}")
-            if role == "group" and v != int(v):
-                raise ScenarioError(f"{where}: a group label is an integer, got {v:g}")
-            values[i, j] = v * factors[j]
+    for k, (j, name, _) in enumerate(selected):
+        cells = [row[j].replace(",", ".") for _, row in body] if sep != "," else [row[j] for _, row in body]
+        values[:, k] = _numbers(path, cells, [lineno for lineno, _ in body], f"{name} [{units[name]}]",
+                                QUANTITIES[name][0]) * factors[k]
     return Measurements(path=path, columns={n: values[:, j] for j, n in enumerate(names)}, units=units,
                         comments=comments)
 
 
+def _numbers(path: Path, cells: list[str], lines: list[int], column: str, role: str) -> np.ndarray:
+    """The numbers of one column, checked for its role; one line naming the first bad cell."""
+    try:
+        v = np.asarray(cells, dtype=float)
+    except ValueError:
+        i = next(i for i, c in enumerate(cells) if not _is_number(c))
+        raise ScenarioError(f"{path}: line {lines[i]}, column '{column}': {_short(cells[i])} is not a number") from None
+    checks = [(~np.isfinite(v), lambda i: f"{_short(cells[i])} is not a finite number")]
+    if role == "load":
+        checks.append((~(v > 0), lambda i: f"a load must be positive, got {v[i]:g}"))
+    if role in ("gap", "flow"):
+        checks.append((v < 0, lambda i: f"a measured {role} must not be negative, got {v[i]:g}"))
+    if role == "group":
+        checks.append((v != np.round(v), lambda i: f"a group label is an integer, got {v[i]:g}"))
+    for bad, message in checks:
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise ScenarioError(f"{path}: line {lines[i]}, column '{column}': {message(i)}")
+    return v
+
+
+def _is_number(cell: str) -> bool:
+    try:
+        float(cell)
+    except ValueError:
+        return False
+    return True
+
+
 def check_fit(data: Measurements, residual: str, free: int, where: str) -> None:
     """Refuse data that cannot carry a fit: the measured column(s) of ``residual`` ("u", "q",
-    "both") missing, or no more residuals than ``free`` parameters (one degree of freedom is
-    needed for the residual variance and the confidence intervals)."""
+    "both") missing, no more residuals than ``free`` parameters (one degree of freedom is
+    needed for the residual variance and the confidence intervals), or fewer different loads
+    than the free parameters need (identical rows identify one value per measured variable)."""
     need = {"u": ["gap"], "q": ["flow"], "both": ["gap", "flow"]}[residual]
     for role in need:
         if data.has(role) is None:
@@ -182,3 +296,8 @@ def check_fit(data: Measurements, residual: str, free: int, where: str) -> None:
     if n <= free:
         raise ScenarioError(f"{where}: {n} measured values for {free} free parameter(s); a fit needs at least "
                             f"{free + 1} (one degree of freedom for the uncertainty)")
+    loads = len(np.unique(data.columns[data.has("load")]))
+    if loads * len(need) < free:
+        which = "every row has the same load" if loads == 1 else f"the rows have only {loads} different loads"
+        raise ScenarioError(f"{where}: the data do not identify {free} free parameters: {which}; measure at "
+                            f"{-(-free // len(need))} or more different loads, or fix a parameter")

@@ -520,7 +520,7 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> BaseScenari
     for key, value in overrides.items():
         _set(data, key, value)
     try:
-        scn = model_for(data).model_validate(data)
+        scn = model_for(data).model_validate(data, context={"folder": path.absolute().parent, "overrides": overrides})
     except ValidationError as exc:
         loc = ".".join(str(p) for p in exc.errors()[0]["loc"])
         hit = next((k for k in overrides if loc == k or loc.startswith(k + ".")), None)
@@ -555,6 +555,8 @@ COST = {
     "rotor_run": 0.5,  # one CVODES passage / step response of the rotor studies
     "grid_point": 1e-5,  # one point of a dense cross-check grid
     "fit": 2.0,  # one least-squares fit with its cross-checks
+    "fit_point": 1e-4,  # one data row of a fit, its cross-check and its results (100,000 rows: 10 s CPU measured)
+    "bootstrap_point": 1.5e-6,  # one data row of one bootstrap refit (1000 rows x 2000 samples: 2.7 s CPU)
 }
 LONG_RUN_S = 60.0  # a run predicted to take longer says so first
 
@@ -624,7 +626,10 @@ def estimate_seconds(scn: BaseScenario) -> dict[str, float]:
         grid = sum(s.grid_points for s in (lb.height, lb.volume) if s is not None)
         out["liquid_balancer"] = c["start"] + c["grid_point"] * grid * (1 + len(lb.unbalance_masses) + len(lb.liquids))
     if a.estimation is not None:
-        out["estimation"] = c["start"] + c["fit"] * len(a.estimation.fits)
+        e = a.estimation
+        disc = sum(f.model == "traditional_disc" for f in e.fits)
+        out["estimation"] = c["start"] + (c["fit"] + c["fit_point"] * e.points) * len(e.fits) \
+            + (c["bootstrap_point"] * e.points * e.bootstrap.samples * disc if e.bootstrap else 0.0)
     return out
 
 

@@ -8,12 +8,13 @@ units, signs and the number of points against the free parameters of every fit.
 from __future__ import annotations
 
 import re
+from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, PrivateAttr, ValidationInfo, model_validator
 
 from autobal.errors import ScenarioError
-from autobal.measurements import Measurements, check_fit, read_csv
+from autobal.measurements import QUANTITIES, Measurements, check_fit, read_csv
 from autobal.models.device import DEVICE_GROUPS, PRESSURE_GROUPS, REGULATOR_GROUPS
 from autobal.schema import NonNegative, Positive, Strict
 from autobal.units import Area, Length, Pressure, VolumeFlow
@@ -96,6 +97,25 @@ class Fit(Strict):
         return [k for k, p in self.parameters.items() if p.free]
 
 
+def _disc_defined(fit: Fit, top: float, where: str) -> None:
+    """Refuse traditional_disc settings under which the gap (4.18) is undefined at a data point:
+    tau_max fixed at or below the largest load tau, or bounded there from above; alpha fixed at 0 or
+    bounded from above at or below 0."""
+    t, a = fit.parameters["tau_max"], fit.parameters["alpha"]
+    if not t.free and t.value <= top:
+        raise ScenarioError(f"{where}.parameters.tau_max: fixed at {t.value:g}, not above the largest measured load "
+                            f"tau = {top:.6g}, where the gap (4.18) is undefined; free it or give a larger value")
+    if t.free and t.upper is not None and t.upper <= top:
+        raise ScenarioError(f"{where}.parameters.tau_max: upper = {t.upper:g} is not above the largest measured load "
+                            f"tau = {top:.6g}, where the gap (4.18) is undefined; raise it")
+    if not a.free and a.value == 0:
+        raise ScenarioError(f"{where}.parameters.alpha: fixed at 0, where the gap (4.18) is undefined; give a "
+                            f"positive conductance ratio")
+    if a.free and a.upper is not None and a.upper <= 0:
+        raise ScenarioError(f"{where}.parameters.alpha: upper = {a.upper:g}; alpha = g_TB/g1 is a positive conductance "
+                            f"ratio: give a positive upper bound")
+
+
 class Bases(Strict):
     """Base values that make dimensional data columns dimensionless (1.17)-(1.21), (4.29).
     The device model takes p_B, s_B, z_B and g1 p_B from the scene's device when these are omitted."""
@@ -147,17 +167,32 @@ class LossCoefficient(Strict):
         return DiscLosses(**self.model_dump(exclude={"fit", "unknown"}))
 
 
+BOOTSTRAP_POINTS = 2_000_000  # bootstrap samples x data rows: about 50 MB of data sets, 3 s of refits
+
+
 class Bootstrap(Strict):
     """Residual-bootstrap confidence intervals of the traditional_disc fits (refits batched in one
     mapped Gauss-Newton call); percentile intervals at the estimation's ``confidence``."""
 
-    samples: Annotated[int, Field(ge=20, le=1_000_000, description="number of bootstrap data sets")] = 2000
+    samples: Annotated[int, Field(ge=20, le=1_000_000, description=(
+        "number of bootstrap data sets; samples x data rows at most 2,000,000 (the refits are held in memory "
+        "together)"))] = 2000
     seed: Annotated[int, Field(ge=0, description="seed of the resampling")] = 0
+
+
+DATA_KEY = "analyses.estimation.data"
 
 
 class Estimation(Strict):
     data: Annotated[str, Field(
-        description="CSV path: absolute, from the working folder, or from the shipped scenarios/ folder")]
+        description="CSV path: absolute, or relative to the scene file's folder (a shipped scene's: the package's "
+                    "scenarios/); a path given by --set / load(set=...) is relative to the working folder. "
+                    "A readable regular file of at most 20 MB, UTF-8 (a byte-order mark is dropped), separated by "
+                    "',' or by ';' or tabs (then with decimal commas)")]
+    columns: Annotated[dict[str, str] | None, Field(
+        description="quantity -> header of its column in the data file, e.g. {axial_force: 'F [kN]', gap: "
+                    "'h (mm)'}: only these columns are read, others are skipped; a column's unit is its header's "
+                    "trailing [unit] or (unit), 1 when none. Default: every header reads 'quantity [unit]'")] = None
     bases: Annotated[Bases, Field(description="base values of dimensional data columns")] = Bases()
     fits: Annotated[list[Fit], Field(min_length=1, max_length=100, description="the fits, 1 to 100")]
     closed_forms: Annotated[bool, Field(
@@ -174,17 +209,40 @@ class Estimation(Strict):
     bootstrap: Annotated[Bootstrap | None, Field(
         description="residual-bootstrap intervals of the traditional_disc fits")] = None
 
+    _folder: Path | None = PrivateAttr(default=None)  # folder of a relative data path, fixed at validation
+    _points: int = PrivateAttr(default=0)
+
+    @property
+    def points(self) -> int:
+        """Number of data rows of the data file (read at validation)."""
+        return self._points
+
     def measurements(self) -> Measurements:
         """The data file, read and checked (values in SI or dimensionless)."""
-        return read_csv(self.data)
+        return read_csv(self.data, self.columns, self._folder)
 
     @model_validator(mode="after")
-    def _data_fits(self):
+    def _data_fits(self, info: ValidationInfo):
         names = [f.name for f in self.fits]
         if len(set(names)) != len(names):
             raise ValueError("fits: two fits have the same name")
+        for k in self.columns or {}:
+            if k not in QUANTITIES:
+                raise ValueError(f"columns.{k}: not a quantity of a data file (one of {', '.join(QUANTITIES)})")
+        ctx = info.context or {}
+        overridden = any(DATA_KEY == k or DATA_KEY.startswith(k + ".") for k in ctx.get("overrides", ()))
+        self._folder = Path.cwd() if overridden or ctx.get("folder") is None else Path(ctx["folder"])
         try:
-            data = read_csv(self.data)
+            data = self.measurements()
+            self._points = data.points
+            bs = self.bootstrap
+            if bs is not None and bs.samples * data.points > BOOTSTRAP_POINTS:
+                most = BOOTSTRAP_POINTS // data.points
+                raise ScenarioError(f"bootstrap.samples: {bs.samples} data sets of {data.points} rows exceed "
+                                    f"{BOOTSTRAP_POINTS:,} rows in all; "
+                                    + (f"use at most {most} samples" if most >= 20 else
+                                       "leave the bootstrap out (with this many rows the linearised intervals "
+                                       "hold)"))
             for i, fit in enumerate(self.fits):
                 check_fit(data, fit.residual, len(fit.free()), f"fits.{i}")
                 if fit.model == "traditional_disc" and data.has("load") in ("psi1", "discharge_pressure"):
@@ -194,6 +252,7 @@ class Estimation(Strict):
                     bases = self.bases.values()
                     for role in ("load", *{"u": ["gap"], "q": ["flow"], "both": ["gap", "flow"]}[fit.residual]):
                         data.dimensionless(role, bases)
+                    _disc_defined(fit, float(data.dimensionless("load", bases).max()), f"fits.{i}")
         except ScenarioError as exc:
             raise ValueError(re.sub(r"\s+", " ", str(exc))) from None
         lc = self.loss_coefficient

@@ -33,8 +33,9 @@ from autobal.errors import ScenarioError, SolveError
 from autobal.measurements import read_csv
 from autobal.models.device import design, static_system
 from autobal.models.hydroheel import LOSS_NAMES, TurbulentDisc, base_flow, load_from_gap
+from autobal.paths import SCENARIO_DIR
 
-TABLE = read_csv("data/table43.csv")
+TABLE = read_csv(SCENARIO_DIR / "data" / "table43.csv")
 TAU, U, GROUP = TABLE.columns["tau"], TABLE.columns["u"], TABLE.columns["group"]
 SYN_TAU = np.linspace(0.5, 2.0, 12)  # synthetic rig: loads on [0.5, 2.0] as Table 4.3
 RIG = yaml.safe_load(scenario.resolve("rig_table43_fit").read_text())
@@ -420,6 +421,7 @@ def test_estimation_result_object():
 
 def _scene(tmp_path, csv_text=None, **estimation):
     data = yaml.safe_load(yaml.safe_dump(RIG))
+    data["analyses"]["estimation"]["data"] = str(SCENARIO_DIR / "data" / "table43.csv")
     if csv_text is not None:
         (tmp_path / "d.csv").write_text(csv_text)
         data["analyses"]["estimation"]["data"] = str(tmp_path / "d.csv")
@@ -473,7 +475,8 @@ def test_bad_fit_settings(tmp_path, fits, message):
 def test_data_reader_does_not_import_the_scenario_loader():
     """No import cycle scenario -> schema_estimation -> measurements -> scenario: the data reader and
     the estimation schema load, and a shipped data file is found and read, without the scenario loader."""
-    code = ("import sys, autobal.schema_estimation, autobal.measurements as m; m.read_csv('data/table43.csv'); "
+    code = ("import sys, autobal.schema_estimation, autobal.measurements as m, autobal.paths as p; "
+            "m.read_csv(p.SCENARIO_DIR / 'data' / 'table43.csv'); "
             "sys.exit('autobal.scenario' in sys.modules)")
     assert subprocess.run([sys.executable, "-c", code], check=False).returncode == 0
 

@@ -143,8 +143,9 @@ def test_the_slim_scene_models_validate_as_the_full_one():
     from autobal import scenario
 
     for path in scenario.shipped():
-        data = scenario.read(path)
+        data, ctx = scenario.read(path), {"folder": path.parent}  # the folder of the scene's data files
         slim = scenario.model_for(data)
-        assert slim.model_validate(data).model_dump() == scenario.Scenario.model_validate(data).model_dump(), path
+        assert slim.model_validate(data, context=ctx).model_dump() == \
+            scenario.Scenario.model_validate(data, context=ctx).model_dump(), path
     statics = scenario.read(scenario.resolve("pump_pe600_statics"))
     assert scenario.model_for(statics).model_fields["rotor"].annotation is type(None)
