@@ -134,13 +134,23 @@ def rotor(r) -> RotorParams:
     Parameters
     ----------
     r : autobal.schema_rotor.Rotor
-        The validated section; a liquid layer is given by its chamber or by psi = m1/m.
+        The validated section; a liquid layer is given by its chamber or by psi = m1/m.  From the datasheet:
+        c = m1 Omega_c^2 (Omega_c the undamped critical speed without liquid), chi = 2 zeta sqrt(c m1)
+        = 2 zeta m1 Omega_c, e = G/Omega_service (balance quality grade G, ISO 21940-11) or e = U/m1 (residual
+        unbalance U).
 
     Returns
     -------
     RotorParams
     """
-    p = RotorParams(m1=r.mass, c=r.stiffness, chi=r.damping, e=r.eccentricity,
+    m1 = r.mass
+    c = r.stiffness if r.stiffness is not None else m1 * r.critical_speed**2
+    chi = r.damping if r.damping is not None else 2 * r.damping_ratio * math.sqrt(c * m1)
+    e = r.eccentricity
+    if e is None:
+        u = r.unbalance
+        e = u.grade_m_s / u.service_speed if u.grade is not None else u.residual / m1
+    p = RotorParams(m1=m1, c=c, chi=chi, e=e,
                     J_p=r.drive.polar_inertia if r.drive else 0.0, b=r.drive.drag if r.drive else 0.0)
     if r.liquid is None:
         return p

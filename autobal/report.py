@@ -135,6 +135,9 @@ _UNDECLARED_RULES: list[tuple[str, str]] = [
     (r"^spinup\..*" + _P + r"(start_speed|final_speed|max_speed|omega_at_peak)$", "rad/s"),
     (r"^spinup\..*" + _P + r"max_acceleration$", "rad/s^2"),
     (r"^spinup\.eccentricity_m$", "m"),
+    (r"^spinup\..*_N_per_m$", "N/m"),
+    (r"^spinup\..*_N_s_per_m$", "N*s/m"),
+    (r"^spinup\..*_m$", "m"),
     (r"^spinup\.", "1"),
     # robust and time-optimal spin-up: peaks delta/e, factors on the nominal rotor dimensionless
     (r"^spinup_time_optimal\.horizon_s$", "s"),
@@ -892,11 +895,18 @@ def spinup_section(sec: Section) -> None:
                       f"NLP solves {number(sec.get('total_solve_time_s'))} s over {len(sec.get('starts', []))} solves, "
                       "the rest global search, re-simulations and baselines)")
     sec.row("peak deflection of the optimum (re-simulated)", "δ*/e", "peak_deflection_over_e")
-    e = _get(sec.results, "meta.scene_si.rotor.eccentricity")
-    if e and sec.get("peak_deflection_over_e") is not None:
-        sec.row("peak deflection of the optimum", "δ*", "", "m", value=sec.get("peak_deflection_over_e") * e)
-        sec.row("eccentricity of the rotor", "e", "", "m", value=e)
-    sec.row("peak deflection of the best ramp", "δ*/e", "baseline_ramp_peak_over_e")
+    sec.row("peak deflection of the optimum, 0-peak (the whirl orbit's radius)", "δ*", "peak_deflection_m")
+    sec.row("eccentricity of the rotor", "e", "eccentricity_m")
+    sec.row("peak deflection of the best ramp within the drive limits", "δ*/e", "baseline_ramp_peak_over_e")
+    for label, sym, key in (("rotor mass", "m1", "mass_kg"),
+                            ("shaft stiffness (c = m1 Ω_c²)", "c", "stiffness_N_per_m"),
+                            ("damping (χ = 2 ζ m1 Ω_c)", "χ", "damping_N_s_per_m"),
+                            ("damping ratio", "ζ", "damping_ratio"),
+                            ("amplification factor, API 684 (2005): N_c/(N_2 − N_1) = 1/(2ζ)", "AF",
+                             "amplification_factor"),
+                            ("separation margin of the final speed from the critical speed, API 684 (2005)", "SM",
+                             "separation_margin_pct")):
+        sec.row(label, sym, f"rotor.{key}")
     sec.row("time of the peak", "t*", "time_of_peak_s")
     sec.row("speed at the peak", "Ω*", "omega_at_peak_rad_s")
     sec.row("final time", "T", "final_time_s")
@@ -912,9 +922,29 @@ def spinup_section(sec: Section) -> None:
     st = sec.get("status")
     sec.verdict(st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"NLP solver: {st} ({sec.get('method')})")
     best, ramp = sec.get("peak_deflection_over_e"), sec.get("baseline_ramp_peak_over_e")
+    base = sec.get("baselines") or {}
     if best is not None and ramp:
-        sec.verdict(best <= ramp, f"optimum peak {number(best)} e vs the best ramp {number(ramp)} e "
-                                  f"({number(100 * (best - ramp) / ramp)} %)")
+        label = (base.get(sec.get("baseline_ramp_key")) or {}).get("label", "the best ramp")
+        sec.verdict(best <= ramp, f"optimum peak {number(best)} e vs {label} {number(ramp)} e "
+                                  f"({number(sec.get('gain_vs_best_feasible_ramp_pct'))} %), the best ramp within the "
+                                  "drive limits")
+    elif best is not None and "baseline_ramp_key" in sec.block:
+        sec.verdict(None, "no ramp baseline keeps the drive limits: no gain is quoted")
+    for b in base.values():
+        if b.get("within_drive_limits") is False:
+            sec.verdict(None, f"{b.get('label')}: outside the drive limits ({', '.join(b.get('violated', []))}), "
+                              f"peak {number(b.get('peak_deflection_over_e'))} e, drawn but no reference")
+    if sec.get("brakes") is not None:
+        sec.verdict(None, f"the optimum {'brakes' if sec.get('brakes') else 'does not brake'} (smallest drive "
+                          f"torque {number(sec.get('min_torque_N_m'))} N·m; braking limit "
+                          f"{number(sec.get('braking_torque_limit_N_m'))} N·m)")
+    seg = sec.get("segments")
+    if seg:
+        sec.verdict(seg.get("within_drive_limits"),
+                    f"{seg['segments']}-segment ramp table (drive_segments.csv): peak "
+                    f"{number(seg.get('peak_deflection_over_e'))} e, {number(seg.get('loss_vs_optimum_pct'))} % "
+                    "against the full optimum, " + ("within" if seg.get("within_drive_limits") else "OUTSIDE")
+                    + " the drive limits")
     drive = _get(sec.results, "meta.scene_si.rotor.drive") or {}
     if not (drive.get("max_torque") or drive.get("max_power")):
         sec.verdict(None, "no drive torque or power limit in the scene")
@@ -923,6 +953,16 @@ def spinup_section(sec: Section) -> None:
                     ("kept" if sec.get("within_drive_limits") else "EXCEEDED") + " in the re-simulation")
     for b in _spinup_binding(sec):
         sec.verdict(None, f"binding constraint: {b}")
+    segs = sec.folder / "drive_segments.csv" if sec.folder else None
+    if segs is not None and segs.exists():
+        with segs.open() as fh:
+            rows = [[text(r["segment"]), cell(float(r["t_start_s"]), "s"), cell(float(r["t_end_s"]), "s"),
+                     text(number(float(r["speed_start_rpm"]))), text(number(float(r["speed_end_rpm"]))),
+                     text(number(float(r["rate_rpm_s"]))), cell(float(r["rate_rad_s2"]), "rad/s^2")]
+                    for r in csv.DictReader(fh)]
+        sec.tables.append(table("Ramp table for the drive (drive_segments.csv; the last row the hold): speeds in "
+                                "rpm, rates in rpm/s", ["segment", "start", "end", "start speed, rpm",
+                                                        "end speed, rpm", "rate, rpm/s", "rate"], rows))
     keeps = {True: "yes", False: "NO", None: "—"}
     rows = [[text(s.get("start")), text(s.get("stage", "final mesh")), text(s.get("status")),
              text(s.get("iterations", "—")), cell(s.get("solve_time_s"), "s"), cell(s.get("objective"), "1"),

@@ -7,6 +7,8 @@ no files and prints nothing.  ``RUNNERS`` order is the run order.
 
 from __future__ import annotations
 
+import math
+
 from autobal import adapters
 from autobal.analysis import progress
 from autobal.analysis.result import Result
@@ -72,9 +74,19 @@ def rotor_dynamics(scene, settings) -> Result:
 
     if scene.rotor is None:
         raise ScenarioError("analyses.rotor_dynamics needs a rotor section")
-    drive = scene.rotor.drive
+    from autobal.ocp.problem import MAX_PERIODS
+
+    drive, params = scene.rotor.drive, adapters.rotor(scene.rotor)
+    ps = settings.passage
+    for key in ("acceleration", "sensitivity_acceleration"):
+        a = getattr(ps, key, None)
+        periods = (ps.final_ratio * params.Omega0 - ps.start_speed) / a * params.Omega0 / (2 * math.pi) if a else 0
+        if periods > MAX_PERIODS:  # CVODES over the passage would not finish
+            raise ScenarioError(f"analyses.rotor_dynamics.passage.{key}: {a:g} rad/s^2 takes {periods:.3g} natural "
+                                f"periods of the rotor to reach final_ratio, more than {MAX_PERIODS:.0e}: give at "
+                                f"least {a * periods / MAX_PERIODS:.3g} rad/s^2")
     with progress.steps(None, "rotor dynamics (curves, steps, passage, Lewis cases)", "part", catch=True):
-        return rotor_study.run(adapters.rotor(scene.rotor), settings, scene.title, drive.motor if drive else None)
+        return rotor_study.run(params, settings, scene.title, drive.motor if drive else None)
 
 
 def montecarlo(scene, settings) -> Result:
@@ -135,17 +147,23 @@ def spinup_ocp(scene, settings):
         raise ScenarioError("analyses.spinup needs a rotor section")
     drive = scene.rotor.drive
     try:
-        return SpinupOcp(
+        ocp = SpinupOcp(
             adapters.rotor(scene.rotor), settings.start_speed, settings.final_speed, settings.horizon,
             settings.max_acceleration,
             objective=settings.objective, settling_time=settings.settling_time, omega_max=settings.max_speed,
             torque_max=drive.max_torque if drive else None, power_max=drive.max_power if drive else None,
+            braking_torque_max=drive.max_braking_torque if drive else None,
+            alpha_min=-drive.max_deceleration if drive and drive.max_deceleration is not None else None,
             motor_stall_torque=drive.motor.stall_torque if drive and drive.motor else None,
             motor_no_load_speed=drive.motor.no_load_speed if drive and drive.motor else None,
             deflection_limit=settings.deflection_limit, jerk_max=settings.max_jerk,
             jerk_penalty=settings.jerk_penalty, jerk_variation=settings.jerk_variation)
     except ValueError as exc:
         raise ScenarioError(f"analyses.spinup: {exc}") from None
+    why = ocp.ill_posed()
+    if why:
+        raise ScenarioError(f"analyses.spinup: {why}")
+    return ocp
 
 
 def spinup(scene, settings) -> Result:
@@ -155,7 +173,8 @@ def spinup(scene, settings) -> Result:
 
     with progress.steps(None, "spin-up (starts, mesh stages)", "IPOPT solve", catch=True):
         return spinup_study.run(spinup_ocp(scene, settings), spinup_study.method_of(settings), scene.title,
-                                settings.multistart, ipopt_options(settings.max_iterations, settings.tolerance))
+                                settings.multistart, ipopt_options(settings.max_iterations, settings.tolerance),
+                                settings.segments)
 
 
 def spinup_robust(scene, settings) -> Result:

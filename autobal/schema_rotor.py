@@ -7,9 +7,10 @@ groups (psi, mu1, the stationary n, zeta, a*) are plain numbers named as in the 
 
 from __future__ import annotations
 
+import re
 from typing import Annotated, Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from autobal.schema import Positive, Range, Strict
 from autobal.units import AngularSpeed, Density, Length, quantity
@@ -28,6 +29,8 @@ RotationalDampingOrZero = quantity("rotational damping", "nonnegative")
 SpeedOrZero = quantity("angular speed", "nonnegative")
 RateOrZero = quantity("rate", "nonnegative")  # n = chi/m1, 1/s
 Fraction = Annotated[float, Field(gt=0, le=1)]
+UnbalanceMass = quantity("unbalance")
+_GRADE = re.compile(r"G\s*(\d+(?:\.\d*)?)")
 
 
 class Liquid(Strict):
@@ -60,22 +63,76 @@ class Motor(Strict):
 
 
 class Drive(Strict):
+    """The drive as specified: inertia and drag, torque and power limits, motor characteristic, and braking
+    (a braking-torque limit, 0 = no braking, and/or a deceleration limit, 0 = the speed never falls; without
+    either the drive brakes up to max_torque and decelerates up to the spin-up's max_acceleration)."""
+
     polar_inertia: Inertia = Field(description="J_p of rotor and drive")
     drag: RotationalDampingOrZero = Field(0.0, description="b, N m s")
     max_torque: Torque | None = None
     max_power: Power | None = None
     motor: Motor | None = None
+    max_braking_torque: quantity("torque", "nonnegative") | None = Field(
+        None, description="the largest braking torque -M, N m (0: the drive cannot brake)")
+    max_deceleration: quantity("angular acceleration", "nonnegative") | None = Field(
+        None, description="the largest deceleration -alpha (0: the speed never falls), rad/s^2")
+
+
+class Unbalance(Strict):
+    """The rotor's unbalance as a datasheet gives it: a balance quality grade G (ISO 21940-11, G in mm/s) at the
+    service speed, e = G/Omega_service, or the residual unbalance U (e.g. 120 g*mm), e = U/m."""
+
+    grade: str | None = Field(None, description="balance quality grade, e.g. G2.5 (G = e Omega in mm/s)")
+    service_speed: AngularSpeed | None = None
+    residual: UnbalanceMass | None = None
+
+    @field_validator("grade")
+    @classmethod
+    def _grade(cls, v):
+        if v is not None and (not _GRADE.fullmatch(v.strip()) or float(_GRADE.fullmatch(v.strip())[1]) <= 0):
+            raise ValueError(f"{v!r}: a balance quality grade is G and a positive number in mm/s, e.g. G2.5")
+        return v
+
+    @model_validator(mode="after")
+    def _one(self):
+        if (self.grade is None) != (self.service_speed is None):
+            raise ValueError("give grade (e.g. G2.5) together with service_speed (e.g. 3000 rpm)")
+        if (self.grade is None) == (self.residual is None):
+            raise ValueError("give either grade with service_speed or residual (e.g. 120 g*mm), not both")
+        return self
+
+    @property
+    def grade_m_s(self) -> float | None:
+        """G in SI, m/s."""
+        return None if self.grade is None else float(_GRADE.fullmatch(self.grade.strip())[1]) * 1e-3
 
 
 class Rotor(Strict):
-    """Jeffcott (Laval) rotor on a flexible shaft, with optional liquid layer and drive."""
+    """Jeffcott (Laval) rotor on a flexible shaft, with optional liquid layer and drive.
 
-    mass: Mass = Field(description="m1, without liquid")
-    stiffness: Stiffness = Field(description="c")
-    damping: DampingOrZero = Field(description="chi, external viscous friction")
-    eccentricity: Length = Field(description="e")
+    Given in SI (stiffness, damping, eccentricity) or from its datasheet (critical_speed, the undamped natural
+    frequency sqrt(c/m1) of the rotor without liquid; damping_ratio zeta = chi/(2 sqrt(c m1)); unbalance as a
+    balance quality grade or a residual unbalance); each pair one or the other."""
+
+    mass: Mass = Field(description="m1, without liquid (the modal mass)")
+    stiffness: Stiffness | None = Field(None, description="c")
+    damping: DampingOrZero | None = Field(None, description="chi, external viscous friction")
+    eccentricity: Length | None = Field(None, description="e")
+    critical_speed: AngularSpeed | None = Field(None, description="undamped critical speed sqrt(c/m1)")
+    damping_ratio: Annotated[float, Field(ge=0, lt=1)] | None = Field(
+        None, description="zeta = chi/(2 sqrt(c m1)), dimensionless")
+    unbalance: Unbalance | None = None
     liquid: Liquid | None = None
     drive: Drive | None = None
+
+    @model_validator(mode="after")
+    def _si_or_datasheet(self):
+        for si, sheet, how in (("stiffness", "critical_speed", "N/m, or rpm"),
+                               ("damping", "damping_ratio", "N*s/m, or dimensionless"),
+                               ("eccentricity", "unbalance", "m, or a grade/residual block")):
+            if (getattr(self, si) is None) == (getattr(self, sheet) is None):
+                raise ValueError(f"give exactly one of {si} and {sheet} ({how})")
+        return self
 
 
 # ---- analyses ----------------------------------------------------------------------------------------
@@ -158,6 +215,9 @@ class Spinup(Strict):
         "ipopt", description="the NLP solver of the collocation: ipopt (MUMPS), or fatrop (a Riccati recursion over "
         "the stages; Radau collocation only)")
     multistart: bool = True
+    segments: Annotated[int, Field(ge=0, le=12)] = Field(
+        4, description="ramp segments of the drive's table (drive_segments.csv), optimised for the same objective "
+        "under the same limits, 1 to 12; 0: no table")
     max_iterations: Annotated[int, Field(ge=1, le=100000)] = Field(
         1000, description="IPOPT's iteration limit per solve (each start and each mesh-continuation stage)")
     tolerance: Annotated[float, Field(gt=0, lt=1)] = Field(
@@ -202,6 +262,8 @@ class SpinupRobust(Spinup):
             raise ValueError("spinup_robust minimises the worst-case peak_deflection by collocation")
         if self.nlp_solver != "ipopt":
             raise ValueError("spinup_robust solves its multi-rotor NLP with nlp_solver ipopt")
+        if "segments" in self.model_fields_set:
+            raise ValueError("segments: the ramp table is written by the spinup analysis only")
         for name in ("damping_factor", "liquid_mass_factor"):
             v = getattr(self, name)
             if v is not None and v[0] > v[1]:
@@ -223,4 +285,6 @@ class SpinupTimeOptimal(Spinup):
             raise ValueError("spinup_time_optimal is built on collocation")
         if self.nlp_solver != "ipopt":
             raise ValueError("spinup_time_optimal solves with nlp_solver ipopt")
+        if "segments" in self.model_fields_set:
+            raise ValueError("segments: the ramp table is written by the spinup analysis only")
         return self

@@ -50,6 +50,7 @@ DIMENSIONS = {
     "angular jerk": ("1 / [time] ** 3", "rad/s**3", "2000 rad/s^3", (1e-9, 1e12)),  # spin-up jerk bound
     "torque": ("[mass] * [length] ** 2 / [time] ** 2", "N*m", "0.04 N*m", (1e-12, 1e9)),
     "power": ("[mass] * [length] ** 2 / [time] ** 3", "W", "6 W", (1e-12, 1e10)),
+    "unbalance": ("[mass] * [length]", "kg*m", "120 g*mm", (1e-15, 1e6)),  # residual unbalance U = m e
     "moment of inertia": ("[mass] * [length] ** 2", "kg*m**2", "1e-3 kg*m^2", (1e-15, 1e9)),
     "rotational damping": ("[mass] * [length] ** 2 / [time]", "N*m*s", "1e-5 N*m*s", (1e-15, 1e9)),
 }

@@ -13,7 +13,8 @@ Objectives: ``peak_deflection`` (epigraph: delta^2 <= S at every collocation poi
 ``peak_unbalance`` (the same with the system unbalance d), ``integrated_deflection`` (integral of
 delta^2 over the horizon and the settling window), ``min_time`` (free final time subject to
 delta <= deflection_limit).  Limits: |alpha| <= alpha_max, 0 <= omega <= omega_max, |M| <= M_max,
-M omega <= P_max, the motor characteristic M <= L_s (1 - omega/omega_nl), and optionally the jerk
+M omega <= P_max, braking -M <= B_max (0: none) and alpha >= alpha_min,
+the motor characteristic M <= L_s (1 - omega/omega_nl), and optionally the jerk
 |d alpha/dt| <= jerk_max between intervals; a jerk penalty (weight ``jerk_penalty`` on the sum of
 squared changes, or ``jerk_variation`` on the smoothed total variation of alpha/alpha_max) regularises
 the profile where the peak does not fix it.  By default the total variation is weighted 1e-4: a
@@ -37,6 +38,11 @@ OBJECTIVES = ("peak_deflection", "peak_unbalance", "integrated_deflection", "min
 # minimum-peak optimum and changes its re-simulated peak by < 0.05 % on the shipped scenes (measured in
 # docs/theory/spinup.md, "Drivable controls")
 JERK_VARIATION = 1e-4
+# a posed spin-up passes near the critical speed (the top speed at least 1/CRITICAL_RATIO of it) within at most
+# MAX_PERIODS natural periods of the rotor (horizon and settling window): beyond, CVODES cannot follow the whirl
+# over the window in reasonable time, and the passage is quasi-static anyway (the steady response)
+CRITICAL_RATIO = 2.0
+MAX_PERIODS = 1e4
 
 
 @dataclass(frozen=True)
@@ -63,6 +69,8 @@ class SpinupOcp:
     settling_time: float = 0.0  # s, window held at omega_final after the horizon
     omega_max: float | None = None  # rad/s
     torque_max: float | None = None  # N m
+    braking_torque_max: float | None = None  # N m, -M <= this (0: no braking; None: up to torque_max)
+    alpha_min: float | None = None  # rad/s^2, <= 0: alpha >= this (0: the speed never falls; None: -alpha_max)
     power_max: float | None = None  # W
     motor_stall_torque: float | None = None  # N m, L_s
     motor_no_load_speed: float | None = None  # rad/s, omega_nl
@@ -78,13 +86,35 @@ class SpinupOcp:
             raise ValueError(f"objective must be one of {OBJECTIVES}")
         if self.objective == "min_time" and self.deflection_limit is None:
             raise ValueError("the min_time objective needs a deflection_limit")
-        if (self.torque_max or self.power_max or self.motor_stall_torque) and \
+        if (self.torque_max or self.power_max or self.motor_stall_torque or self.braking_torque_max is not None) and \
                 self.params.J_p + self.params.m1 * self.params.e**2 * (1 - self.params.psi) <= 0:
             raise ValueError("torque and power limits need the drive's polar inertia J_p > 0")
         if self.jerk_penalty < 0 or self.jerk_variation < 0:
             raise ValueError("jerk_penalty and jerk_variation must not be negative")
+        if self.braking_torque_max is not None and self.braking_torque_max < 0:
+            raise ValueError("the braking-torque limit must not be negative (N m; 0: no braking)")
+        if self.alpha_min is not None and self.alpha_min > 0:
+            raise ValueError("the minimum acceleration must not be positive (rad/s^2): the speed is held at the end")
         if self.jerk_max is not None and self.jerk_max <= 0:
             raise ValueError("jerk_max must be positive (rad/s^3)")
+
+    def ill_posed(self) -> str | None:
+        """Why the problem cannot be posed as a spin-up through the critical speed (one line), or None."""
+        P = self.params
+        wc = P.omega_cr
+        top = max(self.omega_start, self.omega_final, self.omega_max or 0.0)
+        if wc > CRITICAL_RATIO * top:
+            d = top**2 / abs(wc**2 - top**2)
+            return (f"the critical speed {wc:.4g} rad/s ({wc * 30 / np.pi:.4g} rpm) is {wc / top:.3g} times the "
+                    f"highest speed {top:.4g} rad/s: the spin-up never nears it, its peak is about the steady "
+                    f"deflection at the top speed (delta/e = {d:.3g}), which no profile changes (check the rotor's "
+                    "stiffness or critical speed)")
+        periods = (self.horizon + self.settling_time) * wc / (2 * np.pi)
+        if periods > MAX_PERIODS:
+            return (f"horizon + settling_time = {self.horizon + self.settling_time:.4g} s span {periods:.3g} natural "
+                    f"periods of the rotor (2 pi/omega_cr = {2 * np.pi / wc:.3g} s), more than {MAX_PERIODS:.0e}: "
+                    "shorten them (the passage is quasi-static long before)")
+        return None
 
     # dimensionless data (Pashkov 2010, Eq. (2))
     @property
@@ -114,6 +144,19 @@ class SpinupOcp:
     @property
     def a_max(self) -> float:
         return self.alpha_max / self.Om**2
+
+    @property
+    def u_min(self) -> float:
+        """Lower bound of the control u = alpha/alpha_max: -1, or the minimum acceleration's if higher."""
+        return -1.0 if self.alpha_min is None else max(-1.0, self.alpha_min / self.alpha_max)
+
+    @property
+    def torque_bounds(self) -> tuple[float, float]:
+        """(lowest, highest) drive torque allowed, N m (+-inf where no limit): -braking limit (or -max_torque),
+        max_torque."""
+        hi = np.inf if self.torque_max is None else self.torque_max
+        lo = -hi if self.braking_torque_max is None else -self.braking_torque_max
+        return lo, hi
 
     @property
     def q0(self) -> list[float]:
@@ -148,8 +191,14 @@ class SpinupOcp:
             add(f"deflection limit delta/e <= {self.deflection_limit:g}", m.delta2(q) / self.deflection_limit**2,
                 -ca.inf, 1.0)
         M = m.torque(q, a, P.p)  # over m1 e^2 Omega0^2
+        lo, hi = self.torque_bounds
         if self.torque_max is not None:
-            add(f"torque limit |M| <= {self.torque_max:g} N m", M * P.torque_scale / self.torque_max, -1.0, 1.0)
+            name = f"torque limit |M| <= {self.torque_max:g} N m" if lo == -hi else \
+                f"torque limits -{-lo:g} <= M <= {hi:g} N m"
+            add(name, M * P.torque_scale / hi, lo / hi, 1.0)
+        elif self.braking_torque_max is not None:  # scaled by the inertial torque of the full acceleration
+            ref = self.braking_torque_max or (P.J_p + P.m1 * P.e**2 * (1 - P.psi)) * self.alpha_max
+            add(f"braking limit M >= -{-lo:g} N m", M * P.torque_scale / ref, lo / ref, ca.inf)
         if self.power_max is not None:
             add(f"power limit M omega <= {self.power_max:g} W",
                 M * P.torque_scale * q[4] * self.Om / self.power_max, -ca.inf, 1.0)

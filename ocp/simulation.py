@@ -191,17 +191,113 @@ def resimulate(ocp: SpinupOcp, u, h, label: str, points: int = RESIM_POINTS, tol
                       pk, peak(tau, dd)[0], tpk / Om, integral)
 
 
+# relative tolerance of the drive-limit check of a re-simulated profile (the NLP keeps the limits at its
+# collocation points only); on torques it is relative to the torque reference :func:`torque_reference`
+DRIVE_TOL = 1e-3
+
+
+def torque_reference(ocp: SpinupOcp) -> float:
+    """The drive's torque scale, N m: max_torque, else the inertial torque of the full acceleration."""
+    P = ocp.params
+    return ocp.torque_max or (P.J_p + P.m1 * P.e**2 * (1 - P.psi)) * ocp.alpha_max
+
+
+def drive_excess(ocp: SpinupOcp, tr: Trajectory) -> dict[str, float]:
+    """How far a re-simulated profile goes beyond each drive limit of the problem, relative (0: kept): torque and
+    braking over the torque reference (:func:`torque_reference`), power over max_power, the motor characteristic
+    over its stall torque, acceleration over alpha_max, speed over omega_max."""
+    M, w = tr.torque, tr.omega
+    lo, hi = ocp.torque_bounds
+    ref = torque_reference(ocp)
+    out = {"torque limit": (np.max(M) - hi) / ref, "braking limit": (lo - np.min(M)) / ref,
+           "acceleration limits": max(np.max(tr.alpha) - ocp.alpha_max, ocp.u_min * ocp.alpha_max - np.min(tr.alpha))
+           / ocp.alpha_max}
+    if ocp.power_max is not None:
+        out["power limit"] = np.max(M * w) / ocp.power_max - 1
+    if ocp.omega_max is not None:
+        out["speed limit"] = np.max(w) / ocp.omega_max - 1
+    if ocp.motor_stall_torque is not None:
+        out["motor characteristic"] = np.max(M - ocp.motor_stall_torque * (1 - w / ocp.motor_no_load_speed)) \
+            / ocp.motor_stall_torque
+    return {k: max(float(v), 0.0) for k, v in out.items()}
+
+
+def drive_use(ocp: SpinupOcp, tr: Trajectory) -> dict:
+    """The largest and smallest drive torque and the largest power of a re-simulated profile, and whether it keeps
+    every drive limit of the problem (torque, braking, power, motor characteristic, acceleration, speed) within
+    :data:`DRIVE_TOL` (:func:`drive_excess`); ``violated`` names the limits it breaks."""
+    M, w = tr.torque, tr.omega
+    if np.all(np.isnan(M)):
+        return {"max_torque_N_m": None, "min_torque_N_m": None, "max_power_W": None, "within_drive_limits": None,
+                "violated": []}
+    bad = [k for k, v in drive_excess(ocp, tr).items() if v > DRIVE_TOL]
+    return {"max_torque_N_m": float(np.max(M)), "min_torque_N_m": float(np.min(M)),
+            "max_power_W": float(np.max(M * w)), "within_drive_limits": not bad, "violated": bad}
+
+
+def _ramp(ocp: SpinupOcp, alpha: float, h, n: int, ns: int, points: int, label: str) -> Trajectory:
+    u = np.concatenate([ramp_profile(ocp, n, alpha), np.zeros(ns)])
+    return resimulate(ocp, u, h, label, points=points)
+
+
+def fastest_feasible_rate(ocp: SpinupOcp, intervals: int = 200, points: int = 60, tries: int = 12
+                          ) -> tuple[float, Trajectory] | None:
+    """The fastest constant acceleration (ramp to omega_final, then hold) that keeps every drive limit at every
+    speed it passes and arrives by the deadline, with its re-simulation; None when even the slowest ramp that
+    arrives by the deadline breaks a limit.
+
+    Started from the drive's inertia alone (J alpha + b omega within the torque, power and motor limits at the
+    top speed), then lowered by the re-simulated excess torque (the rotor's reaction) until the re-simulation
+    keeps the limits."""
+    ms = mesh(ocp, intervals)
+    h = np.concatenate([np.full(ms.n, ms.h), np.full(ms.ns, ms.hs)])
+    P = ocp.params
+    J = P.J_p + P.m1 * P.e**2 * (1 - P.psi)
+    slowest = min(abs(ocp.omega_final - ocp.omega_start) / ocp.horizon, ocp.alpha_max)
+    wt = max(ocp.omega_start, ocp.omega_final)
+    caps = [ocp.alpha_max]
+    if J > 0 and ocp.omega_final > ocp.omega_start:
+        if ocp.torque_max is not None:
+            caps.append((ocp.torque_max - P.b * wt) / J)
+        if ocp.power_max is not None:
+            caps.append((ocp.power_max / wt - P.b * wt) / J)
+        if ocp.motor_stall_torque is not None:
+            caps.append((ocp.motor_stall_torque * (1 - wt / ocp.motor_no_load_speed) - P.b * wt) / J)
+    a = max(min(caps), slowest)
+    for _ in range(tries):
+        tr = _ramp(ocp, a, h, ms.n, ms.ns, points, f"ramp {a:.4g} rad/s^2 and hold (fastest within the drive limits)")
+        use = drive_use(ocp, tr)
+        if use["within_drive_limits"]:
+            return a, tr
+        if a <= slowest or J <= 0 or "braking limit" in use["violated"] or "speed limit" in use["violated"]:
+            return None
+        M, w = tr.torque, tr.omega
+        excess = [np.max(M - ocp.torque_max)] if ocp.torque_max is not None else []
+        if ocp.power_max is not None:
+            excess.append(np.max(M - ocp.power_max / np.maximum(w, 1e-300)))
+        if ocp.motor_stall_torque is not None:
+            excess.append(np.max(M - ocp.motor_stall_torque * (1 - w / ocp.motor_no_load_speed)))
+        step = max(max(excess, default=0.0) / J, DRIVE_TOL * a)
+        a = max(a - 1.5 * step, slowest)
+    return None
+
+
 def baselines(ocp: SpinupOcp, intervals: int = 200, points: int = 60) -> dict[str, Trajectory]:
     """The constant-ramp baselines (CVODES, ``points`` samples on each of ``intervals`` piecewise-constant
     intervals): the constant ramp over the horizon and the maximum-acceleration ramp followed by a hold, each
-    with the settling window.  200 x 60 samples give the peaks of 2000 x 6 to 1e-6 in a quarter of the time
-    (one CVODES call per interval)."""
+    with the settling window, and, when the maximum-acceleration ramp breaks a drive limit, the fastest ramp and
+    hold that keeps them all (:func:`fastest_feasible_rate`).  200 x 60 samples give the peaks of 2000 x 6 to 1e-6
+    in a quarter of the time (one CVODES call per interval)."""
     ms = mesh(ocp, intervals)
     h = np.concatenate([np.full(ms.n, ms.h), np.full(ms.ns, ms.hs)])
     const = min(abs(ocp.omega_final - ocp.omega_start) / ocp.horizon, ocp.alpha_max)
     out = {}
     for key, label, a in (("constant_ramp", f"constant ramp {const:.4g} rad/s^2", const),
                           ("max_acceleration_ramp", f"ramp {ocp.alpha_max:.4g} rad/s^2 and hold", ocp.alpha_max)):
-        u = np.concatenate([ramp_profile(ocp, ms.n, a), np.zeros(ms.ns)])
-        out[key] = resimulate(ocp, u, h, label, points=points)
+        out[key] = _ramp(ocp, a, h, ms.n, ms.ns, points, label)
+    if not drive_use(ocp, out["max_acceleration_ramp"])["within_drive_limits"] and \
+            drive_use(ocp, out["constant_ramp"])["within_drive_limits"]:
+        best = fastest_feasible_rate(ocp, intervals, points)
+        if best is not None:
+            out["feasible_ramp"] = best[1]
     return out

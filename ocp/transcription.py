@@ -226,7 +226,7 @@ def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
     nlo, nhi = ocp.nu_bounds()
     lbx[idx_X[1:ms.n, 4]], ubx[idx_X[1:ms.n, 4]] = nlo, nhi
     lbx[idx_X[0]] = ubx[idx_X[0]] = ocp.q0
-    lbx[idx_u[:ms.n]], ubx[idx_u[:ms.n]] = -1.0, 1.0
+    lbx[idx_u[:ms.n]], ubx[idx_u[:ms.n]] = ocp.u_min, 1.0
     lbx[idx_u[ms.n:]] = ubx[idx_u[ms.n:]] = 0.0  # settling window: held speed
     if nv:
         lbx[idx_v[0]], ubx[idx_v[0]] = (0.0, 1.0) if ocp.free_time else (0.0, np.inf)

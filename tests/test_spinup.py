@@ -92,7 +92,7 @@ def test_time_split_adds_up_to_the_wall_time(target):
     d = target.data
     split = d["time_split"]
     assert set(split) == {f"{k}_time_s" for k in ("global_search", "guesses", "build", "solve", "resimulation",
-                                                  "baselines", "rest")}
+                                                  "baselines", "segments", "rest")}
     assert all(v >= 0 for v in split.values())
     assert_allclose(sum(split.values()), d["wall_time_s"], rtol=1e-12)
     assert split["build_time_s"] == d["build_time_s"] and split["solve_time_s"] == d["total_solve_time_s"]
