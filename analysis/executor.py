@@ -5,29 +5,41 @@ chunk's samples from ``SeedSequence(seed, spawn_key=(chunk,))``), so the same st
 identical numbers whichever executor runs it and however many workers the cluster has.  A task is
 a picklable callable (plain data; CasADi Functions are rebuilt and cached on the worker).
 
-Choice of executor, first given wins: the CLI's ``--scheduler ADDRESS`` (:func:`set_default_scheduler`),
-the scene's ``executor: {scheduler: ADDRESS}``, else in-process.  A progress bar
-(analysis/progress.py: on a terminal, not when quiet) follows runs of more than one task.
+Choice of executor, first given wins: the ``scheduler`` passed to :func:`make`, the run's scheduler
+(:func:`using`: the CLI's ``--scheduler ADDRESS`` and ``autobal.run(..., scheduler=...)``), the environment
+variable ``AUTOBAL_SCHEDULER``, else in-process.  Never a scene: a scene is data, and a dask scheduler
+sends back pickled results that run code in this process, so only the person running autobal names
+one.  A progress bar (analysis/progress.py: on a terminal, not when quiet) follows runs of more than
+one task.
 """
 
 from __future__ import annotations
 
+import contextlib
+import os
 from collections.abc import Callable, Sequence
 
 from autobal.analysis import progress
 from autobal.errors import ScenarioError
 
-_DEFAULT_SCHEDULER: str | None = None
+ENV = "AUTOBAL_SCHEDULER"  # the environment variable naming a dask scheduler
+_RUN_SCHEDULER: str | None = None
 
 
-def set_default_scheduler(address: str | None) -> None:
-    """The scheduler every study uses unless given one explicitly (the CLI's ``--scheduler``)."""
-    global _DEFAULT_SCHEDULER
-    _DEFAULT_SCHEDULER = address or None
+@contextlib.contextmanager
+def using(address: str | None):
+    """Within the block, studies run on the dask scheduler at ``address`` (None: as outside the block)."""
+    global _RUN_SCHEDULER
+    before, _RUN_SCHEDULER = _RUN_SCHEDULER, address or _RUN_SCHEDULER
+    try:
+        yield
+    finally:
+        _RUN_SCHEDULER = before
 
 
 def default_scheduler() -> str | None:
-    return _DEFAULT_SCHEDULER
+    """The scheduler of the run (:func:`using`), else ``AUTOBAL_SCHEDULER``, else None (in-process)."""
+    return _RUN_SCHEDULER or os.environ.get(ENV) or None
 
 
 def _bar(total: int, desc: str, show: bool):
@@ -68,7 +80,7 @@ class DaskCluster:
         try:
             from distributed import Client
         except ImportError:  # pragma: no cover - dask is a dependency
-            raise ScenarioError("executor: dask.distributed is not installed (pip install 'dask[distributed]')") \
+            raise ScenarioError("scheduler: dask.distributed is not installed (pip install 'dask[distributed]')") \
                 from None
         self.progress = progress
         self._own = client is None
@@ -76,8 +88,8 @@ class DaskCluster:
             try:
                 client = Client(address, timeout=timeout)
             except (OSError, TimeoutError) as exc:
-                raise ScenarioError(f"executor.scheduler: cannot reach the dask scheduler at {address!r}: "
-                                    f"{exc}") from None
+                raise ScenarioError(f"scheduler: cannot reach the dask scheduler at {address!r} (given by --scheduler, "
+                                    f"the API or {ENV}): {exc}") from None
         self.client = client
         self.name = f"dask {self.client.scheduler.address}"
 
@@ -102,9 +114,9 @@ class DaskCluster:
 
 
 def make(scheduler: str | None = None, scene_executor=None, progress: bool | None = None):
-    """The executor for a study: ``scheduler``, else the CLI default, else the scene's
-    ``executor`` block, else in-process."""
-    address = scheduler or _DEFAULT_SCHEDULER or getattr(scene_executor, "scheduler", None)
+    """The executor for a study: on ``scheduler``, else :func:`default_scheduler`, else in-process.
+    ``scene_executor`` (the scene's ``executor`` block) gives the progress bar's setting only."""
+    address = scheduler or default_scheduler()
     if progress is None:
         progress = getattr(scene_executor, "progress", True)
     return DaskCluster(address, progress) if address else InProcess(progress)

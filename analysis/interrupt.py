@@ -18,11 +18,12 @@ solver has not stopped 2 s after the signal.
 from __future__ import annotations
 
 import os
+import re
 import signal
 import sys
 import threading
 
-from autobal.errors import Interrupted
+from autobal.errors import Interrupted, SolverFailure
 
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 _state = {"signum": None, "watchdog": None}
@@ -121,8 +122,22 @@ def call(function, *args, **kwargs):
             fh.write(f"{function.name() if callable(getattr(function, 'name', None)) else function.__name__}\n")
     try:
         out = function(*args, **kwargs)
+    except RuntimeError as exc:
+        check()
+        if type(exc) is not RuntimeError:  # ours (a SolveError), or Python's RecursionError, NotImplementedError
+            raise
+        raise _failure(function, exc) from exc
     except BaseException:
         check()
         raise
     check()
     return out
+
+
+def _failure(function, exc: RuntimeError) -> SolverFailure:
+    """The SolverFailure of a CasADi function that raised: its name, the error's last line, and the return flag
+    the message quotes (``CV_TOO_MUCH_WORK``) as its status."""
+    name = function.name() if callable(getattr(function, "name", None)) else getattr(function, "__name__", "solver")
+    last = (str(exc).strip().splitlines() or ["(no message)"])[-1][:300]
+    flag = re.search(r'"([A-Z][A-Z0-9_]{2,})"', last)
+    return SolverFailure(f"{name}: {last}", flag.group(1) if flag else "solver_raised")

@@ -182,6 +182,13 @@ class Result:
         """A short plain-text summary of the headline numbers."""
         raise NotImplementedError
 
+    def failures(self) -> list[str]:
+        """What failed inside this analysis although it returned, one line each: a residual above the
+        analysis' tolerance, an integrator failure, a case that did not finish.  Empty when everything it
+        reports was solved.  An analysis records them as ``data["failures"]``; a result with failures makes
+        the run's status "failed" (:class:`autobal.api.Run`; the CLI exits with 3)."""
+        return list(getattr(self, "data", {}).get("failures") or [])
+
     def tables(self) -> dict[str, dict]:
         """CSV tables: file name -> {column name: sequence of equal length}."""
         return {}
@@ -298,8 +305,14 @@ def html_block(result: Result, figures: bool = True) -> str:
     rows = result.headline()
     body = html_table(rows) if rows else f"<pre>{escape(result.summary())}</pre>"
     figs = "".join(html_figure(f) for f in result.figures().values()) if figures else ""
-    return (f"<div><h3>{escape(result.name or type(result).__name__)}</h3>{html_verdict(result.verdict())}"
+    verdict = (False, "FAILED: " + "; ".join(result.failures())) if result.failures() else result.verdict()
+    return (f"<div><h3>{escape(result.name or type(result).__name__)}</h3>{html_verdict(verdict)}"
             f"{body}{figs}</div>")
+
+
+def failed_head(failures: list[str]) -> list[str]:
+    """The first line of a summary whose analysis has failures (:meth:`Result.failures`), else nothing."""
+    return [f"FAILED: {'; '.join(failures)}"] if failures else []
 
 
 def with_statuses(block: dict, reasons: dict | None = None, default: str = "no value here (NaN)") -> dict:

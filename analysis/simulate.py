@@ -11,6 +11,11 @@ Reported, not hidden: the face gap reaching zero (u <= 0: the disc touches the p
 has no contact force, so the response is cut there and the time is reported), the valve closing
 (xi <= 0) or passing its travel limit, a reversal of the inner-seal flow (process fluid entering
 the barrier chamber), and an integrator failure (the time reached and the solver's message).
+
+Status: an integrator failure of any case, or a start that is not an equilibrium of the model (residual above
+:data:`EQUILIBRIUM_TOL`), is a failure of the result (:meth:`TransientResult.failures`, first line of the summary;
+the run's status "failed", CLI exit 3) with every case's response kept; a stop event (gap closed, runaway) ends a
+case early by the model's own limits and is reported, not a failure.
 The runner of ``analyses.transient`` is :func:`autobal.runners.transient`.
 """
 
@@ -27,7 +32,7 @@ from autobal.analysis import interrupt
 from autobal.analysis.compiled import compiled_map
 from autobal.analysis.frequency import MODEL_LABELS
 from autobal.analysis.quantities import Declarations, Quantity
-from autobal.analysis.result import Result, new_figure
+from autobal.analysis.result import Result, failed_head, new_figure
 from autobal.analysis.rosenbrock import STATUS, rodas4_grid
 from autobal.models.dynamics import DynamicModel
 
@@ -261,7 +266,7 @@ class TransientResult(Result):
             "cases": [{k: v for k, v in c.items() if k not in ("t", "X", "inputs")} for c in self.data["series"]]}
 
     def summary(self) -> str:
-        lines = [f"transients ({self.data['model']} model, {self.data['integrator']}):"]
+        lines = [*failed_head(self.failures()), f"transients ({self.data['model']} model, {self.data['integrator']}):"]
         for c in self.data["series"]:
             ev = "; ".join(e.get("message", e["event"] + f" at t = {e['t']:.4g} s") for e in c["events"]) or "none"
             fail = f"; integrator failed at t = {c['failure']['t']:.4g} s" if c["failure"] else ""
@@ -328,7 +333,8 @@ def study(model: DynamicModel, cases: list, duration: float, points: int, integr
         cpu = time.perf_counter() - t0
         t, X = r["t"], r["X"]
         ev = events(model, t, X, sim.inputs(s, t)[:, 0])
-        cut = next((e["t"] for e in ev if e["event"] == "gap_closed"), None)
+        # the response ends where the gap closes or runs away (the rest of the chunk beyond is not the device's)
+        cut = min((e["t"] for e in ev if e["event"] in ("gap_closed", "gap_runaway")), default=None)
         if cut is not None:
             keep = t <= cut
             t, X = t[keep], X[keep]
@@ -346,9 +352,20 @@ def study(model: DynamicModel, cases: list, duration: float, points: int, integr
             "integrator_steps": r["steps"],
         })
     label = "nonlinear_chain" if model.form == "chain" else "nonlinear"
+    eq = equilibrium_residual(model)
+    failures = [f"case {i + 1} ({c['input']}, amplitude {c['amplitude']:g}): the integrator failed at "
+                f"t = {c['failure']['t']:.4g} s: {c['failure']['message']}"
+                for i, c in enumerate(series) if c["failure"]]
+    if not eq <= EQUILIBRIUM_TOL:
+        failures.append(f"the start is not an equilibrium of the model: residual {eq:.1e} > {EQUILIBRIUM_TOL:g}")
     return TransientResult({"title": title, "model": label,
                             "integrator": integrator, "states": model.states, "series": series,
-                            "equilibrium_residual": equilibrium_residual(model)})
+                            "equilibrium_residual": eq, "failures": failures})
+
+
+# the largest implicit-row residual accepted at the start (rows normalised to O(1) coefficients): the static
+# solution is accepted to 1e-6 of each balance's largest term (analysis/statics.py MAX_RELATIVE_RESIDUAL)
+EQUILIBRIUM_TOL = 1e-6
 
 
 def equilibrium_residual(model: DynamicModel) -> float:

@@ -15,6 +15,11 @@ linear solves), behind :meth:`StaticsSolver.newton` (an independent
 cross-check of IPOPT), :meth:`StaticsSolver.fast_sweep`, the Monte Carlo and the estimation.
 :meth:`StaticsSolver.sweep` continues over the discharge ratio with warm starts and
 :meth:`StaticsSolver.batch` solves a whole sweep as one NLP.
+
+Status: a point counts as solved only when every balance is within :data:`MAX_RELATIVE_RESIDUAL` of its
+largest term, whatever IPOPT's return status says; otherwise :meth:`StaticsSolver.solve` raises SolveError
+(the statics analysis is a failed solve, exit 3) with the status ``Residual_Above_Tolerance`` and the last
+iterate.
 """
 
 from __future__ import annotations
@@ -40,6 +45,10 @@ RESIDUAL_TOL = 1e-10  # a Newton root is accepted below this largest absolute ba
 # ~1e5 there and the balance's own terms vanish.  Such a point is kept when every balance is within this of
 # its largest term (absolute error ~1e-12 of the flows), with IPOPT's status beside it.
 STALLED_RESIDUAL = 1e-6
+# A solved point (IPOPT's status Solve_Succeeded or not) counts only when every balance is within this of its largest
+# term: IPOPT's status alone does not make a point a solution.
+MAX_RELATIVE_RESIDUAL = STALLED_RESIDUAL
+FLOW_FLOOR = 1e-9  # a flow balance's scale is at least this part of the largest flow in the network
 # Batches of at least COMPILED_MIN points are evaluated by the point Function mapped over COMPILED_SIZE points and
 # compiled to C with the loop inside (one C call per block, the last block padded): 3x CasADi's virtual machine.
 COMPILED_SIZE, COMPILED_MIN = 1024, 256
@@ -174,8 +183,8 @@ class ParametricStatics:
         self.block = COMPILED_SIZE
 
     def _relative(self, groups, w, psi1, dpsi, theta, q) -> ca.Function:
-        """Each balance's |residual| over its scale, the largest absolute term in it (the groups in
-        ``names`` taken from theta)."""
+        """Each balance's |residual| over its scale, the largest absolute term in it (for a flow balance at
+        least :data:`FLOW_FLOOR` of the network's largest flow; the groups in ``names`` taken from theta)."""
         sys_ = self.system
         named = dict(zip(self.names, ca.vertsplit(theta), strict=True)) if self.names else {}
         reg = groups.regulator
@@ -185,8 +194,12 @@ class ParametricStatics:
 
         flows = dict(zip(sys_.throttles, ca.vertsplit(q), strict=True))
 
+        # a flow balance whose own flows both vanish (a closed face, a chamber at its drain's pressure) is scaled
+        # by a small part of the network's largest flow, not by its own zero: its residual is then measured, not 0/0
+        floor = FLOW_FLOOR * ca.mmax(ca.fabs(q))
+
         def largest(*names):
-            return ca.mmax(ca.fabs(ca.vertcat(*[flows[k] for k in names])))
+            return ca.fmax(ca.mmax(ca.fabs(ca.vertcat(*[flows[k] for k in names]))), floor)
 
         scale = {
             "disc force": ca.fmax(group("b", groups) * psi1, group("chi", groups)),
@@ -482,13 +495,11 @@ class StaticsSolver:
         """
         args = self._bounds() | {"p": [psi1, dpsi]}
         if start is not None:
-            res = self._check(ipopt.solve(self._warm, **args, x0=start.x, lam_x0=start.lam["x"],
-                                          lam_g0=start.lam["g"]))
-            point = self._point(psi1, dpsi, res)
+            res, point = self._solved(psi1, dpsi, ipopt.solve(self._warm, **args, x0=start.x, lam_x0=start.lam["x"],
+                                                              lam_g0=start.lam["g"]))
             if res["success"] or self._stalled_at_root(point):
                 return point
-        res = self._check(ipopt.solve(self._cold, **args, x0=self.guess(psi1, dpsi)))
-        point = self._point(psi1, dpsi, res)
+        res, point = self._solved(psi1, dpsi, ipopt.solve(self._cold, **args, x0=self.guess(psi1, dpsi)))
         if self._stalled_at_root(point):
             return point
         if not res["success"] and start is None and psi1 > CONTINUATION_START:
@@ -611,7 +622,11 @@ class StaticsSolver:
             raise SolveError(f"critical {unknown} (q1 = 0) did not converge", res["status"])
         value = float(res["x"][-1])
         res |= {"x": res["x"][:-1], "lam_x": res["lam_x"][:-1], "lam_g": res["lam_g"][:-1]}
-        return self._point(*((value, fixed) if unknown == "psi1" else (fixed, value)), res)
+        point = self._point(*((value, fixed) if unknown == "psi1" else (fixed, value)), res)
+        if not point.max_residual <= MAX_RELATIVE_RESIDUAL:
+            raise SolveError(f"critical {unknown} (q1 = 0): the balances do not hold", f"Residual_Above_Tolerance "
+                             f"({point.max_residual:.1e} relative, IPOPT said {res['status']})")
+        return point
 
     def relative_residual(self, x: np.ndarray, psi1, dpsi: float) -> np.ndarray:
         """Each balance's residual divided by its largest term; rows of ``x`` for arrays of psi1
@@ -636,6 +651,17 @@ class StaticsSolver:
         if res["success"] and res["f"][0] > COMPLEMENTARITY_TOL * points:
             res |= {"success": False, "status": f"Stop_Complementarity_Violated ({res['f'][0]:.1e})"}
         return res
+
+    def _solved(self, psi1: float, dpsi: float, res: dict) -> tuple[dict, StaticPoint]:
+        """IPOPT's answer checked (:meth:`_check`) and its point; a success whose balances are not satisfied to
+        :data:`MAX_RELATIVE_RESIDUAL` is not one (status ``Residual_Above_Tolerance``)."""
+        res = self._check(res)
+        point = self._point(psi1, dpsi, res)
+        if res["success"] and not point.max_residual <= MAX_RELATIVE_RESIDUAL:
+            res |= {"success": False, "status": f"Residual_Above_Tolerance ({point.max_residual:.1e} relative, "
+                                                f"IPOPT said {res['status']})"}
+            point.status = res["status"]
+        return res, point
 
     def _point(self, psi1: float, dpsi: float, res: dict) -> StaticPoint:
         sys_ = self.system

@@ -19,7 +19,7 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 from autobal import __version__, report, scenario
-from autobal.analysis import interrupt
+from autobal.analysis import executor, interrupt
 from autobal.analysis.result import Result, html_figure, write_json
 from autobal.errors import AutobalError, SolveError
 from autobal.output import LOG, OutputFolder, SolverLog
@@ -74,10 +74,21 @@ class Run(Mapping):
     def __len__(self) -> int:
         return len(self.results)
 
+    @property
+    def failures(self) -> dict[str, list[str]]:
+        """Analysis name -> what failed inside it (:meth:`Result.failures`), for the analyses with failures."""
+        return {name: f for name, r in self.results.items() if (f := r.failures())}
+
+    @property
+    def status(self) -> str:
+        """The run's status: "ok" when every analysis solved what it reports, else "failed" (results kept)."""
+        return "failed" if self.failures else "ok"
+
     def to_dict(self) -> dict:
         """The content of results.json (without the ``files`` list, which ``save`` adds)."""
         s = self.scene
-        out = {"status": "ok", "scenario": s.name, "title": s.title, "source": s.source, "meta": self.meta,
+        out = {"status": self.status, "failures": self.failures, "scenario": s.name, "title": s.title,
+               "source": s.source, "meta": self.meta,
                "timing": self.timing, "accuracy": {}}
         for name, res in self.results.items():
             block = res.to_dict()
@@ -161,7 +172,8 @@ def _render_report(folder: Path) -> list[Path]:
         return []
 
 
-def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=None) -> Run:
+def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=None,
+        scheduler: str | None = None) -> Run:
     """Run every analysis the scene names.
 
     Parameters
@@ -175,11 +187,16 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
         Nothing is written when omitted.
     on_result : callable, optional
         Called as ``on_result(name, result, seconds)`` after each analysis (the CLI prints with it).
+    scheduler : str, optional
+        Run sweeps and Monte Carlo on the dask.distributed scheduler at this address (default: the
+        environment variable ``AUTOBAL_SCHEDULER``, else in this process).  A scene cannot name one: a
+        scheduler's results are unpickled here, so it is trusted like code.
 
     Returns
     -------
     Run
-        Analysis name -> Result.
+        Analysis name -> Result.  ``run.status`` is "failed" when an analysis finished with failures
+        (``run.failures``: a residual above its tolerance, an integrator failure); the results are kept.
 
     Raises
     ------
@@ -195,7 +212,7 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
     folder = OutputFolder(out) if out is not None else None
     results, timing, current = {}, {}, None
     try:
-        with SolverLog(folder.tmp / LOG if folder else os.devnull) as log:
+        with SolverLog(folder.tmp / LOG if folder else os.devnull) as log, executor.using(scheduler):
             for current in analyses(scene):
                 t0 = time.perf_counter()
                 try:

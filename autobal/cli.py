@@ -19,7 +19,9 @@ EPILOG = """\
 exit codes:
   0    success
   2    bad input: one line naming the file or override, the field and the unit
-  3    failed solve: the solver status; its last iterate in OUT/failed_solve.json
+  3    failed solve: the solver status; its last iterate in OUT/failed_solve.json, or an
+       analysis that finished with failures (a residual above its tolerance, an integrator
+       failure): OUT/results.json with "status": "failed" and what failed under "failures"
   130  interrupted (Ctrl-C, SIGINT); OUT holds interrupted.json
   143  terminated (SIGTERM); OUT holds interrupted.json
 
@@ -53,7 +55,12 @@ def _run(args, scn) -> int:
             print(result.summary())
             print(f"  ({name}: {seconds:.2f} s)")
 
-    api.run(scn, out, on_result=show)
+    done = api.run(scn, out, on_result=show, scheduler=args.scheduler)
+    if done.status != "ok":
+        what = "; ".join(f"{name}: {f[0]}" + (f" (and {len(f) - 1} more)" if len(f) > 1 else "")
+                         for name, f in done.failures.items())
+        print(f"autobal: solve failed: {what}; the results, marked failed, in {out / 'results.json'}", file=sys.stderr)
+        return EXIT_SOLVE_FAILED
     if not args.quiet:
         print(f"results: {out / 'results.json'}")
     return EXIT_OK
@@ -118,7 +125,9 @@ def parser() -> argparse.ArgumentParser:
     scene_args(p_run)
     out_args(p_run)
     p_run.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                       help="run sweeps and Monte Carlo on this dask.distributed scheduler (e.g. tcp://host:8786)")
+                       help="run sweeps and Monte Carlo on this dask.distributed scheduler (e.g. tcp://host:8786; "
+                            "default: the environment variable AUTOBAL_SCHEDULER, else in-process); never from a "
+                            "scene")
     p_acc = sub.add_parser("accuracy", help="error against run time of every solver of a scenario", epilog=EPILOG,
                            formatter_class=argparse.RawDescriptionHelpFormatter)
     scene_args(p_acc)
@@ -158,9 +167,6 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"  {path} = {units.angular_text(value, kind)}")
             return EXIT_OK
         if args.cmd == "run":
-            from autobal.analysis.executor import set_default_scheduler
-
-            set_default_scheduler(args.scheduler)
             return _run(args, scn)
         return _accuracy(args, scn)
     except ScenarioError as exc:

@@ -25,6 +25,12 @@ class SolveError(AutobalError):
         self.last_iterate = last_iterate or {}
 
 
+class SolverFailure(SolveError, RuntimeError):
+    """A CasADi solver, integrator or rootfinder that raised instead of returning a status (CVODES'
+    ``CV_TOO_MUCH_WORK``, a NaN in a function): a failed solve (CLI exit code 3), and still the
+    RuntimeError CasADi raised for the code that handles those (a transient's case records it)."""
+
+
 class Interrupted(KeyboardInterrupt):
     """The run was stopped by a signal (SIGINT or SIGTERM); the CLI exits with 128 + ``signum``."""
 

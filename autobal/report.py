@@ -1343,7 +1343,9 @@ def _section(name: str, block: dict, results: dict, figures: list[dict], folder:
         sec.notes.append(note)
     acc = (results.get("accuracy") or {}).get(name) or block.get("accuracy") or {}
     tables = [t for t in (sec.headline(), *sec.tables) if t is not None]
-    overall = {"ok": False, "text": error} if error else sec.overall()
+    failures = [f for f in block.get("failures") or [] if isinstance(f, str)]
+    overall = ({"ok": False, "text": "FAILED: " + "; ".join(failures)} if failures  # never ok over a failure
+               else {"ok": False, "text": error} if error else sec.overall())
     return {"name": name, "title": TITLES.get(name, name), "tables": tables, "verdicts": sec.verdicts,
             "overall": overall, "comparison": sec.comparison, "validation": sec.validation,
             "validation_tables": sec.validation_tables, "validation_notes": sec.validation_notes,

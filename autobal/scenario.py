@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import hashlib
 import importlib
+import numbers
+from collections.abc import Mapping
 from functools import cache
 from pathlib import Path
 from typing import Annotated, Literal
@@ -73,6 +75,10 @@ class Operating(Strict):
     def _b_given(self):
         if self.thrust_ratio is None and self.impeller is None:
             raise ValueError("give thrust_ratio (b) or impeller data to compute it")
+        if self.drain_pressure >= self.nominal_pressure:
+            raise ValueError(f"drain_pressure: {self.drain_pressure / 1e6:g} MPa is not below the nominal discharge "
+                             f"pressure {self.nominal_pressure / 1e6:g} MPa; the device leaks from the discharge to "
+                             "the drain (above it the face is pressed shut and nothing is balanced)")
         return self
 
 
@@ -498,6 +504,34 @@ def read(path: Path) -> dict:
     return data
 
 
+def _checked_overrides(overrides) -> dict:
+    """A copy of the overrides mapping after checking its type, its keys (dotted paths) and its values (a string,
+    number, bool, None, pint quantity, or a list or mapping of these as YAML gives them); ScenarioError otherwise."""
+    if overrides is None:
+        return {}
+    if not isinstance(overrides, Mapping):
+        raise ScenarioError(f"set: a mapping of dotted scene paths to values, e.g. {{'device.disc.face.base_gap': "
+                            f"'0.18 mm'}}; got {type(overrides).__name__}")
+    for key, value in overrides.items():
+        if not isinstance(key, str) or not key.strip() or any(not k for k in key.split(".")):
+            raise ScenarioError(f"set: {key!r} is not a dotted scene path such as 'device.disc.face.base_gap'")
+        if not _plain(value) and not (hasattr(value, "units") and hasattr(value, "magnitude")):
+            raise ScenarioError(f"set {key}: a value of type {type(value).__name__} is not a scene value (give a "
+                                "string with its unit, a number, a list or a mapping)")
+    return dict(overrides)
+
+
+def _plain(value) -> bool:
+    """A value YAML could have given: str, a real number (bool too), None, lists and string-keyed mappings of them."""
+    if value is None or isinstance(value, str | numbers.Real):
+        return True
+    if isinstance(value, list | tuple):
+        return all(_plain(v) for v in value)
+    if isinstance(value, Mapping):
+        return all(isinstance(k, str) and _plain(v) for k, v in value.items())
+    return False
+
+
 def load(name_or_path: str | Path, overrides: dict | None = None) -> BaseScenario:
     """Read, validate and convert a scenario to SI; raise ScenarioError with one line.
 
@@ -514,16 +548,17 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> BaseScenari
     Scenario
         The validated scene, every quantity in SI.
     """
+    overrides = _checked_overrides(overrides)
     path = resolve(name_or_path)
     data = read(path)
-    overrides = dict(overrides or {})
     for key, value in overrides.items():
         _set(data, key, value)
     try:
         scn = model_for(data).model_validate(data, context={"folder": path.absolute().parent, "overrides": overrides})
     except ValidationError as exc:
         loc = ".".join(str(p) for p in exc.errors()[0]["loc"])
-        hit = next((k for k in overrides if loc == k or loc.startswith(k + ".")), None)
+        hit = next((k for k in overrides if loc == k or loc.startswith(k + ".") or (loc and k.startswith(loc + "."))),
+                   None)
         where = f"set {hit}={clip(str(overrides[hit]))}" if hit else str(path)
         raise ScenarioError(f"{where}: {_one_line(exc)}") from None
     except RecursionError:

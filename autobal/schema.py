@@ -38,6 +38,39 @@ def _quantity_extra(extra, annotation, key: str) -> str | None:
     return None
 
 
+def _refuse(self, *args, **kwargs):
+    raise TypeError("a validated scene cannot be changed: load it again with set={...} (autobal.load)")
+
+
+class FrozenList(list):
+    """A list of a validated scene: equal to a list, but refuses every change."""
+
+    append = extend = insert = remove = pop = clear = sort = reverse = _refuse
+    __setitem__ = __delitem__ = __iadd__ = __imul__ = _refuse
+
+    def __reduce__(self):  # copy and pickle build it whole, not item by item
+        return FrozenList, (list(self),)
+
+
+class FrozenDict(dict):
+    """A mapping of a validated scene: equal to a dict, but refuses every change."""
+
+    clear = pop = popitem = setdefault = update = _refuse
+    __setitem__ = __delitem__ = __ior__ = _refuse
+
+    def __reduce__(self):
+        return FrozenDict, (dict(self),)
+
+
+def frozen(value):
+    """``value`` with its lists and dicts (and theirs) made :class:`FrozenList` / :class:`FrozenDict`."""
+    if isinstance(value, list):
+        return value if isinstance(value, FrozenList) else FrozenList(frozen(v) for v in value)
+    if isinstance(value, dict):
+        return value if isinstance(value, FrozenDict) else FrozenDict({k: frozen(v) for k, v in value.items()})
+    return value
+
+
 def quantities(model: BaseModel, kinds, path: str = "") -> list[tuple[str, object, str]]:
     """(dotted path, value in SI, kind) of every quantity field of ``model`` (a validated scene or a part
     of it) whose kind is one of ``kinds``; a list field gives its list."""
@@ -81,8 +114,8 @@ def _numbers_only(annotation) -> bool:
 
 
 class Strict(BaseModel):
-    """A scene section: unknown keys are refused, values are frozen, inf and nan refused, and so are
-    booleans where a number is expected (pydantic's lax mode reads YAML's yes/on/true as 1)."""
+    """A scene section: unknown keys are refused, values are frozen (lists and dicts too), inf and nan refused,
+    and so are booleans where a number is expected (pydantic's lax mode reads YAML's yes/on/true as 1)."""
 
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
@@ -93,6 +126,14 @@ class Strict(BaseModel):
             raise ValueError("a boolean where a number is expected (YAML reads yes/no, on/off, true/false as "
                              "booleans)")
         return value
+
+    @model_validator(mode="after")
+    def _freeze_containers(self):
+        for name in type(self).model_fields:
+            value = getattr(self, name)
+            if isinstance(value, list | dict):
+                object.__setattr__(self, name, frozen(value))  # the model itself is frozen: set once, here
+        return self
 
     @classmethod
     def __pydantic_init_subclass__(cls, **kwargs):

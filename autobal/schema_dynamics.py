@@ -136,7 +136,8 @@ class TransientCase(Strict):
     """One time response from the static solution (2.111)."""
 
     input: Literal["force_step", "pressure_step", "pressure_harmonic"]
-    amplitude: float = Field(0.01, description="dtau (force step) or dpsi1 (pressure), dimensionless")
+    amplitude: Annotated[float, Field(ge=-100, le=100)] = Field(
+        0.01, description="dtau (force step) or dpsi1 (pressure), dimensionless, -100 to 100 (as p1 / p_B)")
     frequency: AngularSpeed | None = Field(None, description="harmonic input; default the operating speed")
     thrust_follows_pressure: bool = Field(True, description="with a pressure input, dtau = b dpsi1")
 
@@ -154,3 +155,13 @@ class Transient(Strict):
     points: Annotated[int, Field(ge=10, le=200000)] = Field(2001, description="output times, 10 to 200,000")
     cases: Annotated[list[TransientCase], Field(min_length=1, max_length=100)] = Field(
         description="time responses to compute, 1 to 100")
+
+    @model_validator(mode="after")
+    def _pressure_stays_positive(self):
+        for i, c in enumerate(self.cases):
+            lowest = self.operating_ratio + (c.amplitude if c.input == "pressure_step" else -abs(c.amplitude))
+            if c.input != "force_step" and lowest <= 0:
+                raise ValueError(f"cases.{i}.amplitude: {c.amplitude:g} takes the discharge ratio psi1 from "
+                                 f"operating_ratio {self.operating_ratio:g} to {lowest:g}; a discharge pressure "
+                                 "must stay above zero")
+        return self

@@ -235,7 +235,16 @@ class MonteCarlo(Strict):
 
 
 class Executor(Strict):
-    """Where studies run: in-process (default) or on a dask.distributed scheduler."""
+    """How studies run: the progress bar.  Where they run (a dask.distributed scheduler) is never a scene's
+    choice: ``--scheduler``, ``autobal.run(..., scheduler=...)`` or the environment variable AUTOBAL_SCHEDULER."""
 
-    scheduler: str | None = Field(None, description="e.g. \"tcp://127.0.0.1:8786\"; the CLI's --scheduler overrides it")
     progress: bool = Field(True, description="a progress bar on runs of more than one task (on a terminal)")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _no_scheduler(cls, data):
+        if isinstance(data, dict) and "scheduler" in data:
+            raise ValueError("scheduler: a scene cannot name a scheduler (a scene is data and contacts no host); "
+                             "give it on the command line (--scheduler), in the API (autobal.run(..., "
+                             "scheduler=...)) or in the environment (AUTOBAL_SCHEDULER)")
+        return data

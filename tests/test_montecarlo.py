@@ -194,7 +194,7 @@ def cluster():
 
 
 @pytest.mark.cli
-def test_dask_cluster_gives_the_in_process_numbers(scene, dev, cluster, tmp_path):
+def test_dask_cluster_gives_the_in_process_numbers(scene, dev, cluster, tmp_path, monkeypatch):
     s = small(scene, samples=1200, chunk_size=300)
     local = mc.run(dev, s, ex.InProcess(progress=False))
     with ex.make(cluster.scheduler_address, progress=False) as exe:
@@ -219,9 +219,8 @@ def test_dask_cluster_gives_the_in_process_numbers(scene, dev, cluster, tmp_path
     assert ra["executor"].startswith("dask") and rb["executor"] == "in-process"
     assert ra["exact"] == rb["exact"] and ra["source"] == rb["source"]
     assert ra["afc"]["mean"] == rb["afc"]["mean"] and ra["afc"]["std"] == rb["afc"]["std"]
-    # or the scene's own executor block
-    d["executor"] = {"scheduler": cluster.scheduler_address, "progress": False}
-    path.write_text(yaml.safe_dump(d))
+    # or the environment's AUTOBAL_SCHEDULER (never the scene: tests/test_hostile_status.py)
+    monkeypatch.setenv(ex.ENV, cluster.scheduler_address)
     assert main(["run", str(path), "--out", str(tmp_path / "c")]) == 0
     rc = json.loads((tmp_path / "c" / "results.json").read_text())["montecarlo"]
     assert rc["executor"].startswith("dask") and rc["exact"] == rb["exact"]
@@ -342,5 +341,5 @@ def test_bad_input_found_when_the_study_runs(tmp_path, scene, dev, capsys):
     path.write_text(yaml.safe_dump(d))
     assert main(["run", str(path), "--out", str(tmp_path / "o")]) == 2
     assert "analyses.montecarlo needs a device section" in capsys.readouterr().err
-    with pytest.raises(ScenarioError, match="executor.scheduler: cannot reach the dask scheduler"):
+    with pytest.raises(ScenarioError, match="scheduler: cannot reach the dask scheduler"):
         ex.DaskCluster("tcp://127.0.0.1:9", progress=False, timeout="1s")

@@ -108,3 +108,11 @@ def test_an_analysis_without_a_criterion_still_has_one_summary_line():
     assert sec.overall()["text"] == "limit violated"  # a failed check before a passed one
     sec.conclude(True, "the headline")
     assert sec.overall()["text"] == "the headline" and sec.verdicts[0]["text"] == "the headline"
+
+
+def test_a_failed_analysis_never_has_an_ok_verdict():
+    """A block with failures (an integrator failure, a residual above tolerance) gets a failed summary line, whatever
+    its section concludes."""
+    results = {"scenario": "x", "statics": {"failures": ["the exact statics did not solve at psi1 = 1.2"]}}
+    (sec,) = report.sections(results)
+    assert sec["overall"] == {"ok": False, "text": "FAILED: the exact statics did not solve at psi1 = 1.2"}
