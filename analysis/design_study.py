@@ -13,9 +13,11 @@ import textwrap
 
 import numpy as np
 import scipy.linalg
+from matplotlib.ticker import NullFormatter
 
 from autobal.analysis.design import IPOPT_OPTIONS, UNITS, DesignProblem, Evaluation, Spec, apply
 from autobal.analysis.linearize import Setup, finite_difference, jacobians, operator
+from autobal.analysis.quantities import convert, significant
 from autobal.analysis.result import Result, fmt, new_figure, with_statuses
 from autobal.analysis.stability import pencil
 from autobal.errors import SolveError
@@ -26,10 +28,27 @@ ACTIVE_MARGIN = 1e-6  # a decay-rate constraint is active where -max Re lambda <
 LOCAL_RADIUS = 0.005  # half-width of the local search box about the optimum, fraction of each variable's range
 
 
+#: display units of the design variables by SI unit: chamber volumes in cm³, areas in mm², lengths in mm, MPa
+SHOWN = {"m^3": "cm³", "m^2": "mm²", "m": "mm", "Pa": "MPa", "N*s/m": "N·s/m", "": "1"}
+
+
+def si_unit(key: str) -> str:
+    """The SI unit of a design variable as results.json writes units ("m^3"; "" for a group)."""
+    return UNITS[key].replace("**", "^")
+
+
 def quantity(key: str, value: float) -> str:
-    """A design value as a string with its SI unit, e.g. "4.7e-05 m**3" (what ``--set`` reads)."""
-    unit = UNITS[key]
-    return f"{value:.10g} {unit}".strip()
+    """A design value at full precision with its SI unit, e.g. "4.7e-05 m^3" (what ``--set`` reads)."""
+    return f"{value:.10g} {si_unit(key)}".strip()
+
+
+def shown(unit: str, value: float | None) -> str:
+    """A design value of SI unit ``unit`` in its display unit to 4 significant digits: "209.2 cm³"."""
+    display = SHOWN.get(unit, unit)
+    if value is None:
+        return "—"
+    number = significant(value if display in ("1", unit) else convert(value, unit, display))
+    return number if display == "1" else f"{number} {display}"
 
 
 def block(problem: DesignProblem, ev: Evaluation) -> dict:
@@ -85,8 +104,9 @@ class DesignResult(Result):
                  f"{fmt(n['leakage'])} -> {fmt(o['leakage'])} m^3/s"]
         for p, a in o["margin"].items():
             lines.append(f"  psi1 = {p}: margin {fmt(n['margin'].get(p, math.nan))} -> {fmt(a)} 1/s")
-        for path, v in o["parameters"].items():
-            lines.append(f"  {path}: {n['parameters'][path]} -> {v}")
+        for path, v in o["values_si"].items():
+            unit = o["parameters"][path].partition(" ")[2]
+            lines.append(f"  {path}: {shown(unit, n['values_si'][path])} -> {shown(unit, v)}")
         cmp = d["other_model"]
         lines.append(f"  {cmp['model']} model: max Re lambda nominal "
                      + ", ".join(fmt(v) for v in cmp["nominal"].values()) + "; optimum "
@@ -119,20 +139,27 @@ class DesignResult(Result):
         d = self.data
         fig1, ax = new_figure()
         self.draw(ax)
-        fig2, ax2 = new_figure()
+        fig2, ax2 = new_figure((8.0, 4.4))
         o, n = d["optimum"]["values_si"], d["nominal"]["values_si"]
         names = list(o)
         ratio = np.array([o[k] / n[k] if n[k] else math.nan for k in names])
         ax2.barh(range(len(names)), ratio - 1.0, left=1.0, color=np.where(ratio >= 1, "C0", "C1"))
         ax2.set_xscale("log")
+        finite = ratio[np.isfinite(ratio) & (ratio > 0)]
+        lo, hi = min(finite.min(initial=1.0), 1.0) / 1.6, max(finite.max(initial=1.0), 1.0) * 1.6
+        ax2.set_xlim(lo, hi)
+        ticks = [t for e in range(-4, 5) for t in (10.0 ** e, 2 * 10.0 ** e, 5 * 10.0 ** e) if lo <= t <= hi]
+        ax2.set_xticks(ticks, [f"{t:g}" for t in ticks])  # major ticks only: the minor labels overlapped
+        ax2.xaxis.set_minor_formatter(NullFormatter())
         ax2.set_yticks(range(len(names)), [".".join(k.split(".")[-2:]) for k in names], fontsize=8)
         ax2.axvline(1.0, color="k", lw=0.8)
-        for i, k in enumerate(names):
-            if not n[k]:  # no ratio: the values themselves
-                unit = d["optimum"]["parameters"][k].partition(" ")[2]
-                ax2.text(0.98, i, f"{n[k]:.3g} -> {o[k]:.3g} {unit}", transform=ax2.get_yaxis_transform(),
-                         ha="right", va="center", fontsize=7)
-        ax2.set_xlabel("optimum / nominal")
+        values = ax2.twinx()  # the values themselves, in display units, as the right-hand tick labels
+        values.set_ylim(ax2.get_ylim())
+        units = [d["optimum"]["parameters"][k].partition(" ")[2] for k in names]
+        values.set_yticks(range(len(names)), [f"{shown(u, n[k])} → {shown(u, o[k])}" for u, k in zip(units, names,
+                                                                                                     strict=True)],
+                          fontsize=7)
+        ax2.set_xlabel("optimum / nominal (log scale)")
         fig3, ax3 = new_figure()
         h = self.history
         if h.get("obj"):

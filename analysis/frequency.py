@@ -18,6 +18,7 @@ from scipy.optimize import minimize_scalar
 
 from autobal.analysis import progress
 from autobal.analysis.linearize import LinearModel, Setup
+from autobal.analysis.quantities import Declarations, Quantity
 from autobal.analysis.result import Result, new_figure
 
 #: what each model is, for legends (Pavlenko (2014): chain form (2.40)/(2.111), App. A/B program model)
@@ -81,6 +82,35 @@ def characteristic(lin: LinearModel, omega_range: tuple, convention: str, amplit
     }
 
 
+def _others(*keys: str) -> str:
+    """The keys of the first model (top level) and of every named model."""
+    return " ".join(f"{k} models.*.{k}" for k in keys)
+
+
+#: every number of the frequency block (Pavlenko 2014, §2.6): amplitudes of the face gap in µm as the keys say
+QUANTITIES = Declarations(
+    Quantity("headline.peaks[].omega", "rad/s", "ω_I, ω_II", "resonance frequencies of the headline model",
+             headline=True),
+    Quantity("headline.peaks[].amplitude_um", "um", "A_I, A_II", "face-gap amplitude at the resonances",
+             headline=True),
+    Quantity("headline.at_operating_speed.omega", "rad/s", "ω0", "operating speed", headline=True),
+    Quantity("headline.at_operating_speed.amplitude_um", "um", "A(ω0)", "face-gap amplitude at the operating speed",
+             headline=True),
+    Quantity("headline.static_amplitude_um", "um", "A(0)", "static face-gap amplitude", headline=True),
+    Quantity("headline.max_real", "1/s", "max Re λ", "spectral abscissa of the headline model", headline=True),
+    Quantity(_others("peaks[].omega", "at_operating_speed.omega"), "rad/s", "ω", "resonance frequency / operating "
+             "speed of a model"),
+    Quantity(_others("peaks[].amplitude_um", "at_operating_speed.amplitude_um", "static_amplitude_um"), "um", "A",
+             "face-gap amplitude of a model"),
+    Quantity("headline.at_operating_speed.phase_deg " + _others("at_operating_speed.phase_deg"), "deg", "φ(ω0)",
+             "phase of the face gap at the operating speed"),
+    Quantity("max_real models.*.max_real", "1/s", "max Re λ", "spectral abscissa of a model"),
+    Quantity("forcing_amplitude", "1", "δψ_1a", "forcing amplitude, ratio of the discharge pressure",
+             source="Pavlenko (2014), §2.6"),
+    Quantity("z_B", "m", "z_B", "base gap of the amplitudes", "µm"),
+)
+
+
 @dataclass
 class FrequencyResult(Result):
     """AFC/PFC of the face gap for each model (Pavlenko (2014), Figs 2.7, 2.11).
@@ -91,6 +121,7 @@ class FrequencyResult(Result):
 
     data: dict
     name = "frequency"
+    quantities = QUANTITIES
 
     @property
     def peaks(self) -> list[dict]:

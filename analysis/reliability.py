@@ -32,6 +32,7 @@ from scipy.optimize import brentq
 from scipy.special import ndtr
 
 from autobal.analysis import progress
+from autobal.analysis.quantities import Declarations, Quantity
 from autobal.analysis.result import Result, new_figure
 from autobal.models.hydroheel import (
     WearModel,
@@ -158,12 +159,53 @@ class Reliability:
         return brentq(f, 0.0, horizon, xtol=1.0)
 
 
+_P14 = "Pavlenko (2014)"
+_BOTH = ("literal", "renormalised")
+
+
+def _models(*keys: str) -> str:
+    """The keys of the literal (1.48) and the renormalised load density."""
+    return " ".join(f"{m}.{k}" for m in _BOTH for k in keys)
+
+
+#: every number of the reliability block (Pavlenko 2014, ch. 1.2): times in hours as the keys say
+QUANTITIES = Declarations(
+    Quantity("renormalised.mttf_h", "h", "T", "mean time to failure, load density renormalised on [0, σψ1]",
+             source=f"{_P14}, Eq. (1.49)", headline=True),
+    Quantity("literal.mttf_h", "h", "T", "mean time to failure, (1.48)-(1.49) as printed",
+             source=f"{_P14}, Eq. (1.49)", headline=True),
+    Quantity(_models("mttf_sojourn_h", "mttf_infinite_h", "time_at_h"), "h", "T",
+             "mean time to failure by the sojourn cross-check / to an infinite horizon; time at a reliability"),
+    Quantity(_models("P0", "P") + " reliable_probability wear_le_base_gap", "1", "P(t)",
+             "probability of failure-free operation (at the times of times_h) / of wear ≤ z_B",
+             source=f"{_P14}, Eq. (1.48), Figs. 1.27-1.28"),
+    Quantity("times_h horizon_h curve.t_h", "h", "t", "operating times"),
+    Quantity("curve.P_literal curve.P_renormalised curve.P_wear_le_base_gap", "1", "P(t)", "reliability curves"),
+    Quantity("b_mean b_std", "1/s", "b", "wear rate of the inner-seal clearance ratio χ, mean and std",
+             source=f"{_P14}, Eqs. (1.38)-(1.43)"),
+    Quantity("source.b_mean_per_s source.b_std_per_s", "1/s", "b", "the source's wear rate, mean and std"),
+    Quantity("z_B", "m", "z_B", "base gap", "µm"),
+    Quantity("k alpha_T1 chi0 u_max u_min q_at_u_max a_b tau_mean tau_std sigma psi1 a_tau "
+             "load_mass_on_0_sigma_psi1", "1", "k, α, χ0, u, τ ...", "the source's groups of the wear model",
+             source=f"{_P14}, Eqs. (1.30)-(1.52)"),
+    Quantity("region.chi region.tau_u_min region.tau_u_max", "1", "χ, τ", "region B of Fig. 1.24",
+             source=f"{_P14}, Fig. 1.24"),
+    Quantity("source.u_max source.chi0 source.tau_std source.k source.a_b source.a_tau source.wear_le_zB_2000h "
+             "source.P_2000h source.P_4000h_about", "1", "", "the source's published groups and probabilities",
+             source=f"{_P14}, ch. 1.2"),
+    Quantity("source.mttf_h", "h", "T", "the source's mean time to failure", source=f"{_P14}, Eq. (1.49)"),
+    Quantity("table_1_2.mttf_kh table_1_2.time_at_P_0.8_kh", "kh", "T", "Table 1.2: times in thousands of hours",
+             source=f"{_P14}, Table 1.2"),
+)
+
+
 @dataclass
 class ReliabilityResult(Result):
     """Reliability of the traditional balance disc (Pavlenko 2014, ch. 1.2): P(t), MTTF, wear CDF."""
 
     data: dict
     name = "reliability"
+    quantities = QUANTITIES
 
     @property
     def mttf(self) -> float:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+from html import escape
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -169,6 +170,9 @@ class Result:
 
     #: the analysis key of results.json (``"statics"``, ``"frequency"`` ...)
     name: str = ""
+    #: every number of :meth:`to_dict`, declared (:class:`~autobal.analysis.quantities.Declarations`); None:
+    #: not declared yet (the report's allow-list ``UNDECLARED`` names these analyses)
+    quantities = None
 
     def to_dict(self) -> dict:
         """The results.json block: plain numbers in SI or named dimensionless groups."""
@@ -222,8 +226,88 @@ class Result:
         paths = [write_csv(folder / name, cols) for name, cols in self.tables().items()]
         return paths + [save_figure(fig, folder / name) for name, fig in self.figures().items()]
 
+    def verdict(self) -> tuple[bool | None, str] | None:
+        """The one verdict of the analysis, (ok, words), where it has one (the headline model's)."""
+        return None
+
+    def headline(self) -> list[dict]:
+        """The headline quantities as records (quantity, symbol, value and unit as displayed, SI value and unit,
+        key), from the declarations of :attr:`quantities`; empty where the analysis declares none."""
+        from autobal.analysis.quantities import significant
+
+        if self.quantities is None:
+            return []
+        return [{"quantity": q.description, "symbol": q.symbol, "value": significant(q.shown(v)),
+                 "unit": "" if q.display == "1" else q.display, "si_value": v, "si_unit": q.unit, "key": key}
+                for q, key, v in self.quantities.headline(self.to_dict())]
+
+    def to_dataframe(self, table: str | None = None):
+        """The CSV tables of :meth:`tables` as pandas DataFrames (pandas is optional: ``pip install pandas``).
+
+        Parameters
+        ----------
+        table : str, optional
+            One table's file name (``"statics_sweep.csv"``); without it, every table.
+
+        Returns
+        -------
+        pandas.DataFrame, or dict of file name -> DataFrame
+        """
+        try:
+            import pandas as pd
+        except ImportError as exc:
+            raise ImportError("to_dataframe() needs pandas, which autobal does not install: pip install pandas "
+                              "(or pip install 'autobal[notebook]'); tables() gives the same columns as dicts") from exc
+        tables = self.tables()
+        if table is not None:
+            if table not in tables:
+                raise KeyError(f"{type(self).__name__} has no table {table!r}; it has: {', '.join(tables) or 'none'}")
+            return pd.DataFrame(tables[table])
+        return {name: pd.DataFrame(cols) for name, cols in tables.items()}
+
+    def _repr_html_(self) -> str:
+        """Jupyter's view: the verdict, the headline numbers in display units (or the summary) and the figures."""
+        return html_block(self)
+
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.name}>"
+
+
+def html_verdict(verdict: tuple[bool | None, str] | None) -> str:
+    """A verdict as an HTML paragraph: ✔ good, ✘ bad, • information."""
+    if verdict is None:
+        return ""
+    ok, words = verdict
+    mark, colour = {True: ("✔", "#1a7f37"), False: ("✘", "#c0392b")}.get(ok, ("•", "#555"))
+    return f'<p style="color:{colour};font-weight:bold">{mark} {escape(words)}</p>'
+
+
+def html_table(rows: list[dict], columns: tuple[str, ...] = ("quantity", "symbol", "value", "unit")) -> str:
+    """Records as an HTML table of the named columns."""
+    head = "".join(f"<th>{escape(c)}</th>" for c in columns)
+    body = "".join("<tr>" + "".join(f"<td>{escape(str(r.get(c, '')))}</td>" for c in columns) + "</tr>" for r in rows)
+    return f"<table><tr>{head}</tr>{body}</table>"
+
+
+def html_figure(fig: Figure, dpi: int = 80) -> str:
+    """A figure as an inline PNG ``<img>`` (drawn off pyplot, the caller's backend untouched)."""
+    import base64
+    import io
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    return f'<img style="max-width:100%" src="data:image/png;base64,{base64.b64encode(buf.getvalue()).decode()}">'
+
+
+def html_block(result: Result, figures: bool = True) -> str:
+    """One result as HTML: its name, its verdict, its headline table in display units (the summary text
+    where it declares no headline) and its figures."""
+    rows = result.headline()
+    body = html_table(rows) if rows else f"<pre>{escape(result.summary())}</pre>"
+    figs = "".join(html_figure(f) for f in result.figures().values()) if figures else ""
+    verdict = (False, "FAILED: " + "; ".join(result.failures())) if result.failures() else result.verdict()
+    return (f"<div><h3>{escape(result.name or type(result).__name__)}</h3>{html_verdict(verdict)}"
+            f"{body}{figs}</div>")
 
 
 def failed_head(failures: list[str]) -> list[str]:

@@ -31,6 +31,7 @@ import numpy as np
 from autobal.analysis import interrupt
 from autobal.analysis.compiled import compiled_map
 from autobal.analysis.frequency import MODEL_LABELS
+from autobal.analysis.quantities import Declarations, Quantity
 from autobal.analysis.result import Result, failed_head, new_figure
 from autobal.analysis.rosenbrock import STATUS, rodas4_grid
 from autobal.models.dynamics import DynamicModel
@@ -228,6 +229,22 @@ def events(model: DynamicModel, t: np.ndarray, X: np.ndarray, psi1: np.ndarray) 
     return out
 
 
+#: every number of the transient block (Pavlenko 2014, §2.5); face-gap changes in µm as the keys say
+QUANTITIES = Declarations(
+    Quantity("cases[].max_dz_um", "um", "max |Δz|", "largest face-gap change of a case", headline=True),
+    Quantity("cases[].final_dz_um", "um", "Δz(t_end)", "face-gap change at the end of a case", headline=True),
+    Quantity("cases[].z", "m", "z", "face gap over time", "µm"),
+    Quantity("cases[].p2 cases[].p3", "Pa", "p2, p3", "chamber pressures over time"),
+    Quantity("cases[].amplitude", "1", "δψ1, δτ", "input amplitude, ratio of the discharge pressure or the load"),
+    Quantity("cases[].frequency", "rad/s", "ω", "frequency of a harmonic input", "rad/s"),
+    Quantity("cases[].t_end", "s", "t_end", "time reached", "ms"),
+    Quantity("cases[].events[].t", "s", "t", "time of an event (gap closed, valve at a stop, flow reversed)", "ms"),
+    Quantity("cases[].cpu_s", "s", "", "CPU time of the integration"),
+    Quantity("cases[].integrator_steps", "1", "", "integrator steps"),
+    Quantity("equilibrium_residual", "1", "", "residual of the nonlinear model at the static solution"),
+)
+
+
 @dataclass
 class TransientResult(Result):
     """Time responses of the nonlinear model from its equilibrium (Pavlenko (2014), Eq. (2.111)).
@@ -237,6 +254,7 @@ class TransientResult(Result):
 
     data: dict
     name = "transient"
+    quantities = QUANTITIES
 
     @property
     def max_gap_change(self) -> list[float]:

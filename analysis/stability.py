@@ -188,31 +188,37 @@ class StabilityResult(Result):
 
     @property
     def stable(self) -> bool:
-        """Whether the first model is asymptotically stable."""
+        """Whether the headline model (energy-consistent, nonlinear) is asymptotically stable."""
         return bool(self.data["stable"])
 
     @property
     def decay_rate(self) -> float:
-        """Stability margin of the first model, -max Re lambda, 1/s (negative: unstable)."""
+        """Stability margin of the headline model, -max Re lambda, 1/s (negative: unstable)."""
         return self.data["margin"]["decay_rate"]
 
     @property
     def poles(self) -> np.ndarray:
-        """Poles of the first model, 1/s (complex)."""
+        """Poles of the headline model, 1/s (complex)."""
         p = self.data["poles"]
         return np.asarray(p["real"], float) + 1j * np.asarray(p["imag"], float)
 
     def to_dict(self) -> dict:
         return self.data
 
+    def verdict(self) -> tuple[bool, str]:
+        """The headline (energy-consistent) model's: stable or not, and its decay rate."""
+        h = self.data["headline"]
+        decay = h["margin"]["decay_rate"]
+        rate = f"disturbances decay at {decay:.5g} 1/s" if decay > 0 else f"disturbances GROW at {-decay:.5g} 1/s"
+        return h["stable"], f"{MODEL_LABELS[h['model']]}: {'stable' if h['stable'] else 'UNSTABLE'}, {rate}"
+
     def summary(self) -> str:
         d = self.data
-        lines = [f"stability ({d['model']} model first): stable = {d['stable']}"]
-        if "headline" in d:
-            h = d["headline"]
-            lines.append(f"  headline, {MODEL_LABELS['nonlinear']}: {'stable' if h['stable'] else 'UNSTABLE'}, "
-                         f"decay rate {h['margin']['decay_rate']:+.1f} 1/s")
+        lines = [f"stability: {self.verdict()[1]}",
+                 "  validation against the source (its models do not judge the machine):"]
         for m, v in d["models"].items():
+            if m == "nonlinear":
+                continue
             um = ", ".join(f"{x['real']:+.1f} +- {x['imag']:.1f}i" for x in v["unstable_modes"]) or "-"
             lines.append(f"  {m:16s} stable {str(v['stable']):5s} margin {v['margin']['decay_rate']:+.1f} 1/s; "
                          f"unstable modes: {um}; Hurwitz negative minors: {v['hurwitz']['negative_minors'] or '-'}")
@@ -365,13 +371,14 @@ def _headline_first(models: dict) -> dict:
 
 
 def study(setup: Setup, models: list[str], smap=None, title: str = "") -> StabilityResult:
-    """Verdict of each named model (the first gives the top-level keys), ``headline`` the energy-consistent
-    model's verdict, and the optional maps with their single-parameter scans."""
+    """Verdict of each named model under ``models``; the top-level keys (``stable``, ``poles``, ``margin``,
+    ``hurwitz``) and ``headline`` are the energy-consistent model's, the one verdict of the analysis (the
+    source's models validate, they do not judge the machine); and the optional maps with their
+    single-parameter scans."""
     res = {m: verdict(setup.linear(m)) for m in models}
-    first = res[models[0]]
     head = res.get("nonlinear") or verdict(setup.linear("nonlinear"))
-    data = {"title": title, "model": models[0], "stable": first["stable"], "poles": first["poles"],
-            "hurwitz": first["hurwitz"], "margin": first["margin"], "models": res,
+    data = {"title": title, "model": "nonlinear", "stable": head["stable"], "poles": head["poles"],
+            "hurwitz": head["hurwitz"], "margin": head["margin"], "models": res,
             "headline": {"model": "nonlinear", "stable": head["stable"], "margin": head["margin"],
                          "unstable_modes": head["unstable_modes"]},
             "coefficients": coefficient_table(setup)}

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from autobal.analysis import closed_form, workprecision
+from autobal.analysis.quantities import Declarations, Quantity
 from autobal.analysis.result import Result, fixed_layout, fmt, new_figure, with_statuses
 from autobal.analysis.statics import StaticPoint, StaticsSolver
 from autobal.errors import SolveError
@@ -21,6 +22,78 @@ SWEEP_KEYS = ("psi_e", "psi2", "psi3", "psi_cam", "u", "xi")
 PATH_NODES = 257  # continuation nodes across a sweep's range, whatever the number of requested points
 MAX_HALVINGS = 6  # a failed continuation step is halved at most this many times
 REFINE_POINTS = 12  # extra points inside each sweep interval where a stop is reached or left (figures)
+
+_P14 = "Pavlenko (2014)"
+_SWEEPS = "sweep sweep_refined"
+
+
+def _both(*keys: str) -> str:
+    """The keys in the sweep and its refined points."""
+    return " ".join(f"{s}.{k}" for s in _SWEEPS.split() for k in keys)
+
+
+#: every number of the statics block (Pavlenko 2014, ch. 2: groups (2.18); psi = p/p_B, u = z/z_B, xi = x/x_B,
+#: q = Q/Q_B); the headline quantities first, in the order the summary prints them
+QUANTITIES = Declarations(
+    Quantity("exact.z0", "m", "z0", "face gap at the operating point", "µm", headline=True),
+    Quantity("exact.x0", "m", "x0", "valve opening at the operating point", "mm", headline=True),
+    Quantity("exact.p1", "Pa", "p1", "discharge pressure", headline=True),
+    Quantity("exact.p2", "Pa", "p2", "disc-chamber pressure", headline=True),
+    Quantity("exact.p3", "Pa", "p3", "pressure in the cavity behind the disc", headline=True),
+    Quantity("exact.pe", "Pa", "p_e", "barrier-chamber pressure", headline=True),
+    Quantity("exact.pcam", "Pa", "p_cam", "valve-chamber pressure", headline=True),
+    Quantity("exact.Q_e", "m^3/s", "Q_e", "barrier flow (the leak of the device)", headline=True),
+    Quantity("exact.Q_T", "m^3/s", "Q_T", "face-throttle leak", headline=True),
+    Quantity("exact.Q_1", "m^3/s", "Q_1", "inner-seal flow (positive towards the disc)", headline=True),
+    Quantity("exact.Q_3", "m^3/s", "Q_3", "flow through the cavity throttle"),
+    Quantity("critical_exact.p1_kr", "Pa", "p1_kr", "discharge pressure at which the inner-seal flow reverses",
+             headline=True),
+    Quantity("critical_exact.dp_kr", "Pa", "Δp_kr", "critical barrier pressure margin p_e − p1", "bar", headline=True),
+    Quantity("critical_exact.psi1_kr closed_form.psi1_kr", "1", "ψ1_kr", "critical discharge ratio",
+             source=f"{_P14}, Eq. (2.32)"),
+    Quantity("critical_exact.dpsi_kr closed_form.dpsi_kr", "1", "δψ_kr", "critical barrier margin (p_e − p1)/p_B",
+             source=f"{_P14}, Eq. (2.31)"),
+    Quantity("exact.psi1 force_gap.psi1", "1", "ψ1", "discharge pressure ratio p1/p_B"),
+    Quantity("dpsi", "1", "δψ", "barrier margin (p_e − p1)/p_B of the scene", source=f"{_P14}, Eq. (2.18)"),
+    Quantity("exact.u0 closed_form.u0 closed_form.u0_quadratic", "1", "u0", "face-gap ratio z0/z_B",
+             source=f"{_P14}, Eq. (2.27)"),
+    Quantity("exact.xi0 closed_form.xi0", "1", "ξ0", "valve-opening ratio x0/x_B", source=f"{_P14}, Eq. (2.28)"),
+    Quantity("exact.psi2_0 closed_form.psi2_0 closed_form.psi2_0_quadratic", "1", "ψ20", "disc-chamber ratio p2/p_B",
+             source=f"{_P14}, Eq. (2.24)"),
+    Quantity("exact.psi3_0 closed_form.psi3_0 closed_form.psi3_0_quadratic", "1", "ψ30", "cavity ratio p3/p_B",
+             source=f"{_P14}, Eq. (2.25)"),
+    Quantity("exact.psi_e0 closed_form.psi_e0", "1", "ψ_e0", "barrier-chamber ratio p_e/p_B"),
+    Quantity("exact.psi_cam0 closed_form.psi_cam0", "1", "ψ_cam0", "valve-chamber ratio p_cam/p_B",
+             source=f"{_P14}, Eq. (2.26)"),
+    Quantity("exact.kappa_s closed_form.kappa_s", "1", "κ_s", "axial stiffness of the balancing force (group)",
+             source=f"{_P14}, Eq. (2.36)"),
+    Quantity("closed_form.kappa_u_2_162", "1", "κ_u", "stiffness along the pressure sweep (gas device)",
+             source=f"{_P14}, Eq. (2.162)"),
+    Quantity("exact.q_e exact.q_T exact.q_1 closed_form.q_T closed_form.q_1", "1", "q", "flow ratio Q/Q_B",
+             source=f"{_P14}, Eq. (2.30)"),
+    Quantity("closed_form.Q_e", "m^3/s", "Q_e", "barrier flow, closed form"),
+    Quantity("closed_form.Q_B", "m^3/s", "Q_B", "base flow of the flow ratios q", source=f"{_P14}, Eq. (2.29)"),
+    Quantity("closed_form.Q_e_over_Q_n", "1", "Q_e/Q_n", "barrier flow over the nominal flow of the machine"),
+    Quantity("exact.r_valve exact.r_contact", "1", "r", "complementarity residuals of the valve stop and the contact"),
+    Quantity("exact.solver.iterations", "1", "", "IPOPT iterations"),
+    Quantity("exact.solver.max_relative_residual exact.newton_max_difference sweep.max_relative_residual", "1", "",
+             "largest relative residual of the static equations / difference from a Newton polish"),
+    Quantity("groups.*", "1", "", "the source's dimensionless groups", source=f"{_P14}, Eq. (2.18)"),
+    Quantity("derived.zeta_u3 derived.zeta_TB derived.b_from_impeller", "1", "ζ, b", "loss coefficients and the "
+             "impeller group"),
+    Quantity("scales.p_B", "Pa", "p_B", "base pressure of the ratios ψ"),
+    Quantity("scales.z_B", "m", "z_B", "base gap of the ratio u", "µm"),
+    Quantity("scales.x_B", "m", "x_B", "base opening of the ratio ξ"),
+    Quantity("scales.s_B scales.s_e derived.f_TB derived.s_T derived.s_e", "m^2", "s", "areas"),
+    Quantity("scales.g1 conductances.*", "m^3/(Pa*s)", "g", "hydraulic conductances"),
+    Quantity("scales.Q_scale", "m^3/s", "g1 p_B", "flow scale"),
+    Quantity("scales.Q_n", "m^3/s", "Q_n", "nominal flow of the machine", "m³/h"),
+    Quantity(_both("psi1", "psi_e", "psi2", "psi3", "psi_cam", "u", "xi", "q_e", "q_T", "q_1", "kappa_s",
+                   "regulator_saturated", "closed_form.*"), "1", "", "the ratios of the sweep over ψ1"),
+    Quantity(_both("Q_e", "Q_1", "Q_T"), "m^3/s", "Q", "flows over the sweep"),
+    Quantity("force_gap.u force_gap.phi_exact force_gap.phi_closed_form force_gap.tau", "1", "u, φ, τ",
+             "balancing force against the gap at the operating pressure", source=f"{_P14}, Eq. (2.35)"),
+)
 
 
 @dataclass
@@ -32,6 +105,7 @@ class StaticsResult(Result):
 
     data: dict  # the results.json block; numbers in SI or as named dimensionless groups
     name = "statics"
+    quantities = QUANTITIES
 
     @property
     def face_gap(self) -> float:
@@ -62,17 +136,36 @@ class StaticsResult(Result):
     def to_dict(self) -> dict:
         return self.data
 
+    def verdict(self) -> tuple[bool, str]:
+        """At the operating point: regulating, no face contact, inner-seal flow towards the disc; and how far
+        the discharge pressure is from the one that reverses the inner-seal flow."""
+        ex, kr = self.data["exact"], (self.data.get("critical_exact") or {}).get("psi1_kr")
+        problems = [w for w, bad in (("regulator SATURATED", ex["regulator_saturated"]),
+                                     ("face CONTACT", ex["contact"]),
+                                     ("inner-seal flow REVERSED", not ex["Q_1"] > 0)) if bad]
+        words = "operating point: " + (", ".join(problems) if problems else
+                                       f"regulating, face gap {QUANTITIES.find('exact.z0').text(ex['z0'])}, "
+                                       "inner-seal flow towards the disc")
+        if kr is not None and ex["psi1"]:
+            words += f"; the inner-seal flow reverses at {kr / ex['psi1']:.3g} × the operating discharge pressure"
+        return not problems, words
+
     def summary(self) -> str:
         ex, cf = self.data["exact"], self.data["closed_form"]
         crit = self.data["critical_exact"]
-        lines = [f"statics at psi1 = {ex['psi1']:g}: IPOPT {ex['solver']['status']}, "
-                 f"max relative residual {ex['solver']['max_relative_residual']:.1e}",
+        ok, words = self.verdict()
+        lines = [f"statics at p1 = {QUANTITIES.find('exact.p1').text(ex['p1'])} (psi1 = {ex['psi1']:g}): IPOPT "
+                 f"{ex['solver']['status']}, max relative residual {ex['solver']['max_relative_residual']:.1e}",
+                 f"  {'ok' if ok else 'NOT OK'}: {words}",
+                 *QUANTITIES.lines(self.data),
+                 "  the source's dimensionless groups (Pavlenko 2014, Eqs. (2.24)-(2.36)):",
                  f"  {'':10s}{'exact':>12s}{'closed form':>14s}"]
         for k in ("u0", "xi0", "psi2_0", "psi3_0", "psi_e0", "psi_cam0", "kappa_s"):
             lines.append(f"  {k:10s}{fmt(ex.get(k)):>12s}{fmt(cf.get(k)):>14s}")
         lines.append(f"  {'psi1_kr':10s}{fmt(crit['psi1_kr']):>12s}{fmt(cf['psi1_kr']):>14s}")
         lines.append(f"  {'dpsi_kr':10s}{fmt(crit['dpsi_kr']):>12s}{fmt(cf['dpsi_kr']):>14s}")
-        lines.append(f"  Q_e [m3/s]{fmt(ex['Q_e']):>12s}{fmt(cf['Q_e']):>14s}")
+        q_e = QUANTITIES.find("exact.Q_e")
+        lines.append(f"  {'Q_e':10s}{q_e.text(ex['Q_e']):>12s}{q_e.text(cf['Q_e']):>14s}")
         sat = self.data["sweep"]["regulator_saturated"]
         if any(sat):
             first = self.data["sweep"]["psi1"][int(np.argmax(sat))]
@@ -81,11 +174,28 @@ class StaticsResult(Result):
             lines.append("  the operating point itself has the regulator saturated")
         return "\n".join(lines)
 
+    #: sweep column -> (its base in data["scales"], the operating-point quantity whose display unit it takes)
+    _DIMENSIONAL = {"psi1": ("p_B", "exact.p1", "p1"), "psi_e": ("p_B", "exact.pe", "pe"),
+                    "psi2": ("p_B", "exact.p2", "p2"), "psi3": ("p_B", "exact.p3", "p3"),
+                    "psi_cam": ("p_B", "exact.pcam", "pcam"), "u": ("z_B", "exact.z0", "z"),
+                    "xi": ("x_B", "exact.x0", "x")}
+
     def tables(self) -> dict[str, dict]:
-        sw, fg = self.data["sweep"], self.data["force_gap"]
-        cols = {k: sw[k] for k in ("psi1", *SWEEP_KEYS, "q_e", "q_T", "q_1", "Q_e", "Q_1", "Q_T",
-                                   "kappa_s", "regulator_saturated", "contact")}
-        cols |= {f"closed_form_{k}": v for k, v in sw["closed_form"].items() if not k.endswith("_status")}
+        """statics_sweep.csv: every pressure, gap and flow in the units of the field (MPa, µm, mm, L/s; the
+        header names it) beside the source's dimensionless group; force_gap.csv in the groups of (2.35)."""
+        sw, fg, sc = self.data["sweep"], self.data["force_gap"], self.data["scales"]
+        cols = {}
+        for k in ("psi1", *SWEEP_KEYS):
+            base, key, name = self._DIMENSIONAL[k]
+            q = QUANTITIES.find(key)
+            cols[f"{name} [{q.display}]"] = [None if v is None else q.shown(v * sc[base]) for v in sw[k]]
+            cols[f"{k} [1]"] = sw[k]
+        for k in ("Q_e", "Q_1", "Q_T"):
+            q = QUANTITIES.find(f"exact.{k}")
+            cols[f"{k} [{q.display}]"] = [None if v is None else q.shown(v) for v in sw[k]]
+        cols |= {f"{k} [1]": sw[k] for k in ("q_e", "q_T", "q_1", "kappa_s")}
+        cols |= {k: sw[k] for k in ("regulator_saturated", "contact")}
+        cols |= {f"closed_form_{k} [1]": v for k, v in sw["closed_form"].items() if not k.endswith("_status")}
         return {"statics_sweep.csv": cols,
                 "force_gap.csv": {"u": fg["u"], "phi_exact": fg["phi_exact"],
                                   "phi_closed_form": fg["phi_closed_form"]}}

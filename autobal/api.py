@@ -20,7 +20,7 @@ from pathlib import Path
 
 from autobal import __version__, analyses, report, scenario
 from autobal.analysis import executor, interrupt
-from autobal.analysis.result import Result, write_json
+from autobal.analysis.result import Result, html_figure, write_json
 from autobal.errors import AutobalError, SolveError
 from autobal.output import LOG, OutputFolder, SolverLog, signals_held
 from autobal.scenario import BaseScenario as Scenario  # every scene model (see scenario.model_for)
@@ -115,6 +115,25 @@ class Run(Mapping):
         with folder as tmp:
             self.write(tmp)
         return folder.path
+
+    def tables(self) -> dict[str, dict]:
+        """Every result's CSV tables: file name -> {column: values}."""
+        return {name: cols for r in self.results.values() for name, cols in r.tables().items()}
+
+    def to_dataframe(self, table: str | None = None):
+        """The tables as pandas DataFrames (pandas is optional): one by file name, or a dict of all."""
+        frames = {name: df for r in self.results.values() for name, df in r.to_dataframe().items()}
+        if table is None:
+            return frames
+        if table not in frames:
+            raise KeyError(f"the run has no table {table!r}; it has: {', '.join(frames) or 'none'}")
+        return frames[table]
+
+    def _repr_html_(self, figures: bool = True) -> str:
+        """Jupyter's view: per analysis the one verdict, the headline table in display units and the figures."""
+        imgs = {name: [html_figure(f) for f in r.figures().values()] if figures else []
+                for name, r in self.results.items()}
+        return report.notebook(self.to_dict(), imgs)
 
     def __repr__(self) -> str:
         return f"<Run {self.scene.name}: {', '.join(self.results)}>"

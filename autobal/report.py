@@ -16,11 +16,14 @@ from __future__ import annotations
 
 import base64
 import csv
+import functools
 import hashlib
+import importlib
 import json
 import math
 import re
 import warnings
+from html import escape as html_escape
 from importlib import resources
 from pathlib import Path
 
@@ -28,7 +31,20 @@ import jinja2
 import yaml
 
 from autobal import report_input
-from autobal.analysis.result import plain
+from autobal.analysis.quantities import (
+    Declarations,
+    Quantity,
+    convert,
+    display_unit_of,
+    flatten,
+    is_display_unit,
+    is_number,
+    leaf_paths,
+    lookup,
+    significant,
+    spelled,
+)
+from autobal.analysis.result import html_verdict, plain
 from autobal.errors import ScenarioError
 from autobal.report_input import MAX_FIGURE_BYTES
 from autobal.scenario import MAX_FILE_BYTES as MAX_SCENE_BYTES
@@ -39,13 +55,20 @@ REPORT = "report.html"
 STATUS_FILES = ("failed_solve.json", "interrupted.json", "error.json")
 
 # --------------------------------------------------------------------------------------------
-# units of the results.json keys: (regex on "analysis.dotted.path", SI unit); the first match wins
+# units of the results.json keys: the declarations of each Result class (analysis/quantities.py)
 # --------------------------------------------------------------------------------------------
+#: analysis -> the module whose QUANTITIES declare every number of its block (imported when a report needs it)
+DECLARED = {"statics": "autobal.analysis.statics_study", "frequency": "autobal.analysis.frequency",
+            "transient": "autobal.analysis.simulate", "reliability": "autobal.analysis.reliability"}
+
+#: analyses whose numbers are not declared yet: their units still come from the name rules below.  This
+#: allow-list only shrinks (tests/test_quantities.py fails on an analysis that is in neither).
+UNDECLARED = ("stability", "liquid_balancer", "estimation", "montecarlo",
+              "rotor_dynamics", "spinup", "spinup_robust", "spinup_time_optimal", "design", "ross_spinup")
+
 _P = r"(^|\.)"  # start of a key
-# A key named with its unit (``_s``, ``_um``, ``_rad_s`` ...) is caught by the suffix rules; the last rule
-# of each analysis marks the rest as the source's dimensionless groups, so an owner who adds a
-# dimensional key without a unit suffix adds its rule here.
-UNIT_RULES: list[tuple[str, str]] = [
+# (regex on "analysis.dotted.path", SI unit), the first match wins: for the UNDECLARED analyses only
+_UNDECLARED_RULES: list[tuple[str, str]] = [
     # bookkeeping and keys that carry their unit in the name
     (r"(run_time_s|time_s|time_monte_carlo_s|cpu_s|build_s|solve_s|total_s|seconds)$", "s"),
     (r"\.accuracy\.", "1"),
@@ -74,25 +97,12 @@ UNIT_RULES: list[tuple[str, str]] = [
     (r"(^|\.)(cv|spread|std_ratio|stable_fraction|saturated_fraction|max_rel_diff|\w+_max_rel_diff)$", "1"),
     (r"(iterations|points|samples|seed|chunk_size|dof|groups|valid|invalid|count|integrator_steps"
      r"|zone_without_equilibrium|n_starts|intervals|degree|index|stages)$", "1"),
-    # statics (Pavlenko 2014, ch. 2: groups (2.18), ratios psi = p/p_B, u = z/z_B, xi = x/x_B, q = Q/Q_B)
-    (r"^statics\..*(z0|x0|z_B|x_B)$", "m"),
-    (r"^statics\..*" + _P + r"(p1|p2|p3|pe|pcam|p1_kr|dp_kr|p_B)$", "Pa"),
-    (r"^statics\..*(s_B|s_e|s_T|f_TB)$", "m^2"),
-    (r"^statics\.conductances\.", "m^3/(Pa*s)"),
-    (r"^statics\.scales\.g1$", "m^3/(Pa*s)"),
-    (r"^statics\..*Q_e_over_Q_n$", "1"),
-    (r"^statics\..*" + _P + r"Q_\w+$", "m^3/s"),
-    (r"^statics\.", "1"),
     # dynamics (§2.4-2.7): frequencies rad/s, amplitudes micrometres, poles 1/s
     (r"(^|\.)(omega|omega_ref|natural_frequency|imag|frequency)$", "rad/s"),
     (r"(^|\.)(real|decay_rate|max_real|growth_rate)$", "1/s"),
     (r"(^|\.)phase_deg$", "deg"),
-    (r"^frequency\..*z_B$", "m"),
     (r"^stability\.coefficients\.(columns|extra)\.", "per coefficient: K, zeta 1; T, tau s (App. A/B)"),
-    (r"^transient\..*" + _P + r"(z|z0)$", "m"),
-    (r"^transient\..*" + _P + r"(p1|p2|p3|pe|pcam)$", "Pa"),
-    (r"^transient\..*" + _P + r"(t|t_end)$", "s"),
-    (r"^(frequency|stability|transient)\.", "1"),
+    (r"^stability\.", "1"),
     # liquid auto-balancer (Khomyak 2020; Pashkov 2010): efficiency lambda0, k_D, gamma = omega/omega_cr
     (r"^liquid_balancer\..*(_gcm)$", "g*cm"),
     (r"^liquid_balancer\..*" + _P + r"(D0|D)$", "kg*m"),
@@ -123,11 +133,6 @@ UNIT_RULES: list[tuple[str, str]] = [
     (r"^montecarlo\.afc\.(nominal_um|mean|std|band_low|band_high|quantiles\..*)$", "um"),
     (r"^montecarlo\..*" + _P + r"Q_\w+(\..*)?$", "m^3/s"),
     (r"^montecarlo\.", "1"),
-    # reliability of the traditional disc (Pavlenko 2014, ch. 1.2): u, chi, tau dimensionless
-    (r"^reliability\..*" + _P + r"t_h$", "h"),
-    (r"^reliability\..*(b_mean|b_std|_per_s)$", "1/s"),
-    (r"^reliability\..*z_B$", "m"),
-    (r"^reliability\.", "1"),
     # rotor with a liquid auto-balancer (Pashkov 2010): z = Omega/omega_cr, a/e, d dimensionless
     (r"^rotor_dynamics\.passage\.(table\[\]\.n|crossover_n_star.*)$", "1/s"),
     (r"^rotor_dynamics\.", "1"),
@@ -157,39 +162,30 @@ UNIT_RULES: list[tuple[str, str]] = [
 ]
 
 
-def _leaf_paths(value, path: str):
-    """(dotted path, value) of every numeric leaf; lists of records are walked as ``key[]``."""
-    if isinstance(value, dict):
-        for k, v in value.items():
-            yield from _leaf_paths(v, f"{path}.{k}" if path else str(k))
-    elif isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
-        for v in value:
-            yield from _leaf_paths(v, path + "[]")
-    elif isinstance(value, list):
-        flat = _flatten(value)
-        if any(_is_number(v) for v in flat):
-            yield path, value
-    elif _is_number(value):
-        yield path, value
+@functools.cache
+def declarations(analysis: str) -> Declarations | None:
+    """The declared quantities of an analysis, None for one of :data:`UNDECLARED`."""
+    if analysis not in DECLARED:
+        return None
+    return importlib.import_module(DECLARED[analysis]).QUANTITIES
 
 
-def _flatten(seq):
-    for v in seq:
-        if isinstance(v, list):
-            yield from _flatten(v)
-        else:
-            yield v
-
-
-def _is_number(v) -> bool:
-    return isinstance(v, int | float) and not isinstance(v, bool)
+def quantity(path: str) -> Quantity | None:
+    """The declaration of a results.json key ``analysis.dotted.path``, or None."""
+    analysis, _, rest = path.partition(".")
+    decl = declarations(analysis)
+    return None if decl is None else decl.find(rest)
 
 
 def unit_of(path: str) -> str | None:
-    """SI unit of a results.json key ``analysis.dotted.path`` ("1" when dimensionless), or None."""
-    for pattern, unit in _RULES:
-        if pattern.search(path):
-            return unit
+    """SI unit of a results.json key ``analysis.dotted.path`` ("1" when dimensionless), or None: its
+    declaration, or for an analysis of :data:`UNDECLARED` the first name rule that matches."""
+    analysis = path.partition(".")[0]
+    if analysis in DECLARED:
+        q = quantity(path)
+        return None if q is None else q.unit
+    if analysis in UNDECLARED:
+        return next((unit for pattern, unit in _RULES if pattern.search(path)), None)
     return None
 
 
@@ -199,7 +195,7 @@ def units(results: dict, analyses: list[str] | None = None) -> dict[str, str]:
     names = analyses if analyses is not None else [k for k in results if k in SECTIONS]
     out = {}
     for name in names:
-        for path, _ in _leaf_paths(plain(results.get(name, {})), name):
+        for path, _ in leaf_paths(plain(results.get(name, {})), name):
             unit = _parameter_unit(path, results) or unit_of(path)
             if unit is not None:
                 out.setdefault(path, unit)
@@ -227,33 +223,17 @@ def _parameter_unit(path: str, results: dict) -> str | None:
 
 def _get(data, path: str, default=None):
     """``data`` at a dotted path (``a.b.c``; an integer picks a list item), or ``default``."""
-    for key in path.split("."):
-        if isinstance(data, dict) and key in data:
-            data = data[key]
-        elif isinstance(data, list) and key.isdigit() and int(key) < len(data):
-            data = data[int(key)]
-        else:
-            return default
-    return data
+    return lookup(data, path, default)
 
 
-_RULES = [(re.compile(p), u) for p, u in UNIT_RULES]
+_RULES = [(re.compile(p), u) for p, u in _UNDECLARED_RULES]
 
 # --------------------------------------------------------------------------------------------
 # numbers and cells
 # --------------------------------------------------------------------------------------------
-# SI unit -> (unit shown, factor): designers read MPa, mm and L/s
-DISPLAY = {"Pa": ("MPa", 1e-6), "m^3/s": ("L/s", 1e3), "m": ("mm", 1e3), "m^3": ("L", 1e3)}
-PRETTY = (("um", "µm"), ("^2", "²"), ("^3", "³"), ("*", "·"))
-
-
 def pretty_unit(unit: str) -> str:
     """A unit as printed in the report ("1" -> "dimensionless")."""
-    if unit == "1":
-        return "dimensionless"
-    for a, b in PRETTY:
-        unit = unit.replace(a, b)
-    return unit
+    return "dimensionless" if unit == "1" else spelled(unit)
 
 
 def number(v) -> str:
@@ -268,20 +248,21 @@ def number(v) -> str:
     return f"{v:.5g}" if a == 0 or 1e-3 <= a < 1e6 else f"{v:.4e}"
 
 
-def cell(v, unit: str | None = None) -> dict:
-    """A table cell: a number (or null) with its unit, converted to the display unit of DISPLAY;
-    words and yes/no without a unit."""
+def cell(v, unit: str | None = None, shown: str | None = None) -> dict:
+    """A table cell: a number (or null) with its unit, converted from the SI ``unit`` to the display unit
+    ``shown`` (default: the field's unit of analysis/quantities.py, µm for lengths below 10 µm); words and
+    yes/no without a unit."""
     if isinstance(v, bool | str):
         return text(v)
     unit = unit or "?"
+    if shown is None:
+        shown = "µm" if unit == "m" and v is not None and abs(v) < 1e-5 else display_unit_of(unit)
+    if not is_display_unit(shown, unit):  # a unit of an undeclared analysis that has no display unit
+        shown = unit
     if v is None:
-        return {"text": "—", "unit": pretty_unit(unit), "num": True, "null": True}
-    if unit in DISPLAY:
-        shown, factor = DISPLAY[unit]
-        if unit == "m" and abs(v) < 1e-5:
-            shown, factor = "um", 1e6
-        return {"text": number(v * factor), "unit": pretty_unit(shown), "num": True}
-    return {"text": number(v), "unit": pretty_unit(unit), "num": True}
+        return {"text": "—", "unit": pretty_unit(shown), "num": True, "null": True}
+    return {"text": number(convert(v, unit, shown) if is_display_unit(shown, unit) else v),
+            "unit": pretty_unit(shown), "num": True}
 
 
 def text(v) -> dict:
@@ -313,7 +294,10 @@ class Section:
         self.warnings: list[str] = []
         self.notes: list[str] = []
         self.comparison: dict | None = None
-        self.validation: list[dict] = []  # verdicts on the source's own models (the validation part)
+        self.validation: list[dict] = []  # what the source's own models show (the validation part)
+        self.validation_tables: list[dict] = []
+        self.validation_notes: list[str] = []
+        self.main: dict | None = None  # the one verdict of the analysis (the summary shows it)
 
     def get(self, path: str, default=None):
         return _get(self.block, path, default)
@@ -321,18 +305,41 @@ class Section:
     def unit(self, path: str) -> str | None:
         return _parameter_unit(_unit_path(self.name, path), self.results) or unit_of(_unit_path(self.name, path))
 
-    def row(self, label: str, symbol: str, path: str, unit: str | None = None, value=None) -> None:
-        """One headline row; the value is the block's at ``path`` unless given, its unit the units map's.
-        A key the block lacks (the analysis did not compute it) gives no row."""
+    def cell(self, path: str, value=None) -> dict:
+        """The cell of the block's value at ``path`` (or ``value``) in the display unit of its declaration."""
+        q = quantity(f"{self.name}.{path}")
+        v = self.get(path) if value is None else value
+        return cell(v, q.unit, q.display) if q is not None else cell(v, self.unit(path) or "?")
+
+    def row(self, label: str, symbol: str, path: str, unit: str | None = None, value=None, note: str = "") -> None:
+        """One headline row; the value is the block's at ``path`` unless given, its unit and display unit
+        its declaration's.  A key the block lacks (the analysis did not compute it) gives no row."""
         if value is None and not _has(self.block, path):
             return
         v = self.get(path) if value is None else value
-        c = cell(v, unit or self.unit(path) or "?")
-        self.rows.append([text(label), text(symbol), c, text(c["unit"]), text(self.get(path + "_status") or "")])
+        c = cell(v, unit) if unit else self.cell(path, v)
+        c["key"] = f"{self.name}.{path}"
+        note = f"{note} {self.get(path + '_status') or ''}"
+        if c["unit"] == "rad/s" and is_number(v):  # speeds in rpm and frequencies in Hz beside rad/s
+            note = f"{number(convert(v, 'rad/s', 'rpm'))} rpm = {number(convert(v, 'rad/s', 'Hz'))} Hz " + note
+        self.rows.append([text(label), text(symbol), c, text(c["unit"]), text(note.strip())])
 
     def verdict(self, ok: bool | None, message: str) -> None:
-        """ok True (good), False (bad), None (information)."""
+        """A check of the section: ok True (good), False (bad), None (information)."""
         self.verdicts.append({"ok": ok, "text": message})
+
+    def conclude(self, ok: bool | None, message: str) -> None:
+        """The one verdict of the analysis (the headline model's): first in the section and in the summary."""
+        self.main = {"ok": ok, "text": message}
+        self.verdicts.insert(0, self.main)
+
+    def overall(self) -> dict:
+        """The summary's verdict: the one concluded, else the first failed check, else the first check, else
+        the first piece of information (an analysis without a pass/fail criterion says what it found)."""
+        checks = [v for v in self.verdicts if v["ok"] is not None]
+        return (self.main or next((v for v in checks if v["ok"] is False), None) or (checks[0] if checks else None)
+                or (self.verdicts[0] if self.verdicts else
+                    {"ok": None, "text": "computed; this analysis has no pass/fail criterion (the section below)"}))
 
     def headline(self) -> dict | None:
         if not self.rows:
@@ -361,18 +368,31 @@ def _leading(real: list, imag: list, count: int = 2) -> str:
     return ", ".join(out)
 
 
-def _null_warnings(block, path: str, out: list[str]) -> None:
-    """'key is null: status' for every null that carries a ``key_status`` beside it."""
+def _nulls(block, path: str, out: dict[str, list[str]]) -> dict[str, list[str]]:
+    """reason -> the paths of the nulls that carry it as their ``key_status``."""
     if isinstance(block, dict):
         for k, v in block.items():
             if k.endswith("_status") and isinstance(v, str) and block.get(k[:-7], 0) is None:
-                out.append(f"{path}.{k[:-7]} is null: {v}")
+                out.setdefault(v, []).append(f"{path}.{k[:-7]}")
             elif isinstance(v, dict | list):
-                _null_warnings(v, f"{path}.{k}", out)
+                _nulls(v, f"{path}.{k}", out)
     elif isinstance(block, list):
         for i, v in enumerate(block):
             if isinstance(v, dict):
-                _null_warnings(v, f"{path}[{i}]", out)
+                _nulls(v, f"{path}[{i}]", out)
+    return out
+
+
+def _null_note(block, path: str) -> str | None:
+    """One line on the block's nulls, grouped by reason (each has its ``key_status`` in results.json): not
+    a warning, a reader has nothing to act on."""
+    groups = _nulls(block, path, {})
+    if not groups:
+        return None
+    parts = [f"{reason}: {', '.join(p.removeprefix(path + '.') for p in paths)}" if len(paths) <= 2 else
+             f"{reason} ({len(paths)} values)" for reason, paths in groups.items()]
+    return f"{sum(map(len, groups.values()))} values are null (no number), each with its reason in results.json: " \
+        + "; ".join(parts)
 
 
 # --------------------------------------------------------------------------------------------
@@ -486,27 +506,17 @@ def statics_section(sec: Section) -> None:
     sec.row("critical barrier pressure margin", "Δp_kr", "critical_exact.dp_kr")
     ex, sw = sec.get("exact", {}), sec.get("sweep", {})
     sat, contact, psi1 = sw.get("regulator_saturated", []), sw.get("contact", []), sw.get("psi1", [])
-    if "regulator_saturated" in ex:
-        sec.verdict(not ex["regulator_saturated"], "regulator at the operating point: " +
-                    ("SATURATED (valve on its open stop)" if ex["regulator_saturated"] else "regulating"))
+    from autobal.analysis.statics_study import StaticsResult  # the verdict's one copy
+
+    if {"regulator_saturated", "contact", "Q_1", "z0", "psi1"} <= set(ex):
+        sec.conclude(*StaticsResult(sec.block).verdict())  # the operating point: regulator, contact, inner seal
     if any(sat):
         first = psi1[sat.index(True)]
         sec.verdict(False, f"regulator saturated (valve on its stop) from ψ1 = {number(first)} in the sweep")
         sec.warnings.append(f"regulator saturation from ψ1 = {number(first)}: the closed forms assume an ideal "
                             "regulator and are not valid there")
-    if "contact" in ex:
-        sec.verdict(not ex["contact"], "face contact at the operating point: " + ("YES (disc on the seat)"
-                                                                                  if ex["contact"] else "none"))
     if any(contact):
         sec.verdict(False, f"face contact in the sweep from ψ1 = {number(psi1[contact.index(True)])}")
-    kr = sec.get("critical_exact.psi1_kr")
-    if kr is not None and ex.get("psi1"):
-        sec.verdict(kr > ex["psi1"], f"inner-seal flow reverses at ψ1_kr = {number(kr)} "
-                    f"({number(kr / ex['psi1'])} × the operating ratio)")
-    q1 = ex.get("Q_1")
-    if q1 is not None:
-        sec.verdict(q1 > 0, f"inner-seal flow at the operating point: {number(q1 * 1e3)} L/s "
-                    + ("(towards the disc, as designed)" if q1 > 0 else "(REVERSED)"))
     cf = sec.get("closed_form", {})
     rows = []
     for key, sym, path in (("u0", "u0", "exact.u0"), ("xi0", "ξ0", "exact.xi0"), ("psi2_0", "ψ20", "exact.psi2_0"),
@@ -543,29 +553,45 @@ def _name(model: str) -> str:
     return MODEL_LABELS.get(model, model)
 
 
-#: the source's own models: reported in the validation part of a section
-SOURCE_MODELS = ("program", "thesis")
+#: the source's own models (its printed chain form, its hand model, the appendix program, the thesis as printed):
+#: reported in the validation part of a section, never as a verdict of the machine
+SOURCE_MODELS = ("nonlinear_chain", "consistent", "program", "thesis")
+HEADLINE_MODEL = "nonlinear"
+
+#: why a source's model is unstable where the energy-consistent model is not (docs/theory/dynamics.md)
+WHY_UNSTABLE = {
+    "nonlinear_chain": "its chamber balances are the printed chain form, whose displacement flows do not match the "
+                       "volume changes to the forces (not energy-consistent)",
+    "consistent": "it is the linearisation of the printed chain form (equal to it to 1e-9)",
+    "program": "the published AFC peaks are the magnitudes of its unstable modes (Pavlenko 2014, App. A/B)",
+    "thesis": "the hand model (2.43)-(2.45) with the constants as printed",
+}
+
+
+def _rate(decay) -> str:
+    return ("" if decay is None else f"disturbances decay at {number(decay)} 1/s" if decay > 0
+            else f"disturbances GROW at {number(-decay)} 1/s")
 
 
 def frequency_section(sec: Section) -> None:
     """AFC of the face gap (Pavlenko 2014, §2.6): the headline model (energy-consistent, physical forcing)
-    first, every named model beside it, the source's program model as the validation."""
+    gives the verdict; the source's models are the validation part."""
     stable = _stable_models(sec.results)
     models = sec.get("models", {})
     h = sec.get("headline")
     if h:
         what = f"{_name(h['model'])}, {h['forcing']} forcing"
         verdict = "stable" if h.get("stable") else "UNSTABLE"
-        sec.verdict(h.get("stable"), f"headline: {what}: {verdict} (max Re λ = {number(h.get('max_real'))} 1/s); "
-                                     f"first resonance at {number(_get(h, 'peaks.0.omega'))} rad/s; amplitude at "
-                                     f"the operating speed {number(_get(h, 'at_operating_speed.amplitude_um'))} µm")
-        sec.row(f"first resonance ({what})", "ω_I", "headline.peaks.0.omega", "rad/s")
-        sec.row(f"amplitude at the first resonance ({what})", "A_I", "headline.peaks.0.amplitude_um", "um")
-        sec.row("operating speed", "ω0", "headline.at_operating_speed.omega", "rad/s")
-        sec.row(f"amplitude at the operating speed ({what})", "A(ω0)", "headline.at_operating_speed.amplitude_um", "um")
-        sec.row(f"static amplitude ({what})", "A(0)", "headline.static_amplitude_um", "um")
-    else:
-        lead = next((m for m in MODEL_ORDER if m in models), None)
+        sec.conclude(h.get("stable"), f"{what}: {verdict} (max Re λ = {number(h.get('max_real'))} 1/s); first "
+                                      f"resonance at {number(_get(h, 'peaks.0.omega'))} rad/s; amplitude at the "
+                                      f"operating speed {number(_get(h, 'at_operating_speed.amplitude_um'))} µm")
+        sec.row(f"first resonance ({what})", "ω_I", "headline.peaks.0.omega")
+        sec.row(f"amplitude at the first resonance ({what})", "A_I", "headline.peaks.0.amplitude_um")
+        sec.row("operating speed", "ω0", "headline.at_operating_speed.omega")
+        sec.row(f"amplitude at the operating speed ({what})", "A(ω0)", "headline.at_operating_speed.amplitude_um")
+        sec.row(f"static amplitude ({what})", "A(0)", "headline.static_amplitude_um")
+    else:  # no headline block: the toolkit's own first model, never one of the source's
+        lead = next((m for m in MODEL_ORDER if m in models and m not in SOURCE_MODELS), None)
         if lead is not None:
             what = _name(lead)
             sec.row(f"first resonance ({what})", "ω_I", f"models.{lead}.peaks.0.omega")
@@ -574,11 +600,12 @@ def frequency_section(sec: Section) -> None:
             sec.row(f"amplitude at the operating speed ({what})", "A(ω0)",
                     f"models.{lead}.at_operating_speed.amplitude_um")
     sec.row("forcing amplitude", "δψ_1a", "forcing_amplitude")
-    rows = []
+    own, source = [], []
     for model, m in _ordered(models):
         peaks = m.get("peaks", [])
         at = m.get("at_operating_speed", {})
         verdict = {True: "stable", False: "UNSTABLE", None: "—"}[stable.get(model)]
+        rows = own if model not in SOURCE_MODELS else source
         for i, pk in enumerate(peaks or [{}]):
             first = i == 0
             rows.append([text(_name(model) if first else ""), text(m.get("forcing") if first else ""),
@@ -589,65 +616,72 @@ def frequency_section(sec: Section) -> None:
         if stable.get(model) is False and model not in SOURCE_MODELS:
             sec.warnings.append(f"{_name(model)}: the model is unstable at this operating point; its AFC is the "
                                 "response of an unstable system (no steady state exists)")
-    sec.tables.append(table(f"AFC of the face gap of every named model under the scene's '{sec.get('forcing')}' "
-                            f"forcing, ω0 = {number(sec.get('at_operating_speed.omega'))} rad/s: peaks, amplitude at "
-                            "the operating speed and the static amplitude",
-                            ["model", "forcing", "stability", "peak ω", "peak amplitude", "amplitude at ω0",
-                             "static amplitude"], rows, headline=True))
-    if "program" in models:
-        _program_validation(sec, "program", stable.get("program"), sec.get("models.program.forcing"))
-    top = sec.get("model")
-    if top:
-        sec.verdict(None, f"the top-level keys of the frequency block in results.json hold the {_name(top)}, "
-                          f"forcing '{sec.get('forcing')}'; the 'headline' block the "
-                          f"{_name((h or {}).get('model', top))} under the {(h or {}).get('forcing', '')} forcing")
+        if model in SOURCE_MODELS:
+            _source_model(sec, model, stable.get(model), m.get("forcing"))
+    columns = ["model", "forcing", "stability", "peak ω", "peak amplitude", "amplitude at ω0", "static amplitude"]
+    caption = (f"under the scene's '{sec.get('forcing')}' forcing, ω0 = {number(sec.get('at_operating_speed.omega'))} "
+               "rad/s: peaks, amplitude at the operating speed and the static amplitude")
+    if own:
+        sec.tables.append(table(f"AFC of the face gap, {caption}", columns, own, headline=True))
+    if source:
+        sec.validation_tables.append(table(f"AFC of the face gap of the source's models, {caption}", columns, source))
 
 
-def _program_validation(sec: Section, model: str, stable: bool | None, forcing: str | None) -> None:
-    """The validation verdict of the source's program model: how closely it reproduces the published
-    values of the scene (the comparison table), and its stability."""
+def _source_model(sec: Section, model: str, stable: bool | None, forcing: str | None = None) -> None:
+    """The validation line of one of the source's models: how closely it reproduces the scene's published
+    values (the comparison table, program model), whether it is stable, and why not."""
     rows = PUBLISHED.get(sec.results.get("scenario", ""), {}).get(sec.name) or []
     diffs = [abs(sec.get(key) - pub) / abs(pub) for _, _, key, pub, _, _ in rows
-             if key and isinstance(sec.get(key), int | float) and pub]
+             if key and key.startswith(f"models.{model}.") and isinstance(sec.get(key), int | float) and pub]
     where = rows[0][5] if rows else "the source"
-    repro = (f"reproduces the published values ({where}) within {100 * max(diffs):.1f} % ({len(diffs)} values)"
-             if diffs else "no published values for this scene")
-    state = {True: "stable", False: "UNSTABLE: its AFC is not a steady response", None: "stability not computed"}
-    sec.validation.append({"ok": None,  # information: how the source's model compares, not a pass/fail of this run
-                           "text": f"{_name(model)}, {forcing or ''} forcing: {repro}; {state[stable]}"})
+    repro = (f"reproduces the published values ({where}) within {100 * max(diffs):.1f} % ({len(diffs)} values); "
+             if diffs else "")
+    m = sec.get(f"models.{model}") or {}
+    poles = m.get("poles") or _get(sec.results, f"stability.models.{model}.poles") or {}
+    lead = _leading(poles.get("real", []), poles.get("imag", [])) if poles else ""
+    state = {True: "stable", None: "stability not computed",
+             False: f"UNSTABLE (leading poles {lead} 1/s): {WHY_UNSTABLE.get(model, '')}"}[stable]
+    if stable is False and sec.name == "frequency":
+        state += "; its AFC is not a steady response"
+    text_ = f"{_name(model)}{f', {forcing} forcing' if forcing else ''}: {repro}{state}"
+    if text_ not in [v["text"] for v in sec.validation]:
+        sec.validation.append({"ok": None, "text": text_})  # what the source's model shows, not a verdict
 
 
 def stability_section(sec: Section) -> None:
-    """Poles, Hurwitz determinants and margins per model (Pavlenko 2014, §2.7): the headline model
-    (energy-consistent) first, the source's models as the validation."""
+    """Poles, Hurwitz determinants and margins (Pavlenko 2014, §2.7): the headline model (energy-consistent)
+    gives the verdict; the source's models are the validation part."""
     h = sec.get("headline")
     if h:
-        decay = _get(h, "margin.decay_rate")
-        sec.verdict(h.get("stable"), f"headline: {_name(h['model'])}: {'stable' if h.get('stable') else 'UNSTABLE'}"
-                                     + ("" if decay is None else f", disturbances decay at {number(decay)} 1/s"
-                                        if decay > 0 else f", disturbances GROW at {number(-decay)} 1/s"))
+        from autobal.analysis.stability import StabilityResult  # the verdict's one copy
+
+        sec.conclude(*StabilityResult(sec.block).verdict())
         sec.row(f"decay rate −max Re λ ({_name(h['model'])})", "η", "headline.margin.decay_rate", "1/s")
         sec.row(f"smallest damping ratio ({_name(h['model'])})", "ζ_min", "headline.margin.min_damping_ratio", "1")
-    rows = []
+    own, source = [], []
     for model, m in _ordered(sec.get("models", {})):
         poles = m.get("poles", {})
         lead = _leading(poles.get("real", []), poles.get("imag", []))
         st = m.get("stable")
-        rows.append([text(_name(model)), text({True: "stable", False: "UNSTABLE"}.get(st, "—")),
-                     {"text": lead, "unit": "1/s", "num": True}, cell(_get(m, "margin.decay_rate"), "1/s"),
-                     cell(_get(m, "margin.min_damping_ratio"), "1")])
-        decay = _get(m, "margin.decay_rate")
-        rate = ("" if decay is None else f"; disturbances decay at {number(decay)} 1/s" if decay > 0
-                else f"; disturbances GROW at {number(-decay)} 1/s")
-        v = {"ok": st, "text": f"{_name(model)}: {'stable' if st else 'UNSTABLE'}; leading poles {lead} 1/s{rate}"}
+        row = [text(_name(model)), text({True: "stable", False: "UNSTABLE"}.get(st, "—")),
+               {"text": lead, "unit": "1/s", "num": True}, cell(_get(m, "margin.decay_rate"), "1/s"),
+               cell(_get(m, "margin.min_damping_ratio"), "1")]
         if model in SOURCE_MODELS:
-            sec.validation.append(v)
-        elif model != (h or {}).get("model"):  # the headline model has its verdict above
-            sec.verdicts.append(v)
-    sec.tables.append(table("Stability per model: leading poles (largest real part), decay rate −max Re λ and the "
-                            "smallest damping ratio", ["model", "verdict", "leading poles", "decay rate",
-                                                       "min damping ratio ζ"], rows, headline=True))
-    sec.notes.extend(f"{_name(m)}: {t.removeprefix(m + ': ')}" for m, t in (sec.get("restoring") or {}).items())
+            source.append(row)
+            _source_model(sec, model, st)
+            continue
+        own.append(row)
+        if model != (h or {}).get("model"):  # another model of the toolkit's own: a check, not the verdict
+            sec.verdict(st, f"{_name(model)}: {'stable' if st else 'UNSTABLE'}; leading poles {lead} 1/s; "
+                            f"{_rate(_get(m, 'margin.decay_rate'))}")
+    columns = ["model", "verdict", "leading poles", "decay rate", "min damping ratio ζ"]
+    caption = "leading poles (largest real part), decay rate −max Re λ and the smallest damping ratio"
+    if own:
+        sec.tables.append(table(f"Stability: {caption}", columns, own, headline=True))
+    if source:
+        sec.validation_tables.append(table(f"Stability of the source's models: {caption}", columns, source))
+    for m, t in (sec.get("restoring") or {}).items():
+        (sec.validation_notes if m in SOURCE_MODELS else sec.notes).append(f"{_name(m)}: {t.removeprefix(m + ': ')}")
 
 
 def transient_section(sec: Section) -> None:
@@ -680,8 +714,15 @@ def liquid_balancer_section(sec: Section) -> None:
     sec.row("capacity ratio", "k_D", f"{op}.k_D")
     sec.row("efficiency (the source's algorithm)", "λ0", f"{op}.lambda0")
     sec.row("efficiency (self-consistent closure, toolkit extension)", "λ0", f"{op}.lambda0_self_consistent")
-    sec.row("optimal liquid height", "h_opt", "optimal_height.optimum")
-    sec.row("optimal liquid volume", "V_opt", "optimal_volume.optimum")
+    for key, label, symbol in (("optimal_height", "optimal liquid height", "h_opt"),
+                               ("optimal_volume", "optimal liquid volume", "V_opt")):
+        why = ""
+        if sec.get(f"{key}.singular"):  # orders of magnitude from the published optimum: the row says why
+            why = (f"complete balancing (k_D = 1) is reached here, where λ0 is unbounded: "
+                   f"λ0 = {number(sec.get(f'{key}.lambda0_max'))} says how close IPOPT came to k_D = 1, not how "
+                   "efficient the machine is; Khomyak (2020), Table 3.3 publishes optimal volumes of 0.05-0.18 L, "
+                   "the documented algorithm differs there (the Table 3.3 comparison below, docs/validation.md)")
+        sec.row(label, symbol, f"{key}.optimum", note=why)
     o = sec.get(op, {})
     if "equilibrium_exists" in o:
         sec.verdict(o["equilibrium_exists"], "balancing equilibrium " + ("exists" if o["equilibrium_exists"] else
@@ -711,24 +752,50 @@ def liquid_balancer_section(sec: Section) -> None:
 
 
 def estimation_section(sec: Section) -> None:
-    """Least-squares fits with standard errors and adequacy (Pavlenko 2014, §4.3-4.4)."""
-    rows = []
+    """Least-squares fits with standard errors, bootstrap intervals, parameter correlation and adequacy
+    (Pavlenko 2014, §4.3-4.4): one verdict over the fits (solved and adequate)."""
+    rows, adequacy, verdicts = [], [], []
     for fit, f in sec.get("fits", {}).items():
-        for pname, p in f.get("parameters", {}).items():
-            if not p.get("free"):
-                continue
+        boot = _get(f, "bootstrap.parameters") or {}
+        free = [p for p, v in f.get("parameters", {}).items() if v.get("free")]
+        for pname in free:
+            p, b = f["parameters"][pname], boot.get(pname) or {}
             rows.append([text(fit), text(pname), cell(p.get("estimate"), "1"), cell(p.get("standard_error"), "1"),
-                         cell(p.get("ci_low"), "1"), cell(p.get("ci_high"), "1"), cell(f.get("residual_std"), "1")])
-        st = _get(f, "solver.status")
-        sec.verdict(_get(f, "solver.success"), f"{fit}: solver {st}")
+                         cell(p.get("ci_low"), "1"), cell(p.get("ci_high"), "1"), cell(b.get("ci_low"), "1"),
+                         cell(b.get("ci_high"), "1")])
+        corr = f.get("correlation") or []
+        pairs = [(free[i], free[j], corr[i][j]) for i in range(len(free)) for j in range(i + 1, len(free))
+                 if i < len(corr) and j < len(corr[i]) and is_number(corr[i][j])]
+        for a, b, r in pairs:
+            sec.verdict(None,
+                        f"{fit}: correlation of {a} and {b} {number(r)}" + (
+                            ": the data hardly separate them (the intervals are wide along the ridge)"
+                            if abs(r) >= 0.9 else ""))
+        solved = bool(_get(f, "solver.success"))
         ad = f.get("adequacy") or {}
+        lof = ad.get("lack_of_fit") or {}
         if "adequate" in ad:
-            sec.verdict(ad["adequate"], f"{fit}: Fisher adequacy F = {number(ad.get('F'))} vs F_crit = "
-                                        f"{number(ad.get('F_crit'))}: " + ("adequate" if ad["adequate"] else
-                                                                           "NOT adequate"))
-    sec.tables.append(table("Fitted parameters (the source's dimensionless groups): estimate, standard error, "
-                            "confidence interval", ["fit", "parameter", "estimate", "standard error", "CI low",
-                                                    "CI high", "residual std"], rows, headline=True))
+            adequacy.append([text(fit), *(cell(ad.get(k), "1") for k in ("F", "F_crit", "p_value")),
+                             text(ad["adequate"]), *(cell(lof.get(k), "1") for k in ("F", "F_crit", "p_value")),
+                             text(lof.get("adequate"))])
+        words = (f"{fit} ({', '.join(free)}): " + ("" if solved else f"solver FAILED ({_get(f, 'solver.status')}); ")
+                 + ({True: f"adequate (F = {number(ad.get('F'))} ≤ F_crit = {number(ad.get('F_crit'))})",
+                     False: f"NOT adequate (F = {number(ad.get('F'))} > F_crit = {number(ad.get('F_crit'))})",
+                     None: "adequacy not tested"}[ad.get("adequate")]))
+        if lof.get("adequate") is False:
+            words += f", lack of fit at p = {number(lof.get('p_value'))}"
+        verdicts.append((solved and ad.get("adequate") is not False, words))
+    if verdicts:
+        sec.conclude(all(ok for ok, _ in verdicts), "; ".join(w for _, w in verdicts))
+    sec.tables.append(table("Fitted parameters (the source's dimensionless groups): estimate, standard error, the "
+                            "linearised confidence interval and the bootstrap percentile interval",
+                            ["fit", "parameter", "estimate", "standard error", "CI low", "CI high", "bootstrap low",
+                             "bootstrap high"], rows, headline=True))
+    if adequacy:
+        sec.tables.append(table("Adequacy: Fisher test of the fit against the scatter within the load groups, and "
+                                "the lack-of-fit test (Pavlenko 2014, §4.4; adequate when F ≤ F_crit)",
+                                ["fit", "F", "F_crit", "p", "adequate", "lack-of-fit F", "F_crit", "p",
+                                 "adequate"], adequacy))
 
 
 def montecarlo_section(sec: Section) -> None:
@@ -1017,14 +1084,22 @@ def design_section(sec: Section) -> None:
     sec.verdict(st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"IPOPT: {st} ({sec.get('iterations')} "
                                                                          "iterations)")
     alpha = sec.get("decay_rate")
-    for which in ("nominal", "optimum"):
+    for which in ("optimum", "nominal"):
         margins = [m for m in (sec.get(f"{which}.margin") or {}).values() if isinstance(m, int | float)]
-        if margins and alpha is not None:
-            worst = min(margins)
-            sec.verdict(worst >= alpha * (1 - 1e-6), f"{which} design: every pole has Re λ ≤ −{number(alpha)} 1/s at "
-                        f"every operating point" if worst >= alpha * (1 - 1e-6) else
-                        f"{which} design: the decay-rate margin {number(alpha)} 1/s is NOT met "
-                        f"(worst {number(worst)} 1/s)")
+        if not margins or alpha is None:
+            continue
+        worst = min(margins)
+        met = worst >= alpha * (1 - 1e-6)
+        model = {"energy": HEADLINE_MODEL, "chain": "nonlinear_chain"}.get(sec.get("form"), HEADLINE_MODEL)
+        words = (f"{which} design, {_name(model)}: " + ("stable" if worst > 0 else "UNSTABLE")
+                 + f", decay rate ≥ {number(worst)} 1/s at every operating point, "
+                 + (f"{number(worst - alpha)} 1/s above the required {number(alpha)} 1/s" if met else
+                    f"the required {number(alpha)} 1/s is NOT met"))
+        if which == "optimum" and st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"):
+            sec.conclude(met, words)
+        else:
+            sec.verdict(met, words)
+    _design_validation(sec)
     cert = sec.get("certification") or {}
     if cert:
         sec.verdict(bool(cert.get("eigenvalues_ok")), "eigenvalues confirm every constraint at the optimum"
@@ -1034,11 +1109,43 @@ def design_section(sec: Section) -> None:
                     + ("(none better by more than 0.5 %)" if not cert.get("beaten") else "BEATS the optimum"))
     for a in sec.get("active", []):
         sec.verdict(None, f"active constraint: {a.get('constraint')} (multiplier {number(a.get('multiplier'))})")
-    nominal, optimum = sec.get("nominal.parameters") or {}, sec.get("optimum.parameters") or {}
-    rows = [[text(path), text(nominal.get(path, "")), text(value)] for path, value in optimum.items()]
+    from autobal.analysis.design_study import shown  # display units and digits of the design variables
+
+    nominal, optimum = sec.get("nominal.values_si") or {}, sec.get("optimum.values_si") or {}
+    given = sec.get("optimum.parameters") or {}
+    rows = []
+    for path, value in optimum.items():
+        unit, n = given.get(path, "").partition(" ")[2], nominal.get(path)
+        ratio = value / n if is_number(n) and n and is_number(value) else None
+        rows.append([text(path), text(shown(unit, n)), text(shown(unit, value)),
+                     text("—" if ratio is None else f"× {significant(ratio, 3)}")])
     if rows:
-        sec.tables.append(table("Design parameters (scene paths; `autobal run SCENE --set PATH=VALUE` reproduces the "
-                                "optimum)", ["scene path", "nominal", "optimum"], rows))
+        sec.tables.append(table("Design parameters to 4 significant digits (results.json optimum.parameters holds "
+                                "them in full: `autobal run SCENE --set PATH=VALUE` reproduces the optimum)",
+                                ["scene path", "nominal", "optimum", "optimum / nominal"], rows))
+
+
+def _design_validation(sec: Section) -> None:
+    """The designs under the source's models (chain form, program model): where they disagree with the
+    headline model's verdict, the validation part says so."""
+    for key in ("other_model", "program_model"):
+        block = sec.get(key) or {}
+        model = {"chain": "nonlinear_chain", "energy": HEADLINE_MODEL}.get(block.get("model"), block.get("model"))
+        if not model:
+            continue
+        values = {w: [v for v in (block.get(w) or {}).values() if isinstance(v, int | float)]
+                  for w in ("nominal", "optimum")}
+        if not values["optimum"]:
+            continue
+        lo, hi = min(values["optimum"]), max(values["optimum"])
+        nom = values["nominal"]
+        worse = bool(nom) and hi > max(nom)
+        words = (f"{_name(model)}: spectral abscissa max Re λ of the optimum {number(lo)} to {number(hi)} 1/s over "
+                 "the operating points" + (f" (nominal {number(min(nom))} to {number(max(nom))} 1/s)" if nom else ""))
+        if lo > 0:
+            words += (": UNSTABLE under this model, " + ("MORE unstable than the nominal design" if worse else
+                      "as the nominal design") + f"; the headline verdict stands: {WHY_UNSTABLE.get(model, '')}")
+        sec.validation.append({"ok": None, "text": words})
 
 
 def ross_spinup_section(sec: Section) -> None:
@@ -1235,8 +1342,8 @@ def inputs(meta: dict) -> tuple[list[list[dict]], str]:
         unit = _si_unit_of(g.removesuffix(" (--set)") if isinstance(g, str) else g)
         shown = json.dumps(si) if isinstance(si, list | dict) else si
         rows.append([text(key), text("(default)" if g is None else json.dumps(g) if isinstance(g, list | dict) else g),
-                     {"text": number(shown) if _is_number(shown) else str(shown), "unit": pretty_unit(unit) if unit
-                      else "", "num": _is_number(shown)}, text(pretty_unit(unit) if unit else "")])
+                     {"text": number(shown) if is_number(shown) else str(shown), "unit": pretty_unit(unit) if unit
+                      else "", "num": is_number(shown)}, text(pretty_unit(unit) if unit else "")])
     return rows, where
 
 
@@ -1258,11 +1365,18 @@ def _section(name: str, block: dict, results: dict, figures: list[dict], folder:
         _comparison(sec, results.get("scenario", ""))
     except Exception as exc:  # noqa: BLE001 (a report must not fail a run; it says what it could not show)
         error = f"this section could not be rendered: {type(exc).__name__}: {exc}"
-    _null_warnings(block, name, sec.warnings)
+    note = _null_note(block, name)
+    if note:
+        sec.notes.append(note)
     acc = (results.get("accuracy") or {}).get(name) or block.get("accuracy") or {}
     tables = [t for t in (sec.headline(), *sec.tables) if t is not None]
+    failures = [f for f in block.get("failures") or [] if isinstance(f, str)]
+    overall = ({"ok": False, "text": "FAILED: " + "; ".join(failures)} if failures  # never ok over a failure
+               else {"ok": False, "text": error} if error else sec.overall())
     return {"name": name, "title": TITLES.get(name, name), "tables": tables, "verdicts": sec.verdicts,
-            "comparison": sec.comparison, "validation": sec.validation, "warnings": sec.warnings, "notes": sec.notes,
+            "overall": overall, "comparison": sec.comparison, "validation": sec.validation,
+            "validation_tables": sec.validation_tables, "validation_notes": sec.validation_notes,
+            "warnings": sec.warnings, "notes": sec.notes,
             "figures": figures,
             "accuracy": {"estimate": acc.get("estimate"), "how": acc.get("how", "")},
             "run_time": (results.get("timing") or {}).get(name), "error": error}
@@ -1273,11 +1387,11 @@ def _iterate_rows(it) -> list[list[str]]:
     rows = []
     for key, v in _flat(it if isinstance(it, dict) else {"x": it}).items():
         if isinstance(v, list):
-            flat = list(_flatten(v))
-            ends = f"{number(flat[0])} … {number(flat[-1])}" if flat and all(_is_number(x) for x in flat) else ""
+            flat = list(flatten(v))
+            ends = f"{number(flat[0])} … {number(flat[-1])}" if flat and all(is_number(x) for x in flat) else ""
             rows.append([key, f"{len(flat)} values {ends}".strip()])
         else:
-            rows.append([key, number(v) if _is_number(v) else str(v)])
+            rows.append([key, number(v) if is_number(v) else str(v)])
     return rows
 
 
@@ -1304,12 +1418,39 @@ def context(folder: Path) -> dict:
     meta = meta if isinstance(meta, dict) else {}
     rows, where = inputs(meta)
     others = [f for figs in figures.values() for f in figs]
-    summary = [{"section": sec["title"], **v} for sec in sections for v in sec["verdicts"] if v["ok"] is not None]
+    summary = [{"section": sec["title"], "name": sec["name"], **sec["overall"]} for sec in sections if sec["overall"]]
     return {"results": results, "failure": failure, "sections": sections, "summary": summary, "other_figures": others,
             "inputs": rows, "inputs_where": where, "meta": meta, "overrides": meta.get("overrides") or {},
             "title": text_clean(results.get("title") or (failure or {}).get("title") or "autobal run", 500),
             "scenario": text_clean(results.get("scenario") or (failure or {}).get("scenario") or "—"),
             "log": report_input.present(folder, "autobal.log")}
+
+
+def sections(results: dict) -> list[dict]:
+    """The report's section of every analysis of a results.json mapping, without figures: its one verdict
+    (``overall``), tables in display units, validation part, warnings."""
+    return [_section(n, results[n], results, [], None) for n in results if n in SECTIONS]
+
+
+def notebook(results: dict, figures: dict[str, list[str]] | None = None) -> str:
+    """A run as a notebook cell's HTML: per analysis its one verdict, its headline table in display units and
+    ``figures[analysis]`` (HTML ``<img>`` elements)."""
+    results = plain(results)
+    out = [f"<div><h2>{html_escape(results.get('title') or '')}</h2>"
+           f"<p>scene <b>{html_escape(results.get('scenario', ''))}</b></p>"]
+    for sec in sections(results):
+        out.append(f"<h3>{html_escape(sec['title'])}</h3>")
+        if sec["overall"]:
+            out.append(html_verdict((sec["overall"]["ok"], sec["overall"]["text"])))
+        for t in sec["tables"][:1]:
+            head = "".join(f"<th>{html_escape(c)}</th>" for c in t["columns"])
+            body = "".join("<tr>" + "".join(f"<td>{html_escape(c['text'])}"
+                                            + (f" {html_escape(c['unit'])}" if c.get("num") and not t["unit_column"]
+                                               and c["unit"] != "dimensionless" else "") + "</td>" for c in row)
+                           + "</tr>" for row in t["rows"])
+            out.append(f"<table><caption>{html_escape(t['caption'])}</caption><tr>{head}</tr>{body}</table>")
+        out.extend((figures or {}).get(sec["name"], []))
+    return "".join(out) + "</div>"
 
 
 def html(folder: str | Path) -> str:

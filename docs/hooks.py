@@ -7,6 +7,9 @@
 * ``build/griffe/autobal`` is laid out as the installed package (``models/`` at ``autobal/models`` and so
   on, the ``package-dir`` mapping of pyproject.toml, as symbolic links) so that mkdocstrings reads the
   sources of ``autobal.models``, ``autobal.analysis`` and ``autobal.ocp`` statically.
+* ``<!-- quantities: ANALYSIS -->`` is replaced by the table of the declared quantities of an analysis
+  (``autobal.report.DECLARED``): key, symbol, SI unit, display unit, meaning and source, the one copy that
+  results.json ``units``, the report and the terminal use too.
 * ``<!-- include: PATH -->`` is replaced by the text of PATH (relative to the repository root) with its
   headings moved one level down, so generated benchmark reports appear inside a page.
 """
@@ -37,6 +40,7 @@ def package_dirs() -> dict[str, str]:
     mapping = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-dir"]
     return {name.split(".")[1]: folder for name, folder in mapping.items() if name.count(".") == 1}
 INCLUDE = re.compile(r"<!--\s*include:\s*(\S+)\s*-->")
+QUANTITIES = re.compile(r"<!--\s*quantities:\s*(\w+)\s*-->")
 SCHEMA = "<!-- scenario-schema -->"
 
 
@@ -254,7 +258,23 @@ def _include(match: re.Match) -> str:
     return re.sub(r"^(#{1,5}) ", lambda m: "#" + m.group(1) + " ", text, flags=re.M)
 
 
+def quantities_markdown(analysis: str) -> str:
+    """The declared quantities of an analysis as a Markdown table."""
+    from autobal import report
+
+    decl = report.declarations(analysis)
+    if decl is None:
+        raise ValueError(f"<!-- quantities: {analysis} -->: the analysis declares no quantities (report.UNDECLARED)")
+    lines = ["| key | symbol | SI unit | shown in | meaning | source |", "|---|---|---|---|---|---|"]
+    for q in decl:
+        keys = ", ".join(f"`{k}`" for k in q.keys)
+        lines.append(f"| {_cell(keys)} | {_cell(q.symbol)} | {_cell(q.unit)} | {_cell(q.display)} | "
+                     f"{_cell(q.description)} | {_cell(q.source)} |")
+    return "\n".join(lines) + "\n"
+
+
 def on_page_markdown(markdown: str, page, config, files) -> str:  # noqa: ARG001 - MkDocs hook signature
     if SCHEMA in markdown:
         markdown = markdown.replace(SCHEMA, schema_markdown())
+    markdown = QUANTITIES.sub(lambda m: quantities_markdown(m.group(1)), markdown)
     return INCLUDE.sub(_include, markdown)

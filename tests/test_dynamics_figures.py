@@ -34,7 +34,8 @@ def test_headline_is_the_energy_model_under_physical_forcing_beside_unchanged_to
     # the stability block leads with the same model and agrees on its verdict
     st = stability.study(pump, ["program", "nonlinear"], None, "pump").to_dict()
     assert st["headline"]["model"] == "nonlinear" and st["headline"]["stable"] is True
-    assert st["stable"] is False  # the top-level keys still hold the first model (the program model)
+    # the top-level keys are the headline model's (the one verdict), the program model's are under models
+    assert st["stable"] is True and st["models"]["program"]["stable"] is False
 
 
 def test_phase_is_unwrapped_and_starts_at_minus_180_for_a_negative_static_gain(afc):

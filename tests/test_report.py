@@ -118,10 +118,10 @@ def test_report_of_every_other_shipped_scene(output, name):
 def test_dynamics_report_says_which_model_is_unstable(output):
     """Pavlenko (2014), App. A: the program model is unstable (+219.33 ± 1999.44i), the energy model stable."""
     page = check_report(output("pump_pe600_dynamics"))
-    program = [v for v in page.verdicts if v.startswith("✘ source's program model")]
-    assert any("219.33 ± 1999.4i" in v for v in program)
-    assert any(v.startswith("✔ headline: energy-consistent (nonlinear): stable") for v in page.verdicts)
-    assert any("reproduces the published values" in v and "UNSTABLE" in v for v in page.verdicts)
+    program = [v for v in page.verdicts if v.startswith("• source's program model")]  # validation: information
+    assert any("219.33 ± 1999.4i" in v and "UNSTABLE" in v for v in program)
+    assert any(v.startswith("✔ energy-consistent (nonlinear): stable") for v in page.verdicts)
+    assert any("reproduces the published values" in v and "UNSTABLE" in v for v in program)
 
 
 @pytest.mark.cli

@@ -1,0 +1,58 @@
+"""What the reports carry (issue #23 item 5): the estimation report's bootstrap intervals, parameter correlation and
+adequacy; nulls as one grouped note, not warnings; design parameters to 4 significant digits in engineering units;
+headline values far from the published ones say why in their row."""
+
+from __future__ import annotations
+
+import pytest
+
+from autobal import report
+from autobal.analysis.design_study import quantity, shown
+from tests.test_report import Page
+
+
+@pytest.mark.cli
+def test_estimation_report_shows_bootstrap_correlation_and_adequacy(shipped_run):
+    """Pavlenko (2014), Table 4.3: the two-parameter fit's alpha and tau_max are correlated at 0.986."""
+    folder = shipped_run("rig_table43_fit")[1]
+    ctx = report.context(folder)
+    sec = next(s for s in ctx["sections"] if s["name"] == "estimation")
+    captions = [t["caption"] for t in sec["tables"]]
+    assert any("bootstrap percentile interval" in c for c in captions)
+    assert any(c.startswith("Adequacy: Fisher test") for c in captions)
+    fitted = sec["tables"][0]
+    assert fitted["columns"][-2:] == ["bootstrap low", "bootstrap high"]
+    assert all(row[-1]["text"] != "—" for row in fitted["rows"]), "a free parameter without its bootstrap interval"
+    body = " ".join(Page((folder / "report.html").read_text()).text)
+    assert "correlation of alpha and tau_max 0.98636" in body
+    assert sec["overall"]["text"].startswith("static_1p (alpha): adequate (F = 1.4368 ≤ F_crit = 2.6602)")
+    assert not sec["warnings"], "the trivial nulls are a note, not warnings"
+    assert [n for n in sec["notes"] if n.startswith("10 values are null") and "a fixed parameter (5 values)" in n]
+
+
+def test_null_note_groups_by_reason():
+    block = {"a": None, "a_status": "fixed", "b": {"c": None, "c_status": "fixed", "d": None, "d_status": "fixed"},
+             "e": [{"f": None, "f_status": "no bound"}]}
+    assert report._null_note(block, "x") == ("4 values are null (no number), each with its reason in results.json: "
+                                             "fixed (3 values); no bound: e[0].f")
+    assert report._null_note({"a": 1.0}, "x") is None
+
+
+def test_design_parameters_to_four_digits_in_engineering_units():
+    assert shown("m^3", 0.00020915546094574952) == "209.2 cm³"
+    assert shown("", 0.09999999863063493) == "0.1000"
+    assert shown("Pa", 43662724.52325561) == "43.66 MPa" and shown("m", 0.00012108193232249605) == "0.1211 mm"
+    assert shown("N/m", 44636137.84295489) == "4.464e7 N/m" and shown("m^2", 0.0153604935) == "15360 mm²"
+    assert quantity("V2", 0.00020915546094574952) == "0.0002091554609 m^3"  # full precision for --set, no m**3
+
+
+@pytest.mark.cli
+@pytest.mark.slow
+def test_washer_optimum_row_says_why_lambda0_is_unbounded(shipped_run):
+    """Khomyak (2020), Table 3.3 publishes optima of 0.05-0.18 L; the toolkit's optimum is the complete-balancing
+    point (k_D = 1), where lambda0 is unbounded: the row says so."""
+    ctx = report.context(shipped_run("washer_liquid_balancer")[1])
+    rows = {r[0]["text"]: r for r in ctx["sections"][0]["tables"][0]["rows"]}
+    for label in ("optimal liquid height", "optimal liquid volume"):
+        note = rows[label][-1]["text"]
+        assert "complete balancing (k_D = 1)" in note and "Table 3.3" in note, note
