@@ -92,7 +92,8 @@ class SpinupResult(Result):
         sg = d.get("segments")
         if sg:
             lines.append(f"  {sg['segments']}-segment ramp table: peak {sg['peak_deflection_over_e']:.4f} e, "
-                         f"{sg['loss_vs_optimum_pct']:+.2f} % against the full optimum"
+                         f"{sg['loss_vs_optimum_pct']:+.2f} % against the full optimum (searched from the "
+                         f"{sg['start']} start)"
                          + ("" if sg["within_drive_limits"] else " (outside the drive limits)"))
         return "\n".join(lines)
 
@@ -275,7 +276,8 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
         data["segments"] = {"segments": segments, "peak_deflection_over_e": seg.trajectory.peak_delta,
                             "peak_unbalance": seg.trajectory.peak_d, "objective_value": seg.objective,
                             "loss_vs_optimum_pct": _pct(seg.objective, opt.score),
-                            "evaluations": seg.evaluations, **seg.drive}
+                            "evaluations": seg.evaluations, "start": seg.start,
+                            "start_objectives": seg.start_objectives, **seg.drive}
     # the wall time by part (s): what the global search, the initial guesses, the NLP builds, the IPOPT solves,
     # the CVODES re-simulations (reference ramp, ranking near-ties, the optimum) and the baselines took
     split = {"global_search": opt.times.get("global_search", 0.0), "guesses": opt.times.get("guesses", 0.0),
