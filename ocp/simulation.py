@@ -235,6 +235,14 @@ def drive_use(ocp: SpinupOcp, tr: Trajectory) -> dict:
             "max_power_W": float(np.max(M * w)), "within_drive_limits": not bad, "violated": bad}
 
 
+def best_within_limits(peaks: dict, uses: dict):
+    """The key of the smallest peak among the profiles that keep the drive limits (``uses``: :func:`drive_use` of
+    each; a profile without drive data counts as keeping them), None when none does: the only reference a
+    gain may be quoted against."""
+    feasible = [k for k in peaks if uses[k]["within_drive_limits"] is not False]
+    return min(feasible, key=peaks.get) if feasible else None
+
+
 def _ramp(ocp: SpinupOcp, alpha: float, h, n: int, ns: int, points: int, label: str) -> Trajectory:
     u = np.concatenate([ramp_profile(ocp, n, alpha), np.zeros(ns)])
     return resimulate(ocp, u, h, label, points=points)

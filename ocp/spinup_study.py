@@ -21,6 +21,7 @@ from autobal.ocp.simulation import (
     RESIM_TOL,
     Trajectory,
     baselines,
+    best_within_limits,
     drive_use,
     torque_reference,
 )
@@ -222,8 +223,7 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
     sol, tr = opt.solution, opt.trajectory
     use = {k: drive_use(ocp, v) for k, v in base.items()}
     # percentages refer only to the baselines the drive can run
-    feasible = [k for k in base if use[k]["within_drive_limits"] is not False]
-    ref_key = min(feasible, key=lambda k: base[k].peak_delta) if feasible else None
+    ref_key = best_within_limits({k: v.peak_delta for k, v in base.items()}, use)
     ref_peak = base[ref_key].peak_delta if ref_key else None
     t2 = time.perf_counter()
     seg = drive_profile.segment_profile(ocp, tr, segments) if segments and ocp.objective != "min_time" else None
