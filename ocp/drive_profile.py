@@ -29,7 +29,7 @@ from autobal.ocp.simulation import RESIM_TOL, Trajectory, drive_excess, drive_us
 RPM = 60 / (2 * math.pi)  # rpm per rad/s
 SEGMENT_INTERVALS = 200  # the reported re-simulation is sampled as that of a profile on 200 control intervals
 # the search's integrator: at most 8000 steps (the 8 s datasheet scene at the step 0.5 of FAST_STEP: peak within
-# 2e-6 of CVODES; a 60 s horizon at the step 2.0: within 6e-5, the largest power within 1e-3)
+# 2e-6 of CVODES; a 60 s horizon at the step 2.0: within 6e-5; the largest power within 1e-6 on both)
 SEARCH_STEPS = 8000
 PENALTY = 10.0  # exact penalty on the relative excess over the drive limits (a fraction of the objective)
 SEGMENT_EVALUATIONS = 200  # Nelder-Mead's budget of re-simulations from the best start (half from the next)

@@ -72,7 +72,6 @@ def simulate_steps(ocp: SpinupOcp, u: np.ndarray, dt: float = STEP, rotor: Modal
         Step, dimensionless time (tau = Omega0 t).
     block : int
         Steps advanced at once (the modal recursion is summed in closed form within a block).
-
     states : bool
         Also return the fixed-frame states.
 
