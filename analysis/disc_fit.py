@@ -377,8 +377,9 @@ class DiscFitter:
         est = res["estimate"]
         lo, hi = percentile_interval(est, confidence)
         ok = est[np.all(np.isfinite(est), axis=1)]
+        std, mean = (ok.std(axis=0, ddof=1), ok.mean(axis=0)) if len(ok) >= 2 else (lo, hi)  # NaN: no interval
         return {"samples": samples, "seed": seed, "method": "residual", "confidence": confidence,
-                "ci_low": lo, "ci_high": hi, "std": ok.std(axis=0, ddof=1), "mean": ok.mean(axis=0),
+                "ci_low": lo, "ci_high": hi, "std": std, "mean": mean,
                 "fallback": res["fallback"], "failed": res["failed"]}
 
 

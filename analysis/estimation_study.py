@@ -88,7 +88,9 @@ class EstimationResult(Result):
                 else:
                     lines.append(f"    {k:16s} {p['estimate']:.6g} (fixed)")
             bs = f.get("bootstrap") or {}
-            for k, p in bs.get("parameters", {}).items():
+            if bs.get("status", "ok").startswith("failed"):
+                lines.append(f"    bootstrap {bs['status']}")
+            for k, p in bs.get("parameters", {}).items() if bs.get("status") == "ok" else ():
                 lines.append(f"    {k:16s} bootstrap ({bs['samples']} refits) {100 * bs['confidence']:.0f}% CI "
                              f"[{p['ci_low']:.5g}, {p['ci_high']:.5g}]")
             cc = f.get("cross_check_scipy")
@@ -236,9 +238,11 @@ def _bootstrap_block(fitter, res: FitResult, opts, confidence: float) -> dict:
     b = fitter.bootstrap(res, opts.samples, opts.seed, confidence)
     params = {k: {"ci_low": float(b["ci_low"][i]), "ci_high": float(b["ci_high"][i]), "std": float(b["std"][i]),
                   "mean": float(b["mean"][i])} for i, k in enumerate(res.free)}
-    return {"method": "residual bootstrap, percentile intervals", "samples": b["samples"], "seed": b["seed"],
-            "confidence": confidence, "parameters": params, "ipopt_fallback": b["fallback"], "failed": b["failed"],
-            "time_s": time.perf_counter() - t0}
+    left = b["samples"] - b["failed"]
+    status = "ok" if left >= 2 else f"failed: {b['failed']} of {b['samples']} refits failed, no interval"
+    return {"method": "residual bootstrap, percentile intervals", "status": status, "samples": b["samples"],
+            "seed": b["seed"], "confidence": confidence, "parameters": params, "ipopt_fallback": b["fallback"],
+            "failed": b["failed"], "time_s": time.perf_counter() - t0}
 
 
 def _closed_forms(tau, u, q, group, tau_max: float) -> dict:
@@ -376,6 +380,9 @@ def run(settings, device: DeviceParams | None = None, title: str = "") -> Estima
     for fit in settings.fits:
         try:
             fits[fit.name], solvers[fit.name] = _one_fit(fit, settings, data, bases, device)
+            boot = fits[fit.name].get("bootstrap") or {}
+            if boot.get("status", "").startswith("failed"):
+                failures.append(f"fit {fit.name!r}: bootstrap {boot['status']}")
         except SolveError as exc:
             fits[fit.name] = _failed_block(fit, exc)
             failures.append(f"{exc.message} (status {exc.status}); {fits[fit.name]['hint']}")
@@ -424,13 +431,15 @@ def run(settings, device: DeviceParams | None = None, title: str = "") -> Estima
                 "check_alpha_from_solved": replace(losses, **{lc.unknown: value}).conductance_ratio()}
 
     diffs = [b["cross_check_scipy"]["max_abs_difference"] for b in fits.values() if "cross_check_scipy" in b]
+    n_failed = len(fits) - len(solvers)
+    status = f"{n_failed} of {len(fits)} fits failed" if n_failed else "a bootstrap failed" if failures else "ok"
     block = {
         "title": title,
         "data": {"file": data.path.name, "path": str(data.path), "points": data.points, "columns": data.units,
                  "groups": int(len(np.unique(group))) if group is not None else None, "provenance": data.comments},
         "bases": bases | {f"{k}_status": "not given in the scene (not needed by its fits)" for k, v in bases.items()
                           if v is None},
-        "status": f"{len(failures)} of {len(fits)} fits failed" if failures else "ok", "failures": failures,
+        "status": status, "failures": failures,
         "fits": fits, "closed_forms": closed, "adequacy_reference": reference,
         "loss_coefficient": loss,
         "accuracy": {"estimate": max(diffs) if diffs else None,

@@ -65,9 +65,13 @@ def uncertainty(r, J, estimate, confidence: float = 0.95) -> dict:
 
 def percentile_interval(samples, confidence: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
     """Percentile bootstrap interval (Efron & Tibshirani, 1993, Sec. 13.3) of each column of
-    ``samples`` (rows: bootstrap replicates); NaN rows (failed refits) are left out."""
+    ``samples`` (rows: bootstrap replicates); NaN rows (failed refits) are left out.  With fewer than
+    two refits left there is no interval: NaN bounds."""
     s = np.asarray(samples, float)
     s = s[np.all(np.isfinite(s), axis=1)]
+    if len(s) < 2:
+        nan = np.full(np.shape(samples)[1], np.nan)
+        return nan, nan.copy()
     lo = 100 * (0.5 - confidence / 2)
     return np.percentile(s, lo, axis=0), np.percentile(s, 100 - lo, axis=0)
 

@@ -22,7 +22,7 @@ from autobal import __version__, report, scenario
 from autobal.analysis import executor, interrupt
 from autobal.analysis.result import Result, write_json
 from autobal.errors import AutobalError, SolveError
-from autobal.output import LOG, OutputFolder, SolverLog
+from autobal.output import LOG, OutputFolder, SolverLog, signals_held
 from autobal.runners import RUNNERS
 from autobal.scenario import BaseScenario as Scenario  # every scene model (see scenario.model_for)
 
@@ -136,10 +136,11 @@ def analyses(scene: Scenario) -> list[str]:
 
 def _finish(folder: OutputFolder, scene: Scenario, name: str, data: dict) -> None:
     """Write a status file (with the scene and the run's provenance) and its report.html into the
-    temporary folder, and commit it."""
-    write_json(folder.tmp / name, data | {"scenario": scene.name, "title": scene.title, "meta": meta(scene)})
-    _render_report(folder.tmp)
-    folder.commit()
+    temporary folder, and commit it; a second interrupt meanwhile is raised when that is done."""
+    with signals_held():
+        write_json(folder.tmp / name, data | {"scenario": scene.name, "title": scene.title, "meta": meta(scene)})
+        _render_report(folder.tmp)
+        folder.commit()
 
 
 def _render_report(folder: Path) -> list[Path]:

@@ -13,23 +13,72 @@ other error     ``error.json`` (the one-line message), ``autobal.log``
 
 An existing output folder is replaced (its earlier files are removed) only if it is empty or was
 written by autobal (it holds ``autobal.log``); any other folder is refused before anything runs.
+
+Runs into the same output folder at the same time need no lock: each writes its own temporary folder,
+and the last to finish replaces the folder (:meth:`OutputFolder.commit` renames the old one aside and
+removes it, retrying when another run got there first), so the folder ends with the files of exactly
+one run and nothing is left beside it.  An output folder given as a symbolic link keeps the link: the
+folder it points to is replaced.  SIGINT and SIGTERM that arrive while the folder is moved into place
+or removed are held until that is done (:func:`signals_held`), so an interrupt, even a second one, never
+leaves a half-moved folder; a temporary folder that no run will commit is removed when the CLI ends
+(:func:`discard_uncommitted`).
 """
 
 from __future__ import annotations
 
 import contextlib
 import ctypes
+import errno
 import os
 import shutil
+import signal
 import sys
 import tempfile
+import threading
 import warnings
 from pathlib import Path
 
 from autobal.analysis import progress
 from autobal.errors import ScenarioError
+from autobal.text import clean
 
 LOG = "autobal.log"
+SIGNALS = (signal.SIGINT, signal.SIGTERM)
+_held: dict = {"pending": None}
+_uncommitted: set[OutputFolder] = set()
+
+
+def _defer(signum, frame) -> None:
+    _held["pending"] = _held["pending"] or signum
+
+
+@contextlib.contextmanager
+def signals_held():
+    """Within the block SIGINT and SIGTERM are recorded, not acted on; when it ends the first of them
+    goes to the handler that was in place (so an interrupt raises there, after the block's work is done).
+    In threads other than the main one (which cannot change handlers) the block runs as it is."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {sig: signal.signal(sig, _defer) for sig in SIGNALS}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        signum, _held["pending"] = _held["pending"], None
+        if signum is not None:
+            handler = previous[signum]
+            if callable(handler):
+                handler(signum, None)
+            elif handler == signal.SIG_DFL:
+                os.kill(os.getpid(), signum)
+
+
+def discard_uncommitted() -> None:
+    """Remove the temporary folders of this process that no run will commit (the CLI calls it last)."""
+    for folder in list(_uncommitted):
+        folder.discard()
 
 
 class OutputFolder:
@@ -41,31 +90,50 @@ class OutputFolder:
     """
 
     def __init__(self, path: str | Path):
-        self.path = Path(path).expanduser().absolute()
-        where = f"output folder {path}"
-        if self.path.exists() and not self.path.is_dir():
-            raise ScenarioError(f"{where}: exists and is not a folder")
-        if self.path.is_dir() and any(self.path.iterdir()) and not (self.path / LOG).exists():
-            raise ScenarioError(f"{where}: holds files autobal did not write; give a new or empty folder")
+        where = f"output folder {clean(path)}"
         try:
+            self.path = Path(path).expanduser().absolute()
+            if self.path.is_symlink():  # the link stays; the folder it points to is replaced
+                self.path = Path(os.path.realpath(self.path))
+            if self.path.exists() and not self.path.is_dir():
+                raise ScenarioError(f"{where}: exists and is not a folder")
+            if self.path.is_dir() and any(self.path.iterdir()) and not (self.path / LOG).exists():
+                raise ScenarioError(f"{where}: holds files autobal did not write; give a new or empty folder")
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            self.tmp = Path(tempfile.mkdtemp(prefix=f".{self.path.name}.", suffix=".tmp", dir=self.path.parent))
+            with signals_held():
+                self.tmp = Path(tempfile.mkdtemp(prefix=f".{self.path.name}.", suffix=".tmp", dir=self.path.parent))
+                _uncommitted.add(self)
         except OSError as exc:
             raise ScenarioError(f"{where}: cannot be written ({exc.strerror or exc})") from None
 
     def commit(self) -> Path:
-        """Move the temporary folder into place, removing what the output folder held before."""
-        old = None
-        if self.path.exists():
-            old = self.path.with_name(f"{self.tmp.name}.old")
-            self.path.rename(old)
-        self.tmp.rename(self.path)
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
+        """Move the temporary folder into place, removing what the output folder held before (also when
+        another run put its folder there meanwhile: the last run to commit wins)."""
+        with signals_held():
+            for _ in range(100):
+                try:
+                    os.rename(self.tmp, self.path)  # replaces nothing but an empty folder
+                    break
+                except OSError as exc:
+                    if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST):
+                        raise
+                old = self.path.with_name(f"{self.tmp.name}.old")
+                try:
+                    os.rename(self.path, old)
+                except FileNotFoundError:  # another run moved it aside first
+                    continue
+                shutil.rmtree(old, ignore_errors=True)
+            else:
+                self.discard()
+                raise ScenarioError(f"output folder {clean(self.path)}: other runs kept replacing it; "
+                                    f"this run's files were not moved into place")
+            _uncommitted.discard(self)
         return self.path
 
     def discard(self) -> None:
-        shutil.rmtree(self.tmp, ignore_errors=True)
+        with signals_held():
+            shutil.rmtree(self.tmp, ignore_errors=True)
+            _uncommitted.discard(self)
 
     def __enter__(self) -> Path:
         """``with OutputFolder(out) as tmp:`` write into ``tmp``; committed (with its ``autobal.log``) when
@@ -94,6 +162,10 @@ class SolverLog:
         self.path = path
 
     def __enter__(self):
+        with signals_held():  # an interrupt between the redirections would leave the terminal in the log
+            return self._enter()
+
+    def _enter(self):
         sys.stdout.flush()
         sys.stderr.flush()
         _flush_c_stdout()
@@ -117,6 +189,10 @@ class SolverLog:
         return self
 
     def __exit__(self, *exc):
+        with signals_held():
+            self._exit(*exc)
+
+    def _exit(self, *exc):
         sys.stdout.flush()
         sys.stderr.flush()
         _flush_c_stdout()

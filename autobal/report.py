@@ -20,14 +20,19 @@ import hashlib
 import json
 import math
 import re
+import warnings
 from importlib import resources
 from pathlib import Path
 
 import jinja2
 import yaml
 
+from autobal import report_input
 from autobal.analysis.result import plain
 from autobal.errors import ScenarioError
+from autobal.report_input import MAX_FIGURE_BYTES
+from autobal.scenario import MAX_FILE_BYTES as MAX_SCENE_BYTES
+from autobal.text import clean as text_clean
 from autobal.units import DIMENSIONS, si_unit_of
 
 REPORT = "report.html"
@@ -1156,7 +1161,7 @@ def caption(name: str) -> tuple[str | None, str]:
 
 def data_uri(path: Path) -> str:
     kind = {".png": "image/png", ".svg": "image/svg+xml", ".jpg": "image/jpeg"}[path.suffix.lower()]
-    return f"data:{kind};base64," + base64.b64encode(path.read_bytes()).decode("ascii")
+    return f"data:{kind};base64," + base64.b64encode(report_input.read_regular(path, MAX_FIGURE_BYTES)).decode("ascii")
 
 
 FIGURE_SUFFIXES = (".png", ".svg", ".jpg")
@@ -1164,16 +1169,26 @@ FIGURE_SUFFIXES = (".png", ".svg", ".jpg")
 
 def _figures(folder: Path, results: dict) -> dict[str, list[dict]]:
     """analysis -> its figures {name, caption, uri}, from results.json ``outputs`` or the file names."""
-    outputs = results.get("outputs") or {}
-    owner = {f: name for name, files in outputs.items() for f in files}
+    outputs = results.get("outputs") if isinstance(results.get("outputs"), dict) else {}
+    owner = {f: name for name, files in outputs.items() if isinstance(files, list) for f in files
+             if isinstance(f, str)}
+    named = results.get("files")
     out: dict[str, list[dict]] = {}
-    for name in results.get("files") or sorted(p.name for p in folder.iterdir()):
-        path = folder / name
-        if path.suffix.lower() not in FIGURE_SUFFIXES or not path.exists():
+    refused = []
+    for name in named if isinstance(named, list) and named else sorted(p.name for p in folder.iterdir()):
+        if not isinstance(name, str) or Path(name).suffix.lower() not in FIGURE_SUFFIXES:
+            continue
+        path, out_of_folder = report_input.figure(folder, name)
+        refused += [name] if out_of_folder else []
+        if path is None:
             continue
         analysis, words = caption(name)
         out.setdefault(owner.get(name, analysis) or "", []).append({"name": name, "caption": words,
                                                                    "uri": data_uri(path)})
+    if refused:
+        shown = ", ".join(text_clean(n, 60) for n in refused[:3]) + (", …" if len(refused) > 3 else "")
+        warnings.warn(f"{folder / 'results.json'} names {len(refused)} file(s) outside the folder ({shown}): "
+                      f"not embedded", stacklevel=2)
     return out
 
 
@@ -1194,12 +1209,23 @@ def _si_unit_of(given) -> str:
     return si_unit_of(given).replace("**", "^")
 
 
+def _scene_file(name) -> bytes | None:
+    """The bytes of the scene file results.json names, None when it is not a readable regular file."""
+    if not isinstance(name, str) or not name:
+        return None
+    try:
+        return report_input.read_regular(Path(name), MAX_SCENE_BYTES)
+    except ScenarioError:
+        return None
+
+
 def inputs(meta: dict) -> tuple[list[list[dict]], str]:
     """Rows (path, as given, SI value, SI unit) of the scene, and where the 'as given' column came from."""
     given, where = {}, "the scene file is not available: SI values only"
-    path = Path(meta.get("file") or "")
-    if path.is_file() and hashlib.sha256(path.read_bytes()).hexdigest() == meta.get("sha256"):
-        given = _flat(yaml.safe_load(path.read_text()) or {})
+    raw = _scene_file(meta.get("file"))
+    if raw is not None and hashlib.sha256(raw).hexdigest() == meta.get("sha256"):
+        path = Path(meta["file"])
+        given = _flat(yaml.safe_load(raw.decode("utf-8")) or {})
         where = f"as given in {path.name} (sha256 {meta['sha256'][:12]}…)"
     overrides = meta.get("overrides") or {}
     given |= {k: f"{v} (--set)" for k, v in overrides.items()}
@@ -1259,17 +1285,17 @@ def _iterate_rows(it) -> list[list[str]]:
 
 def context(folder: Path) -> dict:
     """Everything the template shows, from the files of ``folder``."""
-    folder = Path(folder)
-    status_file = next((folder / n for n in STATUS_FILES if (folder / n).exists()), None)
+    folder = report_input.folder_of(folder)
+    status_file = next((folder / n for n in STATUS_FILES if report_input.present(folder, n)), None)
     results_file = folder / "results.json"
-    if results_file.exists():
-        results = json.loads(results_file.read_text())
+    if report_input.present(folder, results_file.name):
+        results = report_input.read_json(results_file)
         failure = None
     elif status_file is not None:
         results = {}
-        failure = json.loads(status_file.read_text()) | {"file": status_file.name}
+        failure = report_input.read_json(status_file) | {"file": status_file.name}
     else:
-        raise ScenarioError(f"{folder}: holds neither results.json nor {', '.join(STATUS_FILES)}")
+        raise ScenarioError(f"{text_clean(folder)}: holds neither results.json nor {', '.join(STATUS_FILES)}")
     if failure is not None:
         it = failure.get("last_iterate")
         failure["last_iterate_rows"] = _iterate_rows(it)
@@ -1277,14 +1303,15 @@ def context(folder: Path) -> dict:
     names = [k for k in results if k in SECTIONS]
     sections = [_section(n, results[n], results, figures.pop(n, []), folder) for n in names]
     meta = results.get("meta") or (failure or {}).get("meta") or {}
+    meta = meta if isinstance(meta, dict) else {}
     rows, where = inputs(meta)
     others = [f for figs in figures.values() for f in figs]
     summary = [{"section": sec["title"], **v} for sec in sections for v in sec["verdicts"] if v["ok"] is not None]
     return {"results": results, "failure": failure, "sections": sections, "summary": summary, "other_figures": others,
             "inputs": rows, "inputs_where": where, "meta": meta, "overrides": meta.get("overrides") or {},
-            "title": results.get("title") or (failure or {}).get("title") or "autobal run",
-            "scenario": results.get("scenario") or (failure or {}).get("scenario") or "—",
-            "log": (folder / "autobal.log").exists()}
+            "title": text_clean(results.get("title") or (failure or {}).get("title") or "autobal run", 500),
+            "scenario": text_clean(results.get("scenario") or (failure or {}).get("scenario") or "—"),
+            "log": report_input.present(folder, "autobal.log")}
 
 
 def html(folder: str | Path) -> str:
@@ -1310,6 +1337,10 @@ def render(folder: str | Path) -> Path:
     ScenarioError
         The folder holds neither results.json nor a status file of a failed run.
     """
+    page = html(folder)
     out = Path(folder) / REPORT
-    out.write_text(html(folder), encoding="utf-8")
+    try:
+        out.write_text(page, encoding="utf-8")
+    except OSError as exc:  # a read-only folder, a full disk
+        raise ScenarioError(f"{text_clean(out)}: cannot be written ({exc.strerror})") from None
     return out

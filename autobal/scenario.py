@@ -21,6 +21,7 @@ from pydantic import Field, PrivateAttr, ValidationError, create_model, model_va
 from autobal.errors import ScenarioError
 from autobal.paths import SCENARIO_DIR
 from autobal.schema import MAX_FORCE_GAP_POINTS, NonNegative, Positive, PressureRatio, Range, Strict
+from autobal.text import LIMIT, clean
 from autobal.units import (
     AngularSpeed,
     Area,
@@ -269,6 +270,8 @@ def analyses_model(named: frozenset[str]) -> type[Strict]:
 
 # a scene's name names its output folder: a plain file name, never a path
 NAME_PATTERN = r"^[A-Za-z0-9_][A-Za-z0-9_.-]{0,99}$"
+PRINTABLE = r"^[^\x00-\x1f\x7f-\x9f]*$"  # one line of text: no control characters (C0, DEL, C1)
+PRINTABLE_LINES = r"^[^\x00-\x08\x0b\x0c\x0e-\x1f\x7f-\x9f]*$"  # text: tabs and line breaks allowed, no escapes
 
 
 class BaseScenario(Strict):
@@ -281,8 +284,10 @@ class BaseScenario(Strict):
     name: Annotated[str, Field(pattern=NAME_PATTERN)] = _d(
         "identifier of the scene and of its default output folder out/<name>: letters, digits, _ - . "
         "(no path separators, no '..', at most 100 characters)")
-    title: Annotated[str, Field(max_length=500)] = _d("one-line title, printed on figures")
-    source: Annotated[str, Field(max_length=2000)] = _d("where the inputs come from", "")
+    title: Annotated[str, Field(max_length=500, pattern=PRINTABLE)] = _d(
+        "one line of text (no control characters), printed on figures")
+    source: Annotated[str, Field(max_length=2000, pattern=PRINTABLE_LINES)] = _d(
+        "where the inputs come from: plain text (line breaks allowed, no terminal escapes)", "")
     _origin: dict = PrivateAttr(default_factory=dict)  # file, sha256, overrides (set by load)
 
     @model_validator(mode="after")
@@ -368,14 +373,18 @@ MAX_NODES = 100_000  # values in a scene after YAML aliases are expanded (refuse
 
 def _one_line(err: ValidationError) -> str:
     e = err.errors()[0]
-    where = ".".join(str(p) for p in e["loc"]) or "(top level)"
-    msg = e["msg"].removeprefix("Value error, ")
+    where = clean(".".join(str(p) for p in e["loc"]) or "(top level)")
+    msg = clean(e["msg"].removeprefix("Value error, "), 2 * LIMIT)
     if e["type"] == "extra_forbidden":
         msg = "unknown key"
     elif e["type"] == "string_pattern_mismatch" and e["loc"] == ("name",):
-        msg = f"{e['input']!r} is not a plain identifier (letters, digits, _ - .; no path separators)"
+        msg = f"{clean(repr(e['input']))} is not a plain identifier (letters, digits, _ - .; no path separators)"
+    elif e["type"] == "string_pattern_mismatch" and e["loc"] == ("title",):
+        msg = "control characters (terminal escapes, tabs, line breaks) are not allowed; write one line of text"
+    elif e["type"] == "string_pattern_mismatch" and e["loc"] == ("source",):
+        msg = "control characters (terminal escapes) are not allowed; write plain text"
     elif e["type"] == "finite_number":
-        msg = f"{e['input']!r}: must be a finite number"
+        msg = f"{clean(repr(e['input']))}: must be a finite number"
     more = f" (and {err.error_count() - 1} more)" if err.error_count() > 1 else ""
     return f"{where}: {msg}{more}"
 
@@ -393,14 +402,17 @@ def resolve(name_or_path: str | Path) -> Path:
     Path
     """
     p = Path(name_or_path)
-    if p.is_file():
-        return p
-    shipped = SCENARIO_DIR / f"{p.stem}.yaml"
-    if p.suffix in ("", ".yaml") and shipped.is_file() and p.parent == Path("."):
-        return shipped
-    if p.is_dir():
-        raise ScenarioError(f"{name_or_path}: is a folder, not a scenario file")
-    raise ScenarioError(f"{name_or_path}: no such scenario file or shipped scenario (see 'autobal list')")
+    try:
+        if p.is_file():
+            return p
+        shipped = SCENARIO_DIR / f"{p.stem}.yaml"
+        if p.suffix in ("", ".yaml") and shipped.is_file() and p.parent == Path("."):
+            return shipped
+        if p.is_dir():
+            raise ScenarioError(f"{clean(name_or_path)}: is a folder, not a scenario file")
+    except OSError as exc:  # a name too long for the file system, a folder that cannot be searched
+        raise ScenarioError(f"{clean(name_or_path)}: cannot be read ({exc.strerror})") from None
+    raise ScenarioError(f"{clean(name_or_path)}: no such scenario file or shipped scenario (see 'autobal list')")
 
 
 def _set(data: dict, path: str, value) -> None:
@@ -559,7 +571,7 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> BaseScenari
         loc = ".".join(str(p) for p in exc.errors()[0]["loc"])
         hit = next((k for k in overrides if loc == k or loc.startswith(k + ".") or (loc and k.startswith(loc + "."))),
                    None)
-        where = f"set {hit}={clip(str(overrides[hit]))}" if hit else str(path)
+        where = f"set {clean(hit)}={clip(str(overrides[hit]))}" if hit else clean(path)
         raise ScenarioError(f"{where}: {_one_line(exc)}") from None
     except RecursionError:
         raise ScenarioError(f"{path}: nested too deeply to be a scenario") from None

@@ -281,3 +281,36 @@ def test_alpha_bounded_below_the_default_lower_bound(tmp_path):
     assert fit["extra"]["start_moved"]["alpha"]["to"] < 1e-12
     assert_allclose(fit["parameters"]["alpha"]["estimate"], 1e-12, rtol=1e-6)
     assert_allclose(fit["parameters"]["tau_max"]["estimate"], 2.0, rtol=1e-6)
+
+
+def test_percentile_interval_of_too_few_refits_is_nan():
+    """Fewer than two finished refits leave no interval (NaN bounds), not an IndexError."""
+    from autobal.analysis.least_squares import percentile_interval
+
+    samples = np.full((50, 2), np.nan)
+    samples[0] = [1.0, 2.0]
+    lo, hi = percentile_interval(samples)
+    assert np.isnan(lo).all() and np.isnan(hi).all()
+    samples[1] = [3.0, 4.0]
+    lo, hi = percentile_interval(samples, 0.5)
+    assert_allclose(lo, [1.5, 2.5]) and assert_allclose(hi, [2.5, 3.5])
+
+
+def test_a_bootstrap_whose_refits_all_fail_is_a_failure(tmp_path, monkeypatch):
+    """Every refit failing (forced) leaves the fit's estimate, but its bootstrap says failed and the
+    run's status is failed with the reason (exit 3), never ok with null intervals."""
+    from autobal.analysis import disc_fit
+
+    def all_failed(self, *args, **kw):
+        n = len(kw["bounds"])
+        return {"estimate": np.full((20, n), np.nan), "fallback": 20, "failed": 20}
+
+    monkeypatch.setattr(disc_fit.DiscFitter, "fit_many", all_failed)
+    p = _scene(tmp_path, str(TABLE), [{"name": "good", "parameters": TWO}], bootstrap={"samples": 20, "seed": 1})
+    assert cli.main(["run", str(p), "--out", str(tmp_path / "out")]) == 3
+    doc = json.loads((tmp_path / "out" / "results.json").read_text())
+    block = doc["estimation"]
+    assert doc["status"] == "failed" and block["status"] == "a bootstrap failed"
+    assert block["fits"]["good"]["bootstrap"]["status"].startswith("failed: 20 of 20 refits failed")
+    assert block["fits"]["good"]["bootstrap"]["parameters"]["alpha"]["ci_low"] is None
+    assert_allclose(block["fits"]["good"]["parameters"]["alpha"]["estimate"], 2.42548, atol=5e-5)
