@@ -296,6 +296,7 @@ def test_percentile_interval_of_too_few_refits_is_nan():
     assert_allclose(lo, [1.5, 2.5]) and assert_allclose(hi, [2.5, 3.5])
 
 
+@pytest.mark.cli
 def test_a_bootstrap_whose_refits_all_fail_is_a_failure(tmp_path, monkeypatch):
     """Every refit failing (forced) leaves the fit's estimate, but its bootstrap says failed and the
     run's status is failed with the reason (exit 3), never ok with null intervals."""
