@@ -3,9 +3,12 @@
 A drive is programmed with a few ramp segments (start speed, end speed, rate), not with hundreds of acceleration
 steps.  :func:`segment_profile` poses that as a low-dimensional problem of its own: the breakpoints
 (t_i, omega_i) of a piecewise-linear speed profile with K segments from omega_start to omega_final, arriving by
-the deadline and held to the end of the settling window, chosen to minimise the same re-simulated objective
-(CVODES, :func:`autobal.ocp.simulation.resimulate`) under the same drive limits (an exact penalty on
-:func:`autobal.ocp.simulation.drive_excess`), by Nelder-Mead from the K segments fitted to the full optimum.
+the deadline and held to the end of the settling window, chosen to minimise the same objective under the same
+drive limits (an exact penalty on :func:`autobal.ocp.simulation.drive_excess`) by Nelder-Mead.  Its starts: the
+K segments fitted to the full optimum, the same projected onto the drive limits (:func:`projected`) and ramps
+at the drive's rate with a hold below the critical speed (:func:`hold_start`); the two best are searched.  The
+search integrates with the exponential integrator of the global search (:func:`fast_segments`, a bounded number
+of steps), the kept profile is re-simulated by CVODES (:func:`simulate_segments`): its reported peak and limits.
 """
 
 from __future__ import annotations
@@ -13,17 +16,25 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 from scipy.optimize import minimize
 
+from autobal.analysis.rotor import deflection, peak, unbalance
+from autobal.models.rotor import rotor_model
 from autobal.ocp.problem import SpinupOcp
-from autobal.ocp.simulation import RESIM_TOL, Trajectory, drive_excess, drive_use, resimulate
+from autobal.ocp.search import FAST_STEP, ModalRotor, simulate_steps
+from autobal.ocp.simulation import RESIM_TOL, Trajectory, drive_excess, drive_use, rate_cap, resimulate
 
 RPM = 60 / (2 * math.pi)  # rpm per rad/s
 SEGMENT_INTERVALS = 200  # the reported re-simulation is sampled as that of a profile on 200 control intervals
-SEARCH_INTERVALS = 25  # and the search's, 8 times coarser, at CVODES tolerance 1e-6 (its peak within 1e-5)
+# the search's integrator: at most 8000 steps (the 8 s datasheet scene at the step 0.5 of FAST_STEP: peak within
+# 2e-6 of CVODES; a 60 s horizon at the step 2.0: within 6e-5; the largest power within 1e-6 on both)
+SEARCH_STEPS = 8000
 PENALTY = 10.0  # exact penalty on the relative excess over the drive limits (a fraction of the objective)
-SEGMENT_EVALUATIONS = 200  # Nelder-Mead's budget of re-simulations
+SEGMENT_EVALUATIONS = 200  # Nelder-Mead's budget of re-simulations from the best start (half from the next)
+SEARCHED_STARTS = 2  # the starts with the smallest penalised objective searched by Nelder-Mead
+HOLD_FRACTIONS = (0.8, 0.9, 0.95)  # starts holding the speed at these fractions of the critical speed
 
 
 def drive_table(tr: Trajectory) -> dict[str, np.ndarray]:
@@ -55,6 +66,8 @@ class Segments:
     fitted_objective: float  # the search's start, the segments fitted to the full optimum: its penalised objective
     evaluations: int
     drive: dict
+    start: str = "fitted"  # the start the kept profile was searched from
+    start_objectives: dict | None = None  # each distinct start's penalised objective
 
     @property
     def rates(self) -> np.ndarray:
@@ -91,6 +104,43 @@ def simulate_segments(ocp: SpinupOcp, t, w, label: str = "segments", intervals: 
     return resimulate(ocp, u, h, label, tol=tol)
 
 
+def fast_segments(ocp: SpinupOcp, t, w, dt: float = FAST_STEP, rotor: ModalRotor | None = None,
+                  max_steps: int = SEARCH_STEPS) -> Trajectory:
+    """The piecewise-linear speed profile through (t, w) (s, rad/s), held after, by the exponential integrator
+    of the global search (:func:`autobal.ocp.search.simulate_steps`, fixed step ``dt`` in Omega0 t, the speed
+    exact at the step ends): deflection, unbalance and drive torque (:func:`autobal.models.rotor.rotor_model`)
+    at the step ends.  At most ``max_steps`` steps over the horizon and settling window (the step grows on
+    longer ones), so its work is bounded whatever the horizon."""
+    end = ocp.horizon + ocp.settling_time
+    t, w = np.asarray(t, float), np.asarray(w, float)
+    dt = max(dt, end * ocp.Om / max_steps)
+    tau = np.arange(int(np.ceil(end * ocp.Om / dt)) + 1) * dt
+    nu = np.interp(tau / ocp.Om, t, w) / ocp.Om  # held at w[-1] after t[-1]
+    u = np.diff(nu) / dt / ocp.a_max
+    _, Z, nus, beta = simulate_steps(ocp, u[None, :], dt, rotor, states=True)
+    turn = np.exp(-1j * beta[0])
+    r = (Z[0, 0] + 1j * Z[1, 0]) * turn  # the rotating frame
+    v = (Z[2, 0] + 1j * Z[3, 0]) * turn - 1j * nus[0] * r
+    q = np.array([r.real, r.imag, v.real, v.imag, nus[0]])
+    # the breakpoints as samples too (the top speed of each segment: the largest power): the speed exact, the
+    # rotor's state interpolated between the step ends
+    tb = t[(t > 0) & (t * ocp.Om < tau[-1])] * ocp.Om
+    qb = np.array([np.interp(tb, tau, qk) for qk in q[:4]] + [np.interp(tb / ocp.Om, t, w) / ocp.Om])
+    order = np.argsort(np.concatenate([tau, tb]), kind="stable")
+    tau, q = np.concatenate([tau, tb])[order], np.hstack([q, qb])[:, order]
+    # the acceleration at each sample: the rate of the segment it ends (the first at t = 0, zero in the hold)
+    rates = np.append(np.diff(w) / np.diff(t), 0.0)
+    a = rates[np.clip(np.searchsorted(t, tau / ocp.Om, side="left") - 1, 0, len(rates) - 1)] / ocp.Om**2
+    P = ocp.params
+    torque = np.array(rotor_model().torque.map(q.shape[1])(q, a[None, :], ca.repmat(ca.DM(P.p), 1, q.shape[1]))
+                      ).ravel() * P.torque_scale
+    dl, dd = deflection(q), unbalance(q, P.psi)
+    pk, tpk = peak(tau, dl)
+    return Trajectory("segments (exponential integrator)", tau / ocp.Om, q[4] * ocp.Om, dl, dd, torque,
+                      np.arange(u.size) * dt / ocp.Om, u * ocp.alpha_max, pk, peak(tau, dd)[0], tpk / ocp.Om,
+                      float(np.trapezoid(dl**2, tau) / ocp.Om))
+
+
 def fit_segments(tr: Trajectory, omega_final: float, horizon: float, K: int) -> tuple[np.ndarray, np.ndarray]:
     """K segments through the optimum's speed: breakpoints on the optimum, their K - 1 inner times minimising the
     squared speed error (Nelder-Mead), the last the optimum's arrival at omega_final."""
@@ -113,6 +163,42 @@ def fit_segments(tr: Trajectory, omega_final: float, horizon: float, K: int) -> 
     return t, w
 
 
+def projected(ocp: SpinupOcp, t, w) -> tuple[np.ndarray, np.ndarray] | None:
+    """The segments (t, w) with each rising segment's rate capped by what the drive gives at its top speed
+    (:func:`autobal.ocp.simulation.rate_cap`), the time this takes recovered from the segments below their cap
+    (in proportion to their slack) so that the arrival time is kept; None when no slack is left for it."""
+    t, w = np.asarray(t, float), np.asarray(w, float)
+    dt, dw = np.diff(t), np.diff(w)
+    cap = np.array([rate_cap(ocp, max(a, b)) for a, b in zip(w[:-1], w[1:], strict=True)])
+    if np.any(cap <= 0):
+        return None
+    shortest = np.where(dw > 0, dw / cap, 0.0)  # the shortest duration of each segment within the caps
+    need = np.maximum(dt, shortest)
+    extra = need.sum() - dt.sum()
+    slack = need - shortest
+    if extra > 0:
+        if slack.sum() <= extra:
+            return None
+        need = need - slack * extra / slack.sum()
+    return np.concatenate([[0.0], np.cumsum(need)]), w
+
+
+def hold_start(ocp: SpinupOcp, K: int, w_hold: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """K segments that ramp at the drive's rate (:func:`autobal.ocp.simulation.rate_cap` at each segment's top
+    speed) from omega_start to ``w_hold`` (rad/s), hold there, and ramp in K - 2 equal speed steps to
+    omega_final, arriving at the deadline; None for K < 3 or when the ramps alone take longer."""
+    w0, wf = ocp.omega_start, ocp.omega_final
+    if K < 3 or not w0 < w_hold < wf:
+        return None
+    w = np.concatenate([[w0, w_hold, w_hold], np.linspace(w_hold, wf, K - 1)[1:]])
+    dw = np.diff(w)
+    rise = np.array([d / rate_cap(ocp, b) if d > 0 else 0.0 for d, b in zip(dw, w[1:], strict=True)])
+    if np.any(rise < 0) or rise.sum() >= ocp.horizon:
+        return None
+    rise[1] = ocp.horizon - rise.sum()
+    return np.concatenate([[0.0], np.cumsum(rise)]), w
+
+
 def segment_profile(ocp: SpinupOcp, optimum: Trajectory, K: int, evaluations: int = SEGMENT_EVALUATIONS
                     ) -> Segments:
     """The best K-segment ramp profile for the problem (see the module docstring).
@@ -133,7 +219,6 @@ def segment_profile(ocp: SpinupOcp, optimum: Trajectory, K: int, evaluations: in
     Segments
         Its drive use says whether it keeps every limit (within :data:`autobal.ocp.simulation.DRIVE_TOL`).
     """
-    t0, w0 = fit_segments(optimum, ocp.omega_final, ocp.horizon, K)
     T, wf = ocp.horizon, max(ocp.omega_final, ocp.omega_start, 1e-300)
 
     def unpack(x):
@@ -142,21 +227,39 @@ def segment_profile(ocp: SpinupOcp, optimum: Trajectory, K: int, evaluations: in
         w = np.concatenate([[ocp.omega_start], x[K:] * wf, [ocp.omega_final]])
         return t, w
 
+    rotor = ModalRotor.of(ocp)
+
     def score(x):
         t, w = unpack(x)
         dt = np.diff(t)
         bad = max(0.0, -dt.min() / T) + max(0.0, t[-1] / T - 1) + max(0.0, -w.min() / wf)
         if bad > 0 or dt.min() <= 1e-9 * T:
             return 1e3 * (1 + bad)
-        tr = simulate_segments(ocp, t, w, intervals=SEARCH_INTERVALS, tol=1e-6)
+        tr = fast_segments(ocp, t, w, rotor=rotor)
         excess = drive_excess(ocp, tr)
         return objective_of(ocp, tr) * (1 + PENALTY * sum(excess.values()))
 
-    x0 = np.concatenate([t0[1:] / T, w0[1:-1] / wf])
-    fitted = score(x0)
-    res = minimize(score, x0, method="Nelder-Mead",
-                   options={"maxfev": evaluations, "xatol": 1e-6, "fatol": 1e-7 * fitted, "adaptive": True})
-    x = res.x if res.fun <= fitted else x0
+    fit = fit_segments(optimum, ocp.omega_final, ocp.horizon, K)
+    starts = {"fitted": fit, "projected": projected(ocp, *fit)}
+    wc = ocp.params.omega_cr
+    for f in HOLD_FRACTIONS:
+        starts[f"hold at {f:g} omega_cr"] = hold_start(ocp, K, f * wc)
+    xs = {}
+    for k, v in starts.items():  # the distinct starts (the projection of segments within the limits is theirs)
+        x = None if v is None else np.concatenate([v[0][1:] / T, v[1][1:-1] / wf])
+        if x is not None and not any(np.array_equal(x, y) for y in xs.values()):
+            xs[k] = x
+    scores = {k: score(x) for k, x in xs.items()}
+    ranked = sorted(scores, key=scores.get)[:SEARCHED_STARTS]
+    best, best_fun, nfev = ranked[0], scores[ranked[0]], len(scores)
+    x = xs[best]
+    for i, key in enumerate(ranked):  # the best start with the full budget, the next with half of it
+        res = minimize(score, xs[key], method="Nelder-Mead",
+                       options={"maxfev": evaluations // (1 + i), "xatol": 1e-6,
+                                "fatol": 1e-7 * scores[key], "adaptive": True})
+        nfev += int(res.nfev)
+        if res.fun < best_fun:
+            best, best_fun, x = key, float(res.fun), res.x
     t, w = unpack(x)
     tr = simulate_segments(ocp, t, w, f"{K}-segment ramp profile")
-    return Segments(t, w, tr, objective_of(ocp, tr), fitted, int(res.nfev), drive_use(ocp, tr))
+    return Segments(t, w, tr, objective_of(ocp, tr), scores["fitted"], nfev, drive_use(ocp, tr), best, scores)

@@ -18,7 +18,7 @@ from autobal.analysis.result import Result, new_figure, with_statuses
 from autobal.ocp import robust as rb
 from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.search import controls_on_mesh, grid_search
-from autobal.ocp.simulation import Trajectory, resimulate
+from autobal.ocp.simulation import Trajectory, best_within_limits, drive_use, resimulate
 from autobal.ocp.solve import optimize
 from autobal.ocp.transcription import DirectCollocation
 
@@ -140,6 +140,34 @@ def _on(ocp: SpinupOcp, factors, profile: rb.Profile) -> Trajectory:
     return resimulate(o, u, h, profile.label, points=8)
 
 
+def best_ramp_within_limits(ocp: SpinupOcp, ramps: list[rb.Profile], worst: np.ndarray
+                            ) -> tuple[int, rb.Profile, dict]:
+    """The ramp with the smallest worst peak among those that keep the drive limits on the nominal rotor (CVODES,
+    :func:`autobal.ocp.simulation.drive_use`, the spin-up study's check), labelled as the best ramp; when none
+    keeps them, the smallest of all, labelled as outside the drive limits.
+
+    Parameters
+    ----------
+    ocp : SpinupOcp
+        The nominal problem (SI).
+    ramps : list of Profile
+        The constant ramps.
+    worst : ndarray, shape (len(ramps),)
+        Their worst peaks, delta/e.
+
+    Returns
+    -------
+    tuple
+        (index, the labelled Profile, {index: drive use} of every ramp).
+    """
+    use = {i: drive_use(ocp, _on(ocp, [1.0, 1.0, 1.0], p)) for i, p in enumerate(ramps)}
+    ib = best_within_limits(dict(enumerate(np.asarray(worst, float))), use)
+    label = "best {}"
+    if ib is None:
+        ib, label = int(np.argmin(worst)), "best {} (outside the drive limits: no ramp keeps them)"
+    return ib, rb.Profile(label.format(ramps[ib].label), ramps[ib].u), use
+
+
 def robust_starts(ocp: SpinupOcp, factors: np.ndarray, nominal: rb.Profile, ramps: list[rb.Profile],
                   ramp_peaks: np.ndarray) -> list[rb.Profile]:
     """Starts of the robust NLP: the nominal optimum, the ramp with the smallest worst design peak and the
@@ -223,9 +251,9 @@ def run(ocp: SpinupOcp, method: DirectCollocation, uncertainty: rb.Uncertainty, 
     factors, peaks = rb.validate(ocp, uncertainty, profiles, samples, seed, executor)
     t_val = time.perf_counter() - t0
     ramp_worst = peaks[:, 2:].max(axis=0)
-    ib = int(np.argmin(ramp_worst))
+    ib, best_ramp, ramp_use = best_ramp_within_limits(ocp, family, ramp_worst)
     chosen = {"robust": (ro.profile, peaks[:, 0]), "nominal": (pn, peaks[:, 1]),
-              "ramp": (rb.Profile(f"best {family[ib].label}", family[ib].u), peaks[:, 2 + ib])}
+              "ramp": (best_ramp, peaks[:, 2 + ib])}
     # the design set's peaks by the fast integrator, each profile's CVODES_WORST worst rotors re-simulated by CVODES
     fast_design = rb.fast_peaks(ocp, F, [p for p, _ in chosen.values()])
     design = {}
@@ -244,6 +272,7 @@ def run(ocp: SpinupOcp, method: DirectCollocation, uncertainty: rb.Uncertainty, 
                    "design_peaks_over_e": design[k].tolist(), "design_worst_over_e": float(design[k].max()),
                    "validation_worst_over_e": float(v.max()), "validation_mean_over_e": float(v.mean()),
                    "validation_quantiles_over_e": {str(q): float(np.quantile(v, q)) for q in QUANTILES}}
+    prof["ramp"]["within_drive_limits"] = ramp_use[ib]["within_drive_limits"]
     data = {
         "title": title, "method": method.label, "omega_cr_rad_s": ocp.params.omega_cr,
         "critical_speed_spread": uncertainty.critical_speed_spread,
@@ -261,8 +290,10 @@ def run(ocp: SpinupOcp, method: DirectCollocation, uncertainty: rb.Uncertainty, 
         "validation_check_rel_error": fast_err,
         "profiles": prof,
         "ramps": [{"label": p.label, "alpha_rad_s2": float(p.u[0] * ocp.alpha_max),
-                   "design_worst_over_e": float(d), "validation_worst_over_e": float(w)}
-                  for p, d, w in zip(family, design_ramps, ramp_worst, strict=True)],
+                   "design_worst_over_e": float(d), "validation_worst_over_e": float(w),
+                   "within_drive_limits": ramp_use[i]["within_drive_limits"],
+                   "violated": ", ".join(ramp_use[i]["violated"])}
+                  for i, (p, d, w) in enumerate(zip(family, design_ramps, ramp_worst, strict=True))],
         "accuracy": {"estimate": fast_err,
                      "how": f"largest relative difference of the validation integrator (exponential, step "
                             f"{rb.FAST_STEP} in Omega0 t) against CVODES on {CHECKED} validation rotors"},

@@ -59,7 +59,7 @@ class ModalRotor:
 
 
 def simulate_steps(ocp: SpinupOcp, u: np.ndarray, dt: float = STEP, rotor: ModalRotor | None = None,
-                   block: int = 64) -> np.ndarray:
+                   block: int = 64, states: bool = False):
     """Peak deflection delta/e of many piecewise-constant profiles at once.
 
     Parameters
@@ -72,11 +72,14 @@ def simulate_steps(ocp: SpinupOcp, u: np.ndarray, dt: float = STEP, rotor: Modal
         Step, dimensionless time (tau = Omega0 t).
     block : int
         Steps advanced at once (the modal recursion is summed in closed form within a block).
+    states : bool
+        Also return the fixed-frame states.
 
     Returns
     -------
     ndarray, shape (C,)
-        The largest delta/e at the step ends.
+        The largest delta/e at the step ends; with ``states`` also (X, Y, X', Y') over e at the step starts and
+        ends, ndarray (4, C, S + 1), the speed nu and the rotation angle beta there, each (C, S + 1).
     """
     rotor = rotor or ModalRotor.of(ocp)
     C, S = u.shape
@@ -101,6 +104,8 @@ def simulate_steps(ocp: SpinupOcp, u: np.ndarray, dt: float = STEP, rotor: Modal
     mdl = np.tile(W @ z0, (C, 1)).astype(complex)  # (C, modes)
     vx_, vy_ = V[0] * (2 if half else 1), V[1] * (2 if half else 1)
     best = np.full(C, np.hypot(x, y))
+    out = [np.repeat(np.array(z0, float)[:, None, None], C, axis=1)] if states else None
+    vvx, vvy = V[2] * (2 if half else 1), V[3] * (2 if half else 1)
     for k0 in range(0, S, block):
         k1 = min(S, k0 + block)
         sp = 1j * num[:, k0:k1, None]  # (C, B, 1)
@@ -114,8 +119,10 @@ def simulate_steps(ocp: SpinupOcp, u: np.ndarray, dt: float = STEP, rotor: Modal
         m = Ej[None] * (mdl[:, None, :] + np.cumsum(inc / Ej[None], axis=1))
         X, Y = (m @ vx_).real, (m @ vy_).real
         best = np.maximum(best, np.hypot(X, Y).max(axis=1))
+        if states:
+            out.append(np.array([X, Y, (m @ vvx).real, (m @ vvy).real]))
         mdl = m[:, -1]
-    return best
+    return (best, np.concatenate(out, axis=2), nu, beta) if states else best
 
 
 def three_phase(ocp: SpinupOcp, u1, w1, u_b, d, steps: int, dt: float = STEP) -> np.ndarray:

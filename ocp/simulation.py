@@ -235,9 +235,34 @@ def drive_use(ocp: SpinupOcp, tr: Trajectory) -> dict:
             "max_power_W": float(np.max(M * w)), "within_drive_limits": not bad, "violated": bad}
 
 
+def best_within_limits(peaks: dict, uses: dict):
+    """The key of the smallest peak among the profiles that keep the drive limits (``uses``: :func:`drive_use` of
+    each; a profile without drive data counts as keeping them), None when none does: the only reference a
+    gain may be quoted against."""
+    feasible = [k for k in peaks if uses[k]["within_drive_limits"] is not False]
+    return min(feasible, key=peaks.get) if feasible else None
+
+
 def _ramp(ocp: SpinupOcp, alpha: float, h, n: int, ns: int, points: int, label: str) -> Trajectory:
     u = np.concatenate([ramp_profile(ocp, n, alpha), np.zeros(ns)])
     return resimulate(ocp, u, h, label, points=points)
+
+
+def rate_cap(ocp: SpinupOcp, omega: float) -> float:
+    """The largest acceleration the drive gives at speed ``omega`` (rad/s) by its inertia alone, rad/s^2:
+    J alpha + b omega within the torque, power and motor limits, and alpha within alpha_max (the rotor's
+    reaction torque left out: a start, checked by re-simulation)."""
+    P = ocp.params
+    J = P.J_p + P.m1 * P.e**2 * (1 - P.psi)
+    caps = [ocp.alpha_max]
+    if J > 0:
+        if ocp.torque_max is not None:
+            caps.append((ocp.torque_max - P.b * omega) / J)
+        if ocp.power_max is not None:
+            caps.append((ocp.power_max / max(omega, 1e-300) - P.b * omega) / J)
+        if ocp.motor_stall_torque is not None:
+            caps.append((ocp.motor_stall_torque * (1 - omega / ocp.motor_no_load_speed) - P.b * omega) / J)
+    return min(caps)
 
 
 def fastest_feasible_rate(ocp: SpinupOcp, intervals: int = 200, points: int = 60, tries: int = 12
@@ -255,15 +280,7 @@ def fastest_feasible_rate(ocp: SpinupOcp, intervals: int = 200, points: int = 60
     J = P.J_p + P.m1 * P.e**2 * (1 - P.psi)
     slowest = min(abs(ocp.omega_final - ocp.omega_start) / ocp.horizon, ocp.alpha_max)
     wt = max(ocp.omega_start, ocp.omega_final)
-    caps = [ocp.alpha_max]
-    if J > 0 and ocp.omega_final > ocp.omega_start:
-        if ocp.torque_max is not None:
-            caps.append((ocp.torque_max - P.b * wt) / J)
-        if ocp.power_max is not None:
-            caps.append((ocp.power_max / wt - P.b * wt) / J)
-        if ocp.motor_stall_torque is not None:
-            caps.append((ocp.motor_stall_torque * (1 - wt / ocp.motor_no_load_speed) - P.b * wt) / J)
-    a = max(min(caps), slowest)
+    a = max(rate_cap(ocp, wt) if ocp.omega_final > ocp.omega_start else ocp.alpha_max, slowest)
     for _ in range(tries):
         tr = _ramp(ocp, a, h, ms.n, ms.ns, points, f"ramp {a:.4g} rad/s^2 and hold (fastest within the drive limits)")
         use = drive_use(ocp, tr)

@@ -21,6 +21,7 @@ from autobal.ocp.simulation import (
     RESIM_TOL,
     Trajectory,
     baselines,
+    best_within_limits,
     drive_use,
     torque_reference,
 )
@@ -92,7 +93,8 @@ class SpinupResult(Result):
         sg = d.get("segments")
         if sg:
             lines.append(f"  {sg['segments']}-segment ramp table: peak {sg['peak_deflection_over_e']:.4f} e, "
-                         f"{sg['loss_vs_optimum_pct']:+.2f} % against the full optimum"
+                         f"{sg['loss_vs_optimum_pct']:+.2f} % against the full optimum (searched from the "
+                         f"{sg['start']} start)"
                          + ("" if sg["within_drive_limits"] else " (outside the drive limits)"))
         return "\n".join(lines)
 
@@ -221,8 +223,7 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
     sol, tr = opt.solution, opt.trajectory
     use = {k: drive_use(ocp, v) for k, v in base.items()}
     # percentages refer only to the baselines the drive can run
-    feasible = [k for k in base if use[k]["within_drive_limits"] is not False]
-    ref_key = min(feasible, key=lambda k: base[k].peak_delta) if feasible else None
+    ref_key = best_within_limits({k: v.peak_delta for k, v in base.items()}, use)
     ref_peak = base[ref_key].peak_delta if ref_key else None
     t2 = time.perf_counter()
     seg = drive_profile.segment_profile(ocp, tr, segments) if segments and ocp.objective != "min_time" else None
@@ -275,7 +276,8 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
         data["segments"] = {"segments": segments, "peak_deflection_over_e": seg.trajectory.peak_delta,
                             "peak_unbalance": seg.trajectory.peak_d, "objective_value": seg.objective,
                             "loss_vs_optimum_pct": _pct(seg.objective, opt.score),
-                            "evaluations": seg.evaluations, **seg.drive}
+                            "evaluations": seg.evaluations, "start": seg.start,
+                            "start_objectives": seg.start_objectives, **seg.drive}
     # the wall time by part (s): what the global search, the initial guesses, the NLP builds, the IPOPT solves,
     # the CVODES re-simulations (reference ramp, ranking near-ties, the optimum) and the baselines took
     split = {"global_search": opt.times.get("global_search", 0.0), "guesses": opt.times.get("guesses", 0.0),
