@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import autobal
-from autobal import runners
+from autobal.analyses.spinup import ocp as spinup_ocp
 from autobal.ocp import drive_profile as dp
 from autobal.ocp import robust as rb
 from autobal.ocp import robust_study, spinup_study
@@ -21,7 +21,7 @@ SCENE = "scenarios/spinup_rotor_datasheet.yaml"
 
 def _ocp(path=SCENE, **changes):
     scene = autobal.load(path)
-    return dataclasses.replace(runners.spinup_ocp(scene, scene.analyses.spinup), **changes)
+    return dataclasses.replace(spinup_ocp(scene, scene.analyses.spinup), **changes)
 
 
 def test_fast_segments_match_cvodes_and_their_work_is_bounded():
