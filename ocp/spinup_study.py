@@ -270,6 +270,14 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
                      "how": "relative difference between the transcription's optimal objective and its CVODES "
                             f"re-simulation (rtol {RESIM_TOL:g}, {RESIM_POINTS} samples per interval)"},
     }
+    outside = "no ramp baseline keeps the drive limits (each is labelled outside them): no gain is quoted"
+    for key, why in (("braking_torque_limit_N_m", "no braking-torque limit: the scene names no drive limit"),
+                     ("brakes", "unknown: the scene gives no drive inertia, so the optimum's torque is not known"),
+                     ("baseline_ramp_peak_over_e", outside), ("baseline_ramp_key", outside),
+                     ("gain_vs_best_feasible_ramp_pct", outside),
+                     ("gain_vs_constant_ramp_pct", "the constant ramp is outside the drive limits: no gain is quoted")):
+        if data[key] is None:
+            data[f"{key}_status"] = why
     if ocp.objective == "peak_unbalance":
         data["collocation_peak_unbalance"] = opt.collocation_value
     if seg is not None:
