@@ -6,7 +6,11 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
+import yaml
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from autobal import cli
 
@@ -40,3 +44,44 @@ def test_pathological_spinup_value_is_refused_quickly_in_one_line(tmp_path, caps
     assert "Traceback" not in err and "CVODES" not in err
     assert text in err, err
     assert elapsed < 20, f"refusal took {elapsed:.1f} s (a hang?)"
+
+
+def _log(draw, lo: float, hi: float) -> float:
+    """A value drawn log-uniformly in [lo, hi] (the schema's physical ranges span many decades)."""
+    return 10 ** draw(st.floats(np.log10(lo), np.log10(hi), allow_nan=False))
+
+
+@st.composite
+def spinup_scenes(draw) -> dict:
+    """A Jeffcott spin-up drawn within the schema's bounds: rotor, speeds, deadline, hold and acceleration
+    over many decades; few intervals and a bounded iteration count keep each solve short."""
+    start = draw(st.sampled_from([0.0, _log(draw, 1e-3, 1e3)]))
+    final = _log(draw, 1e-2, 1e4)
+    return {"name": "drawn", "title": "a drawn spin-up", "rotor": {
+        "mass": f"{_log(draw, 1e-3, 1e5):.6g} kg", "stiffness": f"{_log(draw, 1e-6, 1e14):.6g} N/m",
+        "damping": f"{draw(st.sampled_from([0.0, _log(draw, 1e-9, 1e9)])):.6g} N*s/m",
+        "eccentricity": f"{_log(draw, 1e-9, 1e-2):.6g} m"},
+        "analyses": {"spinup": {
+            "start_speed": f"{start:.6g} rad/s", "final_speed": f"{final:.6g} rad/s",
+            "horizon": f"{_log(draw, 1e-3, 1e6):.6g} s",
+            "settling_time": f"{draw(st.sampled_from([0.0, _log(draw, 1e-3, 1e6)])):.6g} s",
+            "max_acceleration": f"{_log(draw, 1e-6, 1e8):.6g} rad/s^2",
+            "intervals": draw(st.integers(4, 40)), "multistart": False, "max_iterations": 200}}}
+
+
+@pytest.mark.cli
+@pytest.mark.slow
+@settings(max_examples=12, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(d=spinup_scenes())
+def test_spinup_scenes_across_the_bounds_end_without_a_traceback(tmp_path, capsys, d):
+    """Drawn spin-up scenes solve (exit 0), are refused with one line (2) or fail as a solve (3), each within a
+    hang guard; never a traceback."""
+    path = tmp_path / "drawn.yaml"
+    path.write_text(yaml.safe_dump(d))
+    t0 = time.perf_counter()
+    rc = cli.main(["run", str(path), "-q", "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert time.perf_counter() - t0 < 60, d
+    assert rc in (0, 2, 3) and "Traceback" not in err, (d, err)
+    assert rc == 0 or len(err.strip().splitlines()) <= 3, err
