@@ -583,7 +583,8 @@ class StaticsSolver:
     def force_gap(self, psi1: float, dpsi: float, us) -> np.ndarray:
         """Balancing force phi = sigma (psi2 - psi3) against a prescribed gap u at fixed psi1:
         the static characteristic (2.35) from the exact flow network (disc force balance left
-        out), by IPOPT continuation along ``us``."""
+        out), by IPOPT continuation along ``us``; a point counts only if its balances (all but the
+        disc force) hold to :data:`MAX_RELATIVE_RESIDUAL` (else SolveError ``Residual_Above_Tolerance``)."""
         sys_ = self.system
         rows = [i for i, e in enumerate(sys_.equations) if e != "disc force"]
         if "force_gap" not in self._built:
@@ -598,6 +599,10 @@ class StaticsSolver:
             res = self._check(ipopt.solve(solver, **b, x0=x, p=[psi1, dpsi]))
             if not res["success"]:
                 raise SolveError(f"force-gap characteristic at u = {u:g} did not converge", res["status"])
+            worst = float(np.max(self.relative_residual(np.asarray(res["x"], float).ravel(), psi1, dpsi)[rows]))
+            if not worst <= MAX_RELATIVE_RESIDUAL:
+                raise SolveError(f"force-gap characteristic at u = {u:g}: the balances do not hold",
+                                 f"Residual_Above_Tolerance ({worst:.1e} relative, IPOPT said {res['status']})")
             x = res["x"]
             phi.append(self.design.groups.sigma * (x[sys_.index("psi2")] - x[sys_.index("psi3")]))
         return np.array(phi)

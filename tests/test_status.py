@@ -81,6 +81,29 @@ def test_ipopt_success_with_balances_not_satisfied_is_not_a_solution():
     assert res["success"] and pt.max_residual <= st.MAX_RELATIVE_RESIDUAL
 
 
+
+def test_force_gap_point_whose_balances_do_not_hold_is_not_a_solution(monkeypatch):
+    # the force-gap characteristic (2.35) checks every balance but the disc force (the gap is prescribed): IPOPT's
+    # "Solve_Succeeded" at a point 1 % off the root in psi2 is Residual_Above_Tolerance; the true points pass
+    solver = pe600_with_drain(0.0)
+    dpsi = solver.design.dpsi
+    phi = solver.force_gap(1.0, dpsi, [0.8, 1.2])
+    assert np.all(np.isfinite(phi))
+    real = st.ipopt.solve
+
+    def off_root(*args, **kw):
+        res = real(*args, **kw)
+        x = np.array(res["x"], float).ravel()
+        x[solver.system.index("psi2")] *= 1.01
+        return res | {"x": x}
+
+    good = solver.solve(1.0, dpsi)  # the operating point the continuation starts from, solved before the patch
+    monkeypatch.setattr(solver, "solve", lambda *args: good)
+    monkeypatch.setattr(st.ipopt, "solve", off_root)
+    with pytest.raises(SolveError, match="the balances do not hold") as err:
+        solver.force_gap(1.0, dpsi, [0.8, 1.2])
+    assert err.value.status.startswith("Residual_Above_Tolerance")
+
 # ---- a transient whose integrator fails (issue: exit 0, "ok", the failure a field inside the case) ---------
 
 def failing_transient(tmp_path) -> str:
