@@ -228,13 +228,17 @@ def crossover(Omega0: float, psi: float, omega0: float, alpha: float, nu_end: fl
     return float(brentq(gap, *bracket, xtol=xtol))
 
 
+def lewis_end(a_star: float) -> float:
+    """The speed nu = omega/Omega where :func:`lewis` stops: past the asymptotic peak speed 1 + 2.1574 sqrt(a*)."""
+    return 1 + 2.1574 * np.sqrt(a_star) + max(0.15, 5 * np.sqrt(a_star))
+
+
 def lewis(zeta: float, a_star: float, per_unit: float = 12.0, tol: float = TOL) -> dict:
     """Lewis (1932) problem: Jeffcott rotor (psi = 1) from rest, u = u' = 0,
     nu(0) = 0, constant a* = alpha/Omega^2.  |u| = |w|, so the rotating frame is used; it runs
     past the asymptotic peak speed 1 + 2.1574 sqrt(a*).  Returns the peak |u|/e and nu there."""
     p = RotorParams(m1=1.0, c=1.0, chi=2 * zeta, e=1.0)
-    nu_end = 1 + 2.1574 * np.sqrt(a_star) + max(0.15, 5 * np.sqrt(a_star))
-    r = passage(p, 0.0, a_star, nu_end, q0=[0, 0, 0, 0, 0], per_unit=per_unit, tol=tol)
+    r = passage(p, 0.0, a_star, lewis_end(a_star), q0=[0, 0, 0, 0, 0], per_unit=per_unit, tol=tol)
     return {"zeta": zeta, "a_star": a_star, "peak": r["delta_max"], "nu_peak": r["nu_delta_max"],
             "asymptote": 1.4672 / np.sqrt(a_star), "nu_asymptote": 1 + 2.1574 * np.sqrt(a_star)}
 

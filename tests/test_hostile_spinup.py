@@ -28,6 +28,9 @@ CASES = [
     # a passage at 1e-6 rad/s^2 would simulate 2.8e9 periods (a hang before)
     ("passage_1e-6", SCENES / "pashkov_runup.yaml", "analyses.rotor_dynamics.passage.acceleration=1e-6 rad/s^2",
      "analyses.rotor_dynamics.passage.acceleration: 1e-06 rad/s^2 takes 2.84e+09 natural periods"),
+    # Lewis' run from rest at a* = 1e-9 would simulate 1.8e8 periods
+    ("lewis_1e-9", SCENES / "pashkov_runup.yaml", "analyses.rotor_dynamics.lewis.accel_ratio=[1e-9]",
+     "analyses.rotor_dynamics.lewis.accel_ratio: 1e-09 takes 1.83e+08 natural periods"),
 ]
 
 

@@ -92,6 +92,14 @@ def run(scene, settings: RotorDynamics):
             raise ScenarioError(f"analyses.rotor_dynamics.passage.{key}: {a:g} rad/s^2 takes {periods:.3g} natural "
                                 f"periods of the rotor to reach final_ratio, more than {MAX_PERIODS:.0e}: give at "
                                 f"least {a * periods / MAX_PERIODS:.3g} rad/s^2")
+    from autobal.analysis.rotor import lewis_end
+
+    for a in settings.lewis.accel_ratio if settings.lewis else ():
+        periods = lewis_end(a) / a / (2 * math.pi)  # from rest to lewis_end at a* = alpha/Omega^2, in 2 pi/Omega
+        if periods > MAX_PERIODS:  # CVODES over the run would not finish
+            raise ScenarioError(f"analyses.rotor_dynamics.lewis.accel_ratio: {a:g} takes {periods:.3g} natural "
+                                f"periods of the rotor from rest past its critical speed, more than "
+                                f"{MAX_PERIODS:.0e}: give at least {a * periods / MAX_PERIODS:.2g}")
     with progress.steps(None, "rotor dynamics (curves, steps, passage, Lewis cases)", "part", catch=True):
         return rotor_study.run(params, settings, scene.title, drive.motor if drive else None)
 
