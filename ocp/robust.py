@@ -32,7 +32,7 @@ from autobal.errors import SolveError
 from autobal.models.rotor import RotorParams
 from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.search import FAST_STEP, ModalRotor, simulate_steps, steps_of
-from autobal.ocp.simulation import initial_guess, ramp_profile, resimulate
+from autobal.ocp.simulation import initial_guess, ramp_profile, rate_text, resimulate
 from autobal.ocp.solve import IPOPT_OPTIONS
 from autobal.ocp.transcription import DirectCollocation, jerk_regulariser, mesh, structured_derivatives, transcribe
 
@@ -202,7 +202,7 @@ def validate(ocp: SpinupOcp, uncertainty: Uncertainty, profiles: list[Profile], 
 def ramp_family(ocp: SpinupOcp, n: int, count: int = 8) -> list[Profile]:
     """Constant ramps from the slowest that reaches omega_final by the deadline to alpha_max (then held)."""
     lo = min(abs(ocp.omega_final - ocp.omega_start) / ocp.horizon, ocp.alpha_max)
-    return [Profile(f"ramp {a:.4g} rad/s^2", ramp_profile(ocp, n, a)) for a in np.linspace(lo, ocp.alpha_max, count)]
+    return [Profile(f"ramp {rate_text(a)}", ramp_profile(ocp, n, a)) for a in np.linspace(lo, ocp.alpha_max, count)]
 
 
 def scenario_nlp(ocp: SpinupOcp, method: DirectCollocation, ref: float) -> tuple:

@@ -21,6 +21,11 @@ RESIM_TOL = 1e-10
 RESIM_POINTS = 24  # re-simulation samples per interval
 
 
+def rate_text(alpha: float) -> str:
+    """An angular acceleration as an engineer reads it: rad/s² with rpm/s beside (n' = 30 alpha / pi)."""
+    return f"{alpha:.4g} rad/s² ({alpha * 30 / np.pi:.4g} rpm/s)"
+
+
 @cache
 def chained_integrator(fractions: tuple, tol: float, intervals: int, multistep: str) -> ca.Function:
     """:func:`interval_integrator` chained over ``intervals`` intervals in one CasADi call (``mapaccum``: CVODES
@@ -282,7 +287,7 @@ def fastest_feasible_rate(ocp: SpinupOcp, intervals: int = 200, points: int = 60
     wt = max(ocp.omega_start, ocp.omega_final)
     a = max(rate_cap(ocp, wt) if ocp.omega_final > ocp.omega_start else ocp.alpha_max, slowest)
     for _ in range(tries):
-        tr = _ramp(ocp, a, h, ms.n, ms.ns, points, f"ramp {a:.4g} rad/s^2 and hold (fastest within the drive limits)")
+        tr = _ramp(ocp, a, h, ms.n, ms.ns, points, f"ramp {rate_text(a)} and hold (fastest within the drive limits)")
         use = drive_use(ocp, tr)
         if use["within_drive_limits"]:
             return a, tr
@@ -309,8 +314,8 @@ def baselines(ocp: SpinupOcp, intervals: int = 200, points: int = 60) -> dict[st
     h = np.concatenate([np.full(ms.n, ms.h), np.full(ms.ns, ms.hs)])
     const = min(abs(ocp.omega_final - ocp.omega_start) / ocp.horizon, ocp.alpha_max)
     out = {}
-    for key, label, a in (("constant_ramp", f"constant ramp {const:.4g} rad/s^2", const),
-                          ("max_acceleration_ramp", f"ramp {ocp.alpha_max:.4g} rad/s^2 and hold", ocp.alpha_max)):
+    for key, label, a in (("constant_ramp", f"constant ramp {rate_text(const)}", const),
+                          ("max_acceleration_ramp", f"ramp {rate_text(ocp.alpha_max)} and hold", ocp.alpha_max)):
         out[key] = _ramp(ocp, a, h, ms.n, ms.ns, points, label)
     if not drive_use(ocp, out["max_acceleration_ramp"])["within_drive_limits"] and \
             drive_use(ocp, out["constant_ramp"])["within_drive_limits"]:

@@ -127,7 +127,7 @@ def test_every_baseline_a_percentage_refers_to_keeps_the_drive_limits(run):
         assert np.min(alpha) >= -1e-6
     # the issue's numbers: the fastest ramp and hold within 45 kW is power-limited at the top speed,
     # 45 kW / (2 kg m^2 x 418.9 rad/s) = 53.7 rad/s^2, and peaks at 20.82 e (issue #26: about 53.6, 20.83 e)
-    assert "53.71 rad/s^2" in base[ref]["label"]
+    assert "53.71 rad/s² (512.9 rpm/s)" in base[ref]["label"]
     assert base[ref]["peak_deflection_over_e"] == pytest.approx(20.83, abs=0.02)
     gain = res["gain_vs_best_feasible_ramp_pct"]
     assert gain == pytest.approx(100 * (res["peak_deflection_over_e"] / base[ref]["peak_deflection_over_e"] - 1))
