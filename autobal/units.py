@@ -397,6 +397,16 @@ Density = quantity("density")
 Viscosity = quantity("viscosity")
 VolumeFlow = quantity("volume flow")
 AngularSpeed = quantity("angular speed")
+Mass = quantity("mass")
+Stiffness = quantity("stiffness")
+Volume = quantity("volume")
+Time = quantity("time")
+TimeOrZero = quantity("time", "nonnegative")
+AngularAcceleration = quantity("angular acceleration")
+SpeedOrZero = quantity("angular speed", "nonnegative")
+DampingOrZero = quantity("damping", "nonnegative")
+Inertia = quantity("moment of inertia")
+LengthOrZero = quantity("length", "nonnegative")
 
 
 def si_unit_of(text: object) -> str:

@@ -9,13 +9,11 @@ from pydantic import Field
 
 from autobal.analyses import COST
 from autobal.schema import Positive, Range, Strict
-from autobal.units import Density, Length, Viscosity, quantity
+from autobal.units import Density, Length, Mass, Viscosity, Volume
 
 DESCRIPTION = "liquid auto-balancer studies"
 NEEDS = "liquid_balancer"
 REPORT_SECTION = "liquid_balancer_section"
-Mass = quantity("mass")
-Volume = quantity("volume")
 
 
 class Candidate(Strict):

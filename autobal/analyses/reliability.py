@@ -9,12 +9,11 @@ from pydantic import Field, field_validator, model_validator
 
 from autobal.analyses import COST
 from autobal.schema import NonNegative, Positive, Strict
-from autobal.units import Length, quantity
+from autobal.units import Length, Time
 
 DESCRIPTION = "traditional disc wear and time to failure"
 NEEDS = None
 REPORT_SECTION = "reliability_section"
-Time = quantity("time")
 Probability = Annotated[float, Field(gt=0, lt=1)]
 
 

@@ -15,15 +15,11 @@ from autobal.analyses import COST
 from autobal.errors import ScenarioError
 from autobal.parts.ross_rotor import Node
 from autobal.schema import Strict
-from autobal.units import AngularSpeed, quantity
+from autobal.units import AngularAcceleration, AngularSpeed, SpeedOrZero, Time, TimeOrZero
 
 DESCRIPTION = "optimal spin-up of a ROSS rotor reduced to its modes (the ross extra)"
 NEEDS = "ross_rotor"
 REPORT_SECTION = "ross_spinup_section"
-Time = quantity("time")
-TimeOrZero = quantity("time", "nonnegative")
-AngularAcceleration = quantity("angular acceleration")
-SpeedOrZero = quantity("angular speed", "nonnegative")
 
 
 class RossSpinup(Strict):

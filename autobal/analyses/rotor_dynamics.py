@@ -11,14 +11,11 @@ from pydantic import Field
 from autobal.analyses import COST
 from autobal.errors import ScenarioError
 from autobal.schema import Positive, Range, Strict
-from autobal.units import AngularSpeed, quantity
+from autobal.units import AngularAcceleration, AngularSpeed, SpeedOrZero, Time, quantity
 
 DESCRIPTION = "Jeffcott rotor studies"
 NEEDS = "rotor"
 REPORT_SECTION = "rotor_dynamics_section"
-Time = quantity("time")
-AngularAcceleration = quantity("angular acceleration")
-SpeedOrZero = quantity("angular speed", "nonnegative")
 RateOrZero = quantity("rate", "nonnegative")  # n = chi/m1, 1/s
 Fraction = Annotated[float, Field(gt=0, le=1)]
 

@@ -11,16 +11,12 @@ from pydantic import Field, model_validator
 from autobal.analyses import COST
 from autobal.errors import ScenarioError
 from autobal.schema import Positive, Strict
-from autobal.units import AngularSpeed, quantity
+from autobal.units import AngularAcceleration, AngularSpeed, SpeedOrZero, Time, TimeOrZero, quantity
 
 DESCRIPTION = "optimal spin-up through the critical speed"
 NEEDS = "rotor"
 REPORT_SECTION = "spinup_section"
-Time = quantity("time")
-TimeOrZero = quantity("time", "nonnegative")
-AngularAcceleration = quantity("angular acceleration")
 AngularJerk = quantity("angular jerk")
-SpeedOrZero = quantity("angular speed", "nonnegative")
 
 
 class Spinup(Strict):

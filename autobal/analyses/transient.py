@@ -9,12 +9,11 @@ from pydantic import Field, model_validator
 
 from autobal.analyses import COST
 from autobal.schema import Positive, Strict
-from autobal.units import AngularSpeed, quantity
+from autobal.units import AngularSpeed, Time
 
 DESCRIPTION = "time responses"
 NEEDS = "device.dynamics"
 REPORT_SECTION = "transient_section"
-Time = quantity("time")
 
 
 class TransientCase(Strict):

@@ -16,13 +16,9 @@ from pydantic import Field
 
 from autobal.models.dynamics import LONG_NAMES
 from autobal.schema import Positive, Strict
-from autobal.units import AngularSpeed, Area, quantity
+from autobal.units import AngularSpeed, Area, DampingOrZero, Mass, Stiffness, Volume, quantity
 
-Mass = quantity("mass")
-Stiffness = quantity("stiffness")
 Damping = quantity("damping")
-DampingOrZero = quantity("damping", "nonnegative")
-Volume = quantity("volume")
 BulkModulus = quantity("bulk modulus")
 
 

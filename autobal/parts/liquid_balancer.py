@@ -14,12 +14,8 @@ from pydantic import Field, model_validator
 
 from autobal.models.liquid_balancer import System, n_from_decrement
 from autobal.schema import Positive, Strict
-from autobal.units import AngularSpeed, Density, Length, Viscosity, quantity
+from autobal.units import AngularSpeed, Density, Length, LengthOrZero, Mass, Stiffness, Viscosity, Volume, quantity
 
-Mass = quantity("mass")
-Volume = quantity("volume")
-Stiffness = quantity("stiffness")
-LengthOrZero = quantity("length", "nonnegative")
 Rate = quantity("rate")
 
 

@@ -14,13 +14,9 @@ from pydantic import Field, model_validator
 
 from autobal.models import ross_rotor as rr
 from autobal.schema import Strict
-from autobal.units import Density, Length, Pressure, quantity
+from autobal.units import DampingOrZero, Density, Inertia, Length, LengthOrZero, Mass, Pressure, quantity
 
-Mass = quantity("mass")
-Inertia = quantity("moment of inertia")
 StiffnessOrZero = quantity("stiffness", "nonnegative")
-DampingOrZero = quantity("damping", "nonnegative")
-LengthOrZero = quantity("length", "nonnegative")
 Node = Annotated[int, Field(ge=0, le=10_000)]
 EXAMPLES = ("rotor_example", "compressor_example", "rotor_example_with_damping", "rotor_example_6dof",
             "coaxrotor_example")

@@ -16,14 +16,10 @@ from pydantic import Field, field_validator, model_validator
 
 from autobal.models.rotor import LiquidLayer, RotorParams
 from autobal.schema import Strict
-from autobal.units import AngularSpeed, Density, Length, quantity
+from autobal.units import AngularSpeed, DampingOrZero, Density, Inertia, Length, Mass, Stiffness, quantity
 
-Mass = quantity("mass")
-Stiffness = quantity("stiffness")
-DampingOrZero = quantity("damping", "nonnegative")
 Torque = quantity("torque")
 Power = quantity("power")
-Inertia = quantity("moment of inertia")
 RotationalDampingOrZero = quantity("rotational damping", "nonnegative")
 Fraction = Annotated[float, Field(gt=0, le=1)]
 UnbalanceMass = quantity("unbalance")
