@@ -107,12 +107,22 @@ def fixed_layout(fig: Figure, left: float, right: float, top: float, bottom: flo
 
         def execute(self, fig) -> None:
             w, h = fig.get_size_inches()
-            renderer = fig.canvas.get_renderer()
-            legends = sum(leg.get_window_extent(renderer).height for leg in fig.legends) / fig.dpi
+            # the renderer of the draw (Agg for PNG; for SVG, whose canvas keeps none, matplotlib makes one)
+            legends = sum(leg.get_window_extent().height for leg in fig.legends) / fig.dpi
             fig.subplots_adjust(left=left / w, right=1 - right / w, top=1 - top / h,
                                 bottom=(bottom + legends) / h, hspace=hspace)
 
     fig.set_layout_engine(FixedLayout())
+
+
+#: the files of each figure of a result: PNG (report.html embeds it) and SVG beside it, for documents
+FIGURE_FORMATS = (".png", ".svg")
+
+
+def save_figures(fig: Figure, path: Path, dpi: int = DPI) -> list[Path]:
+    """Write a figure in every format of :data:`FIGURE_FORMATS` (``path`` with each suffix): the one place a
+    result's figures are saved.  Returns the paths."""
+    return [save_figure(fig, path.with_suffix(suffix), dpi) for suffix in FIGURE_FORMATS]
 
 
 def save_figure(fig: Figure, path: Path, dpi: int = DPI) -> Path:
@@ -135,6 +145,12 @@ def save_figure(fig: Figure, path: Path, dpi: int = DPI) -> Path:
     -------
     Path
     """
+    if path.suffix.lower() == ".svg":  # text kept as text (editable, searchable), the same bytes every run
+        from matplotlib import rc_context
+
+        with rc_context({"svg.fonttype": "none", "svg.hashsalt": "autobal"}):
+            fig.savefig(path, format="svg", metadata={"Date": None})
+        return path
     if path.suffix.lower() != ".png":
         fig.savefig(path, dpi=dpi)
         return path
@@ -220,11 +236,12 @@ class Result:
         return ax.figure
 
     def save(self, folder: str | Path) -> list[Path]:
-        """Write :meth:`tables` as CSV and :meth:`figures` as PNG into ``folder``; returns the paths."""
+        """Write :meth:`tables` as CSV and :meth:`figures` as PNG with SVG beside into ``folder``; returns the
+        paths."""
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
         paths = [write_csv(folder / name, cols) for name, cols in self.tables().items()]
-        return paths + [save_figure(fig, folder / name) for name, fig in self.figures().items()]
+        return paths + [p for name, fig in self.figures().items() for p in save_figures(fig, folder / name)]
 
     def verdict(self) -> tuple[bool | None, str] | None:
         """The one verdict of the analysis, (ok, words), where it has one (the headline model's)."""
@@ -238,7 +255,7 @@ class Result:
         if self.quantities is None:
             return []
         return [{"quantity": q.description, "symbol": q.symbol, "value": significant(q.shown(v)),
-                 "unit": "" if q.display == "1" else q.display, "si_value": v, "si_unit": q.unit, "key": key}
+                 "unit": "" if q.shown_unit == "1" else q.shown_unit, "si_value": v, "si_unit": q.unit, "key": key}
                 for q, key, v in self.quantities.headline(self.to_dict())]
 
     def to_dataframe(self, table: str | None = None):

@@ -42,6 +42,7 @@ def package_dirs() -> dict[str, str]:
 INCLUDE = re.compile(r"<!--\s*include:\s*(\S+)\s*-->")
 QUANTITIES = re.compile(r"<!--\s*quantities:\s*(\w+)\s*-->")
 SCHEMA = "<!-- scenario-schema -->"
+DISPLAY_KINDS = "<!-- display-kinds -->"
 
 
 # ----------------------------------------------------------------------------- quantity units
@@ -273,8 +274,17 @@ def quantities_markdown(analysis: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+def display_kinds_markdown() -> str:
+    """The rows (kind, SI unit, display units) of the kinds a scene's ``display`` section chooses units for."""
+    from autobal.analysis.quantities import KINDS, units_of_kind
+
+    return "\n".join(f"| `{kind}`: {what} | {si} | {', '.join(units_of_kind(kind))} |"
+                     for kind, (si, what) in KINDS.items())
+
+
 def on_page_markdown(markdown: str, page, config, files) -> str:  # noqa: ARG001 - MkDocs hook signature
     if SCHEMA in markdown:
         markdown = markdown.replace(SCHEMA, schema_markdown())
+    markdown = markdown.replace(DISPLAY_KINDS, display_kinds_markdown())
     markdown = QUANTITIES.sub(lambda m: quantities_markdown(m.group(1)), markdown)
     return INCLUDE.sub(_include, markdown)
