@@ -11,7 +11,7 @@ from typing import Annotated, get_args
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, create_model, field_validator, model_validator
 from pydantic.fields import FieldInfo
 
-from autobal.analysis.quantities import KINDS, unit_of_kind, units_of_kind
+from autobal.analysis.quantities import KINDS, spelled, unit_of_kind, units_of_kind
 from autobal.models.params import BIG
 
 # Dimensionless numbers: finite (every model refuses inf and nan) and at most 1e6 in magnitude, far beyond
@@ -165,7 +165,7 @@ Display = create_model(
     __doc__="The units the terminal summaries, the report tables, the CSV headers and the statics figures show, "
             "by kind of quantity (results.json stays SI); a kind left out keeps each quantity's declared unit "
             "(docs/results.md). `autobal run SCENE --units pressure=bar,flow=m3/h` sets them from the command line.",
-    **{kind: (str | None, Field(None, description=f"{what} (SI {si.replace('^', '')}): one of "
+    **{kind: (str | None, Field(None, description=f"{what} (SI {spelled(si)}): one of "
                                                   f"{', '.join(units_of_kind(kind))}"))
        for kind, (si, what) in KINDS.items()})
 
