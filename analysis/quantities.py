@@ -100,12 +100,21 @@ def checked_choice(choice: Mapping[str, str] | None) -> dict[str, str]:
     return {kind: unit_of_kind(kind, unit) for kind, unit in (choice or {}).items() if unit is not None}
 
 
+def current_choice() -> dict[str, str]:
+    """kind -> display unit chosen by the enclosing :func:`display_units` blocks."""
+    by_si = _CHOSEN.get() or {}
+    return {kind: by_si[si] for kind, (si, _) in KINDS.items() if si in by_si}
+
+
 @contextmanager
-def display_units(choice: Mapping[str, str] | None):
+def display_units(choice: Mapping[str, str] | None, under: bool = False):
     """Within the block, quantities of the kinds in ``choice`` (kind -> display unit, e.g. ``{"pressure": "bar",
     "flow": "m³/h"}``) are shown in those units: summaries, report tables, CSV headers and figure axes; the
-    others in their declared display units.  results.json stays SI."""
-    token = _CHOSEN.set({KINDS[kind][0]: unit for kind, unit in checked_choice(choice).items()})
+    others in their declared display units.  results.json stays SI.  ``under``: the choice only fills the
+    kinds an enclosing block did not choose (a scene's ``display`` section under the caller's choice)."""
+    given = checked_choice(choice)
+    given = given | current_choice() if under else current_choice() | given
+    token = _CHOSEN.set({KINDS[kind][0]: unit for kind, unit in given.items()})
     try:
         yield
     finally:

@@ -101,13 +101,13 @@ class Run(Mapping):
 
     def summary(self) -> str:
         """Every result's summary, in the display units of the scene (its ``display`` section)."""
-        with display_units(display(self.scene)):
+        with display_units(display(self.scene), under=True):
             return "\n".join(r.summary() for r in self.results.values())
 
     def write(self, folder: Path) -> list[Path]:
         """Write every result's files (tables and figures in the display units of the scene), results.json (SI)
         and report.html into an existing ``folder``."""
-        with display_units(display(self.scene)):
+        with display_units(display(self.scene), under=True):
             outputs = {name: [f.name for f in r.save(folder)] for name, r in self.results.items()}
         files = [name for names in outputs.values() for name in names]
         write_json(folder / "results.json", self.to_dict() | {"files": [*files, report.REPORT], "outputs": outputs})
@@ -220,7 +220,7 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
     results, timing, current = {}, {}, None
     try:
         with SolverLog(folder.tmp / LOG if folder else os.devnull) as log, executor.using(scheduler), \
-                display_units(display(scene)):  # the summaries on_result prints
+                display_units(display(scene), under=True):  # the summaries on_result prints
             for current in analyses.named(scene):
                 t0 = time.perf_counter()
                 try:

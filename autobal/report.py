@@ -39,6 +39,7 @@ from autobal.analysis.quantities import (
     checked_choice,
     chosen,
     convert,
+    current_choice,
     display_unit_of,
     display_units,
     flatten,
@@ -1457,7 +1458,7 @@ def context(folder: Path, units: dict | None = None) -> dict:
     names = [k for k in results if k in SECTIONS]
     meta = results.get("meta") or (failure or {}).get("meta") or {}
     meta = meta if isinstance(meta, dict) else {}
-    display = display_choice(meta, units)
+    display = display_choice(meta, units) | current_choice()  # a caller's display_units block over both
     with display_units(display):
         sections = [_section(n, results[n], results, figures.pop(n, []), folder) for n in names]
     rows, where = inputs(meta)
@@ -1481,7 +1482,7 @@ def notebook(results: dict, figures: dict[str, list[str]] | None = None) -> str:
     """A run as a notebook cell's HTML: per analysis its one verdict, its headline table in display units and
     ``figures[analysis]`` (HTML ``<img>`` elements)."""
     results = plain(results)
-    with display_units(display_choice(results.get("meta"))):
+    with display_units(display_choice(results.get("meta")), under=True):
         return _notebook(results, figures)
 
 

@@ -105,6 +105,26 @@ def test_the_choice_reaches_every_declared_quantity_of_its_kind():
     assert report.declarations("statics").find("exact.p2").shown_unit == "MPa"  # the choice ends with its block
 
 
+def test_a_callers_choice_stands_over_the_scenes_and_blocks_nest():
+    p = Quantity("p", "Pa")
+    with display_units({"pressure": "bar", "length": "mm"}):
+        with display_units({"pressure": "kPa", "flow": "m³/h"}, under=True):  # a scene's section, under the caller's
+            assert p.shown_unit == "bar" and Quantity("Q", "m^3/s").shown_unit == "m³/h"
+        with display_units({"pressure": "kPa"}):  # an inner block over the outer
+            assert p.shown_unit == "kPa" and Quantity("z", "m", display="µm").shown_unit == "mm"
+        assert p.shown_unit == "bar"
+    assert p.shown_unit == "MPa"
+
+
+def test_a_run_summary_in_a_callers_display_units(shipped_run):
+    run = shipped_run("pump_pe600_statics")[0]
+    p2 = run["statics"].data["exact"]["p2"]
+    assert summary_line(run.summary(), "p2").endswith(f" {significant(p2 / 1e6)} MPa")
+    with display_units({"pressure": "bar"}):
+        assert summary_line(run.summary(), "p2").endswith(f" {significant(p2 / 1e5)} bar")
+        assert "bar</td>" in run._repr_html_(figures=False)
+
+
 def test_speeds_show_the_other_unit_beside():
     speed = Quantity("omega", "rad/s", display="rad/s")
     assert speed.text(659.734) == "659.7 rad/s (6300 rpm)"
