@@ -22,6 +22,7 @@ def one_line(capsys) -> str:
     return err.strip()
 
 
+@pytest.mark.cli
 @pytest.mark.parametrize("units", [
     "pressure=\x1b[31mbar\x1b[0m",  # terminal escapes
     "pressure=" + "b" * 20_000,  # a unit of any length
@@ -34,6 +35,7 @@ def test_a_hostile_units_option_is_one_line(capsys, units):
     assert line.startswith("autobal: bad input: --units") and len(line) < 700, line
 
 
+@pytest.mark.cli
 @pytest.mark.parametrize("display, message", [
     ({"pressure": 5}, "display.pressure: Input should be a valid string"),
     ({"pressure": True}, "display.pressure: Input should be a valid string"),
