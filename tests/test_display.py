@@ -286,3 +286,26 @@ def test_the_printed_report_starts_each_analysis_on_a_page_of_its_own(shipped_ru
         assert opening, f"{title}: no page opens with it"
     for i, p in enumerate(pages, 1):
         assert "autobal report" in p and f"page {i} of {len(pages)}" in p, i
+
+
+def test_every_result_saves_its_figures_through_the_one_place():
+    """No Result class writes its files another way than Result.save (PNG with SVG beside, save_figures)."""
+    import importlib
+    import pkgutil
+
+    import autobal.analysis
+    import autobal.ocp
+    from autobal.analysis.result import Result
+
+    for package in (autobal.analysis, autobal.ocp):
+        for module in pkgutil.iter_modules(package.__path__):
+            importlib.import_module(f"{package.__name__}.{module.name}")
+
+    def subclasses(cls):
+        for sub in cls.__subclasses__():
+            yield sub
+            yield from subclasses(sub)
+
+    found = list(subclasses(Result))
+    assert len(found) >= 12, [c.__name__ for c in found]
+    assert [c.__name__ for c in found if c.save is not Result.save] == []
