@@ -169,9 +169,11 @@ def significant(value, digits: int = 4) -> str:
     return f"{float(mantissa) * 10.0 ** exp:.{max(digits - 1 - exp, 0)}f}"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Quantity:
     """One declared number of a results.json block.
+
+    ``Quantity(key, unit, symbol="", description="", display="", source="", headline=False)``.
 
     Attributes
     ----------
@@ -183,10 +185,9 @@ class Quantity:
         The symbol, as in the source (``z0``, ``ψ1``).
     description : str
         What it is, in words.
-    display : str
-        The unit a person reads by default (a key of :data:`DISPLAY_UNITS`; default: the field's unit of
-        :data:`DEFAULT_DISPLAY`); a scene or the CLI can choose another for its kind (:func:`display_units`),
-        which :attr:`shown_unit` gives.
+    declared : str
+        The unit a person reads unless a scene or the CLI chooses another for its kind: the ``display`` given
+        (a key of :data:`DISPLAY_UNITS`), else the field's unit of :data:`DEFAULT_DISPLAY`.
     source : str
         Where the value (or its definition) is published: author, year, equation/table/figure.
     headline : bool
@@ -197,34 +198,37 @@ class Quantity:
     unit: str
     symbol: str = ""
     description: str = ""
-    display: str = ""
+    declared: str = ""
     source: str = ""
     headline: bool = False
 
-    def __post_init__(self):
-        shown = self.display or DEFAULT_DISPLAY.get(self.unit, spelled(self.unit))
-        if not is_display_unit(shown, self.unit):
-            raise ValueError(f"{self.key}: display unit '{shown}' is not a unit of '{self.unit}'")
-        object.__setattr__(self, "display", shown)
+    def __init__(self, key: str, unit: str, symbol: str = "", description: str = "", display: str = "",
+                 source: str = "", headline: bool = False):
+        declared = display or DEFAULT_DISPLAY.get(unit, spelled(unit))
+        if not is_display_unit(declared, unit):
+            raise ValueError(f"{key}: display unit '{declared}' is not a unit of '{unit}'")
+        for name, value in (("key", key), ("unit", unit), ("symbol", symbol), ("description", description),
+                            ("declared", declared), ("source", source), ("headline", headline)):
+            object.__setattr__(self, name, value)
 
     @property
     def keys(self) -> list[str]:
         return self.key.split()
 
     @property
-    def shown_unit(self) -> str:
+    def display(self) -> str:
         """The unit the value is shown in now: the one chosen for its kind (:func:`display_units`), else
-        :attr:`display`."""
-        return display_unit_of(self.unit, self.display)
+        :attr:`declared`.  Label a number with it and convert with :meth:`shown` (or write :meth:`text`)."""
+        return display_unit_of(self.unit, self.declared)
 
     def shown(self, value) -> float | None:
-        """``value`` (SI) in :attr:`shown_unit`."""
-        return None if value is None else convert(value, self.unit, self.shown_unit)
+        """``value`` (SI) in :attr:`display`."""
+        return None if value is None else convert(value, self.unit, self.display)
 
     def text(self, value, digits: int = 4) -> str:
-        """'value unit' in :attr:`shown_unit`, speeds with rpm (or rad/s) beside: '143.9 µm',
+        """'value unit' in :attr:`display`, speeds with rpm (or rad/s) beside: '143.9 µm',
         '1977 rad/s (18880 rpm)'."""
-        unit = self.shown_unit
+        unit = self.display
         out = significant(None if value is None else convert(value, self.unit, unit), digits)
         out += "" if unit == "1" else f" {unit}"
         other = beside(self.unit, unit)

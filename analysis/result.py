@@ -262,7 +262,7 @@ class Result:
         if self.quantities is None:
             return []
         return [{"quantity": q.description, "symbol": q.symbol, "value": significant(q.shown(v)),
-                 "unit": "" if q.shown_unit == "1" else q.shown_unit, "si_value": v, "si_unit": q.unit, "key": key}
+                 "unit": "" if q.display == "1" else q.display, "si_value": v, "si_unit": q.unit, "key": key}
                 for q, key, v in self.quantities.headline(self.to_dict())]
 
     def to_dataframe(self, table: str | None = None):

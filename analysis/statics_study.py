@@ -189,11 +189,11 @@ class StaticsResult(Result):
         for k in ("psi1", *SWEEP_KEYS):
             base, key, name = self._DIMENSIONAL[k]
             q = QUANTITIES.find(key)
-            cols[f"{name} [{q.shown_unit}]"] = [None if v is None else q.shown(v * sc[base]) for v in sw[k]]
+            cols[f"{name} [{q.display}]"] = [None if v is None else q.shown(v * sc[base]) for v in sw[k]]
             cols[f"{k} [1]"] = sw[k]
         for k in ("Q_e", "Q_1", "Q_T"):
             q = QUANTITIES.find(f"exact.{k}")
-            cols[f"{k} [{q.shown_unit}]"] = [None if v is None else q.shown(v) for v in sw[k]]
+            cols[f"{k} [{q.display}]"] = [None if v is None else q.shown(v) for v in sw[k]]
         cols |= {f"{k} [1]": sw[k] for k in ("q_e", "q_T", "q_1", "kappa_s")}
         cols |= {k: sw[k] for k in ("regulator_saturated", "contact")}
         cols |= {f"closed_form_{k} [1]": v for k, v in sw["closed_form"].items() if not k.endswith("_status")}
@@ -213,7 +213,7 @@ class StaticsResult(Result):
         key, quantity = self._BASES[kind]
         base = self.data["closed_form"]["Q_B"] if key == "Q_B" else self.data["scales"][key]
         q = QUANTITIES.find(quantity)
-        return q.shown(base), q.shown_unit
+        return q.shown(base), q.display
 
     def _curve(self, key: str, closed: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """psi1 and ``key`` over the sweep with the refined points near the kinks merged in, sorted."""

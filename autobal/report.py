@@ -317,7 +317,7 @@ class Section:
         """The cell of the block's value at ``path`` (or ``value``) in the display unit of its declaration."""
         q = quantity(f"{self.name}.{path}")
         v = self.get(path) if value is None else value
-        return cell(v, q.unit, q.shown_unit) if q is not None else cell(v, self.unit(path) or "?")
+        return cell(v, q.unit, q.display) if q is not None else cell(v, self.unit(path) or "?")
 
     def row(self, label: str, symbol: str, path: str, unit: str | None = None, value=None, note: str = "") -> None:
         """One headline row; the value is the block's at ``path`` unless given, its unit and display unit

@@ -91,29 +91,29 @@ def test_the_choice_reaches_every_declared_quantity_of_its_kind():
     seen = set()
     for name in report.DECLARED:
         for q in report.declarations(name):
-            kind = next((k for k, (si, _) in KINDS.items() if DISPLAY_UNITS.get(q.display, (None,))[0] == si), None)
+            kind = next((k for k, (si, _) in KINDS.items() if DISPLAY_UNITS.get(q.declared, (None,))[0] == si), None)
             with display_units(choice):
-                shown = q.shown_unit
+                shown = q.display
                 value = q.shown(1.0)
             if kind in choice:
                 seen.add(kind)
                 assert shown == choice[kind], f"{name}: {q.key}"
                 assert value == pytest.approx(convert(1.0, q.unit, choice[kind])), q.key
             else:
-                assert shown == q.display, q.key
+                assert shown == q.declared == q.display, q.key
     assert {"length", "pressure", "flow", "speed"} <= seen
-    assert report.declarations("statics").find("exact.p2").shown_unit == "MPa"  # the choice ends with its block
+    assert report.declarations("statics").find("exact.p2").display == "MPa"  # the choice ends with its block
 
 
 def test_a_callers_choice_stands_over_the_scenes_and_blocks_nest():
     p = Quantity("p", "Pa")
     with display_units({"pressure": "bar", "length": "mm"}):
         with display_units({"pressure": "kPa", "flow": "m³/h"}, under=True):  # a scene's section, under the caller's
-            assert p.shown_unit == "bar" and Quantity("Q", "m^3/s").shown_unit == "m³/h"
+            assert p.display == "bar" and Quantity("Q", "m^3/s").display == "m³/h"
         with display_units({"pressure": "kPa"}):  # an inner block over the outer
-            assert p.shown_unit == "kPa" and Quantity("z", "m", display="µm").shown_unit == "mm"
-        assert p.shown_unit == "bar"
-    assert p.shown_unit == "MPa"
+            assert p.display == "kPa" and Quantity("z", "m", display="µm").display == "mm"
+        assert p.display == "bar"
+    assert p.display == "MPa"
 
 
 def test_a_run_summary_in_a_callers_display_units(shipped_run):
