@@ -16,6 +16,7 @@ from autobal.analysis import disc_fit
 from autobal.analysis.adequacy import fisher_adequacy
 from autobal.analysis.device_fit import DeviceFitter
 from autobal.analysis.least_squares import FitResult
+from autobal.analysis.quantities import Declarations, Quantity
 from autobal.analysis.result import Result, fmt, new_figure, plain
 from autobal.errors import ScenarioError, SolveError
 from autobal.models.device import DeviceParams, design
@@ -37,6 +38,65 @@ TRANSFORMED = {
     "flow_2p_4_36": "minimises sum {[(q_i^2 - 1) tau_max + tau_i] alpha^2 - tau_max + tau_i}^2 numerically",
 }
 
+_P14 = "Pavlenko (2014)"
+_ADEQUACY = ("F", "F_crit", "p_value", "sigma1_sq", "sigma2_sq", "dof", "groups", "points", "parameters",
+             "significance", "group_load", "group_mean", "group_theory", "load_spread_in_groups", "lack_of_fit.F",
+             "lack_of_fit.F_crit", "lack_of_fit.p_value", "lack_of_fit.dof")
+
+
+def _adequacy(*keys: str) -> str:
+    """The keys of the fits' own adequacy tests and of the reference curve's."""
+    return " ".join(f"{where}.{k}" for where in ("fits.*.adequacy", "adequacy_reference") for k in keys)
+
+
+#: every number of the estimation block (Pavlenko 2014, §4.3-4.4): the fitted parameters are the source's groups
+#: (α, τ_max) or loss coefficients, all dimensionless; the data's bases are SI
+QUANTITIES = Declarations(
+    Quantity("fits.*.parameters.*.estimate fits.*.parameters.*.initial fits.*.parameters.*.lower "
+             "fits.*.parameters.*.upper fits.*.cross_check_scipy.estimate.*", "1", "α, τ_max",
+             "fitted parameter (a group of the model or a loss coefficient): estimate, start, bounds",
+             source=f"{_P14}, Eqs. (4.16)-(4.18), Table 4.4"),
+    Quantity("fits.*.parameters.*.standard_error fits.*.parameters.*.ci_low fits.*.parameters.*.ci_high", "1",
+             "s, CI", "standard error and linearised (Student-t) confidence interval"),
+    Quantity("fits.*.bootstrap.parameters.*.ci_low fits.*.bootstrap.parameters.*.ci_high "
+             "fits.*.bootstrap.parameters.*.std fits.*.bootstrap.parameters.*.mean", "1", "CI*",
+             "residual-bootstrap percentile interval, std and mean of the refits"),
+    Quantity("fits.*.correlation fits.*.covariance", "1", "r, Σ", "correlation and covariance of the free "
+             "parameters"),
+    Quantity(_adequacy("F", "F_crit", "p_value", "lack_of_fit.F", "lack_of_fit.F_crit", "lack_of_fit.p_value"), "1",
+             "F, F_crit, p", "Fisher adequacy test: the fit's variance against the scatter within the load groups "
+             "(adequate when F ≤ F_crit), and the lack-of-fit test", source=f"{_P14}, Eqs. (4.14)-(4.15)"),
+    Quantity(_adequacy("sigma1_sq", "sigma2_sq", "dof", "groups", "points", "parameters", "significance",
+                       "group_load", "group_mean", "group_theory", "load_spread_in_groups", "lack_of_fit.dof")
+             + " adequacy_reference.reference.*", "1", "σ², ν, τ, u",
+             "the adequacy test's variances, degrees of freedom, level, group loads and means; the reference "
+             "curve's α, τ_max", source=f"{_P14}, §4.3.3"),
+    Quantity("fits.*.data.** fits.*.curve.**", "1", "τ, u, q",
+             "load and measured, fitted, residual gap u = h/h_TB or flow q; the fitted curve and its band",
+             source=f"{_P14}, Table 4.3"),
+    Quantity("fits.*.residual_std fits.*.ssr fits.*.dof fits.*.points fits.*.confidence fits.*.t_quantile "
+             "fits.*.jtj_condition fits.*.weights.* fits.*.solver.iterations fits.*.solver.objective "
+             "fits.*.cross_check_scipy.cost fits.*.cross_check_scipy.nfev fits.*.cross_check_scipy.max_abs_difference "
+             "fits.*.bootstrap.samples fits.*.bootstrap.seed fits.*.bootstrap.confidence fits.*.bootstrap.failed "
+             "fits.*.bootstrap.ipopt_fallback fits.*.last_iterate.* fits.*.extra.** data.points data.groups", "1", "",
+             "the fit's statistics (in the residual's group), solver counts, the scipy cross-check, the bootstrap's "
+             "settings, the device fit's groups"),
+    Quantity("closed_forms.**", "1", "α, τ_max", "the source's closed-form estimators and their sums",
+             source=f"{_P14}, Eqs. (4.20)-(4.37), Table 4.4"),
+    Quantity("loss_coefficient.value loss_coefficient.ci_low loss_coefficient.ci_high loss_coefficient.nominal",
+             "1", "λ, ζ", "loss coefficient the fitted α implies, its interval and nominal value",
+             source=f"{_P14}, Eq. (4.38)"),
+    Quantity("loss_coefficient.alpha loss_coefficient.alpha_ci loss_coefficient.alpha_nominal "
+             "loss_coefficient.check_alpha_from_solved loss_coefficient.friction_factor", "1", "α",
+             "the fitted α and its interval, α of the nominal losses, α recomputed from the solved loss",
+             source=f"{_P14}, Eq. (4.38)"),
+    Quantity("bases.pressure fits.*.bases.pressure", "Pa", "p_B", "pressure base of the data", "MPa"),
+    Quantity("bases.gap fits.*.bases.gap", "m", "h_TB", "gap base of the data", "mm"),
+    Quantity("bases.flow fits.*.bases.flow", "m^3/s", "Q_B", "flow base of the data"),
+    Quantity("bases.force fits.*.bases.force", "N", "F_B", "force base of the data"),
+    Quantity("run_time_s fits.*.bootstrap.time_s", "s", "t", "wall time"),
+)
+
 
 @dataclass
 class EstimationResult(Result):
@@ -45,6 +105,7 @@ class EstimationResult(Result):
 
     data: dict  # the results.json block
     name = "estimation"
+    quantities = QUANTITIES
 
     @property
     def solved(self) -> dict[str, dict]:

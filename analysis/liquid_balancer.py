@@ -21,6 +21,7 @@ import numpy as np
 
 from autobal.analysis import interrupt
 from autobal.analysis.liquid_balancer_optimum import crescent_volume, optimise
+from autobal.analysis.quantities import Declarations, Quantity
 from autobal.analysis.result import Result, fmt, new_figure, with_statuses
 from autobal.models import liquid_balancer as lb
 from autobal.models.liquid_balancer import System
@@ -138,6 +139,114 @@ NULL_REASONS = {k: NO_EQUILIBRIUM for k in ("alpha0_deg", "lambda0", "lambda0_pr
 NULL_REASONS |= {"upper_bound": "no upper bound", "optimum_over_R": "no optimum: the objective has no interior "
                  "extremum", "chosen": "no candidate liquid has a finite viscous zone"}
 
+_K20, _P10 = "Khomyak (2020)", "Pashkov (2010), ch. 3"
+_ROWS = ("operating_point", "table", "sweep")  # the results-table columns: a row at the working speed, a table, a sweep
+
+
+def _cols(*keys: str) -> str:
+    """The keys of the results-table columns, in the operating point, the table and the sweep."""
+    return " ".join(f"{r}.{k}" for r in _ROWS for k in keys)
+
+
+def _optima(*keys: str, kind: str = "height volume") -> str:
+    return " ".join(f"optimal_{v}.{k}" for v in kind.split() for k in keys)
+
+
+_OPT_X = ("lower_bound", "upper_bound", "feasible_lower", "feasible_upper", "optimum", "k_D_equals_1_at",
+          "grid_optimum", "grid_step", "grid_difference", "grid.x")
+
+#: every number of the liquid_balancer block (Khomyak 2020, ch. 2-3, App. В/Г; Pashkov 2010, ch. 3): lengths in
+#: mm, volumes in mL, unbalances in g·cm as the thesis writes them; λ0, k_D, γ the source's groups
+QUANTITIES = Declarations(
+    Quantity("operating_point.omega", "rad/s", "ω", "working speed", "rad/s", headline=True),
+    Quantity("operating_point.gamma", "1", "γ = ω/ω_cr", "speed ratio", source=f"{_K20}, Eq. (2.5)", headline=True),
+    Quantity("operating_point.lambda0", "1", "λ0", "self-balancing efficiency e0/e_c (the source's algorithm)",
+             source=f"{_K20}, Eq. (2.13), Table 3.2", headline=True),
+    Quantity("operating_point.lambda0_self_consistent", "1", "λ0⁺",
+             "self-balancing efficiency, self-consistent closure (toolkit extension)", headline=True),
+    Quantity("operating_point.k_D", "1", "k_D = D0/D", "unbalance capacity ratio", source=f"{_K20}, Eq. (2.9)",
+             headline=True),
+    Quantity("system.D0", "kg*m", "D0", "initial unbalance m_d e_d", "g·cm", headline=True),
+    Quantity("operating_point.D table.D", "kg*m", "D", "unbalance capacity of the liquid ρV x_p", "g·cm",
+             source=f"{_K20}, step 2.8", headline=True),
+    Quantity(_optima("optimum", kind="height"), "m", "h_opt", "optimal chamber height", "mm",
+             source=f"{_K20}, App. В", headline=True),
+    Quantity(_optima("optimum", kind="volume"), "m^3", "V_opt", "optimal liquid volume", "mL",
+             source=f"{_K20}, App. Г, Table 3.3 (48.5-176.7 mL)", headline=True),
+    Quantity(_optima(*_OPT_X, kind="height"), "m", "h", "optimal height: bounds, the grid's optimum and step", "mm"),
+    Quantity(_optima(*_OPT_X, kind="volume") + " liquid_choice.candidates[].V_opt table_3_3.rows[].V_opt", "m^3",
+             "V", "optimal volume: bounds, the grid's optimum and step", "mL"),
+    Quantity(_optima("f") + " " + _cols("f") + " pashkov.*.deflection", "m", "f, s",
+             "deflection of the rotor (2.7); Pashkov's deflection s (3.4)", "mm", source=f"{_K20}, Eq. (2.7)"),
+    Quantity(_optima("lambda0_max", "grid_lambda0", "grid.lambda0", "inverse_lambda0_squared", "k_D",
+                     "optimum_over_R"), "1", "λ0, k_D, h/R",
+             "λ0 and k_D at the optimum (λ0 unbounded where k_D = 1), on the grid; 1/λ0² the objective"),
+    Quantity(_optima("alpha0_deg") + " " + _cols("alpha0_deg") + " extremum.alpha0_deg", "deg", "α0",
+             "angle of the liquid's unbalance", source=f"{_K20}, Eq. (2.12)"),
+    Quantity(_cols("delta_deg", "phi_deg"), "deg", "δ, φ", "phase lag of the deflection, angle φ",
+             source=f"{_K20}, Eq. (2.5)"),
+    Quantity("table.omega", "rad/s", "ω", "speed of a table row", "rad/s"),
+    Quantity(_cols("gamma", "G", "k_D", "lambda0", "lambda0_self_consistent", "lambda0_self_consistent_minus")
+             + " sweep.lambda0_printed sweep.lambda0_program sweep.lambda0_corrected operating_point.zeta_over_ec "
+               "operating_point.extremum_k_star operating_point.extremum_lambda0_max extremum.k_star "
+               "extremum.lambda0_max", "1", "γ, G, k_D, λ0",
+             "the source's groups: speed ratio, deflection ratio f/e, capacity ratio, efficiency (three variants of "
+             "(2.13), the self-consistent ± branches), the extremum k*, λ_max", source=f"{_K20}, Eqs. (2.5)-(2.13)"),
+    Quantity("operating_point.r table.r system.r pashkov.*.sufficiency.r", "m", "r",
+             "free-surface radius of the liquid", "mm", source=f"{_K20}, step 2.3"),
+    Quantity("operating_point.x_p table.x_p", "m", "x_p", "offset of the liquid's centroid", "mm",
+             source=f"{_K20}, step 2.8"),
+    Quantity("operating_point.paraboloid.z_star operating_point.paraboloid.rho_bottom "
+             "operating_point.paraboloid.rho_top", "m", "z*, ρ", "vertex height and radii of the free surface",
+             "mm", source=f"{_K20}, §3.2"),
+    Quantity("operating_point.paraboloid.a", "1/m", "a", "curvature of the paraboloid free surface"),
+    Quantity("system.D0_gcm table_3_3.rows[].D0_gcm table_3_3.rows[].capacity_gcm "
+             "table_3_3.rows[].published_capacity_gcm", "g*cm", "D", "unbalance and capacity, as Table 3.3",
+             source=f"{_K20}, Table 3.3"),
+    Quantity("table_3_3.rows[].D0", "kg*m", "D0", "initial unbalance of a Table 3.3 row", "g·cm"),
+    Quantity("system.m_l system.M_sys system.rho_pi_h_R2 system.rho_pi_h_r2 table_3_3.rows[].m_d pashkov.m "
+             "pashkov.*.full_liquid_mass pashkov.*.nested_liquid_mass pashkov.*.limit_mass", "kg", "m",
+             "masses: liquid, system, full chamber ρπhR², inside the free surface; Pashkov's m, full and limit "
+             "liquid masses", source=f"{_P10}, Eqs. (3.2)-(3.14)"),
+    Quantity("system.n system.two_n", "1/s", "n", "damping coefficient n = θω_p/(2π), 2n", source=f"{_K20}, Table 3.1"),
+    Quantity("system.zeta_damping", "1", "n/ω_cr", "damping ratio"),
+    Quantity("system.e_f system.R_minus_r pashkov.e0 pashkov.*.eccentricity_high_speed pashkov.*.eccentricity_3_7 "
+             "pashkov.*.sufficiency.wall_margin pashkov.*.sufficiency.partition_margin pashkov.*.radii", "m",
+             "e, R − r", "eccentricities, margins of the liquid to the walls, chamber radii", "mm",
+             source=f"{_P10}, Eqs. (3.7)-(3.13)"),
+    Quantity("system.chamber_volume pashkov.*.volumes", "m^3", "V", "chamber volume πR²h, liquid volumes", "mL"),
+    Quantity("pashkov.*.critical_speed", "rad/s", "ω_k", "critical speed with the liquid", "rad/s",
+             source=f"{_P10}, Eq. (3.3)"),
+    Quantity("pashkov.kappa pashkov.*.efficiency pashkov.*.efficiency_nested pashkov.*.psi", "1", "E_e, ψ",
+             "efficiency calculators (printed sum and the nested alternative), ψ = 1/E_e",
+             source=f"{_P10}, Eqs. (3.9), (3.14)"),
+    Quantity("viscous_zone.nu", "m^2/s", "ν", "kinematic viscosity"),
+    Quantity("viscous_zone.xi_rad", "rad", "ξ", "arc angle of (2.15)"),
+    Quantity("viscous_zone.xi_deg viscous_zone.beta_star_deg viscous_zone.zone_half_width_deg "
+             "liquid_choice.candidates[].xi_deg", "deg", "ξ, β*, Δ*", "arc angle, friction angle, half-width of "
+             "the viscous zone", source=f"{_K20}, Eq. (2.15)"),
+    Quantity("viscous_zone.z_program viscous_zone.sin_beta_star viscous_zone.sinus_literal viscous_zone.q "
+             "viscous_zone.lambda0_zone_min viscous_zone.lambda0_zone_max viscous_zone.zone_without_equilibrium "
+             "liquid_choice.candidates[].sin_beta_star liquid_choice.candidates[].k_D "
+             "liquid_choice.candidates[].lambda0_max", "1", "sin β*, q, λ0",
+             "the viscous zone's groups and its λ0 range; the liquid choice's groups", source=f"{_K20}, App. Г"),
+    Quantity("liquid_choice.candidates[].density", "kg/m^3", "ρ", "density of a candidate liquid"),
+    Quantity("liquid_choice.candidates[].viscosity", "Pa*s", "μ", "dynamic viscosity of a candidate liquid"),
+    Quantity("table_3_2.rows[].*", "1", "γ, λ0", "Table 3.2: published theory and experiment beside the toolkit",
+             source=f"{_K20}, Table 3.2"),
+    Quantity("table_3_2.max_theory_experiment_pct table_3_2.max_self_consistent_experiment_pct "
+             "table_3_3.rows[].documented_vs_experiment_pct table_3_3.rows[].crescent_vs_experiment_pct "
+             "table_3_3.rows[].published_vs_experiment_pct", "%", "", "relative differences"),
+    Quantity("table_3_3.rows[].V_opt_mL table_3_3.rows[].V_opt_crescent_mL table_3_3.rows[].published_V_opt_mL "
+             "table_3_3.rows[].experiment_V_opt_mL", "mL", "V_opt", "optimal volumes as Table 3.3",
+             source=f"{_K20}, Table 3.3"),
+    Quantity("table_3_3.rows[].k_D table_3_3.rows[].published_k_D", "1", "k_D", "capacity ratio at the optimum"),
+    Quantity("table_3_3.height", "m", "h", "chamber height of the Table 3.3 study", "mm"),
+    Quantity("table_3_3.speed", "rad/s", "ω", "speed of the Table 3.3 study", "rad/s"),
+    Quantity("optimal_height.solver.iterations optimal_volume.solver.iterations", "1", "", "IPOPT iterations"),
+    Quantity("run_time_s", "s", "t", "wall time"),
+)
+
 
 @dataclass
 class LiquidBalancerResult(Result):
@@ -148,6 +257,7 @@ class LiquidBalancerResult(Result):
 
     data: dict = field(default_factory=dict)
     name = "liquid_balancer"
+    quantities = QUANTITIES
 
     @property
     def efficiency(self) -> float | None:

@@ -37,6 +37,7 @@ from autobal.analysis.montecarlo_statics import (
     sensitivities,
     simulate,
 )
+from autobal.analysis.quantities import Declarations, Quantity
 from autobal.analysis.result import Result, failed_head, new_figure, with_statuses
 from autobal.analysis.sampling import Sampler, correlation_matrix, marginals, relative_standard_errors, statistics
 from autobal.analysis.statics import RESIDUAL_TOL, StaticsSolver
@@ -60,6 +61,65 @@ PARAMETER_NAMES = {  # the random groups of (2.18) by what they are
     "psi_in": r"supply pressure $\psi_{in} = p_{in}/p_B$",
 }
 
+#: exact output (a group of (2.18)) -> its physical quantity in ``dimensional`` and the scale it is the ratio to
+DIMENSIONAL = {"u": ("z", "z_B"), "xi": ("x", "x_B"), "psi2": ("p2", "p_B"), "psi3": ("p3", "p_B"),
+               "psi_e": ("p_e", "p_B"), "psi_cam": ("p_cam", "p_B")}
+#: the statistics that scale with the quantity (cv, spread and the counts do not)
+SCALED = ("nominal", "mean", "std", "band_low", "band_high")
+
+_P14 = "Pavlenko (2014), ch. 3"
+_STATS = " ".join(f"{part}.*.{k}" for part in ("exact", "source") for k in ("cv", "spread", "valid", "invalid"))
+_AFC_UM = "afc.nominal_um afc.mean afc.std afc.band_low afc.band_high afc.at.*.nominal_um " \
+          "afc.at.*.mean_um afc.at.*.std_um afc.quantiles.** afc.nominal_peaks[].amplitude_um"
+
+#: every number of the montecarlo block: the source's sampled groups and outputs (u = z/z_B, ψ = p/p_B, q = Q/Q_B)
+#: dimensionless, beside them the physical gap, pressures (``dimensional``) and leak flows Q in SI
+QUANTITIES = Declarations(
+    Quantity("reference.p1", "Pa", "p1", "discharge pressure of the reference point", headline=True),
+    Quantity("reference.z_mean", "m", "z̄", "face gap, mean over the samples", "µm", headline=True),
+    Quantity("reference.z_std", "m", "σ_z", "face gap, standard deviation", "µm", headline=True),
+    Quantity("reference.gap_spread", "1", "kσ/mean", "spread of the face gap (k = band_sigma)",
+             source=f"{_P14}, conclusion 4 (about 0.20 with k = 3)", headline=True),
+    Quantity("reference.Q_T_mean", "m^3/s", "Q̄_T", "face leak, mean over the samples", headline=True),
+    Quantity("reference.Q_T_std", "m^3/s", "σ_Q", "face leak, standard deviation", headline=True),
+    Quantity("reference.leak_spread", "1", "kσ/mean", "spread of the face leak q_T (k = band_sigma)",
+             source=f"{_P14}, conclusion 4 (about 0.25 with k = 3)", headline=True),
+    Quantity("reference.saturated_fraction", "1", "", "share of samples with the regulator valve on its stop",
+             headline=True),
+    Quantity("reference.psi1 psi1 reference_psi1", "1", "ψ1", "discharge pressure ratio p1/p_B",
+             source=f"{_P14}, Figs 3.3-3.4"),
+    Quantity("p1", "Pa", "p1", "discharge pressures of the grid"),
+    Quantity("scales.p_B", "Pa", "p_B", "base pressure of the ratios ψ"),
+    Quantity("scales.z_B", "m", "z_B", "base gap of the ratio u", "µm"),
+    Quantity("scales.x_B", "m", "x_B", "base valve opening of the ratio ξ", "mm"),
+    Quantity("dimensional.z.**", "m", "z", "face gap over the samples: nominal, mean, std, bands, quantiles",
+             "µm"),
+    Quantity("dimensional.x.**", "m", "x", "valve opening over the samples", "mm"),
+    Quantity("dimensional.p2.** dimensional.p3.** dimensional.p_e.** dimensional.p_cam.**", "Pa", "p",
+             "disc-chamber, cavity, barrier-chamber and valve-chamber pressures over the samples"),
+    Quantity(_STATS, "1", "cv, kσ/mean, N", "coefficient of variation, spread, valid and invalid samples"),
+    Quantity("exact.Q_T.** exact.Q_e.** " + " ".join(f"sensitivity.{s}.{k}" for s in ("jacobian", "std_first_order",
+                                                                                    "std_monte_carlo")
+                                                   for k in ("Q_T", "Q_e")), "m^3/s", "Q_T, Q_e",
+             "face and barrier leak flows over the samples (the jacobian: per unit of the group)"),
+    Quantity("exact.** source.**", "1", "u, ξ, ψ, q", "the source's output groups over the samples (exact statics, "
+             "the source's closed forms): nominal, mean, std, bands, quantiles", source=f"{_P14}, Figs 3.3-3.6"),
+    Quantity("sensitivity.**", "1", "∂y/∂θ", "sensitivities, elasticities, first-order and Monte Carlo stds of "
+             "the groups, their ratio and variance shares", source=f"{_P14}, §3.2"),
+    Quantity("distributions.** sample_mean sample_std correlation", "1", "θ",
+             "the sampled groups: distribution parameters, sample mean and std, correlations",
+             source=f"{_P14}, Eq. (2.18)"),
+    Quantity("saturated_fraction", "1", "", "share of samples with the regulator valve on its stop"),
+    Quantity("samples seed chunk_size band_sigma afc.samples afc.psi1 afc.cv afc.spread afc.valid afc.invalid "
+             "afc.at.*.cv", "1", "", "counts, the band width k, the AFC's operating ratio and coefficients of "
+             "variation"),
+    Quantity("afc.omega afc.at.*.omega afc.nominal_peaks[].omega", "rad/s", "ω", "frequency of the AFC",
+             "rad/s"),
+    Quantity(_AFC_UM, "um", "A_u", "face-gap amplitude over the samples (nominal, mean, std, bands, quantiles)",
+             source=f"{_P14}, Fig. 3.7"),
+    Quantity("time_s time_monte_carlo_s afc.time_s", "s", "t", "wall time"),
+)
+
 
 @dataclass
 class MonteCarloResult(Result):
@@ -70,6 +130,7 @@ class MonteCarloResult(Result):
     data: dict
     samples: dict = field(default_factory=dict, repr=False)
     name = "montecarlo"
+    quantities = QUANTITIES
 
     @property
     def discharge_ratios(self) -> list[float]:
@@ -313,6 +374,8 @@ def run(dev: DeviceDesign, settings, executor, title: str = "", solver=None, dev
         "sensitivity": sens,
         "time_s": time.perf_counter() - t0, "time_monte_carlo_s": t_mc,
     }
+    data |= dimensional(exact, dev.scales, grid)
+    data["reference"] = reference(data)
     if settings.afc is not None:
         t1 = time.perf_counter()
         afc = afc_study(device, settings.afc, settings.seed, executor, settings.band_sigma, settings.quantiles)
@@ -325,6 +388,28 @@ def run(dev: DeviceDesign, settings, executor, title: str = "", solver=None, dev
                         for p, k in zip(grid, exact["u"]["invalid"], strict=True)
                         if k > MAX_INVALID_SHARE * settings.samples]
     return MonteCarloResult(data, samples=raw)
+
+
+def dimensional(exact: dict, scales: dict, grid) -> dict:
+    """The gap, valve opening and pressures of the exact statics in SI beside their groups (z = u z_B,
+    p = psi p_B ...; Pavlenko (2014), Eq. (2.18)): the statistics that scale with them, and the scales."""
+    sc = {k: float(scales[k]) for k in ("p_B", "z_B", "x_B")}
+    out = {}
+    for k, (name, base) in DIMENSIONAL.items():
+        s = exact[k]
+        out[name] = {stat: np.asarray(s[stat], float) * sc[base] for stat in SCALED} | {
+            "quantiles": {q: np.asarray(v, float) * sc[base] for q, v in s["quantiles"].items()}}
+    return {"scales": sc, "p1": np.asarray(grid, float) * sc["p_B"], "dimensional": out}
+
+
+def reference(data: dict) -> dict:
+    """The headline numbers at the reference discharge ratio (the first grid point if it is not on the grid)."""
+    j = data["psi1"].index(data["reference_psi1"]) if data["reference_psi1"] in data["psi1"] else 0
+    z, ex = data["dimensional"]["z"], data["exact"]
+    return {"psi1": data["psi1"][j], "p1": float(data["p1"][j]), "z_mean": float(z["mean"][j]),
+            "z_std": float(z["std"][j]), "gap_spread": float(ex["u"]["spread"][j]),
+            "Q_T_mean": float(ex["Q_T"]["mean"][j]), "Q_T_std": float(ex["Q_T"]["std"][j]),
+            "leak_spread": float(ex["q_T"]["spread"][j]), "saturated_fraction": float(data["saturated_fraction"][j])}
 
 
 def accuracy(data: dict, raw: dict) -> dict:

@@ -59,12 +59,13 @@ STATUS_FILES = ("failed_solve.json", "interrupted.json", "error.json")
 # --------------------------------------------------------------------------------------------
 #: analysis -> the module whose QUANTITIES declare every number of its block (imported when a report needs it)
 DECLARED = {"statics": "autobal.analysis.statics_study", "frequency": "autobal.analysis.frequency",
-            "transient": "autobal.analysis.simulate", "reliability": "autobal.analysis.reliability"}
+            "transient": "autobal.analysis.simulate", "reliability": "autobal.analysis.reliability",
+            "liquid_balancer": "autobal.analysis.liquid_balancer", "estimation": "autobal.analysis.estimation_study",
+            "montecarlo": "autobal.analysis.montecarlo", "rotor_dynamics": "autobal.analysis.rotor_study"}
 
 #: analyses whose numbers are not declared yet: their units still come from the name rules below.  This
 #: allow-list only shrinks (tests/test_quantities.py fails on an analysis that is in neither).
-UNDECLARED = ("stability", "liquid_balancer", "estimation", "montecarlo",
-              "rotor_dynamics", "spinup", "spinup_robust", "spinup_time_optimal", "design", "ross_spinup")
+UNDECLARED = ("stability", "spinup", "spinup_robust", "spinup_time_optimal", "design", "ross_spinup")
 
 _P = r"(^|\.)"  # start of a key
 # (regex on "analysis.dotted.path", SI unit), the first match wins: for the UNDECLARED analyses only
@@ -103,39 +104,6 @@ _UNDECLARED_RULES: list[tuple[str, str]] = [
     (r"(^|\.)phase_deg$", "deg"),
     (r"^stability\.coefficients\.(columns|extra)\.", "per coefficient: K, zeta 1; T, tau s (App. A/B)"),
     (r"^stability\.", "1"),
-    # liquid auto-balancer (Khomyak 2020; Pashkov 2010): efficiency lambda0, k_D, gamma = omega/omega_cr
-    (r"^liquid_balancer\..*(_gcm)$", "g*cm"),
-    (r"^liquid_balancer\..*" + _P + r"(D0|D)$", "kg*m"),
-    (r"^liquid_balancer\..*" + _P + r"(m_l|M_sys|m|m_d|full_liquid_mass|nested_liquid_mass|limit_mass"
-     r"|rho_pi_h_R2|rho_pi_h_r2)$", "kg"),
-    (r"^liquid_balancer\..*" + _P + r"(n|two_n)$", "1/s"),
-    (r"^liquid_balancer\..*paraboloid\.a$", "1/m"),
-    (r"^liquid_balancer\..*paraboloid\.(z_star|rho_bottom|rho_top)$", "m"),
-    (r"^liquid_balancer\..*" + _P + r"(e_f|r|R_minus_r|f|x_p|e0|radii|deflection|wall_margin|partition_margin"
-     r"|eccentricity_high_speed|eccentricity_3_7)$", "m"),
-    (r"^liquid_balancer\.optimal_height\.(lower_bound|upper_bound|feasible_lower|feasible_upper|optimum"
-     r"|k_D_equals_1_at|grid_optimum|grid_step|grid_difference|grid\.x)$", "m"),
-    (r"^liquid_balancer\.optimal_volume\.(lower_bound|upper_bound|feasible_lower|feasible_upper|optimum"
-     r"|k_D_equals_1_at|grid_optimum|grid_step|grid_difference|grid\.x)$", "m^3"),
-    (r"^liquid_balancer\..*" + _P + r"(chamber_volume|volumes|V|V_opt)$", "m^3"),
-    (r"^liquid_balancer\..*" + _P + r"(critical_speed)$", "rad/s"),
-    (r"^liquid_balancer\..*" + _P + r"nu$", "m^2/s"),
-    (r"^liquid_balancer\..*" + _P + r"density$", "kg/m^3"),
-    (r"^liquid_balancer\..*" + _P + r"viscosity$", "Pa*s"),
-    (r"^liquid_balancer\.", "1"),
-    # estimation (Pavlenko 2014, §4.3-4.4): alpha, tau_max, u, q, Phi are the source's groups
-    (r"^estimation\.bases\.pressure$", "Pa"),
-    (r"^estimation\.bases\.gap$", "m"),
-    (r"^estimation\.bases\.flow$", "m^3/s"),
-    (r"^estimation\.bases\.force$", "N"),
-    (r"^estimation\.", "1"),
-    # Monte Carlo (ch. 3): sampled groups, u, xi, psi, q dimensionless; Q in m^3/s; AFC in micrometres
-    (r"^montecarlo\.afc\.(nominal_um|mean|std|band_low|band_high|quantiles\..*)$", "um"),
-    (r"^montecarlo\..*" + _P + r"Q_\w+(\..*)?$", "m^3/s"),
-    (r"^montecarlo\.", "1"),
-    # rotor with a liquid auto-balancer (Pashkov 2010): z = Omega/omega_cr, a/e, d dimensionless
-    (r"^rotor_dynamics\.passage\.(table\[\]\.n|crossover_n_star.*)$", "1/s"),
-    (r"^rotor_dynamics\.", "1"),
     # optimal spin-up: deflection over the eccentricity delta/e, unbalance d, psi, zeta0 dimensionless
     (r"^spinup\..*" + _P + r"(start_speed|final_speed|max_speed|omega_at_peak)$", "rad/s"),
     (r"^spinup\..*" + _P + r"max_acceleration$", "rad/s^2"),
