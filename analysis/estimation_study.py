@@ -7,6 +7,7 @@ results.json, a summary, CSV tables and one figure per fit (the Result protocol)
 
 from __future__ import annotations
 
+import itertools
 import time
 from dataclasses import dataclass, replace
 
@@ -16,8 +17,8 @@ from autobal.analysis import disc_fit
 from autobal.analysis.adequacy import fisher_adequacy
 from autobal.analysis.device_fit import DeviceFitter
 from autobal.analysis.least_squares import FitResult
-from autobal.analysis.quantities import Declarations, Quantity
-from autobal.analysis.result import Result, fmt, new_figure, plain
+from autobal.analysis.quantities import Declarations, Quantity, significant
+from autobal.analysis.result import Result, new_figure, plain
 from autobal.errors import ScenarioError, SolveError
 from autobal.models.device import DeviceParams, design
 from autobal.models.hydroheel import TurbulentDisc
@@ -132,53 +133,79 @@ class EstimationResult(Result):
     def to_dict(self) -> dict:
         return self.data
 
+    def verdict(self) -> tuple[bool, str]:
+        """The one verdict over the fits: each solved and adequate by the Fisher test (4.14) (F <= F_crit), with
+        the lack-of-fit test beside it."""
+        oks, words = [], []
+        for name, f in self.data["fits"].items():
+            free = [k for k, p in (f.get("parameters") or {}).items() if p.get("free")]
+            solved = bool((f.get("solver") or {}).get("success"))
+            ad = f.get("adequacy") or {}
+            w = f"{name} ({', '.join(free)}): " + ("" if solved else f"solver FAILED ({f['solver'].get('status')}); ")
+            w += {True: f"adequate (F = {significant(ad.get('F'))} ≤ F_crit = {significant(ad.get('F_crit'))})",
+                  False: f"NOT adequate (F = {significant(ad.get('F'))} > F_crit = {significant(ad.get('F_crit'))})",
+                  None: "adequacy not tested"}[ad.get("adequate")]
+            if (ad.get("lack_of_fit") or {}).get("adequate") is False:
+                w += f", lack of fit at p = {significant(ad['lack_of_fit'].get('p_value'))}"
+            oks.append(solved and ad.get("adequate") is not False)
+            words.append(w)
+        return all(oks), "; ".join(words)
+
     def summary(self) -> str:
         d = self.data
-        lines = [f"estimation on {d['data']['file']} ({d['data']['points']} points)"]
+        ok, words = self.verdict()
+        lines = [f"estimation on {d['data']['file']} ({d['data']['points']} points)",
+                 f"  {'ok' if ok else 'NOT OK'}: {words}"]
         lines += [f"  FAILED {x}" for x in d.get("failures", [])]
         for name, f in self.solved.items():
             lines.append(f"  fit {name} ({f['model']}, residual in {f['residual']}, {f['hessian']} Hessian): "
                          f"IPOPT {f['solver']['status']} in {f['solver']['iterations']} iterations, "
-                         f"residual std {f['residual_std']:.4g}")
+                         f"residual std {significant(f['residual_std'])}")
             for m in f["extra"].get("start_moved", {}).values():
                 lines.append(f"    start moved: {m['why']}")
-            for k, p in f["parameters"].items():
-                if p["free"]:
-                    lines.append(f"    {k:16s} {p['estimate']:.6g} +- {p['standard_error']:.3g}  "
-                                 f"{100 * f['confidence']:.0f}% CI [{p['ci_low']:.5g}, {p['ci_high']:.5g}]")
-                else:
-                    lines.append(f"    {k:16s} {p['estimate']:.6g} (fixed)")
             bs = f.get("bootstrap") or {}
+            boot = bs.get("parameters", {}) if bs.get("status") == "ok" else {}
+            for k, p in f["parameters"].items():
+                if not p["free"]:
+                    lines.append(f"    {k:10s} {significant(p['estimate'])} (fixed)")
+                    continue
+                line = (f"    {k:10s} {significant(p['estimate'])} +- {significant(p['standard_error'], 2)}  "
+                        f"{100 * f['confidence']:.0f} % CI [{significant(p['ci_low'])}, {significant(p['ci_high'])}]")
+                if k in boot:
+                    line += (f", bootstrap ({bs['samples']} refits) [{significant(boot[k]['ci_low'])}, "
+                             f"{significant(boot[k]['ci_high'])}]")
+                lines.append(line)
             if bs.get("status", "ok").startswith("failed"):
                 lines.append(f"    bootstrap {bs['status']}")
-            for k, p in bs.get("parameters", {}).items() if bs.get("status") == "ok" else ():
-                lines.append(f"    {k:16s} bootstrap ({bs['samples']} refits) {100 * bs['confidence']:.0f}% CI "
-                             f"[{p['ci_low']:.5g}, {p['ci_high']:.5g}]")
+            free = f.get("free") or []
+            corr = f.get("correlation") or []
+            for i, j in itertools.combinations(range(min(len(free), len(corr))), 2):
+                lines.append(f"    correlation of {free[i]} and {free[j]}: {significant(corr[i][j])}"
+                             + (" (the data hardly separate them)" if abs(corr[i][j]) >= 0.9 else ""))
             cc = f.get("cross_check_scipy")
             if cc:
                 lines.append(f"    scipy least_squares: max |difference| {cc['max_abs_difference']:.1e}")
-            ad = f.get("adequacy")
-            if ad and ad.get("F") is not None:
-                lines.append(f"    adequacy (4.14): F = {ad['F']:.3g}, F_crit = {ad['F_crit']:.3g} -> "
-                             f"{'adequate' if ad['adequate'] else 'not adequate'}")
-        cf = d.get("closed_forms") or {}
-        for k, v in cf.items():
-            if isinstance(v, dict) and "alpha" in v:
-                lines.append(f"  closed form {k:16s} alpha = {fmt(v['alpha'])}, tau_max = {fmt(v['tau_max'])}")
-        ref = d.get("adequacy_reference")
-        if ref and ref.get("F") is not None:
-            lines.append(f"  adequacy of the reference curve: sigma1^2 = {ref['sigma1_sq']:.3g}, sigma2^2 = "
-                         f"{ref['sigma2_sq']:.3g}, F = {ref['F']:.3g}, F_crit = {ref['F_crit']:.3g} -> "
-                         f"{'adequate' if ref['adequate'] else 'not adequate'} (source's rule: "
-                         f"{'adequate' if ref['source_rule_adequate'] else 'not adequate'})")
-        if "status" in cf:
-            lines.append(f"  closed forms {cf['status']}")
         lc = d.get("loss_coefficient")
         if lc and "status" in lc:
             lines.append(f"  (4.38) {lc['status']}")
         elif lc:
-            lines.append(f"  (4.38): {lc['unknown']} = {lc['value']:.4g} [{lc['ci_low']:.4g}, {lc['ci_high']:.4g}] "
-                         f"from alpha = {lc['alpha']:.5g} of fit {lc['fit']} (nominal alpha {lc['alpha_nominal']:.4g})")
+            lines.append(f"  (4.38): {lc['unknown']} = {significant(lc['value'])} [{significant(lc['ci_low'])}, "
+                         f"{significant(lc['ci_high'])}] from alpha = {significant(lc['alpha'])} of fit {lc['fit']} "
+                         f"(nominal alpha {significant(lc['alpha_nominal'])})")
+        lines.append("  validation against the source (Pavlenko 2014, Secs. 4.3.3-4.4):")
+        cf = d.get("closed_forms") or {}
+        for k, v in cf.items():
+            if isinstance(v, dict) and "alpha" in v:
+                lines.append(f"    closed form {k:16s} alpha = {significant(v['alpha'])}, tau_max = "
+                             f"{significant(v['tau_max'])}")
+        if "status" in cf:
+            lines.append(f"    closed forms {cf['status']}")
+        ref = d.get("adequacy_reference")
+        if ref and ref.get("F") is not None:
+            lines.append(f"    adequacy of the source's curve: sigma1^2 = {ref['sigma1_sq']:.3g}, sigma2^2 = "
+                         f"{ref['sigma2_sq']:.3g}, F = {ref['F']:.3g}, F_crit = {ref['F_crit']:.3g} -> "
+                         f"{'adequate' if ref['adequate'] else 'not adequate'} (the source's inverted rule: "
+                         f"{'adequate' if ref['source_rule_adequate'] else 'not adequate'})")
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:

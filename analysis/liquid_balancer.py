@@ -21,8 +21,8 @@ import numpy as np
 
 from autobal.analysis import interrupt
 from autobal.analysis.liquid_balancer_optimum import crescent_volume, optimise
-from autobal.analysis.quantities import Declarations, Quantity
-from autobal.analysis.result import Result, fmt, new_figure, with_statuses
+from autobal.analysis.quantities import Declarations, Quantity, significant
+from autobal.analysis.result import Result, new_figure, with_statuses
 from autobal.models import liquid_balancer as lb
 from autobal.models.liquid_balancer import System
 
@@ -159,15 +159,15 @@ _OPT_X = ("lower_bound", "upper_bound", "feasible_lower", "feasible_upper", "opt
 #: mm, volumes in mL, unbalances in g·cm as the thesis writes them; λ0, k_D, γ the source's groups
 QUANTITIES = Declarations(
     Quantity("operating_point.omega", "rad/s", "ω", "working speed", "rad/s", headline=True),
-    Quantity("operating_point.gamma", "1", "γ = ω/ω_cr", "speed ratio", source=f"{_K20}, Eq. (2.5)", headline=True),
-    Quantity("operating_point.lambda0", "1", "λ0", "self-balancing efficiency e0/e_c (the source's algorithm)",
+    Quantity("operating_point.gamma", "1", "γ", "speed ratio ω/ω_cr", source=f"{_K20}, Eq. (2.5)", headline=True),
+    Quantity("operating_point.lambda0", "1", "λ0", "efficiency e0/e_c, the source's algorithm",
              source=f"{_K20}, Eq. (2.13), Table 3.2", headline=True),
-    Quantity("operating_point.lambda0_self_consistent", "1", "λ0⁺",
-             "self-balancing efficiency, self-consistent closure (toolkit extension)", headline=True),
-    Quantity("operating_point.k_D", "1", "k_D = D0/D", "unbalance capacity ratio", source=f"{_K20}, Eq. (2.9)",
+    Quantity("operating_point.lambda0_self_consistent", "1", "λ0⁺", "efficiency, self-consistent closure (extension)",
+             headline=True),
+    Quantity("operating_point.k_D", "1", "k_D", "capacity ratio D0/D", source=f"{_K20}, Eq. (2.9)",
              headline=True),
     Quantity("system.D0", "kg*m", "D0", "initial unbalance m_d e_d", "g·cm", headline=True),
-    Quantity("operating_point.D table.D", "kg*m", "D", "unbalance capacity of the liquid ρV x_p", "g·cm",
+    Quantity("operating_point.D table.D", "kg*m", "D", "unbalance capacity ρV x_p of the liquid", "g·cm",
              source=f"{_K20}, step 2.8", headline=True),
     Quantity(_optima("optimum", kind="height"), "m", "h_opt", "optimal chamber height", "mm",
              source=f"{_K20}, App. В", headline=True),
@@ -280,41 +280,56 @@ class LiquidBalancerResult(Result):
     def to_dict(self) -> dict:
         return with_statuses(self.data, NULL_REASONS)
 
+    def verdict(self) -> tuple[bool, str]:
+        """The one verdict: a balancing equilibrium at the working speed and enough liquid for the deflection
+        (R - r >= f, Pashkov (2010))."""
+        op = self.data["operating_point"]
+        eq, enough = op["equilibrium_exists"], op.get("sufficiency_ok")
+        words = (f"balancing equilibrium at γ = {significant(op['gamma'])} (λ0 = {significant(op['lambda0'])})" if eq
+                 else f"NO balancing equilibrium at γ = {significant(op['gamma'])}: {op.get('reason')}")
+        if enough is not None:
+            words += ("; the liquid suffices (R − r ≥ f)" if enough else
+                      "; the liquid does NOT suffice: the deflection f exceeds the liquid layer R − r (Pashkov 2010)")
+        return bool(eq and enough is not False), words
+
     def summary(self) -> str:
         d = self.data
         op, st = d["operating_point"], d["settings"]
-        lines = [f"liquid balancer ({st['variant']} (2.13), f from {st['deflection']} eccentricity): "
-                 f"gamma = {op['gamma']:.4g}, delta = {op['delta_deg']:.4g} deg, k_D = {op['k_D']:.4g}, "
-                 f"lambda0 = {fmt(op['lambda0'])}{' (' + op['reason'] + ')' if op['reason'] else ''}; "
-                 f"self-consistent lambda0+ = {fmt(op['lambda0_self_consistent'])}"]
-        t = d["table"]
-        lines.append(f"  {'gamma':>6s} {'delta deg':>10s} {'k_D':>10s} {'alpha0 deg':>10s} {'lambda0':>10s} "
-                     f"{'self-cons.':>10s}  note")
-        for i in range(len(t["gamma"])):
-            lines.append(f"  {t['gamma'][i]:6.3g} {t['delta_deg'][i]:10.4f} {fmt(t['k_D'][i]):>10s} "
-                         f"{fmt(t['alpha0_deg'][i]):>10s} {fmt(t['lambda0'][i]):>10s} "
-                         f"{fmt(t['lambda0_self_consistent'][i]):>10s}  {t['reason'][i]}")
-        if "table_3_2" in d:
-            c = d["table_3_2"]
-            lines.append(f"  Table 3.2: max |theory - experiment|/theory = {c['max_theory_experiment_pct']:.2f} % "
-                         f"(thesis: <= 16 %); self-consistent vs experiment max "
-                         f"{c['max_self_consistent_experiment_pct']:.1f} %")
+        ok, words = self.verdict()
+        lines = [f"liquid balancer ({st['variant']} (2.13), f from the {st['deflection']} eccentricity)",
+                 f"  {'ok' if ok else 'NOT OK'}: {words}", *QUANTITIES.lines(d)]
         for key in ("optimal_height", "optimal_volume"):
-            if key in d:
-                o = d[key]
-                lines.append(f"  {key}: {o['variable']} = {fmt(o['optimum'])} (grid {fmt(o.get('grid_optimum'))}, "
-                             f"step {fmt(o.get('grid_step'))}), k_D = {fmt(o['k_D'])}, lambda0 = "
-                             f"{fmt(o['lambda0_max'])} {o['reason']}")
+            o = d.get(key) or {}
+            if o.get("singular"):  # a headline far from the published optimum says why
+                lines.append(f"  {key.replace('_', ' ')}: k_D = 1 (complete balancing), λ0 unbounded there "
+                             f"({significant(o['lambda0_max'])} is how close IPOPT came, not an efficiency)")
+        q = QUANTITIES.find
+        delta, f, lam = q("table.delta_deg"), q("table.f"), q("table.lambda0")
+        lines.append(f"  {'gamma':>6s} {'delta ' + delta.display:>10s} {'f ' + f.display:>9s} {'k_D':>8s} "
+                     f"{'lambda0':>8s} {'self-cons.':>10s}  note")
+        t = d["table"]
+        for i in range(len(t["gamma"])):
+            lines.append(f"  {significant(t['gamma'][i]):>6s} {significant(t['delta_deg'][i]):>10s} "
+                         f"{significant(f.shown(t['f'][i])):>9s} {significant(t['k_D'][i]):>8s} "
+                         f"{significant(lam.shown(t['lambda0'][i])):>8s} "
+                         f"{significant(t['lambda0_self_consistent'][i]):>10s}  {t['reason'][i]}")
         if "liquid_choice" in d:
             lines.append(f"  liquid chosen by viscosity: {d['liquid_choice']['chosen']}")
         pk = d["pashkov"]
         for key in ("single", "multi"):
             if key in pk:
                 b = pk[key]
-                extra = (f", omega_k = {b['critical_speed']:.4g} rad/s, s = {b['deflection']:.4g} m, sufficient: "
-                         f"{b['sufficiency']['all_ok']}" if "sufficiency" in b else "")
-                lines.append(f"  Pashkov {key}: E_e = {b['efficiency']:.5g} (nested alternative "
-                             f"{b['efficiency_nested']:.5g}){extra}")
+                extra = (f", ω_k = {q('pashkov.single.critical_speed').text(b['critical_speed'])}, s = "
+                         f"{q('pashkov.single.deflection').text(b['deflection'])}, sufficient: "
+                         f"{'yes' if b['sufficiency']['all_ok'] else 'NO'}" if "sufficiency" in b else "")
+                lines.append(f"  Pashkov {key}: E_e = {significant(b['efficiency'])} (nested alternative "
+                             f"{significant(b['efficiency_nested'])}){extra}")
+        if "table_3_2" in d:
+            c = d["table_3_2"]
+            lines.append(f"  validation against the source: Table 3.2 max |theory - experiment|/theory = "
+                         f"{c['max_theory_experiment_pct']:.2f} % (thesis: <= 16 %); self-consistent vs experiment max "
+                         f"{c['max_self_consistent_experiment_pct']:.1f} %; the documented algorithm differs "
+                         f"(λ0 = {significant(op['lambda0'])} at γ = {significant(op['gamma'])}): D ≫ D0")
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:

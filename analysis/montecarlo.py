@@ -37,7 +37,7 @@ from autobal.analysis.montecarlo_statics import (
     sensitivities,
     simulate,
 )
-from autobal.analysis.quantities import Declarations, Quantity
+from autobal.analysis.quantities import Declarations, Quantity, significant
 from autobal.analysis.result import Result, failed_head, new_figure, with_statuses
 from autobal.analysis.sampling import Sampler, correlation_matrix, marginals, relative_standard_errors, statistics
 from autobal.analysis.statics import RESIDUAL_TOL, StaticsSolver
@@ -159,32 +159,55 @@ class MonteCarloResult(Result):
                              "null where the valve opening xi has no spread (the valve on its stop at every "
                              "sample) or the source's closed form has no valve opening (the valve saturates)")
 
+    def verdict(self) -> tuple[bool, str]:
+        """The one verdict: the face gap and leak at the reference discharge ratio with their spreads, and whether
+        the exact statics solved for (nearly) every sample (more than MAX_INVALID_SHARE unsolved is a failure)."""
+        d, q = self.data, QUANTITIES.find
+        r, k = d["reference"], d["band_sigma"]
+        invalid = sum(d["exact"]["u"]["invalid"])
+        return not self.failures(), (
+            f"at ψ1 = {r['psi1']:g}: face gap {q('reference.z_mean').text(r['z_mean'])} ± "
+            f"{q('reference.z_std').text(r['z_std'])} (spread {k:g}σ/mean {100 * r['gap_spread']:.3g} %), face leak "
+            f"{q('reference.Q_T_mean').text(r['Q_T_mean'])} (spread {100 * r['leak_spread']:.3g} %); "
+            + (f"{invalid} of {d['samples'] * len(d['psi1'])} sample solves without a converged exact solution, left "
+               "out of the statistics" if invalid else "every sample has a converged exact solution"))
+
     def summary(self) -> str:
         d = self.data
+        ok, words = self.verdict()
         lines = [*failed_head(self.failures()),
                  f"monte carlo: {d['samples']} samples x {len(d['psi1'])} discharge ratios, seed {d['seed']}, "
-                 f"{d['executor']}, {d['time_s']:.2f} s; bands mean +- {d['band_sigma']:g} sigma"]
-        ex, src = d["exact"], d["source"]
-        lines.append(f"  {'psi1':>6s} {'m_u':>8s} {'cv_u':>7s} {'m_qT':>8s} {'cv_qT':>7s} | source: "
-                     f"{'m_u':>8s} {'cv_u':>7s} {'m_qT':>8s} {'cv_qT':>7s} | saturated invalid")
+                 f"{d['executor']}, {d['time_s']:.2f} s; bands mean +- {d['band_sigma']:g} sigma",
+                 f"  {'ok' if ok else 'NOT OK'}: {words}", *QUANTITIES.lines(d)]
+        ex, dim, q = d["exact"], d["dimensional"], QUANTITIES.find
+        units = {k: q(key).display for k, key in (("p", "p1"), ("z", "dimensional.z.mean"),
+                                                  ("Q", "exact.Q_T.mean"))}
+        lines.append(f"  {'psi1':>6s} {'p1 ' + units['p']:>10s} {'z ' + units['z']:>9s} {'std z':>7s} {'spread u':>8s} "
+                     f"{'Q_T ' + units['Q']:>9s} {'spread q_T':>10s} saturated invalid")
         for j, p in enumerate(d["psi1"]):
-            lines.append(f"  {p:6.3f} {ex['u']['mean'][j]:8.4f} {ex['u']['cv'][j]:7.4f} {ex['q_T']['mean'][j]:8.4f} "
-                         f"{ex['q_T']['cv'][j]:7.4f} |         {src['u']['mean'][j]:8.4f} {src['u']['cv'][j]:7.4f} "
-                         f"{src['q_T']['mean'][j]:8.4f} {src['q_T']['cv'][j]:7.4f} | "
-                         f"{d['saturated_fraction'][j]:9.3f} {ex['u']['invalid'][j]:7d}")
+            lines.append(f"  {p:6.3f} {significant(q('p1').shown(d['p1'][j])):>10s} "
+                         f"{significant(q('dimensional.z.mean').shown(dim['z']['mean'][j])):>9s} "
+                         f"{significant(q('dimensional.z.std').shown(dim['z']['std'][j])):>7s} "
+                         f"{significant(ex['u']['spread'][j]):>8s} "
+                         f"{significant(q('exact.Q_T.mean').shown(ex['Q_T']['mean'][j])):>9s} "
+                         f"{significant(ex['q_T']['spread'][j]):>10s} {d['saturated_fraction'][j]:9.3f} "
+                         f"{ex['u']['invalid'][j]:7d}")
         s = d["sensitivity"]
         for k in ("u", "q_T"):
             lines.append(f"  first-order std of {k} / Monte Carlo std: "
                          + ", ".join(f"{r:.3f}" for r in s["std_ratio"][k]))
-        j = d["psi1"].index(d["reference_psi1"]) if d["reference_psi1"] in d["psi1"] else 0
-        lines.append(f"  at psi1 = {d['psi1'][j]:g}: {d['band_sigma']:g} sigma / mean of u {ex['u']['spread'][j]:.3f}, "
-                     f"of q_T {ex['q_T']['spread'][j]:.3f} (exact); {src['u']['spread'][j]:.3f}, "
-                     f"{src['q_T']['spread'][j]:.3f} (source's forms); source: 0.20 and 0.25")
+        src, j = d["source"], self._reference()
+        lines.append(f"  validation against the source: at psi1 = {d['psi1'][j]:g} the source's closed forms give "
+                     f"{d['band_sigma']:g} sigma / mean of u {src['u']['spread'][j]:.3f}, of q_T "
+                     f"{src['q_T']['spread'][j]:.3f} (exact {ex['u']['spread'][j]:.3f}, {ex['q_T']['spread'][j]:.3f});"
+                     " Pavlenko (2014), conclusion 4: 0.20 and 0.25")
         if "afc" in d:
             a = d["afc"]
+            om, amp = q("afc.at.x.omega"), q("afc.at.x.mean_um")
             lines.append(f"  AFC ({a['model']} model, {a['samples']} samples, {a['time_s']:.2f} s): "
-                         + "; ".join(f"{k} {v['omega']:.0f} rad/s: nominal {v['nominal_um']:.2f} um, mean "
-                                     f"{v['mean_um']:.2f} um, cv {v['cv']:.3f}" for k, v in a["at"].items()))
+                         + "; ".join(f"{k.replace('_', ' ')} {om.text(v['omega'])}: nominal "
+                                     f"{amp.text(v['nominal_um'])}, mean {amp.text(v['mean_um'])}, cv {v['cv']:.3f}"
+                                     for k, v in a["at"].items()))
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:

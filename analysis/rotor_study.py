@@ -27,18 +27,18 @@ _P10 = "Pashkov (2010), ch. 2"
 #: every number of the rotor_dynamics block: speeds in rad/s (rpm beside), the source's groups dimensionless
 #: (ν = ω/Ω0 and z of Eq. (9), deflections over the eccentricity e, the system unbalance d of (7))
 QUANTITIES = Declarations(
-    Quantity("rotor.omega_cr_rad_s", "rad/s", "ω_cr", "critical speed with the liquid, √(c/m)", "rad/s",
+    Quantity("rotor.omega_cr_rad_s", "rad/s", "ω_cr", "critical speed with the liquid", "rad/s",
              source=f"{_P10}, Eq. (3)", headline=True),
-    Quantity("rotor.Omega0_rad_s", "rad/s", "Ω0", "natural frequency of the rotor without liquid, √(c/m1)", "rad/s",
+    Quantity("rotor.Omega0_rad_s", "rad/s", "Ω0", "natural frequency without liquid", "rad/s",
              headline=True),
-    Quantity("rotor.psi", "1", "ψ", "liquid mass ratio m1/(m1 + ρπR²h)", source=_P10, headline=True),
+    Quantity("rotor.psi", "1", "ψ", "liquid mass ratio m1/m", source=_P10, headline=True),
     Quantity("rotor.zeta0", "1", "ζ0", "damping ratio of the rotor", headline=True),
     Quantity("rotor.mu1", "1", "μ1", "liquid-to-rotor mass group of Eq. (9)", source=f"{_P10}, Eq. (9)"),
     Quantity("rotor.n_steady_1_s rotor.n_passage_1_s", "1/s", "n", "damping n = χ/m of the steady state (3) and "
              "of the passage (8')", source=_P10),
     Quantity("rotor.n_stationary", "1", "n", "damping group n = χ²/(c m1) of Eq. (9)", source=f"{_P10}, Eq. (9)"),
-    Quantity("stationary.stability.max_real_over_Omega0", "1", "max Re λ/Ω0",
-             "largest real part of the eigenvalues of the steady whirl over the speed range", headline=True),
+    Quantity("stationary.stability.max_real_over_Omega0", "1", "Re λ/Ω0",
+             "stability of the steady whirl: largest real part of the eigenvalues", headline=True),
     Quantity("stationary.cases[].mu1 stationary.cases[].n", "1", "μ1, n", "the (μ1, n) case of Eq. (9)",
              source=f"{_P10}, Figs 5-6"),
     Quantity("stationary.cases[].z_kp stationary.cases[].z_helps stationary.cases[].z1 stationary.cases[].z2 "
@@ -283,7 +283,8 @@ def step_case(P: RotorParams, w0: float, w1: float, duration: float, points: int
     d_ss, a_ss = float(ss["d"]), float(ss["a"])
     dmax, tmax = R.peak(tau, d)
     out = np.nonzero(np.abs(d - d_ss) > 0.05 * d_ss)[0]
-    return {"step": f"{w0:g}->{w1:g}", "omega_from": w0, "omega_to": w1, "psi": psi, "d0": float(d[0]), "d_max": dmax, "t_d_max_ms": tmax / Om * 1e3,
+    return {"step": f"{w0:g}->{w1:g}", "omega_from": w0, "omega_to": w1, "psi": psi, "d0": float(d[0]),
+            "d_max": dmax, "t_d_max_ms": tmax / Om * 1e3,
             "d_ss": d_ss, "a_max_over_e": R.peak(tau, a)[0], "a_ss_over_e": a_ss,
             "t_5pct_ms": float(tau[out[-1]] / Om * 1e3) if len(out) else 0.0, "closed_form_vs_cvodes": diff,
             "_t": tau / Om, "_d": d}
