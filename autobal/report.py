@@ -847,6 +847,10 @@ def montecarlo_section(sec: Section) -> None:
         from autobal.analysis.montecarlo import MonteCarloResult  # the verdict's one copy
 
         sec.conclude(*MonteCarloResult(sec.block).verdict())
+    else:  # a results.json written before the physical values
+        invalid = sum(_get(sec.block, "exact.u.invalid") or [])
+        sec.conclude(not sec.block.get("failures"), f"{invalid} sample solves without a converged exact solution"
+                     if invalid else "every sample has a converged exact solution")
     at = sec.get("afc.at") or {}
     if at:
         model, forcing = sec.get("afc.model"), sec.get("afc.forcing")
