@@ -822,7 +822,7 @@ def montecarlo_section(sec: Section) -> None:
     sec.row("samples with the regulator valve on its stop", "", f"{ref}.saturated_fraction")
     psi1 = sec.get("psi1", [])
     rows, src = [], []
-    for i, p in enumerate(psi1):
+    for i in range(len(psi1)):
         rows.append([sec.cell(f"psi1.{i}"), sec.cell(f"p1.{i}"), sec.cell(f"dimensional.z.mean.{i}"),
                      sec.cell(f"dimensional.z.std.{i}"), sec.cell(f"exact.u.spread.{i}"),
                      sec.cell(f"dimensional.p2.mean.{i}"), sec.cell(f"exact.Q_T.mean.{i}"),
@@ -830,10 +830,11 @@ def montecarlo_section(sec: Section) -> None:
                      sec.cell(f"saturated_fraction.{i}"), sec.cell(f"exact.u.invalid.{i}")])
         src.append([sec.cell(f"psi1.{i}"), *(sec.cell(f"{part}.{k}.{stat}.{i}") for k in ("u", "q_T")
                                              for part in ("exact", "source") for stat in ("mean", "spread"))])
-        frac = _get(sec.block, f"saturated_fraction.{i}") or 0
-        if frac > 0:
-            sec.warnings.append(f"ψ1 = {number(p)}: {number(100 * frac)} % of the samples have the regulator "
-                                "saturated")
+    saturated = [f"ψ1 = {number(p)}: {significant(100 * f, 3)} %" for p, f in
+                 zip(psi1, sec.get("saturated_fraction") or [], strict=False) if f]
+    if saturated:  # one line: the source's closed forms assume an ideal regulator
+        sec.warnings.append("samples with the regulator valve on its stop (the closed forms assume an ideal "
+                            "regulator): " + ", ".join(saturated))
     if _has(sec.block, "dimensional"):
         sec.tables.append(table("Exact statics over the samples: the physical values (mean, standard deviation) "
                                 "beside the source's groups' spread kσ/mean",
