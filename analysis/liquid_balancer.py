@@ -235,6 +235,7 @@ QUANTITIES = Declarations(
     Quantity("table_3_2.rows[].*", "1", "γ, λ0", "Table 3.2: published theory and experiment beside the toolkit",
              source=f"{_K20}, Table 3.2"),
     Quantity("table_3_2.max_theory_experiment_pct table_3_2.max_self_consistent_experiment_pct "
+             "table_3_2.rows[].theory_minus_experiment_pct table_3_2.rows[].self_consistent_vs_experiment_pct "
              "table_3_3.rows[].documented_vs_experiment_pct table_3_3.rows[].crescent_vs_experiment_pct "
              "table_3_3.rows[].published_vs_experiment_pct", "%", "", "relative differences"),
     Quantity("table_3_3.rows[].V_opt_mL table_3_3.rows[].V_opt_crescent_mL table_3_3.rows[].published_V_opt_mL "
@@ -333,12 +334,16 @@ class LiquidBalancerResult(Result):
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
-        out = {"liquid_balancer_table.csv": self.data["table"],
-               "liquid_balancer_sweep.csv": {k: v for k, v in self.data["sweep"].items() if k != "reason"}}
+        """The results table, the sweep and the Tables 3.2/3.3 comparisons, each column headed with its display
+        unit (f in mm, D in g·cm, ω in rad/s; '[1]' for the source's groups)."""
+        out = {"liquid_balancer_table.csv": QUANTITIES.columns(self.data["table"], "table"),
+               "liquid_balancer_sweep.csv": QUANTITIES.columns({k: v for k, v in self.data["sweep"].items()
+                                                                if k != "reason"}, "sweep")}
         for key in ("table_3_2", "table_3_3"):
             if key in self.data:
                 rows = self.data[key]["rows"]
-                out[f"liquid_balancer_{key}.csv"] = {k: [r[k] for r in rows] for k in rows[0]}
+                out[f"liquid_balancer_{key}.csv"] = QUANTITIES.columns({k: [r[k] for r in rows] for k in rows[0]},
+                                                                       f"{key}.rows[]")
         return out
 
     def draw(self, ax) -> None:

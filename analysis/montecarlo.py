@@ -64,6 +64,7 @@ PARAMETER_NAMES = {  # the random groups of (2.18) by what they are
 #: exact output (a group of (2.18)) -> its physical quantity in ``dimensional`` and the scale it is the ratio to
 DIMENSIONAL = {"u": ("z", "z_B"), "xi": ("x", "x_B"), "psi2": ("p2", "p_B"), "psi3": ("p3", "p_B"),
                "psi_e": ("p_e", "p_B"), "psi_cam": ("p_cam", "p_B")}
+DIMENSIONAL_NAMES = tuple(name for name, _ in DIMENSIONAL.values())
 #: the statistics that scale with the quantity (cv, spread and the counts do not)
 SCALED = ("nominal", "mean", "std", "band_low", "band_high")
 
@@ -211,16 +212,16 @@ class MonteCarloResult(Result):
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
+        """montecarlo_statics.csv: per discharge ratio the statistics of the source's groups, the leak flows (L/s)
+        and, beside them, the gap (µm), valve opening (mm) and pressures (MPa); every header names its unit."""
         d = self.data
         out = {}
-        cols = {"psi1": d["psi1"], "saturated_fraction": d["saturated_fraction"]}
-        for part, keys in (("exact", OUTPUTS), ("source", SOURCE_OUTPUTS)):
+        cols = {"psi1": d["psi1"], "p1": d["p1"], "saturated_fraction": d["saturated_fraction"]}
+        stats = ("nominal", "mean", "std", "band_low", "band_high", "invalid")
+        for part, keys in (("exact", OUTPUTS), ("source", SOURCE_OUTPUTS), ("dimensional", DIMENSIONAL_NAMES)):
             for k in keys:
-                s = d[part][k]
-                for stat in ("nominal", "mean", "std", "band_low", "band_high", "invalid"):
-                    if stat in s:
-                        cols[f"{part}_{k}_{stat}"] = s[stat]
-        out["montecarlo_statics.csv"] = cols
+                cols |= {f"{part}.{k}.{stat}": d[part][k][stat] for stat in stats if stat in d[part][k]}
+        out["montecarlo_statics.csv"] = {name.replace(".", "_"): v for name, v in QUANTITIES.columns(cols, "").items()}
         sens = d["sensitivity"]
         rows = {"psi1": [], "output": [], **{f"d_d_{n}": [] for n in d["parameters"]}}
         for j, p in enumerate(d["psi1"]):
@@ -232,9 +233,8 @@ class MonteCarloResult(Result):
         out["montecarlo_sensitivities.csv"] = rows
         if "afc" in d:
             a = d["afc"]
-            out["montecarlo_afc.csv"] = {"omega_rad_s": a["omega"], "nominal_um": a["nominal_um"],
-                                         "mean_um": a["mean"], "std_um": a["std"],
-                                         "band_low_um": a["band_low"], "band_high_um": a["band_high"]}
+            out["montecarlo_afc.csv"] = QUANTITIES.columns({k: a[k] for k in ("omega", "nominal_um", "mean", "std",
+                                                                              "band_low", "band_high")}, "afc")
         return out
 
     def _band(self, s: dict) -> tuple[np.ndarray, np.ndarray, str]:

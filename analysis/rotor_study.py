@@ -151,8 +151,9 @@ class RotorDynamicsResult(Result):
         out = {}
         for key, rows in (("steps", "table"), ("passage", "table"), ("lewis", "table"), ("stationary", "cases")):
             if key in self.data:
-                table = self.data[key][rows]
-                out[f"rotor_{key}.csv"] = {k: [r[k] for r in table] for k in table[0]}
+                table = self.data[key][rows]  # headers with their units (ms, rad/s, 1/s; '[1]' for groups)
+                out[f"rotor_{key}.csv"] = QUANTITIES.columns({k: [r[k] for r in table] for k in table[0]},
+                                                             f"{key}.{rows}[]")
         return out
 
     def figures(self) -> dict:

@@ -132,6 +132,12 @@ def test_montecarlo_gap_pressures_and_leak_in_engineering_units(montecarlo):
     assert "p1 MPa" in header and "z µm" in header and "Q_T L/s" in header
     assert out.splitlines()[1].startswith("  ok: at ψ1 = 1: face gap ") and "µm ±" in out.splitlines()[1]
     assert montecarlo.quantities.undeclared(d) == []
+    csv = montecarlo.tables()["montecarlo_statics.csv"]  # headers name the display unit, values converted
+    assert csv["p1 [MPa]"] == pytest.approx([p * sc["p_B"] / 1e6 for p in d["psi1"]], rel=1e-12)
+    assert csv["dimensional_z_mean [µm]"] == pytest.approx([u * sc["z_B"] * 1e6 for u in d["exact"]["u"]["mean"]],
+                                                            rel=1e-12)
+    assert csv["exact_Q_T_std [L/s]"] == pytest.approx([q * 1e3 for q in d["exact"]["Q_T"]["std"]], rel=1e-12)
+    assert "exact_u_spread [1]" not in csv and "exact_u_mean [1]" in csv
 
 
 @pytest.mark.cli
@@ -154,6 +160,9 @@ def test_rotor_dynamics_speeds_in_rpm_beside_rad_s(tmp_path):
     assert value(omega0, "rpm") == pytest.approx(1002.7, rel=5e-4)
     step = block["steps"]["table"][0]
     assert (step["omega_from"], step["omega_to"]) == (0.0, 150.0)
+    steps = run["rotor_dynamics"].tables()["rotor_steps.csv"]
+    assert steps["omega_to [rad/s]"] == [150.0] and steps["t_5pct_ms [ms]"] == [step["t_5pct_ms"]]
+    assert steps["step"] == ["0->150"] and "psi [1]" in steps
     results = json.loads((tmp_path / "out" / "results.json").read_text())
     assert results["units"]["rotor_dynamics.steps.table[].omega_to"] == "rad/s"
     assert results["units"]["rotor_dynamics.passage.table[].z_delta_max"] == "1"
