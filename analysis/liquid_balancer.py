@@ -365,6 +365,10 @@ class LiquidBalancerResult(Result):
         ax.set_ylim(0, 6)
         ax.set_xlabel(r"speed ratio $\gamma = \omega/\omega_{cr}$")
         ax.set_ylabel(r"self-balancing efficiency $\lambda_0 = e_0/e_c$")
+        op = d["operating_point"]
+        rpm = op["omega"] / op["gamma"] * 30 / math.pi  # omega_cr in rpm: the speed on top
+        ax.secondary_xaxis("top", functions=(lambda g: g * rpm, lambda n: n / rpm)).set_xlabel("speed, rpm",
+                                                                                                fontsize=8)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
 
@@ -373,7 +377,7 @@ class LiquidBalancerResult(Result):
         d = self.data
         fig, ax = new_figure(figsize=(6.4, 4.6))
         self.draw(ax)
-        ax.set_title(d["title"], fontsize=9)
+        fig.suptitle(d["title"], fontsize=9)
         figs = {"fig_liquid_efficiency.png": fig}
         opts = [k for k in ("optimal_height", "optimal_volume") if k in d and len(d[k]["grid"]["x"])]
         if opts:

@@ -272,6 +272,14 @@ class MonteCarloResult(Result):
             ax.set_xlabel(r"discharge pressure ratio $\psi_1 = p_1/p_B$")
             ax.set_ylabel(lab)
             ax.grid(alpha=0.3)
+            if "scales" in d:  # the physical discharge pressure on top
+                p_b = d["scales"]["p_B"] / 1e6
+                ax.secondary_xaxis("top", functions=(lambda x, p_b=p_b: x * p_b, lambda p, p_b=p_b: p / p_b)
+                                   ).set_xlabel("discharge pressure $p_1$, MPa", fontsize=8)
+        if "scales" in d:  # the face gap in µm beside u = z/z_B (q_T is over a per-sample base flow: no second axis)
+            z_b = d["scales"]["z_B"] * 1e6
+            axes[0].secondary_yaxis("right", functions=(lambda u: u * z_b, lambda z: z / z_b)).set_ylabel(
+                "face gap z, µm")
         sens = d["sensitivity"]
         j = self._reference()
         names = d["parameters"]
