@@ -909,7 +909,7 @@ def rotor_dynamics_section(sec: Section) -> None:
     sec.row("peak deflection of the motor run-up", "δ/e", "motor_runup.peak_deflection_over_e")
     from autobal.analysis.rotor_study import RotorDynamicsResult  # the verdict's one copy
 
-    verdict = RotorDynamicsResult(sec.block).verdict() if {"stationary", "motor_runup"} & set(sec.block) else None
+    verdict = RotorDynamicsResult(sec.block).verdict()
     if verdict:
         sec.conclude(*verdict)
     rows = [[sec.cell(f"passage.table.{i}.{k}") for k in ("n", "psi", "delta_max_over_e", "z_delta_max", "d_max")]
