@@ -249,8 +249,7 @@ class MonteCarloResult(Result):
         return np.asarray(s["band_low"], float), np.asarray(s["band_high"], float), rf"mean $\pm {k:g}\sigma$"
 
     def _reference(self) -> int:
-        d = self.data
-        return d["psi1"].index(d["reference_psi1"]) if d["reference_psi1"] in d["psi1"] else 0
+        return reference_index(self.data)
 
     def figures(self) -> dict:
         """Bands against the discharge ratio with the sensitivities (Figs 3.3-3.6), histograms of the
@@ -433,9 +432,14 @@ def dimensional(exact: dict, scales: dict, grid) -> dict:
     return {"scales": sc, "p1": np.asarray(grid, float) * sc["p_B"], "dimensional": out}
 
 
+def reference_index(data: dict) -> int:
+    """Index of the reference discharge ratio on the grid (the first grid point if it is not on the grid)."""
+    return data["psi1"].index(data["reference_psi1"]) if data["reference_psi1"] in data["psi1"] else 0
+
+
 def reference(data: dict) -> dict:
     """The headline numbers at the reference discharge ratio (the first grid point if it is not on the grid)."""
-    j = data["psi1"].index(data["reference_psi1"]) if data["reference_psi1"] in data["psi1"] else 0
+    j = reference_index(data)
     z, ex = data["dimensional"]["z"], data["exact"]
     return {"psi1": data["psi1"][j], "p1": float(data["p1"][j]), "z_mean": float(z["mean"][j]),
             "z_std": float(z["std"][j]), "gap_spread": float(ex["u"]["spread"][j]),
