@@ -181,6 +181,18 @@ class Declarations:
         width = max((len(d) for d, _, _ in rows), default=0)
         return [f"  {d:<{width}s}  {s:<7s} {t}" for d, s, t in rows]
 
+    def columns(self, table: dict, prefix: str) -> dict:
+        """CSV columns of ``table`` (the block's mapping at ``prefix``, column name -> values): a declared numeric
+        column headed 'name [display unit]' in that unit ('[1]' for a group), words and yes/no as they are."""
+        out = {}
+        for name, values in table.items():
+            q = self.find(f"{prefix}.{name}" if prefix else name)
+            if q is None or not any(is_number(v) for v in flatten(values)):
+                out[name] = values
+            else:
+                out[f"{name} [{q.display}]"] = [q.shown(v) if is_number(v) else None for v in values]
+        return out
+
     def undeclared(self, block: dict) -> list[str]:
         """The key paths of ``block``'s numeric leaves that have no declaration."""
         return list(dict.fromkeys(p for p, _ in leaf_paths(block, "") if self.find(p) is None))
