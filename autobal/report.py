@@ -1052,7 +1052,7 @@ def design_section(sec: Section) -> None:
     for which in ("nominal", "optimum"):  # keys are the discharge ratios ("0.5"), so read them whole
         for p, margin in (sec.get(f"{which}.margin") or {}).items():
             if not p.endswith("_status"):
-                sec.row(f"decay rate at ψ1 = {p}, {which} design", "−max Re λ", "", "1/s", value=margin)
+                sec.row(f"decay rate at ψ1 = {p}, {which} design", "−max Re λ", f"{which}.margin.{p}", value=margin)
     sec.verdict(*ds.verdict(sec.block, "nominal"))
     for model, text_ in ds.source_models(sec.block):
         sec.validation.append({"ok": None, "text": text_ + (f"; the headline verdict stands: {WHY_UNSTABLE[model]}"
