@@ -434,7 +434,7 @@ POLE_MARKERS = (("o", 12), ("s", 9), ("D", 7), ("x", 4.5), ("+", 9), ("^", 4))
 
 def _tex(symbol: str) -> str:
     """A parameter's symbol as mathematics: "k_pr" -> "$k_{pr}$", "V2" -> "$V_{2}$"."""
-    base, sub = re.fullmatch(r"([A-Za-z]+?)_?([a-z0-9]*)", symbol).groups() if symbol != "E" else ("E", "")
+    base, sub = re.fullmatch(r"([A-Za-z]+?)_?([a-z0-9]*)", symbol).groups()
     return f"${base}_{{{sub}}}$" if sub else f"${base}$"
 
 
@@ -466,7 +466,7 @@ def _mode(x: dict) -> str:
 
 
 def _span(q: Quantity, a: float, b: float) -> str:
-    """An interval of parameter values in the display unit: '0.0001 to 0.1995 L'."""
+    """An interval of parameter values in the display unit: '0.1000 to 199.5 cm³'."""
     return f"{significant(q.shown(a))} to {q.text(b)}"
 
 
@@ -489,7 +489,7 @@ def _map_lines(d: dict, models: list[str]) -> list[str]:
 
 def _headline_first(models: dict) -> dict:
     """The models with the energy-consistent one first (the headline; the source's models validate)."""
-    return dict(sorted(models.items(), key=lambda kv: kv[0] != "nonlinear"))
+    return dict(sorted(models.items(), key=lambda kv: kv[0] != HEADLINE))
 
 
 def study(setup: Setup, models: list[str], smap=None, title: str = "", decay_rate: float = 0.0) -> StabilityResult:
