@@ -1047,6 +1047,7 @@ def design_section(sec: Section) -> None:
 
     ok, words = ds.verdict(sec.block)
     sec.conclude(ok, words)
+    sec.verdict(sec.get("status") in ds.SUCCESS, f"IPOPT: {sec.get('status')} ({sec.get('iterations')} iterations)")
     for q, key, _ in ds.QUANTITIES.headline(sec.block):
         sec.row(q.description, q.symbol, key)
     for which in ("nominal", "optimum"):  # keys are the discharge ratios ("0.5"), so read them whole
