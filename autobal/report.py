@@ -217,10 +217,10 @@ def number(v) -> str:
     return f"{v:.5g}" if a == 0 or 1e-3 <= a < 1e6 else f"{v:.4e}"
 
 
-def cell(v, unit: str | None = None, shown: str | None = None) -> dict:
+def cell(v, unit: str | None = None, shown: str | None = None, digits: int | None = None) -> dict:
     """A table cell: a number (or null) with its unit, converted from the SI ``unit`` to the display unit
-    ``shown`` (default: the field's unit of analysis/quantities.py, µm for lengths below 10 µm); words and
-    yes/no without a unit."""
+    ``shown`` (default: the field's unit of analysis/quantities.py, µm for lengths below 10 µm), to ``digits``
+    significant digits (default :func:`number`'s 5); words and yes/no without a unit."""
     if isinstance(v, bool | str):
         return text(v)
     unit = unit or "?"
@@ -230,8 +230,8 @@ def cell(v, unit: str | None = None, shown: str | None = None) -> dict:
         shown = unit
     if v is None:
         return {"text": "—", "unit": pretty_unit(shown), "num": True, "null": True}
-    return {"text": number(convert(v, unit, shown) if is_display_unit(shown, unit) else v),
-            "unit": pretty_unit(shown), "num": True}
+    x = convert(v, unit, shown) if is_display_unit(shown, unit) else v
+    return {"text": number(x) if digits is None else significant(x, digits), "unit": pretty_unit(shown), "num": True}
 
 
 def text(v) -> dict:
@@ -275,10 +275,11 @@ class Section:
         return unit_of(_unit_path(self.name, path), self.results)
 
     def cell(self, path: str, value=None) -> dict:
-        """The cell of the block's value at ``path`` (or ``value``) in the display unit of its declaration."""
+        """The cell of the block's value at ``path`` (or ``value``) in the display unit of its declaration, to the 4
+        significant digits of the terminal."""
         q = quantity(f"{self.name}.{path}", self.results)
         v = self.get(path) if value is None else value
-        return cell(v, q.unit, q.display) if q is not None else cell(v, self.unit(path) or "?")
+        return cell(v, q.unit, q.display, 4) if q is not None else cell(v, self.unit(path) or "?")
 
     def row(self, label: str, symbol: str, path: str, unit: str | None = None, value=None, note: str = "") -> None:
         """One headline row; the value is the block's at ``path`` unless given, its unit and display unit
