@@ -50,7 +50,7 @@ from autobal.errors import ScenarioError
 from autobal.report_input import MAX_FIGURE_BYTES
 from autobal.scenario import MAX_FILE_BYTES as MAX_SCENE_BYTES
 from autobal.text import clean as text_clean
-from autobal.units import DIMENSIONS, si_unit_of
+from autobal.units import si_unit_of
 
 REPORT = "report.html"
 STATUS_FILES = ("failed_solve.json", "interrupted.json", "error.json")
@@ -62,11 +62,12 @@ STATUS_FILES = ("failed_solve.json", "interrupted.json", "error.json")
 DECLARED = {"statics": "autobal.analysis.statics_study", "frequency": "autobal.analysis.frequency",
             "transient": "autobal.analysis.simulate", "reliability": "autobal.analysis.reliability",
             "liquid_balancer": "autobal.analysis.liquid_balancer", "estimation": "autobal.analysis.estimation_study",
-            "montecarlo": "autobal.analysis.montecarlo", "rotor_dynamics": "autobal.analysis.rotor_study"}
+            "montecarlo": "autobal.analysis.montecarlo", "rotor_dynamics": "autobal.analysis.rotor_study",
+            "stability": "autobal.analysis.stability", "design": "autobal.analysis.design_study"}
 
 #: analyses whose numbers are not declared yet: their units still come from the name rules below.  This
 #: allow-list only shrinks (tests/test_quantities.py fails on an analysis that is in neither).
-UNDECLARED = ("stability", "spinup", "spinup_robust", "spinup_time_optimal", "design", "ross_spinup")
+UNDECLARED = ("spinup", "spinup_robust", "spinup_time_optimal", "ross_spinup")
 
 _P = r"(^|\.)"  # start of a key
 # (regex on "analysis.dotted.path", SI unit), the first match wins: for the UNDECLARED analyses only
@@ -103,8 +104,6 @@ _UNDECLARED_RULES: list[tuple[str, str]] = [
     (r"(^|\.)(omega|omega_ref|natural_frequency|imag|frequency)$", "rad/s"),
     (r"(^|\.)(real|decay_rate|max_real|growth_rate)$", "1/s"),
     (r"(^|\.)phase_deg$", "deg"),
-    (r"^stability\.coefficients\.(columns|extra)\.", "per coefficient: K, zeta 1; T, tau s (App. A/B)"),
-    (r"^stability\.", "1"),
     # optimal spin-up: deflection over the eccentricity delta/e, unbalance d, psi, zeta0 dimensionless
     (r"^spinup\..*" + _P + r"(start_speed|final_speed|max_speed|omega_at_peak)$", "rad/s"),
     (r"^spinup\..*" + _P + r"max_acceleration$", "rad/s^2"),
@@ -116,18 +115,6 @@ _UNDECLARED_RULES: list[tuple[str, str]] = [
     # robust and time-optimal spin-up: peaks delta/e, factors on the nominal rotor dimensionless
     (r"^spinup_time_optimal\.horizon_s$", "s"),
     (r"^spinup_(robust|time_optimal)\.", "1"),
-    # stability-constrained design: margins and spectral abscissae 1/s, leakage m^3/s, parameters by their path
-    (r"^design\..*" + _P + r"(decay_rate|margin(\.[\d.]+)?|spectral_abscissa(\.[\d.]+)?)$", "1/s"),
-    (r"^design\.(abscissa_sweep\.(nominal|optimum)|other_model\.(nominal|optimum))", "1/s"),
-    (r"^design\..*leakage$", "m^3/s"),
-    (r"^design\..*face_gap(\.[\d.]+)?$", "m"),
-    (r"^design\..*values_si\..*volume$", "m^3"),
-    (r"^design\..*values_si\..*stem_damping$", "N*s/m"),
-    (r"^design\..*values_si\..*spring_stiffness$", "N/m"),
-    (r"^design\..*values_si\..*(pressure)$", "Pa"),
-    (r"^design\..*values_si\..*(area)$", "m^2"),
-    (r"^design\..*values_si\..*(diameter|length|clearance|opening)$", "m"),
-    (r"^design\.", "1"),
 ]
 
 
@@ -139,19 +126,20 @@ def declarations(analysis: str) -> Declarations | None:
     return importlib.import_module(DECLARED[analysis]).QUANTITIES
 
 
-def quantity(path: str) -> Quantity | None:
-    """The declaration of a results.json key ``analysis.dotted.path``, or None."""
+def quantity(path: str, results: dict | None = None) -> Quantity | None:
+    """The declaration of a results.json key ``analysis.dotted.path``, or None (``results``: the run's, for a
+    key whose unit is that of a parameter its block names, e.g. the axis of a stability map)."""
     analysis, _, rest = path.partition(".")
     decl = declarations(analysis)
-    return None if decl is None else decl.find(rest)
+    return None if decl is None else decl.find(rest, None if results is None else results.get(analysis))
 
 
-def unit_of(path: str) -> str | None:
+def unit_of(path: str, results: dict | None = None) -> str | None:
     """SI unit of a results.json key ``analysis.dotted.path`` ("1" when dimensionless), or None: its
     declaration, or for an analysis of :data:`UNDECLARED` the first name rule that matches."""
     analysis = path.partition(".")[0]
     if analysis in DECLARED:
-        q = quantity(path)
+        q = quantity(path, results)
         return None if q is None else q.unit
     if analysis in UNDECLARED:
         return next((unit for pattern, unit in _RULES if pattern.search(path)), None)
@@ -165,29 +153,10 @@ def units(results: dict, analyses: list[str] | None = None) -> dict[str, str]:
     out = {}
     for name in names:
         for path, _ in leaf_paths(plain(results.get(name, {})), name):
-            unit = _parameter_unit(path, results) or unit_of(path)
+            unit = unit_of(path, results)
             if unit is not None:
                 out.setdefault(path, unit)
     return out
-
-
-def _si(kind: str) -> str:
-    return DIMENSIONS[kind][1].replace("**", "^")
-
-
-def _parameter_unit(path: str, results: dict) -> str | None:
-    """Unit of a value of a scanned dynamics parameter (stability maps and single-parameter scans)."""
-    m = re.search(r"\.(\w+)\.(values|nominal)$", path) or re.search(r"nearest_stable\.(\w+)$", path)
-    if m is None or not path.startswith("stability."):
-        return None
-    # a stability report only: a statics run builds no dynamics schema
-    from autobal.parts.device_dynamics import PARAMETERS
-
-    name = m.group(1)
-    if name in ("x", "y"):  # maps: the axis names its parameter
-        name = _get(results, path.rsplit(".", 1)[0] + ".parameter")
-    kind = PARAMETERS.get(name)
-    return _si(kind) if kind in DIMENSIONS else None
 
 
 def _get(data, path: str, default=None):
@@ -217,10 +186,10 @@ def number(v) -> str:
     return f"{v:.5g}" if a == 0 or 1e-3 <= a < 1e6 else f"{v:.4e}"
 
 
-def cell(v, unit: str | None = None, shown: str | None = None) -> dict:
+def cell(v, unit: str | None = None, shown: str | None = None, digits: int | None = None) -> dict:
     """A table cell: a number (or null) with its unit, converted from the SI ``unit`` to the display unit
-    ``shown`` (default: the field's unit of analysis/quantities.py, µm for lengths below 10 µm); words and
-    yes/no without a unit."""
+    ``shown`` (default: the field's unit of analysis/quantities.py, µm for lengths below 10 µm), to ``digits``
+    significant digits (default :func:`number`'s 5); words and yes/no without a unit."""
     if isinstance(v, bool | str):
         return text(v)
     unit = unit or "?"
@@ -230,8 +199,8 @@ def cell(v, unit: str | None = None, shown: str | None = None) -> dict:
         shown = unit
     if v is None:
         return {"text": "—", "unit": pretty_unit(shown), "num": True, "null": True}
-    return {"text": number(convert(v, unit, shown) if is_display_unit(shown, unit) else v),
-            "unit": pretty_unit(shown), "num": True}
+    x = convert(v, unit, shown) if is_display_unit(shown, unit) else v
+    return {"text": number(x) if digits is None else significant(x, digits), "unit": pretty_unit(shown), "num": True}
 
 
 def text(v) -> dict:
@@ -272,13 +241,14 @@ class Section:
         return _get(self.block, path, default)
 
     def unit(self, path: str) -> str | None:
-        return _parameter_unit(_unit_path(self.name, path), self.results) or unit_of(_unit_path(self.name, path))
+        return unit_of(_unit_path(self.name, path), self.results)
 
     def cell(self, path: str, value=None) -> dict:
-        """The cell of the block's value at ``path`` (or ``value``) in the display unit of its declaration."""
-        q = quantity(f"{self.name}.{path}")
+        """The cell of the block's value at ``path`` (or ``value``) in the display unit of its declaration, to the 4
+        significant digits of the terminal."""
+        q = quantity(f"{self.name}.{path}", self.results)
         v = self.get(path) if value is None else value
-        return cell(v, q.unit, q.display) if q is not None else cell(v, self.unit(path) or "?")
+        return cell(v, q.unit, q.display, 4) if q is not None else cell(v, self.unit(path) or "?")
 
     def row(self, label: str, symbol: str, path: str, unit: str | None = None, value=None, note: str = "") -> None:
         """One headline row; the value is the block's at ``path`` unless given, its unit and display unit
@@ -526,7 +496,6 @@ def _name(model: str) -> str:
 #: the source's own models (its printed chain form, its hand model, the appendix program, the thesis as printed):
 #: reported in the validation part of a section, never as a verdict of the machine
 SOURCE_MODELS = ("nonlinear_chain", "consistent", "program", "thesis")
-HEADLINE_MODEL = "nonlinear"
 
 #: why a source's model is unstable where the energy-consistent model is not (docs/theory/dynamics.md)
 WHY_UNSTABLE = {
@@ -623,11 +592,11 @@ def stability_section(sec: Section) -> None:
     gives the verdict; the source's models are the validation part."""
     h = sec.get("headline")
     if h:
-        from autobal.analysis.stability import StabilityResult  # the verdict's one copy
+        from autobal.analysis.stability import QUANTITIES, StabilityResult  # the verdict's one copy
 
         sec.conclude(*StabilityResult(sec.block).verdict())
-        sec.row(f"decay rate −max Re λ ({_name(h['model'])})", "η", "headline.margin.decay_rate", "1/s")
-        sec.row(f"smallest damping ratio ({_name(h['model'])})", "ζ_min", "headline.margin.min_damping_ratio", "1")
+        for q, key, _ in QUANTITIES.headline(sec.block):
+            sec.row(q.description, q.symbol, key)
     own, source = [], []
     for model, m in _ordered(sec.get("models", {})):
         poles = m.get("poles", {})
@@ -1101,82 +1070,43 @@ def spinup_time_optimal_section(sec: Section) -> None:
 
 
 def design_section(sec: Section) -> None:
-    """Stability-constrained design: the optimum against the nominal design, its certificate and limits."""
-    sec.row("required decay rate", "α", "decay_rate")
-    sec.row("barrier leakage, nominal design", "Q_e", "nominal.leakage")
-    sec.row("barrier leakage, optimum", "Q_e", "optimum.leakage")
-    sec.row("objective, optimum over nominal", "J/J_nom", "optimum.objective")
+    """Stability-constrained design: the optimum's verdict with its margin to the required decay rate, its
+    certificate, the parameters in display units; the designs under the source's models in the validation part."""
+    from autobal.analysis import design_study as ds  # the verdicts, declarations and validation: one copy each
+
+    ok, words = ds.verdict(sec.block)
+    sec.conclude(ok, words)
+    sec.verdict(sec.get("status") in ds.SUCCESS, f"IPOPT: {sec.get('status')} ({sec.get('iterations')} iterations)")
+    for q, key, _ in ds.QUANTITIES.headline(sec.block):
+        sec.row(q.description, q.symbol, key)
     for which in ("nominal", "optimum"):  # keys are the discharge ratios ("0.5"), so read them whole
         for p, margin in (sec.get(f"{which}.margin") or {}).items():
-            if p.endswith("_status"):
-                continue
-            sec.row(f"decay-rate margin at ψ1 = {p}, {which}", "−max Re λ", "", "1/s", value=margin)
-    st = sec.get("status")
-    sec.verdict(st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"IPOPT: {st} ({sec.get('iterations')} "
-                                                                         "iterations)")
-    alpha = sec.get("decay_rate")
-    for which in ("optimum", "nominal"):
-        margins = [m for m in (sec.get(f"{which}.margin") or {}).values() if isinstance(m, int | float)]
-        if not margins or alpha is None:
-            continue
-        worst = min(margins)
-        met = worst >= alpha * (1 - 1e-6)
-        model = {"energy": HEADLINE_MODEL, "chain": "nonlinear_chain"}.get(sec.get("form"), HEADLINE_MODEL)
-        words = (f"{which} design, {_name(model)}: " + ("stable" if worst > 0 else "UNSTABLE")
-                 + f", decay rate ≥ {number(worst)} 1/s at every operating point, "
-                 + (f"{number(worst - alpha)} 1/s above the required {number(alpha)} 1/s" if met else
-                    f"the required {number(alpha)} 1/s is NOT met"))
-        if which == "optimum" and st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"):
-            sec.conclude(met, words)
-        else:
-            sec.verdict(met, words)
-    _design_validation(sec)
+            if not p.endswith("_status"):
+                sec.row(f"decay rate at ψ1 = {p}, {which} design", "−max Re λ", f"{which}.margin.{p}", value=margin)
+    sec.verdict(*ds.verdict(sec.block, "nominal"))
+    for model, text_ in ds.source_models(sec.block):
+        sec.validation.append({"ok": None, "text": text_ + (f"; the headline verdict stands: {WHY_UNSTABLE[model]}"
+                                                            if "UNSTABLE" in text_ and model in WHY_UNSTABLE else "")})
     cert = sec.get("certification") or {}
     if cert:
         sec.verdict(bool(cert.get("eigenvalues_ok")), "eigenvalues confirm every constraint at the optimum"
                     if cert.get("eigenvalues_ok") else "eigenvalues do NOT confirm the smooth stability conditions")
         sec.verdict(not cert.get("beaten"), f"random search: {cert.get('feasible_samples')} of {cert.get('samples')} "
-                    f"samples feasible, best {number(cert.get('best_sample'))} "
+                    f"samples feasible, best {significant(cert.get('best_sample'))} "
                     + ("(none better by more than 0.5 %)" if not cert.get("beaten") else "BEATS the optimum"))
     for a in sec.get("active", []):
-        sec.verdict(None, f"active constraint: {a.get('constraint')} (multiplier {number(a.get('multiplier'))})")
-    from autobal.analysis.design_study import shown  # display units and digits of the design variables
-
+        sec.verdict(None, f"active constraint: {a.get('constraint')} (multiplier {significant(a.get('multiplier'))})")
     nominal, optimum = sec.get("nominal.values_si") or {}, sec.get("optimum.values_si") or {}
-    given = sec.get("optimum.parameters") or {}
     rows = []
     for path, value in optimum.items():
-        unit, n = given.get(path, "").partition(" ")[2], nominal.get(path)
+        q, n = ds.variable(path), nominal.get(path)
         ratio = value / n if is_number(n) and n and is_number(value) else None
-        rows.append([text(path), text(shown(unit, n)), text(shown(unit, value)),
+        rows.append([text(path), text(q.symbol), text(q.text(n)), text(q.text(value)),
                      text("—" if ratio is None else f"× {significant(ratio, 3)}")])
     if rows:
         sec.tables.append(table("Design parameters to 4 significant digits (results.json optimum.parameters holds "
                                 "them in full: `autobal run SCENE --set PATH=VALUE` reproduces the optimum)",
-                                ["scene path", "nominal", "optimum", "optimum / nominal"], rows))
-
-
-def _design_validation(sec: Section) -> None:
-    """The designs under the source's models (chain form, program model): where they disagree with the
-    headline model's verdict, the validation part says so."""
-    for key in ("other_model", "program_model"):
-        block = sec.get(key) or {}
-        model = {"chain": "nonlinear_chain", "energy": HEADLINE_MODEL}.get(block.get("model"), block.get("model"))
-        if not model:
-            continue
-        values = {w: [v for v in (block.get(w) or {}).values() if isinstance(v, int | float)]
-                  for w in ("nominal", "optimum")}
-        if not values["optimum"]:
-            continue
-        lo, hi = min(values["optimum"]), max(values["optimum"])
-        nom = values["nominal"]
-        worse = bool(nom) and hi > max(nom)
-        words = (f"{_name(model)}: spectral abscissa max Re λ of the optimum {number(lo)} to {number(hi)} 1/s over "
-                 "the operating points" + (f" (nominal {number(min(nom))} to {number(max(nom))} 1/s)" if nom else ""))
-        if lo > 0:
-            words += (": UNSTABLE under this model, " + ("MORE unstable than the nominal design" if worse else
-                      "as the nominal design") + f"; the headline verdict stands: {WHY_UNSTABLE.get(model, '')}")
-        sec.validation.append({"ok": None, "text": words})
+                                ["scene path", "symbol", "nominal", "optimum", "optimum / nominal"], rows))
 
 
 def ross_spinup_section(sec: Section) -> None:

@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 
 from autobal import report
-from autobal.analysis.design_study import quantity, shown
+from autobal.analysis.design_study import quantity, variable
 
 
 @pytest.mark.cli
@@ -38,10 +38,15 @@ def test_null_note_groups_by_reason():
 
 
 def test_design_parameters_to_four_digits_in_engineering_units():
-    assert shown("m^3", 0.00020915546094574952) == "209.2 cm³"
-    assert shown("", 0.09999999863063493) == "0.1000"
-    assert shown("Pa", 43662724.52325561) == "43.66 MPa" and shown("m", 0.00012108193232249605) == "0.1211 mm"
-    assert shown("N/m", 44636137.84295489) == "4.464e7 N/m" and shown("m^2", 0.0153604935) == "15360 mm²"
+    def shown(path: str, value: float) -> str:
+        return variable(f"device.{path}").text(value)
+
+    assert shown("dynamics.disc_chamber_volume", 0.00020915546094574952) == "209.2 cm³"
+    assert shown("barrier.margin_ratio", 0.09999999863063493) == "0.1000"
+    assert shown("regulator.supply_pressure", 43662724.52325561) == "43.66 MPa"
+    assert shown("disc.outer_seal.clearance", 0.00012108193232249605) == "0.1211 mm"
+    assert shown("dynamics.regulator.spring_stiffness", 44636137.84295489) == "44.64 MN/m"
+    assert shown("regulator.membrane_area", 0.0153604935) == "153.6 cm²"
     assert quantity("V2", 0.00020915546094574952) == "0.0002091554609 m^3"  # full precision for --set, no m**3
 
 
