@@ -211,8 +211,8 @@ class Quantity:
     beside: str | None = None
 
     def __init__(self, key: str, unit: str, symbol: str = "", description: str = "", display: str = "",
-                 source: str = "", headline: bool = False, beside: str | None = None):
-        declared = display or DEFAULT_DISPLAY.get(unit, spelled(unit))
+                 source: str = "", headline: bool = False, beside: str | None = None, *, declared: str = ""):
+        declared = display or declared or DEFAULT_DISPLAY.get(unit, spelled(unit))  # declared: dataclasses.replace
         if not is_display_unit(declared, unit):
             raise ValueError(f"{key}: display unit '{declared}' is not a unit of '{unit}'")
         for name, value in (("key", key), ("unit", unit), ("symbol", symbol), ("description", description),

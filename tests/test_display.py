@@ -156,7 +156,7 @@ def test_a_scene_display_section_and_the_units_option_change_what_a_person_reads
         si = {"bar": "Pa", "m³/h": "m^3/s", "µm": "m"}[unit]
         assert summary_line(text, symbol).endswith(f" {significant(convert(ex[key], si, unit))} {unit}"), symbol
         cell, shown = headline_cell((out / "report.html").read_text(encoding="utf-8"), f"statics.exact.{key}")
-        assert shown == unit and float(cell) == pytest.approx(convert(ex[key], si, unit), rel=1e-4), key
+        assert shown == unit and float(cell) == pytest.approx(convert(ex[key], si, unit), rel=1e-3), key
     assert re.search(r"statics at p1 = [\d.]+ bar", text)
     with open(out / "statics_sweep.csv", newline="") as fh:
         rows = list(csv.DictReader(fh))
