@@ -177,7 +177,7 @@ def test_report_units_rewrites_the_tables_and_nothing_else(shipped_run, tmp_path
     page = (folder / "report.html").read_text(encoding="utf-8")
     p2 = results(folder)["statics"]["exact"]["p2"]
     cell, unit = headline_cell(page, "statics.exact.p2")
-    assert unit == "kPa" and float(cell) == pytest.approx(p2 / 1e3, rel=1e-4)
+    assert unit == "kPa" and float(cell) == pytest.approx(p2 / 1e3, rel=1e-3)
     assert (folder / "results.json").read_bytes() == before
     assert cli.main(["report", str(folder)]) == 0  # without the option: the declared units again
     assert headline_cell((folder / "report.html").read_text(encoding="utf-8"), "statics.exact.p2")[1] == "MPa"
