@@ -34,7 +34,7 @@ import casadi as ca
 import numpy as np
 
 from autobal.analysis import ipopt
-from autobal.analysis.quantities import Declarations, Quantity, significant
+from autobal.analysis.quantities import Declarations, Quantity, convert, significant
 from autobal.analysis.result import Result, new_figure, with_statuses
 from autobal.errors import SolveError
 from autobal.models.ross_rotor import ModalRotor
@@ -859,20 +859,28 @@ class ModalSpinupResult(Result):
                                                      label="critical speeds (reduced model)" if i == 0 else None)
 
     def draw(self, ax) -> None:
-        """Largest deflection over the nodes of interest against speed, optimum and ramps, in um."""
+        """Largest deflection over the nodes of interest against speed, optimum and ramps (the declared display unit,
+        µm; rpm on top)."""
+        from autobal.ocp.spinup_study import RPM, twin_axis
+
+        q = QUANTITIES.find("peak_deflection_m")
         for tr, c, ls, lw in self._runs():
             lab = "optimum" if tr is self.optimum else tr.label
-            ax.plot(tr.omega, tr.deflection.max(axis=0) * 1e6, color=c, ls=ls, lw=lw,
-                    label=f"{lab} (peak {tr.peak * 1e6:.2f} um)")
+            ax.plot(tr.omega, q.shown(tr.deflection.max(axis=0)), color=c, ls=ls, lw=lw,
+                    label=f"{lab} (peak {q.text(tr.peak)})")
         self._criticals(ax, True)
         ax.set_xlabel(r"speed $\omega$, rad/s")
-        ax.set_ylabel(r"deflection $\max_{nodes}\sqrt{x^2+y^2}$, $\mu$m")
+        twin_axis(ax, RPM, "speed, rpm", "x")
+        ax.set_ylabel(rf"deflection $\max_{{nodes}}\sqrt{{x^2+y^2}}$, {q.display} 0-peak")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
 
     def figures(self) -> dict:
-        """Speed and acceleration against time; deflection against time and speed; Campbell diagram."""
-        title = self.data["title"]
+        """Speed (rad/s, rpm) and acceleration (rad/s², rpm/s) against time; deflection (µm) against time and speed;
+        Campbell diagram (rad/s, rpm and Hz)."""
+        from autobal.ocp.spinup_study import RPM, twin_axis
+
+        title, q = self.data["title"], QUANTITIES.find("peak_deflection_m")
         fig, axes = new_figure((8, 6), 2, 1, sharex=True)
         for tr, c, ls, lw in self._runs():
             lab = "optimum" if tr is self.optimum else tr.label
@@ -881,7 +889,9 @@ class ModalSpinupResult(Result):
                          color=c, ls=ls, lw=lw)
         self._criticals(axes[0], False)
         axes[0].set_ylabel(r"speed $\omega$, rad/s")
-        axes[1].set_ylabel(r"acceleration $\alpha$, rad/s$^2$")
+        twin_axis(axes[0], RPM, "rpm")
+        axes[1].set_ylabel(r"acceleration $\alpha$, rad/s²")
+        twin_axis(axes[1], RPM, "rpm/s")
         axes[1].set_xlabel("time t, s")
         for ax in axes:
             ax.grid(alpha=0.3)
@@ -890,9 +900,9 @@ class ModalSpinupResult(Result):
 
         fig2, (a1, a2) = new_figure((8, 7), 2, 1)
         for tr, c, ls, lw in self._runs():
-            a1.plot(tr.t, tr.deflection.max(axis=0) * 1e6, color=c, ls=ls, lw=lw)
+            a1.plot(tr.t, q.shown(tr.deflection.max(axis=0)), color=c, ls=ls, lw=lw)
         a1.set_xlabel("time t, s")
-        a1.set_ylabel(r"deflection, $\mu$m")
+        a1.set_ylabel(f"deflection, {q.display} 0-peak")
         a1.grid(alpha=0.3)
         self.draw(a2)
         fig2.suptitle(title, fontsize=9)
@@ -908,7 +918,9 @@ class ModalSpinupResult(Result):
         if cs["ross_wd_rad_s"] is not None:
             ax.plot(cs["ross_wd_rad_s"], cs["ross_wd_rad_s"], "x", color="k", label="critical speeds (ROSS)")
         ax.set_xlabel(r"speed $\omega$, rad/s")
+        twin_axis(ax, RPM, "speed, rpm", "x")
         ax.set_ylabel("frequency, rad/s")
+        twin_axis(ax, convert(1.0, "rad/s", "Hz"), "frequency, Hz")
         ax.set_ylim(0, 1.2 * cb["omega"][-1])
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)

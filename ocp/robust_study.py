@@ -22,7 +22,7 @@ from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.search import controls_on_mesh, grid_search
 from autobal.ocp.simulation import Trajectory, best_within_limits, drive_use, resimulate
 from autobal.ocp.solve import optimize
-from autobal.ocp.spinup_study import deflection_text
+from autobal.ocp.spinup_study import RPM, deflection_axis, deflection_text, twin_axis
 from autobal.ocp.transcription import DirectCollocation
 
 QUANTILES = (0.5, 0.9, 0.99)
@@ -150,6 +150,7 @@ class RobustResult(Result):
             ax.step(v, np.arange(1, v.size + 1) / v.size, where="post", color=self.COLORS[k],
                     label=f"{lab} (worst {v[-1]:.3f} e)")
         ax.set_xlabel(r"peak deflection $\delta^*/e$")
+        deflection_axis(ax, self.data.get("eccentricity_m"), "x")
         ax.set_ylabel(f"fraction of the {self.validation['factors'].shape[0]} validation rotors")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
@@ -163,14 +164,18 @@ class RobustResult(Result):
             tr, tw = self.nominal_runs[k], self.worst_runs[k]
             lab = self.data["profiles"][k]["label"]
             a0.plot(tr.t, tr.omega, color=self.COLORS[k], label=lab)
-            a1.plot(tw.t, tw.delta, color=self.COLORS[k], label=f"{lab} (peak {tw.peak_delta:.3f} e)")
-        a0.axhline(self.data["omega_cr_rad_s"], color="k", ls=":", lw=0.8,
-                   label=rf"nominal critical speed {self.data['omega_cr_rad_s']:.4g} rad/s")
+            a1.plot(tw.t, tw.delta, color=self.COLORS[k],
+                    label=f"{lab} (peak {deflection_text(tw.peak_delta, self.data.get('eccentricity_m'))})")
+        wc = self.data["omega_cr_rad_s"]
+        a0.axhline(wc, color="k", ls=":", lw=0.8,
+                   label="nominal critical speed " + QUANTITIES.find("omega_cr_rad_s").text(wc))
         a0.set_ylabel(r"speed $\omega$, rad/s")
+        twin_axis(a0, RPM, "rpm")
         w = self.data["worst_design_rotor"]
         a1.set_title(f"on the robust profile's worst design rotor (critical speed x{w[0]:.3g}, damping x{w[1]:.3g}"
                      + (f", liquid x{w[2]:.3g}" if self.data["liquid"] else "") + ")", fontsize=8, loc="left")
         a1.set_ylabel(r"deflection $\delta/e$")
+        deflection_axis(a1, self.data.get("eccentricity_m"))
         a1.set_xlabel("time t, s")
         for ax in (a0, a1):
             ax.grid(alpha=0.3)
@@ -186,6 +191,7 @@ class RobustResult(Result):
                         label=self.data["profiles"][k]["label"])
         ax3.set_xlabel("critical-speed factor (1 = nominal)")
         ax3.set_ylabel(r"peak deflection $\delta^*/e$")
+        deflection_axis(ax3, self.data.get("eccentricity_m"))
         ax3.grid(alpha=0.3)
         ax3.legend(fontsize=7, markerscale=4)
         fig3.suptitle(title, fontsize=8)

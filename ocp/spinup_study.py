@@ -200,14 +200,6 @@ class SpinupResult(Result):
         return tr.label + (" (outside the drive limits)" if out and
                            self.data["baselines"][out]["within_drive_limits"] is False else "")
 
-    def _deflection_axis(self, ax) -> None:
-        """The physical deflection (0-peak, the declared display unit) on the right: delta = (delta/e) e."""
-        e = self.data.get("eccentricity_m")
-        if e:
-            q = QUANTITIES.find("peak_deflection_m")
-            ecc = QUANTITIES.find("eccentricity_m").text(e)
-            twin_axis(ax, q.shown(e), f"deflection δ, {q.display} 0-peak  (e = {ecc})")
-
     def draw(self, ax) -> None:
         """Deflection against time of the optimum and both ramps (delta/e; mm on the right)."""
         for tr, c, ls, lw in self._runs():
@@ -216,7 +208,7 @@ class SpinupResult(Result):
                     label=f"{lab} (peak {deflection_text(tr.peak_delta, self.data.get('eccentricity_m'))})")
         ax.set_xlabel("time t, s")
         ax.set_ylabel(r"deflection $\delta/e$")
-        self._deflection_axis(ax)
+        deflection_axis(ax, self.data.get("eccentricity_m"))
         ax.grid(alpha=0.3)
         ax.legend(fontsize=6.5, loc="upper left")
 
@@ -269,7 +261,7 @@ class SpinupResult(Result):
         a2.set_xlabel(r"speed $\omega$, rad/s")
         twin_axis(a2, RPM, "speed, rpm", "x")
         a2.set_ylabel(r"deflection $\delta/e$")
-        self._deflection_axis(a2)
+        deflection_axis(a2, self.data.get("eccentricity_m"))
         a2.grid(alpha=0.3)
         a2.legend(fontsize=7)
         fig2.suptitle(title, fontsize=9)
@@ -277,6 +269,14 @@ class SpinupResult(Result):
 
 
 RPM = convert(1.0, "rad/s", "rpm")  # rpm per rad/s (and rpm/s per rad/s²)
+
+
+def deflection_axis(ax, e: float | None, which: str = "y") -> None:
+    """The physical deflection delta = (delta/e) e (0-peak, the declared display unit) beside a delta/e axis, when
+    the eccentricity ``e`` (m) is known."""
+    if e:
+        q, ecc = QUANTITIES.find("peak_deflection_m"), QUANTITIES.find("eccentricity_m").text(e)
+        twin_axis(ax, q.shown(e), f"deflection δ, {q.display} 0-peak  (e = {ecc})", which)
 
 
 def twin_axis(ax, factor: float, label: str, which: str = "y") -> None:

@@ -17,7 +17,7 @@ from autobal.analysis.result import Result, new_figure, with_statuses
 from autobal.ocp import time_optimal as to
 from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.solve import TIE
-from autobal.ocp.spinup_study import deflection_text
+from autobal.ocp.spinup_study import RPM, deflection_axis, deflection_text, twin_axis
 from autobal.ocp.transcription import DirectCollocation
 
 
@@ -98,8 +98,8 @@ class TimeOptimalResult(Result):
             how = {"min_time": "by the min_time OCP", "peak_deflection": "by regula falsi on the minimum-peak "
                    "deadline"}.get(by, "the ramp")
             lines.append(f"  earliest arrival with the peak <= {significant(d['deflection_limit_over_e'])} e: "
-                         f"{d['arrival_time_s']:.4f} s {how} (the minimum-peak OCP exceeds the limit by "
-                         f"{d.get('arrival_time_lower_bound_s', float('nan')):.4f} s)")
+                         f"{d['arrival_time_s']:.4f} s {how} (the minimum-peak OCP with the deadline "
+                         f"{d.get('arrival_time_lower_bound_s', float('nan')):.4f} s exceeds the limit)")
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
@@ -127,6 +127,7 @@ class TimeOptimalResult(Result):
                     label=f"earliest arrival with the peak <= {d['deflection_limit_over_e']:.4g} e")
         ax.set_xlabel("arrival time at the final speed, s")
         ax.set_ylabel(r"peak deflection $\delta^*/e$ (re-simulated)")
+        deflection_axis(ax, self.data.get("eccentricity_m"))
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
 
@@ -140,9 +141,12 @@ class TimeOptimalResult(Result):
         cmap = [f"C{i % 10}" for i in range(len(self.front.points))]
         for p, c in zip(self.front.points, cmap, strict=True):
             a0.plot(p.trajectory.t, p.trajectory.omega, color=c, lw=0.9, label=f"arrival by {p.arrival_time_s:.3g} s")
-            a1.plot(p.trajectory.t, p.trajectory.delta, color=c, lw=0.9, label=f"peak {p.peak:.3f} e")
+            a1.plot(p.trajectory.t, p.trajectory.delta, color=c, lw=0.9,
+                    label=f"peak {deflection_text(p.peak, self.data['eccentricity_m'])}")
         a0.set_ylabel(r"speed $\omega$, rad/s")
+        twin_axis(a0, RPM, "rpm")
         a1.set_ylabel(r"deflection $\delta/e$")
+        deflection_axis(a1, self.data.get("eccentricity_m"))
         a1.set_xlabel("time t, s")
         for a in (a0, a1):
             a.grid(alpha=0.3)
