@@ -835,7 +835,8 @@ class ModalSpinupResult(Result):
         for k, v in self.baselines.items():
             cols |= {f"{k}_t_s": v.t, f"{k}_omega_rad_s": v.omega, f"{k}_deflection_m": v.deflection.max(axis=0)}
         n = min(len(c) for c in cols.values())
-        out = {"ross_spinup_optimum.csv": {"t_s": o.t, "omega_rad_s": o.omega} | {
+        out = {"ross_spinup_optimum.csv": {"t_s": o.t, "omega_rad_s": o.omega,
+                                           "omega_rpm": convert(o.omega, "rad/s", "rpm")} | {
                    f"deflection_node{nd}_m": o.deflection[i] for i, nd in enumerate(o.nodes)},
                "ross_spinup_controls.csv": {"t_start_s": o.t_u, "alpha_rad_s2": o.alpha},
                "ross_spinup_baselines.csv": {k: np.asarray(v)[:n] for k, v in cols.items()},

@@ -181,7 +181,9 @@ class SpinupResult(Result):
         cols = {"t_s": next(iter(self.baselines.values())).t}
         for k, v in self.baselines.items():
             cols |= {f"{k}_omega_rad_s": v.omega, f"{k}_deflection_over_e": v.delta, f"{k}_unbalance_d": v.d}
-        return {"spinup_optimum.csv": {"t_s": o.t, "omega_rad_s": o.omega, "deflection_over_e": o.delta,
+        e = self.data.get("eccentricity_m") or np.nan
+        return {"spinup_optimum.csv": {"t_s": o.t, "omega_rad_s": o.omega, "omega_rpm": o.omega * RPM,
+                                       "deflection_over_e": o.delta, "deflection_mm": o.delta * e * 1e3,
                                        "unbalance_d": o.d, "torque_N_m": o.torque},
                 "spinup_controls.csv": {"t_start_s": o.t_u, "alpha_rad_s2": o.alpha},
                 "spinup_baselines.csv": cols, "drive_profile.csv": drive_profile.drive_table(o)} | (

@@ -7,6 +7,7 @@ gain against the best ramp within the drive limits and whether it brakes."""
 from __future__ import annotations
 
 import copy
+import csv
 import json
 import math
 import re
@@ -113,6 +114,18 @@ def test_printed_values_are_the_si_values_converted(datasheet):
     assert d["peak_deflection_m"] == pytest.approx(d["peak_deflection_over_e"] * d["eccentricity_m"], rel=1e-12)
     assert d["rotor"]["amplification_factor"] == pytest.approx(1 / (2 * 0.02))  # API 684: 1/(2 zeta)
     assert d["rotor"]["separation_margin_pct"] == pytest.approx(100 * (4000 - 2400) / 2400)
+
+
+@pytest.mark.cli
+def test_spinup_optimum_csv_has_rpm_and_mm_beside_si(datasheet):
+    _, out, results = datasheet
+    d = results["spinup"]
+    with (out / "spinup_optimum.csv").open() as fh:
+        rows = [{k: float(v) for k, v in r.items()} for r in csv.DictReader(fh)]
+    for r in rows:
+        assert r["omega_rpm"] == pytest.approx(r["omega_rad_s"] * 30 / math.pi, rel=1e-12)
+        assert r["deflection_mm"] == pytest.approx(r["deflection_over_e"] * d["eccentricity_m"] * 1e3, rel=1e-12)
+    assert max(r["deflection_mm"] for r in rows) == pytest.approx(d["peak_deflection_m"] * 1e3, rel=1e-3)
 
 
 @pytest.mark.cli
