@@ -1216,7 +1216,8 @@ def ross_spinup_section(sec: Section) -> None:
     if rows:
         sec.tables.append(table("Critical speeds below the final speed, with the API 684 (2005) amplification factor "
                                 "1/(2ζ) and the separation margin of the final speed",
-                                ["#", "reduced model", "reduced model, rpm", "ROSS", "damping ratio", "AF", "SM"], rows))
+                                ["#", "reduced model", "reduced model, rpm", "ROSS", "damping ratio", "AF", "SM"],
+                                rows))
 
 
 SECTIONS = {"statics": statics_section, "frequency": frequency_section, "stability": stability_section,

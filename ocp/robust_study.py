@@ -210,8 +210,8 @@ def verdict(d: dict) -> tuple[bool | None, str]:
         return deflection_text(x, d.get("eccentricity_m"))
 
     ok = w["robust"] < min(w["nominal"], w["ramp"] if ramp_ok else math.inf)
-    return ok, (f"worst peak over {d.get('validation_samples', 'the')} validation rotors: robust {pk(w['robust'])}, nominal "
-                f"optimum {pk(w['nominal'])}, best ramp {pk(w['ramp'])}"
+    return ok, (f"worst peak over {d.get('validation_samples', 'the')} validation rotors: robust {pk(w['robust'])}, "
+                f"nominal optimum {pk(w['nominal'])}, best ramp {pk(w['ramp'])}"
                 + ("" if ramp_ok else " (outside the drive limits, not compared)"))
 
 

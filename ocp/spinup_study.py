@@ -12,9 +12,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from autobal.analysis.quantities import Declarations, Quantity, convert, significant
+from autobal.analysis.quantities import Declarations, Quantity, significant
 from autobal.analysis.result import Result, new_figure
 from autobal.ocp import drive_profile
+from autobal.ocp.drive_profile import RPM
 from autobal.ocp.problem import SpinupOcp, pulse_variation
 from autobal.ocp.simulation import (
     DRIVE_TOL,
@@ -139,8 +140,8 @@ class SpinupResult(Result):
         d = self.data
         ok, words = self.verdict()
         q = QUANTITIES.find
-        lines = [f"spin-up ({d['objective'].replace('_', ' ')}): {'ok' if ok else 'NOT OK' if ok is False else ''}"
-                 .rstrip() + f": {words}", *QUANTITIES.lines(d),
+        lines = [f"spin-up ({d['objective'].replace('_', ' ')}): {'ok' if ok else 'NOT OK'}: {words}",
+                 *QUANTITIES.lines(d),
                  f"  NLP ({d['method']}): {d['status']}, {d['ipopt_iterations']} iterations in the final solve "
                  f"({d['solve_time_s']:.2f} s); {len(d['starts'])} starts and mesh stages "
                  f"{d['total_solve_time_s']:.2f} s (" + ", ".join(f"{r['solve_time_s']:.2f}" for r in d["starts"]
@@ -268,9 +269,6 @@ class SpinupResult(Result):
         a2.legend(fontsize=7)
         fig2.suptitle(title, fontsize=9)
         return {"spinup_profiles.png": fig, "spinup_deflection.png": fig2}
-
-
-RPM = convert(1.0, "rad/s", "rpm")  # rpm per rad/s (and rpm/s per rad/s²)
 
 
 def deflection_axis(ax, e: float | None, which: str = "y") -> None:
