@@ -257,3 +257,20 @@ def test_spinup_report_rows_carry_rpm_per_second_beside_rad_per_second_squared()
     sec.row("acceleration", "α", "ramps.0.alpha_rad_s2")
     (row,) = sec.rows
     assert row[3]["text"] == "rad/s²" and row[4]["text"].startswith("381.97 rpm/s")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("extra", [{"analyses.spinup.objective": "peak_unbalance"},
+                                   {"analyses.spinup.objective": "integrated_deflection"},
+                                   {"analyses.spinup.objective": "min_time", "analyses.spinup.deflection_limit": 25}])
+def test_every_objective_declares_every_number(extra):
+    """The option variants add keys (collocation_peak_unbalance) or change what a key holds: still all declared."""
+    from autobal.analyses.spinup import ocp as spinup_ocp
+    from autobal.analysis.result import plain
+
+    scene = autobal.load(SCENE, set=SMALL | {"analyses.spinup.segments": 0} | extra)
+    s = scene.analyses.spinup
+    res = spinup_study.run(spinup_ocp(scene, s), spinup_study.method_of(s), multistart=False)
+    assert spinup_study.QUANTITIES.undeclared(plain(res.to_dict())) == []
+    assert res.summary().startswith(f"spin-up ({extra['analyses.spinup.objective'].replace('_', ' ')}): ok: peak "
+                                    "deflection ")
