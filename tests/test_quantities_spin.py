@@ -6,7 +6,6 @@ gain against the best ramp within the drive limits and whether it brakes."""
 
 from __future__ import annotations
 
-import copy
 import csv
 import json
 import math
@@ -253,7 +252,7 @@ def test_robust_time_optimal_and_ross_summaries_and_verdicts(shipped_run, name):
 
 
 def test_spinup_report_rows_carry_rpm_per_second_beside_rad_per_second_squared():
-    results = {"spinup_robust": copy.deepcopy({"ramps": [{"label": "ramp", "alpha_rad_s2": 40.0}]})}
+    results = {"spinup_robust": {"ramps": [{"label": "ramp", "alpha_rad_s2": 40.0}]}}
     sec = report.Section("spinup_robust", results["spinup_robust"], results)
     sec.row("acceleration", "α", "ramps.0.alpha_rad_s2")
     (row,) = sec.rows
