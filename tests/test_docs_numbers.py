@@ -1,0 +1,116 @@
+"""Numbers in docs/ that the toolkit computes come from runs (docs/numbers.py, docs/numbers.json, the
+``{{ n:... }}`` placeholders that docs/hooks.py replaces): every placeholder resolves, an unknown one stops
+the build, and (slow) a fresh run of each recorded scene gives the recorded values."""
+
+import importlib.util
+import json
+import math
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PAGES = sorted((ROOT / "docs").rglob("*.md"))
+
+
+def _module(name: str):
+    spec = importlib.util.spec_from_file_location(f"docs_{name}", ROOT / "docs" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+pytest.importorskip("mkdocs")
+hooks = _module("hooks")
+numbers = _module("numbers")
+RECORDED = json.loads(numbers.NUMBERS.read_text(encoding="utf-8"))
+
+
+def _page(path: Path) -> str:
+    """A page as the hook sees it: with its ``<!-- include: -->`` files in."""
+    return hooks.INCLUDE.sub(hooks._include, path.read_text(encoding="utf-8"))
+
+
+def test_every_placeholder_in_docs_resolves():
+    used = 0
+    for path in PAGES:
+        text = _page(path)
+        used += len(hooks.NUMBER.findall(text))
+        out = hooks.numbers_markdown(text)
+        assert not hooks.LEFT.search(out), path
+    assert used > 0
+
+
+def test_the_design_decay_rates_and_the_robust_worst_case_come_from_runs():
+    """The first numbers converted (issue 24): the design page's decay rates and the robust worst case."""
+    design = (ROOT / "docs" / "design.md").read_text(encoding="utf-8")
+    assert "{{ n:pump_pe600_design.decay_rate_1_s" in design
+    assert "{{ n:compressor_k180_design.decay_rate_1_s" in design
+    robust = _page(ROOT / "docs" / "theory" / "spinup_robust.md")
+    assert "{{ n:spinup_robust_jeffcott.robust.validation_worst_over_e" in robust
+
+
+@pytest.mark.parametrize("placeholder, message", [
+    ("{{ n:pump_pe600_design.no_such_value }}", "no value 'no_such_value' in pump_pe600_design"),
+    ("{{ n:no_such_run.x }}", "no_such_run: no run of that name"),
+    ("{{ n:pump_pe600_design.decay_rate_1_s.9 }}", "no value '9'"),
+    ("{{ n:pump_pe600_design:.2f }}", "is not a number"),
+    ("{{ n:pump_pe600_design.objective:.2q }}", "Unknown format code"),
+    ("{{ n:pump_pe600_design.objective:.2f", "not of the form"),
+    ("{{ run:no_such_run }}", "no_such_run: no run of that name"),
+])
+def test_an_unknown_placeholder_stops_the_build(placeholder, message):
+    with pytest.raises(hooks.UnknownNumber, match=re.escape(message)):
+        hooks.numbers_markdown(f"text {placeholder} text")
+
+    class Page:
+        class file:
+            src_path = "x.md"
+
+    with pytest.raises(ValueError, match=r"x\.md: .*" + re.escape(message)):
+        hooks.on_page_markdown(f"text {placeholder} text", Page, None, None)
+
+
+def test_a_placeholder_is_the_recorded_value_in_its_format():
+    runs = {"runs": {"s": {"command": "autobal run s", "commit": "0123456789abcdef", "date": "2026-11-26T09:00",
+                           "values": {"a": 337.46, "b": [1.0, -2.345], "c": {"d": 12}}}}}
+    text = "{{ n:s.a:.0f }} / {{n:s.b:.2f}} / {{ n:s.b.1:.1f }} / {{ n:s.c.d }} ({{ run:s }})"
+    assert hooks.numbers_markdown(text, runs) == (
+        "337 / 1.00, −2.35 / −2.3 / 12 (`autobal run s` at commit 0123456789 (2026-11-26))")
+
+
+def test_every_recorded_run_names_its_command_and_commit():
+    assert set(RECORDED["runs"]) == set(numbers.EXTRACT)
+    for scene, run in RECORDED["runs"].items():
+        assert run["command"] == f"autobal run {scene}"
+        assert re.fullmatch(r"[0-9a-f]{40}(\+dirty)?", run["commit"]), scene
+        assert run["values"]
+
+
+def _compare(recorded, fresh, rtol: float, where: str) -> list[str]:
+    if isinstance(recorded, dict):
+        return [m for k in recorded for m in _compare(recorded[k], fresh[k], rtol, f"{where}.{k}")]
+    if isinstance(recorded, list):
+        assert len(recorded) == len(fresh), where
+        return [m for i, (r, f) in enumerate(zip(recorded, fresh, strict=True))
+                for m in _compare(r, f, rtol, f"{where}.{i}")]
+    if math.isclose(recorded, fresh, rel_tol=rtol, abs_tol=0.0):
+        return []
+    return [f"{where}: recorded {recorded!r}, fresh run {fresh!r} (tolerance {rtol:g} relative)"]
+
+
+@pytest.mark.cli
+@pytest.mark.slow
+@pytest.mark.parametrize("scene", sorted(numbers.EXTRACT))
+def test_a_fresh_run_gives_the_recorded_numbers(shipped_run, scene):
+    """The scene's run (shared with the other slow tests of the session) against docs/numbers.json; a value
+    whose solver stops where its tolerance lets it has its own tolerance (numbers.TOLERANCE)."""
+    folder = shipped_run(scene)[1]
+    fresh = numbers.values(scene, json.loads((folder / "results.json").read_text(encoding="utf-8")))
+    recorded = RECORDED["runs"][scene]["values"]
+    assert set(fresh) == set(recorded), "regenerate: python docs/numbers.py " + scene
+    tolerance = numbers.TOLERANCE.get(scene, {})
+    bad = [m for key in recorded for m in _compare(recorded[key], fresh[key],
+                                                    tolerance.get(key, numbers.DEFAULT_TOLERANCE), key)]
+    assert not bad, f"{scene}: " + "; ".join(bad) + f" (regenerate: python docs/numbers.py {scene})"
