@@ -1,4 +1,4 @@
-"""Numbers in docs/ that the toolkit computes come from runs (docs/numbers.py, docs/numbers.json, the
+"""Numbers in docs/ that the toolkit computes come from runs (docs/run_numbers.py, docs/numbers.json, the
 ``{{ n:... }}`` placeholders that docs/hooks.py replaces): every placeholder resolves, an unknown one stops
 the build, and (slow) a fresh run of each recorded scene gives the recorded values."""
 
@@ -23,8 +23,8 @@ def _module(name: str):
 
 pytest.importorskip("mkdocs")
 hooks = _module("hooks")
-numbers = _module("numbers")
-RECORDED = json.loads(numbers.NUMBERS.read_text(encoding="utf-8"))
+runner = _module("run_numbers")
+RECORDED = json.loads(runner.NUMBERS.read_text(encoding="utf-8"))
 
 
 def _page(path: Path) -> str:
@@ -81,7 +81,7 @@ def test_a_placeholder_is_the_recorded_value_in_its_format():
 
 
 def test_every_recorded_run_names_its_command_and_commit():
-    assert set(RECORDED["runs"]) == set(numbers.EXTRACT)
+    assert set(RECORDED["runs"]) == set(runner.EXTRACT)
     for scene, run in RECORDED["runs"].items():
         assert run["command"] == f"autobal run {scene}"
         assert re.fullmatch(r"[0-9a-f]{40}(\+dirty)?", run["commit"]), scene
@@ -102,15 +102,15 @@ def _compare(recorded, fresh, rtol: float, where: str) -> list[str]:
 
 @pytest.mark.cli
 @pytest.mark.slow
-@pytest.mark.parametrize("scene", sorted(numbers.EXTRACT))
+@pytest.mark.parametrize("scene", sorted(runner.EXTRACT))
 def test_a_fresh_run_gives_the_recorded_numbers(shipped_run, scene):
     """The scene's run (shared with the other slow tests of the session) against docs/numbers.json; a value
-    whose solver stops where its tolerance lets it has its own tolerance (numbers.TOLERANCE)."""
+    whose solver stops where its tolerance lets it has its own tolerance (runner.TOLERANCE)."""
     folder = shipped_run(scene)[1]
-    fresh = numbers.values(scene, json.loads((folder / "results.json").read_text(encoding="utf-8")))
+    fresh = runner.values(scene, json.loads((folder / "results.json").read_text(encoding="utf-8")))
     recorded = RECORDED["runs"][scene]["values"]
-    assert set(fresh) == set(recorded), "regenerate: python docs/numbers.py " + scene
-    tolerance = numbers.TOLERANCE.get(scene, {})
+    assert set(fresh) == set(recorded), "regenerate: python docs/run_numbers.py " + scene
+    tolerance = runner.TOLERANCE.get(scene, {})
     bad = [m for key in recorded for m in _compare(recorded[key], fresh[key],
-                                                    tolerance.get(key, numbers.DEFAULT_TOLERANCE), key)]
-    assert not bad, f"{scene}: " + "; ".join(bad) + f" (regenerate: python docs/numbers.py {scene})"
+                                                    tolerance.get(key, runner.DEFAULT_TOLERANCE), key)]
+    assert not bad, f"{scene}: " + "; ".join(bad) + f" (regenerate: python docs/run_numbers.py {scene})"
