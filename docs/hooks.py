@@ -325,6 +325,7 @@ def number(key: str, fmt: str = "", numbers: dict | None = None) -> str:
         texts = [format(v, fmt) for v in values]
     except ValueError as exc:
         raise UnknownNumber(f"{{{{ n:{key}:{fmt} }}}}: {exc}") from None
+    texts = [re.sub(r"e([+-])0*(\d)", lambda m: "e" + m.group(1).strip("+") + m.group(2), t) for t in texts]  # e-9
     return ", ".join("−" + t[1:] if t.startswith("-") else t for t in texts)  # the pages' minus sign
 
 
