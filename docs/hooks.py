@@ -279,7 +279,7 @@ def quantities_markdown(analysis: str) -> str:
 
 
 # ----------------------------------------------------------------------------- numbers from runs
-NUMBER = re.compile(r"\{\{\s*n:([\w.\-]+?)(?::([^\s}]*))?\s*\}\}")
+NUMBER = re.compile(r"\{\{\s*n:([\w.\-]+?)(?:\*([\d.e+\-]+))?(?::([^\s}]*))?\s*\}\}")
 RUN = re.compile(r"\{\{\s*run:([\w\-]+)\s*\}\}")
 LEFT = re.compile(r"\{\{\s*(?:n|run):[^}]*\}?\}?")
 NUMBERS = ROOT / "docs" / "numbers.json"
@@ -309,8 +309,9 @@ def _source(name: str, numbers: dict | None = None) -> tuple[dict, str]:
     raise UnknownNumber(f"{name}: no run of that name in docs/numbers.json and no benchmarks/results/{name}.json")
 
 
-def number(key: str, fmt: str = "", numbers: dict | None = None) -> str:
-    """The text of ``{{ n:KEY:FMT }}``: the value at the dotted KEY, formatted by FMT."""
+def number(key: str, fmt: str = "", numbers: dict | None = None, factor: str | None = None) -> str:
+    """The text of ``{{ n:KEY*FACTOR:FMT }}``: the value at the dotted KEY, times FACTOR (optional: a unit
+    change, e.g. ``*1e3`` for s to ms), formatted by FMT."""
     name, _, path = key.partition(".")
     node, _ = _source(name, numbers)
     for part in path.split(".") if path else []:
@@ -322,7 +323,8 @@ def number(key: str, fmt: str = "", numbers: dict | None = None) -> str:
     if not values or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in values):
         raise UnknownNumber(f"{{{{ n:{key} }}}}: {node!r} is not a number or a list of numbers")
     try:
-        texts = [format(v, fmt) for v in values]
+        scale = float(factor) if factor else 1
+        texts = [format(v * scale if factor else v, fmt) for v in values]
     except ValueError as exc:
         raise UnknownNumber(f"{{{{ n:{key}:{fmt} }}}}: {exc}") from None
     texts = [re.sub(r"e([+-])0*(\d)", lambda m: "e" + m.group(1).strip("+") + m.group(2), t) for t in texts]  # e-9
@@ -331,7 +333,7 @@ def number(key: str, fmt: str = "", numbers: dict | None = None) -> str:
 
 def numbers_markdown(markdown: str, numbers: dict | None = None) -> str:
     """A page with every ``{{ n:... }}`` and ``{{ run:... }}`` replaced (UnknownNumber on an unknown one)."""
-    markdown = NUMBER.sub(lambda m: number(m.group(1), m.group(2) or "", numbers), markdown)
+    markdown = NUMBER.sub(lambda m: number(m.group(1), m.group(3) or "", numbers, m.group(2)), markdown)
     markdown = RUN.sub(lambda m: _source(m.group(1), numbers)[1], markdown)
     left = LEFT.search(markdown)
     if left:

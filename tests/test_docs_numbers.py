@@ -73,10 +73,13 @@ def test_an_unknown_placeholder_stops_the_build(placeholder, message):
 
 def test_a_placeholder_is_the_recorded_value_in_its_format():
     runs = {"runs": {"s": {"command": "autobal run s", "commit": "0123456789abcdef", "date": "2026-11-26T09:00",
-                           "values": {"a": 337.46, "b": [1.0, -2.345], "c": {"d": 12}}}}}
-    text = "{{ n:s.a:.0f }} / {{n:s.b:.2f}} / {{ n:s.b.1:.1f }} / {{ n:s.c.d }} ({{ run:s }})"
+                           "values": {"a": 337.46, "b": [1.0, -2.345], "c": {"d": 12}, "t": 1.558e-4,
+                                      "g": 8.56618e-9}}}}
+    text = ("{{ n:s.a:.0f }} / {{n:s.b:.2f}} / {{ n:s.b.1:.1f }} / {{ n:s.c.d }} / {{ n:s.t*1e3:.3f }} ms / "
+            "{{ n:s.g:.4e }} / {{ n:s.a*1e3:.3g }} ({{ run:s }})")
     assert hooks.numbers_markdown(text, runs) == (
-        "337 / 1.00, −2.35 / −2.3 / 12 (`autobal run s` at commit 0123456789 (2026-11-26))")
+        "337 / 1.00, −2.35 / −2.3 / 12 / 0.156 ms / 8.5662e-9 / 3.37e5 (`autobal run s` at commit 0123456789 "
+        "(2026-11-26))")
 
 
 def test_every_recorded_run_names_its_command_and_commit():
