@@ -119,6 +119,19 @@ def dynamics(results: dict) -> dict:
     return out
 
 
+def spinup(results: dict) -> dict:
+    """A Jeffcott spin-up (``analyses: spinup``): peaks delta/e, re-simulated unless named collocation."""
+    d = results["spinup"]
+    b = d["baselines"]
+    return {"peak_over_e": d["peak_deflection_over_e"], "collocation_peak_over_e": d["collocation_peak_over_e"],
+            "resimulation_difference_percent": 100 * d["resimulation_rel_error"],
+            "ipopt_iterations": d["ipopt_iterations"],
+            "constant_ramp_over_e": b["constant_ramp"]["peak_deflection_over_e"],
+            "max_acceleration_ramp_over_e": b["max_acceleration_ramp"]["peak_deflection_over_e"],
+            "below_best_ramp_percent": 100 * (1 - d["peak_deflection_over_e"] / min(
+                b["constant_ramp"]["peak_deflection_over_e"], b["max_acceleration_ramp"]["peak_deflection_over_e"]))}
+
+
 def robust(results: dict) -> dict:
     """The robust spin-up's numbers (``analyses: spinup_robust``), peaks delta/e, re-simulated."""
     d = results["spinup_robust"]
@@ -178,6 +191,8 @@ EXTRACT: dict[str, Callable[[dict], dict]] = {
     "compressor_k180_dynamics": dynamics,
     "pump_pe600_design": design,
     "compressor_k180_design": design,
+    "spinup_jeffcott_ramp_baselines": spinup,
+    "spinup_liquid_balancer": spinup,
     "spinup_robust_jeffcott": robust,
     "spinup_ross_rotor": ross,
 }
@@ -204,6 +219,9 @@ TOLERANCE: dict[str, dict[str, float | str]] = {
     # the min-max NLP has local optima close together (docs/theory/spinup_robust.md, "Fragility": 18.54 to
     # 18.70 e from different starts), so a run on another machine may end in a neighbouring one
     "spinup_robust_jeffcott": {"": 1e-2},
+    # re-simulated peaks (CVODES rtol 1e-10) of an IPOPT optimum (tol 1e-8) from a global search's starts
+    "spinup_jeffcott_ramp_baselines": {"": 1e-4, "ipopt_iterations": ITERATIONS},
+    "spinup_liquid_balancer": {"": 1e-4, "ipopt_iterations": ITERATIONS},
     # the AFC's peaks are refined by a bounded search
     "pump_pe600_dynamics": {"afc": 1e-5},
     "compressor_k180_dynamics": {"afc": 1e-5},
