@@ -119,6 +119,17 @@ def dynamics(results: dict) -> dict:
     return out
 
 
+def estimation(results: dict) -> dict:
+    """The fits of a rig (``analyses: estimation``): each fit's parameters (estimate, standard error, interval),
+    residual std and the correlation of its first and last parameter; the source's closed forms, the
+    adequacy test of the reference curve and the loss coefficient solved from the fitted alpha."""
+    e = results["estimation"]
+    fits = {k: {"parameters": _numbers(f["parameters"]), "residual_std": f["residual_std"],
+                "correlation": f["correlation"][0][-1]} for k, f in e["fits"].items()}
+    return {"fits": fits, "closed_forms": _numbers(e["closed_forms"]),
+            "adequacy": _numbers(e["adequacy_reference"]), "loss_coefficient": _numbers(e["loss_coefficient"])}
+
+
 def spinup(results: dict) -> dict:
     """A Jeffcott spin-up (``analyses: spinup``): peaks delta/e, re-simulated unless named collocation."""
     d = results["spinup"]
@@ -191,6 +202,7 @@ EXTRACT: dict[str, Callable[[dict], dict]] = {
     "compressor_k180_dynamics": dynamics,
     "pump_pe600_design": design,
     "compressor_k180_design": design,
+    "rig_table43_fit": estimation,
     "spinup_jeffcott_ramp_baselines": spinup,
     "spinup_liquid_balancer": spinup,
     "spinup_robust_jeffcott": robust,
