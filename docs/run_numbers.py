@@ -119,6 +119,16 @@ def dynamics(results: dict) -> dict:
     return out
 
 
+def reliability(results: dict) -> dict:
+    """The worked example of the traditional disc (``analyses: reliability``): the example's inputs as the
+    toolkit computes them, P(wear <= z_B), P(t) and the MTTF (h) of both readings of the load density."""
+    r = results["reliability"]
+    scalars = {k: v for k, v in r.items() if isinstance(v, int | float) and not isinstance(v, bool)}
+    out = scalars | {k: _numbers(r[k]) for k in ("wear_le_base_gap", "literal", "renormalised", "times_h")}
+    out["literal"]["P_first_over_last"] = r["literal"]["P"][0] / r["literal"]["P"][-1]  # P(2000 h) / P(4000 h)
+    return out
+
+
 def estimation(results: dict) -> dict:
     """The fits of a rig (``analyses: estimation``): each fit's parameters (estimate, standard error, interval),
     residual std and the correlation of its first and last parameter; the source's closed forms, the
@@ -203,6 +213,7 @@ EXTRACT: dict[str, Callable[[dict], dict]] = {
     "pump_pe600_design": design,
     "compressor_k180_design": design,
     "rig_table43_fit": estimation,
+    "hydroheel_wear": reliability,
     "spinup_jeffcott_ramp_baselines": spinup,
     "spinup_liquid_balancer": spinup,
     "spinup_robust_jeffcott": robust,
@@ -234,6 +245,9 @@ TOLERANCE: dict[str, dict[str, float | str]] = {
     # re-simulated peaks (CVODES rtol 1e-10) of an IPOPT optimum (tol 1e-8) from a global search's starts
     "spinup_jeffcott_ramp_baselines": {"": 1e-4, "ipopt_iterations": ITERATIONS},
     "spinup_liquid_balancer": {"": 1e-4, "ipopt_iterations": ITERATIONS},
+    # quadratures in tau (20 001 nodes) and in time: the MTTF to infinity moves by 1e-3 with the nodes (its
+    # accuracy estimate), the rest by 1e-8..2.5e-4
+    "hydroheel_wear": {"": 1e-6, "literal.mttf_infinite_h": 1e-3, "renormalised.mttf_infinite_h": 1e-3},
     # the AFC's peaks are refined by a bounded search
     "pump_pe600_dynamics": {"afc": 1e-5},
     "compressor_k180_dynamics": {"afc": 1e-5},
