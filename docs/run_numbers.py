@@ -119,6 +119,21 @@ def dynamics(results: dict) -> dict:
     return out
 
 
+def montecarlo(results: dict) -> dict:
+    """The Monte Carlo of the statics (``analyses: montecarlo``): at each discharge ratio the mean and cv of the
+    face gap u and the leak q_T (exact statics and the source's closed forms), the fraction of samples with the
+    regulator saturated, and the spread 3 sigma / mean in % at the reference ratio."""
+    m = results["montecarlo"]
+    i = m["psi1"].index(m["reference_psi1"])
+    out: dict = {"psi1": m["psi1"], "saturated_percent": [100 * f for f in m["saturated_fraction"]]}
+    for method in ("exact", "source"):
+        for q in ("u", "q_T"):
+            block = m[method][q]
+            out[f"{method}_{q}"] = {"mean": block["mean"], "cv": block["cv"],
+                                    "spread_percent_at_reference": 100 * m["band_sigma"] * block["cv"][i]}
+    return out
+
+
 def reliability(results: dict) -> dict:
     """The worked example of the traditional disc (``analyses: reliability``): the example's inputs as the
     toolkit computes them, P(wear <= z_B), P(t) and the MTTF (h) of both readings of the load density."""
@@ -214,6 +229,7 @@ EXTRACT: dict[str, Callable[[dict], dict]] = {
     "compressor_k180_design": design,
     "rig_table43_fit": estimation,
     "hydroheel_wear": reliability,
+    "pump_pe600_montecarlo": montecarlo,
     "spinup_jeffcott_ramp_baselines": spinup,
     "spinup_liquid_balancer": spinup,
     "spinup_robust_jeffcott": robust,
