@@ -139,6 +139,15 @@ def montecarlo(results: dict) -> dict:
     return out
 
 
+def liquid(results: dict) -> dict:
+    """The liquid auto-balancer against Tables 3.2 and 3.3 (``analyses: liquid_balancer``): the rows of both
+    tables as the toolkit computes them (a row's value left out where there is no equilibrium)."""
+    d = results["liquid_balancer"]
+    return {"table_3_2": [_numbers(r) for r in d["table_3_2"]["rows"]],
+            "table_3_3": [_numbers(r) for r in d["table_3_3"]["rows"]],
+            "operating_point": _numbers(d["operating_point"])}
+
+
 def reliability(results: dict) -> dict:
     """The worked example of the traditional disc (``analyses: reliability``): the example's inputs as the
     toolkit computes them, P(wear <= z_B), P(t) and the MTTF (h) of both readings of the load density."""
@@ -244,6 +253,7 @@ EXTRACT: dict[str, Callable[[dict], dict]] = {
     "compressor_k180_design": design,
     "rig_table43_fit": estimation,
     "hydroheel_wear": reliability,
+    "washer_liquid_balancer": liquid,
     "pump_pe600_montecarlo": montecarlo,
     "spinup_jeffcott_ramp_baselines": spinup,
     "spinup_liquid_balancer": spinup,
