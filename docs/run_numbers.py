@@ -227,7 +227,6 @@ def ross(results: dict) -> dict:
         "collocation_peak_um": um * d["collocation_peak_m"],
         "resimulation_difference_percent": 100 * d["resimulation_rel_error"],
         "improvement_over_best_ramp_percent": 100 * d["improvement_over_best_ramp"],
-        "ipopt_iterations": d["ipopt_iterations"],
         "coarse_starts": len(coarse),
         "coarse_best_um": um * best["resimulated_peak_m"],
         "coarse_best_collocation_um": um * best["collocation_peak_m"],
@@ -271,8 +270,12 @@ ITERATIONS = 0.5  # an IPOPT iteration count moves with the rounding of the mach
 # The design's stability constraints are inactive in both shipped scenes: the optimum is a manifold in the
 # variables that enter neither the objective nor an active constraint (the dynamic data), so IPOPT's stopping
 # point on it sets the decay rates above alpha, those variables and the source models' abscissae (docs/design.md,
-# "Convergence").  The leakage, the multipliers and the nominal design are sharp.
-MANIFOLD = 0.05
+# "Convergence").  That point is the same to round-off in runs on one machine, but nothing bounds how far it moves
+# with another machine's rounding or with a change of the code, so 1 % is a regression guard, not an accuracy: a
+# larger move (the pump's decay rates went from 323, 279, 197, 108 to 337, 308, 236, 151 1/s between two
+# versions) fails the test and asks for the scenes to be run again.  The leakage, the multipliers and the nominal
+# design are sharp.
+MANIFOLD = 0.01
 DESIGN_TOLERANCE = {"iterations": ITERATIONS, "decay_rate_1_s": MANIFOLD, "variables": MANIFOLD,
                     "other_model_abscissa_1_s.optimum": MANIFOLD, "program_model_abscissa_1_s.optimum": MANIFOLD,
                     "multipliers": 1e-3, "certification.feasible_local_samples": 0.5,
@@ -296,7 +299,8 @@ TOLERANCE: dict[str, dict[str, float | str]] = {
     # IPOPT optima of a multimodal problem from a global search (front), a min_time OCP (arrival)
     "spinup_time_optimal": {"": 1e-4},
     # re-simulated peaks (CVODES rtol 1e-9) of IPOPT optima (tol 1e-8) of a multimodal problem
-    "spinup_ross_rotor": {"": 1e-3, "ipopt_iterations": ITERATIONS, "coarse_best_iterations": ITERATIONS,
+    # (the refinement's iteration count is not recorded: two runs on this machine took 16 and 47)
+    "spinup_ross_rotor": {"": 1e-3, "coarse_best_iterations": ITERATIONS,
                           "critical_speeds_rad_s": 1e-6, "ross_critical_speeds_rad_s": 1e-6},
 }
 
