@@ -269,7 +269,7 @@ ORDER = "order"
 ITERATIONS = 0.5  # an IPOPT iteration count moves with the rounding of the machine, not with the answer
 # The design's stability constraints are inactive in both shipped scenes: the optimum is a manifold in the
 # variables that enter neither the objective nor an active constraint (the dynamic data), so IPOPT's stopping
-# point on it sets the decay rates above alpha, those variables and the source models' abscissae (docs/design.md,
+# point on it sets the decay rates above alpha, those variables and the source models' abscissae (docs/dev/design.md,
 # "Convergence").  That point is the same to round-off in runs on one machine, but nothing bounds how far it moves
 # with another machine's rounding or with a change of the code, so 1 % is a regression guard, not an accuracy: a
 # larger move (the pump's decay rates went from 323, 279, 197, 108 to 337, 308, 236, 151 1/s between two
@@ -284,7 +284,7 @@ DESIGN_TOLERANCE = {"iterations": ITERATIONS, "decay_rate_1_s": MANIFOLD, "varia
 TOLERANCE: dict[str, dict[str, float | str]] = {
     "pump_pe600_design": DESIGN_TOLERANCE,
     "compressor_k180_design": DESIGN_TOLERANCE,
-    # the min-max NLP has local optima close together (docs/theory/spinup_robust.md, "Fragility": 18.54 to
+    # the min-max NLP has local optima close together (docs/dev/spinup_robust.md, "Fragility": 18.54 to
     # 18.70 e from different starts), so a run on another machine may end in a neighbouring one
     "spinup_robust_jeffcott": {"": 1e-2},
     # re-simulated peaks (CVODES rtol 1e-10) of an IPOPT optimum (tol 1e-8) from a global search's starts
