@@ -50,27 +50,6 @@ def test_the_design_decay_rates_and_the_robust_worst_case_come_from_runs():
     assert "{{ n:spinup_robust_jeffcott.robust.validation_worst_over_e" in robust
 
 
-@pytest.mark.parametrize("placeholder, message", [
-    ("{{ n:pump_pe600_design.no_such_value }}", "no value 'no_such_value' in pump_pe600_design"),
-    ("{{ n:no_such_run.x }}", "no_such_run: no run of that name"),
-    ("{{ n:pump_pe600_design.decay_rate_1_s.9 }}", "no value '9'"),
-    ("{{ n:pump_pe600_design:.2f }}", "is not a number"),
-    ("{{ n:pump_pe600_design.objective:.2q }}", "Unknown format code"),
-    ("{{ n:pump_pe600_design.objective:.2f", "not of the form"),
-    ("{{ run:no_such_run }}", "no_such_run: no run of that name"),
-])
-def test_an_unknown_placeholder_stops_the_build(placeholder, message):
-    with pytest.raises(hooks.UnknownNumber, match=re.escape(message)):
-        hooks.numbers_markdown(f"text {placeholder} text")
-
-    class Page:
-        class file:
-            src_path = "x.md"
-
-    with pytest.raises(ValueError, match=r"x\.md: .*" + re.escape(message)):
-        hooks.on_page_markdown(f"text {placeholder} text", Page, None, None)
-
-
 def test_a_placeholder_is_the_recorded_value_in_its_format():
     runs = {"runs": {"s": {"command": "autobal run s", "commit": "0123456789abcdef", "date": "2026-11-26T09:00",
                            "values": {"a": 337.46, "b": [1.0, -2.345], "c": {"d": 12}, "t": 1.558e-4,
