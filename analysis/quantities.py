@@ -150,10 +150,14 @@ def convert(value: float, si: str, shown: str) -> float:
 
 
 def beside(si: str, shown: str) -> str | None:
-    """The unit shown beside a value of ``si`` displayed in ``shown``: rpm beside rad/s and Hz, rad/s beside rpm."""
-    if _base(si)[0] != "rad/s":
-        return None
-    return "rad/s" if shown == "rpm" else "rpm"
+    """The unit shown beside a value of ``si`` displayed in ``shown``: rpm beside rad/s and Hz, rad/s beside rpm;
+    rpm/s beside rad/s², rad/s² beside rpm/s."""
+    base = _base(si)[0]
+    if base == "rad/s":
+        return "rad/s" if shown == "rpm" else "rpm"
+    if base == "rad/s^2":
+        return "rad/s²" if shown == "rpm/s" else "rpm/s"
+    return None
 
 
 def significant(value, digits: int = 4) -> str:
