@@ -12,6 +12,8 @@
   results.json ``units``, the report and the terminal use too.
 * ``<!-- include: PATH -->`` is replaced by the text of PATH (relative to the repository root) with its
   headings moved one level down, so generated benchmark reports appear inside a page.
+* ``<!-- include-code: PATH -->`` is replaced by the text of PATH as a fenced code block titled with the
+  file's name (YAML, CSV, ...), so a guide shows the shipped example file itself.
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ def package_dirs() -> dict[str, str]:
     mapping = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-dir"]
     return {name.split(".")[1]: folder for name, folder in mapping.items() if name.count(".") == 1}
 INCLUDE = re.compile(r"<!--\s*include:\s*(\S+)\s*-->")
+INCLUDE_CODE = re.compile(r"<!--\s*include-code:\s*(\S+)\s*-->")
 QUANTITIES = re.compile(r"<!--\s*quantities:\s*(\w+)\s*-->")
 SCHEMA = "<!-- scenario-schema -->"
 
@@ -258,6 +261,13 @@ def _include(match: re.Match) -> str:
     return re.sub(r"^(#{1,5}) ", lambda m: "#" + m.group(1) + " ", text, flags=re.M)
 
 
+def _include_code(match: re.Match) -> str:
+    path = ROOT / match.group(1)
+    text = path.read_text(encoding="utf-8-sig").replace("\r\n", "\n").rstrip("\n")
+    lang = {".yaml": "yaml", ".yml": "yaml", ".csv": "text", ".py": "python"}.get(path.suffix, "text")
+    return f'```{lang} title="{path.name}"\n{text}\n```'
+
+
 def quantities_markdown(analysis: str) -> str:
     """The declared quantities of an analysis as a Markdown table."""
     from autobal import report
@@ -277,4 +287,5 @@ def on_page_markdown(markdown: str, page, config, files) -> str:  # noqa: ARG001
     if SCHEMA in markdown:
         markdown = markdown.replace(SCHEMA, schema_markdown())
     markdown = QUANTITIES.sub(lambda m: quantities_markdown(m.group(1)), markdown)
+    markdown = INCLUDE_CODE.sub(_include_code, markdown)
     return INCLUDE.sub(_include, markdown)
