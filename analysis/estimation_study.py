@@ -180,8 +180,9 @@ class EstimationResult(Result):
             free = f.get("free") or []
             corr = f.get("correlation") or []
             for i, j in itertools.combinations(range(min(len(free), len(corr))), 2):
-                lines.append(f"    correlation of {free[i]} and {free[j]}: {significant(corr[i][j])}"
-                             + (" (the data hardly separate them)" if abs(corr[i][j]) >= 0.9 else ""))
+                r = corr[i][j]  # null when the covariance is undefined (a singular Hessian)
+                lines.append(f"    correlation of {free[i]} and {free[j]}: {significant(r)}"
+                             + (" (the data hardly separate them)" if r is not None and abs(r) >= 0.9 else ""))
             cc = f.get("cross_check_scipy")
             if cc:
                 lines.append(f"    scipy least_squares: max |difference| {cc['max_abs_difference']:.1e}")

@@ -31,15 +31,17 @@ DISPLAY_UNITS = {
     "N·s/m": ("N*s/m", 1.0), "kN·s/m": ("N*s/m", 1e3),
     "m³/s": ("m^3/s", 1.0), "L/s": ("m^3/s", 1e-3), "L/min": ("m^3/s", 1e-3 / 60), "m³/h": ("m^3/s", 1 / 3600),
     "rad/s": ("rad/s", 1.0), "rpm": ("rad/s", 2 * math.pi / 60), "Hz": ("rad/s", 2 * math.pi),
+    "rpm/s": ("rad/s^2", 2 * math.pi / 60), "kW": ("W", 1e3),
     "s": ("s", 1.0), "ms": ("s", 1e-3),
     "kg": ("kg", 1.0), "g": ("kg", 1e-3), "kg·m": ("kg*m", 1.0), "g·cm": ("kg*m", 1e-5),
+    "g·mm": ("kg*m", 1e-6),
 }
 
 #: SI unit -> the display unit used when a declaration names none (the field's habits: MPa, mm, L/s, kN)
 DEFAULT_DISPLAY = {"m": "mm", "m^2": "mm²", "m^3": "L", "Pa": "MPa", "N": "kN", "m^3/s": "L/s"}
 
-#: SI unit -> the unit shown beside it: speeds in rpm beside rad/s
-BESIDE = {"rad/s": "rpm"}
+#: SI unit -> the unit shown beside it: speeds in rpm beside rad/s, accelerations in rpm/s beside rad/s²
+BESIDE = {"rad/s": "rpm", "rad/s^2": "rpm/s"}
 
 
 def spelled(unit: str) -> str:

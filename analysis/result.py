@@ -170,8 +170,8 @@ class Result:
 
     #: the analysis key of results.json (``"statics"``, ``"frequency"`` ...)
     name: str = ""
-    #: every number of :meth:`to_dict`, declared (:class:`~autobal.analysis.quantities.Declarations`); None:
-    #: not declared yet (the report's allow-list ``UNDECLARED`` names these analyses)
+    #: every number of :meth:`to_dict`, declared (:class:`~autobal.analysis.quantities.Declarations`); None: a
+    #: result without headline numbers (its summary stands in the notebook view)
     quantities = None
 
     def to_dict(self) -> dict:

@@ -63,64 +63,18 @@ DECLARED = {"statics": "autobal.analysis.statics_study", "frequency": "autobal.a
             "transient": "autobal.analysis.simulate", "reliability": "autobal.analysis.reliability",
             "liquid_balancer": "autobal.analysis.liquid_balancer", "estimation": "autobal.analysis.estimation_study",
             "montecarlo": "autobal.analysis.montecarlo", "rotor_dynamics": "autobal.analysis.rotor_study",
-            "stability": "autobal.analysis.stability", "design": "autobal.analysis.design_study"}
+            "stability": "autobal.analysis.stability", "design": "autobal.analysis.design_study",
+            "spinup": "autobal.ocp.spinup_study", "spinup_robust": "autobal.ocp.robust_study",
+            "spinup_time_optimal": "autobal.ocp.time_optimal_study", "ross_spinup": "autobal.ocp.modal"}
 
-#: analyses whose numbers are not declared yet: their units still come from the name rules below.  This
-#: allow-list only shrinks (tests/test_quantities.py fails on an analysis that is in neither).
-UNDECLARED = ("spinup", "spinup_robust", "spinup_time_optimal", "ross_spinup")
-
-_P = r"(^|\.)"  # start of a key
-# (regex on "analysis.dotted.path", SI unit), the first match wins: for the UNDECLARED analyses only
-_UNDECLARED_RULES: list[tuple[str, str]] = [
-    # bookkeeping and keys that carry their unit in the name
-    (r"(run_time_s|time_s|time_monte_carlo_s|cpu_s|build_s|solve_s|total_s|seconds)$", "s"),
-    (r"\.accuracy\.", "1"),
-    (r"_deg$", "deg"),
-    (r"_rad$", "rad"),
-    (r"_pct$", "%"),
-    (r"_mL$", "mL"),
-    (r"_mm$", "mm"),
-    (r"_Pa$", "Pa"),
-    (r"_MPa$", "MPa"),
-    (r"_N$", "N"),
-    (r"_kg$", "kg"),
-    (r"_m3_s$", "m^3/s"),
-    (r"_m3$", "m^3"),
-    (r"_kh$", "kh"),
-    (r"_h$", "h"),
-    (r"_rad_s2$", "rad/s^2"),
-    (r"_rad_s$", "rad/s"),
-    (r"_1_s$", "1/s"),
-    (r"_ms$", "ms"),
-    (r"_N_m$", "N*m"),
-    (r"_W$", "W"),
-    (r"_kg_m2$", "kg*m^2"),
-    (r"(time|cpu|seconds)\w*_s$|integral_deflection2_s$|(^|\.)t_s$", "s"),
-    (r"_um$", "um"),
-    (r"(^|\.)(cv|spread|std_ratio|stable_fraction|saturated_fraction|max_rel_diff|\w+_max_rel_diff)$", "1"),
-    (r"(iterations|points|samples|seed|chunk_size|dof|groups|valid|invalid|count|integrator_steps"
-     r"|zone_without_equilibrium|n_starts|intervals|degree|index|stages)$", "1"),
-    # dynamics (§2.4-2.7): frequencies rad/s, amplitudes micrometres, poles 1/s
-    (r"(^|\.)(omega|omega_ref|natural_frequency|imag|frequency)$", "rad/s"),
-    (r"(^|\.)(real|decay_rate|max_real|growth_rate)$", "1/s"),
-    (r"(^|\.)phase_deg$", "deg"),
-    # optimal spin-up: deflection over the eccentricity delta/e, unbalance d, psi, zeta0 dimensionless
-    (r"^spinup\..*" + _P + r"(start_speed|final_speed|max_speed|omega_at_peak)$", "rad/s"),
-    (r"^spinup\..*" + _P + r"max_acceleration$", "rad/s^2"),
-    (r"^spinup\.eccentricity_m$", "m"),
-    (r"^spinup\..*_N_per_m$", "N/m"),
-    (r"^spinup\..*_N_s_per_m$", "N*s/m"),
-    (r"^spinup\..*_m$", "m"),
-    (r"^spinup\.", "1"),
-    # robust and time-optimal spin-up: peaks delta/e, factors on the nominal rotor dimensionless
-    (r"^spinup_time_optimal\.horizon_s$", "s"),
-    (r"^spinup_(robust|time_optimal)\.", "1"),
-]
+#: analyses whose numbers are not declared: none (every analysis declares its numbers beside its Result class, and
+#: no unit is read off a key's name; tests/test_quantities.py fails on an analysis that is not declared)
+UNDECLARED: tuple[str, ...] = ()
 
 
 @functools.cache
 def declarations(analysis: str) -> Declarations | None:
-    """The declared quantities of an analysis, None for one of :data:`UNDECLARED`."""
+    """The declared quantities of an analysis, None for a key that is no analysis."""
     if analysis not in DECLARED:
         return None
     return importlib.import_module(DECLARED[analysis]).QUANTITIES
@@ -135,15 +89,10 @@ def quantity(path: str, results: dict | None = None) -> Quantity | None:
 
 
 def unit_of(path: str, results: dict | None = None) -> str | None:
-    """SI unit of a results.json key ``analysis.dotted.path`` ("1" when dimensionless), or None: its
-    declaration, or for an analysis of :data:`UNDECLARED` the first name rule that matches."""
-    analysis = path.partition(".")[0]
-    if analysis in DECLARED:
-        q = quantity(path, results)
-        return None if q is None else q.unit
-    if analysis in UNDECLARED:
-        return next((unit for pattern, unit in _RULES if pattern.search(path)), None)
-    return None
+    """SI unit of a results.json key ``analysis.dotted.path`` ("1" when dimensionless) from its declaration, or
+    None (an undeclared key: tests/test_quantities.py fails on one)."""
+    q = quantity(path, results)
+    return None if q is None else q.unit
 
 
 def units(results: dict, analyses: list[str] | None = None) -> dict[str, str]:
@@ -163,8 +112,6 @@ def _get(data, path: str, default=None):
     """``data`` at a dotted path (``a.b.c``; an integer picks a list item), or ``default``."""
     return lookup(data, path, default)
 
-
-_RULES = [(re.compile(p), u) for p, u in _UNDECLARED_RULES]
 
 # --------------------------------------------------------------------------------------------
 # numbers and cells
@@ -261,6 +208,8 @@ class Section:
         note = f"{note} {self.get(path + '_status') or ''}"
         if c["unit"] == "rad/s" and is_number(v):  # speeds in rpm and frequencies in Hz beside rad/s
             note = f"{number(convert(v, 'rad/s', 'rpm'))} rpm = {number(convert(v, 'rad/s', 'Hz'))} Hz " + note
+        elif c["unit"] == "rad/s²" and is_number(v):  # accelerations in rpm/s beside rad/s²
+            note = f"{number(convert(v, 'rad/s^2', 'rpm/s'))} rpm/s " + note
         self.rows.append([text(label), text(symbol), c, text(c["unit"]), text(note.strip())])
 
     def verdict(self, ok: bool | None, message: str) -> None:
@@ -892,29 +841,37 @@ def rotor_dynamics_section(sec: Section) -> None:
 
 
 def spinup_section(sec: Section) -> None:
-    """Optimal spin-up through the critical speed (direct collocation, CVODES re-simulation)."""
+    """Optimal spin-up through the critical speed (direct collocation, CVODES re-simulation): the verdict is the
+    optimum's peak deflection, its gain against the best ramp within the drive limits and whether it brakes."""
+    from autobal.ocp.spinup_study import verdict  # the verdict's one copy
+
+    sec.conclude(*verdict(sec.block))
     sec.verdict(None, f"objective: {str(sec.get('objective', '')).replace('_', ' ')}; {sec.get('method')}; "
                       f"wall time {number(sec.get('wall_time_s'))} s (NLP build {number(sec.get('build_time_s'))} s, "
                       f"NLP solves {number(sec.get('total_solve_time_s'))} s over {len(sec.get('starts', []))} solves, "
                       "the rest global search, re-simulations and baselines)")
-    sec.row("peak deflection of the optimum (re-simulated)", "δ*/e", "peak_deflection_over_e")
-    sec.row("peak deflection of the optimum, 0-peak (the whirl orbit's radius)", "δ*", "peak_deflection_m")
-    sec.row("eccentricity of the rotor", "e", "eccentricity_m")
+    sec.row("peak deflection of the optimum, 0-peak (the whirl orbit's radius; re-simulated)", "δ*",
+            "peak_deflection_m")
+    sec.row("peak deflection of the optimum over the eccentricity", "δ*/e", "peak_deflection_over_e")
     sec.row("peak deflection of the best ramp within the drive limits", "δ*/e", "baseline_ramp_peak_over_e")
+    sec.row("gain against the best ramp within the drive limits", "", "gain_vs_best_feasible_ramp_pct")
+    sec.row("gain against the constant ramp", "", "gain_vs_constant_ramp_pct")
+    sec.row("eccentricity of the rotor", "e", "eccentricity_m")
     for label, sym, key in (("rotor mass", "m1", "mass_kg"),
                             ("shaft stiffness (c = m1 Ω_c²)", "c", "stiffness_N_per_m"),
                             ("damping (χ = 2 ζ m1 Ω_c)", "χ", "damping_N_s_per_m"),
                             ("damping ratio", "ζ", "damping_ratio"),
+                            ("critical speed (with the liquid mass: Ω0 √ψ)", "ω_cr", "critical_speed_rad_s"),
                             ("amplification factor, API 684 (2005): N_c/(N_2 − N_1) = 1/(2ζ)", "AF",
                              "amplification_factor"),
                             ("separation margin of the final speed from the critical speed, API 684 (2005)", "SM",
                              "separation_margin_pct")):
         sec.row(label, sym, f"rotor.{key}")
     sec.row("time of the peak", "t*", "time_of_peak_s")
-    sec.row("speed at the peak", "Ω*", "omega_at_peak_rad_s")
+    sec.row("speed at the peak", "ω*", "omega_at_peak_rad_s")
     sec.row("final time", "T", "final_time_s")
-    sec.row("critical speed", "ω_cr", "omega_cr_rad_s")
     sec.row("largest drive torque", "M_max", "max_torque_N_m")
+    sec.row("smallest drive torque (below 0: the drive brakes)", "M_min", "min_torque_N_m")
     sec.row("largest drive power", "P_max", "max_power_W")
     sec.row("relative difference, CVODES re-simulation vs transcription", "", "resimulation_rel_error")
     sec.row("chattering of the optimal acceleration (pulse variation of α/α_max; 0: none)", "",
@@ -924,19 +881,24 @@ def spinup_section(sec: Section) -> None:
     sec.row("wall time of the analysis (search, solves, re-simulations)", "", "wall_time_s")
     st = sec.get("status")
     sec.verdict(st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"NLP solver: {st} ({sec.get('method')})")
-    best, ramp = sec.get("peak_deflection_over_e"), sec.get("baseline_ramp_peak_over_e")
     base = sec.get("baselines") or {}
-    if best is not None and ramp:
-        label = (base.get(sec.get("baseline_ramp_key")) or {}).get("label", "the best ramp")
-        sec.verdict(best <= ramp, f"optimum peak {number(best)} e vs {label} {number(ramp)} e "
-                                  f"({number(sec.get('gain_vs_best_feasible_ramp_pct'))} %), the best ramp within the "
-                                  "drive limits")
-    elif best is not None and "baseline_ramp_key" in sec.block:
-        sec.verdict(None, "no ramp baseline keeps the drive limits: no gain is quoted")
-    for b in base.values():
+    e = sec.get("eccentricity_m")
+    rows = []
+    for k, b in base.items():
+        pk = b.get("peak_deflection_over_e")
+        limits = {True: "within", False: "OUTSIDE: " + ", ".join(b.get("violated", [])), None: "no drive data"}
+        rows.append([text(b.get("label")), sec.cell(f"baselines.{k}.peak_deflection_over_e"),
+                     sec.cell("peak_deflection_m", None if pk is None or e is None else pk * e),
+                     sec.cell(f"baselines.{k}.max_torque_N_m"), sec.cell(f"baselines.{k}.max_power_W"),
+                     text(limits[b.get("within_drive_limits")]),
+                     text("reference of the gain" if k == sec.get("baseline_ramp_key") else "")])
         if b.get("within_drive_limits") is False:
             sec.verdict(None, f"{b.get('label')}: outside the drive limits ({', '.join(b.get('violated', []))}), "
-                              f"peak {number(b.get('peak_deflection_over_e'))} e, drawn but no reference")
+                              f"peak {number(pk)} e, drawn but no reference")
+    if rows:
+        sec.tables.append(table("Ramp baselines (re-simulated): a gain is quoted only against a ramp within the drive "
+                                "limits", ["baseline", "peak δ*/e", "peak δ*, 0-peak", "largest torque",
+                                           "largest power", "drive limits", ""], rows))
     if sec.get("brakes") is not None:
         sec.verdict(None, f"the optimum {'brakes' if sec.get('brakes') else 'does not brake'} (smallest drive "
                           f"torque {number(sec.get('min_torque_N_m'))} N·m; braking limit "
@@ -988,13 +950,15 @@ def _spinup_binding(sec: Section) -> list[str]:
             alpha = [float(r["alpha_rad_s2"]) for r in csv.DictReader(fh)]
         on = sum(abs(a) >= 0.999 * amax for a in alpha)
         if on:
-            out.append(f"acceleration limit |α| ≤ {number(amax)} rad/s² on {on} of {len(alpha)} control intervals "
+            from autobal.ocp.simulation import rate_text  # rad/s² with rpm/s beside, the one copy
+
+            out.append(f"acceleration limit |α| ≤ {rate_text(amax)} on {on} of {len(alpha)} control intervals "
                        f"({number(100 * on / len(alpha))} %)")
-    for key, limit, unit, what in (("max_torque_N_m", drive.get("max_torque"), "N·m", "drive torque limit"),
-                                   ("max_power_W", drive.get("max_power"), "W", "drive power limit")):
-        got = sec.get(key)
+    for key, limit, what in (("max_torque_N_m", drive.get("max_torque"), "drive torque limit"),
+                             ("max_power_W", drive.get("max_power"), "drive power limit")):
+        got, q = sec.get(key), quantity(f"spinup.{key}")
         if limit and got is not None and got >= 0.999 * limit:
-            out.append(f"{what} {number(limit)} {unit} reached (largest {number(got)} {unit})")
+            out.append(f"{what} {q.text(limit)} reached (largest {q.text(got)})")
     lim = ocp.get("deflection_limit")
     if lim and sec.get("peak_deflection_over_e") is not None and sec.get("peak_deflection_over_e") >= 0.999 * lim:
         out.append(f"deflection limit δ/e ≤ {number(lim)} reached")
@@ -1005,7 +969,18 @@ def _spinup_binding(sec: Section) -> list[str]:
 
 def spinup_robust_section(sec: Section) -> None:
     """Robust spin-up: the robust profile, the nominal optimum and the best ramp on the design set and on the
-    validation sample."""
+    validation sample; the verdict is the robust profile's worst validation peak against the others'."""
+    from autobal.ocp.robust_study import verdict  # the verdict's one copy
+    from autobal.ocp.spinup_study import QUANTITIES as SPINUP
+
+    prof = sec.get("profiles") or {}
+    if prof:
+        sec.conclude(*verdict(sec.block))
+    for key, label in (("robust", "robust profile"), ("nominal", "nominal optimum"), ("ramp", "best ramp")):
+        sec.row(f"{label}: worst peak over the validation rotors", "δ*/e", f"profiles.{key}.validation_worst_over_e")
+    sec.row("robust profile: worst peak over the design rotors (CVODES)", "δ*/e", "profiles.robust.design_worst_over_e")
+    sec.row("nominal critical speed", "ω_cr", "omega_cr_rad_s")
+    sec.row("eccentricity (δ* = e δ*/e, 0-peak)", "e", "eccentricity_m")
     sec.row("design rotors (grid)", "", "design_scenarios")
     sec.row("design rotors in the final NLP (binding)", "", "active_scenarios")
     sec.row("validation rotors", "", "validation_samples")
@@ -1013,29 +988,28 @@ def spinup_robust_section(sec: Section) -> None:
     sec.row("solve time (robust NLPs)", "", "solve_time_s")
     sec.row("validation time", "", "validation_time_s")
     sec.row("validation integrator against CVODES (largest relative difference)", "", "validation_check_rel_error")
-    prof = sec.get("profiles") or {}
+    e = sec.get("eccentricity_m")
+    physical = SPINUP.find("peak_deflection_m")
     rows = []
     for key in ("robust", "nominal", "ramp"):
         p = prof.get(key) or {}
         q = p.get("validation_quantiles_over_e") or {}
+        worst = p.get("validation_worst_over_e")
         rows.append([text(p.get("label")), cell(p.get("nominal_peak_over_e"), "1"),
                      cell(p.get("design_worst_over_e"), "1"), cell(q.get("0.5"), "1"), cell(q.get("0.99"), "1"),
-                     cell(p.get("validation_worst_over_e"), "1")])
+                     cell(worst, "1"), cell(None if e is None or worst is None else worst * e, "m", physical.display)])
     if prof:
         sec.tables.append(table("Peak deflection δ*/e of each profile: on the nominal rotor, worst over the design "
-                                "set (CVODES), and over the validation sample", ["profile", "nominal rotor",
-                                                                                  "design worst", "validation median",
-                                                                                  "validation 99 %",
-                                                                                  "validation worst"], rows,
-                                headline=True))
-        w = {k: (prof.get(k) or {}).get("validation_worst_over_e") for k in ("robust", "nominal", "ramp")}
-        # a ramp outside the drive limits is shown, never a reference of the verdict
-        ramp_ok = (prof.get("ramp") or {}).get("within_drive_limits") is not False
-        if None not in w.values():
-            sec.verdict(w["robust"] < min(w["nominal"], w["ramp"] if ramp_ok else math.inf),
-                        f"validation worst case: robust {number(w['robust'])} e, nominal optimum "
-                        f"{number(w['nominal'])} e, best ramp {number(w['ramp'])} e"
-                        + ("" if ramp_ok else " (outside the drive limits, not compared)"))
+                                "set (CVODES), and over the validation sample; the worst as a deflection δ* (0-peak)",
+                                ["profile", "nominal rotor", "design worst", "validation median", "validation 99 %",
+                                 "validation worst", "validation worst δ*"], rows, headline=True))
+    rows = [[text(r.get("label")), sec.cell(f"ramps.{i}.alpha_rad_s2"), cell(r.get("design_worst_over_e"), "1"),
+             cell(r.get("validation_worst_over_e"), "1"),
+             text({True: "within", False: f"OUTSIDE: {r.get('violated')}", None: "no drive data"}
+                  [r.get("within_drive_limits")])] for i, r in enumerate(sec.get("ramps") or [])]
+    if rows:
+        sec.tables.append(table("Constant ramps: worst peak δ*/e over the design set and the validation sample",
+                                ["ramp", "acceleration", "design worst", "validation worst", "drive limits"], rows))
     rows = [[text(r.get("start")), cell(r.get("intervals"), "1"), cell(r.get("scenarios"), "1"), text(r.get("status")),
              cell(r.get("iterations"), "1"), cell(r.get("build_time_s"), "s"), cell(r.get("solve_time_s"), "s"),
              cell(r.get("worst_design_peak_over_e"), "1")] for r in sec.get("rounds", [])]
@@ -1046,27 +1020,37 @@ def spinup_robust_section(sec: Section) -> None:
 
 
 def spinup_time_optimal_section(sec: Section) -> None:
-    """Time-optimal spin-up: the earliest arrival under the peak limit and the front."""
+    """Time-optimal spin-up: the earliest arrival under the peak limit (the verdict) and the front."""
+    from autobal.ocp.time_optimal_study import verdict  # the verdict's one copy
+
+    sec.conclude(*verdict(sec.block))
+    sec.row("final speed", "ω_f", "final_speed_rad_s")
     sec.row("peak limit", "δ/e", "deflection_limit_over_e")
     sec.row("earliest arrival at the final speed", "T", "arrival_time_s")
     sec.row("latest front deadline whose minimum peak exceeds the limit", "", "arrival_time_lower_bound_s")
     sec.row("peak deflection of the earliest arrival (re-simulated)", "δ*/e", "peak_deflection_over_e")
     sec.row("arrival of the maximum-acceleration ramp", "", "ramp_arrival_time_s")
     sec.row("peak of the maximum-acceleration ramp", "δ*/e", "ramp_peak_over_e")
+    sec.row("eccentricity (δ* = e δ*/e, 0-peak)", "e", "eccentricity_m")
     sec.row("largest relative difference, collocation vs CVODES re-simulation", "", "resimulation_rel_error")
     sec.row("build time", "", "build_time_s")
     sec.row("solve time", "", "solve_time_s")
-    sec.verdict(sec.get("monotone"), "the front's peak does not rise with the arrival deadline" if sec.get("monotone")
-                else "the front is NOT monotone (a local optimum)")
+    if sec.get("deflection_limit_over_e") is not None:  # else the front's monotonicity is the verdict
+        sec.verdict(sec.get("monotone"), "the front's peak does not rise with the arrival deadline"
+                    if sec.get("monotone") else "the front is NOT monotone (a local optimum)")
+    from autobal.ocp.spinup_study import QUANTITIES as SPINUP
+
+    e, physical = sec.get("eccentricity_m"), SPINUP.find("peak_deflection_m")
     rows = [[cell(p.get("arrival_time_s"), "s"), cell(p.get("resimulated_peak_over_e"), "1"),
+             cell(None if e is None else p.get("resimulated_peak_over_e") * e, "m", physical.display),
              cell(p.get("collocation_peak_over_e"), "1"), cell(p.get("resimulation_rel_error"), "1"),
              cell(p.get("intervals"), "1"), cell(p.get("solve_time_s"), "s"),
              text(f"held from {number(p['held_from_s'])} s" if p.get("held_from_s") else "")]
             for p in sec.get("front", [])]
     if rows:
         sec.tables.append(table("Front: the smallest peak for each arrival deadline",
-                                ["arrival by", "δ*/e (re-simulated)", "δ*/e (collocation)", "difference",
-                                 "intervals", "solve time", "profile"], rows, headline=True))
+                                ["arrival by", "δ*/e (re-simulated)", "δ* (0-peak)", "δ*/e (collocation)",
+                                 "difference", "intervals", "solve time", "profile"], rows, headline=True))
 
 
 def design_section(sec: Section) -> None:
@@ -1110,36 +1094,47 @@ def design_section(sec: Section) -> None:
 
 
 def ross_spinup_section(sec: Section) -> None:
-    """Optimal spin-up of a ROSS rotor reduced to its modes: the reduction checked against ROSS, optimum vs ramps."""
-    sec.row("peak deflection of the optimum (re-simulated)", "r*", "peak_deflection_m", "m")
-    sec.row("peak deflection of the best ramp", "r*", "baseline_ramp_peak_m", "m")
-    sec.row("improvement over the best ramp", "", "improvement_over_best_ramp", "1")
-    sec.row("node of the peak", "", "node_of_peak", "1")
-    sec.row("time of the peak", "t*", "time_of_peak_s", "s")
-    sec.row("modes kept", "", "modes", "1")
-    sec.row("mode cutoff", "ω_c", "mode_cutoff_rad_s", "rad/s")
-    sec.row("shift of a critical speed by the gyroscopic terms", "", "gyroscopic_shift", "1")
-    sec.row("largest critical-speed difference vs ROSS", "", "critical_speeds.max_rel_error_vs_ross", "1")
-    sec.row("relative difference, CVODES re-simulation vs collocation", "", "resimulation_rel_error", "1")
-    sec.row("build time", "", "build_time_s", "s")
-    sec.row("solve time (all starts)", "", "total_solve_time_s", "s")
+    """Optimal spin-up of a ROSS rotor reduced to its modes: the optimum's peak against the best ramp (the verdict),
+    the reduction checked against ROSS, API 684 (2005) values of each critical speed."""
+    from autobal.ocp.modal import ModalSpinupResult  # the verdict's one copy
+
     st = sec.get("status")
+    sec.conclude(*ModalSpinupResult.verdict_of(sec.block))
+    sec.row("peak deflection of the optimum, 0-peak (re-simulated)", "r*", "peak_deflection_m")
+    sec.row("peak deflection of the best ramp", "r*", "baseline_ramp_peak_m")
+    sec.row("improvement over the best ramp", "", "improvement_over_best_ramp")
+    sec.row("node of the peak", "", "node_of_peak")
+    sec.row("time of the peak", "t*", "time_of_peak_s")
+    sec.row("speed at the peak", "ω*", "omega_at_peak_rad_s")
+    sec.row("final (service) speed", "ω_f", "final_speed_rad_s")
+    sec.row("modes kept", "", "modes")
+    sec.row("mode cutoff", "ω_c", "mode_cutoff_rad_s")
+    sec.row("shift of a critical speed by the gyroscopic terms", "", "gyroscopic_shift")
+    sec.row("largest critical-speed difference vs ROSS", "", "critical_speeds.max_rel_error_vs_ross")
+    sec.row("relative difference, CVODES re-simulation vs collocation", "", "resimulation_rel_error")
+    sec.row("build time", "", "build_time_s")
+    sec.row("solve time (all starts)", "", "total_solve_time_s")
     sec.verdict(st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"IPOPT: {st} ({sec.get('method')})")
     err = sec.get("critical_speeds.max_rel_error_vs_ross")
     if err is not None:
         sec.verdict(err <= 0.01, f"critical speeds of the reduced model within {number(100 * err)} % of ROSS's")
-    best, ramp = sec.get("peak_deflection_m"), sec.get("baseline_ramp_peak_m")
-    if best is not None and ramp:
-        sec.verdict(best <= ramp * (1 + 1e-4), f"optimum peak {number(best * 1e6)} µm vs the best ramp "
-                                               f"{number(ramp * 1e6)} µm")
     cs = sec.get("critical_speeds") or {}
     ross = cs.get("ross_wd_rad_s") or []
-    rows = [[text(str(i + 1)), cell(w, "rad/s"), cell(ross[i] if i < len(ross) else None, "rad/s"),
-             cell((cs.get("reduced_damping_ratio") or [None] * (i + 1))[i], "1")]
-            for i, w in enumerate(cs.get("reduced_wd_rad_s") or [])]
+    rows = []
+    for i, w in enumerate(cs.get("reduced_wd_rad_s") or []):
+        at = f"critical_speeds.{{}}.{i}"
+        rows.append([text(str(i + 1)), cell(w, "rad/s"), cell(convert(w, "rad/s", "rpm"), "rpm"),
+                     cell(ross[i] if i < len(ross) else None, "rad/s"),
+                     sec.cell(at.format("reduced_damping_ratio")),
+                     sec.cell(at.format("amplification_factor")) if _has(sec.block, at.format("amplification_factor"))
+                     else text(None),
+                     sec.cell(at.format("separation_margin_pct")) if _has(sec.block, at.format("separation_margin_pct"))
+                     else text(None)])
     if rows:
-        sec.tables.append(table("Critical speeds below the final speed", ["#", "reduced model", "ROSS",
-                                                                          "damping ratio"], rows))
+        sec.tables.append(table("Critical speeds below the final speed, with the API 684 (2005) amplification factor "
+                                "1/(2ζ) and the separation margin of the final speed",
+                                ["#", "reduced model", "reduced model, rpm", "ROSS", "damping ratio", "AF", "SM"],
+                                rows))
 
 
 SECTIONS = {"statics": statics_section, "frequency": frequency_section, "stability": stability_section,

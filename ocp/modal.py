@@ -34,6 +34,7 @@ import casadi as ca
 import numpy as np
 
 from autobal.analysis import ipopt
+from autobal.analysis.quantities import Declarations, Quantity, convert, significant
 from autobal.analysis.result import Result, new_figure, with_statuses
 from autobal.errors import SolveError
 from autobal.models.ross_rotor import ModalRotor
@@ -762,28 +763,70 @@ class ModalSpinupResult(Result):
         """Largest relative difference between the reduced model's critical speeds and ROSS's (None unchecked)."""
         return self.data["critical_speeds"]["max_rel_error_vs_ross"]
 
+    @property
+    def final_speed(self) -> float:
+        """The final (service) speed, rad/s: where the optimum ends."""
+        return float(self.optimum.omega[-1])
+
+    def api684(self) -> dict:
+        """API 684 (2005) per critical speed of the reduced model below the final speed: the amplification factor
+        AF = 1/(2 zeta) (half-power points of a linear mode) and the separation margin of the final (service) speed
+        SM = |N_service - N_c|/N_c, %."""
+        cs, final = self.data["critical_speeds"], self.final_speed
+        return {"amplification_factor": [1 / (2 * z) if z > 0 else None for z in cs["reduced_damping_ratio"]],
+                "separation_margin_pct": [100 * abs(final - w) / w for w in cs["reduced_wd_rad_s"]]}
+
     def to_dict(self) -> dict:
-        return with_statuses(self.data, {
+        data = self.data | {"final_speed_rad_s": self.final_speed,
+                            "critical_speeds": self.data["critical_speeds"] | self.api684()}
+        return with_statuses(data, {
             "ross_wd_rad_s": "not compared with ROSS (validate_with_ross: false)",
             "ross_damping_ratio": "not compared with ROSS (validate_with_ross: false)",
             "max_rel_error_vs_ross": "not compared with ROSS (validate_with_ross: false)",
+            "amplification_factor": "an undamped mode has no amplification factor",
             "lowest_dropped_natural_frequency_rad_s": "no mode was left out: all lateral modes are below the cutoff"})
 
+    def verdict(self) -> tuple[bool | None, str]:
+        return self.verdict_of(self.data)
+
+    @staticmethod
+    def verdict_of(d: dict) -> tuple[bool | None, str]:
+        """The optimum's peak deflection (0-peak) against the best ramp, from the results.json block; the NLP status
+        first when it failed."""
+        q = QUANTITIES.find
+        words = (f"peak deflection {q('peak_deflection_m').text(d['peak_deflection_m'])} 0-peak at node "
+                 f"{d['node_of_peak']}, {-100 * d['improvement_over_best_ramp']:+.1f} % against the best ramp "
+                 f"({q('baseline_ramp_peak_m').text(d['baseline_ramp_peak_m'])})")
+        ok = d["improvement_over_best_ramp"] >= -1e-4
+        if d["status"] not in ("Solve_Succeeded", "Solved_To_Acceptable_Level"):
+            ok, words = False, f"NLP solver {d['status']}: " + words
+        return ok, words
+
     def summary(self) -> str:
-        d, cs = self.data, self.data["critical_speeds"]
-        ross = cs["ross_wd_rad_s"]
-        lines = [f"multi-mode spin-up ({d['modes']} modes up to {d['mode_cutoff_rad_s']:.4g} rad/s, gyroscopic "
-                 f"terms {'kept' if d['gyroscopic'] else 'dropped'}: they move a critical speed by "
+        d, cs, q = self.data, self.data["critical_speeds"], QUANTITIES.find
+        ok, words = self.verdict()
+        ross, api = cs["ross_wd_rad_s"], self.api684()
+        speed = q("critical_speeds.reduced_wd_rad_s")
+        lines = [f"multi-mode spin-up: {'ok' if ok else 'NOT OK'}: {words}", *QUANTITIES.lines(self.to_dict()),
+                 f"  {d['modes']} modes up to {q('mode_cutoff_rad_s').text(d['mode_cutoff_rad_s'])}, gyroscopic terms "
+                 f"{'kept' if d['gyroscopic'] else 'dropped'} (they move a critical speed by "
                  f"{100 * d['gyroscopic_shift']:.3g} %)",
-                 "  critical speeds (reduced): " + ", ".join(f"{w:.2f}" for w in cs["reduced_wd_rad_s"]) + " rad/s"
-                 + ("" if ross is None else "; ROSS: " + ", ".join(f"{w:.2f}" for w in ross)
-                    + f" rad/s (largest difference {100 * cs['max_rel_error_vs_ross']:.3f} %)"),
-                 f"  optimum: peak {d['peak_deflection_m'] * 1e6:.3f} um at node {d['node_of_peak']} "
-                 f"(collocation {d['collocation_peak_m'] * 1e6:.3f} um, difference {d['resimulation_rel_error']:.2e}),"
-                 f" {d['status']}, {d['ipopt_iterations']} IPOPT iterations, {d['solve_time_s']:.2f} s "
-                 f"(build {d['build_time_s']:.2f} s, search for starts {d['search_time_s']:.2f} s)"]
+                 "  critical speeds below the final speed (reduced model; API 684 (2005) amplification factor, "
+                 "separation margin of the final speed):"]
+        for i, w in enumerate(cs["reduced_wd_rad_s"]):
+            lines.append(f"    {speed.text(w)}: AF {significant(api['amplification_factor'][i])}, SM "
+                         f"{significant(api['separation_margin_pct'][i])} %"
+                         + ("" if ross is None or i >= len(ross) else f"; ROSS {speed.text(ross[i])}"))
+        if ross is not None:
+            lines.append(f"  largest difference of the reduced model's critical speeds from ROSS's: "
+                         f"{100 * cs['max_rel_error_vs_ross']:.3f} %")
+        lines.append(f"  NLP: {d['status']}, {d['ipopt_iterations']} IPOPT iterations, {d['solve_time_s']:.2f} s "
+                     f"(build {d['build_time_s']:.2f} s, search for starts {d['search_time_s']:.2f} s); collocation "
+                     f"peak {q('collocation_peak_m').text(d['collocation_peak_m'])} (difference "
+                     f"{d['resimulation_rel_error']:.2e})")
         for v in d["baselines"].values():
-            lines.append(f"  {v['label']:40s} peak {v['peak_deflection_m'] * 1e6:.3f} um at node {v['node_of_peak']}")
+            lines.append(f"  {v['label']:40s} peak {q('peak_deflection_m').text(v['peak_deflection_m'])} at node "
+                         f"{v['node_of_peak']}")
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
@@ -792,7 +835,8 @@ class ModalSpinupResult(Result):
         for k, v in self.baselines.items():
             cols |= {f"{k}_t_s": v.t, f"{k}_omega_rad_s": v.omega, f"{k}_deflection_m": v.deflection.max(axis=0)}
         n = min(len(c) for c in cols.values())
-        out = {"ross_spinup_optimum.csv": {"t_s": o.t, "omega_rad_s": o.omega} | {
+        out = {"ross_spinup_optimum.csv": {"t_s": o.t, "omega_rad_s": o.omega,
+                                           "omega_rpm": convert(o.omega, "rad/s", "rpm")} | {
                    f"deflection_node{nd}_m": o.deflection[i] for i, nd in enumerate(o.nodes)},
                "ross_spinup_controls.csv": {"t_start_s": o.t_u, "alpha_rad_s2": o.alpha},
                "ross_spinup_baselines.csv": {k: np.asarray(v)[:n] for k, v in cols.items()},
@@ -816,20 +860,28 @@ class ModalSpinupResult(Result):
                                                      label="critical speeds (reduced model)" if i == 0 else None)
 
     def draw(self, ax) -> None:
-        """Largest deflection over the nodes of interest against speed, optimum and ramps, in um."""
+        """Largest deflection over the nodes of interest against speed, optimum and ramps (the declared display unit,
+        µm; rpm on top)."""
+        from autobal.ocp.spinup_study import RPM, twin_axis
+
+        q = QUANTITIES.find("peak_deflection_m")
         for tr, c, ls, lw in self._runs():
             lab = "optimum" if tr is self.optimum else tr.label
-            ax.plot(tr.omega, tr.deflection.max(axis=0) * 1e6, color=c, ls=ls, lw=lw,
-                    label=f"{lab} (peak {tr.peak * 1e6:.2f} um)")
+            ax.plot(tr.omega, q.shown(tr.deflection.max(axis=0)), color=c, ls=ls, lw=lw,
+                    label=f"{lab} (peak {q.text(tr.peak)})")
         self._criticals(ax, True)
         ax.set_xlabel(r"speed $\omega$, rad/s")
-        ax.set_ylabel(r"deflection $\max_{nodes}\sqrt{x^2+y^2}$, $\mu$m")
+        twin_axis(ax, RPM, "speed, rpm", "x")
+        ax.set_ylabel(rf"deflection $\max_{{nodes}}\sqrt{{x^2+y^2}}$, {q.display} 0-peak")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
 
     def figures(self) -> dict:
-        """Speed and acceleration against time; deflection against time and speed; Campbell diagram."""
-        title = self.data["title"]
+        """Speed (rad/s, rpm) and acceleration (rad/s², rpm/s) against time; deflection (µm) against time and speed;
+        Campbell diagram (rad/s, rpm and Hz)."""
+        from autobal.ocp.spinup_study import RPM, twin_axis
+
+        title, q = self.data["title"], QUANTITIES.find("peak_deflection_m")
         fig, axes = new_figure((8, 6), 2, 1, sharex=True)
         for tr, c, ls, lw in self._runs():
             lab = "optimum" if tr is self.optimum else tr.label
@@ -838,7 +890,9 @@ class ModalSpinupResult(Result):
                          color=c, ls=ls, lw=lw)
         self._criticals(axes[0], False)
         axes[0].set_ylabel(r"speed $\omega$, rad/s")
-        axes[1].set_ylabel(r"acceleration $\alpha$, rad/s$^2$")
+        twin_axis(axes[0], RPM, "rpm")
+        axes[1].set_ylabel(r"acceleration $\alpha$, rad/s²")
+        twin_axis(axes[1], RPM, "rpm/s")
         axes[1].set_xlabel("time t, s")
         for ax in axes:
             ax.grid(alpha=0.3)
@@ -847,9 +901,9 @@ class ModalSpinupResult(Result):
 
         fig2, (a1, a2) = new_figure((8, 7), 2, 1)
         for tr, c, ls, lw in self._runs():
-            a1.plot(tr.t, tr.deflection.max(axis=0) * 1e6, color=c, ls=ls, lw=lw)
+            a1.plot(tr.t, q.shown(tr.deflection.max(axis=0)), color=c, ls=ls, lw=lw)
         a1.set_xlabel("time t, s")
-        a1.set_ylabel(r"deflection, $\mu$m")
+        a1.set_ylabel(f"deflection, {q.display} 0-peak")
         a1.grid(alpha=0.3)
         self.draw(a2)
         fig2.suptitle(title, fontsize=9)
@@ -865,12 +919,53 @@ class ModalSpinupResult(Result):
         if cs["ross_wd_rad_s"] is not None:
             ax.plot(cs["ross_wd_rad_s"], cs["ross_wd_rad_s"], "x", color="k", label="critical speeds (ROSS)")
         ax.set_xlabel(r"speed $\omega$, rad/s")
+        twin_axis(ax, RPM, "speed, rpm", "x")
         ax.set_ylabel("frequency, rad/s")
+        twin_axis(ax, convert(1.0, "rad/s", "Hz"), "frequency, Hz")
         ax.set_ylim(0, 1.2 * cb["omega"][-1])
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
         ax.set_title("Campbell diagram of the reduced rotor", fontsize=9)
         return {"ross_spinup_profiles.png": fig, "ross_spinup_deflection.png": fig2, "ross_campbell.png": fig3}
+
+
+#: every number of the ross_spinup block: deflections in m (the largest radius of the whirl orbit over the nodes of
+#: interest, 0-peak), speeds in rad/s; the headline quantities first, in summary order
+QUANTITIES = Declarations(
+    Quantity("peak_deflection_m", "m", "r*", "peak deflection of the optimum, 0-peak (re-simulated)", "µm",
+             headline=True),
+    Quantity("baseline_ramp_peak_m", "m", "r*", "peak deflection of the best ramp", "µm", headline=True),
+    Quantity("improvement_over_best_ramp", "1", "", "improvement over the best ramp, 1 − r*/r*_ramp", headline=True),
+    Quantity("time_of_peak_s", "s", "t*", "time of the peak", headline=True),
+    Quantity("omega_at_peak_rad_s", "rad/s", "ω*", "speed at the peak", headline=True),
+    Quantity("final_speed_rad_s", "rad/s", "ω_f", "final (service) speed", headline=True),
+    Quantity("critical_speeds.max_rel_error_vs_ross", "1", "", "largest critical-speed difference from ROSS",
+             headline=True),
+    Quantity("node_of_peak baselines.*.node_of_peak unbalance[].node", "1", "", "node of the shaft model"),
+    Quantity("collocation_peak_m starts[].collocation_peak_m starts[].resimulated_peak_m", "m", "r*",
+             "peak deflection of the collocation / of a start, re-simulated", "µm"),
+    Quantity("baselines.*.peak_deflection_m", "m", "r*", "peak deflection of a ramp baseline", "µm"),
+    Quantity("baselines.*.time_of_peak_s", "s", "t*", "time of a ramp baseline's peak"),
+    Quantity("baselines.*.omega_at_peak_rad_s", "rad/s", "ω*", "speed at a ramp baseline's peak"),
+    Quantity("natural_frequencies_rad_s mode_cutoff_rad_s lowest_dropped_natural_frequency_rad_s", "rad/s", "ω_n",
+             "undamped natural frequencies of the kept modes, the cutoff, the lowest left out"),
+    Quantity("critical_speeds.reduced_wd_rad_s critical_speeds.ross_wd_rad_s", "rad/s", "ω_c",
+             "critical speeds below the final speed: reduced model, ROSS"),
+    Quantity("critical_speeds.reduced_damping_ratio critical_speeds.ross_damping_ratio", "1", "ζ",
+             "damping ratio of each critical speed's mode: reduced model, ROSS"),
+    Quantity("critical_speeds.amplification_factor", "1", "AF", "amplification factor 1/(2ζ) of each critical speed",
+             source="API 684 (2005), amplification factor"),
+    Quantity("critical_speeds.separation_margin_pct", "%", "SM", "separation margin of the final speed from each "
+             "critical speed", source="API 684 (2005), separation margin"),
+    Quantity("gyroscopic_shift", "1", "", "largest relative shift of a critical speed by the gyroscopic terms"),
+    Quantity("unbalance[].magnitude_kg_m", "kg*m", "m e", "unbalance", "g·mm"),
+    Quantity("unbalance[].phase_rad", "rad", "φ", "phase of the unbalance"),
+    Quantity("modes ipopt_iterations resimulation_rel_error starts[].iterations", "1", "",
+             "modes kept; iterations; relative difference, CVODES re-simulation vs collocation"),
+    Quantity("solve_time_s build_time_s search_time_s total_solve_time_s starts[].solve_time_s", "s", "",
+             "times: final solve, NLP build, search for starts, every solve, a start's solve"),
+)
+ModalSpinupResult.quantities = QUANTITIES
 
 
 def campbell(rotor: ModalRotor, omega_top: float, points: int = 200) -> dict:

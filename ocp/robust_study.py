@@ -9,22 +9,70 @@ critical-speed factor).
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
+from autobal.analysis.quantities import Declarations, Quantity, significant
 from autobal.analysis.result import Result, new_figure, with_statuses
 from autobal.ocp import robust as rb
 from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.search import controls_on_mesh, grid_search
 from autobal.ocp.simulation import Trajectory, best_within_limits, drive_use, resimulate
 from autobal.ocp.solve import optimize
+from autobal.ocp.spinup_study import RPM, deflection_axis, deflection_text, twin_axis
 from autobal.ocp.transcription import DirectCollocation
 
 QUANTILES = (0.5, 0.9, 0.99)
 CHECKED = 4  # validation rotors re-simulated with CVODES to check the fast integrator
 CVODES_WORST = 3  # design rotors re-simulated with CVODES per profile (its worst by the fast integrator)
+
+_PROFILE = "profiles.*."
+#: every number of the spinup_robust block: peaks delta/e (Pashkov (2010), Eq. (2)) with the physical deflection
+#: (0-peak) e delta/e beside them in the summary; the rotors as factors on the nominal critical speed, damping and
+#: liquid mass; the headline quantities first, in summary order
+QUANTITIES = Declarations(
+    Quantity("profiles.robust.validation_worst_over_e", "1", "δ*/e", "robust profile: worst peak over the "
+             "validation rotors", headline=True),
+    Quantity("profiles.nominal.validation_worst_over_e", "1", "δ*/e", "nominal optimum: worst peak over the "
+             "validation rotors", headline=True),
+    Quantity("profiles.ramp.validation_worst_over_e", "1", "δ*/e", "best ramp: worst peak over the validation rotors",
+             headline=True),
+    Quantity("profiles.robust.design_worst_over_e", "1", "δ*/e", "robust profile: worst peak over the design rotors "
+             "(CVODES)", headline=True),
+    Quantity("profiles.robust.nominal_peak_over_e", "1", "δ*/e", "robust profile: peak on the nominal rotor",
+             headline=True),
+    Quantity("omega_cr_rad_s", "rad/s", "ω_cr", "nominal critical speed", headline=True),
+    Quantity("eccentricity_m", "m", "e", "eccentricity (a peak δ*/e is the deflection δ* = e δ*/e, 0-peak)", "µm"),
+    Quantity(" ".join(_PROFILE + k for k in ("nominal_peak_over_e", "design_worst_over_e", "design_peaks_over_e",
+                                             "validation_worst_over_e", "validation_mean_over_e",
+                                             "validation_quantiles_over_e.**")),
+             "1", "δ*/e", "peaks of a profile: nominal rotor, design set (worst, each), validation sample (worst, "
+             "mean, quantiles)"),
+    Quantity("critical_speed_spread", "1", "", "relative spread of the critical speed (± factor − 1)"),
+    Quantity("damping_factor liquid_mass_factor", "1", "", "range of the factor on the damping / liquid mass"),
+    Quantity("design_set active_design_rotors worst_design_rotor", "1", "",
+             "design rotors as factors (critical speed, damping, liquid mass)"),
+    Quantity("design_scenarios active_scenarios validation_samples seed", "1", "",
+             "design rotors, those in the final NLP, validation rotors, seed of the sample"),
+    Quantity("robust_collocation_worst_over_e", "1", "δ*/e", "worst collocation peak of the robust NLP"),
+    Quantity("resimulation_rel_error validation_check_rel_error", "1", "",
+             "relative difference: robust NLP vs CVODES; validation integrator vs CVODES"),
+    Quantity("validation_step_tau", "1", "Δτ", "step of the validation integrator in Ω0 t"),
+    Quantity("build_time_s solve_time_s nominal_build_time_s nominal_solve_time_s validation_time_s wall_time_s "
+             "time_split.*", "s", "", "times: robust NLPs, nominal optimum, validation, the analysis; the wall time by "
+             "part"),
+    Quantity("rounds[].intervals rounds[].scenarios rounds[].active rounds[].iterations", "1", "",
+             "an NLP solve of the scenario generation: intervals, design rotors (which), iterations"),
+    Quantity("rounds[].build_time_s rounds[].solve_time_s", "s", "", "build and solve time of an NLP solve"),
+    Quantity("rounds[].worst_design_peak_over_e rounds[].collocation_worst_over_e", "1", "δ*/e",
+             "worst design peak after an NLP solve (re-simulated, collocation)"),
+    Quantity("ramps[].alpha_rad_s2", "rad/s^2", "α", "acceleration of a constant ramp"),
+    Quantity("ramps[].design_worst_over_e ramps[].validation_worst_over_e", "1", "δ*/e",
+             "worst peak of a ramp over the design set / the validation sample"),
+)
 
 
 @dataclass
@@ -37,6 +85,7 @@ class RobustResult(Result):
     worst_runs: dict  # key -> Trajectory on the robust profile's worst design rotor
     validation: dict  # key -> (samples,) peaks; "factors" -> (samples, 3)
     name = "spinup_robust"
+    quantities = QUANTITIES
 
     KEYS = ("robust", "nominal", "ramp")
     COLORS = {"robust": "C3", "nominal": "C0", "ramp": "C2"}
@@ -54,19 +103,29 @@ class RobustResult(Result):
     def to_dict(self) -> dict:
         return self.data
 
+    def verdict(self) -> tuple[bool | None, str]:
+        return verdict(self.data)
+
     def summary(self) -> str:
         d = self.data
-        lines = [f"robust spin-up over {d['design_scenarios']} design rotors ({d['active_scenarios']} in the final "
-                 f"NLP), {d['method']}: build {d['build_time_s']:.2f} s, solve {d['solve_time_s']:.2f} s; "
-                 f"validation on {d['validation_samples']} rotors ({d['executor']}, {d['validation_time_s']:.2f} s)",
+        ok, words = self.verdict()
+        lines = [f"robust spin-up: {'ok' if ok else 'NOT OK'}: {words}", *QUANTITIES.lines(d),
+                 f"  {d['design_scenarios']} design rotors ({d['active_scenarios']} in the final NLP), {d['method']}: "
+                 f"build {d['build_time_s']:.2f} s, solve {d['solve_time_s']:.2f} s; validation on "
+                 f"{d['validation_samples']} rotors ({d['executor']}, {d['validation_time_s']:.2f} s)",
                  "  wall time split: " + ", ".join(f"{k[:-7].replace('_', ' ')} {v:.2f} s" for k, v in
-                                                   d.get("time_split", {}).items())]
+                                                   d.get("time_split", {}).items()),
+                 f"  peaks δ*/e and the deflection δ* = e δ*/e, 0-peak (e = "
+                 f"{QUANTITIES.find('eccentricity_m').text(d.get('eccentricity_m'))}):"]
+        def pk(x):
+            return deflection_text(x, d.get("eccentricity_m"))
+
         for k in self.KEYS:
             p = d["profiles"][k]
-            lines.append(f"  {p['label']:28s} nominal rotor {p['nominal_peak_over_e']:.4f} e, worst design "
-                         f"{p['design_worst_over_e']:.4f} e, validation worst {p['validation_worst_over_e']:.4f} e "
-                         f"(median {p['validation_quantiles_over_e']['0.5']:.4f}, 99 % "
-                         f"{p['validation_quantiles_over_e']['0.99']:.4f})")
+            lines.append(f"  {p['label']:28s} nominal rotor {pk(p['nominal_peak_over_e'])}, worst design "
+                         f"{pk(p['design_worst_over_e'])}, validation worst {pk(p['validation_worst_over_e'])} "
+                         f"(median {significant(p['validation_quantiles_over_e']['0.5'])} e, 99 % "
+                         f"{significant(p['validation_quantiles_over_e']['0.99'])} e)")
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
@@ -91,6 +150,7 @@ class RobustResult(Result):
             ax.step(v, np.arange(1, v.size + 1) / v.size, where="post", color=self.COLORS[k],
                     label=f"{lab} (worst {v[-1]:.3f} e)")
         ax.set_xlabel(r"peak deflection $\delta^*/e$")
+        deflection_axis(ax, self.data.get("eccentricity_m"), "x")
         ax.set_ylabel(f"fraction of the {self.validation['factors'].shape[0]} validation rotors")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
@@ -104,14 +164,18 @@ class RobustResult(Result):
             tr, tw = self.nominal_runs[k], self.worst_runs[k]
             lab = self.data["profiles"][k]["label"]
             a0.plot(tr.t, tr.omega, color=self.COLORS[k], label=lab)
-            a1.plot(tw.t, tw.delta, color=self.COLORS[k], label=f"{lab} (peak {tw.peak_delta:.3f} e)")
-        a0.axhline(self.data["omega_cr_rad_s"], color="k", ls=":", lw=0.8,
-                   label=rf"nominal critical speed {self.data['omega_cr_rad_s']:.4g} rad/s")
+            a1.plot(tw.t, tw.delta, color=self.COLORS[k],
+                    label=f"{lab} (peak {deflection_text(tw.peak_delta, self.data.get('eccentricity_m'))})")
+        wc = self.data["omega_cr_rad_s"]
+        a0.axhline(wc, color="k", ls=":", lw=0.8,
+                   label="nominal critical speed " + QUANTITIES.find("omega_cr_rad_s").text(wc))
         a0.set_ylabel(r"speed $\omega$, rad/s")
+        twin_axis(a0, RPM, "rpm")
         w = self.data["worst_design_rotor"]
         a1.set_title(f"on the robust profile's worst design rotor (critical speed x{w[0]:.3g}, damping x{w[1]:.3g}"
                      + (f", liquid x{w[2]:.3g}" if self.data["liquid"] else "") + ")", fontsize=8, loc="left")
         a1.set_ylabel(r"deflection $\delta/e$")
+        deflection_axis(a1, self.data.get("eccentricity_m"))
         a1.set_xlabel("time t, s")
         for ax in (a0, a1):
             ax.grid(alpha=0.3)
@@ -127,11 +191,28 @@ class RobustResult(Result):
                         label=self.data["profiles"][k]["label"])
         ax3.set_xlabel("critical-speed factor (1 = nominal)")
         ax3.set_ylabel(r"peak deflection $\delta^*/e$")
+        deflection_axis(ax3, self.data.get("eccentricity_m"))
         ax3.grid(alpha=0.3)
         ax3.legend(fontsize=7, markerscale=4)
         fig3.suptitle(title, fontsize=8)
         return {"spinup_robust_profiles.png": fig, "spinup_robust_distribution.png": fig2,
                 "spinup_robust_scatter.png": fig3}
+
+
+def verdict(d: dict) -> tuple[bool | None, str]:
+    """The robust spin-up's one verdict from its results.json block: the robust profile's worst peak over the
+    validation rotors against the nominal optimum's and the best ramp's (a ramp outside the drive limits is shown,
+    never compared)."""
+    w = {k: d["profiles"][k]["validation_worst_over_e"] for k in RobustResult.KEYS}
+    ramp_ok = d["profiles"]["ramp"].get("within_drive_limits") is not False
+
+    def pk(x):
+        return deflection_text(x, d.get("eccentricity_m"))
+
+    ok = w["robust"] < min(w["nominal"], w["ramp"] if ramp_ok else math.inf)
+    return ok, (f"worst peak over {d.get('validation_samples', 'the')} validation rotors: robust {pk(w['robust'])}, "
+                f"nominal optimum {pk(w['nominal'])}, best ramp {pk(w['ramp'])}"
+                + ("" if ramp_ok else " (outside the drive limits, not compared)"))
 
 
 def _on(ocp: SpinupOcp, factors, profile: rb.Profile) -> Trajectory:
@@ -274,7 +355,7 @@ def run(ocp: SpinupOcp, method: DirectCollocation, uncertainty: rb.Uncertainty, 
                    "validation_quantiles_over_e": {str(q): float(np.quantile(v, q)) for q in QUANTILES}}
     prof["ramp"]["within_drive_limits"] = ramp_use[ib]["within_drive_limits"]
     data = {
-        "title": title, "method": method.label, "omega_cr_rad_s": ocp.params.omega_cr,
+        "title": title, "method": method.label, "omega_cr_rad_s": ocp.params.omega_cr, "eccentricity_m": ocp.params.e,
         "critical_speed_spread": uncertainty.critical_speed_spread,
         "damping_factor": list(uncertainty.damping_factor), "liquid": uncertainty.liquid_mass_factor is not None,
         "liquid_mass_factor": list(uncertainty.liquid_mass_factor) if uncertainty.liquid_mass_factor else None,

@@ -12,8 +12,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from autobal.analysis.quantities import Declarations, Quantity, significant
 from autobal.analysis.result import Result, new_figure
 from autobal.ocp import drive_profile
+from autobal.ocp.drive_profile import RPM
 from autobal.ocp.problem import SpinupOcp, pulse_variation
 from autobal.ocp.simulation import (
     DRIVE_TOL,
@@ -28,6 +30,84 @@ from autobal.ocp.simulation import (
 from autobal.ocp.solve import optimize
 from autobal.ocp.transcription import DirectCollocation, MultipleShooting
 
+_P10 = "Pashkov (2010)"
+_API = "API 684 (2005)"
+SOLVED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+
+
+def _drive(prefix: str = "") -> str:
+    return " ".join(f"{prefix}{k}" for k in ("max_torque_N_m", "min_torque_N_m"))
+
+
+#: every number of the spinup block: deflections delta/e (the source's group, Pashkov (2010), Eq. (2)) beside the
+#: physical deflection (0-peak, the radius of the whirl orbit); the headline quantities first, in summary order
+QUANTITIES = Declarations(
+    Quantity("peak_deflection_m", "m", "δ*", "peak deflection of the optimum, 0-peak (re-simulated)", "mm",
+             headline=True),
+    Quantity("peak_deflection_over_e", "1", "δ*/e", "peak deflection of the optimum over the eccentricity",
+             headline=True),
+    Quantity("baseline_ramp_peak_over_e", "1", "δ*/e", "peak of the best ramp within the drive limits",
+             headline=True),
+    Quantity("gain_vs_best_feasible_ramp_pct", "%", "", "gain of the optimum against that ramp", headline=True),
+    Quantity("gain_vs_constant_ramp_pct", "%", "", "gain of the optimum against the constant ramp"),
+    Quantity("rotor.critical_speed_rad_s", "rad/s", "ω_cr", "critical speed (with the liquid mass: Ω0 √ψ)",
+             headline=True),
+    Quantity("omega_cr_rad_s", "rad/s", "ω_cr", "critical speed Ω0 √ψ", source=f"{_P10}, ch. 3"),
+    Quantity("rotor.amplification_factor", "1", "AF", "amplification factor N_c/(N_2 − N_1) = 1/(2ζ)",
+             source=f"{_API}, amplification factor", headline=True),
+    Quantity("rotor.separation_margin_pct", "%", "SM", "separation margin of the final speed from the critical speed",
+             source=f"{_API}, separation margin", headline=True),
+    Quantity("max_torque_N_m", "N*m", "M_max", "largest drive torque of the optimum", headline=True),
+    Quantity("max_power_W", "W", "P_max", "largest drive power of the optimum", "kW", headline=True),
+    Quantity("min_torque_N_m", "N*m", "M_min", "smallest drive torque of the optimum (below 0: it brakes)",
+             headline=True),
+    Quantity("torque_limit_N_m braking_torque_limit_N_m", "N*m", "M_lim", "torque and braking-torque limits of the "
+             "drive"),
+    Quantity("power_limit_W", "W", "P_lim", "power limit of the drive", "kW"),
+    Quantity("time_of_peak_s", "s", "t*", "time of the peak"),
+    Quantity("omega_at_peak_rad_s", "rad/s", "ω*", "speed at the peak"),
+    Quantity("final_time_s", "s", "T", "final time (the deadline, or the arrival with min_time)"),
+    Quantity("rotor.mass_kg", "kg", "m1", "rotor mass", source=f"{_P10}, ch. 3"),
+    Quantity("rotor.liquid_mass_kg", "kg", "m2*", "full-chamber liquid mass ρπR²h", source=f"{_P10}, ch. 3"),
+    Quantity("rotor.stiffness_N_per_m", "N/m", "c", "shaft stiffness"),
+    Quantity("rotor.damping_N_s_per_m", "N*s/m", "χ", "external viscous damping"),
+    Quantity("rotor.eccentricity_m eccentricity_m", "m", "e", "eccentricity (mass centre from the shaft axis)", "µm"),
+    Quantity("rotor.damping_ratio", "1", "ζ", "damping ratio χ/(2√(c m)) of the rotor with its liquid mass"),
+    Quantity("psi", "1", "ψ", "mass ratio m1/(m1 + m2*)", source=f"{_P10}, ch. 3"),
+    Quantity("Omega0_rad_s", "rad/s", "Ω0", "natural frequency √(c/m1) of the rotor without liquid",
+             source=f"{_P10}, ch. 3"),
+    Quantity("zeta0", "1", "ζ0", "damping group of the source", source=f"{_P10}, ch. 3"),
+    Quantity("drive_polar_inertia_kg_m2", "kg*m^2", "J_p", "polar inertia of the rotor and drive"),
+    Quantity("peak_unbalance collocation_peak_unbalance", "1", "d*", "peak system unbalance",
+             source=f"{_P10}, Eq. (2)"),
+    Quantity("collocation_peak_over_e", "1", "δ*/e", "peak deflection of the collocation (before re-simulation)"),
+    Quantity("objective_value objective_value_transcription", "1", "J",
+             "objective: δ*/e or d* (dimensionless); ∫(δ/e)² dt and the final time are in s"),
+    Quantity("integral_deflection2_s", "s", "∫(δ/e)² dt", "integral of the squared deflection over the window"),
+    Quantity("control_pulse_variation", "1", "", "chattering: total variation of the one-interval pulses of α/α_max"),
+    Quantity("resimulation_rel_error", "1", "", "relative difference, CVODES re-simulation vs transcription"),
+    Quantity("ipopt_iterations", "1", "", "iterations of the final solve"),
+    Quantity("solve_time_s total_solve_time_s build_time_s wall_time_s time_split.*", "s", "",
+             "times: final solve, every solve, NLP builds, the analysis; the wall time by part"),
+    Quantity("starts[].iterations", "1", "", "iterations of a start's solve"),
+    Quantity("starts[].solve_time_s starts[].build_time_s", "s", "", "solve and build time of a start"),
+    Quantity("starts[].objective", "1", "J", "re-simulated objective of a start (as objective_value)"),
+    Quantity("starts[].resimulated_peak_over_e", "1", "δ*/e", "re-simulated peak of a start"),
+    Quantity("baselines.*.peak_deflection_over_e", "1", "δ*/e", "peak deflection of a ramp baseline"),
+    Quantity("baselines.*.peak_unbalance", "1", "d*", "peak system unbalance of a ramp baseline"),
+    Quantity("baselines.*.time_of_peak_s", "s", "t*", "time of a ramp baseline's peak"),
+    Quantity("baselines.*.integral_deflection2_s", "s", "∫(δ/e)² dt", "integral of a ramp baseline's δ²"),
+    Quantity(_drive("baselines.*.") + " " + _drive("segments."), "N*m", "M", "largest and smallest drive torque"),
+    Quantity("baselines.*.max_power_W segments.max_power_W", "W", "P", "largest drive power", "kW"),
+    Quantity("segments.segments", "1", "K", "ramp segments of the drive's table"),
+    Quantity("segments.peak_deflection_over_e", "1", "δ*/e", "peak deflection of the ramp table (re-simulated)"),
+    Quantity("segments.peak_unbalance", "1", "d*", "peak system unbalance of the ramp table"),
+    Quantity("segments.objective_value segments.start_objectives.**", "1", "J",
+             "objective of the ramp table (and of each start of its search)"),
+    Quantity("segments.loss_vs_optimum_pct", "%", "", "loss of the ramp table against the full optimum"),
+    Quantity("segments.evaluations", "1", "", "re-simulations of the ramp table's search"),
+)
+
 
 @dataclass
 class SpinupResult(Result):
@@ -38,6 +118,7 @@ class SpinupResult(Result):
     baselines: dict  # key -> Trajectory
     segments: drive_profile.Segments | None = None
     name = "spinup"
+    quantities = QUANTITIES
 
     @property
     def peak_deflection(self) -> float:
@@ -52,49 +133,47 @@ class SpinupResult(Result):
     def to_dict(self) -> dict:
         return self.data
 
+    def verdict(self) -> tuple[bool | None, str]:
+        return verdict(self.data)
+
     def summary(self) -> str:
         d = self.data
-        b = d["baselines"]
-        lines = [f"spin-up OCP ({d['objective']}), {d['method']}: {d['status']}, {d['ipopt_iterations']} "
-                 f"iterations in the final solve ({d['solve_time_s']:.2f} s)",
-                 f"  times: {len(d['starts'])} starts and mesh stages {d['total_solve_time_s']:.2f} s ("
-                 + ", ".join(f"{r['solve_time_s']:.2f}" for r in d["starts"] if "solve_time_s" in r)
+        ok, words = self.verdict()
+        q = QUANTITIES.find
+        lines = [f"spin-up ({d['objective'].replace('_', ' ')}): {'ok' if ok else 'NOT OK'}: {words}",
+                 *QUANTITIES.lines(d),
+                 f"  NLP ({d['method']}): {d['status']}, {d['ipopt_iterations']} iterations in the final solve "
+                 f"({d['solve_time_s']:.2f} s); {len(d['starts'])} starts and mesh stages "
+                 f"{d['total_solve_time_s']:.2f} s (" + ", ".join(f"{r['solve_time_s']:.2f}" for r in d["starts"]
+                                                               if "solve_time_s" in r)
                  + f" s), NLP build {d['build_time_s']:.2f} s, wall {d['wall_time_s']:.2f} s (with the global "
                  "search, re-simulations and baselines)",
                  "  wall time split: " + ", ".join(f"{k[:-7].replace('_', ' ')} {v:.2f} s" for k, v in
                                                    d.get("time_split", {}).items()),
-                 f"  optimum: peak deflection {d['peak_deflection_over_e']:.4f} e (collocation "
-                 f"{d['collocation_peak_over_e']:.4f} e, re-simulation difference {d['resimulation_rel_error']:.2e}),"
-                 f" peak unbalance {d['peak_unbalance']:.4f}, final time {d['final_time_s']:.4g} s, chattering "
-                 f"(pulse variation of alpha/alpha_max) {d['control_pulse_variation']:.3g}"]
+                 f"  optimum: collocation peak {significant(d['collocation_peak_over_e'])} e (re-simulation "
+                 f"difference {d['resimulation_rel_error']:.2e}), peak unbalance {significant(d['peak_unbalance'])}, "
+                 f"peak at t = {q('time_of_peak_s').text(d['time_of_peak_s'])} and "
+                 f"{q('omega_at_peak_rad_s').text(d['omega_at_peak_rad_s'])}, final time "
+                 f"{q('final_time_s').text(d['final_time_s'])}, chattering (pulse variation of alpha/alpha_max) "
+                 f"{d['control_pulse_variation']:.3g}"]
         r = d["rotor"]
-        lines.append(f"  rotor: m1 {r['mass_kg']:.4g} kg, c {r['stiffness_N_per_m']:.4g} N/m, chi "
-                     f"{r['damping_N_s_per_m']:.4g} N s/m, e {r['eccentricity_m'] * 1e6:.4g} um; critical speed "
-                     f"{r['critical_speed_rad_s'] * 30 / np.pi:.5g} rpm ({d['omega_cr_rad_s']:.4g} rad/s), damping "
-                     f"ratio {r['damping_ratio']:.4g}; peak deflection {d['peak_deflection_m'] * 1e6:.4g} um (0-peak)")
-        if r["amplification_factor"] is not None:
-            lines.append(f"  API 684: amplification factor {r['amplification_factor']:.4g}, separation margin of the "
-                         f"final speed {r['separation_margin_pct']:.3g} % from the critical speed")
-        if d["min_torque_N_m"] is not None:
-            brakes = {True: "brakes", False: "does not brake", None: "(no drive data)"}[d["brakes"]]
-            lines.append(f"  braking: the optimum {brakes} (smallest torque {d['min_torque_N_m']:.4g} N m)")
-        for k, v in b.items():
+        rotor = ", ".join(f"{sym} {q(f'rotor.{k}').text(r[k])}" for sym, k in (
+            ("m1", "mass_kg"), ("c", "stiffness_N_per_m"), ("χ", "damping_N_s_per_m"), ("ζ", "damping_ratio"),
+            ("e", "eccentricity_m")))
+        lines.append(f"  rotor: {rotor}; deflections are 0-peak (the radius of the whirl orbit)")
+        e = d["eccentricity_m"]
+        for k, v in d["baselines"].items():
             lim = {True: "", False: " (outside the drive limits: " + ", ".join(v["violated"]) + ")",
                    None: ""}[v["within_drive_limits"]]
             ref = " [reference]" if k == d["baseline_ramp_key"] else ""
-            lines.append(f"  {v['label']:40s} peak deflection {v['peak_deflection_over_e']:.4f} e, "
-                         f"peak unbalance {v['peak_unbalance']:.4f}{lim}{ref}")
-        if d["gain_vs_best_feasible_ramp_pct"] is not None:
-            lines.append(f"  gain: {d['gain_vs_best_feasible_ramp_pct']:+.2f} % against the best ramp within the "
-                         "drive limits" + ("" if d["gain_vs_constant_ramp_pct"] is None else
-                                           f", {d['gain_vs_constant_ramp_pct']:+.2f} % against the constant ramp"))
-        else:
-            lines.append("  gain: no ramp baseline keeps the drive limits, so none is quoted")
+            lines.append(f"  {v['label']:52s} peak {deflection_text(v['peak_deflection_over_e'], e)}{lim}{ref}")
+        if d["gain_vs_constant_ramp_pct"] is not None:
+            lines.append(f"  gain against the constant ramp: {d['gain_vs_constant_ramp_pct']:+.2f} %")
         sg = d.get("segments")
         if sg:
-            lines.append(f"  {sg['segments']}-segment ramp table: peak {sg['peak_deflection_over_e']:.4f} e, "
-                         f"{sg['loss_vs_optimum_pct']:+.2f} % against the full optimum (searched from the "
-                         f"{sg['start']} start)"
+            lines.append(f"  {sg['segments']}-segment ramp table: peak "
+                         f"{deflection_text(sg['peak_deflection_over_e'], e)}, {sg['loss_vs_optimum_pct']:+.2f} % "
+                         f"against the full optimum (searched from the {sg['start']} start)"
                          + ("" if sg["within_drive_limits"] else " (outside the drive limits)"))
         return "\n".join(lines)
 
@@ -103,7 +182,9 @@ class SpinupResult(Result):
         cols = {"t_s": next(iter(self.baselines.values())).t}
         for k, v in self.baselines.items():
             cols |= {f"{k}_omega_rad_s": v.omega, f"{k}_deflection_over_e": v.delta, f"{k}_unbalance_d": v.d}
-        return {"spinup_optimum.csv": {"t_s": o.t, "omega_rad_s": o.omega, "deflection_over_e": o.delta,
+        e = self.data.get("eccentricity_m") or np.nan
+        return {"spinup_optimum.csv": {"t_s": o.t, "omega_rad_s": o.omega, "omega_rpm": o.omega * RPM,
+                                       "deflection_over_e": o.delta, "deflection_mm": o.delta * e * 1e3,
                                        "unbalance_d": o.d, "torque_N_m": o.torque},
                 "spinup_controls.csv": {"t_start_s": o.t_u, "alpha_rad_s2": o.alpha},
                 "spinup_baselines.csv": cols, "drive_profile.csv": drive_profile.drive_table(o)} | (
@@ -122,45 +203,53 @@ class SpinupResult(Result):
         return tr.label + (" (outside the drive limits)" if out and
                            self.data["baselines"][out]["within_drive_limits"] is False else "")
 
-    def _mm_axis(self, ax) -> None:
-        """The deflection in mm on the right (delta = (delta/e) e), when the eccentricity is known."""
-        e = self.data.get("eccentricity_m")
-        if e:
-            ax.secondary_yaxis("right", functions=(lambda d: d * e * 1e3, lambda mm: mm / (e * 1e3))).set_ylabel(
-                f"deflection, mm 0-peak  (e = {e * 1e3:.3g} mm)")
-
     def draw(self, ax) -> None:
-        """Deflection against time of the optimum and both ramps (delta/e, mm on the right)."""
+        """Deflection against time of the optimum and both ramps (delta/e; mm on the right)."""
         for tr, c, ls, lw in self._runs():
             lab = self._label(tr)
-            ax.plot(tr.t, tr.delta, color=c, ls=ls, lw=lw, label=f"{lab} (peak {tr.peak_delta:.3f} e)")
+            ax.plot(tr.t, tr.delta, color=c, ls=ls, lw=lw,
+                    label=f"{lab} (peak {deflection_text(tr.peak_delta, self.data.get('eccentricity_m'))})")
         ax.set_xlabel("time t, s")
         ax.set_ylabel(r"deflection $\delta/e$")
-        self._mm_axis(ax)
+        deflection_axis(ax, self.data.get("eccentricity_m"))
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=6.5, loc="upper left")
 
     def figures(self) -> dict:
-        """Speed, acceleration (steps) and torque against time; deflection against time and speed."""
+        """Speed (rad/s, rpm), acceleration steps (rad/s², rpm/s), drive torque (N·m) and, with drive data, power (kW)
+        against time; deflection (delta/e, mm) against time and speed."""
         title = self.data["title"]
         wc = self.data["omega_cr_rad_s"]
-        fig, axes = new_figure((8, 8), 3, 1, sharex=True)
+        drive = self.data["drive_polar_inertia_kg_m2"] != 0
+        fig, axes = new_figure((8, 10 if drive else 8), 4 if drive else 3, 1, sharex=True)
+        kw = QUANTITIES.find("max_power_W")
         for tr, c, ls, lw in self._runs():
             lab = self._label(tr)
             axes[0].plot(tr.t, tr.omega, color=c, ls=ls, lw=lw, label=lab)
             axes[1].plot(np.append(tr.t_u, tr.t[-1]), np.append(tr.alpha, tr.alpha[-1]), drawstyle="steps-post",
                          color=c, ls=ls, lw=lw)
             axes[2].plot(tr.t, tr.torque, color=c, ls=ls, lw=lw)
-        axes[0].axhline(wc, color="k", lw=0.8, ls=":",
-                        label=rf"critical speed $\omega_{{cr}} = \Omega_0\sqrt{{\psi}}$ = {wc:.4g} rad/s")
+            if drive:
+                axes[3].plot(tr.t, kw.shown(tr.torque * tr.omega), color=c, ls=ls, lw=lw)
+        axes[0].axhline(wc, color="k", lw=0.8, ls=":", label=r"critical speed $\omega_{cr} = \Omega_0\sqrt{\psi}$ = "
+                        + QUANTITIES.find("omega_cr_rad_s").text(wc))
         axes[0].set_ylabel(r"speed $\omega$, rad/s")
-        axes[1].set_ylabel(r"acceleration $\alpha$, rad/s$^2$")
-        if self.data["drive_polar_inertia_kg_m2"] == 0:
-            axes[2].set_ylabel("torque M, N m")
-            axes[2].set_title("no drive data: the torque is the unbalance reaction only", fontsize=8, loc="left")
+        twin_axis(axes[0], RPM, "rpm")
+        axes[1].set_ylabel(r"acceleration $\alpha$, rad/s²")
+        twin_axis(axes[1], RPM, "rpm/s")
+        if drive:
+            axes[2].set_ylabel("drive torque M, N·m")
+            axes[3].set_ylabel(f"drive power P, {kw.display}")
+            brake = self.data.get("braking_torque_limit_N_m")
+            for ax, limit in ((axes[2], self.data.get("torque_limit_N_m")),
+                              (axes[2], None if brake is None else -brake),
+                              (axes[3], kw.shown(self.data.get("power_limit_W")))):
+                if limit is not None:
+                    ax.axhline(limit, color="k", lw=0.8, ls=":")  # the drive's limits
         else:
-            axes[2].set_ylabel("drive torque M, N m")
-        axes[2].set_xlabel("time t, s")
+            axes[2].set_ylabel("torque M, N·m")
+            axes[2].set_title("no drive data: the torque is the unbalance reaction only", fontsize=8, loc="left")
+        axes[-1].set_xlabel("time t, s")
         for ax in axes:
             ax.grid(alpha=0.3)
         fig.legend(loc="outside lower center", ncols=2, fontsize=7)
@@ -170,14 +259,64 @@ class SpinupResult(Result):
         self.draw(a1)
         for tr, c, ls, lw in self._runs():
             a2.plot(tr.omega, tr.delta, color=c, ls=ls, lw=lw)
-        a2.axvline(wc, color="k", lw=0.8, ls=":", label=rf"critical speed $\omega_{{cr}}$ = {wc:.4g} rad/s")
+        a2.axvline(wc, color="k", lw=0.8, ls=":", label=r"critical speed $\omega_{cr}$ = "
+                   + QUANTITIES.find("omega_cr_rad_s").text(wc))
         a2.set_xlabel(r"speed $\omega$, rad/s")
+        twin_axis(a2, RPM, "speed, rpm", "x")
         a2.set_ylabel(r"deflection $\delta/e$")
-        self._mm_axis(a2)
+        deflection_axis(a2, self.data.get("eccentricity_m"))
         a2.grid(alpha=0.3)
         a2.legend(fontsize=7)
         fig2.suptitle(title, fontsize=9)
         return {"spinup_profiles.png": fig, "spinup_deflection.png": fig2}
+
+
+def deflection_axis(ax, e: float | None, which: str = "y") -> None:
+    """The physical deflection delta = (delta/e) e (0-peak, the declared display unit) beside a delta/e axis, when
+    the eccentricity ``e`` (m) is known."""
+    if e:
+        q, ecc = QUANTITIES.find("peak_deflection_m"), QUANTITIES.find("eccentricity_m").text(e)
+        twin_axis(ax, q.shown(e), f"deflection δ, {q.display} 0-peak  (e = {ecc})", which)
+
+
+def twin_axis(ax, factor: float, label: str, which: str = "y") -> None:
+    """A secondary axis (right, or top for ``which="x"``) showing the axis' values times ``factor``: rpm beside
+    rad/s, rpm/s beside rad/s², a deflection beside delta/e."""
+    functions = (lambda v: v * factor, lambda v: v / factor)
+    if which == "x":
+        ax.secondary_xaxis("top", functions=functions).set_xlabel(label)
+    else:
+        ax.secondary_yaxis("right", functions=functions).set_ylabel(label)
+
+
+def deflection_text(over_e: float | None, e: float | None) -> str:
+    """A peak delta/e with the physical deflection e delta/e beside it, 0-peak, in the display unit of the spin-up's
+    peak deflection: '12.31 e (1.231 mm)'."""
+    out = f"{significant(over_e)} e"
+    return out if e is None or over_e is None else out + f" ({QUANTITIES.find('peak_deflection_m').text(over_e * e)})"
+
+
+def verdict(d: dict) -> tuple[bool | None, str]:
+    """The spin-up's one verdict from its results.json block: the optimum's peak deflection (physical, 0-peak,
+    and delta/e), its gain against the best ramp within the drive limits (the only reference a gain is quoted
+    against), whether it brakes and whether it keeps the drive limits; the NLP status first when it is not a
+    success."""
+    peak = QUANTITIES.find("peak_deflection_m").text(d["peak_deflection_m"])
+    words = f"peak deflection {peak} 0-peak ({significant(d['peak_deflection_over_e'])} e)"
+    gain, key = d.get("gain_vs_best_feasible_ramp_pct"), d.get("baseline_ramp_key")
+    if gain is not None:
+        words += f", {gain:+.1f} % against the best ramp within the drive limits ({d['baselines'][key]['label']})"
+    else:
+        words += ", no ramp keeps the drive limits: no gain is quoted"
+    if d.get("brakes") is not None:
+        words += (f"; it brakes (smallest torque {QUANTITIES.find('min_torque_N_m').text(d['min_torque_N_m'])})"
+                  if d["brakes"] else "; it does not brake")
+    ok = gain is None or gain <= 0.01
+    if d.get("within_drive_limits") is False:
+        ok, words = False, words + f"; drive limits EXCEEDED ({', '.join(d.get('violated') or [])})"
+    if d["status"] not in SOLVED:
+        ok, words = False, f"NLP solver {d['status']}: " + words
+    return ok, words
 
 
 def method_of(settings):
@@ -263,6 +402,7 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
         "omega_cr_rad_s": ocp.params.omega_cr, "Omega0_rad_s": ocp.params.Omega0,
         "zeta0": ocp.params.zeta0, "drive_polar_inertia_kg_m2": ocp.params.J_p, **opt_use,
         "braking_torque_limit_N_m": -ocp.torque_bounds[0] if np.isfinite(ocp.torque_bounds[0]) else None,
+        "torque_limit_N_m": ocp.torque_max, "power_limit_W": ocp.power_max,
         # the optimum brakes when its smallest torque is below zero by more than the limit check's tolerance
         "brakes": None if opt_use["min_torque_N_m"] is None or P.J_p == 0 else
         bool(opt_use["min_torque_N_m"] < -DRIVE_TOL * torque_reference(ocp)),
@@ -272,6 +412,8 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
     }
     outside = "no ramp baseline keeps the drive limits (each is labelled outside them): no gain is quoted"
     for key, why in (("braking_torque_limit_N_m", "no braking-torque limit: the scene names no drive limit"),
+                     ("torque_limit_N_m", "no torque limit in the scene"),
+                     ("power_limit_W", "no power limit in the scene"),
                      ("brakes", "unknown: the scene gives no drive inertia, so the optimum's torque is not known"),
                      ("baseline_ramp_peak_over_e", outside), ("baseline_ramp_key", outside),
                      ("gain_vs_best_feasible_ramp_pct", outside),

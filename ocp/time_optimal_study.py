@@ -12,11 +12,42 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from autobal.analysis.quantities import Declarations, Quantity, significant
 from autobal.analysis.result import Result, new_figure, with_statuses
 from autobal.ocp import time_optimal as to
 from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.solve import TIE
+from autobal.ocp.spinup_study import RPM, deflection_axis, deflection_text, twin_axis
 from autobal.ocp.transcription import DirectCollocation
+
+
+def _point(*keys: str) -> str:
+    """The keys of a front point and of the earliest arrival (``limited``)."""
+    return " ".join(f"{w}.{k}" for k in keys for w in ("front[]", "limited"))
+
+
+#: every number of the spinup_time_optimal block: peaks delta/e (Pashkov (2010), Eq. (2)), the physical deflection
+#: (0-peak) e delta/e beside them in the summary; the headline quantities first, in summary order
+QUANTITIES = Declarations(
+    Quantity("arrival_time_s", "s", "T", "earliest arrival at the final speed with the peak within the limit",
+             headline=True),
+    Quantity("peak_deflection_over_e", "1", "δ*/e", "peak deflection of the earliest arrival (re-simulated)",
+             headline=True),
+    Quantity("deflection_limit_over_e", "1", "δ_lim/e", "peak limit of the scene", headline=True),
+    Quantity("ramp_arrival_time_s", "s", "T_ramp", "arrival of the maximum-acceleration ramp", headline=True),
+    Quantity("ramp_peak_over_e", "1", "δ*/e", "peak of the maximum-acceleration ramp", headline=True),
+    Quantity("final_speed_rad_s", "rad/s", "ω_f", "final speed", headline=True),
+    Quantity("eccentricity_m", "m", "e", "eccentricity (a peak δ*/e is the deflection δ* = e δ*/e, 0-peak)", "µm"),
+    Quantity("arrival_time_lower_bound_s", "s", "", "latest front deadline whose minimum peak exceeds the limit"),
+    Quantity("horizon_s", "s", "", "latest arrival (the front's slow end)"),
+    Quantity(_point("arrival_time_s", "held_from_s"), "s", "T", "arrival deadline of a front point (held from an "
+             "earlier point's profile)"),
+    Quantity(_point("resimulated_peak_over_e", "collocation_peak_over_e"), "1", "δ*/e",
+             "peak of a front point: re-simulated, collocation"),
+    Quantity(_point("resimulation_rel_error", "intervals", "iterations") + " resimulation_rel_error", "1", "",
+             "relative difference collocation vs CVODES; intervals and iterations of a point"),
+    Quantity(_point("build_time_s", "solve_time_s") + " build_time_s solve_time_s", "s", "", "build and solve times"),
+)
 
 
 @dataclass
@@ -27,6 +58,7 @@ class TimeOptimalResult(Result):
     front: to.Front
     limited: to.FrontPoint | None  # the earliest arrival at the scene's deflection_limit (None: the ramp)
     name = "spinup_time_optimal"
+    quantities = QUANTITIES
 
     @property
     def arrival_times(self) -> np.ndarray:
@@ -41,24 +73,33 @@ class TimeOptimalResult(Result):
     def to_dict(self) -> dict:
         return self.data
 
+    def verdict(self) -> tuple[bool | None, str]:
+        return verdict(self.data)
+
     def summary(self) -> str:
         d = self.data
-        lines = [f"time-optimal spin-up, {d['method']}: front of {len(d['front'])} points, build "
-                 f"{d['build_time_s']:.2f} s, solve {d['solve_time_s']:.2f} s",
+        ok, words = self.verdict()
+
+        def pk(x):
+            return deflection_text(x, d["eccentricity_m"])
+
+        lines = [f"time-optimal spin-up: {'ok' if ok else 'NOT OK'}: {words}", *QUANTITIES.lines(d),
+                 f"  {d['method']}: front of {len(d['front'])} points, build {d['build_time_s']:.2f} s, solve "
+                 f"{d['solve_time_s']:.2f} s; peaks δ*/e and the deflection δ* = e δ*/e, 0-peak (e = "
+                 f"{QUANTITIES.find('eccentricity_m').text(d['eccentricity_m'])})",
                  f"  fast end: {d['ramp_label']} arrives at {d['ramp_arrival_time_s']:.4g} s, peak "
-                 f"{d['ramp_peak_over_e']:.4f} e"]
+                 f"{pk(d['ramp_peak_over_e'])}"]
         for p in d["front"]:
-            lines.append(f"  arrival by {p['arrival_time_s']:.4f} s: peak {p['resimulated_peak_over_e']:.4f} e "
-                         f"(collocation {p['collocation_peak_over_e']:.4f} e, "
+            lines.append(f"  arrival by {p['arrival_time_s']:.4f} s: peak {pk(p['resimulated_peak_over_e'])} "
+                         f"(collocation {significant(p['collocation_peak_over_e'])} e, "
                          f"{100 * p['resimulation_rel_error']:.2f} %)")
         if d.get("deflection_limit_over_e") is not None:
             by = (d["limited"] or {}).get("objective")
             how = {"min_time": "by the min_time OCP", "peak_deflection": "by regula falsi on the minimum-peak "
                    "deadline"}.get(by, "the ramp")
-            lines.append(f"  earliest arrival with the peak <= {d['deflection_limit_over_e']:.4g} e: "
-                         f"{d['arrival_time_s']:.4f} s {how} (peak {d['peak_deflection_over_e']:.4f} e; the "
-                         f"minimum-peak OCP exceeds the limit by "
-                         f"{d.get('arrival_time_lower_bound_s', float('nan')):.4f} s)")
+            lines.append(f"  earliest arrival with the peak <= {significant(d['deflection_limit_over_e'])} e: "
+                         f"{d['arrival_time_s']:.4f} s {how} (the minimum-peak OCP with the deadline "
+                         f"{d.get('arrival_time_lower_bound_s', float('nan')):.4f} s exceeds the limit)")
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
@@ -86,6 +127,7 @@ class TimeOptimalResult(Result):
                     label=f"earliest arrival with the peak <= {d['deflection_limit_over_e']:.4g} e")
         ax.set_xlabel("arrival time at the final speed, s")
         ax.set_ylabel(r"peak deflection $\delta^*/e$ (re-simulated)")
+        deflection_axis(ax, self.data.get("eccentricity_m"))
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
 
@@ -99,15 +141,38 @@ class TimeOptimalResult(Result):
         cmap = [f"C{i % 10}" for i in range(len(self.front.points))]
         for p, c in zip(self.front.points, cmap, strict=True):
             a0.plot(p.trajectory.t, p.trajectory.omega, color=c, lw=0.9, label=f"arrival by {p.arrival_time_s:.3g} s")
-            a1.plot(p.trajectory.t, p.trajectory.delta, color=c, lw=0.9, label=f"peak {p.peak:.3f} e")
+            a1.plot(p.trajectory.t, p.trajectory.delta, color=c, lw=0.9,
+                    label=f"peak {deflection_text(p.peak, self.data['eccentricity_m'])}")
         a0.set_ylabel(r"speed $\omega$, rad/s")
+        twin_axis(a0, RPM, "rpm")
         a1.set_ylabel(r"deflection $\delta/e$")
+        deflection_axis(a1, self.data.get("eccentricity_m"))
         a1.set_xlabel("time t, s")
         for a in (a0, a1):
             a.grid(alpha=0.3)
             a.legend(fontsize=6, ncols=2)
         fig2.suptitle(title, fontsize=8)
         return {"spinup_time_optimal_front.png": fig, "spinup_time_optimal_profiles.png": fig2}
+
+
+def verdict(d: dict) -> tuple[bool | None, str]:
+    """The time-optimal spin-up's one verdict from its results.json block: with a peak limit, the earliest arrival
+    at the final speed whose re-simulated peak keeps it; without one, whether the front's peak falls with the
+    deadline."""
+    speed = QUANTITIES.find("final_speed_rad_s").text(d["final_speed_rad_s"])
+    if d.get("deflection_limit_over_e") is None:
+        return d["monotone"], (f"front of {len(d['front'])} deadlines to {speed}: the smallest peak "
+                               + ("falls with the arrival deadline" if d["monotone"] else "is NOT monotone in the "
+                                  "deadline (a local optimum)"))
+    lim = d["deflection_limit_over_e"]
+
+    def pk(x):
+        return deflection_text(x, d["eccentricity_m"])
+
+    ok = d["peak_deflection_over_e"] <= lim * (1 + 1e-6)
+    return ok, (f"earliest arrival at {speed} with the peak ≤ {significant(lim)} e: {significant(d['arrival_time_s'])}"
+                f" s, peak {pk(d['peak_deflection_over_e'])}; the maximum-acceleration ramp arrives at "
+                f"{significant(d['ramp_arrival_time_s'])} s with {pk(d['ramp_peak_over_e'])}")
 
 
 def run(ocp: SpinupOcp, method: DirectCollocation, points: int, title: str = "", multistart: bool = True,
@@ -143,6 +208,7 @@ def run(ocp: SpinupOcp, method: DirectCollocation, points: int, title: str = "",
     own = [p for p in every if p.held_from_s is None]  # a held point repeats an earlier one's solve
     data = {
         "title": title, "method": method.label, "horizon_s": ocp.horizon, "ramp_label": fr.ramp.label,
+        "final_speed_rad_s": ocp.omega_final, "eccentricity_m": ocp.params.e,
         "ramp_arrival_time_s": fr.ramp_arrival_time_s, "ramp_peak_over_e": fr.ramp.peak_delta,
         "front": [p.to_dict() for p in fr.points],
         # the ramp, the front and the earliest arrival by arrival time: the peak non-increasing up to the

@@ -65,3 +65,13 @@ def test_a_failed_fit_makes_the_one_verdict_not_ok(shipped_run):
     assert not ok and "static_2p (): solver FAILED (Maximum_Iterations_Exceeded)" in words
     out = EstimationResult(data).summary()
     assert out.splitlines()[1].startswith("  NOT OK: static_1p (alpha): adequate") and "FAILED fit 'static_2p'" in out
+
+
+@pytest.mark.cli
+def test_an_undefined_correlation_prints_as_a_dash(shipped_run):
+    """A singular Hessian leaves the correlation null in results.json (a case the hypothesis test of the
+    estimation inputs found): the summary prints '—' and the report leaves the row out, no TypeError."""
+    data = copy.deepcopy(shipped_run("rig_table43_fit")[0]["estimation"].to_dict())
+    data["fits"]["static_2p"]["correlation"] = [[1.0, None], [None, 1.0]]
+    out = EstimationResult(data).summary()
+    assert "correlation of alpha and tau_max: —" in out and "hardly separate" not in out

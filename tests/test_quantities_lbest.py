@@ -36,7 +36,7 @@ def value(text: str, unit: str) -> float:
 def test_the_four_analyses_are_declared_and_each_has_a_shipped_scene_the_walker_runs():
     assert {k: report.DECLARED.get(k) for k in MINE} == MINE
     assert not set(MINE) & set(report.UNDECLARED)
-    assert not [p for p, _ in report._UNDECLARED_RULES if re.search("|".join(MINE), p)]
+    assert not hasattr(report, "_UNDECLARED_RULES")  # no unit rule keyed on names at all
     walked = {a for name in (*FAST, *SLOW) for a in scenario.load(name).analyses.model_dump(exclude_none=True)}
     assert set(MINE) <= walked
 
