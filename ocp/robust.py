@@ -31,9 +31,9 @@ from autobal.analysis import ipopt
 from autobal.errors import SolveError
 from autobal.models.rotor import RotorParams
 from autobal.ocp.problem import SpinupOcp
-from autobal.ocp.search import FAST_STEP, ModalRotor, simulate_steps, steps_of
+from autobal.ocp.search import FAST_STEP, FixedFrameModes, simulate_steps, steps_of
 from autobal.ocp.simulation import initial_guess, ramp_profile, rate_text, resimulate
-from autobal.ocp.solve import IPOPT_OPTIONS
+from autobal.ocp.solve import IPOPT_OPTIONS, coarse_intervals
 from autobal.ocp.transcription import DirectCollocation, jerk_regulariser, mesh, structured_derivatives, transcribe
 
 
@@ -157,7 +157,7 @@ def fast_peaks(ocp: SpinupOcp, factors: np.ndarray, profiles: list[Profile], dt:
     U = np.array([p.u for p in profiles])
     for i, o in enumerate(scenario_ocps(ocp, factors)):
         steps = np.array([steps_of(o, u, dt) for u in U])
-        out[i] = simulate_steps(o, steps, dt, ModalRotor.of(o))
+        out[i] = simulate_steps(o, steps, dt, FixedFrameModes.of(o))
     return out
 
 
@@ -254,7 +254,8 @@ class RobustSolver:
         first = self.nlps[0]
         K = first.index["u"].size
         n = first.mesh.n
-        nu_idx = np.concatenate([first.index["X"][:, 4], first.index["Xc"][..., 4].ravel()])
+        sp = ocps[0].speed_index
+        nu_idx = np.concatenate([first.index["X"][:, sp], first.index["Xc"][..., sp].ravel()])
         lbx, ubx = [first.lbx[first.index["u"]], [0.0]], [first.ubx[first.index["u"]], [np.inf]]
         cols, scales, keeps, offset = [], [], [], K + 1
         for i, (o, nlp) in enumerate(zip(ocps, self.nlps, strict=True)):
@@ -276,7 +277,7 @@ class RobustSolver:
             if i > 0:  # rows that repeat the first scenario's: speed dynamics, final speed, jerk bound
                 for name, rows in nlp.blocks:
                     if name == "dynamics":
-                        keep[rows[np.arange(rows.size) % 5 == 4]] = False
+                        keep[rows[np.arange(rows.size) % o.nx == sp]] = False
                     elif name.startswith(("final speed", "jerk limit")):
                         keep[rows] = False
             cols.append(col)
@@ -325,7 +326,8 @@ class RobustSolver:
             own[nlp.index["u"]] = False
             own[nlp.index["v"]] = False
             if i > 0:
-                own[np.concatenate([nlp.index["X"][:, 4], nlp.index["Xc"][..., 4].ravel()])] = False
+                sp = o.speed_index
+                own[np.concatenate([nlp.index["X"][:, sp], nlp.index["Xc"][..., sp].ravel()])] = False
             x0.append(w0[own])
         return np.concatenate(x0)
 
@@ -341,8 +343,8 @@ class RobustSolver:
                              f"({len(self.ocps)} scenarios, {self.method.label})", r["status"],
                              {"alpha_rad_s2": list(r["x"][:self.n] * self.ocps[0].alpha_max)})
         ws = [np.asarray(P @ ca.DM(r["x"])).ravel() for P in self.P]
-        peaks = [float(np.sqrt(np.max(np.sum(w[nlp.index["Xc"]][..., :2] ** 2, axis=-1))))
-                 for w, nlp in zip(ws, self.nlps, strict=True)]
+        peaks = [float(np.sqrt(np.max(o.epigraph2(w[nlp.index["Xc"]])))) * o.epigraph_unit
+                 for o, w, nlp in zip(self.ocps, ws, self.nlps, strict=True)]
         return {"u": np.asarray(r["x"][:self.n]), "collocation_peaks": np.array(peaks), "status": r["status"],
                 "iterations": r["iterations"], "solve_time_s": dt}
 
@@ -449,7 +451,6 @@ def optimize_robust(ocp: SpinupOcp, factors: np.ndarray, method: DirectCollocati
     return best
 
 
-COARSE = 50  # control intervals of the coarse stage (at least)
 # coarse optima refined on the fine mesh.  The coarse ranking need not predict the fine one (it did not for
 # some starts, docs/theory/spinup_robust.md, "Build and solve"); on the shipped scene a second refinement
 # never won and cost 14 s more of IPOPT, so one
@@ -459,12 +460,10 @@ REFINED = 1
 def optimize_robust_refined(ocp: SpinupOcp, factors: np.ndarray, method: DirectCollocation, starts: list[Profile],
                             ref: float, options: dict | None = None) -> RobustOptimum:
     """:func:`optimize_robust` by mesh continuation: every start and the scenario generation on N / 2^k
-    intervals (the fewest still at least COARSE), then the REFINED best coarse optima (their worst design
+    intervals (:func:`autobal.ocp.solve.coarse_intervals`), then the REFINED best coarse optima (their worst design
     peaks more than 1e-4 apart: distinct optima) each refined on N intervals with the union of their active
     scenarios (more join if a fine profile needs them); the best fine optimum is kept.  Arguments as there."""
-    n, nc = method.intervals, method.intervals
-    while nc % 2 == 0 and nc // 2 >= COARSE:
-        nc //= 2
+    n, nc = method.intervals, coarse_intervals(method.intervals)
     if nc == n:
         return optimize_robust(ocp, factors, method, starts, ref, options)
     r = n // nc
