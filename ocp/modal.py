@@ -63,6 +63,9 @@ class ModalSpinupOcp:
     omega_max: float | None = None  # rad/s
     intervals: int = 160  # control intervals over the horizon
     degree: int = 3
+    # (a, peak_scale2) of the nominal rotor when this is a perturbed one (:meth:`perturbed`): the scenarios of a
+    # robust NLP share one epigraph level, so their states and envelopes share one scale
+    scales: tuple[float, float] | None = None
 
     # the problem as the generic pipeline sees it: a minimum-peak epigraph, |alpha| <= alpha_max, no jerk terms
     objective = "peak_deflection"
@@ -135,6 +138,8 @@ class ModalSpinupOcp:
     @cached_property
     def amplitude_scale(self) -> float:
         """a: the largest steady modal amplitude |E(omega)| up to omega_final (scales the states)."""
+        if self.scales is not None:
+            return self.scales[0]
         w = np.linspace(0, self.omega_final, 400)
         return float(max(np.abs(self.rotor.steady_amplitude(x)).max() for x in w)) or 1.0
 
@@ -209,10 +214,35 @@ class ModalSpinupOcp:
     @cached_property
     def peak_scale2(self) -> float:
         """(largest steady deflection of the nodes of interest / a)^2: the scale of the epigraph level."""
+        if self.scales is not None:
+            return self.scales[1]
         w = np.linspace(0, self.omega_final, 400)
         a = self.amplitude_scale
         return max(float(np.max(np.abs(self.rotor.node_rows(nd) @ self.rotor.steady_amplitude(x)))) / a
                    for nd in self.nodes for x in w) ** 2
+
+    # the members the robust study uses (:mod:`autobal.ocp.robust`), as the Jeffcott problem's
+    def perturbed(self, factors) -> ModalSpinupOcp:
+        """The problem of the rotor with the factors (critical speed, damping, liquid mass) applied: the modal
+        stiffness scaled by the critical-speed factor squared (every natural frequency by the factor), the modal
+        damping by the damping factor; the scales of this problem kept (one epigraph for every scenario).  The
+        modal rotor has no liquid: its factor must be 1."""
+        cr, dmp, liq = (float(f) for f in factors)
+        if liq != 1.0:
+            raise ValueError("the modal rotor has no liquid block: its liquid-mass factor must be 1")
+        R = self.rotor
+        rotor = dataclasses.replace(R, K=R.K * cr**2, C=R.C * dmp, omega_n=R.omega_n * cr)
+        return dataclasses.replace(self, rotor=rotor, scales=(self.amplitude_scale, self.peak_scale2))
+
+    def fast_peaks(self, U: np.ndarray) -> np.ndarray:
+        """Peak deflection (m) of the profiles U (C, n control intervals of the horizon, alpha/alpha_max) by the
+        Runge-Kutta screening (:func:`screen`)."""
+        return screen(self, np.atleast_2d(U))
+
+    def resimulated_peak(self, u: np.ndarray, h: np.ndarray, label: str, points: int = 8) -> float:
+        """Peak deflection (m) of the profile u (alpha/alpha_max on the problem's intervals, settling window
+        included), CVODES in the fixed frame (:func:`resimulate`; ``h`` and ``points`` are the problem's own)."""
+        return resimulate(self, u, label).peak
 
     @property
     def q0(self) -> np.ndarray:

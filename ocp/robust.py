@@ -31,8 +31,7 @@ from autobal.analysis import ipopt
 from autobal.errors import SolveError
 from autobal.models.rotor import RotorParams
 from autobal.ocp.problem import SpinupOcp
-from autobal.ocp.search import FAST_STEP, FixedFrameModes, simulate_steps, steps_of
-from autobal.ocp.simulation import initial_guess, ramp_profile, rate_text, resimulate
+from autobal.ocp.simulation import initial_guess, ramp_profile, rate_text
 from autobal.ocp.solve import IPOPT_OPTIONS, coarse_intervals
 from autobal.ocp.transcription import DirectCollocation, jerk_regulariser, mesh, structured_derivatives, transcribe
 
@@ -106,8 +105,10 @@ def perturbed(params: RotorParams, factors) -> RotorParams:
 
 
 def scenario_ocps(ocp: SpinupOcp, factors: np.ndarray) -> list[SpinupOcp]:
-    """The spin-up problem of each perturbed rotor (same drive, speeds, deadline and limits)."""
-    return [dataclasses.replace(ocp, params=perturbed(ocp.params, f)) for f in factors]
+    """The spin-up problem of each perturbed rotor (same drive, speeds, deadline and limits): the problem's own
+    ``perturbed`` (the Jeffcott rotor's :meth:`autobal.ocp.problem.SpinupOcp.perturbed`, the modal rotor's
+    :meth:`autobal.ocp.modal.ModalSpinupOcp.perturbed`)."""
+    return [ocp.perturbed(f) for f in factors]
 
 
 @dataclass(frozen=True)
@@ -125,17 +126,19 @@ class Profile:
 
 
 def cvodes_peaks(ocp: SpinupOcp, factors: np.ndarray, profile: Profile, points: int = 8) -> np.ndarray:
-    """Peak delta/e of the profile on each perturbed rotor, CVODES at tight tolerance (the reference)."""
+    """Peak of the profile on each perturbed rotor, CVODES at tight tolerance (the reference): delta/e for the
+    Jeffcott rotor, m for the modal rotor (the problem's ``resimulated_peak``)."""
     out = []
     for o in scenario_ocps(ocp, factors):
         u, h = profile.on(o)
-        out.append(resimulate(o, u, h, profile.label, points=points).peak_delta)
+        out.append(o.resimulated_peak(u, h, profile.label, points=points))
     return np.array(out)
 
 
-def fast_peaks(ocp: SpinupOcp, factors: np.ndarray, profiles: list[Profile], dt: float = FAST_STEP) -> np.ndarray:
-    """Peak delta/e of every profile on every perturbed rotor by the exponential integrator of the global
-    search (:func:`autobal.ocp.search.simulate_steps`), all profiles of one rotor at once.
+def fast_peaks(ocp: SpinupOcp, factors: np.ndarray, profiles: list[Profile]) -> np.ndarray:
+    """Peak of every profile on every perturbed rotor by the problem's fast integrator (``fast_peaks``: the
+    exponential integrator of the Jeffcott rotor's global search, :func:`autobal.ocp.search.simulate_steps`, or
+    the modal rotor's Runge-Kutta screening, :func:`autobal.ocp.modal.screen`), all profiles of one rotor at once.
 
     Parameters
     ----------
@@ -145,19 +148,16 @@ def fast_peaks(ocp: SpinupOcp, factors: np.ndarray, profiles: list[Profile], dt:
         The rotors (:func:`perturbed`).
     profiles : list of Profile
         The speed profiles (same number of control intervals).
-    dt : float
-        Step, dimensionless time of each rotor.
 
     Returns
     -------
     ndarray, shape (R, P)
-        Peak delta/e.
+        Peaks (delta/e, or m for the modal rotor).
     """
     out = np.empty((len(factors), len(profiles)))
     U = np.array([p.u for p in profiles])
     for i, o in enumerate(scenario_ocps(ocp, factors)):
-        steps = np.array([steps_of(o, u, dt) for u in U])
-        out[i] = simulate_steps(o, steps, dt, FixedFrameModes.of(o))
+        out[i] = o.fast_peaks(U)
     return out
 
 

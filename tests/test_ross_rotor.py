@@ -18,6 +18,7 @@ from autobal import cli, scenario
 from autobal.errors import ScenarioError
 from autobal.models import ross_rotor as rr
 from autobal.ocp import modal
+from autobal.ocp import robust as rb
 from autobal.ocp.simulation import simulate_profile
 from autobal.ocp.solve import Solver
 from autobal.ocp.transcription import structured_derivatives, transcribe
@@ -121,6 +122,26 @@ def test_structured_derivatives_match_casadi_ad(small_ocp):
     assert_allclose(np.array(jac), np.array(jac_ad), rtol=1e-12, atol=1e-12)
     assert_allclose(np.array(hess), np.array(hess_ad), rtol=1e-10, atol=1e-10)
     assert np.abs(np.array(hess_ad)).max() > 1.0  # the point exercises the curvature
+
+
+def test_robust_profile_of_the_modal_rotor(small_ocp):
+    """The robust NLP of autobal.ocp.robust runs on the modal rotor through the same transcription, solver and
+    scenario generation as the Jeffcott rotor's: over a 3 x 3 design set (critical speed +-5 %, damping x0.5-2)
+    its worst case, re-simulated by CVODES in the fixed frame, is below the nominal optimum's worst case over the
+    same rotors (measured 131 um against 181 um) and the screening agrees with CVODES on it within 1 %; over a
+    40-rotor sample from the same ranges its worst screened peak is below the nominal's (129 um against 174 um)."""
+    nominal = modal.optimize(small_ocp, {"max_iter": 300})
+    pn = rb.Profile("nominal optimum", nominal.solution.u[:small_ocp.intervals])
+    unc = rb.Uncertainty(0.05, (0.5, 2.0))
+    F = unc.grid(3)
+    ro = rb.optimize_robust(small_ocp, F, small_ocp.method, [pn],
+                            (nominal.trajectory.peak / small_ocp.amplitude_scale) ** 2)
+    robust, nom = rb.cvodes_peaks(small_ocp, F, ro.profile), rb.cvodes_peaks(small_ocp, F, pn)
+    assert robust.max() < 0.9 * nom.max()
+    assert_allclose(ro.design_peaks, robust, rtol=1e-2)
+    assert_allclose(ro.collocation_worst, robust.max(), rtol=1e-2)
+    sample = rb.fast_peaks(small_ocp, unc.sample(40, np.random.default_rng(3)), [ro.profile, pn])
+    assert sample[:, 0].max() < 0.9 * sample[:, 1].max()
 
 
 def test_screening_integrator_matches_the_resimulation(small_ocp):
