@@ -35,6 +35,7 @@ from autobal.errors import SolveError
 from autobal.models.ross_rotor import ModalRotor
 from autobal.ocp.problem import PathConstraint
 from autobal.ocp.search import SearchResult
+from autobal.ocp.simulation import ramp_profile
 from autobal.ocp.solve import TIE as TIE_SOLVED
 from autobal.ocp.solve import Solver, SpinupSolution, coarse_intervals, coarse_options, refine
 from autobal.ocp.transcription import DirectCollocation
@@ -253,12 +254,9 @@ class ModalSpinupOcp:
 
 
 def ramp_controls(ocp: ModalSpinupOcp, alpha: float, n: int | None = None) -> np.ndarray:
-    """u = alpha/alpha_max on n control intervals: a constant ramp at ``alpha`` until omega_final, then hold."""
-    n = n or ocp.intervals
-    h = ocp.horizon / n
-    w = np.minimum(ocp.omega_final, ocp.omega_start + alpha * h * np.arange(n + 1)) if ocp.omega_final > \
-        ocp.omega_start else np.maximum(ocp.omega_final, ocp.omega_start - alpha * h * np.arange(n + 1))
-    return np.clip(np.diff(w) / h / ocp.alpha_max, -1, 1)
+    """u = alpha/alpha_max on n control intervals: a constant ramp at ``alpha`` until omega_final, then hold
+    (:func:`autobal.ocp.simulation.ramp_profile`, the Jeffcott rotor's)."""
+    return ramp_profile(ocp, n or ocp.intervals, alpha)
 
 
 @dataclass
