@@ -207,29 +207,11 @@ class SpinupOcp:
     epigraph_unit = 1.0  # the reported peak is sqrt(epigraph level) times this (delta/e and d are reported as they are)
     max_steps = 20000  # CVODES steps per integrator call at most
 
-    # the members the robust study uses (:mod:`autobal.ocp.robust`): the problem of a perturbed rotor, the peaks of
-    # many profiles by the fast integrator, the CVODES peak of one
     def perturbed(self, factors) -> SpinupOcp:
         """The problem of the rotor with the factors (critical speed, damping, liquid mass) applied
-        (:func:`autobal.ocp.robust.perturbed`); the drive, speeds, deadline and limits the same."""
-        from autobal.ocp.robust import perturbed
-
-        return dataclasses.replace(self, params=perturbed(self.params, factors))
-
-    def fast_peaks(self, U: np.ndarray) -> np.ndarray:
-        """Peak delta/e of the profiles U (C, n control intervals of the horizon, alpha/alpha_max) by the
-        exponential integrator of the global search (:func:`autobal.ocp.search.simulate_steps`), all at once."""
-        from autobal.ocp.search import FAST_STEP, FixedFrameModes, simulate_steps, steps_of
-
-        steps = np.array([steps_of(self, u, FAST_STEP) for u in U])
-        return simulate_steps(self, steps, FAST_STEP, FixedFrameModes.of(self))
-
-    def resimulated_peak(self, u: np.ndarray, h: np.ndarray, label: str, points: int = 8) -> float:
-        """Peak delta/e of the profile u on intervals h (tau), CVODES at tight tolerance
-        (:func:`autobal.ocp.simulation.resimulate`)."""
-        from autobal.ocp.simulation import resimulate
-
-        return resimulate(self, u, h, label, points=points).peak_delta
+        (:meth:`autobal.models.rotor.RotorParams.scaled`); the drive, speeds, deadline and limits the same (a
+        scenario of the robust study, :mod:`autobal.ocp.robust`)."""
+        return dataclasses.replace(self, params=self.params.scaled(*factors))
 
     def dynamics(self) -> ca.Function:
         """(q, u, h) -> h f(q, u a*_max): the model over an interval of length h."""

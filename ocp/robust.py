@@ -31,7 +31,8 @@ from autobal.analysis import ipopt
 from autobal.errors import SolveError
 from autobal.models.rotor import RotorParams
 from autobal.ocp.problem import SpinupOcp
-from autobal.ocp.simulation import initial_guess, ramp_profile, rate_text
+from autobal.ocp.search import FAST_STEP, FixedFrameModes, simulate_steps, steps_of
+from autobal.ocp.simulation import initial_guess, ramp_profile, rate_text, resimulate
 from autobal.ocp.solve import IPOPT_OPTIONS, coarse_intervals
 from autobal.ocp.transcription import DirectCollocation, jerk_regulariser, mesh, structured_derivatives, transcribe
 
@@ -100,8 +101,7 @@ def perturbed(params: RotorParams, factors) -> RotorParams:
     RotorParams
         The perturbed rotor (SI).
     """
-    cr, dmp, liq = (float(f) for f in factors)
-    return dataclasses.replace(params, c=params.c * cr**2, chi=params.chi * dmp, m2_star=params.m2_star * liq)
+    return params.scaled(*factors)
 
 
 def scenario_ocps(ocp: SpinupOcp, factors: np.ndarray) -> list[SpinupOcp]:
@@ -127,18 +127,21 @@ class Profile:
 
 def cvodes_peaks(ocp: SpinupOcp, factors: np.ndarray, profile: Profile, points: int = 8) -> np.ndarray:
     """Peak of the profile on each perturbed rotor, CVODES at tight tolerance (the reference): delta/e for the
-    Jeffcott rotor, m for the modal rotor (the problem's ``resimulated_peak``)."""
+    Jeffcott rotor (:func:`autobal.ocp.simulation.resimulate`), m for the modal rotor (its own
+    ``resimulated_peak``)."""
     out = []
     for o in scenario_ocps(ocp, factors):
         u, h = profile.on(o)
-        out.append(o.resimulated_peak(u, h, profile.label, points=points))
+        out.append(resimulate(o, u, h, profile.label, points=points).peak_delta if isinstance(o, SpinupOcp)
+                   else o.resimulated_peak(u, h, profile.label, points=points))
     return np.array(out)
 
 
 def fast_peaks(ocp: SpinupOcp, factors: np.ndarray, profiles: list[Profile]) -> np.ndarray:
-    """Peak of every profile on every perturbed rotor by the problem's fast integrator (``fast_peaks``: the
-    exponential integrator of the Jeffcott rotor's global search, :func:`autobal.ocp.search.simulate_steps`, or
-    the modal rotor's Runge-Kutta screening, :func:`autobal.ocp.modal.screen`), all profiles of one rotor at once.
+    """Peak of every profile on every perturbed rotor by a fast integrator (the exponential integrator of the
+    Jeffcott rotor's global search, :func:`autobal.ocp.search.simulate_steps`; another model's own
+    ``fast_peaks``, e.g. the modal rotor's Runge-Kutta screening, :func:`autobal.ocp.modal.screen`), all profiles
+    of one rotor at once.
 
     Parameters
     ----------
@@ -157,7 +160,11 @@ def fast_peaks(ocp: SpinupOcp, factors: np.ndarray, profiles: list[Profile]) -> 
     out = np.empty((len(factors), len(profiles)))
     U = np.array([p.u for p in profiles])
     for i, o in enumerate(scenario_ocps(ocp, factors)):
-        out[i] = o.fast_peaks(U)
+        if isinstance(o, SpinupOcp):
+            steps = np.array([steps_of(o, u, FAST_STEP) for u in U])
+            out[i] = simulate_steps(o, steps, FAST_STEP, FixedFrameModes.of(o))
+        else:
+            out[i] = o.fast_peaks(U)
     return out
 
 
