@@ -43,7 +43,7 @@ from autobal.analysis.linearize import exact, jacobians
 from autobal.analysis.statics import StaticsSolver
 from autobal.errors import ScenarioError, SolveError
 from autobal.models.device import REGULATOR_GROUPS, DeviceParams, design, groups_by_name, static_system
-from autobal.models.dynamics import PARAM_NAMES, build
+from autobal.models.dynamics import LONG_NAMES, PARAM_NAMES, build
 
 # design key -> the DeviceParams fields it sets (dotted paths) and its SI unit
 FIELDS = {
@@ -61,6 +61,19 @@ FIELDS = {
     "d_T2": ("disc.face.inner_diameter",), "d_T3": ("disc.face.outer_diameter",),
     "d_c": ("regulator.valve.seat_diameter",),  # and the seat area s_c = pi d_c^2 / 4 (SEAT_AREA)
 }
+#: DeviceParams field -> design key (the first field a key sets)
+_BY_FIELD = {fields[0]: key for key, fields in FIELDS.items()}
+
+
+def variable_key(path: str) -> str | None:
+    """The design key of a scene path (``device.disc.outer_seal.clearance`` -> ``h_3``), None if none: the key
+    that sets the DeviceParams field the path names (a dynamic parameter by its scene name, LONG_NAMES)."""
+    parts = path.split(".")
+    if parts[:2] == ["device", "dynamics"]:
+        return _BY_FIELD.get("dynamics." + LONG_NAMES.get(parts[-1], ""))
+    return _BY_FIELD.get(".".join(parts[1:])) if parts[0] == "device" else None
+
+
 # the dynamic data's seat area follows the valve seat diameter where the scene derives it (autobal/parts/device.py)
 SEAT_AREA = "dynamics.s_c"
 UNITS = {"V2": "m**3", "V3": "m**3", "V_cam": "m**3", "V_m": "m**3", "c_z": "N*s/m", "c_x": "N*s/m",

@@ -8,18 +8,21 @@ with their multipliers, and the spectral abscissa over the operating range befor
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import re
 import textwrap
 
 import numpy as np
 import scipy.linalg
 from matplotlib.ticker import NullFormatter
 
-from autobal.analysis.design import IPOPT_OPTIONS, UNITS, DesignProblem, Evaluation, Spec, apply
+from autobal.analysis.design import IPOPT_OPTIONS, UNITS, DesignProblem, Evaluation, Spec, apply, variable_key
+from autobal.analysis.frequency import MODEL_LABELS
 from autobal.analysis.linearize import Setup, finite_difference, jacobians, operator
-from autobal.analysis.quantities import convert, significant
-from autobal.analysis.result import Result, fmt, new_figure, with_statuses
-from autobal.analysis.stability import pencil
+from autobal.analysis.quantities import Declarations, Quantity, is_number, significant
+from autobal.analysis.result import Result, new_figure, with_statuses
+from autobal.analysis.stability import PARAMETERS, pencil
 from autobal.errors import SolveError
 from autobal.models.device import DeviceParams
 
@@ -28,8 +31,9 @@ ACTIVE_MARGIN = 1e-6  # a decay-rate constraint is active where -max Re lambda <
 LOCAL_RADIUS = 0.005  # half-width of the local search box about the optimum, fraction of each variable's range
 
 
-#: display units of the design variables by SI unit: chamber volumes in cm³, areas in mm², lengths in mm, MPa
-SHOWN = {"m^3": "cm³", "m^2": "mm²", "m": "mm", "Pa": "MPa", "N*s/m": "N·s/m", "": "1"}
+#: display units of the design variables that are not dynamic parameters (those: stability.PARAMETERS), by SI unit
+SHOWN = {"m": "mm", "m^2": "cm²", "Pa": "MPa"}
+SUCCESS = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
 
 def si_unit(key: str) -> str:
@@ -42,13 +46,109 @@ def quantity(key: str, value: float) -> str:
     return f"{value:.10g} {si_unit(key)}".strip()
 
 
-def shown(unit: str, value: float | None) -> str:
-    """A design value of SI unit ``unit`` in its display unit to 4 significant digits: "209.2 cm³"."""
-    display = SHOWN.get(unit, unit)
-    if value is None:
-        return "—"
-    number = significant(value if display in ("1", unit) else convert(value, unit, display))
-    return number if display == "1" else f"{number} {display}"
+def variable(path: str) -> Quantity | None:
+    """The declaration of the design variable at a scene path (None: not a design variable): a dynamic parameter's
+    (stability.PARAMETERS), else its SI unit (analysis/design.py UNITS) shown in mm, cm², MPa."""
+    key = variable_key(path)
+    if key is None:
+        return None
+    name = path.rsplit(".", 1)[-1]
+    if path.startswith("device.dynamics.") and name in PARAMETERS:
+        return dataclasses.replace(PARAMETERS[name], key=path)
+    unit = si_unit(key) or "1"
+    return Quantity(path, unit, key, f"design variable {path.removeprefix('device.')}", SHOWN.get(unit, ""))
+
+
+def _values(path: str, block: dict | None = None) -> Quantity | None:
+    """The declaration of ``optimum.values_si.<scene path>`` and ``nominal.values_si.<scene path>``."""
+    m = re.fullmatch(r"(optimum|nominal)\.values_si\.(.+)", path)
+    q = variable(m.group(2)) if m else None
+    return None if q is None else dataclasses.replace(q, key=path)
+
+
+_PSI = "at each operating point ψ1"
+QUANTITIES = Declarations(
+    Quantity("decay_rate", "1/s", "α", "required decay rate (every pole Re λ ≤ −α)", headline=True),
+    Quantity("nominal.leakage", "m^3/s", "Q_e", "barrier leakage of the nominal design", headline=True),
+    Quantity("optimum.leakage", "m^3/s", "Q_e", "barrier leakage of the optimum", headline=True),
+    Quantity("optimum.objective", "1", "J/J_nom", "objective of the optimum over the nominal design's",
+             headline=True),
+    Quantity("nominal.objective certification.best_sample certification.best_local_sample", "1", "J",
+             "objective (over the nominal design's)"),
+    Quantity("optimum.margin.** nominal.margin.**", "1/s", "−max Re λ", f"decay rate {_PSI}"),
+    Quantity("optimum.spectral_abscissa.** nominal.spectral_abscissa.** abscissa_sweep.nominal "
+             "abscissa_sweep.optimum", "1/s", "max Re λ", "spectral abscissa (designed-for model)"),
+    Quantity("other_model.nominal.** other_model.optimum.**", "1/s", "max Re λ",
+             "spectral abscissa under the other chamber form (validation)"),
+    Quantity("program_model.nominal.** program_model.optimum.**", "1/s", "max Re λ",
+             "spectral abscissa under the source's program model (validation)", source="Pavlenko (2014), App. A/B"),
+    Quantity("optimum.stiffness.** nominal.stiffness.**", "1", "κ_s", f"static stiffness of the balancing force {_PSI}",
+             source="Pavlenko (2014), Eq. (2.33)"),
+    Quantity("optimum.face_gap.** nominal.face_gap.**", "m", "z0", f"face gap {_PSI}", "µm"),
+    Quantity("optimum.valve_travel.** nominal.valve_travel.**", "1", "x0/x_max",
+             f"valve opening over its travel {_PSI}"),
+    Quantity("points abscissa_sweep.psi1", "1", "ψ1", "operating discharge ratios p1/p_B"),
+    Quantity("iterations", "1", "", "IPOPT iterations"),
+    Quantity("active[].multiplier", "1", "λ", "multiplier of an active constraint (the objective is O(1))"),
+    Quantity("active[].value", "1", "", "the NLP's (scaled) value of an active constraint row or variable"),
+    Quantity("active[].decay_rate", "1/s", "−max Re λ", "decay rate at an active decay-rate constraint"),
+    Quantity("certification.samples certification.feasible_samples certification.local_samples "
+             "certification.feasible_local_samples", "1", "", "designs sampled / feasible in the certification"),
+    Quantity("certification.tolerance", "1", "", "relative amount a sample may beat the optimum by"),
+    Quantity("certification.local_radius", "1", "", "half-width of the local search box, fraction of each range"),
+    resolve=_values,
+)
+
+
+def verdict(d: dict, which: str = "optimum") -> tuple[bool, str]:
+    """The verdict on the ``which`` design under the model it was designed for: stable or not, its smallest decay
+    rate over the operating points and the margin to the required α (ok: α met at every point, IPOPT converged)."""
+    alpha, eta = d["decay_rate"], QUANTITIES.find("decay_rate")
+    margins = {p: v for p, v in d[which]["margin"].items() if not p.endswith("_status")}
+    values = [v for v in margins.values() if is_number(v) and math.isfinite(v)]
+    missing = [p for p, v in margins.items() if not (is_number(v) and math.isfinite(v))]
+    model = MODEL_LABELS[{"chain": "nonlinear_chain"}.get(d["form"], "nonlinear")]
+    if not values:
+        return False, f"{which} design, {model}: no operating point has a static solution off the stops"
+    worst = min(values)
+    met = worst >= alpha * (1 - 1e-6) and not missing
+    where = ("at every operating point" if not missing else f"at {len(values)} of {len(margins)} operating points "
+             f"(none at ψ1 = {', '.join(missing)}: no static solution off the stops there)")
+    state = (f"stable, decay rate ≥ {eta.text(worst)}" if worst > 0 else
+             f"UNSTABLE, disturbances grow at up to {eta.text(-worst)}")
+    margin = (f"{eta.text(worst - alpha)} above the required {eta.text(alpha)}" if met else
+              f"the required {eta.text(alpha)} is NOT met")
+    words = f"{which} design, {model}: {state} {where}, {margin}"
+    if which == "optimum" and d["status"] not in SUCCESS:
+        return False, f"{words}; IPOPT did NOT converge ({d['status']})"
+    return met, words
+
+
+def _signed(v: float) -> str:
+    return ("+" if v > 0 else "") + significant(v)
+
+
+def source_models(d: dict) -> list[tuple[str, str]]:
+    """(model, sentence) per model the design is checked under but not designed for (the other chamber form, the
+    source's program model): its spectral abscissa of the optimum and of the starting design, and whether the
+    optimum is unstable, and more so than the starting design, under it."""
+    out = []
+    for key in ("other_model", "program_model"):
+        block = d.get(key) or {}
+        model = {"chain": "nonlinear_chain", "energy": "nonlinear"}.get(block.get("model"), block.get("model"))
+        opt, nom = ([v for k, v in (block.get(w) or {}).items() if not k.endswith("_status") and is_number(v)
+                     and math.isfinite(v)] for w in ("optimum", "nominal"))
+        if not model or not opt:
+            continue
+        words = (f"{MODEL_LABELS.get(model, model)}: spectral abscissa max Re λ of the optimum {_signed(min(opt))} to "
+                 f"{_signed(max(opt))} 1/s over the operating points"
+                 + (f" (nominal design {_signed(min(nom))} to {_signed(max(nom))} 1/s)" if nom else ""))
+        if min(opt) > 0:
+            words += ": UNSTABLE under this model" + ("" if not nom else ", MORE unstable than the nominal design"
+                                                       if max(opt) > max(nom) else ", less unstable than the nominal "
+                                                       "design")
+        out.append((model, words))
+    return out
 
 
 def block(problem: DesignProblem, ev: Evaluation) -> dict:
@@ -73,6 +173,7 @@ class DesignResult(Result):
     """Result of ``analyses.design``: the optimum, the starting design, certification and history."""
 
     name = "design"
+    quantities = QUANTITIES
 
     def __init__(self, data: dict, sweep: dict, history: dict, title: str = ""):
         self.data, self.sweep, self.history, self.title = data, sweep, history, title
@@ -96,30 +197,33 @@ class DesignResult(Result):
         return with_statuses(self.data, default="no value at this operating point: the design has no static "
                              "solution or spectral abscissa there (NaN)")
 
+    def verdict(self) -> tuple[bool, str]:
+        """The optimum's under the model it was designed for, with the margin to the required decay rate."""
+        return verdict(self.data)
+
     def summary(self) -> str:
         d = self.data
         o, n = d["optimum"], d["nominal"]
-        lines = [f"design ({d['form']} model, alpha = {d['decay_rate']:g} 1/s): status {d['status']}",
-                 f"  objective {fmt(n['objective'])} -> {fmt(o['objective'])}; leakage Q_e "
-                 f"{fmt(n['leakage'])} -> {fmt(o['leakage'])} m^3/s"]
-        for p, a in o["margin"].items():
-            lines.append(f"  psi1 = {p}: margin {fmt(n['margin'].get(p, math.nan))} -> {fmt(a)} 1/s")
+        lines = [f"design: {self.verdict()[1]}", f"  IPOPT {d['status']}, {d['iterations']} iterations",
+                 *QUANTITIES.lines(d),
+                 f"  nominal design: {verdict(d, 'nominal')[1].removeprefix('nominal design, ')}",
+                 "  decay rate −max Re λ (nominal design → optimum), 1/s: " + "; ".join(
+                     f"ψ1 = {p}: {significant(n['margin'].get(p))} → {significant(a)}"
+                     for p, a in o["margin"].items() if not p.endswith("_status")),
+                 "  design variables (nominal design → optimum; results.json optimum.parameters in full):"]
+        width = max((len(p) for p in o["values_si"]), default=0)
         for path, v in o["values_si"].items():
-            unit = o["parameters"][path].partition(" ")[2]
-            lines.append(f"  {path}: {shown(unit, n['values_si'][path])} -> {shown(unit, v)}")
-        cmp = d["other_model"]
-        lines.append(f"  {cmp['model']} model: max Re lambda nominal "
-                     + ", ".join(fmt(v) for v in cmp["nominal"].values()) + "; optimum "
-                     + ", ".join(fmt(v) for v in cmp["optimum"].values()) + " 1/s")
-        prg = d["program_model"]
-        lines.append("  program model: max Re lambda nominal " + ", ".join(fmt(v) for v in prg["nominal"].values())
-                     + "; optimum " + ", ".join(fmt(v) for v in prg["optimum"].values()) + " 1/s")
-        lines.append("  active: " + (", ".join(a["constraint"] for a in d["active"]) or "-"))
+            q = variable(path)
+            lines.append(f"    {path:<{width}s}  {q.symbol:<7s} {q.text(n['values_si'][path])} → {q.text(v)}")
+        lines.append("  active constraints: " + (", ".join(a["constraint"] for a in d["active"]) or "none"))
         c = d["certification"]
-        lines.append(f"  certified: eigenvalues {c['eigenvalues_ok']}; random search {c['samples']} samples, "
-                     f"{c['feasible_samples']} feasible, best {fmt(c['best_sample'])}; local search "
-                     f"{c['local_samples']} samples, {c['feasible_local_samples']} feasible, best "
-                     f"{fmt(c['best_local_sample'])} (optimum {fmt(o['objective'])})")
+        lines.append(f"  certified: eigenvalues {'confirm' if c['eigenvalues_ok'] else 'do NOT confirm'} the optimum; "
+                     f"random search {c['feasible_samples']} of {c['samples']} samples feasible, best "
+                     f"{significant(c['best_sample'])}; local search {c['feasible_local_samples']} of "
+                     f"{c['local_samples']} feasible, best {significant(c['best_local_sample'])} (optimum "
+                     f"{significant(o['objective'])})" + ("; a sample BEATS the optimum" if c["beaten"] else ""))
+        lines.append("  validation against the source (its models do not judge the design):")
+        lines += [f"    {words}" for _, words in source_models(d)]
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
@@ -155,10 +259,11 @@ class DesignResult(Result):
         ax2.axvline(1.0, color="k", lw=0.8)
         values = ax2.twinx()  # the values themselves, in display units, as the right-hand tick labels
         values.set_ylim(ax2.get_ylim())
-        units = [d["optimum"]["parameters"][k].partition(" ")[2] for k in names]
-        values.set_yticks(range(len(names)), [f"{shown(u, n[k])} → {shown(u, o[k])}" for u, k in zip(units, names,
-                                                                                                     strict=True)],
+        values.set_yticks(range(len(names)), [f"{variable(k).text(n[k])} → {variable(k).text(o[k])}" for k in names],
                           fontsize=7)
+        values.set_ylabel("nominal → optimum", fontsize=8)
+        for i in np.flatnonzero(~np.isfinite(ratio) | (ratio <= 0)):  # from or to zero: no ratio to draw
+            ax2.text(1.0, i, "  from 0" if not n[names[i]] else "  to 0", va="center", fontsize=7, color="0.3")
         ax2.set_xlabel("optimum / nominal (log scale)")
         fig3, ax3 = new_figure()
         h = self.history
@@ -170,7 +275,7 @@ class DesignResult(Result):
         ax3.set_xlabel("IPOPT iteration")
         model = {"energy": "energy-consistent", "chain": "chain (printed)"}[d["form"]]
         what = {fig1: f"spectral abscissa over the operating range ({model} model)",
-                fig2: "design variables, optimum against the starting design",
+                fig2: "design variables, optimum against the nominal design",
                 fig3: f"IPOPT convergence ({d['status']}, {d['iterations']} iterations, {d['barrier']} barrier)"}
         for fig, sub in what.items():
             fig.suptitle(textwrap.fill(self.title, 80) + "\n" + sub if self.title else sub, fontsize=9)
@@ -263,7 +368,8 @@ def decay_rate_active(problem: DesignProblem, out: dict, opt: Evaluation) -> lis
         i = min(rows, key=lambda i: abs(res["g"][i]))
         if problem.names[i] not in listed:
             found.append({"constraint": f"psi1={p:g}: decay rate (eigenvalues; row {problem.names[i].split()[-1]})",
-                          "multiplier": float(res["lam_g"][i]), "value": float(-a)})
+                          "multiplier": float(res["lam_g"][i]), "value": float(res["g"][i]),
+                          "decay_rate": float(-a)})
     return found
 
 

@@ -7,6 +7,7 @@ results.json, a summary, CSV tables and one figure per fit (the Result protocol)
 
 from __future__ import annotations
 
+import itertools
 import time
 from dataclasses import dataclass, replace
 
@@ -16,7 +17,8 @@ from autobal.analysis import disc_fit
 from autobal.analysis.adequacy import fisher_adequacy
 from autobal.analysis.device_fit import DeviceFitter
 from autobal.analysis.least_squares import FitResult
-from autobal.analysis.result import Result, fmt, new_figure, plain
+from autobal.analysis.quantities import Declarations, Quantity, significant
+from autobal.analysis.result import Result, new_figure, plain
 from autobal.errors import ScenarioError, SolveError
 from autobal.models.device import DeviceParams, design
 from autobal.models.hydroheel import TurbulentDisc
@@ -37,6 +39,65 @@ TRANSFORMED = {
     "flow_2p_4_36": "minimises sum {[(q_i^2 - 1) tau_max + tau_i] alpha^2 - tau_max + tau_i}^2 numerically",
 }
 
+_P14 = "Pavlenko (2014)"
+_ADEQUACY = ("F", "F_crit", "p_value", "sigma1_sq", "sigma2_sq", "dof", "groups", "points", "parameters",
+             "significance", "group_load", "group_mean", "group_theory", "load_spread_in_groups", "lack_of_fit.F",
+             "lack_of_fit.F_crit", "lack_of_fit.p_value", "lack_of_fit.dof")
+
+
+def _adequacy(*keys: str) -> str:
+    """The keys of the fits' own adequacy tests and of the reference curve's."""
+    return " ".join(f"{where}.{k}" for where in ("fits.*.adequacy", "adequacy_reference") for k in keys)
+
+
+#: every number of the estimation block (Pavlenko 2014, §4.3-4.4): the fitted parameters are the source's groups
+#: (α, τ_max) or loss coefficients, all dimensionless; the data's bases are SI
+QUANTITIES = Declarations(
+    Quantity("fits.*.parameters.*.estimate fits.*.parameters.*.initial fits.*.parameters.*.lower "
+             "fits.*.parameters.*.upper fits.*.cross_check_scipy.estimate.*", "1", "α, τ_max",
+             "fitted parameter (a group of the model or a loss coefficient): estimate, start, bounds",
+             source=f"{_P14}, Eqs. (4.16)-(4.18), Table 4.4"),
+    Quantity("fits.*.parameters.*.standard_error fits.*.parameters.*.ci_low fits.*.parameters.*.ci_high", "1",
+             "s, CI", "standard error and linearised (Student-t) confidence interval"),
+    Quantity("fits.*.bootstrap.parameters.*.ci_low fits.*.bootstrap.parameters.*.ci_high "
+             "fits.*.bootstrap.parameters.*.std fits.*.bootstrap.parameters.*.mean", "1", "CI*",
+             "residual-bootstrap percentile interval, std and mean of the refits"),
+    Quantity("fits.*.correlation fits.*.covariance", "1", "r, Σ", "correlation and covariance of the free "
+             "parameters"),
+    Quantity(_adequacy("F", "F_crit", "p_value", "lack_of_fit.F", "lack_of_fit.F_crit", "lack_of_fit.p_value"), "1",
+             "F, F_crit, p", "Fisher adequacy test: the fit's variance against the scatter within the load groups "
+             "(adequate when F ≤ F_crit), and the lack-of-fit test", source=f"{_P14}, Eqs. (4.14)-(4.15)"),
+    Quantity(_adequacy("sigma1_sq", "sigma2_sq", "dof", "groups", "points", "parameters", "significance",
+                       "group_load", "group_mean", "group_theory", "load_spread_in_groups", "lack_of_fit.dof")
+             + " adequacy_reference.reference.*", "1", "σ², ν, τ, u",
+             "the adequacy test's variances, degrees of freedom, level, group loads and means; the reference "
+             "curve's α, τ_max", source=f"{_P14}, §4.3.3"),
+    Quantity("fits.*.data.** fits.*.curve.**", "1", "τ, u, q",
+             "load and measured, fitted, residual gap u = h/h_TB or flow q; the fitted curve and its band",
+             source=f"{_P14}, Table 4.3"),
+    Quantity("fits.*.residual_std fits.*.ssr fits.*.dof fits.*.points fits.*.confidence fits.*.t_quantile "
+             "fits.*.jtj_condition fits.*.weights.* fits.*.solver.iterations fits.*.solver.objective "
+             "fits.*.cross_check_scipy.cost fits.*.cross_check_scipy.nfev fits.*.cross_check_scipy.max_abs_difference "
+             "fits.*.bootstrap.samples fits.*.bootstrap.seed fits.*.bootstrap.confidence fits.*.bootstrap.failed "
+             "fits.*.bootstrap.ipopt_fallback fits.*.last_iterate.* fits.*.extra.** data.points data.groups", "1", "",
+             "the fit's statistics (in the residual's group), solver counts, the scipy cross-check, the bootstrap's "
+             "settings, the device fit's groups"),
+    Quantity("closed_forms.**", "1", "α, τ_max", "the source's closed-form estimators and their sums",
+             source=f"{_P14}, Eqs. (4.20)-(4.37), Table 4.4"),
+    Quantity("loss_coefficient.value loss_coefficient.ci_low loss_coefficient.ci_high loss_coefficient.nominal",
+             "1", "λ, ζ", "loss coefficient the fitted α implies, its interval and nominal value",
+             source=f"{_P14}, Eq. (4.38)"),
+    Quantity("loss_coefficient.alpha loss_coefficient.alpha_ci loss_coefficient.alpha_nominal "
+             "loss_coefficient.check_alpha_from_solved loss_coefficient.friction_factor", "1", "α",
+             "the fitted α and its interval, α of the nominal losses, α recomputed from the solved loss",
+             source=f"{_P14}, Eq. (4.38)"),
+    Quantity("bases.pressure fits.*.bases.pressure", "Pa", "p_B", "pressure base of the data", "MPa"),
+    Quantity("bases.gap fits.*.bases.gap", "m", "h_TB", "gap base of the data", "mm"),
+    Quantity("bases.flow fits.*.bases.flow", "m^3/s", "Q_B", "flow base of the data"),
+    Quantity("bases.force fits.*.bases.force", "N", "F_B", "force base of the data"),
+    Quantity("run_time_s fits.*.bootstrap.time_s", "s", "t", "wall time"),
+)
+
 
 @dataclass
 class EstimationResult(Result):
@@ -45,6 +106,7 @@ class EstimationResult(Result):
 
     data: dict  # the results.json block
     name = "estimation"
+    quantities = QUANTITIES
 
     @property
     def solved(self) -> dict[str, dict]:
@@ -71,53 +133,79 @@ class EstimationResult(Result):
     def to_dict(self) -> dict:
         return self.data
 
+    def verdict(self) -> tuple[bool, str]:
+        """The one verdict over the fits: each solved and adequate by the Fisher test (4.14) (F <= F_crit), with
+        the lack-of-fit test beside it."""
+        oks, words = [], []
+        for name, f in self.data["fits"].items():
+            free = [k for k, p in (f.get("parameters") or {}).items() if p.get("free")]
+            solved = bool((f.get("solver") or {}).get("success"))
+            ad = f.get("adequacy") or {}
+            w = f"{name} ({', '.join(free)}): " + ("" if solved else f"solver FAILED ({f['solver'].get('status')}); ")
+            w += {True: f"adequate (F = {significant(ad.get('F'))} ≤ F_crit = {significant(ad.get('F_crit'))})",
+                  False: f"NOT adequate (F = {significant(ad.get('F'))} > F_crit = {significant(ad.get('F_crit'))})",
+                  None: "adequacy not tested"}[ad.get("adequate")]
+            if (ad.get("lack_of_fit") or {}).get("adequate") is False:
+                w += f", lack of fit at p = {significant(ad['lack_of_fit'].get('p_value'))}"
+            oks.append(solved and ad.get("adequate") is not False)
+            words.append(w)
+        return all(oks), "; ".join(words)
+
     def summary(self) -> str:
         d = self.data
-        lines = [f"estimation on {d['data']['file']} ({d['data']['points']} points)"]
+        ok, words = self.verdict()
+        lines = [f"estimation on {d['data']['file']} ({d['data']['points']} points)",
+                 f"  {'ok' if ok else 'NOT OK'}: {words}"]
         lines += [f"  FAILED {x}" for x in d.get("failures", [])]
         for name, f in self.solved.items():
             lines.append(f"  fit {name} ({f['model']}, residual in {f['residual']}, {f['hessian']} Hessian): "
                          f"IPOPT {f['solver']['status']} in {f['solver']['iterations']} iterations, "
-                         f"residual std {f['residual_std']:.4g}")
+                         f"residual std {significant(f['residual_std'])}")
             for m in f["extra"].get("start_moved", {}).values():
                 lines.append(f"    start moved: {m['why']}")
-            for k, p in f["parameters"].items():
-                if p["free"]:
-                    lines.append(f"    {k:16s} {p['estimate']:.6g} +- {p['standard_error']:.3g}  "
-                                 f"{100 * f['confidence']:.0f}% CI [{p['ci_low']:.5g}, {p['ci_high']:.5g}]")
-                else:
-                    lines.append(f"    {k:16s} {p['estimate']:.6g} (fixed)")
             bs = f.get("bootstrap") or {}
+            boot = bs.get("parameters", {}) if bs.get("status") == "ok" else {}
+            for k, p in f["parameters"].items():
+                if not p["free"]:
+                    lines.append(f"    {k:10s} {significant(p['estimate'])} (fixed)")
+                    continue
+                line = (f"    {k:10s} {significant(p['estimate'])} +- {significant(p['standard_error'], 2)}  "
+                        f"{100 * f['confidence']:.0f} % CI [{significant(p['ci_low'])}, {significant(p['ci_high'])}]")
+                if k in boot:
+                    line += (f", bootstrap ({bs['samples']} refits) [{significant(boot[k]['ci_low'])}, "
+                             f"{significant(boot[k]['ci_high'])}]")
+                lines.append(line)
             if bs.get("status", "ok").startswith("failed"):
                 lines.append(f"    bootstrap {bs['status']}")
-            for k, p in bs.get("parameters", {}).items() if bs.get("status") == "ok" else ():
-                lines.append(f"    {k:16s} bootstrap ({bs['samples']} refits) {100 * bs['confidence']:.0f}% CI "
-                             f"[{p['ci_low']:.5g}, {p['ci_high']:.5g}]")
+            free = f.get("free") or []
+            corr = f.get("correlation") or []
+            for i, j in itertools.combinations(range(min(len(free), len(corr))), 2):
+                lines.append(f"    correlation of {free[i]} and {free[j]}: {significant(corr[i][j])}"
+                             + (" (the data hardly separate them)" if abs(corr[i][j]) >= 0.9 else ""))
             cc = f.get("cross_check_scipy")
             if cc:
                 lines.append(f"    scipy least_squares: max |difference| {cc['max_abs_difference']:.1e}")
-            ad = f.get("adequacy")
-            if ad and ad.get("F") is not None:
-                lines.append(f"    adequacy (4.14): F = {ad['F']:.3g}, F_crit = {ad['F_crit']:.3g} -> "
-                             f"{'adequate' if ad['adequate'] else 'not adequate'}")
-        cf = d.get("closed_forms") or {}
-        for k, v in cf.items():
-            if isinstance(v, dict) and "alpha" in v:
-                lines.append(f"  closed form {k:16s} alpha = {fmt(v['alpha'])}, tau_max = {fmt(v['tau_max'])}")
-        ref = d.get("adequacy_reference")
-        if ref and ref.get("F") is not None:
-            lines.append(f"  adequacy of the reference curve: sigma1^2 = {ref['sigma1_sq']:.3g}, sigma2^2 = "
-                         f"{ref['sigma2_sq']:.3g}, F = {ref['F']:.3g}, F_crit = {ref['F_crit']:.3g} -> "
-                         f"{'adequate' if ref['adequate'] else 'not adequate'} (source's rule: "
-                         f"{'adequate' if ref['source_rule_adequate'] else 'not adequate'})")
-        if "status" in cf:
-            lines.append(f"  closed forms {cf['status']}")
         lc = d.get("loss_coefficient")
         if lc and "status" in lc:
             lines.append(f"  (4.38) {lc['status']}")
         elif lc:
-            lines.append(f"  (4.38): {lc['unknown']} = {lc['value']:.4g} [{lc['ci_low']:.4g}, {lc['ci_high']:.4g}] "
-                         f"from alpha = {lc['alpha']:.5g} of fit {lc['fit']} (nominal alpha {lc['alpha_nominal']:.4g})")
+            lines.append(f"  (4.38): {lc['unknown']} = {significant(lc['value'])} [{significant(lc['ci_low'])}, "
+                         f"{significant(lc['ci_high'])}] from alpha = {significant(lc['alpha'])} of fit {lc['fit']} "
+                         f"(nominal alpha {significant(lc['alpha_nominal'])})")
+        lines.append("  validation against the source (Pavlenko 2014, Secs. 4.3.3-4.4):")
+        cf = d.get("closed_forms") or {}
+        for k, v in cf.items():
+            if isinstance(v, dict) and "alpha" in v:
+                lines.append(f"    closed form {k:16s} alpha = {significant(v['alpha'])}, tau_max = "
+                             f"{significant(v['tau_max'])}")
+        if "status" in cf:
+            lines.append(f"    closed forms {cf['status']}")
+        ref = d.get("adequacy_reference")
+        if ref and ref.get("F") is not None:
+            lines.append(f"    adequacy of the source's curve: sigma1^2 = {ref['sigma1_sq']:.3g}, sigma2^2 = "
+                         f"{ref['sigma2_sq']:.3g}, F = {ref['F']:.3g}, F_crit = {ref['F_crit']:.3g} -> "
+                         f"{'adequate' if ref['adequate'] else 'not adequate'} (the source's inverted rule: "
+                         f"{'adequate' if ref['source_rule_adequate'] else 'not adequate'})")
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:

@@ -196,7 +196,9 @@ class Setup:
 def coefficient_table(setup: Setup) -> dict:
     """K1..K13, T1..T9, tau3..tau7, zeta1, zeta2 of the hand model in each mode beside the values read
     off the exact Jacobians of the nonlinear model's rows (chain and energy forms), with a note where
-    they differ: ``{"names": [...], "columns": {model: [values]}, "notes": {name: text}, "extra": {...}}``."""
+    they differ: ``{"names": [...], "columns": {model: {name: value}}, "notes": {name: text}, "extra": {...}}``
+    (K, zeta dimensionless, T, tau in s; a constant a model does not have is left out, its ``<model>_status``
+    names it)."""
     cols, extra = {}, {}
     for mode in ("program", "thesis", "consistent"):
         cols[mode] = dict(setup.constants(mode).c)
@@ -221,9 +223,9 @@ def coefficient_table(setup: Setup) -> dict:
             diff.append(f"energy form: {e + 0.0:.4g} (sign differs)" if e * c < 0 else f"energy form: {e + 0.0:.4g}")
         if diff:
             notes[k] = "; ".join(diff)
-    columns = {m: [v.get(k, math.nan) for k in names] for m, v in cols.items()}
+    columns = {m: {k: v[k] for k in names if k in v} for m, v in cols.items()}
     for m, v in cols.items():
         if any(k not in v for k in names):
-            columns[f"{m}_status"] = (f"null where the {m} model has no such constant: "
+            columns[f"{m}_status"] = (f"the {m} model has no such constant (left out): "
                                       + ", ".join(k for k in names if k not in v))
     return {"names": names, "columns": columns, "notes": notes, "extra": extra}

@@ -21,7 +21,8 @@ import numpy as np
 
 from autobal.analysis import interrupt
 from autobal.analysis.liquid_balancer_optimum import crescent_volume, optimise
-from autobal.analysis.result import Result, fmt, new_figure, with_statuses
+from autobal.analysis.quantities import Declarations, Quantity, significant
+from autobal.analysis.result import Result, new_figure, with_statuses
 from autobal.models import liquid_balancer as lb
 from autobal.models.liquid_balancer import System
 
@@ -138,6 +139,115 @@ NULL_REASONS = {k: NO_EQUILIBRIUM for k in ("alpha0_deg", "lambda0", "lambda0_pr
 NULL_REASONS |= {"upper_bound": "no upper bound", "optimum_over_R": "no optimum: the objective has no interior "
                  "extremum", "chosen": "no candidate liquid has a finite viscous zone"}
 
+_K20, _P10 = "Khomyak (2020)", "Pashkov (2010), ch. 3"
+_ROWS = ("operating_point", "table", "sweep")  # the results-table columns: a row at the working speed, a table, a sweep
+
+
+def _cols(*keys: str) -> str:
+    """The keys of the results-table columns, in the operating point, the table and the sweep."""
+    return " ".join(f"{r}.{k}" for r in _ROWS for k in keys)
+
+
+def _optima(*keys: str, kind: str = "height volume") -> str:
+    return " ".join(f"optimal_{v}.{k}" for v in kind.split() for k in keys)
+
+
+_OPT_X = ("lower_bound", "upper_bound", "feasible_lower", "feasible_upper", "optimum", "k_D_equals_1_at",
+          "grid_optimum", "grid_step", "grid_difference", "grid.x")
+
+#: every number of the liquid_balancer block (Khomyak 2020, ch. 2-3, App. В/Г; Pashkov 2010, ch. 3): lengths in
+#: mm, volumes in mL, unbalances in g·cm as the thesis writes them; λ0, k_D, γ the source's groups
+QUANTITIES = Declarations(
+    Quantity("operating_point.omega", "rad/s", "ω", "working speed", "rad/s", headline=True),
+    Quantity("operating_point.gamma", "1", "γ", "speed ratio ω/ω_cr", source=f"{_K20}, Eq. (2.5)", headline=True),
+    Quantity("operating_point.lambda0", "1", "λ0", "efficiency e0/e_c, the source's algorithm",
+             source=f"{_K20}, Eqs. (2.13)-(2.14), Table 3.2", headline=True),
+    Quantity("operating_point.lambda0_self_consistent", "1", "λ0⁺", "efficiency, self-consistent closure (extension)",
+             headline=True),
+    Quantity("operating_point.k_D", "1", "k_D", "capacity ratio D0/D", source=f"{_K20}, Eq. (2.9)",
+             headline=True),
+    Quantity("system.D0", "kg*m", "D0", "initial unbalance m_d e_d", "g·cm", headline=True),
+    Quantity("operating_point.D table.D", "kg*m", "D", "unbalance capacity ρV x_p of the liquid", "g·cm",
+             source=f"{_K20}, step 2.8", headline=True),
+    Quantity(_optima("optimum", kind="height"), "m", "h_opt", "optimal chamber height", "mm",
+             source=f"{_K20}, App. В", headline=True),
+    Quantity(_optima("optimum", kind="volume"), "m^3", "V_opt", "optimal liquid volume", "mL",
+             source=f"{_K20}, App. Г, Table 3.3 (48.5-176.7 mL)", headline=True),
+    Quantity(_optima(*_OPT_X, kind="height"), "m", "h", "optimal height: bounds, the grid's optimum and step", "mm"),
+    Quantity(_optima(*_OPT_X, kind="volume") + " liquid_choice.candidates[].V_opt table_3_3.rows[].V_opt", "m^3",
+             "V", "optimal volume: bounds, the grid's optimum and step", "mL"),
+    Quantity(_optima("f") + " " + _cols("f") + " pashkov.*.deflection", "m", "f, s",
+             "deflection of the rotor (2.7); Pashkov's deflection s (3.2)", "mm", source=f"{_K20}, Eq. (2.7)"),
+    Quantity(_optima("lambda0_max", "grid_lambda0", "grid.lambda0", "inverse_lambda0_squared", "k_D",
+                     "optimum_over_R"), "1", "λ0, k_D, h/R",
+             "λ0 and k_D at the optimum (λ0 unbounded where k_D = 1), on the grid; 1/λ0² the objective"),
+    Quantity(_optima("alpha0_deg") + " " + _cols("alpha0_deg") + " extremum.alpha0_deg", "deg", "α0",
+             "angle of the liquid's unbalance", source=f"{_K20}, Eq. (2.13)"),
+    Quantity(_cols("delta_deg", "phi_deg"), "deg", "δ, φ", "phase lag of the deflection, angle φ",
+             source=f"{_K20}, Eq. (2.5)"),
+    Quantity("table.omega", "rad/s", "ω", "speed of a table row", "rad/s"),
+    Quantity(_cols("gamma", "G", "k_D", "lambda0", "lambda0_self_consistent", "lambda0_self_consistent_minus")
+             + " sweep.lambda0_printed sweep.lambda0_program sweep.lambda0_corrected operating_point.zeta_over_ec "
+               "operating_point.extremum_k_star operating_point.extremum_lambda0_max extremum.k_star "
+               "extremum.lambda0_max", "1", "γ, G, k_D, λ0",
+             "the source's groups: speed ratio, deflection ratio f/e, capacity ratio, efficiency (three variants of "
+             "(2.13), the self-consistent ± branches), the extremum k*, λ_max", source=f"{_K20}, Eqs. (2.5)-(2.14)"),
+    Quantity("operating_point.r table.r system.r pashkov.*.sufficiency.r", "m", "r",
+             "free-surface radius of the liquid", "mm", source=f"{_K20}, step 2.3"),
+    Quantity("operating_point.x_p table.x_p", "m", "x_p", "offset of the liquid's centroid", "mm",
+             source=f"{_K20}, step 2.8"),
+    Quantity("operating_point.paraboloid.z_star operating_point.paraboloid.rho_bottom "
+             "operating_point.paraboloid.rho_top", "m", "z*, ρ", "vertex height and radii of the free surface",
+             "mm"),
+    Quantity("operating_point.paraboloid.a", "1/m", "a", "curvature of the paraboloid free surface"),
+    Quantity("system.D0_gcm table_3_3.rows[].D0_gcm table_3_3.rows[].capacity_gcm "
+             "table_3_3.rows[].published_capacity_gcm", "g*cm", "D", "unbalance and capacity, as Table 3.3",
+             source=f"{_K20}, Table 3.3"),
+    Quantity("table_3_3.rows[].D0", "kg*m", "D0", "initial unbalance of a Table 3.3 row", "g·cm"),
+    Quantity("system.m_l system.M_sys system.rho_pi_h_R2 system.rho_pi_h_r2 table_3_3.rows[].m_d pashkov.m "
+             "pashkov.*.full_liquid_mass pashkov.*.nested_liquid_mass pashkov.*.limit_mass", "kg", "m",
+             "masses: liquid, system, full chamber ρπhR², inside the free surface; Pashkov's m, full and limit "
+             "liquid masses", source=f"{_P10}, Eqs. (3.2)-(3.14)"),
+    Quantity("system.n system.two_n", "1/s", "n", "damping coefficient n = θω_p/(2π), 2n", source=f"{_K20}, Table 3.1"),
+    Quantity("system.zeta_damping", "1", "n/ω_cr", "damping ratio"),
+    Quantity("system.e_f system.R_minus_r pashkov.e0 pashkov.*.eccentricity_high_speed pashkov.*.eccentricity_3_7 "
+             "pashkov.*.sufficiency.wall_margin pashkov.*.sufficiency.partition_margin pashkov.*.radii", "m",
+             "e, R − r", "eccentricities, margins of the liquid to the walls, chamber radii", "mm",
+             source=f"{_P10}, Eqs. (3.4), (3.7)-(3.11)"),
+    Quantity("system.chamber_volume pashkov.*.volumes", "m^3", "V", "chamber volume πR²h, liquid volumes", "mL"),
+    Quantity("pashkov.*.critical_speed", "rad/s", "ω_k", "critical speed with the liquid", "rad/s",
+             source=f"{_P10}, Eq. (3.3)"),
+    Quantity("pashkov.kappa pashkov.*.efficiency pashkov.*.efficiency_nested pashkov.*.psi", "1", "E_e, ψ",
+             "efficiency calculators (printed sum and the nested alternative), ψ = 1/E_e",
+             source=f"{_P10}, Eqs. (3.9), (3.14)"),
+    Quantity("viscous_zone.nu", "m^2/s", "ν", "kinematic viscosity"),
+    Quantity("viscous_zone.xi_rad", "rad", "ξ", "arc angle of (2.15)"),
+    Quantity("viscous_zone.xi_deg viscous_zone.beta_star_deg viscous_zone.zone_half_width_deg "
+             "liquid_choice.candidates[].xi_deg", "deg", "ξ, β*, Δ*", "arc angle, friction angle, half-width of "
+             "the viscous zone", source=f"{_K20}, Eq. (2.15)"),
+    Quantity("viscous_zone.z_program viscous_zone.sin_beta_star viscous_zone.sinus_literal viscous_zone.q "
+             "viscous_zone.lambda0_zone_min viscous_zone.lambda0_zone_max viscous_zone.zone_without_equilibrium "
+             "liquid_choice.candidates[].sin_beta_star liquid_choice.candidates[].k_D "
+             "liquid_choice.candidates[].lambda0_max", "1", "sin β*, q, λ0",
+             "the viscous zone's groups and its λ0 range; the liquid choice's groups", source=f"{_K20}, App. Г"),
+    Quantity("liquid_choice.candidates[].density", "kg/m^3", "ρ", "density of a candidate liquid"),
+    Quantity("liquid_choice.candidates[].viscosity", "Pa*s", "μ", "dynamic viscosity of a candidate liquid"),
+    Quantity("table_3_2.rows[].*", "1", "γ, λ0", "Table 3.2: published theory and experiment beside the toolkit",
+             source=f"{_K20}, Table 3.2"),
+    Quantity("table_3_2.max_theory_experiment_pct table_3_2.max_self_consistent_experiment_pct "
+             "table_3_2.rows[].theory_minus_experiment_pct table_3_2.rows[].self_consistent_vs_experiment_pct "
+             "table_3_3.rows[].documented_vs_experiment_pct table_3_3.rows[].crescent_vs_experiment_pct "
+             "table_3_3.rows[].published_vs_experiment_pct", "%", "", "relative differences"),
+    Quantity("table_3_3.rows[].V_opt_mL table_3_3.rows[].V_opt_crescent_mL table_3_3.rows[].published_V_opt_mL "
+             "table_3_3.rows[].experiment_V_opt_mL", "mL", "V_opt", "optimal volumes as Table 3.3",
+             source=f"{_K20}, Table 3.3"),
+    Quantity("table_3_3.rows[].k_D table_3_3.rows[].published_k_D", "1", "k_D", "capacity ratio at the optimum"),
+    Quantity("table_3_3.height", "m", "h", "chamber height of the Table 3.3 study", "mm"),
+    Quantity("table_3_3.speed", "rad/s", "ω", "speed of the Table 3.3 study", "rad/s"),
+    Quantity("optimal_height.solver.iterations optimal_volume.solver.iterations", "1", "", "IPOPT iterations"),
+    Quantity("run_time_s", "s", "t", "wall time"),
+)
+
 
 @dataclass
 class LiquidBalancerResult(Result):
@@ -148,6 +258,7 @@ class LiquidBalancerResult(Result):
 
     data: dict = field(default_factory=dict)
     name = "liquid_balancer"
+    quantities = QUANTITIES
 
     @property
     def efficiency(self) -> float | None:
@@ -170,50 +281,69 @@ class LiquidBalancerResult(Result):
     def to_dict(self) -> dict:
         return with_statuses(self.data, NULL_REASONS)
 
+    def verdict(self) -> tuple[bool, str]:
+        """The one verdict: a balancing equilibrium at the working speed and enough liquid for the deflection
+        (R - r >= f, Pashkov (2010))."""
+        op = self.data["operating_point"]
+        eq, enough = op["equilibrium_exists"], op.get("sufficiency_ok")
+        words = (f"balancing equilibrium at γ = {significant(op['gamma'])} (λ0 = {significant(op['lambda0'])})" if eq
+                 else f"NO balancing equilibrium at γ = {significant(op['gamma'])}: {op.get('reason')}")
+        if enough is not None:
+            words += ("; the liquid suffices (R − r ≥ f)" if enough else
+                      "; the liquid does NOT suffice: the deflection f exceeds the liquid layer R − r (Pashkov 2010)")
+        return bool(eq and enough is not False), words
+
     def summary(self) -> str:
         d = self.data
         op, st = d["operating_point"], d["settings"]
-        lines = [f"liquid balancer ({st['variant']} (2.13), f from {st['deflection']} eccentricity): "
-                 f"gamma = {op['gamma']:.4g}, delta = {op['delta_deg']:.4g} deg, k_D = {op['k_D']:.4g}, "
-                 f"lambda0 = {fmt(op['lambda0'])}{' (' + op['reason'] + ')' if op['reason'] else ''}; "
-                 f"self-consistent lambda0+ = {fmt(op['lambda0_self_consistent'])}"]
-        t = d["table"]
-        lines.append(f"  {'gamma':>6s} {'delta deg':>10s} {'k_D':>10s} {'alpha0 deg':>10s} {'lambda0':>10s} "
-                     f"{'self-cons.':>10s}  note")
-        for i in range(len(t["gamma"])):
-            lines.append(f"  {t['gamma'][i]:6.3g} {t['delta_deg'][i]:10.4f} {fmt(t['k_D'][i]):>10s} "
-                         f"{fmt(t['alpha0_deg'][i]):>10s} {fmt(t['lambda0'][i]):>10s} "
-                         f"{fmt(t['lambda0_self_consistent'][i]):>10s}  {t['reason'][i]}")
-        if "table_3_2" in d:
-            c = d["table_3_2"]
-            lines.append(f"  Table 3.2: max |theory - experiment|/theory = {c['max_theory_experiment_pct']:.2f} % "
-                         f"(thesis: <= 16 %); self-consistent vs experiment max "
-                         f"{c['max_self_consistent_experiment_pct']:.1f} %")
+        ok, words = self.verdict()
+        lines = [f"liquid balancer ({st['variant']} (2.13), f from the {st['deflection']} eccentricity)",
+                 f"  {'ok' if ok else 'NOT OK'}: {words}", *QUANTITIES.lines(d)]
         for key in ("optimal_height", "optimal_volume"):
-            if key in d:
-                o = d[key]
-                lines.append(f"  {key}: {o['variable']} = {fmt(o['optimum'])} (grid {fmt(o.get('grid_optimum'))}, "
-                             f"step {fmt(o.get('grid_step'))}), k_D = {fmt(o['k_D'])}, lambda0 = "
-                             f"{fmt(o['lambda0_max'])} {o['reason']}")
+            o = d.get(key) or {}
+            if o.get("singular"):  # a headline far from the published optimum says why
+                lines.append(f"  {key.replace('_', ' ')}: k_D = 1 (complete balancing), λ0 unbounded there "
+                             f"({significant(o['lambda0_max'])} is how close IPOPT came, not an efficiency)")
+        q = QUANTITIES.find
+        delta, f, lam = q("table.delta_deg"), q("table.f"), q("table.lambda0")
+        lines.append(f"  {'gamma':>6s} {'delta ' + delta.display:>10s} {'f ' + f.display:>9s} {'k_D':>8s} "
+                     f"{'lambda0':>8s} {'self-cons.':>10s}  note")
+        t = d["table"]
+        for i in range(len(t["gamma"])):
+            lines.append(f"  {significant(t['gamma'][i]):>6s} {significant(t['delta_deg'][i]):>10s} "
+                         f"{significant(f.shown(t['f'][i])):>9s} {significant(t['k_D'][i]):>8s} "
+                         f"{significant(lam.shown(t['lambda0'][i])):>8s} "
+                         f"{significant(t['lambda0_self_consistent'][i]):>10s}  {t['reason'][i]}")
         if "liquid_choice" in d:
             lines.append(f"  liquid chosen by viscosity: {d['liquid_choice']['chosen']}")
         pk = d["pashkov"]
         for key in ("single", "multi"):
             if key in pk:
                 b = pk[key]
-                extra = (f", omega_k = {b['critical_speed']:.4g} rad/s, s = {b['deflection']:.4g} m, sufficient: "
-                         f"{b['sufficiency']['all_ok']}" if "sufficiency" in b else "")
-                lines.append(f"  Pashkov {key}: E_e = {b['efficiency']:.5g} (nested alternative "
-                             f"{b['efficiency_nested']:.5g}){extra}")
+                extra = (f", ω_k = {q('pashkov.single.critical_speed').text(b['critical_speed'])}, s = "
+                         f"{q('pashkov.single.deflection').text(b['deflection'])}, sufficient: "
+                         f"{'yes' if b['sufficiency']['all_ok'] else 'NO'}" if "sufficiency" in b else "")
+                lines.append(f"  Pashkov {key}: E_e = {significant(b['efficiency'])} (nested alternative "
+                             f"{significant(b['efficiency_nested'])}){extra}")
+        if "table_3_2" in d:
+            c = d["table_3_2"]
+            lines.append(f"  validation against the source: Table 3.2 max |theory - experiment|/theory = "
+                         f"{c['max_theory_experiment_pct']:.2f} % (thesis: <= 16 %); self-consistent vs experiment max "
+                         f"{c['max_self_consistent_experiment_pct']:.1f} %; the documented algorithm differs "
+                         f"(λ0 = {significant(op['lambda0'])} at γ = {significant(op['gamma'])}): D ≫ D0")
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
-        out = {"liquid_balancer_table.csv": self.data["table"],
-               "liquid_balancer_sweep.csv": {k: v for k, v in self.data["sweep"].items() if k != "reason"}}
+        """The results table, the sweep and the Tables 3.2/3.3 comparisons, each column headed with its display
+        unit (f in mm, D in g·cm, ω in rad/s; '[1]' for the source's groups)."""
+        out = {"liquid_balancer_table.csv": QUANTITIES.columns(self.data["table"], "table"),
+               "liquid_balancer_sweep.csv": QUANTITIES.columns({k: v for k, v in self.data["sweep"].items()
+                                                                if k != "reason"}, "sweep")}
         for key in ("table_3_2", "table_3_3"):
             if key in self.data:
                 rows = self.data[key]["rows"]
-                out[f"liquid_balancer_{key}.csv"] = {k: [r[k] for r in rows] for k in rows[0]}
+                out[f"liquid_balancer_{key}.csv"] = QUANTITIES.columns({k: [r[k] for r in rows] for k in rows[0]},
+                                                                       f"{key}.rows[]")
         return out
 
     def draw(self, ax) -> None:
@@ -235,6 +365,10 @@ class LiquidBalancerResult(Result):
         ax.set_ylim(0, 6)
         ax.set_xlabel(r"speed ratio $\gamma = \omega/\omega_{cr}$")
         ax.set_ylabel(r"self-balancing efficiency $\lambda_0 = e_0/e_c$")
+        op = d["operating_point"]
+        rpm = op["omega"] / op["gamma"] * 30 / math.pi  # omega_cr in rpm: the speed on top
+        ax.secondary_xaxis("top", functions=(lambda g: g * rpm, lambda n: n / rpm)).set_xlabel("speed, rpm",
+                                                                                                fontsize=8)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
 
@@ -243,7 +377,7 @@ class LiquidBalancerResult(Result):
         d = self.data
         fig, ax = new_figure(figsize=(6.4, 4.6))
         self.draw(ax)
-        ax.set_title(d["title"], fontsize=9)
+        fig.suptitle(d["title"], fontsize=9)
         figs = {"fig_liquid_efficiency.png": fig}
         opts = [k for k in ("optimal_height", "optimal_volume") if k in d and len(d[k]["grid"]["x"])]
         if opts:

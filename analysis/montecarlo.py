@@ -37,6 +37,7 @@ from autobal.analysis.montecarlo_statics import (
     sensitivities,
     simulate,
 )
+from autobal.analysis.quantities import Declarations, Quantity, significant
 from autobal.analysis.result import Result, failed_head, new_figure, with_statuses
 from autobal.analysis.sampling import Sampler, correlation_matrix, marginals, relative_standard_errors, statistics
 from autobal.analysis.statics import RESIDUAL_TOL, StaticsSolver
@@ -60,6 +61,66 @@ PARAMETER_NAMES = {  # the random groups of (2.18) by what they are
     "psi_in": r"supply pressure $\psi_{in} = p_{in}/p_B$",
 }
 
+#: exact output (a group of (2.18)) -> its physical quantity in ``dimensional`` and the scale it is the ratio to
+DIMENSIONAL = {"u": ("z", "z_B"), "xi": ("x", "x_B"), "psi2": ("p2", "p_B"), "psi3": ("p3", "p_B"),
+               "psi_e": ("p_e", "p_B"), "psi_cam": ("p_cam", "p_B")}
+DIMENSIONAL_NAMES = tuple(name for name, _ in DIMENSIONAL.values())
+#: the statistics that scale with the quantity (cv, spread and the counts do not)
+SCALED = ("nominal", "mean", "std", "band_low", "band_high")
+
+_P14 = "Pavlenko (2014), ch. 3"
+_STATS = " ".join(f"{part}.*.{k}" for part in ("exact", "source") for k in ("cv", "spread", "valid", "invalid"))
+_AFC_UM = "afc.nominal_um afc.mean afc.std afc.band_low afc.band_high afc.at.*.nominal_um " \
+          "afc.at.*.mean_um afc.at.*.std_um afc.quantiles.** afc.nominal_peaks[].amplitude_um"
+
+#: every number of the montecarlo block: the source's sampled groups and outputs (u = z/z_B, ψ = p/p_B, q = Q/Q_B)
+#: dimensionless, beside them the physical gap, pressures (``dimensional``) and leak flows Q in SI
+QUANTITIES = Declarations(
+    Quantity("reference.p1", "Pa", "p1", "discharge pressure of the reference point", headline=True),
+    Quantity("reference.z_mean", "m", "z̄", "face gap, mean over the samples", "µm", headline=True),
+    Quantity("reference.z_std", "m", "σ_z", "face gap, standard deviation", "µm", headline=True),
+    Quantity("reference.gap_spread", "1", "kσ/mean", "spread of the face gap (k = band_sigma)",
+             source=f"{_P14}, conclusion 4 (about 0.20 with k = 3)", headline=True),
+    Quantity("reference.Q_T_mean", "m^3/s", "Q̄_T", "face leak, mean over the samples", headline=True),
+    Quantity("reference.Q_T_std", "m^3/s", "σ_Q", "face leak, standard deviation", headline=True),
+    Quantity("reference.leak_spread", "1", "kσ/mean", "spread of the face leak q_T (k = band_sigma)",
+             source=f"{_P14}, conclusion 4 (about 0.25 with k = 3)", headline=True),
+    Quantity("reference.saturated_fraction", "1", "", "share of samples with the regulator valve on its stop",
+             headline=True),
+    Quantity("reference.psi1 psi1 reference_psi1", "1", "ψ1", "discharge pressure ratio p1/p_B",
+             source=f"{_P14}, Figs 3.3-3.4"),
+    Quantity("p1", "Pa", "p1", "discharge pressures of the grid"),
+    Quantity("scales.p_B", "Pa", "p_B", "base pressure of the ratios ψ"),
+    Quantity("scales.z_B", "m", "z_B", "base gap of the ratio u", "µm"),
+    Quantity("scales.x_B", "m", "x_B", "base valve opening of the ratio ξ", "mm"),
+    Quantity("dimensional.z.**", "m", "z", "face gap over the samples: nominal, mean, std, bands, quantiles",
+             "µm"),
+    Quantity("dimensional.x.**", "m", "x", "valve opening over the samples", "mm"),
+    Quantity("dimensional.p2.** dimensional.p3.** dimensional.p_e.** dimensional.p_cam.**", "Pa", "p",
+             "disc-chamber, cavity, barrier-chamber and valve-chamber pressures over the samples"),
+    Quantity(_STATS, "1", "cv, kσ/mean, N", "coefficient of variation, spread, valid and invalid samples"),
+    Quantity("exact.Q_T.** exact.Q_e.** " + " ".join(f"sensitivity.{s}.{k}" for s in ("jacobian", "std_first_order",
+                                                                                    "std_monte_carlo")
+                                                   for k in ("Q_T", "Q_e")), "m^3/s", "Q_T, Q_e",
+             "face and barrier leak flows over the samples (the jacobian: per unit of the group)"),
+    Quantity("exact.** source.**", "1", "u, ξ, ψ, q", "the source's output groups over the samples (exact statics, "
+             "the source's closed forms): nominal, mean, std, bands, quantiles", source=f"{_P14}, Figs 3.3-3.6"),
+    Quantity("sensitivity.**", "1", "∂y/∂θ", "sensitivities, elasticities, first-order and Monte Carlo stds of "
+             "the groups, their ratio and variance shares", source=f"{_P14}, §3.2"),
+    Quantity("distributions.** sample_mean sample_std correlation", "1", "θ",
+             "the sampled groups: distribution parameters, sample mean and std, correlations",
+             source=f"{_P14}, Eq. (2.18)"),
+    Quantity("saturated_fraction", "1", "", "share of samples with the regulator valve on its stop"),
+    Quantity("samples seed chunk_size band_sigma afc.samples afc.psi1 afc.cv afc.spread afc.valid afc.invalid "
+             "afc.at.*.cv", "1", "", "counts, the band width k, the AFC's operating ratio and coefficients of "
+             "variation"),
+    Quantity("afc.omega afc.at.*.omega afc.nominal_peaks[].omega", "rad/s", "ω", "frequency of the AFC",
+             "rad/s"),
+    Quantity(_AFC_UM, "um", "A_u", "face-gap amplitude over the samples (nominal, mean, std, bands, quantiles)",
+             source=f"{_P14}, Fig. 3.7"),
+    Quantity("time_s time_monte_carlo_s afc.time_s", "s", "t", "wall time"),
+)
+
 
 @dataclass
 class MonteCarloResult(Result):
@@ -70,6 +131,7 @@ class MonteCarloResult(Result):
     data: dict
     samples: dict = field(default_factory=dict, repr=False)
     name = "montecarlo"
+    quantities = QUANTITIES
 
     @property
     def discharge_ratios(self) -> list[float]:
@@ -98,45 +160,68 @@ class MonteCarloResult(Result):
                              "null where the valve opening xi has no spread (the valve on its stop at every "
                              "sample) or the source's closed form has no valve opening (the valve saturates)")
 
+    def verdict(self) -> tuple[bool, str]:
+        """The one verdict: the face gap and leak at the reference discharge ratio with their spreads, and whether
+        the exact statics solved for (nearly) every sample (more than MAX_INVALID_SHARE unsolved is a failure)."""
+        d, q = self.data, QUANTITIES.find
+        r, k = d["reference"], d["band_sigma"]
+        invalid = sum(d["exact"]["u"]["invalid"])
+        return not self.failures(), (
+            f"at ψ1 = {r['psi1']:g}: face gap {q('reference.z_mean').text(r['z_mean'])} ± "
+            f"{q('reference.z_std').text(r['z_std'])} (spread {k:g}σ/mean {100 * r['gap_spread']:.3g} %), face leak "
+            f"{q('reference.Q_T_mean').text(r['Q_T_mean'])} (spread {100 * r['leak_spread']:.3g} %); "
+            + (f"{invalid} of {d['samples'] * len(d['psi1'])} sample solves without a converged exact solution, left "
+               "out of the statistics" if invalid else "every sample has a converged exact solution"))
+
     def summary(self) -> str:
         d = self.data
+        ok, words = self.verdict()
         lines = [*failed_head(self.failures()),
                  f"monte carlo: {d['samples']} samples x {len(d['psi1'])} discharge ratios, seed {d['seed']}, "
-                 f"{d['executor']}, {d['time_s']:.2f} s; bands mean +- {d['band_sigma']:g} sigma"]
-        ex, src = d["exact"], d["source"]
-        lines.append(f"  {'psi1':>6s} {'m_u':>8s} {'cv_u':>7s} {'m_qT':>8s} {'cv_qT':>7s} | source: "
-                     f"{'m_u':>8s} {'cv_u':>7s} {'m_qT':>8s} {'cv_qT':>7s} | saturated invalid")
+                 f"{d['executor']}, {d['time_s']:.2f} s; bands mean +- {d['band_sigma']:g} sigma",
+                 f"  {'ok' if ok else 'NOT OK'}: {words}", *QUANTITIES.lines(d)]
+        ex, dim, q = d["exact"], d["dimensional"], QUANTITIES.find
+        units = {k: q(key).display for k, key in (("p", "p1"), ("z", "dimensional.z.mean"),
+                                                  ("Q", "exact.Q_T.mean"))}
+        lines.append(f"  {'psi1':>6s} {'p1 ' + units['p']:>10s} {'z ' + units['z']:>9s} {'std z':>7s} {'spread u':>8s} "
+                     f"{'Q_T ' + units['Q']:>9s} {'spread q_T':>10s} saturated invalid")
         for j, p in enumerate(d["psi1"]):
-            lines.append(f"  {p:6.3f} {ex['u']['mean'][j]:8.4f} {ex['u']['cv'][j]:7.4f} {ex['q_T']['mean'][j]:8.4f} "
-                         f"{ex['q_T']['cv'][j]:7.4f} |         {src['u']['mean'][j]:8.4f} {src['u']['cv'][j]:7.4f} "
-                         f"{src['q_T']['mean'][j]:8.4f} {src['q_T']['cv'][j]:7.4f} | "
-                         f"{d['saturated_fraction'][j]:9.3f} {ex['u']['invalid'][j]:7d}")
+            lines.append(f"  {p:6.3f} {significant(q('p1').shown(d['p1'][j])):>10s} "
+                         f"{significant(q('dimensional.z.mean').shown(dim['z']['mean'][j])):>9s} "
+                         f"{significant(q('dimensional.z.std').shown(dim['z']['std'][j])):>7s} "
+                         f"{significant(ex['u']['spread'][j]):>8s} "
+                         f"{significant(q('exact.Q_T.mean').shown(ex['Q_T']['mean'][j])):>9s} "
+                         f"{significant(ex['q_T']['spread'][j]):>10s} {d['saturated_fraction'][j]:9.3f} "
+                         f"{ex['u']['invalid'][j]:7d}")
         s = d["sensitivity"]
         for k in ("u", "q_T"):
             lines.append(f"  first-order std of {k} / Monte Carlo std: "
                          + ", ".join(f"{r:.3f}" for r in s["std_ratio"][k]))
-        j = d["psi1"].index(d["reference_psi1"]) if d["reference_psi1"] in d["psi1"] else 0
-        lines.append(f"  at psi1 = {d['psi1'][j]:g}: {d['band_sigma']:g} sigma / mean of u {ex['u']['spread'][j]:.3f}, "
-                     f"of q_T {ex['q_T']['spread'][j]:.3f} (exact); {src['u']['spread'][j]:.3f}, "
-                     f"{src['q_T']['spread'][j]:.3f} (source's forms); source: 0.20 and 0.25")
+        src, j = d["source"], self._reference()
+        lines.append(f"  validation against the source: at psi1 = {d['psi1'][j]:g} the source's closed forms give "
+                     f"{d['band_sigma']:g} sigma / mean of u {src['u']['spread'][j]:.3f}, of q_T "
+                     f"{src['q_T']['spread'][j]:.3f} (exact {ex['u']['spread'][j]:.3f}, {ex['q_T']['spread'][j]:.3f});"
+                     " Pavlenko (2014), conclusion 4: 0.20 and 0.25")
         if "afc" in d:
             a = d["afc"]
+            om, amp = q("afc.at.x.omega"), q("afc.at.x.mean_um")
             lines.append(f"  AFC ({a['model']} model, {a['samples']} samples, {a['time_s']:.2f} s): "
-                         + "; ".join(f"{k} {v['omega']:.0f} rad/s: nominal {v['nominal_um']:.2f} um, mean "
-                                     f"{v['mean_um']:.2f} um, cv {v['cv']:.3f}" for k, v in a["at"].items()))
+                         + "; ".join(f"{k.replace('_', ' ')} {om.text(v['omega'])}: nominal "
+                                     f"{amp.text(v['nominal_um'])}, mean {amp.text(v['mean_um'])}, cv {v['cv']:.3f}"
+                                     for k, v in a["at"].items()))
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
+        """montecarlo_statics.csv: per discharge ratio the statistics of the source's groups, the leak flows (L/s)
+        and, beside them, the gap (µm), valve opening (mm) and pressures (MPa); every header names its unit."""
         d = self.data
         out = {}
-        cols = {"psi1": d["psi1"], "saturated_fraction": d["saturated_fraction"]}
-        for part, keys in (("exact", OUTPUTS), ("source", SOURCE_OUTPUTS)):
+        cols = {"psi1": d["psi1"], "p1": d["p1"], "saturated_fraction": d["saturated_fraction"]}
+        stats = ("nominal", "mean", "std", "band_low", "band_high", "invalid")
+        for part, keys in (("exact", OUTPUTS), ("source", SOURCE_OUTPUTS), ("dimensional", DIMENSIONAL_NAMES)):
             for k in keys:
-                s = d[part][k]
-                for stat in ("nominal", "mean", "std", "band_low", "band_high", "invalid"):
-                    if stat in s:
-                        cols[f"{part}_{k}_{stat}"] = s[stat]
-        out["montecarlo_statics.csv"] = cols
+                cols |= {f"{part}.{k}.{stat}": d[part][k][stat] for stat in stats if stat in d[part][k]}
+        out["montecarlo_statics.csv"] = {name.replace(".", "_"): v for name, v in QUANTITIES.columns(cols, "").items()}
         sens = d["sensitivity"]
         rows = {"psi1": [], "output": [], **{f"d_d_{n}": [] for n in d["parameters"]}}
         for j, p in enumerate(d["psi1"]):
@@ -148,9 +233,8 @@ class MonteCarloResult(Result):
         out["montecarlo_sensitivities.csv"] = rows
         if "afc" in d:
             a = d["afc"]
-            out["montecarlo_afc.csv"] = {"omega_rad_s": a["omega"], "nominal_um": a["nominal_um"],
-                                         "mean_um": a["mean"], "std_um": a["std"],
-                                         "band_low_um": a["band_low"], "band_high_um": a["band_high"]}
+            out["montecarlo_afc.csv"] = QUANTITIES.columns({k: a[k] for k in ("omega", "nominal_um", "mean", "std",
+                                                                              "band_low", "band_high")}, "afc")
         return out
 
     def _band(self, s: dict) -> tuple[np.ndarray, np.ndarray, str]:
@@ -165,8 +249,7 @@ class MonteCarloResult(Result):
         return np.asarray(s["band_low"], float), np.asarray(s["band_high"], float), rf"mean $\pm {k:g}\sigma$"
 
     def _reference(self) -> int:
-        d = self.data
-        return d["psi1"].index(d["reference_psi1"]) if d["reference_psi1"] in d["psi1"] else 0
+        return reference_index(self.data)
 
     def figures(self) -> dict:
         """Bands against the discharge ratio with the sensitivities (Figs 3.3-3.6), histograms of the
@@ -188,6 +271,14 @@ class MonteCarloResult(Result):
             ax.set_xlabel(r"discharge pressure ratio $\psi_1 = p_1/p_B$")
             ax.set_ylabel(lab)
             ax.grid(alpha=0.3)
+            if "scales" in d:  # the physical discharge pressure on top
+                p_b = d["scales"]["p_B"] / 1e6
+                ax.secondary_xaxis("top", functions=(lambda x, p_b=p_b: x * p_b, lambda p, p_b=p_b: p / p_b)
+                                   ).set_xlabel("discharge pressure $p_1$, MPa", fontsize=8)
+        if "scales" in d:  # the face gap in µm beside u = z/z_B (q_T is over a per-sample base flow: no second axis)
+            z_b = d["scales"]["z_B"] * 1e6
+            axes[0].secondary_yaxis("right", functions=(lambda u: u * z_b, lambda z: z / z_b)).set_ylabel(
+                "face gap z, µm")
         sens = d["sensitivity"]
         j = self._reference()
         names = d["parameters"]
@@ -313,6 +404,8 @@ def run(dev: DeviceDesign, settings, executor, title: str = "", solver=None, dev
         "sensitivity": sens,
         "time_s": time.perf_counter() - t0, "time_monte_carlo_s": t_mc,
     }
+    data |= dimensional(exact, dev.scales, grid)
+    data["reference"] = reference(data)
     if settings.afc is not None:
         t1 = time.perf_counter()
         afc = afc_study(device, settings.afc, settings.seed, executor, settings.band_sigma, settings.quantiles)
@@ -325,6 +418,33 @@ def run(dev: DeviceDesign, settings, executor, title: str = "", solver=None, dev
                         for p, k in zip(grid, exact["u"]["invalid"], strict=True)
                         if k > MAX_INVALID_SHARE * settings.samples]
     return MonteCarloResult(data, samples=raw)
+
+
+def dimensional(exact: dict, scales: dict, grid) -> dict:
+    """The gap, valve opening and pressures of the exact statics in SI beside their groups (z = u z_B,
+    p = psi p_B ...; Pavlenko (2014), Eq. (2.18)): the statistics that scale with them, and the scales."""
+    sc = {k: float(scales[k]) for k in ("p_B", "z_B", "x_B")}
+    out = {}
+    for k, (name, base) in DIMENSIONAL.items():
+        s = exact[k]
+        out[name] = {stat: np.asarray(s[stat], float) * sc[base] for stat in SCALED} | {
+            "quantiles": {q: np.asarray(v, float) * sc[base] for q, v in s["quantiles"].items()}}
+    return {"scales": sc, "p1": np.asarray(grid, float) * sc["p_B"], "dimensional": out}
+
+
+def reference_index(data: dict) -> int:
+    """Index of the reference discharge ratio on the grid (the first grid point if it is not on the grid)."""
+    return data["psi1"].index(data["reference_psi1"]) if data["reference_psi1"] in data["psi1"] else 0
+
+
+def reference(data: dict) -> dict:
+    """The headline numbers at the reference discharge ratio (the first grid point if it is not on the grid)."""
+    j = reference_index(data)
+    z, ex = data["dimensional"]["z"], data["exact"]
+    return {"psi1": data["psi1"][j], "p1": float(data["p1"][j]), "z_mean": float(z["mean"][j]),
+            "z_std": float(z["std"][j]), "gap_spread": float(ex["u"]["spread"][j]),
+            "Q_T_mean": float(ex["Q_T"]["mean"][j]), "Q_T_std": float(ex["Q_T"]["std"][j]),
+            "leak_spread": float(ex["q_T"]["spread"][j]), "saturated_fraction": float(data["saturated_fraction"][j])}
 
 
 def accuracy(data: dict, raw: dict) -> dict:

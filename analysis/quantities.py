@@ -27,6 +27,8 @@ DISPLAY_UNITS = {
     "m³": ("m^3", 1.0), "L": ("m^3", 1e-3), "cm³": ("m^3", 1e-6), "mL": ("m^3", 1e-6),
     "Pa": ("Pa", 1.0), "kPa": ("Pa", 1e3), "MPa": ("Pa", 1e6), "bar": ("Pa", 1e5),
     "N": ("N", 1.0), "kN": ("N", 1e3),
+    "N/m": ("N/m", 1.0), "kN/m": ("N/m", 1e3), "MN/m": ("N/m", 1e6),
+    "N·s/m": ("N*s/m", 1.0), "kN·s/m": ("N*s/m", 1e3),
     "m³/s": ("m^3/s", 1.0), "L/s": ("m^3/s", 1e-3), "L/min": ("m^3/s", 1e-3 / 60), "m³/h": ("m^3/s", 1 / 3600),
     "rad/s": ("rad/s", 1.0), "rpm": ("rad/s", 2 * math.pi / 60), "Hz": ("rad/s", 2 * math.pi),
     "s": ("s", 1.0), "ms": ("s", 1e-3),
@@ -101,6 +103,9 @@ class Quantity:
         Where the value (or its definition) is published: author, year, equation/table/figure.
     headline : bool
         One of the numbers a reader looks at first (the summary, the notebook table).
+    beside : str
+        A unit shown in brackets after the display unit; default :data:`BESIDE` (rpm beside a speed), "Hz"
+        beside a vibration frequency.
     """
 
     key: str
@@ -110,6 +115,7 @@ class Quantity:
     display: str = ""
     source: str = ""
     headline: bool = False
+    beside: str | None = None
 
     def __post_init__(self):
         shown = self.display or display_unit_of(self.unit)
@@ -130,7 +136,7 @@ class Quantity:
         shown = self.shown(value)
         unit = "" if self.display == "1" else f" {self.display}"
         out = significant(shown, digits) + unit
-        beside = BESIDE.get(self.unit)
+        beside = BESIDE.get(self.unit) if self.beside is None else self.beside
         if beside and self.display != beside and value is not None:
             out += f" ({significant(convert(value, self.unit, beside), digits)} {beside})"
         return out
@@ -142,20 +148,26 @@ def _pattern(key: str) -> re.Pattern:
 
 
 class Declarations:
-    """The declared quantities of one analysis: key path -> :class:`Quantity`."""
+    """The declared quantities of one analysis: key path -> :class:`Quantity`.
 
-    def __init__(self, *quantities: Quantity):
+    ``resolve(path, block)``, optional, declares the keys whose unit is that of a parameter the key or the
+    block names (the values of a scanned parameter, a design variable by its scene path): it returns the
+    :class:`Quantity` of such a key, or None; ``block`` is None where only the path is known."""
+
+    def __init__(self, *quantities: Quantity, resolve=None):
         quantities = (*quantities, *COMMON)
         self.quantities = list(quantities)
+        self.resolve = resolve
         self._exact = {k: q for q in quantities for k in q.keys if "*" not in k}
         self._patterns = [(_pattern(k), q) for q in quantities for k in q.keys if "*" in k]
 
     def __iter__(self):
         return iter(self.quantities)
 
-    def find(self, path: str) -> Quantity | None:
+    def find(self, path: str, block: dict | None = None) -> Quantity | None:
         """The declaration of a key path, or None; an integer key picks an item of a list of records
-        (``peaks.0.omega`` is ``peaks[].omega``) or, last, an element of a list of numbers (``P.0`` is ``P``)."""
+        (``peaks.0.omega`` is ``peaks[].omega``) or, last, an element of a list of numbers (``P.0`` is ``P``);
+        then ``resolve(path, block)``."""
         records = re.sub(r"\.\d+(?=\.)", "[]", path)
         for candidate in (path, re.sub(r"\.\d+$", "[]", records), re.sub(r"\.\d+$", "", records)):
             if candidate in self._exact:
@@ -163,7 +175,7 @@ class Declarations:
             q = next((q for p, q in self._patterns if p.fullmatch(candidate)), None)
             if q is not None:
                 return q
-        return None
+        return None if self.resolve is None else self.resolve(path, block)
 
     def headline(self, block: dict) -> list[tuple[Quantity, str, object]]:
         """(declaration, key, value) of the headline quantities ``block`` holds, in declaration order."""
@@ -181,9 +193,21 @@ class Declarations:
         width = max((len(d) for d, _, _ in rows), default=0)
         return [f"  {d:<{width}s}  {s:<7s} {t}" for d, s, t in rows]
 
+    def columns(self, table: dict, prefix: str) -> dict:
+        """CSV columns of ``table`` (the block's mapping at ``prefix``, column name -> values): a declared numeric
+        column headed 'name [display unit]' in that unit ('[1]' for a group), words and yes/no as they are."""
+        out = {}
+        for name, values in table.items():
+            q = self.find(f"{prefix}.{name}" if prefix else name)
+            if q is None or not any(is_number(v) for v in flatten(values)):
+                out[name] = values
+            else:
+                out[f"{name} [{q.display}]"] = [q.shown(v) if is_number(v) else None for v in values]
+        return out
+
     def undeclared(self, block: dict) -> list[str]:
         """The key paths of ``block``'s numeric leaves that have no declaration."""
-        return list(dict.fromkeys(p for p, _ in leaf_paths(block, "") if self.find(p) is None))
+        return list(dict.fromkeys(p for p, _ in leaf_paths(block, "") if self.find(p, block) is None))
 
 
 MISSING = object()

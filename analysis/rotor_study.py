@@ -15,11 +15,72 @@ import numpy as np
 
 from autobal.analysis import progress
 from autobal.analysis import rotor as R
+from autobal.analysis.quantities import Declarations, Quantity
 from autobal.analysis.result import Result, new_figure
 from autobal.errors import ScenarioError
 from autobal.models.rotor import RotorParams
 
 STEP_TOL = 1e-12  # CVODES tolerance of the step transients checked against the closed form
+
+_P10 = "Pashkov (2010), ch. 2"
+
+#: every number of the rotor_dynamics block: speeds in rad/s (rpm beside), the source's groups dimensionless
+#: (ν = ω/Ω0 and z of Eq. (9), deflections over the eccentricity e, the system unbalance d of (7))
+QUANTITIES = Declarations(
+    Quantity("rotor.omega_cr_rad_s", "rad/s", "ω_cr", "critical speed with the liquid", "rad/s", source=_P10,
+             headline=True),
+    Quantity("rotor.Omega0_rad_s", "rad/s", "Ω0", "natural frequency without liquid", "rad/s",
+             headline=True),
+    Quantity("rotor.psi", "1", "ψ", "liquid mass ratio m1/m", source=_P10, headline=True),
+    Quantity("rotor.zeta0", "1", "ζ0", "damping ratio of the rotor", headline=True),
+    Quantity("rotor.mu1", "1", "μ1", "liquid-to-rotor mass group of Eq. (9)", source=f"{_P10}, Eq. (9)"),
+    Quantity("rotor.n_steady_1_s rotor.n_passage_1_s", "1/s", "n", "damping n = χ/m of the steady state (3) and "
+             "of the passage (8')", source=_P10),
+    Quantity("rotor.n_stationary", "1", "n", "damping group n = χ²/(c m1) of Eq. (9)", source=f"{_P10}, Eq. (9)"),
+    Quantity("stationary.stability.max_real_over_Omega0", "1", "Re λ/Ω0",
+             "stability of the steady whirl: largest real part of the eigenvalues", headline=True),
+    Quantity("stationary.cases[].mu1 stationary.cases[].n", "1", "μ1, n", "the (μ1, n) case of Eq. (9)",
+             source=f"{_P10}, Figs 5-6"),
+    Quantity("stationary.cases[].z_kp stationary.cases[].z_helps stationary.cases[].z1 stationary.cases[].z2 "
+             "stationary.cases[].z_d_max", "1", "z", "speed group z = (ω/Ω0)² of the stationary table's points",
+             source=f"{_P10}, Eq. (9), table §5.1"),
+    Quantity("stationary.cases[].a_kp stationary.cases[].a_inf", "1", "a/e", "whirl amplitude over the eccentricity",
+             source=f"{_P10}, Fig. 5"),
+    Quantity("stationary.cases[].M1 stationary.cases[].M2", "1", "M/(e²c)", "moment group of Fig. 6",
+             source=f"{_P10}, Fig. 6"),
+    Quantity("stationary.cases[].d_max", "1", "d/(m1 e)", "largest system unbalance", source=f"{_P10}, Eq. (7)"),
+    Quantity("stationary.steady_vs_eq9_max_rel_diff stationary.stability.max_eigenvalue_residual "
+             "steps.closed_form_vs_cvodes_max_rel_diff steps.table[].closed_form_vs_cvodes", "1", "",
+             "cross-checks: steady state (3) against (9), eigenpair residual, closed form (5)-(7) against CVODES"),
+    Quantity("steps.table[].omega_from steps.table[].omega_to", "rad/s", "ω", "speed before and after the step",
+             "rad/s", source=f"{_P10}, Figs 3-4"),
+    Quantity("steps.table[].psi passage.table[].psi", "1", "ψ", "liquid mass ratio of the case"),
+    Quantity("steps.table[].d0 steps.table[].d_max steps.table[].d_ss", "1", "d", "system unbalance (7): at the "
+             "step, its peak, the new steady value", source=f"{_P10}, Eq. (7), table §5.3"),
+    Quantity("steps.table[].a_max_over_e steps.table[].a_ss_over_e", "1", "a/e",
+             "whirl amplitude over the eccentricity: peak, new steady value", source=f"{_P10}, table §5.3"),
+    Quantity("steps.table[].t_d_max_ms steps.table[].t_5pct_ms", "ms", "t", "time of the peak of d, time to "
+             "settle within 5 %"),
+    Quantity("passage.table[].n", "1/s", "n", "damping n = χ/m1 of the run", source=f"{_P10}, Figs 7-9"),
+    Quantity("passage.table[].delta_max_over_e", "1", "δ*/e", "peak deflection over the eccentricity",
+             source=f"{_P10}, Fig. 9, table §5.4"),
+    Quantity("passage.table[].d_max", "1", "d*", "peak system unbalance", source=f"{_P10}, Fig. 9"),
+    Quantity("passage.table[].z_delta_max passage.table[].z_d_max", "1", "ν = ω/Ω0", "speed ratio at the peak"),
+    Quantity("passage.crossover_n_star.** passage.crossover_n_star_sensitivity.**", "1/s", "n*",
+             "damping above which the liquid raises the passage peak (per ψ; the second at the sensitivity "
+             "acceleration)", source=f"{_P10}, Fig. 9"),
+    Quantity("passage.acceleration_rad_s2 passage.sensitivity_acceleration_rad_s2", "rad/s^2", "2ε",
+             "angular acceleration of the passage", source=f"{_P10}, Eq. (8')"),
+    Quantity("lewis.table[].zeta", "1", "ζ", "damping ratio", source="Lewis (1932)"),
+    Quantity("lewis.table[].a_star", "1", "a* = α/Ω²", "acceleration group", source="Lewis (1932)"),
+    Quantity("lewis.table[].peak_over_e lewis.table[].undamped_asymptote", "1", "|u|/e",
+             "peak amplitude over the eccentricity; the undamped asymptote 1.4672/√a*", source="Lewis (1932)"),
+    Quantity("lewis.table[].nu_peak lewis.table[].nu_asymptote", "1", "ν = ω/Ω", "speed ratio at the peak"),
+    Quantity("motor_runup.omega_final_rad_s", "rad/s", "ω_end", "speed at the end of the motor run-up", "rad/s",
+             headline=True),
+    Quantity("motor_runup.peak_deflection_over_e", "1", "δ/e", "peak deflection of the run-up over the "
+             "eccentricity", headline=True),
+)
 
 
 @dataclass
@@ -32,6 +93,7 @@ class RotorDynamicsResult(Result):
     data: dict
     curves: dict = field(default_factory=dict, repr=False)
     name = "rotor_dynamics"
+    quantities = QUANTITIES
 
     @property
     def psi(self) -> float:
@@ -46,15 +108,30 @@ class RotorDynamicsResult(Result):
     def to_dict(self) -> dict:
         return self.data
 
+    def verdict(self) -> tuple[bool, str] | None:
+        """The one verdict: the steady whirl's stability (P) over the speed range, else whether the motor
+        run-up passes the critical speed; None when the scene asks for neither."""
+        d = self.data
+        if "stationary" in d:
+            mr = d["stationary"]["stability"]["max_real_over_Omega0"]
+            return mr < 0, (f"steady whirl {'asymptotically stable' if mr < 0 else 'NOT stable'} over the speed "
+                            f"range (max Re λ/Ω0 = {mr:.4g})")
+        if "motor_runup" in d:
+            m = d["motor_runup"]
+            speed = QUANTITIES.find("motor_runup.omega_final_rad_s").text(m["omega_final_rad_s"])
+            return m["passed"], ("the motor run-up passes the critical speed" if m["passed"] else
+                                 f"the motor run-up is captured below the critical speed, at {speed}")
+        return None
+
     def summary(self) -> str:
-        d, lines = self.data, [f"rotor dynamics: psi = {self.data['rotor']['psi']:.4g}, Omega0 = "
-                               f"{self.data['rotor']['Omega0_rad_s']:.4g} rad/s, omega_cr = "
-                               f"{self.data['rotor']['omega_cr_rad_s']:.4g} rad/s"]
+        d = self.data
+        v = self.verdict()
+        lines = ["rotor with a liquid auto-balancer (Pashkov 2010, ch. 2)",
+                 *([f"  {'ok' if v[0] else 'NOT OK'}: {v[1]}"] if v else []), *QUANTITIES.lines(d)]
         if "stationary" in d:
             s = d["stationary"]
-            lines.append(f"  stationary (9): {len(s['cases'])} (mu1, n) cases; (3) = (9) to "
-                         f"{s['steady_vs_eq9_max_rel_diff']:.1e}; stability (P): max Re = "
-                         f"{s['stability']['max_real_over_Omega0']:.4g} Omega0, eigenvalues = lambda +- i nu to "
+            lines.append(f"  stationary (9): {len(s['cases'])} (mu1, n) cases; steady state (3) = (9) to "
+                         f"{s['steady_vs_eq9_max_rel_diff']:.1e}; eigenvalues = lambda +- i nu to "
                          f"{s['stability']['max_eigenvalue_residual']:.1e}")
         if "steps" in d:
             s = d["steps"]
@@ -62,22 +139,21 @@ class RotorDynamicsResult(Result):
                          f"{s['closed_form_vs_cvodes_max_rel_diff']:.1e}")
         if "passage" in d:
             s = d["passage"]
-            cx = ", ".join(f"psi={k}: {v:.3f} 1/s" for k, v in s["crossover_n_star"].items())
-            lines.append(f"  passage (8')-(9'): {len(s['table'])} runs; crossover n*: {cx or '-'}")
+            n_star = QUANTITIES.find("passage.crossover_n_star.x")
+            cx = ", ".join(f"psi = {k}: {n_star.text(v)}" for k, v in s["crossover_n_star"].items())
+            accel = QUANTITIES.find("passage.acceleration_rad_s2").text(s["acceleration_rad_s2"])
+            lines.append(f"  passage (8')-(9') at {accel}: {len(s['table'])} runs; crossover n*: {cx or '-'}")
         if "lewis" in d:
             lines.append(f"  Lewis passage: {len(d['lewis']['table'])} cases")
-        if "motor_runup" in d:
-            m = d["motor_runup"]
-            lines.append(f"  motor run-up: final speed {m['omega_final_rad_s']:.4g} rad/s, "
-                         f"{'passed' if m['passed'] else 'captured below'} omega_cr")
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
         out = {}
         for key, rows in (("steps", "table"), ("passage", "table"), ("lewis", "table"), ("stationary", "cases")):
             if key in self.data:
-                table = self.data[key][rows]
-                out[f"rotor_{key}.csv"] = {k: [r[k] for r in table] for k in table[0]}
+                table = self.data[key][rows]  # headers with their units (ms, rad/s, 1/s; '[1]' for groups)
+                out[f"rotor_{key}.csv"] = QUANTITIES.columns({k: [r[k] for r in table] for k in table[0]},
+                                                             f"{key}.{rows}[]")
         return out
 
     def figures(self) -> dict:
@@ -208,7 +284,8 @@ def step_case(P: RotorParams, w0: float, w1: float, duration: float, points: int
     d_ss, a_ss = float(ss["d"]), float(ss["a"])
     dmax, tmax = R.peak(tau, d)
     out = np.nonzero(np.abs(d - d_ss) > 0.05 * d_ss)[0]
-    return {"step": f"{w0:g}->{w1:g}", "psi": psi, "d0": float(d[0]), "d_max": dmax, "t_d_max_ms": tmax / Om * 1e3,
+    return {"step": f"{w0:g}->{w1:g}", "omega_from": w0, "omega_to": w1, "psi": psi, "d0": float(d[0]),
+            "d_max": dmax, "t_d_max_ms": tmax / Om * 1e3,
             "d_ss": d_ss, "a_max_over_e": R.peak(tau, a)[0], "a_ss_over_e": a_ss,
             "t_5pct_ms": float(tau[out[-1]] / Om * 1e3) if len(out) else 0.0, "closed_form_vs_cvodes": diff,
             "_t": tau / Om, "_d": d}

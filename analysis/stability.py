@@ -13,7 +13,9 @@ grid in one CasADi call).  The runner of ``analyses.stability`` is :func:`autoba
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import re
 from dataclasses import dataclass
 from fractions import Fraction
 
@@ -23,8 +25,9 @@ import scipy.linalg
 from autobal.analysis import progress
 from autobal.analysis.frequency import MODEL_COLOURS, MODEL_LABELS
 from autobal.analysis.linearize import LinearModel, Setup, coefficient_table, jacobians, operator
+from autobal.analysis.quantities import Declarations, Quantity, convert, lookup, significant
 from autobal.analysis.result import Result, new_figure
-from autobal.models.dynamics import LONG_NAMES
+from autobal.models.dynamics import LONG_NAMES, DynamicData
 
 OMEGA_REF = 1000.0  # rad/s, time scale of the reported polynomial coefficients
 
@@ -178,6 +181,86 @@ def _intervals(vals, mask) -> list[list[float]]:
     return out
 
 
+_P14 = "Pavlenko (2014)"
+
+#: name and display unit of each dynamic parameter a map or a scan varies (scene key); its SI unit is its field's
+#: in DynamicData (models/dynamics.py), the one declaration
+_PARAMETER_NAMES = {
+    "rotor_mass": ("rotor mass", "kg"), "pushoff_stiffness": ("push-off stiffness", "MN/m"),
+    "rotor_damping": ("rotor damping", "kN·s/m"), "bulk_modulus": ("bulk modulus", "MPa"),
+    "disc_chamber_volume": ("disc-chamber volume", "cm³"), "cavity_volume": ("cavity volume", "cm³"),
+    "stem_mass": ("regulator stem mass", "kg"), "spring_stiffness": ("regulator spring stiffness", "MN/m"),
+    "stem_damping": ("stem damping", "N·s/m"), "valve_chamber_volume": ("valve-chamber volume", "cm³"),
+    "membrane_chamber_volume": ("membrane-chamber volume", "cm³"), "seat_area": ("valve seat area", "mm²")}
+_SI = {f.name: f.metadata["unit"].replace("**", "^") for f in dataclasses.fields(DynamicData)}
+#: scene key -> the declaration of the dynamic parameter (its values in maps and scans)
+PARAMETERS = {k: Quantity(k, _SI[LONG_NAMES[k]], LONG_NAMES[k], name, shown, source=f"{_P14}, App. A/B")
+              for k, (name, shown) in _PARAMETER_NAMES.items()}
+assert set(PARAMETERS) == set(LONG_NAMES)
+
+
+def _scanned(name: str) -> str:
+    """The keys holding values of the dynamic parameter ``name``: its scans, the map's lines and nearest point."""
+    return (f"single_parameter.*.{name}.nominal single_parameter.*.{name}.values "
+            f"single_parameter.*.{name}.stable_intervals maps.*.restoring.along_axes.{name}.values "
+            f"maps.*.restoring.along_axes.{name}.stable_intervals maps.*.restoring.nearest_stable.{name}")
+
+
+def _map_axis(path: str, block: dict | None) -> Quantity | None:
+    """The declaration of a map axis' values and nominal value: the parameter the axis names."""
+    m = re.fullmatch(r"(maps\.[^.]+\.[xy])\.(values|nominal)", path)
+    q = PARAMETERS.get(lookup(block, m.group(1) + ".parameter", None)) if m and block is not None else None
+    return None if q is None else dataclasses.replace(q, key=path, description=f"{q.description} on the map's axis")
+
+
+_MODELS = "models.*."
+QUANTITIES = Declarations(
+    Quantity("decay_rate", "1/s", "α", "required decay rate (the scene's; 0: none)", headline=True),
+    Quantity("headline.margin.decay_rate", "1/s", "η", "decay rate −max Re λ of the energy-consistent model",
+             headline=True),
+    Quantity("headline.margin_to_required", "1/s", "η − α", "margin to the required decay rate", headline=True),
+    Quantity("headline.margin.min_damping_ratio", "1", "ζ_min", "smallest damping ratio of its modes", headline=True),
+    Quantity("headline.leading_pole.real", "1/s", "Re λ", "real part of its least-stable pole"),
+    Quantity("headline.leading_pole.imag", "rad/s", "Im λ", "frequency of its least-stable mode", "rad/s",
+             headline=True, beside="Hz"),
+    Quantity("poles.real headline.unstable_modes[].real " + _MODELS + "poles.real " + _MODELS + "unstable_modes[].real",
+             "1/s", "Re λ", "real part of a pole (positive: an unstable mode)", source=f"{_P14}, Eq. (2.97)"),
+    Quantity("poles.imag headline.unstable_modes[].imag " + _MODELS + "poles.imag " + _MODELS + "unstable_modes[].imag",
+             "rad/s", "Im λ", "imaginary part of a pole, the mode's damped frequency", "rad/s", beside="Hz"),
+    Quantity(_MODELS + "natural_frequency", "rad/s", "ω_n", "natural frequency |λ| of a pole", "rad/s", beside="Hz"),
+    Quantity(_MODELS + "damping_ratio", "1", "ζ", "damping ratio −Re λ/|λ| of a pole"),
+    Quantity("margin.decay_rate " + _MODELS + "margin.decay_rate", "1/s", "η", "decay rate −max Re λ (negative: "
+             "the growth rate of an unstable model)"),
+    Quantity("margin.min_damping_ratio " + _MODELS + "margin.min_damping_ratio", "1", "ζ_min",
+             "smallest damping ratio"),
+    Quantity("hurwitz.omega_ref " + _MODELS + "hurwitz.omega_ref", "rad/s", "ω_ref",
+             "time scale of the characteristic polynomial p = ω_ref p~", "rad/s"),
+    Quantity("hurwitz.coefficients " + _MODELS + "hurwitz.coefficients", "1", "a_i",
+             "coefficients of the monic characteristic polynomial in p~ = p/ω_ref", source=f"{_P14}, Eq. (2.97)"),
+    Quantity("hurwitz.minors " + _MODELS + "hurwitz.minors", "1", "Δ_k",
+             "leading minors of the Hurwitz matrix, in p~", source=f"{_P14}, Eqs. (2.98)-(2.99)"),
+    Quantity("hurwitz.negative_minors " + _MODELS + "hurwitz.negative_minors", "1", "k",
+             "indices k of the Hurwitz minors Δ_k ≤ 0"),
+    Quantity("coefficients.columns.*.K*", "1", "K_i", "gain of the hand model (2.43), per model and mode",
+             source=f"{_P14}, Eqs. (2.44), (2.169), App. A/B"),
+    Quantity("coefficients.columns.*.T* coefficients.columns.*.tau*", "s", "T_i, τ_i",
+             "time constant of the hand model (2.43), per model and mode", "ms",
+             source=f"{_P14}, Eqs. (2.44), (2.169), App. A/B"),
+    Quantity("coefficients.columns.*.zeta*", "1", "ζ1, ζ2", "damping ratio of the hand model's rotor and stem",
+             source=f"{_P14}, Eq. (2.44)"),
+    Quantity("coefficients.extra.*.N0[*]", "1", "N0", "entry of the exact operator the hand model (2.101) lacks"),
+    Quantity("coefficients.extra.*.N1[*]", "s", "N1", "entry of p in the exact operator the hand model lacks",
+             "s"),
+    Quantity("coefficients.extra.*.N2[*]", "s^2", "N2", "entry of p² in the exact operator the hand model lacks"),
+    Quantity("maps.*.max_real maps.*.restoring.along_axes.*.max_real maps.*.restoring.nearest_stable.max_real "
+             "single_parameter.*.*.max_real", "1/s", "max Re λ", "spectral abscissa over a map or a scan"),
+    Quantity("maps.*.stable_fraction", "1", "", "fraction of the map's grid that is stable"),
+    *(Quantity(_scanned(k), q.unit, q.symbol, f"{q.description}: values scanned", q.display)
+      for k, q in PARAMETERS.items()),
+    resolve=_map_axis,
+)
+
+
 @dataclass
 class StabilityResult(Result):
     """Poles, damping, Hurwitz test and margin of each linear model, coefficient table, maps
@@ -185,6 +268,7 @@ class StabilityResult(Result):
 
     data: dict
     name = "stability"
+    quantities = QUANTITIES
 
     @property
     def stable(self) -> bool:
@@ -206,49 +290,60 @@ class StabilityResult(Result):
         return self.data
 
     def verdict(self) -> tuple[bool, str]:
-        """The headline (energy-consistent) model's: stable or not, and its decay rate."""
-        h = self.data["headline"]
-        decay = h["margin"]["decay_rate"]
-        rate = f"disturbances decay at {decay:.5g} 1/s" if decay > 0 else f"disturbances GROW at {-decay:.5g} 1/s"
-        return h["stable"], f"{MODEL_LABELS[h['model']]}: {'stable' if h['stable'] else 'UNSTABLE'}, {rate}"
+        """The headline (energy-consistent) model's: stable or not, its decay rate and its margin to the scene's
+        required decay rate α (ok: stable with a decay rate of at least α)."""
+        h, alpha = self.data["headline"], self.data.get("decay_rate", 0.0)
+        decay, eta = h["margin"]["decay_rate"], QUANTITIES.find("headline.margin.decay_rate")
+        ok = bool(h["stable"]) and decay >= alpha
+        words = f"disturbances decay at {eta.text(decay)}" if decay > 0 else f"disturbances GROW at {eta.text(-decay)}"
+        if alpha > 0:
+            words += (f", {eta.text(decay - alpha)} above the required {eta.text(alpha)}" if ok else
+                      f", the required {eta.text(alpha)} is NOT met")
+        return ok, f"{MODEL_LABELS[h['model']]}: {'stable' if h['stable'] else 'UNSTABLE'}, {words}"
 
     def summary(self) -> str:
         d = self.data
-        lines = [f"stability: {self.verdict()[1]}",
-                 "  validation against the source (its models do not judge the machine):"]
-        for m, v in d["models"].items():
-            if m == "nonlinear":
-                continue
-            um = ", ".join(f"{x['real']:+.1f} +- {x['imag']:.1f}i" for x in v["unstable_modes"]) or "-"
-            lines.append(f"  {m:16s} stable {str(v['stable']):5s} margin {v['margin']['decay_rate']:+.1f} 1/s; "
-                         f"unstable modes: {um}; Hurwitz negative minors: {v['hurwitz']['negative_minors'] or '-'}")
-        for m, mp in d.get("maps", {}).items():
-            lines.append(f"  map ({m}): {mp['x']['parameter']} x {mp['y']['parameter']}, "
-                         f"stable on {100 * mp['stable_fraction']:.0f} % of the grid")
-            for name, line in mp["restoring"]["along_axes"].items():
-                iv = "; ".join(f"[{a:.4g}, {b:.4g}]" for a, b in line["stable_intervals"]) or "none in range"
-                lines.append(f"    {name} alone (other nominal): stable for {iv}")
-        co = d["coefficients"]
-        lines.append("  K/T of the hand model vs the exact linearization (consistent mode = nonlinear_chain "
-                     "to 1e-9); differences:")
-        lines += [f"    {k:5s} {v}" for k, v in co["notes"].items()]
-        for m, text in d.get("restoring", {}).items():
-            lines.append(f"  restores stability ({m}): {text}")
+        lines = [f"stability: {self.verdict()[1]}", *QUANTITIES.lines(d)]
+        source = [m for m in d["models"] if m != HEADLINE]
+        lines += _map_lines(d, [m for m in d.get("maps", {}) if m == HEADLINE])
+        lines.append("  validation against the source (its models do not judge the machine):")
+        for m in source:
+            v = d["models"][m]
+            modes = ", ".join(_mode(x) for x in v["unstable_modes"]) or "none"
+            minors = ", ".join(f"Δ{k}" for k in v["hurwitz"]["negative_minors"]) or "none"
+            decay = v["margin"]["decay_rate"]
+            rate = f"decays at {significant(decay)} 1/s" if decay > 0 else f"grows at {significant(-decay)} 1/s"
+            lines.append(f"    {MODEL_LABELS.get(m, m)}: {'stable' if v['stable'] else 'UNSTABLE'}, {rate}; unstable "
+                         f"modes: {modes}; Hurwitz minors ≤ 0: {minors}")
+        lines += ["  " + x for x in _map_lines(d, [m for m in d.get("maps", {}) if m != HEADLINE])]
+        lines.append("    K/T of the hand model vs the exact linearization (consistent mode = nonlinear_chain to "
+                     "1e-9); differences:")
+        lines += [f"      {k:5s} {v}" for k, v in d["coefficients"]["notes"].items()]
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
+        """Poles per model (frequencies in rad/s and Hz), the hand model's constants with their units, and the
+        maps with the parameters in their display units; every header names its unit."""
         out = {}
         for m, v in self.data["models"].items():
-            out[f"poles_{m}.csv"] = {"real": v["poles"]["real"], "imag": v["poles"]["imag"],
-                                     "damping_ratio": v["damping_ratio"], "natural_frequency": v["natural_frequency"]}
+            out[f"poles_{m}.csv"] = {"real [1/s]": v["poles"]["real"], "imag [rad/s]": v["poles"]["imag"],
+                                     "imag [Hz]": [convert(x, "rad/s", "Hz") for x in v["poles"]["imag"]],
+                                     "damping_ratio [1]": v["damping_ratio"],
+                                     "natural_frequency [rad/s]": v["natural_frequency"],
+                                     "natural_frequency [Hz]": [convert(x, "rad/s", "Hz")
+                                                                for x in v["natural_frequency"]]}
         co = self.data["coefficients"]
-        columns = {m: v for m, v in co["columns"].items() if not m.endswith("_status")}
-        out["coefficients.csv"] = ({"name": co["names"]} | columns
+        columns = {m: [v.get(k) for k in co["names"]] for m, v in co["columns"].items() if not m.endswith("_status")}
+        some = next(m for m in columns)
+        units = [QUANTITIES.find(f"coefficients.columns.{some}.{k}").unit for k in co["names"]]
+        out["coefficients.csv"] = ({"name": co["names"], "unit": units} | columns
                                    | {"note": [co["notes"].get(k, "") for k in co["names"]]})
         for m, mp in self.data.get("maps", {}).items():
+            qx, qy = PARAMETERS[mp["x"]["parameter"]], PARAMETERS[mp["y"]["parameter"]]
             X, Y = np.meshgrid(mp["x"]["values"], mp["y"]["values"])
-            out[f"stability_map_{m}.csv"] = {mp["x"]["parameter"]: X.ravel(), mp["y"]["parameter"]: Y.ravel(),
-                                             "max_real": np.asarray(mp["max_real"]).ravel()}
+            out[f"stability_map_{m}.csv"] = {f"{mp['x']['parameter']} [{qx.display}]": qx.shown(X.ravel()),
+                                             f"{mp['y']['parameter']} [{qy.display}]": qy.shown(Y.ravel()),
+                                             "max_real [1/s]": np.asarray(mp["max_real"]).ravel()}
         return out
 
     def draw(self, ax) -> None:
@@ -337,15 +432,10 @@ class StabilityResult(Result):
 #: marker and size per model in the pole plot: nested hollow markers keep coinciding poles visible
 POLE_MARKERS = (("o", 12), ("s", 9), ("D", 7), ("x", 4.5), ("+", 9), ("^", 4))
 
-#: display name, unit and factor (SI value / factor = shown value) of each map parameter (LONG_NAMES symbols)
-DISPLAY = {"m_p": ("rotor mass $m_p$", "kg", 1.0), "k_pr": ("push-off stiffness $k_{pr}$", "MN/m", 1e6),
-           "c_z": ("rotor damping $c_z$", "kN·s/m", 1e3), "E": ("bulk modulus $E$", "MPa", 1e6),
-           "V2": ("disc-chamber volume $V_2$", "L", 1e-3), "V3": ("cavity volume $V_3$", "L", 1e-3),
-           "m0": ("regulator stem mass $m_0$", "kg", 1.0),
-           "k_reg": ("regulator spring stiffness $k_{reg}$", "MN/m", 1e6),
-           "c_x": ("stem damping $c_x$", "N·s/m", 1.0), "V_cam": ("valve-chamber volume $V_{cam}$", "cm³", 1e-6),
-           "V_m": ("membrane-chamber volume $V_m$", "cm³", 1e-6), "s_c": ("valve seat area $s_c$", "mm²", 1e-6)}
-assert set(DISPLAY) == set(LONG_NAMES.values())
+def _tex(symbol: str) -> str:
+    """A parameter's symbol as mathematics: "k_pr" -> "$k_{pr}$", "V2" -> "$V_{2}$"."""
+    base, sub = re.fullmatch(r"([A-Za-z]+?)_?([a-z0-9]*)", symbol).groups()
+    return f"${base}_{{{sub}}}$" if sub else f"${base}$"
 
 
 def axis_label(parameter: str) -> tuple[float, str, str]:
@@ -359,28 +449,67 @@ def axis_label(parameter: str) -> tuple[float, str, str]:
     Returns
     -------
     (float, str, str)
-        SI value / factor is the value shown; the unit shown; the label "name symbol, unit".
+        SI value / factor is the value shown; the unit shown (its declaration's display unit); the label
+        "name symbol, unit".
     """
-    name, unit, factor = DISPLAY[LONG_NAMES[parameter]]
-    return factor, unit, f"{name}, {unit}"
+    q = PARAMETERS[parameter]
+    return 1.0 / convert(1.0, q.unit, q.display), q.display, f"{q.description} {_tex(q.symbol)}, {q.display}"
+
+
+HEADLINE = "nonlinear"  # the energy-consistent model: the one verdict; the others are the source's (validation)
+
+
+def _mode(x: dict) -> str:
+    """An unstable mode as 'Re ± Im i 1/s (f Hz)'."""
+    hz = significant(convert(x["imag"], "rad/s", "Hz"))
+    return f"{significant(x['real'])} ± {significant(x['imag'])}i 1/s ({hz} Hz)"
+
+
+def _span(q: Quantity, a: float, b: float) -> str:
+    """An interval of parameter values in the display unit: '0.1000 to 199.5 cm³'."""
+    return f"{significant(q.shown(a))} to {q.text(b)}"
+
+
+def _map_lines(d: dict, models: list[str]) -> list[str]:
+    """The summary lines of the maps of ``models``: the grid's stable share, each axis alone, what restores."""
+    lines = []
+    for m in models:
+        mp = d["maps"][m]
+        qx, qy = PARAMETERS[mp["x"]["parameter"]], PARAMETERS[mp["y"]["parameter"]]
+        lines.append(f"  map, {MODEL_LABELS.get(m, m)}: {qx.description} {qx.symbol} × {qy.description} "
+                     f"{qy.symbol}, stable on {100 * mp['stable_fraction']:.0f} % of the grid")
+        for name, line in mp["restoring"]["along_axes"].items():
+            q = PARAMETERS[name]
+            iv = " or ".join(_span(q, a, b) for a, b in line["stable_intervals"]) or "no value in the range"
+            lines.append(f"    {q.description} {q.symbol} alone (the other nominal): stable for {iv}")
+        if m in d.get("restoring", {}):
+            lines.append(f"    restores stability: {d['restoring'][m].removeprefix(m + ': ')}")
+    return lines
 
 
 def _headline_first(models: dict) -> dict:
     """The models with the energy-consistent one first (the headline; the source's models validate)."""
-    return dict(sorted(models.items(), key=lambda kv: kv[0] != "nonlinear"))
+    return dict(sorted(models.items(), key=lambda kv: kv[0] != HEADLINE))
 
 
-def study(setup: Setup, models: list[str], smap=None, title: str = "") -> StabilityResult:
+def study(setup: Setup, models: list[str], smap=None, title: str = "", decay_rate: float = 0.0) -> StabilityResult:
     """Verdict of each named model under ``models``; the top-level keys (``stable``, ``poles``, ``margin``,
     ``hurwitz``) and ``headline`` are the energy-consistent model's, the one verdict of the analysis (the
-    source's models validate, they do not judge the machine); and the optional maps with their
-    single-parameter scans."""
+    source's models validate, they do not judge the machine), with its margin to the required ``decay_rate``
+    (1/s); and the optional maps with their single-parameter scans."""
     res = {m: verdict(setup.linear(m)) for m in models}
-    head = res.get("nonlinear") or verdict(setup.linear("nonlinear"))
-    data = {"title": title, "model": "nonlinear", "stable": head["stable"], "poles": head["poles"],
-            "hurwitz": head["hurwitz"], "margin": head["margin"], "models": res,
-            "headline": {"model": "nonlinear", "stable": head["stable"], "margin": head["margin"],
-                         "unstable_modes": head["unstable_modes"]},
+    head = res.get(HEADLINE) or verdict(setup.linear(HEADLINE))
+    real, imag = head["poles"]["real"], head["poles"]["imag"]
+    upper = np.flatnonzero(imag >= 0)
+    lead = upper[np.argmax(real[upper])]  # the least-stable pole of the upper half-plane
+    leading = {"real": float(real[lead]), "imag": float(imag[lead])}
+    decay = head["margin"]["decay_rate"]
+    data = {"title": title, "model": HEADLINE, "stable": head["stable"], "poles": head["poles"],
+            "hurwitz": head["hurwitz"], "margin": head["margin"], "decay_rate": float(decay_rate), "models": res,
+            "headline": {"model": HEADLINE, "stable": head["stable"], "margin": head["margin"],
+                         "margin_to_required": decay - decay_rate,
+                         "meets_requirement": bool(head["stable"] and decay >= decay_rate),
+                         "leading_pole": leading, "unstable_modes": head["unstable_modes"]},
             "coefficients": coefficient_table(setup)}
     if smap is not None:
         data["maps"] = {m: stability_map(setup, smap.x, smap.y, m) for m in smap.models}
@@ -390,21 +519,23 @@ def study(setup: Setup, models: list[str], smap=None, title: str = "") -> Stabil
 
 
 def _statement(data: dict, model: str) -> str:
-    """One sentence: which change restores stability of ``model``, read off its scans and map."""
+    """One sentence: which change restores stability of ``model``, read off its scans and map (display units)."""
     v = data["models"].get(model)
     if v is not None and v["stable"]:
-        return f"{model}: stable as given (decay rate {v['margin']['decay_rate']:.1f} 1/s)"
-    single = [f"{k} in " + " or ".join(f"[{a:.3g}, {b:.3g}]" for a, b in s["stable_intervals"])
-              for k, s in data["single_parameter"][model].items() if s["stable_intervals"]]
+        return f"{model}: stable as given (decay rate {significant(v['margin']['decay_rate'])} 1/s)"
+    scans = data["single_parameter"][model]
+    single = [f"{PARAMETERS[k].description} {PARAMETERS[k].symbol} in "
+              + " or ".join(_span(PARAMETERS[k], a, b) for a, b in s["stable_intervals"])
+              for k, s in scans.items() if s["stable_intervals"]]
     mp = data["maps"][model]
     ns = mp["restoring"]["nearest_stable"]
     text = f"{model}: " + ("a single change restores stability: " + "; ".join(single) if single else
-                           "no single change of " + ", ".join(data["single_parameter"][model]) +
-                           " within 1e-3..1e3 x nominal restores stability")
+                           "no single change of " + ", ".join(PARAMETERS[k].description for k in scans) +
+                           " within 1e-3..1e3 × nominal restores stability")
     if ns:
-        text += (f"; on the map the nearest stable point is {mp['x']['parameter']} = {ns[mp['x']['parameter']]:.3g}"
-                 f" with {mp['y']['parameter']} = {ns[mp['y']['parameter']]:.3g} (SI), "
-                 f"stable on {100 * mp['stable_fraction']:.0f} % of the map")
+        (kx, qx), (ky, qy) = ((mp[a]["parameter"], PARAMETERS[mp[a]["parameter"]]) for a in ("x", "y"))
+        text += (f"; on the map the nearest stable point is {qx.symbol} = {qx.text(ns[kx])} with {qy.symbol} = "
+                 f"{qy.text(ns[ky])}, stable on {100 * mp['stable_fraction']:.0f} % of the map")
     else:
         text += "; nowhere stable on the map"
     return text

@@ -12,10 +12,14 @@
   results.json ``units``, the report and the terminal use too.
 * ``<!-- include: PATH -->`` is replaced by the text of PATH (relative to the repository root) with its
   headings moved one level down, so generated benchmark reports appear inside a page.
+* Mathematics: ``$...$`` and ``$$...$$`` (kept apart from Markdown by ``pymdownx.arithmatex`` in generic
+  mode) are converted to MathML when the page is built (``latex2mathml``), which browsers render without
+  a script; ``\\tag{2.15}`` in a display equation becomes the source's equation number at its right.
 """
 
 from __future__ import annotations
 
+import html
 import re
 import shutil
 import types
@@ -278,3 +282,47 @@ def on_page_markdown(markdown: str, page, config, files) -> str:  # noqa: ARG001
         markdown = markdown.replace(SCHEMA, schema_markdown())
     markdown = QUANTITIES.sub(lambda m: quantities_markdown(m.group(1)), markdown)
     return INCLUDE.sub(_include, markdown)
+
+
+# ----------------------------------------------------------------------------- mathematics
+MATH = re.compile(r'<(span|div) class="arithmatex">(.*?)</\1>', re.S)
+TAG = re.compile(r"\\tag\{([^{}]*)\}")
+
+
+def math_html(tex: str, display: bool) -> str:
+    """MathML of one TeX formula; a display formula's ``\\tag{N}`` becomes the number (N) at its right."""
+    from latex2mathml.converter import convert
+
+    tags = TAG.findall(tex)
+    if len(tags) > 1:
+        raise ValueError(f"more than one \\tag in a formula: {tex!r}")
+    tex = TAG.sub("", tex).strip()
+    try:
+        mathml = convert(tex, display="block" if display else "inline")
+    except Exception as exc:  # noqa: BLE001 - latex2mathml raises its own types; name the formula
+        raise ValueError(f"latex2mathml cannot convert {tex!r}: {exc}") from exc
+    if "<mi>&</mi>" in mathml or "<mi>\\</mi>" in mathml:  # e.g. an aligned environment it does not know
+        raise ValueError(f"latex2mathml cannot align {tex!r}: use array{{rl}} or cases")
+    if re.search(r"\\\\\[[^]]*\]", tex):  # \\[6pt] would be printed as "[6pt]"
+        raise ValueError(f"latex2mathml takes no row spacing \\\\[..] in {tex!r}")
+    if not display:
+        return mathml
+    number = f'<span class="eqno">({html.escape(tags[0])})</span>' if tags else ""
+    return f'<div class="equation">{mathml}{number}</div>'
+
+
+def _math(match: re.Match) -> str:
+    text = html.unescape(match.group(2)).strip()
+    display = match.group(1) == "div"
+    for start, end in ((r"\[", r"\]"), (r"\(", r"\)"), ("$$", "$$"), ("$", "$")):
+        if text.startswith(start) and text.endswith(end):
+            text = text[len(start):len(text) - len(end)]
+            break
+    return math_html(text, display)
+
+
+def on_page_content(html_text: str, page, config, files) -> str:  # noqa: ARG001 - MkDocs hook signature
+    try:
+        return MATH.sub(_math, html_text)
+    except ValueError as exc:
+        raise ValueError(f"{page.file.src_uri}: {exc}") from exc

@@ -37,7 +37,7 @@ from autobal.models.rotor import STATES, RotorParams, rotor_model
 OBJECTIVES = ("peak_deflection", "peak_unbalance", "integrated_deflection", "min_time")
 # default weight of the smoothed total variation of alpha/alpha_max: removes the one-interval pulses of the
 # minimum-peak optimum and changes its re-simulated peak by < 0.05 % on the shipped scenes (measured in
-# docs/theory/spinup.md, "Drivable controls")
+# docs/dev/spinup.md, "Drivable controls: the regulariser study")
 JERK_VARIATION = 1e-4
 # a posed spin-up passes near the critical speed (the top speed at least 1/CRITICAL_RATIO of it) within at most
 # MAX_PERIODS natural periods of the rotor (horizon and settling window): beyond, CVODES cannot follow the whirl

@@ -459,7 +459,7 @@ def optimize_robust(ocp: SpinupOcp, factors: np.ndarray, method: DirectCollocati
 
 
 # coarse optima refined on the fine mesh.  The coarse ranking need not predict the fine one (it did not for
-# some starts, docs/theory/spinup_robust.md, "Build and solve"); on the shipped scene a second refinement
+# some starts, docs/dev/spinup_robust.md, "Build and solve"); on the shipped scene a second refinement
 # never won and cost 14 s more of IPOPT, so one
 REFINED = 1
 

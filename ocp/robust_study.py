@@ -172,7 +172,7 @@ def robust_starts(ocp: SpinupOcp, factors: np.ndarray, nominal: rb.Profile, ramp
                   ramp_peaks: np.ndarray) -> list[rb.Profile]:
     """Starts of the robust NLP: the nominal optimum, the ramp with the smallest worst design peak and the
     global search's two best three-phase profiles on that ramp's worst design rotor (the robust optimum
-    depends on the start: docs/theory/spinup_robust.md, "Build and solve").
+    depends on the start: docs/dev/spinup_robust.md, "Build and solve").
 
     Parameters
     ----------

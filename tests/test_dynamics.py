@@ -334,7 +334,7 @@ def test_pump_scene_results_keys(tmp_path):
     assert abs(fp["at_operating_speed"]["amplitude_um"] - 6.84) < 0.1
     assert sp["stable"] is False and len(sp["poles"]["real"]) == len(sp["poles"]["imag"]) == 8
     assert sp["hurwitz"]["negative_minors"] and s["models"]["nonlinear"]["stable"] is True
-    assert "no single change" in s["restoring"]["program"] and "stem_damping" in s["restoring"]["program"]
+    assert "no single change" in s["restoring"]["program"] and "stem damping" in s["restoring"]["program"]
     assert r["transient"]["cases"][0]["events"] == []
     # the K/T table: App. A's K8 is twice (2.44)'s at the same point, T6 changes sign in the energy form
     notes = s["coefficients"]["notes"]

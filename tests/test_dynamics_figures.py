@@ -66,6 +66,6 @@ def test_maps_share_one_symmetric_colour_scale_and_physical_axes(pump):
     norms = [figs[f"fig_stability_map_{m}.png"].axes[0].collections[0].norm for m in Map.models]
     assert norms[0].vmin == norms[1].vmin == -norms[1].vmax < 0
     ax = figs["fig_stability_map_program.png"].axes[0]
-    assert ax.get_xlabel() == "cavity volume $V_3$, L" and ax.get_ylabel() == "stem damping $c_x$, N·s/m"
+    assert ax.get_xlabel() == "cavity volume $V_{3}$, cm³" and ax.get_ylabel() == "stem damping $c_{x}$, N·s/m"
     star = next(line for line in ax.lines if line.get_label() == "scene (nominal)")
-    assert star.get_xdata()[0] == pytest.approx(0.1) and star.get_clip_on() is False  # V3 = 1e-4 m^3 = 0.1 L
+    assert star.get_xdata()[0] == pytest.approx(100.0) and star.get_clip_on() is False  # V3 = 1e-4 m^3 = 100 cm³

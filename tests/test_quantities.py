@@ -31,11 +31,11 @@ def check_declared(folder) -> None:
         assert decl.undeclared(results[name]) == [], f"{name}: numbers without a declaration"
         for path, unit in results["units"].items():
             if path.startswith(name + "."):
-                assert report.quantity(path).unit == unit, path
+                assert report.quantity(path, results).unit == unit, path
     page = Page((folder / "report.html").read_text(encoding="utf-8"))
     keyed = [c for c in page.headline_cells if c.get("data-key")]
     for c in keyed:
-        q = report.quantity(c["data-key"])
+        q = report.quantity(c["data-key"], results)
         if q is None:  # an analysis of the allow-list
             assert c["data-key"].split(".")[0] in report.UNDECLARED
             continue

@@ -7,8 +7,7 @@ from __future__ import annotations
 import pytest
 
 from autobal import report
-from autobal.analysis.design_study import quantity, shown
-from tests.test_report import Page
+from autobal.analysis.design_study import quantity, variable
 
 
 @pytest.mark.cli
@@ -21,11 +20,11 @@ def test_estimation_report_shows_bootstrap_correlation_and_adequacy(shipped_run)
     assert any("bootstrap percentile interval" in c for c in captions)
     assert any(c.startswith("Adequacy: Fisher test") for c in captions)
     fitted = sec["tables"][0]
-    assert fitted["columns"][-2:] == ["bootstrap low", "bootstrap high"]
-    assert all(row[-1]["text"] != "—" for row in fitted["rows"]), "a free parameter without its bootstrap interval"
-    body = " ".join(Page((folder / "report.html").read_text()).text)
-    assert "correlation of alpha and tau_max 0.98636" in body
-    assert sec["overall"]["text"].startswith("static_1p (alpha): adequate (F = 1.4368 ≤ F_crit = 2.6602)")
+    assert fitted["columns"][-3:] == ["bootstrap low", "bootstrap high", "unit"]
+    assert all(row[-2]["text"] != "—" for row in fitted["rows"]), "a free parameter without its bootstrap interval"
+    correlation = next(t for t in sec["tables"] if t["caption"].startswith("Correlation of the free parameters"))
+    assert [[c["text"] for c in r[:3]] for r in correlation["rows"]] == [["static_2p", "alpha, tau_max", "0.98636"]]
+    assert sec["overall"]["text"].startswith("static_1p (alpha): adequate (F = 1.437 ≤ F_crit = 2.660)")
     assert not sec["warnings"], "the trivial nulls are a note, not warnings"
     assert [n for n in sec["notes"] if n.startswith("10 values are null") and "a fixed parameter (5 values)" in n]
 
@@ -39,10 +38,15 @@ def test_null_note_groups_by_reason():
 
 
 def test_design_parameters_to_four_digits_in_engineering_units():
-    assert shown("m^3", 0.00020915546094574952) == "209.2 cm³"
-    assert shown("", 0.09999999863063493) == "0.1000"
-    assert shown("Pa", 43662724.52325561) == "43.66 MPa" and shown("m", 0.00012108193232249605) == "0.1211 mm"
-    assert shown("N/m", 44636137.84295489) == "4.464e7 N/m" and shown("m^2", 0.0153604935) == "15360 mm²"
+    def shown(path: str, value: float) -> str:
+        return variable(f"device.{path}").text(value)
+
+    assert shown("dynamics.disc_chamber_volume", 0.00020915546094574952) == "209.2 cm³"
+    assert shown("barrier.margin_ratio", 0.09999999863063493) == "0.1000"
+    assert shown("regulator.supply_pressure", 43662724.52325561) == "43.66 MPa"
+    assert shown("disc.outer_seal.clearance", 0.00012108193232249605) == "0.1211 mm"
+    assert shown("dynamics.regulator.spring_stiffness", 44636137.84295489) == "44.64 MN/m"
+    assert shown("regulator.membrane_area", 0.0153604935) == "153.6 cm²"
     assert quantity("V2", 0.00020915546094574952) == "0.0002091554609 m^3"  # full precision for --set, no m**3
 
 
@@ -53,6 +57,6 @@ def test_washer_optimum_row_says_why_lambda0_is_unbounded(shipped_run):
     point (k_D = 1), where lambda0 is unbounded: the row says so."""
     ctx = report.context(shipped_run("washer_liquid_balancer")[1])
     rows = {r[0]["text"]: r for r in ctx["sections"][0]["tables"][0]["rows"]}
-    for label in ("optimal liquid height", "optimal liquid volume"):
+    for label in ("optimal chamber height", "optimal liquid volume"):
         note = rows[label][-1]["text"]
         assert "complete balancing (k_D = 1)" in note and "Table 3.3" in note, note

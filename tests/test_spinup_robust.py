@@ -250,7 +250,7 @@ def test_robust_optimum_of_the_shipped_scene_does_not_move_with_its_starts():
     """The shipped scene's design problem (5 x 5 rotors, 100 intervals, the scene's regulariser) from its four
     starts (nominal optimum, best ramp, the global search on the ramp's worst design rotor), every start moved
     by 1e-7: the same optimum both times, 18.5715 e (worst design peak, fast integrator).  With the nominal
-    optimum and the ramp alone the answer moved between 18.591 and 18.601 e for such moves (docs/theory/
+    optimum and the ramp alone the answer moved between 18.591 and 18.601 e for such moves (docs/dev/
     spinup_robust.md, "Build and solve")."""
     scene = api.load("spinup_robust_jeffcott")
     st = scene.analyses.spinup_robust

@@ -81,7 +81,7 @@ def test_the_pump_is_stable_and_its_source_models_are_validation(shipped_run):
     assert st.stable is True and st.to_dict()["stable"] is True and st.decay_rate == pytest.approx(80.6, abs=0.1)
     parts = check_one_verdict(folder)
     verdicts = dict(parts.summary)
-    assert verdicts["stability"].startswith("✔") and "decay at 80.623 1/s" in verdicts["stability"]
+    assert verdicts["stability"].startswith("✔") and "decay at 80.62 1/s" in verdicts["stability"]
     inside = " ".join(parts.inside)
     assert "219.33 ± 1999.4i" in inside and "Validation against the source" in inside
 

@@ -10,7 +10,9 @@ from pydantic import Field, model_validator
 from autobal.analyses import COST
 from autobal.parts.device_dynamics import PARAMETERS, ModelName, ParameterName
 from autobal.schema import Positive, Strict
-from autobal.units import to_si
+from autobal.units import quantity, to_si
+
+RateOrZero = quantity("rate", "nonnegative")
 
 DESCRIPTION = "poles, Hurwitz, stability maps"
 NEEDS = "device.dynamics"
@@ -61,6 +63,8 @@ class Stability(Strict):
     operating_ratio: Positive = 1.0
     models: Annotated[list[ModelName], Field(min_length=1)] = ["program", "nonlinear", "nonlinear_chain"]
     map: StabilityMap | None = None
+    decay_rate: RateOrZero = Field(0.0, description="required decay rate alpha of the energy-consistent model "
+                                   "(every pole Re lambda <= -alpha), e.g. '50 1/s'; 0: asymptotic stability")
 
 
 SETTINGS = Stability
@@ -73,7 +77,7 @@ def run(scene, settings: Stability):
     from autobal.parts.device import dynamic_device
 
     setup = Setup(dynamic_device(scene), settings.operating_ratio)
-    res = st.study(setup, list(settings.models), settings.map, scene.title)
+    res = st.study(setup, list(settings.models), settings.map, scene.title, settings.decay_rate)
     res.data["accuracy"] = st.accuracy(setup, list(settings.models))
     return res
 
