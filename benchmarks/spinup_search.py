@@ -88,7 +88,7 @@ def main() -> list[dict]:
     for name, family in SCENES.items():
         scene = api.load(name)
         ocp = spinup_ocp(scene, scene.analyses.spinup)
-        rotor = search.ModalRotor.of(ocp)
+        rotor = search.FixedFrameModes.of(ocp)
         slack = ocp.horizon - (ocp.omega_final - ocp.omega_start) / ocp.alpha_max
         for m in family:
             bounds = [(0.0, ocp.horizon - slack)] + [(0.0, slack / 2), (0.0, 1.0)] * (m - 1) + [

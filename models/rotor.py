@@ -185,6 +185,12 @@ class RotorParams(SIParams):
     def with_chi(self, chi: float) -> RotorParams:
         return RotorParams(self.m1, self.c, chi, self.e, self.m2_star, self.J_p, self.b)
 
+    def scaled(self, critical_speed: float, damping: float, liquid_mass: float) -> RotorParams:
+        """The rotor with its critical speed, damping and liquid mass scaled by the factors: c (critical_speed)^2
+        (omega_cr = sqrt(c/m) scales by the factor), chi damping, m2* liquid_mass."""
+        return RotorParams(self.m1, self.c * float(critical_speed) ** 2, self.chi * float(damping), self.e,
+                           self.m2_star * float(liquid_mass), self.J_p, self.b)
+
 
 @dataclass(frozen=True)
 class RotorModel:

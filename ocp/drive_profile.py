@@ -23,7 +23,7 @@ from scipy.optimize import minimize
 from autobal.analysis.rotor import deflection, peak, unbalance
 from autobal.models.rotor import rotor_model
 from autobal.ocp.problem import SpinupOcp
-from autobal.ocp.search import FAST_STEP, ModalRotor, simulate_steps
+from autobal.ocp.search import FAST_STEP, FixedFrameModes, simulate_steps
 from autobal.ocp.simulation import RESIM_TOL, Trajectory, drive_excess, drive_use, rate_cap, resimulate
 
 RPM = 60 / (2 * math.pi)  # rpm per rad/s
@@ -104,7 +104,7 @@ def simulate_segments(ocp: SpinupOcp, t, w, label: str = "segments", intervals: 
     return resimulate(ocp, u, h, label, tol=tol)
 
 
-def fast_segments(ocp: SpinupOcp, t, w, dt: float = FAST_STEP, rotor: ModalRotor | None = None,
+def fast_segments(ocp: SpinupOcp, t, w, dt: float = FAST_STEP, rotor: FixedFrameModes | None = None,
                   max_steps: int = SEARCH_STEPS) -> Trajectory:
     """The piecewise-linear speed profile through (t, w) (s, rad/s), held after, by the exponential integrator
     of the global search (:func:`autobal.ocp.search.simulate_steps`, fixed step ``dt`` in Omega0 t, the speed
@@ -227,7 +227,7 @@ def segment_profile(ocp: SpinupOcp, optimum: Trajectory, K: int, evaluations: in
         w = np.concatenate([[ocp.omega_start], x[K:] * wf, [ocp.omega_final]])
         return t, w
 
-    rotor = ModalRotor.of(ocp)
+    rotor = FixedFrameModes.of(ocp)
 
     def score(x):
         t, w = unpack(x)

@@ -6,19 +6,16 @@ The drive is posed as in the Jeffcott scenes: |alpha| <= alpha_max, omega_final 
 The objective is the peak over time of the largest lateral deflection sqrt(x^2 + y^2) at the nodes of
 interest.
 
-Transcription: Radau collocation (:func:`autobal.ocp.transcription.collocation_data`) of the complex
-envelope S of the modal state (s = Re(S e^{i phi}), :mod:`autobal.models.ross_rotor`), which is smooth where
-the rotor whirls at the running speed; control alpha/alpha_max piecewise constant per interval.  The
-deflection envelope of a node with complex amplitudes (X, Y) is the major half-axis of its orbit,
-r^2 = (|X|^2 + |Y|^2 + |X^2 + Y^2|)/2 (smoothed: |W| -> sqrt(|W|^2 + eps^2)); epigraph r^2 <= S ref at every
-collocation point, minimise S.  As the Jeffcott spin-up (:mod:`autobal.ocp.transcription`): one SX Function
-per interval mapped over the intervals, the Radau node states eliminated (the last collocation point is the
-next node), the Jacobian and Hessian assembled from the interval's own SX derivatives
-(:func:`autobal.ocp.transcription.structured_derivatives`), IPOPT with
-:data:`autobal.ocp.solve.IPOPT_OPTIONS`.  Starts: a grid of four-phase speed profiles (full acceleration to w1,
-a middle phase, full acceleration to w3, then the constant acceleration that arrives at the deadline),
-screened by a fixed-step Runge-Kutta integration of the same envelope equation (:func:`screen`); the best
-distinct ones are solved.
+What is modal lives here: the problem (:class:`ModalSpinupOcp`: the complex envelope S of the modal state,
+s = Re(S e^{i phi}) (:mod:`autobal.models.ross_rotor`), smooth where the rotor whirls at the running speed; the
+deflection envelope of a node with complex amplitudes (X, Y), the major half-axis of its orbit,
+r^2 = (|X|^2 + |Y|^2 + |X^2 + Y^2|)/2, smoothed: |W| -> sqrt(|W|^2 + eps^2); the epigraph r^2 <= S ref at every
+collocation point, minimise S), the starts (a grid of four-phase speed profiles: full acceleration to w1, a
+middle phase, full acceleration to w3, then the constant acceleration that arrives at the deadline, screened
+by a fixed-step Runge-Kutta integration of the same envelope equation, :func:`screen`), and the physical
+re-simulation.  The problem has the members the generic pipeline uses, so it is transcribed, solved and
+continued from a coarse mesh by the same code as the Jeffcott rotor's (:func:`autobal.ocp.transcription.transcribe`,
+:class:`autobal.ocp.solve.Solver`, :func:`autobal.ocp.solve.refine`, :func:`autobal.ocp.simulation.simulate_profile`).
 
 Every reported peak is the CVODES re-simulation of the physical (fixed-frame) response, max_t sqrt(x^2 + y^2).
 """
@@ -33,13 +30,16 @@ from functools import cached_property
 import casadi as ca
 import numpy as np
 
-from autobal.analysis import ipopt
 from autobal.analysis.quantities import Declarations, Quantity, convert, significant
 from autobal.analysis.result import Result, new_figure, with_statuses
 from autobal.errors import SolveError
 from autobal.models.ross_rotor import ModalRotor
-from autobal.ocp.solve import IPOPT_OPTIONS
-from autobal.ocp.transcription import Nlp, collocation_data, structured_derivatives
+from autobal.ocp.problem import PathConstraint
+from autobal.ocp.search import SearchResult
+from autobal.ocp.simulation import ramp_profile
+from autobal.ocp.solve import TIE as TIE_SOLVED
+from autobal.ocp.solve import Solver, SpinupSolution, coarse_intervals, coarse_options, refine
+from autobal.ocp.transcription import DirectCollocation
 
 RESIM_TOL = 1e-9  # CVODES relative tolerance of the re-simulation
 POINTS_PER_REV = 64  # output points per revolution of the re-simulation (peak between them: < 1e-3)
@@ -48,7 +48,12 @@ EPS = 1e-3  # smoothing of |X^2 + Y^2| in the envelope, relative to the referenc
 
 @dataclass
 class ModalSpinupOcp:
-    """The spin-up problem of a reduced rotor, in SI."""
+    """The spin-up problem of a reduced rotor, in SI at the boundary.
+
+    Inside, as the generic pipeline (:mod:`autobal.ocp.transcription`, :mod:`autobal.ocp.solve`,
+    :mod:`autobal.ocp.simulation`) takes every problem: time tau = omega_final t, speed nu = omega/omega_final,
+    control u = alpha/alpha_max, and the members of :class:`autobal.ocp.problem.SpinupOcp` it uses (the state
+    dimension and its speed, the equation, the named path constraints, the measure the epigraph bounds)."""
 
     rotor: ModalRotor
     omega_start: float  # rad/s
@@ -60,6 +65,21 @@ class ModalSpinupOcp:
     omega_max: float | None = None  # rad/s
     intervals: int = 160  # control intervals over the horizon
     degree: int = 3
+    # (a, peak_scale2) of the nominal rotor when this is a perturbed one (:meth:`perturbed`): the scenarios of a
+    # robust NLP share one epigraph level, so their states and envelopes share one scale
+    scales: tuple[float, float] | None = None
+
+    # the problem as the generic pipeline sees it: a minimum-peak epigraph, |alpha| <= alpha_max, no jerk terms
+    objective = "peak_deflection"
+    free_time = False
+    n_extra = 1
+    u_min = -1.0
+    jerk_max = None
+    jerk_penalty = 0.0
+    jerk_variation = 0.0
+    deflection_limit = None
+    max_steps = 100000  # CVODES steps per call at most (the envelope of four modes whirls fast)
+    p = ()  # the equation has no parameters: the rotor's matrices are in it
 
     def __post_init__(self):
         if abs(self.omega_final - self.omega_start) > self.alpha_max * self.horizon:
@@ -77,28 +97,85 @@ class ModalSpinupOcp:
     def settling_intervals(self) -> int:
         return int(np.ceil(self.settling_time / self.h - 1e-9)) if self.settling_time > 0 else 0
 
+    @property
+    def method(self) -> DirectCollocation:
+        """Radau collocation of the problem's degree on its control intervals."""
+        return DirectCollocation(self.intervals, self.degree, "radau")
+
+    # dimensionless data (tau = omega_final t)
+    @property
+    def Om(self) -> float:
+        return self.omega_final
+
+    @property
+    def nu0(self) -> float:
+        return self.omega_start / self.omega_final
+
+    nuf = 1.0
+
+    @property
+    def tau_h(self) -> float:
+        return self.horizon * self.omega_final
+
+    @property
+    def tau_s(self) -> float:
+        return self.settling_time * self.omega_final
+
+    @property
+    def a_max(self) -> float:
+        return self.alpha_max / self.omega_final**2
+
+    def nu_bounds(self) -> tuple[float, float]:
+        return 0.0, (self.omega_max / self.omega_final if self.omega_max is not None else ca.inf)
+
+    @property
+    def nx(self) -> int:
+        """The envelope state (Re p, Im p, Re q, Im q) of the n modes and the speed."""
+        return 4 * self.rotor.n + 1
+
+    @property
+    def speed_index(self) -> int:
+        return 4 * self.rotor.n
+
     @cached_property
     def amplitude_scale(self) -> float:
         """a: the largest steady modal amplitude |E(omega)| up to omega_final (scales the states)."""
+        if self.scales is not None:
+            return self.scales[0]
         w = np.linspace(0, self.omega_final, 400)
         return float(max(np.abs(self.rotor.steady_amplitude(x)).max() for x in w)) or 1.0
 
-    def envelope_rhs(self) -> ca.Function:
-        """(x, u) -> dx/dt of the scaled envelope state x = (Re p, Im p, Re q, Im q, nu), p = P/a,
-        q = Q/(a omega_f), nu = omega/omega_f, u = alpha/alpha_max."""
+    @cached_property
+    def _rhs(self) -> ca.Function:
         R, n, a, wf = self.rotor, self.rotor.n, self.amplitude_scale, self.omega_final
-        x, u = ca.SX.sym("x", 4 * n + 1), ca.SX.sym("u")
+        x, ast, par = ca.SX.sym("x", 4 * n + 1), ca.SX.sym("a"), ca.SX.sym("p", 0)
         pr, pi, qr, qi, nu = x[:n], x[n:2 * n], x[2 * n:3 * n], x[3 * n:4 * n], x[4 * n]
-        w, al = nu * wf, u * self.alpha_max
+        w, al = nu * wf, ast * wf**2
         fr, fi = R.force_amplitude(w, al)
         ode = R.ode()
         ddr = ode(a * pr, a * wf * qr, w, al, fr) / (a * wf)
         ddi = ode(a * pi, a * wf * qi, w, al, fi) / (a * wf)
         dx = ca.vertcat(wf * qr + w * pi, wf * qi - w * pr, ddr + w * qi, ddi - w * qr, al / wf)
-        return ca.Function("envelope", [x, u], [dx])
+        return ca.Function("envelope", [x, ast, par], [dx / wf])
 
-    def envelope2(self) -> ca.Function:
-        """x -> the squared deflection envelope of each node of interest over a^2 (smoothed)."""
+    def rhs(self) -> ca.Function:
+        """(x, a*, p) -> dx/dtau of the scaled envelope state x = (Re p, Im p, Re q, Im q, nu), p = P/a,
+        q = Q/(a omega_f), nu = omega/omega_f, a* = alpha/omega_f^2 (the modal equation,
+        :meth:`autobal.models.ross_rotor.ModalRotor.ode`, on the complex envelope)."""
+        return self._rhs
+
+    def dynamics(self) -> ca.Function:
+        """(x, u, h) -> h dx/dtau over an interval of length h (tau)."""
+        x, u, h = ca.SX.sym("x", self.nx), ca.SX.sym("u"), ca.SX.sym("h")
+        return ca.Function("modal_f", [x, u, h], [h * self._rhs(x, u * self.a_max, ca.DM(0, 1))])
+
+    def envelope_rhs(self) -> ca.Function:
+        """(x, u) -> dx/dt (per second) of the scaled envelope state, u = alpha/alpha_max."""
+        x, u = ca.SX.sym("x", self.nx), ca.SX.sym("u")
+        return ca.Function("envelope_s", [x, u], [self.omega_final * self._rhs(x, u * self.a_max, ca.DM(0, 1))])
+
+    @cached_property
+    def _envelope2(self) -> ca.Function:
         n = self.rotor.n
         x = ca.SX.sym("x", 4 * n + 1)
         out = []
@@ -110,15 +187,67 @@ class ModalSpinupOcp:
             out.append(0.5 * (V2 + ca.sqrt(Wr**2 + Wi**2 + (EPS * self.peak_scale2) ** 2)))
         return ca.Function("envelope2", [x], [ca.vertcat(*out)])
 
+    def envelope2(self) -> ca.Function:
+        """x -> the squared deflection envelope of each node of interest over a^2 (smoothed)."""
+        return self._envelope2
+
+    def path_constraints(self, ref: float) -> list[PathConstraint]:
+        """The epigraph r^2/(a^2 ref) <= S of every node of interest at every path point."""
+        x, a, v = ca.SX.sym("x", self.nx), ca.SX.sym("a"), ca.SX.sym("v", 1)
+        return [PathConstraint("deflection epigraph r^2 <= S", ca.Function(
+            "path0", [x, a, v], [self._envelope2(x) / ref - v[0]]), -ca.inf, 0.0)]
+
+    def epigraph2(self, states: np.ndarray) -> np.ndarray:
+        """The squared envelope over a^2 (the epigraph's measure) of the nodes of interest, largest node, at
+        states (..., nx)."""
+        X = np.reshape(states, (-1, self.nx))
+        e2 = np.array(self._envelope2.map(X.shape[0])(X.T))
+        return e2.max(axis=0).reshape(np.shape(states)[:-1])
+
+    @property
+    def epigraph_unit(self) -> float:
+        """m per unit of the square root of the epigraph's measure (a)."""
+        return self.amplitude_scale
+
+    def deflection_of(self, states: np.ndarray) -> dict:
+        """The largest node's deflection envelope at states (k, nx), for a failed solve's last iterate, m."""
+        return {"deflection_envelope_m": list(np.sqrt(self.epigraph2(states)) * self.amplitude_scale)}
+
     @cached_property
     def peak_scale2(self) -> float:
         """(largest steady deflection of the nodes of interest / a)^2: the scale of the epigraph level."""
+        if self.scales is not None:
+            return self.scales[1]
         w = np.linspace(0, self.omega_final, 400)
         a = self.amplitude_scale
         return max(float(np.max(np.abs(self.rotor.node_rows(nd) @ self.rotor.steady_amplitude(x)))) / a
                    for nd in self.nodes for x in w) ** 2
 
-    def x0(self) -> np.ndarray:
+    # the members the robust study uses (:mod:`autobal.ocp.robust`), as the Jeffcott problem's
+    def perturbed(self, factors) -> ModalSpinupOcp:
+        """The problem of the rotor with the factors (critical speed, damping, liquid mass) applied: the modal
+        stiffness scaled by the critical-speed factor squared (every natural frequency by the factor), the modal
+        damping by the damping factor; the scales of this problem kept (one epigraph for every scenario).  The
+        modal rotor has no liquid: its factor must be 1."""
+        cr, dmp, liq = (float(f) for f in factors)
+        if liq != 1.0:
+            raise ValueError("the modal rotor has no liquid block: its liquid-mass factor must be 1")
+        R = self.rotor
+        rotor = dataclasses.replace(R, K=R.K * cr**2, C=R.C * dmp, omega_n=R.omega_n * cr)
+        return dataclasses.replace(self, rotor=rotor, scales=(self.amplitude_scale, self.peak_scale2))
+
+    def fast_peaks(self, U: np.ndarray) -> np.ndarray:
+        """Peak deflection (m) of the profiles U (C, n control intervals of the horizon, alpha/alpha_max) by the
+        Runge-Kutta screening (:func:`screen`)."""
+        return screen(self, np.atleast_2d(U))
+
+    def resimulated_peak(self, u: np.ndarray, h: np.ndarray, label: str, points: int = 8) -> float:
+        """Peak deflection (m) of the profile u (alpha/alpha_max on the problem's intervals, settling window
+        included), CVODES in the fixed frame (:func:`resimulate`; ``h`` and ``points`` are the problem's own)."""
+        return resimulate(self, u, label).peak
+
+    @property
+    def q0(self) -> np.ndarray:
         """The steady envelope at omega_start (scaled)."""
         E = self.rotor.steady_amplitude(self.omega_start) / self.amplitude_scale
         Q = 1j * self.omega_start * E / self.omega_final
@@ -126,31 +255,9 @@ class ModalSpinupOcp:
 
 
 def ramp_controls(ocp: ModalSpinupOcp, alpha: float, n: int | None = None) -> np.ndarray:
-    """u = alpha/alpha_max on n control intervals: a constant ramp at ``alpha`` until omega_final, then hold."""
-    n = n or ocp.intervals
-    h = ocp.horizon / n
-    w = np.minimum(ocp.omega_final, ocp.omega_start + alpha * h * np.arange(n + 1)) if ocp.omega_final > \
-        ocp.omega_start else np.maximum(ocp.omega_final, ocp.omega_start - alpha * h * np.arange(n + 1))
-    return np.clip(np.diff(w) / h / ocp.alpha_max, -1, 1)
-
-
-def _interval_integrator(ocp: ModalSpinupOcp, fractions, tol: float) -> ca.Function:
-    f = ocp.envelope_rhs()
-    nx = f.size1_in(0)
-    x, p = ca.SX.sym("x", nx), ca.SX.sym("p", 2)  # p = (u, h)
-    return ca.integrator("envelope_interval", "cvodes", {"x": x, "p": p, "ode": p[1] * f(x, p[0])}, 0,
-                         list(fractions), {"abstol": tol, "reltol": tol, "max_num_steps": 100000})
-
-
-def simulate_envelope(ocp: ModalSpinupOcp, u: np.ndarray, fractions, tol: float = 1e-8) -> np.ndarray:
-    """The envelope state at the ``fractions`` of every interval (settling window included), (K, len, nx)."""
-    F = _interval_integrator(ocp, fractions, tol)
-    x, out = ocp.x0(), []
-    for uk in u:
-        xf = np.array(F(x0=x, p=[uk, ocp.h])["xf"])
-        out.append(xf.T)
-        x = xf[:, -1]
-    return np.array(out)
+    """u = alpha/alpha_max on n control intervals: a constant ramp at ``alpha`` until omega_final, then hold
+    (:func:`autobal.ocp.simulation.ramp_profile`, the Jeffcott rotor's)."""
+    return ramp_profile(ocp, n or ocp.intervals, alpha)
 
 
 @dataclass
@@ -246,157 +353,6 @@ def resimulate(ocp: ModalSpinupOcp, u: np.ndarray, label: str) -> ModalTrajector
                            u * ocp.alpha_max)
 
 
-@dataclass
-class ModalSolution:
-    u: np.ndarray  # over alpha_max, all intervals (settling window zeros)
-    status: str
-    iterations: int
-    solve_time_s: float
-    collocation_peak: float  # m, largest envelope at the collocation points
-    start: str
-    w: np.ndarray = field(repr=False, default=None)  # the NLP's variables
-
-
-def interval_function(ocp: ModalSpinupOcp, ref: float) -> ca.Function:
-    """One Radau interval as an SX Function (x_k (nx), the collocation states (nx d), u_k, S) -> (collocation
-    residuals (nx d), epigraph rows r^2/(a^2 ref) - S at the collocation points (nodes x d), 0 (no quadrature)).
-    The last Radau point is the interval end, so the next node is the last collocation state and there is
-    no continuity equation.  Mapped over the intervals it is the whole transcription.
-
-    Parameters
-    ----------
-    ocp : ModalSpinupOcp
-        The problem (its interval length h, s, and the scaled envelope equation).
-    ref : float
-        Scale of the epigraph level (:attr:`ModalSpinupOcp.peak_scale2`), dimensionless.
-
-    Returns
-    -------
-    casadi.Function
-        With the calling convention :func:`autobal.ocp.transcription.structured_derivatives` expects (the last
-        output is the objective's quadrature, here none).
-    """
-    d = ocp.degree
-    _, C, _, _ = collocation_data(d, "radau")
-    f, env = ocp.envelope_rhs(), ocp.envelope2()
-    nx = f.size1_in(0)
-    x0, xc, u, s = ca.SX.sym("x0", nx), ca.SX.sym("xc", nx * d), ca.SX.sym("u"), ca.SX.sym("S")
-    Z = [x0] + [xc[nx * j:nx * (j + 1)] for j in range(d)]
-    res = [sum(C[r, j] * Z[r] for r in range(d + 1)) - ocp.h * f(Z[j + 1], u) for j in range(d)]
-    epi = [env(Z[j + 1]) / ref - s for j in range(d)]
-    return ca.Function("modal_interval", [x0, xc, u, s], [ca.vertcat(*res), ca.vertcat(*epi), ca.SX(1, 1)])
-
-
-def transcribe(ocp: ModalSpinupOcp) -> Nlp:
-    """The Radau collocation NLP of ``ocp`` in the layout of :func:`autobal.ocp.transcription.transcribe`
-    (x_0, then per interval the collocation states and u_k, then the epigraph level S; the Radau node
-    states eliminated), with the interval Function's data that
-    :func:`autobal.ocp.transcription.structured_derivatives` assembles the derivatives from.
-
-    Parameters
-    ----------
-    ocp : ModalSpinupOcp
-        The problem.
-
-    Returns
-    -------
-    Nlp
-        Variables (MX), objective S, constraints (collocation residuals, then epigraph rows) and bounds;
-        ``index`` "X" (K+1, nx), "Xc" (K, d, nx), "u" (K,), "v" [S]; ``ref`` the epigraph scale.
-    """
-    d, N, K = ocp.degree, ocp.intervals, ocp.intervals + ocp.settling_intervals
-    ref = ocp.peak_scale2
-    fi = interval_function(ocp, ref)
-    nx = fi.size1_in(0)
-    per = nx * d + 1
-    w = ca.MX.sym("w", nx + K * per + 1)
-    starts_ = nx + per * np.arange(K)
-    idx_Xc = starts_[:, None, None] + nx * np.arange(d)[:, None] + np.arange(nx)
-    idx_X = np.concatenate([np.arange(nx)[None, :], idx_Xc[:, -1, :]])
-    idx_u = starts_ + per - 1
-    iS = nx + K * per
-    W = ca.reshape(w[nx:iS], per, K)
-    X0 = ca.horzcat(w[:nx], W[nx * (d - 1):nx * d, :K - 1])
-    args = [X0, W[:nx * d, :], W[per - 1, :], w[iS]]
-    dyn, epi, _ = fi.map(K)(*args)
-    ndyn, nepi = fi.nnz_out(0), fi.nnz_out(1)
-    g = ca.vertcat(ca.vec(dyn), ca.vec(epi))
-    lbg = np.concatenate([np.zeros(ndyn * K), np.full(nepi * K, -np.inf)])
-    ubg = np.zeros(g.numel())
-    lbx, ubx = np.full(w.numel(), -np.inf), np.full(w.numel(), np.inf)
-    lbx[idx_X[0]] = ubx[idx_X[0]] = ocp.x0()
-    lbx[idx_u[:N]], ubx[idx_u[:N]] = -1.0, 1.0
-    lbx[idx_u[N:]] = ubx[idx_u[N:]] = 0.0  # settling window: held speed
-    # the speed is linear in each interval (exact in the collocation): bounded at the nodes of the horizon,
-    # omega_final at the deadline as a bound, free over the settling window (held by the dynamics)
-    lbx[idx_X[1:N, -1]] = 0.0
-    ubx[idx_X[1:N, -1]] = (ocp.omega_max / ocp.omega_final) if ocp.omega_max is not None else np.inf
-    lbx[idx_X[N, -1]] = ubx[idx_X[N, -1]] = 1.0
-    lbx[iS] = 0.0
-    cols = np.full((fi.nnz_in(), K), -1)
-    cols[:nx] = idx_X[:-1].T
-    cols[nx:nx + nx * d] = idx_Xc.reshape(K, -1).T
-    cols[nx + nx * d] = idx_u
-    cols[nx + nx * d + 1] = iS
-    rows = np.concatenate([np.arange(ndyn)[:, None] + ndyn * np.arange(K)[None, :],
-                           ndyn * K + np.arange(nepi)[:, None] + nepi * np.arange(K)[None, :]])
-    intervals = {"function": fi, "args": args, "cols": cols, "coefs": np.ones(cols.shape), "rows": rows,
-                 "tail": ca.MX(0, 1)}
-    blocks = [("dynamics", np.arange(ndyn * K)), ("deflection epigraph r^2 <= S", ndyn * K + np.arange(nepi * K))]
-    index = {"X": idx_X, "Xc": idx_Xc, "u": idx_u, "v": [iS]}
-    tau = collocation_data(d, "radau")[0]
-    return Nlp(w, w[iS], g, lbx, ubx, lbg, ubg, blocks, index, None, tau, None, ref, intervals)
-
-
-class ModalSolver:
-    """The collocation NLP of a ModalSpinupOcp, built once, solved from any control profile.  The Jacobian and
-    the Hessian of the Lagrangian come from the interval Function's own SX derivatives, mapped over the
-    intervals (:func:`autobal.ocp.transcription.structured_derivatives`); IPOPT with the Jeffcott spin-up's
-    options (:data:`autobal.ocp.solve.IPOPT_OPTIONS`)."""
-
-    def __init__(self, ocp: ModalSpinupOcp, options: dict | None = None):
-        t0 = time.perf_counter()
-        self.ocp = ocp
-        self.nlp = nlp = transcribe(ocp)
-        self.K = ocp.intervals + ocp.settling_intervals
-        self.ref = nlp.ref
-        self.fractions = nlp.fractions
-        self.env = ocp.envelope2()
-        opts = IPOPT_OPTIONS | (options or {})
-        self.solver = ipopt.nlpsol("modal_spinup", nlp.x, ca.MX.sym("p", 0), nlp.f, nlp.g,
-                                   **structured_derivatives(nlp), **opts)
-        self.build_time_s = time.perf_counter() - t0
-
-    def guess(self, u: np.ndarray) -> np.ndarray:
-        """All NLP variables from a control profile u (n control intervals): the envelope simulated."""
-        ocp, idx = self.ocp, self.nlp.index
-        uu = np.concatenate([u, np.zeros(self.K - len(u))])
-        sim = simulate_envelope(ocp, uu, self.fractions)
-        w0 = np.zeros(self.nlp.x.numel())
-        w0[idx["Xc"]] = sim
-        w0[idx["X"][0]] = ocp.x0()
-        w0[idx["u"]] = uu
-        lev = np.array(self.env.map(sim.shape[0] * sim.shape[1])(sim.reshape(-1, sim.shape[2]).T))
-        w0[idx["v"][0]] = 1.05 * lev.max() / self.ref
-        return w0
-
-    def solve(self, u: np.ndarray, label: str) -> ModalSolution:
-        """IPOPT from the control profile u; SolveError with the status when it fails."""
-        nlp = self.nlp
-        w0 = self.guess(u)
-        t0 = time.perf_counter()
-        r = ipopt.solve(self.solver, x0=w0, lbx=nlp.lbx, ubx=nlp.ubx, lbg=nlp.lbg, ubg=nlp.ubg)
-        dt = time.perf_counter() - t0
-        iu = nlp.index["u"]
-        if not r["success"]:
-            raise SolveError(f"multi-mode spin-up OCP not solved from the {label}: IPOPT {r['status']} after "
-                             f"{r['iterations']} iterations", r["status"], {"alpha_rad_s2": list(
-                                 r["x"][iu] * self.ocp.alpha_max)})
-        wopt = r["x"]
-        peak = float(np.sqrt(wopt[nlp.index["v"][0]] * self.ref)) * self.ocp.amplitude_scale
-        return ModalSolution(wopt[iu], r["status"], r["iterations"], dt, peak, label, wopt)
-
-
 # ---- starts: a cheap global search over multi-phase speed profiles ------------------------------------
 
 # the screening integrator: RK4 steps of at most RK4_STEP / (largest |eigenvalue| of the envelope equation), at
@@ -405,11 +361,6 @@ class ModalSolver:
 RK4_STEP = 1.5  # |lambda| dt; RK4 is stable on the imaginary axis up to 2.83
 SAMPLES = 10
 KEEP = 2  # distinct search profiles solved by IPOPT
-# control intervals of the coarse mesh (at least) on which the starts are solved when the mesh has twice as
-# many: on the shipped scene 80 (50 ms) coarse intervals lead to the optimum the 160-interval mesh reaches from
-# all its starts (19.57 um; solved directly, 19.52-19.57 um), 40 (100 ms) to a worse one on 80 (20.45 um, where
-# the starts solved on the 80 intervals directly reach 19.65 um)
-COARSE = 80
 TIE = 2e-3  # relative: screened peaks this close tie (broken by the peak of the last phase)
 AHEAD = 0.05  # the ramps are not solved when the search's best profile is this far below both of their peaks
 
@@ -484,7 +435,7 @@ def screen(ocp: ModalSpinupOcp, u: np.ndarray, substeps: int | None = None, samp
     Cn, n = u.shape
     K = ocp.intervals + ocp.settling_intervals
     u = np.concatenate([u, np.zeros((Cn, K - n))], axis=1)
-    x0 = ocp.x0()
+    x0 = ocp.q0
     y, nu = np.tile(x0[:-1], (Cn, 1)), np.full(Cn, x0[-1])
     if substeps is None:
         top = (ocp.omega_max or ocp.omega_final) / ocp.omega_final
@@ -542,15 +493,6 @@ def phase_profiles(ocp: ModalSpinupOcp, w1, u_b, d, w3) -> np.ndarray:
         bw = [w0, w1[i], w2[i], w3[i], wf, wf]
         out[i] = np.diff(np.interp(tk, bt, bw)) / (ocp.h * a)
     return out
-
-
-@dataclass
-class SearchResult:
-    """The best profiles of the grid, distinct basins first."""
-
-    params: np.ndarray  # (k, 4): w1 (rad/s), u_b, d (s), w3 (rad/s)
-    peaks: np.ndarray  # (k,) m, by the screening integrator
-    evaluated: int
 
 
 def grid_search(ocp: ModalSpinupOcp, n_w: int = 12, n_u: int = 4, n_d: int = 6, n_w3: int = 6,
@@ -667,7 +609,7 @@ def baselines(ocp: ModalSpinupOcp) -> dict[str, ModalTrajectory]:
 
 @dataclass
 class ModalOptimum:
-    solution: ModalSolution
+    solution: SpinupSolution
     trajectory: ModalTrajectory
     starts: list
     build_time_s: float
@@ -676,15 +618,16 @@ class ModalOptimum:
     @property
     def resimulation_rel_error(self) -> float:
         """|collocation peak - re-simulated peak| / re-simulated peak."""
-        return abs(self.solution.collocation_peak - self.trajectory.peak) / self.trajectory.peak
+        return abs(self.solution.peak_collocation - self.trajectory.peak) / self.trajectory.peak
 
 
 def optimize(ocp: ModalSpinupOcp, options: dict | None = None) -> ModalOptimum:
-    """Solve from every start (:func:`starts`); keep the best optimum by its re-simulated peak.
+    """Solve from every start (:func:`starts`) by the spin-up's solver (:class:`autobal.ocp.solve.Solver`: the
+    generic collocation, IPOPT, structured derivatives); keep the best optimum by its re-simulated peak.
 
-    With an even number of at least 2 x COARSE control intervals, the starts are searched for and solved on
-    half as many (the coarse mesh) and only the best coarse optimum, by its re-simulation, is solved on the full
-    mesh, from its controls (each interval split in two; the states simulated).
+    Mesh continuation as every spin-up study (:func:`autobal.ocp.solve.coarse_intervals`): the starts are searched
+    for and solved on the coarse mesh and only the best coarse optimum, by its re-simulation, is refined to the
+    full mesh (:func:`autobal.ocp.solve.refine`).
 
     Parameters
     ----------
@@ -699,38 +642,35 @@ def optimize(ocp: ModalSpinupOcp, options: dict | None = None) -> ModalOptimum:
         The best solution, its re-simulation (m, s, rad/s) and one row per solve.
     """
     n = ocp.intervals
-    coarse = dataclasses.replace(ocp, intervals=n // 2) if n % 2 == 0 and n // 2 >= COARSE else None
-    first = coarse or ocp
+    nc = coarse_intervals(n)
+    first = dataclasses.replace(ocp, intervals=nc)
     clock = time.perf_counter()
     start_list = starts(first)
     search_time = time.perf_counter() - clock
-    solver = ModalSolver(first, options)
+    solver = Solver(first, first.method, first.peak_scale2, coarse_options(options) if nc < n else options)
     build = solver.build_time_s
-    stage = f"{first.intervals} intervals"
+    stage = f"{nc} intervals"
     rows, best, err = [], None, None
     for label, u in start_list:
         try:
-            sol = solver.solve(u, label)
+            sol = solver.solve(u)
         except SolveError as exc:
             rows.append({"start": label, "stage": stage, "status": exc.status, "error": str(exc)})
             err = err or exc
             continue
         tr = resimulate(first, sol.u, "optimum")
         rows.append({"start": label, "stage": stage, "status": sol.status, "iterations": sol.iterations,
-                     "solve_time_s": sol.solve_time_s, "collocation_peak_m": sol.collocation_peak,
+                     "solve_time_s": sol.solve_time_s, "collocation_peak_m": sol.peak_collocation,
                      "resimulated_peak_m": tr.peak})
-        if best is None or tr.peak < best[1].peak * (1 - 1e-4):
+        if best is None or tr.peak < best[1].peak * (1 - TIE_SOLVED):
             best = (sol, tr)
     if best is None:
         raise err
-    if coarse is not None:  # refine the best coarse optimum on the full mesh
-        fine = ModalSolver(ocp, options)
+    if nc < n:  # refine the best coarse optimum to the full mesh
+        fine, sol = refine(ocp, ocp.method, solver, best[0], options, rows)
         build += fine.build_time_s
-        sol = fine.solve(np.repeat(best[0].u[:coarse.intervals], 2), f"{best[0].start}, refined")
         tr = resimulate(ocp, sol.u, "optimum")
-        rows.append({"start": sol.start, "stage": f"{n} intervals", "status": sol.status,
-                     "iterations": sol.iterations, "solve_time_s": sol.solve_time_s,
-                     "collocation_peak_m": sol.collocation_peak, "resimulated_peak_m": tr.peak})
+        rows[-1] |= {"collocation_peak_m": sol.peak_collocation, "resimulated_peak_m": tr.peak}
         best = (sol, tr)
     return ModalOptimum(best[0], best[1], rows, build, search_time)
 
@@ -1022,7 +962,7 @@ def run(rotor: ModalRotor, ocp_kw: dict, title: str = "", ross_critical: dict | 
         "status": sol.status, "ipopt_iterations": sol.iterations, "solve_time_s": sol.solve_time_s,
         "build_time_s": opt.build_time_s, "search_time_s": opt.search_time_s,
         "total_solve_time_s": sum(r.get("solve_time_s", 0.0) for r in opt.starts),
-        "peak_deflection_m": tr.peak, "collocation_peak_m": sol.collocation_peak,
+        "peak_deflection_m": tr.peak, "collocation_peak_m": sol.peak_collocation,
         "resimulation_rel_error": opt.resimulation_rel_error, "node_of_peak": tr.node_of_peak,
         "time_of_peak_s": tr.t_peak, "omega_at_peak_rad_s": float(np.interp(tr.t_peak, tr.t, tr.omega)),
         "baseline_ramp_peak_m": best_ramp.peak, "improvement_over_best_ramp": 1 - tr.peak / best_ramp.peak,

@@ -25,13 +25,14 @@ shape of a short back-off), and unregularised it puts one-interval pulses there 
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
-from autobal.analysis.rotor import steady_q
-from autobal.models.rotor import RotorParams, rotor_model
+from autobal.analysis.rotor import steady_q, unbalance
+from autobal.models.rotor import STATES, RotorParams, rotor_model
 
 OBJECTIVES = ("peak_deflection", "peak_unbalance", "integrated_deflection", "min_time")
 # default weight of the smoothed total variation of alpha/alpha_max: removes the one-interval pulses of the
@@ -161,23 +162,66 @@ class SpinupOcp:
 
     @property
     def q0(self) -> list[float]:
-        return steady_q(self.params, self.nu0) if self.nu0 > 0 else [0.0, 0.0, 0.0, 0.0, 0.0]
+        return steady_q(self.params, self.nu0) if self.nu0 > 0 else [0.0] * self.nx
 
     @property
     def n_extra(self) -> int:
         """Extra decision variables v: the epigraph level (peak objectives) or the final time."""
         return 1 if self.objective != "integrated_deflection" else 0
 
+    # the model as the transcription, the simulation and the solver see it (:mod:`autobal.ocp.transcription`):
+    # its state, its equation, the measure the epigraph bounds; the modal rotor's problem has the same members
+    @property
+    def nx(self) -> int:
+        """Number of states of the model (:data:`autobal.models.rotor.STATES`)."""
+        return len(STATES)
+
+    @property
+    def speed_index(self) -> int:
+        """Where the speed nu = omega/Omega0 sits in the state."""
+        return STATES.index("nu")
+
+    @property
+    def p(self) -> list[float]:
+        """The parameters of :meth:`rhs`."""
+        return self.params.p
+
+    def rhs(self) -> ca.Function:
+        """(q, a*, p) -> dq/dtau: the rotating-frame model (:func:`autobal.models.rotor.rotor_model`)."""
+        return rotor_model().ode
+
+    def deflection2(self) -> ca.Function:
+        """q -> (delta/e)^2: the integrand of the integrated objective."""
+        return rotor_model().delta2
+
+    def epigraph2(self, states: np.ndarray) -> np.ndarray:
+        """The squared measure the epigraph bounds ((delta/e)^2, or d^2 for peak_unbalance) at states (..., nx)."""
+        if self.objective == "peak_unbalance":
+            return unbalance(np.reshape(states, (-1, self.nx)).T, self.params.psi) ** 2
+        return states[..., 0] ** 2 + states[..., 1] ** 2
+
+    def deflection_of(self, states: np.ndarray) -> dict:
+        """The deflection at states (k, nx) for a failed solve's last iterate, named with its unit."""
+        return {"deflection_over_e": list(np.hypot(states[:, 0], states[:, 1]))}
+
+    epigraph_unit = 1.0  # the reported peak is sqrt(epigraph level) times this (delta/e and d are reported as they are)
+    max_steps = 20000  # CVODES steps per integrator call at most
+
+    def perturbed(self, factors) -> SpinupOcp:
+        """The problem of the rotor with the factors (critical speed, damping, liquid mass) applied
+        (:meth:`autobal.models.rotor.RotorParams.scaled`); the drive, speeds, deadline and limits the same (a
+        scenario of the robust study, :mod:`autobal.ocp.robust`)."""
+        return dataclasses.replace(self, params=self.params.scaled(*factors))
+
     def dynamics(self) -> ca.Function:
-        """(q, u, h) -> h f(q, u a*_max): the rotating-frame model over an interval of length h."""
-        m = rotor_model()
-        q, u, h = ca.SX.sym("q", 5), ca.SX.sym("u"), ca.SX.sym("h")
-        return ca.Function("spinup_f", [q, u, h], [h * m.ode(q, u * self.a_max, self.params.p)])
+        """(q, u, h) -> h f(q, u a*_max): the model over an interval of length h."""
+        q, u, h = ca.SX.sym("q", self.nx), ca.SX.sym("u"), ca.SX.sym("h")
+        return ca.Function("spinup_f", [q, u, h], [h * self.rhs()(q, u * self.a_max, self.p)])
 
     def path_constraints(self, ref: float) -> list[PathConstraint]:
         """Named path constraints; ``ref`` is the scale of the epigraph level (delta^2 or d^2)."""
         m, P = rotor_model(), self.params
-        q, a, v = ca.SX.sym("q", 5), ca.SX.sym("a"), ca.SX.sym("v", self.n_extra)
+        q, a, v = ca.SX.sym("q", self.nx), ca.SX.sym("a"), ca.SX.sym("v", self.n_extra)
         out = []
 
         def add(name, expr, lb, ub):
@@ -202,9 +246,9 @@ class SpinupOcp:
             add(f"braking limit M >= -{-lo:g} N m", M * P.torque_scale / ref, lo / ref, ca.inf)
         if self.power_max is not None:
             add(f"power limit M omega <= {self.power_max:g} W",
-                M * P.torque_scale * q[4] * self.Om / self.power_max, -ca.inf, 1.0)
+                M * P.torque_scale * q[self.speed_index] * self.Om / self.power_max, -ca.inf, 1.0)
         if self.motor_stall_torque is not None:
-            L = self.motor_stall_torque * (1 - q[4] * self.Om / self.motor_no_load_speed)
+            L = self.motor_stall_torque * (1 - q[self.speed_index] * self.Om / self.motor_no_load_speed)
             add("motor characteristic M <= L_s (1 - omega/omega_nl)",
                 (M * P.torque_scale - L) / self.motor_stall_torque, -ca.inf, 0.0)
         return out

@@ -31,9 +31,9 @@ from autobal.analysis import ipopt
 from autobal.errors import SolveError
 from autobal.models.rotor import RotorParams
 from autobal.ocp.problem import SpinupOcp
-from autobal.ocp.search import FAST_STEP, ModalRotor, simulate_steps, steps_of
+from autobal.ocp.search import FAST_STEP, FixedFrameModes, simulate_steps, steps_of
 from autobal.ocp.simulation import initial_guess, ramp_profile, rate_text, resimulate
-from autobal.ocp.solve import IPOPT_OPTIONS
+from autobal.ocp.solve import IPOPT_OPTIONS, coarse_intervals
 from autobal.ocp.transcription import DirectCollocation, jerk_regulariser, mesh, structured_derivatives, transcribe
 
 
@@ -101,13 +101,14 @@ def perturbed(params: RotorParams, factors) -> RotorParams:
     RotorParams
         The perturbed rotor (SI).
     """
-    cr, dmp, liq = (float(f) for f in factors)
-    return dataclasses.replace(params, c=params.c * cr**2, chi=params.chi * dmp, m2_star=params.m2_star * liq)
+    return params.scaled(*factors)
 
 
 def scenario_ocps(ocp: SpinupOcp, factors: np.ndarray) -> list[SpinupOcp]:
-    """The spin-up problem of each perturbed rotor (same drive, speeds, deadline and limits)."""
-    return [dataclasses.replace(ocp, params=perturbed(ocp.params, f)) for f in factors]
+    """The spin-up problem of each perturbed rotor (same drive, speeds, deadline and limits): the problem's own
+    ``perturbed`` (the Jeffcott rotor's :meth:`autobal.ocp.problem.SpinupOcp.perturbed`, the modal rotor's
+    :meth:`autobal.ocp.modal.ModalSpinupOcp.perturbed`)."""
+    return [ocp.perturbed(f) for f in factors]
 
 
 @dataclass(frozen=True)
@@ -125,17 +126,22 @@ class Profile:
 
 
 def cvodes_peaks(ocp: SpinupOcp, factors: np.ndarray, profile: Profile, points: int = 8) -> np.ndarray:
-    """Peak delta/e of the profile on each perturbed rotor, CVODES at tight tolerance (the reference)."""
+    """Peak of the profile on each perturbed rotor, CVODES at tight tolerance (the reference): delta/e for the
+    Jeffcott rotor (:func:`autobal.ocp.simulation.resimulate`), m for the modal rotor (its own
+    ``resimulated_peak``)."""
     out = []
     for o in scenario_ocps(ocp, factors):
         u, h = profile.on(o)
-        out.append(resimulate(o, u, h, profile.label, points=points).peak_delta)
+        out.append(resimulate(o, u, h, profile.label, points=points).peak_delta if isinstance(o, SpinupOcp)
+                   else o.resimulated_peak(u, h, profile.label, points=points))
     return np.array(out)
 
 
-def fast_peaks(ocp: SpinupOcp, factors: np.ndarray, profiles: list[Profile], dt: float = FAST_STEP) -> np.ndarray:
-    """Peak delta/e of every profile on every perturbed rotor by the exponential integrator of the global
-    search (:func:`autobal.ocp.search.simulate_steps`), all profiles of one rotor at once.
+def fast_peaks(ocp: SpinupOcp, factors: np.ndarray, profiles: list[Profile]) -> np.ndarray:
+    """Peak of every profile on every perturbed rotor by a fast integrator (the exponential integrator of the
+    Jeffcott rotor's global search, :func:`autobal.ocp.search.simulate_steps`; another model's own
+    ``fast_peaks``, e.g. the modal rotor's Runge-Kutta screening, :func:`autobal.ocp.modal.screen`), all profiles
+    of one rotor at once.
 
     Parameters
     ----------
@@ -145,19 +151,20 @@ def fast_peaks(ocp: SpinupOcp, factors: np.ndarray, profiles: list[Profile], dt:
         The rotors (:func:`perturbed`).
     profiles : list of Profile
         The speed profiles (same number of control intervals).
-    dt : float
-        Step, dimensionless time of each rotor.
 
     Returns
     -------
     ndarray, shape (R, P)
-        Peak delta/e.
+        Peaks (delta/e, or m for the modal rotor).
     """
     out = np.empty((len(factors), len(profiles)))
     U = np.array([p.u for p in profiles])
     for i, o in enumerate(scenario_ocps(ocp, factors)):
-        steps = np.array([steps_of(o, u, dt) for u in U])
-        out[i] = simulate_steps(o, steps, dt, ModalRotor.of(o))
+        if isinstance(o, SpinupOcp):
+            steps = np.array([steps_of(o, u, FAST_STEP) for u in U])
+            out[i] = simulate_steps(o, steps, FAST_STEP, FixedFrameModes.of(o))
+        else:
+            out[i] = o.fast_peaks(U)
     return out
 
 
@@ -254,7 +261,8 @@ class RobustSolver:
         first = self.nlps[0]
         K = first.index["u"].size
         n = first.mesh.n
-        nu_idx = np.concatenate([first.index["X"][:, 4], first.index["Xc"][..., 4].ravel()])
+        sp = ocps[0].speed_index
+        nu_idx = np.concatenate([first.index["X"][:, sp], first.index["Xc"][..., sp].ravel()])
         lbx, ubx = [first.lbx[first.index["u"]], [0.0]], [first.ubx[first.index["u"]], [np.inf]]
         cols, scales, keeps, offset = [], [], [], K + 1
         for i, (o, nlp) in enumerate(zip(ocps, self.nlps, strict=True)):
@@ -276,7 +284,7 @@ class RobustSolver:
             if i > 0:  # rows that repeat the first scenario's: speed dynamics, final speed, jerk bound
                 for name, rows in nlp.blocks:
                     if name == "dynamics":
-                        keep[rows[np.arange(rows.size) % 5 == 4]] = False
+                        keep[rows[np.arange(rows.size) % o.nx == sp]] = False
                     elif name.startswith(("final speed", "jerk limit")):
                         keep[rows] = False
             cols.append(col)
@@ -325,7 +333,8 @@ class RobustSolver:
             own[nlp.index["u"]] = False
             own[nlp.index["v"]] = False
             if i > 0:
-                own[np.concatenate([nlp.index["X"][:, 4], nlp.index["Xc"][..., 4].ravel()])] = False
+                sp = o.speed_index
+                own[np.concatenate([nlp.index["X"][:, sp], nlp.index["Xc"][..., sp].ravel()])] = False
             x0.append(w0[own])
         return np.concatenate(x0)
 
@@ -341,8 +350,8 @@ class RobustSolver:
                              f"({len(self.ocps)} scenarios, {self.method.label})", r["status"],
                              {"alpha_rad_s2": list(r["x"][:self.n] * self.ocps[0].alpha_max)})
         ws = [np.asarray(P @ ca.DM(r["x"])).ravel() for P in self.P]
-        peaks = [float(np.sqrt(np.max(np.sum(w[nlp.index["Xc"]][..., :2] ** 2, axis=-1))))
-                 for w, nlp in zip(ws, self.nlps, strict=True)]
+        peaks = [float(np.sqrt(np.max(o.epigraph2(w[nlp.index["Xc"]])))) * o.epigraph_unit
+                 for o, w, nlp in zip(self.ocps, ws, self.nlps, strict=True)]
         return {"u": np.asarray(r["x"][:self.n]), "collocation_peaks": np.array(peaks), "status": r["status"],
                 "iterations": r["iterations"], "solve_time_s": dt}
 
@@ -449,7 +458,6 @@ def optimize_robust(ocp: SpinupOcp, factors: np.ndarray, method: DirectCollocati
     return best
 
 
-COARSE = 50  # control intervals of the coarse stage (at least)
 # coarse optima refined on the fine mesh.  The coarse ranking need not predict the fine one (it did not for
 # some starts, docs/dev/spinup_robust.md, "Build and solve"); on the shipped scene a second refinement
 # never won and cost 14 s more of IPOPT, so one
@@ -459,12 +467,10 @@ REFINED = 1
 def optimize_robust_refined(ocp: SpinupOcp, factors: np.ndarray, method: DirectCollocation, starts: list[Profile],
                             ref: float, options: dict | None = None) -> RobustOptimum:
     """:func:`optimize_robust` by mesh continuation: every start and the scenario generation on N / 2^k
-    intervals (the fewest still at least COARSE), then the REFINED best coarse optima (their worst design
+    intervals (:func:`autobal.ocp.solve.coarse_intervals`), then the REFINED best coarse optima (their worst design
     peaks more than 1e-4 apart: distinct optima) each refined on N intervals with the union of their active
     scenarios (more join if a fine profile needs them); the best fine optimum is kept.  Arguments as there."""
-    n, nc = method.intervals, method.intervals
-    while nc % 2 == 0 and nc // 2 >= COARSE:
-        nc //= 2
+    n, nc = method.intervals, coarse_intervals(method.intervals)
     if nc == n:
         return optimize_robust(ocp, factors, method, starts, ref, options)
     r = n // nc

@@ -19,7 +19,7 @@ from autobal.analysis.quantities import Declarations, Quantity, significant
 from autobal.analysis.result import Result, new_figure, with_statuses
 from autobal.ocp import robust as rb
 from autobal.ocp.problem import SpinupOcp
-from autobal.ocp.search import controls_on_mesh, grid_search
+from autobal.ocp.search import FAST_STEP, controls_on_mesh, grid_search
 from autobal.ocp.simulation import Trajectory, best_within_limits, drive_use, resimulate
 from autobal.ocp.solve import optimize
 from autobal.ocp.spinup_study import RPM, deflection_axis, deflection_text, twin_axis
@@ -367,7 +367,7 @@ def run(ocp: SpinupOcp, method: DirectCollocation, uncertainty: rb.Uncertainty, 
         "nominal_build_time_s": nominal.build_time_s,
         "nominal_solve_time_s": sum(r.get("solve_time_s", 0.0) for r in nominal.starts),
         "validation_samples": int(samples), "seed": int(seed), "executor": executor.name,
-        "validation_time_s": t_val, "validation_step_tau": rb.FAST_STEP,
+        "validation_time_s": t_val, "validation_step_tau": FAST_STEP,
         "validation_check_rel_error": fast_err,
         "profiles": prof,
         "ramps": [{"label": p.label, "alpha_rad_s2": float(p.u[0] * ocp.alpha_max),
@@ -377,7 +377,7 @@ def run(ocp: SpinupOcp, method: DirectCollocation, uncertainty: rb.Uncertainty, 
                   for i, (p, d, w) in enumerate(zip(family, design_ramps, ramp_worst, strict=True))],
         "accuracy": {"estimate": fast_err,
                      "how": f"largest relative difference of the validation integrator (exponential, step "
-                            f"{rb.FAST_STEP} in Omega0 t) against CVODES on {CHECKED} validation rotors"},
+                            f"{FAST_STEP} in Omega0 t) against CVODES on {CHECKED} validation rotors"},
     }
     validation = {"factors": factors} | {k: v for k, (_, v) in chosen.items()}
     # the wall time by part (s): the nominal optimum (global search, multi-start, its builds and solves), the

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from autobal.models.rotor import rotor_model
+from autobal.models.rotor import FIXED_STATES, rotor_model
 from autobal.ocp.problem import SpinupOcp
 
 STEP = 1.0  # dimensionless time step of the search integrator (tau = Omega0 t)
@@ -30,9 +30,10 @@ FAST_STEP = 0.5  # step of the validation and ranking integrator (peak within 1e
 
 
 @dataclass(frozen=True)
-class ModalRotor:
-    """The fixed-frame rotor z' = A z + b(t) in modal form, z = (X, Y, X', Y') over e; the force
-    (X'' + i Y'' at beta = 0) is f0 + f_nu2 nu^2 + f_a a* (checked at a random point when built)."""
+class FixedFrameModes:
+    """The Jeffcott rotor in the fixed frame, z' = A z + b(t), in modal form (the exponential integrator's
+    eigen-decomposition; not the multi-mode rotor of :mod:`autobal.models.ross_rotor`), z = (X, Y, X', Y') over
+    e; the force (X'' + i Y'' at beta = 0) is f0 + f_nu2 nu^2 + f_a a* (checked at a random point when built)."""
 
     lam: np.ndarray  # (4,) eigenvalues of A
     V: np.ndarray  # eigenvectors
@@ -40,11 +41,12 @@ class ModalRotor:
     f: tuple  # complex (f0, f_nu2, f_a)
 
     @classmethod
-    def of(cls, ocp: SpinupOcp) -> ModalRotor:
-        m = rotor_model()
-        Q, a = ca.SX.sym("Q", 6), ca.SX.sym("a")
+    def of(cls, ocp: SpinupOcp) -> FixedFrameModes:
+        m, nq = rotor_model(), len(FIXED_STATES)
+        nz = FIXED_STATES.index("nu")  # the deflection states come first
+        Q, a = ca.SX.sym("Q", nq), ca.SX.sym("a")
         rhs = m.ode_fixed(Q, a, ocp.params.p)
-        A = np.array(ca.Function("A", [Q, a], [ca.jacobian(rhs[:4], Q[:4])])(np.zeros(6), 0.0))
+        A = np.array(ca.Function("A", [Q, a], [ca.jacobian(rhs[:nz], Q[:nz])])(np.zeros(nq), 0.0))
         lam, V = np.linalg.eig(A)
 
         def force(nu, acc):
@@ -58,7 +60,7 @@ class ModalRotor:
         return cls(lam, V, np.linalg.inv(V), f)
 
 
-def simulate_steps(ocp: SpinupOcp, u: np.ndarray, dt: float = STEP, rotor: ModalRotor | None = None,
+def simulate_steps(ocp: SpinupOcp, u: np.ndarray, dt: float = STEP, rotor: FixedFrameModes | None = None,
                    block: int = 64, states: bool = False):
     """Peak deflection delta/e of many piecewise-constant profiles at once.
 
@@ -81,7 +83,7 @@ def simulate_steps(ocp: SpinupOcp, u: np.ndarray, dt: float = STEP, rotor: Modal
         The largest delta/e at the step ends; with ``states`` also (X, Y, X', Y') over e at the step starts and
         ends, ndarray (4, C, S + 1), the speed nu and the rotation angle beta there, each (C, S + 1).
     """
-    rotor = rotor or ModalRotor.of(ocp)
+    rotor = rotor or FixedFrameModes.of(ocp)
     C, S = u.shape
     a = u * ocp.a_max
     nu = ocp.nu0 + np.concatenate([np.zeros((C, 1)), np.cumsum(a * dt, axis=1)], axis=1)
@@ -149,10 +151,11 @@ def three_phase(ocp: SpinupOcp, u1, w1, u_b, d, steps: int, dt: float = STEP) ->
 
 @dataclass
 class SearchResult:
-    """The best profiles of the grid, distinct basins first."""
+    """The best profiles of a grid search over a profile family, distinct basins first (the Jeffcott rotor's
+    three-phase family here, the modal rotor's four-phase family in :mod:`autobal.ocp.modal`)."""
 
-    params: np.ndarray  # (k, 4): u1, w1 (rad/s), u_b, d (s)
-    peaks: np.ndarray  # (k,) delta/e by the search integrator
+    params: np.ndarray  # (k, 4): the family's parameters (here u1, w1 (rad/s), u_b, d (s))
+    peaks: np.ndarray  # (k,) peaks by the search integrator (here delta/e)
     evaluated: int
 
 
@@ -219,7 +222,7 @@ def steps_of(ocp: SpinupOcp, u: np.ndarray, dt: float) -> np.ndarray:
     return averaged(u, ocp.tau_h, np.arange(steps + 1) * dt)
 
 
-def profile_peak(ocp: SpinupOcp, u: np.ndarray, dt: float = FAST_STEP, rotor: ModalRotor | None = None) -> float:
+def profile_peak(ocp: SpinupOcp, u: np.ndarray, dt: float = FAST_STEP, rotor: FixedFrameModes | None = None) -> float:
     """Peak delta/e of one profile by the exponential integrator (:func:`simulate_steps`).
 
     Parameters

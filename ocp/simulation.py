@@ -27,12 +27,13 @@ def rate_text(alpha: float) -> str:
 
 
 @cache
-def chained_integrator(fractions: tuple, tol: float, intervals: int, multistep: str) -> ca.Function:
-    """:func:`interval_integrator` chained over ``intervals`` intervals in one CasADi call (``mapaccum``: CVODES
-    restarts at every interval, as the control jumps there): (q0 (5), [a*, h, p] (6, K)) -> (q(T), states
-    (5, K len(fractions)))."""
-    F = interval_integrator(fractions, tol, multistep)
-    q, par = ca.MX.sym("q", 5), ca.MX.sym("par", 6)
+def chained_integrator(rhs: ca.Function, fractions: tuple, tol: float, intervals: int, multistep: str,
+                       max_steps: int = 20000) -> ca.Function:
+    """:func:`interval_integrator` of the model's equation ``rhs`` chained over ``intervals`` intervals in one
+    CasADi call (``mapaccum``: CVODES restarts at every interval, as the control jumps there): (q0 (nx),
+    [a*, h, p] (2 + np, K)) -> (q(T), states (nx, K len(fractions)))."""
+    F = interval_integrator(rhs, fractions, tol, multistep, max_steps)
+    q, par = ca.MX.sym("q", rhs.size1_in(0)), ca.MX.sym("par", 2 + rhs.size1_in(2))
     xf = F(x0=q, p=par)["xf"]
     return ca.Function("spinup_interval_step", [q, par], [xf[:, -1], xf]).mapaccum("spinup_chain", intervals, [0], [0])
 
@@ -66,13 +67,14 @@ def simulate_profile(ocp: SpinupOcp, u, h, fractions, tol: float = RESIM_TOL, mu
 
     Returns
     -------
-    ndarray, shape (K, len(fractions), 5)
+    ndarray, shape (K, len(fractions), nx)
         The states at the fractions of each interval.
     """
     if abs(fractions[-1] - 1) > 1e-14:
         raise ValueError("the last output fraction must be the interval end (1)")
     u, h = np.asarray(u, float), np.asarray(h, float)
-    K, nf, fr, p = len(u), len(fractions), tuple(float(f) for f in fractions), list(ocp.params.p)
+    K, nf, fr, p = len(u), len(fractions), tuple(float(f) for f in fractions), list(ocp.p)
+    rhs, steps = ocp.rhs(), ocp.max_steps
     if len(h) != K:
         raise ValueError(f"{K} controls for {len(h)} intervals")
     pieces = runs(u, h) if merge else [(0, K)]
@@ -80,7 +82,7 @@ def simulate_profile(ocp: SpinupOcp, u, h, fractions, tol: float = RESIM_TOL, mu
     while i < len(pieces):
         k, m = pieces[i]
         if merge and m > 1:  # one call over the run, outputs at the fractions of each of its intervals
-            F = interval_integrator(tuple((r + f) / m for r in range(m) for f in fr), tol, multistep)
+            F = interval_integrator(rhs, tuple((r + f) / m for r in range(m) for f in fr), tol, multistep, steps)
             xs = np.array(interrupt.call(F, x0=q, p=[u[k] * ocp.a_max, m * h[k], *p])["xf"])
             i += 1
         else:  # single intervals (or all, without merge): one chained call restarting at each
@@ -88,11 +90,11 @@ def simulate_profile(ocp: SpinupOcp, u, h, fractions, tol: float = RESIM_TOL, mu
             while j < len(pieces) and (not merge or pieces[j][1] == 1):
                 j += 1
             m = sum(r[1] for r in pieces[i:j])
-            F = chained_integrator(fr, tol, m, multistep)
+            F = chained_integrator(rhs, fr, tol, m, multistep, steps)
             par = np.vstack([u[k:k + m] * ocp.a_max, h[k:k + m], np.tile(np.array(p)[:, None], m)])
             xs = np.array(interrupt.call(F, q, par)[1])
             i = j
-        out.append(xs.T.reshape(m, nf, 5))
+        out.append(xs.T.reshape(m, nf, ocp.nx))
         q = xs[:, -1]
     return np.concatenate(out)
 
@@ -140,12 +142,8 @@ def initial_guess(ocp: SpinupOcp, nlp: Nlp, u: np.ndarray) -> np.ndarray:
     if ocp.free_time:
         w0[nlp.index["v"][0]] = 1.0
     elif nlp.index["v"]:
-        pts = np.array(w0[nlp.index["Xc"]] if nlp.index["Xc"] is not None else w0[nlp.index["X"]]).reshape(-1, 5)
-        if ocp.objective == "peak_deflection":
-            level = np.max(pts[:, 0] ** 2 + pts[:, 1] ** 2)
-        else:
-            level = np.max(unbalance(pts.T, ocp.params.psi) ** 2)
-        w0[nlp.index["v"][0]] = 1.05 * level / nlp.ref
+        pts = np.array(w0[nlp.index["Xc"]] if nlp.index["Xc"] is not None else w0[nlp.index["X"]])
+        w0[nlp.index["v"][0]] = 1.05 * np.max(ocp.epigraph2(pts)) / nlp.ref
     return w0
 
 
@@ -180,7 +178,7 @@ def resimulate(ocp: SpinupOcp, u, h, label: str, points: int = RESIM_POINTS, tol
     K = len(u)
     t0 = np.concatenate([[0.0], np.cumsum(h)[:-1]])
     tau = np.concatenate([[0.0], (t0[:, None] + np.asarray(h)[:, None] * np.array(frac)[None, :]).ravel()])
-    q = np.vstack([np.asarray(ocp.q0, float)[None, :], sim.reshape(K * points, 5)]).T
+    q = np.vstack([np.asarray(ocp.q0, float)[None, :], sim.reshape(K * points, ocp.nx)]).T
     a = np.concatenate([np.repeat(np.asarray(u) * ocp.a_max, points)[:1], np.repeat(np.asarray(u) * ocp.a_max,
                                                                                      points)])
     dl, dd = deflection(q), unbalance(q, ocp.params.psi)

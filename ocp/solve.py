@@ -13,10 +13,9 @@ import casadi as ca
 import numpy as np
 
 from autobal.analysis import ipopt
-from autobal.analysis.rotor import unbalance
 from autobal.errors import SolveError
 from autobal.ocp.problem import SpinupOcp
-from autobal.ocp.search import ModalRotor, controls_on_mesh, grid_search, horizon_steps, profile_peak
+from autobal.ocp.search import FixedFrameModes, controls_on_mesh, grid_search, horizon_steps, profile_peak
 from autobal.ocp.simulation import (
     Trajectory,
     initial_guess,
@@ -91,8 +90,8 @@ class SpinupSolution:
     final_time_s: float
     u: np.ndarray  # control intervals (over alpha_max), settling window included (zeros)
     h: np.ndarray  # interval lengths, tau
-    points: np.ndarray  # (K, npath, 5) states at the path points (collocation or shooting outputs)
-    peak_collocation: float  # largest delta/e at the path points (or d for peak_unbalance)
+    points: np.ndarray  # (K, npath, nx) states at the path points (collocation or shooting outputs)
+    peak_collocation: float  # largest delta/e at the path points (or d for peak_unbalance; m for the modal rotor)
     w: np.ndarray = field(repr=False, default=None)
     lam_g: np.ndarray = field(repr=False, default=None)  # IPOPT's multipliers of the constraints
     lam_x: np.ndarray = field(repr=False, default=None)  # and of the variable bounds
@@ -101,7 +100,7 @@ class SpinupSolution:
 
 def _objective_value(ocp: SpinupOcp, nlp: Nlp, wopt: np.ndarray, f: float) -> float:
     if ocp.objective in ("peak_deflection", "peak_unbalance"):
-        return math.sqrt(max(f, 0.0) * nlp.ref)
+        return math.sqrt(max(f, 0.0) * nlp.ref) * ocp.epigraph_unit
     if ocp.objective == "min_time":
         return f * ocp.horizon
     return f * nlp.ref / ocp.Om
@@ -195,10 +194,7 @@ class Solver:
             raise infeasibility_error(ocp, nlp, wopt, r)
         u, h = _controls(nlp, wopt, ocp)
         pts = _points(nlp, wopt, ocp)
-        if ocp.objective == "peak_unbalance":
-            pk = float(np.max(unbalance(pts.reshape(-1, 5).T, ocp.params.psi)))
-        else:
-            pk = float(np.max(np.hypot(pts[..., 0], pts[..., 1])))
+        pk = float(np.sqrt(np.max(ocp.epigraph2(pts)))) * ocp.epigraph_unit
         return SpinupSolution(self.method.label, r["status"], r["success"], r["iterations"], dt, self.build_time_s,
                               _objective_value(ocp, nlp, wopt, float(r["f"][0])), float(np.sum(h[:nlp.mesh.n]))
                               / ocp.Om, u, h, pts, pk, wopt, r["lam_g"], r["lam_x"], t_guess)
@@ -230,9 +226,10 @@ def infeasibility_error(ocp: SpinupOcp, nlp: Nlp, wopt: np.ndarray, r: dict) -> 
     u, h = _controls(nlp, wopt, ocp)
     n = nlp.mesh.n
     X = wopt[nlp.index["X"]]
+    nu = X[:, ocp.speed_index]
     active = {f"acceleration limit |alpha| <= {ocp.alpha_max:g} rad/s^2": float(np.mean(np.abs(u[:n]) > 1 - 1e-6))}
     if ocp.omega_max is not None:
-        active[f"speed limit omega <= {ocp.omega_max:g} rad/s"] = float(np.mean(X[1:, 4] * ocp.Om >
+        active[f"speed limit omega <= {ocp.omega_max:g} rad/s"] = float(np.mean(nu[1:] * ocp.Om >
                                                                               ocp.omega_max * (1 - 1e-6)))
     for name, rows in nlp.blocks:
         if "limit" in name or "characteristic" in name:
@@ -254,13 +251,13 @@ def infeasibility_error(ocp: SpinupOcp, nlp: Nlp, wopt: np.ndarray, r: dict) -> 
             parts.append(f"alpha_max x horizon = {ocp.alpha_max * ocp.horizon:.4g} rad/s of speed change, "
                          f"{abs(ocp.omega_final - ocp.omega_start):.4g} rad/s needed")
         else:
-            parts.append(f"the last iterate ends at omega = {X[n, 4] * ocp.Om:.4g} rad/s")
+            parts.append(f"the last iterate ends at omega = {nu[n] * ocp.Om:.4g} rad/s")
     bad = [(name, float(viol[rows].max(initial=0.0))) for name, rows in nlp.blocks]
     bad = [f"'{k}' by {v:.3g}" for k, v in bad if v > 1e-6]
     if bad:
         parts.append("the last iterate violates " + ", ".join(bad))
-    last = {"t_s": list(np.concatenate([[0.0], np.cumsum(h)]) / ocp.Om), "omega_rad_s": list(X[:, 4] * ocp.Om),
-            "deflection_over_e": list(np.hypot(X[:, 0], X[:, 1])), "alpha_rad_s2": list(u * ocp.alpha_max),
+    last = {"t_s": list(np.concatenate([[0.0], np.cumsum(h)]) / ocp.Om), "omega_rad_s": list(nu * ocp.Om),
+            **ocp.deflection_of(X), "alpha_rad_s2": list(u * ocp.alpha_max),
             "constraint_violation": {name: float(viol[rows].max(initial=0.0)) for name, rows in nlp.blocks},
             "active_fraction": active}
     return SolveError("; ".join(parts), r["status"], last)
@@ -333,7 +330,12 @@ def drive_acceleration(ocp: SpinupOcp, omega: float) -> float:
 
 
 SEARCH_STEPS = 20000  # longer passages (quasi-static, thousands of whirl periods) skip the global search
-COARSE = 50  # control intervals of the coarse stage of the mesh continuation (at least)
+# Mesh continuation, the one used by every spin-up study (Jeffcott, liquid balancer, the modal rotor, the robust
+# NLP): the starts are solved on N / 2^k control intervals, the fewest still at least COARSE, and the best coarse
+# optimum is refined by doubling (:func:`refine`).  On the shipped modal scene (160 intervals) the coarse mesh is
+# 80, which leads to the optimum the 160-interval mesh reaches from all its starts (19.57 um; 40 coarse intervals
+# lead to a worse one, 20.45 um).
+COARSE = 50
 # IPOPT iterations a start may take on the coarse mesh: a screening, not the answer.  The starts that reach
 # the best basins converge in 13-111 (benchmarks/spinup_ocp.md, "Study time" and "Liquid balancer convergence").
 COARSE_ITERATIONS = 200
@@ -341,19 +343,30 @@ AHEAD = 0.05  # the constant ramps are not solved when the search's best is this
 RANK_TIE = 2e-3  # relative: coarse optima this close to the best by the fast integrator are ranked by CVODES
 
 
-def coarse_solver(ocp: SpinupOcp, method, ref: float, options: dict | None) -> Solver | None:
-    """The coarse stage of the mesh continuation: the same collocation on N / 2^k intervals (the
-    fewest that are still at least COARSE), or None when N is already that coarse.  Every start is
-    solved there and only the best is refined (with a single start the fine mesh is solved directly)."""
-    if not isinstance(method, DirectCollocation) or ocp.free_time:
-        return None
-    n = method.intervals
+def coarse_intervals(n: int) -> int:
+    """The control intervals of the coarse stage of the mesh continuation: N / 2^k, the fewest that are still at
+    least COARSE (N itself when it is already that coarse)."""
     while n % 2 == 0 and n // 2 >= COARSE:
         n //= 2
+    return n
+
+
+def coarse_options(options: dict | None) -> dict:
+    """IPOPT options of a coarse-stage solve: the iteration limit capped at COARSE_ITERATIONS."""
+    cap = min(int((options or {}).get("max_iter", IPOPT_OPTIONS["max_iter"])), COARSE_ITERATIONS)
+    return (options or {}) | {"max_iter": cap}
+
+
+def coarse_solver(ocp: SpinupOcp, method, ref: float, options: dict | None) -> Solver | None:
+    """The coarse stage of the mesh continuation (:func:`coarse_intervals`), or None when N is already that
+    coarse.  Every start is solved there and only the best is refined (with a single start the fine mesh is
+    solved directly)."""
+    if not isinstance(method, DirectCollocation) or ocp.free_time:
+        return None
+    n = coarse_intervals(method.intervals)
     if n == method.intervals:
         return None
-    cap = min(int((options or {}).get("max_iter", IPOPT_OPTIONS["max_iter"])), COARSE_ITERATIONS)
-    return Solver(ocp, dataclasses.replace(method, intervals=n), ref, (options or {}) | {"max_iter": cap})
+    return Solver(ocp, dataclasses.replace(method, intervals=n), ref, coarse_options(options))
 
 
 def rank_coarse(ocp: SpinupOcp, found: list, n: int) -> tuple[str, SpinupSolution]:
@@ -366,7 +379,7 @@ def rank_coarse(ocp: SpinupOcp, found: list, n: int) -> tuple[str, SpinupSolutio
     the earlier start).  Only the winner is refined and re-simulated at RESIM_TOL."""
     close = list(range(len(found)))
     if ocp.objective == "peak_deflection" and horizon_steps(ocp) <= SEARCH_STEPS:
-        rotor = ModalRotor.of(ocp)
+        rotor = FixedFrameModes.of(ocp)
         fast = [profile_peak(ocp, sol.u[:n], rotor=rotor) for _, sol in found]
         close = [i for i, f in enumerate(fast) if f <= min(fast) * (1 + RANK_TIE)]
     if len(close) == 1:

@@ -17,7 +17,6 @@ from functools import cache
 import casadi as ca
 import numpy as np
 
-from autobal.models.rotor import rotor_model
 from autobal.ocp.problem import SpinupOcp
 
 TV_SMOOTHING = 1e-2  # |Delta u| below which the total-variation penalty is quadratic
@@ -70,34 +69,36 @@ def path_fractions(degree: int, scheme: str) -> list[float]:
 
 
 @cache
-def interval_integrator(fractions: tuple, tol: float, multistep: str = "bdf") -> ca.Function:
-    """CVODES over one interval in s in [0, 1]: dq/ds = h f(q, a*, p), outputs at ``fractions``.
-    Parameters [a*, h, p(4)].  ``multistep``: "bdf" (Newton iteration) or "adams" (functional iteration,
-    non-stiff: the re-simulation at tight tolerance, benchmarks/spinup_ocp.md "Study time")."""
-    m = rotor_model()
-    q, par = ca.SX.sym("q", 5), ca.SX.sym("par", 6)
+def interval_integrator(rhs: ca.Function, fractions: tuple, tol: float, multistep: str = "bdf",
+                        max_steps: int = 20000) -> ca.Function:
+    """CVODES over one interval in s in [0, 1]: dq/ds = h f(q, a*, p) of the model's equation ``rhs``
+    ((q, a*, p) -> dq/dtau, any state dimension), outputs at ``fractions``.  Parameters [a*, h, p].
+    ``multistep``: "bdf" (Newton iteration) or "adams" (functional iteration, non-stiff: the re-simulation at
+    tight tolerance, benchmarks/spinup_ocp.md "Study time")."""
+    q, par = ca.SX.sym("q", rhs.size1_in(0)), ca.SX.sym("par", 2 + rhs.size1_in(2))
     adams = {"linear_multistep_method": "adams", "nonlinear_solver_iteration": "functional"}
-    return ca.integrator("spinup_interval", "cvodes", {"x": q, "p": par, "ode": par[1] * m.ode(q, par[0], par[2:])},
-                         0, list(fractions), {"abstol": tol, "reltol": tol, "max_num_steps": 20000}
+    return ca.integrator("spinup_interval", "cvodes", {"x": q, "p": par, "ode": par[1] * rhs(q, par[0], par[2:])},
+                         0, list(fractions), {"abstol": tol, "reltol": tol, "max_num_steps": max_steps}
                          | (adams if multistep == "adams" else {}))
 
 
 def interval_function(ocp: SpinupOcp, d: int, scheme: str, ref: float, continuity: bool = True) -> ca.Function:
-    """One collocation interval as an SX Function (x_k (5), the collocation states (5 d), u_k, x_(k+1) (5),
-    h, v) -> (collocation residuals (5 d) and, with ``continuity``, the continuity residual (5), one column
+    """One collocation interval as an SX Function (x_k (nx), the collocation states (nx d), u_k, x_(k+1) (nx),
+    h, v) -> (collocation residuals (nx d) and, with ``continuity``, the continuity residual (nx), one column
     per path constraint (its values at the interval start when it uses the control, then at the path points),
     h sum_j B_j delta^2 (the quadrature of the integrated objective)).  Mapped over the intervals it is the
     whole transcription."""
     tau, C, D, B = collocation_data(d, scheme)
     frac = path_fractions(d, scheme)
-    f, m = ocp.dynamics(), rotor_model()
-    x0, xc, u, x1, h = ca.SX.sym("x0", 5), ca.SX.sym("xc", 5 * d), ca.SX.sym("u"), ca.SX.sym("x1", 5), ca.SX.sym("h")
+    f, nx = ocp.dynamics(), ocp.nx
+    x0, xc, u, x1, h = ca.SX.sym("x0", nx), ca.SX.sym("xc", nx * d), ca.SX.sym("u"), ca.SX.sym("x1", nx), ca.SX.sym("h")
     v = ca.SX.sym("v", ocp.n_extra)
-    Z = [x0] + [xc[5 * j:5 * j + 5] for j in range(d)]
-    res, quad = [], 0
+    Z = [x0] + [xc[nx * j:nx * j + nx] for j in range(d)]
+    res, quad = [], ca.SX(0)
     for j in range(d):
         res.append(sum(C[r, j] * Z[r] for r in range(d + 1)) - f(Z[j + 1], u, h))
-        quad = quad + h * B[j] * m.delta2(Z[j + 1])
+        if ocp.objective == "integrated_deflection":
+            quad = quad + h * B[j] * ocp.deflection2()(Z[j + 1])
     if continuity:
         res.append(x1 - sum(D[r] * Z[r] for r in range(d + 1)))
     pts = Z[1:] + ([x1] if len(frac) > d else [])
@@ -159,7 +160,7 @@ class Nlp:
     lbg: np.ndarray
     ubg: np.ndarray
     blocks: list  # (name, rows of g as an index array)
-    index: dict  # "X" (n+ns+1, 5), "Xc" (n+ns, d, 5) or None, "u" (n+ns,), "v" list of indices
+    index: dict  # "X" (n+ns+1, nx), "Xc" (n+ns, d, nx) or None, "u" (n+ns,), "v" list of indices
     mesh: Mesh
     fractions: list
     method: object
@@ -198,24 +199,24 @@ def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
     d = method.degree
     frac = path_fractions(d, method.scheme)
     Sym = ca.MX if symbolic == "MX" or not collocation else ca.SX
-    nv = ocp.n_extra
-    # variables: per interval [X_k (5), Xc_k (d*5, collocation only), u_k], then X_K, then v.  When the
+    nv, nx, sp = ocp.n_extra, ocp.nx, ocp.speed_index
+    # variables: per interval [X_k (nx), Xc_k (d*nx, collocation only), u_k], then X_K, then v.  When the
     # last collocation point is the interval end (Radau) it is the next node: X_0, per interval [Xc_k, u_k],
     # then v; the node states and their continuity equations drop out (a fifth of the KKT system and most
     # of its zero-diagonal pairs: half the time per IPOPT iteration at N = 200, benchmarks/spinup_ocp.md)
     merged = collocation and abs(collocation_data(d, method.scheme)[0][-1] - 1) < 1e-12
-    per = (0 if merged else 5) + (5 * d if collocation else 0) + 1
-    w = Sym.sym("w", K * per + 5 + nv)
-    b0 = 5 if merged else 0  # where the interval blocks start
+    per = (0 if merged else nx) + (nx * d if collocation else 0) + 1
+    w = Sym.sym("w", K * per + nx + nv)
+    b0 = nx if merged else 0  # where the interval blocks start
     starts = b0 + per * np.arange(K)
-    idx_Xc = (starts[:, None, None] + per - 1 - 5 * d + 5 * np.arange(d)[:, None] + np.arange(5)
+    idx_Xc = (starts[:, None, None] + per - 1 - nx * d + nx * np.arange(d)[:, None] + np.arange(nx)
               if collocation else None)
-    idx_X = (np.concatenate([np.arange(5)[None, :], idx_Xc[:, -1, :]]) if merged else
-             np.concatenate([starts[:, None] + np.arange(5), K * per + np.arange(5)[None, :]]))
+    idx_X = (np.concatenate([np.arange(nx)[None, :], idx_Xc[:, -1, :]]) if merged else
+             np.concatenate([starts[:, None] + np.arange(nx), K * per + np.arange(nx)[None, :]]))
     idx_u = starts + per - 1
-    idx_v = list(range(K * per + 5, K * per + 5 + nv))
+    idx_v = list(range(K * per + nx, K * per + nx + nv))
     U = w[idx_u.tolist()]
-    v = w[K * per + 5:]
+    v = w[K * per + nx:]
 
     lbx, ubx = np.full(w.numel(), -np.inf), np.full(w.numel(), np.inf)
     # speed bounds on the horizon only: at its end omega_final is imposed, and over the settling window
@@ -224,7 +225,7 @@ def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
     # (exact in any collocation), so a bound at the collocation points would duplicate the node bounds
     # (the last Radau point is the next node): on an arc held at the cap that fails LICQ
     nlo, nhi = ocp.nu_bounds()
-    lbx[idx_X[1:ms.n, 4]], ubx[idx_X[1:ms.n, 4]] = nlo, nhi
+    lbx[idx_X[1:ms.n, sp]], ubx[idx_X[1:ms.n, sp]] = nlo, nhi
     lbx[idx_X[0]] = ubx[idx_X[0]] = ocp.q0
     lbx[idx_u[:ms.n]], ubx[idx_u[:ms.n]] = ocp.u_min, 1.0
     lbx[idx_u[ms.n:]] = ubx[idx_u[ms.n:]] = 0.0  # settling window: held speed
@@ -243,43 +244,44 @@ def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
     quad = 0
     if collocation:  # one SX Function per interval, mapped over the K intervals (C++, no Python loop)
         W = ca.reshape(w[b0:b0 + K * per], per, K)
-        last = W[per - 6:per - 1, :]  # the last collocation point
-        X0 = ca.horzcat(w[:5], last[:, :-1]) if merged else W[:5, :]  # each interval's start and end node
-        Xn = last if merged else ca.horzcat(W[:5, 1:], w[K * per:K * per + 5])
+        last = W[per - 1 - nx:per - 1, :]  # the last collocation point
+        X0 = ca.horzcat(w[:nx], last[:, :-1]) if merged else W[:nx, :]  # each interval's start and end node
+        Xn = last if merged else ca.horzcat(W[:nx, 1:], w[K * per:K * per + nx])
         hn = v[0] * ocp.tau_h / ms.n if ocp.free_time else ms.h
         hrow = ca.horzcat(*([ca.repmat(hn, 1, ms.n)] + ([ca.repmat(ms.hs, 1, ms.ns)] if ms.ns else [])))
         fi = interval_function(ocp, d, method.scheme, ref, continuity=not merged)
-        args = [X0, W[per - 1 - 5 * d:per - 1, :], W[per - 1, :], Xn, hrow, v]
+        args = [X0, W[per - 1 - nx * d:per - 1, :], W[per - 1, :], Xn, hrow, v]
         out = fi.map(K)(*args)
         # each interval input's variable (-1: a constant) and its coefficient (the interval length h is
         # v_0 tau_h / n when the time is free)
         cols = np.full((fi.nnz_in(), K), -1)
         coefs = np.ones((fi.nnz_in(), K))
-        cols[:5] = idx_X[:-1].T
-        cols[5:5 + 5 * d] = idx_Xc.reshape(K, -1).T
-        cols[5 + 5 * d] = idx_u
-        cols[6 + 5 * d:11 + 5 * d] = idx_X[1:].T
+        ih = 2 * nx + nx * d + 1  # where h sits among the interval's inputs
+        cols[:nx] = idx_X[:-1].T
+        cols[nx:nx + nx * d] = idx_Xc.reshape(K, -1).T
+        cols[nx + nx * d] = idx_u
+        cols[nx + nx * d + 1:ih] = idx_X[1:].T
         if ocp.free_time:
-            cols[11 + 5 * d, :ms.n], coefs[11 + 5 * d, :ms.n] = idx_v[0], ocp.tau_h / ms.n
-        cols[12 + 5 * d:] = np.array(idx_v, int)[:, None]
+            cols[ih, :ms.n], coefs[ih, :ms.n] = idx_v[0], ocp.tau_h / ms.n
+        cols[ih + 1:] = np.array(idx_v, int)[:, None]
         intervals = {"function": fi, "args": args, "cols": cols, "coefs": coefs}
         rows["dynamics"].append(ca.vec(out[0]))
         for pc, o in zip(paths, out[1:-1], strict=True):
             rows[pc.name].append(ca.vec(o))
         quad = ca.sum2(out[-1])
     else:
-        X = [w[k * per:k * per + 5] for k in range(K + 1)]  # shooting: [X_k, u_k] per interval
-        F = interval_integrator(tuple(frac), method.tol)
+        X = [w[k * per:k * per + nx] for k in range(K + 1)]  # shooting: [X_k, u_k] per interval
+        F = interval_integrator(ocp.rhs(), tuple(frac), method.tol)
         for k in range(K):
             h = h_of(k)
-            out = F(x0=X[k], p=ca.vertcat(U[k] * ocp.a_max, h, *ocp.params.p))["xf"]
+            out = F(x0=X[k], p=ca.vertcat(U[k] * ocp.a_max, h, *ocp.p))["xf"]
             rows["dynamics"].append(X[k + 1] - out[:, -1])
             for pc in paths:
                 rows[pc.name] += [pc.expr(qj, U[k] * ocp.a_max, v) for qj in ([X[k]] if pc.uses_control else [])
                                   + [out[:, j] for j in range(len(frac))]]
         if ocp.objective == "integrated_deflection":
             raise ValueError("multiple shooting supports the peak and min_time objectives (no quadrature)")
-    rows["final speed omega(T) = omega_final"] = [w[int(idx_X[ms.n, 4])] - ocp.nuf]
+    rows["final speed omega(T) = omega_final"] = [w[int(idx_X[ms.n, sp])] - ocp.nuf]
     # one vector expression, not n scalar ones: the MX Hessian of a sum of n scalar nodes costs ~n^2 to build
     # (the study's NLP build at N = 1600: 6.6 s; benchmarks/spinup_ocp.md, "Study scaling with N")
     du = [U[1:ms.n] - U[:ms.n - 1]] if ms.n > 1 else []
@@ -323,17 +325,17 @@ def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
 
 
 def stage_function(ocp: SpinupOcp, d: int, scheme: str, ref: float, jerk: bool) -> ca.Function:
-    """One stage of the stage form (:func:`transcribe_stages`) as an SX Function (x_k (5), the collocation
-    states (5 d), u_k, h, v_k, p_k, x_(k+1) (5), v_(k+1), p_(k+1)) -> (the gap rows x_(k+1) - Z_d, v_(k+1) - v_k
+    """One stage of the stage form (:func:`transcribe_stages`) as an SX Function (x_k (nx), the collocation
+    states (nx d), u_k, h, v_k, p_k, x_(k+1) (nx), v_(k+1), p_(k+1)) -> (the gap rows x_(k+1) - Z_d, v_(k+1) - v_k
     and, with ``jerk``, p_(k+1) - u_k; the collocation residuals; one column per path constraint; the speed
-    x_k[4]; with a jerk limit (u_k - p_k)/h; the quadrature).  The equations are :func:`interval_function`'s."""
+    of x_k; with a jerk limit (u_k - p_k)/h; the quadrature).  The equations are :func:`interval_function`'s."""
     fi = interval_function(ocp, d, scheme, ref, continuity=False)
-    nv, jp = ocp.n_extra, int(jerk)
-    x0, xc, u, h = ca.SX.sym("x0", 5), ca.SX.sym("xc", 5 * d), ca.SX.sym("u"), ca.SX.sym("h")
-    v, p, x1, v1, p1 = (ca.SX.sym(n, k) for n, k in (("v", nv), ("p", jp), ("x1", 5), ("v1", nv), ("p1", jp)))
-    res, *paths, quad = fi(x0, xc, u, xc[-5:], h, v)
-    gap = ca.vertcat(x1 - xc[-5:], v1 - v, p1 - u if jerk else ca.SX(0, 1))
-    rows = [gap, res, *paths, x0[4]]
+    nv, jp, nx = ocp.n_extra, int(jerk), ocp.nx
+    x0, xc, u, h = ca.SX.sym("x0", nx), ca.SX.sym("xc", nx * d), ca.SX.sym("u"), ca.SX.sym("h")
+    v, p, x1, v1, p1 = (ca.SX.sym(n, k) for n, k in (("v", nv), ("p", jp), ("x1", nx), ("v1", nv), ("p1", jp)))
+    res, *paths, quad = fi(x0, xc, u, xc[-nx:], h, v)
+    gap = ca.vertcat(x1 - xc[-nx:], v1 - v, p1 - u if jerk else ca.SX(0, 1))
+    rows = [gap, res, *paths, x0[ocp.speed_index]]
     if ocp.jerk_max is not None:
         rows.append((u - p) / (ocp.jerk_max / ocp.alpha_max / ocp.Om * h))
     return ca.Function("spinup_stage", [x0, xc, u, h, v, p, x1, v1, p1], [*rows, quad])
@@ -344,8 +346,8 @@ def transcribe_stages(ocp: SpinupOcp, method: DirectCollocation, ref: float) -> 
     al. (2023), a Riccati recursion over the stages, linear in their number).
 
     The same discrete problem as :func:`transcribe` (Radau points): stage k < K has the states
-    x_k = [X_k (5), v_k (the epigraph level or the time scale, one copy per stage), p_k (the previous control,
-    when the objective or a limit uses the jerk)] and the controls [u_k, the collocation states (5 d)]; stage 0
+    x_k = [X_k (nx), v_k (the epigraph level or the time scale, one copy per stage), p_k (the previous control,
+    when the objective or a limit uses the jerk)] and the controls [u_k, the collocation states (nx d)]; stage 0
     has only controls (X_0 fixed by its bounds); stage K only its states.  Each stage's rows follow its gap
     rows (x_(k+1) as the last collocation point, v and p carried): the collocation residuals, the path
     constraints, the speed (the bounds on the horizon, omega_final at the deadline, free elsewhere) and the
@@ -370,25 +372,25 @@ def transcribe_stages(ocp: SpinupOcp, method: DirectCollocation, ref: float) -> 
                                                         - 1) > 1e-12:
         raise ValueError(f"the stage form (fatrop) needs Radau collocation, got {method.label}")
     ms = mesh(ocp, method.intervals)
-    K, n, d, nv = ms.n + ms.ns, ms.n, method.degree, ocp.n_extra
+    K, n, d, nv, nx = ms.n + ms.ns, ms.n, method.degree, ocp.n_extra, ocp.nx
     jerk = n > 1 and bool(ocp.jerk_penalty or ocp.jerk_variation or ocp.jerk_max is not None)
     jp = int(jerk)
-    nxs = 5 + nv + jp  # the states of a stage
-    per = nxs + 1 + 5 * d  # stage k < K: [X_k, v_k, p_k, u_k, Xc_k]; then stage K: [X_K, v_K, p_K]
+    nxs = nx + nv + jp  # the states of a stage
+    per = nxs + 1 + nx * d  # stage k < K: [X_k, v_k, p_k, u_k, Xc_k]; then stage K: [X_K, v_K, p_K]
     w = ca.MX.sym("w", K * per + nxs)
     start = per * np.arange(K + 1)
-    idx_X = start[:, None] + np.arange(5)
-    idx_vc = start[:, None] + 5 + np.arange(nv)
-    idx_p = start + 5 + nv if jerk else None
+    idx_X = start[:, None] + np.arange(nx)
+    idx_vc = start[:, None] + nx + np.arange(nv)
+    idx_p = start + nx + nv if jerk else None
     idx_u = start[:K] + nxs
-    idx_Xc = start[:K, None, None] + nxs + 1 + 5 * np.arange(d)[:, None] + np.arange(5)
+    idx_Xc = start[:K, None, None] + nxs + 1 + nx * np.arange(d)[:, None] + np.arange(nx)
     W = ca.reshape(w[:K * per], per, K)
     nxt = ca.horzcat(W[:nxs, 1:], w[K * per:])
     scale = ocp.tau_h / n  # h = v_0 tau_h / n on the horizon when the time is free
-    hrow = ca.horzcat(W[5, :n] * scale if ocp.free_time else ca.repmat(ms.h, 1, n), ca.repmat(ms.hs, 1, ms.ns))
+    hrow = ca.horzcat(W[nx, :n] * scale if ocp.free_time else ca.repmat(ms.h, 1, n), ca.repmat(ms.hs, 1, ms.ns))
     fs = stage_function(ocp, d, method.scheme, ref, jerk)
-    out = fs.map(K)(W[:5, :], W[nxs + 1:, :], W[nxs, :], hrow, W[5:5 + nv, :], W[5 + nv:nxs, :], nxt[:5, :],
-                    nxt[5:5 + nv, :], nxt[5 + nv:, :])
+    out = fs.map(K)(W[:nx, :], W[nxs + 1:, :], W[nxs, :], hrow, W[nx:nx + nv, :], W[nx + nv:nxs, :], nxt[:nx, :],
+                    nxt[nx:nx + nv, :], nxt[nx + nv:, :])
     sizes = [fs.nnz_out(i) for i in range(fs.n_out() - 1)]
     nrow = sum(sizes)
     rows = np.arange(nrow)[:, None] + nrow * np.arange(K)[None, :]  # stage by stage
@@ -413,7 +415,7 @@ def transcribe_stages(ocp: SpinupOcp, method: DirectCollocation, ref: float) -> 
     if ms.ns:
         lo[rows[speed, n]] = hi[rows[speed, n]] = ocp.nuf
     else:  # the deadline is the last stage's: its one row
-        g = ca.vertcat(g, w[int(idx_X[K, 4])])
+        g = ca.vertcat(g, w[int(idx_X[K, ocp.speed_index])])
         lo, hi = np.append(lo, ocp.nuf), np.append(hi, ocp.nuf)
         blocks[speed_name] = np.append(blocks[speed_name], g.numel() - 1)
     blocks = [(name, np.sort(r)) for name, r in blocks.items()]
@@ -433,7 +435,7 @@ def transcribe_stages(ocp: SpinupOcp, method: DirectCollocation, ref: float) -> 
     if jerk:
         obj = obj + jerk_regulariser(ocp, w[idx_u[1:n].tolist()] - w[idx_p[1:n].tolist()])
     index = {"X": idx_X, "Xc": idx_Xc, "u": idx_u, "v": list(idx_vc[0]), "v_copies": idx_vc, "p": idx_p}
-    stages = {"N": K, "nx": [0] + [nxs] * K, "nu": [nxs + 1 + 5 * d] + [1 + 5 * d] * (K - 1) + [0],
+    stages = {"N": K, "nx": [0] + [nxs] * K, "nu": [nxs + 1 + nx * d] + [1 + nx * d] * (K - 1) + [0],
               "ng": [nrow - nxs] * K + [0 if ms.ns else 1]}
     return Nlp(w, obj, g, lbx, ubx, lo, hi, blocks, index, ms,
                path_fractions(d, method.scheme), method, ref, None, stages)
@@ -559,6 +561,7 @@ def interpolate(coarse: Nlp, w: np.ndarray, lam_g: np.ndarray, lam_x: np.ndarray
     tf0, hf, tfc = point_times(fine)
     Kc, Kf = len(hc), len(hf)
     Xc, Zc = w[coarse.index["X"]], w[coarse.index["Xc"]]
+    nx = Xc.shape[1]
     nodes = np.concatenate([[0.0], tau])
 
     def interval(t):
@@ -566,13 +569,13 @@ def interpolate(coarse: Nlp, w: np.ndarray, lam_g: np.ndarray, lam_x: np.ndarray
 
     def state_at(t):
         k = interval(t)
-        Z = np.concatenate([Xc[k][:, None, :], Zc[k]], axis=1)  # (P, d+1, 5)
+        Z = np.concatenate([Xc[k][:, None, :], Zc[k]], axis=1)  # (P, d+1, nx)
         return np.einsum("pr,pri->pi", _lagrange(nodes, (t - tc0[k]) / hc[k]), Z)
 
     wf = np.zeros(fine.x.numel())
     wf[fine.index["X"]] = state_at(tf0)
     wf[fine.index["X"][-1]] = Xc[-1]
-    wf[fine.index["Xc"]] = state_at(tfc.ravel()).reshape((Kf, d, 5))
+    wf[fine.index["Xc"]] = state_at(tfc.ravel()).reshape((Kf, d, nx))
     kc = interval(tf0[:-1] + 0.5 * hf)
     wf[fine.index["u"]] = w[coarse.index["u"]][kc]
     wf[fine.index["v"]] = w[coarse.index["v"]]
@@ -585,13 +588,13 @@ def interpolate(coarse: Nlp, w: np.ndarray, lam_g: np.ndarray, lam_x: np.ndarray
 
     lg = np.zeros(fine.g.numel())
     rows = block(coarse, "dynamics")
-    per = rows.size // (5 * Kc)  # d + 1 equations per interval, d when the nodes are the last points (Radau)
-    Dc = lam_g[rows].reshape(Kc, per, 5)
-    colloc = (Dc[:, :d, :] / np.asarray(B)[None, :, None]).reshape(-1, 5)
-    pc = np.stack([np.interp(tfc.ravel(), tcc.ravel(), colloc[:, i]) for i in range(5)], -1).reshape(Kf, d, 5)
+    per = rows.size // (nx * Kc)  # d + 1 equations per interval, d when the nodes are the last points (Radau)
+    Dc = lam_g[rows].reshape(Kc, per, nx)
+    colloc = (Dc[:, :d, :] / np.asarray(B)[None, :, None]).reshape(-1, nx)
+    pc = np.stack([np.interp(tfc.ravel(), tcc.ravel(), colloc[:, i]) for i in range(nx)], -1).reshape(Kf, d, nx)
     parts = [pc * np.asarray(B)[None, :, None]]
     if per > d:
-        parts.append(np.stack([np.interp(tf0[1:], tc0[1:], Dc[:, d, i]) for i in range(5)], -1)[:, None, :])
+        parts.append(np.stack([np.interp(tf0[1:], tc0[1:], Dc[:, d, i]) for i in range(nx)], -1)[:, None, :])
     lg[block(fine, "dynamics")] = np.concatenate(parts, axis=1).ravel()
     npath = len(coarse.fractions)
     tcp = np.concatenate([tcc, tc0[1:, None]], axis=1)[:, :npath].ravel() if npath > d else tcc.ravel()
@@ -602,9 +605,12 @@ def interpolate(coarse: Nlp, w: np.ndarray, lam_g: np.ndarray, lam_x: np.ndarray
             continue
         if rows.size == 1 and fb.size == 1:
             lg[fb] = lam_g[rows]
-        elif rows.size == tcp.size and fb.size == tfp.size:  # path constraints at the path points
+        elif (rows.size == tcp.size or "epigraph" in name) and rows.size % tcp.size == 0 \
+                and fb.size == rows.size // tcp.size * tfp.size:
+            # a path constraint at the path points (m rows per point: the nodes of a multi-node epigraph)
+            m = rows.size // tcp.size
             for i in np.nonzero(lam_g[rows])[0]:
-                lg[fb[np.argmin(np.abs(tfp - tcp[i]))]] += lam_g[rows[i]]
+                lg[fb[m * np.argmin(np.abs(tfp - tcp[i // m])) + i % m]] += lam_g[rows[i]]
     lx = np.zeros(fine.x.numel())
     lx[fine.index["X"][0]] = lam_x[coarse.index["X"][0]]
     lx[fine.index["u"]] = lam_x[coarse.index["u"]][kc] * hf / hc[kc]

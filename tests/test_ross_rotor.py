@@ -18,7 +18,10 @@ from autobal import cli, scenario
 from autobal.errors import ScenarioError
 from autobal.models import ross_rotor as rr
 from autobal.ocp import modal
-from autobal.ocp.transcription import structured_derivatives
+from autobal.ocp import robust as rb
+from autobal.ocp.simulation import simulate_profile
+from autobal.ocp.solve import Solver
+from autobal.ocp.transcription import structured_derivatives, transcribe
 from autobal.parts import ross_rotor as ross_rotor_part
 
 HAS_ROSS = importlib.util.find_spec("ross") is not None
@@ -79,7 +82,8 @@ def test_envelope_peak_matches_the_physical_response(small_ocp):
     """The envelope state simulated on the collocation mesh bounds the fixed-frame deflection and its peak
     agrees with the re-simulated one within 0.5 % (one copy of the equations, two frames)."""
     u = np.concatenate([modal.ramp_controls(small_ocp, 60.0), np.zeros(small_ocp.settling_intervals)])
-    env = modal.simulate_envelope(small_ocp, u, np.linspace(0, 1, 41)[1:])
+    h = np.full(u.size, small_ocp.h * small_ocp.Om)
+    env = simulate_profile(small_ocp, u, h, np.linspace(0, 1, 41)[1:], tol=1e-8)
     e2 = np.array(small_ocp.envelope2().map(env.shape[0] * env.shape[1])(env.reshape(-1, env.shape[2]).T))
     env_peak = np.sqrt(e2.max()) * small_ocp.amplitude_scale
     tr = modal.resimulate(small_ocp, u, "ramp")
@@ -104,7 +108,7 @@ def test_ocp_beats_the_ramps_and_resimulates(small_ocp):
 def test_structured_derivatives_match_casadi_ad(small_ocp):
     """The modal NLP's constraint Jacobian and Lagrangian Hessian assembled from the interval Function's SX
     derivatives equal CasADi's AD of the whole (MX) NLP at a random point, to rounding."""
-    nlp = modal.transcribe(small_ocp)
+    nlp = transcribe(small_ocp, small_ocp.method, small_ocp.peak_scale2, "MX")
     der = structured_derivatives(nlp)
     rng = np.random.default_rng(1)
     x, lam_g = rng.standard_normal(nlp.x.numel()), rng.standard_normal(nlp.g.numel())
@@ -118,6 +122,26 @@ def test_structured_derivatives_match_casadi_ad(small_ocp):
     assert_allclose(np.array(jac), np.array(jac_ad), rtol=1e-12, atol=1e-12)
     assert_allclose(np.array(hess), np.array(hess_ad), rtol=1e-10, atol=1e-10)
     assert np.abs(np.array(hess_ad)).max() > 1.0  # the point exercises the curvature
+
+
+def test_robust_profile_of_the_modal_rotor(small_ocp):
+    """The robust NLP of autobal.ocp.robust runs on the modal rotor through the same transcription, solver and
+    scenario generation as the Jeffcott rotor's: over a 3 x 3 design set (critical speed +-5 %, damping x0.5-2)
+    its worst case, re-simulated by CVODES in the fixed frame, is below the nominal optimum's worst case over the
+    same rotors (measured 131 um against 181 um) and the screening agrees with CVODES on it within 1 %; over a
+    40-rotor sample from the same ranges its worst screened peak is below the nominal's (129 um against 174 um)."""
+    nominal = modal.optimize(small_ocp, {"max_iter": 300})
+    pn = rb.Profile("nominal optimum", nominal.solution.u[:small_ocp.intervals])
+    unc = rb.Uncertainty(0.05, (0.5, 2.0))
+    F = unc.grid(3)
+    ro = rb.optimize_robust(small_ocp, F, small_ocp.method, [pn],
+                            (nominal.trajectory.peak / small_ocp.amplitude_scale) ** 2)
+    robust, nom = rb.cvodes_peaks(small_ocp, F, ro.profile), rb.cvodes_peaks(small_ocp, F, pn)
+    assert robust.max() < 0.9 * nom.max()
+    assert_allclose(ro.design_peaks, robust, rtol=1e-2)
+    assert_allclose(ro.collocation_worst, robust.max(), rtol=1e-2)
+    sample = rb.fast_peaks(small_ocp, unc.sample(40, np.random.default_rng(3)), [ro.profile, pn])
+    assert sample[:, 0].max() < 0.9 * sample[:, 1].max()
 
 
 def test_screening_integrator_matches_the_resimulation(small_ocp):
@@ -252,9 +276,9 @@ def test_shipped_optimum_does_not_depend_on_the_ramps(scene_rotor):
     opt = modal.optimize(ocp)
     assert opt.starts[0]["start"].startswith("search") and len(opt.starts) >= 3
     assert opt.resimulation_rel_error < 1e-2
-    solver = modal.ModalSolver(ocp)
+    solver = Solver(ocp, ocp.method, ocp.peak_scale2)
     const = (s.final_speed - s.start_speed) / s.horizon
-    ramps = [modal.resimulate(ocp, solver.solve(modal.ramp_controls(ocp, a), "ramp").u, "ramp").peak
+    ramps = [modal.resimulate(ocp, solver.solve(modal.ramp_controls(ocp, a)).u, "ramp").peak
              for a in (const, s.max_acceleration)]
     assert_allclose(ramps, [24.99e-6, 28.79e-6], rtol=2e-3)
     assert opt.trajectory.peak < 0.9 * min(ramps)
