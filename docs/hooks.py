@@ -329,7 +329,9 @@ def _source(name: str, numbers: dict | None = None) -> tuple[dict, str]:
     if bench.is_file():
         data = json.loads(bench.read_text(encoding="utf-8"))
         load = ", ".join(f"{x:g}" for x in data.get("load_average", []))
-        return data, f"`python -m benchmarks {name}` on {data.get('machine', 'an unnamed machine')}, load {load}"
+        how = (f"`python -m benchmarks {name}`" if (ROOT / "benchmarks" / f"{name}.py").is_file()
+               else f"`benchmarks/results/{name}.json`")  # a JSON that another benchmark's module writes
+        return data, f"{how} on {data.get('machine', 'an unnamed machine')}, load {load}"
     raise UnknownNumber(f"{name}: no run of that name in docs/numbers.json and no benchmarks/results/{name}.json")
 
 

@@ -100,3 +100,22 @@ def test_a_fresh_run_gives_the_recorded_numbers(shipped_run, scene):
     fresh = runner.values(scene, json.loads((folder / "results.json").read_text(encoding="utf-8")))
     bad = runner.differences(scene, RECORDED["runs"][scene]["values"], fresh)
     assert not bad, f"{scene}: " + "; ".join(bad) + f" (regenerate: python docs/run_numbers.py {scene})"
+
+
+def test_a_benchmark_run_names_the_command_that_writes_it_and_its_machine():
+    """A benchmark JSON with a module of its name names ``python -m benchmarks NAME``; one that another module
+    writes (the spin-up study scaling) names the file, not a command that does not exist."""
+    startup = hooks.numbers_markdown("{{ run:startup }}")
+    assert startup.startswith("`python -m benchmarks startup` on ") and "2 cores" in startup
+    scaling = hooks.numbers_markdown("{{ run:spinup_study_scaling }}")
+    assert scaling.startswith("`benchmarks/results/spinup_study_scaling.json` on ")
+
+
+def test_the_benchmark_sections_quote_their_runs():
+    """The benchmarks page's spin-up studies, spin-up OCP, stiff transient and lever numbers are placeholders
+    into the benchmark JSONs (issue 24 item 2), not typed: e.g. the studies' wall times."""
+    page = (ROOT / "docs" / "benchmarks.md").read_text(encoding="utf-8")
+    for key in ("spinup_studies.cases.2.wall_s", "spinup_ocp.cases.6.peer_s", "dynamics_integrators.cases.17.ratio",
+                "statics_sweep.cases.11.cpu_ratio", "montecarlo_statics.cases.6.ratio", "spinup_study_scaling.cases.3"):
+        assert "{{ n:" + key in page, key
+    assert "113–138 s" not in page  # the studies' row typed from two stale runs
