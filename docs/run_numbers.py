@@ -122,7 +122,14 @@ def dynamics(results: dict) -> dict:
                                "complex_imag": [i for r, i in poles if i > 0],
                                "real": [r for r, i in poles if i == 0],
                                "max_real_1_s": max(r for r, _ in poles)}
+    out["accuracy"] = _accuracy(results, ("frequency", "stability", "transient"))
+    out["accuracy"]["stability_bound"] = results["accuracy"]["stability"]["max_relative_bound"]
     return out
+
+
+def _accuracy(results: dict, analyses: tuple[str, ...]) -> dict:
+    """The accuracy estimates (results.json ``accuracy.<analysis>.estimate``) of the analyses a scene runs."""
+    return {a: results["accuracy"][a]["estimate"] for a in analyses if a in results["accuracy"]}
 
 
 def montecarlo(results: dict) -> dict:
@@ -137,6 +144,9 @@ def montecarlo(results: dict) -> dict:
             block = m[method][q]
             out[f"{method}_{q}"] = {"mean": block["mean"], "cv": block["cv"],
                                     "spread_percent_at_reference": 100 * m["band_sigma"] * block["cv"][i]}
+    a = results["accuracy"]["montecarlo"]
+    out["accuracy"] = {"estimate": a["estimate"], "statics_spreads": max(
+        max(v) for k, v in a["spread_relative_standard_error"].items() if k != "afc_at")}
     return out
 
 
@@ -146,7 +156,7 @@ def liquid(results: dict) -> dict:
     d = results["liquid_balancer"]
     return {"table_3_2": [_numbers(r) for r in d["table_3_2"]["rows"]],
             "table_3_3": [_numbers(r) for r in d["table_3_3"]["rows"]],
-            "operating_point": _numbers(d["operating_point"])}
+            "operating_point": _numbers(d["operating_point"]), "accuracy": _accuracy(results, ("liquid_balancer",))}
 
 
 def reliability(results: dict) -> dict:
@@ -156,6 +166,9 @@ def reliability(results: dict) -> dict:
     scalars = {k: v for k, v in r.items() if isinstance(v, int | float) and not isinstance(v, bool)}
     out = scalars | {k: _numbers(r[k]) for k in ("wear_le_base_gap", "literal", "renormalised", "times_h")}
     out["literal"]["P_first_over_last"] = r["literal"]["P"][0] / r["literal"]["P"][-1]  # P(2000 h) / P(4000 h)
+    parts = results["accuracy"]["reliability"]["parts"].values()
+    out["accuracy"] = {"estimate": results["accuracy"]["reliability"]["estimate"],  # the MTTF to infinity
+                       "mttf_horizon": max(p["mttf_tau"] for p in parts), "P": max(p["P_tau"] for p in parts)}
     return out
 
 
@@ -300,10 +313,14 @@ TOLERANCE: dict[str, dict[str, float | str]] = {
     "spinup_liquid_balancer": {"": 1e-4, "ipopt_iterations": ITERATIONS},
     # quadratures in tau (20 001 nodes) and in time: the MTTF to infinity moves by 1e-3 with the nodes (its
     # accuracy estimate), the rest by 1e-8..2.5e-4
-    "hydroheel_wear": {"": 1e-6, "literal.mttf_infinite_h": 1e-3, "renormalised.mttf_infinite_h": 1e-3},
+    "hydroheel_wear": {"": 1e-6, "literal.mttf_infinite_h": 1e-3, "renormalised.mttf_infinite_h": 1e-3,
+                       "accuracy": ORDER},
     # the AFC's peaks are refined by a bounded search
-    "pump_pe600_dynamics": {"afc": 1e-5},
-    "compressor_k180_dynamics": {"afc": 1e-5},
+    "pump_pe600_dynamics": {"afc": 1e-5, "accuracy": ORDER},
+    "compressor_k180_dynamics": {"afc": 1e-5, "accuracy": ORDER},
+    # accuracy estimates: round-off and Monte Carlo errors, within a factor 10
+    "washer_liquid_balancer": {"accuracy": ORDER},
+    "pump_pe600_montecarlo": {"accuracy": ORDER},
     # IPOPT optima of a multimodal problem from a global search (front), a min_time OCP (arrival)
     "spinup_time_optimal": {"": 1e-4},
     # re-simulated peaks (CVODES rtol 1e-9) of IPOPT optima (tol 1e-8) of a multimodal problem
