@@ -276,9 +276,10 @@ def test_afc_spread_of_the_program_model_matches_spec(scene):
     r = mcafc.afc_study(device_part.adapt(scene.device), a, 2014, ex.InProcess(progress=False), 3.0, [0.5])
     at = r["at"]
     assert_allclose([at["peak_1"]["omega"], at["peak_2"]["omega"]], [1977.2, 2912.5], atol=1.0)
-    # MC noise of a cv from 4000 samples: about cv / sqrt(2 N) = 0.004-0.006
-    assert_allclose([at["operating_speed"]["cv"], at["peak_1"]["cv"], at["peak_2"]["cv"]], [0.30, 0.29, 0.51],
-                    atol=0.025)
+    # the validation ledger's values (docs/validation.md: 0.30, 0.29, 0.50 with 2e4 samples; the spec's
+    # recomputation 0.51 at omega_II) within the MC noise of a cv from 4000 samples: cv / sqrt(2 N) = 0.003-0.006
+    assert_allclose([at["operating_speed"]["cv"], at["peak_1"]["cv"], at["peak_2"]["cv"]], [0.30, 0.29, 0.50],
+                    atol=0.02)
     # the nominal curve of the study (the vectorised operator at the nominal constants) at App. A's printed
     # A(660) = 6.84 um and the peaks 25.20, 9.90 um (spec §6.1.4 recomputation), and between grid points
     # against the state-space response of the same linear model (LinearModel.response, not the operator N(p))
