@@ -76,6 +76,7 @@ def test_chambers_thousand_times_smaller(tmp_path):
     code, res = run(tmp_path, "dynamics_small_chambers")
     assert code == 0
     assert stiffness_ratio(res) > 1e9  # the stiffness ratio
+    assert stiffness_ratio(res) == pytest.approx(1.2e9, rel=0.05)  # as docs/theory/workprecision.md prints it
     case = res["transient"]["cases"][0]
     assert case["failure"] is None and case["t_end"] == pytest.approx(0.02)  # integrated to the end
     # the chambers are nearly instantaneous: the gap response equals the nominal scene's to 15 %
@@ -86,6 +87,7 @@ def test_incompressible_limit(tmp_path):
     code, res = run(tmp_path, "dynamics_incompressible")
     assert code == 0
     assert stiffness_ratio(res) > 1e11
+    assert stiffness_ratio(res) == pytest.approx(5.5e11, rel=0.01)  # as docs/theory/workprecision.md prints it
     case = res["transient"]["cases"][0]
     assert case["failure"] is None and np.isfinite(case["final_dz_um"])
     assert case["max_dz_um"] == pytest.approx(1.86, rel=0.15)
@@ -129,6 +131,7 @@ def test_spinup_hundred_times_slower_is_quasi_static(tmp_path):
     # 13 000 whirl periods on 200 intervals: the mesh cannot follow the whirl; the re-simulation says by how much
     # (1.4 % since the mesh continuation by doubling; 0.8 % before): the reported peak is the re-simulated one
     assert 1e-3 < sp["resimulation_rel_error"] < 2e-2
+    assert sp["resimulation_rel_error"] == pytest.approx(0.014, abs=5e-4)  # docs/theory/workprecision.md: 1.4 %
 
 
 def test_liquid_filling_the_chamber_cannot_balance(tmp_path):
