@@ -119,3 +119,14 @@ def test_the_benchmark_sections_quote_their_runs():
                 "statics_sweep.cases.11.cpu_ratio", "montecarlo_statics.cases.6.ratio", "spinup_study_scaling.cases.3"):
         assert "{{ n:" + key in page, key
     assert "113–138 s" not in page  # the studies' row typed from two stale runs
+
+
+def test_the_accuracy_table_quotes_the_recorded_runs():
+    """The work-precision page's accuracy estimates of the shipped scenes are recorded values (docs/numbers.json,
+    compared within a factor 10 by the slow test), one per analysis of the table."""
+    page = (ROOT / "docs" / "theory" / "workprecision.md").read_text(encoding="utf-8")
+    for key in ("pump_pe600_dynamics.accuracy.frequency", "pump_pe600_dynamics.accuracy.stability",
+                "pump_pe600_dynamics.accuracy.transient", "washer_liquid_balancer.accuracy.liquid_balancer",
+                "hydroheel_wear.accuracy.estimate", "pump_pe600_montecarlo.accuracy.estimate"):
+        assert "{{ n:" + key in page, key
+        assert runner.tolerance(key.partition(".")[0], key.partition(".")[2]) == runner.ORDER, key
