@@ -46,23 +46,30 @@ class RossSpinupRobust(create_model("_RossSpinupWithRanges", __base__=RossSpinup
 SETTINGS = RossSpinupRobust
 
 
-def run(scene, settings: RossSpinupRobust):
-    """One spin-up profile of the reduced ROSS rotor minimising the worst-case peak over a set of rotors,
-    validated on a random sample (on the executor the CLI or the scene names; needs the ross extra)."""
-    from autobal.analysis import executor, progress
+def problem(scene, settings: RossSpinupRobust):
+    """The nominal spin-up problem of the scene's ROSS rotor reduced to its modes (SI; needs the ross extra)."""
     from autobal.models import ross_rotor as rr
-    from autobal.ocp import modal, robust, robust_study
+    from autobal.ocp import modal
     from autobal.parts.ross_rotor import adapt
 
     spec, unbalances = adapt(scene.ross_rotor)
     reduced = rr.reduce(rr.lateral_matrices(rr.ross_rotor(spec)), unbalances, settings.final_speed,
                         settings.mode_cutoff, settings.gyroscopic_tolerance)
     try:
-        ocp = modal.ModalSpinupOcp(reduced, settings.start_speed, settings.final_speed, settings.horizon,
-                                   settings.max_acceleration, tuple(settings.nodes), settings.settling_time,
-                                   settings.max_speed, settings.intervals, settings.degree)
+        return modal.ModalSpinupOcp(reduced, settings.start_speed, settings.final_speed, settings.horizon,
+                                    settings.max_acceleration, tuple(settings.nodes), settings.settling_time,
+                                    settings.max_speed, settings.intervals, settings.degree)
     except ValueError as exc:
         raise ScenarioError(f"analyses.ross_spinup_robust: {exc}") from None
+
+
+def run(scene, settings: RossSpinupRobust):
+    """One spin-up profile of the reduced ROSS rotor minimising the worst-case peak over a set of rotors,
+    validated on a random sample (on the executor the CLI or the scene names; needs the ross extra)."""
+    from autobal.analysis import executor, progress
+    from autobal.ocp import robust, robust_study
+
+    ocp = problem(scene, settings)
     unc = robust.Uncertainty(settings.critical_speed_spread, tuple(settings.damping_factor))
     with executor.make(scene_executor=getattr(scene, "executor", None)) as exe, \
             progress.steps(None, "robust spin-up of the modal rotor (nominal, scenario generation)", "IPOPT solve",
