@@ -18,7 +18,7 @@ from scipy.optimize import minimize_scalar
 
 from autobal.analysis import progress
 from autobal.analysis.linearize import LinearModel, Setup
-from autobal.analysis.quantities import Declarations, Quantity
+from autobal.analysis.quantities import Declarations, Quantity, significant
 from autobal.analysis.result import Result, new_figure
 
 #: what each model is, for legends (Pavlenko (2014): chain form (2.40)/(2.111), App. A/B program model)
@@ -90,7 +90,7 @@ def _others(*keys: str) -> str:
 #: every number of the frequency block (Pavlenko 2014, §2.6): amplitudes of the face gap in µm as the keys say
 QUANTITIES = Declarations(
     Quantity("headline.peaks[].omega", "rad/s", "ω_I, ω_II", "resonance frequencies of the headline model",
-             headline=True),
+             headline=True, beside="Hz"),
     Quantity("headline.peaks[].amplitude_um", "um", "A_I, A_II", "face-gap amplitude at the resonances",
              headline=True),
     Quantity("headline.at_operating_speed.omega", "rad/s", "ω0", "operating speed", headline=True),
@@ -98,8 +98,8 @@ QUANTITIES = Declarations(
              headline=True),
     Quantity("headline.static_amplitude_um", "um", "A(0)", "static face-gap amplitude", headline=True),
     Quantity("headline.max_real", "1/s", "max Re λ", "spectral abscissa of the headline model", headline=True),
-    Quantity(_others("peaks[].omega", "at_operating_speed.omega"), "rad/s", "ω", "resonance frequency / operating "
-             "speed of a model"),
+    Quantity(_others("peaks[].omega"), "rad/s", "ω", "resonance frequency of a model", beside="Hz"),
+    Quantity(_others("at_operating_speed.omega"), "rad/s", "ω0", "operating speed of a model"),
     Quantity(_others("peaks[].amplitude_um", "at_operating_speed.amplitude_um", "static_amplitude_um"), "um", "A",
              "face-gap amplitude of a model"),
     Quantity("headline.at_operating_speed.phase_deg " + _others("at_operating_speed.phase_deg"), "deg", "φ(ω0)",
@@ -143,15 +143,29 @@ class FrequencyResult(Result):
         return d
 
     def summary(self) -> str:
-        lines = [f"frequency response (forcing {self.data['forcing']}, dpsi1a = {self.data['forcing_amplitude']:g}):"]
-        h = self.data.get("headline")
-        rows = ([(f"headline: {MODEL_LABELS.get(h['model'], h['model'])}, {h['forcing']} forcing"
-                  + ("" if h["stable"] else ", UNSTABLE"), h)] if h else [])
-        rows += [(m if c.get("stable", True) else f"{m} (unstable)", c) for m, c in self.data["curves"].items()]
-        for m, c in rows:
-            pk = ", ".join(f"{p['omega']:.1f} rad/s {p['amplitude_um']:.2f} um" for p in c["peaks"]) or "none"
+        """The verdict (the headline model under physical forcing), its declared numbers in display units, the
+        scene's forcing for the headline model, and the source's models apart as validation."""
+        d, h = self.data, self.data.get("headline")
+        q_omega, q_amp = QUANTITIES.find("peaks.0.omega"), QUANTITIES.find("peaks.0.amplitude_um")
+
+        def curve(c: dict) -> str:
+            pk = ", ".join(f"{q_omega.text(p['omega'])} with {q_amp.text(p['amplitude_um'])}" for p in c["peaks"])
             a0 = c["at_operating_speed"]
-            lines.append(f"  {m:16s} peaks: {pk}; at {a0['omega']:.1f} rad/s: {a0['amplitude_um']:.2f} um")
+            return f"peaks {pk or 'none'}; at the operating speed {q_amp.text(a0['amplitude_um'])}"
+
+        lines = []
+        if h:
+            label = f"{MODEL_LABELS.get(h['model'], h['model'])}, {h['forcing']} forcing"
+            lines += [f"frequency response: {label}: {'stable' if h['stable'] else 'UNSTABLE'}, {curve(h)}",
+                      *QUANTITIES.lines(d)]
+        forcing = f"the scene's forcing '{d['forcing']}' (δψ_1a = {significant(d['forcing_amplitude'])})"
+        main = {m: c for m, c in d["curves"].items() if h is None or m == h["model"]}
+        source = {m: c for m, c in d["curves"].items() if m not in main}
+        lines += [f"  {forcing}, {MODEL_LABELS.get(m, m)}: {curve(c)}" for m, c in main.items()]
+        if source:
+            lines.append(f"  validation against the source (its models do not judge the machine), {forcing}:")
+            lines += [f"    {MODEL_LABELS.get(m, m)}{'' if c.get('stable', True) else ' (UNSTABLE)'}: {curve(c)}"
+                      for m, c in source.items()]
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:

@@ -17,6 +17,9 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Mapping
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 
 #: display unit -> (SI unit, SI value of one display unit): the one conversion table of the toolkit (a unit is
@@ -25,23 +28,42 @@ DISPLAY_UNITS = {
     "m": ("m", 1.0), "mm": ("m", 1e-3), "µm": ("m", 1e-6),
     "m²": ("m^2", 1.0), "mm²": ("m^2", 1e-6), "cm²": ("m^2", 1e-4),
     "m³": ("m^3", 1.0), "L": ("m^3", 1e-3), "cm³": ("m^3", 1e-6), "mL": ("m^3", 1e-6),
-    "Pa": ("Pa", 1.0), "kPa": ("Pa", 1e3), "MPa": ("Pa", 1e6), "bar": ("Pa", 1e5),
+    "Pa": ("Pa", 1.0), "kPa": ("Pa", 1e3), "MPa": ("Pa", 1e6), "bar": ("Pa", 1e5), "mbar": ("Pa", 1e2),
     "N": ("N", 1.0), "kN": ("N", 1e3),
     "N/m": ("N/m", 1.0), "kN/m": ("N/m", 1e3), "MN/m": ("N/m", 1e6),
     "N·s/m": ("N*s/m", 1.0), "kN·s/m": ("N*s/m", 1e3),
     "m³/s": ("m^3/s", 1.0), "L/s": ("m^3/s", 1e-3), "L/min": ("m^3/s", 1e-3 / 60), "m³/h": ("m^3/s", 1 / 3600),
     "rad/s": ("rad/s", 1.0), "rpm": ("rad/s", 2 * math.pi / 60), "Hz": ("rad/s", 2 * math.pi),
-    "rpm/s": ("rad/s^2", 2 * math.pi / 60), "kW": ("W", 1e3),
-    "s": ("s", 1.0), "ms": ("s", 1e-3),
-    "kg": ("kg", 1.0), "g": ("kg", 1e-3), "kg·m": ("kg*m", 1.0), "g·cm": ("kg*m", 1e-5),
-    "g·mm": ("kg*m", 1e-6),
+    "rad/s²": ("rad/s^2", 1.0), "rpm/s": ("rad/s^2", 2 * math.pi / 60),
+    "s": ("s", 1.0), "ms": ("s", 1e-3), "min": ("s", 60.0), "h": ("s", 3600.0), "kh": ("s", 3.6e6),
+    "kg": ("kg", 1.0), "g": ("kg", 1e-3), "kg·m": ("kg*m", 1.0), "g·cm": ("kg*m", 1e-5), "g·mm": ("kg*m", 1e-6),
+    "W": ("W", 1.0), "kW": ("W", 1e3),
 }
 
 #: SI unit -> the display unit used when a declaration names none (the field's habits: MPa, mm, L/s, kN)
 DEFAULT_DISPLAY = {"m": "mm", "m^2": "mm²", "m^3": "L", "Pa": "MPa", "N": "kN", "m^3/s": "L/s"}
 
-#: SI unit -> the unit shown beside it: speeds in rpm beside rad/s, accelerations in rpm/s beside rad/s²
-BESIDE = {"rad/s": "rpm", "rad/s^2": "rpm/s"}
+#: kind of quantity a scene (``display:``) or the CLI (``--units``) can choose the display unit of ->
+#: (its SI unit, what it covers); every quantity whose unit converts to that SI unit is shown in the choice
+KINDS = {
+    "length": ("m", "gaps, openings, clearances, deflections, AFC amplitudes"),
+    "area": ("m^2", "areas"),
+    "volume": ("m^3", "volumes"),
+    "pressure": ("Pa", "pressures and pressure margins"),
+    "force": ("N", "forces"),
+    "stiffness": ("N/m", "stiffnesses (springs)"),
+    "damping": ("N*s/m", "damping coefficients"),
+    "flow": ("m^3/s", "volume flows (leaks, barrier and seal flows)"),
+    "speed": ("rad/s", "angular speeds and frequencies"),
+    "acceleration": ("rad/s^2", "angular accelerations"),
+    "time": ("s", "times"),
+    "mass": ("kg", "masses"),
+    "unbalance": ("kg*m", "unbalances m·e"),
+    "power": ("W", "powers"),
+}
+
+#: the display units chosen for this run: SI unit -> display unit (see :func:`display_units`)
+_CHOSEN: ContextVar[dict[str, str] | None] = ContextVar("autobal_display_units", default=None)
 
 
 def spelled(unit: str) -> str:
@@ -51,21 +73,91 @@ def spelled(unit: str) -> str:
     return unit
 
 
-def display_unit_of(si: str) -> str:
-    """The default display unit of a unit of results.json (the unit itself, engineer-spelled, when it has none)."""
-    return DEFAULT_DISPLAY.get(si, spelled(si))
+def _base(unit: str) -> tuple[str, float]:
+    """The SI unit of a unit of results.json or a display unit, and the SI value of one of it ("um" -> m, 1e-6)."""
+    return DISPLAY_UNITS.get(spelled(unit), (unit, 1.0))
+
+
+def units_of_kind(kind: str) -> list[str]:
+    """The display units of a kind of :data:`KINDS`, as engineers write them."""
+    return [u for u, (si, _) in DISPLAY_UNITS.items() if si == KINDS[kind][0]]
+
+
+def unit_of_kind(kind: str, unit: str) -> str:
+    """``unit`` as written by a person ("m3/h", "um", "m^3/h", "l/s") spelled as :data:`DISPLAY_UNITS` spells it;
+    ValueError naming the kind and the units to write when it is not a display unit of ``kind``."""
+    if kind not in KINDS:
+        raise ValueError(f"'{kind}' is not a kind of quantity; choose units for {', '.join(KINDS)}")
+    text = str(unit).strip().replace("μ", "µ").replace("**", "^")
+    text = re.sub(r"(?<![A-Za-z])u(?=m)", "µ", text)
+    text = re.sub(r"\^?([23])", lambda m: "²³"[int(m.group(1)) - 2], text).replace("*", "·")
+    text = re.sub(r"(?<![A-Za-z])(m?)l(?=$|/)", r"\1L", text)
+    if text not in units_of_kind(kind):
+        raise ValueError(f"'{unit}' is not a unit of {kind} ({KINDS[kind][0]}): write one of "
+                         f"{', '.join(units_of_kind(kind))}")
+    return text
+
+
+def checked_choice(choice: Mapping[str, str] | None) -> dict[str, str]:
+    """kind -> display unit, each unit spelled as :data:`DISPLAY_UNITS` spells it; ValueError for a kind or a
+    unit that is not one (see :func:`unit_of_kind`)."""
+    return {kind: unit_of_kind(kind, unit) for kind, unit in (choice or {}).items() if unit is not None}
+
+
+def current_choice() -> dict[str, str]:
+    """kind -> display unit chosen by the enclosing :func:`display_units` blocks."""
+    by_si = _CHOSEN.get() or {}
+    return {kind: by_si[si] for kind, (si, _) in KINDS.items() if si in by_si}
+
+
+@contextmanager
+def display_units(choice: Mapping[str, str] | None, under: bool = False):
+    """Within the block, quantities of the kinds in ``choice`` (kind -> display unit, e.g. ``{"pressure": "bar",
+    "flow": "m³/h"}``) are shown in those units: summaries, report tables, CSV headers and figure axes; the
+    others in their declared display units.  results.json stays SI.  ``under``: the choice only fills the
+    kinds an enclosing block did not choose (a scene's ``display`` section under the caller's choice)."""
+    given = checked_choice(choice)
+    given = given | current_choice() if under else current_choice() | given
+    token = _CHOSEN.set({KINDS[kind][0]: unit for kind, unit in given.items()})
+    try:
+        yield
+    finally:
+        _CHOSEN.reset(token)
+
+
+def chosen(kind: str) -> str | None:
+    """The display unit chosen for a kind of :data:`KINDS` in this block of :func:`display_units`, or None."""
+    return (_CHOSEN.get() or {}).get(KINDS[kind][0])
+
+
+def display_unit_of(unit: str, declared: str = "") -> str:
+    """The unit a value of results.json unit ``unit`` is shown in: the unit chosen for its kind
+    (:func:`display_units`), else ``declared``, else the field's default (:data:`DEFAULT_DISPLAY`), else the
+    unit itself, engineer-spelled."""
+    return (_CHOSEN.get() or {}).get(_base(unit)[0]) or declared or DEFAULT_DISPLAY.get(unit, spelled(unit))
 
 
 def is_display_unit(shown: str, si: str) -> bool:
     """Whether ``shown`` is a display unit of the results.json unit ``si`` (the unit itself, spelled, is one)."""
-    return shown == spelled(si) or DISPLAY_UNITS.get(shown, (None,))[0] == si
+    return shown == spelled(si) or shown in DISPLAY_UNITS and DISPLAY_UNITS[shown][0] == _base(si)[0]
 
 
 def convert(value: float, si: str, shown: str) -> float:
     """A value of results.json unit ``si`` in the display unit ``shown``; ValueError if it is not one of ``si``."""
     if not is_display_unit(shown, si):
         raise ValueError(f"'{shown}' is not a display unit of '{si}'")
-    return value if shown == spelled(si) else value / DISPLAY_UNITS[shown][1]
+    return value if shown == spelled(si) else value * _base(si)[1] / DISPLAY_UNITS[shown][1]
+
+
+def beside(si: str, shown: str) -> str | None:
+    """The unit shown beside a value of ``si`` displayed in ``shown``: rpm beside rad/s and Hz, rad/s beside rpm;
+    rpm/s beside rad/s², rad/s² beside rpm/s."""
+    base = _base(si)[0]
+    if base == "rad/s":
+        return "rad/s" if shown == "rpm" else "rpm"
+    if base == "rad/s^2":
+        return "rad/s²" if shown == "rpm/s" else "rpm/s"
+    return None
 
 
 def significant(value, digits: int = 4) -> str:
@@ -85,9 +177,11 @@ def significant(value, digits: int = 4) -> str:
     return f"{float(mantissa) * 10.0 ** exp:.{max(digits - 1 - exp, 0)}f}"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Quantity:
     """One declared number of a results.json block.
+
+    ``Quantity(key, unit, symbol="", description="", display="", source="", headline=False, beside=None)``.
 
     Attributes
     ----------
@@ -99,48 +193,59 @@ class Quantity:
         The symbol, as in the source (``z0``, ``ψ1``).
     description : str
         What it is, in words.
-    display : str
-        The unit a person reads (a key of :data:`DISPLAY_UNITS`); default :func:`display_unit_of`.
+    declared : str
+        The unit a person reads unless a scene or the CLI chooses another for its kind: the ``display`` given
+        (a key of :data:`DISPLAY_UNITS`), else the field's unit of :data:`DEFAULT_DISPLAY`.
     source : str
         Where the value (or its definition) is published: author, year, equation/table/figure.
     headline : bool
         One of the numbers a reader looks at first (the summary, the notebook table).
     beside : str
-        A unit shown in brackets after the display unit; default :data:`BESIDE` (rpm beside a speed), "Hz"
-        beside a vibration frequency.
+        A unit shown in brackets after the display unit; default :func:`beside` (rpm beside a speed, rad/s
+        beside one shown in rpm), "Hz" beside a vibration frequency.
     """
 
     key: str
     unit: str
     symbol: str = ""
     description: str = ""
-    display: str = ""
+    declared: str = ""
     source: str = ""
     headline: bool = False
     beside: str | None = None
 
-    def __post_init__(self):
-        shown = self.display or display_unit_of(self.unit)
-        if not is_display_unit(shown, self.unit):
-            raise ValueError(f"{self.key}: display unit '{shown}' is not a unit of '{self.unit}'")
-        object.__setattr__(self, "display", shown)
+    def __init__(self, key: str, unit: str, symbol: str = "", description: str = "", display: str = "",
+                 source: str = "", headline: bool = False, beside: str | None = None, *, declared: str = ""):
+        declared = display or declared or DEFAULT_DISPLAY.get(unit, spelled(unit))  # declared: dataclasses.replace
+        if not is_display_unit(declared, unit):
+            raise ValueError(f"{key}: display unit '{declared}' is not a unit of '{unit}'")
+        for name, value in (("key", key), ("unit", unit), ("symbol", symbol), ("description", description),
+                            ("declared", declared), ("source", source), ("headline", headline), ("beside", beside)):
+            object.__setattr__(self, name, value)
 
     @property
     def keys(self) -> list[str]:
         return self.key.split()
 
+    @property
+    def display(self) -> str:
+        """The unit the value is shown in now: the one chosen for its kind (:func:`display_units`), else
+        :attr:`declared`.  Label a number with it and convert with :meth:`shown` (or write :meth:`text`)."""
+        return display_unit_of(self.unit, self.declared)
+
     def shown(self, value) -> float | None:
-        """``value`` (SI) in the display unit."""
+        """``value`` (SI) in :attr:`display`."""
         return None if value is None else convert(value, self.unit, self.display)
 
     def text(self, value, digits: int = 4) -> str:
-        """'value unit' in the display unit, speeds with rpm beside: '143.9 µm', '1977 rad/s (18 880 rpm)'."""
-        shown = self.shown(value)
-        unit = "" if self.display == "1" else f" {self.display}"
-        out = significant(shown, digits) + unit
-        beside = BESIDE.get(self.unit) if self.beside is None else self.beside
-        if beside and self.display != beside and value is not None:
-            out += f" ({significant(convert(value, self.unit, beside), digits)} {beside})"
+        """'value unit' in :attr:`display`, speeds with rpm (or rad/s) beside, or the declared :attr:`beside`:
+        '143.9 µm', '1977 rad/s (18880 rpm)'."""
+        unit = self.display
+        out = significant(None if value is None else convert(value, self.unit, unit), digits)
+        out += "" if unit == "1" else f" {unit}"
+        other = beside(self.unit, unit) if self.beside is None else self.beside
+        if other and other != unit and value is not None:
+            out += f" ({significant(convert(value, self.unit, other), digits)} {other})"
         return out
 
 

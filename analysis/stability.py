@@ -21,6 +21,7 @@ from fractions import Fraction
 
 import numpy as np
 import scipy.linalg
+import scipy.optimize
 
 from autobal.analysis import progress
 from autobal.analysis.frequency import MODEL_COLOURS, MODEL_LABELS
@@ -129,7 +130,8 @@ def _restoring(setup, model, xaxis, yaxis, xs, ys, R) -> dict:
     lines = {}
     for ax, key, vals in ((xaxis, kx, xs), (yaxis, ky, ys)):
         r = max_real(setup, model, [{key: v} for v in vals])
-        lines[ax.parameter] = {"values": vals, "max_real": r, "stable_intervals": _intervals(vals, r < 0)}
+        at = lambda v, key=key: max_real(setup, model, [{key: v}])[0]  # noqa: E731
+        lines[ax.parameter] = {"values": vals, "max_real": r, "stable_intervals": _intervals(vals, r, at)}
 
     def offset(v, v0, ax, vals):  # distance from nominal in decades (log) or in axis spans (linear)
         return math.log10(v / v0) if ax.scale == "log" and v0 > 0 else (v - v0) / (vals[-1] - vals[0])
@@ -163,21 +165,36 @@ def single_parameter_scans(setup: Setup, model: str, points: int = 61) -> dict:
         else:
             vals = np.geomspace(1e-3 * nominal, 1e3 * nominal, points)
         r = max_real(setup, model, [{key: v} for v in vals])
-        out[name] = {"nominal": nominal, "values": vals, "max_real": r, "stable_intervals": _intervals(vals, r < 0)}
+        at = lambda v, key=key: max_real(setup, model, [{key: v}])[0]  # noqa: E731
+        out[name] = {"nominal": nominal, "values": vals, "max_real": r, "stable_intervals": _intervals(vals, r, at)}
     return out
 
 
-def _intervals(vals, mask) -> list[list[float]]:
-    out, start, prev = [], None, None
-    for v, m in zip(vals, mask, strict=True):
-        if m and start is None:
-            start = v
-        if not m and start is not None:
-            out.append([float(start), float(prev)])
+def _intervals(vals, max_re, at=None) -> list[list[float]]:
+    """The stable intervals (max Re lambda < 0) of a scan over the grid ``vals``.  A boundary between two grid
+    points is the root of max Re lambda there (Brent's method on ``at(value) -> max Re lambda``, to 1e-6
+    relative; with ``at`` None, the zero of the straight line between the two points), not the last stable
+    grid point; an interval that reaches an end of the range ends at that end."""
+    vals, max_re = np.asarray(vals, float), np.asarray(max_re, float)
+
+    def boundary(i: int) -> float:  # where max Re lambda changes sign between vals[i] and vals[i + 1]
+        a, b, fa, fb = vals[i], vals[i + 1], max_re[i], max_re[i + 1]
+        if not (math.isfinite(fa) and math.isfinite(fb)):
+            return float(a if fa < 0 else b)  # a failed point: the stable grid point
+        if at is not None:
+            return float(scipy.optimize.brentq(at, a, b, xtol=1e-12 * max(abs(a), abs(b)), rtol=1e-6))
+        return float(a + fa / (fa - fb) * (b - a))
+
+    stable = max_re < 0
+    out, start = [], None
+    for i, s in enumerate(stable):
+        if s and start is None:
+            start = float(vals[0]) if i == 0 else boundary(i - 1)
+        if not s and start is not None:
+            out.append([start, boundary(i - 1)])
             start = None
-        prev = v
     if start is not None:
-        out.append([float(start), float(vals[-1])])
+        out.append([start, float(vals[-1])])
     return out
 
 
@@ -255,7 +272,7 @@ QUANTITIES = Declarations(
     Quantity("maps.*.max_real maps.*.restoring.along_axes.*.max_real maps.*.restoring.nearest_stable.max_real "
              "single_parameter.*.*.max_real", "1/s", "max Re λ", "spectral abscissa over a map or a scan"),
     Quantity("maps.*.stable_fraction", "1", "", "fraction of the map's grid that is stable"),
-    *(Quantity(_scanned(k), q.unit, q.symbol, f"{q.description}: values scanned", q.display)
+    *(Quantity(_scanned(k), q.unit, q.symbol, f"{q.description}: values scanned", q.declared)
       for k, q in PARAMETERS.items()),
     resolve=_map_axis,
 )

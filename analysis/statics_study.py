@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from autobal.analysis import closed_form, workprecision
-from autobal.analysis.quantities import Declarations, Quantity
+from autobal.analysis.quantities import Declarations, Quantity, convert, display_unit_of
 from autobal.analysis.result import Result, fixed_layout, fmt, new_figure, with_statuses
 from autobal.analysis.statics import StaticPoint, StaticsSolver
 from autobal.errors import SolveError
@@ -181,8 +181,9 @@ class StaticsResult(Result):
                     "xi": ("x_B", "exact.x0", "x")}
 
     def tables(self) -> dict[str, dict]:
-        """statics_sweep.csv: every pressure, gap and flow in the units of the field (MPa, µm, mm, L/s; the
-        header names it) beside the source's dimensionless group; force_gap.csv in the groups of (2.35)."""
+        """statics_sweep.csv: every pressure, gap and flow in its display unit (MPa, µm, mm, L/s unless
+        the scene or the CLI chooses others; the header names it) beside the source's dimensionless group;
+        force_gap.csv in the groups of (2.35)."""
         sw, fg, sc = self.data["sweep"], self.data["force_gap"], self.data["scales"]
         cols = {}
         for k in ("psi1", *SWEEP_KEYS):
@@ -200,20 +201,19 @@ class StaticsResult(Result):
                 "force_gap.csv": {"u": fg["u"], "phi_exact": fg["phi_exact"],
                                   "phi_closed_form": fg["phi_closed_form"]}}
 
-    # dimensional axes: (key of the base in data["scales"] or "Q_B", factor SI -> shown unit, unit)
-    _BASES = {"p": ("p_B", 1e-6, "MPa"), "z": ("z_B", 1e6, "µm"), "x": ("x_B", 1e3, "mm"),
-              "Q": ("Q_B", 6e4, "L/min")}
+    # dimensional axes: (key of the base in data["scales"] or "Q_B", the quantity whose shown unit the axis takes)
+    _BASES = {"p": ("p_B", "exact.p1"), "z": ("z_B", "exact.z0"), "x": ("x_B", "exact.x0"), "Q": ("Q_B", "exact.Q_T")}
     _CF = "closed form, Pavlenko (2014)"
     # inches: tick labels and the two-line label on the left, the suptitle on top, tick labels and label below
     _MARGINS = {"left": 0.95, "right": 0.25, "top": 0.4, "bottom": 0.55, "hspace": 0.08}
 
     def _base(self, kind: str) -> tuple[float, str]:
-        """The factor from a dimensionless group to the shown unit, and the unit (p_B, z_B, x_B, Q_B)."""
-        key, f, unit = self._BASES[kind]
+        """The factor from a dimensionless group to the shown unit, and the unit (p_B, z_B, x_B, Q_B): the
+        display unit of the operating point's pressure, gap, opening and leak (MPa, µm, mm, L/s unless chosen)."""
+        key, quantity = self._BASES[kind]
         base = self.data["closed_form"]["Q_B"] if key == "Q_B" else self.data["scales"][key]
-        if kind == "Q" and base * f > 5000:  # large flows (the compressor) in m^3/min
-            return base * 60, "m³/min"
-        return base * f, unit
+        q = QUANTITIES.find(quantity)
+        return q.shown(base), q.display
 
     def _curve(self, key: str, closed: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """psi1 and ``key`` over the sweep with the refined points near the kinks merged in, sorted."""
@@ -230,11 +230,11 @@ class StaticsResult(Result):
         return self.data["exact"]["psi1"] * self._base("p")[0]
 
     def _decorate(self, ax, kind: str, ylabel: str, xlabel: bool = True) -> None:
-        """Dimensional axes, p1 (MPa) and y in the unit of ``kind``, their labels naming the source's groups
-        and bases (psi1 = p1/p_B, u = z/z_B ...); the saturated range shaded and labelled, the critical
+        """Dimensional axes, p1 and y in the display units of ``kind`` (:meth:`_base`), their labels naming the
+        source's groups and bases (psi1 = p1/p_B, u = z/z_B ...); the saturated range shaded and labelled, the critical
         discharge pressures marked."""
         sw = self.data["sweep"]
-        P, _ = self._base("p")
+        P, p_unit = self._base("p")
         p1 = np.asarray(sw["psi1"], float) * P
         x, sat = self._curve("regulator_saturated")
         sat = sat > 0.5
@@ -252,7 +252,7 @@ class StaticsResult(Result):
                        label=rf"$p_1^{{kr}}$, {self._CF} Eq. ({'2.160' if self.data['medium'] == 'gas' else '2.32'})")
         ax.set_xlim(p1.min(), p1.max())
         if xlabel:  # the groups in the labels: a secondary axis costs about a tenth of a draw
-            ax.set_xlabel(rf"discharge pressure p₁, MPa  (ψ₁ = p₁/$p_B$, $p_B$ = {P:.3g} MPa)")
+            ax.set_xlabel(rf"discharge pressure p₁, {p_unit}  (ψ₁ = p₁/$p_B$, $p_B$ = {P:.3g} {p_unit})")
         if kind in self._BASES:
             F, unit = self._base(kind)
             group = {"p": "ψ = p/$p_B$", "z": "u = z/$z_B$", "x": "ξ = x/$x_B$", "Q": "Q/$Q_B$"}[kind]
@@ -267,7 +267,8 @@ class StaticsResult(Result):
             ax.plot([self._operating_x()], [y], "k*", ms=9, zorder=5, label="operating point")
 
     def draw(self, ax) -> None:
-        """Chamber pressures against the discharge pressure (Fig 2.4 / 2.9), MPa with psi on the right."""
+        """Chamber pressures against the discharge pressure (Fig 2.4 / 2.9) in the display unit (MPa unless
+        chosen), the group psi named in the label."""
         ex = self.data["exact"]
         P, _ = self._base("p")
         for k, k0, lab in (("psi_e", "psi_e0", "pₑ barrier"), ("psi2", "psi2_0", "p₂ disc chamber"),
@@ -284,7 +285,8 @@ class StaticsResult(Result):
 
     def figures(self) -> dict:
         """Pressures (Fig 2.4/2.9), gap and valve (Fig 2.5), flows (Fig 2.6/2.10), phi(u) (2.35); dimensional
-        axes (MPa, um, mm, L/min, kN) whose labels name the source's groups and their bases."""
+        axes in the display units (MPa, µm, mm, L/s, kN unless the scene or the CLI chooses others) whose labels
+        name the source's groups and their bases."""
         sw, ex = self.data["sweep"], self.data["exact"]
         psi1 = np.asarray(sw["psi1"], float)
         P, _ = self._base("p")
@@ -348,15 +350,16 @@ class StaticsResult(Result):
         fig, ax = new_figure((8, 4.6))
         Z, unit = self._base("z")
         u = np.asarray(fg["u"], float)
-        kN = self.data["scales"]["p_B"] * self.data["scales"]["s_B"] * 1e-3
-        ax.plot(u * Z, np.asarray(fg["phi_exact"], float) * kN, label="φ(u), exact network")
+        force = display_unit_of("N")
+        F = convert(self.data["scales"]["p_B"] * self.data["scales"]["s_B"], "N", force)
+        ax.plot(u * Z, np.asarray(fg["phi_exact"], float) * F, label="φ(u), exact network")
         if any(v is not None for v in fg["phi_closed_form"]):
-            ax.plot(u * Z, np.asarray(fg["phi_closed_form"], float) * kN, ls="--", label=f"{self._CF} Eq. (2.35)")
-        ax.axhline(fg["tau"] * kN, color="k", lw=0.8, ls=":", label="load τ − χ")
+            ax.plot(u * Z, np.asarray(fg["phi_closed_form"], float) * F, ls="--", label=f"{self._CF} Eq. (2.35)")
+        ax.axhline(fg["tau"] * F, color="k", lw=0.8, ls=":", label="load τ − χ")
         if fg["psi1"] == ex["psi1"]:
-            ax.plot([ex["u0"] * Z], [fg["tau"] * kN], "k*", ms=9, zorder=5, label="operating point")
+            ax.plot([ex["u0"] * Z], [fg["tau"] * F], "k*", ms=9, zorder=5, label="operating point")
         ax.set_xlabel(f"face gap z, {unit}  (u = z/$z_B$, $z_B$ = {Z:.3g} {unit})")
-        ax.set_ylabel(f"balancing force F, kN\nφ = F/($p_B s_B$), $p_B s_B$ = {kN:.3g} kN")
+        ax.set_ylabel(f"balancing force F, {force}\nφ = F/($p_B s_B$), $p_B s_B$ = {F:.3g} {force}")
         ax.grid(alpha=0.3)
         _legend(fig, ax)
         figs["fig_force_gap.png"] = fig

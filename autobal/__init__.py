@@ -10,13 +10,13 @@ The public API::
 __version__ = "0.2.0"
 
 __all__ = ["AutobalError", "DeviceParams", "DynamicData", "LiquidLayer", "Result", "RotorParams", "Run", "Scenario",
-           "ScenarioError", "SolveError", "__version__", "load", "run"]
+           "ScenarioError", "SolveError", "__version__", "display_units", "load", "run"]
 
 _WHERE = {"load": "autobal.api", "run": "autobal.api", "Run": "autobal.api", "Result": "autobal.analysis.result",
           "Scenario": "autobal.scenario", "AutobalError": "autobal.errors", "ScenarioError": "autobal.errors",
           "SolveError": "autobal.errors", "DeviceParams": "autobal.models.device",
           "DynamicData": "autobal.models.dynamics", "RotorParams": "autobal.models.rotor",
-          "LiquidLayer": "autobal.models.rotor"}
+          "LiquidLayer": "autobal.models.rotor", "display_units": "autobal.analysis.quantities"}
 
 
 def __getattr__(name: str):

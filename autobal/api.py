@@ -4,7 +4,9 @@
 >>> scene = autobal.load("pump_pe600_statics", set={"device.disc.face.base_gap": "0.18 mm"})
 >>> run = autobal.run(scene)                     # nothing printed, nothing written
 >>> run["statics"].face_gap                      # m
->>> run.save("out/pump")                         # results.json, CSV, PNG; atomically
+>>> run.save("out/pump")                         # results.json, CSV, PNG and SVG; atomically
+>>> with autobal.display_units({"pressure": "bar"}):  # what a person reads; results.json stays SI
+...     print(run["statics"].summary())
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from pathlib import Path
 
 from autobal import __version__, analyses, report, scenario
 from autobal.analysis import executor, interrupt
+from autobal.analysis.quantities import display_units
 from autobal.analysis.result import Result, html_figure, write_json
 from autobal.errors import AutobalError, SolveError
 from autobal.output import LOG, OutputFolder, SolverLog, signals_held
@@ -97,11 +100,15 @@ class Run(Mapping):
         return out
 
     def summary(self) -> str:
-        return "\n".join(r.summary() for r in self.results.values())
+        """Every result's summary, in the display units of the scene (its ``display`` section)."""
+        with display_units(display(self.scene), under=True):
+            return "\n".join(r.summary() for r in self.results.values())
 
     def write(self, folder: Path) -> list[Path]:
-        """Write every result's files, results.json and report.html into an existing ``folder``."""
-        outputs = {name: [f.name for f in r.save(folder)] for name, r in self.results.items()}
+        """Write every result's files (tables and figures in the display units of the scene), results.json (SI)
+        and report.html into an existing ``folder``."""
+        with display_units(display(self.scene), under=True):
+            outputs = {name: [f.name for f in r.save(folder)] for name, r in self.results.items()}
         files = [name for names in outputs.values() for name in names]
         write_json(folder / "results.json", self.to_dict() | {"files": [*files, report.REPORT], "outputs": outputs})
         written = _render_report(folder)
@@ -137,6 +144,11 @@ class Run(Mapping):
 
     def __repr__(self) -> str:
         return f"<Run {self.scene.name}: {', '.join(self.results)}>"
+
+
+def display(scene: Scenario) -> dict[str, str]:
+    """The display units the scene chooses (its ``display`` section): kind -> unit."""
+    return scene.display.model_dump(exclude_none=True) if scene.display is not None else {}
 
 
 def meta(scene: Scenario) -> dict:
@@ -207,7 +219,8 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
     folder = OutputFolder(out) if out is not None else None
     results, timing, current = {}, {}, None
     try:
-        with SolverLog(folder.tmp / LOG if folder else os.devnull) as log, executor.using(scheduler):
+        with SolverLog(folder.tmp / LOG if folder else os.devnull) as log, executor.using(scheduler), \
+                display_units(display(scene), under=True):  # the summaries on_result prints
             for current in analyses.named(scene):
                 t0 = time.perf_counter()
                 try:

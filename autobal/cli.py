@@ -80,6 +80,24 @@ def _overrides(pairs: list[str]) -> dict:
     return out
 
 
+def _units(given: list[str]) -> dict[str, str]:
+    """``--units KIND=UNIT[,KIND=UNIT...]`` (repeatable) -> kind -> display unit, spelled as the conversion
+    table spells it; ScenarioError with one line naming the pair and the units of its kind."""
+    from autobal.analysis.quantities import KINDS, unit_of_kind
+
+    out = {}
+    for pair in (p.strip() for item in given for p in item.split(",")):
+        kind, sep, unit = (t.strip() for t in pair.partition("="))
+        if not sep or not kind or not unit:
+            raise ScenarioError(f"--units {pair}: write KIND=UNIT, e.g. --units pressure=bar,flow=m3/h "
+                                f"(kinds: {', '.join(KINDS)})")
+        try:
+            out[kind] = unit_of_kind(kind, unit)
+        except ValueError as exc:
+            raise ScenarioError(f"--units {pair}: {exc}") from None
+    return out
+
+
 @contextlib.contextmanager
 def _writing(out: Path):
     """An OSError without a file name, or naming a file of a temporary folder of ``out`` (a full disk while
@@ -120,7 +138,8 @@ def _run(args, scn) -> int:
 def _accuracy(args, scn) -> int:
     """Work-precision of every analysis of the scene that has a provider: figure, CSV, summary; into
     ``out/NAME-accuracy`` unless ``--out`` (never the run's folder), interrupted.json on an interrupt."""
-    from autobal import analyses
+    from autobal import analyses, api
+    from autobal.analysis.quantities import display_units
 
     studies = {name: analyses.module(name).accuracy for name in analyses.named(scn)
                if hasattr(analyses.module(name), "accuracy")}
@@ -128,7 +147,7 @@ def _accuracy(args, scn) -> int:
         raise ScenarioError(f"{scn.name}: none of its analyses has a work-precision study "
                             f"(available: {', '.join(analyses.accuracy_studies())})")
     out = args.out if args.out is not None else Path("out") / f"{scn.name}-accuracy"
-    with _writing(out):
+    with _writing(out), display_units(api.display(scn)):
         return _write_accuracy(args, scn, studies, out)
 
 
@@ -175,7 +194,7 @@ def _report(args) -> int:
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        path = report.render(args.folder)
+        path = report.render(args.folder, units=_units(args.units))
     for w in caught:
         _error(f"warning: {w.message}")
     _say(f"report: {path}")
@@ -194,6 +213,12 @@ def parser() -> argparse.ArgumentParser:
                        help="override a scene value, validated like the file "
                             "(repeatable), e.g. --set device.disc.face.base_gap='0.18 mm'")
 
+    def units_arg(p):
+        p.add_argument("--units", action="append", default=[], metavar="KIND=UNIT[,...]",
+                       help="show these kinds of quantity in these units (terminal, report tables, CSV headers, "
+                            "statics figures; results.json stays SI), over the scene's display section, e.g. "
+                            "--units pressure=bar,flow=m3/h,length=um,speed=rpm")
+
     def out_args(p):
         p.add_argument("--out", type=Path, default=None, metavar="OUT",
                        help="output folder (default out/<scenario name>); replaced whole by each run")
@@ -204,6 +229,7 @@ def parser() -> argparse.ArgumentParser:
                            formatter_class=argparse.RawDescriptionHelpFormatter)
     scene_args(p_run)
     out_args(p_run)
+    units_arg(p_run)
     p_run.add_argument("--scheduler", default=None, metavar="ADDRESS",
                        help="run sweeps and Monte Carlo on this dask.distributed scheduler (e.g. tcp://host:8786; "
                             "default: the environment variable AUTOBAL_SCHEDULER, else in-process); never from a "
@@ -212,12 +238,14 @@ def parser() -> argparse.ArgumentParser:
                            formatter_class=argparse.RawDescriptionHelpFormatter)
     scene_args(p_acc)
     out_args(p_acc)
+    units_arg(p_acc)
     p_check = sub.add_parser("check", help="validate a scenario without solving")
     scene_args(p_check)
     sub.add_parser("list", help="list the shipped scenarios")
     p_report = sub.add_parser("report", help="write OUT/report.html again from the results in an output folder")
     p_report.add_argument("folder", type=Path, metavar="OUT",
                           help="an output folder of 'autobal run' (holds results.json or failed_solve.json)")
+    units_arg(p_report)
     return ap
 
 
@@ -306,7 +334,8 @@ def _main(args) -> int:
     if args.cmd == "report":
         return _report(args)
     progress.set_quiet(getattr(args, "quiet", False))  # bars: on a terminal unless --quiet
-    scn = scenario.load(args.scenario, overrides=_overrides(args.set))
+    chosen = {f"display.{kind}": unit for kind, unit in _units(getattr(args, "units", [])).items()}
+    scn = scenario.load(args.scenario, overrides=_overrides(args.set) | chosen)
     if args.cmd == "check":
         _say(f"{scn.name}: valid; analyses: {', '.join(analyses.named(scn)) or 'none'}")
         for path, value, kind in quantities(scn, units.ANGULAR):  # the speeds as read: rad/s and rpm

@@ -30,13 +30,19 @@ from pathlib import Path
 
 import jinja2
 import yaml
+from markupsafe import Markup
 
 from autobal import report_input
 from autobal.analysis.quantities import (
     Declarations,
     Quantity,
+    beside,
+    checked_choice,
+    chosen,
     convert,
+    current_choice,
     display_unit_of,
+    display_units,
     flatten,
     is_display_unit,
     is_number,
@@ -136,13 +142,16 @@ def number(v) -> str:
 
 def cell(v, unit: str | None = None, shown: str | None = None, digits: int | None = None) -> dict:
     """A table cell: a number (or null) with its unit, converted from the SI ``unit`` to the display unit
-    ``shown`` (default: the field's unit of analysis/quantities.py, µm for lengths below 10 µm), to ``digits``
-    significant digits (default :func:`number`'s 5); words and yes/no without a unit."""
+    ``shown`` (default: the unit chosen for its kind, else the field's unit of analysis/quantities.py, µm for
+    lengths below 10 µm), to ``digits`` significant digits (default :func:`number`'s 5); words and yes/no
+    without a unit."""
     if isinstance(v, bool | str):
         return text(v)
     unit = unit or "?"
     if shown is None:
-        shown = "µm" if unit == "m" and v is not None and abs(v) < 1e-5 else display_unit_of(unit)
+        shown = display_unit_of(unit)
+        if shown == "mm" and unit == "m" and v is not None and abs(v) < 1e-5 and not chosen("length"):
+            shown = "µm"
     if not is_display_unit(shown, unit):  # a unit of an undeclared analysis that has no display unit
         shown = unit
     if v is None:
@@ -207,10 +216,10 @@ class Section:
         c = cell(v, unit) if unit else self.cell(path, v)
         c["key"] = f"{self.name}.{path}"
         note = f"{note} {self.get(path + '_status') or ''}"
-        if c["unit"] == "rad/s" and is_number(v):  # speeds in rpm and frequencies in Hz beside rad/s
-            note = f"{number(convert(v, 'rad/s', 'rpm'))} rpm = {number(convert(v, 'rad/s', 'Hz'))} Hz " + note
-        elif c["unit"] == "rad/s²" and is_number(v):  # accelerations in rpm/s beside rad/s²
-            note = f"{number(convert(v, 'rad/s^2', 'rpm/s'))} rpm/s " + note
+        si = unit or getattr(quantity(f"{self.name}.{path}"), "unit", None) or self.unit(path)
+        if si is not None and is_number(v) and beside(si, c["unit"]):  # speeds, accelerations in the other units
+            others = ("rad/s", "rpm", "Hz") if is_display_unit("rpm", si) else ("rad/s²", "rpm/s")
+            note = " = ".join(f"{number(convert(v, si, u))} {u}" for u in others if u != c["unit"]) + f" {note}"
         self.rows.append([text(label), text(symbol), c, text(c["unit"]), text(note.strip())])
 
     def verdict(self, ok: bool | None, message: str) -> None:
@@ -1250,11 +1259,14 @@ def _figures(folder: Path, results: dict) -> dict[str, list[dict]]:
     owner = {f: name for name, files in outputs.items() if isinstance(files, list) for f in files
              if isinstance(f, str)}
     named = results.get("files")
+    names = [n for n in (named if isinstance(named, list) and named else sorted(p.name for p in folder.iterdir()))
+             if isinstance(n, str)]
+    pngs = {n[:-4] for n in names if n.lower().endswith(".png")}
     out: dict[str, list[dict]] = {}
     refused = []
-    for name in named if isinstance(named, list) and named else sorted(p.name for p in folder.iterdir()):
-        if not isinstance(name, str) or Path(name).suffix.lower() not in FIGURE_SUFFIXES:
-            continue
+    for name in names:
+        if Path(name).suffix.lower() not in FIGURE_SUFFIXES or name.lower().endswith(".svg") and name[:-4] in pngs:
+            continue  # a figure's SVG beside its PNG is for documents: the page embeds the PNG
         path, out_of_folder = report_input.figure(folder, name)
         refused += [name] if out_of_folder else []
         if path is None:
@@ -1322,11 +1334,22 @@ def inputs(meta: dict) -> tuple[list[list[dict]], str]:
 # --------------------------------------------------------------------------------------------
 # rendering
 # --------------------------------------------------------------------------------------------
+def css_string(value, width: int = 90) -> Markup:
+    """``value`` as a quoted CSS string for the page's running header, cut to ``width`` characters: everything
+    but letters, digits and plain punctuation written as a CSS escape, so no text can leave the string or
+    the ``<style>`` element."""
+    value = text_clean(value, width)
+    return Markup('"' + "".join(c if c.isascii() and (c.isalnum() or c in " .,:;_-()+") else f"\\{ord(c):x} "
+                               for c in value) + '"')  # the space ends the escape (and is not shown)
+
+
 def _environment() -> jinja2.Environment:
     files = resources.files("autobal") / "templates"
     loader = jinja2.DictLoader({p.name: p.read_text(encoding="utf-8") for p in files.iterdir()
                                 if p.name.endswith((".j2", ".css"))})
-    return jinja2.Environment(loader=loader, autoescape=True, trim_blocks=True, lstrip_blocks=True)
+    env = jinja2.Environment(loader=loader, autoescape=True, trim_blocks=True, lstrip_blocks=True)
+    env.filters["css_string"] = css_string
+    return env
 
 
 def _section(name: str, block: dict, results: dict, figures: list[dict], folder: Path) -> dict:
@@ -1367,8 +1390,24 @@ def _iterate_rows(it) -> list[list[str]]:
     return rows
 
 
-def context(folder: Path) -> dict:
-    """Everything the template shows, from the files of ``folder``."""
+def display_choice(meta, units: dict | None = None) -> dict[str, str]:
+    """kind -> display unit of a report: the ``display`` section of the run's scene (results.json
+    ``meta.scene_si.display``), updated with ``units`` (``autobal report --units``); ScenarioError naming the
+    key for a unit that is not one of its kind."""
+    scene = _get(meta, "scene_si.display") if isinstance(meta, dict) else None
+    try:
+        given = checked_choice(scene) if isinstance(scene, dict) else {}
+    except ValueError as exc:
+        raise ScenarioError(f"results.json meta.scene_si.display: {text_clean(exc)}") from None
+    try:
+        return given | checked_choice(units)
+    except ValueError as exc:
+        raise ScenarioError(f"units: {text_clean(exc)}") from None
+
+
+def context(folder: Path, units: dict | None = None) -> dict:
+    """Everything the template shows, from the files of ``folder``, numbers in the display units of the run's
+    scene (its ``display`` section) updated with ``units`` (kind -> display unit)."""
     folder = report_input.folder_of(folder)
     status_file = next((folder / n for n in STATUS_FILES if report_input.present(folder, n)), None)
     results_file = folder / "results.json"
@@ -1385,14 +1424,17 @@ def context(folder: Path) -> dict:
         failure["last_iterate_rows"] = _iterate_rows(it)
     figures = _figures(folder, results)
     names = [k for k in results if k in SECTIONS]
-    sections = [_section(n, results[n], results, figures.pop(n, []), folder) for n in names]
     meta = results.get("meta") or (failure or {}).get("meta") or {}
     meta = meta if isinstance(meta, dict) else {}
+    display = display_choice(meta, units) | current_choice()  # a caller's display_units block over both
+    with display_units(display):
+        sections = [_section(n, results[n], results, figures.pop(n, []), folder) for n in names]
     rows, where = inputs(meta)
     others = [f for figs in figures.values() for f in figs]
     summary = [{"section": sec["title"], "name": sec["name"], **sec["overall"]} for sec in sections if sec["overall"]]
     return {"results": results, "failure": failure, "sections": sections, "summary": summary, "other_figures": others,
             "inputs": rows, "inputs_where": where, "meta": meta, "overrides": meta.get("overrides") or {},
+            "display": display,
             "title": text_clean(results.get("title") or (failure or {}).get("title") or "autobal run", 500),
             "scenario": text_clean(results.get("scenario") or (failure or {}).get("scenario") or "—"),
             "log": report_input.present(folder, "autobal.log")}
@@ -1408,6 +1450,11 @@ def notebook(results: dict, figures: dict[str, list[str]] | None = None) -> str:
     """A run as a notebook cell's HTML: per analysis its one verdict, its headline table in display units and
     ``figures[analysis]`` (HTML ``<img>`` elements)."""
     results = plain(results)
+    with display_units(display_choice(results.get("meta")), under=True):
+        return _notebook(results, figures)
+
+
+def _notebook(results: dict, figures: dict[str, list[str]] | None) -> str:
     out = [f"<div><h2>{html_escape(results.get('title') or '')}</h2>"
            f"<p>scene <b>{html_escape(results.get('scenario', ''))}</b></p>"]
     for sec in sections(results):
@@ -1425,18 +1472,21 @@ def notebook(results: dict, figures: dict[str, list[str]] | None = None) -> str:
     return "".join(out) + "</div>"
 
 
-def html(folder: str | Path) -> str:
-    """The report of an output folder as an HTML string."""
-    return _environment().get_template("report.html.j2").render(**context(Path(folder)))
+def html(folder: str | Path, units: dict | None = None) -> str:
+    """The report of an output folder as an HTML string (``units``: as :func:`render`)."""
+    return _environment().get_template("report.html.j2").render(**context(Path(folder), units))
 
 
-def render(folder: str | Path) -> Path:
+def render(folder: str | Path, units: dict | None = None) -> Path:
     """Write ``report.html`` into an output folder (from its results.json or status file); returns its path.
 
     Parameters
     ----------
     folder : str or Path
         An output folder of ``autobal run`` (or :meth:`autobal.api.Run.save`).
+    units : dict, optional
+        Kind -> display unit (``{"pressure": "bar"}``, see :data:`autobal.analysis.quantities.KINDS`), over
+        the ``display`` section of the run's scene.  The tables change; the figures keep the units of the run.
 
     Returns
     -------
@@ -1448,7 +1498,7 @@ def render(folder: str | Path) -> Path:
     ScenarioError
         The folder holds neither results.json nor a status file of a failed run.
     """
-    page = html(folder)
+    page = html(folder, units)
     out = Path(folder) / REPORT
     try:
         out.write_text(page, encoding="utf-8")

@@ -20,7 +20,7 @@ from pydantic import Field, PrivateAttr, ValidationError, create_model, model_va
 from autobal import analyses, parts
 from autobal.errors import ScenarioError
 from autobal.paths import SCENARIO_DIR
-from autobal.schema import Strict
+from autobal.schema import Display, Strict
 from autobal.text import LIMIT, clean
 from autobal.units import clip
 
@@ -77,6 +77,7 @@ class BaseScenario(Strict):
         "one line of text (no control characters), printed on figures")
     source: Annotated[str, Field(max_length=2000, pattern=PRINTABLE_LINES)] = _d(
         "where the inputs come from: plain text (line breaks allowed, no terminal escapes)", "")
+    display: Display | None = _d("the units a person reads, by kind of quantity (results.json stays SI)", None)
     _origin: dict = PrivateAttr(default_factory=dict)  # file, sha256, overrides (set by load)
 
     @model_validator(mode="after")

@@ -8,9 +8,10 @@ from __future__ import annotations
 
 from typing import Annotated, get_args
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, create_model, field_validator, model_validator
 from pydantic.fields import FieldInfo
 
+from autobal.analysis.quantities import KINDS, spelled, unit_of_kind, units_of_kind
 from autobal.models.params import BIG
 
 # Dimensionless numbers: finite (every model refuses inf and nan) and at most 1e6 in magnitude, far beyond
@@ -149,6 +150,24 @@ class Strict(BaseModel):
                 changed = True
         if changed:
             cls.model_rebuild(force=True)
+
+
+class _DisplayUnits(Strict):
+    @field_validator("*")
+    @classmethod
+    def _unit_of_kind(cls, value, info: ValidationInfo):
+        return None if value is None else unit_of_kind(info.field_name, value)
+
+
+#: the ``display`` section of a scene: kind -> display unit (analysis/quantities.py KINDS, DISPLAY_UNITS)
+Display = create_model(
+    "Display", __base__=_DisplayUnits, __module__=__name__,
+    __doc__="The units the terminal summaries, the report tables, the CSV headers and the statics figures show, "
+            "by kind of quantity (results.json stays SI); a kind left out keeps each quantity's declared unit "
+            "(docs/results.md). `autobal run SCENE --units pressure=bar,flow=m3/h` sets them from the command line.",
+    **{kind: (str | None, Field(None, description=f"{what} (SI {spelled(si)}): one of "
+                                                  f"{', '.join(units_of_kind(kind))}"))
+       for kind, (si, what) in KINDS.items()})
 
 
 class Range(Strict):

@@ -55,6 +55,7 @@ INCLUDE = re.compile(r"<!--\s*include:\s*(\S+)\s*-->")
 INCLUDE_CODE = re.compile(r"<!--\s*include-code:\s*(\S+)\s*-->")
 QUANTITIES = re.compile(r"<!--\s*quantities:\s*(\w+)\s*-->")
 SCHEMA = "<!-- scenario-schema -->"
+DISPLAY_KINDS = "<!-- display-kinds -->"
 
 
 # ----------------------------------------------------------------------------- quantity units
@@ -288,9 +289,17 @@ def quantities_markdown(analysis: str) -> str:
     lines = ["| key | symbol | SI unit | shown in | meaning | source |", "|---|---|---|---|---|---|"]
     for q in decl:
         keys = ", ".join(f"`{k}`" for k in q.keys)
-        lines.append(f"| {_cell(keys)} | {_cell(q.symbol)} | {_cell(q.unit)} | {_cell(q.display)} | "
+        lines.append(f"| {_cell(keys)} | {_cell(q.symbol)} | {_cell(q.unit)} | {_cell(q.declared)} | "
                      f"{_cell(q.description)} | {_cell(q.source)} |")
     return "\n".join(lines) + "\n"
+
+
+def display_kinds_markdown() -> str:
+    """The rows (kind, SI unit, display units) of the kinds a scene's ``display`` section chooses units for."""
+    from autobal.analysis.quantities import KINDS, units_of_kind
+
+    return "\n".join(f"| `{kind}`: {what} | {si} | {', '.join(units_of_kind(kind))} |"
+                     for kind, (si, what) in KINDS.items())
 
 
 # ----------------------------------------------------------------------------- numbers from runs
@@ -358,6 +367,7 @@ def numbers_markdown(markdown: str, numbers: dict | None = None) -> str:
 def on_page_markdown(markdown: str, page, config, files) -> str:  # noqa: ARG001 - MkDocs hook signature
     if SCHEMA in markdown:
         markdown = markdown.replace(SCHEMA, schema_markdown())
+    markdown = markdown.replace(DISPLAY_KINDS, display_kinds_markdown())
     markdown = QUANTITIES.sub(lambda m: quantities_markdown(m.group(1)), markdown)
     markdown = INCLUDE_CODE.sub(_include_code, markdown)
     markdown = INCLUDE.sub(_include, markdown)

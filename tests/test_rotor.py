@@ -287,6 +287,7 @@ def test_rotor_dynamics_result_plots_without_pyplot(tmp_path):
     before = matplotlib.get_backend()
     figs = res.plot()
     assert len(figs) == 1 and isinstance(figs[0], Figure) and matplotlib.get_backend() == before
-    assert [f.name for f in res.save(tmp_path)] == ["rotor_stationary.csv", "fig_rotor_stationary.png"]
+    assert [f.name for f in res.save(tmp_path)] == ["rotor_stationary.csv", "fig_rotor_stationary.png",
+                                                     "fig_rotor_stationary.svg"]
     assert_allclose([res.psi, res.critical_speed], [0.5, 100.0 * math.sqrt(0.5)], rtol=1e-12)
     assert res.to_dict()["accuracy"]["estimate"] < 1e-8

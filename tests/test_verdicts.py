@@ -5,12 +5,14 @@ thesis as printed) appear only in the "Validation against the source" part."""
 from __future__ import annotations
 
 import json
+import math
 from html.parser import HTMLParser
 
 import pytest
 
 from autobal import report, scenario
 from autobal.analysis.frequency import MODEL_LABELS
+from autobal.analysis.quantities import significant
 
 FAST = ("pump_pe600_statics", "pump_pe600_dynamics", "rig_table43_fit", "washer_liquid_balancer_nested")
 SLOW = tuple(p.stem for p in scenario.shipped() if p.stem not in FAST)
@@ -116,3 +118,20 @@ def test_a_failed_analysis_never_has_an_ok_verdict():
     results = {"scenario": "x", "statics": {"failures": ["the exact statics did not solve at psi1 = 1.2"]}}
     (sec,) = report.sections(results)
     assert sec["overall"] == {"ok": False, "text": "FAILED: the exact statics did not solve at psi1 = 1.2"}
+
+
+@pytest.mark.cli
+def test_frequency_summary_is_one_verdict_in_display_units_and_the_source_apart(shipped_run):
+    """The AFC summary opens with the headline model's verdict (energy-consistent, physical forcing), resonances in
+    rad/s with Hz beside and amplitudes in µm, as results.json has them; the source's models only below the
+    validation line."""
+    run, folder = shipped_run("pump_pe600_dynamics")
+    text = run["frequency"].summary()
+    h = json.loads((folder / "results.json").read_text())["frequency"]["headline"]
+    first = text.splitlines()[0]
+    omega, amp = h["peaks"][0]["omega"], h["peaks"][0]["amplitude_um"]
+    assert first.startswith("frequency response: energy-consistent (nonlinear), physical forcing: stable, peaks ")
+    assert f"{significant(omega)} rad/s ({significant(omega / (2 * math.pi))} Hz) with {significant(amp)} µm" in first
+    head, _, validation = text.partition("validation against the source")
+    assert "UNSTABLE" not in head and "program model" not in head and "program model" in validation
+    assert " um" not in text
