@@ -982,14 +982,15 @@ def spinup_robust_section(sec: Section) -> None:
     ``ross_spinup_robust``, peaks in m shown in µm, as the block's ``peak_unit`` states): the robust profile, the
     nominal optimum and the best ramp on the design set and on the validation sample; the verdict is the robust
     profile's worst validation peak against the others'."""
-    from autobal.ocp.robust_study import PEAK_SYMBOL, peak_key, verdict  # the verdict's one copy
+    from autobal.ocp.robust_study import PEAK_SYMBOL, QUANTITIES, peak_key, verdict  # the verdict's one copy
     from autobal.ocp.spinup_study import QUANTITIES as SPINUP
 
     prof = sec.get("profiles") or {}
     if prof:
         sec.conclude(*verdict(sec.block))
     unit = sec.get("peak_unit") or "1"
-    s, sym, shown = peak_key(sec.block), PEAK_SYMBOL[unit], None if unit == "1" else "µm"
+    s, sym = peak_key(sec.block), PEAK_SYMBOL[unit]
+    shown = None if unit == "1" else QUANTITIES.find(f"profiles.robust.validation_worst_{s}").display
 
     def pc(v):
         return cell(v, unit, shown)

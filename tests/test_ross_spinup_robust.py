@@ -11,6 +11,7 @@ from numpy.testing import assert_allclose
 
 from autobal import scenario
 from autobal.analyses import ross_spinup_robust as analysis
+from autobal.analysis.quantities import display_units
 from autobal.models import ross_rotor as rr
 from autobal.ocp import modal
 from autobal.ocp import robust as rb
@@ -30,6 +31,8 @@ def test_peaks_are_declared_in_the_models_unit():
     assert peak_text({"peak_unit": "m"}, 2.2222e-5) == "22.22 µm"
     assert peak_text({"peak_unit": "1", "eccentricity_m": 1e-4}, 18.6548) == "18.65 e (1.865 mm)"
     assert peak_text({"peak_unit": "1"}, 18.6548) == "18.65 e"
+    with display_units({"length": "mm"}):  # a length unit the scene or the CLI chooses
+        assert peak_text({"peak_unit": "m"}, 2.2222e-5) == "0.02222 mm"
 
 
 def test_a_coarse_profile_has_the_peaks_of_the_same_profile_on_the_full_mesh():
