@@ -979,9 +979,9 @@ def _spinup_binding(sec: Section) -> list[str]:
 
 def spinup_robust_section(sec: Section) -> None:
     """Robust spin-up (the Jeffcott rotor's ``spinup_robust``, peaks delta/e; the modal rotor's
-    ``ross_spinup_robust``, peaks in m shown in µm, as the block's ``peak_unit`` states): the robust profile, the
-    nominal optimum and the best ramp on the design set and on the validation sample; the verdict is the robust
-    profile's worst validation peak against the others'."""
+    ``ross_spinup_robust``, peaks in m shown in µm or the chosen length unit, as the block's ``peak_unit`` states):
+    the robust profile, the nominal optimum and the best ramp on the design set and on the validation sample; the
+    verdict is the robust profile's worst validation peak against the others'."""
     from autobal.ocp.robust_study import PEAK_SYMBOL, QUANTITIES, peak_key, verdict  # the verdict's one copy
     from autobal.ocp.spinup_study import QUANTITIES as SPINUP
 
