@@ -71,7 +71,8 @@ DECLARED = {"statics": "autobal.analysis.statics_study", "frequency": "autobal.a
             "montecarlo": "autobal.analysis.montecarlo", "rotor_dynamics": "autobal.analysis.rotor_study",
             "stability": "autobal.analysis.stability", "design": "autobal.analysis.design_study",
             "spinup": "autobal.ocp.spinup_study", "spinup_robust": "autobal.ocp.robust_study",
-            "spinup_time_optimal": "autobal.ocp.time_optimal_study", "ross_spinup": "autobal.ocp.modal"}
+            "spinup_time_optimal": "autobal.ocp.time_optimal_study", "ross_spinup": "autobal.ocp.modal",
+            "ross_spinup_robust": "autobal.ocp.robust_study"}
 
 #: analyses whose numbers are not declared: none (every analysis declares its numbers beside its Result class, and
 #: no unit is read off a key's name; tests/test_quantities.py fails on an analysis that is not declared)
@@ -977,17 +978,26 @@ def _spinup_binding(sec: Section) -> list[str]:
 
 
 def spinup_robust_section(sec: Section) -> None:
-    """Robust spin-up: the robust profile, the nominal optimum and the best ramp on the design set and on the
-    validation sample; the verdict is the robust profile's worst validation peak against the others'."""
-    from autobal.ocp.robust_study import verdict  # the verdict's one copy
+    """Robust spin-up (the Jeffcott rotor's ``spinup_robust``, peaks delta/e; the modal rotor's
+    ``ross_spinup_robust``, peaks in m shown in µm or the chosen length unit, as the block's ``peak_unit`` states):
+    the robust profile, the nominal optimum and the best ramp on the design set and on the validation sample; the
+    verdict is the robust profile's worst validation peak against the others'."""
+    from autobal.ocp.robust_study import PEAK_SYMBOL, QUANTITIES, peak_key, verdict  # the verdict's one copy
     from autobal.ocp.spinup_study import QUANTITIES as SPINUP
 
     prof = sec.get("profiles") or {}
     if prof:
         sec.conclude(*verdict(sec.block))
+    unit = sec.get("peak_unit") or "1"
+    s, sym = peak_key(sec.block), PEAK_SYMBOL[unit]
+    shown = None if unit == "1" else QUANTITIES.find(f"profiles.robust.validation_worst_{s}").display
+
+    def pc(v):
+        return cell(v, unit, shown)
+
     for key, label in (("robust", "robust profile"), ("nominal", "nominal optimum"), ("ramp", "best ramp")):
-        sec.row(f"{label}: worst peak over the validation rotors", "δ*/e", f"profiles.{key}.validation_worst_over_e")
-    sec.row("robust profile: worst peak over the design rotors (CVODES)", "δ*/e", "profiles.robust.design_worst_over_e")
+        sec.row(f"{label}: worst peak over the validation rotors", sym, f"profiles.{key}.validation_worst_{s}")
+    sec.row("robust profile: worst peak over the design rotors (CVODES)", sym, f"profiles.robust.design_worst_{s}")
     sec.row("nominal critical speed", "ω_cr", "omega_cr_rad_s")
     sec.row("eccentricity (δ* = e δ*/e, 0-peak)", "e", "eccentricity_m")
     sec.row("design rotors (grid)", "", "design_scenarios")
@@ -1002,30 +1012,34 @@ def spinup_robust_section(sec: Section) -> None:
     rows = []
     for key in ("robust", "nominal", "ramp"):
         p = prof.get(key) or {}
-        q = p.get("validation_quantiles_over_e") or {}
-        worst = p.get("validation_worst_over_e")
-        rows.append([text(p.get("label")), cell(p.get("nominal_peak_over_e"), "1"),
-                     cell(p.get("design_worst_over_e"), "1"), cell(q.get("0.5"), "1"), cell(q.get("0.99"), "1"),
-                     cell(worst, "1"), cell(None if e is None or worst is None else worst * e, "m", physical.display)])
+        q = p.get(f"validation_quantiles_{s}") or {}
+        worst = p.get(f"validation_worst_{s}")
+        rows.append([text(p.get("label")), pc(p.get(f"nominal_peak_{s}")), pc(p.get(f"design_worst_{s}")),
+                     pc(q.get("0.5")), pc(q.get("0.99")), pc(worst)]
+                    + ([cell(None if e is None or worst is None else worst * e, "m", physical.display)]
+                       if unit == "1" else []))
     if prof:
-        sec.tables.append(table("Peak deflection δ*/e of each profile: on the nominal rotor, worst over the design "
-                                "set (CVODES), and over the validation sample; the worst as a deflection δ* (0-peak)",
+        what = ("δ*/e", "; the worst as a deflection δ* (0-peak)") if unit == "1" else \
+            ("r* (the largest whirl radius over the nodes, 0-peak)", "")
+        sec.tables.append(table(f"Peak deflection {what[0]} of each profile: on the nominal rotor, worst over the "
+                                f"design set (CVODES), and over the validation sample{what[1]}",
                                 ["profile", "nominal rotor", "design worst", "validation median", "validation 99 %",
-                                 "validation worst", "validation worst δ*"], rows, headline=True))
-    rows = [[text(r.get("label")), sec.cell(f"ramps.{i}.alpha_rad_s2"), cell(r.get("design_worst_over_e"), "1"),
-             cell(r.get("validation_worst_over_e"), "1"),
+                                 "validation worst"] + (["validation worst δ*"] if unit == "1" else []), rows,
+                                headline=True))
+    rows = [[text(r.get("label")), sec.cell(f"ramps.{i}.alpha_rad_s2"), pc(r.get(f"design_worst_{s}")),
+             pc(r.get(f"validation_worst_{s}")),
              text({True: "within", False: f"OUTSIDE: {r.get('violated')}", None: "no drive data"}
                   [r.get("within_drive_limits")])] for i, r in enumerate(sec.get("ramps") or [])]
     if rows:
-        sec.tables.append(table("Constant ramps: worst peak δ*/e over the design set and the validation sample",
+        sec.tables.append(table(f"Constant ramps: worst peak {sym} over the design set and the validation sample",
                                 ["ramp", "acceleration", "design worst", "validation worst", "drive limits"], rows))
     rows = [[text(r.get("start")), cell(r.get("intervals"), "1"), cell(r.get("scenarios"), "1"), text(r.get("status")),
              cell(r.get("iterations"), "1"), cell(r.get("build_time_s"), "s"), cell(r.get("solve_time_s"), "s"),
-             cell(r.get("worst_design_peak_over_e"), "1")] for r in sec.get("rounds", [])]
+             pc(r.get(f"worst_design_peak_{s}"))] for r in sec.get("rounds", [])]
     if rows:
         sec.tables.append(table("Scenario generation: each NLP solve", ["start", "intervals", "scenarios", "status",
                                                                         "iterations", "build", "solve",
-                                                                        "worst design δ*/e"], rows))
+                                                                        f"worst design {sym}"], rows))
 
 
 def spinup_time_optimal_section(sec: Section) -> None:
@@ -1152,14 +1166,15 @@ SECTIONS = {"statics": statics_section, "frequency": frequency_section, "stabili
             "rotor_dynamics": rotor_dynamics_section, "spinup": spinup_section,
             "spinup_robust": spinup_robust_section, "spinup_time_optimal": spinup_time_optimal_section,
             "design": design_section,
-            "ross_spinup": ross_spinup_section}
+            "ross_spinup": ross_spinup_section, "ross_spinup_robust": spinup_robust_section}
 
 TITLES = {"statics": "Statics", "frequency": "Frequency response (AFC)", "stability": "Stability",
           "transient": "Transients", "liquid_balancer": "Liquid auto-balancer", "estimation": "Parameter estimation",
           "reliability": "Reliability", "montecarlo": "Monte Carlo", "rotor_dynamics": "Rotor dynamics",
           "spinup": "Optimal spin-up", "spinup_robust": "Robust spin-up", "spinup_time_optimal": "Time-optimal spin-up",
           "design": "Stability-constrained design",
-          "ross_spinup": "Optimal spin-up of a ROSS rotor (multi-mode)"}
+          "ross_spinup": "Optimal spin-up of a ROSS rotor (multi-mode)",
+          "ross_spinup_robust": "Robust spin-up of a ROSS rotor (multi-mode)"}
 
 #: figure file name (regex) -> (analysis, caption)
 CAPTIONS = [
@@ -1207,6 +1222,8 @@ CAPTIONS = [
                                                           "arrival under the limit"),
     (r"spinup_time_optimal_profiles", "spinup_time_optimal", "Time-optimal spin-up: speed and deflection of the "
                                                              "front's points"),
+    (r"ross_spinup_robust_(profiles|distribution|scatter)", "ross_spinup_robust", "Robust spin-up of the ROSS rotor "
+                                                                                   "(multi-mode): {0}, peaks in µm"),
     (r"ross_spinup_(\w+)", "ross_spinup", "Multi-mode spin-up: {0} of the optimum beside the ramps, critical "
                                           "speeds of the reduced model dotted"),
     (r"ross_campbell", "ross_spinup", "Campbell diagram of the reduced rotor: damped natural frequencies against "

@@ -236,15 +236,24 @@ class ModalSpinupOcp:
         rotor = dataclasses.replace(R, K=R.K * cr**2, C=R.C * dmp, omega_n=R.omega_n * cr)
         return dataclasses.replace(self, rotor=rotor, scales=(self.amplitude_scale, self.peak_scale2))
 
+    def on_intervals(self, n: int) -> ModalSpinupOcp:
+        """The same problem on n control intervals of the horizon (a coarse stage of the mesh continuation),
+        its scales kept."""
+        if n == self.intervals:
+            return self
+        return dataclasses.replace(self, intervals=n, scales=(self.amplitude_scale, self.peak_scale2))
+
     def fast_peaks(self, U: np.ndarray) -> np.ndarray:
-        """Peak deflection (m) of the profiles U (C, n control intervals of the horizon, alpha/alpha_max) by the
-        Runge-Kutta screening (:func:`screen`)."""
-        return screen(self, np.atleast_2d(U))
+        """Peak deflection (m) of the profiles U (C, n control intervals of the horizon, alpha/alpha_max; n may
+        be a coarse mesh's) by the Runge-Kutta screening (:func:`screen`)."""
+        U = np.atleast_2d(U)
+        return screen(self.on_intervals(U.shape[1]), U)
 
     def resimulated_peak(self, u: np.ndarray, h: np.ndarray, label: str, points: int = 8) -> float:
-        """Peak deflection (m) of the profile u (alpha/alpha_max on the problem's intervals, settling window
-        included), CVODES in the fixed frame (:func:`resimulate`; ``h`` and ``points`` are the problem's own)."""
-        return resimulate(self, u, label).peak
+        """Peak deflection (m) of the profile u (alpha/alpha_max on the intervals of dimensionless length h, the
+        horizon's then the settling window's), CVODES in the fixed frame (:func:`resimulate`; ``points`` is the
+        problem's own)."""
+        return resimulate(self.on_intervals(int(round(self.tau_h / h[0]))), u, label).peak
 
     @property
     def q0(self) -> np.ndarray:

@@ -30,75 +30,121 @@ CHECKED = 4  # validation rotors re-simulated with CVODES to check the fast inte
 CVODES_WORST = 3  # design rotors re-simulated with CVODES per profile (its worst by the fast integrator)
 
 _PROFILE = "profiles.*."
-#: every number of the spinup_robust block: peaks delta/e (Pashkov (2010), Eq. (2)) with the physical deflection
-#: (0-peak) e delta/e beside them in the summary; the rotors as factors on the nominal critical speed, damping and
-#: liquid mass; the headline quantities first, in summary order
+#: the results.json suffix of a peak by its unit, as the model's problem gives it: delta/e for the Jeffcott rotor
+#: (Pashkov (2010), Eq. (2)), m for the modal (ROSS) rotor (the largest whirl radius over its nodes, 0-peak)
+PEAK_KEY = {"1": "over_e", "m": "m"}
+PEAK_SYMBOL = {"1": "δ*/e", "m": "r*"}
+
+
+def _peak_quantities(unit: str) -> tuple[Quantity, ...]:
+    """The peaks of the block in ``unit`` ("1": delta/e, "m": shown in µm)."""
+    s, sym, shown = PEAK_KEY[unit], PEAK_SYMBOL[unit], "" if unit == "1" else "µm"
+    return (
+        Quantity(f"profiles.robust.validation_worst_{s}", unit, sym, "robust profile: worst peak over the "
+                 "validation rotors", shown, headline=True),
+        Quantity(f"profiles.nominal.validation_worst_{s}", unit, sym, "nominal optimum: worst peak over the "
+                 "validation rotors", shown, headline=True),
+        Quantity(f"profiles.ramp.validation_worst_{s}", unit, sym, "best ramp: worst peak over the validation rotors",
+                 shown, headline=True),
+        Quantity(f"profiles.robust.design_worst_{s}", unit, sym, "robust profile: worst peak over the design rotors "
+                 "(CVODES)", shown, headline=True),
+        Quantity(f"profiles.robust.nominal_peak_{s}", unit, sym, "robust profile: peak on the nominal rotor", shown,
+                 headline=True),
+        Quantity(" ".join(_PROFILE + k.format(s) for k in (
+            "nominal_peak_{}", "design_worst_{}", "design_peaks_{}", "validation_worst_{}", "validation_mean_{}",
+            "validation_quantiles_{}.**")), unit, sym, "peaks of a profile: nominal rotor, design set (worst, each), "
+                 "validation sample (worst, mean, quantiles)", shown),
+        Quantity(f"robust_collocation_worst_{s}", unit, sym, "worst collocation peak of the robust NLP", shown),
+        Quantity(f"rounds[].worst_design_peak_{s} rounds[].collocation_worst_{s}", unit, sym,
+                 "worst design peak after an NLP solve (re-simulated, collocation)", shown),
+        Quantity(f"ramps[].design_worst_{s} ramps[].validation_worst_{s}", unit, sym,
+                 "worst peak of a ramp over the design set / the validation sample", shown),
+    )
+
+
+#: every number of a robust spin-up block (``spinup_robust``: the Jeffcott rotor, peaks delta/e (Pashkov (2010),
+#: Eq. (2)) with the physical deflection (0-peak) e delta/e beside them in the summary; ``ross_spinup_robust``: the
+#: modal rotor, peaks in m shown in µm); the rotors as factors on the nominal critical speed, damping and liquid
+#: mass; the headline quantities first, in summary order
 QUANTITIES = Declarations(
-    Quantity("profiles.robust.validation_worst_over_e", "1", "δ*/e", "robust profile: worst peak over the "
-             "validation rotors", headline=True),
-    Quantity("profiles.nominal.validation_worst_over_e", "1", "δ*/e", "nominal optimum: worst peak over the "
-             "validation rotors", headline=True),
-    Quantity("profiles.ramp.validation_worst_over_e", "1", "δ*/e", "best ramp: worst peak over the validation rotors",
-             headline=True),
-    Quantity("profiles.robust.design_worst_over_e", "1", "δ*/e", "robust profile: worst peak over the design rotors "
-             "(CVODES)", headline=True),
-    Quantity("profiles.robust.nominal_peak_over_e", "1", "δ*/e", "robust profile: peak on the nominal rotor",
-             headline=True),
-    Quantity("omega_cr_rad_s", "rad/s", "ω_cr", "nominal critical speed", headline=True),
+    *_peak_quantities("1")[:5], *_peak_quantities("m")[:5],
+    Quantity("omega_cr_rad_s", "rad/s", "ω_cr", "nominal critical speed (the lowest below the final "
+             "speed)", headline=True),
     Quantity("eccentricity_m", "m", "e", "eccentricity (a peak δ*/e is the deflection δ* = e δ*/e, 0-peak)", "µm"),
-    Quantity(" ".join(_PROFILE + k for k in ("nominal_peak_over_e", "design_worst_over_e", "design_peaks_over_e",
-                                             "validation_worst_over_e", "validation_mean_over_e",
-                                             "validation_quantiles_over_e.**")),
-             "1", "δ*/e", "peaks of a profile: nominal rotor, design set (worst, each), validation sample (worst, "
-             "mean, quantiles)"),
+    *_peak_quantities("1")[5:], *_peak_quantities("m")[5:],
     Quantity("critical_speed_spread", "1", "", "relative spread of the critical speed (± factor − 1)"),
     Quantity("damping_factor liquid_mass_factor", "1", "", "range of the factor on the damping / liquid mass"),
     Quantity("design_set active_design_rotors worst_design_rotor", "1", "",
              "design rotors as factors (critical speed, damping, liquid mass)"),
     Quantity("design_scenarios active_scenarios validation_samples seed", "1", "",
              "design rotors, those in the final NLP, validation rotors, seed of the sample"),
-    Quantity("robust_collocation_worst_over_e", "1", "δ*/e", "worst collocation peak of the robust NLP"),
     Quantity("resimulation_rel_error validation_check_rel_error", "1", "",
              "relative difference: robust NLP vs CVODES; validation integrator vs CVODES"),
     Quantity("validation_step_tau", "1", "Δτ", "step of the validation integrator in Ω0 t"),
+    Quantity("modes nodes", "1", "", "modes of the reduced rotor; the nodes whose deflection counts"),
     Quantity("build_time_s solve_time_s nominal_build_time_s nominal_solve_time_s validation_time_s wall_time_s "
              "time_split.*", "s", "", "times: robust NLPs, nominal optimum, validation, the analysis; the wall time by "
              "part"),
     Quantity("rounds[].intervals rounds[].scenarios rounds[].active rounds[].iterations", "1", "",
              "an NLP solve of the scenario generation: intervals, design rotors (which), iterations"),
     Quantity("rounds[].build_time_s rounds[].solve_time_s", "s", "", "build and solve time of an NLP solve"),
-    Quantity("rounds[].worst_design_peak_over_e rounds[].collocation_worst_over_e", "1", "δ*/e",
-             "worst design peak after an NLP solve (re-simulated, collocation)"),
     Quantity("ramps[].alpha_rad_s2", "rad/s^2", "α", "acceleration of a constant ramp"),
-    Quantity("ramps[].design_worst_over_e ramps[].validation_worst_over_e", "1", "δ*/e",
-             "worst peak of a ramp over the design set / the validation sample"),
 )
+
+
+def peak_key(d: dict) -> str:
+    """The suffix of the block's peaks (``over_e`` or ``m``), from the unit the block states (``peak_unit``)."""
+    return PEAK_KEY[d.get("peak_unit", "1")]
+
+
+def peak_text(d: dict, x) -> str:
+    """A peak of the block as read: delta/e with the deflection e delta/e beside it (Jeffcott rotor), or in µm
+    (modal rotor)."""
+    if d.get("peak_unit", "1") == "1":
+        return deflection_text(x, d.get("eccentricity_m"))
+    return QUANTITIES.find("profiles.robust.validation_worst_m").text(x)
+
+
+def peak_of(tr) -> float:
+    """The peak of a re-simulation: delta/e (Jeffcott :class:`Trajectory`) or m (modal ``ModalTrajectory``)."""
+    return tr.peak_delta if isinstance(tr, Trajectory) else tr.peak
+
+
+def deflection_of(tr) -> np.ndarray:
+    """The deflection of a re-simulation against its time: delta/e, or the largest node's in m."""
+    return tr.delta if isinstance(tr, Trajectory) else tr.deflection.max(axis=0)
 
 
 @dataclass
 class RobustResult(Result):
     """The robust profile, the nominal optimum and the best constant ramp, each on the design set and on the
-    validation sample (peaks delta/e)."""
+    validation sample (peaks in the unit the block states: delta/e for the Jeffcott rotor, m for the modal
+    rotor)."""
 
     data: dict
-    nominal_runs: dict  # key -> Trajectory on the nominal rotor
-    worst_runs: dict  # key -> Trajectory on the robust profile's worst design rotor
+    nominal_runs: dict  # key -> re-simulation on the nominal rotor
+    worst_runs: dict  # key -> re-simulation on the robust profile's worst design rotor
     validation: dict  # key -> (samples,) peaks; "factors" -> (samples, 3)
-    name = "spinup_robust"
+    name: str = "spinup_robust"
     quantities = QUANTITIES
 
     KEYS = ("robust", "nominal", "ramp")
     COLORS = {"robust": "C3", "nominal": "C0", "ramp": "C2"}
 
     @property
+    def peak_unit(self) -> str:
+        """SI unit of the peaks: "1" (delta/e) or "m"."""
+        return self.data["peak_unit"]
+
+    @property
     def worst_validation(self) -> dict:
-        """Worst peak over the validation sample of each profile (robust, nominal, ramp), delta/e."""
-        return {k: self.data["profiles"][k]["validation_worst_over_e"] for k in self.KEYS}
+        """Worst peak over the validation sample of each profile (robust, nominal, ramp), in :attr:`peak_unit`."""
+        return {k: self.data["profiles"][k][f"validation_worst_{peak_key(self.data)}"] for k in self.KEYS}
 
     @property
     def worst_design(self) -> dict:
-        """Worst CVODES peak over the design set of each profile, delta/e."""
-        return {k: self.data["profiles"][k]["design_worst_over_e"] for k in self.KEYS}
+        """Worst CVODES peak over the design set of each profile, in :attr:`peak_unit`."""
+        return {k: self.data["profiles"][k][f"design_worst_{peak_key(self.data)}"] for k in self.KEYS}
 
     def to_dict(self) -> dict:
         return self.data
@@ -106,50 +152,73 @@ class RobustResult(Result):
     def verdict(self) -> tuple[bool | None, str]:
         return verdict(self.data)
 
+    def _shown(self) -> tuple[float, str, str]:
+        """(factor, axis label, CSV suffix) of the peaks as a person reads them: delta/e, or µm."""
+        if self.peak_unit == "1":
+            return 1.0, r"peak deflection $\delta^*/e$", "over_e"
+        q = QUANTITIES.find("profiles.robust.validation_worst_m")
+        return q.shown(1.0), f"peak deflection r*, {q.display} 0-peak", q.display.replace("µ", "u")
+
     def summary(self) -> str:
         d = self.data
         ok, words = self.verdict()
+        s = peak_key(d)
+        if d["peak_unit"] == "1":
+            unit_line = ("  peaks δ*/e and the deflection δ* = e δ*/e, 0-peak (e = "
+                         f"{QUANTITIES.find('eccentricity_m').text(d.get('eccentricity_m'))}):")
+            def quantile(x):
+                return f"{significant(x)} e"
+        else:
+            unit_line = f"  peaks r*, the largest whirl radius over the nodes {d['nodes']}, 0-peak:"
+            def quantile(x):
+                return peak_text(d, x)
         lines = [f"robust spin-up: {'ok' if ok else 'NOT OK'}: {words}", *QUANTITIES.lines(d),
                  f"  {d['design_scenarios']} design rotors ({d['active_scenarios']} in the final NLP), {d['method']}: "
                  f"build {d['build_time_s']:.2f} s, solve {d['solve_time_s']:.2f} s; validation on "
                  f"{d['validation_samples']} rotors ({d['executor']}, {d['validation_time_s']:.2f} s)",
                  "  wall time split: " + ", ".join(f"{k[:-7].replace('_', ' ')} {v:.2f} s" for k, v in
                                                    d.get("time_split", {}).items()),
-                 f"  peaks δ*/e and the deflection δ* = e δ*/e, 0-peak (e = "
-                 f"{QUANTITIES.find('eccentricity_m').text(d.get('eccentricity_m'))}):"]
-        def pk(x):
-            return deflection_text(x, d.get("eccentricity_m"))
-
+                 unit_line]
         for k in self.KEYS:
             p = d["profiles"][k]
-            lines.append(f"  {p['label']:28s} nominal rotor {pk(p['nominal_peak_over_e'])}, worst design "
-                         f"{pk(p['design_worst_over_e'])}, validation worst {pk(p['validation_worst_over_e'])} "
-                         f"(median {significant(p['validation_quantiles_over_e']['0.5'])} e, 99 % "
-                         f"{significant(p['validation_quantiles_over_e']['0.99'])} e)")
+            lines.append(f"  {p['label']:28s} nominal rotor {peak_text(d, p[f'nominal_peak_{s}'])}, worst design "
+                         f"{peak_text(d, p[f'design_worst_{s}'])}, validation worst "
+                         f"{peak_text(d, p[f'validation_worst_{s}'])} "
+                         f"(median {quantile(p[f'validation_quantiles_{s}']['0.5'])}, 99 % "
+                         f"{quantile(p[f'validation_quantiles_{s}']['0.99'])})")
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
+        factor, _, col = self._shown()
+        s = peak_key(self.data)
         f = self.validation["factors"]
         cols = {"critical_speed_factor": f[:, 0], "damping_factor": f[:, 1], "liquid_mass_factor": f[:, 2]}
-        cols |= {f"{k}_peak_over_e": self.validation[k] for k in self.KEYS}
+        cols |= {f"{k}_peak_{col}": factor * self.validation[k] for k in self.KEYS}
         r = self.nominal_runs["robust"]
         design = {"critical_speed_factor": [], "damping_factor": [], "liquid_mass_factor": []}
         for row in self.data["design_set"]:
             for key, v in zip(design, row, strict=True):
                 design[key].append(v)
-        design |= {f"{k}_peak_over_e": self.data["profiles"][k]["design_peaks_over_e"] for k in self.KEYS}
-        return {"spinup_robust_validation.csv": cols, "spinup_robust_design.csv": design,
-                "spinup_robust_controls.csv": {"t_start_s": r.t_u, "alpha_rad_s2": r.alpha},
-                "spinup_robust_ramps.csv": {k: [row[k] for row in self.data["ramps"]] for k in self.data["ramps"][0]}}
+        design |= {f"{k}_peak_{col}": factor * np.asarray(self.data["profiles"][k][f"design_peaks_{s}"])
+                   for k in self.KEYS}
+        ramps = {}
+        for k in self.data["ramps"][0]:
+            v = [row[k] for row in self.data["ramps"]]
+            peak = k.endswith("_" + s)
+            ramps[k[:-len(s)] + col if peak else k] = list(factor * np.asarray(v)) if peak else v
+        return {f"{self.name}_validation.csv": cols, f"{self.name}_design.csv": design,
+                f"{self.name}_controls.csv": {"t_start_s": r.t_u, "alpha_rad_s2": r.alpha},
+                f"{self.name}_ramps.csv": ramps}
 
     def draw(self, ax) -> None:
         """Empirical distribution of the validation peaks of the three profiles."""
+        factor, label, _ = self._shown()
         for k in self.KEYS:
             v = np.sort(self.validation[k])
             lab = self.data["profiles"][k]["label"]
-            ax.step(v, np.arange(1, v.size + 1) / v.size, where="post", color=self.COLORS[k],
-                    label=f"{lab} (worst {v[-1]:.3f} e)")
-        ax.set_xlabel(r"peak deflection $\delta^*/e$")
+            ax.step(factor * v, np.arange(1, v.size + 1) / v.size, where="post", color=self.COLORS[k],
+                    label=f"{lab} (worst {peak_text(self.data, v[-1])})")
+        ax.set_xlabel(label)
         deflection_axis(ax, self.data.get("eccentricity_m"), "x")
         ax.set_ylabel(f"fraction of the {self.validation['factors'].shape[0]} validation rotors")
         ax.grid(alpha=0.3)
@@ -158,23 +227,25 @@ class RobustResult(Result):
     def figures(self) -> dict:
         """Profiles and the deflection on the worst design rotor; validation distribution; peak against the
         critical-speed factor."""
+        factor, label, _ = self._shown()
         title = self.data["title"]
         fig, (a0, a1) = new_figure((8, 7), 2, 1, sharex=True)
         for k in self.KEYS:
             tr, tw = self.nominal_runs[k], self.worst_runs[k]
             lab = self.data["profiles"][k]["label"]
             a0.plot(tr.t, tr.omega, color=self.COLORS[k], label=lab)
-            a1.plot(tw.t, tw.delta, color=self.COLORS[k],
-                    label=f"{lab} (peak {deflection_text(tw.peak_delta, self.data.get('eccentricity_m'))})")
+            a1.plot(tw.t, factor * deflection_of(tw), color=self.COLORS[k],
+                    label=f"{lab} (peak {peak_text(self.data, peak_of(tw))})")
         wc = self.data["omega_cr_rad_s"]
-        a0.axhline(wc, color="k", ls=":", lw=0.8,
-                   label="nominal critical speed " + QUANTITIES.find("omega_cr_rad_s").text(wc))
+        if wc is not None:
+            a0.axhline(wc, color="k", ls=":", lw=0.8,
+                       label="nominal critical speed " + QUANTITIES.find("omega_cr_rad_s").text(wc))
         a0.set_ylabel(r"speed $\omega$, rad/s")
         twin_axis(a0, RPM, "rpm")
         w = self.data["worst_design_rotor"]
         a1.set_title(f"on the robust profile's worst design rotor (critical speed x{w[0]:.3g}, damping x{w[1]:.3g}"
                      + (f", liquid x{w[2]:.3g}" if self.data["liquid"] else "") + ")", fontsize=8, loc="left")
-        a1.set_ylabel(r"deflection $\delta/e$")
+        a1.set_ylabel(label.replace("peak deflection", "deflection").replace("^*", "").replace("r*", "r"))
         deflection_axis(a1, self.data.get("eccentricity_m"))
         a1.set_xlabel("time t, s")
         for ax in (a0, a1):
@@ -187,27 +258,27 @@ class RobustResult(Result):
         fig3, ax3 = new_figure((8.5, 4.8))
         f = self.validation["factors"]
         for k in self.KEYS:
-            ax3.scatter(f[:, 0], self.validation[k], s=3, color=self.COLORS[k], alpha=0.5,
+            ax3.scatter(f[:, 0], factor * self.validation[k], s=3, color=self.COLORS[k], alpha=0.5,
                         label=self.data["profiles"][k]["label"])
         ax3.set_xlabel("critical-speed factor (1 = nominal)")
-        ax3.set_ylabel(r"peak deflection $\delta^*/e$")
+        ax3.set_ylabel(label)
         deflection_axis(ax3, self.data.get("eccentricity_m"))
         ax3.grid(alpha=0.3)
         ax3.legend(fontsize=7, markerscale=4)
         fig3.suptitle(title, fontsize=8)
-        return {"spinup_robust_profiles.png": fig, "spinup_robust_distribution.png": fig2,
-                "spinup_robust_scatter.png": fig3}
+        return {f"{self.name}_profiles.png": fig, f"{self.name}_distribution.png": fig2,
+                f"{self.name}_scatter.png": fig3}
 
 
 def verdict(d: dict) -> tuple[bool | None, str]:
     """The robust spin-up's one verdict from its results.json block: the robust profile's worst peak over the
     validation rotors against the nominal optimum's and the best ramp's (a ramp outside the drive limits is shown,
     never compared)."""
-    w = {k: d["profiles"][k]["validation_worst_over_e"] for k in RobustResult.KEYS}
+    w = {k: d["profiles"][k][f"validation_worst_{peak_key(d)}"] for k in RobustResult.KEYS}
     ramp_ok = d["profiles"]["ramp"].get("within_drive_limits") is not False
 
     def pk(x):
-        return deflection_text(x, d.get("eccentricity_m"))
+        return peak_text(d, x)
 
     ok = w["robust"] < min(w["nominal"], w["ramp"] if ramp_ok else math.inf)
     return ok, (f"worst peak over {d.get('validation_samples', 'the')} validation rotors: robust {pk(w['robust'])}, "
@@ -215,10 +286,45 @@ def verdict(d: dict) -> tuple[bool | None, str]:
                 + ("" if ramp_ok else " (outside the drive limits, not compared)"))
 
 
-def _on(ocp: SpinupOcp, factors, profile: rb.Profile) -> Trajectory:
+def _modal():
+    from autobal.ocp import modal  # the modal rotor's own pieces, imported for its problems only
+
+    return modal
+
+
+def _on(ocp, factors, profile: rb.Profile):
+    """The profile re-simulated by CVODES on the rotor with ``factors`` (:class:`Trajectory`, or the modal rotor's
+    ``ModalTrajectory``)."""
     o = rb.scenario_ocps(ocp, np.atleast_2d(factors))[0]
     u, h = profile.on(o)
-    return resimulate(o, u, h, profile.label, points=8)
+    return resimulate(o, u, h, profile.label, points=8) if isinstance(o, SpinupOcp) else \
+        _modal().resimulate(o, u, profile.label)
+
+
+def nominal_optimum(ocp, method: DirectCollocation, multistart: bool, options: dict | None
+                    ) -> tuple[rb.Profile, float, float, float]:
+    """The nominal rotor's optimum by its model's study (:func:`autobal.ocp.solve.optimize` for the Jeffcott
+    rotor, :func:`autobal.ocp.modal.optimize` for the modal rotor: each with its global search for starts and the
+    shared solver).
+
+    Returns
+    -------
+    tuple
+        (its profile on the method's intervals, its peak in the epigraph's measure squared (the scale of the
+        robust NLP's level), build time s, solve time s).
+    """
+    n = method.intervals
+    if isinstance(ocp, SpinupOcp):
+        r = optimize(ocp, method, multistart, options)
+        ref = r.score**2
+    else:
+        if n != ocp.intervals or method.degree != ocp.degree:
+            raise ValueError(f"the modal rotor's robust NLP is transcribed on its problem's mesh "
+                             f"({ocp.intervals} intervals, degree {ocp.degree}), not {method.label}")
+        r = _modal().optimize(ocp, options)
+        ref = (r.trajectory.peak / ocp.epigraph_unit) ** 2
+    return (rb.Profile("nominal optimum", r.solution.u[:n]), ref, r.build_time_s,
+            sum(row.get("solve_time_s", 0.0) for row in r.starts))
 
 
 def best_ramp_within_limits(ocp: SpinupOcp, ramps: list[rb.Profile], worst: np.ndarray
@@ -241,7 +347,10 @@ def best_ramp_within_limits(ocp: SpinupOcp, ramps: list[rb.Profile], worst: np.n
     tuple
         (index, the labelled Profile, {index: drive use} of every ramp).
     """
-    use = {i: drive_use(ocp, _on(ocp, [1.0, 1.0, 1.0], p)) for i, p in enumerate(ramps)}
+    if isinstance(ocp, SpinupOcp):
+        use = {i: drive_use(ocp, _on(ocp, [1.0, 1.0, 1.0], p)) for i, p in enumerate(ramps)}
+    else:  # the modal problem has no drive torque or power: no drive data (a ramp keeps |alpha| and the cap)
+        use = {i: {"within_drive_limits": None, "violated": []} for i in range(len(ramps))}
     ib = best_within_limits(dict(enumerate(np.asarray(worst, float))), use)
     label = "best {}"
     if ib is None:
@@ -277,19 +386,24 @@ def robust_starts(ocp: SpinupOcp, factors: np.ndarray, nominal: rb.Profile, ramp
     worst = int(np.argmax(ramp_peaks[:, ib]))
     o = rb.scenario_ocps(ocp, factors[[worst]])[0]
     n = ramps[ib].u.size
-    return [nominal, ramps[ib], *[rb.Profile(f"global search on design rotor {worst}", controls_on_mesh(o, p, n))
-                                  for p in grid_search(o, keep=2).params]]
+    if isinstance(o, SpinupOcp):
+        found = [controls_on_mesh(o, p, n) for p in grid_search(o, keep=2).params]
+    else:
+        found = [_modal().phase_profiles(o, *p)[0] for p in _modal().grid_search(o, keep=2).params]
+    return [nominal, ramps[ib], *[rb.Profile(f"global search on design rotor {worst}", u) for u in found]]
 
 
-def run(ocp: SpinupOcp, method: DirectCollocation, uncertainty: rb.Uncertainty, design_points: int,
+def run(ocp, method: DirectCollocation, uncertainty: rb.Uncertainty, design_points: int,
         samples: int, seed: int, ramps: int, executor, title: str = "", multistart: bool = True,
-        options: dict | None = None) -> RobustResult:
+        options: dict | None = None, name: str = "spinup_robust") -> RobustResult:
     """Nominal optimum, robust optimum over the design grid, constant ramps; all validated on a sample.
 
     Parameters
     ----------
-    ocp : SpinupOcp
-        The nominal problem (SI), objective peak_deflection.
+    ocp : SpinupOcp or ModalSpinupOcp
+        The nominal problem (SI), objective peak_deflection: the Jeffcott rotor's
+        (:class:`autobal.ocp.problem.SpinupOcp`) or the modal rotor's (:class:`autobal.ocp.modal.ModalSpinupOcp`,
+        on its own mesh).
     method : DirectCollocation
         The transcription of every scenario.
     uncertainty : Uncertainty
@@ -305,20 +419,24 @@ def run(ocp: SpinupOcp, method: DirectCollocation, uncertainty: rb.Uncertainty, 
     title : str
         The scene's title.
     multistart : bool
-        Multi-start of the nominal optimum.
+        Multi-start of the nominal optimum (the Jeffcott rotor's).
     options : dict, optional
         IPOPT options.
+    name : str
+        The analysis (the results.json block, the file names).
 
     Returns
     -------
     RobustResult
-        Peaks in delta/e, times in s.
+        Peaks in delta/e (Jeffcott) or m (modal), as its ``peak_unit`` states; times in s.
     """
+    jeffcott = isinstance(ocp, SpinupOcp)
+    unit = "1" if jeffcott else "m"
+    s = PEAK_KEY[unit]
     n = method.intervals
     t_start = time.perf_counter()
-    nominal = optimize(ocp, method, multistart, options)
+    pn, ref, nominal_build, nominal_solve = nominal_optimum(ocp, method, multistart, options)
     t_nominal = time.perf_counter() - t_start
-    pn = rb.Profile("nominal optimum", nominal.solution.u[:n])
     family = rb.ramp_family(ocp, n, ramps)
     F = uncertainty.grid(design_points)
     t0 = time.perf_counter()
@@ -326,7 +444,7 @@ def run(ocp: SpinupOcp, method: DirectCollocation, uncertainty: rb.Uncertainty, 
     design_ramps = ramp_peaks.max(axis=0)
     starts = robust_starts(ocp, F, pn, family, ramp_peaks)
     t_starts = time.perf_counter() - t0
-    ro = rb.optimize_robust_refined(ocp, F, method, starts, nominal.score**2, options)
+    ro = rb.optimize_robust_refined(ocp, F, method, starts, ref, options)
     profiles = [ro.profile, pn, *family]
     t0 = time.perf_counter()
     factors, peaks = rb.validate(ocp, uncertainty, profiles, samples, seed, executor)
@@ -349,35 +467,45 @@ def run(ocp: SpinupOcp, method: DirectCollocation, uncertainty: rb.Uncertainty, 
     worst_runs = {k: _on(ocp, worst_rotor, p) for k, (p, _) in chosen.items()}
     prof = {}
     for k, (p, v) in chosen.items():
-        prof[k] = {"label": p.label, "nominal_peak_over_e": nominal_runs[k].peak_delta,
-                   "design_peaks_over_e": design[k].tolist(), "design_worst_over_e": float(design[k].max()),
-                   "validation_worst_over_e": float(v.max()), "validation_mean_over_e": float(v.mean()),
-                   "validation_quantiles_over_e": {str(q): float(np.quantile(v, q)) for q in QUANTILES}}
+        prof[k] = {"label": p.label, f"nominal_peak_{s}": peak_of(nominal_runs[k]),
+                   f"design_peaks_{s}": design[k].tolist(), f"design_worst_{s}": float(design[k].max()),
+                   f"validation_worst_{s}": float(v.max()), f"validation_mean_{s}": float(v.mean()),
+                   f"validation_quantiles_{s}": {str(q): float(np.quantile(v, q)) for q in QUANTILES}}
     prof["ramp"]["within_drive_limits"] = ramp_use[ib]["within_drive_limits"]
+    # the scenario generation names a round's peaks in delta/e (:func:`autobal.ocp.robust.optimize_robust`); the
+    # modal rotor's are in m
+    rounds = [{(k[:-len("over_e")] + s if k.endswith("_over_e") else k): v for k, v in r.items()} for r in ro.rounds]
+    if jeffcott:
+        model = {"omega_cr_rad_s": ocp.params.omega_cr, "eccentricity_m": ocp.params.e,
+                 "validation_step_tau": FAST_STEP}
+        how = f"the validation integrator (exponential, step {FAST_STEP} in Omega0 t)"
+    else:
+        cs = ocp.rotor.critical_speeds(ocp.omega_final)["wd"]
+        model = {"omega_cr_rad_s": float(cs[0]) if len(cs) else None, "nodes": list(ocp.nodes),
+                 "modes": ocp.rotor.n}
+        how = "the validation integrator (Runge-Kutta screening of the envelope, autobal.ocp.modal.screen)"
     data = {
-        "title": title, "method": method.label, "omega_cr_rad_s": ocp.params.omega_cr, "eccentricity_m": ocp.params.e,
+        "title": title, "method": method.label, "peak_unit": unit, **model,
         "critical_speed_spread": uncertainty.critical_speed_spread,
         "damping_factor": list(uncertainty.damping_factor), "liquid": uncertainty.liquid_mass_factor is not None,
         "liquid_mass_factor": list(uncertainty.liquid_mass_factor) if uncertainty.liquid_mass_factor else None,
         "design_set": F.tolist(), "design_scenarios": len(F), "active_scenarios": len(ro.active),
         "active_design_rotors": F[ro.active].tolist(), "worst_design_rotor": worst_rotor.tolist(),
-        "robust_collocation_worst_over_e": ro.collocation_worst,
+        f"robust_collocation_worst_{s}": ro.collocation_worst,
         "resimulation_rel_error": abs(ro.collocation_worst - design["robust"].max()) / design["robust"].max(),
-        "build_time_s": ro.build_time_s, "solve_time_s": ro.solve_time_s, "rounds": ro.rounds,
-        "nominal_build_time_s": nominal.build_time_s,
-        "nominal_solve_time_s": sum(r.get("solve_time_s", 0.0) for r in nominal.starts),
+        "build_time_s": ro.build_time_s, "solve_time_s": ro.solve_time_s, "rounds": rounds,
+        "nominal_build_time_s": nominal_build, "nominal_solve_time_s": nominal_solve,
         "validation_samples": int(samples), "seed": int(seed), "executor": executor.name,
-        "validation_time_s": t_val, "validation_step_tau": FAST_STEP,
+        "validation_time_s": t_val,
         "validation_check_rel_error": fast_err,
         "profiles": prof,
         "ramps": [{"label": p.label, "alpha_rad_s2": float(p.u[0] * ocp.alpha_max),
-                   "design_worst_over_e": float(d), "validation_worst_over_e": float(w),
+                   f"design_worst_{s}": float(d), f"validation_worst_{s}": float(w),
                    "within_drive_limits": ramp_use[i]["within_drive_limits"],
                    "violated": ", ".join(ramp_use[i]["violated"])}
                   for i, (p, d, w) in enumerate(zip(family, design_ramps, ramp_worst, strict=True))],
         "accuracy": {"estimate": fast_err,
-                     "how": f"largest relative difference of the validation integrator (exponential, step "
-                            f"{FAST_STEP} in Omega0 t) against CVODES on {CHECKED} validation rotors"},
+                     "how": f"largest relative difference of {how} against CVODES on {CHECKED} validation rotors"},
     }
     validation = {"factors": factors} | {k: v for k, (_, v) in chosen.items()}
     # the wall time by part (s): the nominal optimum (global search, multi-start, its builds and solves), the
@@ -388,5 +516,10 @@ def run(ocp: SpinupOcp, method: DirectCollocation, uncertainty: rb.Uncertainty, 
     data["wall_time_s"] = time.perf_counter() - t_start
     split["rest"] = data["wall_time_s"] - sum(split.values())
     data["time_split"] = {f"{k}_time_s": v for k, v in split.items()}
-    data = with_statuses(data, {"liquid_mass_factor": "the rotor has no liquid block (or its mass is not uncertain)"})
-    return RobustResult(data, nominal_runs, worst_runs, validation)
+    data = with_statuses(data, {
+        "liquid_mass_factor": "the rotor has no liquid block (or its mass is not uncertain)",
+        "omega_cr_rad_s": "no critical speed below the final speed",
+        "within_drive_limits": "no drive torque data (the scene's drive)" if jeffcott else
+        "the modal rotor's problem has no drive torque or power model (its ramps keep the acceleration bound and "
+        "the speed cap)"})
+    return RobustResult(data, nominal_runs, worst_runs, validation, name)

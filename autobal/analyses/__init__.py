@@ -36,6 +36,7 @@ MODULES = {
     "spinup_time_optimal": "autobal.analyses.spinup_time_optimal",
     "design": "autobal.analyses.design",
     "ross_spinup": "autobal.analyses.ross_spinup",
+    "ross_spinup_robust": "autobal.analyses.ross_spinup_robust",
 }
 
 
