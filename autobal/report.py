@@ -385,7 +385,7 @@ def _comparison(sec: Section, scenario: str) -> None:
     out = []
     for label, symbol, key, published, unit, where in rows:
         if key and key.startswith("afc.") and sec.get("afc.model") not in SOURCE_MODELS:
-            continue  # the published AFC spread is the program model's (montecarlo_section says so)
+            continue  # the published AFC spread is the program model's (the montecarlo room's report_section says so)
         got = sec.get(key) if key else None
         rel = (got - published) / abs(published) if isinstance(got, int | float) and published else None
         out.append([text(label), text(symbol), cell(published, unit), cell(got, unit),
@@ -397,7 +397,8 @@ def _comparison(sec: Section, scenario: str) -> None:
 
 
 # --------------------------------------------------------------------------------------------
-# one function per analysis: headline rows, verdicts, tables, warnings
+# what several sections share: the section of an analysis (headline rows, verdicts, tables, warnings) is
+# report_section(sec) in its room, autobal/analyses/<key>.py, found through SECTIONS
 # --------------------------------------------------------------------------------------------
 
 
