@@ -1,25 +1,11 @@
 """Hostile input to the documentation's numbers: a placeholder that names no recorded value, a malformed one,
 an unknown scene for docs/run_numbers.py: each refused with one line naming it."""
 
-import importlib.util
 import re
-from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-
-
-def _module(name: str):
-    spec = importlib.util.spec_from_file_location(f"docs_{name}", ROOT / "docs" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-pytest.importorskip("mkdocs")
-hooks = _module("hooks")
-runner = _module("run_numbers")
+from tests.test_docs_numbers import hooks, runner
 
 
 @pytest.mark.parametrize("placeholder, message", [
