@@ -15,15 +15,14 @@ dimensionless group named as in the source.
 from __future__ import annotations
 
 import base64
-import csv
 import functools
 import hashlib
 import importlib
-import itertools
 import json
 import math
 import re
 import warnings
+from collections.abc import Mapping
 from html import escape as html_escape
 from importlib import resources
 from pathlib import Path
@@ -32,6 +31,7 @@ import jinja2
 import yaml
 from markupsafe import Markup
 
+from autobal import analyses as rooms
 from autobal import report_input
 from autobal.analysis.quantities import (
     Declarations,
@@ -61,18 +61,35 @@ from autobal.units import si_unit_of
 REPORT = "report.html"
 STATUS_FILES = ("failed_solve.json", "interrupted.json", "error.json")
 
+
+class _FromRooms(Mapping):
+    """analysis -> ``name`` defined in its room (``autobal/analyses/<key>.py``), read when asked: a look-up
+    imports that room only (a statics report imports no dynamics); iterating imports every room."""
+
+    def __init__(self, name: str):
+        self.name = name
+
+    def __contains__(self, key) -> bool:
+        return key in rooms.MODULES and hasattr(rooms.module(key), self.name)
+
+    def __getitem__(self, key: str):
+        if key not in self:
+            raise KeyError(key)
+        return getattr(rooms.module(key), self.name)
+
+    def __iter__(self):
+        return (key for key in rooms.MODULES if key in self)
+
+    def __len__(self) -> int:
+        return sum(1 for _ in self)
+
+
 # --------------------------------------------------------------------------------------------
 # units of the results.json keys: the declarations of each Result class (analysis/quantities.py)
 # --------------------------------------------------------------------------------------------
-#: analysis -> the module whose QUANTITIES declare every number of its block (imported when a report needs it)
-DECLARED = {"statics": "autobal.analysis.statics_study", "frequency": "autobal.analysis.frequency",
-            "transient": "autobal.analysis.simulate", "reliability": "autobal.analysis.reliability",
-            "liquid_balancer": "autobal.analysis.liquid_balancer", "estimation": "autobal.analysis.estimation_study",
-            "montecarlo": "autobal.analysis.montecarlo", "rotor_dynamics": "autobal.analysis.rotor_study",
-            "stability": "autobal.analysis.stability", "design": "autobal.analysis.design_study",
-            "spinup": "autobal.ocp.spinup_study", "spinup_robust": "autobal.ocp.robust_study",
-            "spinup_time_optimal": "autobal.ocp.time_optimal_study", "ross_spinup": "autobal.ocp.modal",
-            "ross_spinup_robust": "autobal.ocp.robust_study"}
+#: analysis -> the module whose QUANTITIES declare every number of its block, named by its room
+#: (``QUANTITIES_MODULE``; the declarations are imported when a report needs them)
+DECLARED: Mapping = _FromRooms("QUANTITIES_MODULE")
 
 #: analyses whose numbers are not declared: none (every analysis declares its numbers beside its Result class, and
 #: no unit is read off a key's name; tests/test_quantities.py fails on an analysis that is not declared)
@@ -115,7 +132,7 @@ def units(results: dict, analyses: list[str] | None = None) -> dict[str, str]:
     return out
 
 
-def _get(data, path: str, default=None):
+def get_path(data, path: str, default=None):
     """``data`` at a dotted path (``a.b.c``; an integer picks a list item), or ``default``."""
     return lookup(data, path, default)
 
@@ -179,7 +196,7 @@ def _unit_path(name: str, path: str) -> str:
 
 
 class Section:
-    """The report section of one analysis, filled by its function in SECTIONS."""
+    """The report section of one analysis, filled by ``report_section(sec)`` of its room (SECTIONS)."""
 
     def __init__(self, name: str, block: dict, results: dict, folder: Path | None = None):
         self.name, self.block, self.results, self.folder = name, block, results, folder
@@ -195,7 +212,7 @@ class Section:
         self.main: dict | None = None  # the one verdict of the analysis (the summary shows it)
 
     def get(self, path: str, default=None):
-        return _get(self.block, path, default)
+        return get_path(self.block, path, default)
 
     def unit(self, path: str) -> str | None:
         return unit_of(_unit_path(self.name, path), self.results)
@@ -210,7 +227,7 @@ class Section:
     def row(self, label: str, symbol: str, path: str, unit: str | None = None, value=None, note: str = "") -> None:
         """One headline row; the value is the block's at ``path`` unless given, its unit and display unit
         its declaration's.  A key the block lacks (the analysis did not compute it) gives no row."""
-        if value is None and not _has(self.block, path):
+        if value is None and not has_path(self.block, path):
             return
         v = self.get(path) if value is None else value
         c = cell(v, unit) if unit else self.cell(path, v)
@@ -246,12 +263,12 @@ class Section:
                      unit_column=True)
 
 
-def _has(data, path: str) -> bool:
+def has_path(data, path: str) -> bool:
     sentinel = object()
-    return _get(data, path, sentinel) is not sentinel
+    return get_path(data, path, sentinel) is not sentinel
 
 
-def _leading(real: list, imag: list, count: int = 2) -> str:
+def leading_poles(real: list, imag: list, count: int = 2) -> str:
     """The poles with the largest real part, as 're ± im i' (1/s)."""
     pairs = sorted(zip(real, imag, strict=True), key=lambda p: -(p[0] if p[0] is not None else -math.inf))
     seen, out = set(), []
@@ -368,7 +385,7 @@ def _comparison(sec: Section, scenario: str) -> None:
     out = []
     for label, symbol, key, published, unit, where in rows:
         if key and key.startswith("afc.") and sec.get("afc.model") not in SOURCE_MODELS:
-            continue  # the published AFC spread is the program model's (montecarlo_section says so)
+            continue  # the published AFC spread is the program model's (the montecarlo room's report_section says so)
         got = sec.get(key) if key else None
         rel = (got - published) / abs(published) if isinstance(got, int | float) and published else None
         out.append([text(label), text(symbol), cell(published, unit), cell(got, unit),
@@ -380,72 +397,25 @@ def _comparison(sec: Section, scenario: str) -> None:
 
 
 # --------------------------------------------------------------------------------------------
-# one function per analysis: headline rows, verdicts, tables, warnings
+# what several sections share: the section of an analysis (headline rows, verdicts, tables, warnings) is
+# report_section(sec) in its room, autobal/analyses/<key>.py, found through SECTIONS
 # --------------------------------------------------------------------------------------------
-def statics_section(sec: Section) -> None:
-    """Operating point, criticals, saturation and contact (Pavlenko 2014, ch. 2.2-2.3)."""
-    sec.row("discharge pressure ratio at the operating point", "ψ1 = p1/p_B", "exact.psi1")
-    sec.row("discharge pressure", "p1", "exact.p1")
-    sec.row("base pressure", "p_B", "scales.p_B")
-    sec.row("face gap", "z0", "exact.z0")
-    sec.row("face gap ratio", "u0 = z0/z_B", "exact.u0")
-    sec.row("valve opening", "x0", "exact.x0")
-    sec.row("valve opening ratio", "ξ0 = x0/x_B", "exact.xi0")
-    for k, sym, what in (("p2", "p2", "disc chamber"), ("p3", "p3", "cavity behind the disc"),
-                         ("pe", "p_e", "barrier chamber"), ("pcam", "p_cam", "valve chamber")):
-        sec.row(f"{what} pressure", sym, f"exact.{k}")
-    sec.row("barrier flow", "Q_e", "exact.Q_e")
-    sec.row("face-throttle leak", "Q_T", "exact.Q_T")
-    sec.row("inner-seal flow", "Q_1", "exact.Q_1")
-    sec.row("base flow of the source's flow ratios q", "Q_B", "closed_form.Q_B")
-    sec.row("axial stiffness of the balancing force", "κ_s", "exact.kappa_s")
-    sec.row("critical discharge pressure (inner-seal flow reverses)", "p1_kr", "critical_exact.p1_kr")
-    sec.row("critical discharge ratio", "ψ1_kr", "critical_exact.psi1_kr")
-    sec.row("critical barrier margin", "δψ_kr", "critical_exact.dpsi_kr")
-    sec.row("critical barrier pressure margin", "Δp_kr", "critical_exact.dp_kr")
-    ex, sw = sec.get("exact", {}), sec.get("sweep", {})
-    sat, contact, psi1 = sw.get("regulator_saturated", []), sw.get("contact", []), sw.get("psi1", [])
-    from autobal.analysis.statics_study import StaticsResult  # the verdict's one copy
-
-    if {"regulator_saturated", "contact", "Q_1", "z0", "psi1"} <= set(ex):
-        sec.conclude(*StaticsResult(sec.block).verdict())  # the operating point: regulator, contact, inner seal
-    if any(sat):
-        first = psi1[sat.index(True)]
-        sec.verdict(False, f"regulator saturated (valve on its stop) from ψ1 = {number(first)} in the sweep")
-        sec.warnings.append(f"regulator saturation from ψ1 = {number(first)}: the closed forms assume an ideal "
-                            "regulator and are not valid there")
-    if any(contact):
-        sec.verdict(False, f"face contact in the sweep from ψ1 = {number(psi1[contact.index(True)])}")
-    cf = sec.get("closed_form", {})
-    rows = []
-    for key, sym, path in (("u0", "u0", "exact.u0"), ("xi0", "ξ0", "exact.xi0"), ("psi2_0", "ψ20", "exact.psi2_0"),
-                           ("psi3_0", "ψ30", "exact.psi3_0"), ("psi_e0", "ψ_e0", "exact.psi_e0"),
-                           ("psi_cam0", "ψ_cam0", "exact.psi_cam0"), ("kappa_s", "κ_s", "exact.kappa_s"),
-                           ("psi1_kr", "ψ1_kr", "critical_exact.psi1_kr"),
-                           ("dpsi_kr", "δψ_kr", "critical_exact.dpsi_kr"), ("Q_e", "Q_e", "exact.Q_e")):
-        if key in cf:
-            u = sec.unit(path) or "?"
-            rows.append([text(sym), cell(cf[key], u), cell(sec.get(path), u)])
-    if rows:
-        sec.tables.append(table("The source's closed forms (ideal regulator, Eqs. (2.24)-(2.36)) beside the exact "
-                                "IPOPT solution of the full static system", ["quantity", "closed form", "exact"],
-                                rows))
 
 
-def _stable_models(results: dict) -> dict:
-    return {m: v.get("stable") for m, v in _get(results, "stability.models", {}).items()}
+def stable_models(results: dict) -> dict:
+    return {m: v.get("stable") for m, v in get_path(results, "stability.models", {}).items()}
 
 
 MODEL_ORDER = ("nonlinear", "nonlinear_chain", "consistent", "program", "thesis")
 
 
-def _ordered(models: dict) -> list:
+def ordered_models(models: dict) -> list:
     """Models with the energy-consistent one first and the source's hand models last (validation)."""
     rank = {m: i for i, m in enumerate(MODEL_ORDER)}
     return sorted(models.items(), key=lambda kv: rank.get(kv[0], len(rank)))
 
 
-def _name(model: str) -> str:
+def model_name(model: str) -> str:
     """What a model is (analysis/frequency.py MODEL_LABELS, the one copy)."""
     from autobal.analysis.frequency import MODEL_LABELS  # python-control and scipy: only a dynamics report needs it
 
@@ -466,66 +436,7 @@ WHY_UNSTABLE = {
 }
 
 
-def _rate(decay) -> str:
-    return ("" if decay is None else f"disturbances decay at {number(decay)} 1/s" if decay > 0
-            else f"disturbances GROW at {number(-decay)} 1/s")
-
-
-def frequency_section(sec: Section) -> None:
-    """AFC of the face gap (Pavlenko 2014, §2.6): the headline model (energy-consistent, physical forcing)
-    gives the verdict; the source's models are the validation part."""
-    stable = _stable_models(sec.results)
-    models = sec.get("models", {})
-    h = sec.get("headline")
-    if h:
-        what = f"{_name(h['model'])}, {h['forcing']} forcing"
-        verdict = "stable" if h.get("stable") else "UNSTABLE"
-        sec.conclude(h.get("stable"), f"{what}: {verdict} (max Re λ = {number(h.get('max_real'))} 1/s); first "
-                                      f"resonance at {number(_get(h, 'peaks.0.omega'))} rad/s; amplitude at the "
-                                      f"operating speed {number(_get(h, 'at_operating_speed.amplitude_um'))} µm")
-        sec.row(f"first resonance ({what})", "ω_I", "headline.peaks.0.omega")
-        sec.row(f"amplitude at the first resonance ({what})", "A_I", "headline.peaks.0.amplitude_um")
-        sec.row("operating speed", "ω0", "headline.at_operating_speed.omega")
-        sec.row(f"amplitude at the operating speed ({what})", "A(ω0)", "headline.at_operating_speed.amplitude_um")
-        sec.row(f"static amplitude ({what})", "A(0)", "headline.static_amplitude_um")
-    else:  # no headline block: the toolkit's own first model, never one of the source's
-        lead = next((m for m in MODEL_ORDER if m in models and m not in SOURCE_MODELS), None)
-        if lead is not None:
-            what = _name(lead)
-            sec.row(f"first resonance ({what})", "ω_I", f"models.{lead}.peaks.0.omega")
-            sec.row(f"amplitude at the first resonance ({what})", "A_I", f"models.{lead}.peaks.0.amplitude_um")
-            sec.row("operating speed", "ω0", f"models.{lead}.at_operating_speed.omega")
-            sec.row(f"amplitude at the operating speed ({what})", "A(ω0)",
-                    f"models.{lead}.at_operating_speed.amplitude_um")
-    sec.row("forcing amplitude", "δψ_1a", "forcing_amplitude")
-    own, source = [], []
-    for model, m in _ordered(models):
-        peaks = m.get("peaks", [])
-        at = m.get("at_operating_speed", {})
-        verdict = {True: "stable", False: "UNSTABLE", None: "—"}[stable.get(model)]
-        rows = own if model not in SOURCE_MODELS else source
-        for i, pk in enumerate(peaks or [{}]):
-            first = i == 0
-            rows.append([text(_name(model) if first else ""), text(m.get("forcing") if first else ""),
-                         text(verdict if first else ""), cell(pk.get("omega"), "rad/s"),
-                         cell(pk.get("amplitude_um"), "um"),
-                         cell(at.get("amplitude_um") if i == 0 else None, "um"),
-                         cell(m.get("static_amplitude_um") if i == 0 else None, "um")])
-        if stable.get(model) is False and model not in SOURCE_MODELS:
-            sec.warnings.append(f"{_name(model)}: the model is unstable at this operating point; its AFC is the "
-                                "response of an unstable system (no steady state exists)")
-        if model in SOURCE_MODELS:
-            _source_model(sec, model, stable.get(model), m.get("forcing"))
-    columns = ["model", "forcing", "stability", "peak ω", "peak amplitude", "amplitude at ω0", "static amplitude"]
-    caption = (f"under the scene's '{sec.get('forcing')}' forcing, ω0 = {number(sec.get('at_operating_speed.omega'))} "
-               "rad/s: peaks, amplitude at the operating speed and the static amplitude")
-    if own:
-        sec.tables.append(table(f"AFC of the face gap, {caption}", columns, own, headline=True))
-    if source:
-        sec.validation_tables.append(table(f"AFC of the face gap of the source's models, {caption}", columns, source))
-
-
-def _source_model(sec: Section, model: str, stable: bool | None, forcing: str | None = None) -> None:
+def source_model_line(sec: Section, model: str, stable: bool | None, forcing: str | None = None) -> None:
     """The validation line of one of the source's models: how closely it reproduces the scene's published
     values (the comparison table, program model), whether it is stable, and why not."""
     rows = PUBLISHED.get(sec.results.get("scenario", ""), {}).get(sec.name) or []
@@ -535,646 +446,22 @@ def _source_model(sec: Section, model: str, stable: bool | None, forcing: str | 
     repro = (f"reproduces the published values ({where}) within {100 * max(diffs):.1f} % ({len(diffs)} values); "
              if diffs else "")
     m = sec.get(f"models.{model}") or {}
-    poles = m.get("poles") or _get(sec.results, f"stability.models.{model}.poles") or {}
-    lead = _leading(poles.get("real", []), poles.get("imag", [])) if poles else ""
+    poles = m.get("poles") or get_path(sec.results, f"stability.models.{model}.poles") or {}
+    lead = leading_poles(poles.get("real", []), poles.get("imag", [])) if poles else ""
     state = {True: "stable", None: "stability not computed",
              False: f"UNSTABLE (leading poles {lead} 1/s): {WHY_UNSTABLE.get(model, '')}"}[stable]
     if stable is False and sec.name == "frequency":
         state += "; its AFC is not a steady response"
-    text_ = f"{_name(model)}{f', {forcing} forcing' if forcing else ''}: {repro}{state}"
+    text_ = f"{model_name(model)}{f', {forcing} forcing' if forcing else ''}: {repro}{state}"
     if text_ not in [v["text"] for v in sec.validation]:
         sec.validation.append({"ok": None, "text": text_})  # what the source's model shows, not a verdict
 
 
-def stability_section(sec: Section) -> None:
-    """Poles, Hurwitz determinants and margins (Pavlenko 2014, §2.7): the headline model (energy-consistent)
-    gives the verdict; the source's models are the validation part."""
-    h = sec.get("headline")
-    if h:
-        from autobal.analysis.stability import QUANTITIES, StabilityResult  # the verdict's one copy
+#: analysis -> its section function ``report_section(sec)``, in its room
+SECTIONS: Mapping = _FromRooms("report_section")
 
-        sec.conclude(*StabilityResult(sec.block).verdict())
-        for q, key, _ in QUANTITIES.headline(sec.block):
-            sec.row(q.description, q.symbol, key)
-    own, source = [], []
-    for model, m in _ordered(sec.get("models", {})):
-        poles = m.get("poles", {})
-        lead = _leading(poles.get("real", []), poles.get("imag", []))
-        st = m.get("stable")
-        row = [text(_name(model)), text({True: "stable", False: "UNSTABLE"}.get(st, "—")),
-               {"text": lead, "unit": "1/s", "num": True}, cell(_get(m, "margin.decay_rate"), "1/s"),
-               cell(_get(m, "margin.min_damping_ratio"), "1")]
-        if model in SOURCE_MODELS:
-            source.append(row)
-            _source_model(sec, model, st)
-            continue
-        own.append(row)
-        if model != (h or {}).get("model"):  # another model of the toolkit's own: a check, not the verdict
-            sec.verdict(st, f"{_name(model)}: {'stable' if st else 'UNSTABLE'}; leading poles {lead} 1/s; "
-                            f"{_rate(_get(m, 'margin.decay_rate'))}")
-    columns = ["model", "verdict", "leading poles", "decay rate", "min damping ratio ζ"]
-    caption = "leading poles (largest real part), decay rate −max Re λ and the smallest damping ratio"
-    if own:
-        sec.tables.append(table(f"Stability: {caption}", columns, own, headline=True))
-    if source:
-        sec.validation_tables.append(table(f"Stability of the source's models: {caption}", columns, source))
-    for m, t in (sec.get("restoring") or {}).items():
-        (sec.validation_notes if m in SOURCE_MODELS else sec.notes).append(f"{_name(m)}: {t.removeprefix(m + ': ')}")
-
-
-def transient_section(sec: Section) -> None:
-    """Nonlinear transients by CVODES/IDAS (Pavlenko 2014, §2.5)."""
-    sec.row("equilibrium residual of the nonlinear model", "", "equilibrium_residual")
-    rows = []
-    for c in sec.get("cases", []):
-        rows.append([text(c.get("input")), cell(c.get("amplitude"), "1"), cell(c.get("frequency"), "rad/s"),
-                     cell(c.get("max_dz_um"), "um"), cell(c.get("final_dz_um"), "um"), cell(c.get("t_end"), "s"),
-                     cell(c.get("integrator_steps"), "1"), text(c.get("failure") or "ok")])
-        if c.get("failure"):
-            sec.verdict(False, f"{c.get('input')}: integration failed: {c['failure']}")
-        for e in c.get("events") or []:
-            sec.warnings.append(f"{c.get('input')}: event {e}")
-    sec.tables.append(table(f"Transients of the {sec.get('model')} model ({sec.get('integrator')}): face-gap change "
-                            "dz", ["input", "amplitude", "frequency", "max |dz|", "final dz", "t_end", "steps",
-                                   "status"], rows, headline=True))
-    if rows and not any(c.get("failure") for c in sec.get("cases", [])):
-        sec.verdict(True, "every transient integrated to its end time")
-
-
-def liquid_balancer_section(sec: Section) -> None:
-    """Efficiency of the liquid auto-balancer at the operating point (Khomyak 2020, ch. 3): one verdict (a balancing
-    equilibrium and enough liquid at the working speed); Tables 3.2/3.3 in the validation part."""
-    op = "operating_point"
-    sec.row("speed ratio", "γ = ω/ω_cr", f"{op}.gamma")
-    sec.row("working speed", "ω", f"{op}.omega")
-    sec.row("phase lag of the deflection", "δ", f"{op}.delta_deg")
-    sec.row("initial unbalance", "D0", "system.D0")
-    sec.row("liquid unbalance capacity", "D", f"{op}.D")
-    sec.row("capacity ratio", "k_D = D0/D", f"{op}.k_D")
-    published = next((r for r in sec.get("table_3_2.rows", []) if is_number(r.get("gamma"))
-                      and abs(r["gamma"] - (sec.get(f"{op}.gamma") or math.nan)) < 1e-9), None)
-    why = ""
-    if published and published.get("status") == "differs":  # the headline differs from the published value
-        why = (f"Khomyak (2020), Table 3.2 publishes {number(published['published_theory'])} (theory) and "
-               f"{number(published['published_experiment'])} (experiment) at γ = {number(published['gamma'])}: the "
-               f"documented App. В algorithm makes the liquid's unbalance D ≫ D0 (k_D = {number(sec.get(f'{op}.k_D'))}"
-               "); the table came from the thesis's C# program, which it does not show (docs/validation.md)")
-    sec.row("efficiency (the source's algorithm)", "λ0", f"{op}.lambda0", note=why)
-    sec.row("efficiency (self-consistent closure, toolkit extension)", "λ0⁺", f"{op}.lambda0_self_consistent")
-    for key, label, symbol in (("optimal_height", "optimal chamber height", "h_opt"),
-                               ("optimal_volume", "optimal liquid volume", "V_opt")):
-        why = ""
-        if sec.get(f"{key}.singular"):  # orders of magnitude from the published optimum: the row says why
-            why = (f"complete balancing (k_D = 1) is reached here, where λ0 is unbounded: "
-                   f"λ0 = {number(sec.get(f'{key}.lambda0_max'))} says how close IPOPT came to k_D = 1, not how "
-                   "efficient the machine is; Khomyak (2020), Table 3.3 publishes optimal volumes of 48.5-176.7 mL: "
-                   "in the documented model D = ρf(πhR² − V) falls with V, the table's rises with D0 "
-                   "(docs/validation.md)")
-        sec.row(label, symbol, f"{key}.optimum", note=why)
-    if "equilibrium_exists" in sec.get(op, {}):
-        from autobal.analysis.liquid_balancer import LiquidBalancerResult  # the verdict's one copy
-
-        sec.conclude(*LiquidBalancerResult(sec.block).verdict())
-    rows = sec.get("table_3_2.rows", [])
-    if rows:
-        sec.comparison = table("Comparison with Khomyak (2020), Table 3.2: efficiency λ0",
-                               ["γ", "published theory", "published experiment", "toolkit (documented)",
-                                "toolkit (self-consistent)", "status"],
-                               [[cell(r.get("gamma"), "1"), cell(r.get("published_theory"), "1"),
-                                 cell(r.get("published_experiment"), "1"), cell(r.get("toolkit_documented"), "1"),
-                                 cell(r.get("toolkit_self_consistent"), "1"), text(r.get("status"))] for r in rows])
-        differs = next((r for r in rows if r.get("status") == "differs"), None)
-        if differs:
-            sec.validation.append({"ok": None, "text": f"Table 3.2 is not reproduced by the documented algorithm: "
-                                                       f"{differs.get('reason')}"})
-    rows = sec.get("table_3_3.rows", [])
-    if rows:
-        sec.validation_tables.append(table("Khomyak (2020), Table 3.3: optimal liquid volume",
-                                           ["D0", "published V_opt", "experiment V_opt", "toolkit (documented)",
-                                            "toolkit (crescent)", "status"],
-                                           [[sec.cell(f"table_3_3.rows.{i}.D0_gcm"),
-                                             sec.cell(f"table_3_3.rows.{i}.published_V_opt_mL"),
-                                             sec.cell(f"table_3_3.rows.{i}.experiment_V_opt_mL"),
-                                             sec.cell(f"table_3_3.rows.{i}.V_opt_mL"),
-                                             sec.cell(f"table_3_3.rows.{i}.V_opt_crescent_mL"), text(r.get("status"))]
-                                            for i, r in enumerate(rows)]))
-
-
-def _adequacy_row(label: str, ad: dict) -> list[dict]:
-    """One row of the adequacy table: the Fisher test (4.14) and the lack-of-fit test of a fit or a curve."""
-    lof = ad.get("lack_of_fit") or {}
-    return [text(label), *(cell(ad.get(k), "1") for k in ("F", "F_crit", "p_value")), text(ad.get("adequate")),
-            *(cell(lof.get(k), "1") for k in ("F", "F_crit", "p_value")), text(lof.get("adequate"))]
-
-
-def estimation_section(sec: Section) -> None:
-    """Least-squares fits with standard errors, bootstrap intervals, parameter correlation and adequacy
-    (Pavlenko 2014, §4.3-4.4), the loss coefficient of (4.38): one verdict over the fits (solved and adequate)."""
-    rows, correlations, adequacy, moved = [], [], [], []
-    for fit, f in sec.get("fits", {}).items():
-        boot = _get(f, "bootstrap.parameters") or {}
-        free = [p for p, v in f.get("parameters", {}).items() if v.get("free")]
-        for pname in free:
-            at = f"fits.{fit}.parameters.{pname}"
-            rows.append([text(fit), text(pname), *(sec.cell(f"{at}.{k}") for k in ("estimate", "standard_error",
-                                                                                    "ci_low", "ci_high")),
-                         *(sec.cell(f"fits.{fit}.bootstrap.parameters.{pname}.{k}") if k in (boot.get(pname) or {})
-                           else text(None) for k in ("ci_low", "ci_high")), text("dimensionless")])
-        corr = f.get("correlation") or []
-        for a, b in itertools.combinations(range(len(free)), 2):
-            r = corr[a][b] if a < len(corr) and b < len(corr[a]) else None
-            if is_number(r):
-                correlations.append([text(fit), text(f"{free[a]}, {free[b]}"), cell(r, "1"),
-                                     text("the data hardly separate them: the intervals are wide along the ridge"
-                                          if abs(r) >= 0.9 else "")])
-        moved += [f"{fit}: {m.get('why')}" for m in (_get(f, "extra.start_moved") or {}).values()]
-        ad = f.get("adequacy") or {}
-        if "adequate" in ad:
-            adequacy.append(_adequacy_row(f"fit {fit}", ad))
-    if sec.get("fits"):
-        from autobal.analysis.estimation_study import EstimationResult  # the verdict's one copy
-
-        sec.conclude(*EstimationResult(sec.block).verdict())
-    level = number(100 * (next(iter(sec.get("fits", {}).values()), {}).get("confidence") or 0.95))
-    sec.tables.append(table(f"Fitted parameters: estimate, standard error, the linearised {level} % confidence "
-                            "interval and the residual-bootstrap percentile interval",
-                            ["fit", "parameter", "estimate", "standard error", "CI low", "CI high", "bootstrap low",
-                             "bootstrap high", "unit"], rows, headline=True, unit_column=True))
-    if correlations:
-        sec.tables.append(table("Correlation of the free parameters (from the covariance at the optimum)",
-                                ["fit", "parameters", "correlation", "meaning"], correlations))
-    ref = sec.get("adequacy_reference") or {}
-    if "adequate" in ref:
-        r = ref.get("reference") or {}
-        adequacy.append(_adequacy_row(f"the source's curve (α {number(r.get('alpha'))}, τ_max "
-                                      f"{number(r.get('tau_max'))})", ref))
-    if adequacy:
-        sec.tables.append(table("Adequacy: Fisher test of the variance about the curve against the scatter within "
-                                "the load groups (Pavlenko 2014, Eqs. (4.14)-(4.15); adequate when F ≤ F_crit), and "
-                                "the lack-of-fit test; F and p dimensionless",
-                                ["fit", "F", "F_crit", "p", "adequate", "lack-of-fit F", "F_crit", "p",
-                                 "adequate"], adequacy))
-    if "source_rule_adequate" in ref and ref["source_rule_adequate"] != ref.get("adequate"):
-        sec.validation.append({"ok": None, "text": "the source's text calls F > F_crit adequate (inverted); by its "
-                                                   "rule the reference curve would be "
-                                                   + ("adequate" if ref["source_rule_adequate"] else "not adequate")})
-    lc = sec.get("loss_coefficient") or {}
-    if "value" in lc:
-        sec.tables.append(table(f"Loss coefficient {lc.get('unknown')} that the fitted α of {lc.get('fit')} implies "
-                                "(Pavlenko 2014, Eq. (4.38)); dimensionless",
-                                ["unknown", "value", "CI low", "CI high", "nominal", "α fitted", "α nominal"],
-                                [[text(lc.get("unknown")), *(sec.cell(f"loss_coefficient.{k}") for k in (
-                                    "value", "ci_low", "ci_high", "nominal", "alpha", "alpha_nominal"))]]))
-        if lc.get("physical") is False:
-            sec.warnings.append(f"(4.38): the fitted α implies a negative {lc.get('unknown')}: the loss model does "
-                                "not explain the fit")
-    elif "status" in lc:
-        sec.warnings.append(f"(4.38): {lc['status']}")
-    if moved:  # trivial for a reader: one line
-        sec.notes.append("starts moved where the model is defined: " + "; ".join(moved))
-
-
-def montecarlo_section(sec: Section) -> None:
-    """Spreads of face gap, pressures and leak over the sampled groups (Pavlenko 2014, ch. 3): the physical values
-    beside the source's groups; its closed forms in the validation part."""
-    sec.row("samples", "N", "samples")
-    ref = "reference"
-    sec.row("discharge pressure of the reference point", "p1", f"{ref}.p1",
-            note=f"ψ1 = p1/p_B = {number(sec.get(f'{ref}.psi1'))}")
-    sec.row("face gap, mean", "z̄", f"{ref}.z_mean")
-    sec.row("face gap, standard deviation", "σ_z", f"{ref}.z_std")
-    sec.row("face-gap spread kσ/mean", "δu", f"{ref}.gap_spread", note=f"k = {number(sec.get('band_sigma'))}")
-    sec.row("face leak, mean", "Q̄_T", f"{ref}.Q_T_mean")
-    sec.row("face leak, standard deviation", "σ_Q", f"{ref}.Q_T_std")
-    sec.row("face-leak spread kσ/mean", "δq_T", f"{ref}.leak_spread")
-    sec.row("samples with the regulator valve on its stop", "", f"{ref}.saturated_fraction")
-    psi1 = sec.get("psi1", [])
-    rows, src = [], []
-    for i in range(len(psi1)):
-        rows.append([sec.cell(f"psi1.{i}"), sec.cell(f"p1.{i}"), sec.cell(f"dimensional.z.mean.{i}"),
-                     sec.cell(f"dimensional.z.std.{i}"), sec.cell(f"exact.u.spread.{i}"),
-                     sec.cell(f"dimensional.p2.mean.{i}"), sec.cell(f"exact.Q_T.mean.{i}"),
-                     sec.cell(f"exact.Q_T.std.{i}"), sec.cell(f"exact.q_T.spread.{i}"),
-                     sec.cell(f"saturated_fraction.{i}"), sec.cell(f"exact.u.invalid.{i}")])
-        src.append([sec.cell(f"psi1.{i}"), *(sec.cell(f"{part}.{k}.{stat}.{i}") for k in ("u", "q_T")
-                                             for part in ("exact", "source") for stat in ("mean", "spread"))])
-    saturated = [f"ψ1 = {number(p)}: {significant(100 * f, 3)} %" for p, f in
-                 zip(psi1, sec.get("saturated_fraction") or [], strict=False) if f]
-    if saturated:  # one line: the source's closed forms assume an ideal regulator
-        sec.warnings.append("samples with the regulator valve on its stop (the closed forms assume an ideal "
-                            "regulator): " + ", ".join(saturated))
-    if _has(sec.block, "dimensional"):
-        sec.tables.append(table("Exact statics over the samples: the physical values (mean, standard deviation) "
-                                "beside the source's groups' spread kσ/mean",
-                                ["ψ1", "p1", "mean z", "std z", "spread u", "mean p2", "mean Q_T", "std Q_T",
-                                 "spread q_T", "saturated fraction", "invalid samples"], rows, headline=True))
-    sec.validation_tables.append(table("The source's closed forms (ideal regulator, Figs 3.3-3.4) beside the exact "
-                                       "statics over the same samples: mean and spread of u = z/z_B and q_T = Q_T/Q_B",
-                                       ["ψ1", "u exact", "spread", "u closed form", "spread", "q_T exact", "spread",
-                                        "q_T closed form", "spread"], src))
-    if _has(sec.block, "reference"):
-        from autobal.analysis.montecarlo import MonteCarloResult  # the verdict's one copy
-
-        sec.conclude(*MonteCarloResult(sec.block).verdict())
-    else:  # a results.json written before the physical values
-        invalid = sum(_get(sec.block, "exact.u.invalid") or [])
-        sec.conclude(not sec.block.get("failures"), f"{invalid} sample solves without a converged exact solution"
-                     if invalid else "every sample has a converged exact solution")
-    at = sec.get("afc.at") or {}
-    if at:
-        model, forcing = sec.get("afc.model"), sec.get("afc.forcing")
-        st = _stable_models(sec.results).get(model)
-        sec.tables.append(table(f"AFC amplitude spread of the {_name(model)} model under the {forcing} forcing "
-                                f"({sec.get('afc.samples')} samples of {len(sec.get('afc.parameters') or [])} "
-                                "uncertain parameters)", ["where", "ω", "nominal", "mean", "std", "cv"],
-                                [[text(k.replace("_", " ")), *(sec.cell(f"afc.at.{k}.{x}") for x in (
-                                    "omega", "nominal_um", "mean_um", "std_um", "cv"))] for k in at], headline=True))
-        if model in SOURCE_MODELS:
-            sec.warnings.append(f"the AFC spread is computed on the {_name(model)}, which the stability analysis "
-                                "reports unstable at the pumps' operating points (see the dynamics scenes): a "
-                                "validation of the source's Fig. 3.7, not a prediction" if st is None else
-                                f"the AFC model '{_name(model)}' is {'stable' if st else 'UNSTABLE'}")
-        else:
-            sec.validation.append({"ok": None, "text": "the source's AFC spread (Fig. 3.7, 'up to 40 %') was "
-                                                       "computed on its program model, which is unstable; this run "
-                                                       f"uses the {_name(model)} model (set "
-                                                       "analyses.montecarlo.afc.model: program, forcing: appendix "
-                                                       "and its 28 constants to reproduce the source)"})
-
-
-def reliability_section(sec: Section) -> None:
-    """Wear, reliability P(t) and mean time to failure of the traditional disc (Pavlenko 2014, ch. 1.2)."""
-    sec.row("largest gap", "u_max", "u_max")
-    sec.row("mean wear rate", "b̄", "b_mean")
-    sec.row("mean load", "τ̄", "tau_mean")
-    times = sec.get("times_h", [])
-    for i, t in enumerate(times):
-        sec.row(f"reliability at {number(t)} h (literal (1.48))", "P(t)", f"literal.P.{i}")
-    sec.row("mean time to failure (literal)", "T", "literal.mttf_h")
-    sec.row("mean time to failure (renormalised load density)", "T", "renormalised.mttf_h")
-    level = sec.get("reliable_probability")
-    for variant in ("literal", "renormalised"):
-        t = sec.get(f"{variant}.time_at_h")
-        p0 = sec.get(f"{variant}.P0")
-        if t is None and level is not None:
-            sec.verdict(False, f"{variant}: P(t) never reaches {number(level)} (P(0) = {number(p0)}): no time of "
-                               "reliable operation")
-        elif t is not None:
-            sec.verdict(None, f"{variant}: P(t) ≥ {number(level)} up to t = {number(t)} h")
-
-
-def rotor_dynamics_section(sec: Section) -> None:
-    """Rotor with a liquid auto-balancer: stationary, steps, passage (Pashkov 2010); one verdict, the result's."""
-    sec.row("critical speed with the liquid", "ω_cr", "rotor.omega_cr_rad_s")
-    sec.row("natural frequency without liquid", "Ω0", "rotor.Omega0_rad_s")
-    sec.row("liquid mass ratio", "ψ", "rotor.psi")
-    sec.row("damping ratio", "ζ0", "rotor.zeta0")
-    sec.row("largest real part of the eigenvalues over Ω0", "max Re λ/Ω0", "stationary.stability.max_real_over_Omega0")
-    for psi, n in (sec.get("passage.crossover_n_star") or {}).items():  # keys like "0.75": the value given
-        sec.row(f"damping above which the liquid raises the passage peak (ψ = {psi})", "n*",
-                f"passage.crossover_n_star.{psi}", value=n)
-    sec.row("speed at the end of the motor run-up", "ω_end", "motor_runup.omega_final_rad_s")
-    sec.row("peak deflection of the motor run-up", "δ/e", "motor_runup.peak_deflection_over_e")
-    from autobal.analysis.rotor_study import RotorDynamicsResult  # the verdict's one copy
-
-    verdict = RotorDynamicsResult(sec.block).verdict()
-    if verdict:
-        sec.conclude(*verdict)
-    rows = [[sec.cell(f"passage.table.{i}.{k}") for k in ("n", "psi", "delta_max_over_e", "z_delta_max", "d_max")]
-            for i, _ in enumerate(sec.get("passage.table", []))]
-    if rows:
-        key = "passage.acceleration_rad_s2"
-        accel = declarations("rotor_dynamics").find(key).text(sec.get(key))
-        sec.tables.append(table(f"Passage through the critical speed at {accel}: peak "
-                                "deflection δ*/e and its speed ratio ν = ω/Ω0",
-                                ["n", "ψ", "δ*/e", "ν at the peak", "d*"], rows, headline=True))
-
-
-def spinup_section(sec: Section) -> None:
-    """Optimal spin-up through the critical speed (direct collocation, CVODES re-simulation): the verdict is the
-    optimum's peak deflection, its gain against the best ramp within the drive limits and whether it brakes."""
-    from autobal.ocp.spinup_study import verdict  # the verdict's one copy
-
-    sec.conclude(*verdict(sec.block))
-    sec.verdict(None, f"objective: {str(sec.get('objective', '')).replace('_', ' ')}; {sec.get('method')}; "
-                      f"wall time {number(sec.get('wall_time_s'))} s (NLP build {number(sec.get('build_time_s'))} s, "
-                      f"NLP solves {number(sec.get('total_solve_time_s'))} s over {len(sec.get('starts', []))} solves, "
-                      "the rest global search, re-simulations and baselines)")
-    sec.row("peak deflection of the optimum, 0-peak (the whirl orbit's radius; re-simulated)", "δ*",
-            "peak_deflection_m")
-    sec.row("peak deflection of the optimum over the eccentricity", "δ*/e", "peak_deflection_over_e")
-    sec.row("peak deflection of the best ramp within the drive limits", "δ*/e", "baseline_ramp_peak_over_e")
-    sec.row("gain against the best ramp within the drive limits", "", "gain_vs_best_feasible_ramp_pct")
-    sec.row("gain against the constant ramp", "", "gain_vs_constant_ramp_pct")
-    sec.row("eccentricity of the rotor", "e", "eccentricity_m")
-    for label, sym, key in (("rotor mass", "m1", "mass_kg"),
-                            ("shaft stiffness (c = m1 Ω_c²)", "c", "stiffness_N_per_m"),
-                            ("damping (χ = 2 ζ m1 Ω_c)", "χ", "damping_N_s_per_m"),
-                            ("damping ratio", "ζ", "damping_ratio"),
-                            ("critical speed (with the liquid mass: Ω0 √ψ)", "ω_cr", "critical_speed_rad_s"),
-                            ("amplification factor, API 684 (2005): N_c/(N_2 − N_1) = 1/(2ζ)", "AF",
-                             "amplification_factor"),
-                            ("separation margin of the final speed from the critical speed, API 684 (2005)", "SM",
-                             "separation_margin_pct")):
-        sec.row(label, sym, f"rotor.{key}")
-    sec.row("time of the peak", "t*", "time_of_peak_s")
-    sec.row("speed at the peak", "ω*", "omega_at_peak_rad_s")
-    sec.row("final time", "T", "final_time_s")
-    sec.row("largest drive torque", "M_max", "max_torque_N_m")
-    sec.row("smallest drive torque (below 0: the drive brakes)", "M_min", "min_torque_N_m")
-    sec.row("largest drive power", "P_max", "max_power_W")
-    sec.row("relative difference, CVODES re-simulation vs transcription", "", "resimulation_rel_error")
-    sec.row("chattering of the optimal acceleration (pulse variation of α/α_max; 0: none)", "",
-            "control_pulse_variation")
-    sec.row("NLP build time", "", "build_time_s")
-    sec.row("NLP solve time (IPOPT or fatrop), all starts and mesh stages", "", "total_solve_time_s")
-    sec.row("wall time of the analysis (search, solves, re-simulations)", "", "wall_time_s")
-    st = sec.get("status")
-    sec.verdict(st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"NLP solver: {st} ({sec.get('method')})")
-    base = sec.get("baselines") or {}
-    e = sec.get("eccentricity_m")
-    rows = []
-    for k, b in base.items():
-        pk = b.get("peak_deflection_over_e")
-        limits = {True: "within", False: "OUTSIDE: " + ", ".join(b.get("violated", [])), None: "no drive data"}
-        rows.append([text(b.get("label")), sec.cell(f"baselines.{k}.peak_deflection_over_e"),
-                     sec.cell("peak_deflection_m", None if pk is None or e is None else pk * e),
-                     sec.cell(f"baselines.{k}.max_torque_N_m"), sec.cell(f"baselines.{k}.max_power_W"),
-                     text(limits[b.get("within_drive_limits")]),
-                     text("reference of the gain" if k == sec.get("baseline_ramp_key") else "")])
-        if b.get("within_drive_limits") is False:
-            sec.verdict(None, f"{b.get('label')}: outside the drive limits ({', '.join(b.get('violated', []))}), "
-                              f"peak {number(pk)} e, drawn but no reference")
-    if rows:
-        sec.tables.append(table("Ramp baselines (re-simulated): a gain is quoted only against a ramp within the drive "
-                                "limits", ["baseline", "peak δ*/e", "peak δ*, 0-peak", "largest torque",
-                                           "largest power", "drive limits", ""], rows))
-    if sec.get("brakes") is not None:
-        sec.verdict(None, f"the optimum {'brakes' if sec.get('brakes') else 'does not brake'} (smallest drive "
-                          f"torque {number(sec.get('min_torque_N_m'))} N·m; braking limit "
-                          f"{number(sec.get('braking_torque_limit_N_m'))} N·m)")
-    seg = sec.get("segments")
-    if seg:
-        sec.verdict(seg.get("within_drive_limits"),
-                    f"{seg['segments']}-segment ramp table (drive_segments.csv): peak "
-                    f"{number(seg.get('peak_deflection_over_e'))} e, {number(seg.get('loss_vs_optimum_pct'))} % "
-                    "against the full optimum, " + ("within" if seg.get("within_drive_limits") else "OUTSIDE")
-                    + " the drive limits")
-    drive = _get(sec.results, "meta.scene_si.rotor.drive") or {}
-    if not (drive.get("max_torque") or drive.get("max_power")):
-        sec.verdict(None, "no drive torque or power limit in the scene")
-    elif "within_drive_limits" in sec.block:
-        sec.verdict(sec.get("within_drive_limits"), "drive torque and power limits " +
-                    ("kept" if sec.get("within_drive_limits") else "EXCEEDED") + " in the re-simulation")
-    for b in _spinup_binding(sec):
-        sec.verdict(None, f"binding constraint: {b}")
-    segs = sec.folder / "drive_segments.csv" if sec.folder else None
-    if segs is not None and segs.exists():
-        with segs.open() as fh:
-            rows = [[text(r["segment"]), cell(float(r["t_start_s"]), "s"), cell(float(r["t_end_s"]), "s"),
-                     text(number(float(r["speed_start_rpm"]))), text(number(float(r["speed_end_rpm"]))),
-                     text(number(float(r["rate_rpm_s"]))), cell(float(r["rate_rad_s2"]), "rad/s^2")]
-                    for r in csv.DictReader(fh)]
-        sec.tables.append(table("Ramp table for the drive (drive_segments.csv; the last row the hold): speeds in "
-                                "rpm, rates in rpm/s", ["segment", "start", "end", "start speed, rpm",
-                                                        "end speed, rpm", "rate, rpm/s", "rate"], rows))
-    keeps = {True: "yes", False: "NO", None: "—"}
-    rows = [[text(s.get("start")), text(s.get("stage", "final mesh")), text(s.get("status")),
-             text(s.get("iterations", "—")), cell(s.get("solve_time_s"), "s"), cell(s.get("objective"), "1"),
-             text(keeps[s.get("keeps_limit")])] for s in sec.get("starts", [])]
-    if rows:
-        sec.tables.append(table("NLP solves of the multi-start: every start on the coarse mesh, the best one "
-                                "refined on the final mesh and judged by its CVODES re-simulation",
-                                ["start", "stage", "status", "iterations", "solve time", "re-simulated objective",
-                                 "keeps limit"], rows))
-
-
-def _spinup_binding(sec: Section) -> list[str]:
-    """The limits the optimum runs on: acceleration (from the controls table), torque, power, deflection."""
-    scene = _get(sec.results, "meta.scene_si") or {}
-    ocp, drive = _get(scene, "analyses.spinup") or {}, _get(scene, "rotor.drive") or {}
-    out = []
-    amax, controls = ocp.get("max_acceleration"), sec.folder / "spinup_controls.csv" if sec.folder else None
-    if amax and controls is not None and controls.exists():
-        with controls.open() as fh:
-            alpha = [float(r["alpha_rad_s2"]) for r in csv.DictReader(fh)]
-        on = sum(abs(a) >= 0.999 * amax for a in alpha)
-        if on:
-            from autobal.ocp.simulation import rate_text  # rad/s² with rpm/s beside, the one copy
-
-            out.append(f"acceleration limit |α| ≤ {rate_text(amax)} on {on} of {len(alpha)} control intervals "
-                       f"({number(100 * on / len(alpha))} %)")
-    for key, limit, what in (("max_torque_N_m", drive.get("max_torque"), "drive torque limit"),
-                             ("max_power_W", drive.get("max_power"), "drive power limit")):
-        got, q = sec.get(key), quantity(f"spinup.{key}")
-        if limit and got is not None and got >= 0.999 * limit:
-            out.append(f"{what} {q.text(limit)} reached (largest {q.text(got)})")
-    lim = ocp.get("deflection_limit")
-    if lim and sec.get("peak_deflection_over_e") is not None and sec.get("peak_deflection_over_e") >= 0.999 * lim:
-        out.append(f"deflection limit δ/e ≤ {number(lim)} reached")
-    if not out:
-        out.append("none of the acceleration, torque, power and deflection limits is active at the optimum")
-    return out
-
-
-def spinup_robust_section(sec: Section) -> None:
-    """Robust spin-up (the Jeffcott rotor's ``spinup_robust``, peaks delta/e; the modal rotor's
-    ``ross_spinup_robust``, peaks in m shown in µm or the chosen length unit, as the block's ``peak_unit`` states):
-    the robust profile, the nominal optimum and the best ramp on the design set and on the validation sample; the
-    verdict is the robust profile's worst validation peak against the others'."""
-    from autobal.ocp.robust_study import PEAK_SYMBOL, QUANTITIES, peak_key, verdict  # the verdict's one copy
-    from autobal.ocp.spinup_study import QUANTITIES as SPINUP
-
-    prof = sec.get("profiles") or {}
-    if prof:
-        sec.conclude(*verdict(sec.block))
-    unit = sec.get("peak_unit") or "1"
-    s, sym = peak_key(sec.block), PEAK_SYMBOL[unit]
-    shown = None if unit == "1" else QUANTITIES.find(f"profiles.robust.validation_worst_{s}").display
-
-    def pc(v):
-        return cell(v, unit, shown)
-
-    for key, label in (("robust", "robust profile"), ("nominal", "nominal optimum"), ("ramp", "best ramp")):
-        sec.row(f"{label}: worst peak over the validation rotors", sym, f"profiles.{key}.validation_worst_{s}")
-    sec.row("robust profile: worst peak over the design rotors (CVODES)", sym, f"profiles.robust.design_worst_{s}")
-    sec.row("nominal critical speed", "ω_cr", "omega_cr_rad_s")
-    sec.row("eccentricity (δ* = e δ*/e, 0-peak)", "e", "eccentricity_m")
-    sec.row("design rotors (grid)", "", "design_scenarios")
-    sec.row("design rotors in the final NLP (binding)", "", "active_scenarios")
-    sec.row("validation rotors", "", "validation_samples")
-    sec.row("build time (robust NLPs)", "", "build_time_s")
-    sec.row("solve time (robust NLPs)", "", "solve_time_s")
-    sec.row("validation time", "", "validation_time_s")
-    sec.row("validation integrator against CVODES (largest relative difference)", "", "validation_check_rel_error")
-    e = sec.get("eccentricity_m")
-    physical = SPINUP.find("peak_deflection_m")
-    rows = []
-    for key in ("robust", "nominal", "ramp"):
-        p = prof.get(key) or {}
-        q = p.get(f"validation_quantiles_{s}") or {}
-        worst = p.get(f"validation_worst_{s}")
-        rows.append([text(p.get("label")), pc(p.get(f"nominal_peak_{s}")), pc(p.get(f"design_worst_{s}")),
-                     pc(q.get("0.5")), pc(q.get("0.99")), pc(worst)]
-                    + ([cell(None if e is None or worst is None else worst * e, "m", physical.display)]
-                       if unit == "1" else []))
-    if prof:
-        what = ("δ*/e", "; the worst as a deflection δ* (0-peak)") if unit == "1" else \
-            ("r* (the largest whirl radius over the nodes, 0-peak)", "")
-        sec.tables.append(table(f"Peak deflection {what[0]} of each profile: on the nominal rotor, worst over the "
-                                f"design set (CVODES), and over the validation sample{what[1]}",
-                                ["profile", "nominal rotor", "design worst", "validation median", "validation 99 %",
-                                 "validation worst"] + (["validation worst δ*"] if unit == "1" else []), rows,
-                                headline=True))
-    rows = [[text(r.get("label")), sec.cell(f"ramps.{i}.alpha_rad_s2"), pc(r.get(f"design_worst_{s}")),
-             pc(r.get(f"validation_worst_{s}")),
-             text({True: "within", False: f"OUTSIDE: {r.get('violated')}", None: "no drive data"}
-                  [r.get("within_drive_limits")])] for i, r in enumerate(sec.get("ramps") or [])]
-    if rows:
-        sec.tables.append(table(f"Constant ramps: worst peak {sym} over the design set and the validation sample",
-                                ["ramp", "acceleration", "design worst", "validation worst", "drive limits"], rows))
-    rows = [[text(r.get("start")), cell(r.get("intervals"), "1"), cell(r.get("scenarios"), "1"), text(r.get("status")),
-             cell(r.get("iterations"), "1"), cell(r.get("build_time_s"), "s"), cell(r.get("solve_time_s"), "s"),
-             pc(r.get(f"worst_design_peak_{s}"))] for r in sec.get("rounds", [])]
-    if rows:
-        sec.tables.append(table("Scenario generation: each NLP solve", ["start", "intervals", "scenarios", "status",
-                                                                        "iterations", "build", "solve",
-                                                                        f"worst design {sym}"], rows))
-
-
-def spinup_time_optimal_section(sec: Section) -> None:
-    """Time-optimal spin-up: the earliest arrival under the peak limit (the verdict) and the front."""
-    from autobal.ocp.time_optimal_study import verdict  # the verdict's one copy
-
-    sec.conclude(*verdict(sec.block))
-    sec.row("final speed", "ω_f", "final_speed_rad_s")
-    sec.row("peak limit", "δ/e", "deflection_limit_over_e")
-    sec.row("earliest arrival at the final speed", "T", "arrival_time_s")
-    sec.row("latest front deadline whose minimum peak exceeds the limit", "", "arrival_time_lower_bound_s")
-    sec.row("peak deflection of the earliest arrival (re-simulated)", "δ*/e", "peak_deflection_over_e")
-    sec.row("arrival of the maximum-acceleration ramp", "", "ramp_arrival_time_s")
-    sec.row("peak of the maximum-acceleration ramp", "δ*/e", "ramp_peak_over_e")
-    sec.row("eccentricity (δ* = e δ*/e, 0-peak)", "e", "eccentricity_m")
-    sec.row("largest relative difference, collocation vs CVODES re-simulation", "", "resimulation_rel_error")
-    sec.row("build time", "", "build_time_s")
-    sec.row("solve time", "", "solve_time_s")
-    if sec.get("deflection_limit_over_e") is not None:  # else the front's monotonicity is the verdict
-        sec.verdict(sec.get("monotone"), "the front's peak does not rise with the arrival deadline"
-                    if sec.get("monotone") else "the front is NOT monotone (a local optimum)")
-    from autobal.ocp.spinup_study import QUANTITIES as SPINUP
-
-    e, physical = sec.get("eccentricity_m"), SPINUP.find("peak_deflection_m")
-    rows = [[cell(p.get("arrival_time_s"), "s"), cell(p.get("resimulated_peak_over_e"), "1"),
-             cell(None if e is None else p.get("resimulated_peak_over_e") * e, "m", physical.display),
-             cell(p.get("collocation_peak_over_e"), "1"), cell(p.get("resimulation_rel_error"), "1"),
-             cell(p.get("intervals"), "1"), cell(p.get("solve_time_s"), "s"),
-             text(f"held from {number(p['held_from_s'])} s" if p.get("held_from_s") else "")]
-            for p in sec.get("front", [])]
-    if rows:
-        sec.tables.append(table("Front: the smallest peak for each arrival deadline",
-                                ["arrival by", "δ*/e (re-simulated)", "δ* (0-peak)", "δ*/e (collocation)",
-                                 "difference", "intervals", "solve time", "profile"], rows, headline=True))
-
-
-def design_section(sec: Section) -> None:
-    """Stability-constrained design: the optimum's verdict with its margin to the required decay rate, its
-    certificate, the parameters in display units; the designs under the source's models in the validation part."""
-    from autobal.analysis import design_study as ds  # the verdicts, declarations and validation: one copy each
-
-    ok, words = ds.verdict(sec.block)
-    sec.conclude(ok, words)
-    sec.verdict(sec.get("status") in ds.SUCCESS, f"IPOPT: {sec.get('status')} ({sec.get('iterations')} iterations)")
-    for q, key, _ in ds.QUANTITIES.headline(sec.block):
-        sec.row(q.description, q.symbol, key)
-    for which in ("nominal", "optimum"):  # keys are the discharge ratios ("0.5"), so read them whole
-        for p, margin in (sec.get(f"{which}.margin") or {}).items():
-            if not p.endswith("_status"):
-                sec.row(f"decay rate at ψ1 = {p}, {which} design", "−max Re λ", f"{which}.margin.{p}", value=margin)
-    sec.verdict(*ds.verdict(sec.block, "nominal"))
-    for model, text_ in ds.source_models(sec.block):
-        sec.validation.append({"ok": None, "text": text_ + (f"; the headline verdict stands: {WHY_UNSTABLE[model]}"
-                                                            if "UNSTABLE" in text_ and model in WHY_UNSTABLE else "")})
-    cert = sec.get("certification") or {}
-    if cert:
-        sec.verdict(bool(cert.get("eigenvalues_ok")), "eigenvalues confirm every constraint at the optimum"
-                    if cert.get("eigenvalues_ok") else "eigenvalues do NOT confirm the smooth stability conditions")
-        sec.verdict(not cert.get("beaten"), f"random search: {cert.get('feasible_samples')} of {cert.get('samples')} "
-                    f"samples feasible, best {significant(cert.get('best_sample'))} "
-                    + ("(none better by more than 0.5 %)" if not cert.get("beaten") else "BEATS the optimum"))
-    for a in sec.get("active", []):
-        sec.verdict(None, f"active constraint: {a.get('constraint')} (multiplier {significant(a.get('multiplier'))})")
-    nominal, optimum = sec.get("nominal.values_si") or {}, sec.get("optimum.values_si") or {}
-    rows = []
-    for path, value in optimum.items():
-        q, n = ds.variable(path), nominal.get(path)
-        ratio = value / n if is_number(n) and n and is_number(value) else None
-        rows.append([text(path), text(q.symbol), text(q.text(n)), text(q.text(value)),
-                     text("—" if ratio is None else f"× {significant(ratio, 3)}")])
-    if rows:
-        sec.tables.append(table("Design parameters to 4 significant digits (results.json optimum.parameters holds "
-                                "them in full: `autobal run SCENE --set PATH=VALUE` reproduces the optimum)",
-                                ["scene path", "symbol", "nominal", "optimum", "optimum / nominal"], rows))
-
-
-def ross_spinup_section(sec: Section) -> None:
-    """Optimal spin-up of a ROSS rotor reduced to its modes: the optimum's peak against the best ramp (the verdict),
-    the reduction checked against ROSS, API 684 (2005) values of each critical speed."""
-    from autobal.ocp.modal import ModalSpinupResult  # the verdict's one copy
-
-    st = sec.get("status")
-    sec.conclude(*ModalSpinupResult.verdict_of(sec.block))
-    sec.row("peak deflection of the optimum, 0-peak (re-simulated)", "r*", "peak_deflection_m")
-    sec.row("peak deflection of the best ramp", "r*", "baseline_ramp_peak_m")
-    sec.row("improvement over the best ramp", "", "improvement_over_best_ramp")
-    sec.row("node of the peak", "", "node_of_peak")
-    sec.row("time of the peak", "t*", "time_of_peak_s")
-    sec.row("speed at the peak", "ω*", "omega_at_peak_rad_s")
-    sec.row("final (service) speed", "ω_f", "final_speed_rad_s")
-    sec.row("modes kept", "", "modes")
-    sec.row("mode cutoff", "ω_c", "mode_cutoff_rad_s")
-    sec.row("shift of a critical speed by the gyroscopic terms", "", "gyroscopic_shift")
-    sec.row("largest critical-speed difference vs ROSS", "", "critical_speeds.max_rel_error_vs_ross")
-    sec.row("relative difference, CVODES re-simulation vs collocation", "", "resimulation_rel_error")
-    sec.row("build time", "", "build_time_s")
-    sec.row("solve time (all starts)", "", "total_solve_time_s")
-    sec.verdict(st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"IPOPT: {st} ({sec.get('method')})")
-    err = sec.get("critical_speeds.max_rel_error_vs_ross")
-    if err is not None:
-        sec.verdict(err <= 0.01, f"critical speeds of the reduced model within {number(100 * err)} % of ROSS's")
-    cs = sec.get("critical_speeds") or {}
-    ross = cs.get("ross_wd_rad_s") or []
-    rows = []
-    for i, w in enumerate(cs.get("reduced_wd_rad_s") or []):
-        at = f"critical_speeds.{{}}.{i}"
-        rows.append([text(str(i + 1)), cell(w, "rad/s"), cell(convert(w, "rad/s", "rpm"), "rpm"),
-                     cell(ross[i] if i < len(ross) else None, "rad/s"),
-                     sec.cell(at.format("reduced_damping_ratio")),
-                     sec.cell(at.format("amplification_factor")) if _has(sec.block, at.format("amplification_factor"))
-                     else text(None),
-                     sec.cell(at.format("separation_margin_pct")) if _has(sec.block, at.format("separation_margin_pct"))
-                     else text(None)])
-    if rows:
-        sec.tables.append(table("Critical speeds below the final speed, with the API 684 (2005) amplification factor "
-                                "1/(2ζ) and the separation margin of the final speed",
-                                ["#", "reduced model", "reduced model, rpm", "ROSS", "damping ratio", "AF", "SM"],
-                                rows))
-
-
-SECTIONS = {"statics": statics_section, "frequency": frequency_section, "stability": stability_section,
-            "transient": transient_section, "liquid_balancer": liquid_balancer_section,
-            "estimation": estimation_section, "reliability": reliability_section, "montecarlo": montecarlo_section,
-            "rotor_dynamics": rotor_dynamics_section, "spinup": spinup_section,
-            "spinup_robust": spinup_robust_section, "spinup_time_optimal": spinup_time_optimal_section,
-            "design": design_section,
-            "ross_spinup": ross_spinup_section, "ross_spinup_robust": spinup_robust_section}
-
-TITLES = {"statics": "Statics", "frequency": "Frequency response (AFC)", "stability": "Stability",
-          "transient": "Transients", "liquid_balancer": "Liquid auto-balancer", "estimation": "Parameter estimation",
-          "reliability": "Reliability", "montecarlo": "Monte Carlo", "rotor_dynamics": "Rotor dynamics",
-          "spinup": "Optimal spin-up", "spinup_robust": "Robust spin-up", "spinup_time_optimal": "Time-optimal spin-up",
-          "design": "Stability-constrained design",
-          "ross_spinup": "Optimal spin-up of a ROSS rotor (multi-mode)",
-          "ross_spinup_robust": "Robust spin-up of a ROSS rotor (multi-mode)"}
+#: analysis -> the title of its section, in its room
+TITLES: Mapping = _FromRooms("TITLE")
 
 #: figure file name (regex) -> (analysis, caption)
 CAPTIONS = [
@@ -1395,7 +682,7 @@ def display_choice(meta, units: dict | None = None) -> dict[str, str]:
     """kind -> display unit of a report: the ``display`` section of the run's scene (results.json
     ``meta.scene_si.display``), updated with ``units`` (``autobal report --units``); ScenarioError naming the
     key for a unit that is not one of its kind."""
-    scene = _get(meta, "scene_si.display") if isinstance(meta, dict) else None
+    scene = get_path(meta, "scene_si.display") if isinstance(meta, dict) else None
     try:
         given = checked_choice(scene) if isinstance(scene, dict) else {}
     except ValueError as exc:

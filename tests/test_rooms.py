@@ -1,6 +1,7 @@
 """One room per analysis (docs/contributing.md): every module of the registries defines what the registries
 read, and a new analysis is one file and one line, followed here once with a throwaway analysis."""
 
+import importlib
 import json
 import math
 import sys
@@ -22,8 +23,13 @@ def test_every_analysis_room_defines_what_the_registry_reads(key):
     # the part it needs is a part of the registry (or device.dynamics), checked at load time
     assert room.NEEDS is None or room.NEEDS.split(".")[0] in parts.MODULES
     assert callable(room.run) and callable(room.estimate_seconds)
-    # its report section: the function it names is the one report.py draws its results with
-    assert getattr(report, room.REPORT_SECTION) is report.SECTIONS[key]
+    # its report section lives in the room and is the one report.py draws its results with; the module it
+    # names declares every number of its block
+    assert callable(room.report_section) and report.SECTIONS[key] is room.report_section
+    assert report.DECLARED[key] == room.QUANTITIES_MODULE
+    assert report.declarations(key) is importlib.import_module(room.QUANTITIES_MODULE).QUANTITIES
+    assert isinstance(room.TITLE, str) and report.TITLES[key] == room.TITLE
+    assert not hasattr(room, "REPORT_SECTION")
     assert scenario.Scenario.model_fields["analyses"].annotation.model_fields[key].description.startswith(
         room.DESCRIPTION)
 
@@ -59,13 +65,17 @@ at the nominal pressure, the area base s_B of the dimensionless groups (Pavlenko
 from pydantic import Field
 
 from autobal.analyses import COST
+from autobal.analysis.quantities import Declarations, Quantity
 from autobal.analysis.result import Result
 from autobal.schema import Strict
 from autobal.units import Pressure
 
 DESCRIPTION = "area carrying the nominal thrust"
 NEEDS = "device"
-REPORT_SECTION = "area_base_section"
+QUANTITIES_MODULE = "area_base_room"  # this file: its QUANTITIES below
+TITLE = "Area base"
+QUANTITIES = Declarations(Quantity("area", "m^2", "s", "area carrying the nominal thrust", display="cm²",
+                                   headline=True))
 
 
 class AreaBase(Strict):
@@ -99,6 +109,11 @@ def run(scene, settings: AreaBase) -> AreaBaseResult:
 
 def estimate_seconds(settings: AreaBase) -> float:
     return COST["start"]
+
+
+def report_section(sec) -> None:
+    sec.row("area carrying the nominal thrust", "s", "area")
+    sec.verdict(None, "the area base s_B at the nominal pressure")
 '''
 
 
@@ -139,6 +154,14 @@ def test_a_new_analysis_is_one_file_and_one_line(area_base, tmp_path):
     assert run["area_base"].area == pytest.approx(3.3e5 / 20e6, rel=1e-12)
     out = json.loads((tmp_path / "out" / "results.json").read_text())
     assert out["area_base"]["area"] == pytest.approx(0.0165, rel=1e-12) and out["status"] == "ok"
+    # its unit from the QUANTITIES its room names, its report section from its room: 165 cm² in report.html
+    assert out["units"]["area_base.area"] == "m^2"
+    assert report.SECTIONS["area_base"] is sys.modules["area_base_room"].report_section
+    (sec,) = report.sections(out)
+    assert sec["title"] == "Area base"
+    assert sec["overall"]["text"] == "the area base s_B at the nominal pressure"
+    page = (tmp_path / "out" / "report.html").read_text()
+    assert 'data-key="area_base.area"' in page and "165" in page and "cm²" in page
     # at the nominal pressure the area is the area base s_B of the device's dimensionless groups
     nominal = autobal.run(autobal.load(_scene(tmp_path, {})))
     from autobal.parts.device import design

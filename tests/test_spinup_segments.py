@@ -111,13 +111,14 @@ def test_robust_best_ramp_keeps_the_drive_limits():
 def test_robust_report_verdict_never_against_a_ramp_outside_the_drive_limits(ramp_ok, ok):
     """The robust profile beats the nominal optimum but not a ramp: against a ramp within the limits the verdict
     fails; against a ramp outside them it is not compared and says so."""
-    from autobal.report import Section, spinup_robust_section
+    from autobal.analyses.spinup_robust import report_section
+    from autobal.report import Section
 
     prof = {k: {"label": k, "validation_worst_over_e": v} for k, v in (("robust", 1.5), ("nominal", 2.0),
                                                                         ("ramp", 1.2))}
     prof["ramp"]["within_drive_limits"] = ramp_ok
     sec = Section("spinup_robust", {"profiles": prof}, {})
-    spinup_robust_section(sec)
+    report_section(sec)
     (v,) = sec.verdicts
     assert v["ok"] is ok
     assert ("outside the drive limits, not compared" in v["text"]) is not ramp_ok

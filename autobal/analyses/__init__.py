@@ -8,7 +8,10 @@ An analysis module defines
 - ``run(scene, settings) -> Result``: the validated scene and its settings to the analysis' Result (it writes
   no files and prints nothing; the scene's parts become SI parameter objects through :mod:`autobal.parts`);
 - ``estimate_seconds(settings) -> float``: its predicted run time, from the per-unit costs :data:`COST`;
-- ``REPORT_SECTION``: the name of its section function in :mod:`autobal.report`;
+- ``QUANTITIES_MODULE``: the module whose ``QUANTITIES`` declare every number of its results block;
+- ``TITLE``: the title of its section of report.html;
+- ``report_section(sec)``: its section of report.html, drawn from its results block into the
+  :class:`autobal.report.Section` ``sec`` (it imports what it needs from :mod:`autobal.report` inside);
 - optionally ``accuracy(scene, settings)``: its work-precision study (``autobal accuracy``).
 
 :data:`MODULES` is the one list kept by hand: one line per analysis, in the scene's order, which is also the

@@ -18,7 +18,8 @@ from autobal.units import Length, to_si
 
 DESCRIPTION = "stability-constrained design of the device"
 NEEDS = "device.dynamics"
-REPORT_SECTION = "design_section"
+QUANTITIES_MODULE = "autobal.analysis.design_study"  # its QUANTITIES declare every number of its block
+TITLE = "Stability-constrained design"  # of its section of report.html
 
 # scene path -> (design key of analysis/design.py, unit kind; None: dimensionless)
 VARIABLES = {
@@ -141,3 +142,45 @@ def estimate_seconds(settings: Design) -> float:
     and the two spectral-abscissa sweeps (the NLP's own iterations are of the same order, left in the constant)."""
     evaluations = (settings.samples + settings.samples // 2 + 2) * len(settings.operating_ratios)
     return COST["start"] + COST["design_point"] * (evaluations + 2 * settings.sweep_points)
+
+
+def report_section(sec) -> None:
+    """Stability-constrained design: the optimum's verdict with its margin to the required decay rate, its
+    certificate, the parameters in display units; the designs under the source's models in the validation part."""
+    from autobal.analysis import design_study as ds  # the verdicts, declarations and validation: one copy each
+    from autobal.analysis.quantities import is_number, significant
+    from autobal.report import WHY_UNSTABLE, table, text
+
+    ok, words = ds.verdict(sec.block)
+    sec.conclude(ok, words)
+    sec.verdict(sec.get("status") in ds.SUCCESS, f"IPOPT: {sec.get('status')} ({sec.get('iterations')} iterations)")
+    for q, key, _ in ds.QUANTITIES.headline(sec.block):
+        sec.row(q.description, q.symbol, key)
+    for which in ("nominal", "optimum"):  # keys are the discharge ratios ("0.5"), so read them whole
+        for p, margin in (sec.get(f"{which}.margin") or {}).items():
+            if not p.endswith("_status"):
+                sec.row(f"decay rate at ψ1 = {p}, {which} design", "−max Re λ", f"{which}.margin.{p}", value=margin)
+    sec.verdict(*ds.verdict(sec.block, "nominal"))
+    for model, text_ in ds.source_models(sec.block):
+        sec.validation.append({"ok": None, "text": text_ + (f"; the headline verdict stands: {WHY_UNSTABLE[model]}"
+                                                            if "UNSTABLE" in text_ and model in WHY_UNSTABLE else "")})
+    cert = sec.get("certification") or {}
+    if cert:
+        sec.verdict(bool(cert.get("eigenvalues_ok")), "eigenvalues confirm every constraint at the optimum"
+                    if cert.get("eigenvalues_ok") else "eigenvalues do NOT confirm the smooth stability conditions")
+        sec.verdict(not cert.get("beaten"), f"random search: {cert.get('feasible_samples')} of {cert.get('samples')} "
+                    f"samples feasible, best {significant(cert.get('best_sample'))} "
+                    + ("(none better by more than 0.5 %)" if not cert.get("beaten") else "BEATS the optimum"))
+    for a in sec.get("active", []):
+        sec.verdict(None, f"active constraint: {a.get('constraint')} (multiplier {significant(a.get('multiplier'))})")
+    nominal, optimum = sec.get("nominal.values_si") or {}, sec.get("optimum.values_si") or {}
+    rows = []
+    for path, value in optimum.items():
+        q, n = ds.variable(path), nominal.get(path)
+        ratio = value / n if is_number(n) and n and is_number(value) else None
+        rows.append([text(path), text(q.symbol), text(q.text(n)), text(q.text(value)),
+                     text("—" if ratio is None else f"× {significant(ratio, 3)}")])
+    if rows:
+        sec.tables.append(table("Design parameters to 4 significant digits (results.json optimum.parameters holds "
+                                "them in full: `autobal run SCENE --set PATH=VALUE` reproduces the optimum)",
+                                ["scene path", "symbol", "nominal", "optimum", "optimum / nominal"], rows))

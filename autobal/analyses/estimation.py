@@ -7,6 +7,7 @@ units, signs and the number of points against the free parameters of every fit.
 
 from __future__ import annotations
 
+import itertools
 import re
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Literal
@@ -25,7 +26,8 @@ if TYPE_CHECKING:
 
 DESCRIPTION = "parameter fits to measured characteristics"
 NEEDS = None
-REPORT_SECTION = "estimation_section"
+QUANTITIES_MODULE = "autobal.analysis.estimation_study"  # its QUANTITIES declare every number of its block
+TITLE = "Parameter estimation"  # of its section of report.html
 
 # Parameters each model can fit.  traditional_disc: (4.16)-(4.31).  device: the groups (2.18) of the
 # full static model (models/device.py) and the loss coefficients they come from.
@@ -303,3 +305,82 @@ def accuracy(scene, settings: Estimation):
     bases = settings.bases.values()
     return workprecision.estimation_study(data.dimensionless("load", bases), data.dimensionless("gap", bases),
                                           fit.free(), {k: p.value for k, p in fit.parameters.items()})
+
+
+def _adequacy_row(label: str, ad: dict) -> list[dict]:
+    """One row of the adequacy table: the Fisher test (4.14) and the lack-of-fit test of a fit or a curve."""
+    from autobal.report import cell, text
+
+    lof = ad.get("lack_of_fit") or {}
+    return [text(label), *(cell(ad.get(k), "1") for k in ("F", "F_crit", "p_value")), text(ad.get("adequate")),
+            *(cell(lof.get(k), "1") for k in ("F", "F_crit", "p_value")), text(lof.get("adequate"))]
+
+
+def report_section(sec) -> None:
+    """Least-squares fits with standard errors, bootstrap intervals, parameter correlation and adequacy
+    (Pavlenko 2014, §4.3-4.4), the loss coefficient of (4.38): one verdict over the fits (solved and adequate)."""
+    from autobal.analysis.quantities import is_number
+    from autobal.report import cell, get_path, number, table, text
+
+    rows, correlations, adequacy, moved = [], [], [], []
+    for fit, f in sec.get("fits", {}).items():
+        boot = get_path(f, "bootstrap.parameters") or {}
+        free = [p for p, v in f.get("parameters", {}).items() if v.get("free")]
+        for pname in free:
+            at = f"fits.{fit}.parameters.{pname}"
+            rows.append([text(fit), text(pname), *(sec.cell(f"{at}.{k}") for k in ("estimate", "standard_error",
+                                                                                    "ci_low", "ci_high")),
+                         *(sec.cell(f"fits.{fit}.bootstrap.parameters.{pname}.{k}") if k in (boot.get(pname) or {})
+                           else text(None) for k in ("ci_low", "ci_high")), text("dimensionless")])
+        corr = f.get("correlation") or []
+        for a, b in itertools.combinations(range(len(free)), 2):
+            r = corr[a][b] if a < len(corr) and b < len(corr[a]) else None
+            if is_number(r):
+                correlations.append([text(fit), text(f"{free[a]}, {free[b]}"), cell(r, "1"),
+                                     text("the data hardly separate them: the intervals are wide along the ridge"
+                                          if abs(r) >= 0.9 else "")])
+        moved += [f"{fit}: {m.get('why')}" for m in (get_path(f, "extra.start_moved") or {}).values()]
+        ad = f.get("adequacy") or {}
+        if "adequate" in ad:
+            adequacy.append(_adequacy_row(f"fit {fit}", ad))
+    if sec.get("fits"):
+        from autobal.analysis.estimation_study import EstimationResult  # the verdict's one copy
+
+        sec.conclude(*EstimationResult(sec.block).verdict())
+    level = number(100 * (next(iter(sec.get("fits", {}).values()), {}).get("confidence") or 0.95))
+    sec.tables.append(table(f"Fitted parameters: estimate, standard error, the linearised {level} % confidence "
+                            "interval and the residual-bootstrap percentile interval",
+                            ["fit", "parameter", "estimate", "standard error", "CI low", "CI high", "bootstrap low",
+                             "bootstrap high", "unit"], rows, headline=True, unit_column=True))
+    if correlations:
+        sec.tables.append(table("Correlation of the free parameters (from the covariance at the optimum)",
+                                ["fit", "parameters", "correlation", "meaning"], correlations))
+    ref = sec.get("adequacy_reference") or {}
+    if "adequate" in ref:
+        r = ref.get("reference") or {}
+        adequacy.append(_adequacy_row(f"the source's curve (α {number(r.get('alpha'))}, τ_max "
+                                      f"{number(r.get('tau_max'))})", ref))
+    if adequacy:
+        sec.tables.append(table("Adequacy: Fisher test of the variance about the curve against the scatter within "
+                                "the load groups (Pavlenko 2014, Eqs. (4.14)-(4.15); adequate when F ≤ F_crit), and "
+                                "the lack-of-fit test; F and p dimensionless",
+                                ["fit", "F", "F_crit", "p", "adequate", "lack-of-fit F", "F_crit", "p",
+                                 "adequate"], adequacy))
+    if "source_rule_adequate" in ref and ref["source_rule_adequate"] != ref.get("adequate"):
+        sec.validation.append({"ok": None, "text": "the source's text calls F > F_crit adequate (inverted); by its "
+                                                   "rule the reference curve would be "
+                                                   + ("adequate" if ref["source_rule_adequate"] else "not adequate")})
+    lc = sec.get("loss_coefficient") or {}
+    if "value" in lc:
+        sec.tables.append(table(f"Loss coefficient {lc.get('unknown')} that the fitted α of {lc.get('fit')} implies "
+                                "(Pavlenko 2014, Eq. (4.38)); dimensionless",
+                                ["unknown", "value", "CI low", "CI high", "nominal", "α fitted", "α nominal"],
+                                [[text(lc.get("unknown")), *(sec.cell(f"loss_coefficient.{k}") for k in (
+                                    "value", "ci_low", "ci_high", "nominal", "alpha", "alpha_nominal"))]]))
+        if lc.get("physical") is False:
+            sec.warnings.append(f"(4.38): the fitted α implies a negative {lc.get('unknown')}: the loss model does "
+                                "not explain the fit")
+    elif "status" in lc:
+        sec.warnings.append(f"(4.38): {lc['status']}")
+    if moved:  # trivial for a reader: one line
+        sec.notes.append("starts moved where the model is defined: " + "; ".join(moved))

@@ -14,7 +14,8 @@ from autobal.units import AngularSpeed
 
 DESCRIPTION = "frequency response (AFC/Bode)"
 NEEDS = "device.dynamics"
-REPORT_SECTION = "frequency_section"
+QUANTITIES_MODULE = "autobal.analysis.frequency"  # its QUANTITIES declare every number of its block
+TITLE = "Frequency response (AFC)"  # of its section of report.html
 
 
 class OmegaGrid(Strict):
@@ -59,3 +60,71 @@ def run(scene, settings: Frequency):
 def estimate_seconds(settings: Frequency) -> float:
     """One AFC point per frequency and model."""
     return COST["start"] + COST["afc_point"] * settings.omega.points * len(settings.models)
+
+
+def report_section(sec) -> None:
+    """AFC of the face gap (Pavlenko 2014, §2.6): the headline model (energy-consistent, physical forcing)
+    gives the verdict; the source's models are the validation part."""
+    from autobal.report import (
+        MODEL_ORDER,
+        SOURCE_MODELS,
+        cell,
+        get_path,
+        model_name,
+        number,
+        ordered_models,
+        source_model_line,
+        stable_models,
+        table,
+        text,
+    )
+
+    stable = stable_models(sec.results)
+    models = sec.get("models", {})
+    h = sec.get("headline")
+    if h:
+        what = f"{model_name(h['model'])}, {h['forcing']} forcing"
+        verdict = "stable" if h.get("stable") else "UNSTABLE"
+        sec.conclude(h.get("stable"), f"{what}: {verdict} (max Re λ = {number(h.get('max_real'))} 1/s); first "
+                                      f"resonance at {number(get_path(h, 'peaks.0.omega'))} rad/s; amplitude at the "
+                                      f"operating speed {number(get_path(h, 'at_operating_speed.amplitude_um'))} µm")
+        sec.row(f"first resonance ({what})", "ω_I", "headline.peaks.0.omega")
+        sec.row(f"amplitude at the first resonance ({what})", "A_I", "headline.peaks.0.amplitude_um")
+        sec.row("operating speed", "ω0", "headline.at_operating_speed.omega")
+        sec.row(f"amplitude at the operating speed ({what})", "A(ω0)", "headline.at_operating_speed.amplitude_um")
+        sec.row(f"static amplitude ({what})", "A(0)", "headline.static_amplitude_um")
+    else:  # no headline block: the toolkit's own first model, never one of the source's
+        lead = next((m for m in MODEL_ORDER if m in models and m not in SOURCE_MODELS), None)
+        if lead is not None:
+            what = model_name(lead)
+            sec.row(f"first resonance ({what})", "ω_I", f"models.{lead}.peaks.0.omega")
+            sec.row(f"amplitude at the first resonance ({what})", "A_I", f"models.{lead}.peaks.0.amplitude_um")
+            sec.row("operating speed", "ω0", f"models.{lead}.at_operating_speed.omega")
+            sec.row(f"amplitude at the operating speed ({what})", "A(ω0)",
+                    f"models.{lead}.at_operating_speed.amplitude_um")
+    sec.row("forcing amplitude", "δψ_1a", "forcing_amplitude")
+    own, source = [], []
+    for model, m in ordered_models(models):
+        peaks = m.get("peaks", [])
+        at = m.get("at_operating_speed", {})
+        verdict = {True: "stable", False: "UNSTABLE", None: "—"}[stable.get(model)]
+        rows = own if model not in SOURCE_MODELS else source
+        for i, pk in enumerate(peaks or [{}]):
+            first = i == 0
+            rows.append([text(model_name(model) if first else ""), text(m.get("forcing") if first else ""),
+                         text(verdict if first else ""), cell(pk.get("omega"), "rad/s"),
+                         cell(pk.get("amplitude_um"), "um"),
+                         cell(at.get("amplitude_um") if i == 0 else None, "um"),
+                         cell(m.get("static_amplitude_um") if i == 0 else None, "um")])
+        if stable.get(model) is False and model not in SOURCE_MODELS:
+            sec.warnings.append(f"{model_name(model)}: the model is unstable at this operating point; its AFC is the "
+                                "response of an unstable system (no steady state exists)")
+        if model in SOURCE_MODELS:
+            source_model_line(sec, model, stable.get(model), m.get("forcing"))
+    columns = ["model", "forcing", "stability", "peak ω", "peak amplitude", "amplitude at ω0", "static amplitude"]
+    caption = (f"under the scene's '{sec.get('forcing')}' forcing, ω0 = {number(sec.get('at_operating_speed.omega'))} "
+               "rad/s: peaks, amplitude at the operating speed and the static amplitude")
+    if own:
+        sec.tables.append(table(f"AFC of the face gap, {caption}", columns, own, headline=True))
+    if source:
+        sec.validation_tables.append(table(f"AFC of the face gap of the source's models, {caption}", columns, source))

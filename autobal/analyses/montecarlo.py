@@ -25,7 +25,8 @@ MAX_AFC_SAMPLES = 1_000_000  # AFC Monte Carlo: a frequency response per sample
 
 DESCRIPTION = "Monte Carlo of the statics (and AFC)"
 NEEDS = "device"
-REPORT_SECTION = "montecarlo_section"
+QUANTITIES_MODULE = "autobal.analysis.montecarlo"  # its QUANTITIES declare every number of its block
+TITLE = "Monte Carlo"  # of its section of report.html
 
 
 class Distribution(Strict):
@@ -100,7 +101,6 @@ class AfcMonteCarlo(Strict):
     parameters: dict[str, Distribution] = Field(min_length=1)
 
 
-
 class MonteCarlo(Strict):
     """Monte Carlo over the device's uncertain dimensionless groups (ch. 3)."""
 
@@ -173,3 +173,74 @@ def estimate_seconds(settings: MonteCarlo) -> float:
     if settings.afc is not None:
         t += COST["start"] + COST["mc_afc_point"] * settings.afc.samples * settings.afc.omega.points
     return t
+
+
+def report_section(sec) -> None:
+    """Spreads of face gap, pressures and leak over the sampled groups (Pavlenko 2014, ch. 3): the physical values
+    beside the source's groups; its closed forms in the validation part."""
+    from autobal.analysis.quantities import significant
+    from autobal.report import SOURCE_MODELS, get_path, has_path, model_name, number, stable_models, table, text
+
+    sec.row("samples", "N", "samples")
+    ref = "reference"
+    sec.row("discharge pressure of the reference point", "p1", f"{ref}.p1",
+            note=f"ψ1 = p1/p_B = {number(sec.get(f'{ref}.psi1'))}")
+    sec.row("face gap, mean", "z̄", f"{ref}.z_mean")
+    sec.row("face gap, standard deviation", "σ_z", f"{ref}.z_std")
+    sec.row("face-gap spread kσ/mean", "δu", f"{ref}.gap_spread", note=f"k = {number(sec.get('band_sigma'))}")
+    sec.row("face leak, mean", "Q̄_T", f"{ref}.Q_T_mean")
+    sec.row("face leak, standard deviation", "σ_Q", f"{ref}.Q_T_std")
+    sec.row("face-leak spread kσ/mean", "δq_T", f"{ref}.leak_spread")
+    sec.row("samples with the regulator valve on its stop", "", f"{ref}.saturated_fraction")
+    psi1 = sec.get("psi1", [])
+    rows, src = [], []
+    for i in range(len(psi1)):
+        rows.append([sec.cell(f"psi1.{i}"), sec.cell(f"p1.{i}"), sec.cell(f"dimensional.z.mean.{i}"),
+                     sec.cell(f"dimensional.z.std.{i}"), sec.cell(f"exact.u.spread.{i}"),
+                     sec.cell(f"dimensional.p2.mean.{i}"), sec.cell(f"exact.Q_T.mean.{i}"),
+                     sec.cell(f"exact.Q_T.std.{i}"), sec.cell(f"exact.q_T.spread.{i}"),
+                     sec.cell(f"saturated_fraction.{i}"), sec.cell(f"exact.u.invalid.{i}")])
+        src.append([sec.cell(f"psi1.{i}"), *(sec.cell(f"{part}.{k}.{stat}.{i}") for k in ("u", "q_T")
+                                             for part in ("exact", "source") for stat in ("mean", "spread"))])
+    saturated = [f"ψ1 = {number(p)}: {significant(100 * f, 3)} %" for p, f in
+                 zip(psi1, sec.get("saturated_fraction") or [], strict=False) if f]
+    if saturated:  # one line: the source's closed forms assume an ideal regulator
+        sec.warnings.append("samples with the regulator valve on its stop (the closed forms assume an ideal "
+                            "regulator): " + ", ".join(saturated))
+    if has_path(sec.block, "dimensional"):
+        sec.tables.append(table("Exact statics over the samples: the physical values (mean, standard deviation) "
+                                "beside the source's groups' spread kσ/mean",
+                                ["ψ1", "p1", "mean z", "std z", "spread u", "mean p2", "mean Q_T", "std Q_T",
+                                 "spread q_T", "saturated fraction", "invalid samples"], rows, headline=True))
+    sec.validation_tables.append(table("The source's closed forms (ideal regulator, Figs 3.3-3.4) beside the exact "
+                                       "statics over the same samples: mean and spread of u = z/z_B and q_T = Q_T/Q_B",
+                                       ["ψ1", "u exact", "spread", "u closed form", "spread", "q_T exact", "spread",
+                                        "q_T closed form", "spread"], src))
+    if has_path(sec.block, "reference"):
+        from autobal.analysis.montecarlo import MonteCarloResult  # the verdict's one copy
+
+        sec.conclude(*MonteCarloResult(sec.block).verdict())
+    else:  # a results.json written before the physical values
+        invalid = sum(get_path(sec.block, "exact.u.invalid") or [])
+        sec.conclude(not sec.block.get("failures"), f"{invalid} sample solves without a converged exact solution"
+                     if invalid else "every sample has a converged exact solution")
+    at = sec.get("afc.at") or {}
+    if at:
+        model, forcing = sec.get("afc.model"), sec.get("afc.forcing")
+        st = stable_models(sec.results).get(model)
+        sec.tables.append(table(f"AFC amplitude spread of the {model_name(model)} model under the {forcing} forcing "
+                                f"({sec.get('afc.samples')} samples of {len(sec.get('afc.parameters') or [])} "
+                                "uncertain parameters)", ["where", "ω", "nominal", "mean", "std", "cv"],
+                                [[text(k.replace("_", " ")), *(sec.cell(f"afc.at.{k}.{x}") for x in (
+                                    "omega", "nominal_um", "mean_um", "std_um", "cv"))] for k in at], headline=True))
+        if model in SOURCE_MODELS:
+            sec.warnings.append(f"the AFC spread is computed on the {model_name(model)}, which the stability analysis "
+                                "reports unstable at the pumps' operating points (see the dynamics scenes): a "
+                                "validation of the source's Fig. 3.7, not a prediction" if st is None else
+                                f"the AFC model '{model_name(model)}' is {'stable' if st else 'UNSTABLE'}")
+        else:
+            sec.validation.append({"ok": None, "text": "the source's AFC spread (Fig. 3.7, 'up to 40 %') was "
+                                                       "computed on its program model, which is unstable; this run "
+                                                       f"uses the {model_name(model)} model (set "
+                                                       "analyses.montecarlo.afc.model: program, forcing: appendix "
+                                                       "and its 28 constants to reproduce the source)"})

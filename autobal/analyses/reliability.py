@@ -13,7 +13,8 @@ from autobal.units import Length, Time
 
 DESCRIPTION = "traditional disc wear and time to failure"
 NEEDS = None
-REPORT_SECTION = "reliability_section"
+QUANTITIES_MODULE = "autobal.analysis.reliability"  # its QUANTITIES declare every number of its block
+TITLE = "Reliability"  # of its section of report.html
 Probability = Annotated[float, Field(gt=0, lt=1)]
 
 
@@ -112,3 +113,26 @@ def run(scene, settings: Reliability):
 def estimate_seconds(settings: Reliability) -> float:
     """The reliability integrals over (time, load) nodes."""
     return COST["start"] + COST["reliability_node"] * settings.time_points * settings.tau_nodes
+
+
+def report_section(sec) -> None:
+    """Wear, reliability P(t) and mean time to failure of the traditional disc (Pavlenko 2014, ch. 1.2)."""
+    from autobal.report import number
+
+    sec.row("largest gap", "u_max", "u_max")
+    sec.row("mean wear rate", "b̄", "b_mean")
+    sec.row("mean load", "τ̄", "tau_mean")
+    times = sec.get("times_h", [])
+    for i, t in enumerate(times):
+        sec.row(f"reliability at {number(t)} h (literal (1.48))", "P(t)", f"literal.P.{i}")
+    sec.row("mean time to failure (literal)", "T", "literal.mttf_h")
+    sec.row("mean time to failure (renormalised load density)", "T", "renormalised.mttf_h")
+    level = sec.get("reliable_probability")
+    for variant in ("literal", "renormalised"):
+        t = sec.get(f"{variant}.time_at_h")
+        p0 = sec.get(f"{variant}.P0")
+        if t is None and level is not None:
+            sec.verdict(False, f"{variant}: P(t) never reaches {number(level)} (P(0) = {number(p0)}): no time of "
+                               "reliable operation")
+        elif t is not None:
+            sec.verdict(None, f"{variant}: P(t) ≥ {number(level)} up to t = {number(t)} h")

@@ -19,7 +19,8 @@ from autobal.units import AngularAcceleration, AngularSpeed, SpeedOrZero, Time, 
 
 DESCRIPTION = "optimal spin-up of a ROSS rotor reduced to its modes (the ross extra)"
 NEEDS = "ross_rotor"
-REPORT_SECTION = "ross_spinup_section"
+QUANTITIES_MODULE = "autobal.ocp.modal"  # its QUANTITIES declare every number of its block
+TITLE = "Optimal spin-up of a ROSS rotor (multi-mode)"  # of its section of report.html
 
 
 class RossSpinup(Strict):
@@ -85,3 +86,49 @@ def estimate_seconds(settings: RossSpinup) -> float:
     5 s) and its starts on the modal envelope (4 modes, 160 intervals of degree 3: about 24 s measured)."""
     return 30.0 * settings.validate_with_ross + COST["start"] + COST["modal_ocp_point"] * settings.intervals \
         * settings.degree * 2
+
+
+def report_section(sec) -> None:
+    """Optimal spin-up of a ROSS rotor reduced to its modes: the optimum's peak against the best ramp (the verdict),
+    the reduction checked against ROSS, API 684 (2005) values of each critical speed."""
+    from autobal.analysis.quantities import convert
+    from autobal.ocp.modal import ModalSpinupResult  # the verdict's one copy
+    from autobal.report import cell, has_path, number, table, text
+
+    st = sec.get("status")
+    sec.conclude(*ModalSpinupResult.verdict_of(sec.block))
+    sec.row("peak deflection of the optimum, 0-peak (re-simulated)", "r*", "peak_deflection_m")
+    sec.row("peak deflection of the best ramp", "r*", "baseline_ramp_peak_m")
+    sec.row("improvement over the best ramp", "", "improvement_over_best_ramp")
+    sec.row("node of the peak", "", "node_of_peak")
+    sec.row("time of the peak", "t*", "time_of_peak_s")
+    sec.row("speed at the peak", "ω*", "omega_at_peak_rad_s")
+    sec.row("final (service) speed", "ω_f", "final_speed_rad_s")
+    sec.row("modes kept", "", "modes")
+    sec.row("mode cutoff", "ω_c", "mode_cutoff_rad_s")
+    sec.row("shift of a critical speed by the gyroscopic terms", "", "gyroscopic_shift")
+    sec.row("largest critical-speed difference vs ROSS", "", "critical_speeds.max_rel_error_vs_ross")
+    sec.row("relative difference, CVODES re-simulation vs collocation", "", "resimulation_rel_error")
+    sec.row("build time", "", "build_time_s")
+    sec.row("solve time (all starts)", "", "total_solve_time_s")
+    sec.verdict(st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"IPOPT: {st} ({sec.get('method')})")
+    err = sec.get("critical_speeds.max_rel_error_vs_ross")
+    if err is not None:
+        sec.verdict(err <= 0.01, f"critical speeds of the reduced model within {number(100 * err)} % of ROSS's")
+    cs = sec.get("critical_speeds") or {}
+    ross = cs.get("ross_wd_rad_s") or []
+    rows = []
+    for i, w in enumerate(cs.get("reduced_wd_rad_s") or []):
+        at = f"critical_speeds.{{}}.{i}"
+        rows.append([text(str(i + 1)), cell(w, "rad/s"), cell(convert(w, "rad/s", "rpm"), "rpm"),
+                     cell(ross[i] if i < len(ross) else None, "rad/s"),
+                     sec.cell(at.format("reduced_damping_ratio")),
+                     sec.cell(at.format("amplification_factor"))
+                     if has_path(sec.block, at.format("amplification_factor")) else text(None),
+                     sec.cell(at.format("separation_margin_pct"))
+                     if has_path(sec.block, at.format("separation_margin_pct")) else text(None)])
+    if rows:
+        sec.tables.append(table("Critical speeds below the final speed, with the API 684 (2005) amplification factor "
+                                "1/(2ζ) and the separation margin of the final speed",
+                                ["#", "reduced model", "reduced model, rpm", "ROSS", "damping ratio", "AF", "SM"],
+                                rows))

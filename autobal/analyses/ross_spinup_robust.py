@@ -13,11 +13,13 @@ from pydantic import create_model, model_validator
 from autobal.analyses import COST
 from autobal.analyses.ross_spinup import RossSpinup
 from autobal.analyses.spinup_robust import SpinupRobust
+from autobal.analyses.spinup_robust import report_section as report_section  # one section for both rotors
 from autobal.errors import ScenarioError
 
 DESCRIPTION = "one spin-up profile of a ROSS rotor for a set of rotors (worst case; the ross extra)"
 NEEDS = "ross_rotor"
-REPORT_SECTION = "spinup_robust_section"
+QUANTITIES_MODULE = "autobal.ocp.robust_study"  # the robust study's declarations: peaks in m for the modal rotor
+TITLE = "Robust spin-up of a ROSS rotor (multi-mode)"
 
 #: the robust study's settings, as the Jeffcott rotor's spinup_robust declares them (no liquid: the modal rotor has
 #: none)

@@ -15,7 +15,8 @@ from autobal.units import AngularAcceleration, AngularSpeed, SpeedOrZero, Time, 
 
 DESCRIPTION = "Jeffcott rotor studies"
 NEEDS = "rotor"
-REPORT_SECTION = "rotor_dynamics_section"
+QUANTITIES_MODULE = "autobal.analysis.rotor_study"  # its QUANTITIES declare every number of its block
+TITLE = "Rotor dynamics"  # of its section of report.html
 RateOrZero = quantity("rate", "nonnegative")  # n = chi/m1, 1/s
 Fraction = Annotated[float, Field(gt=0, le=1)]
 
@@ -109,3 +110,32 @@ def estimate_seconds(settings: RotorDynamics) -> float:
     runs += len(rd.lewis.zeta) * len(rd.lewis.accel_ratio) if rd.lewis else 0
     runs += 1 if rd.motor_runup else 0
     return COST["start"] + COST["rotor_run"] * runs
+
+
+def report_section(sec) -> None:
+    """Rotor with a liquid auto-balancer: stationary, steps, passage (Pashkov 2010); one verdict, the result's."""
+    from autobal.report import declarations, table
+
+    sec.row("critical speed with the liquid", "ω_cr", "rotor.omega_cr_rad_s")
+    sec.row("natural frequency without liquid", "Ω0", "rotor.Omega0_rad_s")
+    sec.row("liquid mass ratio", "ψ", "rotor.psi")
+    sec.row("damping ratio", "ζ0", "rotor.zeta0")
+    sec.row("largest real part of the eigenvalues over Ω0", "max Re λ/Ω0", "stationary.stability.max_real_over_Omega0")
+    for psi, n in (sec.get("passage.crossover_n_star") or {}).items():  # keys like "0.75": the value given
+        sec.row(f"damping above which the liquid raises the passage peak (ψ = {psi})", "n*",
+                f"passage.crossover_n_star.{psi}", value=n)
+    sec.row("speed at the end of the motor run-up", "ω_end", "motor_runup.omega_final_rad_s")
+    sec.row("peak deflection of the motor run-up", "δ/e", "motor_runup.peak_deflection_over_e")
+    from autobal.analysis.rotor_study import RotorDynamicsResult  # the verdict's one copy
+
+    verdict = RotorDynamicsResult(sec.block).verdict()
+    if verdict:
+        sec.conclude(*verdict)
+    rows = [[sec.cell(f"passage.table.{i}.{k}") for k in ("n", "psi", "delta_max_over_e", "z_delta_max", "d_max")]
+            for i, _ in enumerate(sec.get("passage.table", []))]
+    if rows:
+        key = "passage.acceleration_rad_s2"
+        accel = declarations("rotor_dynamics").find(key).text(sec.get(key))
+        sec.tables.append(table(f"Passage through the critical speed at {accel}: peak "
+                                "deflection δ*/e and its speed ratio ν = ω/Ω0",
+                                ["n", "ψ", "δ*/e", "ν at the peak", "d*"], rows, headline=True))

@@ -4,6 +4,7 @@ share."""
 
 from __future__ import annotations
 
+import csv
 from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
@@ -15,7 +16,8 @@ from autobal.units import AngularAcceleration, AngularSpeed, SpeedOrZero, Time, 
 
 DESCRIPTION = "optimal spin-up through the critical speed"
 NEEDS = "rotor"
-REPORT_SECTION = "spinup_section"
+QUANTITIES_MODULE = "autobal.ocp.spinup_study"  # its QUANTITIES declare every number of its block
+TITLE = "Optimal spin-up"  # of its section of report.html
 AngularJerk = quantity("angular jerk")
 
 
@@ -125,3 +127,133 @@ def accuracy(scene, settings: Spinup):
 
     with progress.steps(None, "accuracy spinup (degrees x intervals)", "IPOPT solve", catch=True):
         return spinup_study(ocp(scene, settings))
+
+
+def _spinup_binding(sec) -> list[str]:
+    """The limits the optimum runs on: acceleration (from the controls table), torque, power, deflection."""
+    from autobal.report import get_path, number, quantity
+
+    scene = get_path(sec.results, "meta.scene_si") or {}
+    ocp, drive = get_path(scene, "analyses.spinup") or {}, get_path(scene, "rotor.drive") or {}
+    out = []
+    amax, controls = ocp.get("max_acceleration"), sec.folder / "spinup_controls.csv" if sec.folder else None
+    if amax and controls is not None and controls.exists():
+        with controls.open() as fh:
+            alpha = [float(r["alpha_rad_s2"]) for r in csv.DictReader(fh)]
+        on = sum(abs(a) >= 0.999 * amax for a in alpha)
+        if on:
+            from autobal.ocp.simulation import rate_text  # rad/s² with rpm/s beside, the one copy
+
+            out.append(f"acceleration limit |α| ≤ {rate_text(amax)} on {on} of {len(alpha)} control intervals "
+                       f"({number(100 * on / len(alpha))} %)")
+    for key, limit, what in (("max_torque_N_m", drive.get("max_torque"), "drive torque limit"),
+                             ("max_power_W", drive.get("max_power"), "drive power limit")):
+        got, q = sec.get(key), quantity(f"spinup.{key}")
+        if limit and got is not None and got >= 0.999 * limit:
+            out.append(f"{what} {q.text(limit)} reached (largest {q.text(got)})")
+    lim = ocp.get("deflection_limit")
+    if lim and sec.get("peak_deflection_over_e") is not None and sec.get("peak_deflection_over_e") >= 0.999 * lim:
+        out.append(f"deflection limit δ/e ≤ {number(lim)} reached")
+    if not out:
+        out.append("none of the acceleration, torque, power and deflection limits is active at the optimum")
+    return out
+
+
+def report_section(sec) -> None:
+    """Optimal spin-up through the critical speed (direct collocation, CVODES re-simulation): the verdict is the
+    optimum's peak deflection, its gain against the best ramp within the drive limits and whether it brakes."""
+    from autobal.ocp.spinup_study import verdict  # the verdict's one copy
+    from autobal.report import cell, get_path, number, table, text
+
+    sec.conclude(*verdict(sec.block))
+    sec.verdict(None, f"objective: {str(sec.get('objective', '')).replace('_', ' ')}; {sec.get('method')}; "
+                      f"wall time {number(sec.get('wall_time_s'))} s (NLP build {number(sec.get('build_time_s'))} s, "
+                      f"NLP solves {number(sec.get('total_solve_time_s'))} s over {len(sec.get('starts', []))} solves, "
+                      "the rest global search, re-simulations and baselines)")
+    sec.row("peak deflection of the optimum, 0-peak (the whirl orbit's radius; re-simulated)", "δ*",
+            "peak_deflection_m")
+    sec.row("peak deflection of the optimum over the eccentricity", "δ*/e", "peak_deflection_over_e")
+    sec.row("peak deflection of the best ramp within the drive limits", "δ*/e", "baseline_ramp_peak_over_e")
+    sec.row("gain against the best ramp within the drive limits", "", "gain_vs_best_feasible_ramp_pct")
+    sec.row("gain against the constant ramp", "", "gain_vs_constant_ramp_pct")
+    sec.row("eccentricity of the rotor", "e", "eccentricity_m")
+    for label, sym, key in (("rotor mass", "m1", "mass_kg"),
+                            ("shaft stiffness (c = m1 Ω_c²)", "c", "stiffness_N_per_m"),
+                            ("damping (χ = 2 ζ m1 Ω_c)", "χ", "damping_N_s_per_m"),
+                            ("damping ratio", "ζ", "damping_ratio"),
+                            ("critical speed (with the liquid mass: Ω0 √ψ)", "ω_cr", "critical_speed_rad_s"),
+                            ("amplification factor, API 684 (2005): N_c/(N_2 − N_1) = 1/(2ζ)", "AF",
+                             "amplification_factor"),
+                            ("separation margin of the final speed from the critical speed, API 684 (2005)", "SM",
+                             "separation_margin_pct")):
+        sec.row(label, sym, f"rotor.{key}")
+    sec.row("time of the peak", "t*", "time_of_peak_s")
+    sec.row("speed at the peak", "ω*", "omega_at_peak_rad_s")
+    sec.row("final time", "T", "final_time_s")
+    sec.row("largest drive torque", "M_max", "max_torque_N_m")
+    sec.row("smallest drive torque (below 0: the drive brakes)", "M_min", "min_torque_N_m")
+    sec.row("largest drive power", "P_max", "max_power_W")
+    sec.row("relative difference, CVODES re-simulation vs transcription", "", "resimulation_rel_error")
+    sec.row("chattering of the optimal acceleration (pulse variation of α/α_max; 0: none)", "",
+            "control_pulse_variation")
+    sec.row("NLP build time", "", "build_time_s")
+    sec.row("NLP solve time (IPOPT or fatrop), all starts and mesh stages", "", "total_solve_time_s")
+    sec.row("wall time of the analysis (search, solves, re-simulations)", "", "wall_time_s")
+    st = sec.get("status")
+    sec.verdict(st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"NLP solver: {st} ({sec.get('method')})")
+    base = sec.get("baselines") or {}
+    e = sec.get("eccentricity_m")
+    rows = []
+    for k, b in base.items():
+        pk = b.get("peak_deflection_over_e")
+        limits = {True: "within", False: "OUTSIDE: " + ", ".join(b.get("violated", [])), None: "no drive data"}
+        rows.append([text(b.get("label")), sec.cell(f"baselines.{k}.peak_deflection_over_e"),
+                     sec.cell("peak_deflection_m", None if pk is None or e is None else pk * e),
+                     sec.cell(f"baselines.{k}.max_torque_N_m"), sec.cell(f"baselines.{k}.max_power_W"),
+                     text(limits[b.get("within_drive_limits")]),
+                     text("reference of the gain" if k == sec.get("baseline_ramp_key") else "")])
+        if b.get("within_drive_limits") is False:
+            sec.verdict(None, f"{b.get('label')}: outside the drive limits ({', '.join(b.get('violated', []))}), "
+                              f"peak {number(pk)} e, drawn but no reference")
+    if rows:
+        sec.tables.append(table("Ramp baselines (re-simulated): a gain is quoted only against a ramp within the drive "
+                                "limits", ["baseline", "peak δ*/e", "peak δ*, 0-peak", "largest torque",
+                                           "largest power", "drive limits", ""], rows))
+    if sec.get("brakes") is not None:
+        sec.verdict(None, f"the optimum {'brakes' if sec.get('brakes') else 'does not brake'} (smallest drive "
+                          f"torque {number(sec.get('min_torque_N_m'))} N·m; braking limit "
+                          f"{number(sec.get('braking_torque_limit_N_m'))} N·m)")
+    seg = sec.get("segments")
+    if seg:
+        sec.verdict(seg.get("within_drive_limits"),
+                    f"{seg['segments']}-segment ramp table (drive_segments.csv): peak "
+                    f"{number(seg.get('peak_deflection_over_e'))} e, {number(seg.get('loss_vs_optimum_pct'))} % "
+                    "against the full optimum, " + ("within" if seg.get("within_drive_limits") else "OUTSIDE")
+                    + " the drive limits")
+    drive = get_path(sec.results, "meta.scene_si.rotor.drive") or {}
+    if not (drive.get("max_torque") or drive.get("max_power")):
+        sec.verdict(None, "no drive torque or power limit in the scene")
+    elif "within_drive_limits" in sec.block:
+        sec.verdict(sec.get("within_drive_limits"), "drive torque and power limits " +
+                    ("kept" if sec.get("within_drive_limits") else "EXCEEDED") + " in the re-simulation")
+    for b in _spinup_binding(sec):
+        sec.verdict(None, f"binding constraint: {b}")
+    segs = sec.folder / "drive_segments.csv" if sec.folder else None
+    if segs is not None and segs.exists():
+        with segs.open() as fh:
+            rows = [[text(r["segment"]), cell(float(r["t_start_s"]), "s"), cell(float(r["t_end_s"]), "s"),
+                     text(number(float(r["speed_start_rpm"]))), text(number(float(r["speed_end_rpm"]))),
+                     text(number(float(r["rate_rpm_s"]))), cell(float(r["rate_rad_s2"]), "rad/s^2")]
+                    for r in csv.DictReader(fh)]
+        sec.tables.append(table("Ramp table for the drive (drive_segments.csv; the last row the hold): speeds in "
+                                "rpm, rates in rpm/s", ["segment", "start", "end", "start speed, rpm",
+                                                        "end speed, rpm", "rate, rpm/s", "rate"], rows))
+    keeps = {True: "yes", False: "NO", None: "—"}
+    rows = [[text(s.get("start")), text(s.get("stage", "final mesh")), text(s.get("status")),
+             text(s.get("iterations", "—")), cell(s.get("solve_time_s"), "s"), cell(s.get("objective"), "1"),
+             text(keeps[s.get("keeps_limit")])] for s in sec.get("starts", [])]
+    if rows:
+        sec.tables.append(table("NLP solves of the multi-start: every start on the coarse mesh, the best one "
+                                "refined on the final mesh and judged by its CVODES re-simulation",
+                                ["start", "stage", "status", "iterations", "solve time", "re-simulated objective",
+                                 "keeps limit"], rows))

@@ -12,7 +12,8 @@ from autobal.analyses.spinup import Spinup, ocp
 
 DESCRIPTION = "earliest arrival with the peak bounded, and the front of peak against arrival time"
 NEEDS = "rotor"
-REPORT_SECTION = "spinup_time_optimal_section"
+QUANTITIES_MODULE = "autobal.ocp.time_optimal_study"  # its QUANTITIES declare every number of its block
+TITLE = "Time-optimal spin-up"  # of its section of report.html
 
 
 class SpinupTimeOptimal(Spinup):
@@ -55,3 +56,38 @@ def estimate_seconds(settings: SpinupTimeOptimal) -> float:
     """The minimum-peak and fastest solves and two per front point, each at the spin-up's cost."""
     return COST["start"] + COST["ocp_collocation_point"] * settings.intervals * settings.degree * (
         4 + 2 * settings.front_points)
+
+
+def report_section(sec) -> None:
+    """Time-optimal spin-up: the earliest arrival under the peak limit (the verdict) and the front."""
+    from autobal.ocp.time_optimal_study import verdict  # the verdict's one copy
+    from autobal.report import cell, number, table, text
+
+    sec.conclude(*verdict(sec.block))
+    sec.row("final speed", "ω_f", "final_speed_rad_s")
+    sec.row("peak limit", "δ/e", "deflection_limit_over_e")
+    sec.row("earliest arrival at the final speed", "T", "arrival_time_s")
+    sec.row("latest front deadline whose minimum peak exceeds the limit", "", "arrival_time_lower_bound_s")
+    sec.row("peak deflection of the earliest arrival (re-simulated)", "δ*/e", "peak_deflection_over_e")
+    sec.row("arrival of the maximum-acceleration ramp", "", "ramp_arrival_time_s")
+    sec.row("peak of the maximum-acceleration ramp", "δ*/e", "ramp_peak_over_e")
+    sec.row("eccentricity (δ* = e δ*/e, 0-peak)", "e", "eccentricity_m")
+    sec.row("largest relative difference, collocation vs CVODES re-simulation", "", "resimulation_rel_error")
+    sec.row("build time", "", "build_time_s")
+    sec.row("solve time", "", "solve_time_s")
+    if sec.get("deflection_limit_over_e") is not None:  # else the front's monotonicity is the verdict
+        sec.verdict(sec.get("monotone"), "the front's peak does not rise with the arrival deadline"
+                    if sec.get("monotone") else "the front is NOT monotone (a local optimum)")
+    from autobal.ocp.spinup_study import QUANTITIES as SPINUP
+
+    e, physical = sec.get("eccentricity_m"), SPINUP.find("peak_deflection_m")
+    rows = [[cell(p.get("arrival_time_s"), "s"), cell(p.get("resimulated_peak_over_e"), "1"),
+             cell(None if e is None else p.get("resimulated_peak_over_e") * e, "m", physical.display),
+             cell(p.get("collocation_peak_over_e"), "1"), cell(p.get("resimulation_rel_error"), "1"),
+             cell(p.get("intervals"), "1"), cell(p.get("solve_time_s"), "s"),
+             text(f"held from {number(p['held_from_s'])} s" if p.get("held_from_s") else "")]
+            for p in sec.get("front", [])]
+    if rows:
+        sec.tables.append(table("Front: the smallest peak for each arrival deadline",
+                                ["arrival by", "δ*/e (re-simulated)", "δ* (0-peak)", "δ*/e (collocation)",
+                                 "difference", "intervals", "solve time", "profile"], rows, headline=True))

@@ -16,7 +16,8 @@ RateOrZero = quantity("rate", "nonnegative")
 
 DESCRIPTION = "poles, Hurwitz, stability maps"
 NEEDS = "device.dynamics"
-REPORT_SECTION = "stability_section"
+QUANTITIES_MODULE = "autobal.analysis.stability"  # its QUANTITIES declare every number of its block
+TITLE = "Stability"  # of its section of report.html
 
 
 class MapAxis(Strict):
@@ -86,3 +87,59 @@ def estimate_seconds(settings: Stability) -> float:
     """One map point per grid point and model (the poles themselves are cheap)."""
     m = settings.map
     return COST["start"] + (COST["map_point"] * m.x.points * m.y.points * len(m.models) if m else 0.0)
+
+
+def _rate(decay) -> str:
+    from autobal.report import number
+
+    return ("" if decay is None else f"disturbances decay at {number(decay)} 1/s" if decay > 0
+            else f"disturbances GROW at {number(-decay)} 1/s")
+
+
+def report_section(sec) -> None:
+    """Poles, Hurwitz determinants and margins (Pavlenko 2014, §2.7): the headline model (energy-consistent)
+    gives the verdict; the source's models are the validation part."""
+    from autobal.report import (
+        SOURCE_MODELS,
+        cell,
+        get_path,
+        leading_poles,
+        model_name,
+        ordered_models,
+        source_model_line,
+        table,
+        text,
+    )
+
+    h = sec.get("headline")
+    if h:
+        from autobal.analysis.stability import QUANTITIES, StabilityResult  # the verdict's one copy
+
+        sec.conclude(*StabilityResult(sec.block).verdict())
+        for q, key, _ in QUANTITIES.headline(sec.block):
+            sec.row(q.description, q.symbol, key)
+    own, source = [], []
+    for model, m in ordered_models(sec.get("models", {})):
+        poles = m.get("poles", {})
+        lead = leading_poles(poles.get("real", []), poles.get("imag", []))
+        st = m.get("stable")
+        row = [text(model_name(model)), text({True: "stable", False: "UNSTABLE"}.get(st, "—")),
+               {"text": lead, "unit": "1/s", "num": True}, cell(get_path(m, "margin.decay_rate"), "1/s"),
+               cell(get_path(m, "margin.min_damping_ratio"), "1")]
+        if model in SOURCE_MODELS:
+            source.append(row)
+            source_model_line(sec, model, st)
+            continue
+        own.append(row)
+        if model != (h or {}).get("model"):  # another model of the toolkit's own: a check, not the verdict
+            sec.verdict(st, f"{model_name(model)}: {'stable' if st else 'UNSTABLE'}; leading poles {lead} 1/s; "
+                            f"{_rate(get_path(m, 'margin.decay_rate'))}")
+    columns = ["model", "verdict", "leading poles", "decay rate", "min damping ratio ζ"]
+    caption = "leading poles (largest real part), decay rate −max Re λ and the smallest damping ratio"
+    if own:
+        sec.tables.append(table(f"Stability: {caption}", columns, own, headline=True))
+    if source:
+        sec.validation_tables.append(table(f"Stability of the source's models: {caption}", columns, source))
+    for m, t in (sec.get("restoring") or {}).items():
+        (sec.validation_notes if m in SOURCE_MODELS else sec.notes).append(
+            f"{model_name(m)}: {t.removeprefix(m + ': ')}")

@@ -13,7 +13,8 @@ from autobal.units import AngularSpeed, Time
 
 DESCRIPTION = "time responses"
 NEEDS = "device.dynamics"
-REPORT_SECTION = "transient_section"
+QUANTITIES_MODULE = "autobal.analysis.simulate"  # its QUANTITIES declare every number of its block
+TITLE = "Transients"  # of its section of report.html
 
 
 class TransientCase(Strict):
@@ -86,3 +87,24 @@ def accuracy(scene, settings: Transient):
 
     dtau = next((c.amplitude for c in settings.cases if c.input == "force_step"), 0.01)
     return workprecision.dynamics_study(_model(scene, settings), settings.duration, dtau)
+
+
+def report_section(sec) -> None:
+    """Nonlinear transients by CVODES/IDAS (Pavlenko 2014, §2.5)."""
+    from autobal.report import cell, table, text
+
+    sec.row("equilibrium residual of the nonlinear model", "", "equilibrium_residual")
+    rows = []
+    for c in sec.get("cases", []):
+        rows.append([text(c.get("input")), cell(c.get("amplitude"), "1"), cell(c.get("frequency"), "rad/s"),
+                     cell(c.get("max_dz_um"), "um"), cell(c.get("final_dz_um"), "um"), cell(c.get("t_end"), "s"),
+                     cell(c.get("integrator_steps"), "1"), text(c.get("failure") or "ok")])
+        if c.get("failure"):
+            sec.verdict(False, f"{c.get('input')}: integration failed: {c['failure']}")
+        for e in c.get("events") or []:
+            sec.warnings.append(f"{c.get('input')}: event {e}")
+    sec.tables.append(table(f"Transients of the {sec.get('model')} model ({sec.get('integrator')}): face-gap change "
+                            "dz", ["input", "amplitude", "frequency", "max |dz|", "final dz", "t_end", "steps",
+                                   "status"], rows, headline=True))
+    if rows and not any(c.get("failure") for c in sec.get("cases", [])):
+        sec.verdict(True, "every transient integrated to its end time")
