@@ -52,3 +52,15 @@ def shipped_run(tmp_path_factory):
         return _SHIPPED_RUNS[name]
 
     return get
+
+
+def pytest_collection_modifyitems(config, items):
+    """Under pytest-xdist with ``--dist loadgroup`` (.ci/run's slow set), the tests of one shipped scene go to one
+    worker, so that the scene runs once (shipped_run shares a run within a worker only): a test parametrized by a
+    scene name is grouped by it, every other test that uses shipped_run joins the group "shipped"."""
+    for item in items:
+        if "shipped_run" not in getattr(item, "fixturenames", ()):
+            continue
+        params = getattr(getattr(item, "callspec", None), "params", {})
+        scene = next((v for k, v in params.items() if k in ("name", "scene") and isinstance(v, str)), "shipped")
+        item.add_marker(pytest.mark.xdist_group(scene))
