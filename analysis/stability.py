@@ -129,9 +129,7 @@ def _restoring(setup, model, xaxis, yaxis, xs, ys, R) -> dict:
     x0, y0 = getattr(setup.data, kx), getattr(setup.data, ky)
     lines = {}
     for ax, key, vals in ((xaxis, kx, xs), (yaxis, ky, ys)):
-        r = max_real(setup, model, [{key: v} for v in vals])
-        at = lambda v, key=key: max_real(setup, model, [{key: v}])[0]  # noqa: E731
-        lines[ax.parameter] = {"values": vals, "max_real": r, "stable_intervals": _intervals(vals, r, at)}
+        lines[ax.parameter] = {"values": vals, **_scan(setup, model, key, vals)}
 
     def offset(v, v0, ax, vals):  # distance from nominal in decades (log) or in axis spans (linear)
         return math.log10(v / v0) if ax.scale == "log" and v0 > 0 else (v - v0) / (vals[-1] - vals[0])
@@ -164,10 +162,15 @@ def single_parameter_scans(setup: Setup, model: str, points: int = 61) -> dict:
             vals = np.geomspace(1e-3 * crit, 1e2 * crit, points)
         else:
             vals = np.geomspace(1e-3 * nominal, 1e3 * nominal, points)
-        r = max_real(setup, model, [{key: v} for v in vals])
-        at = lambda v, key=key: max_real(setup, model, [{key: v}])[0]  # noqa: E731
-        out[name] = {"nominal": nominal, "values": vals, "max_real": r, "stable_intervals": _intervals(vals, r, at)}
+        out[name] = {"nominal": nominal, "values": vals, **_scan(setup, model, key, vals)}
     return out
+
+
+def _scan(setup: Setup, model: str, key: str, vals) -> dict:
+    """max Re lambda of ``model`` along one dynamic parameter ``key`` (the others nominal) over the grid ``vals``,
+    and its stable intervals, each ending at a root of max Re lambda."""
+    r = max_real(setup, model, [{key: v} for v in vals])
+    return {"max_real": r, "stable_intervals": _intervals(vals, r, lambda v: max_real(setup, model, [{key: v}])[0])}
 
 
 def _intervals(vals, max_re, at=None) -> list[list[float]]:

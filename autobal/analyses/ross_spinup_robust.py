@@ -12,8 +12,7 @@ from pydantic import create_model, model_validator
 
 from autobal.analyses import COST
 from autobal.analyses.ross_spinup import RossSpinup
-from autobal.analyses.spinup_robust import SpinupRobust
-from autobal.analyses.spinup_robust import report_section as report_section  # one section for both rotors
+from autobal.analyses.spinup_robust import SpinupRobust, report_section  # noqa: F401  one section for both rotors
 from autobal.errors import ScenarioError
 
 DESCRIPTION = "one spin-up profile of a ROSS rotor for a set of rotors (worst case; the ross extra)"
