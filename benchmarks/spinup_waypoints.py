@@ -33,8 +33,8 @@ SCENES = ("spinup_jeffcott_deadline_5s", "spinup_jeffcott_horizon_10s")
 RUNS = {"spinup_jeffcott_deadline_5s": [(3, 1, 10, 300), (4, 1, 10, 300), (5, 1, 10, 300), (6, 1, 10, 300),
                                         (5, 2, 25, 400)],
         "spinup_jeffcott_horizon_10s": [(4, 1, 10, 300), (6, 1, 10, 300)]}
-# the best full-braking profiles of `python -m benchmarks spinup_search` (phase durations, s, alternately full
-# acceleration and full braking), polished here as waypoint profiles
+# the best full-braking profiles of the searches of benchmarks/spinup_ocp.md (`python -m benchmarks spinup_search`
+# and its exploratory runs; phase durations, s, alternately full acceleration and full braking), polished here
 BANG_BANG = {"spinup_jeffcott_deadline_5s": [1.004968, 0.0, 0.236354, 0.006297, 0.412206, 0.335701, 0.585426,
                                              0.029814, 0.843241, 0.001221],
              "spinup_jeffcott_horizon_10s": [3.016849, 5.6e-05, 0.002098, 0.247027, 0.533299, 0.500742]}
@@ -114,11 +114,11 @@ def polish(ocp, x0: np.ndarray, rotor, maxfev: int = 8000):
     return r.x, float(r.fun), int(r.nfev)
 
 
-def search_waypoints(ocp, K: int, seed: int, rotor, maxiter: int = 800, popsize: int = 15):
-    """Differential evolution on K segments, then Nelder-Mead at POLISH_DT: (x, DE peak, polished peak, profiles
-    integrated)."""
+def search_waypoints(ocp, K: int, seed: int, rotor, maxiter: int = 800, popsize: int = 15, dt: float = DT):
+    """Differential evolution on K segments (integrator step dt), then Nelder-Mead at POLISH_DT: (x, DE peak,
+    polished peak, profiles integrated)."""
     bounds = [(-1.0, 1.0)] * K + [(0.0, 1.0)] * K
-    r = differential_evolution(lambda x: integrator_peaks(ocp, *knots(ocp, x.T), rotor, DT), bounds, seed=seed,
+    r = differential_evolution(lambda x: integrator_peaks(ocp, *knots(ocp, x.T), rotor, dt), bounds, seed=seed,
                                vectorized=True, updating="deferred", popsize=popsize, maxiter=maxiter, tol=1e-10,
                                polish=False, mutation=(0.5, 1.0), recombination=0.9)
     x, fine, nfev = polish(ocp, r.x, rotor, 4000)
