@@ -29,17 +29,22 @@ from autobal.ocp.simulation import resimulate
 from benchmarks._results import case, write
 
 SCENES = ("spinup_jeffcott_deadline_5s", "spinup_jeffcott_horizon_10s")
-# the runs of benchmarks/spinup_ocp.md: (segments K, seed, population multiplier, generations)
-RUNS = {"spinup_jeffcott_deadline_5s": [(3, 1, 10, 300), (4, 1, 10, 300), (5, 1, 10, 300), (6, 1, 10, 300),
-                                        (5, 2, 25, 400)],
-        "spinup_jeffcott_horizon_10s": [(4, 1, 10, 300), (6, 1, 10, 300)]}
+DT = 0.5  # dimensionless step of the search integrator (4.8 ms)
+POLISH_DT = 0.1  # step of the polish (1 ms)
+# the runs of benchmarks/spinup_ocp.md: (segments K, seed, population multiplier, generations, integrator step of
+# the search, polish); the unpolished runs at a coarse step show how far such a search's own reading falls below
+# the re-simulated peak of its profile
+RUNS = {"spinup_jeffcott_deadline_5s": [(3, 1, 10, 300, DT, True), (4, 1, 10, 300, DT, True),
+                                        (5, 1, 10, 300, DT, True), (6, 1, 10, 300, DT, True),
+                                        (5, 2, 25, 400, DT, True), (4, 1, 10, 300, 2.0, False),
+                                        (4, 1, 10, 300, 1.0, False)],
+        "spinup_jeffcott_horizon_10s": [(4, 1, 10, 300, DT, True), (6, 1, 10, 300, DT, True),
+                                        (4, 1, 10, 300, 2.0, False)]}
 # the best full-braking profiles of the searches of benchmarks/spinup_ocp.md (`python -m benchmarks spinup_search`
 # and its exploratory runs; phase durations, s, alternately full acceleration and full braking), polished here
 BANG_BANG = {"spinup_jeffcott_deadline_5s": [1.004968, 0.0, 0.236354, 0.006297, 0.412206, 0.335701, 0.585426,
                                              0.029814, 0.843241, 0.001221],
              "spinup_jeffcott_horizon_10s": [3.016849, 5.6e-05, 0.002098, 0.247027, 0.533299, 0.500742]}
-DT = 0.5  # dimensionless step of the search integrator (4.8 ms)
-POLISH_DT = 0.1  # step of the polish (1 ms)
 
 
 def knots(ocp, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -114,13 +119,17 @@ def polish(ocp, x0: np.ndarray, rotor, maxfev: int = 8000):
     return r.x, float(r.fun), int(r.nfev)
 
 
-def search_waypoints(ocp, K: int, seed: int, rotor, maxiter: int = 800, popsize: int = 15, dt: float = DT):
+def search_waypoints(ocp, K: int, seed: int, rotor, maxiter: int = 800, popsize: int = 15, dt: float = DT,
+                     polished: bool = True):
     """Differential evolution on K segments (integrator step dt), then Nelder-Mead at POLISH_DT: (x, DE peak,
-    polished peak, profiles integrated)."""
+    polished peak, profiles integrated); without ``polished`` the DE's profile and its peak at POLISH_DT."""
     bounds = [(-1.0, 1.0)] * K + [(0.0, 1.0)] * K
     r = differential_evolution(lambda x: integrator_peaks(ocp, *knots(ocp, x.T), rotor, dt), bounds, seed=seed,
                                vectorized=True, updating="deferred", popsize=popsize, maxiter=maxiter, tol=1e-10,
                                polish=False, mutation=(0.5, 1.0), recombination=0.9)
+    if not polished:
+        return r.x, float(r.fun), float(integrator_peaks(ocp, *knots(ocp, r.x), rotor, POLISH_DT)[0]), int(
+            r.nit * popsize * 2 * K)
     x, fine, nfev = polish(ocp, r.x, rotor, 4000)
     return x, float(r.fun), fine, int(r.nit * popsize * 2 * K + nfev)  # r.nfev counts the vectorised calls
 
@@ -140,9 +149,10 @@ def main() -> list[dict]:
                 de = float(integrator_peaks(ocp, *knots(ocp, x0), rotor, DT)[0])
                 x, fine, n = polish(ocp, x0, rotor)
             else:
-                K, seed, popsize, gens = spec
-                label = f"{K} waypoints, DE seed {seed}, population {popsize} x {2 * K}, {gens} generations"
-                x, de, fine, n = search_waypoints(ocp, K, seed, rotor, gens, popsize)
+                K, seed, popsize, gens, dt, polished = spec
+                label = (f"{K} waypoints, DE seed {seed}, population {popsize} x {2 * K}, {gens} generations, step "
+                         f"{dt}" + ("" if polished else ", not polished"))
+                x, de, fine, n = search_waypoints(ocp, K, seed, rotor, gens, popsize, dt, polished)
             t, w = knots(ocp, x)
             pk = cvodes_peak(ocp, t[0], w[0])
             wall, cpu = time.perf_counter() - t0, time.process_time() - c0
