@@ -36,8 +36,8 @@ POLISH_DT = 0.1  # step of the polish (1 ms)
 # the re-simulated peak of its profile
 RUNS = {"spinup_jeffcott_deadline_5s": [(3, 1, 10, 300, DT, True), (4, 1, 10, 300, DT, True),
                                         (5, 1, 10, 300, DT, True), (6, 1, 10, 300, DT, True),
-                                        (5, 2, 25, 400, DT, True), (4, 1, 10, 300, 2.0, False),
-                                        (4, 1, 10, 300, 1.0, False)],
+                                        (8, 1, 10, 300, DT, True), (5, 2, 25, 400, DT, True),
+                                        (4, 1, 10, 300, 2.0, False), (4, 1, 10, 300, 1.0, False)],
         "spinup_jeffcott_horizon_10s": [(4, 1, 10, 300, DT, True), (6, 1, 10, 300, DT, True),
                                         (4, 1, 10, 300, 2.0, False)]}
 # the best full-braking profiles of the searches of benchmarks/spinup_ocp.md (`python -m benchmarks spinup_search`
