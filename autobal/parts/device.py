@@ -109,24 +109,18 @@ def dynamic_data(d, params: dv.DeviceParams) -> DynamicData:
     if (d.regulator is None) != (dyn.regulator is None):
         raise ScenarioError("device.dynamics.regulator: give it exactly when the device has a regulator "
                             "(stem_mass, spring_stiffness, valve_chamber_volume, membrane_chamber_volume)")
-    face = params.disc.face
-    c_z = dyn.rotor_damping
-    if c_z is None:
-        c_z = squeeze_damping(params.fluid.viscosity, dv.face_area(face), face.base_gap)
-    omega0 = dyn.operating_speed
-    if omega0 is None:
-        imp = params.operating.impeller
-        omega0 = imp.speed if imp is not None else math.nan
-    kw = {}
+    filled = {"p_n": params.fluid.normal_pressure}
+    if dyn.rotor_damping is None:
+        face = params.disc.face
+        filled["c_z"] = squeeze_damping(params.fluid.viscosity, dv.face_area(face), face.base_gap)
+    if dyn.operating_speed is None and params.operating.impeller is not None:
+        filled["omega0"] = params.operating.impeller.speed
     if dyn.regulator is not None:
-        r, reg = dyn.regulator, params.regulator
-        s_c = r.seat_area if r.seat_area is not None else math.pi * reg.valve.seat_diameter**2 / 4
-        kw = {"m0": r.stem_mass, "k_reg": r.spring_stiffness, "c_x": r.stem_damping,
-              "V_cam": r.valve_chamber_volume, "V_m": r.membrane_chamber_volume, "s_c": s_c,
-              "s_m": reg.membrane_area}
-    return DynamicData(m_p=dyn.rotor_mass, k_pr=dyn.pushoff_stiffness, c_z=c_z, E=dyn.bulk_modulus,
-                       V2=dyn.disc_chamber_volume, V3=dyn.cavity_volume, p_n=params.fluid.normal_pressure,
-                       forcing_amplitude=dyn.forcing_amplitude, omega0=omega0, **kw)
+        reg = params.regulator
+        filled["s_m"] = reg.membrane_area
+        if dyn.regulator.seat_area is None:
+            filled["s_c"] = math.pi * reg.valve.seat_diameter**2 / 4
+    return to_params(dyn, **filled)
 
 
 def dynamic_device(scn) -> dv.DeviceParams:

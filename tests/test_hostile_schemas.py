@@ -1,0 +1,31 @@
+"""Hostile input to the scene parts whose schemas are derived from the SI parameter dataclasses of models/
+(autobal/parts/derived.py): a wrong unit, a negative value and an unknown key in each part end with exit 2 and
+one line naming the field (and the unit where one is expected), no traceback."""
+
+import pytest
+
+from autobal import cli
+
+CASES = [  # scene, --set, what the line names
+    ("pump_pe600_dynamics", "device.dynamics.regulator.stem_mass=3 mm",
+     ["device.dynamics.regulator.stem_mass", "not a mass", "kg"]),
+    ("pump_pe600_dynamics", "device.dynamics.rotor_mass=-5 kg", ["device.dynamics.rotor_mass", "positive", "kg"]),
+    ("pump_pe600_dynamics", "device.dynamics.regulator.stem_damping=-1 N*s/m",
+     ["device.dynamics.regulator.stem_damping", "negative", "N*s/m"]),
+    ("pump_pe600_dynamics", "device.dynamics.regulator.stem_mas=3 kg",
+     ["device.dynamics.regulator.stem_mas", "unknown key"]),
+    ("pump_pe600_dynamics", "device.dynamics.forcing_amplitude=0",
+     ["device.dynamics.forcing_amplitude", "greater than 0"]),
+]
+
+
+@pytest.mark.cli
+@pytest.mark.parametrize("scene, setting, named", CASES, ids=[c[1].partition("=")[0] + "-" + str(i)
+                                                            for i, c in enumerate(CASES)])
+def test_bad_input_to_a_derived_part_is_one_line_naming_the_field(capsys, scene, setting, named):
+    assert cli.main(["check", scene, "--set", setting]) == 2
+    err = capsys.readouterr().err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in err, err
+    for text in named:
+        assert text in lines[0], lines[0]
