@@ -16,6 +16,15 @@ CASES = [  # scene, --set, what the line names
      ["device.dynamics.regulator.stem_mas", "unknown key"]),
     ("pump_pe600_dynamics", "device.dynamics.forcing_amplitude=0",
      ["device.dynamics.forcing_amplitude", "greater than 0"]),
+    ("washer_liquid_balancer_nested", "liquid_balancer.chamber.radius=3 kg",
+     ["liquid_balancer.chamber.radius", "not a length", "mm"]),
+    ("washer_liquid_balancer_nested", "liquid_balancer.rotor.mass=-5 kg", ["liquid_balancer.rotor.mass", "positive"]),
+    ("washer_liquid_balancer_nested", "liquid_balancer.nested.wall_thickness=-1 mm",
+     ["liquid_balancer.nested.wall_thickness", "negative", "m"]),
+    ("washer_liquid_balancer_nested", "liquid_balancer.liquid.colour=3",
+     ["liquid_balancer.liquid.colour", "unknown key"]),
+    ("washer_liquid_balancer_nested", "liquid_balancer.rotor.damping_coefficient=2 rad/s",
+     ["liquid_balancer.rotor.damping_coefficient", "1/s"]),
 ]
 
 
