@@ -25,6 +25,13 @@ CASES = [  # scene, --set, what the line names
      ["liquid_balancer.liquid.colour", "unknown key"]),
     ("washer_liquid_balancer_nested", "liquid_balancer.rotor.damping_coefficient=2 rad/s",
      ["liquid_balancer.rotor.damping_coefficient", "1/s"]),
+    ("spinup_liquid_balancer", "rotor.drive.polar_inertia=3 kg",
+     ["rotor.drive.polar_inertia", "not a moment of inertia", "kg*m"]),
+    ("spinup_liquid_balancer", "rotor.mass=-5 kg", ["rotor.mass", "positive", "kg"]),
+    ("spinup_liquid_balancer", "rotor.drive.drag=-1 N*m*s", ["rotor.drive.drag", "negative", "N*m*s"]),
+    ("spinup_liquid_balancer", "rotor.drive.torq=3 N*m", ["rotor.drive.torq", "unknown key"]),
+    ("spinup_liquid_balancer", "rotor.liquid.radius=2 kg", ["rotor.liquid.radius", "not a length", "mm"]),
+    ("spinup_liquid_balancer", "rotor.liquid.colour=1", ["rotor.liquid.colour", "unknown key"]),
 ]
 
 
