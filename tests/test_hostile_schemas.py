@@ -32,6 +32,12 @@ CASES = [  # scene, --set, what the line names
     ("spinup_liquid_balancer", "rotor.drive.torq=3 N*m", ["rotor.drive.torq", "unknown key"]),
     ("spinup_liquid_balancer", "rotor.liquid.radius=2 kg", ["rotor.liquid.radius", "not a length", "mm"]),
     ("spinup_liquid_balancer", "rotor.liquid.colour=1", ["rotor.liquid.colour", "unknown key"]),
+    ("spinup_ross_rotor", "ross_rotor.shaft.0.length=3 kg", ["ross_rotor.shaft.0.length", "not a length", "mm"]),
+    ("spinup_ross_rotor", "ross_rotor.disks.0.mass=-5 kg", ["ross_rotor.disks.0.mass", "positive", "kg"]),
+    ("spinup_ross_rotor", "ross_rotor.bearings.0.kxx=-1 N/m", ["ross_rotor.bearings.0.kxx", "negative", "N/m"]),
+    ("spinup_ross_rotor", "ross_rotor.bearings.0.cxy=1 N*s/m", ["ross_rotor.bearings.0.cxy", "unknown key"]),
+    ("spinup_ross_rotor", "ross_rotor.material.colour=1", ["ross_rotor.material.colour", "unknown key"]),
+    ("spinup_ross_rotor", "ross_rotor.unbalance.0.phase=400", ["ross_rotor.unbalance.0.phase", "360"]),
 ]
 
 
