@@ -155,14 +155,15 @@ def values(section: Strict, cls: type) -> dict:
     kw = {}
     for f in dataclasses.fields(cls):
         path = key(f)
+        if path is None:
+            continue
         value = section
-        for part in (path or "").split(".") if path else ():
+        for part in path.split("."):
             value = getattr(value, part, None)
             if value is None:
                 break
-        if path is None or value is None:
-            continue
-        kw[f.name] = to_params(value) if type(value) in _PARAMS else value
+        if value is not None:
+            kw[f.name] = to_params(value) if type(value) in _PARAMS else value
     return kw
 
 
