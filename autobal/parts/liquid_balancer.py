@@ -25,7 +25,7 @@ from autobal.schema import Positive, Strict
 from autobal.units import Length, Volume
 
 
-class LBRotor(Strict):
+class _LBRotor(Strict):
     """Rotor with its unbalance (Table 3.1)."""
 
     log_decrement: Positive | None = Field(None, description="theta; n = theta omega_p / (2 pi) (erratum 1)")
@@ -37,7 +37,7 @@ class LBRotor(Strict):
         return self
 
 
-class LBChamber(Strict):
+class _LBChamber(Strict):
     inclination_deg: Annotated[float, Field(ge=0, le=90)] | None = Field(
         None, description="Omega_inc; 90 = vertical rotor")
 
@@ -47,7 +47,7 @@ class NestedChamber(Strict):
     volume: Volume = Field(description="V_i, liquid in this chamber")
 
 
-class Nested(Strict):
+class _Nested(Strict):
     """Further concentric chambers inside the outer one, outermost first (Pashkov ch. 3, [T] (3.10)-(3.14))."""
 
     chambers: Annotated[list[NestedChamber], Field(min_length=1, max_length=100)] = Field(
@@ -85,10 +85,10 @@ class _LiquidBalancer(Strict):
 
 
 LiquidBalancer = schema(System, "LiquidBalancer", base=_LiquidBalancer, groups=(
-    Group("rotor", "LBRotor", "the rotor with its unbalance", LBRotor),
-    Group("chamber", "LBChamber", "the balancer's (outer) chamber", LBChamber),
+    Group("rotor", "LBRotor", "the rotor with its unbalance", _LBRotor),
+    Group("chamber", "LBChamber", "the balancer's (outer) chamber", _LBChamber),
     Group("liquid", "LBLiquid", "the liquid in the chamber"),
-    Group("nested", "Nested", "further chambers inside the outer one", Nested, optional=True)))
+    Group("nested", "Nested", "further chambers inside the outer one", _Nested, optional=True)))
 SCHEMA = LiquidBalancer
 DESCRIPTION = "liquid auto-balancer"
 
