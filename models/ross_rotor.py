@@ -39,6 +39,7 @@ import casadi as ca
 import numpy as np
 
 from autobal.errors import ScenarioError
+from autobal.models.params import si
 
 EXTRA = "pip install -e '.[ross]'"
 DOFS_PER_NODE = 6  # ROSS: x, y, z, alpha, beta, theta
@@ -87,56 +88,62 @@ def import_ross():
 
 # ---- the rotor as ROSS elements (SI) -------------------------------------------------------------------
 
+# the scene's ross_rotor elements are derived from these declarations (autobal/parts/ross_rotor.py)
+NODES = {"ge": 0, "le": 10_000}  # the range of a node number
+_NODE = {"doc": "node number (0 at the left end)", **NODES}
+
+
 @dataclass(frozen=True)
 class Material:
-    """Shaft material: density (kg/m^3), Young's modulus E (Pa), shear modulus G (Pa)."""
+    """Shaft material: density (kg/m^3), Young's modulus E (Pa), shear modulus G (Pa); the defaults are ROSS's
+    steel."""
 
-    density: float = 7810.0
-    young_modulus: float = 211e9
-    shear_modulus: float = 81.2e9
+    density: float = si("kg/m**3", 7810.0, kind="density", doc="rho")
+    young_modulus: float = si("Pa", 211e9, kind="pressure", doc="E")
+    shear_modulus: float = si("Pa", 81.2e9, kind="pressure", doc="G_s")
 
 
 @dataclass(frozen=True)
 class Shaft:
     """One Timoshenko shaft element of ROSS (``ross.ShaftElement``): length, inner and outer diameter, m."""
 
-    length: float
-    inner_diameter: float
-    outer_diameter: float
+    length: float = si("m", kind="length", doc="element length L")
+    inner_diameter: float = si("m", kind="length", scene_default=0.0, ge=0, doc="idl (0 for a solid shaft)")
+    outer_diameter: float = si("m", kind="length", doc="odl")
 
 
 @dataclass(frozen=True)
 class Disk:
     """A rigid disk (``ross.DiskElement``) at ``node``: mass (kg), diametral and polar inertia (kg m^2)."""
 
-    node: int
-    mass: float
-    diametral_inertia: float
-    polar_inertia: float
+    node: int = si("", **_NODE)
+    mass: float = si("kg", kind="mass", doc="m")
+    diametral_inertia: float = si("kg*m**2", kind="moment of inertia", doc="I_d")
+    polar_inertia: float = si("kg*m**2", kind="moment of inertia", doc="I_p")
 
 
 @dataclass(frozen=True)
 class Bearing:
     """A linear bearing (``ross.BearingElement``) at ``node``: stiffness (N/m) and damping (N s/m)."""
 
-    node: int
-    kxx: float
-    kyy: float
-    cxx: float
-    cyy: float
-    kxy: float = 0.0
-    kyx: float = 0.0
-    cxy: float = 0.0
-    cyx: float = 0.0
+    node: int = si("", **_NODE)
+    kxx: float = si("N/m", kind="stiffness", ge=0, doc="direct stiffness in x")
+    kyy: float = si("N/m", kind="stiffness", scene_default=None, ge=0, doc="direct stiffness in y (default kxx)")
+    cxx: float = si("N*s/m", kind="damping", scene_default=0.0, ge=0, doc="direct damping in x")
+    cyy: float = si("N*s/m", kind="damping", scene_default=None, ge=0, doc="direct damping in y (default cxx)")
+    kxy: float = si("N/m", 0.0, kind="stiffness", ge=0, doc="cross-coupled stiffness")
+    kyx: float = si("N/m", 0.0, kind="stiffness", ge=0, doc="cross-coupled stiffness")
+    cxy: float = si("N*s/m", 0.0, kind="damping", key="", doc="cross-coupled damping (not in a scene)")
+    cyx: float = si("N*s/m", 0.0, kind="damping", key="", doc="cross-coupled damping (not in a scene)")
 
 
 @dataclass(frozen=True)
 class Unbalance:
     """Unbalance m e (kg m) at ``node`` with phase beta (rad)."""
 
-    node: int
-    magnitude: float
-    phase: float = 0.0
+    node: int = si("", **_NODE)
+    magnitude: float = si("kg*m", doc="m e, kg m", gt=0, le=1e3)
+    phase: float = si("rad", 0.0, key="", doc="phase beta (the scene: degrees)")
 
 
 @dataclass(frozen=True)
