@@ -38,8 +38,8 @@ from autobal.ocp.problem import PathConstraint
 from autobal.ocp.search import SearchResult
 from autobal.ocp.simulation import ramp_profile
 from autobal.ocp.solve import TIE as TIE_SOLVED
-from autobal.ocp.solve import Solver, SpinupSolution, coarse_intervals, coarse_options, refine
-from autobal.ocp.transcription import DirectCollocation
+from autobal.ocp.solve import Optimum, Solver, coarse_intervals, coarse_options, refine
+from autobal.ocp.transcription import DirectCollocation, mesh
 
 RESIM_TOL = 1e-9  # CVODES relative tolerance of the re-simulation
 POINTS_PER_REV = 64  # output points per revolution of the re-simulation (peak between them: < 1e-3)
@@ -68,16 +68,18 @@ class ModalSpinupOcp:
     # (a, peak_scale2) of the nominal rotor when this is a perturbed one (:meth:`perturbed`): the scenarios of a
     # robust NLP share one epigraph level, so their states and envelopes share one scale
     scales: tuple[float, float] | None = None
+    # "peak_deflection" (the epigraph r^2 <= S, minimise S) or "min_time" (free final time, up to ``horizon``, with
+    # r <= deflection_limit at every collocation point), as the Jeffcott rotor's :class:`autobal.ocp.problem.SpinupOcp`
+    objective: str = "peak_deflection"
+    deflection_limit: float | None = None  # m, the largest deflection of the nodes of interest (0-peak)
 
-    # the problem as the generic pipeline sees it: a minimum-peak epigraph, |alpha| <= alpha_max, no jerk terms
-    objective = "peak_deflection"
-    free_time = False
-    n_extra = 1
+    # the problem as the generic pipeline sees it: |alpha| <= alpha_max, no jerk terms, no drive torque model
+    n_extra = 1  # the epigraph level, or the final time over the horizon
     u_min = -1.0
     jerk_max = None
     jerk_penalty = 0.0
     jerk_variation = 0.0
-    deflection_limit = None
+    deflection_unit = "m"  # of deflection_limit and of every peak (the Jeffcott problem's: "1", delta/e)
     max_steps = 100000  # CVODES steps per call at most (the envelope of four modes whirls fast)
     p = ()  # the equation has no parameters: the rotor's matrices are in it
 
@@ -85,8 +87,18 @@ class ModalSpinupOcp:
         if abs(self.omega_final - self.omega_start) > self.alpha_max * self.horizon:
             raise ValueError(f"|alpha| <= {self.alpha_max:g} rad/s^2 cannot reach {self.omega_final:g} rad/s "
                              f"from {self.omega_start:g} rad/s within the horizon {self.horizon:g} s")
+        if self.objective not in ("peak_deflection", "min_time"):
+            raise ValueError("the modal problem's objective is peak_deflection or min_time")
+        if self.objective == "min_time" and self.deflection_limit is None:
+            raise ValueError("the min_time objective needs a deflection_limit (m)")
+        if self.deflection_limit is not None and not self.deflection_limit > 0:
+            raise ValueError("the deflection limit must be positive (m)")
         for nd in self.nodes:
             self.rotor.node_rows(nd)
+
+    @property
+    def free_time(self) -> bool:
+        return self.objective == "min_time"
 
     @property
     def h(self) -> float:
@@ -192,10 +204,18 @@ class ModalSpinupOcp:
         return self._envelope2
 
     def path_constraints(self, ref: float) -> list[PathConstraint]:
-        """The epigraph r^2/(a^2 ref) <= S of every node of interest at every path point."""
+        """The epigraph r^2/(a^2 ref) <= S (minimum peak) and the limit r^2 <= deflection_limit^2 (when set) of every
+        node of interest at every path point."""
         x, a, v = ca.SX.sym("x", self.nx), ca.SX.sym("a"), ca.SX.sym("v", 1)
-        return [PathConstraint("deflection epigraph r^2 <= S", ca.Function(
-            "path0", [x, a, v], [self._envelope2(x) / ref - v[0]]), -ca.inf, 0.0)]
+        out = []
+        if self.objective == "peak_deflection":
+            out.append(PathConstraint("deflection epigraph r^2 <= S", ca.Function(
+                "path0", [x, a, v], [self._envelope2(x) / ref - v[0]]), -ca.inf, 0.0))
+        if self.deflection_limit is not None:
+            lim2 = (self.deflection_limit / self.amplitude_scale) ** 2
+            out.append(PathConstraint(f"deflection limit r <= {self.deflection_limit:.6g} m", ca.Function(
+                f"path{len(out)}", [x, a, v], [self._envelope2(x) / lim2]), -ca.inf, 1.0))
+        return out
 
     def epigraph2(self, states: np.ndarray) -> np.ndarray:
         """The squared envelope over a^2 (the epigraph's measure) of the nodes of interest, largest node, at
@@ -253,7 +273,7 @@ class ModalSpinupOcp:
         """Peak deflection (m) of the profile u (alpha/alpha_max on the intervals of dimensionless length h, the
         horizon's then the settling window's), CVODES in the fixed frame (:func:`resimulate`; ``points`` is the
         problem's own)."""
-        return resimulate(self.on_intervals(int(round(self.tau_h / h[0]))), u, label).peak
+        return resimulate(self, u, h, label).peak
 
     @property
     def q0(self) -> np.ndarray:
@@ -352,14 +372,18 @@ def simulate_fixed(rotor: ModalRotor, omega_start: float, alpha: np.ndarray, h: 
     return np.concatenate(ts), np.concatenate(ws), xy
 
 
-def resimulate(ocp: ModalSpinupOcp, u: np.ndarray, label: str) -> ModalTrajectory:
-    """CVODES re-simulation (fixed frame) of the control u (over alpha_max) on the OCP's intervals, settling
-    window included."""
-    K = len(u)
-    h = np.full(K, ocp.h)
-    t, w, xy = simulate_fixed(ocp.rotor, ocp.omega_start, u * ocp.alpha_max, h, ocp.nodes)
-    return ModalTrajectory(label, t, w, np.hypot(xy[:, 0], xy[:, 1]), tuple(ocp.nodes), np.arange(K) * ocp.h,
-                           u * ocp.alpha_max)
+def resimulate(ocp: ModalSpinupOcp, u: np.ndarray, h: np.ndarray | None, label: str) -> ModalTrajectory:
+    """CVODES re-simulation (fixed frame) of the control u (over alpha_max) on intervals of dimensionless length h
+    (tau = omega_final t, as the generic pipeline's :func:`autobal.ocp.simulation.resimulate`; None: the problem's
+    mesh, its control intervals then its settling intervals), settling window included."""
+    u = np.asarray(u, float)
+    if h is None:
+        ms = mesh(ocp, ocp.intervals)
+        h = np.concatenate([np.full(ms.n, ms.h), np.full(ms.ns, ms.hs)])[:len(u)]
+    hs = np.asarray(h, float) / ocp.Om  # s
+    t, w, xy = simulate_fixed(ocp.rotor, ocp.omega_start, u * ocp.alpha_max, hs, ocp.nodes)
+    return ModalTrajectory(label, t, w, np.hypot(xy[:, 0], xy[:, 1]), tuple(ocp.nodes),
+                           np.concatenate([[0.0], np.cumsum(hs)[:-1]]), u * ocp.alpha_max)
 
 
 # ---- starts: a cheap global search over multi-phase speed profiles ------------------------------------
@@ -612,25 +636,11 @@ def baselines(ocp: ModalSpinupOcp) -> dict[str, ModalTrajectory]:
     out = {}
     for key, a in (("constant_ramp", const), ("max_acceleration_ramp", ocp.alpha_max)):
         lab = f"constant ramp {a:.4g} rad/s^2" if key == "constant_ramp" else f"ramp {a:.4g} rad/s^2 and hold"
-        out[key] = resimulate(ocp, np.concatenate([ramp_controls(ocp, a), zeros]), lab)
+        out[key] = resimulate(ocp, np.concatenate([ramp_controls(ocp, a), zeros]), None, lab)
     return out
 
 
-@dataclass
-class ModalOptimum:
-    solution: SpinupSolution
-    trajectory: ModalTrajectory
-    starts: list
-    build_time_s: float
-    search_time_s: float = 0.0  # the screening of the starts (grid search), s
-
-    @property
-    def resimulation_rel_error(self) -> float:
-        """|collocation peak - re-simulated peak| / re-simulated peak."""
-        return abs(self.solution.peak_collocation - self.trajectory.peak) / self.trajectory.peak
-
-
-def optimize(ocp: ModalSpinupOcp, options: dict | None = None) -> ModalOptimum:
+def optimize(ocp: ModalSpinupOcp, options: dict | None = None, multistart: bool = True) -> Optimum:
     """Solve from every start (:func:`starts`) by the spin-up's solver (:class:`autobal.ocp.solve.Solver`: the
     generic collocation, IPOPT, structured derivatives); keep the best optimum by its re-simulated peak.
 
@@ -641,20 +651,23 @@ def optimize(ocp: ModalSpinupOcp, options: dict | None = None) -> ModalOptimum:
     Parameters
     ----------
     ocp : ModalSpinupOcp
-        The problem.
+        The problem (objective peak_deflection).
     options : dict, optional
         IPOPT options over :data:`autobal.ocp.solve.IPOPT_OPTIONS`.
+    multistart : bool
+        Solve every start; otherwise the first (the best screened profile) only.
 
     Returns
     -------
-    ModalOptimum
-        The best solution, its re-simulation (m, s, rad/s) and one row per solve.
+    Optimum
+        The best solution, its re-simulation (m, s, rad/s), one row per solve, and the search's wall time
+        (``times["global_search"]``, s), as the Jeffcott rotor's :func:`autobal.ocp.solve.optimize` returns.
     """
     n = ocp.intervals
     nc = coarse_intervals(n)
     first = dataclasses.replace(ocp, intervals=nc)
     clock = time.perf_counter()
-    start_list = starts(first)
+    start_list = starts(first)[:None if multistart else 1]
     search_time = time.perf_counter() - clock
     solver = Solver(first, first.method, first.peak_scale2, coarse_options(options) if nc < n else options)
     build = solver.build_time_s
@@ -667,7 +680,7 @@ def optimize(ocp: ModalSpinupOcp, options: dict | None = None) -> ModalOptimum:
             rows.append({"start": label, "stage": stage, "status": exc.status, "error": str(exc)})
             err = err or exc
             continue
-        tr = resimulate(first, sol.u, "optimum")
+        tr = resimulate(first, sol.u, sol.h, "optimum")
         rows.append({"start": label, "stage": stage, "status": sol.status, "iterations": sol.iterations,
                      "solve_time_s": sol.solve_time_s, "collocation_peak_m": sol.peak_collocation,
                      "resimulated_peak_m": tr.peak})
@@ -678,10 +691,11 @@ def optimize(ocp: ModalSpinupOcp, options: dict | None = None) -> ModalOptimum:
     if nc < n:  # refine the best coarse optimum to the full mesh
         fine, sol = refine(ocp, ocp.method, solver, best[0], options, rows)
         build += fine.build_time_s
-        tr = resimulate(ocp, sol.u, "optimum")
+        tr = resimulate(ocp, sol.u, sol.h, "optimum")
         rows[-1] |= {"collocation_peak_m": sol.peak_collocation, "resimulated_peak_m": tr.peak}
         best = (sol, tr)
-    return ModalOptimum(best[0], best[1], rows, build, search_time)
+    sol, tr = best
+    return Optimum(ocp, sol, tr, tr.peak, rows, sol.peak_collocation, build, {"global_search": search_time})
 
 
 # ---- the study of a scene: reduction, critical speeds vs ROSS, optimum vs ramps ------------------------
@@ -970,7 +984,7 @@ def run(rotor: ModalRotor, ocp_kw: dict, title: str = "", ross_critical: dict | 
                   f"{ocp.settling_intervals} settling) of the complex envelope, structured derivatives; starts "
                   "from a screened grid of four-phase profiles",
         "status": sol.status, "ipopt_iterations": sol.iterations, "solve_time_s": sol.solve_time_s,
-        "build_time_s": opt.build_time_s, "search_time_s": opt.search_time_s,
+        "build_time_s": opt.build_time_s, "search_time_s": opt.times["global_search"],
         "total_solve_time_s": sum(r.get("solve_time_s", 0.0) for r in opt.starts),
         "peak_deflection_m": tr.peak, "collocation_peak_m": sol.peak_collocation,
         "resimulation_rel_error": opt.resimulation_rel_error, "node_of_peak": tr.node_of_peak,

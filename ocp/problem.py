@@ -45,6 +45,9 @@ JERK_VARIATION = 1e-4
 # extreme scene spinup_100x_slower spans 1.42e4 periods and solves (tests/test_extreme.py)
 CRITICAL_RATIO = 2.0
 MAX_PERIODS = 2e4
+#: the results.json suffix of a peak by the problem's ``deflection_unit``: delta/e for the Jeffcott rotor (Pashkov
+#: (2010), Eq. (2)), m for the modal (ROSS) rotor (the largest whirl radius over its nodes, 0-peak)
+PEAK_KEY = {"1": "over_e", "m": "m"}
 
 
 @dataclass(frozen=True)
@@ -204,6 +207,7 @@ class SpinupOcp:
         """The deflection at states (k, nx) for a failed solve's last iterate, named with its unit."""
         return {"deflection_over_e": list(np.hypot(states[:, 0], states[:, 1]))}
 
+    deflection_unit = "1"  # of deflection_limit and of the peaks: delta/e (the modal rotor's problem: m)
     epigraph_unit = 1.0  # the reported peak is sqrt(epigraph level) times this (delta/e and d are reported as they are)
     max_steps = 20000  # CVODES steps per integrator call at most
 

@@ -18,7 +18,7 @@ import numpy as np
 from autobal.analysis.quantities import Declarations, Quantity, significant
 from autobal.analysis.result import Result, new_figure, with_statuses
 from autobal.ocp import robust as rb
-from autobal.ocp.problem import SpinupOcp
+from autobal.ocp.problem import PEAK_KEY, SpinupOcp
 from autobal.ocp.search import FAST_STEP, controls_on_mesh, grid_search
 from autobal.ocp.simulation import Trajectory, best_within_limits, drive_use, resimulate
 from autobal.ocp.solve import optimize
@@ -30,9 +30,6 @@ CHECKED = 4  # validation rotors re-simulated with CVODES to check the fast inte
 CVODES_WORST = 3  # design rotors re-simulated with CVODES per profile (its worst by the fast integrator)
 
 _PROFILE = "profiles.*."
-#: the results.json suffix of a peak by its unit, as the model's problem gives it: delta/e for the Jeffcott rotor
-#: (Pashkov (2010), Eq. (2)), m for the modal (ROSS) rotor (the largest whirl radius over its nodes, 0-peak)
-PEAK_KEY = {"1": "over_e", "m": "m"}
 PEAK_SYMBOL = {"1": "δ*/e", "m": "r*"}
 
 
@@ -298,7 +295,7 @@ def _on(ocp, factors, profile: rb.Profile):
     o = rb.scenario_ocps(ocp, np.atleast_2d(factors))[0]
     u, h = profile.on(o)
     return resimulate(o, u, h, profile.label, points=8) if isinstance(o, SpinupOcp) else \
-        _modal().resimulate(o, u, profile.label)
+        _modal().resimulate(o, u, h, profile.label)
 
 
 def nominal_optimum(ocp, method: DirectCollocation, multistart: bool, options: dict | None
