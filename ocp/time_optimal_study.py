@@ -228,7 +228,7 @@ def verdict(d: dict) -> tuple[bool | None, str]:
 
     ok = peak <= lim * (1 + 1e-6)
     return ok, (f"earliest arrival at {speed} with the peak ≤ {pk(lim)}: {significant(d['arrival_time_s'])} s, peak "
-                f"{pk(peak)} ({significant(100 * abs(d['limit_margin']))} % {'below' if ok else 'ABOVE'} the limit); "
+                f"{pk(peak)} ({significant(100 * abs(1 - peak / lim))} % {'below' if ok else 'ABOVE'} the limit); "
                 f"the maximum-acceleration ramp arrives at {significant(d['ramp_arrival_time_s'])} s with "
                 f"{pk(d[f'ramp_peak_{s}'])}")
 
