@@ -33,7 +33,8 @@ import numpy as np
 from autobal.analysis.quantities import Declarations, Quantity, convert, significant
 from autobal.analysis.result import Result, new_figure, with_statuses
 from autobal.errors import SolveError
-from autobal.models.ross_rotor import ModalRotor
+from autobal.models import ross_rotor as rr
+from autobal.models.ross_rotor import POINTS_PER_REV, RESIM_TOL, ModalRotor, simulate_fixed
 from autobal.ocp.problem import PathConstraint
 from autobal.ocp.search import SearchResult
 from autobal.ocp.simulation import ramp_profile
@@ -41,8 +42,6 @@ from autobal.ocp.solve import TIE as TIE_SOLVED
 from autobal.ocp.solve import Optimum, Solver, coarse_intervals, coarse_options, refine
 from autobal.ocp.transcription import DirectCollocation, mesh
 
-RESIM_TOL = 1e-9  # CVODES relative tolerance of the re-simulation
-POINTS_PER_REV = 64  # output points per revolution of the re-simulation (peak between them: < 1e-3)
 EPS = 1e-3  # smoothing of |X^2 + Y^2| in the envelope, relative to the reference deflection
 
 
@@ -283,12 +282,6 @@ class ModalSpinupOcp:
         return np.concatenate([E.real, E.imag, Q.real, Q.imag, [self.omega_start / self.omega_final]])
 
 
-def ramp_controls(ocp: ModalSpinupOcp, alpha: float, n: int | None = None) -> np.ndarray:
-    """u = alpha/alpha_max on n control intervals: a constant ramp at ``alpha`` until omega_final, then hold
-    (:func:`autobal.ocp.simulation.ramp_profile`, the Jeffcott rotor's)."""
-    return ramp_profile(ocp, n or ocp.intervals, alpha)
-
-
 @dataclass
 class ModalTrajectory:
     """A speed profile and the physical response (fixed frame) of the reduced rotor, SI."""
@@ -312,64 +305,6 @@ class ModalTrajectory:
         return {"label": self.label, "peak_deflection_m": self.peak, "time_of_peak_s": self.t_peak,
                 "omega_at_peak_rad_s": float(np.interp(self.t_peak, self.t, self.omega)),
                 "node_of_peak": int(self.node_of_peak)}
-
-
-def fixed_frame_integrator(rotor: ModalRotor, points: int, tol: float = RESIM_TOL, scale: float = 1.0
-                           ) -> ca.Function:
-    """CVODES of the physical modal state (eta/scale, eta'/scale, omega, phi) over one interval of constant
-    acceleration; parameters (alpha, h); outputs at ``points`` evenly spaced instants after its start."""
-    n = rotor.n
-    x, p = ca.SX.sym("x", 2 * n + 2), ca.SX.sym("p", 2)
-    eta, deta, w, ph = x[:n], x[n:2 * n], x[2 * n], x[2 * n + 1]
-    fr, fi = rotor.force_amplitude(w, p[0])
-    f = ca.cos(ph) * fr - ca.sin(ph) * fi  # Re(F^ e^{i phi})
-    dd = rotor.ode()(eta, deta, w, p[0], f / scale)
-    return ca.integrator("modal_fixed", "cvodes", {"x": x, "p": p, "ode": p[1] * ca.vertcat(deta, dd, p[0], w)},
-                         0, list(np.linspace(0, 1, points + 1)[1:]),
-                         {"abstol": tol, "reltol": tol, "max_num_steps": 500000})
-
-
-def simulate_fixed(rotor: ModalRotor, omega_start: float, alpha: np.ndarray, h: np.ndarray, nodes,
-                   from_rest: bool = False, tol: float = RESIM_TOL):
-    """The physical response to a piecewise-constant acceleration (alpha (rad/s^2) on intervals h (s)),
-    from the steady state at omega_start (or from rest, as ROSS's time response starts), sampled at
-    least POINTS_PER_REV times per revolution.
-
-    Parameters
-    ----------
-    rotor : ModalRotor
-    omega_start : float
-        rad/s.
-    alpha, h : ndarray
-        Acceleration (rad/s^2) and length (s) of each interval.
-    nodes : sequence of int
-    from_rest : bool
-        Start from rest instead of the steady state.
-    tol : float
-        CVODES tolerance (relative; absolute on the scaled states).
-
-    Returns
-    -------
-    t (s), omega (rad/s), xy (len(nodes), 2, len(t)) deflections in m
-    """
-    n = rotor.n
-    a = float(np.abs(rotor.unbalance).max()) or 1.0
-    E = np.zeros(n, complex) if from_rest else rotor.steady_amplitude(omega_start)
-    x = np.concatenate([E.real / a, (1j * omega_start * E).real / a, [omega_start, 0.0]])
-    w_top = np.max(np.abs(omega_start + np.concatenate([[0], np.cumsum(np.asarray(alpha) * h)])))
-    m = max(4, int(np.ceil(w_top * np.max(h) / (2 * np.pi) * POINTS_PER_REV)))
-    F = fixed_frame_integrator(rotor, m, tol, a)
-    frac = np.linspace(0, 1, m + 1)[1:]
-    ts, ws, ys, t0 = [np.zeros(1)], [np.array([omega_start])], [x[:n][:, None]], 0.0
-    for al, hk in zip(alpha, h, strict=True):
-        xf = np.array(F(x0=x, p=[al, hk])["xf"])
-        ts.append(t0 + hk * frac)
-        ws.append(xf[2 * n])
-        ys.append(xf[:n])
-        x, t0 = xf[:, -1], t0 + hk
-    eta = np.hstack(ys) * a
-    xy = np.array([rotor.node_rows(nd) @ eta for nd in nodes])
-    return np.concatenate(ts), np.concatenate(ws), xy
 
 
 def resimulate(ocp: ModalSpinupOcp, u: np.ndarray, h: np.ndarray | None, label: str) -> ModalTrajectory:
@@ -615,8 +550,8 @@ def starts(ocp: ModalSpinupOcp, search: bool = True) -> list[tuple[str, np.ndarr
         Label and alpha/alpha_max on each control interval of the horizon.
     """
     const = abs(ocp.omega_final - ocp.omega_start) / ocp.horizon
-    ramps = [("constant ramp", ramp_controls(ocp, const)),
-             ("maximum-acceleration ramp", ramp_controls(ocp, ocp.alpha_max))]
+    ramps = [("constant ramp", ramp_profile(ocp, ocp.intervals, const)),
+             ("maximum-acceleration ramp", ramp_profile(ocp, ocp.intervals, ocp.alpha_max))]
     if not search or ocp.omega_final <= ocp.omega_start:
         return ramps
     found = grid_search(ocp)
@@ -636,7 +571,7 @@ def baselines(ocp: ModalSpinupOcp) -> dict[str, ModalTrajectory]:
     out = {}
     for key, a in (("constant_ramp", const), ("max_acceleration_ramp", ocp.alpha_max)):
         lab = f"constant ramp {a:.4g} rad/s^2" if key == "constant_ramp" else f"ramp {a:.4g} rad/s^2 and hold"
-        out[key] = resimulate(ocp, np.concatenate([ramp_controls(ocp, a), zeros]), None, lab)
+        out[key] = resimulate(ocp, np.concatenate([ramp_profile(ocp, ocp.intervals, a), zeros]), None, lab)
     return out
 
 
@@ -932,23 +867,6 @@ QUANTITIES = Declarations(
 ModalSpinupResult.quantities = QUANTITIES
 
 
-def campbell(rotor: ModalRotor, omega_top: float, points: int = 200) -> dict:
-    """Damped natural frequencies (rad/s) of the reduced rotor against speed, 0 to omega_top."""
-    w = np.linspace(0, omega_top, points)
-    wd = np.array([np.sort(np.linalg.eigvals(rotor.state_matrix(x)).imag)[rotor.n:] for x in w])
-    return {"omega": w, "wd": wd}
-
-
-def compare_critical_speeds(reduced: np.ndarray, ross: np.ndarray | None) -> float | None:
-    """Largest relative difference of paired critical speeds (ascending), None without ROSS's."""
-    if ross is None:
-        return None
-    m = min(len(reduced), len(ross))
-    if m == 0 or len(reduced) != len(ross):
-        return float("inf")
-    return float(np.max(np.abs(np.asarray(reduced[:m]) - np.asarray(ross[:m])) / np.asarray(ross[:m])))
-
-
 def run(rotor: ModalRotor, ocp_kw: dict, title: str = "", ross_critical: dict | None = None,
         options: dict | None = None) -> ModalSpinupResult:
     """Optimise the spin-up of the reduced rotor (multi-start), re-simulate, compare with the ramps.
@@ -999,10 +917,10 @@ def run(rotor: ModalRotor, ocp_kw: dict, title: str = "", ross_critical: dict | 
                             "ross_wd_rad_s": ross,
                             "ross_damping_ratio": None if ross_critical is None else
                             list(ross_critical["damping_ratio"]),
-                            "max_rel_error_vs_ross": compare_critical_speeds(cs["wd"], ross_critical and
+                            "max_rel_error_vs_ross": rr.compare_critical_speeds(cs["wd"], ross_critical and
                                                                              ross_critical["wd"])},
         "accuracy": {"estimate": opt.resimulation_rel_error,
                      "how": "relative difference between the collocation's peak envelope and the CVODES re-simulation "
                             f"of the physical response (rtol {RESIM_TOL:g}, {POINTS_PER_REV} samples per revolution)"},
     }
-    return ModalSpinupResult(data, tr, base, campbell(rotor, 1.2 * ocp.omega_final))
+    return ModalSpinupResult(data, tr, base, rotor.campbell(1.2 * ocp.omega_final))

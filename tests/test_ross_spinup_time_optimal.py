@@ -14,7 +14,7 @@ from autobal.analyses import ross_spinup_time_optimal as analysis
 from autobal.models import ross_rotor as rr
 from autobal.ocp import modal
 from autobal.ocp import time_optimal as to
-from autobal.ocp.simulation import simulate_profile
+from autobal.ocp.simulation import ramp_profile, simulate_profile
 from autobal.ocp.solve import Solver
 from autobal.ocp.time_optimal_study import QUANTITIES, peak_text
 from tests.test_quantities import check_declared
@@ -38,7 +38,7 @@ def test_the_modal_min_time_problem_is_the_shared_transcriptions():
     solver = Solver(ocp, ocp.method)
     names = [n for n, _ in solver.nlp.blocks]
     assert any(n.startswith("deflection limit") for n in names) and not any("epigraph" in n for n in names)
-    sol = solver.solve(modal.ramp_controls(ocp, ocp.alpha_max))
+    sol = solver.solve(ramp_profile(ocp, ocp.intervals, ocp.alpha_max))
     assert sol.objective == pytest.approx(sol.final_time_s, rel=1e-9)
     assert 0.2 < sol.final_time_s < ocp.horizon
     assert sol.peak_collocation == pytest.approx(lim, rel=1e-6)  # the limit binds
@@ -66,7 +66,7 @@ def ramp_peak(ocp: modal.ModalSpinupOcp, alpha: float) -> float:
     """Peak whirl radius (m) of the constant ramp at ``alpha`` (rad/s^2) to the final speed, then held over the
     settling window: the fixed-frame CVODES re-simulation of the modal rotor."""
     t_ramp = (ocp.omega_final - ocp.omega_start) / alpha
-    _, _, xy = modal.simulate_fixed(ocp.rotor, ocp.omega_start, np.array([alpha, 0.0]),
+    _, _, xy = rr.simulate_fixed(ocp.rotor, ocp.omega_start, np.array([alpha, 0.0]),
                                     np.array([t_ramp, ocp.settling_time]), ocp.nodes)
     return float(np.hypot(xy[:, 0], xy[:, 1]).max())
 
@@ -109,7 +109,7 @@ def test_shipped_scene_end_to_end(shipped_run, scene):
     s = scenario.load(scene).analyses.ross_spinup_time_optimal
     ocp = analysis.ross_spinup.problem(scenario.load(scene), s)
     sol = res.limited.optimum.solution
-    t, w, xy = modal.simulate_fixed(ocp.rotor, ocp.omega_start, sol.u * ocp.alpha_max, sol.h / ocp.Om, ocp.nodes,
+    t, w, xy = rr.simulate_fixed(ocp.rotor, ocp.omega_start, sol.u * ocp.alpha_max, sol.h / ocp.Om, ocp.nodes,
                                     tol=1e-11)
     peak = float(np.hypot(xy[:, 0], xy[:, 1]).max())
     assert lim * (1 - 3e-3) <= peak <= lim * (1 + 1e-5)
