@@ -35,18 +35,18 @@ from autobal.analysis.result import Result, new_figure, with_statuses
 from autobal.errors import SolveError
 from autobal.models import ross_rotor as rr
 from autobal.models.ross_rotor import POINTS_PER_REV, RESIM_TOL, ModalRotor, simulate_fixed
-from autobal.ocp.problem import PathConstraint
+from autobal.ocp.problem import Dimensionless, PathConstraint
 from autobal.ocp.search import SearchResult
 from autobal.ocp.simulation import ramp_profile
+from autobal.ocp.solve import AHEAD, Optimum, Solver, coarse_intervals, coarse_options, refine
 from autobal.ocp.solve import TIE as TIE_SOLVED
-from autobal.ocp.solve import Optimum, Solver, coarse_intervals, coarse_options, refine
 from autobal.ocp.transcription import DirectCollocation, mesh
 
 EPS = 1e-3  # smoothing of |X^2 + Y^2| in the envelope, relative to the reference deflection
 
 
 @dataclass
-class ModalSpinupOcp:
+class ModalSpinupOcp(Dimensionless):
     """The spin-up problem of a reduced rotor, in SI at the boundary.
 
     Inside, as the generic pipeline (:mod:`autobal.ocp.transcription`, :mod:`autobal.ocp.solve`,
@@ -96,10 +96,6 @@ class ModalSpinupOcp:
             self.rotor.node_rows(nd)
 
     @property
-    def free_time(self) -> bool:
-        return self.objective == "min_time"
-
-    @property
     def h(self) -> float:
         """Control interval, s."""
         return self.horizon / self.intervals
@@ -113,31 +109,10 @@ class ModalSpinupOcp:
         """Radau collocation of the problem's degree on its control intervals."""
         return DirectCollocation(self.intervals, self.degree, "radau")
 
-    # dimensionless data (tau = omega_final t)
+    # the dimensionless data (:class:`autobal.ocp.problem.Dimensionless`) on the time scale tau = omega_final t
     @property
     def Om(self) -> float:
         return self.omega_final
-
-    @property
-    def nu0(self) -> float:
-        return self.omega_start / self.omega_final
-
-    nuf = 1.0
-
-    @property
-    def tau_h(self) -> float:
-        return self.horizon * self.omega_final
-
-    @property
-    def tau_s(self) -> float:
-        return self.settling_time * self.omega_final
-
-    @property
-    def a_max(self) -> float:
-        return self.alpha_max / self.omega_final**2
-
-    def nu_bounds(self) -> tuple[float, float]:
-        return 0.0, (self.omega_max / self.omega_final if self.omega_max is not None else ca.inf)
 
     @property
     def nx(self) -> int:
@@ -330,7 +305,6 @@ RK4_STEP = 1.5  # |lambda| dt; RK4 is stable on the imaginary axis up to 2.83
 SAMPLES = 10
 KEEP = 2  # distinct search profiles solved by IPOPT
 TIE = 2e-3  # relative: screened peaks this close tie (broken by the peak of the last phase)
-AHEAD = 0.05  # the ramps are not solved when the search's best profile is this far below both of their peaks
 
 
 @dataclass(frozen=True)

@@ -61,8 +61,43 @@ class PathConstraint:
     uses_control: bool = False  # then also imposed at each interval start, where the control jumps
 
 
+class Dimensionless:
+    """The dimensionless data of a spin-up problem from its SI members (omega_start, omega_final, horizon,
+    settling_time, alpha_max, omega_max in rad/s, s, rad/s^2) and its time scale ``Om`` (1/s): time tau = Om t,
+    speed nu = omega/Om, acceleration a* = alpha/Om^2; the objective ``min_time`` frees the final time.  The
+    Jeffcott rotor's problem scales by its Omega0, the modal rotor's by omega_final."""
+
+    @property
+    def free_time(self) -> bool:
+        return self.objective == "min_time"
+
+    @property
+    def nu0(self) -> float:
+        return self.omega_start / self.Om
+
+    @property
+    def nuf(self) -> float:
+        return self.omega_final / self.Om
+
+    @property
+    def tau_h(self) -> float:
+        return self.horizon * self.Om
+
+    @property
+    def tau_s(self) -> float:
+        return self.settling_time * self.Om
+
+    @property
+    def a_max(self) -> float:
+        return self.alpha_max / self.Om**2
+
+    def nu_bounds(self) -> tuple[float, float]:
+        """Bounds of nu on the horizon: 0, and the speed cap when there is one."""
+        return 0.0, (self.omega_max / self.Om if self.omega_max is not None else ca.inf)
+
+
 @dataclass
-class SpinupOcp:
+class SpinupOcp(Dimensionless):
     """Declaration of the spin-up problem in SI (converted to the dimensionless form inside)."""
 
     params: RotorParams
@@ -121,34 +156,10 @@ class SpinupOcp:
                     "shorten them (the passage is quasi-static long before)")
         return None
 
-    # dimensionless data (Pashkov 2010, Eq. (2))
-    @property
-    def free_time(self) -> bool:
-        return self.objective == "min_time"
-
+    # dimensionless data (Pashkov 2010, Eq. (2)): the time scale Omega0
     @property
     def Om(self) -> float:
         return self.params.Omega0
-
-    @property
-    def nu0(self) -> float:
-        return self.omega_start / self.Om
-
-    @property
-    def nuf(self) -> float:
-        return self.omega_final / self.Om
-
-    @property
-    def tau_h(self) -> float:
-        return self.horizon * self.Om
-
-    @property
-    def tau_s(self) -> float:
-        return self.settling_time * self.Om
-
-    @property
-    def a_max(self) -> float:
-        return self.alpha_max / self.Om**2
 
     @property
     def u_min(self) -> float:
@@ -257,8 +268,6 @@ class SpinupOcp:
                 (M * P.torque_scale - L) / self.motor_stall_torque, -ca.inf, 0.0)
         return out
 
-    def nu_bounds(self) -> tuple[float, float]:
-        return 0.0, (self.omega_max / self.Om if self.omega_max is not None else ca.inf)
 
 
 def pulse_variation(u) -> float:
