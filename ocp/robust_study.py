@@ -102,11 +102,6 @@ def peak_text(d: dict, x) -> str:
     return QUANTITIES.find("profiles.robust.validation_worst_m").text(x)
 
 
-def peak_of(tr) -> float:
-    """The peak of a re-simulation: delta/e (Jeffcott :class:`Trajectory`) or m (modal ``ModalTrajectory``)."""
-    return tr.peak_delta if isinstance(tr, Trajectory) else tr.peak
-
-
 def deflection_of(tr) -> np.ndarray:
     """The deflection of a re-simulation against its time: delta/e, or the largest node's in m."""
     return tr.delta if isinstance(tr, Trajectory) else tr.deflection.max(axis=0)
@@ -232,7 +227,7 @@ class RobustResult(Result):
             lab = self.data["profiles"][k]["label"]
             a0.plot(tr.t, tr.omega, color=self.COLORS[k], label=lab)
             a1.plot(tw.t, factor * deflection_of(tw), color=self.COLORS[k],
-                    label=f"{lab} (peak {peak_text(self.data, peak_of(tw))})")
+                    label=f"{lab} (peak {peak_text(self.data, tw.peak)})")
         wc = self.data["omega_cr_rad_s"]
         if wc is not None:
             a0.axhline(wc, color="k", ls=":", lw=0.8,
@@ -464,7 +459,7 @@ def run(ocp, method: DirectCollocation, uncertainty: rb.Uncertainty, design_poin
     worst_runs = {k: _on(ocp, worst_rotor, p) for k, (p, _) in chosen.items()}
     prof = {}
     for k, (p, v) in chosen.items():
-        prof[k] = {"label": p.label, f"nominal_peak_{s}": peak_of(nominal_runs[k]),
+        prof[k] = {"label": p.label, f"nominal_peak_{s}": nominal_runs[k].peak,
                    f"design_peaks_{s}": design[k].tolist(), f"design_worst_{s}": float(design[k].max()),
                    f"validation_worst_{s}": float(v.max()), f"validation_mean_{s}": float(v.mean()),
                    f"validation_quantiles_{s}": {str(q): float(np.quantile(v, q)) for q in QUANTILES}}
