@@ -21,8 +21,8 @@ from autobal.ocp import robust as rb
 from autobal.ocp.problem import PEAK_KEY, SpinupOcp
 from autobal.ocp.search import FAST_STEP, controls_on_mesh, grid_search
 from autobal.ocp.simulation import Trajectory, best_within_limits, drive_use, resimulate
-from autobal.ocp.solve import optimize
 from autobal.ocp.spinup_study import RPM, deflection_axis, deflection_text, twin_axis
+from autobal.ocp.time_optimal import minimum_peak
 from autobal.ocp.transcription import DirectCollocation
 
 QUANTILES = (0.5, 0.9, 0.99)
@@ -295,9 +295,9 @@ def _on(ocp, factors, profile: rb.Profile):
 
 def nominal_optimum(ocp, method: DirectCollocation, multistart: bool, options: dict | None
                     ) -> tuple[rb.Profile, float, float, float]:
-    """The nominal rotor's optimum by its model's study (:func:`autobal.ocp.solve.optimize` for the Jeffcott
-    rotor, :func:`autobal.ocp.modal.optimize` for the modal rotor: each with its global search for starts and the
-    shared solver).
+    """The nominal rotor's optimum by its model's study (:func:`autobal.ocp.time_optimal.minimum_peak`: the Jeffcott
+    rotor's or the modal rotor's global search for starts, and the shared solver); the modal rotor's on its problem's
+    own mesh.
 
     Returns
     -------
@@ -306,16 +306,11 @@ def nominal_optimum(ocp, method: DirectCollocation, multistart: bool, options: d
         robust NLP's level), build time s, solve time s).
     """
     n = method.intervals
-    if isinstance(ocp, SpinupOcp):
-        r = optimize(ocp, method, multistart, options)
-        ref = r.score**2
-    else:
-        if n != ocp.intervals or method.degree != ocp.degree:
-            raise ValueError(f"the modal rotor's robust NLP is transcribed on its problem's mesh "
-                             f"({ocp.intervals} intervals, degree {ocp.degree}), not {method.label}")
-        r = _modal().optimize(ocp, options)
-        ref = (r.trajectory.peak / ocp.epigraph_unit) ** 2
-    return (rb.Profile("nominal optimum", r.solution.u[:n]), ref, r.build_time_s,
+    if not isinstance(ocp, SpinupOcp) and (n != ocp.intervals or method.degree != ocp.degree):
+        raise ValueError(f"the modal rotor's robust NLP is transcribed on its problem's mesh "
+                         f"({ocp.intervals} intervals, degree {ocp.degree}), not {method.label}")
+    r = minimum_peak(ocp, method, multistart, options)
+    return (rb.Profile("nominal optimum", r.solution.u[:n]), (r.score / ocp.epigraph_unit) ** 2, r.build_time_s,
             sum(row.get("solve_time_s", 0.0) for row in r.starts))
 
 
