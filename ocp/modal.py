@@ -4,18 +4,21 @@
 The drive is posed as in the Jeffcott scenes: |alpha| <= alpha_max, omega_final reached by the deadline
 (``horizon``), held over ``settling_time`` (the peak counts over the whole window), omega <= omega_max.
 The objective is the peak over time of the largest lateral deflection sqrt(x^2 + y^2) at the nodes of
-interest.
+interest, or (``min_time``) the arrival time with that deflection at most ``deflection_limit`` (the time-optimal
+study of :mod:`autobal.ocp.time_optimal`, run on this problem as on the Jeffcott rotor's).
 
 What is modal lives here: the problem (:class:`ModalSpinupOcp`: the complex envelope S of the modal state,
 s = Re(S e^{i phi}) (:mod:`autobal.models.ross_rotor`), smooth where the rotor whirls at the running speed; the
 deflection envelope of a node with complex amplitudes (X, Y), the major half-axis of its orbit,
 r^2 = (|X|^2 + |Y|^2 + |X^2 + Y^2|)/2, smoothed: |W| -> sqrt(|W|^2 + eps^2); the epigraph r^2 <= S ref at every
-collocation point, minimise S), the starts (a grid of four-phase speed profiles: full acceleration to w1, a
-middle phase, full acceleration to w3, then the constant acceleration that arrives at the deadline, screened
-by a fixed-step Runge-Kutta integration of the same envelope equation, :func:`screen`), and the physical
-re-simulation.  The problem has the members the generic pipeline uses, so it is transcribed, solved and
-continued from a coarse mesh by the same code as the Jeffcott rotor's (:func:`autobal.ocp.transcription.transcribe`,
-:class:`autobal.ocp.solve.Solver`, :func:`autobal.ocp.solve.refine`, :func:`autobal.ocp.simulation.simulate_profile`).
+collocation point, minimise S; or r^2 <= deflection_limit^2 there), the starts (a grid of four-phase speed
+profiles: full acceleration to w1, a middle phase, full acceleration to w3, then the constant acceleration that
+arrives at the deadline, screened by a fixed-step Runge-Kutta integration of the same envelope equation,
+:func:`screen`), and the physical re-simulation (the fixed-frame response of
+:func:`autobal.models.ross_rotor.simulate_fixed`).  The problem has the members the generic pipeline uses, so it is
+transcribed, solved and continued from a coarse mesh by the same code as the Jeffcott rotor's
+(:func:`autobal.ocp.transcription.transcribe`, :class:`autobal.ocp.solve.Solver`, :func:`autobal.ocp.solve.refine`,
+:func:`autobal.ocp.simulation.simulate_profile`).
 
 Every reported peak is the CVODES re-simulation of the physical (fixed-frame) response, max_t sqrt(x^2 + y^2).
 """
