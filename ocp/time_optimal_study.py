@@ -16,9 +16,9 @@ from autobal.analysis.quantities import Declarations, Quantity, significant
 from autobal.analysis.result import Result, new_figure, with_statuses
 from autobal.ocp import time_optimal as to
 from autobal.ocp.problem import PEAK_KEY, SpinupOcp
-from autobal.ocp.robust_study import PEAK_SYMBOL, deflection_of
+from autobal.ocp.robust_study import PEAK_SYMBOL, deflection_of, peak_text
 from autobal.ocp.solve import TIE
-from autobal.ocp.spinup_study import RPM, deflection_axis, deflection_text, twin_axis
+from autobal.ocp.spinup_study import RPM, deflection_axis, twin_axis
 from autobal.ocp.transcription import DirectCollocation
 
 
@@ -65,14 +65,6 @@ QUANTITIES = Declarations(
              "cutoff)"),
     Quantity("modes nodes", "1", "", "modes of the reduced rotor; the nodes whose deflection counts"),
 )
-
-
-def peak_text(d: dict, x) -> str:
-    """A peak of the block as read: delta/e with the deflection e delta/e beside it (Jeffcott rotor), or in µm
-    (modal rotor), as the block's ``peak_unit`` states."""
-    if d.get("peak_unit", "1") == "1":
-        return deflection_text(x, d.get("eccentricity_m"))
-    return QUANTITIES.find("peak_deflection_m").text(x)
 
 
 @dataclass
