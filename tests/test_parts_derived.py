@@ -16,7 +16,8 @@ from autobal.parts import module
 
 SCENES = Path(__file__).parents[1] / "scenarios"
 # the parameter objects of every shipped scene's parts, recorded from main before the schemas were derived
-# (commit 14ec08f, hand-written schemas and adapters); floats as repr, so the comparison is exact
+# (commit 14ec08f, hand-written schemas and adapters; ross_spinup_time_optimal.yaml under the same code at
+# c7b2817); floats as repr, so the comparison is exact
 RECORDED = json.loads((Path(__file__).parent / "data" / "part_params.json").read_text())
 
 
