@@ -45,7 +45,8 @@ from autobal.errors import ScenarioError, SolveError
 from autobal.models.device import REGULATOR_GROUPS, DeviceParams, design, groups_by_name, static_system
 from autobal.models.dynamics import LONG_NAMES, PARAM_NAMES, build
 
-# design key -> the DeviceParams fields it sets (dotted paths) and its SI unit
+# design key -> the DeviceParams fields it sets (dotted paths); their units are declared with the fields
+# (models/device.py, models/dynamics.py)
 FIELDS = {
     "V2": ("dynamics.V2",), "V3": ("dynamics.V3",), "c_z": ("dynamics.c_z",), "c_x": ("dynamics.c_x",),
     "k_reg": ("dynamics.k_reg",), "V_cam": ("dynamics.V_cam",), "V_m": ("dynamics.V_m",),
