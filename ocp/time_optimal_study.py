@@ -13,11 +13,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from autobal.analysis.quantities import Declarations, Quantity, significant
-from autobal.analysis.result import Result, new_figure, with_statuses
+from autobal.analysis.result import Result, new_figure, unit_axis, with_statuses
 from autobal.ocp import time_optimal as to
 from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.solve import TIE
-from autobal.ocp.spinup_study import RPM, deflection_axis, deflection_text, twin_axis
+from autobal.ocp.spinup_study import deflection_axis, deflection_text
 from autobal.ocp.transcription import DirectCollocation
 
 
@@ -118,14 +118,15 @@ class TimeOptimalResult(Result):
         line = np.array(sorted([(d["ramp_arrival_time_s"], d["ramp_peak_over_e"]),
                                 *zip(self.arrival_times, self.peaks, strict=True)]
                                + ([(d["arrival_time_s"], d["peak_deflection_over_e"])] if self.limited else [])))
-        ax.plot(line[:, 0], line[:, 1], "-", color="0.6", lw=0.8)
-        ax.plot(self.arrival_times, self.peaks, "o", color="C3", label="minimum peak for an arrival deadline")
-        ax.plot(d["ramp_arrival_time_s"], d["ramp_peak_over_e"], "s", color="C2", label=d["ramp_label"])
+        ft = unit_axis(ax, "arrival time at the final speed", "s", which="x")
+        ax.plot(line[:, 0] * ft, line[:, 1], "-", color="0.6", lw=0.8)
+        ax.plot(np.asarray(self.arrival_times) * ft, self.peaks, "o", color="C3",
+                label="minimum peak for an arrival deadline")
+        ax.plot(d["ramp_arrival_time_s"] * ft, d["ramp_peak_over_e"], "s", color="C2", label=d["ramp_label"])
         if d.get("deflection_limit_over_e") is not None:
             ax.axhline(d["deflection_limit_over_e"], color="k", ls=":", lw=0.8)
-            ax.plot(d["arrival_time_s"], d["peak_deflection_over_e"], "*", ms=12, color="k",
+            ax.plot(d["arrival_time_s"] * ft, d["peak_deflection_over_e"], "*", ms=12, color="k",
                     label=f"earliest arrival with the peak <= {d['deflection_limit_over_e']:.4g} e")
-        ax.set_xlabel("arrival time at the final speed, s")
         ax.set_ylabel(r"peak deflection $\delta^*/e$ (re-simulated)")
         deflection_axis(ax, self.data.get("eccentricity_m"))
         ax.grid(alpha=0.3)
@@ -139,15 +140,14 @@ class TimeOptimalResult(Result):
         fig.suptitle(title, fontsize=8)
         fig2, (a0, a1) = new_figure((8, 7), 2, 1, sharex=True)
         cmap = [f"C{i % 10}" for i in range(len(self.front.points))]
+        ft, fw = unit_axis(a1, "time t", "s", which="x"), unit_axis(a0, r"speed $\omega$", "rad/s")
         for p, c in zip(self.front.points, cmap, strict=True):
-            a0.plot(p.trajectory.t, p.trajectory.omega, color=c, lw=0.9, label=f"arrival by {p.arrival_time_s:.3g} s")
-            a1.plot(p.trajectory.t, p.trajectory.delta, color=c, lw=0.9,
+            a0.plot(p.trajectory.t * ft, p.trajectory.omega * fw, color=c, lw=0.9,
+                    label=f"arrival by {p.arrival_time_s:.3g} s")
+            a1.plot(p.trajectory.t * ft, p.trajectory.delta, color=c, lw=0.9,
                     label=f"peak {deflection_text(p.peak, self.data['eccentricity_m'])}")
-        a0.set_ylabel(r"speed $\omega$, rad/s")
-        twin_axis(a0, RPM, "rpm")
         a1.set_ylabel(r"deflection $\delta/e$")
         deflection_axis(a1, self.data.get("eccentricity_m"))
-        a1.set_xlabel("time t, s")
         for a in (a0, a1):
             a.grid(alpha=0.3)
             a.legend(fontsize=6, ncols=2)
