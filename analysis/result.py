@@ -113,6 +113,12 @@ def unit_axis(ax: Axes, label: str, si: str, declared: str = "", which: str = "y
     return factor
 
 
+def speed_axis(ax: Axes, which: str = "y", label: str = r"speed $\omega$") -> float:
+    """A shaft-speed axis: rpm with rad/s beside unless a speed unit is chosen (:func:`unit_axis`); returns the
+    factor from rad/s."""
+    return unit_axis(ax, label, "rad/s", "rpm", which)
+
+
 def twin_axis(ax: Axes, factor: float, label: str, which: str = "y") -> None:
     """A secondary axis (right, or top for ``which="x"``) showing the axis' values times ``factor``: rpm beside
     rad/s, Hz beside rad/s, a deflection beside delta/e."""

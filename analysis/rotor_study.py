@@ -16,7 +16,7 @@ import numpy as np
 from autobal.analysis import progress
 from autobal.analysis import rotor as R
 from autobal.analysis.quantities import Declarations, Quantity
-from autobal.analysis.result import Result, new_figure, unit_axis
+from autobal.analysis.result import Result, new_figure, speed_axis, unit_axis
 from autobal.errors import ScenarioError
 from autobal.models.rotor import RotorParams
 
@@ -233,7 +233,7 @@ class RotorDynamicsResult(Result):
         if "motor" in c:
             fig, a = new_figure(figsize=(6, 5), nrows=2, sharex=True)
             m = c["motor"]
-            ft, fw = unit_axis(a[1], "time t", "s", which="x"), unit_axis(a[0], r"speed $\omega$", "rad/s")
+            ft, fw = unit_axis(a[1], "time t", "s", which="x"), speed_axis(a[0])
             a[0].plot(np.asarray(m["t"]) * ft, np.asarray(m["omega"]) * fw)
             a[0].axhline(self.data["rotor"]["omega_cr_rad_s"] * fw, color="k", ls=":", lw=0.8,
                          label=r"$\omega_{cr}$")

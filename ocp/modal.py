@@ -31,7 +31,7 @@ import casadi as ca
 import numpy as np
 
 from autobal.analysis.quantities import Declarations, Quantity, convert, significant
-from autobal.analysis.result import Result, new_figure, unit_axis, with_statuses
+from autobal.analysis.result import Result, new_figure, speed_axis, unit_axis, with_statuses
 from autobal.errors import SolveError
 from autobal.models.ross_rotor import ModalRotor
 from autobal.ocp.problem import PathConstraint
@@ -810,9 +810,9 @@ class ModalSpinupResult(Result):
 
     def draw(self, ax) -> None:
         """Largest deflection over the nodes of interest against speed, optimum and ramps (the declared display unit,
-        µm; rpm on top)."""
+        µm; the speed in rpm, rad/s on top)."""
         q = QUANTITIES.find("peak_deflection_m")
-        fw = unit_axis(ax, r"speed $\omega$", "rad/s", which="x")
+        fw = speed_axis(ax, "x")
         for tr, c, ls, lw in self._runs():
             lab = "optimum" if tr is self.optimum else tr.label
             ax.plot(tr.omega * fw, q.shown(tr.deflection.max(axis=0)), color=c, ls=ls, lw=lw,
@@ -823,12 +823,12 @@ class ModalSpinupResult(Result):
         ax.legend(fontsize=7)
 
     def figures(self) -> dict:
-        """Speed (rad/s, rpm) and acceleration (rad/s², rpm/s) against time; deflection (µm) against time and speed;
+        """Speed (rpm, rad/s) and acceleration (rad/s², rpm/s) against time; deflection (µm) against time and speed;
         Campbell diagram (rad/s, rpm and Hz); every axis in its display unit."""
         title, q = self.data["title"], QUANTITIES.find("peak_deflection_m")
         fig, axes = new_figure((8, 6), 2, 1, sharex=True)
         ft = unit_axis(axes[1], "time t", "s", which="x")
-        fw, fa = unit_axis(axes[0], r"speed $\omega$", "rad/s"), unit_axis(axes[1], r"acceleration $\alpha$", "rad/s^2")
+        fw, fa = speed_axis(axes[0]), unit_axis(axes[1], r"acceleration $\alpha$", "rad/s^2")
         for tr, c, ls, lw in self._runs():
             lab = "optimum" if tr is self.optimum else tr.label
             axes[0].plot(tr.t * ft, tr.omega * fw, color=c, ls=ls, lw=lw, label=lab)
@@ -851,7 +851,7 @@ class ModalSpinupResult(Result):
 
         fig3, ax = new_figure((7, 5))
         cb, cs = self.campbell, self.data["critical_speeds"]
-        fw = unit_axis(ax, r"speed $\omega$", "rad/s", which="x")
+        fw = speed_axis(ax, "x")
         ff = unit_axis(ax, "frequency", "rad/s", "Hz", other="rad/s")
         for k in range(cb["wd"].shape[1]):
             ax.plot(cb["omega"] * fw, cb["wd"][:, k] * ff, color="C0", lw=1.0,

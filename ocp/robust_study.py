@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from autobal.analysis.quantities import Declarations, Quantity, significant
-from autobal.analysis.result import Result, new_figure, unit_axis, with_statuses
+from autobal.analysis.result import Result, new_figure, speed_axis, unit_axis, with_statuses
 from autobal.ocp import robust as rb
 from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.search import FAST_STEP, controls_on_mesh, grid_search
@@ -230,7 +230,7 @@ class RobustResult(Result):
         factor, label, _ = self._shown()
         title = self.data["title"]
         fig, (a0, a1) = new_figure((8, 7), 2, 1, sharex=True)
-        ft, fw = unit_axis(a1, "time t", "s", which="x"), unit_axis(a0, r"speed $\omega$", "rad/s")
+        ft, fw = unit_axis(a1, "time t", "s", which="x"), speed_axis(a0)
         for k in self.KEYS:
             tr, tw = self.nominal_runs[k], self.worst_runs[k]
             lab = self.data["profiles"][k]["label"]

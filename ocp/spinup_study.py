@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from autobal.analysis.quantities import Declarations, Quantity, significant
-from autobal.analysis.result import Result, new_figure, twin_axis, unit_axis
+from autobal.analysis.result import Result, new_figure, speed_axis, twin_axis, unit_axis
 from autobal.ocp import drive_profile
 from autobal.ocp.drive_profile import RPM
 from autobal.ocp.problem import SpinupOcp, pulse_variation
@@ -246,7 +246,7 @@ class SpinupResult(Result):
         ax.legend(fontsize=6.5, loc="upper left")
 
     def figures(self) -> dict:
-        """Speed (rad/s, rpm), acceleration steps (rad/s², rpm/s), drive torque (N·m) and, with drive data, power (kW)
+        """Speed (rpm, rad/s), acceleration steps (rad/s², rpm/s), drive torque (N·m) and, with drive data, power (kW)
         against time; deflection (delta/e, mm) against time and speed; every axis in its display unit."""
         title = self.data["title"]
         wc = self.data["omega_cr_rad_s"]
@@ -254,7 +254,7 @@ class SpinupResult(Result):
         fig, axes = new_figure((8, 10 if drive else 8), 4 if drive else 3, 1, sharex=True)
         kw = QUANTITIES.find("max_power_W")
         ft = unit_axis(axes[-1], "time t", "s", which="x")
-        fw = unit_axis(axes[0], r"speed $\omega$", "rad/s")
+        fw = speed_axis(axes[0])
         fa = unit_axis(axes[1], r"acceleration $\alpha$", "rad/s^2")
         fm = unit_axis(axes[2], "drive torque M" if drive else "torque M", "N*m")
         fp = unit_axis(axes[3], "drive power P", "W", kw.declared) if drive else None
@@ -284,7 +284,7 @@ class SpinupResult(Result):
 
         fig2, (a1, a2) = new_figure((8, 7), 2, 1)
         self.draw(a1)
-        fw = unit_axis(a2, r"speed $\omega$", "rad/s", which="x")
+        fw = speed_axis(a2, "x")
         for tr, c, ls, lw in self._runs():
             a2.plot(tr.omega * fw, tr.delta, color=c, ls=ls, lw=lw)
         a2.axvline(wc * fw, color="k", lw=0.8, ls=":", label=r"critical speed $\omega_{cr}$ = "

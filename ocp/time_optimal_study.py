@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from autobal.analysis.quantities import Declarations, Quantity, significant
-from autobal.analysis.result import Result, new_figure, unit_axis, with_statuses
+from autobal.analysis.result import Result, new_figure, speed_axis, unit_axis, with_statuses
 from autobal.ocp import time_optimal as to
 from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.solve import TIE
@@ -140,7 +140,7 @@ class TimeOptimalResult(Result):
         fig.suptitle(title, fontsize=8)
         fig2, (a0, a1) = new_figure((8, 7), 2, 1, sharex=True)
         cmap = [f"C{i % 10}" for i in range(len(self.front.points))]
-        ft, fw = unit_axis(a1, "time t", "s", which="x"), unit_axis(a0, r"speed $\omega$", "rad/s")
+        ft, fw = unit_axis(a1, "time t", "s", which="x"), speed_axis(a0)
         for p, c in zip(self.front.points, cmap, strict=True):
             a0.plot(p.trajectory.t * ft, p.trajectory.omega * fw, color=c, lw=0.9,
                     label=f"arrival by {p.arrival_time_s:.3g} s")

@@ -1,5 +1,5 @@
-"""Figure axes speak the display units (analysis/quantities.py): speeds in rad/s with rpm beside, frequencies with Hz
-beside, amplitudes in µm, times in s; a scene's or a caller's choice (``display:``, ``--units``,
+"""Figure axes speak the display units (analysis/quantities.py): shaft speeds in rpm with rad/s beside, frequencies
+in rad/s with Hz beside, amplitudes in µm, times in s; a scene's or a caller's choice (``display:``, ``--units``,
 :func:`display_units`) changes the label and the plotted data, which are the SI data converted.  The spin-up's
 objective value is declared in the unit of the scene's objective (δ*/e and d* dimensionless, ∫(δ/e)² dt and the
 arrival time in s): results.json ``units``, the terminal and the report."""
@@ -110,33 +110,40 @@ def spin(tmp_path_factory):
 
 
 def test_spinup_speed_time_and_power_axes_follow_the_display_units(spin):
+    """Shaft speeds in rpm with rad/s beside, accelerations in rad/s² with rpm/s beside, the power in kW; a choice
+    of rad/s, rpm/s, ms and W changes labels and data."""
     res = spin[0]["spinup"]
     opt = res.optimum
     figs = res.figures()
     axes = figs["spinup_profiles.png"].axes
-    assert axes[0].get_ylabel() == r"speed $\omega$, rad/s" and secondary(axes[0]) == ["rpm"]
+    assert axes[0].get_ylabel() == r"speed $\omega$, rpm" and secondary(axes[0]) == ["rad/s"]
     assert axes[1].get_ylabel() == r"acceleration $\alpha$, rad/s²" and secondary(axes[1]) == ["rpm/s"]
     assert axes[3].get_ylabel() == "drive power P, kW" and axes[3].get_xlabel() == "time t, s"
-    np.testing.assert_allclose(axes[0].get_lines()[0].get_ydata(), opt.omega, rtol=1e-15)
+    line = axes[0].get_lines()[0]
+    np.testing.assert_allclose(line.get_xdata(), opt.t, rtol=1e-15)
+    np.testing.assert_allclose(line.get_ydata(), opt.omega * RPM, rtol=1e-12)
     np.testing.assert_allclose(axes[3].get_lines()[0].get_ydata(), opt.torque * opt.omega / 1e3, rtol=1e-12)
+    critical = [x for x in axes[0].get_lines() if list(x.get_xdata()) == [0, 1]][0]  # axhline: axes coordinates
+    assert critical.get_ydata()[0] == pytest.approx(res.data["omega_cr_rad_s"] * RPM, rel=1e-12)
     a2 = figs["spinup_deflection.png"].axes[1]
-    assert a2.get_xlabel() == r"speed $\omega$, rad/s" and "rpm" in secondary(a2)
-    with display_units({"speed": "rpm", "time": "ms", "acceleration": "rpm/s", "power": "W"}):
+    assert a2.get_xlabel() == r"speed $\omega$, rpm" and "rad/s" in secondary(a2)
+    np.testing.assert_allclose(a2.get_lines()[0].get_xdata(), opt.omega * RPM, rtol=1e-12)
+    np.testing.assert_allclose(a2.get_lines()[0].get_ydata(), opt.delta, rtol=1e-15)  # δ/e stays δ/e
+    with display_units({"speed": "rad/s", "time": "ms", "acceleration": "rpm/s", "power": "W"}):
         figs = res.figures()
     axes = figs["spinup_profiles.png"].axes
-    assert axes[0].get_ylabel() == r"speed $\omega$, rpm" and secondary(axes[0]) == ["rad/s"]
+    assert axes[0].get_ylabel() == r"speed $\omega$, rad/s" and secondary(axes[0]) == ["rpm"]
     assert axes[1].get_ylabel() == r"acceleration $\alpha$, rpm/s" and secondary(axes[1]) == ["rad/s²"]
     assert axes[3].get_ylabel() == "drive power P, W" and axes[3].get_xlabel() == "time t, ms"
     line = axes[0].get_lines()[0]
     np.testing.assert_allclose(line.get_xdata(), opt.t * 1e3, rtol=1e-12)
-    np.testing.assert_allclose(line.get_ydata(), opt.omega * RPM, rtol=1e-12)
+    np.testing.assert_allclose(line.get_ydata(), opt.omega, rtol=1e-15)
+    steps = axes[1].get_lines()[0]
+    np.testing.assert_allclose(steps.get_ydata()[:-1], opt.alpha * RPM, rtol=1e-12)
     np.testing.assert_allclose(axes[3].get_lines()[0].get_ydata(), opt.torque * opt.omega, rtol=1e-12)
-    critical = [x for x in axes[0].get_lines() if list(x.get_xdata()) == [0, 1]][0]  # axhline: axes coordinates
-    assert critical.get_ydata()[0] == pytest.approx(res.data["omega_cr_rad_s"] * RPM, rel=1e-12)
     a2 = figs["spinup_deflection.png"].axes[1]
-    assert a2.get_xlabel() == r"speed $\omega$, rpm"
-    np.testing.assert_allclose(a2.get_lines()[0].get_xdata(), opt.omega * RPM, rtol=1e-12)
-    np.testing.assert_allclose(a2.get_lines()[0].get_ydata(), opt.delta, rtol=1e-15)  # δ/e stays δ/e
+    assert a2.get_xlabel() == r"speed $\omega$, rad/s"
+    np.testing.assert_allclose(a2.get_lines()[0].get_xdata(), opt.omega, rtol=1e-15)
 
 
 @pytest.mark.parametrize("objective, unit", [("peak_deflection", "1"), ("peak_unbalance", "1"),
@@ -188,8 +195,8 @@ def test_a_real_integrated_deflection_optimum_reports_its_objective_in_seconds()
 # --------------------------------------------------------------------------------------- every shipped scene
 SHIPPED = [p.stem for p in scenario.shipped()]
 #: a choice of a unit for each kind an axis can carry, and the units it replaces (the declared and the defaults)
-CHOICE = {"speed": "rpm", "length": "mm", "pressure": "bar", "time": "min", "flow": "m³/h", "power": "W"}
-REPLACED = re.compile(r", (rad/s|µm|\$\\mu\$m|MPa|L/s|s|ms|h|kW)(?=$|[\s(\n])")
+CHOICE = {"speed": "Hz", "length": "mm", "pressure": "bar", "time": "min", "flow": "m³/h", "power": "W"}
+REPLACED = re.compile(r", (rad/s|rpm|µm|\$\\mu\$m|MPa|L/s|s|ms|h|kW)(?=$|[\s(\n])")
 
 
 @pytest.mark.cli
@@ -206,6 +213,7 @@ def test_every_figure_of_a_shipped_scene_follows_a_choice_of_units(shipped_run, 
                 for ax in fig.axes:
                     for label in (ax.get_xlabel(), ax.get_ylabel()):
                         left += [f"{analysis}/{file}: {label!r}"] if REPLACED.search(label) else []
-                        chosen += bool(re.search(r", (rpm|mm|bar|min|m³/h|W)(?=$|[\s(\n])", label))
+                        chosen += bool(re.search(r", (Hz|mm|bar|min|m³/h|W)(?=$|[\s(\n])", label))
     assert left == []
-    assert chosen > 0 or name.startswith(("hydroheel", "rig_", "washer"))
+    # every scene but the designs' (psi1 against 1/s) and the fit's (groups, the physical values beside) has one
+    assert chosen > 0 or name.endswith("_design") or name.startswith("rig_")
