@@ -109,6 +109,7 @@ def spin(tmp_path_factory):
     return autobal.run(autobal.load("scenarios/spinup_rotor_datasheet.yaml", set=SMALL_SPINUP), out=out), out
 
 
+@pytest.mark.cli
 def test_spinup_speed_time_and_power_axes_follow_the_display_units(spin):
     """Shaft speeds in rpm with rad/s beside, accelerations in rad/s² with rpm/s beside, the power in kW; a choice
     of rad/s, rpm/s, ms and W changes labels and data."""
@@ -146,6 +147,7 @@ def test_spinup_speed_time_and_power_axes_follow_the_display_units(spin):
     np.testing.assert_allclose(a2.get_lines()[0].get_xdata(), opt.omega, rtol=1e-15)
 
 
+@pytest.mark.cli
 @pytest.mark.parametrize("objective, unit", [("peak_deflection", "1"), ("peak_unbalance", "1"),
                                              ("integrated_deflection", "s"), ("min_time", "s")])
 def test_the_objective_value_is_declared_in_the_unit_of_the_scene_objective(spin, objective, unit, tmp_path):
