@@ -215,7 +215,8 @@ def test_every_figure_of_a_shipped_scene_follows_a_choice_of_units(shipped_run, 
                 for ax in fig.axes:
                     for label in (ax.get_xlabel(), ax.get_ylabel()):
                         left += [f"{analysis}/{file}: {label!r}"] if REPLACED.search(label) else []
+                    for label in (t for a in (ax, *ax.child_axes) for t in (a.get_xlabel(), a.get_ylabel())):
                         chosen += bool(re.search(r", (Hz|mm|bar|min|m³/h|W)(?=$|[\s(\n])", label))
     assert left == []
-    # every scene but the designs' (psi1 against 1/s) and the fit's (groups, the physical values beside) has one
+    # every scene but the designs' (psi1 against 1/s) and the fit's (groups; no bases given) shows a chosen unit
     assert chosen > 0 or name.endswith("_design") or name.startswith("rig_")
