@@ -511,6 +511,13 @@ CAPTIONS = [
                                                              "front's points"),
     (r"ross_spinup_robust_(profiles|distribution|scatter)", "ross_spinup_robust", "Robust spin-up of the ROSS rotor "
                                                                                    "(multi-mode): {0}, peaks in µm"),
+    (r"ross_spinup_time_optimal_front", "ross_spinup_time_optimal", "Time-optimal spin-up of the ROSS rotor: the "
+                                                                    "smallest re-simulated peak (µm) against the "
+                                                                    "arrival deadline, the ramp and the earliest "
+                                                                    "arrival under the limit"),
+    (r"ross_spinup_time_optimal_profiles", "ross_spinup_time_optimal", "Time-optimal spin-up of the ROSS rotor: speed "
+                                                                       "and deflection (µm) of the front's points and "
+                                                                       "of the earliest arrival"),
     (r"ross_spinup_(\w+)", "ross_spinup", "Multi-mode spin-up: {0} of the optimum beside the ramps, critical "
                                           "speeds of the reduced model dotted"),
     (r"ross_campbell", "ross_spinup", "Campbell diagram of the reduced rotor: damped natural frequencies against "

@@ -28,25 +28,17 @@ equilibrium is exactly the static solution.  Inputs are w = (psi1, tau), tau = T
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 
 import casadi as ca
 import numpy as np
 
 from autobal.models.device import DeviceDesign, groups_by_name, network
-from autobal.models.params import SIParams, si
+from autobal.models.params import BIG, SIParams, si
 
 FORMS = ("energy", "chain")
 # dynamic data, in this order, as the symbolic parameter vector of the model
 PARAM_NAMES = ("m_p", "k_pr", "c_z", "E", "V2", "V3", "m0", "k_reg", "c_x", "V_cam", "V_m", "s_c")
-# the same parameters by their descriptive names (the scene's and the reports' names) -> short name
-LONG_NAMES = {
-    "rotor_mass": "m_p", "pushoff_stiffness": "k_pr", "rotor_damping": "c_z", "bulk_modulus": "E",
-    "disc_chamber_volume": "V2", "cavity_volume": "V3", "stem_mass": "m0", "spring_stiffness": "k_reg",
-    "stem_damping": "c_x", "valve_chamber_volume": "V_cam", "membrane_chamber_volume": "V_m", "seat_area": "s_c",
-}
-
-
 @dataclass(frozen=True)
 class DynamicData(SIParams):
     """Dynamic data of a device in SI (Pavlenko (2014), App. A and App. B dynamic data).
@@ -83,22 +75,35 @@ class DynamicData(SIParams):
         Operating speed, rad/s.
     """
 
-    m_p: float = si("kg")
-    k_pr: float = si("N/m")
-    c_z: float = si("N*s/m")
-    E: float = si("Pa")
-    V2: float = si("m**3")
-    V3: float = si("m**3")
-    m0: float = si("kg", math.nan)
-    k_reg: float = si("N/m", math.nan)
-    c_x: float = si("N*s/m", math.nan)
-    V_cam: float = si("m**3", math.nan)
-    V_m: float = si("m**3", math.nan)
-    s_c: float = si("m**2", math.nan)
-    s_m: float = si("m**2", math.nan)
-    p_n: float = si("Pa", math.nan)
-    forcing_amplitude: float = si("", 0.2)
-    omega0: float = si("rad/s", math.nan)
+    # the scene's device.dynamics section is derived from these declarations (autobal/parts/device_dynamics.py):
+    # ``key`` is the scene's name, ``regulator.*`` its sub-section (required there, NaN without a regulator)
+    m_p: float = si("kg", kind="mass", key="rotor_mass", doc="rotor mass m_p")
+    k_pr: float = si("N/m", kind="stiffness", key="pushoff_stiffness",
+                     doc="push-off spring stiffness k_pr; preload deflection F_pr/k_pr + z0")
+    c_z: float = si("N*s/m", kind="damping", key="rotor_damping", scene_default=None, ge=0,
+                    doc="rotor damping c_z (0: undamped); default the squeeze film, Pavlenko (2014), App. A")
+    E: float = si("Pa", kind="bulk modulus", key="bulk_modulus",
+                  doc="bulk modulus E of the barrier medium (gas: the source's 1.42e5 Pa)")
+    V2: float = si("m**3", kind="volume", key="disc_chamber_volume", doc="V2, chamber before the face throttle")
+    V3: float = si("m**3", kind="volume", key="cavity_volume", doc="V3, cavity behind the disc")
+    m0: float = si("kg", math.nan, kind="mass", key="regulator.stem_mass", scene_default=...,
+                   doc="regulator stem mass m0")
+    k_reg: float = si("N/m", math.nan, kind="stiffness", key="regulator.spring_stiffness", scene_default=...,
+                      doc="regulator spring stiffness k_reg")
+    c_x: float = si("N*s/m", math.nan, kind="damping", key="regulator.stem_damping", scene_default=0.0, ge=0,
+                    doc="stem damping c_x (the source: 0)")
+    V_cam: float = si("m**3", math.nan, kind="volume", key="regulator.valve_chamber_volume", scene_default=...,
+                      doc="V_cam, valve chamber")
+    V_m: float = si("m**3", math.nan, kind="volume", key="regulator.membrane_chamber_volume", scene_default=...,
+                    doc="V_m, membrane (barrier) chamber")
+    s_c: float = si("m**2", math.nan, kind="area", key="regulator.seat_area",
+                    doc="valve seat area s_c; default pi d_c^2 / 4 from regulator.valve.seat_diameter")
+    s_m: float = si("m**2", math.nan, kind="area", key="", doc="membrane area s_m (the device's regulator)")
+    p_n: float = si("Pa", math.nan, kind="pressure", key="", doc="gas: pressure of normal conditions (the fluid's)")
+    forcing_amplitude: float = si("", 0.2, doc="delta psi_1a, amplitude of the harmonic discharge pressure",
+                                  gt=0, le=BIG)
+    omega0: float = si("rad/s", math.nan, kind="angular speed", key="operating_speed",
+                       doc="operating speed omega0; default the impeller speed")
 
     @property
     def has_regulator(self) -> bool:
@@ -109,6 +114,10 @@ class DynamicData(SIParams):
 
     def with_(self, **changes) -> DynamicData:
         return replace(self, **changes)
+
+
+# the dynamic parameters by their descriptive names (the scene's and the reports' names) -> short name
+LONG_NAMES = {f.metadata["key"].rpartition(".")[2]: f.name for f in fields(DynamicData) if f.name in PARAM_NAMES}
 
 
 def squeeze_damping(viscosity: float, face_area: float, base_gap: float) -> float:

@@ -75,24 +75,30 @@ class System(SIParams):
         Partition thickness and the innermost chamber's inner wall radius, m.
     """
 
-    rotor_mass: float = si("kg")
-    chamber_mass: float = si("kg")
-    unbalance_mass: float = si("kg")
-    unbalance_radius: float = si("m")
-    omega_cr: float = si("rad/s")
-    n: float = si("1/s")
-    R: float = si("m")
-    h: float = si("m")
-    V: float = si("m**3")
-    rho: float = si("kg/m**3")
-    speed: float = si("rad/s")
-    mu: float | None = si("Pa*s", None)
-    stiffness: float | None = si("N/m", None)
-    inclination: float | None = si("rad", None)
+    # the scene's liquid_balancer section is derived from these declarations (autobal/parts/liquid_balancer.py):
+    # ``key`` is the field's place in the scene (rotor, chamber, liquid, nested)
+    rotor_mass: float = si("kg", kind="mass", key="rotor.mass", doc="M_p, rotor mass")
+    chamber_mass: float = si("kg", kind="mass", key="chamber.mass", doc="M_k")
+    unbalance_mass: float = si("kg", kind="mass", key="rotor.unbalance_mass", doc="m_d")
+    unbalance_radius: float = si("m", kind="length", key="rotor.unbalance_radius", doc="e_d; D0 = m_d e_d")
+    omega_cr: float = si("rad/s", kind="angular speed", key="rotor.critical_speed", doc="omega_p (resonance speed)")
+    n: float = si("1/s", kind="rate", key="rotor.damping_coefficient", scene_default=None,
+                  doc="n; overrides log_decrement")
+    R: float = si("m", kind="length", key="chamber.radius", doc="R, inner radius of the (outer) chamber wall")
+    h: float = si("m", kind="length", key="chamber.height", doc="h")
+    V: float = si("m**3", kind="volume", key="liquid.volume", doc="V")
+    rho: float = si("kg/m**3", kind="density", key="liquid.density", doc="rho")
+    speed: float = si("rad/s", kind="angular speed", doc="working angular speed omega")
+    mu: float | None = si("Pa*s", None, kind="viscosity", key="liquid.viscosity", doc="mu (viscous zone (2.15))")
+    stiffness: float | None = si("N/m", None, kind="stiffness", key="rotor.stiffness",
+                                 doc="c [N/m], for the chapter-3 / Pashkov calculators only")
+    inclination: float | None = si("rad", None, key="", doc="Omega_inc (the scene: chamber.inclination_deg)")
     nested_radii: tuple = ()
     nested_volumes: tuple = ()
-    wall_thickness: float = si("m", 0.0)
-    hub_radius: float = si("m", 0.0)
+    wall_thickness: float = si("m", 0.0, kind="length", key="nested.wall_thickness", scene_default=..., ge=0,
+                               doc="t_w, partition thickness")
+    hub_radius: float = si("m", 0.0, kind="length", key="nested.hub_radius", ge=0,
+                           doc="inner wall of the innermost chamber")
 
     @property
     def D0(self) -> float:

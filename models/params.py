@@ -13,9 +13,10 @@ _NO_DEFAULT = dataclasses.MISSING
 BIG = 1e6  # bound of a dimensionless number where physics gives none (autobal.schema's too)
 
 
-def si(unit: str, default=_NO_DEFAULT, *, kind: str | None = None, doc: str = "", **bounds):
+def si(unit: str, default=_NO_DEFAULT, *, kind: str | None = None, doc: str = "", key: str | None = None,
+       scene_default=_NO_DEFAULT, **bounds):
     """A dataclass field holding a float in the SI unit ``unit`` (e.g. "m", "Pa", "kg/m**3"; "" for a
-    dimensionless number), with what a scene schema derived from the class needs (autobal/parts/device.py).
+    dimensionless number), with what a scene schema derived from the class needs (autobal/parts/derived.py).
 
     Parameters
     ----------
@@ -28,10 +29,20 @@ def si(unit: str, default=_NO_DEFAULT, *, kind: str | None = None, doc: str = ""
         unit table), whose SI unit is ``unit``.
     doc : str
         Its meaning, with the source's symbol, for the schema reference.
+    key : str, optional
+        Its key in a scene where that is not the field's name: another name, ``"group.name"`` in a sub-section
+        of the scene, or "" (not in a scene: the part's adapter computes it).
+    scene_default : optional
+        Its default in a scene where that is not ``default``: ``...`` (required in the scene, e.g. inside an
+        optional sub-section) or None (optional: the part's adapter fills it in, e.g. from another section).
     **bounds
         ``gt``, ``ge``, ``lt``, ``le``: its bounds; ``ge=0`` on a dimensional field admits zero.
     """
     metadata = {"unit": unit, "kind": kind, "doc": doc, "bounds": bounds}
+    if key is not None:
+        metadata["key"] = key
+    if scene_default is not _NO_DEFAULT:
+        metadata["scene_default"] = scene_default
     if default is _NO_DEFAULT:
         return dataclasses.field(metadata=metadata)
     return dataclasses.field(default=default, metadata=metadata)

@@ -39,10 +39,13 @@ import casadi as ca
 import numpy as np
 
 from autobal.errors import ScenarioError
+from autobal.models.params import si
 
 EXTRA = "pip install -e '.[ross]'"
 DOFS_PER_NODE = 6  # ROSS: x, y, z, alpha, beta, theta
 LATERAL = (0, 1, 3, 4)  # x, y, alpha, beta
+RESIM_TOL = 1e-9  # CVODES relative tolerance of the fixed-frame response (:func:`simulate_fixed`)
+POINTS_PER_REV = 64  # its output points per revolution (the peak between them: < 1e-3)
 
 
 @contextlib.contextmanager
@@ -87,56 +90,62 @@ def import_ross():
 
 # ---- the rotor as ROSS elements (SI) -------------------------------------------------------------------
 
+# the scene's ross_rotor elements are derived from these declarations (autobal/parts/ross_rotor.py)
+NODES = {"ge": 0, "le": 10_000}  # the range of a node number
+_NODE = {"doc": "node number (0 at the left end)", **NODES}
+
+
 @dataclass(frozen=True)
 class Material:
-    """Shaft material: density (kg/m^3), Young's modulus E (Pa), shear modulus G (Pa)."""
+    """Shaft material: density (kg/m^3), Young's modulus E (Pa), shear modulus G (Pa); the defaults are ROSS's
+    steel."""
 
-    density: float = 7810.0
-    young_modulus: float = 211e9
-    shear_modulus: float = 81.2e9
+    density: float = si("kg/m**3", 7810.0, kind="density", doc="rho")
+    young_modulus: float = si("Pa", 211e9, kind="pressure", doc="E")
+    shear_modulus: float = si("Pa", 81.2e9, kind="pressure", doc="G_s")
 
 
 @dataclass(frozen=True)
 class Shaft:
     """One Timoshenko shaft element of ROSS (``ross.ShaftElement``): length, inner and outer diameter, m."""
 
-    length: float
-    inner_diameter: float
-    outer_diameter: float
+    length: float = si("m", kind="length", doc="element length L")
+    inner_diameter: float = si("m", kind="length", scene_default=0.0, ge=0, doc="idl (0 for a solid shaft)")
+    outer_diameter: float = si("m", kind="length", doc="odl")
 
 
 @dataclass(frozen=True)
 class Disk:
     """A rigid disk (``ross.DiskElement``) at ``node``: mass (kg), diametral and polar inertia (kg m^2)."""
 
-    node: int
-    mass: float
-    diametral_inertia: float
-    polar_inertia: float
+    node: int = si("", **_NODE)
+    mass: float = si("kg", kind="mass", doc="m")
+    diametral_inertia: float = si("kg*m**2", kind="moment of inertia", doc="I_d")
+    polar_inertia: float = si("kg*m**2", kind="moment of inertia", doc="I_p")
 
 
 @dataclass(frozen=True)
 class Bearing:
     """A linear bearing (``ross.BearingElement``) at ``node``: stiffness (N/m) and damping (N s/m)."""
 
-    node: int
-    kxx: float
-    kyy: float
-    cxx: float
-    cyy: float
-    kxy: float = 0.0
-    kyx: float = 0.0
-    cxy: float = 0.0
-    cyx: float = 0.0
+    node: int = si("", **_NODE)
+    kxx: float = si("N/m", kind="stiffness", ge=0, doc="direct stiffness in x")
+    kyy: float = si("N/m", kind="stiffness", scene_default=None, ge=0, doc="direct stiffness in y (default kxx)")
+    cxx: float = si("N*s/m", kind="damping", scene_default=0.0, ge=0, doc="direct damping in x")
+    cyy: float = si("N*s/m", kind="damping", scene_default=None, ge=0, doc="direct damping in y (default cxx)")
+    kxy: float = si("N/m", 0.0, kind="stiffness", ge=0, doc="cross-coupled stiffness")
+    kyx: float = si("N/m", 0.0, kind="stiffness", ge=0, doc="cross-coupled stiffness")
+    cxy: float = si("N*s/m", 0.0, kind="damping", key="", doc="cross-coupled damping (not in a scene)")
+    cyx: float = si("N*s/m", 0.0, kind="damping", key="", doc="cross-coupled damping (not in a scene)")
 
 
 @dataclass(frozen=True)
 class Unbalance:
     """Unbalance m e (kg m) at ``node`` with phase beta (rad)."""
 
-    node: int
-    magnitude: float
-    phase: float = 0.0
+    node: int = si("", **_NODE)
+    magnitude: float = si("kg*m", doc="m e, kg m", gt=0, le=1e3)
+    phase: float = si("rad", 0.0, key="", doc="phase beta (the scene: degrees)")
 
 
 @dataclass(frozen=True)
@@ -301,6 +310,72 @@ class ModalRotor:
         """
         return critical_speeds(self.state_matrix, self.n, self.omega_n, upper)
 
+    def campbell(self, omega_top: float, points: int = 200) -> dict:
+        """Damped natural frequencies (rad/s) against speed, 0 to omega_top: "omega" (points,), "wd" (points, n)."""
+        w = np.linspace(0, omega_top, points)
+        wd = np.array([np.sort(np.linalg.eigvals(self.state_matrix(x)).imag)[self.n:] for x in w])
+        return {"omega": w, "wd": wd}
+
+
+# ---- the physical response of the reduced rotor (fixed frame) ------------------------------------------
+
+def fixed_frame_integrator(rotor: ModalRotor, points: int, tol: float = RESIM_TOL, scale: float = 1.0
+                           ) -> ca.Function:
+    """CVODES of the physical modal state (eta/scale, eta'/scale, omega, phi) over one interval of constant
+    acceleration; parameters (alpha, h); outputs at ``points`` evenly spaced instants after its start."""
+    n = rotor.n
+    x, p = ca.SX.sym("x", 2 * n + 2), ca.SX.sym("p", 2)
+    eta, deta, w, ph = x[:n], x[n:2 * n], x[2 * n], x[2 * n + 1]
+    fr, fi = rotor.force_amplitude(w, p[0])
+    f = ca.cos(ph) * fr - ca.sin(ph) * fi  # Re(F^ e^{i phi})
+    dd = rotor.ode()(eta, deta, w, p[0], f / scale)
+    return ca.integrator("modal_fixed", "cvodes", {"x": x, "p": p, "ode": p[1] * ca.vertcat(deta, dd, p[0], w)},
+                         0, list(np.linspace(0, 1, points + 1)[1:]),
+                         {"abstol": tol, "reltol": tol, "max_num_steps": 500000})
+
+
+def simulate_fixed(rotor: ModalRotor, omega_start: float, alpha: np.ndarray, h: np.ndarray, nodes,
+                   from_rest: bool = False, tol: float = RESIM_TOL):
+    """The physical response to a piecewise-constant acceleration (alpha (rad/s^2) on intervals h (s)),
+    from the steady state at omega_start (or from rest, as ROSS's time response starts), sampled at
+    least POINTS_PER_REV times per revolution.
+
+    Parameters
+    ----------
+    rotor : ModalRotor
+    omega_start : float
+        rad/s.
+    alpha, h : ndarray
+        Acceleration (rad/s^2) and length (s) of each interval.
+    nodes : sequence of int
+    from_rest : bool
+        Start from rest instead of the steady state.
+    tol : float
+        CVODES tolerance (relative; absolute on the scaled states).
+
+    Returns
+    -------
+    t (s), omega (rad/s), xy (len(nodes), 2, len(t)) deflections in m
+    """
+    n = rotor.n
+    a = float(np.abs(rotor.unbalance).max()) or 1.0
+    E = np.zeros(n, complex) if from_rest else rotor.steady_amplitude(omega_start)
+    x = np.concatenate([E.real / a, (1j * omega_start * E).real / a, [omega_start, 0.0]])
+    w_top = np.max(np.abs(omega_start + np.concatenate([[0], np.cumsum(np.asarray(alpha) * h)])))
+    m = max(4, int(np.ceil(w_top * np.max(h) / (2 * np.pi) * POINTS_PER_REV)))
+    F = fixed_frame_integrator(rotor, m, tol, a)
+    frac = np.linspace(0, 1, m + 1)[1:]
+    ts, ws, ys, t0 = [np.zeros(1)], [np.array([omega_start])], [x[:n][:, None]], 0.0
+    for al, hk in zip(alpha, h, strict=True):
+        xf = np.array(F(x0=x, p=[al, hk])["xf"])
+        ts.append(t0 + hk * frac)
+        ws.append(xf[2 * n])
+        ys.append(xf[:n])
+        x, t0 = xf[:, -1], t0 + hk
+    eta = np.hstack(ys) * a
+    xy = np.array([rotor.node_rows(nd) @ eta for nd in nodes])
+    return np.concatenate(ts), np.concatenate(ws), xy
+
 
 def _modes(A_of, omega: float, n: int) -> tuple[np.ndarray, np.ndarray]:
     lam = np.linalg.eigvals(A_of(omega))
@@ -416,6 +491,17 @@ def ross_critical_speeds(rotor, upper: float, rtol: float = 1e-6) -> dict:
         zeta = np.asarray(cs.damping_ratio)
     keep = [i for i in range(len(wd)) if wd[i] <= upper and whirl[i] in ("Forward", "Backward", "Mixed")]
     return {"wd": wd[keep], "wn": wn[keep], "damping_ratio": zeta[keep], "whirl": [str(whirl[i]) for i in keep]}
+
+
+def compare_critical_speeds(reduced: np.ndarray, ross: np.ndarray | None) -> float | None:
+    """Largest relative difference of paired critical speeds (ascending), None without ROSS's (inf when their
+    counts differ)."""
+    if ross is None:
+        return None
+    m = min(len(reduced), len(ross))
+    if m == 0 or len(reduced) != len(ross):
+        return float("inf")
+    return float(np.max(np.abs(np.asarray(reduced[:m]) - np.asarray(ross[:m])) / np.asarray(ross[:m])))
 
 
 def ross_time_response(rotor, unbalances, t: np.ndarray, omega: np.ndarray, node: int) -> np.ndarray:

@@ -57,10 +57,13 @@ class LiquidLayer(SIParams):
         r, m (only the sufficiency check needs it).
     """
 
-    density: float = si("kg/m**3")
-    radius: float = si("m")
-    height: float = si("m")
-    free_surface_radius: float | None = si("m", None)
+    # the scene's rotor.liquid section is derived from these declarations (autobal/parts/rotor.py); a scene gives
+    # the chamber or the design parameter psi instead, so each is optional there
+    density: float = si("kg/m**3", kind="density", scene_default=None, doc="rho, liquid density")
+    radius: float = si("m", kind="length", scene_default=None, doc="R = r1, chamber wall radius")
+    height: float = si("m", kind="length", scene_default=None, doc="h, chamber height")
+    free_surface_radius: float | None = si("m", None, kind="length", doc="r, free-surface radius (only the "
+                                           "sufficiency check R - r >= s needs it)")
 
     @property
     def full_chamber_mass(self) -> float:
@@ -101,13 +104,18 @@ class RotorParams(SIParams):
         Rotational drag of the drive, N m s.
     """
 
-    m1: float = si("kg")
-    c: float = si("N/m")
-    chi: float = si("N*s/m")
-    e: float = si("m")
-    m2_star: float = si("kg", 0.0)
-    J_p: float = si("kg*m**2", 0.0)
-    b: float = si("N*m*s", 0.0)
+    # the scene's rotor section is derived from these declarations (autobal/parts/rotor.py); a scene may give
+    # c, chi and e from a datasheet instead (critical speed, damping ratio, balance grade), so they are optional
+    # there; m2_star comes from the liquid section
+    m1: float = si("kg", kind="mass", key="mass", doc="m1, without liquid (the modal mass)")
+    c: float = si("N/m", kind="stiffness", key="stiffness", scene_default=None, doc="c, shaft stiffness")
+    chi: float = si("N*s/m", kind="damping", key="damping", scene_default=None, ge=0,
+                    doc="chi, external viscous friction")
+    e: float = si("m", kind="length", key="eccentricity", scene_default=None, doc="e, eccentricity")
+    m2_star: float = si("kg", 0.0, kind="mass", key="", doc="m2* = rho pi R^2 h (the liquid section)")
+    J_p: float = si("kg*m**2", 0.0, kind="moment of inertia", key="drive.polar_inertia", scene_default=...,
+                    doc="J_p of rotor and drive")
+    b: float = si("N*m*s", 0.0, kind="rotational damping", key="drive.drag", ge=0, doc="b, N m s")
 
     @classmethod
     def from_groups(cls, Omega0: float, chi_over_m1: float, psi: float = 1.0, e: float = 1.0,

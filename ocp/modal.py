@@ -4,18 +4,21 @@
 The drive is posed as in the Jeffcott scenes: |alpha| <= alpha_max, omega_final reached by the deadline
 (``horizon``), held over ``settling_time`` (the peak counts over the whole window), omega <= omega_max.
 The objective is the peak over time of the largest lateral deflection sqrt(x^2 + y^2) at the nodes of
-interest.
+interest, or (``min_time``) the arrival time with that deflection at most ``deflection_limit`` (the time-optimal
+study of :mod:`autobal.ocp.time_optimal`, run on this problem as on the Jeffcott rotor's).
 
 What is modal lives here: the problem (:class:`ModalSpinupOcp`: the complex envelope S of the modal state,
 s = Re(S e^{i phi}) (:mod:`autobal.models.ross_rotor`), smooth where the rotor whirls at the running speed; the
 deflection envelope of a node with complex amplitudes (X, Y), the major half-axis of its orbit,
 r^2 = (|X|^2 + |Y|^2 + |X^2 + Y^2|)/2, smoothed: |W| -> sqrt(|W|^2 + eps^2); the epigraph r^2 <= S ref at every
-collocation point, minimise S), the starts (a grid of four-phase speed profiles: full acceleration to w1, a
-middle phase, full acceleration to w3, then the constant acceleration that arrives at the deadline, screened
-by a fixed-step Runge-Kutta integration of the same envelope equation, :func:`screen`), and the physical
-re-simulation.  The problem has the members the generic pipeline uses, so it is transcribed, solved and
-continued from a coarse mesh by the same code as the Jeffcott rotor's (:func:`autobal.ocp.transcription.transcribe`,
-:class:`autobal.ocp.solve.Solver`, :func:`autobal.ocp.solve.refine`, :func:`autobal.ocp.simulation.simulate_profile`).
+collocation point, minimise S; or r^2 <= deflection_limit^2 there), the starts (a grid of four-phase speed
+profiles: full acceleration to w1, a middle phase, full acceleration to w3, then the constant acceleration that
+arrives at the deadline, screened by a fixed-step Runge-Kutta integration of the same envelope equation,
+:func:`screen`), and the physical re-simulation (the fixed-frame response of
+:func:`autobal.models.ross_rotor.simulate_fixed`).  The problem has the members the generic pipeline uses, so it is
+transcribed, solved and continued from a coarse mesh by the same code as the Jeffcott rotor's
+(:func:`autobal.ocp.transcription.transcribe`, :class:`autobal.ocp.solve.Solver`, :func:`autobal.ocp.solve.refine`,
+:func:`autobal.ocp.simulation.simulate_profile`).
 
 Every reported peak is the CVODES re-simulation of the physical (fixed-frame) response, max_t sqrt(x^2 + y^2).
 """
@@ -33,21 +36,20 @@ import numpy as np
 from autobal.analysis.quantities import Declarations, Quantity, convert, significant
 from autobal.analysis.result import Result, new_figure, speed_axis, unit_axis, with_statuses
 from autobal.errors import SolveError
-from autobal.models.ross_rotor import ModalRotor
-from autobal.ocp.problem import PathConstraint
+from autobal.models import ross_rotor as rr
+from autobal.models.ross_rotor import POINTS_PER_REV, RESIM_TOL, ModalRotor, simulate_fixed
+from autobal.ocp.problem import Dimensionless, PathConstraint
 from autobal.ocp.search import SearchResult
 from autobal.ocp.simulation import ramp_profile
+from autobal.ocp.solve import AHEAD, Optimum, Solver, coarse_intervals, coarse_options, refine
 from autobal.ocp.solve import TIE as TIE_SOLVED
-from autobal.ocp.solve import Solver, SpinupSolution, coarse_intervals, coarse_options, refine
-from autobal.ocp.transcription import DirectCollocation
+from autobal.ocp.transcription import DirectCollocation, mesh
 
-RESIM_TOL = 1e-9  # CVODES relative tolerance of the re-simulation
-POINTS_PER_REV = 64  # output points per revolution of the re-simulation (peak between them: < 1e-3)
 EPS = 1e-3  # smoothing of |X^2 + Y^2| in the envelope, relative to the reference deflection
 
 
 @dataclass
-class ModalSpinupOcp:
+class ModalSpinupOcp(Dimensionless):
     """The spin-up problem of a reduced rotor, in SI at the boundary.
 
     Inside, as the generic pipeline (:mod:`autobal.ocp.transcription`, :mod:`autobal.ocp.solve`,
@@ -68,16 +70,18 @@ class ModalSpinupOcp:
     # (a, peak_scale2) of the nominal rotor when this is a perturbed one (:meth:`perturbed`): the scenarios of a
     # robust NLP share one epigraph level, so their states and envelopes share one scale
     scales: tuple[float, float] | None = None
+    # "peak_deflection" (the epigraph r^2 <= S, minimise S) or "min_time" (free final time, up to ``horizon``, with
+    # r <= deflection_limit at every collocation point), as the Jeffcott rotor's :class:`autobal.ocp.problem.SpinupOcp`
+    objective: str = "peak_deflection"
+    deflection_limit: float | None = None  # m, the largest deflection of the nodes of interest (0-peak)
 
-    # the problem as the generic pipeline sees it: a minimum-peak epigraph, |alpha| <= alpha_max, no jerk terms
-    objective = "peak_deflection"
-    free_time = False
-    n_extra = 1
+    # the problem as the generic pipeline sees it: |alpha| <= alpha_max, no jerk terms, no drive torque model
+    n_extra = 1  # the epigraph level, or the final time over the horizon
     u_min = -1.0
     jerk_max = None
     jerk_penalty = 0.0
     jerk_variation = 0.0
-    deflection_limit = None
+    deflection_unit = "m"  # of deflection_limit and of every peak (the Jeffcott problem's: "1", delta/e)
     max_steps = 100000  # CVODES steps per call at most (the envelope of four modes whirls fast)
     p = ()  # the equation has no parameters: the rotor's matrices are in it
 
@@ -85,6 +89,12 @@ class ModalSpinupOcp:
         if abs(self.omega_final - self.omega_start) > self.alpha_max * self.horizon:
             raise ValueError(f"|alpha| <= {self.alpha_max:g} rad/s^2 cannot reach {self.omega_final:g} rad/s "
                              f"from {self.omega_start:g} rad/s within the horizon {self.horizon:g} s")
+        if self.objective not in ("peak_deflection", "min_time"):
+            raise ValueError("the modal problem's objective is peak_deflection or min_time")
+        if self.objective == "min_time" and self.deflection_limit is None:
+            raise ValueError("the min_time objective needs a deflection_limit (m)")
+        if self.deflection_limit is not None and not self.deflection_limit > 0:
+            raise ValueError("the deflection limit must be positive (m)")
         for nd in self.nodes:
             self.rotor.node_rows(nd)
 
@@ -102,31 +112,10 @@ class ModalSpinupOcp:
         """Radau collocation of the problem's degree on its control intervals."""
         return DirectCollocation(self.intervals, self.degree, "radau")
 
-    # dimensionless data (tau = omega_final t)
+    # the dimensionless data (:class:`autobal.ocp.problem.Dimensionless`) on the time scale tau = omega_final t
     @property
     def Om(self) -> float:
         return self.omega_final
-
-    @property
-    def nu0(self) -> float:
-        return self.omega_start / self.omega_final
-
-    nuf = 1.0
-
-    @property
-    def tau_h(self) -> float:
-        return self.horizon * self.omega_final
-
-    @property
-    def tau_s(self) -> float:
-        return self.settling_time * self.omega_final
-
-    @property
-    def a_max(self) -> float:
-        return self.alpha_max / self.omega_final**2
-
-    def nu_bounds(self) -> tuple[float, float]:
-        return 0.0, (self.omega_max / self.omega_final if self.omega_max is not None else ca.inf)
 
     @property
     def nx(self) -> int:
@@ -192,10 +181,18 @@ class ModalSpinupOcp:
         return self._envelope2
 
     def path_constraints(self, ref: float) -> list[PathConstraint]:
-        """The epigraph r^2/(a^2 ref) <= S of every node of interest at every path point."""
+        """The epigraph r^2/(a^2 ref) <= S (minimum peak) and the limit r^2 <= deflection_limit^2 (when set) of every
+        node of interest at every path point."""
         x, a, v = ca.SX.sym("x", self.nx), ca.SX.sym("a"), ca.SX.sym("v", 1)
-        return [PathConstraint("deflection epigraph r^2 <= S", ca.Function(
-            "path0", [x, a, v], [self._envelope2(x) / ref - v[0]]), -ca.inf, 0.0)]
+        out = []
+        if self.objective == "peak_deflection":
+            out.append(PathConstraint("deflection epigraph r^2 <= S", ca.Function(
+                "path0", [x, a, v], [self._envelope2(x) / ref - v[0]]), -ca.inf, 0.0))
+        if self.deflection_limit is not None:
+            lim2 = (self.deflection_limit / self.amplitude_scale) ** 2
+            out.append(PathConstraint(f"deflection limit r <= {self.deflection_limit:.6g} m", ca.Function(
+                f"path{len(out)}", [x, a, v], [self._envelope2(x) / lim2]), -ca.inf, 1.0))
+        return out
 
     def epigraph2(self, states: np.ndarray) -> np.ndarray:
         """The squared envelope over a^2 (the epigraph's measure) of the nodes of interest, largest node, at
@@ -253,7 +250,7 @@ class ModalSpinupOcp:
         """Peak deflection (m) of the profile u (alpha/alpha_max on the intervals of dimensionless length h, the
         horizon's then the settling window's), CVODES in the fixed frame (:func:`resimulate`; ``points`` is the
         problem's own)."""
-        return resimulate(self.on_intervals(int(round(self.tau_h / h[0]))), u, label).peak
+        return resimulate(self, u, h, label).peak
 
     @property
     def q0(self) -> np.ndarray:
@@ -261,12 +258,6 @@ class ModalSpinupOcp:
         E = self.rotor.steady_amplitude(self.omega_start) / self.amplitude_scale
         Q = 1j * self.omega_start * E / self.omega_final
         return np.concatenate([E.real, E.imag, Q.real, Q.imag, [self.omega_start / self.omega_final]])
-
-
-def ramp_controls(ocp: ModalSpinupOcp, alpha: float, n: int | None = None) -> np.ndarray:
-    """u = alpha/alpha_max on n control intervals: a constant ramp at ``alpha`` until omega_final, then hold
-    (:func:`autobal.ocp.simulation.ramp_profile`, the Jeffcott rotor's)."""
-    return ramp_profile(ocp, n or ocp.intervals, alpha)
 
 
 @dataclass
@@ -294,72 +285,18 @@ class ModalTrajectory:
                 "node_of_peak": int(self.node_of_peak)}
 
 
-def fixed_frame_integrator(rotor: ModalRotor, points: int, tol: float = RESIM_TOL, scale: float = 1.0
-                           ) -> ca.Function:
-    """CVODES of the physical modal state (eta/scale, eta'/scale, omega, phi) over one interval of constant
-    acceleration; parameters (alpha, h); outputs at ``points`` evenly spaced instants after its start."""
-    n = rotor.n
-    x, p = ca.SX.sym("x", 2 * n + 2), ca.SX.sym("p", 2)
-    eta, deta, w, ph = x[:n], x[n:2 * n], x[2 * n], x[2 * n + 1]
-    fr, fi = rotor.force_amplitude(w, p[0])
-    f = ca.cos(ph) * fr - ca.sin(ph) * fi  # Re(F^ e^{i phi})
-    dd = rotor.ode()(eta, deta, w, p[0], f / scale)
-    return ca.integrator("modal_fixed", "cvodes", {"x": x, "p": p, "ode": p[1] * ca.vertcat(deta, dd, p[0], w)},
-                         0, list(np.linspace(0, 1, points + 1)[1:]),
-                         {"abstol": tol, "reltol": tol, "max_num_steps": 500000})
-
-
-def simulate_fixed(rotor: ModalRotor, omega_start: float, alpha: np.ndarray, h: np.ndarray, nodes,
-                   from_rest: bool = False, tol: float = RESIM_TOL):
-    """The physical response to a piecewise-constant acceleration (alpha (rad/s^2) on intervals h (s)),
-    from the steady state at omega_start (or from rest, as ROSS's time response starts), sampled at
-    least POINTS_PER_REV times per revolution.
-
-    Parameters
-    ----------
-    rotor : ModalRotor
-    omega_start : float
-        rad/s.
-    alpha, h : ndarray
-        Acceleration (rad/s^2) and length (s) of each interval.
-    nodes : sequence of int
-    from_rest : bool
-        Start from rest instead of the steady state.
-    tol : float
-        CVODES tolerance (relative; absolute on the scaled states).
-
-    Returns
-    -------
-    t (s), omega (rad/s), xy (len(nodes), 2, len(t)) deflections in m
-    """
-    n = rotor.n
-    a = float(np.abs(rotor.unbalance).max()) or 1.0
-    E = np.zeros(n, complex) if from_rest else rotor.steady_amplitude(omega_start)
-    x = np.concatenate([E.real / a, (1j * omega_start * E).real / a, [omega_start, 0.0]])
-    w_top = np.max(np.abs(omega_start + np.concatenate([[0], np.cumsum(np.asarray(alpha) * h)])))
-    m = max(4, int(np.ceil(w_top * np.max(h) / (2 * np.pi) * POINTS_PER_REV)))
-    F = fixed_frame_integrator(rotor, m, tol, a)
-    frac = np.linspace(0, 1, m + 1)[1:]
-    ts, ws, ys, t0 = [np.zeros(1)], [np.array([omega_start])], [x[:n][:, None]], 0.0
-    for al, hk in zip(alpha, h, strict=True):
-        xf = np.array(F(x0=x, p=[al, hk])["xf"])
-        ts.append(t0 + hk * frac)
-        ws.append(xf[2 * n])
-        ys.append(xf[:n])
-        x, t0 = xf[:, -1], t0 + hk
-    eta = np.hstack(ys) * a
-    xy = np.array([rotor.node_rows(nd) @ eta for nd in nodes])
-    return np.concatenate(ts), np.concatenate(ws), xy
-
-
-def resimulate(ocp: ModalSpinupOcp, u: np.ndarray, label: str) -> ModalTrajectory:
-    """CVODES re-simulation (fixed frame) of the control u (over alpha_max) on the OCP's intervals, settling
-    window included."""
-    K = len(u)
-    h = np.full(K, ocp.h)
-    t, w, xy = simulate_fixed(ocp.rotor, ocp.omega_start, u * ocp.alpha_max, h, ocp.nodes)
-    return ModalTrajectory(label, t, w, np.hypot(xy[:, 0], xy[:, 1]), tuple(ocp.nodes), np.arange(K) * ocp.h,
-                           u * ocp.alpha_max)
+def resimulate(ocp: ModalSpinupOcp, u: np.ndarray, h: np.ndarray | None, label: str) -> ModalTrajectory:
+    """CVODES re-simulation (fixed frame) of the control u (over alpha_max) on intervals of dimensionless length h
+    (tau = omega_final t, as the generic pipeline's :func:`autobal.ocp.simulation.resimulate`; None: the problem's
+    mesh, its control intervals then its settling intervals), settling window included."""
+    u = np.asarray(u, float)
+    if h is None:
+        ms = mesh(ocp, ocp.intervals)
+        h = np.concatenate([np.full(ms.n, ms.h), np.full(ms.ns, ms.hs)])[:len(u)]
+    hs = np.asarray(h, float) / ocp.Om  # s
+    t, w, xy = simulate_fixed(ocp.rotor, ocp.omega_start, u * ocp.alpha_max, hs, ocp.nodes)
+    return ModalTrajectory(label, t, w, np.hypot(xy[:, 0], xy[:, 1]), tuple(ocp.nodes),
+                           np.concatenate([[0.0], np.cumsum(hs)[:-1]]), u * ocp.alpha_max)
 
 
 # ---- starts: a cheap global search over multi-phase speed profiles ------------------------------------
@@ -371,7 +308,6 @@ RK4_STEP = 1.5  # |lambda| dt; RK4 is stable on the imaginary axis up to 2.83
 SAMPLES = 10
 KEEP = 2  # distinct search profiles solved by IPOPT
 TIE = 2e-3  # relative: screened peaks this close tie (broken by the peak of the last phase)
-AHEAD = 0.05  # the ramps are not solved when the search's best profile is this far below both of their peaks
 
 
 @dataclass(frozen=True)
@@ -591,8 +527,8 @@ def starts(ocp: ModalSpinupOcp, search: bool = True) -> list[tuple[str, np.ndarr
         Label and alpha/alpha_max on each control interval of the horizon.
     """
     const = abs(ocp.omega_final - ocp.omega_start) / ocp.horizon
-    ramps = [("constant ramp", ramp_controls(ocp, const)),
-             ("maximum-acceleration ramp", ramp_controls(ocp, ocp.alpha_max))]
+    ramps = [("constant ramp", ramp_profile(ocp, ocp.intervals, const)),
+             ("maximum-acceleration ramp", ramp_profile(ocp, ocp.intervals, ocp.alpha_max))]
     if not search or ocp.omega_final <= ocp.omega_start:
         return ramps
     found = grid_search(ocp)
@@ -612,25 +548,11 @@ def baselines(ocp: ModalSpinupOcp) -> dict[str, ModalTrajectory]:
     out = {}
     for key, a in (("constant_ramp", const), ("max_acceleration_ramp", ocp.alpha_max)):
         lab = f"constant ramp {a:.4g} rad/s^2" if key == "constant_ramp" else f"ramp {a:.4g} rad/s^2 and hold"
-        out[key] = resimulate(ocp, np.concatenate([ramp_controls(ocp, a), zeros]), lab)
+        out[key] = resimulate(ocp, np.concatenate([ramp_profile(ocp, ocp.intervals, a), zeros]), None, lab)
     return out
 
 
-@dataclass
-class ModalOptimum:
-    solution: SpinupSolution
-    trajectory: ModalTrajectory
-    starts: list
-    build_time_s: float
-    search_time_s: float = 0.0  # the screening of the starts (grid search), s
-
-    @property
-    def resimulation_rel_error(self) -> float:
-        """|collocation peak - re-simulated peak| / re-simulated peak."""
-        return abs(self.solution.peak_collocation - self.trajectory.peak) / self.trajectory.peak
-
-
-def optimize(ocp: ModalSpinupOcp, options: dict | None = None) -> ModalOptimum:
+def optimize(ocp: ModalSpinupOcp, options: dict | None = None, multistart: bool = True) -> Optimum:
     """Solve from every start (:func:`starts`) by the spin-up's solver (:class:`autobal.ocp.solve.Solver`: the
     generic collocation, IPOPT, structured derivatives); keep the best optimum by its re-simulated peak.
 
@@ -641,20 +563,23 @@ def optimize(ocp: ModalSpinupOcp, options: dict | None = None) -> ModalOptimum:
     Parameters
     ----------
     ocp : ModalSpinupOcp
-        The problem.
+        The problem (objective peak_deflection).
     options : dict, optional
         IPOPT options over :data:`autobal.ocp.solve.IPOPT_OPTIONS`.
+    multistart : bool
+        Solve every start; otherwise the first (the best screened profile) only.
 
     Returns
     -------
-    ModalOptimum
-        The best solution, its re-simulation (m, s, rad/s) and one row per solve.
+    Optimum
+        The best solution, its re-simulation (m, s, rad/s), one row per solve, and the search's wall time
+        (``times["global_search"]``, s), as the Jeffcott rotor's :func:`autobal.ocp.solve.optimize` returns.
     """
     n = ocp.intervals
     nc = coarse_intervals(n)
     first = dataclasses.replace(ocp, intervals=nc)
     clock = time.perf_counter()
-    start_list = starts(first)
+    start_list = starts(first)[:None if multistart else 1]
     search_time = time.perf_counter() - clock
     solver = Solver(first, first.method, first.peak_scale2, coarse_options(options) if nc < n else options)
     build = solver.build_time_s
@@ -667,7 +592,7 @@ def optimize(ocp: ModalSpinupOcp, options: dict | None = None) -> ModalOptimum:
             rows.append({"start": label, "stage": stage, "status": exc.status, "error": str(exc)})
             err = err or exc
             continue
-        tr = resimulate(first, sol.u, "optimum")
+        tr = resimulate(first, sol.u, sol.h, "optimum")
         rows.append({"start": label, "stage": stage, "status": sol.status, "iterations": sol.iterations,
                      "solve_time_s": sol.solve_time_s, "collocation_peak_m": sol.peak_collocation,
                      "resimulated_peak_m": tr.peak})
@@ -678,10 +603,11 @@ def optimize(ocp: ModalSpinupOcp, options: dict | None = None) -> ModalOptimum:
     if nc < n:  # refine the best coarse optimum to the full mesh
         fine, sol = refine(ocp, ocp.method, solver, best[0], options, rows)
         build += fine.build_time_s
-        tr = resimulate(ocp, sol.u, "optimum")
+        tr = resimulate(ocp, sol.u, sol.h, "optimum")
         rows[-1] |= {"collocation_peak_m": sol.peak_collocation, "resimulated_peak_m": tr.peak}
         best = (sol, tr)
-    return ModalOptimum(best[0], best[1], rows, build, search_time)
+    sol, tr = best
+    return Optimum(ocp, sol, tr, tr.peak, rows, sol.peak_collocation, build, {"global_search": search_time})
 
 
 # ---- the study of a scene: reduction, critical speeds vs ROSS, optimum vs ramps ------------------------
@@ -909,23 +835,6 @@ QUANTITIES = Declarations(
 ModalSpinupResult.quantities = QUANTITIES
 
 
-def campbell(rotor: ModalRotor, omega_top: float, points: int = 200) -> dict:
-    """Damped natural frequencies (rad/s) of the reduced rotor against speed, 0 to omega_top."""
-    w = np.linspace(0, omega_top, points)
-    wd = np.array([np.sort(np.linalg.eigvals(rotor.state_matrix(x)).imag)[rotor.n:] for x in w])
-    return {"omega": w, "wd": wd}
-
-
-def compare_critical_speeds(reduced: np.ndarray, ross: np.ndarray | None) -> float | None:
-    """Largest relative difference of paired critical speeds (ascending), None without ROSS's."""
-    if ross is None:
-        return None
-    m = min(len(reduced), len(ross))
-    if m == 0 or len(reduced) != len(ross):
-        return float("inf")
-    return float(np.max(np.abs(np.asarray(reduced[:m]) - np.asarray(ross[:m])) / np.asarray(ross[:m])))
-
-
 def run(rotor: ModalRotor, ocp_kw: dict, title: str = "", ross_critical: dict | None = None,
         options: dict | None = None) -> ModalSpinupResult:
     """Optimise the spin-up of the reduced rotor (multi-start), re-simulate, compare with the ramps.
@@ -961,7 +870,7 @@ def run(rotor: ModalRotor, ocp_kw: dict, title: str = "", ross_critical: dict | 
                   f"{ocp.settling_intervals} settling) of the complex envelope, structured derivatives; starts "
                   "from a screened grid of four-phase profiles",
         "status": sol.status, "ipopt_iterations": sol.iterations, "solve_time_s": sol.solve_time_s,
-        "build_time_s": opt.build_time_s, "search_time_s": opt.search_time_s,
+        "build_time_s": opt.build_time_s, "search_time_s": opt.times["global_search"],
         "total_solve_time_s": sum(r.get("solve_time_s", 0.0) for r in opt.starts),
         "peak_deflection_m": tr.peak, "collocation_peak_m": sol.peak_collocation,
         "resimulation_rel_error": opt.resimulation_rel_error, "node_of_peak": tr.node_of_peak,
@@ -976,10 +885,10 @@ def run(rotor: ModalRotor, ocp_kw: dict, title: str = "", ross_critical: dict | 
                             "ross_wd_rad_s": ross,
                             "ross_damping_ratio": None if ross_critical is None else
                             list(ross_critical["damping_ratio"]),
-                            "max_rel_error_vs_ross": compare_critical_speeds(cs["wd"], ross_critical and
+                            "max_rel_error_vs_ross": rr.compare_critical_speeds(cs["wd"], ross_critical and
                                                                              ross_critical["wd"])},
         "accuracy": {"estimate": opt.resimulation_rel_error,
                      "how": "relative difference between the collocation's peak envelope and the CVODES re-simulation "
                             f"of the physical response (rtol {RESIM_TOL:g}, {POINTS_PER_REV} samples per revolution)"},
     }
-    return ModalSpinupResult(data, tr, base, campbell(rotor, 1.2 * ocp.omega_final))
+    return ModalSpinupResult(data, tr, base, rotor.campbell(1.2 * ocp.omega_final))

@@ -45,6 +45,9 @@ JERK_VARIATION = 1e-4
 # extreme scene spinup_100x_slower spans 1.42e4 periods and solves (tests/test_extreme.py)
 CRITICAL_RATIO = 2.0
 MAX_PERIODS = 2e4
+#: the results.json suffix of a peak by the problem's ``deflection_unit``: delta/e for the Jeffcott rotor (Pashkov
+#: (2010), Eq. (2)), m for the modal (ROSS) rotor (the largest whirl radius over its nodes, 0-peak)
+PEAK_KEY = {"1": "over_e", "m": "m"}
 
 
 @dataclass(frozen=True)
@@ -58,8 +61,43 @@ class PathConstraint:
     uses_control: bool = False  # then also imposed at each interval start, where the control jumps
 
 
+class Dimensionless:
+    """The dimensionless data of a spin-up problem from its SI members (omega_start, omega_final, horizon,
+    settling_time, alpha_max, omega_max in rad/s, s, rad/s^2) and its time scale ``Om`` (1/s): time tau = Om t,
+    speed nu = omega/Om, acceleration a* = alpha/Om^2; the objective ``min_time`` frees the final time.  The
+    Jeffcott rotor's problem scales by its Omega0, the modal rotor's by omega_final."""
+
+    @property
+    def free_time(self) -> bool:
+        return self.objective == "min_time"
+
+    @property
+    def nu0(self) -> float:
+        return self.omega_start / self.Om
+
+    @property
+    def nuf(self) -> float:
+        return self.omega_final / self.Om
+
+    @property
+    def tau_h(self) -> float:
+        return self.horizon * self.Om
+
+    @property
+    def tau_s(self) -> float:
+        return self.settling_time * self.Om
+
+    @property
+    def a_max(self) -> float:
+        return self.alpha_max / self.Om**2
+
+    def nu_bounds(self) -> tuple[float, float]:
+        """Bounds of nu on the horizon: 0, and the speed cap when there is one."""
+        return 0.0, (self.omega_max / self.Om if self.omega_max is not None else ca.inf)
+
+
 @dataclass
-class SpinupOcp:
+class SpinupOcp(Dimensionless):
     """Declaration of the spin-up problem in SI (converted to the dimensionless form inside)."""
 
     params: RotorParams
@@ -118,34 +156,10 @@ class SpinupOcp:
                     "shorten them (the passage is quasi-static long before)")
         return None
 
-    # dimensionless data (Pashkov 2010, Eq. (2))
-    @property
-    def free_time(self) -> bool:
-        return self.objective == "min_time"
-
+    # dimensionless data (Pashkov 2010, Eq. (2)): the time scale Omega0
     @property
     def Om(self) -> float:
         return self.params.Omega0
-
-    @property
-    def nu0(self) -> float:
-        return self.omega_start / self.Om
-
-    @property
-    def nuf(self) -> float:
-        return self.omega_final / self.Om
-
-    @property
-    def tau_h(self) -> float:
-        return self.horizon * self.Om
-
-    @property
-    def tau_s(self) -> float:
-        return self.settling_time * self.Om
-
-    @property
-    def a_max(self) -> float:
-        return self.alpha_max / self.Om**2
 
     @property
     def u_min(self) -> float:
@@ -204,6 +218,7 @@ class SpinupOcp:
         """The deflection at states (k, nx) for a failed solve's last iterate, named with its unit."""
         return {"deflection_over_e": list(np.hypot(states[:, 0], states[:, 1]))}
 
+    deflection_unit = "1"  # of deflection_limit and of the peaks: delta/e (the modal rotor's problem: m)
     epigraph_unit = 1.0  # the reported peak is sqrt(epigraph level) times this (delta/e and d are reported as they are)
     max_steps = 20000  # CVODES steps per integrator call at most
 
@@ -253,8 +268,6 @@ class SpinupOcp:
                 (M * P.torque_scale - L) / self.motor_stall_torque, -ca.inf, 0.0)
         return out
 
-    def nu_bounds(self) -> tuple[float, float]:
-        return 0.0, (self.omega_max / self.Om if self.omega_max is not None else ca.inf)
 
 
 def pulse_variation(u) -> float:

@@ -18,11 +18,11 @@ import numpy as np
 from autobal.analysis.quantities import Declarations, Quantity, significant
 from autobal.analysis.result import Result, new_figure, speed_axis, unit_axis, with_statuses
 from autobal.ocp import robust as rb
-from autobal.ocp.problem import SpinupOcp
+from autobal.ocp.problem import PEAK_KEY, SpinupOcp
 from autobal.ocp.search import FAST_STEP, controls_on_mesh, grid_search
 from autobal.ocp.simulation import Trajectory, best_within_limits, drive_use, resimulate
-from autobal.ocp.solve import optimize
 from autobal.ocp.spinup_study import deflection_axis, deflection_text
+from autobal.ocp.time_optimal import minimum_peak
 from autobal.ocp.transcription import DirectCollocation
 
 QUANTILES = (0.5, 0.9, 0.99)
@@ -30,9 +30,6 @@ CHECKED = 4  # validation rotors re-simulated with CVODES to check the fast inte
 CVODES_WORST = 3  # design rotors re-simulated with CVODES per profile (its worst by the fast integrator)
 
 _PROFILE = "profiles.*."
-#: the results.json suffix of a peak by its unit, as the model's problem gives it: delta/e for the Jeffcott rotor
-#: (Pashkov (2010), Eq. (2)), m for the modal (ROSS) rotor (the largest whirl radius over its nodes, 0-peak)
-PEAK_KEY = {"1": "over_e", "m": "m"}
 PEAK_SYMBOL = {"1": "δ*/e", "m": "r*"}
 
 
@@ -103,11 +100,6 @@ def peak_text(d: dict, x) -> str:
     if d.get("peak_unit", "1") == "1":
         return deflection_text(x, d.get("eccentricity_m"))
     return QUANTITIES.find("profiles.robust.validation_worst_m").text(x)
-
-
-def peak_of(tr) -> float:
-    """The peak of a re-simulation: delta/e (Jeffcott :class:`Trajectory`) or m (modal ``ModalTrajectory``)."""
-    return tr.peak_delta if isinstance(tr, Trajectory) else tr.peak
 
 
 def deflection_of(tr) -> np.ndarray:
@@ -236,7 +228,7 @@ class RobustResult(Result):
             lab = self.data["profiles"][k]["label"]
             a0.plot(tr.t * ft, tr.omega * fw, color=self.COLORS[k], label=lab)
             a1.plot(tw.t * ft, factor * deflection_of(tw), color=self.COLORS[k],
-                    label=f"{lab} (peak {peak_text(self.data, peak_of(tw))})")
+                    label=f"{lab} (peak {peak_text(self.data, tw.peak)})")
         wc = self.data["omega_cr_rad_s"]
         if wc is not None:
             a0.axhline(wc * fw, color="k", ls=":", lw=0.8,
@@ -296,14 +288,14 @@ def _on(ocp, factors, profile: rb.Profile):
     o = rb.scenario_ocps(ocp, np.atleast_2d(factors))[0]
     u, h = profile.on(o)
     return resimulate(o, u, h, profile.label, points=8) if isinstance(o, SpinupOcp) else \
-        _modal().resimulate(o, u, profile.label)
+        _modal().resimulate(o, u, h, profile.label)
 
 
 def nominal_optimum(ocp, method: DirectCollocation, multistart: bool, options: dict | None
                     ) -> tuple[rb.Profile, float, float, float]:
-    """The nominal rotor's optimum by its model's study (:func:`autobal.ocp.solve.optimize` for the Jeffcott
-    rotor, :func:`autobal.ocp.modal.optimize` for the modal rotor: each with its global search for starts and the
-    shared solver).
+    """The nominal rotor's optimum by its model's study (:func:`autobal.ocp.time_optimal.minimum_peak`: the Jeffcott
+    rotor's or the modal rotor's global search for starts, and the shared solver); the modal rotor's on its problem's
+    own mesh.
 
     Returns
     -------
@@ -312,16 +304,11 @@ def nominal_optimum(ocp, method: DirectCollocation, multistart: bool, options: d
         robust NLP's level), build time s, solve time s).
     """
     n = method.intervals
-    if isinstance(ocp, SpinupOcp):
-        r = optimize(ocp, method, multistart, options)
-        ref = r.score**2
-    else:
-        if n != ocp.intervals or method.degree != ocp.degree:
-            raise ValueError(f"the modal rotor's robust NLP is transcribed on its problem's mesh "
-                             f"({ocp.intervals} intervals, degree {ocp.degree}), not {method.label}")
-        r = _modal().optimize(ocp, options)
-        ref = (r.trajectory.peak / ocp.epigraph_unit) ** 2
-    return (rb.Profile("nominal optimum", r.solution.u[:n]), ref, r.build_time_s,
+    if not isinstance(ocp, SpinupOcp) and (n != ocp.intervals or method.degree != ocp.degree):
+        raise ValueError(f"the modal rotor's robust NLP is transcribed on its problem's mesh "
+                         f"({ocp.intervals} intervals, degree {ocp.degree}), not {method.label}")
+    r = minimum_peak(ocp, method, multistart, options)
+    return (rb.Profile("nominal optimum", r.solution.u[:n]), (r.score / ocp.epigraph_unit) ** 2, r.build_time_s,
             sum(row.get("solve_time_s", 0.0) for row in r.starts))
 
 
@@ -465,7 +452,7 @@ def run(ocp, method: DirectCollocation, uncertainty: rb.Uncertainty, design_poin
     worst_runs = {k: _on(ocp, worst_rotor, p) for k, (p, _) in chosen.items()}
     prof = {}
     for k, (p, v) in chosen.items():
-        prof[k] = {"label": p.label, f"nominal_peak_{s}": peak_of(nominal_runs[k]),
+        prof[k] = {"label": p.label, f"nominal_peak_{s}": nominal_runs[k].peak,
                    f"design_peaks_{s}": design[k].tolist(), f"design_worst_{s}": float(design[k].max()),
                    f"validation_worst_{s}": float(v.max()), f"validation_mean_{s}": float(v.mean()),
                    f"validation_quantiles_{s}": {str(q): float(np.quantile(v, q)) for q in QUANTILES}}

@@ -164,6 +164,12 @@ class Trajectory:
     t_peak: float
     integral_delta2: float  # integral of (delta/e)^2 dt, s
 
+    @property
+    def peak(self) -> float:
+        """The peak deflection in the problem's deflection unit (``deflection_unit`` "1": delta/e), as the modal
+        rotor's trajectory states its own (m): what a deflection limit bounds."""
+        return self.peak_delta
+
     def to_dict(self) -> dict:
         return {"label": self.label, "peak_deflection_over_e": self.peak_delta, "peak_unbalance": self.peak_d,
                 "time_of_peak_s": self.t_peak, "integral_deflection2_s": self.integral_delta2}

@@ -415,7 +415,7 @@ def resimulated_scores(ocp: SpinupOcp, sol: SpinupSolution, tr: Trajectory) -> t
         return tr.integral_delta2, sol.objective
     if ocp.objective == "min_time":
         return sol.final_time_s, sol.final_time_s
-    return tr.peak_delta, sol.peak_collocation
+    return tr.peak, sol.peak_collocation
 
 
 def refine(ocp: SpinupOcp, method, coarse: Solver, sol: SpinupSolution, options: dict | None, rows: list

@@ -1,11 +1,18 @@
 """Time-optimal spin-up: the earliest arrival at the final speed with the peak deflection bounded (the settling
 window still counted), and the Pareto front of peak against arrival time.
 
+Any spin-up problem of the generic pipeline runs through it: the Jeffcott rotor's
+(:class:`autobal.ocp.problem.SpinupOcp`, peaks delta/e) and the modal (ROSS) rotor's
+(:class:`autobal.ocp.modal.ModalSpinupOcp`, peaks in m), each with its ``min_time`` objective and its deflection
+limit as a path constraint of the shared transcription; each peak and limit in its problem's ``deflection_unit``.
+Only the minimum-peak optimum of a deadline (its model's global search for starts), the fastest ramp and the
+CVODES re-simulation are the model's own (:func:`minimum_peak`, :func:`fastest_ramp`, :func:`resimulated`).
+
 The front is computed as its dual: for a deadline T, the smallest peak P*(T) by the minimum-peak OCP of
 :mod:`autobal.ocp.solve` (global search, multi-start, collocation, CVODES re-simulation), the control step
 kept as the scene's.  P* does not increase with T (a profile that arrives by T also arrives by any later
 deadline and holds), so the earliest arrival with the peak at most L is the smallest T with P*(T) <= L:
-found first by the ``min_time`` OCP (free final time, delta/e <= L at every collocation point) started from
+found first by the ``min_time`` OCP (free final time, the deflection at most L at every collocation point) started from
 the profile of the front's first point that keeps L, and by regula falsi on T between the two points of
 the front that bracket L where that fails.  The fast end of the front is the maximum-acceleration ramp
 (the earliest arrival the acceleration limit allows); the slow end is the scene's horizon.  Every point is
@@ -16,15 +23,63 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from autobal.errors import SolveError
-from autobal.ocp.problem import SpinupOcp
+from autobal.ocp.problem import PEAK_KEY, SpinupOcp
 from autobal.ocp.search import averaged
 from autobal.ocp.simulation import Trajectory, baselines, resimulate
-from autobal.ocp.solve import TIE, Optimum, Solver, optimize, resimulated_scores
+from autobal.ocp.solve import TIE, Optimum, Solver, optimize, reference_level, resimulated_scores
 from autobal.ocp.transcription import DirectCollocation
+
+if TYPE_CHECKING:
+    from autobal.ocp.modal import ModalSpinupOcp
+
+
+def _modal():
+    from autobal.ocp import modal  # the modal rotor's own pieces, imported for its problems only
+
+    return modal
+
+
+def minimum_peak(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation, multistart: bool = True,
+                 options: dict | None = None) -> Optimum:
+    """The minimum-peak optimum of ``ocp`` on ``method``'s mesh by its model's study: the global search for starts,
+    the shared solver and mesh continuation (:func:`autobal.ocp.solve.optimize` for the Jeffcott rotor,
+    :func:`autobal.ocp.modal.optimize` for the modal rotor)."""
+    if isinstance(ocp, SpinupOcp):
+        return optimize(ocp, method, multistart, options)
+    return _modal().optimize(ocp.on_intervals(method.intervals), options, multistart)
+
+
+def resimulated(ocp: SpinupOcp | ModalSpinupOcp, u: np.ndarray, h: np.ndarray, label: str):
+    """The CVODES re-simulation of the profile u (over alpha_max) on intervals h (the problem's dimensionless
+    time): the Jeffcott rotor's :class:`Trajectory` or the modal rotor's (fixed frame), each with ``peak`` in the
+    problem's deflection unit."""
+    if isinstance(ocp, SpinupOcp):
+        return resimulate(ocp, u, h, label)
+    return _modal().resimulate(ocp, u, h, label)
+
+
+def fastest_ramp(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation):
+    """The maximum-acceleration ramp and hold, re-simulated (the Jeffcott rotor's on 4x the method's intervals, the
+    modal rotor's on its own)."""
+    if isinstance(ocp, SpinupOcp):
+        return baselines(ocp, intervals=4 * method.intervals)["max_acceleration_ramp"]
+    return _modal().baselines(ocp.on_intervals(method.intervals))["max_acceleration_ramp"]
+
+
+def epigraph_reference(ocp: SpinupOcp | ModalSpinupOcp) -> float:
+    """The scale of the minimum-peak epigraph level: the maximum-acceleration ramp's peak squared (Jeffcott), the
+    largest steady deflection squared (modal rotor, :attr:`autobal.ocp.modal.ModalSpinupOcp.peak_scale2`)."""
+    return reference_level(ocp) if isinstance(ocp, SpinupOcp) else ocp.peak_scale2
+
+
+def peak_words(ocp: SpinupOcp | ModalSpinupOcp, x: float) -> str:
+    """A peak or limit in the problem's deflection unit, for messages: delta/e as "13 e", m as um."""
+    return f"{x:.6g} e" if ocp.deflection_unit == "1" else f"{x * 1e6:.6g} um"
 
 
 @dataclass
@@ -38,12 +93,12 @@ class FrontPoint:
 
     @property
     def peak(self) -> float:
-        """Re-simulated peak deflection, delta/e."""
-        return self.optimum.trajectory.peak_delta
+        """Re-simulated peak deflection, in the problem's deflection unit (delta/e or m)."""
+        return self.optimum.trajectory.peak
 
     @property
     def collocation_peak(self) -> float:
-        """Largest delta/e at the collocation points."""
+        """Largest deflection at the collocation points (delta/e or m)."""
         return self.optimum.solution.peak_collocation
 
     @property
@@ -57,8 +112,9 @@ class FrontPoint:
 
     def to_dict(self) -> dict:
         o = self.optimum
-        return {"arrival_time_s": self.arrival_time_s, "resimulated_peak_over_e": self.peak,
-                "collocation_peak_over_e": self.collocation_peak,
+        s = PEAK_KEY[o.ocp.deflection_unit]
+        return {"arrival_time_s": self.arrival_time_s, f"resimulated_peak_{s}": self.peak,
+                f"collocation_peak_{s}": self.collocation_peak,
                 "resimulation_rel_error": self.resimulation_rel_error, "objective": o.ocp.objective,
                 "intervals": self.intervals, "held_from_s": self.held_from_s,
                 "iterations": sum(r.get("iterations", 0) for r in o.starts) if o.ocp.free_time
@@ -66,14 +122,14 @@ class FrontPoint:
                 "solve_time_s": sum(r.get("solve_time_s", 0.0) for r in o.starts)}
 
 
-def deadline_point(ocp: SpinupOcp, method: DirectCollocation, deadline: float, options: dict | None = None,
-                   multistart: bool = True) -> FrontPoint:
+def deadline_point(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation, deadline: float,
+                   options: dict | None = None, multistart: bool = True) -> FrontPoint:
     """The smallest re-simulated peak when omega_final must be reached by ``deadline`` (s), on the control step
     of ``method`` over ``ocp.horizon``.
 
     Parameters
     ----------
-    ocp : SpinupOcp
+    ocp : SpinupOcp or ModalSpinupOcp
         The problem (SI).
     method : DirectCollocation
         The transcription over the scene's horizon (its control step is kept).
@@ -87,11 +143,11 @@ def deadline_point(ocp: SpinupOcp, method: DirectCollocation, deadline: float, o
     Returns
     -------
     FrontPoint
-        Peak in delta/e.
+        Peak in the problem's deflection unit (delta/e or m).
     """
     o = dataclasses.replace(ocp, horizon=float(deadline), objective="peak_deflection", deflection_limit=None)
     m = dataclasses.replace(method, intervals=max(MIN_INTERVALS, round(method.intervals * deadline / ocp.horizon)))
-    return FrontPoint(float(deadline), optimize(o, m, multistart, options), m.intervals)
+    return FrontPoint(float(deadline), minimum_peak(o, m, multistart, options), m.intervals)
 
 
 MIN_INTERVALS = 20
@@ -106,14 +162,14 @@ class Front:
     ramp_arrival_time_s: float
 
 
-def front(ocp: SpinupOcp, method: DirectCollocation, count: int = 6, options: dict | None = None,
+def front(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation, count: int = 6, options: dict | None = None,
           multistart: bool = True) -> Front:
     """The front: ``count`` deadlines evenly between the maximum-acceleration ramp's arrival (excluded) and
     the horizon (included), each solved by :func:`deadline_point`.
 
     Parameters
     ----------
-    ocp : SpinupOcp
+    ocp : SpinupOcp or ModalSpinupOcp
         The problem (SI): its horizon is the slow end of the front, s.
     method : DirectCollocation
         The transcription over the horizon.
@@ -127,14 +183,14 @@ def front(ocp: SpinupOcp, method: DirectCollocation, count: int = 6, options: di
     Returns
     -------
     Front
-        Arrival times in s, peaks in delta/e.
+        Arrival times in s, peaks in the problem's deflection unit (delta/e or m).
     """
     t_ramp = abs(ocp.omega_final - ocp.omega_start) / ocp.alpha_max
     if t_ramp >= ocp.horizon:
         raise SolveError(f"time-optimal front: the maximum-acceleration ramp arrives at {t_ramp:.4g} s, not before "
                          f"the horizon {ocp.horizon:g} s", "no_front", {})
     peak_ocp = dataclasses.replace(ocp, objective="peak_deflection", deflection_limit=None)
-    ramp = baselines(peak_ocp, intervals=4 * method.intervals)["max_acceleration_ramp"]
+    ramp = fastest_ramp(peak_ocp, method)
     # deadlines on the control grid of the horizon, so that every earlier profile, held, is one of the later
     # deadline's profiles (the meshes nest)
     dt = ocp.horizon / method.intervals
@@ -154,7 +210,7 @@ def front(ocp: SpinupOcp, method: DirectCollocation, count: int = 6, options: di
     return Front(points, ramp, t_ramp)
 
 
-def extended(ocp: SpinupOcp, method: DirectCollocation, earlier: FrontPoint, deadline: float,
+def extended(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation, earlier: FrontPoint, deadline: float,
              options: dict | None = None) -> FrontPoint | None:
     """The minimum-peak OCP for ``deadline`` solved from the ``earlier`` point's profile (arrive by the earlier
     deadline, then hold; the deadlines on one control grid): a later deadline admits every earlier profile,
@@ -164,12 +220,12 @@ def extended(ocp: SpinupOcp, method: DirectCollocation, earlier: FrontPoint, dea
     m = dataclasses.replace(method, intervals=max(MIN_INTERVALS, round(method.intervals * deadline / ocp.horizon)))
     n0 = earlier.intervals
     u = averaged(earlier.optimum.solution.u[:n0], earlier.arrival_time_s, np.linspace(0.0, deadline, m.intervals + 1))
-    solver = Solver(o, m, options=options)
+    solver = Solver(o, m, epigraph_reference(o), options)
     try:
         sol = solver.solve(np.clip(u, -1.0, 1.0))
     except SolveError:
         return None
-    tr = resimulate(o, sol.u, sol.h, "optimum")
+    tr = resimulated(o, sol.u, sol.h, "optimum")
     score, own = resimulated_scores(o, sol, tr)
     row = {"start": f"the {earlier.arrival_time_s:.4g} s point's profile, then held", "status": sol.status,
            "success": True, "iterations": sol.iterations, "solve_time_s": sol.solve_time_s, "objective": score}
@@ -181,10 +237,10 @@ def extended(ocp: SpinupOcp, method: DirectCollocation, earlier: FrontPoint, dea
 AIM = 1e-5
 
 
-def min_time_point(ocp: SpinupOcp, method: DirectCollocation, limit: float, start: FrontPoint,
+def min_time_point(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation, limit: float, start: FrontPoint,
                    options: dict | None = None, corrections: int = 4) -> FrontPoint | None:
     """The earliest arrival with the re-simulated peak at most ``limit`` by the ``min_time`` OCP (free final
-    time, delta/e at most a collocation limit at every collocation point), started from the profile of the
+    time, the deflection at most a collocation limit at every collocation point), started from the profile of the
     front point ``start`` that keeps the limit; its arrival is the upper bound of the final time.
 
     The control step is the scene's, as at every point of the front: solved first on ``start``'s intervals,
@@ -197,12 +253,12 @@ def min_time_point(ocp: SpinupOcp, method: DirectCollocation, limit: float, star
 
     Parameters
     ----------
-    ocp : SpinupOcp
+    ocp : SpinupOcp or ModalSpinupOcp
         The spin-up problem, SI (its objective and limit are replaced).
     method : DirectCollocation
         Collocation over the scene's horizon: its control step is the one kept at the arrival.
     limit : float
-        Largest peak deflection delta/e.
+        Largest peak deflection, in the problem's deflection unit (delta/e or m).
     start : FrontPoint
         A front point whose re-simulated peak is at most ``limit``.
     options : dict, optional
@@ -213,19 +269,19 @@ def min_time_point(ocp: SpinupOcp, method: DirectCollocation, limit: float, star
     Returns
     -------
     FrontPoint or None
-        Arrival time in s, peak in delta/e (re-simulated, at most ``limit``); None when IPOPT fails or the
-        re-simulated peak stays above ``limit``.
+        Arrival time in s, peak in the problem's deflection unit (re-simulated, at most ``limit``); None when
+        IPOPT fails or the re-simulated peak stays above ``limit``.
     """
     arrival = start.held_from_s or start.arrival_time_s
     t, n, u = arrival, start.intervals, start.optimum.solution.u[:start.intervals]
     rows, build, level = [], 0.0, float(limit)
 
     def record(label: str):
-        tr = resimulate(o, sol.u, sol.h, "optimum")
-        rows.append({"start": label, "stage": f"min_time, {n} intervals, collocation limit {level:.7g} e",
+        tr = resimulated(o, sol.u, sol.h, "optimum")
+        rows.append({"start": label, "stage": f"min_time, {n} intervals, collocation limit {peak_words(o, level)}",
                      "status": sol.status, "success": True, "iterations": sol.iterations,
                      "solve_time_s": sol.solve_time_s, "objective": sol.final_time_s,
-                     "resimulated_peak_over_e": tr.peak_delta})
+                     f"resimulated_peak_{PEAK_KEY[o.deflection_unit]}": tr.peak})
         return tr
 
     for stage, label in enumerate((f"the {arrival:.4g} s point's profile", "the first optimum, on the scene's "
@@ -249,12 +305,12 @@ def min_time_point(ocp: SpinupOcp, method: DirectCollocation, limit: float, star
                                           np.linspace(0.0, sol.final_time_s, scene_n + 1))
         n = scene_n
     tried = []
-    while tr.peak_delta > limit:
+    while tr.peak > limit:
         if len(tried) == corrections:
             return None
-        tried.append((level, tr.peak_delta))
+        tried.append((level, tr.peak))
         slope = (tried[-1][1] - tried[-2][1]) / (tried[-1][0] - tried[-2][0]) if len(tried) > 1 else 1.0
-        level -= (tr.peak_delta - limit * (1 - AIM)) / (slope if slope > 0 else 1.0)
+        level -= (tr.peak - limit * (1 - AIM)) / (slope if slope > 0 else 1.0)
         ubg[rows_limit] = (level / limit) ** 2
         try:
             sol = warm.solve(w0=sol.w, lam_g0=sol.lam_g, lam_x0=sol.lam_x, bounds={"ubx": ubx, "ubg": ubg})
@@ -265,10 +321,10 @@ def min_time_point(ocp: SpinupOcp, method: DirectCollocation, limit: float, star
                       n)
 
 
-def earliest_arrival(ocp: SpinupOcp, method: DirectCollocation, limit: float, fr: Front,
+def earliest_arrival(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation, limit: float, fr: Front,
                      options: dict | None = None, multistart: bool = True, rtol: float = 1e-3,
                      ttol: float = 0.01, max_solves: int = 8, min_time: bool = True) -> tuple[FrontPoint | None, float]:
-    """The earliest arrival with the re-simulated peak at most ``limit`` (delta/e): the ``min_time`` OCP from
+    """The earliest arrival with the re-simulated peak at most ``limit`` (delta/e or m): the ``min_time`` OCP from
     the profile of the front's first point that keeps the limit (:func:`min_time_point`), and, where that
     fails or lands more than ``rtol`` below the limit, regula falsi on the deadline (each step kept in the
     middle half of the bracket, so the bracket shrinks by at least a quarter) between the two points of the
@@ -289,14 +345,15 @@ def earliest_arrival(ocp: SpinupOcp, method: DirectCollocation, limit: float, fr
     SolveError
         When even the horizon does not keep the limit.
     """
-    if fr.ramp.peak_delta <= limit:
+    if fr.ramp.peak <= limit:
         return None, fr.ramp_arrival_time_s
-    pts = [(fr.ramp_arrival_time_s, fr.ramp.peak_delta, None)] + [(p.arrival_time_s, p.peak, p) for p in fr.points]
+    pts = [(fr.ramp_arrival_time_s, fr.ramp.peak, None)] + [(p.arrival_time_s, p.peak, p) for p in fr.points]
     if min(p[1] for p in pts) > limit:
-        raise SolveError(f"time-optimal spin-up infeasible: binding constraint: deflection limit delta/e <= "
-                         f"{limit:g}; the smallest peak reachable by the horizon {ocp.horizon:g} s is "
-                         f"{min(p[1] for p in pts):.4g} e", "Infeasible_Problem_Detected",
-                         {"smallest_peak_over_e": min(p[1] for p in pts)})
+        lowest = min(p[1] for p in pts)
+        raise SolveError(f"time-optimal spin-up infeasible: binding constraint: deflection limit "
+                         f"{peak_words(ocp, limit)}; the smallest peak reachable by the horizon {ocp.horizon:g} s is "
+                         f"{peak_words(ocp, lowest)}", "Infeasible_Problem_Detected",
+                         {f"smallest_peak_{PEAK_KEY[ocp.deflection_unit]}": lowest})
     k = next(i for i, p in enumerate(pts) if p[1] <= limit)
     (ta, pa, _), (tb, pb, best) = pts[k - 1], pts[k]
     q = min_time_point(ocp, method, limit, best, options) if min_time else None

@@ -54,6 +54,7 @@ def shipped_run(tmp_path_factory):
     return get
 
 
+@pytest.hookimpl(tryfirst=True)  # before xdist's own hook, which reads the groups into the node ids
 def pytest_collection_modifyitems(config, items):
     """Under pytest-xdist with ``--dist loadgroup`` (.ci/run's slow set), the tests of one shipped scene go to one
     worker, so that the scene runs once (shipped_run shares a run within a worker only): a test parametrized by a

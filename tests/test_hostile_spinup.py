@@ -37,16 +37,16 @@ CASES = [
 @pytest.mark.cli
 @pytest.mark.parametrize("scene, override, text", [pytest.param(*c[1:], id=c[0]) for c in CASES])
 def test_pathological_spinup_value_is_refused_quickly_in_one_line(tmp_path, capsys, scene, override, text):
-    t0 = time.perf_counter()
+    t0 = time.process_time()  # CPU time: a hang guard that a loaded machine does not trip
     code = cli.main(["run", str(scene), "--out", str(tmp_path / "out"), "--quiet", "--set", override])
-    elapsed = time.perf_counter() - t0
+    elapsed = time.process_time() - t0
     err = capsys.readouterr().err
     assert code == 2, err
     lines = err.strip().splitlines()
     assert 1 <= len(lines) <= 3, err
     assert "Traceback" not in err and "CVODES" not in err
     assert text in err, err
-    assert elapsed < 20, f"refusal took {elapsed:.1f} s (a hang?)"
+    assert elapsed < 20, f"refusal took {elapsed:.1f} s of CPU (a hang?)"
 
 
 def _log(draw, lo: float, hi: float) -> float:
@@ -79,12 +79,12 @@ def spinup_scenes(draw) -> dict:
 @given(d=spinup_scenes())
 def test_spinup_scenes_across_the_bounds_end_without_a_traceback(tmp_path, capsys, d):
     """Drawn spin-up scenes solve (exit 0), are refused with one line (2) or fail as a solve (3), each within a
-    hang guard; never a traceback."""
+    hang guard (60 s of CPU); never a traceback."""
     path = tmp_path / "drawn.yaml"
     path.write_text(yaml.safe_dump(d))
-    t0 = time.perf_counter()
+    t0 = time.process_time()  # CPU time: a hang guard that a loaded machine does not trip
     rc = cli.main(["run", str(path), "-q", "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err
-    assert time.perf_counter() - t0 < 60, d
+    assert time.process_time() - t0 < 60, d
     assert rc in (0, 2, 3) and "Traceback" not in err, (d, err)
     assert rc == 0 or len(err.strip().splitlines()) <= 3, err

@@ -133,17 +133,17 @@ def test_a_scene_builds_only_the_schemas_it_names(tmp_path):
     # (the start-up goal, docs/benchmarks.md): a statics run with its report imports the statics and the device ...
     argv = ["run", "pump_pe600_statics", "--quiet", "--out", str(tmp_path)]
     assert _rooms(f"from autobal import cli\nassert cli.main({argv!r}) == 0\n") == [
-        "autobal.analyses.statics", "autobal.parts.device"]
+        "autobal.analyses.statics", "autobal.parts.derived", "autobal.parts.device"]
     assert (tmp_path / "report.html").is_file()
     # ... a dynamics scene its three analyses and the device with its dynamics schema, and the full Scenario
     # (the schema reference) every analysis and part of the registries
     assert _rooms("from autobal import scenario\nscenario.load('pump_pe600_dynamics')\n") == [
         "autobal.analyses.frequency", "autobal.analyses.stability", "autobal.analyses.transient",
-        "autobal.parts.device", "autobal.parts.device_dynamics"]
+        "autobal.parts.derived", "autobal.parts.device", "autobal.parts.device_dynamics"]
     from autobal import analyses, parts
 
     assert set(_rooms("from autobal import scenario\nscenario.Scenario\n")) == {
-        *analyses.MODULES.values(), *parts.MODULES.values(), "autobal.parts.device_dynamics"}
+        *analyses.MODULES.values(), *parts.MODULES.values(), "autobal.parts.derived", "autobal.parts.device_dynamics"}
 
 
 def test_the_slim_scene_models_validate_as_the_full_one():

@@ -182,8 +182,8 @@ def test_time_optimal_verdict_is_the_earliest_arrival_under_the_limit():
          "ramp_arrival_time_s": 4.25, "ramp_peak_over_e": 14.15, "eccentricity_m": 1e-4, "final_speed_rad_s": 210.0,
          "monotone": True}
     ok, words = time_optimal_study.verdict(d)
-    assert ok and words.startswith("earliest arrival at 210.0 rad/s (2005 rpm) with the peak ≤ 13.00 e: 4.300 s, "
-                                   "peak 12.99 e (1.299 mm)")
+    assert ok and words.startswith("earliest arrival at 210.0 rad/s (2005 rpm) with the peak ≤ 13.00 e (1.300 mm): "
+                                   "4.300 s, peak 12.99 e (1.299 mm) (0.07692 % below the limit)")
     assert time_optimal_study.verdict(d | {"peak_deflection_over_e": 13.5})[0] is False
     ok, words = time_optimal_study.verdict(d | {"deflection_limit_over_e": None, "monotone": False})
     assert ok is False and "NOT monotone" in words

@@ -19,7 +19,7 @@ from autobal.errors import ScenarioError
 from autobal.models import ross_rotor as rr
 from autobal.ocp import modal
 from autobal.ocp import robust as rb
-from autobal.ocp.simulation import simulate_profile
+from autobal.ocp.simulation import ramp_profile, simulate_profile
 from autobal.ocp.solve import Solver
 from autobal.ocp.transcription import structured_derivatives, transcribe
 from autobal.parts import ross_rotor as ross_rotor_part
@@ -65,7 +65,7 @@ def test_steady_response_and_fixed_frame_simulation_agree():
     """At constant speed the re-simulated orbit radius is the closed form m e omega^2 / |k - m w^2 + i c w|."""
     red = rr.reduce(disk_rotor(), [rr.Unbalance(0, 1e-4)], omega_final=120.0, cutoff=1.5)
     w = 80.0
-    t, om, xy = modal.simulate_fixed(red, w, np.zeros(1), np.array([0.5]), [0])
+    t, om, xy = rr.simulate_fixed(red, w, np.zeros(1), np.array([0.5]), [0])
     r = np.hypot(xy[0, 0], xy[0, 1])
     exact = 1e-4 * w**2 / abs(k - m * w**2 + 1j * c * w)
     assert_allclose(r, exact, rtol=1e-7)
@@ -81,12 +81,12 @@ def small_ocp():
 def test_envelope_peak_matches_the_physical_response(small_ocp):
     """The envelope state simulated on the collocation mesh bounds the fixed-frame deflection and its peak
     agrees with the re-simulated one within 0.5 % (one copy of the equations, two frames)."""
-    u = np.concatenate([modal.ramp_controls(small_ocp, 60.0), np.zeros(small_ocp.settling_intervals)])
+    u = np.concatenate([ramp_profile(small_ocp, small_ocp.intervals, 60.0), np.zeros(small_ocp.settling_intervals)])
     h = np.full(u.size, small_ocp.h * small_ocp.Om)
     env = simulate_profile(small_ocp, u, h, np.linspace(0, 1, 41)[1:], tol=1e-8)
     e2 = np.array(small_ocp.envelope2().map(env.shape[0] * env.shape[1])(env.reshape(-1, env.shape[2]).T))
     env_peak = np.sqrt(e2.max()) * small_ocp.amplitude_scale
-    tr = modal.resimulate(small_ocp, u, "ramp")
+    tr = modal.resimulate(small_ocp, u, h, "ramp")
     assert_allclose(env_peak, tr.peak, rtol=5e-3)
 
 
@@ -148,9 +148,9 @@ def test_screening_integrator_matches_the_resimulation(small_ocp):
     """The fixed-step Runge-Kutta screening of the envelope (taken from the same CasADi equation) gives the
     re-simulated (CVODES, fixed frame) peak of two profiles within 0.5 %."""
     n, ns = small_ocp.intervals, small_ocp.settling_intervals
-    for u in (modal.ramp_controls(small_ocp, 70.0), modal.phase_profiles(small_ocp, 80.0, -1.0, 0.1, 120.0)[0]):
+    for u in (ramp_profile(small_ocp, n, 70.0), modal.phase_profiles(small_ocp, 80.0, -1.0, 0.1, 120.0)[0]):
         fast = modal.screen(small_ocp, u[None, :])[0]
-        slow = modal.resimulate(small_ocp, np.concatenate([u, np.zeros(ns)]), "p").peak
+        slow = modal.resimulate(small_ocp, np.concatenate([u, np.zeros(ns)]), None, "p").peak
         assert_allclose(fast, slow, rtol=5e-3)
         assert u.size == n
 
@@ -220,7 +220,7 @@ def test_critical_speeds_match_ross(scene_rotor):
     mine = red.critical_speeds(350.0)["wd"]
     assert len(mine) == len(ross) == 4
     assert_allclose(mine, ross, rtol=1e-2)
-    assert modal.compare_critical_speeds(mine, ross) < 3e-3
+    assert rr.compare_critical_speeds(mine, ross) < 3e-3
 
 
 @pytest.mark.slow
@@ -234,7 +234,7 @@ def test_ramp_run_up_matches_ross_time_response(scene_rotor):
     t = np.linspace(0, T, 35001)
     xy = rr.ross_time_response(rotor, ub, t, wf * t / T, 3)
     r_ross = np.hypot(xy[:, 0], xy[:, 1])
-    ts, _, xy2 = modal.simulate_fixed(red, 0.0, np.array([wf / T]), np.array([T]), [3], from_rest=True)
+    ts, _, xy2 = rr.simulate_fixed(red, 0.0, np.array([wf / T]), np.array([T]), [3], from_rest=True)
     r = np.hypot(xy2[0, 0], xy2[0, 1])
     assert_allclose(r.max(), r_ross.max(), rtol=1e-2)
     assert_allclose(ts[np.argmax(r)], t[np.argmax(r_ross)], rtol=1e-2)
@@ -278,8 +278,8 @@ def test_shipped_optimum_does_not_depend_on_the_ramps(scene_rotor):
     assert opt.resimulation_rel_error < 1e-2
     solver = Solver(ocp, ocp.method, ocp.peak_scale2)
     const = (s.final_speed - s.start_speed) / s.horizon
-    ramps = [modal.resimulate(ocp, solver.solve(modal.ramp_controls(ocp, a)).u, "ramp").peak
-             for a in (const, s.max_acceleration)]
+    sols = [solver.solve(ramp_profile(ocp, ocp.intervals, a)) for a in (const, s.max_acceleration)]
+    ramps = [modal.resimulate(ocp, sol.u, sol.h, "ramp").peak for sol in sols]
     assert_allclose(ramps, [24.99e-6, 28.79e-6], rtol=2e-3)
     assert opt.trajectory.peak < 0.9 * min(ramps)
     assert_allclose(opt.trajectory.peak, 19.65e-6, rtol=5e-3)

@@ -164,7 +164,7 @@ def test_time_optimal_front_is_monotone_and_every_point_resimulates_within_half_
 def test_earliest_arrival_of_a_limit_the_ramp_keeps_is_the_ramp():
     ocp = jeffcott()
     ramp = rb.cvodes_peaks(ocp, np.array([[1.0, 1.0, 1.0]]), rb.Profile("r", ramp_profile(ocp, 200, 40.0)))[0]
-    fr = time_optimal.Front([], SimpleNamespace(peak_delta=ramp), 4.25)
+    fr = time_optimal.Front([], SimpleNamespace(peak=ramp), 4.25)
     assert time_optimal.earliest_arrival(ocp, DirectCollocation(50), ramp * 1.01, fr) == (None, 4.25)
 
 

@@ -40,6 +40,7 @@ MODULES = {
     "design": "autobal.analyses.design",
     "ross_spinup": "autobal.analyses.ross_spinup",
     "ross_spinup_robust": "autobal.analyses.ross_spinup_robust",
+    "ross_spinup_time_optimal": "autobal.analyses.ross_spinup_time_optimal",
 }
 
 

@@ -81,6 +81,25 @@ def run(scene, settings: RossSpinup):
         raise ScenarioError(f"analyses.ross_spinup: {exc}") from None
 
 
+def problem(scene, settings: RossSpinup, key: str = "ross_spinup", **extra):
+    """The spin-up problem of the scene's ROSS rotor reduced to its modes (SI; needs the ross extra), with the
+    ``extra`` members of :class:`autobal.ocp.modal.ModalSpinupOcp` (e.g. a deflection limit); a problem that cannot
+    be posed raises ScenarioError naming ``analyses.<key>``."""
+    from autobal.models import ross_rotor as rr
+    from autobal.ocp import modal
+    from autobal.parts.ross_rotor import adapt
+
+    spec, unbalances = adapt(scene.ross_rotor)
+    reduced = rr.reduce(rr.lateral_matrices(rr.ross_rotor(spec)), unbalances, settings.final_speed,
+                        settings.mode_cutoff, settings.gyroscopic_tolerance)
+    try:
+        return modal.ModalSpinupOcp(reduced, settings.start_speed, settings.final_speed, settings.horizon,
+                                    settings.max_acceleration, tuple(settings.nodes), settings.settling_time,
+                                    settings.max_speed, settings.intervals, settings.degree, **extra)
+    except ValueError as exc:
+        raise ScenarioError(f"analyses.{key}: {exc}") from None
+
+
 def estimate_seconds(settings: RossSpinup) -> float:
     """ROSS's import, numba compilation and critical speeds (about 30 s), then the four-phase search (about
     5 s) and its starts on the modal envelope (4 modes, 160 intervals of degree 3: about 24 s measured)."""

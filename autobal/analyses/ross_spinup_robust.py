@@ -10,10 +10,9 @@ from __future__ import annotations
 
 from pydantic import create_model, model_validator
 
-from autobal.analyses import COST
+from autobal.analyses import COST, ross_spinup
 from autobal.analyses.ross_spinup import RossSpinup
 from autobal.analyses.spinup_robust import SpinupRobust, report_section  # noqa: F401  one section for both rotors
-from autobal.errors import ScenarioError
 
 DESCRIPTION = "one spin-up profile of a ROSS rotor for a set of rotors (worst case; the ross extra)"
 NEEDS = "ross_rotor"
@@ -49,19 +48,7 @@ SETTINGS = RossSpinupRobust
 
 def problem(scene, settings: RossSpinupRobust):
     """The nominal spin-up problem of the scene's ROSS rotor reduced to its modes (SI; needs the ross extra)."""
-    from autobal.models import ross_rotor as rr
-    from autobal.ocp import modal
-    from autobal.parts.ross_rotor import adapt
-
-    spec, unbalances = adapt(scene.ross_rotor)
-    reduced = rr.reduce(rr.lateral_matrices(rr.ross_rotor(spec)), unbalances, settings.final_speed,
-                        settings.mode_cutoff, settings.gyroscopic_tolerance)
-    try:
-        return modal.ModalSpinupOcp(reduced, settings.start_speed, settings.final_speed, settings.horizon,
-                                    settings.max_acceleration, tuple(settings.nodes), settings.settling_time,
-                                    settings.max_speed, settings.intervals, settings.degree)
-    except ValueError as exc:
-        raise ScenarioError(f"analyses.ross_spinup_robust: {exc}") from None
+    return ross_spinup.problem(scene, settings, "ross_spinup_robust")
 
 
 def run(scene, settings: RossSpinupRobust):

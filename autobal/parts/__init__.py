@@ -2,8 +2,9 @@
 
 A part module defines ``SCHEMA`` (the pydantic schema of the top-level section ``<key>``), ``DESCRIPTION``
 (one line for the schema reference) and, where the physics takes one, ``adapt(section)``: the validated
-section to the SI parameter object of :mod:`autobal.models`.  The device's schema is built by
-:func:`autobal.parts.device.device_model` instead (with or without its ``dynamics`` section).
+section to the SI parameter object of :mod:`autobal.models`.  The schemas are derived from those parameter
+objects (:mod:`autobal.parts.derived`); the device's is built by :func:`autobal.parts.device.device_model`
+(with or without its ``dynamics`` section).
 
 :data:`MODULES` is the one list kept by hand, in the scene's order; a module is imported only when a scene
 names its part.

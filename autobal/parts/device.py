@@ -11,27 +11,23 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import typing
 from functools import cache
-from typing import Annotated, Literal
 
-from pydantic import Field, create_model, model_validator
+from pydantic import Field, create_model
 
 from autobal.errors import ScenarioError
 from autobal.models import device as dv
 from autobal.models.dynamics import DynamicData, squeeze_damping
+from autobal.parts.derived import SCENE_CHECKS, schema, to_params
 from autobal.schema import Strict
-from autobal.units import quantity
 
 DESCRIPTION = "the axial balancing device (statics, dynamics, Monte Carlo, fits)"
 DYNAMICS_DESCRIPTION = "masses, springs, volumes for the frequency, stability and transient analyses"
 
 
-# The schema of each section is derived from the SI parameter dataclass of autobal.models.device, the one
-# declaration of each parameter: its unit and quantity kind, meaning, bounds and default (``si(...)``,
-# ``section(...)``) and the checks across its fields (``__post_init__``).  A NaN or inf default (a value the
-# model reads as "not given" or "unlimited") is an optional key of the scene; None in the scene is that default.
-_PARAMS: dict[type, type] = {}  # derived schema -> its dataclass
+# The schema of each section is derived from the SI parameter dataclass of autobal.models.device
+# (autobal.parts.derived), the one declaration of each parameter; the checks across its fields are its
+# ``__post_init__``, and a scene's own rules are below.
 
 
 def _drain_below_nominal(op: dv.Operating) -> None:
@@ -43,65 +39,7 @@ def _drain_below_nominal(op: dv.Operating) -> None:
                          "the drain (above it the face is pressed shut and nothing is balanced)")
 
 
-# what a scene must satisfy beyond the checks of the dataclasses themselves
-SCENE_CHECKS = {dv.Operating: _drain_below_nominal}
-
-
-class _Derived(Strict):
-    """A section whose schema is derived from a parameter dataclass; its values are checked by building it
-    (the dataclass' own checks) and by :data:`SCENE_CHECKS`."""
-
-    @model_validator(mode="after")
-    def _dataclass_checks(self):
-        params = to_params(self)
-        if type(params) in SCENE_CHECKS:
-            SCENE_CHECKS[type(params)](params)
-        return self
-
-
-def _optional(value) -> bool:
-    return isinstance(value, float) and not math.isfinite(value)
-
-
-@cache
-def schema(cls: type) -> type[Strict]:
-    """The pydantic schema of a scene section derived from the parameter dataclass ``cls`` of
-    :mod:`autobal.models.device` (its ``dynamics`` field left out: see :func:`device_model`)."""
-    hints = typing.get_type_hints(cls, localns={"DynamicData": object})
-    fields = {}
-    for f in dataclasses.fields(cls):
-        if f.name == "dynamics":
-            continue
-        meta, hint = f.metadata, hints[f.name]
-        default = ... if f.default is dataclasses.MISSING else f.default
-        if meta.get("choices"):
-            typ = Literal[meta["choices"]]
-        elif "unit" in meta:  # a number: a quantity of its kind, or a dimensionless number within its bounds
-            bounds = meta["bounds"]
-            typ = (quantity(meta["kind"], "nonnegative" if bounds.get("ge") == 0 else "positive") if meta["kind"]
-                   else Annotated[hint, Field(**bounds)])
-            if _optional(default):
-                typ, default = typ | None, None
-        else:  # a part: its own derived schema
-            part = next((a for a in typing.get_args(hint) if a is not type(None)), hint)
-            typ = schema(part) | None if default is None else schema(part)
-        fields[f.name] = (typ, Field(default, description=meta.get("doc")))
-    model = create_model(cls.__name__, __base__=_Derived, __module__=__name__, __doc__=cls.__doc__, **fields)
-    _PARAMS[model] = cls
-    return model
-
-
-def to_params(section: Strict):
-    """A validated section of a derived schema as its parameter dataclass (SI): None becomes the
-    dataclass' default; ``device.dynamics`` is left out (:func:`dynamic_data`)."""
-    cls = next(_PARAMS[c] for c in type(section).__mro__ if c in _PARAMS)
-    kw = {}
-    for f in dataclasses.fields(cls):
-        value = getattr(section, f.name, None)
-        if f.name == "dynamics" or value is None:
-            continue
-        kw[f.name] = to_params(value) if isinstance(value, Strict) else value
-    return cls(**kw)
+SCENE_CHECKS[dv.Operating] = _drain_below_nominal
 
 
 @cache
@@ -171,24 +109,18 @@ def dynamic_data(d, params: dv.DeviceParams) -> DynamicData:
     if (d.regulator is None) != (dyn.regulator is None):
         raise ScenarioError("device.dynamics.regulator: give it exactly when the device has a regulator "
                             "(stem_mass, spring_stiffness, valve_chamber_volume, membrane_chamber_volume)")
-    face = params.disc.face
-    c_z = dyn.rotor_damping
-    if c_z is None:
-        c_z = squeeze_damping(params.fluid.viscosity, dv.face_area(face), face.base_gap)
-    omega0 = dyn.operating_speed
-    if omega0 is None:
-        imp = params.operating.impeller
-        omega0 = imp.speed if imp is not None else math.nan
-    kw = {}
+    filled = {"p_n": params.fluid.normal_pressure}
+    if dyn.rotor_damping is None:
+        face = params.disc.face
+        filled["c_z"] = squeeze_damping(params.fluid.viscosity, dv.face_area(face), face.base_gap)
+    if dyn.operating_speed is None and params.operating.impeller is not None:
+        filled["omega0"] = params.operating.impeller.speed
     if dyn.regulator is not None:
-        r, reg = dyn.regulator, params.regulator
-        s_c = r.seat_area if r.seat_area is not None else math.pi * reg.valve.seat_diameter**2 / 4
-        kw = {"m0": r.stem_mass, "k_reg": r.spring_stiffness, "c_x": r.stem_damping,
-              "V_cam": r.valve_chamber_volume, "V_m": r.membrane_chamber_volume, "s_c": s_c,
-              "s_m": reg.membrane_area}
-    return DynamicData(m_p=dyn.rotor_mass, k_pr=dyn.pushoff_stiffness, c_z=c_z, E=dyn.bulk_modulus,
-                       V2=dyn.disc_chamber_volume, V3=dyn.cavity_volume, p_n=params.fluid.normal_pressure,
-                       forcing_amplitude=dyn.forcing_amplitude, omega0=omega0, **kw)
+        reg = params.regulator
+        filled["s_m"] = reg.membrane_area
+        if dyn.regulator.seat_area is None:
+            filled["s_c"] = math.pi * reg.valve.seat_diameter**2 / 4
+    return to_params(dyn, **filled)
 
 
 def dynamic_device(scn) -> dv.DeviceParams:

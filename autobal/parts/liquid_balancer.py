@@ -1,6 +1,13 @@
 """Scene part ``liquid_balancer``: the liquid auto-balancer's schema and its adapter to
 :class:`autobal.models.liquid_balancer.System` (SI).  Quantities carry units and are converted to SI at load time.
 
+The schema is derived from :class:`~autobal.models.liquid_balancer.System` (:mod:`autobal.parts.derived`), where
+each parameter is declared with its place in the scene (``rotor``, ``chamber``, ``liquid``, ``nested``), unit,
+meaning and default.  Written here by hand, as scene-only inputs without a field of their own in ``System``:
+``rotor.log_decrement`` (the alternative to ``damping_coefficient``), ``chamber.inclination_deg`` (degrees;
+the model's ``inclination`` is in rad) and the list ``nested.chambers`` (the model's ``nested_radii`` and
+``nested_volumes``), and the checks across sections.
+
 Sources: Khomyak 2020 (Table 3.1 system, App. В/Г programs), Pashkov 2010 ch. 3 (nested chambers);
 Khomyak (2020), Pashkov (2010).
 """
@@ -13,22 +20,15 @@ from typing import Annotated
 from pydantic import Field, model_validator
 
 from autobal.models.liquid_balancer import System, n_from_decrement
+from autobal.parts.derived import Group, schema, to_params
 from autobal.schema import Positive, Strict
-from autobal.units import AngularSpeed, Density, Length, LengthOrZero, Mass, Stiffness, Viscosity, Volume, quantity
-
-Rate = quantity("rate")
+from autobal.units import Length, Volume
 
 
-class LBRotor(Strict):
+class _LBRotor(Strict):
     """Rotor with its unbalance (Table 3.1)."""
 
-    mass: Mass = Field(description="M_p, rotor mass")
-    unbalance_mass: Mass = Field(description="m_d")
-    unbalance_radius: Length = Field(description="e_d; D0 = m_d e_d")
-    critical_speed: AngularSpeed = Field(description="omega_p (resonance speed)")
     log_decrement: Positive | None = Field(None, description="theta; n = theta omega_p / (2 pi) (erratum 1)")
-    damping_coefficient: Rate | None = Field(None, description="n; overrides log_decrement")
-    stiffness: Stiffness | None = Field(None, description="c [N/m], for the chapter-3 / Pashkov calculators only")
 
     @model_validator(mode="after")
     def _damping(self):
@@ -37,18 +37,9 @@ class LBRotor(Strict):
         return self
 
 
-class LBChamber(Strict):
-    mass: Mass = Field(description="M_k")
-    radius: Length = Field(description="R, inner radius of the (outer) chamber wall")
-    height: Length = Field(description="h")
+class _LBChamber(Strict):
     inclination_deg: Annotated[float, Field(ge=0, le=90)] | None = Field(
         None, description="Omega_inc; 90 = vertical rotor")
-
-
-class LBLiquid(Strict):
-    volume: Volume = Field(description="V")
-    density: Density = Field(description="rho")
-    viscosity: Viscosity | None = Field(None, description="mu (viscous zone (2.15))")
 
 
 class NestedChamber(Strict):
@@ -56,23 +47,15 @@ class NestedChamber(Strict):
     volume: Volume = Field(description="V_i, liquid in this chamber")
 
 
-class Nested(Strict):
+class _Nested(Strict):
     """Further concentric chambers inside the outer one, outermost first (Pashkov ch. 3, [T] (3.10)-(3.14))."""
 
-    wall_thickness: LengthOrZero = Field(description="t_w, partition thickness")
-    hub_radius: LengthOrZero = Field(0.0, description="inner wall of the innermost chamber")
     chambers: Annotated[list[NestedChamber], Field(min_length=1, max_length=100)] = Field(
         description="nested chambers, outermost first, 1 to 100")
 
 
-class LiquidBalancer(Strict):
+class _LiquidBalancer(Strict):
     """The system: rotor, chamber, liquid, working speed (Table 3.1 / GUI fig. 3.5)."""
-
-    rotor: LBRotor
-    chamber: LBChamber
-    liquid: LBLiquid
-    speed: AngularSpeed = Field(description="working angular speed omega")
-    nested: Nested | None = None
 
     @model_validator(mode="after")
     def _geometry(self):
@@ -101,26 +84,28 @@ class LiquidBalancer(Strict):
         return self
 
 
+LiquidBalancer = schema(System, "LiquidBalancer", base=_LiquidBalancer, groups=(
+    Group("rotor", "LBRotor", "the rotor with its unbalance", _LBRotor),
+    Group("chamber", "LBChamber", "the balancer's (outer) chamber", _LBChamber),
+    Group("liquid", "LBLiquid", "the liquid in the chamber"),
+    Group("nested", "Nested", "further chambers inside the outer one", _Nested, optional=True)))
 SCHEMA = LiquidBalancer
 DESCRIPTION = "liquid auto-balancer"
 
 
-def adapt(part: LiquidBalancer) -> System:
+def adapt(part) -> System:
     """The scene's ``liquid_balancer`` section as :class:`autobal.models.liquid_balancer.System` (SI).
 
     The damping constant n is the section's ``damping_coefficient`` or, from the log decrement,
     n = theta omega_cr / (2 pi) (:func:`autobal.models.liquid_balancer.n_from_decrement`).
     """
-    ro, ch, li = part.rotor, part.chamber, part.liquid
-    n = ro.damping_coefficient if ro.damping_coefficient is not None else n_from_decrement(
-        ro.log_decrement, ro.critical_speed)
-    nest = part.nested
-    return System(rotor_mass=ro.mass, chamber_mass=ch.mass, unbalance_mass=ro.unbalance_mass,
-                  unbalance_radius=ro.unbalance_radius, omega_cr=ro.critical_speed, n=n, R=ch.radius,
-                  h=ch.height, V=li.volume, rho=li.density, speed=part.speed, mu=li.viscosity,
-                  stiffness=ro.stiffness,
-                  inclination=None if ch.inclination_deg is None else math.radians(ch.inclination_deg),
-                  nested_radii=tuple(c.radius for c in nest.chambers) if nest else (),
-                  nested_volumes=tuple(c.volume for c in nest.chambers) if nest else (),
-                  wall_thickness=nest.wall_thickness if nest else 0.0,
-                  hub_radius=nest.hub_radius if nest else 0.0)
+    ro, ch, nest = part.rotor, part.chamber, part.nested
+    filled = {}
+    if ro.damping_coefficient is None:
+        filled["n"] = n_from_decrement(ro.log_decrement, ro.critical_speed)
+    if ch.inclination_deg is not None:
+        filled["inclination"] = math.radians(ch.inclination_deg)
+    if nest is not None:
+        filled["nested_radii"] = tuple(c.radius for c in nest.chambers)
+        filled["nested_volumes"] = tuple(c.volume for c in nest.chambers)
+    return to_params(part, **filled)

@@ -1,6 +1,12 @@
 """Scene part ``ross_rotor``: a rotor given as ROSS elements or a ROSS example rotor, its schema and its
 adapter to :class:`autobal.models.ross_rotor.RossRotorSpec` (SI); ``analyses.ross_spinup`` is built on it.
 
+The schema of each element (material, shaft element, disk, bearing, unbalance) is derived from its dataclass
+of :mod:`autobal.models.ross_rotor` (:mod:`autobal.parts.derived`), where each parameter is declared with its
+unit, meaning, bounds and default.  Written here by hand: the section itself (the element lists, their
+lengths, the example rotor by name, the node checks), a shaft element's ``count`` (repetitions), and an
+unbalance's phase in degrees (the model's is in rad).
+
 Needs the optional ROSS package (``pip install -e '.[ross]'``); a scene naming it without the package
 installed exits 2 with one line naming the extra.
 """
@@ -13,59 +19,32 @@ from typing import Annotated, Literal
 from pydantic import Field, model_validator
 
 from autobal.models import ross_rotor as rr
+from autobal.parts.derived import schema, to_params
 from autobal.schema import Strict
-from autobal.units import DampingOrZero, Density, Inertia, Length, LengthOrZero, Mass, Pressure, quantity
 
-StiffnessOrZero = quantity("stiffness", "nonnegative")
-Node = Annotated[int, Field(ge=0, le=10_000)]
+Node = Annotated[int, Field(**rr.NODES)]
 EXAMPLES = ("rotor_example", "compressor_example", "rotor_example_with_damping", "rotor_example_6dof",
             "coaxrotor_example")
 
 
-class RossMaterial(Strict):
-    """Shaft material (ROSS ``Material``); the defaults are ROSS's steel."""
-
-    density: Density = Field(7810.0, description="rho")
-    young_modulus: Pressure = Field(211e9, description="E")
-    shear_modulus: Pressure = Field(81.2e9, description="G_s")
-
-
-class RossShaft(Strict):
+class _Shaft(Strict):
     """One Timoshenko shaft element (ROSS ``ShaftElement``, shear, rotary inertia and gyroscopic terms)."""
 
-    length: Length = Field(description="element length L")
-    outer_diameter: Length = Field(description="odl")
-    inner_diameter: LengthOrZero = Field(0.0, description="idl (0 for a solid shaft)")
     count: Annotated[int, Field(ge=1, le=200)] = Field(1, description="this element repeated, 1 to 200 times")
 
 
-class RossDisk(Strict):
-    """A rigid disk (ROSS ``DiskElement``) at a node."""
-
-    node: Node = Field(description="node number (0 at the left end)")
-    mass: Mass = Field(description="m")
-    diametral_inertia: Inertia = Field(description="I_d")
-    polar_inertia: Inertia = Field(description="I_p")
-
-
-class RossBearing(Strict):
-    """A linear bearing (ROSS ``BearingElement``) with constant coefficients; y defaults to x."""
-
-    node: Node = Field(description="node number")
-    kxx: StiffnessOrZero = Field(description="direct stiffness in x")
-    kyy: StiffnessOrZero | None = Field(None, description="direct stiffness in y (default kxx)")
-    kxy: StiffnessOrZero = Field(0.0, description="cross-coupled stiffness")
-    kyx: StiffnessOrZero = Field(0.0, description="cross-coupled stiffness")
-    cxx: DampingOrZero = Field(0.0, description="direct damping in x")
-    cyy: DampingOrZero | None = Field(None, description="direct damping in y (default cxx)")
-
-
-class RossUnbalance(Strict):
+class _Unbalance(Strict):
     """Unbalance m e at a node, with its phase."""
 
-    node: Node = Field(description="node number")
-    magnitude: Annotated[float, Field(gt=0, le=1e3)] = Field(description="m e, kg m")
     phase: Annotated[float, Field(ge=-360, le=360)] = Field(0.0, description="phase beta, degrees")
+
+
+RossMaterial = schema(rr.Material, "RossMaterial", base=Strict)
+RossShaft = schema(rr.Shaft, "RossShaft", base=_Shaft)
+RossDisk = schema(rr.Disk, "RossDisk", base=Strict, doc="A rigid disk (ROSS ``DiskElement``) at a node.")
+RossBearing = schema(rr.Bearing, "RossBearing", base=Strict, doc="A linear bearing (ROSS ``BearingElement``) "
+                     "with constant coefficients; y defaults to x.")
+RossUnbalance = schema(rr.Unbalance, "RossUnbalance", base=_Unbalance)
 
 
 class RossRotor(Strict):
@@ -112,13 +91,11 @@ def adapt(r: RossRotor):
     (RossRotorSpec, tuple of Unbalance)
         Elements in SI; unbalance m e in kg m, phase in rad.
     """
-    ub = tuple(rr.Unbalance(u.node, u.magnitude, math.radians(u.phase)) for u in r.unbalance)
+    ub = tuple(to_params(u, phase=math.radians(u.phase)) for u in r.unbalance)
     if r.example is not None:
         return rr.RossRotorSpec(example=r.example), ub
-    m = r.material
-    shaft = tuple(rr.Shaft(s.length, s.inner_diameter, s.outer_diameter) for s in r.shaft for _ in range(s.count))
-    disks = tuple(rr.Disk(d.node, d.mass, d.diametral_inertia, d.polar_inertia) for d in r.disks)
-    brgs = tuple(rr.Bearing(b.node, b.kxx, b.kxx if b.kyy is None else b.kyy, b.cxx, b.cxx if b.cyy is None else b.cyy,
-                            b.kxy, b.kyx) for b in r.bearings)
-    return rr.RossRotorSpec(shaft=shaft, disks=disks, bearings=brgs,
-                            material=rr.Material(m.density, m.young_modulus, m.shear_modulus)), ub
+    shaft = tuple(to_params(s) for s in r.shaft for _ in range(s.count))
+    brgs = tuple(to_params(b, kyy=b.kxx if b.kyy is None else b.kyy, cyy=b.cxx if b.cyy is None else b.cyy)
+                 for b in r.bearings)
+    return rr.RossRotorSpec(shaft=shaft, disks=tuple(to_params(d) for d in r.disks), bearings=brgs,
+                            material=to_params(r.material)), ub

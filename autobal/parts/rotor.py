@@ -4,6 +4,13 @@ the spin-up analyses are built on it.
 
 Quantities are written with units and converted to SI at load time; the source's dimensionless
 groups (psi, mu1, the stationary n, zeta, a*) are plain numbers named as in the source.
+
+The schema is derived from :class:`~autobal.models.rotor.RotorParams` and ``rotor.liquid`` from
+:class:`~autobal.models.rotor.LiquidLayer` (:mod:`autobal.parts.derived`), where each parameter is declared with
+its scene key, unit, meaning and default.  Written here by hand, as scene-only inputs without a field of their
+own in the model: the datasheet form (``critical_speed``, ``damping_ratio``, ``unbalance``: a grade or a residual
+unbalance), the liquid layer's alternative ``psi``, and the drive's limits (``max_torque``, ``max_power``,
+``motor``, ``max_braking_torque``, ``max_deceleration``), which the spin-up analyses read from the scene.
 """
 
 from __future__ import annotations
@@ -15,25 +22,21 @@ from typing import Annotated
 from pydantic import Field, field_validator, model_validator
 
 from autobal.models.rotor import LiquidLayer, RotorParams
+from autobal.parts.derived import Group, schema, to_params
 from autobal.schema import Strict
-from autobal.units import AngularSpeed, DampingOrZero, Density, Inertia, Length, Mass, Stiffness, quantity
+from autobal.units import AngularSpeed, quantity
 
 Torque = quantity("torque")
 Power = quantity("power")
-RotationalDampingOrZero = quantity("rotational damping", "nonnegative")
 Fraction = Annotated[float, Field(gt=0, le=1)]
 UnbalanceMass = quantity("unbalance")
 _GRADE = re.compile(r"G\s*(\d+(?:\.\d*)?)")
 
 
-class Liquid(Strict):
+class _Liquid(Strict):
     """Liquid auto-balancer layer (model M1): a chamber of wall radius R and height h of
     liquid density rho (full-chamber mass rho pi R^2 h), or the design parameter psi = m1/m directly."""
 
-    density: Density | None = None
-    radius: Length | None = None
-    height: Length | None = None
-    free_surface_radius: Length | None = None
     psi: Fraction | None = None
 
     @model_validator(mode="after")
@@ -48,6 +51,9 @@ class Liquid(Strict):
         return self
 
 
+Liquid = schema(LiquidLayer, "Liquid", base=_Liquid)
+
+
 class Motor(Strict):
     """Linear motor characteristic L(omega) = stall_torque (1 - omega/no_load_speed)."""
 
@@ -55,13 +61,11 @@ class Motor(Strict):
     no_load_speed: AngularSpeed
 
 
-class Drive(Strict):
+class _Drive(Strict):
     """The drive as specified: inertia and drag, torque and power limits, motor characteristic, and braking
     (a braking-torque limit, 0 = no braking, and/or a deceleration limit, 0 = the speed never falls; without
     either the drive brakes up to max_torque and decelerates up to the spin-up's max_acceleration)."""
 
-    polar_inertia: Inertia = Field(description="J_p of rotor and drive")
-    drag: RotationalDampingOrZero = Field(0.0, description="b, N m s")
     max_torque: Torque | None = None
     max_power: Power | None = None
     motor: Motor | None = None
@@ -100,23 +104,18 @@ class Unbalance(Strict):
         return None if self.grade is None else float(_GRADE.fullmatch(self.grade.strip())[1]) * 1e-3
 
 
-class Rotor(Strict):
+class _Rotor(Strict):
     """Jeffcott (Laval) rotor on a flexible shaft, with optional liquid layer and drive.
 
     Given in SI (stiffness, damping, eccentricity) or from its datasheet (critical_speed, the undamped natural
     frequency sqrt(c/m1) of the rotor without liquid; damping_ratio zeta = chi/(2 sqrt(c m1)); unbalance as a
     balance quality grade or a residual unbalance); each pair one or the other."""
 
-    mass: Mass = Field(description="m1, without liquid (the modal mass)")
-    stiffness: Stiffness | None = Field(None, description="c")
-    damping: DampingOrZero | None = Field(None, description="chi, external viscous friction")
-    eccentricity: Length | None = Field(None, description="e")
     critical_speed: AngularSpeed | None = Field(None, description="undamped critical speed sqrt(c/m1)")
     damping_ratio: Annotated[float, Field(ge=0, lt=1)] | None = Field(
         None, description="zeta = chi/(2 sqrt(c m1)), dimensionless")
     unbalance: Unbalance | None = None
     liquid: Liquid | None = None
-    drive: Drive | None = None
 
     @model_validator(mode="after")
     def _si_or_datasheet(self):
@@ -128,6 +127,8 @@ class Rotor(Strict):
         return self
 
 
+Rotor = schema(RotorParams, "Rotor", base=_Rotor, groups=(
+    Group("drive", "Drive", "the drive: inertia, drag and limits", _Drive, optional=True),))
 SCHEMA = Rotor
 DESCRIPTION = "Jeffcott rotor with optional liquid layer and drive"
 
@@ -147,18 +148,18 @@ def adapt(r: Rotor) -> RotorParams:
     -------
     RotorParams
     """
-    m1 = r.mass
-    c = r.stiffness if r.stiffness is not None else m1 * r.critical_speed**2
-    chi = r.damping if r.damping is not None else 2 * r.damping_ratio * math.sqrt(c * m1)
-    e = r.eccentricity
-    if e is None:
+    m1, filled = r.mass, {}
+    c = r.stiffness
+    if c is None:
+        c = filled["c"] = m1 * r.critical_speed**2
+    if r.damping is None:
+        filled["chi"] = 2 * r.damping_ratio * math.sqrt(c * m1)
+    if r.eccentricity is None:
         u = r.unbalance
-        e = u.grade_m_s / u.service_speed if u.grade is not None else u.residual / m1
-    p = RotorParams(m1=m1, c=c, chi=chi, e=e,
-                    J_p=r.drive.polar_inertia if r.drive else 0.0, b=r.drive.drag if r.drive else 0.0)
+        filled["e"] = u.grade_m_s / u.service_speed if u.grade is not None else u.residual / m1
+    p = to_params(r, **filled)
     if r.liquid is None:
         return p
     if r.liquid.psi is not None:
         return p.with_psi(r.liquid.psi)
-    return p.with_liquid(LiquidLayer(r.liquid.density, r.liquid.radius, r.liquid.height,
-                                     r.liquid.free_surface_radius))
+    return p.with_liquid(to_params(r.liquid))
