@@ -17,8 +17,8 @@ from autobal.analysis import disc_fit
 from autobal.analysis.adequacy import fisher_adequacy
 from autobal.analysis.device_fit import DeviceFitter
 from autobal.analysis.least_squares import FitResult
-from autobal.analysis.quantities import Declarations, Quantity, significant
-from autobal.analysis.result import Result, new_figure, plain
+from autobal.analysis.quantities import Declarations, Quantity, is_number, significant
+from autobal.analysis.result import Result, new_figure, plain, twin_axis
 from autobal.errors import ScenarioError, SolveError
 from autobal.models.device import DeviceParams, design
 from autobal.models.hydroheel import TurbulentDisc
@@ -256,8 +256,17 @@ class EstimationResult(Result):
                                 label=f"({key.split('_', 2)[2].replace('_', '.')}): alpha {v['alpha']:.4g}, "
                                       f"tau_max {v['tau_max']:.4g}")
         ax.set_ylabel(label[k])
+        self._physical_axis(ax, f, {"u": "gap", "q": "flow"}[k], "face gap z" if k == "u" else "flow Q")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
+
+    def _physical_axis(self, ax, f: dict, base: str, label: str, which: str = "y") -> None:
+        """The physical values beside a group of the data (u = z/z_B ...) on a secondary axis, in their display
+        unit, where the data's base (SI) is known."""
+        value = (f.get("bases") or self.data.get("bases") or {}).get(base)
+        if is_number(value) and value > 0:
+            q = QUANTITIES.find(f"bases.{base}")
+            twin_axis(ax, q.shown(value), f"{label}, {q.display}", which)
 
     def figures(self) -> dict:
         """One figure per fit: data, fitted curve, confidence band (and the closed forms' curves for
@@ -268,9 +277,12 @@ class EstimationResult(Result):
             fig, axes = new_figure((6.4 * len(parts), 6.4), 2, len(parts), squeeze=False,
                                    gridspec_kw={"height_ratios": [3, 1]}, sharex="col")
             x = np.asarray(f["data"]["load"], float)
-            xl = r"load $\tau$" if f.get("load_kind", "tau") == "tau" else r"discharge pressure $\psi_1$"
+            tau = f.get("load_kind", "tau") == "tau"
+            xl = r"load $\tau$" if tau else r"discharge pressure $\psi_1$"
             for j, k in enumerate(parts):
                 self._draw_fit(axes[0, j], name, f, k)
+                self._physical_axis(axes[0, j], f, "force" if tau else "pressure",
+                                    "axial force F" if tau else "discharge pressure $p_1$", "x")
                 axr = axes[1, j]
                 axr.axhline(0, color="k", lw=0.6)
                 axr.plot(x, f["data"][k]["residual"], "ko", ms=4)

@@ -19,7 +19,7 @@ from scipy.optimize import minimize_scalar
 from autobal.analysis import progress
 from autobal.analysis.linearize import LinearModel, Setup
 from autobal.analysis.quantities import Declarations, Quantity, significant
-from autobal.analysis.result import Result, new_figure
+from autobal.analysis.result import Result, new_figure, unit_axis
 
 #: what each model is, for legends (Pavlenko (2014): chain form (2.40)/(2.111), App. A/B program model)
 MODEL_LABELS = {"nonlinear": "energy-consistent (nonlinear)", "nonlinear_chain": "chain form (2.40)/(2.111)",
@@ -210,20 +210,30 @@ class FrequencyResult(Result):
 
     def draw(self, ax) -> None:
         """The amplitude curves of every model with their peaks, the headline model first; the operating
-        speed dotted and its amplitude marked."""
+        speed dotted and its amplitude marked; the frequency in its display unit (rad/s, Hz on top), the amplitude
+        in its display unit (µm)."""
+        fw, fa = self._axes(ax)
         for _key, c, style, label in self._styles():
-            ax.semilogy(c["omega"], c["amplitude_um"], label=label, **style)
+            ax.semilogy(np.asarray(c["omega"]) * fw, np.asarray(c["amplitude_um"]) * fa, label=label, **style)
             for p in c["peaks"]:
-                ax.plot(p["omega"], p["amplitude_um"], "o", ms=5, mec="w", mew=0.6, color=style["color"], zorder=6)
+                ax.plot(p["omega"] * fw, p["amplitude_um"] * fa, "o", ms=5, mec="w", mew=0.6, color=style["color"],
+                        zorder=6)
         h = self.data.get("headline") or {"at_operating_speed": self.data["at_operating_speed"]}
         a0 = h["at_operating_speed"]
-        ax.axvline(a0["omega"], color="k", ls=":", lw=1.0,
-                   label=rf"operating speed $\omega_0$ = {a0['omega']:.0f} rad/s")
-        ax.plot(a0["omega"], a0["amplitude_um"], "D", color="k", ms=5, zorder=7,
-                label=rf"$A(\omega_0)$ = {a0['amplitude_um']:.3g} $\mu$m (headline); dots: peaks")
+        q_omega, q_amp = QUANTITIES.find("at_operating_speed.omega"), QUANTITIES.find("at_operating_speed.amplitude_um")
+        ax.axvline(a0["omega"] * fw, color="k", ls=":", lw=1.0,
+                   label=rf"operating speed $\omega_0$ = {q_omega.text(a0['omega'])}")
+        ax.plot(a0["omega"] * fw, a0["amplitude_um"] * fa, "D", color="k", ms=5, zorder=7,
+                label=rf"$A(\omega_0)$ = {q_amp.text(a0['amplitude_um'], 3)} (headline); dots: peaks")
         ax.grid(alpha=0.3)
-        ax.set_ylabel(r"gap amplitude $A_u$, $\mu$m")
         ax.legend(fontsize=6.5)
+
+    def _axes(self, ax) -> tuple[float, float]:
+        """Label ``ax``: the forcing frequency on x in the display unit of the resonance frequencies (rad/s, Hz
+        on top), the gap amplitude on y in its display unit (µm); the factors from SI (rad/s, µm) to them."""
+        q_omega, q_amp = QUANTITIES.find("peaks.0.omega"), QUANTITIES.find("peaks.0.amplitude_um")
+        fw = unit_axis(ax, r"frequency $\omega$", q_omega.unit, q_omega.declared, "x", q_omega.beside)
+        return fw, unit_axis(ax, "gap amplitude $A_u$", q_amp.unit, q_amp.declared)
 
     def figures(self) -> dict:
         from matplotlib.ticker import MultipleLocator
@@ -231,12 +241,13 @@ class FrequencyResult(Result):
         fig, (a1, a2) = new_figure(figsize=(9.5, 7.8), nrows=2, sharex=True)
         self.draw(a1)
         a1.get_legend().remove()  # one legend for both axes, below them
+        a1.set_xlabel("")  # the frequency is labelled below a2 (and on top of a1)
+        fw = unit_axis(a2, r"frequency $\omega$", "rad/s", QUANTITIES.find("peaks.0.omega").declared, "x", "")
         for _key, c, style, _label in self._styles():
-            a2.plot(c["omega"], c["phase_deg"], **style)
-        a2.axvline(self.data["at_operating_speed"]["omega"], color="k", ls=":", lw=1.0)
+            a2.plot(np.asarray(c["omega"]) * fw, c["phase_deg"], **style)
+        a2.axvline(self.data["at_operating_speed"]["omega"] * fw, color="k", ls=":", lw=1.0)
         a2.grid(alpha=0.3)
         a2.set_ylabel("phase (unwrapped), deg")
-        a2.set_xlabel(r"$\omega$, rad/s")
         span = max(np.ptp(c["phase_deg"]) for c in self.data["curves"].values())
         a2.yaxis.set_major_locator(MultipleLocator(90 if span <= 720 else 180))
         fig.legend(*a1.get_legend_handles_labels(), loc="outside lower center", ncols=2, fontsize=7.5,

@@ -21,8 +21,8 @@ import numpy as np
 
 from autobal.analysis import interrupt
 from autobal.analysis.liquid_balancer_optimum import crescent_volume, optimise
-from autobal.analysis.quantities import Declarations, Quantity, significant
-from autobal.analysis.result import Result, new_figure, with_statuses
+from autobal.analysis.quantities import Declarations, Quantity, convert, display_unit_of, significant
+from autobal.analysis.result import Result, new_figure, twin_axis, unit_axis, with_statuses
 from autobal.models import liquid_balancer as lb
 from autobal.models.liquid_balancer import System
 
@@ -366,9 +366,8 @@ class LiquidBalancerResult(Result):
         ax.set_xlabel(r"speed ratio $\gamma = \omega/\omega_{cr}$")
         ax.set_ylabel(r"self-balancing efficiency $\lambda_0 = e_0/e_c$")
         op = d["operating_point"]
-        rpm = op["omega"] / op["gamma"] * 30 / math.pi  # omega_cr in rpm: the speed on top
-        ax.secondary_xaxis("top", functions=(lambda g: g * rpm, lambda n: n / rpm)).set_xlabel("speed, rpm",
-                                                                                                fontsize=8)
+        speed = display_unit_of("rad/s", "rpm")  # the speed on top: gamma times omega_cr, rpm unless chosen
+        twin_axis(ax, convert(op["omega"] / op["gamma"], "rad/s", speed), f"speed ω, {speed}", "x")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
 
@@ -385,10 +384,10 @@ class LiquidBalancerResult(Result):
             for ax, key in zip(axes[0], opts, strict=True):
                 o = d[key]
                 x = np.asarray(o["grid"]["x"], float)
-                unit, sc = ("mm", 1e3) if o["variable"] == "h" else ("mL", 1e6)
+                q = QUANTITIES.find(f"{key}.optimum")
+                sc = unit_axis(ax, f"{q.description} {o['variable']}", q.unit, q.declared, "x")
                 ax.semilogy(x * sc, np.asarray(o["grid"]["lambda0"], float), label=r"$\lambda_0$ on the grid")
                 ax.axvline(o["optimum"] * sc, color="k", ls="--", lw=0.8, label="IPOPT optimum")
-                ax.set_xlabel(f"{o['variable']} [{unit}]")
                 ax.set_ylabel(r"$\lambda_0$")
                 ax.grid(alpha=0.3)
                 ax.legend(fontsize=7)

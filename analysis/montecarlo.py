@@ -38,7 +38,7 @@ from autobal.analysis.montecarlo_statics import (
     simulate,
 )
 from autobal.analysis.quantities import Declarations, Quantity, significant
-from autobal.analysis.result import Result, failed_head, new_figure, with_statuses
+from autobal.analysis.result import Result, failed_head, new_figure, twin_axis, unit_axis, with_statuses
 from autobal.analysis.sampling import Sampler, correlation_matrix, marginals, relative_standard_errors, statistics
 from autobal.analysis.statics import RESIDUAL_TOL, StaticsSolver
 from autobal.errors import ScenarioError
@@ -271,14 +271,12 @@ class MonteCarloResult(Result):
             ax.set_xlabel(r"discharge pressure ratio $\psi_1 = p_1/p_B$")
             ax.set_ylabel(lab)
             ax.grid(alpha=0.3)
-            if "scales" in d:  # the physical discharge pressure on top
-                p_b = d["scales"]["p_B"] / 1e6
-                ax.secondary_xaxis("top", functions=(lambda x, p_b=p_b: x * p_b, lambda p, p_b=p_b: p / p_b)
-                                   ).set_xlabel("discharge pressure $p_1$, MPa", fontsize=8)
-        if "scales" in d:  # the face gap in µm beside u = z/z_B (q_T is over a per-sample base flow: no second axis)
-            z_b = d["scales"]["z_B"] * 1e6
-            axes[0].secondary_yaxis("right", functions=(lambda u: u * z_b, lambda z: z / z_b)).set_ylabel(
-                "face gap z, µm")
+            if "scales" in d:  # the physical discharge pressure on top, in its display unit
+                q = QUANTITIES.find("p1")
+                twin_axis(ax, q.shown(d["scales"]["p_B"]), f"discharge pressure $p_1$, {q.display}", "x")
+        if "scales" in d:  # the face gap beside u = z/z_B (q_T is over a per-sample base flow: no second axis)
+            q = QUANTITIES.find("scales.z_B")
+            twin_axis(axes[0], q.shown(d["scales"]["z_B"]), f"face gap z, {q.display}")
         sens = d["sensitivity"]
         j = self._reference()
         names = d["parameters"]
@@ -299,16 +297,18 @@ class MonteCarloResult(Result):
         if "afc" in d:
             a = d["afc"]
             fig, ax = new_figure(figsize=(7, 4.8))
-            ax.plot(a["omega"], a["nominal_um"], "k:", label=f"nominal: {MODEL_LABELS.get(a['model'], a['model'])}, "
-                                                            f"{a['forcing']} forcing")
-            line, = ax.plot(a["omega"], a["mean"], color="C0", label="mean")
+            q_omega, q_amp = QUANTITIES.find("afc.omega"), QUANTITIES.find("afc.mean")
+            fw = unit_axis(ax, r"shaft speed $\omega$", q_omega.unit, q_omega.declared, "x", q_omega.beside)
+            fa = unit_axis(ax, "face-gap amplitude $A_u$", q_amp.unit, q_amp.declared)
+            omega = np.asarray(a["omega"], float) * fw
+            ax.plot(omega, np.asarray(a["nominal_um"], float) * fa, "k:",
+                    label=f"nominal: {MODEL_LABELS.get(a['model'], a['model'])}, {a['forcing']} forcing")
+            line, = ax.plot(omega, np.asarray(a["mean"], float) * fa, color="C0", label="mean")
             lo, hi, what = self._band(a)
-            ax.fill_between(a["omega"], lo, hi, color="C0", alpha=0.15, lw=0.8, edgecolor="C0", label=what)
-            ax.plot(a["omega"], np.maximum(a["band_low"], 0), color="C1", lw=0.8, ls="--")
-            ax.plot(a["omega"], a["band_high"], color="C1", lw=0.8, ls="--",
+            ax.fill_between(omega, lo * fa, hi * fa, color="C0", alpha=0.15, lw=0.8, edgecolor="C0", label=what)
+            ax.plot(omega, np.maximum(a["band_low"], 0) * fa, color="C1", lw=0.8, ls="--")
+            ax.plot(omega, np.asarray(a["band_high"], float) * fa, color="C1", lw=0.8, ls="--",
                     label=rf"mean $\pm {d['band_sigma']:g}\sigma$ (normal assumption)")
-            ax.set_xlabel(r"shaft speed $\omega$, rad/s")
-            ax.set_ylabel(r"face-gap amplitude $A_u$, $\mu$m")
             ax.grid(alpha=0.3)
             fig.legend(loc="outside lower center", ncols=2, fontsize=7)
             src = ("Pavlenko (2014) Figs 3.7/3.10" if a["model"] == "program" else

@@ -33,7 +33,7 @@ from scipy.special import ndtr
 
 from autobal.analysis import progress
 from autobal.analysis.quantities import Declarations, Quantity
-from autobal.analysis.result import Result, new_figure
+from autobal.analysis.result import Result, new_figure, unit_axis
 from autobal.models.hydroheel import (
     WearModel,
     WornDisc,
@@ -248,13 +248,14 @@ class ReliabilityResult(Result):
     def draw(self, ax) -> None:
         """Probability of failure-free operation against time, both readings of (1.48), Fig. 1.28."""
         d, c = self.data, self.data["curve"]
-        ax.plot(c["t_h"], c["P_literal"], label="P(t), (1.48) literal")
-        ax.plot(c["t_h"], c["P_renormalised"], ls="--", label=r"P(t), $p_\tau$ renormalised on [0, $\sigma\psi_1$]")
-        ax.plot(c["t_h"], c["P_wear_le_base_gap"], ls=":", label=r"P(wear $\leq z_B$) (Fig. 1.27)")
-        ax.plot([2000, 4000], [0.75, 0.25], "kx", label="source (Fig. 1.28)")
-        ax.axvline(d["literal"]["mttf_h"], color="0.4", lw=0.8, label="MTTF (1.49), literal")
-        ax.set_xlim(0, min(c["t_h"][-1], 12000))
-        ax.set_xlabel("time, h")
+        f = unit_axis(ax, "time t", "h", which="x")  # hours unless a time unit is chosen
+        t = np.asarray(c["t_h"], float) * f
+        ax.plot(t, c["P_literal"], label="P(t), (1.48) literal")
+        ax.plot(t, c["P_renormalised"], ls="--", label=r"P(t), $p_\tau$ renormalised on [0, $\sigma\psi_1$]")
+        ax.plot(t, c["P_wear_le_base_gap"], ls=":", label=r"P(wear $\leq z_B$) (Fig. 1.27)")
+        ax.plot(np.array([2000, 4000]) * f, [0.75, 0.25], "kx", label="source (Fig. 1.28)")
+        ax.axvline(d["literal"]["mttf_h"] * f, color="0.4", lw=0.8, label="MTTF (1.49), literal")
+        ax.set_xlim(0, min(t[-1], 12000 * f))
         ax.set_ylabel("probability")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)

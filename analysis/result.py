@@ -82,6 +82,53 @@ def new_figure(figsize: tuple[float, float] = (6.4, 4.4), nrows: int = 1, ncols:
     return fig, fig.subplots(nrows, ncols, **subplots_kw)
 
 
+def unit_axis(ax: Axes, label: str, si: str, declared: str = "", which: str = "y", other: str | None = None) -> float:
+    """Label an axis of values of results.json unit ``si`` in their display unit: the unit chosen for its kind
+    (:func:`~autobal.analysis.quantities.display_units`), else ``declared``, else the field's default; the unit
+    ``other`` on a secondary axis (right, or top for ``which="x"``), by default the one shown beside it in the
+    tables (rpm beside rad/s, rad/s beside rpm).  Returns the factor that takes SI values to the axis' unit:
+    plot ``values * factor``.
+
+    Parameters
+    ----------
+    ax : Axes
+    label : str
+        The quantity in words and symbol ("speed $\\omega$"); the unit is appended (", rpm").
+    si : str
+        The unit of the values in results.json ("rad/s", "m", "um").
+    declared : str
+        The declared display unit (a :class:`~autobal.analysis.quantities.Quantity`'s ``declared``).
+    which : {"x", "y"}
+    other : str, optional
+        The unit of the secondary axis; "" for none.
+    """
+    from autobal.analysis.quantities import beside, convert, display_unit_of
+
+    shown = display_unit_of(si, declared)
+    factor = convert(1.0, si, shown)
+    (ax.set_xlabel if which == "x" else ax.set_ylabel)(label if shown == "1" else f"{label}, {shown}")
+    other = beside(si, shown) if other is None or other == shown else other
+    if other:
+        twin_axis(ax, convert(1.0, si, other) / factor, other, which)
+    return factor
+
+
+def speed_axis(ax: Axes, which: str = "y", label: str = r"speed $\omega$") -> float:
+    """A shaft-speed axis: rpm with rad/s beside unless a speed unit is chosen (:func:`unit_axis`); returns the
+    factor from rad/s."""
+    return unit_axis(ax, label, "rad/s", "rpm", which)
+
+
+def twin_axis(ax: Axes, factor: float, label: str, which: str = "y") -> None:
+    """A secondary axis (right, or top for ``which="x"``) showing the axis' values times ``factor``: rpm beside
+    rad/s, Hz beside rad/s, a deflection beside delta/e."""
+    functions = (lambda v: v * factor, lambda v: v / factor)
+    if which == "x":
+        ax.secondary_xaxis("top", functions=functions).set_xlabel(label)
+    else:
+        ax.secondary_yaxis("right", functions=functions).set_ylabel(label)
+
+
 def fixed_layout(fig: Figure, left: float, right: float, top: float, bottom: float, hspace: float = 0.3) -> None:
     """Give ``fig`` margins fixed in inches instead of constrained layout, with the bottom margin grown by
     the height of the figure legends (placed ``"outside lower center"``), measured at each draw.

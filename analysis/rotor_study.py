@@ -16,7 +16,7 @@ import numpy as np
 from autobal.analysis import progress
 from autobal.analysis import rotor as R
 from autobal.analysis.quantities import Declarations, Quantity
-from autobal.analysis.result import Result, new_figure
+from autobal.analysis.result import Result, new_figure, speed_axis, unit_axis
 from autobal.errors import ScenarioError
 from autobal.models.rotor import RotorParams
 
@@ -182,10 +182,10 @@ class RotorDynamicsResult(Result):
             keys = list(c["steps"])
             fig, ax = new_figure(figsize=(9, 7), nrows=2, ncols=2, sharey=False)
             for a, key in zip(ax.ravel(), keys, strict=False):
+                f = unit_axis(a, "time t", "s", "ms", "x")
                 for psi, cv in c["steps"][key].items():
-                    a.plot(cv["t"] * 1e3, cv["d"], label=rf"$\psi$={psi:g}")
+                    a.plot(cv["t"] * f, cv["d"], label=rf"$\psi$={psi:g}")
                 a.set_title(f"step {key} rad/s (Figs 3-4)", fontsize=9)
-                a.set_xlabel("t (ms)")
                 a.set_ylabel("system unbalance d (7)")
                 a.grid(alpha=0.3)
                 a.legend(fontsize=7)
@@ -233,13 +233,13 @@ class RotorDynamicsResult(Result):
         if "motor" in c:
             fig, a = new_figure(figsize=(6, 5), nrows=2, sharex=True)
             m = c["motor"]
-            a[0].plot(m["t"], m["omega"])
-            a[0].axhline(self.data["rotor"]["omega_cr_rad_s"], color="k", ls=":", lw=0.8, label=r"$\omega_{cr}$")
-            a[0].set_ylabel(r"$\omega$ (rad/s)")
+            ft, fw = unit_axis(a[1], "time t", "s", which="x"), speed_axis(a[0])
+            a[0].plot(np.asarray(m["t"]) * ft, np.asarray(m["omega"]) * fw)
+            a[0].axhline(self.data["rotor"]["omega_cr_rad_s"] * fw, color="k", ls=":", lw=0.8,
+                         label=r"$\omega_{cr}$")
             a[0].legend(fontsize=7)
-            a[1].plot(m["t"], m["delta"])
+            a[1].plot(np.asarray(m["t"]) * ft, m["delta"])
             a[1].set_ylabel(r"$\delta/e$")
-            a[1].set_xlabel("t (s)")
             for x in a:
                 x.grid(alpha=0.3)
             save(fig, "fig_rotor_motor.png")

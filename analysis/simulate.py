@@ -32,7 +32,7 @@ from autobal.analysis import interrupt
 from autobal.analysis.compiled import compiled_map
 from autobal.analysis.frequency import MODEL_LABELS
 from autobal.analysis.quantities import Declarations, Quantity
-from autobal.analysis.result import Result, failed_head, new_figure
+from autobal.analysis.result import Result, failed_head, new_figure, unit_axis
 from autobal.analysis.rosenbrock import STATUS, rodas4_grid
 from autobal.models.dynamics import DynamicModel
 
@@ -282,37 +282,42 @@ class TransientResult(Result):
         return out
 
     def draw(self, ax) -> None:
-        """The face-gap change of every case against time."""
+        """The face-gap change of every case against time (the display units of the events' time, ms, and of the
+        gap, µm)."""
+        ft, fz = self._time_axis(ax), self._gap_axis(ax, r"$\delta z$")
         for c in self.data["series"]:
-            ax.plot(c["t"] * 1e3, (c["z"] - c["z"][0]) * 1e6, label=f"{c['input']} ({c['amplitude']:g})")
-        ax.set_xlabel("t, ms")
-        ax.set_ylabel(r"$\delta z$, $\mu$m")
+            ax.plot(c["t"] * ft, (c["z"] - c["z"][0]) * fz, label=f"{c['input']} ({c['amplitude']:g})")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
+
+    def _time_axis(self, ax) -> float:
+        return unit_axis(ax, "t", "s", QUANTITIES.find("cases.0.t_end").declared, "x")
+
+    def _gap_axis(self, ax, label: str) -> float:
+        return unit_axis(ax, label, "m", QUANTITIES.find("cases.0.z").declared)
 
     def figures(self) -> dict:
         n = len(self.data["series"])
         fig, axes = new_figure(figsize=(9, 2.6 * n + 0.4), nrows=n, ncols=2, squeeze=False)
+        qz, qp = QUANTITIES.find("cases.0.z"), QUANTITIES.find("cases.0.p2")
+        ft = [self._time_axis(a) for a in axes[-1]][0]  # the time below the last row
         for ax, c in zip(axes, self.data["series"], strict=True):
-            t = c["t"] * 1e3
-            ax[0].plot(t, (c["z"] - c["z"][0]) * 1e6)
-            ax[0].set_ylabel(r"gap change $\delta z$, $\mu$m")
+            t = c["t"] * ft
+            ax[0].plot(t, (c["z"] - c["z"][0]) * self._gap_axis(ax[0], r"gap change $\delta z$"))
             ax[0].set_title(f"{c['input'].replace('_', ' ')} ({c['amplitude']:g}): face gap, "
-                            rf"$z_0$ = {c['z'][0] * 1e6:.1f} $\mu$m", fontsize=8)
+                            rf"$z_0$ = {qz.text(c['z'][0])}", fontsize=8)
             dp2, dp3 = c["p2"] - c["p2"][0], c["p3"] - c["p3"][0]
-            big = max(np.abs(dp2).max(), np.abs(dp3).max())
-            unit, f = ("MPa", 1e6) if big >= 1e6 else ("kPa", 1e3) if big >= 1e3 else ("Pa", 1.0)
-            ax[1].plot(t, dp2 / f, label=rf"$\Delta p_2$ (static {c['p2'][0] / 1e6:.2f} MPa)")
-            ax[1].plot(t, dp3 / f, label=rf"$\Delta p_3$ (static {c['p3'][0] / 1e6:.2f} MPa)")
-            ax[1].set_ylabel(rf"pressure change $\Delta p$, {unit}")
+            big = max(np.abs(dp2).max(), np.abs(dp3).max())  # unless chosen: the unit of the changes' size
+            fp = unit_axis(ax[1], r"pressure change $\Delta p$", "Pa",
+                           "MPa" if big >= 1e6 else "kPa" if big >= 1e3 else "Pa")
+            ax[1].plot(t, dp2 * fp, label=rf"$\Delta p_2$ (static {qp.text(c['p2'][0], 3)})")
+            ax[1].plot(t, dp3 * fp, label=rf"$\Delta p_3$ (static {qp.text(c['p3'][0], 3)})")
             ax[1].set_title("chamber pressures relative to their static values", fontsize=8)
             ax[1].legend(fontsize=7, loc="best")
             for a in ax:
                 a.grid(alpha=0.3)
                 for e in c["events"]:
-                    a.axvline(e["t"] * 1e3, color="r", ls=":", lw=0.8)
-        for a in axes[-1]:
-            a.set_xlabel("t, ms")
+                    a.axvline(e["t"] * ft, color="r", ls=":", lw=0.8)
         fig.suptitle(f"{self.data['title']}\ntime responses of the {MODEL_LABELS.get(self.data['model'], '')} model "
                      "from the static solution (red dotted: events)", fontsize=9)
         return {"fig_transients.png": fig}

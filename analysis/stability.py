@@ -27,7 +27,7 @@ from autobal.analysis import progress
 from autobal.analysis.frequency import MODEL_COLOURS, MODEL_LABELS
 from autobal.analysis.linearize import LinearModel, Setup, coefficient_table, jacobians, operator
 from autobal.analysis.quantities import Declarations, Quantity, convert, lookup, significant
-from autobal.analysis.result import Result, new_figure
+from autobal.analysis.result import Result, new_figure, unit_axis
 from autobal.models.dynamics import LONG_NAMES, DynamicData
 
 OMEGA_REF = 1000.0  # rad/s, time scale of the reported polynomial coefficients
@@ -379,11 +379,13 @@ class StabilityResult(Result):
         hi = 10.0 ** math.ceil(math.log10(max(nz.max(), 10 * lo))) if nz.size else 10.0
         right = 10.0 ** math.ceil(math.log10(max(re.max(), lo))) * 3 if re.max() > 0 else 3 * lo
         ax.axvspan(0, right, color="tab:red", alpha=0.09, lw=0, label=r"unstable half-plane Re $\lambda$ > 0")
+        fi = unit_axis(ax, r"Im $\lambda$", "rad/s", other="Hz")
         for i, (m, v) in enumerate(models.items()):
             mk, size = POLE_MARKERS[i % len(POLE_MARKERS)]
             label = MODEL_LABELS.get(m, m) + ("" if v["stable"] else " — unstable")
-            ax.plot(v["poles"]["real"], v["poles"]["imag"], mk, ms=size, mfc="none", mew=1.3, label=label,
-                    color="tab:blue" if m == "nonlinear" else MODEL_COLOURS.get(m, "tab:orange"), zorder=3 + i)
+            ax.plot(v["poles"]["real"], np.asarray(v["poles"]["imag"], float) * fi, mk, ms=size, mfc="none", mew=1.3,
+                    label=label, color="tab:blue" if m == "nonlinear" else MODEL_COLOURS.get(m, "tab:orange"),
+                    zorder=3 + i)
         ax.axvline(0, color="k", lw=0.8)
         ax.set_xscale("symlog", linthresh=lo, linscale=0.6)
         ax.set_xlim(-1.5 * hi, right)
@@ -392,7 +394,6 @@ class StabilityResult(Result):
         ax.set_xticks([-d for d in reversed(dec)] + [0.0] + [d for d in dec if d <= right])
         ax.xaxis.set_minor_locator(NullLocator())
         ax.set_xlabel(rf"Re $\lambda$, 1/s (symlog, linear within $\pm${lo:g})")
-        ax.set_ylabel(r"Im $\lambda$, rad/s")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=6.5)
 

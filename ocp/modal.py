@@ -34,7 +34,7 @@ import casadi as ca
 import numpy as np
 
 from autobal.analysis.quantities import Declarations, Quantity, convert, significant
-from autobal.analysis.result import Result, new_figure, with_statuses
+from autobal.analysis.result import Result, new_figure, speed_axis, unit_axis, with_statuses
 from autobal.errors import SolveError
 from autobal.models import ross_rotor as rr
 from autobal.models.ross_rotor import POINTS_PER_REV, RESIM_TOL, ModalRotor, simulate_fixed
@@ -729,55 +729,47 @@ class ModalSpinupResult(Result):
         return [(self.optimum, "C3", "-", 1.4)] + [(v, c, "--", 1.0) for v, c in zip(self.baselines.values(),
                                                                                      ("C0", "C2"), strict=False)]
 
-    def _criticals(self, ax, vertical: bool) -> None:
+    def _criticals(self, ax, vertical: bool, factor: float) -> None:
         for i, w in enumerate(self.data["critical_speeds"]["reduced_wd_rad_s"]):
-            (ax.axvline if vertical else ax.axhline)(w, color="k", lw=0.6, ls=":",
+            (ax.axvline if vertical else ax.axhline)(w * factor, color="k", lw=0.6, ls=":",
                                                      label="critical speeds (reduced model)" if i == 0 else None)
 
     def draw(self, ax) -> None:
         """Largest deflection over the nodes of interest against speed, optimum and ramps (the declared display unit,
-        µm; rpm on top)."""
-        from autobal.ocp.spinup_study import RPM, twin_axis
-
+        µm; the speed in rpm, rad/s on top)."""
         q = QUANTITIES.find("peak_deflection_m")
+        fw = speed_axis(ax, "x")
         for tr, c, ls, lw in self._runs():
             lab = "optimum" if tr is self.optimum else tr.label
-            ax.plot(tr.omega, q.shown(tr.deflection.max(axis=0)), color=c, ls=ls, lw=lw,
+            ax.plot(tr.omega * fw, q.shown(tr.deflection.max(axis=0)), color=c, ls=ls, lw=lw,
                     label=f"{lab} (peak {q.text(tr.peak)})")
-        self._criticals(ax, True)
-        ax.set_xlabel(r"speed $\omega$, rad/s")
-        twin_axis(ax, RPM, "speed, rpm", "x")
+        self._criticals(ax, True, fw)
         ax.set_ylabel(rf"deflection $\max_{{nodes}}\sqrt{{x^2+y^2}}$, {q.display} 0-peak")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
 
     def figures(self) -> dict:
-        """Speed (rad/s, rpm) and acceleration (rad/s², rpm/s) against time; deflection (µm) against time and speed;
-        Campbell diagram (rad/s, rpm and Hz)."""
-        from autobal.ocp.spinup_study import RPM, twin_axis
-
+        """Speed (rpm, rad/s) and acceleration (rad/s², rpm/s) against time; deflection (µm) against time and speed;
+        Campbell diagram (rad/s, rpm and Hz); every axis in its display unit."""
         title, q = self.data["title"], QUANTITIES.find("peak_deflection_m")
         fig, axes = new_figure((8, 6), 2, 1, sharex=True)
+        ft = unit_axis(axes[1], "time t", "s", which="x")
+        fw, fa = speed_axis(axes[0]), unit_axis(axes[1], r"acceleration $\alpha$", "rad/s^2")
         for tr, c, ls, lw in self._runs():
             lab = "optimum" if tr is self.optimum else tr.label
-            axes[0].plot(tr.t, tr.omega, color=c, ls=ls, lw=lw, label=lab)
-            axes[1].plot(np.append(tr.t_u, tr.t[-1]), np.append(tr.alpha, tr.alpha[-1]), drawstyle="steps-post",
-                         color=c, ls=ls, lw=lw)
-        self._criticals(axes[0], False)
-        axes[0].set_ylabel(r"speed $\omega$, rad/s")
-        twin_axis(axes[0], RPM, "rpm")
-        axes[1].set_ylabel(r"acceleration $\alpha$, rad/s²")
-        twin_axis(axes[1], RPM, "rpm/s")
-        axes[1].set_xlabel("time t, s")
+            axes[0].plot(tr.t * ft, tr.omega * fw, color=c, ls=ls, lw=lw, label=lab)
+            axes[1].plot(np.append(tr.t_u, tr.t[-1]) * ft, np.append(tr.alpha, tr.alpha[-1]) * fa,
+                         drawstyle="steps-post", color=c, ls=ls, lw=lw)
+        self._criticals(axes[0], False, fw)
         for ax in axes:
             ax.grid(alpha=0.3)
         axes[0].legend(fontsize=7)
         fig.suptitle(title, fontsize=9)
 
         fig2, (a1, a2) = new_figure((8, 7), 2, 1)
+        ft = unit_axis(a1, "time t", "s", which="x")
         for tr, c, ls, lw in self._runs():
-            a1.plot(tr.t, q.shown(tr.deflection.max(axis=0)), color=c, ls=ls, lw=lw)
-        a1.set_xlabel("time t, s")
+            a1.plot(tr.t * ft, q.shown(tr.deflection.max(axis=0)), color=c, ls=ls, lw=lw)
         a1.set_ylabel(f"deflection, {q.display} 0-peak")
         a1.grid(alpha=0.3)
         self.draw(a2)
@@ -785,19 +777,18 @@ class ModalSpinupResult(Result):
 
         fig3, ax = new_figure((7, 5))
         cb, cs = self.campbell, self.data["critical_speeds"]
+        fw = speed_axis(ax, "x")
+        ff = unit_axis(ax, "frequency", "rad/s", "Hz", other="rad/s")
         for k in range(cb["wd"].shape[1]):
-            ax.plot(cb["omega"], cb["wd"][:, k], color="C0", lw=1.0, label="damped natural frequencies (reduced)"
-                    if k == 0 else None)
-        ax.plot(cb["omega"], cb["omega"], color="k", lw=0.8, label="synchronous line")
-        ax.plot(cs["reduced_wd_rad_s"], cs["reduced_wd_rad_s"], "o", mfc="none", color="C3",
-                label="critical speeds (reduced)")
+            ax.plot(cb["omega"] * fw, cb["wd"][:, k] * ff, color="C0", lw=1.0,
+                    label="damped natural frequencies (reduced)" if k == 0 else None)
+        ax.plot(cb["omega"] * fw, cb["omega"] * ff, color="k", lw=0.8, label="synchronous line")
+        ax.plot(np.asarray(cs["reduced_wd_rad_s"]) * fw, np.asarray(cs["reduced_wd_rad_s"]) * ff, "o", mfc="none",
+                color="C3", label="critical speeds (reduced)")
         if cs["ross_wd_rad_s"] is not None:
-            ax.plot(cs["ross_wd_rad_s"], cs["ross_wd_rad_s"], "x", color="k", label="critical speeds (ROSS)")
-        ax.set_xlabel(r"speed $\omega$, rad/s")
-        twin_axis(ax, RPM, "speed, rpm", "x")
-        ax.set_ylabel("frequency, rad/s")
-        twin_axis(ax, convert(1.0, "rad/s", "Hz"), "frequency, Hz")
-        ax.set_ylim(0, 1.2 * cb["omega"][-1])
+            ax.plot(np.asarray(cs["ross_wd_rad_s"]) * fw, np.asarray(cs["ross_wd_rad_s"]) * ff, "x", color="k",
+                    label="critical speeds (ROSS)")
+        ax.set_ylim(0, 1.2 * cb["omega"][-1] * ff)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
         ax.set_title("Campbell diagram of the reduced rotor", fontsize=9)

@@ -16,12 +16,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from autobal.analysis.quantities import Declarations, Quantity, significant
-from autobal.analysis.result import Result, new_figure, with_statuses
+from autobal.analysis.result import Result, new_figure, speed_axis, unit_axis, with_statuses
 from autobal.ocp import robust as rb
 from autobal.ocp.problem import PEAK_KEY, SpinupOcp
 from autobal.ocp.search import FAST_STEP, controls_on_mesh, grid_search
 from autobal.ocp.simulation import Trajectory, best_within_limits, drive_use, resimulate
-from autobal.ocp.spinup_study import RPM, deflection_axis, deflection_text, twin_axis
+from autobal.ocp.spinup_study import deflection_axis, deflection_text
 from autobal.ocp.time_optimal import minimum_peak
 from autobal.ocp.transcription import DirectCollocation
 
@@ -222,24 +222,22 @@ class RobustResult(Result):
         factor, label, _ = self._shown()
         title = self.data["title"]
         fig, (a0, a1) = new_figure((8, 7), 2, 1, sharex=True)
+        ft, fw = unit_axis(a1, "time t", "s", which="x"), speed_axis(a0)
         for k in self.KEYS:
             tr, tw = self.nominal_runs[k], self.worst_runs[k]
             lab = self.data["profiles"][k]["label"]
-            a0.plot(tr.t, tr.omega, color=self.COLORS[k], label=lab)
-            a1.plot(tw.t, factor * deflection_of(tw), color=self.COLORS[k],
+            a0.plot(tr.t * ft, tr.omega * fw, color=self.COLORS[k], label=lab)
+            a1.plot(tw.t * ft, factor * deflection_of(tw), color=self.COLORS[k],
                     label=f"{lab} (peak {peak_text(self.data, tw.peak)})")
         wc = self.data["omega_cr_rad_s"]
         if wc is not None:
-            a0.axhline(wc, color="k", ls=":", lw=0.8,
+            a0.axhline(wc * fw, color="k", ls=":", lw=0.8,
                        label="nominal critical speed " + QUANTITIES.find("omega_cr_rad_s").text(wc))
-        a0.set_ylabel(r"speed $\omega$, rad/s")
-        twin_axis(a0, RPM, "rpm")
         w = self.data["worst_design_rotor"]
         a1.set_title(f"on the robust profile's worst design rotor (critical speed x{w[0]:.3g}, damping x{w[1]:.3g}"
                      + (f", liquid x{w[2]:.3g}" if self.data["liquid"] else "") + ")", fontsize=8, loc="left")
         a1.set_ylabel(label.replace("peak deflection", "deflection").replace("^*", "").replace("r*", "r"))
         deflection_axis(a1, self.data.get("eccentricity_m"))
-        a1.set_xlabel("time t, s")
         for ax in (a0, a1):
             ax.grid(alpha=0.3)
             ax.legend(fontsize=7)

@@ -7,13 +7,14 @@ optimum and both ramps on each plot).
 
 from __future__ import annotations
 
+import re
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
 from autobal.analysis.quantities import Declarations, Quantity, significant
-from autobal.analysis.result import Result, new_figure
+from autobal.analysis.result import Result, new_figure, speed_axis, twin_axis, unit_axis
 from autobal.ocp import drive_profile
 from autobal.ocp.drive_profile import RPM
 from autobal.ocp.problem import SpinupOcp, pulse_variation
@@ -37,6 +38,36 @@ SOLVED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
 def _drive(prefix: str = "") -> str:
     return " ".join(f"{prefix}{k}" for k in ("max_torque_N_m", "min_torque_N_m"))
+
+
+#: the objective J of each ``objective`` of a scene: (SI unit, symbol, what it measures); Pashkov (2010), Eq. (2)
+#: for the deflection delta/e and the system unbalance d
+OBJECTIVES = {
+    "peak_deflection": ("1", "δ*/e", "peak deflection over the eccentricity"),
+    "peak_unbalance": ("1", "d*", "peak system unbalance"),
+    "integrated_deflection": ("s", "∫(δ/e)² dt", "integral of the squared deflection over the window"),
+    "min_time": ("s", "T", "arrival time at the final speed"),
+}
+
+#: the keys that hold a value of the objective: the optimum's, each start's, the ramp table's (and its starts')
+_OBJECTIVE_KEYS = {"objective_value": "objective of the optimum (re-simulated)",
+                   "objective_value_transcription": "objective of the optimum (transcription)",
+                   "starts[].objective": "re-simulated objective of a start",
+                   "segments.objective_value": "objective of the ramp table",
+                   "segments.start_objectives.*": "objective of a start of the ramp table's search"}
+
+
+def objective_quantity(path: str, block: dict | None) -> Quantity | None:
+    """The declaration of a key that holds a value of the objective J, in the unit of the block's ``objective``
+    (:data:`OBJECTIVES`: δ*/e and d* dimensionless, ∫(δ/e)² dt and the arrival time in s); None for another key or
+    without the block."""
+    key = re.sub(r"\.\d+\.", "[].", path)
+    key = "segments.start_objectives.*" if key.startswith("segments.start_objectives.") else key
+    objective = block.get("objective") if isinstance(block, dict) else None
+    if key not in _OBJECTIVE_KEYS or objective not in OBJECTIVES:
+        return None
+    unit, symbol, words = OBJECTIVES[objective]
+    return Quantity(path, unit, f"J = {symbol}", f"{_OBJECTIVE_KEYS[key]}: the {words}")
 
 
 #: every number of the spinup block: deflections delta/e (the source's group, Pashkov (2010), Eq. (2)) beside the
@@ -81,8 +112,6 @@ QUANTITIES = Declarations(
     Quantity("peak_unbalance collocation_peak_unbalance", "1", "d*", "peak system unbalance",
              source=f"{_P10}, Eq. (2)"),
     Quantity("collocation_peak_over_e", "1", "δ*/e", "peak deflection of the collocation (before re-simulation)"),
-    Quantity("objective_value objective_value_transcription", "1", "J",
-             "objective: δ*/e or d* (dimensionless); ∫(δ/e)² dt and the final time are in s"),
     Quantity("integral_deflection2_s", "s", "∫(δ/e)² dt", "integral of the squared deflection over the window"),
     Quantity("control_pulse_variation", "1", "", "chattering: total variation of the one-interval pulses of α/α_max"),
     Quantity("resimulation_rel_error", "1", "", "relative difference, CVODES re-simulation vs transcription"),
@@ -91,7 +120,6 @@ QUANTITIES = Declarations(
              "times: final solve, every solve, NLP builds, the analysis; the wall time by part"),
     Quantity("starts[].iterations", "1", "", "iterations of a start's solve"),
     Quantity("starts[].solve_time_s starts[].build_time_s", "s", "", "solve and build time of a start"),
-    Quantity("starts[].objective", "1", "J", "re-simulated objective of a start (as objective_value)"),
     Quantity("starts[].resimulated_peak_over_e", "1", "δ*/e", "re-simulated peak of a start"),
     Quantity("baselines.*.peak_deflection_over_e", "1", "δ*/e", "peak deflection of a ramp baseline"),
     Quantity("baselines.*.peak_unbalance", "1", "d*", "peak system unbalance of a ramp baseline"),
@@ -102,10 +130,9 @@ QUANTITIES = Declarations(
     Quantity("segments.segments", "1", "K", "ramp segments of the drive's table"),
     Quantity("segments.peak_deflection_over_e", "1", "δ*/e", "peak deflection of the ramp table (re-simulated)"),
     Quantity("segments.peak_unbalance", "1", "d*", "peak system unbalance of the ramp table"),
-    Quantity("segments.objective_value segments.start_objectives.**", "1", "J",
-             "objective of the ramp table (and of each start of its search)"),
     Quantity("segments.loss_vs_optimum_pct", "%", "", "loss of the ramp table against the full optimum"),
     Quantity("segments.evaluations", "1", "", "re-simulations of the ramp table's search"),
+    resolve=objective_quantity,
 )
 
 
@@ -156,6 +183,9 @@ class SpinupResult(Result):
                  f"{q('omega_at_peak_rad_s').text(d['omega_at_peak_rad_s'])}, final time "
                  f"{q('final_time_s').text(d['final_time_s'])}, chattering (pulse variation of alpha/alpha_max) "
                  f"{d['control_pulse_variation']:.3g}"]
+        j = QUANTITIES.find("objective_value", d)
+        if j is not None and d.get("objective_value") is not None:
+            lines.append(f"  objective {j.symbol} ({d['objective'].replace('_', ' ')}): {j.text(d['objective_value'])}")
         r = d["rotor"]
         rotor = ", ".join(f"{sym} {q(f'rotor.{k}').text(r[k])}" for sym, k in (
             ("m1", "mass_kg"), ("c", "stiffness_N_per_m"), ("χ", "damping_N_s_per_m"), ("ζ", "damping_ratio"),
@@ -205,51 +235,48 @@ class SpinupResult(Result):
 
     def draw(self, ax) -> None:
         """Deflection against time of the optimum and both ramps (delta/e; mm on the right)."""
+        ft = unit_axis(ax, "time t", "s", which="x")
         for tr, c, ls, lw in self._runs():
             lab = self._label(tr)
-            ax.plot(tr.t, tr.delta, color=c, ls=ls, lw=lw,
+            ax.plot(tr.t * ft, tr.delta, color=c, ls=ls, lw=lw,
                     label=f"{lab} (peak {deflection_text(tr.peak_delta, self.data.get('eccentricity_m'))})")
-        ax.set_xlabel("time t, s")
         ax.set_ylabel(r"deflection $\delta/e$")
         deflection_axis(ax, self.data.get("eccentricity_m"))
         ax.grid(alpha=0.3)
         ax.legend(fontsize=6.5, loc="upper left")
 
     def figures(self) -> dict:
-        """Speed (rad/s, rpm), acceleration steps (rad/s², rpm/s), drive torque (N·m) and, with drive data, power (kW)
-        against time; deflection (delta/e, mm) against time and speed."""
+        """Speed (rpm, rad/s), acceleration steps (rad/s², rpm/s), drive torque (N·m) and, with drive data, power (kW)
+        against time; deflection (delta/e, mm) against time and speed; every axis in its display unit."""
         title = self.data["title"]
         wc = self.data["omega_cr_rad_s"]
         drive = self.data["drive_polar_inertia_kg_m2"] != 0
         fig, axes = new_figure((8, 10 if drive else 8), 4 if drive else 3, 1, sharex=True)
         kw = QUANTITIES.find("max_power_W")
+        ft = unit_axis(axes[-1], "time t", "s", which="x")
+        fw = speed_axis(axes[0])
+        fa = unit_axis(axes[1], r"acceleration $\alpha$", "rad/s^2")
+        fm = unit_axis(axes[2], "drive torque M" if drive else "torque M", "N*m")
+        fp = unit_axis(axes[3], "drive power P", "W", kw.declared) if drive else None
         for tr, c, ls, lw in self._runs():
             lab = self._label(tr)
-            axes[0].plot(tr.t, tr.omega, color=c, ls=ls, lw=lw, label=lab)
-            axes[1].plot(np.append(tr.t_u, tr.t[-1]), np.append(tr.alpha, tr.alpha[-1]), drawstyle="steps-post",
-                         color=c, ls=ls, lw=lw)
-            axes[2].plot(tr.t, tr.torque, color=c, ls=ls, lw=lw)
+            axes[0].plot(tr.t * ft, tr.omega * fw, color=c, ls=ls, lw=lw, label=lab)
+            axes[1].plot(np.append(tr.t_u, tr.t[-1]) * ft, np.append(tr.alpha, tr.alpha[-1]) * fa,
+                         drawstyle="steps-post", color=c, ls=ls, lw=lw)
+            axes[2].plot(tr.t * ft, tr.torque * fm, color=c, ls=ls, lw=lw)
             if drive:
-                axes[3].plot(tr.t, kw.shown(tr.torque * tr.omega), color=c, ls=ls, lw=lw)
-        axes[0].axhline(wc, color="k", lw=0.8, ls=":", label=r"critical speed $\omega_{cr} = \Omega_0\sqrt{\psi}$ = "
-                        + QUANTITIES.find("omega_cr_rad_s").text(wc))
-        axes[0].set_ylabel(r"speed $\omega$, rad/s")
-        twin_axis(axes[0], RPM, "rpm")
-        axes[1].set_ylabel(r"acceleration $\alpha$, rad/s²")
-        twin_axis(axes[1], RPM, "rpm/s")
+                axes[3].plot(tr.t * ft, tr.torque * tr.omega * fp, color=c, ls=ls, lw=lw)
+        axes[0].axhline(wc * fw, color="k", lw=0.8, ls=":", label=r"critical speed $\omega_{cr} = "
+                        r"\Omega_0\sqrt{\psi}$ = " + QUANTITIES.find("omega_cr_rad_s").text(wc))
         if drive:
-            axes[2].set_ylabel("drive torque M, N·m")
-            axes[3].set_ylabel(f"drive power P, {kw.display}")
             brake = self.data.get("braking_torque_limit_N_m")
-            for ax, limit in ((axes[2], self.data.get("torque_limit_N_m")),
-                              (axes[2], None if brake is None else -brake),
-                              (axes[3], kw.shown(self.data.get("power_limit_W")))):
+            for ax, limit, f in ((axes[2], self.data.get("torque_limit_N_m"), fm),
+                                 (axes[2], None if brake is None else -brake, fm),
+                                 (axes[3], self.data.get("power_limit_W"), fp)):
                 if limit is not None:
-                    ax.axhline(limit, color="k", lw=0.8, ls=":")  # the drive's limits
+                    ax.axhline(limit * f, color="k", lw=0.8, ls=":")  # the drive's limits
         else:
-            axes[2].set_ylabel("torque M, N·m")
             axes[2].set_title("no drive data: the torque is the unbalance reaction only", fontsize=8, loc="left")
-        axes[-1].set_xlabel("time t, s")
         for ax in axes:
             ax.grid(alpha=0.3)
         fig.legend(loc="outside lower center", ncols=2, fontsize=7)
@@ -257,12 +284,11 @@ class SpinupResult(Result):
 
         fig2, (a1, a2) = new_figure((8, 7), 2, 1)
         self.draw(a1)
+        fw = speed_axis(a2, "x")
         for tr, c, ls, lw in self._runs():
-            a2.plot(tr.omega, tr.delta, color=c, ls=ls, lw=lw)
-        a2.axvline(wc, color="k", lw=0.8, ls=":", label=r"critical speed $\omega_{cr}$ = "
+            a2.plot(tr.omega * fw, tr.delta, color=c, ls=ls, lw=lw)
+        a2.axvline(wc * fw, color="k", lw=0.8, ls=":", label=r"critical speed $\omega_{cr}$ = "
                    + QUANTITIES.find("omega_cr_rad_s").text(wc))
-        a2.set_xlabel(r"speed $\omega$, rad/s")
-        twin_axis(a2, RPM, "speed, rpm", "x")
         a2.set_ylabel(r"deflection $\delta/e$")
         deflection_axis(a2, self.data.get("eccentricity_m"))
         a2.grid(alpha=0.3)
@@ -277,16 +303,6 @@ def deflection_axis(ax, e: float | None, which: str = "y") -> None:
     if e:
         q, ecc = QUANTITIES.find("peak_deflection_m"), QUANTITIES.find("eccentricity_m").text(e)
         twin_axis(ax, q.shown(e), f"deflection δ, {q.display} 0-peak  (e = {ecc})", which)
-
-
-def twin_axis(ax, factor: float, label: str, which: str = "y") -> None:
-    """A secondary axis (right, or top for ``which="x"``) showing the axis' values times ``factor``: rpm beside
-    rad/s, rpm/s beside rad/s², a deflection beside delta/e."""
-    functions = (lambda v: v * factor, lambda v: v / factor)
-    if which == "x":
-        ax.secondary_xaxis("top", functions=functions).set_xlabel(label)
-    else:
-        ax.secondary_yaxis("right", functions=functions).set_ylabel(label)
 
 
 def deflection_text(over_e: float | None, e: float | None) -> str:

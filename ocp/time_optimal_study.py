@@ -13,12 +13,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from autobal.analysis.quantities import Declarations, Quantity, significant
-from autobal.analysis.result import Result, new_figure, with_statuses
+from autobal.analysis.result import Result, new_figure, speed_axis, unit_axis, with_statuses
 from autobal.ocp import time_optimal as to
 from autobal.ocp.problem import PEAK_KEY, SpinupOcp
 from autobal.ocp.robust_study import PEAK_SYMBOL, deflection_of, peak_text
 from autobal.ocp.solve import TIE
-from autobal.ocp.spinup_study import RPM, deflection_axis, twin_axis
+from autobal.ocp.spinup_study import deflection_axis
 from autobal.ocp.transcription import DirectCollocation
 
 
@@ -159,14 +159,15 @@ class TimeOptimalResult(Result):
         line = np.array(sorted([(d["ramp_arrival_time_s"], d[f"ramp_peak_{s}"]),
                                 *zip(self.arrival_times, self.peaks, strict=True)]
                                + ([(d["arrival_time_s"], d[f"peak_deflection_{s}"])] if self.limited else [])))
-        ax.plot(line[:, 0], factor * line[:, 1], "-", color="0.6", lw=0.8)
-        ax.plot(self.arrival_times, factor * self.peaks, "o", color="C3", label="minimum peak for an arrival deadline")
-        ax.plot(d["ramp_arrival_time_s"], factor * d[f"ramp_peak_{s}"], "s", color="C2", label=d["ramp_label"])
+        ft = unit_axis(ax, "arrival time at the final speed", "s", which="x")
+        ax.plot(line[:, 0] * ft, factor * line[:, 1], "-", color="0.6", lw=0.8)
+        ax.plot(np.asarray(self.arrival_times) * ft, factor * self.peaks, "o", color="C3",
+                label="minimum peak for an arrival deadline")
+        ax.plot(d["ramp_arrival_time_s"] * ft, factor * d[f"ramp_peak_{s}"], "s", color="C2", label=d["ramp_label"])
         if d.get(f"deflection_limit_{s}") is not None:
             ax.axhline(factor * d[f"deflection_limit_{s}"], color="k", ls=":", lw=0.8)
-            ax.plot(d["arrival_time_s"], factor * d[f"peak_deflection_{s}"], "*", ms=12, color="k",
+            ax.plot(d["arrival_time_s"] * ft, factor * d[f"peak_deflection_{s}"], "*", ms=12, color="k",
                     label=f"earliest arrival with the peak <= {peak_text(d, d[f'deflection_limit_{s}'])}")
-        ax.set_xlabel("arrival time at the final speed, s")
         ax.set_ylabel(f"{label} (re-simulated)")
         deflection_axis(ax, self.data.get("eccentricity_m"))
         ax.grid(alpha=0.3)
@@ -185,17 +186,15 @@ class TimeOptimalResult(Result):
                                                                                   strict=True)]
         if self.limited is not None:
             runs.append((self.limited, "k", 1.6, f"earliest arrival, {self.limited.arrival_time_s:.4g} s"))
+        ft, fw = unit_axis(a1, "time t", "s", which="x"), speed_axis(a0)
         for p, c, lw, lab in runs:
-            a0.plot(p.trajectory.t, p.trajectory.omega, color=c, lw=lw, label=lab)
-            a1.plot(p.trajectory.t, factor * deflection_of(p.trajectory), color=c, lw=lw,
+            a0.plot(p.trajectory.t * ft, p.trajectory.omega * fw, color=c, lw=lw, label=lab)
+            a1.plot(p.trajectory.t * ft, factor * deflection_of(p.trajectory), color=c, lw=lw,
                     label=f"peak {peak_text(self.data, p.peak)}")
         if self.limited is not None:
             a1.axhline(factor * self.data[f"deflection_limit_{self.key}"], color="k", ls=":", lw=0.8)
-        a0.set_ylabel(r"speed $\omega$, rad/s")
-        twin_axis(a0, RPM, "rpm")
         a1.set_ylabel(label.replace("peak deflection", "deflection").replace("^*", "").replace("r*", "r"))
         deflection_axis(a1, self.data.get("eccentricity_m"))
-        a1.set_xlabel("time t, s")
         for a in (a0, a1):
             a.grid(alpha=0.3)
             a.legend(fontsize=6, ncols=2)

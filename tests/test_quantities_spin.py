@@ -222,7 +222,7 @@ def test_spinup_figures_speak_rpm_kw_and_mm(datasheet):
     axes = [a for f in figs.values() for ax in f.axes for a in (ax, *ax.child_axes)]  # with the secondary axes
     labels = [a.get_ylabel() for a in axes] + [a.get_xlabel() for a in axes]
     for unit in ("rad/s", "rpm", "rad/s²", "rpm/s", "drive torque M, N·m", "drive power P, kW",
-                 "deflection δ, mm 0-peak  (e = 50.00 µm)", "speed, rpm"):
+                 "deflection δ, mm 0-peak  (e = 50.00 µm)", r"speed $\omega$, rpm"):
         assert any(unit in x for x in labels), (unit, labels)
 
 

@@ -162,7 +162,7 @@ def _spinup_binding(sec) -> list[str]:
 def report_section(sec) -> None:
     """Optimal spin-up through the critical speed (direct collocation, CVODES re-simulation): the verdict is the
     optimum's peak deflection, its gain against the best ramp within the drive limits and whether it brakes."""
-    from autobal.ocp.spinup_study import verdict  # the verdict's one copy
+    from autobal.ocp.spinup_study import OBJECTIVES, verdict  # the verdict's one copy
     from autobal.report import cell, get_path, number, table, text
 
     sec.conclude(*verdict(sec.block))
@@ -187,6 +187,10 @@ def report_section(sec) -> None:
                             ("separation margin of the final speed from the critical speed, API 684 (2005)", "SM",
                              "separation_margin_pct")):
         sec.row(label, sym, f"rotor.{key}")
+    objective = OBJECTIVES.get(sec.get("objective"))
+    if objective is not None:
+        sec.row(f"objective of the optimum (re-simulated): the {objective[2]}", f"J = {objective[1]}",
+                "objective_value")
     sec.row("time of the peak", "t*", "time_of_peak_s")
     sec.row("speed at the peak", "ω*", "omega_at_peak_rad_s")
     sec.row("final time", "T", "final_time_s")
@@ -250,8 +254,8 @@ def report_section(sec) -> None:
                                                         "end speed, rpm", "rate, rpm/s", "rate"], rows))
     keeps = {True: "yes", False: "NO", None: "—"}
     rows = [[text(s.get("start")), text(s.get("stage", "final mesh")), text(s.get("status")),
-             text(s.get("iterations", "—")), cell(s.get("solve_time_s"), "s"), cell(s.get("objective"), "1"),
-             text(keeps[s.get("keeps_limit")])] for s in sec.get("starts", [])]
+             text(s.get("iterations", "—")), cell(s.get("solve_time_s"), "s"), sec.cell(f"starts.{i}.objective"),
+             text(keeps[s.get("keeps_limit")])] for i, s in enumerate(sec.get("starts", []))]
     if rows:
         sec.tables.append(table("NLP solves of the multi-start: every start on the coarse mesh, the best one "
                                 "refined on the final mesh and judged by its CVODES re-simulation",
