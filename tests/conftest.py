@@ -1,3 +1,6 @@
+import inspect
+import re
+
 import pytest
 
 from autobal import api, scenario
@@ -54,14 +57,25 @@ def shipped_run(tmp_path_factory):
     return get
 
 
+_SHIPPED_NAMES = {p.stem for p in scenario.shipped()}
+_NAMED = re.compile(r"shipped_run\(\s*[\"'](\w+)[\"']")  # shipped_run("pump_pe600_statics") in a test's source
+
+
+def _scene_of(item) -> str:
+    """The shipped scene a test runs through shipped_run: its ``name`` or ``scene`` parameter if that is a shipped
+    scene, else the one scene its source names in shipped_run("..."); "shipped" when there are several or none."""
+    params = getattr(getattr(item, "callspec", None), "params", {})
+    named = {v for k, v in params.items() if k in ("name", "scene") and v in _SHIPPED_NAMES}
+    if not named:
+        named = set(_NAMED.findall(inspect.getsource(item.function))) & _SHIPPED_NAMES
+    return named.pop() if len(named) == 1 else "shipped"
+
+
 @pytest.hookimpl(tryfirst=True)  # before xdist's own hook, which reads the groups into the node ids
 def pytest_collection_modifyitems(config, items):
     """Under pytest-xdist with ``--dist loadgroup`` (.ci/run's slow set), the tests of one shipped scene go to one
-    worker, so that the scene runs once (shipped_run shares a run within a worker only): a test parametrized by a
-    scene name is grouped by it, every other test that uses shipped_run joins the group "shipped"."""
+    worker, so that the scene runs once (shipped_run shares a run within a worker only): each test that uses
+    shipped_run is grouped by its scene (:func:`_scene_of`)."""
     for item in items:
-        if "shipped_run" not in getattr(item, "fixturenames", ()):
-            continue
-        params = getattr(getattr(item, "callspec", None), "params", {})
-        scene = next((v for k, v in params.items() if k in ("name", "scene") and isinstance(v, str)), "shipped")
-        item.add_marker(pytest.mark.xdist_group(scene))
+        if "shipped_run" in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.xdist_group(_scene_of(item)))

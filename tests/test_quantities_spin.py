@@ -228,11 +228,11 @@ def test_spinup_figures_speak_rpm_kw_and_mm(datasheet):
 
 @pytest.mark.cli
 @pytest.mark.slow
-@pytest.mark.parametrize("name", SCENES)
-def test_robust_time_optimal_and_ross_summaries_and_verdicts(shipped_run, name):
+@pytest.mark.parametrize("name, scene", SCENES.items(), ids=list(SCENES))
+def test_robust_time_optimal_and_ross_summaries_and_verdicts(shipped_run, name, scene):
     """On the shipped scene: every number declared, the summary's first line is the report's one verdict, printed
     in mm (µm for the ROSS rotor) beside delta/e and rpm beside rad/s, the printed values the SI values converted."""
-    run, folder = shipped_run(SCENES[name])
+    run, folder = shipped_run(scene)
     check_declared(folder)
     results = json.loads((folder / "results.json").read_text())
     res, d = run[name], results[name]
