@@ -73,9 +73,9 @@ def _scene_of(item) -> str:
 
 @pytest.hookimpl(tryfirst=True)  # before xdist's own hook, which reads the groups into the node ids
 def pytest_collection_modifyitems(config, items):
-    """Under pytest-xdist with ``--dist loadgroup`` (.ci/run's slow set), the tests of one shipped scene go to one
-    worker, so that the scene runs once (shipped_run shares a run within a worker only): each test that uses
-    shipped_run is grouped by its scene (:func:`_scene_of`)."""
+    """Under pytest-xdist (``-n 2``, README and .ci/run; ``--dist loadgroup`` is in the addopts) the tests of one
+    shipped scene go to one worker, so that the scene runs once (shipped_run shares a run within a worker only):
+    each test that uses shipped_run is grouped by its scene (:func:`_scene_of`)."""
     for item in items:
         if "shipped_run" in getattr(item, "fixturenames", ()):
             item.add_marker(pytest.mark.xdist_group(_scene_of(item)))

@@ -1,5 +1,5 @@
-"""The slow set's grouping under pytest-xdist (.ci/run: ``-n 2 --dist loadgroup``) takes effect: tests of one group
-run on one worker, so a shipped scene shared through ``shipped_run`` runs once (tests/conftest.py).  Under pytest
+"""The grouping under pytest-xdist (``-n 2``, with ``--dist loadgroup`` from the addopts) takes effect: tests of one
+group run on one worker, so a shipped scene shared through ``shipped_run`` runs once (tests/conftest.py).  Under pytest
 9.2 with pytest-xdist 3.8 the groups are silently ignored (pytest-xdist issue 1386): this test fails there."""
 
 import subprocess
