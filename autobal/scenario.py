@@ -20,7 +20,7 @@ from pydantic import Field, PrivateAttr, ValidationError, create_model, model_va
 from autobal import analyses, parts
 from autobal.errors import ScenarioError
 from autobal.paths import SCENARIO_DIR
-from autobal.schema import Display, Strict
+from autobal.schema import Display, Strict, section_at
 from autobal.text import LIMIT, clean
 from autobal.units import clip
 
@@ -91,10 +91,7 @@ class BaseScenario(Strict):
             path = analyses.module(analysis).NEEDS
             if path is None:
                 continue
-            node = self
-            for part in path.split("."):
-                node = getattr(node, part, None)
-            if node is None:
+            if section_at(self, path) is None:
                 raise ValueError(f"analyses.{analysis} needs a {path} section")
         return self
 

@@ -115,6 +115,16 @@ def _numbers_only(annotation) -> bool:
     return "number" in seen and "bool" not in seen
 
 
+def section_at(node, path: str):
+    """The section (or value) at the dotted ``path`` below ``node`` (``device.dynamics``), None if a step along it is
+    left out."""
+    for part in path.split("."):
+        node = getattr(node, part, None)
+        if node is None:
+            return None
+    return node
+
+
 class Strict(BaseModel):
     """A scene section: unknown keys are refused, values are frozen (lists and dicts too), inf and nan refused,
     and so are booleans where a number is expected (pydantic's lax mode reads YAML's yes/on/true as 1)."""

@@ -31,7 +31,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, create_model, model_validator
 
-from autobal.schema import Strict
+from autobal.schema import Strict, section_at
 from autobal.units import quantity
 
 _PARAMS: dict[type, type] = {}  # derived schema -> its dataclass
@@ -157,11 +157,7 @@ def values(section: Strict, cls: type) -> dict:
         path = key(f)
         if path is None:
             continue
-        value = section
-        for part in path.split("."):
-            value = getattr(value, part, None)
-            if value is None:
-                break
+        value = section_at(section, path)
         if value is not None:
             kw[f.name] = to_params(value) if type(value) in _PARAMS else value
     return kw
