@@ -207,8 +207,7 @@ DRIVE_TOL = 1e-3
 
 def torque_reference(ocp: SpinupOcp) -> float:
     """The drive's torque scale, N m: max_torque, else the inertial torque of the full acceleration."""
-    P = ocp.params
-    return ocp.torque_max or (P.J_p + P.m1 * P.e**2 * (1 - P.psi)) * ocp.alpha_max
+    return ocp.torque_max or ocp.inertia * ocp.alpha_max
 
 
 def drive_excess(ocp: SpinupOcp, tr: Trajectory) -> dict[str, float]:
@@ -261,16 +260,15 @@ def rate_cap(ocp: SpinupOcp, omega: float) -> float:
     """The largest acceleration the drive gives at speed ``omega`` (rad/s) by its inertia alone, rad/s^2:
     J alpha + b omega within the torque, power and motor limits, and alpha within alpha_max (the rotor's
     reaction torque left out: a start, checked by re-simulation)."""
-    P = ocp.params
-    J = P.J_p + P.m1 * P.e**2 * (1 - P.psi)
+    J, b = ocp.inertia, ocp.drag
     caps = [ocp.alpha_max]
     if J > 0:
         if ocp.torque_max is not None:
-            caps.append((ocp.torque_max - P.b * omega) / J)
+            caps.append((ocp.torque_max - b * omega) / J)
         if ocp.power_max is not None:
-            caps.append((ocp.power_max / max(omega, 1e-300) - P.b * omega) / J)
+            caps.append((ocp.power_max / max(omega, 1e-300) - b * omega) / J)
         if ocp.motor_stall_torque is not None:
-            caps.append((ocp.motor_stall_torque * (1 - omega / ocp.motor_no_load_speed) - P.b * omega) / J)
+            caps.append((ocp.motor_stall_torque * (1 - omega / ocp.motor_no_load_speed) - b * omega) / J)
     return min(caps)
 
 
@@ -285,8 +283,7 @@ def fastest_feasible_rate(ocp: SpinupOcp, intervals: int = 200, points: int = 60
     keeps the limits."""
     ms = mesh(ocp, intervals)
     h = np.concatenate([np.full(ms.n, ms.h), np.full(ms.ns, ms.hs)])
-    P = ocp.params
-    J = P.J_p + P.m1 * P.e**2 * (1 - P.psi)
+    J = ocp.inertia
     slowest = min(abs(ocp.omega_final - ocp.omega_start) / ocp.horizon, ocp.alpha_max)
     wt = max(ocp.omega_start, ocp.omega_final)
     a = max(rate_cap(ocp, wt) if ocp.omega_final > ocp.omega_start else ocp.alpha_max, slowest)
