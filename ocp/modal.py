@@ -38,9 +38,18 @@ from autobal.analysis.result import Result, new_figure, speed_axis, unit_axis, w
 from autobal.errors import SolveError
 from autobal.models import ross_rotor as rr
 from autobal.models.ross_rotor import POINTS_PER_REV, RESIM_TOL, ModalRotor, simulate_fixed
+from autobal.ocp.drive_profile import drive_table
 from autobal.ocp.problem import Dimensionless, PathConstraint
 from autobal.ocp.search import SearchResult
-from autobal.ocp.simulation import DRIVE_TOL, best_within_limits, drive_use, ramp_profile, rate_cap, torque_reference
+from autobal.ocp.simulation import (
+    DRIVE_TOL,
+    acceleration_at,
+    best_within_limits,
+    drive_use,
+    ramp_profile,
+    rate_cap,
+    torque_reference,
+)
 from autobal.ocp.solve import AHEAD, Optimum, Solver, coarse_intervals, coarse_options, refine
 from autobal.ocp.solve import TIE as TIE_SOLVED
 from autobal.ocp.transcription import DirectCollocation, mesh
@@ -319,9 +328,7 @@ def resimulate(ocp: ModalSpinupOcp, u: np.ndarray, h: np.ndarray | None, label: 
     t, w, xy = simulate_fixed(ocp.rotor, ocp.omega_start, u * ocp.alpha_max, hs, ocp.nodes)
     t_u = np.concatenate([[0.0], np.cumsum(hs)[:-1]])
     alpha = u * ocp.alpha_max
-    # the acceleration at each sample: that of the interval it ends (the first sample: the first interval's)
-    at = alpha[np.clip(np.searchsorted(t_u, t, side="left") - 1, 0, len(alpha) - 1)]
-    torque = ocp.inertia * at if ocp.inertia > 0 else np.full(t.shape, np.nan)
+    torque = ocp.inertia * acceleration_at(t, t_u, alpha) if ocp.inertia > 0 else np.full(t.shape, np.nan)
     return ModalTrajectory(label, t, w, np.hypot(xy[:, 0], xy[:, 1]), tuple(ocp.nodes), t_u, alpha, torque)
 
 
@@ -767,6 +774,7 @@ class ModalSpinupResult(Result):
                                            "omega_rpm": convert(o.omega, "rad/s", "rpm")} | {
                    f"deflection_node{nd}_m": o.deflection[i] for i, nd in enumerate(o.nodes)},
                "ross_spinup_controls.csv": {"t_start_s": o.t_u, "alpha_rad_s2": o.alpha},
+               "drive_profile.csv": drive_table(o),
                "ross_spinup_baselines.csv": {k: np.asarray(v)[:n] for k, v in cols.items()},
                "ross_modes.csv": {"mode": np.arange(1, self.data["modes"] + 1),
                                   "natural_frequency_rad_s": self.data["natural_frequencies_rad_s"]}}

@@ -175,6 +175,14 @@ class Trajectory:
                 "time_of_peak_s": self.t_peak, "integral_deflection2_s": self.integral_delta2}
 
 
+def acceleration_at(t: np.ndarray, t_u: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+    """The acceleration at the sample times ``t`` of a piecewise-constant profile (``alpha`` on the intervals
+    starting at ``t_u``): that of the interval each sample ends (a sample on a switch takes the interval before
+    it, the first sample the first interval's)."""
+    k = np.searchsorted(t_u, np.asarray(t) * (1 - 1e-12), side="left") - 1  # the interval's end, to rounding
+    return np.asarray(alpha)[np.clip(k, 0, len(alpha) - 1)]
+
+
 def resimulate(ocp: SpinupOcp, u, h, label: str, points: int = RESIM_POINTS, tol: float = RESIM_TOL,
                multistep: str = "adams", merge: bool = True) -> Trajectory:
     """CVODES at tight tolerance with the piecewise-constant profile u (over alpha_max) on intervals h
