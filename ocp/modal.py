@@ -42,6 +42,7 @@ from autobal.ocp.drive_profile import drive_table
 from autobal.ocp.problem import Dimensionless, PathConstraint
 from autobal.ocp.search import SearchResult
 from autobal.ocp.simulation import (
+    DRIVE_QUANTITIES,
     DRIVE_TOL,
     acceleration_at,
     best_within_limits,
@@ -864,13 +865,7 @@ QUANTITIES = Declarations(
     Quantity("baseline_ramp_peak_m", "m", "r*", "peak deflection of the best ramp within the drive limits", "µm",
              headline=True),
     Quantity("improvement_over_best_ramp", "1", "", "improvement over that ramp, 1 − r*/r*_ramp", headline=True),
-    Quantity("max_torque_N_m", "N*m", "M_max", "largest drive torque of the optimum, J α", headline=True),
-    Quantity("max_power_W", "W", "P_max", "largest drive power of the optimum", "kW", headline=True),
-    Quantity("min_torque_N_m", "N*m", "M_min", "smallest drive torque of the optimum (below 0: it brakes)",
-             headline=True),
-    Quantity("torque_limit_N_m braking_torque_limit_N_m", "N*m", "M_lim", "torque and braking-torque limits of the "
-             "drive"),
-    Quantity("power_limit_W", "W", "P_lim", "power limit of the drive", "kW"),
+    *DRIVE_QUANTITIES,
     Quantity("max_deceleration_rad_s2", "rad/s^2", "−α_min", "largest deceleration the drive allows"),
     Quantity("drive_polar_inertia_kg_m2 rotor_polar_inertia_kg_m2", "kg*m^2", "J", "polar inertia the drive "
              "accelerates (rotor and drive); the rotor's, from ROSS's mass matrix"),

@@ -10,6 +10,7 @@ import casadi as ca
 import numpy as np
 
 from autobal.analysis import interrupt
+from autobal.analysis.quantities import Quantity
 from autobal.analysis.rotor import deflection, peak, unbalance
 from autobal.models.rotor import rotor_model
 from autobal.ocp.problem import SpinupOcp
@@ -249,6 +250,19 @@ def drive_use(ocp: SpinupOcp, tr: Trajectory) -> dict:
     bad = [k for k, v in drive_excess(ocp, tr).items() if v > DRIVE_TOL]
     return {"max_torque_N_m": float(np.max(M)), "min_torque_N_m": float(np.min(M)),
             "max_power_W": float(np.max(M * w)), "within_drive_limits": not bad, "violated": bad}
+
+
+#: the drive's numbers of a spin-up block (:func:`drive_use` of the optimum, and the limits), declared once for the
+#: Jeffcott and the modal rotor's blocks
+DRIVE_QUANTITIES = (
+    Quantity("max_torque_N_m", "N*m", "M_max", "largest drive torque of the optimum", headline=True),
+    Quantity("max_power_W", "W", "P_max", "largest drive power of the optimum", "kW", headline=True),
+    Quantity("min_torque_N_m", "N*m", "M_min", "smallest drive torque of the optimum (below 0: it brakes)",
+             headline=True),
+    Quantity("torque_limit_N_m braking_torque_limit_N_m", "N*m", "M_lim", "torque and braking-torque limits of the "
+             "drive"),
+    Quantity("power_limit_W", "W", "P_lim", "power limit of the drive", "kW"),
+)
 
 
 def best_within_limits(peaks: dict, uses: dict):
