@@ -86,7 +86,8 @@ class ModalSpinupOcp(Dimensionless):
     deflection_limit: float | None = None  # m, the largest deflection of the nodes of interest (0-peak)
     alpha_min: float | None = None  # rad/s^2, <= 0: alpha >= this (0: the speed never falls; None: -alpha_max)
     # the drive (as the Jeffcott problem's): the torque it needs is (J_rotor + drive_inertia) alpha, the rotor's
-    # polar inertia from ROSS (the unbalance's reaction torque left out: m e r omega^2, micro-N m here)
+    # polar inertia from ROSS; the unbalance's reaction torque, of order m e r omega^2 (about 1e-4 N m on the shipped
+    # rotor, against J alpha = 67 N m), is left out
     drive_inertia: float = 0.0  # kg m^2, the drive's own (motor rotor, coupling)
     torque_max: float | None = None  # N m
     braking_torque_max: float | None = None  # N m, -M <= this (0: no braking; None: up to torque_max)
