@@ -15,6 +15,7 @@ import numpy as np
 from autobal.analysis.quantities import Declarations, Quantity, significant
 from autobal.analysis.result import Result, new_figure, speed_axis, unit_axis, with_statuses
 from autobal.ocp import time_optimal as to
+from autobal.ocp.drive_profile import drive_table
 from autobal.ocp.problem import PEAK_KEY, SpinupOcp
 from autobal.ocp.robust_study import PEAK_SYMBOL, deflection_of, peak_text
 from autobal.ocp.solve import TIE
@@ -149,6 +150,7 @@ class TimeOptimalResult(Result):
             tr = self.limited.trajectory
             out[f"{self.name}_profile.csv"] = {"t_s": tr.t, "omega_rad_s": tr.omega,
                                                f"deflection_{col}": factor * deflection_of(tr)}
+            out["drive_profile.csv"] = drive_table(tr)
         return out
 
     def draw(self, ax) -> None:
