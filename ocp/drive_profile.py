@@ -40,7 +40,7 @@ SEGMENT_INTERVALS = 200  # the reported re-simulation is sampled as that of a pr
 SEARCH_STEPS = 8000
 # the step of the search itself, that of the global search: the kept tables of the six shipped Jeffcott scenes
 # integrate within 2.8e-4 of CVODES at it, below their losses against the optimum (>= 8.5e-4), the search taking
-# 0.44-0.91 of its CPU time at FAST_STEP (docs/dev/spinup.md, "The drive's segment table")
+# 0.47-0.61 of its CPU time at FAST_STEP (docs/dev/spinup.md, "The drive's segment table")
 SEGMENT_STEP = STEP
 PENALTY = 10.0  # exact penalty on the relative excess over the drive limits (a fraction of the objective)
 SEGMENT_EVALUATIONS = 200  # Nelder-Mead's budget of integrations from the best start
