@@ -223,7 +223,7 @@ class ModalSpinupOcp(Dimensionless):
         if self.deflection_limit is not None:
             lim2 = (self.deflection_limit / self.amplitude_scale) ** 2
             add(f"deflection limit r <= {self.deflection_limit:.6g} m", self._envelope2(x) / lim2, -ca.inf, 1.0)
-        self.drive_constraints(self.inertia * a * self.Om**2, x[self.speed_index] * self.Om, add)
+        self.drive_constraints(self.inertia * a * self.Om**2, x[self.speed_index], add)
         return out
 
     def epigraph2(self, states: np.ndarray) -> np.ndarray:

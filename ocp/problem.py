@@ -105,9 +105,9 @@ class Dimensionless:
         lo = -hi if self.braking_torque_max is None else -self.braking_torque_max
         return lo, hi
 
-    def drive_constraints(self, M, omega, add) -> None:
+    def drive_constraints(self, M, nu, add) -> None:
         """The drive's path constraints, each by ``add(name, expr, lb, ub)``: the torque (or braking) limits, the
-        power limit and the motor characteristic on the drive torque ``M`` (N m) and the speed ``omega`` (rad/s),
+        power limit and the motor characteristic on the drive torque ``M`` (N m) and the speed ``nu`` (omega/Om),
         CasADi expressions of the state and the control; each row scaled to order one."""
         lo, hi = self.torque_bounds
         if self.torque_max is not None:
@@ -118,9 +118,9 @@ class Dimensionless:
             ref = self.braking_torque_max or self.inertia * self.alpha_max
             add(f"braking limit M >= -{-lo:g} N m", M / ref, lo / ref, ca.inf)
         if self.power_max is not None:
-            add(f"power limit M omega <= {self.power_max:g} W", M * omega / self.power_max, -ca.inf, 1.0)
+            add(f"power limit M omega <= {self.power_max:g} W", M * nu * self.Om / self.power_max, -ca.inf, 1.0)
         if self.motor_stall_torque is not None:
-            L = self.motor_stall_torque * (1 - omega / self.motor_no_load_speed)
+            L = self.motor_stall_torque * (1 - nu * self.Om / self.motor_no_load_speed)
             add("motor characteristic M <= L_s (1 - omega/omega_nl)", (M - L) / self.motor_stall_torque, -ca.inf,
                 0.0)
 
@@ -289,7 +289,7 @@ class SpinupOcp(Dimensionless):
         if self.deflection_limit is not None:
             add(f"deflection limit delta/e <= {self.deflection_limit:g}", m.delta2(q) / self.deflection_limit**2,
                 -ca.inf, 1.0)
-        self.drive_constraints(m.torque(q, a, P.p) * P.torque_scale, q[self.speed_index] * self.Om, add)
+        self.drive_constraints(m.torque(q, a, P.p) * P.torque_scale, q[self.speed_index], add)
         return out
 
 
