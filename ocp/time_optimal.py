@@ -6,7 +6,8 @@ Any spin-up problem of the generic pipeline runs through it: the Jeffcott rotor'
 (:class:`autobal.ocp.modal.ModalSpinupOcp`, peaks in m), each with its ``min_time`` objective and its deflection
 limit as a path constraint of the shared transcription; each peak and limit in its problem's ``deflection_unit``.
 Only the minimum-peak optimum of a deadline (its model's global search for starts), the fastest ramp and the
-CVODES re-simulation are the model's own (:func:`minimum_peak`, :func:`fastest_ramp`, :func:`resimulated`).
+CVODES re-simulation are the model's own (:func:`minimum_peak`, :func:`fastest_ramp`,
+:func:`autobal.ocp.solve.model_of`).
 
 The front is computed as its dual: for a deadline T, the smallest peak P*(T) by the minimum-peak OCP of
 :mod:`autobal.ocp.solve` (global search, multi-start, collocation, CVODES re-simulation), the control step
@@ -47,19 +48,12 @@ def minimum_peak(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation, mul
                     options)
 
 
-def resimulated(ocp: SpinupOcp | ModalSpinupOcp, u: np.ndarray, h: np.ndarray, label: str):
-    """The CVODES re-simulation of the profile u (over alpha_max) on intervals h (the problem's dimensionless
-    time) by its model (:func:`autobal.ocp.solve.model_of`): the Jeffcott rotor's :class:`Trajectory` or the modal
-    rotor's (fixed frame), each with ``peak`` in the problem's deflection unit."""
-    return model_of(ocp).resimulate(ocp, u, h, label)
-
-
 def fastest_ramp(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation):
     """The maximum-acceleration ramp and hold, re-simulated (the Jeffcott rotor's on 4x the method's intervals, the
     modal rotor's on its own)."""
     if isinstance(ocp, SpinupOcp):
         return baselines(ocp, intervals=4 * method.intervals)["max_acceleration_ramp"]
-    return model_of(ocp).baselines(ocp.on_intervals(method.intervals))["max_acceleration_ramp"]
+    return model_of(ocp).baselines(ocp.on_intervals(method.intervals))["max_acceleration_ramp"]  # the modal one
 
 
 def peak_words(ocp: SpinupOcp | ModalSpinupOcp, x: float) -> str:
@@ -210,7 +204,7 @@ def extended(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation, earlier
         sol = solver.solve(np.clip(u, -1.0, 1.0))
     except SolveError:
         return None
-    tr = resimulated(o, sol.u, sol.h, "optimum")
+    tr = model_of(o).resimulate(o, sol.u, sol.h, "optimum")
     score, own = resimulated_scores(o, sol, tr)
     row = {"start": f"the {earlier.arrival_time_s:.4g} s point's profile, then held", "status": sol.status,
            "success": True, "iterations": sol.iterations, "solve_time_s": sol.solve_time_s, "objective": score}
@@ -262,7 +256,7 @@ def min_time_point(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation, l
     rows, build, level = [], 0.0, float(limit)
 
     def record(label: str):
-        tr = resimulated(o, sol.u, sol.h, "optimum")
+        tr = model_of(o).resimulate(o, sol.u, sol.h, "optimum")
         rows.append({"start": label, "stage": f"min_time, {n} intervals, collocation limit {peak_words(o, level)}",
                      "status": sol.status, "success": True, "iterations": sol.iterations,
                      "solve_time_s": sol.solve_time_s, "objective": sol.final_time_s,

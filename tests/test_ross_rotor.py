@@ -20,7 +20,7 @@ from autobal.models import ross_rotor as rr
 from autobal.ocp import modal
 from autobal.ocp import robust as rb
 from autobal.ocp.simulation import ramp_profile, simulate_profile
-from autobal.ocp.solve import Solver, optimize
+from autobal.ocp.solve import TIE, Solver, optimize
 from autobal.ocp.transcription import structured_derivatives, transcribe
 from autobal.parts import ross_rotor as ross_rotor_part
 
@@ -103,6 +103,26 @@ def test_ocp_beats_the_ramps_and_resimulates(small_ocp):
     assert_allclose(tr.omega[i:], 150.0, rtol=1e-6)
     assert tr.omega.max() <= 150.0 * (1 + 1e-6)
     assert np.all(np.abs(opt.solution.u) <= 1 + 1e-9)
+
+
+def test_modal_starts_solved_coarse_and_the_best_refined(small_ocp):
+    """On 100 intervals the shared loop (autobal.ocp.solve.optimize) solves every modal start on the coarse mesh of 50
+    (each start's screened profile repeated onto the 100), re-simulates every coarse optimum, refines the best (ties
+    within TIE to the earlier start) and re-simulates the refined optimum, no worse than the coarse one."""
+    ocp = small_ocp.on_intervals(100)
+    labels, profiles = zip(*modal.starts(ocp, 100), strict=True)
+    assert all(u.size == 100 and np.array_equal(u[0::2], u[1::2]) for u in profiles)
+    opt = optimize(ocp, ocp.method, options={"max_iter": 300})
+    coarse = [r for r in opt.starts if r.get("stage") == "coarse (50 intervals)"]
+    assert [r["start"] for r in coarse] == list(labels)
+    scored = [r for r in coarse if r["success"]]
+    assert scored and all(r["objective"] > 0 for r in scored)
+    low = min(r["objective"] for r in scored)
+    best = next(r for r in scored if r["objective"] <= low * (1 + TIE))
+    assert [r.get("stage") for r in opt.starts[-2:]] == ["100 intervals", None]
+    assert opt.starts[-1]["start"] == f"{best['start']}, refined from 50 intervals"
+    assert opt.starts[-1]["resimulated_peak_m"] == opt.trajectory.peak == opt.score
+    assert opt.trajectory.peak <= best["objective"] * (1 + 1e-3)
 
 
 def test_structured_derivatives_match_casadi_ad(small_ocp):
