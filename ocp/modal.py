@@ -16,9 +16,10 @@ profiles: full acceleration to w1, a middle phase, full acceleration to w3, then
 arrives at the deadline, screened by a fixed-step Runge-Kutta integration of the same envelope equation,
 :func:`screen`), and the physical re-simulation (the fixed-frame response of
 :func:`autobal.models.ross_rotor.simulate_fixed`).  The problem has the members the generic pipeline uses, so it is
-transcribed, solved and continued from a coarse mesh by the same code as the Jeffcott rotor's
-(:func:`autobal.ocp.transcription.transcribe`, :class:`autobal.ocp.solve.Solver`, :func:`autobal.ocp.solve.refine`,
-:func:`autobal.ocp.simulation.simulate_profile`).
+transcribed, solved from its starts, ranked and continued from a coarse mesh by the same code as the Jeffcott
+rotor's (:func:`autobal.ocp.solve.optimize`, which takes :func:`starts`, :func:`reference_level`,
+:func:`resimulate`, :func:`rank_coarse` and HOLD_STATES from this module; :func:`autobal.ocp.transcription.transcribe`,
+:class:`autobal.ocp.solve.Solver`, :func:`autobal.ocp.solve.refine`, :func:`autobal.ocp.simulation.simulate_profile`).
 
 Every reported peak is the CVODES re-simulation of the physical (fixed-frame) response, max_t sqrt(x^2 + y^2).
 """
