@@ -6,7 +6,7 @@ steps.  :func:`segment_profile` poses that as a low-dimensional problem of its o
 the deadline and held to the end of the settling window, chosen to minimise the same objective under the same
 drive limits (an exact penalty on :func:`autobal.ocp.simulation.drive_excess`) by Nelder-Mead.  Its starts: the
 K segments fitted to the full optimum, the same projected onto the drive limits (:func:`projected`) and ramps
-at the drive's rate with a hold below the critical speed (:func:`hold_start`); the two best are searched.  The
+at the drive's rate with a hold below the critical speed (:func:`hold_start`); the best is searched.  The
 search integrates with the exponential integrator of the global search (:func:`fast_segments`, a bounded number
 of steps), the kept profile is re-simulated by CVODES (:func:`simulate_segments`): its reported peak and limits.
 """
@@ -16,14 +16,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import casadi as ca
 import numpy as np
 from scipy.optimize import minimize
 
 from autobal.analysis.rotor import deflection, peak, unbalance
 from autobal.models.rotor import rotor_model
 from autobal.ocp.problem import SpinupOcp
-from autobal.ocp.search import FAST_STEP, FixedFrameModes, simulate_steps
+from autobal.ocp.search import FAST_STEP, STEP, FixedFrameModes, simulate_steps
 from autobal.ocp.simulation import RESIM_TOL, Trajectory, drive_excess, drive_use, rate_cap, resimulate
 
 RPM = 60 / (2 * math.pi)  # rpm per rad/s
@@ -31,9 +30,12 @@ SEGMENT_INTERVALS = 200  # the reported re-simulation is sampled as that of a pr
 # the search's integrator: at most 8000 steps (the 8 s datasheet scene at the step 0.5 of FAST_STEP: peak within
 # 2e-6 of CVODES; a 60 s horizon at the step 2.0: within 6e-5; the largest power within 1e-6 on both)
 SEARCH_STEPS = 8000
+# the step of the search itself, that of the global search: the kept tables of the six shipped Jeffcott scenes
+# integrate within 2.8e-4 of CVODES at it, below their losses against the optimum (>= 8.5e-4), the search taking
+# 0.44-0.91 of its CPU time at FAST_STEP (docs/dev/spinup.md, "The drive's segment table")
+SEGMENT_STEP = STEP
 PENALTY = 10.0  # exact penalty on the relative excess over the drive limits (a fraction of the objective)
-SEGMENT_EVALUATIONS = 200  # Nelder-Mead's budget of re-simulations from the best start (half from the next)
-SEARCHED_STARTS = 2  # the starts with the smallest penalised objective searched by Nelder-Mead
+SEGMENT_EVALUATIONS = 200  # Nelder-Mead's budget of integrations from the best start
 HOLD_FRACTIONS = (0.8, 0.9, 0.95)  # starts holding the speed at these fractions of the critical speed
 
 
@@ -132,8 +134,7 @@ def fast_segments(ocp: SpinupOcp, t, w, dt: float = FAST_STEP, rotor: FixedFrame
     rates = np.append(np.diff(w) / np.diff(t), 0.0)
     a = rates[np.clip(np.searchsorted(t, tau / ocp.Om, side="left") - 1, 0, len(rates) - 1)] / ocp.Om**2
     P = ocp.params
-    torque = np.array(rotor_model().torque.map(q.shape[1])(q, a[None, :], ca.repmat(ca.DM(P.p), 1, q.shape[1]))
-                      ).ravel() * P.torque_scale
+    torque = np.array(rotor_model().torque(q, a[None, :], P.p)).ravel() * P.torque_scale  # column by column
     dl, dd = deflection(q), unbalance(q, P.psi)
     pk, tpk = peak(tau, dl)
     return Trajectory("segments (exponential integrator)", tau / ocp.Om, q[4] * ocp.Om, dl, dd, torque,
@@ -199,8 +200,8 @@ def hold_start(ocp: SpinupOcp, K: int, w_hold: float) -> tuple[np.ndarray, np.nd
     return np.concatenate([[0.0], np.cumsum(rise)]), w
 
 
-def segment_profile(ocp: SpinupOcp, optimum: Trajectory, K: int, evaluations: int = SEGMENT_EVALUATIONS
-                    ) -> Segments:
+def segment_profile(ocp: SpinupOcp, optimum: Trajectory, K: int, evaluations: int = SEGMENT_EVALUATIONS,
+                    step: float = SEGMENT_STEP, start: str | None = None) -> Segments:
     """The best K-segment ramp profile for the problem (see the module docstring).
 
     Parameters
@@ -212,7 +213,11 @@ def segment_profile(ocp: SpinupOcp, optimum: Trajectory, K: int, evaluations: in
     K : int
         Number of ramp segments.
     evaluations : int
-        Budget of re-simulations of the search.
+        Budget of integrations of the search.
+    step : float
+        The search integrator's step (dimensionless time Omega0 t, :func:`fast_segments`).
+    start : str, optional
+        Search from this start (a key of ``Segments.start_objectives``) instead of the best one.
 
     Returns
     -------
@@ -235,7 +240,7 @@ def segment_profile(ocp: SpinupOcp, optimum: Trajectory, K: int, evaluations: in
         bad = max(0.0, -dt.min() / T) + max(0.0, t[-1] / T - 1) + max(0.0, -w.min() / wf)
         if bad > 0 or dt.min() <= 1e-9 * T:
             return 1e3 * (1 + bad)
-        tr = fast_segments(ocp, t, w, rotor=rotor)
+        tr = fast_segments(ocp, t, w, step, rotor)
         excess = drive_excess(ocp, tr)
         return objective_of(ocp, tr) * (1 + PENALTY * sum(excess.values()))
 
@@ -250,16 +255,11 @@ def segment_profile(ocp: SpinupOcp, optimum: Trajectory, K: int, evaluations: in
         if x is not None and not any(np.array_equal(x, y) for y in xs.values()):
             xs[k] = x
     scores = {k: score(x) for k, x in xs.items()}
-    ranked = sorted(scores, key=scores.get)[:SEARCHED_STARTS]
-    best, best_fun, nfev = ranked[0], scores[ranked[0]], len(scores)
-    x = xs[best]
-    for i, key in enumerate(ranked):  # the best start with the full budget, the next with half of it
-        res = minimize(score, xs[key], method="Nelder-Mead",
-                       options={"maxfev": evaluations // (1 + i), "xatol": 1e-6,
-                                "fatol": 1e-7 * scores[key], "adaptive": True})
-        nfev += int(res.nfev)
-        if res.fun < best_fun:
-            best, best_fun, x = key, float(res.fun), res.x
+    best = start or min(scores, key=scores.get)
+    res = minimize(score, xs[best], method="Nelder-Mead",
+                   options={"maxfev": evaluations, "xatol": 1e-6, "fatol": 1e-7 * scores[best], "adaptive": True})
+    x = res.x if res.fun < scores[best] else xs[best]
     t, w = unpack(x)
     tr = simulate_segments(ocp, t, w, f"{K}-segment ramp profile")
-    return Segments(t, w, tr, objective_of(ocp, tr), scores["fitted"], nfev, drive_use(ocp, tr), best, scores)
+    return Segments(t, w, tr, objective_of(ocp, tr), scores["fitted"], len(scores) + int(res.nfev),
+                    drive_use(ocp, tr), best, scores)

@@ -74,10 +74,11 @@ class ModalSpinupOcp(Dimensionless):
     # r <= deflection_limit at every collocation point), as the Jeffcott rotor's :class:`autobal.ocp.problem.SpinupOcp`
     objective: str = "peak_deflection"
     deflection_limit: float | None = None  # m, the largest deflection of the nodes of interest (0-peak)
+    alpha_min: float | None = None  # rad/s^2, <= 0: alpha >= this (0: the speed never falls; None: -alpha_max)
 
-    # the problem as the generic pipeline sees it: |alpha| <= alpha_max, no jerk terms, no drive torque model
+    # the problem as the generic pipeline sees it: alpha_min <= alpha <= alpha_max, no jerk terms, no drive torque
+    # model
     n_extra = 1  # the epigraph level, or the final time over the horizon
-    u_min = -1.0
     jerk_max = None
     jerk_penalty = 0.0
     jerk_variation = 0.0
@@ -95,6 +96,7 @@ class ModalSpinupOcp(Dimensionless):
             raise ValueError("the min_time objective needs a deflection_limit (m)")
         if self.deflection_limit is not None and not self.deflection_limit > 0:
             raise ValueError("the deflection limit must be positive (m)")
+        self.check_alpha_min()
         for nd in self.nodes:
             self.rotor.node_rows(nd)
 
@@ -444,10 +446,10 @@ def grid_search(ocp: ModalSpinupOcp, n_w: int = 12, n_u: int = 4, n_d: int = 6, 
                 keep: int = KEEP) -> SearchResult:
     """Screen the four-phase family (:func:`phase_profiles`) on a grid: w1 between the start and the final
     speed or 1.25 x the first critical speed above the start (the passage of the first critical group), u_b in
-    [-1, 0.5], d up to what the horizon leaves, w3 between the speed after the middle phase and omega_final;
-    return the ``keep`` best whose first phases differ by more than a grid cell, the best first phase with each
-    w3 that ties with it (the later passage is multimodal: they lead IPOPT to different optima); none when the
-    horizon leaves no time for a middle phase.
+    [u_min, 0.5] (u_min = -1 unless a minimum acceleration is set), d up to what the horizon leaves, w3 between
+    the speed after the middle phase and omega_final; return the ``keep`` best whose first phases differ by more
+    than a grid cell, the best first phase with each w3 that ties with it (the later passage is multimodal: they
+    lead IPOPT to different optima); none when the horizon leaves no time for a middle phase.
 
     Parameters
     ----------
@@ -466,7 +468,7 @@ def grid_search(ocp: ModalSpinupOcp, n_w: int = 12, n_u: int = 4, n_d: int = 6, 
     w0, wf, a, T = ocp.omega_start, ocp.omega_final, ocp.alpha_max, ocp.horizon
     wc = [w for w in ocp.rotor.critical_speeds(wf)["wd"] if w > w0]
     top = min(wf, 1.25 * wc[0]) if wc else wf  # the first phase ends near the first critical speed above the start
-    W1, UB, D, F3 = np.meshgrid(np.linspace(w0, top, n_w + 1)[1:], np.linspace(-1.0, 0.5, n_u),
+    W1, UB, D, F3 = np.meshgrid(np.linspace(w0, top, n_w + 1)[1:], np.linspace(ocp.u_min, 0.5, n_u),
                                 np.linspace(0, 1, n_d + 1)[1:], np.linspace(0, 1, n_w3 + 1)[1:], indexing="ij")
     W1, UB, D, F3 = W1.ravel(), UB.ravel(), D.ravel(), F3.ravel()
     slack = T - (wf - w0) / a

@@ -63,8 +63,8 @@ class PathConstraint:
 
 class Dimensionless:
     """The dimensionless data of a spin-up problem from its SI members (omega_start, omega_final, horizon,
-    settling_time, alpha_max, omega_max in rad/s, s, rad/s^2) and its time scale ``Om`` (1/s): time tau = Om t,
-    speed nu = omega/Om, acceleration a* = alpha/Om^2; the objective ``min_time`` frees the final time.  The
+    settling_time, alpha_max, alpha_min, omega_max in rad/s, s, rad/s^2) and its time scale ``Om`` (1/s): time
+    tau = Om t, speed nu = omega/Om, acceleration a* = alpha/Om^2; the objective ``min_time`` frees the final time.  The
     Jeffcott rotor's problem scales by its Omega0, the modal rotor's by omega_final."""
 
     @property
@@ -90,6 +90,17 @@ class Dimensionless:
     @property
     def a_max(self) -> float:
         return self.alpha_max / self.Om**2
+
+    @property
+    def u_min(self) -> float:
+        """Lower bound of the control u = alpha/alpha_max: -1, or the minimum acceleration's (``alpha_min``, rad/s^2,
+        <= 0; 0: the speed never falls) if higher."""
+        return -1.0 if self.alpha_min is None else max(-1.0, self.alpha_min / self.alpha_max)
+
+    def check_alpha_min(self) -> None:
+        """Refuse a positive minimum acceleration (the speed is held over the settling window)."""
+        if self.alpha_min is not None and self.alpha_min > 0:
+            raise ValueError("the minimum acceleration must not be positive (rad/s^2): the speed is held at the end")
 
     def nu_bounds(self) -> tuple[float, float]:
         """Bounds of nu on the horizon: 0, and the speed cap when there is one."""
@@ -133,8 +144,7 @@ class SpinupOcp(Dimensionless):
             raise ValueError("jerk_penalty and jerk_variation must not be negative")
         if self.braking_torque_max is not None and self.braking_torque_max < 0:
             raise ValueError("the braking-torque limit must not be negative (N m; 0: no braking)")
-        if self.alpha_min is not None and self.alpha_min > 0:
-            raise ValueError("the minimum acceleration must not be positive (rad/s^2): the speed is held at the end")
+        self.check_alpha_min()
         if self.jerk_max is not None and self.jerk_max <= 0:
             raise ValueError("jerk_max must be positive (rad/s^3)")
 
@@ -160,11 +170,6 @@ class SpinupOcp(Dimensionless):
     @property
     def Om(self) -> float:
         return self.params.Omega0
-
-    @property
-    def u_min(self) -> float:
-        """Lower bound of the control u = alpha/alpha_max: -1, or the minimum acceleration's if higher."""
-        return -1.0 if self.alpha_min is None else max(-1.0, self.alpha_min / self.alpha_max)
 
     @property
     def torque_bounds(self) -> tuple[float, float]:

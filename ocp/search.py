@@ -174,12 +174,13 @@ def feasible(ocp: SpinupOcp, u1, w1, u_b, d) -> np.ndarray:
 def grid_search(ocp: SpinupOcp, n_w: int = 16, n_u: int = 5, n_d: int = 8, levels=(1.0,),
                 keep: int = 2, dt: float = STEP) -> SearchResult:
     """Evaluate the three-phase family on a grid (first-phase acceleration ``levels``, w1 between the
-    start and the final speed, u_b in [-1, 0.5], d up to what the horizon leaves) and return the
-    ``keep`` best profiles whose first phases differ by more than a grid cell (distinct basins)."""
+    start and the final speed, u_b in [u_min, 0.5] (-1 unless the drive sets a minimum acceleration), d up to
+    what the horizon leaves) and return the ``keep`` best profiles whose first phases differ by more than a grid
+    cell (distinct basins)."""
     if ocp.free_time or ocp.horizon * ocp.alpha_max <= ocp.omega_final - ocp.omega_start:
         return SearchResult(np.empty((0, 4)), np.empty(0), 0)
     U1, W1, UB, D = np.meshgrid(levels, np.linspace(ocp.omega_start, ocp.omega_final, n_w + 1)[1:],
-                                np.linspace(-1.0, 0.5, n_u), np.linspace(0, 1, n_d + 1)[1:], indexing="ij")
+                                np.linspace(ocp.u_min, 0.5, n_u), np.linspace(0, 1, n_d + 1)[1:], indexing="ij")
     U1, W1, UB, D = U1.ravel(), W1.ravel(), UB.ravel(), D.ravel()
     slack = ocp.horizon - (W1 - ocp.omega_start) / (U1 * ocp.alpha_max) - (ocp.omega_final - W1) / ocp.alpha_max
     D = D * np.maximum(slack, 0) / (1 - UB)  # the middle phase lasts at most what the horizon leaves

@@ -266,7 +266,7 @@ def run(ocp, method: DirectCollocation, points: int, title: str = "", multistart
     else:
         model = {"nodes": list(ocp.nodes), "modes": ocp.rotor.n,
                  "critical_speeds_rad_s": list(ocp.rotor.critical_speeds(ocp.rotor.cutoff_rad_s)["wd"]),
-                 "drive": "the acceleration limit only: the modal rotor's problem has no drive torque or power model"}
+                 "drive": "the acceleration limits only: the modal rotor's problem has no drive torque or power model"}
     data = {
         "title": title, "method": method.label, "peak_unit": ocp.deflection_unit, **model, "horizon_s": ocp.horizon,
         "ramp_label": fr.ramp.label, "final_speed_rad_s": ocp.omega_final,

@@ -5,6 +5,7 @@ independently (scipy, from the CSV alone)."""
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 import math
 
@@ -17,6 +18,7 @@ import autobal
 from autobal.analyses.spinup import ocp as spinup_ocp
 from autobal.errors import ScenarioError
 from autobal.ocp import spinup_study
+from autobal.ocp.search import grid_search
 from autobal.parts import rotor as rotor_part
 
 SCENE = "scenarios/spinup_rotor_datasheet.yaml"
@@ -160,7 +162,12 @@ def test_deceleration_limit_bounds_the_control():
     ocp = spinup_ocp(scene, scene.analyses.spinup)
     assert ocp.u_min == 0.0
     scene = autobal.load(SCENE, set={**SMALL, "rotor.drive.max_deceleration": "15 rad/s^2"})
-    assert spinup_ocp(scene, scene.analyses.spinup).u_min == pytest.approx(-0.25)
+    ocp = spinup_ocp(scene, scene.analyses.spinup)
+    assert ocp.u_min == pytest.approx(-0.25)
+    # the global search draws its middle phase within the limit too (without it, down to -alpha_max)
+    found = grid_search(ocp, keep=8)
+    assert found.params.size and found.params[:, 2].min() >= -0.25 - 1e-12
+    assert grid_search(dataclasses.replace(ocp, alpha_min=None), keep=8).params[:, 2].min() < -0.25
 
 
 def _si_scene(rotor):

@@ -15,7 +15,7 @@ from autobal.analyses import COST
 from autobal.errors import ScenarioError
 from autobal.parts.ross_rotor import Node
 from autobal.schema import Strict
-from autobal.units import AngularAcceleration, AngularSpeed, SpeedOrZero, Time, TimeOrZero
+from autobal.units import AngularAcceleration, AngularSpeed, SpeedOrZero, Time, TimeOrZero, quantity
 
 DESCRIPTION = "optimal spin-up of a ROSS rotor reduced to its modes (the ross extra)"
 NEEDS = "ross_rotor"
@@ -26,7 +26,8 @@ TITLE = "Optimal spin-up of a ROSS rotor (multi-mode)"  # of its section of repo
 class RossSpinup(Strict):
     """Minimum-peak spin-up of the ROSS rotor reduced to its modes, posed as a drive is specified (as the
     Jeffcott ``spinup``): reach ``final_speed`` by the deadline ``horizon``, hold it over ``settling_time``
-    (the peak counts over the whole window), never exceed ``max_speed``, |alpha| <= ``max_acceleration``."""
+    (the peak counts over the whole window), never exceed ``max_speed``, -``max_deceleration`` <= alpha <=
+    ``max_acceleration``."""
 
     start_speed: SpeedOrZero = Field(description="speed at t = 0 (steady state there)")
     final_speed: AngularSpeed = Field(description="reached by the deadline")
@@ -34,6 +35,9 @@ class RossSpinup(Strict):
     max_acceleration: AngularAcceleration = Field(description="bound on |alpha|")
     settling_time: TimeOrZero = Field(0.0, description="held at final_speed after the deadline")
     max_speed: AngularSpeed | None = Field(None, description="speed cap")
+    max_deceleration: quantity("angular acceleration", "nonnegative") | None = Field(
+        None, description="the drive's largest deceleration -alpha (0: the speed never falls; default "
+        "max_acceleration), rad/s^2")
     nodes: Annotated[list[Node], Field(min_length=1, max_length=50)] = Field(
         description="nodes whose lateral deflection sqrt(x^2 + y^2) counts (the peak is the largest)")
     mode_cutoff: Annotated[float, Field(ge=1.0, le=10.0)] = Field(
@@ -73,12 +77,17 @@ def run(scene, settings: RossSpinup):
     kw = {"omega_start": settings.start_speed, "omega_final": settings.final_speed, "horizon": settings.horizon,
           "alpha_max": settings.max_acceleration, "nodes": tuple(settings.nodes),
           "settling_time": settings.settling_time, "omega_max": settings.max_speed, "intervals": settings.intervals,
-          "degree": settings.degree}
+          "degree": settings.degree, "alpha_min": _alpha_min(settings)}
     try:
         with progress.steps(None, "multi-mode spin-up (starts)", "IPOPT solve", catch=True):
             return modal.run(reduced, kw, scene.title, ross_cs, {"max_iter": settings.max_iterations})
     except ValueError as exc:
         raise ScenarioError(f"analyses.ross_spinup: {exc}") from None
+
+
+def _alpha_min(settings: RossSpinup) -> float | None:
+    """The lowest acceleration the drive allows, rad/s^2 (None: -max_acceleration)."""
+    return None if settings.max_deceleration is None else -settings.max_deceleration
 
 
 def problem(scene, settings: RossSpinup, key: str = "ross_spinup", **extra):
@@ -95,7 +104,8 @@ def problem(scene, settings: RossSpinup, key: str = "ross_spinup", **extra):
     try:
         return modal.ModalSpinupOcp(reduced, settings.start_speed, settings.final_speed, settings.horizon,
                                     settings.max_acceleration, tuple(settings.nodes), settings.settling_time,
-                                    settings.max_speed, settings.intervals, settings.degree, **extra)
+                                    settings.max_speed, settings.intervals, settings.degree,
+                                    alpha_min=_alpha_min(settings), **extra)
     except ValueError as exc:
         raise ScenarioError(f"analyses.{key}: {exc}") from None
 
