@@ -10,6 +10,7 @@ import pytest
 from autobal.analyses.ross_spinup import RossSpinup, _alpha_min
 from autobal.models import ross_rotor as rr
 from autobal.ocp import modal
+from autobal.ocp.solve import optimize
 from tests.test_ross_rotor import disk_rotor
 
 
@@ -17,7 +18,7 @@ from tests.test_ross_rotor import disk_rotor
 def free_and_no_braking():
     red = rr.reduce(disk_rotor(), [rr.Unbalance(0, 1e-4)], omega_final=150.0, cutoff=1.5)
     ocp = modal.ModalSpinupOcp(red, 50.0, 150.0, 1.5, 100.0, (0,), settling_time=0.3, omega_max=150.0, intervals=30)
-    return [modal.optimize(p, {"max_iter": 300}) for p in (ocp, dataclasses.replace(ocp, alpha_min=0.0))]
+    return [optimize(p, p.method, options={"max_iter": 300}) for p in (ocp, dataclasses.replace(ocp, alpha_min=0.0))]
 
 
 def test_no_deceleration_keeps_the_speed_from_falling(free_and_no_braking):
@@ -32,7 +33,7 @@ def test_no_deceleration_keeps_the_speed_from_falling(free_and_no_braking):
 
 def test_the_search_keeps_the_deceleration_limit(free_and_no_braking):
     held = free_and_no_braking[1].ocp
-    for _, u in modal.starts(held):
+    for _, u in modal.starts(held, held.intervals):
         assert u.min() >= -1e-12
 
 
