@@ -44,6 +44,7 @@ from autobal.models.params import si
 EXTRA = "pip install -e '.[ross]'"
 DOFS_PER_NODE = 6  # ROSS: x, y, z, alpha, beta, theta
 LATERAL = (0, 1, 3, 4)  # x, y, alpha, beta
+TORSION = 5  # theta, the rotation about the axis
 RESIM_TOL = 1e-9  # CVODES relative tolerance of the fixed-frame response (:func:`simulate_fixed`)
 POINTS_PER_REV = 64  # its output points per revolution (the peak between them: < 1e-3)
 
@@ -200,6 +201,7 @@ class LateralMatrices:
     G: np.ndarray
     Ksdt: np.ndarray
     nodes: int
+    polar_inertia: float = 0.0  # kg m^2, of the whole rotor about its axis (1' M_theta 1, the torsional dofs)
 
     def row(self, node: int, dof: int) -> int:
         """Row of local dof ``dof`` (0 = x, 1 = y) of ``node`` in these matrices."""
@@ -233,7 +235,9 @@ def lateral_matrices(rotor) -> LateralMatrices:
         if np.abs(a[np.ix_(lat, rest)]).max(initial=0) > 1e-9 * np.abs(a).max():
             raise ScenarioError(f"ross_rotor: the {name} matrix couples lateral and axial/torsional dofs")
     sub = [a[np.ix_(lat, lat)] for a in mats]
-    return LateralMatrices(*sub, nodes=rotor.ndof // nd)
+    # the rigid rotation of every node by the same angle: its kinetic energy is (1' M_theta 1) theta'^2 / 2
+    turn = [i for i in range(rotor.ndof) if i % nd == TORSION]
+    return LateralMatrices(*sub, nodes=rotor.ndof // nd, polar_inertia=float(np.sum(mats[0][np.ix_(turn, turn)])))
 
 
 # ---- the reduced model ---------------------------------------------------------------------------------
@@ -255,6 +259,7 @@ class ModalRotor:
     gyroscopic_shift: float  # largest relative shift of a retained critical speed by G
     nodes: int
     dropped_omega_n: float = field(default=float("nan"))  # rad/s, lowest natural frequency left out
+    polar_inertia: float = 0.0  # kg m^2, of the whole rotor about its axis (what a drive accelerates)
 
     @property
     def n(self) -> int:
@@ -455,7 +460,7 @@ def reduce(lat: LateralMatrices, unbalances, omega_final: float, cutoff: float =
     red = {k: Phi.T @ getattr(lat, k) @ Phi for k in ("K", "C", "G", "Ksdt")}
     wk = w[keep]
     common = dict(Phi=Phi, omega_n=wk, K=red["K"], C=red["C"], unbalance=Phi.T @ u, unbalances=tuple(unbalances),
-                  cutoff_rad_s=cutoff * omega_final, nodes=lat.nodes,
+                  cutoff_rad_s=cutoff * omega_final, nodes=lat.nodes, polar_inertia=lat.polar_inertia,
                   dropped_omega_n=float(w[~keep][0]) if (~keep).any() else float("nan"))
     full = ModalRotor(G=red["G"], Ksdt=red["Ksdt"], gyroscopic=True, gyroscopic_shift=0.0, **common)
     plain = ModalRotor(G=0 * red["G"], Ksdt=0 * red["Ksdt"], gyroscopic=False, gyroscopic_shift=0.0, **common)

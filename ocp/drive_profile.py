@@ -23,7 +23,15 @@ from autobal.analysis.rotor import deflection, peak, unbalance
 from autobal.models.rotor import rotor_model
 from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.search import FAST_STEP, STEP, FixedFrameModes, simulate_steps
-from autobal.ocp.simulation import RESIM_TOL, Trajectory, drive_excess, drive_use, rate_cap, resimulate
+from autobal.ocp.simulation import (
+    RESIM_TOL,
+    Trajectory,
+    acceleration_at,
+    drive_excess,
+    drive_use,
+    rate_cap,
+    resimulate,
+)
 
 RPM = 60 / (2 * math.pi)  # rpm per rad/s
 SEGMENT_INTERVALS = 200  # the reported re-simulation is sampled as that of a profile on 200 control intervals
@@ -40,12 +48,10 @@ HOLD_FRACTIONS = (0.8, 0.9, 0.95)  # starts holding the speed at these fractions
 
 
 def drive_table(tr: Trajectory) -> dict[str, np.ndarray]:
-    """The profile as a drive takes it, at the re-simulation's samples: time s, speed rpm and rad/s, acceleration
-    rpm/s and rad/s^2 (of the interval ending at each sample; the first row that of the first interval), torque
-    N m and power kW."""
-    # the samples are t = 0 and the same number of points inside each interval, its end included
-    K = len(tr.alpha)
-    alpha = tr.alpha[np.concatenate([[0], np.repeat(np.arange(K), (len(tr.t) - 1) // K)])]
+    """The profile as a drive takes it, at the re-simulation's samples (the Jeffcott rotor's or the modal rotor's
+    trajectory): time s, speed rpm and rad/s, acceleration rpm/s and rad/s^2 (of the interval ending at each sample;
+    the first row that of the first interval), torque N m and power kW."""
+    alpha = acceleration_at(tr.t, tr.t_u, tr.alpha)
     return {"time_s": tr.t, "speed_rpm": tr.omega * RPM, "speed_rad_s": tr.omega,
             "acceleration_rpm_s": alpha * RPM, "acceleration_rad_s2": alpha, "torque_N_m": tr.torque,
             "power_kW": tr.torque * tr.omega * 1e-3}

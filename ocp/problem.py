@@ -97,6 +97,41 @@ class Dimensionless:
         <= 0; 0: the speed never falls) if higher."""
         return -1.0 if self.alpha_min is None else max(-1.0, self.alpha_min / self.alpha_max)
 
+    @property
+    def torque_bounds(self) -> tuple[float, float]:
+        """(lowest, highest) drive torque allowed, N m (+-inf where no limit): -braking limit (or -max_torque),
+        max_torque."""
+        hi = np.inf if self.torque_max is None else self.torque_max
+        lo = -hi if self.braking_torque_max is None else -self.braking_torque_max
+        return lo, hi
+
+    def drive_constraints(self, M, omega, add) -> None:
+        """The drive's path constraints, each by ``add(name, expr, lb, ub)``: the torque (or braking) limits, the
+        power limit and the motor characteristic on the drive torque ``M`` (N m) and the speed ``omega`` (rad/s),
+        CasADi expressions of the state and the control; each row scaled to order one."""
+        lo, hi = self.torque_bounds
+        if self.torque_max is not None:
+            name = f"torque limit |M| <= {self.torque_max:g} N m" if lo == -hi else \
+                f"torque limits -{-lo:g} <= M <= {hi:g} N m"
+            add(name, M / hi, lo / hi, 1.0)
+        elif self.braking_torque_max is not None:  # scaled by the inertial torque of the full acceleration
+            ref = self.braking_torque_max or self.inertia * self.alpha_max
+            add(f"braking limit M >= -{-lo:g} N m", M / ref, lo / ref, ca.inf)
+        if self.power_max is not None:
+            add(f"power limit M omega <= {self.power_max:g} W", M * omega / self.power_max, -ca.inf, 1.0)
+        if self.motor_stall_torque is not None:
+            L = self.motor_stall_torque * (1 - omega / self.motor_no_load_speed)
+            add("motor characteristic M <= L_s (1 - omega/omega_nl)", (M - L) / self.motor_stall_torque, -ca.inf,
+                0.0)
+
+    def check_drive(self) -> None:
+        """Refuse torque and power limits without the inertia the drive accelerates."""
+        if (self.torque_max or self.power_max or self.motor_stall_torque or self.braking_torque_max is not None) \
+                and self.inertia <= 0:
+            raise ValueError("torque and power limits need the drive's polar inertia J_p > 0")
+        if self.braking_torque_max is not None and self.braking_torque_max < 0:
+            raise ValueError("the braking-torque limit must not be negative (N m; 0: no braking)")
+
     def check_alpha_min(self) -> None:
         """Refuse a positive minimum acceleration (the speed is held over the settling window)."""
         if self.alpha_min is not None and self.alpha_min > 0:
@@ -137,13 +172,9 @@ class SpinupOcp(Dimensionless):
             raise ValueError(f"objective must be one of {OBJECTIVES}")
         if self.objective == "min_time" and self.deflection_limit is None:
             raise ValueError("the min_time objective needs a deflection_limit")
-        if (self.torque_max or self.power_max or self.motor_stall_torque or self.braking_torque_max is not None) and \
-                self.params.J_p + self.params.m1 * self.params.e**2 * (1 - self.params.psi) <= 0:
-            raise ValueError("torque and power limits need the drive's polar inertia J_p > 0")
+        self.check_drive()
         if self.jerk_penalty < 0 or self.jerk_variation < 0:
             raise ValueError("jerk_penalty and jerk_variation must not be negative")
-        if self.braking_torque_max is not None and self.braking_torque_max < 0:
-            raise ValueError("the braking-torque limit must not be negative (N m; 0: no braking)")
         self.check_alpha_min()
         if self.jerk_max is not None and self.jerk_max <= 0:
             raise ValueError("jerk_max must be positive (rad/s^3)")
@@ -172,12 +203,15 @@ class SpinupOcp(Dimensionless):
         return self.params.Omega0
 
     @property
-    def torque_bounds(self) -> tuple[float, float]:
-        """(lowest, highest) drive torque allowed, N m (+-inf where no limit): -braking limit (or -max_torque),
-        max_torque."""
-        hi = np.inf if self.torque_max is None else self.torque_max
-        lo = -hi if self.braking_torque_max is None else -self.braking_torque_max
-        return lo, hi
+    def inertia(self) -> float:
+        """What the drive accelerates, kg m^2: J_p of rotor and drive, and the unbalance mass off the axis."""
+        P = self.params
+        return P.J_p + P.m1 * P.e**2 * (1 - P.psi)
+
+    @property
+    def drag(self) -> float:
+        """The drive's rotational drag b, N m s."""
+        return self.params.b
 
     @property
     def q0(self) -> list[float]:
@@ -255,22 +289,7 @@ class SpinupOcp(Dimensionless):
         if self.deflection_limit is not None:
             add(f"deflection limit delta/e <= {self.deflection_limit:g}", m.delta2(q) / self.deflection_limit**2,
                 -ca.inf, 1.0)
-        M = m.torque(q, a, P.p)  # over m1 e^2 Omega0^2
-        lo, hi = self.torque_bounds
-        if self.torque_max is not None:
-            name = f"torque limit |M| <= {self.torque_max:g} N m" if lo == -hi else \
-                f"torque limits -{-lo:g} <= M <= {hi:g} N m"
-            add(name, M * P.torque_scale / hi, lo / hi, 1.0)
-        elif self.braking_torque_max is not None:  # scaled by the inertial torque of the full acceleration
-            ref = self.braking_torque_max or (P.J_p + P.m1 * P.e**2 * (1 - P.psi)) * self.alpha_max
-            add(f"braking limit M >= -{-lo:g} N m", M * P.torque_scale / ref, lo / ref, ca.inf)
-        if self.power_max is not None:
-            add(f"power limit M omega <= {self.power_max:g} W",
-                M * P.torque_scale * q[self.speed_index] * self.Om / self.power_max, -ca.inf, 1.0)
-        if self.motor_stall_torque is not None:
-            L = self.motor_stall_torque * (1 - q[self.speed_index] * self.Om / self.motor_no_load_speed)
-            add("motor characteristic M <= L_s (1 - omega/omega_nl)",
-                (M * P.torque_scale - L) / self.motor_stall_torque, -ca.inf, 0.0)
+        self.drive_constraints(m.torque(q, a, P.p) * P.torque_scale, q[self.speed_index] * self.Om, add)
         return out
 
 

@@ -18,6 +18,7 @@ import numpy as np
 from autobal.analysis.quantities import Declarations, Quantity, significant
 from autobal.analysis.result import Result, new_figure, speed_axis, unit_axis, with_statuses
 from autobal.ocp import robust as rb
+from autobal.ocp.drive_profile import drive_table
 from autobal.ocp.problem import PEAK_KEY, SpinupOcp
 from autobal.ocp.search import FAST_STEP, controls_on_mesh, grid_search
 from autobal.ocp.simulation import Trajectory, best_within_limits, drive_use, resimulate
@@ -201,7 +202,7 @@ class RobustResult(Result):
             ramps[k[:-len(s)] + col if peak else k] = list(factor * np.asarray(v)) if peak else v
         return {f"{self.name}_validation.csv": cols, f"{self.name}_design.csv": design,
                 f"{self.name}_controls.csv": {"t_start_s": r.t_u, "alpha_rad_s2": r.alpha},
-                f"{self.name}_ramps.csv": ramps}
+                f"{self.name}_ramps.csv": ramps, "drive_profile.csv": drive_table(r)}
 
     def draw(self, ax) -> None:
         """Empirical distribution of the validation peaks of the three profiles."""

@@ -10,6 +10,7 @@ import casadi as ca
 import numpy as np
 
 from autobal.analysis import interrupt
+from autobal.analysis.quantities import Quantity
 from autobal.analysis.rotor import deflection, peak, unbalance
 from autobal.models.rotor import rotor_model
 from autobal.ocp.problem import SpinupOcp
@@ -175,6 +176,14 @@ class Trajectory:
                 "time_of_peak_s": self.t_peak, "integral_deflection2_s": self.integral_delta2}
 
 
+def acceleration_at(t: np.ndarray, t_u: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+    """The acceleration at the sample times ``t`` of a piecewise-constant profile (``alpha`` on the intervals
+    starting at ``t_u``): that of the interval each sample ends (a sample on a switch takes the interval before
+    it, the first sample the first interval's)."""
+    k = np.searchsorted(t_u, np.asarray(t) * (1 - 1e-12), side="left") - 1  # the interval's end, to rounding
+    return np.asarray(alpha)[np.clip(k, 0, len(alpha) - 1)]
+
+
 def resimulate(ocp: SpinupOcp, u, h, label: str, points: int = RESIM_POINTS, tol: float = RESIM_TOL,
                multistep: str = "adams", merge: bool = True) -> Trajectory:
     """CVODES at tight tolerance with the piecewise-constant profile u (over alpha_max) on intervals h
@@ -207,8 +216,7 @@ DRIVE_TOL = 1e-3
 
 def torque_reference(ocp: SpinupOcp) -> float:
     """The drive's torque scale, N m: max_torque, else the inertial torque of the full acceleration."""
-    P = ocp.params
-    return ocp.torque_max or (P.J_p + P.m1 * P.e**2 * (1 - P.psi)) * ocp.alpha_max
+    return ocp.torque_max or ocp.inertia * ocp.alpha_max
 
 
 def drive_excess(ocp: SpinupOcp, tr: Trajectory) -> dict[str, float]:
@@ -244,6 +252,19 @@ def drive_use(ocp: SpinupOcp, tr: Trajectory) -> dict:
             "max_power_W": float(np.max(M * w)), "within_drive_limits": not bad, "violated": bad}
 
 
+#: the drive's numbers of a spin-up block (:func:`drive_use` of the optimum, and the limits), declared once for the
+#: Jeffcott and the modal rotor's blocks
+DRIVE_QUANTITIES = (
+    Quantity("max_torque_N_m", "N*m", "M_max", "largest drive torque of the optimum", headline=True),
+    Quantity("max_power_W", "W", "P_max", "largest drive power of the optimum", "kW", headline=True),
+    Quantity("min_torque_N_m", "N*m", "M_min", "smallest drive torque of the optimum (below 0: it brakes)",
+             headline=True),
+    Quantity("torque_limit_N_m braking_torque_limit_N_m", "N*m", "M_lim", "torque and braking-torque limits of the "
+             "drive"),
+    Quantity("power_limit_W", "W", "P_lim", "power limit of the drive", "kW"),
+)
+
+
 def best_within_limits(peaks: dict, uses: dict):
     """The key of the smallest peak among the profiles that keep the drive limits (``uses``: :func:`drive_use` of
     each; a profile without drive data counts as keeping them), None when none does: the only reference a
@@ -261,16 +282,15 @@ def rate_cap(ocp: SpinupOcp, omega: float) -> float:
     """The largest acceleration the drive gives at speed ``omega`` (rad/s) by its inertia alone, rad/s^2:
     J alpha + b omega within the torque, power and motor limits, and alpha within alpha_max (the rotor's
     reaction torque left out: a start, checked by re-simulation)."""
-    P = ocp.params
-    J = P.J_p + P.m1 * P.e**2 * (1 - P.psi)
+    J, b = ocp.inertia, ocp.drag
     caps = [ocp.alpha_max]
     if J > 0:
         if ocp.torque_max is not None:
-            caps.append((ocp.torque_max - P.b * omega) / J)
+            caps.append((ocp.torque_max - b * omega) / J)
         if ocp.power_max is not None:
-            caps.append((ocp.power_max / max(omega, 1e-300) - P.b * omega) / J)
+            caps.append((ocp.power_max / max(omega, 1e-300) - b * omega) / J)
         if ocp.motor_stall_torque is not None:
-            caps.append((ocp.motor_stall_torque * (1 - omega / ocp.motor_no_load_speed) - P.b * omega) / J)
+            caps.append((ocp.motor_stall_torque * (1 - omega / ocp.motor_no_load_speed) - b * omega) / J)
     return min(caps)
 
 
@@ -285,8 +305,7 @@ def fastest_feasible_rate(ocp: SpinupOcp, intervals: int = 200, points: int = 60
     keeps the limits."""
     ms = mesh(ocp, intervals)
     h = np.concatenate([np.full(ms.n, ms.h), np.full(ms.ns, ms.hs)])
-    P = ocp.params
-    J = P.J_p + P.m1 * P.e**2 * (1 - P.psi)
+    J = ocp.inertia
     slowest = min(abs(ocp.omega_final - ocp.omega_start) / ocp.horizon, ocp.alpha_max)
     wt = max(ocp.omega_start, ocp.omega_final)
     a = max(rate_cap(ocp, wt) if ocp.omega_final > ocp.omega_start else ocp.alpha_max, slowest)

@@ -323,8 +323,7 @@ def drive_acceleration(ocp: SpinupOcp, omega: float) -> float:
     float
         Acceleration, rad/s^2.
     """
-    P = ocp.params
-    inertia = P.J_p + P.m1 * P.e**2 * (1 - P.psi)
+    inertia = ocp.inertia
     torque = [t for t in (ocp.torque_max, ocp.power_max / omega if ocp.power_max else None,
                           ocp.motor_stall_torque * (1 - omega / ocp.motor_no_load_speed)
                           if ocp.motor_stall_torque else None) if t is not None]

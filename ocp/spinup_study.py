@@ -19,6 +19,7 @@ from autobal.ocp import drive_profile
 from autobal.ocp.drive_profile import RPM
 from autobal.ocp.problem import SpinupOcp, pulse_variation
 from autobal.ocp.simulation import (
+    DRIVE_QUANTITIES,
     DRIVE_TOL,
     RESIM_POINTS,
     RESIM_TOL,
@@ -88,13 +89,7 @@ QUANTITIES = Declarations(
              source=f"{_API}, amplification factor", headline=True),
     Quantity("rotor.separation_margin_pct", "%", "SM", "separation margin of the final speed from the critical speed",
              source=f"{_API}, separation margin", headline=True),
-    Quantity("max_torque_N_m", "N*m", "M_max", "largest drive torque of the optimum", headline=True),
-    Quantity("max_power_W", "W", "P_max", "largest drive power of the optimum", "kW", headline=True),
-    Quantity("min_torque_N_m", "N*m", "M_min", "smallest drive torque of the optimum (below 0: it brakes)",
-             headline=True),
-    Quantity("torque_limit_N_m braking_torque_limit_N_m", "N*m", "M_lim", "torque and braking-torque limits of the "
-             "drive"),
-    Quantity("power_limit_W", "W", "P_lim", "power limit of the drive", "kW"),
+    *DRIVE_QUANTITIES,
     Quantity("time_of_peak_s", "s", "t*", "time of the peak"),
     Quantity("omega_at_peak_rad_s", "rad/s", "ω*", "speed at the peak"),
     Quantity("final_time_s", "s", "T", "final time (the deadline, or the arrival with min_time)"),

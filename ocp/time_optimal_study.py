@@ -15,6 +15,7 @@ import numpy as np
 from autobal.analysis.quantities import Declarations, Quantity, significant
 from autobal.analysis.result import Result, new_figure, speed_axis, unit_axis, with_statuses
 from autobal.ocp import time_optimal as to
+from autobal.ocp.drive_profile import drive_table
 from autobal.ocp.problem import PEAK_KEY, SpinupOcp
 from autobal.ocp.robust_study import PEAK_SYMBOL, deflection_of, peak_text
 from autobal.ocp.solve import TIE
@@ -149,6 +150,7 @@ class TimeOptimalResult(Result):
             tr = self.limited.trajectory
             out[f"{self.name}_profile.csv"] = {"t_s": tr.t, "omega_rad_s": tr.omega,
                                                f"deflection_{col}": factor * deflection_of(tr)}
+            out["drive_profile.csv"] = drive_table(tr)
         return out
 
     def draw(self, ax) -> None:
@@ -266,7 +268,8 @@ def run(ocp, method: DirectCollocation, points: int, title: str = "", multistart
     else:
         model = {"nodes": list(ocp.nodes), "modes": ocp.rotor.n,
                  "critical_speeds_rad_s": list(ocp.rotor.critical_speeds(ocp.rotor.cutoff_rad_s)["wd"]),
-                 "drive": "the acceleration limits only: the modal rotor's problem has no drive torque or power model"}
+                 "drive": "the acceleration limit only: the time-optimal study of the modal rotor takes no drive "
+                          "torque or power model"}
     data = {
         "title": title, "method": method.label, "peak_unit": ocp.deflection_unit, **model, "horizon_s": ocp.horizon,
         "ramp_label": fr.ramp.label, "final_speed_rad_s": ocp.omega_final,

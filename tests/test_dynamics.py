@@ -428,3 +428,17 @@ def test_device_dynamics_defaults_filled_by_the_adapter(tmp_path, scene_edit):
     assert_allclose(d.omega0, 6300 * 2 * math.pi / 60, rtol=1e-12)
     assert_allclose(d.s_c, math.pi * dev.regulator.valve.seat_diameter**2 / 4, rtol=1e-12)
     assert d.s_m == dev.regulator.membrane_area and d.has_regulator
+
+
+@pytest.mark.literature
+def test_consistent_mode_at_the_closed_form_point_against_2_44(pump):
+    # (2.44), the "strict" linearisation (x_B, dimensional k, K7/K8 corrected): +43 +- 975i, +2706 +- 2164i.  The
+    # consistent hand model at the appendix's closed-form point, as the validation ledger prints it: +43.3 +- 975.1i,
+    # +2746 +- 2120i; the first mode within 0.05 %, the second 1.5 % (real) and 2.0 % (imaginary) apart (the
+    # recomputation does not state the operating point it used)
+    lam = linearize.hand(linearize.constants(pump.dev, pump.data, pump.program_point, "consistent")).poles()
+    first, second = sorted((z for z in lam if z.imag > 0), key=abs)[:2]
+    assert (round(first.real, 1), round(first.imag, 1)) == (43.3, 975.1)
+    assert (round(second.real), round(second.imag)) == (2746, 2120)
+    assert abs(first - (43 + 975j)) < 5e-4 * abs(43 + 975j)
+    assert 0.014 < (second.real - 2706) / 2706 < 0.016 and 0.019 < (2164 - second.imag) / 2164 < 0.021

@@ -3,20 +3,10 @@ one line on stderr naming the field (no ROSS needed: the scene is refused before
 
 import pytest
 
-from autobal import cli
+from tests.hostile import refused
 
 pytestmark = pytest.mark.cli
 KEY = "analyses.ross_spinup_robust"
-
-
-def _one_line(capsys, *sets) -> str:
-    args = ["run", "ross_spinup_robust", "--out", "/nonexistent/never-written", "-q"]
-    for s in sets:
-        args += ["--set", s]
-    assert cli.main(args) == 2
-    err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1, err
-    return err
 
 
 @pytest.mark.parametrize("sets, words", [
@@ -29,4 +19,4 @@ def _one_line(capsys, *sets) -> str:
     ([f"{KEY}.max_acceleration=10 rad/s^2"], "max_acceleration"),
 ])
 def test_bad_robust_settings_exit_2_naming_the_field(capsys, sets, words):
-    assert words in _one_line(capsys, *sets)
+    assert words in refused(capsys, "ross_spinup_robust", *sets)

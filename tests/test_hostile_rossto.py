@@ -6,22 +6,12 @@ from types import SimpleNamespace
 
 import pytest
 
-from autobal import cli
 from autobal.errors import SolveError
 from autobal.ocp import time_optimal as to
+from tests.hostile import refused
 from tests.test_ross_spinup_time_optimal import small
 
 KEY = "analyses.ross_spinup_time_optimal"
-
-
-def _one_line(capsys, *sets) -> str:
-    args = ["run", "ross_spinup_time_optimal", "--out", "/nonexistent/never-written", "-q"]
-    for s in sets:
-        args += ["--set", s]
-    assert cli.main(args) == 2
-    err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1, err
-    return err
 
 
 @pytest.mark.cli
@@ -36,7 +26,7 @@ def _one_line(capsys, *sets) -> str:
     ([f"{KEY}.max_speed=70 rad/s"], "max_speed"),
 ])
 def test_bad_time_optimal_settings_exit_2_naming_the_field(capsys, sets, words):
-    err = _one_line(capsys, *sets)
+    err = refused(capsys, "ross_spinup_time_optimal", *sets)
     assert words in err and KEY in err
 
 

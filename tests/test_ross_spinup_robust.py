@@ -85,4 +85,4 @@ def test_shipped_scene_end_to_end(shipped_run):
     assert "µm" in text and " e (" not in text
     assert "Robust spin-up of a ROSS rotor" in (folder / "report.html").read_text()
     assert {f.name for f in folder.iterdir()} >= {"ross_spinup_robust_profiles.png", "ross_spinup_robust_ramps.csv",
-                                                   "ross_spinup_robust_validation.csv"}
+                                                   "ross_spinup_robust_validation.csv", "drive_profile.csv"}

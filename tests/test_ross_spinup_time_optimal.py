@@ -129,4 +129,4 @@ def test_shipped_scene_end_to_end(shipped_run, scene):
     page = (folder / "report.html").read_text()
     assert "Time-optimal spin-up of a ROSS rotor" in page and "acceleration limit only" in page
     assert {f.name for f in folder.iterdir()} >= {f"{scene}_front.png", f"{scene}_profiles.png", f"{scene}_front.csv",
-                                                   f"{scene}_profile.csv"}
+                                                   f"{scene}_profile.csv", "drive_profile.csv"}

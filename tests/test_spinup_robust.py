@@ -133,6 +133,11 @@ def test_robust_profile_beats_nominal_optimum_and_every_ramp_on_1000_rotors():
     assert res.nominal_runs["nominal"].peak_delta < res.nominal_runs["robust"].peak_delta  # the price on nominal
     assert set(res.figures()) == {"spinup_robust_profiles.png", "spinup_robust_distribution.png",
                                   "spinup_robust_scatter.png"}
+    # the robust profile as a drive takes it: the speed column is the integral of the acceleration column
+    c = res.tables()["drive_profile.csv"]
+    np.testing.assert_allclose(np.diff(c["speed_rad_s"]) / np.diff(c["time_s"]), c["acceleration_rad_s2"][1:],
+                               rtol=1e-6, atol=1e-6)
+    np.testing.assert_allclose(c["speed_rad_s"], res.nominal_runs["robust"].omega, rtol=1e-12)
 
 
 @pytest.mark.slow

@@ -15,7 +15,7 @@ from autobal.analyses import COST
 from autobal.errors import ScenarioError
 from autobal.parts.ross_rotor import Node
 from autobal.schema import Strict
-from autobal.units import AngularAcceleration, AngularSpeed, SpeedOrZero, Time, TimeOrZero, quantity
+from autobal.units import AngularAcceleration, AngularSpeed, SpeedOrZero, Time, TimeOrZero
 
 DESCRIPTION = "optimal spin-up of a ROSS rotor reduced to its modes (the ross extra)"
 NEEDS = "ross_rotor"
@@ -26,8 +26,8 @@ TITLE = "Optimal spin-up of a ROSS rotor (multi-mode)"  # of its section of repo
 class RossSpinup(Strict):
     """Minimum-peak spin-up of the ROSS rotor reduced to its modes, posed as a drive is specified (as the
     Jeffcott ``spinup``): reach ``final_speed`` by the deadline ``horizon``, hold it over ``settling_time``
-    (the peak counts over the whole window), never exceed ``max_speed``, -``max_deceleration`` <= alpha <=
-    ``max_acceleration``."""
+    (the peak counts over the whole window), never exceed ``max_speed``, |alpha| <= ``max_acceleration``, within
+    the limits of the rotor's ``drive`` (``ross_rotor.drive``)."""
 
     start_speed: SpeedOrZero = Field(description="speed at t = 0 (steady state there)")
     final_speed: AngularSpeed = Field(description="reached by the deadline")
@@ -35,9 +35,6 @@ class RossSpinup(Strict):
     max_acceleration: AngularAcceleration = Field(description="bound on |alpha|")
     settling_time: TimeOrZero = Field(0.0, description="held at final_speed after the deadline")
     max_speed: AngularSpeed | None = Field(None, description="speed cap")
-    max_deceleration: quantity("angular acceleration", "nonnegative") | None = Field(
-        None, description="the drive's largest deceleration -alpha (0: the speed never falls; default "
-        "max_acceleration), rad/s^2")
     nodes: Annotated[list[Node], Field(min_length=1, max_length=50)] = Field(
         description="nodes whose lateral deflection sqrt(x^2 + y^2) counts (the peak is the largest)")
     mode_cutoff: Annotated[float, Field(ge=1.0, le=10.0)] = Field(
@@ -77,7 +74,7 @@ def run(scene, settings: RossSpinup):
     kw = {"omega_start": settings.start_speed, "omega_final": settings.final_speed, "horizon": settings.horizon,
           "alpha_max": settings.max_acceleration, "nodes": tuple(settings.nodes),
           "settling_time": settings.settling_time, "omega_max": settings.max_speed, "intervals": settings.intervals,
-          "degree": settings.degree, "alpha_min": _alpha_min(settings)}
+          "degree": settings.degree, **drive(scene)}
     try:
         with progress.steps(None, "multi-mode spin-up (starts)", "IPOPT solve", catch=True):
             return modal.run(reduced, kw, scene.title, ross_cs, {"max_iter": settings.max_iterations})
@@ -85,18 +82,31 @@ def run(scene, settings: RossSpinup):
         raise ScenarioError(f"analyses.ross_spinup: {exc}") from None
 
 
-def _alpha_min(settings: RossSpinup) -> float | None:
-    """The lowest acceleration the drive allows, rad/s^2 (None: -max_acceleration)."""
-    return None if settings.max_deceleration is None else -settings.max_deceleration
+def drive(scene) -> dict:
+    """The scene's ``ross_rotor.drive`` as keyword arguments of :class:`autobal.ocp.modal.ModalSpinupOcp` (SI; none
+    without a drive section: |alpha| <= max_acceleration only)."""
+    d = scene.ross_rotor.drive
+    if d is None:
+        return {}
+    return {"drive_inertia": d.polar_inertia, "torque_max": d.max_torque, "power_max": d.max_power,
+            "braking_torque_max": d.max_braking_torque,
+            "alpha_min": None if d.max_deceleration is None else -d.max_deceleration,
+            "motor_stall_torque": d.motor.stall_torque if d.motor else None,
+            "motor_no_load_speed": d.motor.no_load_speed if d.motor else None}
 
 
 def problem(scene, settings: RossSpinup, key: str = "ross_spinup", **extra):
     """The spin-up problem of the scene's ROSS rotor reduced to its modes (SI; needs the ross extra), with the
     ``extra`` members of :class:`autobal.ocp.modal.ModalSpinupOcp` (e.g. a deflection limit); a problem that cannot
-    be posed raises ScenarioError naming ``analyses.<key>``."""
+    be posed raises ScenarioError naming ``analyses.<key>``.  The robust and time-optimal studies of the modal
+    rotor (its callers) take the acceleration limit only: a scene with ``ross_rotor.drive`` is refused."""
     from autobal.models import ross_rotor as rr
     from autobal.ocp import modal
     from autobal.parts.ross_rotor import adapt
+
+    if scene.ross_rotor.drive is not None:
+        raise ScenarioError(f"analyses.{key}: ross_rotor.drive: this study of the ROSS rotor takes the acceleration "
+                            "limit only; remove the drive section (ross_spinup takes its limits)")
 
     spec, unbalances = adapt(scene.ross_rotor)
     reduced = rr.reduce(rr.lateral_matrices(rr.ross_rotor(spec)), unbalances, settings.final_speed,
@@ -104,8 +114,7 @@ def problem(scene, settings: RossSpinup, key: str = "ross_spinup", **extra):
     try:
         return modal.ModalSpinupOcp(reduced, settings.start_speed, settings.final_speed, settings.horizon,
                                     settings.max_acceleration, tuple(settings.nodes), settings.settling_time,
-                                    settings.max_speed, settings.intervals, settings.degree,
-                                    alpha_min=_alpha_min(settings), **extra)
+                                    settings.max_speed, settings.intervals, settings.degree, **extra)
     except ValueError as exc:
         raise ScenarioError(f"analyses.{key}: {exc}") from None
 
@@ -127,8 +136,11 @@ def report_section(sec) -> None:
     st = sec.get("status")
     sec.conclude(*ModalSpinupResult.verdict_of(sec.block))
     sec.row("peak deflection of the optimum, 0-peak (re-simulated)", "r*", "peak_deflection_m")
-    sec.row("peak deflection of the best ramp", "r*", "baseline_ramp_peak_m")
-    sec.row("improvement over the best ramp", "", "improvement_over_best_ramp")
+    sec.row("peak deflection of the best ramp within the drive limits", "r*", "baseline_ramp_peak_m")
+    sec.row("improvement over that ramp", "", "improvement_over_best_ramp")
+    sec.row("largest drive torque of the optimum, J α", "M_max", "max_torque_N_m")
+    sec.row("smallest drive torque of the optimum (below 0: it brakes)", "M_min", "min_torque_N_m")
+    sec.row("largest drive power of the optimum", "P_max", "max_power_W")
     sec.row("node of the peak", "", "node_of_peak")
     sec.row("time of the peak", "t*", "time_of_peak_s")
     sec.row("speed at the peak", "ω*", "omega_at_peak_rad_s")

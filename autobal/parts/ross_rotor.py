@@ -4,8 +4,9 @@ adapter to :class:`autobal.models.ross_rotor.RossRotorSpec` (SI); ``analyses.ros
 The schema of each element (material, shaft element, disk, bearing, unbalance) is derived from its dataclass
 of :mod:`autobal.models.ross_rotor` (:mod:`autobal.parts.derived`), where each parameter is declared with its
 unit, meaning, bounds and default.  Written here by hand: the section itself (the element lists, their
-lengths, the example rotor by name, the node checks), a shaft element's ``count`` (repetitions), and an
-unbalance's phase in degrees (the model's is in rad).
+lengths, the example rotor by name, the node checks), a shaft element's ``count`` (repetitions), an
+unbalance's phase in degrees (the model's is in rad), and the drive (the Jeffcott rotor's drive limits and the
+drive's own polar inertia), which the spin-up analyses read.
 
 Needs the optional ROSS package (``pip install -e '.[ross]'``); a scene naming it without the package
 installed exits 2 with one line naming the extra.
@@ -20,7 +21,9 @@ from pydantic import Field, model_validator
 
 from autobal.models import ross_rotor as rr
 from autobal.parts.derived import schema, to_params
+from autobal.parts.rotor import Drive
 from autobal.schema import Strict
+from autobal.units import quantity
 
 Node = Annotated[int, Field(**rr.NODES)]
 EXAMPLES = ("rotor_example", "compressor_example", "rotor_example_with_damping", "rotor_example_6dof",
@@ -47,6 +50,14 @@ RossBearing = schema(rr.Bearing, "RossBearing", base=Strict, doc="A linear beari
 RossUnbalance = schema(rr.Unbalance, "RossUnbalance", base=_Unbalance)
 
 
+class RossDrive(Drive):
+    """The drive of a ROSS rotor, as the Jeffcott rotor's (torque, power and motor limits, braking): the torque
+    it needs is J alpha, J the rotor's polar inertia (from ROSS's mass matrix) and the drive's own."""
+
+    polar_inertia: quantity("moment of inertia", "nonnegative") = Field(
+        0.0, description="the drive's own polar inertia (motor rotor, coupling) beside the rotor's, kg m^2")
+
+
 class RossRotor(Strict):
     """A rotor as ROSS elements (shaft, disks, bearings) or a ROSS example rotor by name, with its unbalance."""
 
@@ -57,6 +68,7 @@ class RossRotor(Strict):
     bearings: Annotated[list[RossBearing], Field(max_length=200)] = Field([], description="bearings")
     unbalance: Annotated[list[RossUnbalance], Field(min_length=1, max_length=200)] = Field(
         description="unbalances m e at nodes")
+    drive: RossDrive | None = Field(None, description="the drive's inertia and limits (the spin-up analyses)")
 
     @model_validator(mode="after")
     def _elements_or_example(self):
