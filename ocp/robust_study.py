@@ -22,6 +22,7 @@ from autobal.ocp.drive_profile import drive_table
 from autobal.ocp.problem import PEAK_KEY, SpinupOcp
 from autobal.ocp.search import FAST_STEP, controls_on_mesh, grid_search
 from autobal.ocp.simulation import Trajectory, best_within_limits, drive_use, resimulate
+from autobal.ocp.solve import model_of
 from autobal.ocp.spinup_study import deflection_axis, deflection_text
 from autobal.ocp.time_optimal import minimum_peak
 from autobal.ocp.transcription import DirectCollocation
@@ -277,19 +278,13 @@ def verdict(d: dict) -> tuple[bool | None, str]:
                 + ("" if ramp_ok else " (outside the drive limits, not compared)"))
 
 
-def _modal():
-    from autobal.ocp import modal  # the modal rotor's own pieces, imported for its problems only
-
-    return modal
-
-
 def _on(ocp, factors, profile: rb.Profile):
     """The profile re-simulated by CVODES on the rotor with ``factors`` (:class:`Trajectory`, or the modal rotor's
     ``ModalTrajectory``)."""
     o = rb.scenario_ocps(ocp, np.atleast_2d(factors))[0]
     u, h = profile.on(o)
     return resimulate(o, u, h, profile.label, points=8) if isinstance(o, SpinupOcp) else \
-        _modal().resimulate(o, u, h, profile.label)
+        model_of(o).resimulate(o, u, h, profile.label)
 
 
 def nominal_optimum(ocp, method: DirectCollocation, multistart: bool, options: dict | None
@@ -375,7 +370,8 @@ def robust_starts(ocp: SpinupOcp, factors: np.ndarray, nominal: rb.Profile, ramp
     if isinstance(o, SpinupOcp):
         found = [controls_on_mesh(o, p, n) for p in grid_search(o, keep=2).params]
     else:
-        found = [_modal().phase_profiles(o, *p)[0] for p in _modal().grid_search(o, keep=2).params]
+        modal = model_of(o)
+        found = [modal.phase_profiles(o, *p)[0] for p in modal.grid_search(o, keep=2).params]
     return [nominal, ramps[ib], *[rb.Profile(f"global search on design rotor {worst}", u) for u in found]]
 
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import sys
 import time
 from dataclasses import dataclass, field
 
@@ -14,7 +15,7 @@ import numpy as np
 
 from autobal.analysis import ipopt
 from autobal.errors import SolveError
-from autobal.ocp.problem import SpinupOcp
+from autobal.ocp.problem import PEAK_KEY, SpinupOcp
 from autobal.ocp.search import FixedFrameModes, controls_on_mesh, grid_search, horizon_steps, profile_peak
 from autobal.ocp.simulation import (
     Trajectory,
@@ -123,7 +124,8 @@ def _controls(nlp: Nlp, wopt: np.ndarray, ocp: SpinupOcp) -> tuple[np.ndarray, n
 
 
 def reference_level(ocp: SpinupOcp) -> float:
-    """Scale of the objective (the maximum-acceleration ramp's peak squared, or its integral of delta^2)."""
+    """Scale of the objective (the maximum-acceleration ramp's peak squared, or its integral of delta^2; 1 for
+    min_time)."""
     if ocp.objective not in ("peak_deflection", "peak_unbalance", "integrated_deflection"):
         return 1.0
     # BDF restarted at every interval, as the guesses: the NLP's scale to the last bit (the robust study's
@@ -143,7 +145,7 @@ class Solver:
         self.ocp, self.method = ocp, method
         # MX: the interval Function mapped over the intervals, so the construction hardly grows with N
         # (SX: 1.7 s at N = 200; benchmarks/spinup_ocp.md, "Levers")
-        ref = reference_level(ocp) if ref is None else ref
+        ref = model_of(ocp).reference_level(ocp) if ref is None else ref
         if getattr(method, "solver", "ipopt") == "fatrop":
             self.nlp = transcribe_stages(ocp, method, ref)
             self.solver = fatrop_solver(self.nlp, options)
@@ -368,9 +370,9 @@ def coarse_solver(ocp: SpinupOcp, method, ref: float, options: dict | None) -> S
     return Solver(ocp, dataclasses.replace(method, intervals=n), ref, coarse_options(options))
 
 
-def rank_coarse(ocp: SpinupOcp, found: list, n: int) -> tuple[str, SpinupSolution]:
+def rank_coarse(ocp: SpinupOcp, found: list, n: int) -> tuple[int, dict[int, float]]:
     """The best of the coarse optima ``found`` ((label, solution) pairs, in start order, ``n`` control
-    intervals).
+    intervals): its index, and the objective re-simulated by CVODES of those it was judged by (by index).
 
     For the peak deflection the fixed-step exponential integrator (:func:`autobal.ocp.search.profile_peak`,
     step FAST_STEP: the peak within 1e-4 of CVODES) ranks them; those within RANK_TIE of its best, and the
@@ -382,10 +384,10 @@ def rank_coarse(ocp: SpinupOcp, found: list, n: int) -> tuple[str, SpinupSolutio
         fast = [profile_peak(ocp, sol.u[:n], rotor=rotor) for _, sol in found]
         close = [i for i, f in enumerate(fast) if f <= min(fast) * (1 + RANK_TIE)]
     if len(close) == 1:
-        return found[close[0]]
-    scores = [resimulated_scores(ocp, found[i][1], resimulate(ocp, found[i][1].u, found[i][1].h, "coarse", 8,
-                                                              1e-10))[0] for i in close]
-    return found[close[int(np.argmin(scores))]]
+        return close[0], {}
+    scores = {i: resimulated_scores(ocp, found[i][1], resimulate(ocp, found[i][1].u, found[i][1].h, "coarse", 8,
+                                                                 1e-10))[0] for i in close}
+    return min(scores, key=scores.get), scores
 
 
 @dataclass
@@ -436,17 +438,39 @@ def refine(ocp: SpinupOcp, method, coarse: Solver, sol: SpinupSolution, options:
     return prev, sol
 
 
-def optimize(ocp: SpinupOcp, method, multistart: bool = True, options: dict | None = None) -> Optimum:
-    """Solve from every start; keep the best optimum by its re-simulated objective (for min_time: the
-    shortest time whose re-simulated peak keeps the deflection limit within 1 %).
+def model_of(ocp):
+    """The rotor model's own parts of :func:`optimize`, by the problem's type (:data:`MODELS`): this module for the
+    Jeffcott rotor's :class:`SpinupOcp`, :mod:`autobal.ocp.modal` for the modal rotor's.  Each has ``starts(ocp, n,
+    multistart)`` (labelled profiles on n control intervals), ``reference_level(ocp)`` (the NLP's scale),
+    ``resimulate(ocp, u, h, label)`` (CVODES; ``peak`` in the problem's deflection unit), ``rank_coarse(ocp, found,
+    n)`` (the best coarse optimum) and HOLD_STATES (how the coarse starts' collocation states begin)."""
+    return MODELS[type(ocp)]
+
+
+#: the module of each problem type's model parts (:func:`model_of`); the modal rotor's module adds itself when
+#: imported (before any of its problems exists)
+MODELS = {SpinupOcp: sys.modules[__name__]}
+
+# the coarse solves of the starts begin with the collocation states held at the interval-start values (rockit's
+# guess): from a coarse mesh the Jeffcott rotor reaches better basins so (benchmarks/spinup_ocp.md)
+HOLD_STATES = True
+
+
+def optimize(ocp, method, multistart: bool = True, options: dict | None = None) -> Optimum:
+    """Solve from every start of the problem's model (:func:`model_of`: the Jeffcott rotor's
+    :class:`SpinupOcp` or the modal rotor's :class:`autobal.ocp.modal.ModalSpinupOcp`); keep the best optimum by
+    its re-simulated objective (for min_time: the shortest time whose re-simulated peak keeps the deflection limit
+    within 1 %).
 
     With several starts and a collocation mesh of at least 2 x COARSE intervals, every start is solved on
-    the coarse mesh and the best re-simulated coarse optimum is refined by mesh continuation
+    the coarse mesh and the best coarse optimum (the model's ``rank_coarse``) is refined by mesh continuation
     (:func:`refine`).  min_time is solved by continuation: first the smallest peak over the full horizon
     (if even that exceeds the deflection limit, the limit is the binding constraint and no time is
-    feasible), then the minimum time started from that profile."""
+    feasible), then the minimum time started from that profile.  One row per solve in ``Optimum.starts``: the
+    start, its mesh stage, status, iterations, times, and its re-simulated ``objective`` where one was computed."""
+    model = model_of(ocp)
     clock = time.perf_counter()
-    ref = reference_level(ocp)
+    ref = model.reference_level(ocp)
     times = {"resimulation": time.perf_counter() - clock}
     n_ctrl = method.intervals
     rows, best, first_error, build = [], None, None, 0.0
@@ -471,7 +495,7 @@ def optimize(ocp: SpinupOcp, method, multistart: bool = True, options: dict | No
         start_list = [("minimum-peak profile over the horizon", pk.solution.u[:n_ctrl])]
     else:
         clock = time.perf_counter()
-        start_list = starts(ocp, n_ctrl, multistart)
+        start_list = model.starts(ocp, n_ctrl, multistart)
         times["global_search"] = time.perf_counter() - clock
     coarse = coarse_solver(ocp, method, ref, options) if len(start_list) > 1 else None
     solved = []  # (label, solution) of the finest mesh
@@ -482,16 +506,19 @@ def optimize(ocp: SpinupOcp, method, multistart: bool = True, options: dict | No
         for label, u in start_list:
             cu = u.reshape(nc, -1).mean(axis=1) if u.size % nc == 0 else np.interp(
                 np.linspace(0, 1, nc), np.linspace(0, 1, u.size), u)
-            sc = coarse.solve(cu, raise_on_failure=False, hold_states=True)
+            sc = coarse.solve(cu, raise_on_failure=False, hold_states=model.HOLD_STATES)
             guesses.append(sc.guess_time_s)
-            if sc.success:
-                found.append((label, sc))
             rows.append({"start": label, "stage": f"coarse ({nc} intervals)", "status": sc.status,
                          "success": sc.success, "iterations": sc.iterations, "solve_time_s": sc.solve_time_s})
+            if sc.success:
+                found.append((label, sc, rows[-1]))
         if found:
             clock = time.perf_counter()
-            label, sc = rank_coarse(ocp, found, nc)
+            i, scores = model.rank_coarse(ocp, [f[:2] for f in found], nc)
+            for j, score in scores.items():
+                found[j][2]["objective"] = score
             times["resimulation"] += time.perf_counter() - clock
+            label, sc, _ = found[i]
             start_list = []
             try:
                 solver, sol = refine(ocp, method, coarse, sc, options, rows)
@@ -515,14 +542,15 @@ def optimize(ocp: SpinupOcp, method, multistart: bool = True, options: dict | No
             rows.append({"start": label, "status": exc.status, "success": False})
     clock = time.perf_counter()
     for label, sol in solved:
-        tr = resimulate(ocp, sol.u, sol.h, "optimum")
+        tr = model.resimulate(ocp, sol.u, sol.h, "optimum")
         score, own = resimulated_scores(ocp, sol, tr)
-        ok = ocp.deflection_limit is None or tr.peak_delta <= 1.01 * ocp.deflection_limit
+        ok = ocp.deflection_limit is None or tr.peak <= 1.01 * ocp.deflection_limit
         # a refined optimum's solve is already in the row of its mesh-continuation stage
         timed = {} if any(r.get("stage") == f"{method.intervals} intervals" for r in rows) else {
             "solve_time_s": sol.solve_time_s}
         rows.append({"start": label, "status": sol.status, "success": True, "iterations": sol.iterations,
-                     **timed, "objective": score, "resimulated_peak_over_e": tr.peak_delta, "keeps_limit": ok})
+                     **timed, "objective": score, f"resimulated_peak_{PEAK_KEY[ocp.deflection_unit]}": tr.peak,
+                     "keeps_limit": ok})
         if ok and (best is None or score < best[0] * (1 - TIE)):  # ties go to the earlier start
             best = (score, own, sol, tr)
     times["resimulation"] += time.perf_counter() - clock

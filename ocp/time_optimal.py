@@ -6,7 +6,8 @@ Any spin-up problem of the generic pipeline runs through it: the Jeffcott rotor'
 (:class:`autobal.ocp.modal.ModalSpinupOcp`, peaks in m), each with its ``min_time`` objective and its deflection
 limit as a path constraint of the shared transcription; each peak and limit in its problem's ``deflection_unit``.
 Only the minimum-peak optimum of a deadline (its model's global search for starts), the fastest ramp and the
-CVODES re-simulation are the model's own (:func:`minimum_peak`, :func:`fastest_ramp`, :func:`resimulated`).
+CVODES re-simulation are the model's own (:func:`minimum_peak`, :func:`fastest_ramp`,
+:func:`autobal.ocp.solve.model_of`).
 
 The front is computed as its dual: for a deadline T, the smallest peak P*(T) by the minimum-peak OCP of
 :mod:`autobal.ocp.solve` (global search, multi-start, collocation, CVODES re-simulation), the control step
@@ -30,37 +31,21 @@ import numpy as np
 from autobal.errors import SolveError
 from autobal.ocp.problem import PEAK_KEY, SpinupOcp
 from autobal.ocp.search import averaged
-from autobal.ocp.simulation import Trajectory, baselines, resimulate
-from autobal.ocp.solve import TIE, Optimum, Solver, optimize, reference_level, resimulated_scores
+from autobal.ocp.simulation import Trajectory, baselines
+from autobal.ocp.solve import TIE, Optimum, Solver, model_of, optimize, resimulated_scores
 from autobal.ocp.transcription import DirectCollocation
 
 if TYPE_CHECKING:
     from autobal.ocp.modal import ModalSpinupOcp
 
 
-def _modal():
-    from autobal.ocp import modal  # the modal rotor's own pieces, imported for its problems only
-
-    return modal
-
-
 def minimum_peak(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation, multistart: bool = True,
                  options: dict | None = None) -> Optimum:
-    """The minimum-peak optimum of ``ocp`` on ``method``'s mesh by its model's study: the global search for starts,
-    the shared solver and mesh continuation (:func:`autobal.ocp.solve.optimize` for the Jeffcott rotor,
-    :func:`autobal.ocp.modal.optimize` for the modal rotor)."""
-    if isinstance(ocp, SpinupOcp):
-        return optimize(ocp, method, multistart, options)
-    return _modal().optimize(ocp.on_intervals(method.intervals), options, multistart)
-
-
-def resimulated(ocp: SpinupOcp | ModalSpinupOcp, u: np.ndarray, h: np.ndarray, label: str):
-    """The CVODES re-simulation of the profile u (over alpha_max) on intervals h (the problem's dimensionless
-    time): the Jeffcott rotor's :class:`Trajectory` or the modal rotor's (fixed frame), each with ``peak`` in the
-    problem's deflection unit."""
-    if isinstance(ocp, SpinupOcp):
-        return resimulate(ocp, u, h, label)
-    return _modal().resimulate(ocp, u, h, label)
+    """The minimum-peak optimum of ``ocp`` on ``method``'s mesh by the shared loop (:func:`autobal.ocp.solve.optimize`:
+    its model's global search for starts, the shared solver and mesh continuation); the modal problem on the
+    method's intervals (its starts and baselines are on its own mesh)."""
+    return optimize(ocp if isinstance(ocp, SpinupOcp) else ocp.on_intervals(method.intervals), method, multistart,
+                    options)
 
 
 def fastest_ramp(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation):
@@ -68,13 +53,7 @@ def fastest_ramp(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation):
     modal rotor's on its own)."""
     if isinstance(ocp, SpinupOcp):
         return baselines(ocp, intervals=4 * method.intervals)["max_acceleration_ramp"]
-    return _modal().baselines(ocp.on_intervals(method.intervals))["max_acceleration_ramp"]
-
-
-def epigraph_reference(ocp: SpinupOcp | ModalSpinupOcp) -> float:
-    """The scale of the minimum-peak epigraph level: the maximum-acceleration ramp's peak squared (Jeffcott), the
-    largest steady deflection squared (modal rotor, :attr:`autobal.ocp.modal.ModalSpinupOcp.peak_scale2`)."""
-    return reference_level(ocp) if isinstance(ocp, SpinupOcp) else ocp.peak_scale2
+    return model_of(ocp).baselines(ocp.on_intervals(method.intervals))["max_acceleration_ramp"]  # the modal one
 
 
 def peak_words(ocp: SpinupOcp | ModalSpinupOcp, x: float) -> str:
@@ -220,12 +199,12 @@ def extended(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation, earlier
     m = dataclasses.replace(method, intervals=max(MIN_INTERVALS, round(method.intervals * deadline / ocp.horizon)))
     n0 = earlier.intervals
     u = averaged(earlier.optimum.solution.u[:n0], earlier.arrival_time_s, np.linspace(0.0, deadline, m.intervals + 1))
-    solver = Solver(o, m, epigraph_reference(o), options)
+    solver = Solver(o, m, options=options)
     try:
         sol = solver.solve(np.clip(u, -1.0, 1.0))
     except SolveError:
         return None
-    tr = resimulated(o, sol.u, sol.h, "optimum")
+    tr = model_of(o).resimulate(o, sol.u, sol.h, "optimum")
     score, own = resimulated_scores(o, sol, tr)
     row = {"start": f"the {earlier.arrival_time_s:.4g} s point's profile, then held", "status": sol.status,
            "success": True, "iterations": sol.iterations, "solve_time_s": sol.solve_time_s, "objective": score}
@@ -277,7 +256,7 @@ def min_time_point(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation, l
     rows, build, level = [], 0.0, float(limit)
 
     def record(label: str):
-        tr = resimulated(o, sol.u, sol.h, "optimum")
+        tr = model_of(o).resimulate(o, sol.u, sol.h, "optimum")
         rows.append({"start": label, "stage": f"min_time, {n} intervals, collocation limit {peak_words(o, level)}",
                      "status": sol.status, "success": True, "iterations": sol.iterations,
                      "solve_time_s": sol.solve_time_s, "objective": sol.final_time_s,

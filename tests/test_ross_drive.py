@@ -15,6 +15,7 @@ from autobal.errors import ScenarioError, SolveError
 from autobal.models import ross_rotor as rr
 from autobal.ocp import modal
 from autobal.ocp.simulation import drive_use
+from autobal.ocp.solve import optimize
 from tests.test_ross_rotor import Ip, disk_rotor, needs_ross
 
 J_DRIVE = 0.05  # kg m^2, the drive's own
@@ -29,7 +30,7 @@ def _ocp(**kw) -> modal.ModalSpinupOcp:
 @pytest.fixture(scope="module")
 def free_and_no_braking():
     ocp = _ocp()
-    return [modal.optimize(p, {"max_iter": 300}) for p in (ocp, dataclasses.replace(ocp, alpha_min=0.0))]
+    return [optimize(p, p.method, options={"max_iter": 300}) for p in (ocp, dataclasses.replace(ocp, alpha_min=0.0))]
 
 
 def test_no_deceleration_keeps_the_speed_from_falling(free_and_no_braking):
@@ -40,7 +41,7 @@ def test_no_deceleration_keeps_the_speed_from_falling(free_and_no_braking):
     assert np.all(np.diff(held.trajectory.omega) >= -1e-9 * held.ocp.omega_final)
     # a bound can only cost: the held optimum peaks no lower than the free one (to the re-simulation's accuracy)
     assert held.trajectory.peak >= free.trajectory.peak * (1 - 1e-4)
-    for _, u in modal.starts(held.ocp):  # the four-phase search draws within the limit
+    for _, u in modal.starts(held.ocp, held.ocp.intervals):  # the four-phase search draws within the limit
         assert u.min() >= -1e-12
 
 
@@ -63,7 +64,8 @@ def test_power_limit_binds_and_the_gain_is_quoted_against_a_feasible_ramp():
     arrives in 1.35 s of the 1.5).  With 1.5 kW the fastest is 76.9 rad/s^2.  With 600 W the deadline cannot be
     met (2.17 s at the limit): a solve error names the final speed."""
     with pytest.raises(SolveError, match="final speed"):
-        modal.optimize(_ocp(drive_inertia=J_DRIVE, power_max=600.0), {"max_iter": 300})
+        o = _ocp(drive_inertia=J_DRIVE, power_max=600.0)
+        optimize(o, o.method, options={"max_iter": 300})
     for power, feasible in ((1000.0, None), (1500.0, 1500.0 / ((Ip + J_DRIVE) * 150.0))):
         ocp = _ocp(drive_inertia=J_DRIVE, power_max=power)
         base = modal.baselines(ocp)

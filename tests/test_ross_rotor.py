@@ -20,7 +20,7 @@ from autobal.models import ross_rotor as rr
 from autobal.ocp import modal
 from autobal.ocp import robust as rb
 from autobal.ocp.simulation import ramp_profile, simulate_profile
-from autobal.ocp.solve import Solver
+from autobal.ocp.solve import TIE, Solver, optimize
 from autobal.ocp.transcription import structured_derivatives, transcribe
 from autobal.parts import ross_rotor as ross_rotor_part
 
@@ -93,7 +93,7 @@ def test_envelope_peak_matches_the_physical_response(small_ocp):
 def test_ocp_beats_the_ramps_and_resimulates(small_ocp):
     """The multi-start optimum, re-simulated, is no worse than either ramp, and its collocation peak is within
     1 % of the re-simulation; it reaches the final speed by the deadline and keeps the speed cap."""
-    opt = modal.optimize(small_ocp, {"max_iter": 300})
+    opt = optimize(small_ocp, small_ocp.method, options={"max_iter": 300})
     base = modal.baselines(small_ocp)
     tr = opt.trajectory
     assert tr.peak <= min(b.peak for b in base.values()) * (1 + 1e-4)
@@ -103,6 +103,26 @@ def test_ocp_beats_the_ramps_and_resimulates(small_ocp):
     assert_allclose(tr.omega[i:], 150.0, rtol=1e-6)
     assert tr.omega.max() <= 150.0 * (1 + 1e-6)
     assert np.all(np.abs(opt.solution.u) <= 1 + 1e-9)
+
+
+def test_modal_starts_solved_coarse_and_the_best_refined(small_ocp):
+    """On 100 intervals the shared loop (autobal.ocp.solve.optimize) solves every modal start on the coarse mesh of 50
+    (each start's screened profile repeated onto the 100), re-simulates every coarse optimum, refines the best (ties
+    within TIE to the earlier start) and re-simulates the refined optimum, no worse than the coarse one."""
+    ocp = small_ocp.on_intervals(100)
+    labels, profiles = zip(*modal.starts(ocp, 100), strict=True)
+    assert all(u.size == 100 and np.array_equal(u[0::2], u[1::2]) for u in profiles)
+    opt = optimize(ocp, ocp.method, options={"max_iter": 300})
+    coarse = [r for r in opt.starts if r.get("stage") == "coarse (50 intervals)"]
+    assert [r["start"] for r in coarse] == list(labels)
+    scored = [r for r in coarse if r["success"]]
+    assert scored and all(r["objective"] > 0 for r in scored)
+    low = min(r["objective"] for r in scored)
+    best = next(r for r in scored if r["objective"] <= low * (1 + TIE))
+    assert [r.get("stage") for r in opt.starts[-2:]] == ["100 intervals", None]
+    assert opt.starts[-1]["start"] == f"{best['start']}, refined from 50 intervals"
+    assert opt.starts[-1]["resimulated_peak_m"] == opt.trajectory.peak == opt.score
+    assert opt.trajectory.peak <= best["objective"] * (1 + 1e-3)
 
 
 def test_structured_derivatives_match_casadi_ad(small_ocp):
@@ -130,7 +150,7 @@ def test_robust_profile_of_the_modal_rotor(small_ocp):
     its worst case, re-simulated by CVODES in the fixed frame, is below the nominal optimum's worst case over the
     same rotors (measured 131 um against 181 um) and the screening agrees with CVODES on it within 1 %; over a
     40-rotor sample from the same ranges its worst screened peak is below the nominal's (129 um against 174 um)."""
-    nominal = modal.optimize(small_ocp, {"max_iter": 300})
+    nominal = optimize(small_ocp, small_ocp.method, options={"max_iter": 300})
     pn = rb.Profile("nominal optimum", nominal.solution.u[:small_ocp.intervals])
     unc = rb.Uncertainty(0.05, (0.5, 2.0))
     F = unc.grid(3)
@@ -171,7 +191,7 @@ def test_no_search_when_the_horizon_leaves_no_time(small_ocp):
     the two ramps."""
     tight = modal.ModalSpinupOcp(small_ocp.rotor, 50.0, 150.0, 1.0, 100.0, (0,), intervals=20)
     assert modal.grid_search(tight).evaluated == 0
-    assert [lab for lab, _ in modal.starts(tight)] == ["constant ramp", "maximum-acceleration ramp"]
+    assert [lab for lab, _ in modal.starts(tight, tight.intervals)] == ["constant ramp", "maximum-acceleration ramp"]
 
 
 def test_missing_ross_names_the_extra(monkeypatch):
@@ -257,7 +277,9 @@ def test_shipped_scene_end_to_end(shipped_run, tmp_path):
     # 160 intervals, the starts solved on 80 and the best refined: measured 19.575 um (re-simulated), 1.9e-4 from
     # the collocation; the 160-interval mesh solved directly from every start reaches 19.52-19.57 um
     assert_allclose(res.peak_deflection, 19.57e-6, rtol=5e-3)
-    assert [r["stage"] for r in d["starts"]][-1] == "160 intervals"
+    assert [r.get("stage") for r in d["starts"]][-2:] == ["160 intervals", None]
+    assert d["starts"][-1]["start"].endswith("refined from 80 intervals")
+    assert d["starts"][-1]["resimulated_peak_m"] == res.peak_deflection
     paths = res.save(tmp_path)
     assert {p.name for p in paths} >= {"ross_campbell.png", "ross_spinup_deflection.png", "ross_critical_speeds.csv"}
     assert "ROSS" in res.summary()
@@ -273,7 +295,7 @@ def test_shipped_optimum_does_not_depend_on_the_ramps(scene_rotor):
     s = scenario.load("spinup_ross_rotor").analyses.ross_spinup
     ocp = modal.ModalSpinupOcp(scene_rotor[1], s.start_speed, s.final_speed, s.horizon, s.max_acceleration,
                                tuple(s.nodes), s.settling_time, s.max_speed, 80, s.degree)
-    opt = modal.optimize(ocp)
+    opt = optimize(ocp, ocp.method)
     assert opt.starts[0]["start"].startswith("search") and len(opt.starts) >= 3
     assert opt.resimulation_rel_error < 1e-2
     solver = Solver(ocp, ocp.method, ocp.peak_scale2)
