@@ -524,7 +524,10 @@ def grid_search(ocp: ModalSpinupOcp, n_w: int = 12, n_u: int = 4, n_d: int = 6, 
                             np.full((U.shape[0], K - U.shape[1]), wf)], axis=1)  # at each interval start
     t2 = (W1 - w0) / a + D
     past = (speed >= top) & (np.arange(K)[None, :] * ocp.h >= t2[:, None] - 1e-12)
-    late = np.where(past, E, 0.0).max(axis=1)
+    # to 1e-9 of the largest: the screening's rounding (its sums' order varies between runs with the BLAS threads)
+    # must not reorder ties, so that a scene gives the same starts in every run
+    late = np.round(np.where(past, E, 0.0).max(axis=1) / E.max(), 9)
+    peaks = np.round(peaks / E.max(), 9) * E.max()
     cell = (top - w0) / n_w
     chosen = []
     free = np.ones(peaks.size, bool)
