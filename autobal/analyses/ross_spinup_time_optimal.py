@@ -27,7 +27,8 @@ class RossSpinupTimeOptimal(create_model("_RossSpinupWithFront", __base__=RossSp
     """Time-optimal spin-up of the ROSS rotor reduced to its modes, posed as ``ross_spinup``: the earliest arrival at
     ``final_speed`` whose re-simulated peak deflection (the largest whirl radius over ``nodes``, 0-peak; the settling
     window still counts) is at most ``deflection_limit``, and the front of the smallest peak against the arrival
-    deadline up to ``horizon``.  The drive is -``max_deceleration`` <= alpha <= ``max_acceleration``."""
+    deadline up to ``horizon``.  The drive is |alpha| <= ``max_acceleration`` only (a ``ross_rotor.drive`` is
+    refused)."""
 
     deflection_limit: Length | None = Field(
         None, description="largest deflection allowed (the whirl radius over the nodes, 0-peak), e.g. a fraction of "
