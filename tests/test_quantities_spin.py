@@ -21,6 +21,7 @@ from autobal.analysis.quantities import significant
 from autobal.ocp import robust_study, spinup_study, time_optimal_study
 from autobal.ocp.modal import QUANTITIES as MODAL
 from autobal.ocp.modal import ModalSpinupResult
+from autobal.ocp.solve import ipopt_options
 from tests.test_quantities import check_declared
 
 SPIN = ("spinup", "spinup_robust", "spinup_time_optimal", "ross_spinup")
@@ -264,13 +265,17 @@ def test_spinup_report_rows_carry_rpm_per_second_beside_rad_per_second_squared()
                                    {"analyses.spinup.objective": "integrated_deflection"},
                                    {"analyses.spinup.objective": "min_time", "analyses.spinup.deflection_limit": 25}])
 def test_every_objective_declares_every_number(extra):
-    """The option variants add keys (collocation_peak_unbalance) or change what a key holds: still all declared."""
+    """The option variants add keys (collocation_peak_unbalance) or change what a key holds: still all declared.
+    The integrated objective converges slowly on this rotor at 40 intervals (775 IPOPT iterations; a rounding-level
+    change of the NLP once took it past 1000): the iteration limit is raised, this test is about declarations."""
     from autobal.analyses.spinup import ocp as spinup_ocp
     from autobal.analysis.result import plain
 
-    scene = autobal.load(SCENE, set=SMALL | {"analyses.spinup.segments": 0} | extra)
+    scene = autobal.load(SCENE, set=SMALL | {"analyses.spinup.segments": 0, "analyses.spinup.max_iterations": 3000}
+                         | extra)
     s = scene.analyses.spinup
-    res = spinup_study.run(spinup_ocp(scene, s), spinup_study.method_of(s), multistart=False)
+    res = spinup_study.run(spinup_ocp(scene, s), spinup_study.method_of(s), multistart=False,
+                           options=ipopt_options(s.max_iterations, s.tolerance))
     assert spinup_study.QUANTITIES.undeclared(plain(res.to_dict())) == []
     assert res.summary().startswith(f"spin-up ({extra['analyses.spinup.objective'].replace('_', ' ')}): ok: peak "
                                     "deflection ")
