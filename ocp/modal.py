@@ -48,6 +48,7 @@ from autobal.ocp.simulation import (
     best_within_limits,
     drive_use,
     ramp_profile,
+    ramp_runs,
     rate_cap,
     torque_reference,
 )
@@ -765,8 +766,7 @@ class ModalSpinupResult(Result):
         return out
 
     def _runs(self):
-        return [(self.optimum, "C3", "-", 1.4)] + [(v, c, "--", 1.0) for v, c in zip(self.baselines.values(),
-                                                                                     ("C0", "C2"), strict=False)]
+        return [(self.optimum, "C3", "-", 1.4, "optimum"), *ramp_runs(self.baselines, self.data["baselines"])]
 
     def _criticals(self, ax, vertical: bool, factor: float) -> None:
         for i, w in enumerate(self.data["critical_speeds"]["reduced_wd_rad_s"]):
@@ -778,8 +778,7 @@ class ModalSpinupResult(Result):
         µm; the speed in rpm, rad/s on top)."""
         q = QUANTITIES.find("peak_deflection_m")
         fw = speed_axis(ax, "x")
-        for tr, c, ls, lw in self._runs():
-            lab = "optimum" if tr is self.optimum else tr.label
+        for tr, c, ls, lw, lab in self._runs():
             ax.plot(tr.omega * fw, q.shown(tr.deflection.max(axis=0)), color=c, ls=ls, lw=lw,
                     label=f"{lab} (peak {q.text(tr.peak)})")
         self._criticals(ax, True, fw)
@@ -794,8 +793,7 @@ class ModalSpinupResult(Result):
         fig, axes = new_figure((8, 6), 2, 1, sharex=True)
         ft = unit_axis(axes[1], "time t", "s", which="x")
         fw, fa = speed_axis(axes[0]), unit_axis(axes[1], r"acceleration $\alpha$", "rad/s^2")
-        for tr, c, ls, lw in self._runs():
-            lab = "optimum" if tr is self.optimum else tr.label
+        for tr, c, ls, lw, lab in self._runs():
             axes[0].plot(tr.t * ft, tr.omega * fw, color=c, ls=ls, lw=lw, label=lab)
             axes[1].plot(np.append(tr.t_u, tr.t[-1]) * ft, np.append(tr.alpha, tr.alpha[-1]) * fa,
                          drawstyle="steps-post", color=c, ls=ls, lw=lw)
@@ -807,7 +805,7 @@ class ModalSpinupResult(Result):
 
         fig2, (a1, a2) = new_figure((8, 7), 2, 1)
         ft = unit_axis(a1, "time t", "s", which="x")
-        for tr, c, ls, lw in self._runs():
+        for tr, c, ls, lw, _ in self._runs():
             a1.plot(tr.t * ft, q.shown(tr.deflection.max(axis=0)), color=c, ls=ls, lw=lw)
         a1.set_ylabel(f"deflection, {q.display} 0-peak")
         a1.grid(alpha=0.3)

@@ -265,6 +265,18 @@ DRIVE_QUANTITIES = (
 )
 
 
+def ramp_runs(baselines: dict, uses: dict) -> list[tuple]:
+    """The ramp baselines as the figures draw them: (trajectory, colour, line style, line width, label) each, dotted
+    and labelled "outside the drive limits" where its drive use (``uses``: the results.json baselines, or
+    :func:`drive_use` of each) says it breaks them."""
+    out = []
+    for (k, tr), c in zip(baselines.items(), ("C0", "C2", "C1"), strict=False):
+        outside = uses[k]["within_drive_limits"] is False
+        label = tr.label + (" (outside the drive limits)" if outside else "")
+        out.append((tr, c, ":" if outside else "--", 1.0, label))
+    return out
+
+
 def best_within_limits(peaks: dict, uses: dict):
     """The key of the smallest peak among the profiles that keep the drive limits (``uses``: :func:`drive_use` of
     each; a profile without drive data counts as keeping them), None when none does: the only reference a

@@ -27,6 +27,7 @@ from autobal.ocp.simulation import (
     baselines,
     best_within_limits,
     drive_use,
+    ramp_runs,
     torque_reference,
 )
 from autobal.ocp.solve import optimize
@@ -216,23 +217,14 @@ class SpinupResult(Result):
             {} if self.segments is None else {"drive_segments.csv": self.segments.table(o.t[-1])})
 
     def _runs(self):
-        base = [(v, c, "--" if self.data["baselines"][k]["within_drive_limits"] is not False else ":", 1.0)
-                for (k, v), c in zip(self.baselines.items(), ("C0", "C2", "C1"), strict=False)]
-        seg = [] if self.segments is None else [(self.segments.trajectory, "C4", "-.", 1.0)]
-        return [(self.optimum, "C3", "-", 1.4), *seg, *base]
-
-    def _label(self, tr) -> str:
-        if tr is self.optimum:
-            return "optimum"
-        out = {v.label: k for k, v in self.baselines.items()}.get(tr.label)
-        return tr.label + (" (outside the drive limits)" if out and
-                           self.data["baselines"][out]["within_drive_limits"] is False else "")
+        seg = [] if self.segments is None else [(self.segments.trajectory, "C4", "-.", 1.0,
+                                                 self.segments.trajectory.label)]
+        return [(self.optimum, "C3", "-", 1.4, "optimum"), *seg, *ramp_runs(self.baselines, self.data["baselines"])]
 
     def draw(self, ax) -> None:
         """Deflection against time of the optimum and both ramps (delta/e; mm on the right)."""
         ft = unit_axis(ax, "time t", "s", which="x")
-        for tr, c, ls, lw in self._runs():
-            lab = self._label(tr)
+        for tr, c, ls, lw, lab in self._runs():
             ax.plot(tr.t * ft, tr.delta, color=c, ls=ls, lw=lw,
                     label=f"{lab} (peak {deflection_text(tr.peak_delta, self.data.get('eccentricity_m'))})")
         ax.set_ylabel(r"deflection $\delta/e$")
@@ -253,8 +245,7 @@ class SpinupResult(Result):
         fa = unit_axis(axes[1], r"acceleration $\alpha$", "rad/s^2")
         fm = unit_axis(axes[2], "drive torque M" if drive else "torque M", "N*m")
         fp = unit_axis(axes[3], "drive power P", "W", kw.declared) if drive else None
-        for tr, c, ls, lw in self._runs():
-            lab = self._label(tr)
+        for tr, c, ls, lw, lab in self._runs():
             axes[0].plot(tr.t * ft, tr.omega * fw, color=c, ls=ls, lw=lw, label=lab)
             axes[1].plot(np.append(tr.t_u, tr.t[-1]) * ft, np.append(tr.alpha, tr.alpha[-1]) * fa,
                          drawstyle="steps-post", color=c, ls=ls, lw=lw)
@@ -280,7 +271,7 @@ class SpinupResult(Result):
         fig2, (a1, a2) = new_figure((8, 7), 2, 1)
         self.draw(a1)
         fw = speed_axis(a2, "x")
-        for tr, c, ls, lw in self._runs():
+        for tr, c, ls, lw, _ in self._runs():
             a2.plot(tr.omega * fw, tr.delta, color=c, ls=ls, lw=lw)
         a2.axvline(wc * fw, color="k", lw=0.8, ls=":", label=r"critical speed $\omega_{cr}$ = "
                    + QUANTITIES.find("omega_cr_rad_s").text(wc))

@@ -87,6 +87,11 @@ def test_power_limit_binds_and_the_gain_is_quoted_against_a_feasible_ramp():
             key = d["baseline_ramp_key"]
             assert d["baselines"][key]["within_drive_limits"]
             assert d["improvement_over_best_ramp"] == pytest.approx(1 - d["peak_deflection_m"] / base[key].peak)
+            # the figures draw every ramp, the one outside the limits dotted and labelled so
+            lines = {ln.get_label(): ln.get_linestyle() for ln in res.figures()["ross_spinup_profiles.png"].axes[0]
+                     .get_lines()}
+            assert lines[base["max_acceleration_ramp"].label + " (outside the drive limits)"] == ":"
+            assert lines[base["feasible_ramp"].label] == "--"
             # drive_profile.csv: the speed is the integral of the acceleration column, the torque J alpha
             c = res.tables()["drive_profile.csv"]
             t, w, a = c["time_s"], c["speed_rad_s"], c["acceleration_rad_s2"]
