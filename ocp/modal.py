@@ -116,7 +116,6 @@ class ModalSpinupOcp(Dimensionless):
             raise ValueError("the min_time objective needs a deflection_limit (m)")
         if self.deflection_limit is not None and not self.deflection_limit > 0:
             raise ValueError("the deflection limit must be positive (m)")
-        self.check_alpha_min()
         self.check_drive()
         for nd in self.nodes:
             self.rotor.node_rows(nd)
@@ -592,15 +591,15 @@ def baselines(ocp: ModalSpinupOcp) -> dict[str, ModalTrajectory]:
     ramp."""
     const = abs(ocp.omega_final - ocp.omega_start) / ocp.horizon
     zeros = np.zeros(ocp.settling_intervals)
-    rates = {"constant_ramp": const, "max_acceleration_ramp": ocp.alpha_max}
-    out = {}
-    for key, a in rates.items():
-        lab = f"constant ramp {a:.4g} rad/s^2" if key == "constant_ramp" else f"ramp {a:.4g} rad/s^2 and hold"
-        out[key] = resimulate(ocp, np.concatenate([ramp_profile(ocp, ocp.intervals, a), zeros]), None, lab)
+
+    def ramp(a: float, label: str) -> ModalTrajectory:
+        return resimulate(ocp, np.concatenate([ramp_profile(ocp, ocp.intervals, a), zeros]), None, label)
+
+    out = {"constant_ramp": ramp(const, f"constant ramp {const:.4g} rad/s^2"),
+           "max_acceleration_ramp": ramp(ocp.alpha_max, f"ramp {ocp.alpha_max:.4g} rad/s^2 and hold")}
     a = rate_cap(ocp, max(ocp.omega_start, ocp.omega_final))
     if drive_use(ocp, out["max_acceleration_ramp"])["within_drive_limits"] is False and a > const:
-        out["feasible_ramp"] = resimulate(ocp, np.concatenate([ramp_profile(ocp, ocp.intervals, a), zeros]), None,
-                                          f"ramp {a:.4g} rad/s^2 and hold (fastest within the drive limits)")
+        out["feasible_ramp"] = ramp(a, f"ramp {a:.4g} rad/s^2 and hold (fastest within the drive limits)")
     return out
 
 

@@ -125,15 +125,13 @@ class Dimensionless:
                 0.0)
 
     def check_drive(self) -> None:
-        """Refuse torque and power limits without the inertia the drive accelerates."""
+        """Refuse torque and power limits without the inertia the drive accelerates, a negative braking limit and a
+        positive minimum acceleration (the speed is held over the settling window)."""
         if (self.torque_max or self.power_max or self.motor_stall_torque or self.braking_torque_max is not None) \
                 and self.inertia <= 0:
             raise ValueError("torque and power limits need the drive's polar inertia J_p > 0")
         if self.braking_torque_max is not None and self.braking_torque_max < 0:
             raise ValueError("the braking-torque limit must not be negative (N m; 0: no braking)")
-
-    def check_alpha_min(self) -> None:
-        """Refuse a positive minimum acceleration (the speed is held over the settling window)."""
         if self.alpha_min is not None and self.alpha_min > 0:
             raise ValueError("the minimum acceleration must not be positive (rad/s^2): the speed is held at the end")
 
@@ -175,7 +173,6 @@ class SpinupOcp(Dimensionless):
         self.check_drive()
         if self.jerk_penalty < 0 or self.jerk_variation < 0:
             raise ValueError("jerk_penalty and jerk_variation must not be negative")
-        self.check_alpha_min()
         if self.jerk_max is not None and self.jerk_max <= 0:
             raise ValueError("jerk_max must be positive (rad/s^3)")
 
@@ -291,7 +288,6 @@ class SpinupOcp(Dimensionless):
                 -ca.inf, 1.0)
         self.drive_constraints(m.torque(q, a, P.p) * P.torque_scale, q[self.speed_index], add)
         return out
-
 
 
 def pulse_variation(u) -> float:
