@@ -21,7 +21,7 @@ from pydantic import Field, model_validator
 
 from autobal.models import ross_rotor as rr
 from autobal.parts.derived import schema, to_params
-from autobal.parts.rotor import Drive
+from autobal.parts.rotor import DriveLimits
 from autobal.schema import Strict
 from autobal.units import quantity
 
@@ -50,7 +50,7 @@ RossBearing = schema(rr.Bearing, "RossBearing", base=Strict, doc="A linear beari
 RossUnbalance = schema(rr.Unbalance, "RossUnbalance", base=_Unbalance)
 
 
-class RossDrive(Drive):
+class RossDrive(DriveLimits):
     """The drive of a ROSS rotor, as the Jeffcott rotor's (torque, power and motor limits, braking): the torque
     it needs is J alpha, J the rotor's polar inertia (from ROSS's mass matrix) and the drive's own."""
 

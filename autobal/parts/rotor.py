@@ -61,7 +61,7 @@ class Motor(Strict):
     no_load_speed: AngularSpeed
 
 
-class Drive(Strict):
+class DriveLimits(Strict):
     """The drive as specified: inertia and drag, torque and power limits, motor characteristic, and braking
     (a braking-torque limit, 0 = no braking, and/or a deceleration limit, 0 = the speed never falls; without
     either the drive brakes up to max_torque and decelerates up to the spin-up's max_acceleration)."""
@@ -128,7 +128,7 @@ class _Rotor(Strict):
 
 
 Rotor = schema(RotorParams, "Rotor", base=_Rotor, groups=(
-    Group("drive", "Drive", "the drive: inertia, drag and limits", Drive, optional=True),))
+    Group("drive", "Drive", "the drive: inertia, drag and limits", DriveLimits, optional=True),))
 SCHEMA = Rotor
 DESCRIPTION = "Jeffcott rotor with optional liquid layer and drive"
 
