@@ -1,3 +1,4 @@
+import importlib.util
 import inspect
 import re
 
@@ -38,6 +39,19 @@ def _edit(data: dict, path: str, value) -> dict:
 def scene_edit():
     """``scene_edit(data, "a.b.c", value)``: a copy of a scene dict with one key changed or removed."""
     return _edit
+
+
+#: optional extra of pyproject.toml -> the module it installs: a test marked ``@pytest.mark.extra("ross")`` skips
+#: without it.  The README's test command installs only ``.[test]``; .ci/run then installs the extras and runs
+#: ``pytest -m "extra and not slow"`` (and the slow set), so every such test runs in CI.
+EXTRAS = {"ross": "ross", "docs": "mkdocs", "notebook": "pandas", "explore": "bokeh"}
+
+
+def pytest_runtest_setup(item):
+    for mark in item.iter_markers("extra"):
+        (extra,) = mark.args
+        if importlib.util.find_spec(EXTRAS[extra]) is None:
+            pytest.skip(f"needs the '{extra}' extra: pip install -e '.[{extra}]'")
 
 
 _SHIPPED_RUNS: dict = {}

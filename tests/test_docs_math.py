@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.extra("docs")
 pytest.importorskip("mkdocs")
 pytest.importorskip("latex2mathml")
 markdown = pytest.importorskip("markdown")

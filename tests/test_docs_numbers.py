@@ -20,6 +20,7 @@ def _module(name: str):
     return module
 
 
+pytestmark = pytest.mark.extra("docs")
 pytest.importorskip("mkdocs")
 hooks = _module("hooks")
 runner = _module("run_numbers")

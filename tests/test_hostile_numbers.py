@@ -5,7 +5,10 @@ import re
 
 import pytest
 
-from tests.test_docs_numbers import hooks, runner
+pytestmark = pytest.mark.extra("docs")
+pytest.importorskip("mkdocs")  # before the import below: test_docs_numbers skips itself without mkdocs
+
+from tests.test_docs_numbers import hooks, runner  # noqa: E402
 
 
 @pytest.mark.parametrize("placeholder, message", [

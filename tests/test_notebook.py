@@ -36,8 +36,10 @@ def test_a_run_renders_one_verdict_per_analysis(statics_run):
 
 
 @pytest.mark.cli
+@pytest.mark.extra("notebook")
 def test_tables_as_dataframes(statics_run):
-    pd = pytest.importorskip("pandas")
+    import pandas as pd
+
     res = statics_run["statics"]
     frame = res.to_dataframe("statics_sweep.csv")
     assert isinstance(frame, pd.DataFrame) and list(frame.columns) == list(res.tables()["statics_sweep.csv"])

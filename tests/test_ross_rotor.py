@@ -6,7 +6,6 @@ tests marked slow build the shipped scene's rotor with ROSS and compare critical
 model) with the reduced model, within 1 %.
 """
 
-import importlib.util
 import sys
 
 import casadi as ca
@@ -24,8 +23,7 @@ from autobal.ocp.solve import TIE, Solver, optimize
 from autobal.ocp.transcription import structured_derivatives, transcribe
 from autobal.parts import ross_rotor as ross_rotor_part
 
-HAS_ROSS = importlib.util.find_spec("ross") is not None
-needs_ross = pytest.mark.skipif(not HAS_ROSS, reason="ross-rotordynamics is not installed (pip install -e '.[ross]')")
+needs_ross = pytest.mark.extra("ross")
 
 # one node: x, y (mass m on stiffness k, damping c) and the tilts alpha, beta (I_d on k_t, polar I_p)
 m, k, c, Id, Ip, kt = 10.0, 1e5, 20.0, 0.05, 0.08, 4e4
