@@ -1,0 +1,88 @@
+"""autobal.log holds every IPOPT solve of its own run (iterations and status), and a run never takes the caller's
+standard output and error (file descriptors 1 and 2, sys.stdout, sys.stderr) away, also with runs in threads."""
+
+import os
+import re
+import sys
+import threading
+
+import pytest
+
+import autobal
+from autobal.analysis import ipopt
+from autobal.errors import SolveError
+
+
+def _solves(log: str) -> list[tuple[str, str, str]]:
+    """(solver, status, its IPOPT text) of each solve in an autobal.log."""
+    parts = re.split(r"^--- IPOPT (\S+): (\S+), \S+ iterations\n", log, flags=re.M)
+    texts = [t.split("\n=== ")[0] for t in parts[3::3]]  # the run's own lines follow its solves
+    return list(zip(parts[1::3], parts[2::3], texts, strict=True))
+
+
+def test_two_runs_in_two_threads_each_log_their_own_solves_and_leave_the_caller_its_output(tmp_path, capfd):
+    stdout, stderr, fds = sys.stdout, sys.stderr, [os.fstat(fd) for fd in (1, 2)]
+    scenes = {"pump": "pump_pe600_statics", "compressor": "compressor_k180_statics"}
+    runs, errors = {}, []
+
+    def run(name):
+        try:
+            runs[name] = autobal.run(scenes[name], out=tmp_path / name)
+        except BaseException as exc:  # noqa: BLE001 (reported below)
+            errors.append(exc)
+
+    threads = [threading.Thread(target=run, args=(name,)) for name in scenes]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors
+    assert sys.stdout is stdout and sys.stderr is stderr
+    assert [(s.st_dev, s.st_ino) for s in (os.fstat(fd) for fd in (1, 2))] == [(s.st_dev, s.st_ino) for s in fds]
+    os.write(1, b"caller's line on fd 1\n")
+    os.write(2, b"caller's line on fd 2\n")
+    print("caller's print")
+    out, err = capfd.readouterr()
+    assert out == "caller's line on fd 1\ncaller's print\n" and err == "caller's line on fd 2\n"  # no solver text
+
+    logs = {name: (tmp_path / name / "autobal.log").read_text() for name in scenes}
+    for name, log in logs.items():
+        solves = _solves(log)
+        assert len(solves) > 10
+        for solver, status, text in solves:
+            assert solver in {"statics", "statics_warm", "force_gap", "critical"}
+            assert "iter    objective" in text and status == "Solve_Succeeded"
+            assert text.rstrip().endswith("EXIT: Optimal Solution Found.")
+        assert f"=== statics: ok ({runs[name].timing['statics']:.2f} s)" in log
+    # each log holds its own run's solves, no more, no fewer: the same solves, with the same text, as a run alone
+    for name in scenes:
+        autobal.run(scenes[name], out=tmp_path / f"{name}_alone")
+        alone = _solves((tmp_path / f"{name}_alone" / "autobal.log").read_text())
+        assert [(s, st, _iterations(t)) for s, st, t in _solves(logs[name])] == [
+            (s, st, _iterations(t)) for s, st, t in alone]
+    assert _solves(logs["pump"])[0][2] != _solves(logs["compressor"])[0][2]
+
+
+def _iterations(text: str) -> list[str]:
+    """The rows of IPOPT's iteration table (without the timing lines, which differ between runs)."""
+    return re.findall(r"^ *\d+r? +[-+]?\d\.\d+e[-+]\d+ .*$", text, flags=re.M)
+
+
+def test_a_failed_solve_leaves_its_status_in_the_log(tmp_path, monkeypatch, capfd):
+    monkeypatch.setitem(ipopt.COLD, "ipopt.max_iter", 1)
+    monkeypatch.setitem(ipopt.WARM, "ipopt.max_iter", 1)
+    with pytest.raises(SolveError) as err:
+        autobal.run("compressor_k180_statics", out=tmp_path / "x")
+    log = (tmp_path / "x" / "autobal.log").read_text()
+    solver, status, text = _solves(log)[-1]
+    assert status == err.value.status == "Maximum_Iterations_Exceeded"
+    assert "EXIT: Maximum Number of Iterations Exceeded." in text
+    assert f"=== statics: solve failed, status Maximum_Iterations_Exceeded: {err.value}" in log
+    assert capfd.readouterr() == ("", "")  # nothing of the solver on the caller's terminal
+
+
+def test_a_run_without_an_output_folder_writes_no_log_and_prints_nothing(tmp_path, capfd, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    autobal.run("pump_pe600_statics")
+    assert capfd.readouterr() == ("", "")
+    assert list(tmp_path.iterdir()) == []
