@@ -7,8 +7,10 @@ import sys
 import threading
 
 import pytest
+import yaml
 
 import autobal
+from autobal import scenario
 from autobal.analysis import ipopt
 from autobal.errors import SolveError
 
@@ -86,3 +88,20 @@ def test_a_run_without_an_output_folder_writes_no_log_and_prints_nothing(tmp_pat
     autobal.run("pump_pe600_statics")
     assert capfd.readouterr() == ("", "")
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.slow
+def test_an_integrator_failure_is_in_the_log(tmp_path, capfd):
+    """CVODES stops at t = 0 with CV_TOO_MUCH_WORK on the compressor's force step of 100 (tests/test_status.py): the
+    run's log says which case failed and with what status; nothing of it reaches the caller's terminal."""
+    d = yaml.safe_load(scenario.resolve("compressor_k180_dynamics").read_text())
+    d["analyses"] = {"transient": {"duration": "2 ms", "points": 21, "cases": [
+        {"input": "force_step", "amplitude": 100}, {"input": "force_step", "amplitude": 0.01}]}}
+    path = tmp_path / "k180_failing.yaml"
+    path.write_text(yaml.safe_dump(d))
+    run = autobal.run(path, out=tmp_path / "o")
+    log = (tmp_path / "o" / "autobal.log").read_text()
+    [line] = [x for x in log.splitlines() if x.startswith("=== transient")]
+    assert run.status == "failed" and line.startswith("=== transient: failed: case 1 (force_step, amplitude 100)")
+    assert "CV_TOO_MUCH_WORK" in line
+    assert capfd.readouterr() == ("", "")
