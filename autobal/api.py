@@ -194,7 +194,8 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
         A scene from :func:`load`, or what :func:`load` takes.
     out : str or Path, optional
         Output folder. When given, the run is written there atomically: results.json, CSV tables,
-        PNG figures and ``autobal.log`` (what the solvers printed); a failed solve leaves
+        PNG figures and ``autobal.log`` (each IPOPT solve's iterations and status, each analysis' status; nothing
+        of the process is redirected, so runs in several threads keep their own logs); a failed solve leaves
         ``failed_solve.json`` instead and an interrupt ``interrupted.json`` (see :mod:`autobal.output`).
         Nothing is written when omitted.
     on_result : callable, optional
@@ -207,8 +208,10 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
     Returns
     -------
     Run
-        Analysis name -> Result.  ``run.status`` is "failed" when an analysis finished with failures
-        (``run.failures``: a residual above its tolerance, an integrator failure); the results are kept.
+        Analysis name -> Result, each with the display units of the scene (``Result.display_choice``: its
+        ``summary()``, tables and figures show them wherever they are called).  ``run.status`` is "failed" when an
+        analysis finished with failures (``run.failures``: a residual above its tolerance, an integrator failure);
+        the results are kept.
 
     Raises
     ------
