@@ -13,6 +13,7 @@ import autobal
 from autobal import scenario
 from autobal.analysis import ipopt
 from autobal.errors import SolveError
+from autobal.output import SolverLog
 
 
 def _solves(log: str) -> list[tuple[str, str, str]]:
@@ -22,23 +23,30 @@ def _solves(log: str) -> list[tuple[str, str, str]]:
     return list(zip(parts[1::3], parts[2::3], texts, strict=True))
 
 
-def test_two_runs_in_two_threads_each_log_their_own_solves_and_leave_the_caller_its_output(tmp_path, capfd):
-    stdout, stderr, fds = sys.stdout, sys.stderr, [os.fstat(fd) for fd in (1, 2)]
-    scenes = {"pump": "pump_pe600_statics", "compressor": "compressor_k180_statics"}
-    runs, errors = {}, []
+SCENES = {"pump": "pump_pe600_statics", "compressor": "compressor_k180_statics"}
 
-    def run(name):
+
+def in_threads(work) -> dict:
+    """``work(name)`` for each scene of SCENES in a thread of its own, all at once; name -> what it returned."""
+    out, errors = {}, []
+
+    def one(name):
         try:
-            runs[name] = autobal.run(scenes[name], out=tmp_path / name)
+            out[name] = work(name)
         except BaseException as exc:  # noqa: BLE001 (reported below)
             errors.append(exc)
 
-    threads = [threading.Thread(target=run, args=(name,)) for name in scenes]
+    threads = [threading.Thread(target=one, args=(name,)) for name in SCENES]
     for t in threads:
         t.start()
     for t in threads:
         t.join()
     assert not errors
+    return out
+
+
+def assert_the_caller_keeps_its_output(capfd, stdout, stderr, fds) -> None:
+    """sys.stdout, sys.stderr and file descriptors 1 and 2 are the caller's, and reach the caller."""
     assert sys.stdout is stdout and sys.stderr is stderr
     assert [(s.st_dev, s.st_ino) for s in (os.fstat(fd) for fd in (1, 2))] == [(s.st_dev, s.st_ino) for s in fds]
     os.write(1, b"caller's line on fd 1\n")
@@ -47,22 +55,48 @@ def test_two_runs_in_two_threads_each_log_their_own_solves_and_leave_the_caller_
     out, err = capfd.readouterr()
     assert out == "caller's line on fd 1\ncaller's print\n" and err == "caller's line on fd 2\n"  # no solver text
 
-    logs = {name: (tmp_path / name / "autobal.log").read_text() for name in scenes}
-    for name, log in logs.items():
-        solves = _solves(log)
-        assert len(solves) > 10
-        for solver, status, text in solves:
-            assert solver in {"statics", "statics_warm", "force_gap", "critical"}
-            assert "iter    objective" in text and status == "Solve_Succeeded"
-            assert text.rstrip().endswith("EXIT: Optimal Solution Found.")
-        assert f"=== statics: ok ({runs[name].timing['statics']:.2f} s)" in log
-    # each log holds its own run's solves, no more, no fewer: the same solves, with the same text, as a run alone
-    for name in scenes:
-        autobal.run(scenes[name], out=tmp_path / f"{name}_alone")
-        alone = _solves((tmp_path / f"{name}_alone" / "autobal.log").read_text())
+
+def assert_solved_statics_log(log: str) -> None:
+    solves = _solves(log)
+    assert len(solves) > 10
+    for solver, status, text in solves:
+        assert solver in {"statics", "statics_warm", "force_gap", "critical"}
+        assert "iter    objective" in text and status == "Solve_Succeeded"
+        assert text.rstrip().endswith("EXIT: Optimal Solution Found.")
+
+
+def test_solves_in_two_threads_go_to_the_log_of_their_own_run(tmp_path, capfd):
+    stdout, stderr, fds = sys.stdout, sys.stderr, [os.fstat(fd) for fd in (1, 2)]
+
+    def run(name):
+        with SolverLog(tmp_path / f"{name}.log"):
+            return autobal.run(SCENES[name])
+
+    in_threads(run)
+    assert_the_caller_keeps_its_output(capfd, stdout, stderr, fds)
+    logs = {name: (tmp_path / f"{name}.log").read_text() for name in SCENES}
+    for log in logs.values():
+        assert_solved_statics_log(log)
+    # each log holds its own run's solves, no more, no fewer: the same solves, iterate for iterate, as a run alone
+    for name in SCENES:
+        alone = []
+        with ipopt.logging_to(alone.append):
+            autobal.run(SCENES[name])
         assert [(s, st, _iterations(t)) for s, st, t in _solves(logs[name])] == [
-            (s, st, _iterations(t)) for s, st, t in alone]
-    assert _solves(logs["pump"])[0][2] != _solves(logs["compressor"])[0][2]
+            (s, st, _iterations(t)) for s, st, t in _solves("".join(alone))]
+    assert _iterations(_solves(logs["pump"])[0][2]) != _iterations(_solves(logs["compressor"])[0][2])
+
+
+@pytest.mark.slow
+@pytest.mark.cli
+def test_two_runs_with_output_folders_in_two_threads_each_log_their_own_solves(tmp_path, capfd):
+    stdout, stderr, fds = sys.stdout, sys.stderr, [os.fstat(fd) for fd in (1, 2)]
+    runs = in_threads(lambda name: autobal.run(SCENES[name], out=tmp_path / name))
+    assert_the_caller_keeps_its_output(capfd, stdout, stderr, fds)
+    for name in SCENES:
+        log = (tmp_path / name / "autobal.log").read_text()
+        assert_solved_statics_log(log)
+        assert f"=== statics: ok ({runs[name].timing['statics']:.2f} s)" in log
 
 
 def _iterations(text: str) -> list[str]:
