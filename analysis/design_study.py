@@ -227,8 +227,8 @@ class DesignResult(Result):
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
-        return {"design_abscissa.csv": {"psi1": self.sweep["psi1"], "nominal": self.sweep["nominal"],
-                                        "optimum": self.sweep["optimum"]}}
+        return {"design_abscissa.csv": QUANTITIES.columns({k: self.sweep[k] for k in ("psi1", "nominal", "optimum")},
+                                                          "abscissa_sweep")}
 
     def draw(self, ax) -> None:
         s = self.sweep

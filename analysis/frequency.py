@@ -1,9 +1,9 @@
 """Amplitude- and phase-frequency characteristics of the face gap (Pavlenko 2014, (2.100)-(2.110)).
 
 For a harmonic discharge pressure dpsi1 = dpsi1a sin(omega t) (with dtau = dpsi1, the appendix
-convention, or dtau = b dpsi1) the gap amplitude in micrometres is
-A_u(omega) = |W_u(i omega)| dpsi1a z_B 1e6 (Pavlenko (2014), App. A and B).  The Bode data come
-from python-control (``control.frequency_response``) on a grid refined near every lightly damped
+convention, or dtau = b dpsi1) the gap amplitude in metres is
+A_u(omega) = |W_u(i omega)| dpsi1a z_B (Pavlenko (2014), App. A and B, in micrometres there).  The Bode data
+come from python-control (``control.frequency_response``) on a grid refined near every lightly damped
 pole; peaks are local maxima refined with a bounded scalar search.  The runner of ``analyses.frequency`` is
 :func:`autobal.analyses.frequency.run`.
 """
@@ -55,14 +55,14 @@ def peaks(lin: LinearModel, omega: np.ndarray, amp: np.ndarray, convention: str,
         res = minimize_scalar(lambda w: -abs(lin.response([w], convention)[0]) * scale,
                               bounds=(omega[i - 1], omega[i + 1]), method="bounded",
                               options={"xatol": PEAK_XATOL * omega[i]})
-        out.append({"omega": float(res.x), "amplitude_um": float(-res.fun)})
+        out.append({"omega": float(res.x), "amplitude": float(-res.fun)})
     return out
 
 
 def characteristic(lin: LinearModel, omega_range: tuple, convention: str, amplitude: float,
                    omega0: float) -> dict:
-    """AFC/PFC of du for one linear model: grid, amplitude (um), phase (deg), peaks, A(omega0)."""
-    scale = amplitude * lin.z_B * 1e6
+    """AFC/PFC of du for one linear model: grid, amplitude (m), phase (deg), peaks, A(omega0)."""
+    scale = amplitude * lin.z_B
     om = grid(lin, *omega_range)
     n = len(lin.states)
     siso = control.ss(lin.A, lin.forcing(convention)[:, None], np.eye(n)[[lin.u_out]], 0)
@@ -73,11 +73,11 @@ def characteristic(lin: LinearModel, omega_range: tuple, convention: str, amplit
     max_real = float(lin.poles().real.max())
     return {
         "stable": max_real < 0, "max_real": max_real,
-        "omega": om, "amplitude_um": mag, "phase_deg": phase,
+        "omega": om, "amplitude": mag, "phase_deg": phase,
         "peaks": peaks(lin, om, mag, convention, scale),
-        "at_operating_speed": {"omega": omega0, "amplitude_um": abs(w0) * scale,
+        "at_operating_speed": {"omega": omega0, "amplitude": abs(w0) * scale,
                                "phase_deg": float(np.degrees(np.angle(w0)))},
-        "static_amplitude_um": float(abs(lin.response([0.0], convention)[0]) * scale),
+        "static_amplitude": float(abs(lin.response([0.0], convention)[0]) * scale),
         "forcing": convention,
     }
 
@@ -87,21 +87,21 @@ def _others(*keys: str) -> str:
     return " ".join(f"{k} models.*.{k}" for k in keys)
 
 
-#: every number of the frequency block (Pavlenko 2014, §2.6): amplitudes of the face gap in µm as the keys say
+#: every number of the frequency block (Pavlenko 2014, §2.6): amplitudes of the face gap in m, shown in µm
 QUANTITIES = Declarations(
     Quantity("headline.peaks[].omega", "rad/s", "ω_I, ω_II", "resonance frequencies of the headline model",
              headline=True, beside="Hz"),
-    Quantity("headline.peaks[].amplitude_um", "um", "A_I, A_II", "face-gap amplitude at the resonances",
+    Quantity("headline.peaks[].amplitude", "m", "A_I, A_II", "face-gap amplitude at the resonances", "µm",
              headline=True),
     Quantity("headline.at_operating_speed.omega", "rad/s", "ω0", "operating speed", headline=True),
-    Quantity("headline.at_operating_speed.amplitude_um", "um", "A(ω0)", "face-gap amplitude at the operating speed",
-             headline=True),
-    Quantity("headline.static_amplitude_um", "um", "A(0)", "static face-gap amplitude", headline=True),
+    Quantity("headline.at_operating_speed.amplitude", "m", "A(ω0)", "face-gap amplitude at the operating speed",
+             "µm", headline=True),
+    Quantity("headline.static_amplitude", "m", "A(0)", "static face-gap amplitude", "µm", headline=True),
     Quantity("headline.max_real", "1/s", "max Re λ", "spectral abscissa of the headline model", headline=True),
     Quantity(_others("peaks[].omega"), "rad/s", "ω", "resonance frequency of a model", beside="Hz"),
     Quantity(_others("at_operating_speed.omega"), "rad/s", "ω0", "operating speed of a model"),
-    Quantity(_others("peaks[].amplitude_um", "at_operating_speed.amplitude_um", "static_amplitude_um"), "um", "A",
-             "face-gap amplitude of a model"),
+    Quantity(_others("peaks[].amplitude", "at_operating_speed.amplitude", "static_amplitude"), "m", "A",
+             "face-gap amplitude of a model", "µm"),
     Quantity("headline.at_operating_speed.phase_deg " + _others("at_operating_speed.phase_deg"), "deg", "φ(ω0)",
              "phase of the face gap at the operating speed"),
     Quantity("max_real models.*.max_real", "1/s", "max Re λ", "spectral abscissa of a model"),
@@ -115,8 +115,8 @@ QUANTITIES = Declarations(
 class FrequencyResult(Result):
     """AFC/PFC of the face gap for each model (Pavlenko (2014), Figs 2.7, 2.11).
 
-    ``data`` is the results.json block plus the curves; amplitudes are in micrometres per
-    forcing amplitude dpsi1a, frequencies in rad/s.
+    ``data`` is the results.json block plus the curves; amplitudes are in metres for the forcing amplitude
+    dpsi1a, frequencies in rad/s.
     """
 
     data: dict
@@ -125,16 +125,16 @@ class FrequencyResult(Result):
 
     @property
     def peaks(self) -> list[dict]:
-        """Resonance peaks of the first model: ``{"omega": rad/s, "amplitude_um": um}`` each."""
+        """Resonance peaks of the first model: ``{"omega": rad/s, "amplitude": m}`` each."""
         return self.data["peaks"]
 
     @property
     def amplitude_at_operating_speed(self) -> float:
         """Face-gap amplitude of the first model at the operating speed omega0, m."""
-        return self.data["at_operating_speed"]["amplitude_um"] * 1e-6
+        return self.data["at_operating_speed"]["amplitude"]
 
     def to_dict(self) -> dict:
-        arrays = ("omega", "amplitude_um", "phase_deg")
+        arrays = ("omega", "amplitude", "phase_deg")
         d = {k: v for k, v in self.data.items() if k not in ("curves", "headline")}
         if "headline" in self.data:
             d["headline"] = {k: v for k, v in self.data["headline"].items() if k not in arrays}
@@ -146,12 +146,12 @@ class FrequencyResult(Result):
         """The verdict (the headline model under physical forcing), its declared numbers in display units, the
         scene's forcing for the headline model, and the source's models apart as validation."""
         d, h = self.data, self.data.get("headline")
-        q_omega, q_amp = QUANTITIES.find("peaks.0.omega"), QUANTITIES.find("peaks.0.amplitude_um")
+        q_omega, q_amp = QUANTITIES.find("peaks.0.omega"), QUANTITIES.find("peaks.0.amplitude")
 
         def curve(c: dict) -> str:
-            pk = ", ".join(f"{q_omega.text(p['omega'])} with {q_amp.text(p['amplitude_um'])}" for p in c["peaks"])
+            pk = ", ".join(f"{q_omega.text(p['omega'])} with {q_amp.text(p['amplitude'])}" for p in c["peaks"])
             a0 = c["at_operating_speed"]
-            return f"peaks {pk or 'none'}; at the operating speed {q_amp.text(a0['amplitude_um'])}"
+            return f"peaks {pk or 'none'}; at the operating speed {q_amp.text(a0['amplitude'])}"
 
         lines = []
         if h:
@@ -173,8 +173,10 @@ class FrequencyResult(Result):
         h = self.data.get("headline")
         if h is not None and (h["model"] not in curves or h["forcing"] != self.data["forcing"]):
             curves[f"headline_{h['model']}_{h['forcing']}"] = h
-        return {f"afc_{m}.csv": {"omega_rad_s": c["omega"], "amplitude_um": c["amplitude_um"],
-                                 "phase_deg": c["phase_deg"]} for m, c in curves.items()}
+        q_omega, q_amp = QUANTITIES.find("peaks.0.omega"), QUANTITIES.find("peaks.0.amplitude")
+        return {f"afc_{m}.csv": {f"omega [{q_omega.display}]": q_omega.shown(np.asarray(c["omega"])),
+                                 f"amplitude [{q_amp.display}]": q_amp.shown(np.asarray(c["amplitude"])),
+                                 "phase [deg]": c["phase_deg"]} for m, c in curves.items()}
 
     def _styles(self) -> list[tuple[str, dict, dict, str]]:
         """(key, curve, line style, legend label) per drawn curve: the headline (energy-consistent model,
@@ -199,12 +201,12 @@ class FrequencyResult(Result):
                 style = {"color": MODEL_COLOURS.get(model) or next(spare), "lw": 0.9, "ls": "--", "zorder": 2}
             if not c.get("stable", True):
                 label += " — unstable"
-            twin = next((lab for om, amp, lab in drawn if _coincide(om, amp, c["omega"], c["amplitude_um"])), None)
+            twin = next((lab for om, amp, lab in drawn if _coincide(om, amp, c["omega"], c["amplitude"])), None)
             if twin is not None:
                 style |= {"ls": (0, (1.5, 2.5)), "lw": 2.0, "marker": "o", "ms": 4, "mfc": "none",
                           "markevery": 0.07, "zorder": 5}
                 label += f"; same curve as {twin}"
-            drawn.append((c["omega"], c["amplitude_um"], MODEL_LABELS.get(model, model)))
+            drawn.append((c["omega"], c["amplitude"], MODEL_LABELS.get(model, model)))
             out.append((key, c, style, label))
         return out
 
@@ -214,24 +216,24 @@ class FrequencyResult(Result):
         in its display unit (µm)."""
         fw, fa = self._axes(ax)
         for _key, c, style, label in self._styles():
-            ax.semilogy(np.asarray(c["omega"]) * fw, np.asarray(c["amplitude_um"]) * fa, label=label, **style)
+            ax.semilogy(np.asarray(c["omega"]) * fw, np.asarray(c["amplitude"]) * fa, label=label, **style)
             for p in c["peaks"]:
-                ax.plot(p["omega"] * fw, p["amplitude_um"] * fa, "o", ms=5, mec="w", mew=0.6, color=style["color"],
+                ax.plot(p["omega"] * fw, p["amplitude"] * fa, "o", ms=5, mec="w", mew=0.6, color=style["color"],
                         zorder=6)
         h = self.data.get("headline") or {"at_operating_speed": self.data["at_operating_speed"]}
         a0 = h["at_operating_speed"]
-        q_omega, q_amp = QUANTITIES.find("at_operating_speed.omega"), QUANTITIES.find("at_operating_speed.amplitude_um")
+        q_omega, q_amp = QUANTITIES.find("at_operating_speed.omega"), QUANTITIES.find("at_operating_speed.amplitude")
         ax.axvline(a0["omega"] * fw, color="k", ls=":", lw=1.0,
                    label=rf"operating speed $\omega_0$ = {q_omega.text(a0['omega'])}")
-        ax.plot(a0["omega"] * fw, a0["amplitude_um"] * fa, "D", color="k", ms=5, zorder=7,
-                label=rf"$A(\omega_0)$ = {q_amp.text(a0['amplitude_um'], 3)} (headline); dots: peaks")
+        ax.plot(a0["omega"] * fw, a0["amplitude"] * fa, "D", color="k", ms=5, zorder=7,
+                label=rf"$A(\omega_0)$ = {q_amp.text(a0['amplitude'], 3)} (headline); dots: peaks")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=6.5)
 
     def _axes(self, ax) -> tuple[float, float]:
         """Label ``ax``: the forcing frequency on x in the display unit of the resonance frequencies (rad/s, Hz
-        on top), the gap amplitude on y in its display unit (µm); the factors from SI (rad/s, µm) to them."""
-        q_omega, q_amp = QUANTITIES.find("peaks.0.omega"), QUANTITIES.find("peaks.0.amplitude_um")
+        on top), the gap amplitude on y in its display unit (µm); the factors from SI (rad/s, m) to them."""
+        q_omega, q_amp = QUANTITIES.find("peaks.0.omega"), QUANTITIES.find("peaks.0.amplitude")
         fw = unit_axis(ax, r"frequency $\omega$", q_omega.unit, q_omega.declared, "x", q_omega.beside)
         return fw, unit_axis(ax, "gap amplitude $A_u$", q_amp.unit, q_amp.declared)
 

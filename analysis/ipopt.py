@@ -4,11 +4,26 @@ On a terminal (analysis/progress.py: not quiet, not a pipe) a solver gets an ite
 solve that runs longer than ``progress.AFTER_S`` draws its own bar: one step per IPOPT iteration, the
 objective and the primal infeasibility in its note.  A solver built off a terminal has no callback and
 pays nothing.
+
+Every solver writes IPOPT's own log (the iteration table, the exit message) at ``FILE_PRINT_LEVEL`` into a file of
+its own (IPOPT's ``output_file``), never onto the terminal (``print_level`` 0); :func:`solve` appends what one
+solve wrote, headed by its name, status and iteration count, to the log of the run it belongs to
+(:func:`logging_to`: a context variable, so runs in several threads each get their own solves).  Nothing of the
+process (its standard output and error, file descriptors 1 and 2) is redirected.
 """
 
 from __future__ import annotations
 
+import atexit
+import contextlib
+import os
+import shutil
+import tempfile
+import threading
 import time
+import weakref
+from collections.abc import Callable
+from contextvars import ContextVar
 
 import casadi as ca
 import numpy as np
@@ -35,6 +50,7 @@ WARM = COLD | {
     "ipopt.warm_start_mult_bound_push": 1e-10,
     "ipopt.mu_init": 1e-8,
 }
+FILE_PRINT_LEVEL = 5  # IPOPT's iteration table and exit message in the solver's log file, not on the terminal
 NOTE_EVERY_S = 0.2  # the bar's note (objective, infeasibility) is refreshed at most this often, s
 
 
@@ -99,6 +115,8 @@ def nlpsol(name: str, x, p, f, g, warm: bool = False, hess_lag: ca.Function | No
         opts["hess_lag"] = hess_lag
     if jac_g is not None:
         opts["jac_g"] = jac_g
+    log = SolveLog(name)
+    opts |= {"ipopt.output_file": log.path, "ipopt.file_print_level": FILE_PRINT_LEVEL}
     bar = None
     if progress.enabled():  # a terminal: long solves show their iterations
         nx, ng, n_p = (int(np.prod(e.shape)) for e in (x, g, p))
@@ -107,6 +125,8 @@ def nlpsol(name: str, x, p, f, g, warm: bool = False, hess_lag: ca.Function | No
     solver = ca.nlpsol(name, "ipopt", {"x": x, "p": p, "f": f, "g": g}, opts)
     if bar is not None:
         solver.autobal_iterations, bar.solver = bar, solver  # the callback lives as long as the solver
+    solver.autobal_log = log
+    weakref.finalize(solver, log.remove)
     return solver
 
 
@@ -116,20 +136,96 @@ def solve(solver: ca.Function, **args) -> dict:
     An interrupt (SIGINT, SIGTERM) during the solve raises :class:`autobal.analysis.interrupt.Interrupted`
     instead of coming back as a solver status.
     """
-    bar = getattr(solver, "autobal_iterations", None)
-    if bar is None or not progress.enabled():
-        out = interrupt.call(solver, **args)
-    else:
-        with progress.steps(None, f"IPOPT {solver.name()}", "iteration", delay=progress.AFTER_S) as bar.bar:
-            bar.calls, bar.next_note = 0, 0.0
-            try:
-                out = interrupt.call(solver, **args)
-            finally:
-                bar.bar = None
-    stats = solver.stats()
+    log = getattr(solver, "autobal_log", None)
+    with log.solving(solver) if log is not None else contextlib.nullcontext():
+        out = _call(solver, args)
+        stats = solver.stats()
     res = {k: np.asarray(v).ravel() for k, v in out.items()}
     res["status"] = stats["return_status"]
     res["success"] = bool(stats["success"])
     res["iterations"] = int(stats.get("iter_count", -1))
     progress.tick(note=f"last: {res['iterations']} iterations, {res['status']}")  # a bar counting solves
     return res
+
+
+def _call(solver: ca.Function, args: dict) -> dict:
+    bar = getattr(solver, "autobal_iterations", None)
+    if bar is None or not progress.enabled():
+        return interrupt.call(solver, **args)
+    with progress.steps(None, f"IPOPT {solver.name()}", "iteration", delay=progress.AFTER_S) as bar.bar:
+        bar.calls, bar.next_note = 0, 0.0
+        try:
+            return interrupt.call(solver, **args)
+        finally:
+            bar.bar = None
+
+
+#: where the solves of this run append their logs (:func:`logging_to`); None: nowhere
+_RUN_LOG: ContextVar[Callable[[str], None] | None] = ContextVar("autobal_run_log", default=None)
+_FOLDER = {"path": None}
+_FOLDER_LOCK = threading.Lock()
+
+
+@contextlib.contextmanager
+def logging_to(write: Callable[[str], None]):
+    """Within the block (in this thread or task), each solve of :func:`solve` calls ``write`` with IPOPT's log of
+    that solve, headed by the solver's name, status and iteration count."""
+    token = _RUN_LOG.set(write)
+    try:
+        yield
+    finally:
+        _RUN_LOG.reset(token)
+
+
+def log(text: str) -> None:
+    """Add ``text`` to the log of the run in progress (:func:`logging_to`), if there is one."""
+    write = _RUN_LOG.get()
+    if write is not None:
+        write(text)
+
+
+class SolveLog:
+    """The file a solver's IPOPT writes its log into (in a temporary folder of this process, removed at exit),
+    and the lock that keeps one solve of that solver at a time, so that what a solve wrote is the file's new
+    part."""
+
+    def __init__(self, name: str):
+        with _FOLDER_LOCK:
+            if _FOLDER["path"] is None:
+                _FOLDER["path"] = tempfile.mkdtemp(prefix="autobal-ipopt-")
+                atexit.register(shutil.rmtree, _FOLDER["path"], True)
+        fd, self.path = tempfile.mkstemp(prefix=f"{name}.", suffix=".log", dir=_FOLDER["path"])
+        os.close(fd)
+        self.lock = threading.Lock()
+
+    @contextlib.contextmanager
+    def solving(self, solver: ca.Function):
+        """One solve: its part of the file goes to the run's log (:func:`log`) when it ends, also when it raises."""
+        with self.lock:
+            start = self.size()
+            status = "raised"
+            try:
+                yield
+                status = solver.stats().get("return_status", "?")
+            finally:
+                if _RUN_LOG.get() is not None:
+                    iterations = solver.stats().get("iter_count", "?") if status != "raised" else "?"
+                    log(f"--- IPOPT {solver.name()}: {status}, {iterations} iterations\n{self.read(start)}\n")
+
+    def size(self) -> int:
+        try:
+            return os.path.getsize(self.path)
+        except OSError:
+            return 0
+
+    def read(self, start: int) -> str:
+        try:
+            with open(self.path, errors="backslashreplace") as fh:
+                fh.seek(start)
+                return fh.read().strip("\n")
+        except OSError:
+            return ""
+
+    def remove(self) -> None:
+        with contextlib.suppress(OSError):
+            os.remove(self.path)

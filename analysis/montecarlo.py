@@ -70,8 +70,8 @@ SCALED = ("nominal", "mean", "std", "band_low", "band_high")
 
 _P14 = "Pavlenko (2014), ch. 3"
 _STATS = " ".join(f"{part}.*.{k}" for part in ("exact", "source") for k in ("cv", "spread", "valid", "invalid"))
-_AFC_UM = "afc.nominal_um afc.mean afc.std afc.band_low afc.band_high afc.at.*.nominal_um " \
-          "afc.at.*.mean_um afc.at.*.std_um afc.quantiles.** afc.nominal_peaks[].amplitude_um"
+_AFC_AMPLITUDES = "afc.nominal afc.mean afc.std afc.band_low afc.band_high afc.at.*.nominal " \
+                  "afc.at.*.mean afc.at.*.std afc.quantiles.** afc.nominal_peaks[].amplitude"
 
 #: every number of the montecarlo block: the source's sampled groups and outputs (u = z/z_B, ψ = p/p_B, q = Q/Q_B)
 #: dimensionless, beside them the physical gap, pressures (``dimensional``) and leak flows Q in SI
@@ -116,8 +116,8 @@ QUANTITIES = Declarations(
              "variation"),
     Quantity("afc.omega afc.at.*.omega afc.nominal_peaks[].omega", "rad/s", "ω", "frequency of the AFC",
              "rad/s"),
-    Quantity(_AFC_UM, "um", "A_u", "face-gap amplitude over the samples (nominal, mean, std, bands, quantiles)",
-             source=f"{_P14}, Fig. 3.7"),
+    Quantity(_AFC_AMPLITUDES, "m", "A_u", "face-gap amplitude over the samples (nominal, mean, std, bands, "
+             "quantiles)", "µm", source=f"{_P14}, Fig. 3.7"),
     Quantity("time_s time_monte_carlo_s afc.time_s", "s", "t", "wall time"),
 )
 
@@ -204,10 +204,10 @@ class MonteCarloResult(Result):
                      " Pavlenko (2014), conclusion 4: 0.20 and 0.25")
         if "afc" in d:
             a = d["afc"]
-            om, amp = q("afc.at.x.omega"), q("afc.at.x.mean_um")
+            om, amp = q("afc.at.x.omega"), q("afc.at.x.mean")
             lines.append(f"  AFC ({a['model']} model, {a['samples']} samples, {a['time_s']:.2f} s): "
                          + "; ".join(f"{k.replace('_', ' ')} {om.text(v['omega'])}: nominal "
-                                     f"{amp.text(v['nominal_um'])}, mean {amp.text(v['mean_um'])}, cv {v['cv']:.3f}"
+                                     f"{amp.text(v['nominal'])}, mean {amp.text(v['mean'])}, cv {v['cv']:.3f}"
                                      for k, v in a["at"].items()))
         return "\n".join(lines)
 
@@ -223,17 +223,19 @@ class MonteCarloResult(Result):
                 cols |= {f"{part}.{k}.{stat}": d[part][k][stat] for stat in stats if stat in d[part][k]}
         out["montecarlo_statics.csv"] = {name.replace(".", "_"): v for name, v in QUANTITIES.columns(cols, "").items()}
         sens = d["sensitivity"]
-        rows = {"psi1": [], "output": [], **{f"d_d_{n}": [] for n in d["parameters"]}}
+        # d output / d group, SI: the unit of each row's output in its own column (the groups are dimensionless)
+        rows = {"psi1 [1]": [], "output": [], "unit": [], **{f"d_d_{n}": [] for n in d["parameters"]}}
         for j, p in enumerate(d["psi1"]):
             for k in SENSITIVITY_OUTPUTS:
-                rows["psi1"].append(p)
+                rows["psi1 [1]"].append(p)
                 rows["output"].append(k)
+                rows["unit"].append(QUANTITIES.find(f"sensitivity.jacobian.{k}").unit)
                 for i, n in enumerate(d["parameters"]):
                     rows[f"d_d_{n}"].append(sens["jacobian"][k][j][i])
         out["montecarlo_sensitivities.csv"] = rows
         if "afc" in d:
             a = d["afc"]
-            out["montecarlo_afc.csv"] = QUANTITIES.columns({k: a[k] for k in ("omega", "nominal_um", "mean", "std",
+            out["montecarlo_afc.csv"] = QUANTITIES.columns({k: a[k] for k in ("omega", "nominal", "mean", "std",
                                                                               "band_low", "band_high")}, "afc")
         return out
 
@@ -301,7 +303,7 @@ class MonteCarloResult(Result):
             fw = unit_axis(ax, r"shaft speed $\omega$", q_omega.unit, q_omega.declared, "x", q_omega.beside)
             fa = unit_axis(ax, "face-gap amplitude $A_u$", q_amp.unit, q_amp.declared)
             omega = np.asarray(a["omega"], float) * fw
-            ax.plot(omega, np.asarray(a["nominal_um"], float) * fa, "k:",
+            ax.plot(omega, np.asarray(a["nominal"], float) * fa, "k:",
                     label=f"nominal: {MODEL_LABELS.get(a['model'], a['model'])}, {a['forcing']} forcing")
             line, = ax.plot(omega, np.asarray(a["mean"], float) * fa, color="C0", label="mean")
             lo, hi, what = self._band(a)

@@ -52,11 +52,11 @@ class AfcModel:
     samples at once per omega.  Nonlinear models: the exact Jacobians A, B of the nonlinear model
     at its equilibrium (linearize.jacobians), mapped over the samples of the dynamic data with
     CasADi ``map``, then (i omega I - A)^-1 b per omega for all samples at once.
-    A_u = |W_u| dpsi1a z_B 1e6 (App. A L3412)."""
+    A_u = |W_u| dpsi1a z_B, m (App. A L3412 prints it in micrometres)."""
 
     def __init__(self, setup, model: str, names, convention: str = "appendix"):
         self.setup, self.model, self.names, self.convention = setup, model, tuple(names), convention
-        self.scale = setup.data.forcing_amplitude * setup.dev.scales["z_B"] * 1e6
+        self.scale = setup.data.forcing_amplitude * setup.dev.scales["z_B"]
         if model in HAND_MODES:
             self.base = setup.constants(model)
             self._nominal = dict(self.base.c)
@@ -160,10 +160,10 @@ def afc_study(device, settings, seed: int, executor, band_sigma: float, quantile
     det = am.amplitude(np.array([[am.nominal()[n] for n in names]]), omega)[0]
     st = statistics(amp, band_sigma, quantiles)
     n = len(grid)
-    at = {k: {"omega": w, "nominal_um": det[n + i], "mean_um": st["mean"][n + i], "std_um": st["std"][n + i],
+    at = {k: {"omega": w, "nominal": det[n + i], "mean": st["mean"][n + i], "std": st["std"][n + i],
               "cv": st["cv"][n + i]} for i, (k, w) in enumerate(marks.items())}
     return {"model": a.model, "forcing": a.forcing, "samples": a.samples, "psi1": a.operating_ratio,
-            "parameters": names, "omega": grid, "nominal_um": det[:n],
+            "parameters": names, "omega": grid, "nominal": det[:n],
             **{k: (v[:n] if isinstance(v, np.ndarray) else v) for k, v in st.items() if k != "quantiles"},
             "quantiles": {q: v[:n] for q, v in st["quantiles"].items()},
             "nominal_peaks": nominal["peaks"], "at": at, "amplitude_samples": amp}

@@ -243,10 +243,17 @@ class Quantity:
         unit = self.display
         out = significant(None if value is None else convert(value, self.unit, unit), digits)
         out += "" if unit == "1" else f" {unit}"
+        also = self.also(value, digits)
+        return f"{out} ({also})" if also else out
+
+    def also(self, value, digits: int = 4) -> str:
+        """'value unit' in the unit shown beside :attr:`display` (rpm beside rad/s, or the declared
+        :attr:`beside`), or "" where there is none: '18880 rpm'."""
+        unit = self.display
         other = beside(self.unit, unit) if self.beside is None else self.beside
-        if other and other != unit and value is not None:
-            out += f" ({significant(convert(value, self.unit, other), digits)} {other})"
-        return out
+        if not other or other == unit or value is None:
+            return ""
+        return f"{significant(convert(value, self.unit, other), digits)} {other}"
 
 
 def _pattern(key: str) -> re.Pattern:

@@ -241,9 +241,9 @@ class ReliabilityResult(Result):
 
     def tables(self) -> dict[str, dict]:
         c = self.data["curve"]
-        return {"reliability_curve.csv": {"t_h": c["t_h"], "P_literal": c["P_literal"],
-                                          "P_renormalised": c["P_renormalised"],
-                                          "P_wear_le_base_gap": c["P_wear_le_base_gap"]}}
+        q = QUANTITIES.find("curve.t_h")
+        curves = QUANTITIES.columns({k: c[k] for k in ("P_literal", "P_renormalised", "P_wear_le_base_gap")}, "curve")
+        return {"reliability_curve.csv": {f"t [{q.display}]": q.shown(np.asarray(c["t_h"], float))} | curves}
 
     def draw(self, ax) -> None:
         """Probability of failure-free operation against time, both readings of (1.48), Fig. 1.28."""

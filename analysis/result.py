@@ -9,6 +9,7 @@ plotting neither switches the caller's backend nor writes anything; ``save(folde
 from __future__ import annotations
 
 import csv
+import functools
 import json
 import math
 from html import escape
@@ -230,6 +231,29 @@ def fmt(v, digits: int = 5) -> str:
     return f"{v:.{digits}g}"
 
 
+#: the methods of a Result that show numbers to a person, in display units: each runs in the display units of the
+#: scene the result came from (:attr:`Result.display_choice`), under a caller's own ``display_units`` block
+SHOWN = ("summary", "tables", "figures", "draw", "headline", "verdict")
+
+
+def in_display_units(method):
+    """``method`` of a Result, run in the display units of the result's scene (:attr:`Result.display_choice`):
+    the kinds the caller chose (an enclosing :func:`~autobal.analysis.quantities.display_units`) keep the
+    caller's unit."""
+    if getattr(method, "in_display_units", False):
+        return method
+
+    @functools.wraps(method)
+    def shown(self, *args, **kwargs):
+        from autobal.analysis.quantities import display_units
+
+        with display_units(self.display_choice, under=True):
+            return method(self, *args, **kwargs)
+
+    shown.in_display_units = True
+    return shown
+
+
 class Result:
     """Base of every analysis result.
 
@@ -243,6 +267,15 @@ class Result:
     #: every number of :meth:`to_dict`, declared (:class:`~autobal.analysis.quantities.Declarations`); None: a
     #: result without headline numbers (its summary stands in the notebook view)
     quantities = None
+    #: the display units of the scene this result was run from, kind -> unit (``autobal.run`` sets it from the
+    #: scene's ``display`` section): :data:`SHOWN` methods show them wherever they are called
+    display_choice: dict | None = None
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        for name in SHOWN:
+            if name in cls.__dict__:
+                setattr(cls, name, in_display_units(cls.__dict__[name]))
 
     def to_dict(self) -> dict:
         """The results.json block: plain numbers in SI or named dimensionless groups."""
@@ -302,14 +335,16 @@ class Result:
         return None
 
     def headline(self) -> list[dict]:
-        """The headline quantities as records (quantity, symbol, value and unit as displayed, SI value and unit,
-        key), from the declarations of :attr:`quantities`; empty where the analysis declares none."""
+        """The headline quantities as records (quantity, symbol, value and unit as displayed, the value in the unit
+        shown beside it (rpm beside rad/s), SI value and unit, key), from the declarations of :attr:`quantities`;
+        empty where the analysis declares none."""
         from autobal.analysis.quantities import significant
 
         if self.quantities is None:
             return []
         return [{"quantity": q.description, "symbol": q.symbol, "value": significant(q.shown(v)),
-                 "unit": "" if q.display == "1" else q.display, "si_value": v, "si_unit": q.unit, "key": key}
+                 "unit": "" if q.display == "1" else q.display, "beside": q.also(v),
+                 "si_value": v, "si_unit": q.unit, "key": key}
                 for q, key, v in self.quantities.headline(self.to_dict())]
 
     def to_dataframe(self, table: str | None = None):
@@ -344,6 +379,10 @@ class Result:
         return f"<{type(self).__name__} {self.name}>"
 
 
+for _name in SHOWN:
+    setattr(Result, _name, in_display_units(getattr(Result, _name)))
+
+
 def html_verdict(verdict: tuple[bool | None, str] | None) -> str:
     """A verdict as an HTML paragraph: ✔ good, ✘ bad, • information."""
     if verdict is None:
@@ -353,7 +392,7 @@ def html_verdict(verdict: tuple[bool | None, str] | None) -> str:
     return f'<p style="color:{colour};font-weight:bold">{mark} {escape(words)}</p>'
 
 
-def html_table(rows: list[dict], columns: tuple[str, ...] = ("quantity", "symbol", "value", "unit")) -> str:
+def html_table(rows: list[dict], columns: tuple[str, ...] = ("quantity", "symbol", "value", "unit", "beside")) -> str:
     """Records as an HTML table of the named columns."""
     head = "".join(f"<th>{escape(c)}</th>" for c in columns)
     body = "".join("<tr>" + "".join(f"<td>{escape(str(r.get(c, '')))}</td>" for c in columns) + "</tr>" for r in rows)

@@ -229,10 +229,10 @@ def events(model: DynamicModel, t: np.ndarray, X: np.ndarray, psi1: np.ndarray) 
     return out
 
 
-#: every number of the transient block (Pavlenko 2014, §2.5); face-gap changes in µm as the keys say
+#: every number of the transient block (Pavlenko 2014, §2.5); face-gap changes in m, shown in µm
 QUANTITIES = Declarations(
-    Quantity("cases[].max_dz_um", "um", "max |Δz|", "largest face-gap change of a case", headline=True),
-    Quantity("cases[].final_dz_um", "um", "Δz(t_end)", "face-gap change at the end of a case", headline=True),
+    Quantity("cases[].max_dz", "m", "max |Δz|", "largest face-gap change of a case", "µm", headline=True),
+    Quantity("cases[].final_dz", "m", "Δz(t_end)", "face-gap change at the end of a case", "µm", headline=True),
     Quantity("cases[].z", "m", "z", "face gap over time", "µm"),
     Quantity("cases[].p2 cases[].p3", "Pa", "p2, p3", "chamber pressures over time"),
     Quantity("cases[].amplitude", "1", "δψ1, δτ", "input amplitude, ratio of the discharge pressure or the load"),
@@ -259,7 +259,7 @@ class TransientResult(Result):
     @property
     def max_gap_change(self) -> list[float]:
         """Largest face-gap change max |z - z0| of each case, m."""
-        return [c["max_dz_um"] * 1e-6 for c in self.data["series"]]
+        return [c["max_dz"] for c in self.data["series"]]
 
     def to_dict(self) -> dict:
         return {k: v for k, v in self.data.items() if k != "series"} | {
@@ -267,18 +267,23 @@ class TransientResult(Result):
 
     def summary(self) -> str:
         lines = [*failed_head(self.failures()), f"transients ({self.data['model']} model, {self.data['integrator']}):"]
+        dz = QUANTITIES.find("cases.0.max_dz")
         for c in self.data["series"]:
             ev = "; ".join(e.get("message", e["event"] + f" at t = {e['t']:.4g} s") for e in c["events"]) or "none"
             fail = f"; integrator failed at t = {c['failure']['t']:.4g} s" if c["failure"] else ""
-            lines.append(f"  {c['input']:17s} amplitude {c['amplitude']:g}: max |dz| = {c['max_dz_um']:.3g} um, "
-                         f"final dz = {c['final_dz_um']:.3g} um; events: {ev}{fail}")
+            lines.append(f"  {c['input']:17s} amplitude {c['amplitude']:g}: max |dz| = {dz.text(c['max_dz'], 3)}, "
+                         f"final dz = {dz.text(c['final_dz'], 3)}; events: {ev}{fail}")
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
         out = {}
         for i, c in enumerate(self.data["series"]):
-            cols = {"t_s": c["t"]} | {k: c["X"][:, j] for j, k in enumerate(self.data["states"])}
-            out[f"transient_{i}_{c['input']}.csv"] = cols | {"z_m": c["z"], "p2_Pa": c["p2"], "p3_Pa": c["p3"]}
+            q_t, q_z, q_p = (QUANTITIES.find(f"cases.0.{k}") for k in ("t_end", "z", "p2"))
+            cols = {f"t [{q_t.display}]": q_t.shown(np.asarray(c["t"]))}
+            cols |= {f"{k} [1]": c["X"][:, j] for j, k in enumerate(self.data["states"])}  # the source's groups
+            out[f"transient_{i}_{c['input']}.csv"] = cols | {f"z [{q_z.display}]": q_z.shown(np.asarray(c["z"])),
+                                                             f"p2 [{q_p.display}]": q_p.shown(np.asarray(c["p2"])),
+                                                             f"p3 [{q_p.display}]": q_p.shown(np.asarray(c["p3"]))}
         return out
 
     def draw(self, ax) -> None:
@@ -344,12 +349,12 @@ def study(model: DynamicModel, cases: list, duration: float, points: int, integr
             keep = t <= cut
             t, X = t[keep], X[keep]
         z = X[:, model.index("u")] * sc["z_B"]
-        dz = (z - z[0]) * 1e6
+        dz = z - z[0]
         series.append({
             "input": kind, "amplitude": case["amplitude"], "frequency": omega if kind == "pressure_harmonic" else None,
             "t": t, "X": X, "z": z, "p2": X[:, model.index("psi2")] * sc["p_B"],
             "p3": X[:, model.index("psi3")] * sc["p_B"],
-            "max_dz_um": float(np.abs(dz).max()), "final_dz_um": float(dz[-1]), "events": ev,
+            "max_dz": float(np.abs(dz).max()), "final_dz": float(dz[-1]), "events": ev,
             "failure": r["failure"], "cpu_s": cpu, "t_end": float(t[-1]),
             **({"failure_status": "none: the integrator reached the end time or a stop event"}
                if r["failure"] is None else {}),
@@ -397,11 +402,11 @@ def accuracy(model: DynamicModel, res: TransientResult, cases: list, duration: f
         omega = case.get("frequency") or model.data.omega0
         r = tight.run(tight.input_vector(case["input"], case["amplitude"], omega, case.get("couple", True)))
         k = min(len(c["z"]), len(r["t"]))
-        dz, dz_t = (c["z"][:k] - c["z"][0]) * 1e6, (r["X"][:k, iu] - r["X"][0, iu]) * z_B * 1e6
+        dz, dz_t = c["z"][:k] - c["z"][0], (r["X"][:k, iu] - r["X"][0, iu]) * z_B
         ref = max(np.abs(dz_t).max(), 1e-300)
         per.append({"input": c["input"], "curve": float(np.abs(dz - dz_t).max() / ref),
-                    "max_dz": abs(c["max_dz_um"] - np.abs(dz_t).max()) / ref,
-                    "final_dz": abs(c["final_dz_um"] - dz_t[-1]) / ref if k == len(c["z"]) else math.nan})
+                    "max_dz": abs(c["max_dz"] - np.abs(dz_t).max()) / ref,
+                    "final_dz": abs(c["final_dz"] - dz_t[-1]) / ref if k == len(c["z"]) else math.nan})
     est = max(max(p["curve"], p["max_dz"], 0.0 if math.isnan(p["final_dz"]) else p["final_dz"]) for p in per)
     return {"estimate": float(est), "cases": per, "rtol": sim.rtol, "atol": sim.atol,
             "how": f"largest difference of the face-gap response dz(t) (and of max |dz|, final dz) between the run "

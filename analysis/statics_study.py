@@ -198,8 +198,8 @@ class StaticsResult(Result):
         cols |= {k: sw[k] for k in ("regulator_saturated", "contact")}
         cols |= {f"closed_form_{k} [1]": v for k, v in sw["closed_form"].items() if not k.endswith("_status")}
         return {"statics_sweep.csv": cols,
-                "force_gap.csv": {"u": fg["u"], "phi_exact": fg["phi_exact"],
-                                  "phi_closed_form": fg["phi_closed_form"]}}
+                "force_gap.csv": {"u [1]": fg["u"], "phi_exact [1]": fg["phi_exact"],
+                                  "phi_closed_form [1]": fg["phi_closed_form"]}}
 
     # dimensional axes: (key of the base in data["scales"] or "Q_B", the quantity whose shown unit the axis takes)
     _BASES = {"p": ("p_B", "exact.p1"), "z": ("z_B", "exact.z0"), "x": ("x_B", "exact.x0"), "Q": ("Q_B", "exact.Q_T")}

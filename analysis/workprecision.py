@@ -80,8 +80,8 @@ class WorkPrecision(Result):
         return self.analysis
 
     def tables(self) -> dict[str, dict]:
-        return {f"workprecision_{self.analysis}.csv": {k: [r[k] for r in self.rows]
-                                                       for k in ("method", "setting", "error", "time_s")}}
+        columns = {"method": "method", "setting [1]": "setting", "error [1]": "error", "time [s]": "time_s"}
+        return {f"workprecision_{self.analysis}.csv": {name: [r[k] for r in self.rows] for name, k in columns.items()}}
 
     def figures(self) -> dict:
         fig, ax = new_figure((6.4, 4.6))

@@ -11,8 +11,8 @@
 
 from __future__ import annotations
 
+import contextlib
 import datetime
-import os
 import platform
 import sys
 import time
@@ -174,9 +174,14 @@ def _render_report(folder: Path) -> list[Path]:
     try:
         return [report.render(folder)]
     except Exception as exc:  # noqa: BLE001 (a report must not lose the results or replace the run's error)
-        with open(folder / LOG, "a") as log:
-            log.write(f"report.html not written: {type(exc).__name__}: {exc}\n")
+        _note(folder, f"report.html not written: {type(exc).__name__}: {exc}")
         return []
+
+
+def _note(folder: Path, line: str) -> None:
+    """Append one line to ``folder``'s autobal.log."""
+    with open(folder / LOG, "a") as log:
+        log.write(line + "\n")
 
 
 def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=None,
@@ -189,7 +194,8 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
         A scene from :func:`load`, or what :func:`load` takes.
     out : str or Path, optional
         Output folder. When given, the run is written there atomically: results.json, CSV tables,
-        PNG figures and ``autobal.log`` (what the solvers printed); a failed solve leaves
+        PNG figures and ``autobal.log`` (each IPOPT solve's iterations and status, each analysis' status; nothing
+        of the process is redirected, so runs in several threads keep their own logs); a failed solve leaves
         ``failed_solve.json`` instead and an interrupt ``interrupted.json`` (see :mod:`autobal.output`).
         Nothing is written when omitted.
     on_result : callable, optional
@@ -202,8 +208,10 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
     Returns
     -------
     Run
-        Analysis name -> Result.  ``run.status`` is "failed" when an analysis finished with failures
-        (``run.failures``: a residual above its tolerance, an integrator failure); the results are kept.
+        Analysis name -> Result, each with the display units of the scene (``Result.display_choice``: its
+        ``summary()``, tables and figures show them wherever they are called).  ``run.status`` is "failed" when an
+        analysis finished with failures (``run.failures``: a residual above its tolerance, an integrator failure);
+        the results are kept.
 
     Raises
     ------
@@ -218,8 +226,9 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
     interrupt.ensure()  # record SIGINT/SIGTERM even when they arrive inside a solver
     folder = OutputFolder(out) if out is not None else None
     results, timing, current = {}, {}, None
+    log = SolverLog(folder.tmp / LOG) if folder is not None else None
     try:
-        with SolverLog(folder.tmp / LOG if folder else os.devnull) as log, executor.using(scheduler), \
+        with log or contextlib.nullcontext(), executor.using(scheduler), \
                 display_units(display(scene), under=True):  # the summaries on_result prints
             for current in analyses.named(scene):
                 t0 = time.perf_counter()
@@ -228,9 +237,13 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
                 finally:
                     interrupt.check()  # an interrupt a solver swallowed, or turned into another error, is one
                 timing[current] = time.perf_counter() - t0
+                results[current].display_choice = display(scene)  # its summary() later shows what the run did
+                failures = results[current].failures()
+                if log is not None:
+                    log.write(f"=== {current}: {'failed: ' + '; '.join(failures) if failures else 'ok'} "
+                              f"({timing[current]:.2f} s)")
                 if on_result is not None:
-                    with log.terminal():
-                        on_result(current, results[current], timing[current])
+                    on_result(current, results[current], timing[current])
         done = Run(scene, results, timing)
         if folder is not None:
             done.write(folder.tmp)
@@ -238,6 +251,7 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
         return done
     except SolveError as exc:
         if folder is not None:
+            _note(folder.tmp, f"=== {current}: solve failed, status {exc.status}: {exc}")
             _finish(folder, scene, "failed_solve.json", {"status": exc.status, "analysis": current,
                                                          "error": str(exc), "last_iterate": exc.last_iterate})
         raise
@@ -248,6 +262,7 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
         raise
     except AutobalError as exc:
         if folder is not None:
+            _note(folder.tmp, f"=== {current}: {type(exc).__name__}: {exc}")
             _finish(folder, scene, "error.json", {"status": "error", "analysis": current, "error": str(exc)})
         raise
     except BaseException:

@@ -27,18 +27,14 @@ leaves a half-moved folder; a temporary folder that no run will commit is remove
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import errno
 import os
 import shutil
 import signal
-import sys
 import tempfile
 import threading
-import warnings
 from pathlib import Path
 
-from autobal.analysis import progress
 from autobal.errors import ScenarioError
 from autobal.text import clean
 
@@ -148,72 +144,37 @@ class OutputFolder:
         self.commit()
 
 
-def _flush_c_stdout() -> None:
-    with contextlib.suppress(Exception):
-        ctypes.CDLL(None).fflush(None)
-
-
 class SolverLog:
-    """Within ``with SolverLog(path):`` what solvers print (IPOPT, CasADi, CVODES: C-level stdout and
-    stderr, Python's stderr) and Python warnings go to ``path``; progress bars still reach the terminal,
-    and :meth:`terminal` gives the real stdout back for a moment."""
+    """Within ``with SolverLog(path) as log:`` every IPOPT solve of this thread (its context: runs in other threads
+    keep their own logs) appends its iteration log and status to ``path`` (:func:`autobal.analysis.ipopt.solve`),
+    and :meth:`write` adds the run's own lines (an analysis' status, a failed solve).  Nothing of the process is
+    redirected: standard output and error (file descriptors 1 and 2, ``sys.stdout``, ``sys.stderr``), warnings
+    and progress bars stay the caller's."""
 
     def __init__(self, path: str | Path):
         self.path = path
+        self._lock = threading.Lock()
 
     def __enter__(self):
-        with signals_held():  # an interrupt between the redirections would leave the terminal in the log
-            return self._enter()
+        from autobal.analysis import ipopt
 
-    def _enter(self):
-        sys.stdout.flush()
-        sys.stderr.flush()
-        _flush_c_stdout()
-        self._log = open(self.path, "a")  # noqa: SIM115 (closed in __exit__)
-        self._warnings = warnings.catch_warnings()
-        self._warnings.__enter__()
-        warnings.simplefilter("default")
-        warnings.showwarning = lambda msg, cat, fname, line, file=None, text=None: self._log.write(
-            warnings.formatwarning(msg, cat, fname, line, text))
-        self._saved = os.dup(1)
-        self._saved_err = os.dup(2)
-        self._py_stderr = sys.stderr
-        # progress bars keep the terminal; Python's stderr (tracebacks a solver prints from a callback) and
-        # C-level stdout and stderr go to the log
-        self._terminal_err = open(os.dup(self._saved_err), "w", buffering=1, errors="backslashreplace")  # noqa: SIM115
-        self._bars = progress.output(self._terminal_err)
-        self._bars.__enter__()
-        sys.stderr = self._log
-        os.dup2(self._log.fileno(), 1)
-        os.dup2(self._log.fileno(), 2)
+        self._log = open(self.path, "a", errors="backslashreplace")  # noqa: SIM115 (closed in __exit__)
+        self._logging = ipopt.logging_to(self.write)
+        self._logging.__enter__()
         return self
 
     def __exit__(self, *exc):
-        with signals_held():
-            self._exit(*exc)
+        self._logging.__exit__(*exc)
+        with self._lock:
+            self._log.close()
 
-    def _exit(self, *exc):
-        sys.stdout.flush()
-        sys.stderr.flush()
-        _flush_c_stdout()
-        os.dup2(self._saved, 1)
-        os.dup2(self._saved_err, 2)
-        os.close(self._saved)
-        os.close(self._saved_err)
-        sys.stderr = self._py_stderr
-        self._bars.__exit__(None, None, None)
-        self._terminal_err.close()
-        self._warnings.__exit__(*exc)
-        self._log.close()
+    def write(self, text: str) -> None:
+        """Append ``text`` (a line is ended if it is not) to the log, at once."""
+        with self._lock:
+            self._log.write(text if text.endswith("\n") else text + "\n")
+            self._log.flush()
 
     @contextlib.contextmanager
     def terminal(self):
-        """The real stdout, for printing inside the block."""
-        sys.stdout.flush()
-        _flush_c_stdout()
-        os.dup2(self._saved, 1)
-        try:
-            yield
-        finally:
-            sys.stdout.flush()
-            os.dup2(self._log.fileno(), 1)
+        """Print inside the block (the terminal is never taken away: kept for callers that ask for it)."""
+        yield

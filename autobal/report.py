@@ -318,10 +318,10 @@ _STATICS = (("critical margin", "δψ_kr", "dpsi_kr", "1"), ("critical discharge
             ("valve chamber pressure", "ψ_cam0", "psi_cam0", "1"), ("disc chamber pressure", "ψ20", "psi2_0", "1"),
             ("cavity pressure", "ψ30", "psi3_0", "1"))
 _AFC = (("first AFC peak", "ω_I", "peaks.0.omega", "rad/s"),
-        ("first peak amplitude", "A_I", "peaks.0.amplitude_um", "um"),
+        ("first peak amplitude", "A_I", "peaks.0.amplitude", "m"),
         ("second AFC peak", "ω_II", "peaks.1.omega", "rad/s"),
-        ("second peak amplitude", "A_II", "peaks.1.amplitude_um", "um"),
-        ("amplitude at the operating speed", "A(ω0)", "at_operating_speed.amplitude_um", "um"))
+        ("second peak amplitude", "A_II", "peaks.1.amplitude", "m"),
+        ("amplitude at the operating speed", "A(ω0)", "at_operating_speed.amplitude", "m"))
 
 
 def _statics_published(values: tuple, where: tuple) -> list:
@@ -346,8 +346,10 @@ PUBLISHED = {
         (0.017, 1.471, 0.029, 0.967, 0.356, 1.367, 1.007, 0.223),
         ("Eq. (2.160), App. B", "Eq. (2.160), App. B", "App. B", "Eq. (2.147), App. B", "App. B", "App. B",
          "Eq. (2.145), App. B", "Eq. (2.146), App. B"))},
-    "pump_pe600_dynamics": {"frequency": _afc_published((1980.0, 25.0, 2920.0, 10.0, 7.0), "§2.6, AFC figure")},
-    "compressor_k180_dynamics": {"frequency": _afc_published((2340.0, 33.0, 4810.0, 18.0, 20.0), "§2.7, AFC figure")},
+    "pump_pe600_dynamics": {"frequency": _afc_published((1980.0, 25.0e-6, 2920.0, 10.0e-6, 7.0e-6),
+                                                        "§2.6, AFC figure")},
+    "compressor_k180_dynamics": {"frequency": _afc_published((2340.0, 33.0e-6, 4810.0, 18.0e-6, 20.0e-6),
+                                                             "§2.7, AFC figure")},
     "hydroheel_wear": {"reliability": [
         ("largest gap", "u_max", "u_max", 1.5, "1", "Pavlenko (2014), Eq. (1.52)"),
         ("load group", "χ0", "chi0", 1.76, "1", "Pavlenko (2014), Eq. (1.30)"),
@@ -388,7 +390,9 @@ def _comparison(sec: Section, scenario: str) -> None:
             continue  # the published AFC spread is the program model's (the montecarlo room's report_section says so)
         got = sec.get(key) if key else None
         rel = (got - published) / abs(published) if isinstance(got, int | float) and published else None
-        out.append([text(label), text(symbol), cell(published, unit), cell(got, unit),
+        q = quantity(f"{sec.name}.{key}", sec.results) if key else None  # its declared display unit (µm, not mm)
+        shown = q.display if q is not None and q.unit == unit else None
+        out.append([text(label), text(symbol), cell(published, unit, shown), cell(got, unit, shown),
                     cell(None if rel is None else 100 * rel, "%"), text(where)])
     sec.comparison = table("Comparison with the source's published values (docs/validation.md explains each "
                            "difference)",

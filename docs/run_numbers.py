@@ -113,8 +113,8 @@ def dynamics(results: dict) -> dict:
     out: dict = {"afc": {}, "poles": {}}
     for model, f in results["frequency"]["models"].items():
         out["afc"][model] = {"peak_rad_s": [p["omega"] for p in f["peaks"]],
-                             "peak_um": [p["amplitude_um"] for p in f["peaks"]],
-                             "at_operating_speed_um": f["at_operating_speed"]["amplitude_um"],
+                             "peak_um": [p["amplitude"] / 1e-6 for p in f["peaks"]],  # m in results.json
+                             "at_operating_speed_um": f["at_operating_speed"]["amplitude"] / 1e-6,
                              "operating_over_first_peak": f["at_operating_speed"]["omega"] / f["peaks"][0]["omega"]}
     for model, st in results["stability"]["models"].items():
         poles = list(zip(st["poles"]["real"], st["poles"]["imag"], strict=True))

@@ -74,13 +74,13 @@ def test_published_pump_afc_reproduced(pump):
     # 660 rad/s (read off a figure); [derived] reproduction 1977.2/25.20, 2912.5/9.90, 6.84 um
     r = afc(pump)
     (p1, p2) = r["peaks"]
-    assert abs(p1["omega"] - 1977.2) < 10 and abs(p1["amplitude_um"] - 25.2) < 0.5
-    assert abs(p2["omega"] - 2912.5) < 10 and abs(p2["amplitude_um"] - 9.9) < 0.3
-    assert abs(r["at_operating_speed"]["amplitude_um"] - 6.84) < 0.1
+    assert abs(p1["omega"] - 1977.2) < 10 and abs(p1["amplitude"] * 1e6 - 25.2) < 0.5
+    assert abs(p2["omega"] - 2912.5) < 10 and abs(p2["amplitude"] * 1e6 - 9.9) < 0.3
+    assert abs(r["at_operating_speed"]["amplitude"] * 1e6 - 6.84) < 0.1
     # against the thesis's printed figures, to the digits it prints
     assert abs(p1["omega"] - 1980) < 10 and abs(p2["omega"] - 2920) < 15
-    assert abs(p1["amplitude_um"] - 25) < 1 and abs(p2["amplitude_um"] - 10) < 0.5
-    assert abs(r["at_operating_speed"]["amplitude_um"] - 7) < 0.3
+    assert abs(p1["amplitude"] * 1e6 - 25) < 1 and abs(p2["amplitude"] * 1e6 - 10) < 0.5
+    assert abs(r["at_operating_speed"]["amplitude"] * 1e6 - 7) < 0.3
 
 
 @pytest.mark.literature
@@ -89,9 +89,9 @@ def test_published_compressor_afc_reproduced(comp):
     # [derived] reproduction 2343.4/32.52, 4811.1/17.98, 19.97 um
     r = afc(comp)
     (p1, p2) = r["peaks"]
-    assert abs(p1["omega"] - 2343.4) < 10 and abs(p1["amplitude_um"] - 32.5) < 0.5
-    assert abs(p2["omega"] - 4811.1) < 10 and abs(p2["amplitude_um"] - 18.0) < 0.3
-    assert abs(r["at_operating_speed"]["amplitude_um"] - 19.97) < 0.1
+    assert abs(p1["omega"] - 2343.4) < 10 and abs(p1["amplitude"] * 1e6 - 32.5) < 0.5
+    assert abs(p2["omega"] - 4811.1) < 10 and abs(p2["amplitude"] * 1e6 - 18.0) < 0.3
+    assert abs(r["at_operating_speed"]["amplitude"] * 1e6 - 19.97) < 0.1
 
 
 def test_physical_forcing_does_not_give_the_published_afc(pump):
@@ -99,8 +99,8 @@ def test_physical_forcing_does_not_give_the_published_afc(pump):
     # A(660) = 2.27 um: the published figure needs the appendix's b = 1 in the forcing
     r = afc(pump, convention="physical")
     assert_allclose([p["omega"] for p in r["peaks"]], [1962, 2887], atol=5)
-    assert_allclose([p["amplitude_um"] for p in r["peaks"]], [6.8, 7.1], atol=0.1)
-    assert_allclose(r["at_operating_speed"]["amplitude_um"], 2.27, atol=0.02)
+    assert_allclose([p["amplitude"] * 1e6 for p in r["peaks"]], [6.8, 7.1], atol=0.1)
+    assert_allclose(r["at_operating_speed"]["amplitude"] * 1e6, 2.27, atol=0.02)
 
 
 @pytest.mark.literature
@@ -336,8 +336,8 @@ def test_pump_scene_results_keys(tmp_path):
     assert f["model"] == s["model"] == "nonlinear" and s["stable"] is True and f["headline"]["forcing"] == "physical"
     fp, sp = f["models"]["program"], s["models"]["program"]
     assert [round(p["omega"]) for p in fp["peaks"]] == [1977, 2912]
-    assert set(f["peaks"][0]) == {"omega", "amplitude_um"}
-    assert abs(fp["at_operating_speed"]["amplitude_um"] - 6.84) < 0.1
+    assert set(f["peaks"][0]) == {"omega", "amplitude"}
+    assert abs(fp["at_operating_speed"]["amplitude"] * 1e6 - 6.84) < 0.1
     assert sp["stable"] is False and len(sp["poles"]["real"]) == len(sp["poles"]["imag"]) == 8
     assert sp["hurwitz"]["negative_minors"] and s["models"]["nonlinear"]["stable"] is True
     assert "no single change" in s["restoring"]["program"] and "stem damping" in s["restoring"]["program"]

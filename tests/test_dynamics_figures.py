@@ -29,8 +29,8 @@ def test_headline_is_the_energy_model_under_physical_forcing_beside_unchanged_to
     assert "omega" not in h  # no curves in results.json
     # A(omega0) by the direct solve against the python-control curve interpolated at omega0
     c = afc.data["headline"]
-    assert h["at_operating_speed"]["amplitude_um"] == pytest.approx(
-        np.interp(h["at_operating_speed"]["omega"], c["omega"], c["amplitude_um"]), rel=2e-3)
+    assert h["at_operating_speed"]["amplitude"] == pytest.approx(
+        np.interp(h["at_operating_speed"]["omega"], c["omega"], c["amplitude"]), rel=2e-3)
     # the stability block leads with the same model and agrees on its verdict
     st = stability.study(pump, ["program", "nonlinear"], None, "pump").to_dict()
     assert st["headline"]["model"] == "nonlinear" and st["headline"]["stable"] is True

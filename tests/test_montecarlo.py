@@ -240,8 +240,8 @@ def test_vectorised_afc_equals_the_linear_models_response(scene, model, names):
     mine = am.amplitude(np.array([[am.nominal()[n] for n in names]] * 3), om)
     theirs = np.abs(am.setup.linear(model).response(om, "appendix")) * am.scale
     assert_allclose(mine, np.tile(theirs, (3, 1)), rtol=1e-10)
-    if model == "program":  # recomputation of the published 7, 25 and 10 um
-        assert_allclose(mine[0, 1:4], [6.84, 25.20, 9.90], atol=0.01)
+    if model == "program":  # recomputation of the published 7, 25 and 10 um (amplitudes in m)
+        assert_allclose(mine[0, 1:4], [6.84e-6, 25.20e-6, 9.90e-6], atol=0.01e-6)
 
 
 def program_afc(scene):
@@ -263,7 +263,7 @@ def test_shipped_afc_monte_carlo_is_the_energy_consistent_model_under_physical_f
     assert list(r["at"]) == ["operating_speed", "peak_1"]
     at = r["at"]
     assert_allclose(at["peak_1"]["omega"], 987.0, atol=0.5)
-    assert_allclose([at["peak_1"]["nominal_um"], at["operating_speed"]["nominal_um"]], [15.82, 3.60], atol=0.01)
+    assert_allclose([at["peak_1"]["nominal"], at["operating_speed"]["nominal"]], [15.82e-6, 3.60e-6], atol=0.01e-6)
     assert 0 < r["at"]["peak_1"]["cv"] < 1
 
 
@@ -284,11 +284,11 @@ def test_afc_spread_of_the_program_model_matches_spec(scene):
     # A(660) = 6.84 um and the peaks 25.20, 9.90 um (spec §6.1.4 recomputation), and between grid points
     # against the state-space response of the same linear model (LinearModel.response, not the operator N(p))
     assert a.model == "program" and a.forcing == "appendix"
-    assert_allclose([at["operating_speed"]["nominal_um"], at["peak_1"]["nominal_um"], at["peak_2"]["nominal_um"]],
-                    [6.84, 25.20, 9.90], atol=0.01)
+    assert_allclose([at["operating_speed"]["nominal"], at["peak_1"]["nominal"], at["peak_2"]["nominal"]],
+                    [6.84e-6, 25.20e-6, 9.90e-6], atol=0.01e-6)
     am = mcafc.afc_model(device_part.adapt(scene.device), a.operating_ratio, a.model, list(a.parameters), a.forcing)
     ctrl = np.abs(am.setup.linear("program").response(r["omega"], "appendix")) * am.scale
-    assert_allclose(r["nominal_um"], ctrl, rtol=1e-9)
+    assert_allclose(r["nominal"], ctrl, rtol=1e-9)
     assert np.all(r["mean"] > 0) and r["valid"].min() == 4000
 
 

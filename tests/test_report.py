@@ -147,14 +147,14 @@ def test_units_map():
                            "closed_form": {"Q_e_over_Q_n": 0.04}},
                "stability": {"maps": {"program": {"x": {"parameter": "cavity_volume", "values": [1e-6, 2e-6]}}},
                              "models": {"program": {"poles": {"real": [1.0], "imag": [2.0]}}}},
-               "frequency": {"peaks": [{"omega": 1977.0, "amplitude_um": 25.2}]},
+               "frequency": {"peaks": [{"omega": 1977.0, "amplitude": 25.2e-6}]},
                "spinup": {"time_of_peak_s": 3.6, "max_torque_N_m": 0.05, "peak_deflection_over_e": 12.3}}
     u = report.units(results)
     assert u == {"statics.exact.z0": "m", "statics.exact.p2": "Pa", "statics.exact.Q_e": "m^3/s",
                  "statics.exact.u0": "1", "statics.exact.kappa_s": "1", "statics.closed_form.Q_e_over_Q_n": "1",
                  "stability.maps.program.x.values": "m^3", "stability.models.program.poles.real": "1/s",
                  "stability.models.program.poles.imag": "rad/s", "frequency.peaks[].omega": "rad/s",
-                 "frequency.peaks[].amplitude_um": "um", "spinup.time_of_peak_s": "s",
+                 "frequency.peaks[].amplitude": "m", "spinup.time_of_peak_s": "s",
                  "spinup.max_torque_N_m": "N*m", "spinup.peak_deflection_over_e": "1"}
 
 

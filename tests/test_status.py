@@ -130,7 +130,7 @@ def test_transient_integrator_failure_is_a_failed_run(tmp_path, capsys):
     [line] = res["failures"]["transient"]
     assert "CV_TOO_MUCH_WORK" in line and res["transient"]["failures"] == [line]
     first, second = res["transient"]["cases"]
-    assert first["failure"]["t"] == 0 and second["failure"] is None and second["max_dz_um"] > 0
+    assert first["failure"]["t"] == 0 and second["failure"] is None and second["max_dz"] > 0
     html = (tmp_path / "o" / "report.html").read_text()
     assert "Failed: the results below are kept" in html and "CV_TOO_MUCH_WORK" in html
 

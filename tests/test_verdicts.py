@@ -129,7 +129,7 @@ def test_frequency_summary_is_one_verdict_in_display_units_and_the_source_apart(
     text = run["frequency"].summary()
     h = json.loads((folder / "results.json").read_text())["frequency"]["headline"]
     first = text.splitlines()[0]
-    omega, amp = h["peaks"][0]["omega"], h["peaks"][0]["amplitude_um"]
+    omega, amp = h["peaks"][0]["omega"], h["peaks"][0]["amplitude"] / 1e-6  # m in results.json
     assert first.startswith("frequency response: energy-consistent (nonlinear), physical forcing: stable, peaks ")
     assert f"{significant(omega)} rad/s ({significant(omega / (2 * math.pi))} Hz) with {significant(amp)} µm" in first
     head, _, validation = text.partition("validation against the source")

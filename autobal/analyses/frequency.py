@@ -65,6 +65,7 @@ def estimate_seconds(settings: Frequency) -> float:
 def report_section(sec) -> None:
     """AFC of the face gap (Pavlenko 2014, §2.6): the headline model (energy-consistent, physical forcing)
     gives the verdict; the source's models are the validation part."""
+    from autobal.analysis.frequency import QUANTITIES
     from autobal.report import (
         MODEL_ORDER,
         SOURCE_MODELS,
@@ -79,6 +80,7 @@ def report_section(sec) -> None:
         text,
     )
 
+    amp = QUANTITIES.find("peaks.0.amplitude")  # face-gap amplitudes: m in results.json, shown in µm
     stable = stable_models(sec.results)
     models = sec.get("models", {})
     h = sec.get("headline")
@@ -87,21 +89,21 @@ def report_section(sec) -> None:
         verdict = "stable" if h.get("stable") else "UNSTABLE"
         sec.conclude(h.get("stable"), f"{what}: {verdict} (max Re λ = {number(h.get('max_real'))} 1/s); first "
                                       f"resonance at {number(get_path(h, 'peaks.0.omega'))} rad/s; amplitude at the "
-                                      f"operating speed {number(get_path(h, 'at_operating_speed.amplitude_um'))} µm")
+                                      f"operating speed {amp.text(get_path(h, 'at_operating_speed.amplitude'))}")
         sec.row(f"first resonance ({what})", "ω_I", "headline.peaks.0.omega")
-        sec.row(f"amplitude at the first resonance ({what})", "A_I", "headline.peaks.0.amplitude_um")
+        sec.row(f"amplitude at the first resonance ({what})", "A_I", "headline.peaks.0.amplitude")
         sec.row("operating speed", "ω0", "headline.at_operating_speed.omega")
-        sec.row(f"amplitude at the operating speed ({what})", "A(ω0)", "headline.at_operating_speed.amplitude_um")
-        sec.row(f"static amplitude ({what})", "A(0)", "headline.static_amplitude_um")
+        sec.row(f"amplitude at the operating speed ({what})", "A(ω0)", "headline.at_operating_speed.amplitude")
+        sec.row(f"static amplitude ({what})", "A(0)", "headline.static_amplitude")
     else:  # no headline block: the toolkit's own first model, never one of the source's
         lead = next((m for m in MODEL_ORDER if m in models and m not in SOURCE_MODELS), None)
         if lead is not None:
             what = model_name(lead)
             sec.row(f"first resonance ({what})", "ω_I", f"models.{lead}.peaks.0.omega")
-            sec.row(f"amplitude at the first resonance ({what})", "A_I", f"models.{lead}.peaks.0.amplitude_um")
+            sec.row(f"amplitude at the first resonance ({what})", "A_I", f"models.{lead}.peaks.0.amplitude")
             sec.row("operating speed", "ω0", f"models.{lead}.at_operating_speed.omega")
             sec.row(f"amplitude at the operating speed ({what})", "A(ω0)",
-                    f"models.{lead}.at_operating_speed.amplitude_um")
+                    f"models.{lead}.at_operating_speed.amplitude")
     sec.row("forcing amplitude", "δψ_1a", "forcing_amplitude")
     own, source = [], []
     for model, m in ordered_models(models):
@@ -113,9 +115,9 @@ def report_section(sec) -> None:
             first = i == 0
             rows.append([text(model_name(model) if first else ""), text(m.get("forcing") if first else ""),
                          text(verdict if first else ""), cell(pk.get("omega"), "rad/s"),
-                         cell(pk.get("amplitude_um"), "um"),
-                         cell(at.get("amplitude_um") if i == 0 else None, "um"),
-                         cell(m.get("static_amplitude_um") if i == 0 else None, "um")])
+                         cell(pk.get("amplitude"), "m", amp.display),
+                         cell(at.get("amplitude") if i == 0 else None, "m", amp.display),
+                         cell(m.get("static_amplitude") if i == 0 else None, "m", amp.display)])
         if stable.get(model) is False and model not in SOURCE_MODELS:
             sec.warnings.append(f"{model_name(model)}: the model is unstable at this operating point; its AFC is the "
                                 "response of an unstable system (no steady state exists)")

@@ -232,7 +232,7 @@ def report_section(sec) -> None:
                                 f"({sec.get('afc.samples')} samples of {len(sec.get('afc.parameters') or [])} "
                                 "uncertain parameters)", ["where", "ω", "nominal", "mean", "std", "cv"],
                                 [[text(k.replace("_", " ")), *(sec.cell(f"afc.at.{k}.{x}") for x in (
-                                    "omega", "nominal_um", "mean_um", "std_um", "cv"))] for k in at], headline=True))
+                                    "omega", "nominal", "mean", "std", "cv"))] for k in at], headline=True))
         if model in SOURCE_MODELS:
             sec.warnings.append(f"the AFC spread is computed on the {model_name(model)}, which the stability analysis "
                                 "reports unstable at the pumps' operating points (see the dynamics scenes): a "
