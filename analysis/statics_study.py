@@ -50,8 +50,8 @@ QUANTITIES = Declarations(
     Quantity("critical_exact.p1_kr", "Pa", "p1_kr", "discharge pressure at which the inner-seal flow reverses",
              headline=True),
     Quantity("exact.dp", "Pa", "Δp", "operating barrier margin p_e − p1", "bar", headline=True),
-    Quantity("critical_exact.dp_kr", "Pa", "Δp_kr", "critical barrier margin p_e − p1 (inner-seal flow reverses)", "bar",
-             headline=True),
+    Quantity("critical_exact.dp_kr", "Pa", "Δp_kr", "critical barrier margin p_e − p1 (inner-seal flow reverses)",
+             "bar", headline=True),
     Quantity("critical_exact.psi1_kr closed_form.psi1_kr", "1", "ψ1_kr", "critical discharge ratio",
              source=f"{_P14}, Eq. (2.32)"),
     Quantity("critical_exact.dpsi_kr closed_form.dpsi_kr", "1", "δψ_kr", "critical barrier margin (p_e − p1)/p_B",
@@ -184,7 +184,8 @@ class StaticsResult(Result):
                  f"{ex['solver']['status']}, max relative residual {ex['solver']['max_relative_residual']:.1e}",
                  f"  {'ok' if ok else 'NOT OK'}: {words}",
                  *QUANTITIES.lines(self.data),
-                 "  the source's dimensionless groups, exact and by its closed forms (Pavlenko 2014, Eqs. (2.24)-(2.36));",
+                 "  the source's dimensionless groups, exact and by its closed forms (Pavlenko 2014, "
+                 "Eqs. (2.24)-(2.36));",
                  f"  {self.closed_form_note()}",
                  f"  {'':10s}{'exact':>12s}{'closed form':>14s}"]
         for k in ("u0", "xi0", "psi2_0", "psi3_0", "psi_e0", "psi_cam0", "kappa_s"):
