@@ -275,7 +275,8 @@ class StaticsResult(Result):
         if sat.any():
             lo = x[sat].min() * P
             ax.axvspan(lo, p1.max(), color="0.92", zorder=0)
-            ax.text(lo, 0.03, " regulator saturated (valve on its stop)", transform=ax.get_xaxis_transform(),
+            ax.text(lo, 0.03, " regulator saturated (valve on its stop):\n the closed forms' ideal regulator "
+                    "does not hold", transform=ax.get_xaxis_transform(),
                     va="bottom", ha="left", fontsize=7, color="0.3")
         inside = lambda v: v is not None and np.isfinite(v) and p1.min() <= v * P <= p1.max()  # noqa: E731
         if inside(kr):  # a line outside the axis gets no legend entry either
