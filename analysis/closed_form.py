@@ -4,6 +4,10 @@ Pump: Pavlenko (2014) Eqs. (2.22), (2.24)-(2.28), (2.30)-(2.32), (2.36), with th
 reconstructions of (2.27), (2.28) and the sign erratum of (2.32).  Compressor: (2.144)-(2.147),
 (2.156), (2.159), (2.160) and, as Appendix B does, the pump formulas (2.26), (2.28) for the
 regulator.  All functions take :class:`autobal.models.device.DeviceGroups` and numpy arrays.
+
+Every closed form assumes an ideal regulator: the barrier margin p_e - p1 = dpsi p_B is held at every discharge
+pressure.  A device without a regulator has exactly that barrier supply (psi_e = psi1 + dpsi); with a regulator
+the assumption fails where its valve is on its stop (saturated), and a closed form is then no estimate of the device.
 """
 
 from __future__ import annotations

@@ -30,7 +30,15 @@ FORCING_LABELS = {"physical": r"physical forcing $\delta\tau = b\,\delta\psi_1$"
 #: colour per model in the AFC and pole plots (the headline curve is tab:blue); the hand/program models reddish
 MODEL_COLOURS = {"nonlinear": "tab:green", "nonlinear_chain": "0.45", "consistent": "darkred",
                  "program": "tab:red", "thesis": "tab:purple"}
+#: the scene's forcing in words (the appendix forcing is the source's convention, for the comparison with it)
+FORCING_WORDS = {"physical": "under the physical forcing δτ = b δψ1",
+                 "appendix": "under the source's appendix forcing δτ = δψ1 (Pavlenko (2014), App. A/B)"}
 HEADLINE = ("nonlinear", "physical")  # the energy-consistent model under the physical forcing
+
+
+def _is_headline(h: dict | None, model: str, c: dict) -> bool:
+    """Whether curve ``c`` of ``model`` is the headline curve itself (same model, same forcing)."""
+    return h is not None and model == h["model"] and c.get("forcing") == h["forcing"]
 
 
 def grid(lin: LinearModel, start: float, stop: float, points: int) -> np.ndarray:
@@ -143,8 +151,9 @@ class FrequencyResult(Result):
         return d
 
     def summary(self) -> str:
-        """The verdict (the headline model under physical forcing), its declared numbers in display units, the
-        scene's forcing for the headline model, and the source's models apart as validation."""
+        """The verdict (the headline model under the physical forcing) and its declared numbers in display units;
+        below the validation line every other curve, each with its forcing (the source's appendix forcing, when
+        the scene names it, is validation: it is not the machine's): the headline curve is shown once."""
         d, h = self.data, self.data.get("headline")
         q_omega, q_amp = QUANTITIES.find("peaks.0.omega"), QUANTITIES.find("peaks.0.amplitude")
 
@@ -158,14 +167,14 @@ class FrequencyResult(Result):
             label = f"{MODEL_LABELS.get(h['model'], h['model'])}, {h['forcing']} forcing"
             lines += [f"frequency response: {label}: {'stable' if h['stable'] else 'UNSTABLE'}, {curve(h)}",
                       *QUANTITIES.lines(d)]
-        forcing = f"the scene's forcing '{d['forcing']}' (δψ_1a = {significant(d['forcing_amplitude'])})"
-        main = {m: c for m, c in d["curves"].items() if h is None or m == h["model"]}
-        source = {m: c for m, c in d["curves"].items() if m not in main}
-        lines += [f"  {forcing}, {MODEL_LABELS.get(m, m)}: {curve(c)}" for m, c in main.items()]
-        if source:
-            lines.append(f"  validation against the source (its models do not judge the machine), {forcing}:")
+        others = {m: c for m, c in d["curves"].items() if not _is_headline(h, m, c)}
+        if others:
+            forcing = FORCING_WORDS.get(d["forcing"], d["forcing"])
+            judge = "its models and its forcing" if d["forcing"] == "appendix" else "its models"
+            lines.append(f"  validation against the source ({judge} do not judge the machine), "
+                         f"{forcing}, δψ_1a = {significant(d['forcing_amplitude'])}:")
             lines += [f"    {MODEL_LABELS.get(m, m)}{'' if c.get('stable', True) else ' (UNSTABLE)'}: {curve(c)}"
-                      for m, c in source.items()]
+                      for m, c in others.items()]
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
@@ -199,6 +208,8 @@ class FrequencyResult(Result):
                 style = {"color": MODEL_COLOURS.get(model) or next(spare), "lw": 1.5, "zorder": 3}
             else:
                 style = {"color": MODEL_COLOURS.get(model) or next(spare), "lw": 0.9, "ls": "--", "zorder": 2}
+            if key != "headline" and h is not None and c.get("forcing") != h["forcing"]:
+                label += f", {c.get('forcing')} forcing"
             if not c.get("stable", True):
                 label += " — unstable"
             twin = next((lab for om, amp, lab in drawn if _coincide(om, amp, c["omega"], c["amplitude"])), None)

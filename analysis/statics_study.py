@@ -19,6 +19,7 @@ from autobal.errors import SolveError
 from autobal.models.device import groups_by_name
 
 SWEEP_KEYS = ("psi_e", "psi2", "psi3", "psi_cam", "u", "xi")
+REGULATOR_KEYS = ("psi_cam", "xi")  # the sweep's regulator states: none without a regulator
 PATH_NODES = 257  # continuation nodes across a sweep's range, whatever the number of requested points
 MAX_HALVINGS = 6  # a failed continuation step is halved at most this many times
 REFINE_POINTS = 12  # extra points inside each sweep interval where a stop is reached or left (figures)
@@ -48,7 +49,9 @@ QUANTITIES = Declarations(
     Quantity("exact.Q_3", "m^3/s", "Q_3", "flow through the cavity throttle"),
     Quantity("critical_exact.p1_kr", "Pa", "p1_kr", "discharge pressure at which the inner-seal flow reverses",
              headline=True),
-    Quantity("critical_exact.dp_kr", "Pa", "Δp_kr", "critical barrier pressure margin p_e − p1", "bar", headline=True),
+    Quantity("exact.dp", "Pa", "Δp", "operating barrier margin p_e − p1", "bar", headline=True),
+    Quantity("critical_exact.dp_kr", "Pa", "Δp_kr", "critical barrier margin p_e − p1 (inner-seal flow reverses)",
+             "bar", headline=True),
     Quantity("critical_exact.psi1_kr closed_form.psi1_kr", "1", "ψ1_kr", "critical discharge ratio",
              source=f"{_P14}, Eq. (2.32)"),
     Quantity("critical_exact.dpsi_kr closed_form.dpsi_kr", "1", "δψ_kr", "critical barrier margin (p_e − p1)/p_B",
@@ -136,19 +139,42 @@ class StaticsResult(Result):
     def to_dict(self) -> dict:
         return self.data
 
+    @property
+    def has_regulator(self) -> bool:
+        """Whether the device has a regulator (without one it has no regulator states: no valve, no p_cam)."""
+        return "regulator_saturated" in self.data["exact"]
+
     def verdict(self) -> tuple[bool, str]:
-        """At the operating point: regulating, no face contact, inner-seal flow towards the disc; and how far
-        the discharge pressure is from the one that reverses the inner-seal flow."""
-        ex, kr = self.data["exact"], (self.data.get("critical_exact") or {}).get("psi1_kr")
-        problems = [w for w, bad in (("regulator SATURATED", ex["regulator_saturated"]),
+        """At the operating point: regulating (or, without a regulator, the barrier margin held by its supply), no
+        face contact, inner-seal flow towards the disc; the operating barrier margin against the critical one, and
+        how far the discharge pressure is from the one that reverses the inner-seal flow."""
+        ex, crit = self.data["exact"], self.data.get("critical_exact") or {}
+        kr = crit.get("psi1_kr")
+        problems = [w for w, bad in (("regulator SATURATED", ex.get("regulator_saturated")),
                                      ("face CONTACT", ex["contact"]),
                                      ("inner-seal flow REVERSED", not ex["Q_1"] > 0)) if bad]
+        held = "regulating" if self.has_regulator else "no regulator (the barrier supply holds p_e − p1)"
         words = "operating point: " + (", ".join(problems) if problems else
-                                       f"regulating, face gap {QUANTITIES.find('exact.z0').text(ex['z0'])}, "
+                                       f"{held}, face gap {QUANTITIES.find('exact.z0').text(ex['z0'])}, "
                                        "inner-seal flow towards the disc")
+        dp, dp_kr = ex.get("dp"), crit.get("dp_kr")
+        if dp is not None and dp_kr is not None:
+            bar = QUANTITIES.find("exact.dp")
+            words += f"; operating barrier margin {bar.text(dp)} against the critical {bar.text(dp_kr)}"
         if kr is not None and ex["psi1"]:
             words += f"; the inner-seal flow reverses at {kr / ex['psi1']:.3g} × the operating discharge pressure"
         return not problems, words
+
+    def closed_form_note(self) -> str:
+        """The assumption of the source's closed forms and whether this device meets it at the operating point."""
+        ex = self.data["exact"]
+        margin = QUANTITIES.find("exact.dp").text(self.data["dpsi"] * self.data["scales"]["p_B"])
+        note = f"they assume an ideal regulator (p_e − p1 held at δψ p_B = {margin})"
+        if not self.has_regulator:
+            return note + ", as the barrier supply of this device (no regulator) does"
+        if ex["regulator_saturated"]:
+            return note + "; NOT valid here: the regulator is saturated at the operating point"
+        return note
 
     def summary(self) -> str:
         ex, cf = self.data["exact"], self.data["closed_form"]
@@ -158,19 +184,25 @@ class StaticsResult(Result):
                  f"{ex['solver']['status']}, max relative residual {ex['solver']['max_relative_residual']:.1e}",
                  f"  {'ok' if ok else 'NOT OK'}: {words}",
                  *QUANTITIES.lines(self.data),
-                 "  the source's dimensionless groups (Pavlenko 2014, Eqs. (2.24)-(2.36)):",
+                 "  the source's dimensionless groups, exact and by its closed forms (Pavlenko 2014, "
+                 "Eqs. (2.24)-(2.36));",
+                 f"  {self.closed_form_note()}",
                  f"  {'':10s}{'exact':>12s}{'closed form':>14s}"]
         for k in ("u0", "xi0", "psi2_0", "psi3_0", "psi_e0", "psi_cam0", "kappa_s"):
-            lines.append(f"  {k:10s}{fmt(ex.get(k)):>12s}{fmt(cf.get(k)):>14s}")
-        lines.append(f"  {'psi1_kr':10s}{fmt(crit['psi1_kr']):>12s}{fmt(cf['psi1_kr']):>14s}")
+            if k in ex:
+                lines.append(f"  {k:10s}{fmt(ex.get(k)):>12s}{fmt(cf.get(k)):>14s}")
+        kr = f"  {'psi1_kr':10s}{fmt(crit['psi1_kr']):>12s}{fmt(cf['psi1_kr']):>14s}"
+        if crit.get("psi1_kr_regulator_saturated"):
+            kr += "  (exact: with the regulator saturated, where the ideal regulator does not hold)"
+        lines.append(kr)
         lines.append(f"  {'dpsi_kr':10s}{fmt(crit['dpsi_kr']):>12s}{fmt(cf['dpsi_kr']):>14s}")
         q_e = QUANTITIES.find("exact.Q_e")
         lines.append(f"  {'Q_e':10s}{q_e.text(ex['Q_e']):>12s}{q_e.text(cf['Q_e']):>14s}")
-        sat = self.data["sweep"]["regulator_saturated"]
+        sat = self.data["sweep"].get("regulator_saturated", [])
         if any(sat):
             first = self.data["sweep"]["psi1"][int(np.argmax(sat))]
             lines.append(f"  regulator saturated (valve on its open stop) from psi1 = {first:.4g}")
-        if ex["regulator_saturated"]:
+        if ex.get("regulator_saturated"):
             lines.append("  the operating point itself has the regulator saturated")
         return "\n".join(lines)
 
@@ -186,7 +218,7 @@ class StaticsResult(Result):
         force_gap.csv in the groups of (2.35)."""
         sw, fg, sc = self.data["sweep"], self.data["force_gap"], self.data["scales"]
         cols = {}
-        for k in ("psi1", *SWEEP_KEYS):
+        for k in ("psi1", *(k for k in SWEEP_KEYS if k in sw)):
             base, key, name = self._DIMENSIONAL[k]
             q = QUANTITIES.find(key)
             cols[f"{name} [{q.display}]"] = [None if v is None else q.shown(v * sc[base]) for v in sw[k]]
@@ -195,7 +227,7 @@ class StaticsResult(Result):
             q = QUANTITIES.find(f"exact.{k}")
             cols[f"{k} [{q.display}]"] = [None if v is None else q.shown(v) for v in sw[k]]
         cols |= {f"{k} [1]": sw[k] for k in ("q_e", "q_T", "q_1", "kappa_s")}
-        cols |= {k: sw[k] for k in ("regulator_saturated", "contact")}
+        cols |= {k: sw[k] for k in ("regulator_saturated", "contact") if k in sw}
         cols |= {f"closed_form_{k} [1]": v for k, v in sw["closed_form"].items() if not k.endswith("_status")}
         return {"statics_sweep.csv": cols,
                 "force_gap.csv": {"u [1]": fg["u"], "phi_exact [1]": fg["phi_exact"],
@@ -203,7 +235,7 @@ class StaticsResult(Result):
 
     # dimensional axes: (key of the base in data["scales"] or "Q_B", the quantity whose shown unit the axis takes)
     _BASES = {"p": ("p_B", "exact.p1"), "z": ("z_B", "exact.z0"), "x": ("x_B", "exact.x0"), "Q": ("Q_B", "exact.Q_T")}
-    _CF = "closed form, Pavlenko (2014)"
+    _CF = "closed form (ideal regulator), Pavlenko (2014)"
     # inches: tick labels and the two-line label on the left, the suptitle on top, tick labels and label below
     _MARGINS = {"left": 0.95, "right": 0.25, "top": 0.4, "bottom": 0.55, "hspace": 0.08}
 
@@ -236,18 +268,20 @@ class StaticsResult(Result):
         sw = self.data["sweep"]
         P, p_unit = self._base("p")
         p1 = np.asarray(sw["psi1"], float) * P
-        x, sat = self._curve("regulator_saturated")
+        x, sat = self._curve("regulator_saturated") if self.has_regulator else (p1, np.zeros(p1.shape))
         sat = sat > 0.5
         kr = self.data["critical_exact"]["psi1_kr"]
         kr_cf = self.data["closed_form"]["psi1_kr"]
         if sat.any():
             lo = x[sat].min() * P
             ax.axvspan(lo, p1.max(), color="0.92", zorder=0)
-            ax.text(lo, 0.03, " regulator saturated (valve on its stop)", transform=ax.get_xaxis_transform(),
+            ax.text(lo, 0.03, " regulator saturated (valve on its stop):\n the closed forms' ideal regulator "
+                    "does not hold", transform=ax.get_xaxis_transform(),
                     va="bottom", ha="left", fontsize=7, color="0.3")
-        if kr is not None:
+        inside = lambda v: v is not None and np.isfinite(v) and p1.min() <= v * P <= p1.max()  # noqa: E731
+        if inside(kr):  # a line outside the axis gets no legend entry either
             ax.axvline(kr * P, color="k", lw=0.8, ls=":", label=r"$p_1^{kr}$ (inner-seal flow reverses), exact")
-        if kr_cf is not None and np.isfinite(kr_cf):
+        if inside(kr_cf):
             ax.axvline(kr_cf * P, color="0.5", lw=0.8, ls="-.",
                        label=rf"$p_1^{{kr}}$, {self._CF} Eq. ({'2.160' if self.data['medium'] == 'gas' else '2.32'})")
         ax.set_xlim(p1.min(), p1.max())
@@ -273,6 +307,8 @@ class StaticsResult(Result):
         P, _ = self._base("p")
         for k, k0, lab in (("psi_e", "psi_e0", "pₑ barrier"), ("psi2", "psi2_0", "p₂ disc chamber"),
                            ("psi3", "psi3_0", "p₃"), ("psi_cam", "psi_cam0", r"$p_{cam}$ regulator")):
+            if k not in self.data["sweep"]:
+                continue  # no regulator: no valve chamber
             x, y = self._curve(k)
             line, = ax.plot(x * P, y * P, label=f"{lab}, exact")
             x, y = self._curve(k, closed=True)
@@ -282,6 +318,23 @@ class StaticsResult(Result):
         ax.plot([], [], "k--", label=f"{self._CF} (dashed)")
         ax.plot([], [], "k*", ms=8, label="operating point")
         self._decorate(ax, "p", "pressure")
+
+    def _valve_panel(self, ax) -> None:
+        """The valve opening against the discharge pressure (Fig 2.5, lower panel), exact and (2.28)."""
+        sw, ex = self.data["sweep"], self.data["exact"]
+        P, _ = self._base("p")
+        X, _ = self._base("x")
+        x, xi = self._curve("xi")
+        ax.plot(x * P, xi * X, color="C2", label="valve opening x, exact (dots: sweep grid)")
+        ax.plot(np.asarray(sw["psi1"], float) * P, np.asarray(sw["xi"], float) * X, ".", ms=4, color="C2")
+        xc, xi_cf = self._curve("xi", closed=True)
+        stop = ""
+        if np.isfinite(xi_cf).any() and not np.isfinite(xi_cf).all():
+            last = xc[np.isfinite(xi_cf)].max()
+            stop = f";\nends: no opening passes the flow beyond ψ₁ = {last:.4g}"
+        ax.plot(xc * P, xi_cf * X, ls="--", color="C3", label=f"valve, {self._CF} Eq. (2.28){stop}")
+        self._operating_point(ax, ex["xi0"] * X if ex.get("xi0") is not None else None)
+        self._decorate(ax, "x", "valve opening x")
 
     def figures(self) -> dict:
         """Pressures (Fig 2.4/2.9), gap and valve (Fig 2.5), flows (Fig 2.6/2.10), phi(u) (2.35); dimensional
@@ -298,7 +351,10 @@ class StaticsResult(Result):
         _legend(fig, ax)
         figs["fig_pressures.png"] = fig
 
-        fig, (a1, a2) = new_figure((8, 6.4), 2, 1, sharex=True)
+        if self.has_regulator:
+            fig, (a1, a2) = new_figure((8, 6.4), 2, 1, sharex=True)
+        else:  # no regulator: the face gap alone, no valve panel
+            fig, a1 = new_figure((8, 4.6))
         Z, _ = self._base("z")
         x, y = self._curve("u")
         a1.plot(x * P, y * Z, label="face gap z, exact")
@@ -307,20 +363,10 @@ class StaticsResult(Result):
         a1.plot(x * P, y * Z, ls="--",
                 label=f"face gap, {self._CF} Eq. ({'2.147' if self.data['medium'] == 'gas' else '2.27'})")
         self._operating_point(a1, ex["u0"] * Z)
-        self._decorate(a1, "z", "face gap z", xlabel=False)
-        X, _ = self._base("x")
-        x, xi = self._curve("xi")
-        a2.plot(x * P, xi * X, color="C2", label="valve opening x, exact (dots: sweep grid)")
-        a2.plot(p1, np.asarray(sw["xi"], float) * X, ".", ms=4, color="C2")
-        xc, xi_cf = self._curve("xi", closed=True)
-        stop = ""
-        if np.isfinite(xi_cf).any() and not np.isfinite(xi_cf).all():
-            last = xc[np.isfinite(xi_cf)].max()
-            stop = f";\nends: no opening passes the flow beyond ψ₁ = {last:.4g}"
-        a2.plot(xc * P, xi_cf * X, ls="--", color="C3", label=f"valve, {self._CF} Eq. (2.28) (ideal regulator){stop}")
-        self._operating_point(a2, ex["xi0"] * X if ex.get("xi0") is not None else None)
-        self._decorate(a2, "x", "valve opening x")
-        _legend(fig, a1, a2)
+        self._decorate(a1, "z", "face gap z", xlabel=not self.has_regulator)
+        if self.has_regulator:
+            self._valve_panel(a2)
+        _legend(fig, *fig.axes)
         figs["fig_gap.png"] = fig
 
         fig, ax = new_figure((8, 4.6))
@@ -383,19 +429,28 @@ def _state(solver: StaticsSolver, pt: StaticPoint, q_base: float) -> dict:
     sc = solver.design.scales
     v, q = pt.values, pt.flows
     q_e = q["e"]
-    return {
-        "psi1": pt.psi1, "u0": v["u"], "xi0": v.get("xi"), "psi2_0": v["psi2"], "psi3_0": v["psi3"],
-        "psi_e0": v["psi_e"], "psi_cam0": v.get("psi_cam"),
-        "z0": v["u"] * sc["z_B"], "x0": v.get("xi", np.nan) * sc["x_B"],
+    out = {
+        "psi1": pt.psi1, "u0": v["u"], "psi2_0": v["psi2"], "psi3_0": v["psi3"], "psi_e0": v["psi_e"],
+        "z0": v["u"] * sc["z_B"],
         "p1": pt.psi1 * sc["p_B"], "p2": v["psi2"] * sc["p_B"], "p3": v["psi3"] * sc["p_B"],
-        "pe": v["psi_e"] * sc["p_B"], "pcam": v.get("psi_cam", np.nan) * sc["p_B"],
+        "pe": v["psi_e"] * sc["p_B"], "dp": (v["psi_e"] - pt.psi1) * sc["p_B"],
         **{f"Q_{k}": q[k] * sc["Q_scale"] for k in ("e", "1", "T", "3")},
         "q_e": q_e / q_base, "q_T": q["T"] / q_base, "q_1": q["1"] / q_base,
         "kappa_s": solver.stiffness(pt),
-        "regulator_saturated": pt.saturated, "contact": pt.contact,
-        "r_valve": v.get("r_valve", 0.0), "r_contact": v["r_contact"],
+        "contact": pt.contact, "r_contact": v["r_contact"],
         "solver": {"status": pt.status, "iterations": pt.iterations, "max_relative_residual": pt.max_residual},
     }
+    if solver.design.groups.regulator is not None:  # a device without a regulator has no regulator states
+        out |= {"xi0": v["xi"], "psi_cam0": v["psi_cam"], "x0": v["xi"] * sc["x_B"],
+                "pcam": v["psi_cam"] * sc["p_B"], "regulator_saturated": pt.saturated,
+                "r_valve": v.get("r_valve", 0.0)}
+    return out
+
+
+def sweep_keys(g) -> tuple[str, ...]:
+    """The unknowns the sweep reports for the device of groups ``g``: a device without a regulator has no
+    regulator states."""
+    return SWEEP_KEYS if g.regulator is not None else tuple(k for k in SWEEP_KEYS if k not in REGULATOR_KEYS)
 
 
 def cf_xi(g, psi1s, dpsi):
@@ -414,7 +469,9 @@ def _criticals(solver: StaticsSolver, psi1: float, dpsi: float, psi1_guess: floa
     dpsi_guess = dpsi_guess if dpsi_guess > 0 else dpsi
     try:
         pt = solver.critical("psi1", dpsi, psi1_guess)
-        out |= {"psi1_kr": pt.psi1, "psi1_kr_regulator_saturated": pt.saturated, "p1_kr": pt.psi1 * sc["p_B"]}
+        out |= {"psi1_kr": pt.psi1, "p1_kr": pt.psi1 * sc["p_B"]}
+        if solver.design.groups.regulator is not None:
+            out["psi1_kr_regulator_saturated"] = pt.saturated
     except SolveError as exc:
         out |= {"psi1_kr": None, "psi1_kr_status": f"no discharge ratio with q1 = 0 found: {exc.status}"}
     try:
@@ -539,11 +596,13 @@ def run(solver: StaticsSolver, settings, title: str = "") -> StaticsResult:
     exact["newton_max_difference"] = float(np.abs(newton - op.x).max())
 
     closed = {
-        "dpsi_kr": cf["dpsi_kr"], "psi1_kr": cf["psi1_kr"], "u0": cf["u"], "xi0": cf.get("xi"),
-        "psi2_0": cf["psi2"], "psi3_0": cf["psi3"], "psi_e0": cf["psi_e"], "psi_cam0": cf.get("psi_cam"),
+        "dpsi_kr": cf["dpsi_kr"], "psi1_kr": cf["psi1_kr"], "u0": cf["u"],
+        "psi2_0": cf["psi2"], "psi3_0": cf["psi3"], "psi_e0": cf["psi_e"],
         "Q_e": cf["Q_e_over_g1pB"] * sc["Q_scale"], "Q_B": q_base * sc["Q_scale"],
         "q_T": cf["q_T"], "q_1": cf["q_1"], "kappa_s": cf["kappa_s"],
     }
+    if g.regulator is not None:
+        closed |= {"xi0": cf["xi"], "psi_cam0": cf["psi_cam"]}
     if "kappa_u_2_162" in cf:
         closed["kappa_u_2_162"] = cf["kappa_u_2_162"]
     closed["Q_e_over_Q_n"] = closed["Q_e"] / sc["Q_n"]
@@ -570,23 +629,26 @@ def run(solver: StaticsSolver, settings, title: str = "") -> StaticsResult:
         raise
     states = [_state(solver, p, q_base) for p in points]
     cfs = closed_form.for_medium(g, grid, dpsi)
+    keys = sweep_keys(g)
     sweep = {"psi1": grid}
-    for k in SWEEP_KEYS:
-        sweep[k] = np.array([p.values.get(k, np.nan) for p in points])
-    for k in ("q_e", "q_T", "q_1", "Q_e", "Q_1", "Q_T", "kappa_s", "regulator_saturated", "contact"):
+    for k in keys:
+        sweep[k] = np.array([p.values[k] for p in points])
+    for k in ("q_e", "q_T", "q_1", "Q_e", "Q_1", "Q_T", "kappa_s", "contact") + (
+            ("regulator_saturated",) if g.regulator is not None else ()):
         sweep[k] = np.array([s[k] for s in states])
     sweep["status"] = [p.status for p in points]
     sweep["max_relative_residual"] = max(p.max_residual for p in points)
     sweep["closed_form"] = {k: np.broadcast_to(np.asarray(cfs.get(k, np.nan), float), grid.shape)
-                            for k in (*SWEEP_KEYS, "q_e", "q_T", "q_1")}
+                            for k in (*keys, "q_e", "q_T", "q_1")}
     extra = refine(solver, points, dpsi)
     fine = np.array([p.psi1 for p in extra])
     cff = closed_form.for_medium(g, fine, dpsi) if extra else {}
-    refined = {"psi1": fine, **{k: np.array([p.values.get(k, np.nan) for p in extra]) for k in SWEEP_KEYS}}
+    refined = {"psi1": fine, **{k: np.array([p.values[k] for p in extra], dtype=float) for k in keys}}
     refined |= {f"q_{k}": np.array([p.flows[k] / q_base for p in extra], dtype=float) for k in ("e", "T", "1")}
-    refined["regulator_saturated"] = np.array([p.saturated for p in extra], dtype=float)
+    if g.regulator is not None:
+        refined["regulator_saturated"] = np.array([p.saturated for p in extra], dtype=float)
     refined["closed_form"] = {k: np.broadcast_to(np.asarray(cff.get(k, np.nan), float), fine.shape)
-                              for k in (*SWEEP_KEYS, "q_e", "q_T", "q_1")}
+                              for k in (*keys, "q_e", "q_T", "q_1")}
 
     us = np.linspace(0.3, 2.0, settings.force_gap_points)
     force_gap = {"psi1": psi1, "u": us, "phi_exact": solver.force_gap(psi1, dpsi, us),
@@ -611,7 +673,8 @@ def run(solver: StaticsSolver, settings, title: str = "") -> StaticsResult:
         "accuracy": accuracy,
         "title": title, "medium": g.medium, "dpsi": dpsi,
         "groups": groups_by_name(g) | ({"xi_max": g.regulator.xi_max} if g.regulator else {}),
-        "scales": sc, "conductances": dev.conductances, "derived": dev.extra,
+        "scales": sc if g.regulator is not None else {k: v for k, v in sc.items() if k != "x_B"},
+        "conductances": dev.conductances, "derived": dev.extra,
         "closed_form": closed, "exact": exact, "critical_exact": critical,
         "sweep": sweep, "sweep_refined": refined, "force_gap": force_gap,
     }

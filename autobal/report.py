@@ -472,7 +472,8 @@ CAPTIONS = [
     (r"fig_pressures", "statics", "Chamber pressures (MPa; ψ = p/p_B on the right) against the discharge pressure, "
                                   "exact (solid) and the source's closed forms (dashed); Pavlenko (2014), Fig. 2.4 / "
                                   "2.9"),
-    (r"fig_gap", "statics", "Face gap z (u = z/z_B) and valve opening x (ξ = x/x_B) against the discharge pressure; "
+    (r"fig_gap", "statics", "Face gap z (u = z/z_B) and, with a regulator, its valve opening x (ξ = x/x_B) against the "
+                            "discharge pressure; "
                             "Pavlenko (2014), Fig. 2.5"),
     (r"fig_flows", "statics", "Flows (L/min; Q/Q_B on the right) against the discharge pressure, reversed flows cut "
                               "and annotated; Pavlenko (2014), Fig. 2.6 / 2.10"),

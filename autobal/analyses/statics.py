@@ -85,13 +85,14 @@ def report_section(sec) -> None:
     sec.row("axial stiffness of the balancing force", "κ_s", "exact.kappa_s")
     sec.row("critical discharge pressure (inner-seal flow reverses)", "p1_kr", "critical_exact.p1_kr")
     sec.row("critical discharge ratio", "ψ1_kr", "critical_exact.psi1_kr")
-    sec.row("critical barrier margin", "δψ_kr", "critical_exact.dpsi_kr")
-    sec.row("critical barrier pressure margin", "Δp_kr", "critical_exact.dp_kr")
+    sec.row("operating barrier margin p_e − p1", "Δp", "exact.dp")
+    sec.row("critical barrier margin p_e − p1 (inner-seal flow reverses)", "Δp_kr", "critical_exact.dp_kr")
+    sec.row("critical barrier margin ratio", "δψ_kr", "critical_exact.dpsi_kr")
     ex, sw = sec.get("exact", {}), sec.get("sweep", {})
     sat, contact, psi1 = sw.get("regulator_saturated", []), sw.get("contact", []), sw.get("psi1", [])
     from autobal.analysis.statics_study import StaticsResult  # the verdict's one copy
 
-    if {"regulator_saturated", "contact", "Q_1", "z0", "psi1"} <= set(ex):
+    if {"contact", "Q_1", "z0", "psi1"} <= set(ex):
         sec.conclude(*StaticsResult(sec.block).verdict())  # the operating point: regulator, contact, inner seal
     if any(sat):
         first = psi1[sat.index(True)]
@@ -111,6 +112,7 @@ def report_section(sec) -> None:
             u = sec.unit(path) or "?"
             rows.append([text(sym), cell(cf[key], u), cell(sec.get(path), u)])
     if rows:
-        sec.tables.append(table("The source's closed forms (ideal regulator, Eqs. (2.24)-(2.36)) beside the exact "
-                                "IPOPT solution of the full static system", ["quantity", "closed form", "exact"],
-                                rows))
+        note = StaticsResult(sec.block).closed_form_note() if {"dpsi", "scales"} <= set(sec.block) else \
+            "they assume an ideal regulator"
+        sec.tables.append(table(f"The source's closed forms (Eqs. (2.24)-(2.36)) beside the exact IPOPT solution of "
+                                f"the full static system: {note}", ["quantity", "closed form", "exact"], rows))
