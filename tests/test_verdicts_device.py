@@ -25,7 +25,7 @@ from autobal.scenario import shipped
 
 pytestmark = pytest.mark.cli  # each test runs its scene through autobal.run
 
-AMPLITUDE = frequency.QUANTITIES.find("peaks.0.amplitude_um")  # the AFC's amplitudes, µm
+AMPLITUDE = frequency.QUANTITIES.find("peaks.0.amplitude")  # the AFC's amplitudes: m, shown in µm
 REGULATOR_KEYS = {"x0", "xi0", "pcam", "psi_cam0", "regulator_saturated", "r_valve"}
 
 
@@ -243,9 +243,9 @@ def test_default_forcing_is_the_physical_one_and_the_headline_is_its_curve(afc_d
     assert f["forcing"] == "physical" and f["headline"]["forcing"] == "physical"
     # the headline and the scene's-forcing curve of the energy-consistent model are one curve
     assert f["headline"]["peaks"] == f["models"]["nonlinear"]["peaks"]
-    assert f["headline"]["peaks"][0]["amplitude_um"] == pytest.approx(15.82, abs=0.01)  # shipped pump, physical
+    assert f["headline"]["peaks"][0]["amplitude"] == pytest.approx(15.82e-6, abs=1e-8)  # shipped pump, physical
     text = res.summary()
-    amp = AMPLITUDE.text(f["headline"]["peaks"][0]["amplitude_um"])
+    amp = AMPLITUDE.text(f["headline"]["peaks"][0]["amplitude"])
     assert text.count(amp) == 1, text
     assert text.count("energy-consistent") == 1
     head, _, validation = text.partition("validation against the source")
@@ -259,16 +259,16 @@ def test_the_source_forcing_is_validation_only(afc_appendix):
     f = results["frequency"]
     h, nl = f["headline"], f["models"]["nonlinear"]
     assert (h["forcing"], nl["forcing"]) == ("physical", "appendix")
-    assert h["peaks"][0]["amplitude_um"] == pytest.approx(15.82, abs=0.01)
-    assert nl["peaks"][0]["amplitude_um"] == pytest.approx(32.34, abs=0.01)
+    assert h["peaks"][0]["amplitude"] == pytest.approx(15.82e-6, abs=1e-8)
+    assert nl["peaks"][0]["amplitude"] == pytest.approx(32.34e-6, abs=1e-8)
     text = res.summary()
-    appendix = AMPLITUDE.text(nl["peaks"][0]["amplitude_um"])
+    appendix = AMPLITUDE.text(nl["peaks"][0]["amplitude"])
     head, _, validation = text.partition("validation against the source")
     assert appendix not in head and appendix in validation
     assert "the source's appendix forcing" in validation.splitlines()[0]
     assert "the scene's forcing" not in text
     (sec,) = report.sections(results)
-    amplitude = report.number(nl["peaks"][0]["amplitude_um"])
+    amplitude = report.number(AMPLITUDE.shown(nl["peaks"][0]["amplitude"]))
     cells = [c["text"] for t in sec["tables"] for row in t["rows"] for c in row]
     assert amplitude not in cells and "appendix" not in cells
     validation_cells = [c["text"] for t in sec["validation_tables"] for row in t["rows"] for c in row]
