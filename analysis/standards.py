@@ -109,11 +109,11 @@ def half_power_readings(response: Callable[[np.ndarray], np.ndarray], critical_s
     """
     from scipy.optimize import brentq, minimize_scalar  # here: a scene load must not pull scipy.optimize
 
-    w = np.linspace(low, high, points)
-    a = np.asarray(response(w), float)
-    peaks = np.flatnonzero((a[1:-1] > a[:-2]) & (a[1:-1] >= a[2:])) + 1
     critical_speeds = [float(c) for c in critical_speeds]
     undamped = list(undamped) or [False] * len(critical_speeds)
+    w = np.linspace(low, high, points)
+    a = np.asarray(response(w), float) if not all(undamped) else np.zeros(points)  # an undamped peak is infinite
+    peaks = np.flatnonzero((a[1:-1] > a[:-2]) & (a[1:-1] >= a[2:])) + 1
     # each peak belongs to the critical speed nearest it
     owner = {int(i): min(range(len(critical_speeds)), key=lambda k: abs(critical_speeds[k] - w[i]))
              for i in peaks} if critical_speeds else {}
@@ -139,8 +139,8 @@ def half_power_readings(response: Callable[[np.ndarray], np.ndarray], critical_s
         def g(x, level=level):
             return float(np.asarray(response(np.array([x])))[0]) - level
 
-        side = []
-        for step in (-1, 1):  # from the peak down, then up: the first sample below 0.707 of it brackets N_1 (N_2)
+        side, why = [], []
+        for step, name in ((-1, "below"), (1, "above")):  # the first sample under 0.707 of the peak brackets N_1, N_2
             j, prev, found = (i if (w[i] - wp) * step > 0 else i + step), wp, None
             while 0 <= j < points and a[j] <= peak:
                 if a[j] < level:
@@ -148,12 +148,14 @@ def half_power_readings(response: Callable[[np.ndarray], np.ndarray], critical_s
                     break
                 prev, j = w[j], j + step
             side.append(found)
+            if found is None:
+                why.append(f"{name} it the response rises into a higher peak first" if 0 <= j < points else
+                           f"{name} it the response stays above 0.707 of the peak to the end of the range ({low:.4g} "
+                           f"to {high:.4g})")
         lo, hi = side
-        if lo is None or hi is None:
-            where = " and ".join(s for s, v in (("below", lo), ("above", hi)) if v is None)
-            out.append(HalfPower(wc, wp, peak, lo, hi, status=f"the response does not fall to 0.707 of its peak "
-                                 f"{where} it within {low:.4g} to {high:.4g}: no half-power points, no AF; treated "
-                                 "as critically damped"))
+        if why:
+            out.append(HalfPower(wc, wp, peak, lo, hi, status="no half-power point " + "; ".join(why) + ": no AF, "
+                                 "treated as critically damped"))
             continue
         out.append(HalfPower(wc, wp, peak, lo, hi, amplification_factor(wp, lo, hi)))
     return out
