@@ -29,6 +29,7 @@ from autobal.ocp.simulation import (
     baselines,
     best_within_limits,
     drive_use,
+    legend_above_curves,
     ramp_runs,
     torque_reference,
 )
@@ -248,7 +249,7 @@ class SpinupResult(Result):
         ax.set_ylabel(r"deflection $\delta/e$")
         deflection_axis(ax, self.data.get("eccentricity_m"))
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=6.5, loc="upper right")  # the peak comes before the hold, on the left
+        legend_above_curves(ax)  # every run's peak stays visible
 
     def figures(self) -> dict:
         """Speed (rpm, rad/s), acceleration steps (rad/s², rpm/s), drive torque (N·m) and, with drive data, power (kW)
