@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import importlib.util
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,6 +19,7 @@ from autobal.models.rotor import RotorParams
 
 RPM = 2 * math.pi / 60
 HAS_ROSS = importlib.util.find_spec("ross") is not None
+FAN = Path(__file__).resolve().parents[1] / "scenarios" / "examples" / "fan_rotor_spinup.yaml"  # the guide's scene
 
 
 def jeffcott(zeta: float):
@@ -161,7 +163,7 @@ def test_the_scene_grade_is_the_standard_eccentricity():
     from autobal import load
     from autobal.parts.rotor import adapt
 
-    scene = load("scenarios/examples/fan_rotor_spinup.yaml")
+    scene = load(FAN)
     assert adapt(scene.rotor).e == pytest.approx(S.permissible_eccentricity(2.5e-3, 3000 * RPM), rel=1e-12)
 
 
@@ -215,3 +217,74 @@ def test_multi_mode_af_against_ross_unbalance_response():
     high = ross_reading(265.0, 345.0, 201)  # the second pair's merged peak, 0.4 rad/s apart
     assert len(low) == 2 and len(high) == 1
     assert_allclose([mine[0].factor, mine[1].factor, mine[3].factor], [*low, *high], rtol=0.03)
+
+
+# ---- the spin-up's words: what the scene's rotor is, and a ramp table that dwells near the critical speed ----------
+
+def _small_spinup(tmp_path, liquid: bool):
+    import yaml
+
+    import autobal
+    from autobal.analyses.spinup import ocp as spinup_ocp
+    from autobal.ocp import spinup_study
+
+    rotor = {"mass": "120 kg", "critical_speed": "2400 rpm", "damping_ratio": 0.02, "eccentricity": "10 um"}
+    if liquid:
+        rotor["liquid"] = {"psi": 0.8}
+    scene = {"name": "small", "title": "small", "rotor": rotor,
+             "analyses": {"spinup": {"start_speed": "600 rpm", "final_speed": "4000 rpm", "horizon": "8 s",
+                                     "max_acceleration": "60 rad/s^2", "intervals": 40, "multistart": False,
+                                     "segments": 0}}}
+    (tmp_path / "small.yaml").write_text(yaml.safe_dump(scene))
+    s = autobal.load(tmp_path / "small.yaml")
+    return spinup_study.run(spinup_ocp(s, s.analyses.spinup), spinup_study.method_of(s.analyses.spinup),
+                            multistart=False)
+
+
+@pytest.mark.parametrize("liquid", [False, True])
+def test_the_critical_speed_label_says_whether_the_rotor_has_liquid(tmp_path, liquid):
+    """Issue #32 item 4a: a dry rotor's critical speed is sqrt(c/m1), labelled so, never 'with the liquid mass'; a
+    rotor with a liquid layer (psi = 0.8) is labelled with it, Omega0 sqrt(psi) = 2400 sqrt(0.8) rpm."""
+    res = _small_spinup(tmp_path, liquid)
+    text = res.summary()
+    wc = res.data["rotor"]["critical_speed_rad_s"]
+    assert wc == pytest.approx(2400 * RPM * (math.sqrt(0.8) if liquid else 1.0), rel=1e-12)
+    assert res.data["rotor"]["liquid"] is liquid
+    if liquid:
+        assert "critical speed with the liquid mass, ω_cr = Ω0 √ψ" in text and "dry rotor" not in text
+    else:
+        assert "critical speed of the dry rotor (no liquid layer), ω_cr = √(c/m1)" in text and "liquid mass" not in text
+    assert "API 684 (2005): AF" in text
+
+
+@pytest.mark.slow
+def test_the_guides_ramp_table_dwell_near_the_critical_speed_is_cautioned(tmp_path, capsys):
+    """Issue #32 item 4b, the spin-up guide's case (scenarios/examples/fan_rotor_spinup.yaml, docs/guides/spinup.md):
+    its 4-segment ramp table holds the rotor at 1709 rpm, 95 % of the 1800 rpm critical speed, for 3.9 s; within
+    10 % of the critical speed it spends more than twice the 0.2 x 188.5/50 = 0.754 s the maximum acceleration takes
+    across, at a steady whirl of r^2/sqrt((1 - r^2)^2 + (2 zeta r)^2) = 7.9 e (r = 0.9494, zeta = 0.03): the summary,
+    the ramp table's check and its table title say so; the optimum crosses without dwelling."""
+    import json
+
+    from autobal import cli, report
+
+    out = tmp_path / "fan"
+    assert cli.main(["run", str(FAN), "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "CAUTION: the 4-segment ramp table holds the rotor" in printed
+    results = json.loads((out / "results.json").read_text())
+    d = results["spinup"]
+    seg, opt = d["segments"]["dwell"], d["dwell"]
+    assert seg["dwells"] is True and opt["dwells"] is False
+    assert seg["fastest_crossing_s"] == pytest.approx(0.2 * 1800 * RPM / 50, rel=1e-12)
+    assert seg["time_near_critical_s"] > 3.9 > 2 * seg["fastest_crossing_s"] > opt["time_near_critical_s"]
+    r = seg["hold_speed_rad_s"] / (1800 * RPM)
+    assert r == pytest.approx(1709 / 1800, abs=2e-3)
+    assert seg["hold_steady_deflection_over_e"] == pytest.approx(jeffcott(0.03)(r), rel=1e-9)
+    assert seg["hold_steady_deflection_over_e"] == pytest.approx(7.9, abs=0.1)
+    (sec,) = [s for s in report.sections(results) if s["name"] == "spinup"]
+    (check,) = [v for v in sec["verdicts"] if v["text"].startswith("4-segment ramp table")]
+    assert check["ok"] is False and "CAUTION: it holds the rotor" in check["text"] and "1709 rpm" in check["text"]
+    html = (out / "report.html").read_text()
+    assert "CAUTION: it dwells near the critical speed" in html
+    assert "critical speed of the dry rotor (no liquid layer)" in html and "with the liquid mass" not in html
