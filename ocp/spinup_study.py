@@ -177,7 +177,7 @@ class SpinupResult(Result):
         ok, words = self.verdict()
         q = QUANTITIES.find
         lines = [f"spin-up ({d['objective'].replace('_', ' ')}): {'ok' if ok else 'NOT OK'}: {words}",
-                 f"  {critical_label(d['rotor'].get('liquid'))}: "
+                 f"  {critical_label(d['rotor'].get('liquid'))}  ω_cr  "
                  f"{q('rotor.critical_speed_rad_s').text(d['rotor']['critical_speed_rad_s'])}",
                  *QUANTITIES.lines(d),
                  f"  API 684 (2005): {standards.margin_words(d['rotor'])}",
@@ -346,9 +346,9 @@ def critical_label(liquid: bool | None, tex: bool = False) -> str:
     rotor and its liquid mass, Omega0 sqrt(psi); without one (a dry rotor) sqrt(c/m1)."""
     if liquid:
         return (r"critical speed $\omega_{cr} = \Omega_0\sqrt{\psi}$ (with the liquid mass)" if tex else
-                "critical speed with the liquid mass, ω_cr = Ω0 √ψ")
+                "critical speed with the liquid mass, Ω0 √ψ")
     return (r"critical speed $\omega_{cr} = \sqrt{c/m_1}$ (dry rotor, no liquid)" if tex else
-            "critical speed of the dry rotor (no liquid layer), ω_cr = √(c/m1)")
+            "critical speed of the dry rotor (no liquid layer), √(c/m1)")
 
 
 def deflection_axis(ax, e: float | None, which: str = "y") -> None:
