@@ -149,9 +149,9 @@ def half_power_readings(response: Callable[[np.ndarray], np.ndarray], critical_s
                 prev, j = w[j], j + step
             side.append(found)
             if found is None:
-                why.append(f"{name} it the response rises into a higher peak first" if 0 <= j < points else
-                           f"{name} it the response stays above 0.707 of the peak to the end of the range ({low:.4g} "
-                           f"to {high:.4g})")
+                why.append(f"{name} it: the response rises into a higher peak first" if 0 <= j < points else
+                           f"{name} it: the response stays above 0.707 of the peak to the end of the range "
+                           f"({low:.4g} to {high:.4g})")
         lo, hi = side
         if why:
             out.append(HalfPower(wc, wp, peak, lo, hi, status="no half-power point " + "; ".join(why) + ": no AF, "
