@@ -177,7 +177,7 @@ class SpinupResult(Result):
         ok, words = self.verdict()
         q = QUANTITIES.find
         lines = [f"spin-up ({d['objective'].replace('_', ' ')}): {'ok' if ok else 'NOT OK'}: {words}",
-                 f"  {critical_label(d['rotor'].get('liquid'))}  ω_cr  "
+                 f"  {critical_label(d['rotor']['liquid_mass_kg'] > 0)}  ω_cr  "
                  f"{q('rotor.critical_speed_rad_s').text(d['rotor']['critical_speed_rad_s'])}",
                  *QUANTITIES.lines(d),
                  f"  API 684 (2005): {standards.margin_words(d['rotor'])}",
@@ -271,7 +271,7 @@ class SpinupResult(Result):
             axes[2].plot(tr.t * ft, tr.torque * fm, color=c, ls=ls, lw=lw)
             if drive:
                 axes[3].plot(tr.t * ft, tr.torque * tr.omega * fp, color=c, ls=ls, lw=lw)
-        liquid = self.data["rotor"].get("liquid")
+        liquid = self.data["rotor"]["liquid_mass_kg"] > 0
         axes[0].axhline(wc * fw, color="k", lw=0.8, ls=":", label=critical_label(liquid, tex=True) + " = "
                         + QUANTITIES.find("omega_cr_rad_s").text(wc))
         if drive:
@@ -341,9 +341,10 @@ def dwell_words(what: str, dw: dict, omega_cr: float) -> str:
             "near the critical speed (a critical speed a few per cent off the datasheet's puts it at resonance)")
 
 
-def critical_label(liquid: bool | None, tex: bool = False) -> str:
-    """What the rotor's critical speed is, as the scene has it: with a liquid layer the undamped critical speed of the
-    rotor and its liquid mass, Omega0 sqrt(psi); without one (a dry rotor) sqrt(c/m1)."""
+def critical_label(liquid: bool, tex: bool = False) -> str:
+    """What the rotor's critical speed is, as the scene has it (``liquid``: a liquid layer, rotor.liquid_mass_kg > 0):
+    with a liquid layer the undamped critical speed of the rotor and its liquid mass, Omega0 sqrt(psi); without one
+    (a dry rotor) sqrt(c/m1)."""
     if liquid:
         return (r"critical speed $\omega_{cr} = \Omega_0\sqrt{\psi}$ (with the liquid mass)" if tex else
                 "critical speed with the liquid mass, Ω0 √ψ")
@@ -445,7 +446,7 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
     # API 684 (2005) / API 617 (2014): AF off the half-power points of the rotor's own steady unbalance response, the
     # separation margin from the service speed (the final speed: the scene gives no operating range)
     rotor = {"mass_kg": P.m1, "stiffness_N_per_m": P.c, "damping_N_s_per_m": P.chi, "eccentricity_m": P.e,
-             "liquid_mass_kg": P.m2_star, "liquid": P.m2_star > 0, "critical_speed_rad_s": P.omega_cr,
+             "liquid_mass_kg": P.m2_star, "critical_speed_rad_s": P.omega_cr,
              "damping_ratio": zeta, "service_speed_rad_s": ocp.omega_final,
              **api_margins(P, ocp.omega_final),
              "amplitude_convention": "0-peak (the radius of the whirl orbit)"}

@@ -178,11 +178,12 @@ def report_section(sec) -> None:
     sec.row("gain against the best ramp within the drive limits", "", "gain_vs_best_feasible_ramp_pct")
     sec.row("gain against the constant ramp", "", "gain_vs_constant_ramp_pct")
     sec.row("eccentricity of the rotor", "e", "eccentricity_m")
+    liquid = (sec.get("rotor.liquid_mass_kg") or 0) > 0
     for label, sym, key in (("rotor mass", "m1", "mass_kg"),
                             ("shaft stiffness (c = m1 Ω_c²)", "c", "stiffness_N_per_m"),
                             ("damping (χ = 2 ζ m1 Ω_c)", "χ", "damping_N_s_per_m"),
                             ("damping ratio", "ζ", "damping_ratio"),
-                            (critical_label(sec.get("rotor.liquid")), "ω_cr", "critical_speed_rad_s"),
+                            (critical_label(liquid), "ω_cr", "critical_speed_rad_s"),
                             ("service speed (the final speed)", "N_s", "service_speed_rad_s")):
         sec.row(label, sym, f"rotor.{key}")
     api_rows(sec, "rotor.")
