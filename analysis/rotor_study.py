@@ -27,7 +27,8 @@ _P10 = "Pashkov (2010), ch. 2"
 #: every number of the rotor_dynamics block: speeds in rad/s (rpm beside), the source's groups dimensionless
 #: (ν = ω/Ω0 and z of Eq. (9), deflections over the eccentricity e, the system unbalance d of (7))
 QUANTITIES = Declarations(
-    Quantity("rotor.omega_cr_rad_s", "rad/s", "ω_cr", "critical speed with the liquid", "rad/s", source=_P10,
+    Quantity("rotor.omega_cr_rad_s", "rad/s", "ω_cr", "critical speed √(c/m) (m with the liquid mass, if any)", "rad/s",
+             source=_P10,
              headline=True),
     Quantity("rotor.Omega0_rad_s", "rad/s", "Ω0", "natural frequency without liquid", "rad/s",
              headline=True),

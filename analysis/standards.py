@@ -279,8 +279,8 @@ def margin_quantities(prefix: str = "", headline: bool = False) -> tuple:
 def margin_words(check: dict) -> str:
     """The check in words for a summary, a verdict or a report: 'AF 24.96, SM 39.98 % from the operating speed
     (API 684 requires 16 %): kept'."""
-    af = check["amplification_factor"]
-    words = f"AF {'not defined' if af is None else f'{af:.4g}'}"
+    af, why = check["amplification_factor"], check.get("amplification_factor_status")
+    words = f"AF {f'{af:.4g}' if af is not None else f'not defined ({why})' if why else 'not defined'}"
     if check["separation_margin_pct"] is None:
         return words + " (no operating speed: no separation margin)"
     kept = "kept" if check["separation_margin_ok"] else "NOT kept"

@@ -719,8 +719,7 @@ class ModalSpinupResult(Result):
         for i, w in enumerate(cs["reduced_wd_rad_s"]):
             m = api[i]
             lines.append(f"    {speed.text(w)}: {margin_words(m)}"
-                         + ("" if ross is None or i >= len(ross) else f"; ROSS {speed.text(ross[i])}")
-                         + (f" ({m['amplification_factor_status']})" if m.get("amplification_factor_status") else ""))
+                         + ("" if ross is None or i >= len(ross) else f"; ROSS {speed.text(ross[i])}"))
         if ross is not None:
             lines.append(f"  largest difference of the reduced model's critical speeds from ROSS's: "
                          f"{100 * cs['max_rel_error_vs_ross']:.3f} %")

@@ -171,9 +171,8 @@ def report_section(sec) -> None:
                        for k in ("amplification_factor", "separation_margin_pct", "required_separation_margin_pct")),
                      text(kept)])
         if m:
-            why = m.get("amplification_factor_status")
             sec.verdict(m.get("separation_margin_ok"), f"critical speed {i + 1} ({number(w)} rad/s), API 684 (2005): "
-                        + margin_words(m) + (f" ({why})" if why else ""))
+                        + margin_words(m))
     if rows:
         sec.tables.append(table("Critical speeds below the final speed: the API 684 (2005) amplification factor at the "
                                 "half-power points of the unbalance response at the nodes of interest, the separation "
