@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from autobal.analysis import progress
+from autobal.analysis import progress, standards
 from autobal.analysis import rotor as R
 from autobal.analysis.quantities import Declarations, Quantity
 from autobal.analysis.result import Result, new_figure, speed_axis, unit_axis
@@ -27,12 +27,15 @@ _P10 = "Pashkov (2010), ch. 2"
 #: every number of the rotor_dynamics block: speeds in rad/s (rpm beside), the source's groups dimensionless
 #: (ν = ω/Ω0 and z of Eq. (9), deflections over the eccentricity e, the system unbalance d of (7))
 QUANTITIES = Declarations(
-    Quantity("rotor.omega_cr_rad_s", "rad/s", "ω_cr", "critical speed with the liquid", "rad/s", source=_P10,
+    Quantity("rotor.omega_cr_rad_s", "rad/s", "ω_cr", "critical speed √(c/m) (m with the liquid mass, if any)", "rad/s",
+             source=_P10,
              headline=True),
     Quantity("rotor.Omega0_rad_s", "rad/s", "Ω0", "natural frequency without liquid", "rad/s",
              headline=True),
     Quantity("rotor.psi", "1", "ψ", "liquid mass ratio m1/m", source=_P10, headline=True),
     Quantity("rotor.zeta0", "1", "ζ0", "damping ratio of the rotor", headline=True),
+    *standards.margin_quantities("rotor.", headline=True),
+    Quantity("rotor.service_speed_rad_s", "rad/s", "N_s", "service speed (the scene's rotor.unbalance.service_speed)"),
     Quantity("rotor.mu1", "1", "μ1", "liquid-to-rotor mass group of Eq. (9)", source=f"{_P10}, Eq. (9)"),
     Quantity("rotor.n_steady_1_s rotor.n_passage_1_s", "1/s", "n", "damping n = χ/m of the steady state (3) and "
              "of the passage (8')", source=_P10),
@@ -127,7 +130,8 @@ class RotorDynamicsResult(Result):
         d = self.data
         v = self.verdict()
         lines = ["rotor with a liquid auto-balancer (Pashkov 2010, ch. 2)",
-                 *([f"  {'ok' if v[0] else 'NOT OK'}: {v[1]}"] if v else []), *QUANTITIES.lines(d)]
+                 *([f"  {'ok' if v[0] else 'NOT OK'}: {v[1]}"] if v else []), *QUANTITIES.lines(d),
+                 f"  API 684 (2005): {standards.margin_words(d['rotor'])}"]
         if "stationary" in d:
             s = d["stationary"]
             lines.append(f"  stationary (9): {len(s['cases'])} (mu1, n) cases; steady state (3) = (9) to "
@@ -246,6 +250,16 @@ class RotorDynamicsResult(Result):
         return figs
 
 
+def api_margins(P: RotorParams, min_speed: float | None, max_speed: float | None = None) -> dict:
+    """The rotor's critical speed against its operating speed range (:func:`autobal.analysis.standards.margin_check`,
+    API 684 (2005), API 617 (2014)): the amplification factor read off the half-power points of the model's own
+    steady unbalance response |delta/e| (:func:`autobal.analysis.rotor.steady_state`, with the liquid mass), the
+    separation margin from N_min..N_mc (rad/s; None: no operating speed, the AF alone) and the margin required."""
+    reading = standards.half_power_readings(lambda w: R.steady_state(P, w / P.Omega0)["a"], [P.omega_cr],
+                                            high=20 * P.omega_cr, points=8001, undamped=[P.chi == 0])[0]
+    return standards.margin_check(reading, min_speed, max_speed)
+
+
 # ---- parts -----------------------------------------------------------------------------------------
 
 def stationary_part(P: RotorParams, cases, z) -> tuple[dict, dict]:
@@ -314,10 +328,16 @@ def passage_part(P: RotorParams, s) -> tuple[dict, dict]:
         "curves": curves}
 
 
-def run(P: RotorParams, settings, title: str = "", motor=None) -> RotorDynamicsResult:
+def run(P: RotorParams, settings, title: str = "", motor=None, service_speed: float | None = None
+        ) -> RotorDynamicsResult:
+    """The parts the settings name; the rotor's API 684 margins (:func:`api_margins`) from ``service_speed`` (rad/s,
+    the scene's rotor.unbalance.service_speed; None: the amplification factor alone)."""
     data = {"title": title, "rotor": {"psi": P.psi, "mu1": P.mu1, "Omega0_rad_s": P.Omega0,
                                       "omega_cr_rad_s": P.omega_cr, "zeta0": P.zeta0, "n_steady_1_s": P.n_steady(),
-                                      "n_stationary": P.n_stationary(), "n_passage_1_s": P.n_passage()}}
+                                      "n_stationary": P.n_stationary(), "n_passage_1_s": P.n_passage(),
+                                      "service_speed_rad_s": service_speed, **api_margins(P, service_speed)}}
+    if service_speed is None:
+        data["rotor"]["service_speed_rad_s_status"] = "the scene gives no service speed (rotor.unbalance)"
     curves = {}
     if settings.stationary is not None:
         s = settings.stationary

@@ -34,8 +34,9 @@ from functools import cached_property
 import casadi as ca
 import numpy as np
 
-from autobal.analysis.quantities import Declarations, Quantity, convert, significant
+from autobal.analysis.quantities import Declarations, Quantity, convert
 from autobal.analysis.result import Result, new_figure, speed_axis, unit_axis, with_statuses
+from autobal.analysis.standards import half_power_readings, margin_check, margin_quantities, margin_words
 from autobal.models import ross_rotor as rr
 from autobal.models.ross_rotor import POINTS_PER_REV, RESIM_TOL, ModalRotor, simulate_fixed
 from autobal.ocp.drive_profile import drive_table
@@ -662,22 +663,12 @@ class ModalSpinupResult(Result):
         """The final (service) speed, rad/s: where the optimum ends."""
         return float(self.optimum.omega[-1])
 
-    def api684(self) -> dict:
-        """API 684 (2005) per critical speed of the reduced model below the final speed: the amplification factor
-        AF = 1/(2 zeta) (half-power points of a linear mode) and the separation margin of the final (service) speed
-        SM = |N_service - N_c|/N_c, %."""
-        cs, final = self.data["critical_speeds"], self.final_speed
-        return {"amplification_factor": [1 / (2 * z) if z > 0 else None for z in cs["reduced_damping_ratio"]],
-                "separation_margin_pct": [100 * abs(final - w) / w for w in cs["reduced_wd_rad_s"]]}
-
     def to_dict(self) -> dict:
-        data = self.data | {"final_speed_rad_s": self.final_speed,
-                            "critical_speeds": self.data["critical_speeds"] | self.api684()}
+        data = self.data | {"final_speed_rad_s": self.final_speed}
         return with_statuses(data, {
             "ross_wd_rad_s": "not compared with ROSS (validate_with_ross: false)",
             "ross_damping_ratio": "not compared with ROSS (validate_with_ross: false)",
             "max_rel_error_vs_ross": "not compared with ROSS (validate_with_ross: false)",
-            "amplification_factor": "an undamped mode has no amplification factor",
             "lowest_dropped_natural_frequency_rad_s": "no mode was left out: all lateral modes are below the cutoff",
             **dict.fromkeys(("baseline_ramp_peak_m", "baseline_ramp_key", "improvement_over_best_ramp"),
                             "no ramp keeps the drive limits (each is labelled outside them): no gain is quoted"),
@@ -716,17 +707,18 @@ class ModalSpinupResult(Result):
     def summary(self) -> str:
         d, cs, q = self.data, self.data["critical_speeds"], QUANTITIES.find
         ok, words = self.verdict()
-        ross, api = cs["ross_wd_rad_s"], self.api684()
+        ross, api = cs["ross_wd_rad_s"], cs["margins"]
         speed = q("critical_speeds.reduced_wd_rad_s")
         lines = [f"multi-mode spin-up: {'ok' if ok else 'NOT OK'}: {words}", *QUANTITIES.lines(self.to_dict()),
                  f"  {d['modes']} modes up to {q('mode_cutoff_rad_s').text(d['mode_cutoff_rad_s'])}, gyroscopic terms "
                  f"{'kept' if d['gyroscopic'] else 'dropped'} (they move a critical speed by "
                  f"{100 * d['gyroscopic_shift']:.3g} %)",
-                 "  critical speeds below the final speed (reduced model; API 684 (2005) amplification factor, "
-                 "separation margin of the final speed):"]
+                 "  critical speeds below the final speed (reduced model; API 684 (2005): amplification factor at "
+                 "the half-power points of the unbalance response at the nodes of interest, separation margin from "
+                 "the final (service) speed):"]
         for i, w in enumerate(cs["reduced_wd_rad_s"]):
-            lines.append(f"    {speed.text(w)}: AF {significant(api['amplification_factor'][i])}, SM "
-                         f"{significant(api['separation_margin_pct'][i])} %"
+            m = api[i]
+            lines.append(f"    {speed.text(w)}: {margin_words(m)}"
                          + ("" if ross is None or i >= len(ross) else f"; ROSS {speed.text(ross[i])}"))
         if ross is not None:
             lines.append(f"  largest difference of the reduced model's critical speeds from ROSS's: "
@@ -863,10 +855,7 @@ QUANTITIES = Declarations(
              "critical speeds below the final speed: reduced model, ROSS"),
     Quantity("critical_speeds.reduced_damping_ratio critical_speeds.ross_damping_ratio", "1", "ζ",
              "damping ratio of each critical speed's mode: reduced model, ROSS"),
-    Quantity("critical_speeds.amplification_factor", "1", "AF", "amplification factor 1/(2ζ) of each critical speed",
-             source="API 684 (2005), amplification factor"),
-    Quantity("critical_speeds.separation_margin_pct", "%", "SM", "separation margin of the final speed from each "
-             "critical speed", source="API 684 (2005), separation margin"),
+    *margin_quantities("critical_speeds.margins[]."),
     Quantity("gyroscopic_shift", "1", "", "largest relative shift of a critical speed by the gyroscopic terms"),
     Quantity("unbalance[].magnitude_kg_m", "kg*m", "m e", "unbalance", "g·mm"),
     Quantity("unbalance[].phase_rad", "rad", "φ", "phase of the unbalance"),
@@ -877,6 +866,25 @@ QUANTITIES = Declarations(
              "start's solve and build"),
 )
 ModalSpinupResult.quantities = QUANTITIES
+
+
+def steady_deflection(ocp: ModalSpinupOcp, omega) -> np.ndarray:
+    """The steady unbalance response at constant speeds ``omega`` (rad/s): the largest deflection envelope over the
+    nodes of interest (the major half-axis of each node's orbit, :meth:`ModalSpinupOcp.epigraph2`) of the steady modal
+    amplitude (:meth:`autobal.models.ross_rotor.ModalRotor.steady_amplitude`), m."""
+    omega = np.atleast_1d(np.asarray(omega, float))
+    a, n = ocp.amplitude_scale, ocp.rotor.n
+    E = np.array([ocp.rotor.steady_amplitude(w) for w in omega]) / a
+    X = np.hstack([E.real, E.imag, np.zeros((omega.size, 2 * n)), omega[:, None] / ocp.omega_final])
+    return np.sqrt(ocp.epigraph2(X)) * a
+
+
+def api_readings(ocp: ModalSpinupOcp, cs: dict) -> list:
+    """Each critical speed of the reduced model (``cs``, :meth:`~autobal.models.ross_rotor.ModalRotor.critical_speeds`)
+    read off the steady unbalance response at the nodes of interest (:func:`steady_deflection`) up to the mode cutoff
+    (:func:`autobal.analysis.standards.half_power_readings`, API 684 (2005): AF at the half-power points)."""
+    return half_power_readings(lambda w: steady_deflection(ocp, w), cs["wd"], high=ocp.rotor.cutoff_rad_s,
+                               undamped=[z <= 0 for z in cs["damping_ratio"]])
 
 
 def run(rotor: ModalRotor, ocp_kw: dict, title: str = "", ross_critical: dict | None = None,
@@ -936,6 +944,7 @@ def run(rotor: ModalRotor, ocp_kw: dict, title: str = "", ross_critical: dict | 
         "gyroscopic": rotor.gyroscopic, "gyroscopic_shift": rotor.gyroscopic_shift,
         "unbalance": [{"node": u.node, "magnitude_kg_m": u.magnitude, "phase_rad": u.phase} for u in rotor.unbalances],
         "critical_speeds": {"reduced_wd_rad_s": list(cs["wd"]), "reduced_damping_ratio": list(cs["damping_ratio"]),
+                            "margins": [margin_check(r, ocp.omega_final) for r in api_readings(ocp, cs)],
                             "ross_wd_rad_s": ross,
                             "ross_damping_ratio": None if ross_critical is None else
                             list(ross_critical["damping_ratio"]),

@@ -277,6 +277,17 @@ def ramp_runs(baselines: dict, uses: dict) -> list[tuple]:
     return out
 
 
+def legend_above_curves(ax, fontsize: float = 6.5) -> None:
+    """The legend of the runs in a band of its own above the curves (upper right): the y-axis raised by the legend's
+    height (its rows at ``fontsize``, estimated from the axes' height), so that it covers no run's peak."""
+    handles, labels = ax.get_legend_handles_labels()
+    lo, hi = ax.get_ylim()
+    height = ax.get_position().height * ax.figure.get_figheight() * 72  # points
+    band = min(0.6, (len(labels) * 1.45 * fontsize + 10) / height)
+    ax.set_ylim(lo, lo + (hi - lo) / (1 - band))
+    ax.legend(handles, labels, fontsize=fontsize, loc="upper right")
+
+
 def best_within_limits(peaks: dict, uses: dict):
     """The key of the smallest peak among the profiles that keep the drive limits (``uses``: :func:`drive_use` of
     each; a profile without drive data counts as keeping them), None when none does: the only reference a

@@ -13,8 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from autobal.analysis import standards
 from autobal.analysis.quantities import Declarations, Quantity, significant
 from autobal.analysis.result import Result, new_figure, speed_axis, twin_axis, unit_axis
+from autobal.analysis.rotor_study import api_margins
 from autobal.ocp import drive_profile
 from autobal.ocp.drive_profile import RPM
 from autobal.ocp.problem import SpinupOcp, pulse_variation
@@ -27,6 +29,7 @@ from autobal.ocp.simulation import (
     baselines,
     best_within_limits,
     drive_use,
+    legend_above_curves,
     ramp_runs,
     torque_reference,
 )
@@ -34,8 +37,12 @@ from autobal.ocp.solve import optimize
 from autobal.ocp.transcription import DirectCollocation, MultipleShooting
 
 _P10 = "Pashkov (2010)"
-_API = "API 684 (2005)"
 SOLVED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+#: a profile dwells near the critical speed when it spends, within DWELL_BAND of omega_cr (10 %: there the steady
+#: whirl of a lightly damped rotor is above 1/(1 - 0.9^2) = 4.3 e; API 684 asks 16 to 26 % of a service speed at
+#: large AF), more than DWELL_FACTOR times the time the maximum acceleration takes across that band
+DWELL_BAND = 0.10
+DWELL_FACTOR = 2.0
 
 
 def _drive(prefix: str = "") -> str:
@@ -83,13 +90,11 @@ QUANTITIES = Declarations(
              headline=True),
     Quantity("gain_vs_best_feasible_ramp_pct", "%", "", "gain of the optimum against that ramp", headline=True),
     Quantity("gain_vs_constant_ramp_pct", "%", "", "gain of the optimum against the constant ramp"),
-    Quantity("rotor.critical_speed_rad_s", "rad/s", "ω_cr", "critical speed (with the liquid mass: Ω0 √ψ)",
-             headline=True),
+    Quantity("rotor.critical_speed_rad_s", "rad/s", "ω_cr", "undamped critical speed √(c/m), m the rotor's mass with "
+             "its liquid layer's if it has one (critical_label says which)"),
     Quantity("omega_cr_rad_s", "rad/s", "ω_cr", "critical speed Ω0 √ψ", source=f"{_P10}, ch. 3"),
-    Quantity("rotor.amplification_factor", "1", "AF", "amplification factor N_c/(N_2 − N_1) = 1/(2ζ)",
-             source=f"{_API}, amplification factor", headline=True),
-    Quantity("rotor.separation_margin_pct", "%", "SM", "separation margin of the final speed from the critical speed",
-             source=f"{_API}, separation margin", headline=True),
+    *standards.margin_quantities("rotor.", headline=True),
+    Quantity("rotor.service_speed_rad_s", "rad/s", "N_s", "service speed (the final speed of the spin-up)"),
     *DRIVE_QUANTITIES,
     Quantity("time_of_peak_s", "s", "t*", "time of the peak"),
     Quantity("omega_at_peak_rad_s", "rad/s", "ω*", "speed at the peak"),
@@ -124,6 +129,14 @@ QUANTITIES = Declarations(
     Quantity(_drive("baselines.*.") + " " + _drive("segments."), "N*m", "M", "largest and smallest drive torque"),
     Quantity("baselines.*.max_power_W segments.max_power_W", "W", "P", "largest drive power", "kW"),
     Quantity("segments.segments", "1", "K", "ramp segments of the drive's table"),
+    Quantity("dwell.time_near_critical_s segments.dwell.time_near_critical_s", "s", "t_cr",
+             f"time within {100 * DWELL_BAND:.0f} % of the critical speed (optimum, ramp table)"),
+    Quantity("dwell.fastest_crossing_s segments.dwell.fastest_crossing_s", "s", "",
+             f"time the maximum acceleration takes across {100 * DWELL_BAND:.0f} % either side of the critical speed"),
+    Quantity("dwell.hold_speed_rad_s segments.dwell.hold_speed_rad_s", "rad/s", "ω_hold",
+             f"speed held longest within {100 * DWELL_BAND:.0f} % of the critical speed (time-weighted median)"),
+    Quantity("dwell.hold_steady_deflection_over_e segments.dwell.hold_steady_deflection_over_e", "1", "δ_ss/e",
+             "steady whirl of the rotor at that speed"),
     Quantity("segments.peak_deflection_over_e", "1", "δ*/e", "peak deflection of the ramp table (re-simulated)"),
     Quantity("segments.peak_unbalance", "1", "d*", "peak system unbalance of the ramp table"),
     Quantity("segments.loss_vs_optimum_pct", "%", "", "loss of the ramp table against the full optimum"),
@@ -164,7 +177,10 @@ class SpinupResult(Result):
         ok, words = self.verdict()
         q = QUANTITIES.find
         lines = [f"spin-up ({d['objective'].replace('_', ' ')}): {'ok' if ok else 'NOT OK'}: {words}",
+                 f"  {critical_label(d['rotor']['liquid_mass_kg'] > 0)}  ω_cr  "
+                 f"{q('rotor.critical_speed_rad_s').text(d['rotor']['critical_speed_rad_s'])}",
                  *QUANTITIES.lines(d),
+                 f"  API 684 (2005): {standards.margin_words(d['rotor'])}",
                  f"  NLP ({d['method']}): {d['status']}, {d['ipopt_iterations']} iterations in the final solve "
                  f"({d['solve_time_s']:.2f} s); {len(d['starts'])} starts and mesh stages "
                  f"{d['total_solve_time_s']:.2f} s (" + ", ".join(f"{r['solve_time_s']:.2f}" for r in d["starts"]
@@ -201,6 +217,9 @@ class SpinupResult(Result):
                          f"{deflection_text(sg['peak_deflection_over_e'], e)}, {sg['loss_vs_optimum_pct']:+.2f} % "
                          f"against the full optimum (searched from the {sg['start']} start)"
                          + ("" if sg["within_drive_limits"] else " (outside the drive limits)"))
+            if (sg.get("dwell") or {}).get("dwells"):
+                lines.append("  CAUTION: " + dwell_words(f"the {sg['segments']}-segment ramp table", sg["dwell"],
+                                                         d["omega_cr_rad_s"]))
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
@@ -230,7 +249,7 @@ class SpinupResult(Result):
         ax.set_ylabel(r"deflection $\delta/e$")
         deflection_axis(ax, self.data.get("eccentricity_m"))
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=6.5, loc="upper right")  # the peak comes before the hold, on the left
+        legend_above_curves(ax)  # every run's peak stays visible
 
     def figures(self) -> dict:
         """Speed (rpm, rad/s), acceleration steps (rad/s², rpm/s), drive torque (N·m) and, with drive data, power (kW)
@@ -252,8 +271,9 @@ class SpinupResult(Result):
             axes[2].plot(tr.t * ft, tr.torque * fm, color=c, ls=ls, lw=lw)
             if drive:
                 axes[3].plot(tr.t * ft, tr.torque * tr.omega * fp, color=c, ls=ls, lw=lw)
-        axes[0].axhline(wc * fw, color="k", lw=0.8, ls=":", label=r"critical speed $\omega_{cr} = "
-                        r"\Omega_0\sqrt{\psi}$ = " + QUANTITIES.find("omega_cr_rad_s").text(wc))
+        liquid = self.data["rotor"]["liquid_mass_kg"] > 0
+        axes[0].axhline(wc * fw, color="k", lw=0.8, ls=":", label=critical_label(liquid, tex=True) + " = "
+                        + QUANTITIES.find("omega_cr_rad_s").text(wc))
         if drive:
             brake = self.data.get("braking_torque_limit_N_m")
             for ax, limit, f in ((axes[2], self.data.get("torque_limit_N_m"), fm),
@@ -273,7 +293,7 @@ class SpinupResult(Result):
         fw = speed_axis(a2, "x")
         for tr, c, ls, lw, _ in self._runs():
             a2.plot(tr.omega * fw, tr.delta, color=c, ls=ls, lw=lw)
-        a2.axvline(wc * fw, color="k", lw=0.8, ls=":", label=r"critical speed $\omega_{cr}$ = "
+        a2.axvline(wc * fw, color="k", lw=0.8, ls=":", label=critical_label(liquid, tex=True) + " = "
                    + QUANTITIES.find("omega_cr_rad_s").text(wc))
         a2.set_ylabel(r"deflection $\delta/e$")
         deflection_axis(a2, self.data.get("eccentricity_m"))
@@ -281,6 +301,55 @@ class SpinupResult(Result):
         a2.legend(fontsize=7)
         fig2.suptitle(title, fontsize=9)
         return {"spinup_profiles.png": fig, "spinup_deflection.png": fig2}
+
+
+def dwell(P, tr: Trajectory, alpha_max: float) -> dict:
+    """How long a profile stays near the critical speed: its time within DWELL_BAND of omega_cr (s), the time
+    the maximum acceleration ``alpha_max`` takes across that band, the speed it spends the most time at there
+    (the time-weighted median, rad/s) with the rotor's steady whirl at that speed (delta/e, the model's steady state
+    :func:`autobal.analysis.rotor.steady_state`), and whether it dwells (more than DWELL_FACTOR times that
+    crossing)."""
+    from autobal.analysis.rotor import steady_state
+
+    wc, dt = P.omega_cr, np.diff(tr.t)
+    mid = 0.5 * (tr.omega[1:] + tr.omega[:-1])
+    inside = np.abs(mid - wc) <= DWELL_BAND * wc
+    t_in, crossing = float(dt[inside].sum()), 2 * DWELL_BAND * wc / alpha_max
+    out = {"time_near_critical_s": t_in, "fastest_crossing_s": crossing, "dwells": t_in > DWELL_FACTOR * crossing,
+           "hold_speed_rad_s": None, "hold_steady_deflection_over_e": None}
+    if t_in > 0:
+        order = np.argsort(mid[inside])
+        cum = np.cumsum(dt[inside][order])
+        hold = float(mid[inside][order][np.searchsorted(cum, 0.5 * cum[-1])])
+        out |= {"hold_speed_rad_s": hold, "hold_steady_deflection_over_e": float(steady_state(P, hold / P.Omega0)["a"])}
+    else:
+        out |= {k: "the profile never comes within 10 % of the critical speed" for k in (
+            "hold_speed_rad_s_status", "hold_steady_deflection_over_e_status")}
+    return out
+
+
+def dwell_words(what: str, dw: dict, omega_cr: float) -> str:
+    """'the 4-segment ramp table holds the rotor 4.3 s within 10 % of its critical speed (most of it at 1709 rpm,
+    95 % of ω_cr, where its steady whirl is 8.0 e), more than twice the 0.75 s the maximum acceleration takes across:
+    a dwell near the critical speed'."""
+    q = QUANTITIES.find
+    hold = dw["hold_speed_rad_s"]
+    return (f"{what} holds the rotor {dw['time_near_critical_s']:.2g} s within {100 * DWELL_BAND:.0f} % of its "
+            f"critical speed (most of it at {q('omega_at_peak_rad_s').text(hold)}, {100 * hold / omega_cr:.0f} % of "
+            f"ω_cr, where its steady whirl is {significant(dw['hold_steady_deflection_over_e'], 2)} e), more than "
+            f"{DWELL_FACTOR:g} × the {dw['fastest_crossing_s']:.2g} s the maximum acceleration takes across: a dwell "
+            "near the critical speed (a critical speed a few per cent off the datasheet's puts it at resonance)")
+
+
+def critical_label(liquid: bool, tex: bool = False) -> str:
+    """What the rotor's critical speed is, as the scene has it (``liquid``: a liquid layer, rotor.liquid_mass_kg > 0):
+    with a liquid layer the undamped critical speed of the rotor and its liquid mass, Omega0 sqrt(psi); without one
+    (a dry rotor) sqrt(c/m1)."""
+    if liquid:
+        return (r"critical speed $\omega_{cr} = \Omega_0\sqrt{\psi}$ (with the liquid mass)" if tex else
+                "critical speed with the liquid mass, Ω0 √ψ")
+    return (r"critical speed $\omega_{cr} = \sqrt{c/m_1}$ (dry rotor, no liquid)" if tex else
+            "critical speed of the dry rotor (no liquid layer), √(c/m1)")
 
 
 def deflection_axis(ax, e: float | None, which: str = "y") -> None:
@@ -314,6 +383,8 @@ def verdict(d: dict) -> tuple[bool | None, str]:
         words += (f"; it brakes (smallest torque {QUANTITIES.find('min_torque_N_m').text(d['min_torque_N_m'])})"
                   if d["brakes"] else "; it does not brake")
     ok = gain is None or gain <= 0.01
+    if (d.get("dwell") or {}).get("dwells"):
+        ok, words = False, words + "; CAUTION: " + dwell_words("it", d["dwell"], d["omega_cr_rad_s"])
     if d.get("within_drive_limits") is False:
         ok, words = False, words + f"; drive limits EXCEEDED ({', '.join(d.get('violated') or [])})"
     if d["status"] not in SOLVED:
@@ -372,12 +443,12 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
     P = ocp.params
     zeta = P.chi / (2 * (P.c * P.m) ** 0.5)  # of the rotor with its liquid mass: u'' + 2 zeta w u' + w^2 u
     opt_use = drive_use(ocp, tr)
+    # API 684 (2005) / API 617 (2014): AF off the half-power points of the rotor's own steady unbalance response, the
+    # separation margin from the service speed (the final speed: the scene gives no operating range)
     rotor = {"mass_kg": P.m1, "stiffness_N_per_m": P.c, "damping_N_s_per_m": P.chi, "eccentricity_m": P.e,
-             "liquid_mass_kg": P.m2_star, "critical_speed_rad_s": P.omega_cr, "damping_ratio": zeta,
-             # API 684 (2005): AF = N_c/(N_2 - N_1) at the half-power points, 1/(2 zeta) for the linear rotor;
-             # separation margin SM = |N_service - N_c|/N_c of the final (service) speed
-             "amplification_factor": 1 / (2 * zeta) if zeta > 0 else None,
-             "separation_margin_pct": 100 * abs(ocp.omega_final - P.omega_cr) / P.omega_cr,
+             "liquid_mass_kg": P.m2_star, "critical_speed_rad_s": P.omega_cr,
+             "damping_ratio": zeta, "service_speed_rad_s": ocp.omega_final,
+             **api_margins(P, ocp.omega_final),
              "amplitude_convention": "0-peak (the radius of the whirl orbit)"}
     data = {
         "title": title, "objective": ocp.objective, "method": method.label, "status": sol.status,
@@ -408,6 +479,7 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
         # the optimum brakes when its smallest torque is below zero by more than the limit check's tolerance
         "brakes": None if opt_use["min_torque_N_m"] is None or P.J_p == 0 else
         bool(opt_use["min_torque_N_m"] < -DRIVE_TOL * torque_reference(ocp)),
+        "dwell": dwell(P, tr, ocp.alpha_max),
         "accuracy": {"estimate": opt.resimulation_rel_error,
                      "how": "relative difference between the transcription's optimal objective and its CVODES "
                             f"re-simulation (rtol {RESIM_TOL:g}, {RESIM_POINTS} samples per interval)"},
@@ -429,7 +501,8 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
                             "peak_unbalance": seg.trajectory.peak_d, "objective_value": seg.objective,
                             "loss_vs_optimum_pct": _pct(seg.objective, opt.score),
                             "evaluations": seg.evaluations, "start": seg.start,
-                            "start_objectives": seg.start_objectives, **seg.drive}
+                            "start_objectives": seg.start_objectives, **seg.drive,
+                            "dwell": dwell(P, seg.trajectory, ocp.alpha_max)}
     # the wall time by part (s): what the global search, the initial guesses, the NLP builds, the IPOPT solves,
     # the CVODES re-simulations (reference ramp, ranking near-ties, the optimum) and the baselines took
     split = {"global_search": opt.times.get("global_search", 0.0), "guesses": opt.times.get("guesses", 0.0),

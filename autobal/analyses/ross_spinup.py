@@ -128,10 +128,11 @@ def estimate_seconds(settings: RossSpinup) -> float:
 
 def report_section(sec) -> None:
     """Optimal spin-up of a ROSS rotor reduced to its modes: the optimum's peak against the best ramp (the verdict),
-    the reduction checked against ROSS, API 684 (2005) values of each critical speed."""
+    the reduction checked against ROSS, the API 684 (2005) margins of each critical speed."""
     from autobal.analysis.quantities import convert
+    from autobal.analysis.standards import margin_words
     from autobal.ocp.modal import ModalSpinupResult  # the verdict's one copy
-    from autobal.report import cell, has_path, number, table, text
+    from autobal.report import cell, get_path, has_path, number, table, text
 
     st = sec.get("status")
     sec.conclude(*ModalSpinupResult.verdict_of(sec.block))
@@ -160,16 +161,21 @@ def report_section(sec) -> None:
     ross = cs.get("ross_wd_rad_s") or []
     rows = []
     for i, w in enumerate(cs.get("reduced_wd_rad_s") or []):
-        at = f"critical_speeds.{{}}.{i}"
+        at = f"critical_speeds.margins.{i}.{{}}"
+        m = get_path(cs, f"margins.{i}") or {}
+        kept = {True: "yes", False: "NO", None: "—"}[m.get("separation_margin_ok")]
         rows.append([text(str(i + 1)), cell(w, "rad/s"), cell(convert(w, "rad/s", "rpm"), "rpm"),
                      cell(ross[i] if i < len(ross) else None, "rad/s"),
-                     sec.cell(at.format("reduced_damping_ratio")),
-                     sec.cell(at.format("amplification_factor"))
-                     if has_path(sec.block, at.format("amplification_factor")) else text(None),
-                     sec.cell(at.format("separation_margin_pct"))
-                     if has_path(sec.block, at.format("separation_margin_pct")) else text(None)])
+                     sec.cell(f"critical_speeds.reduced_damping_ratio.{i}"),
+                     *(sec.cell(at.format(k)) if has_path(sec.block, at.format(k)) else text(None)
+                       for k in ("amplification_factor", "separation_margin_pct", "required_separation_margin_pct")),
+                     text(kept)])
+        if m:
+            sec.verdict(m.get("separation_margin_ok"), f"critical speed {i + 1} ({number(w)} rad/s), API 684 (2005): "
+                        + margin_words(m))
     if rows:
-        sec.tables.append(table("Critical speeds below the final speed, with the API 684 (2005) amplification factor "
-                                "1/(2ζ) and the separation margin of the final speed",
-                                ["#", "reduced model", "reduced model, rpm", "ROSS", "damping ratio", "AF", "SM"],
-                                rows))
+        sec.tables.append(table("Critical speeds below the final speed: the API 684 (2005) amplification factor at the "
+                                "half-power points of the unbalance response at the nodes of interest, the separation "
+                                "margin from the final (service) speed and the margin API 684 requires for that AF",
+                                ["#", "reduced model", "reduced model, rpm", "ROSS", "damping ratio", "AF", "SM",
+                                 "SM required", "kept"], rows))

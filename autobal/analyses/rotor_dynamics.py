@@ -99,7 +99,8 @@ def run(scene, settings: RotorDynamics):
                                 f"periods of the rotor from rest past its critical speed, more than "
                                 f"{MAX_PERIODS:.0e}: give at least {a * periods / MAX_PERIODS:.2g}")
     with progress.steps(None, "rotor dynamics (curves, steps, passage, Lewis cases)", "part", catch=True):
-        return rotor_study.run(params, settings, scene.title, drive.motor if drive else None)
+        return rotor_study.run(params, settings, scene.title, drive.motor if drive else None,
+                               scene.rotor.unbalance.service_speed if scene.rotor.unbalance else None)
 
 
 def estimate_seconds(settings: RotorDynamics) -> float:
@@ -116,10 +117,12 @@ def report_section(sec) -> None:
     """Rotor with a liquid auto-balancer: stationary, steps, passage (Pashkov 2010); one verdict, the result's."""
     from autobal.report import declarations, table
 
-    sec.row("critical speed with the liquid", "ω_cr", "rotor.omega_cr_rad_s")
+    sec.row("critical speed √(c/m) (m with the liquid mass, if the rotor has a liquid layer)", "ω_cr",
+            "rotor.omega_cr_rad_s")
     sec.row("natural frequency without liquid", "Ω0", "rotor.Omega0_rad_s")
     sec.row("liquid mass ratio", "ψ", "rotor.psi")
     sec.row("damping ratio", "ζ0", "rotor.zeta0")
+    api_rows(sec, "rotor.")
     sec.row("largest real part of the eigenvalues over Ω0", "max Re λ/Ω0", "stationary.stability.max_real_over_Omega0")
     for psi, n in (sec.get("passage.crossover_n_star") or {}).items():  # keys like "0.75": the value given
         sec.row(f"damping above which the liquid raises the passage peak (ψ = {psi})", "n*",
@@ -131,6 +134,7 @@ def report_section(sec) -> None:
     verdict = RotorDynamicsResult(sec.block).verdict()
     if verdict:
         sec.conclude(*verdict)
+    api_verdict(sec, sec.get("rotor") or {})
     rows = [[sec.cell(f"passage.table.{i}.{k}") for k in ("n", "psi", "delta_max_over_e", "z_delta_max", "d_max")]
             for i, _ in enumerate(sec.get("passage.table", []))]
     if rows:
@@ -139,3 +143,25 @@ def report_section(sec) -> None:
         sec.tables.append(table(f"Passage through the critical speed at {accel}: peak "
                                 "deflection δ*/e and its speed ratio ν = ω/Ω0",
                                 ["n", "ψ", "δ*/e", "ν at the peak", "d*"], rows, headline=True))
+
+
+def api_rows(sec, prefix: str) -> None:
+    """The rows of a Jeffcott rotor's API 684 (2005) margins (:func:`autobal.analysis.standards.margin_check`) under
+    ``prefix`` of the block; the spin-up's section shows them too."""
+    for label, sym, key in (("amplification factor at the half-power points of the unbalance response, API 684 "
+                             "(2005)", "AF", "amplification_factor"),
+                            ("speed of the unbalance response's peak", "N_c", "response_peak_speed_rad_s"),
+                            ("separation margin from the operating speed, API 684 (2005)", "SM",
+                             "separation_margin_pct"),
+                            ("separation margin required for that AF, API 684 (2005)", "SM_req",
+                             "required_separation_margin_pct")):
+        sec.row(label, sym, prefix + key)
+
+
+def api_verdict(sec, margins: dict) -> None:
+    """The check line of the API 684 (2005) separation margin (kept or not, or why there is none)."""
+    from autobal.analysis.standards import margin_words
+
+    if "amplification_factor" in margins:
+        sec.verdict(margins.get("separation_margin_ok"), "API 684 (2005): " + margin_words(margins))
+

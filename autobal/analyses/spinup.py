@@ -162,7 +162,8 @@ def _spinup_binding(sec) -> list[str]:
 def report_section(sec) -> None:
     """Optimal spin-up through the critical speed (direct collocation, CVODES re-simulation): the verdict is the
     optimum's peak deflection, its gain against the best ramp within the drive limits and whether it brakes."""
-    from autobal.ocp.spinup_study import OBJECTIVES, verdict  # the verdict's one copy
+    from autobal.analyses.rotor_dynamics import api_rows, api_verdict  # the API 684 rows' one copy
+    from autobal.ocp.spinup_study import DWELL_BAND, OBJECTIVES, critical_label, dwell_words, verdict
     from autobal.report import cell, get_path, number, table, text
 
     sec.conclude(*verdict(sec.block))
@@ -177,20 +178,26 @@ def report_section(sec) -> None:
     sec.row("gain against the best ramp within the drive limits", "", "gain_vs_best_feasible_ramp_pct")
     sec.row("gain against the constant ramp", "", "gain_vs_constant_ramp_pct")
     sec.row("eccentricity of the rotor", "e", "eccentricity_m")
+    liquid = (sec.get("rotor.liquid_mass_kg") or 0) > 0
     for label, sym, key in (("rotor mass", "m1", "mass_kg"),
                             ("shaft stiffness (c = m1 Ω_c²)", "c", "stiffness_N_per_m"),
                             ("damping (χ = 2 ζ m1 Ω_c)", "χ", "damping_N_s_per_m"),
                             ("damping ratio", "ζ", "damping_ratio"),
-                            ("critical speed (with the liquid mass: Ω0 √ψ)", "ω_cr", "critical_speed_rad_s"),
-                            ("amplification factor, API 684 (2005): N_c/(N_2 − N_1) = 1/(2ζ)", "AF",
-                             "amplification_factor"),
-                            ("separation margin of the final speed from the critical speed, API 684 (2005)", "SM",
-                             "separation_margin_pct")):
+                            (critical_label(liquid), "ω_cr", "critical_speed_rad_s"),
+                            ("service speed (the final speed)", "N_s", "service_speed_rad_s")):
         sec.row(label, sym, f"rotor.{key}")
+    api_rows(sec, "rotor.")
+    api_verdict(sec, sec.get("rotor") or {})
     objective = OBJECTIVES.get(sec.get("objective"))
     if objective is not None:
         sec.row(f"objective of the optimum (re-simulated): the {objective[2]}", f"J = {objective[1]}",
                 "objective_value")
+    band = f"{100 * DWELL_BAND:.0f} %"
+    sec.row(f"time of the optimum within {band} of the critical speed", "t_cr", "dwell.time_near_critical_s")
+    sec.row(f"time of the ramp table within {band} of the critical speed", "t_cr",
+            "segments.dwell.time_near_critical_s")
+    sec.row(f"time of the maximum acceleration across {band} either side of the critical speed", "",
+            "dwell.fastest_crossing_s")
     sec.row("time of the peak", "t*", "time_of_peak_s")
     sec.row("speed at the peak", "ω*", "omega_at_peak_rad_s")
     sec.row("final time", "T", "final_time_s")
@@ -229,11 +236,13 @@ def report_section(sec) -> None:
                           f"{number(sec.get('braking_torque_limit_N_m'))} N·m)")
     seg = sec.get("segments")
     if seg:
-        sec.verdict(seg.get("within_drive_limits"),
+        dw = seg.get("dwell") or {}
+        sec.verdict(seg.get("within_drive_limits") and not dw.get("dwells"),
                     f"{seg['segments']}-segment ramp table (drive_segments.csv): peak "
                     f"{number(seg.get('peak_deflection_over_e'))} e, {number(seg.get('loss_vs_optimum_pct'))} % "
                     "against the full optimum, " + ("within" if seg.get("within_drive_limits") else "OUTSIDE")
-                    + " the drive limits")
+                    + " the drive limits" + ("; CAUTION: " + dwell_words("it", dw, sec.get("omega_cr_rad_s"))
+                                             if dw.get("dwells") else ""))
     drive = get_path(sec.results, "meta.scene_si.rotor.drive") or {}
     if not (drive.get("max_torque") or drive.get("max_power")):
         sec.verdict(None, "no drive torque or power limit in the scene")
@@ -249,8 +258,10 @@ def report_section(sec) -> None:
                      text(number(float(r["speed_start_rpm"]))), text(number(float(r["speed_end_rpm"]))),
                      text(number(float(r["rate_rpm_s"]))), cell(float(r["rate_rad_s2"]), "rad/s^2")]
                     for r in csv.DictReader(fh)]
+        caution = "; CAUTION: it dwells near the critical speed (the checks above)" if (
+            (seg or {}).get("dwell") or {}).get("dwells") else ""
         sec.tables.append(table("Ramp table for the drive (drive_segments.csv; the last row the hold): speeds in "
-                                "rpm, rates in rpm/s", ["segment", "start", "end", "start speed, rpm",
+                                "rpm, rates in rpm/s" + caution, ["segment", "start", "end", "start speed, rpm",
                                                         "end speed, rpm", "rate, rpm/s", "rate"], rows))
     keeps = {True: "yes", False: "NO", None: "—"}
     rows = [[text(s.get("start")), text(s.get("stage", "final mesh")), text(s.get("status")),

@@ -156,7 +156,12 @@ def adapt(r: Rotor) -> RotorParams:
         filled["chi"] = 2 * r.damping_ratio * math.sqrt(c * m1)
     if r.eccentricity is None:
         u = r.unbalance
-        filled["e"] = u.grade_m_s / u.service_speed if u.grade is not None else u.residual / m1
+        if u.grade is not None:
+            from autobal.analysis.standards import permissible_eccentricity  # e = G/Omega, ISO 21940-11
+
+            filled["e"] = permissible_eccentricity(u.grade_m_s, u.service_speed)
+        else:
+            filled["e"] = u.residual / m1
     p = to_params(r, **filled)
     if r.liquid is None:
         return p
