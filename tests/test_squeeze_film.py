@@ -9,7 +9,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 import autobal
-from autobal.analysis import linearize, simulate
+from autobal.analysis import linearize, simulate, stability
 from autobal.analysis.linearize import Setup
 from autobal.models import dynamics as dy
 from autobal.models.device import face_area
@@ -127,3 +127,20 @@ def test_unknown_damping_gap_is_refused(setups):
     s = setups[0.15]
     with pytest.raises(ValueError, match="damping gap 'operating'"):
         dy.build(s.dev, s.data, s.point, "energy", damping_gap="operating")
+
+
+def test_compressor_is_stabilised_by_a_small_cavity_or_a_strong_film_alone():
+    """docs/validation.md: the unstable energy-consistent compressor (Pavlenko (2014), App. B data) becomes stable
+    along a single-parameter scan for V3 <= 5.0e-6 m^3 or c_z >= 3.4e5 N s/m (c_z at z_B; the film at z0 is
+    c_z/u0^3), and by no V2 or stem damping alone."""
+    s = Setup(dynamic_device(autobal.load("compressor_k180_dynamics")), 1.0)
+    scans = {k: v["stable_intervals"] for k, v in stability.single_parameter_scans(s, "nonlinear").items()}
+    assert scans["disc_chamber_volume"] == [] and scans["stem_damping"] == []
+    [(lo, hi)] = scans["cavity_volume"]
+    assert hi == pytest.approx(4.99e-6, rel=2e-3)
+    [(lo, hi)] = scans["rotor_damping"]
+    assert lo == pytest.approx(3.39e5, rel=2e-3)
+    # the boundary is one value of the film at the operating gap: c_z/u0^3 there equals the constant film's boundary
+    constant_film = dy.build(s.dev, s.data.with_(c_z=lo / s.static.values["u"] ** 3), s.point, "energy",
+                          damping_gap="base")
+    assert linearize.exact(constant_film).poles().real.max() == pytest.approx(0.0, abs=1.0)
