@@ -147,14 +147,18 @@ class OuterSeal(SIParams):
 
 @dataclass(frozen=True)
 class Face(SIParams):
-    """Face throttle between the disc and the pad; conductance g_TB u^(3/2).
+    """Face throttle between the disc and the pad; conductance g_TB u^(3/2), u = z/z_B.
+
+    The base gap z_B is the normalising base of the face law, not a second gap: g_TB is proportional to
+    z_B^(3/2) (flow area times 1/sqrt(zeta_TB), both set at z_B), so g_TB (z/z_B)^(3/2) is one function of the
+    physical gap z whatever z_B is (Pavlenko (2014), App. A).
 
     Attributes
     ----------
     inner_diameter, outer_diameter : float
         d2, d3, m.
     base_gap : float
-        z_B, m.
+        z_B, m: the base of u = z/z_B (and the gap at which the rotor damping c_z is given).
     friction : float
         lambda_T, dimensionless.
     """
@@ -162,7 +166,10 @@ class Face(SIParams):
     inner_diameter: float = si("m", kind="length", doc="inner diameter of the face annulus")
     outer_diameter: float = si("m", kind="length", doc="outer diameter of the face annulus; larger than "
                                "inner_diameter")
-    base_gap: float = si("m", kind="length", doc="base face gap z_B = h_TB, the gap base")
+    base_gap: float = si("m", kind="length", doc="base face gap z_B = h_TB: the normalising base of the face "
+                         "law g_TB (z/z_B)^(3/2), u = z/z_B; g_TB scales as z_B^(3/2), so changing z_B alone "
+                         "changes neither the operating gap z0 nor the leakage. device.dynamics.rotor_damping "
+                         "is given at this gap: scale it by (old/new)^3 to keep the device's squeeze film")
     friction: float = si("", 0.06, doc="friction factor lambda of the face gap, dimensionless", gt=0, le=BIG)
 
     def __post_init__(self):

@@ -15,6 +15,12 @@ throttle laws of the statics (models/throttles.py).  Two forms of the chamber ba
   cavity 3 is never squeezed and its barrier chamber has the wrong sign of s_m dx/dt, both of
   which feed energy into the system.
 
+The rotor's damping c_z is the squeeze film of the face throttle, c(z) = 1.5 mu s_T^2 / (pi z^3),
+given by its value at the base gap z_B (Pavlenko (2014), App. A).  ``damping_gap`` chooses where the
+film is evaluated: ``"instantaneous"`` (the default of the energy form) at the state gap z, c_z (z_B/z)^3
+= c_z u^-3, which is the same force for every choice of the normalising base z_B (its linearisation is the
+film at the operating gap z0); ``"base"`` (the default of the chain form, the source's) the constant c_z.
+
 A device without a regulator (simplified system of §2.4.2) is the same model without the regulator
 block: the barrier pressure is then ideal, psi_e = psi1 + dpsi.
 
@@ -37,6 +43,9 @@ from autobal.models.device import DeviceDesign, groups_by_name, network
 from autobal.models.params import BIG, SIParams, si
 
 FORMS = ("energy", "chain")
+# where the rotor's squeeze-film damping is evaluated, by default per chamber form: at the state gap z (the
+# physical film) or at the base gap z_B (the source's constant c_z, kept with the printed form that reproduces it)
+DAMPING_GAPS = {"energy": "instantaneous", "chain": "base"}
 # dynamic data, in this order, as the symbolic parameter vector of the model
 PARAM_NAMES = ("m_p", "k_pr", "c_z", "E", "V2", "V3", "m0", "k_reg", "c_x", "V_cam", "V_m", "s_c")
 @dataclass(frozen=True)
@@ -52,7 +61,8 @@ class DynamicData(SIParams):
     k_pr : float
         Push-off spring stiffness, N/m.
     c_z : float
-        Rotor damping, N s/m (see :func:`squeeze_damping`).
+        Rotor damping at the base gap z_B, N s/m (see :func:`squeeze_damping`); the energy form scales it
+        to the instantaneous gap as the squeeze film, c_z (z_B/z)^3.
     E : float
         Bulk modulus of the barrier medium, Pa.
     V2, V3 : float
@@ -81,7 +91,9 @@ class DynamicData(SIParams):
     k_pr: float = si("N/m", kind="stiffness", key="pushoff_stiffness",
                      doc="push-off spring stiffness k_pr; preload deflection F_pr/k_pr + z0")
     c_z: float = si("N*s/m", kind="damping", key="rotor_damping", scene_default=None, ge=0,
-                    doc="rotor damping c_z (0: undamped); default the squeeze film, Pavlenko (2014), App. A")
+                    doc="rotor damping c_z at the base gap z_B (0: undamped); the energy-consistent model takes "
+                    "it as the face's squeeze film at the instantaneous gap z, c_z (z_B/z)^3; default the "
+                    "squeeze film 1.5 mu s_T^2/(pi z_B^3), Pavlenko (2014), App. A")
     E: float = si("Pa", kind="bulk modulus", key="bulk_modulus",
                   doc="bulk modulus E of the barrier medium (gas: the source's 1.42e5 Pa)")
     V2: float = si("m**3", kind="volume", key="disc_chamber_volume", doc="V2, chamber before the face throttle")
@@ -120,8 +132,11 @@ class DynamicData(SIParams):
 LONG_NAMES = {f.metadata["key"].rpartition(".")[2]: f.name for f in fields(DynamicData) if f.name in PARAM_NAMES}
 
 
-def squeeze_damping(viscosity: float, face_area: float, base_gap: float) -> float:
-    """Squeeze-film damping of the face throttle, c_z = 1.5 mu s_T^2 / (pi z_B^3) (Pavlenko (2014), App. A).
+def squeeze_damping(viscosity: float, face_area: float, gap: float) -> float:
+    """Squeeze-film damping of the face throttle at the gap z, c = 1.5 mu s_T^2 / (pi z^3).
+
+    Pavlenko (2014), App. A, evaluates it at the base gap z = z_B (c_z); the energy-consistent model
+    carries it to the instantaneous gap as c_z (z_B/z)^3 (see :func:`build`).
 
     Parameters
     ----------
@@ -129,15 +144,15 @@ def squeeze_damping(viscosity: float, face_area: float, base_gap: float) -> floa
         mu, Pa s.
     face_area : float
         s_T, m^2.
-    base_gap : float
-        z_B, m.
+    gap : float
+        z, m (z_B for the scene's c_z).
 
     Returns
     -------
     float
-        c_z, N s/m.
+        c, N s/m.
     """
-    return 1.5 * viscosity * face_area**2 / (math.pi * base_gap**3)
+    return 1.5 * viscosity * face_area**2 / (math.pi * gap**3)
 
 
 @dataclass
@@ -167,6 +182,7 @@ class DynamicModel:
     design: DeviceDesign
     data: DynamicData
     point: dict = field(default_factory=dict)
+    damping_gap: str = "instantaneous"
 
     def index(self, name: str) -> int:
         return self.states.index(name)
@@ -176,7 +192,7 @@ class DynamicModel:
 
 
 def build(dev: DeviceDesign, data: DynamicData, point: dict, form: str = "energy",
-          preload: str = "static", symbols=None, values=None) -> DynamicModel:
+          preload: str = "static", symbols=None, values=None, damping_gap: str | None = None) -> DynamicModel:
     """Build the nonlinear model at the static ``point`` (Pavlenko (2014), Eqs. (2.40), (2.111), (2.167)).
 
     The throttle flows are those of the statics (:func:`autobal.models.device.network`).
@@ -204,6 +220,10 @@ def build(dev: DeviceDesign, data: DynamicData, point: dict, form: str = "energy
     values : array_like, optional
         With ``symbols``: their nominal values, at which the chamber rows' normalisation (a constant
         per row, which the ODE does not see) is taken as a number; default: symbolic.
+    damping_gap : {"instantaneous", "base"} or None
+        Where the rotor's squeeze film is evaluated: "instantaneous", at the state gap z, force
+        c_z (z_B/z)^3 dz/dt = c_z u^-3 dz/dt (independent of the normalising base z_B); "base", the constant
+        c_z of Pavlenko (2014), App. A.  Default: ``DAMPING_GAPS[form]`` (energy: instantaneous, chain: base).
 
     Returns
     -------
@@ -212,6 +232,9 @@ def build(dev: DeviceDesign, data: DynamicData, point: dict, form: str = "energy
     """
     if form not in FORMS:
         raise ValueError(f"unknown chamber form {form!r}; expected one of {FORMS}")
+    damping_gap = DAMPING_GAPS[form] if damping_gap is None else damping_gap
+    if damping_gap not in ("instantaneous", "base"):
+        raise ValueError(f"unknown damping gap {damping_gap!r}; expected 'instantaneous' or 'base'")
     if symbols is not None and preload != "static":
         raise ValueError("a model with design symbols takes preload='static' only")
     extra, extra_names = ([symbols], ["d"]) if symbols is not None else ([], [])
@@ -248,8 +271,9 @@ def build(dev: DeviceDesign, data: DynamicData, point: dict, form: str = "energy
         return psi * p_b / p_n if gas and form == "energy" else 1.0
 
     fl = network(g, groups_by_name(g), psi1, dpsi, Q)  # the flow network of the statics
-    # rotor (2.37): m z'' + c z' + k (z - z0) = F - T + F_pr   [over p_B s_B]
-    rows = [(P["m_p"] * Qdd["u"] + P["c_z"] * Qd["u"] + P["k_pr"] * (Q["u"] - u_spring)) * z_b / force
+    # rotor (2.37): m z'' + c z' + k (z - z0) = F - T + F_pr   [over p_B s_B]; c = c_z (z_B/z)^3 or c_z
+    c_rotor = P["c_z"] / Q["u"] ** 3 if damping_gap == "instantaneous" else P["c_z"]
+    rows = [(P["m_p"] * Qdd["u"] + c_rotor * Qd["u"] + P["k_pr"] * (Q["u"] - u_spring)) * z_b / force
             - (g.sigma * (Q["psi2"] - Q["psi3"]) - tau + g.chi)]
     d_e = s_e * z_b * Qd["u"] / flow_scale  # disc displacement flow s_e dz/dt
     comp = {k: theta(P[v]) * Qd[k] for k, v in (("psi2", "V2"), ("psi3", "V3"))}
@@ -332,5 +356,5 @@ def build(dev: DeviceDesign, data: DynamicData, point: dict, form: str = "energy
         point = dict(point) | {k: float(v) for k, v in zip(states, x0, strict=True) if k in coords}
     return DynamicModel(form=form, regulator=reg is not None, medium=g.medium, states=states, coords=coords,
                         inputs=["psi1", "tau"], t_ref=t_ref, ode=ode, rows=rows_f, flows=flows, x0=x0, w0=w0,
-                        p0=data.vector(), design=dev, data=data, point=dict(point))
+                        p0=data.vector(), design=dev, data=data, point=dict(point), damping_gap=damping_gap)
 

@@ -13,36 +13,41 @@ from autobal.errors import ScenarioError, SolveError
 
 pytestmark = pytest.mark.cli
 
-GAP = {"device.disc.face.base_gap": "0.18 mm"}  # 0.15 mm in the scene (Pavlenko 2014, App. A)
+SEAL = {"device.disc.outer_seal.length": "300 mm"}  # the README's example; 260 mm in the scene (Pavlenko 2014, App. A)
 
 
 @pytest.fixture(scope="module")
 def statics_run():
-    return autobal.run(autobal.load("pump_pe600_statics", set=GAP))
+    return autobal.run(autobal.load("pump_pe600_statics", set=SEAL))
 
 
 def test_api_gives_the_cli_numbers(statics_run, tmp_path):
     assert cli.main(["run", "pump_pe600_statics", "--out", str(tmp_path), "--quiet",
-                     "--set", "device.disc.face.base_gap=0.18 mm"]) == 0
+                     "--set", "device.disc.outer_seal.length=300 mm"]) == 0
     written = json.loads((tmp_path / "results.json").read_text())
     api = statics_run.to_dict()
     for key in ("u0", "z0", "xi0", "psi2_0", "Q_e"):
         assert written["statics"]["exact"][key] == pytest.approx(api["statics"]["exact"][key], rel=1e-12)
-    # the override really reached the physics: z0 = u0 z_B with the new base gap
-    st = statics_run["statics"]
-    assert st.face_gap == pytest.approx(st.to_dict()["exact"]["u0"] * 0.18e-3, rel=1e-12)
-    assert written["meta"]["overrides"] == GAP and written["meta"]["autobal_version"] == autobal.__version__
-    assert written["meta"]["scene_si"]["device"]["disc"]["face"]["base_gap"] == pytest.approx(0.18e-3)
+    assert written["meta"]["overrides"] == SEAL and written["meta"]["autobal_version"] == autobal.__version__
+    assert written["meta"]["scene_si"]["device"]["disc"]["outer_seal"]["length"] == pytest.approx(0.3)
 
 
 def test_override_reaches_the_physics(statics_run):
-    """The base gap z_B only scales the gap (the face conductance is defined at u = 1 and scales as
-    z_B^(3/2)): u0 changes as 1/z_B while the physical gap and pressures do not. A margin does change them."""
+    """The README's longer outer seal (300 mm for 260 mm) throttles the cavity's outflow more: the face gap
+    closes from 143.9 to 137.6 um and the barrier leakage falls from 11.29 to 11.04 L/s.  The base gap z_B alone
+    only scales the gap (the face conductance is defined at u = 1 and scales as z_B^(3/2)): u0 changes as 1/z_B
+    while the physical gap and pressures do not. A margin does change them."""
     nominal = autobal.run("pump_pe600_statics")["statics"]
     changed = statics_run["statics"]
-    assert changed.to_dict()["exact"]["u0"] / nominal.to_dict()["exact"]["u0"] == pytest.approx(0.15 / 0.18, rel=1e-7)
-    assert changed.face_gap == pytest.approx(nominal.face_gap, rel=1e-7)
-    assert changed.chamber_pressures["p2"] == pytest.approx(nominal.chamber_pressures["p2"], rel=1e-9)
+    assert nominal.face_gap == pytest.approx(143.86e-6, rel=1e-4) and changed.face_gap == pytest.approx(137.59e-6,
+                                                                                                         rel=1e-4)
+    assert nominal.barrier_flow == pytest.approx(11.290e-3, rel=1e-4)
+    assert changed.barrier_flow == pytest.approx(11.041e-3, rel=1e-4)
+    based = autobal.run(autobal.load("pump_pe600_statics", set={"device.disc.face.base_gap": "0.18 mm"}))["statics"]
+    assert based.to_dict()["exact"]["u0"] / nominal.to_dict()["exact"]["u0"] == pytest.approx(0.15 / 0.18, rel=1e-7)
+    assert based.face_gap == pytest.approx(nominal.face_gap, rel=1e-7)
+    assert based.face_gap == pytest.approx(based.to_dict()["exact"]["u0"] * 0.18e-3, rel=1e-12)  # z0 = u0 z_B
+    assert based.chamber_pressures["p2"] == pytest.approx(nominal.chamber_pressures["p2"], rel=1e-9)
     wider = autobal.run(autobal.load("pump_pe600_statics", set={"device.barrier.margin_ratio": 0.05}))["statics"]
     assert wider.to_dict()["dpsi"] == 0.05
     assert wider.barrier_flow > 1.1 * nominal.barrier_flow and wider.face_gap != pytest.approx(nominal.face_gap)

@@ -97,7 +97,7 @@ def test_no_damping_stays_stable_on_hydraulic_damping(tmp_path):
     code, res = run(tmp_path, "dynamics_no_damping")
     assert code == 0
     nl = res["stability"]["models"]["nonlinear"]
-    assert nl["stable"] and 0 < nl["margin"]["decay_rate"] < 80.6  # less than with c_z (80.6 1/s), still stable
+    assert nl["stable"] and 0 < nl["margin"]["decay_rate"] < 82.6  # less than with c_z (82.6 1/s), still stable
 
 
 def test_valve_driven_to_its_travel_limit(tmp_path):
