@@ -70,5 +70,5 @@ def run(scene, settings: RossSpinupRobust):
 def estimate_seconds(settings: RossSpinupRobust) -> float:
     """ROSS's import and the rotor's matrices (about 10 s), the nominal and multi-rotor collocation NLPs of the
     modal envelope, then every profile on every validation rotor."""
-    return (10.0 + COST["start"] + COST["modal_ocp_point"] * settings.intervals * settings.degree * 8
+    return (COST["ross_rotor"] + COST["start"] + COST["modal_ocp_point"] * settings.intervals * settings.degree * 8
             + COST["robust_validation_run"] * 10 * settings.validation_samples * (settings.ramps + 2))

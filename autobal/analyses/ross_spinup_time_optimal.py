@@ -60,5 +60,5 @@ def run(scene, settings: RossSpinupTimeOptimal):
 def estimate_seconds(settings: RossSpinupTimeOptimal) -> float:
     """ROSS's import and the rotor's matrices (about 10 s), then a minimum-peak study of the modal envelope (about
     four starts) per front point and the min_time solves."""
-    return 10.0 + COST["start"] + COST["modal_ocp_point"] * settings.intervals * settings.degree * (
+    return COST["ross_rotor"] + COST["start"] + COST["modal_ocp_point"] * settings.intervals * settings.degree * (
         4 + 4 * settings.front_points)
