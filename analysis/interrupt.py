@@ -117,10 +117,7 @@ def call(function, *args, **kwargs):
     """
     ensure()
     check()
-    trace = os.environ.get("AUTOBAL_SOLVER_TRACE")
-    if trace:  # a file that receives the name of each solver called (tests wait on it to interrupt a solve)
-        with open(trace, "a") as fh:
-            fh.write(f"{function.name() if callable(getattr(function, 'name', None)) else function.__name__}\n")
+    _trace(function.name() if callable(getattr(function, "name", None)) else function.__name__)
     try:
         out = function(*args, **kwargs)
     except RuntimeError as exc:
@@ -133,6 +130,15 @@ def call(function, *args, **kwargs):
         raise
     check()
     return out
+
+
+def _trace(name: str) -> None:
+    """With the environment variable ``AUTOBAL_SOLVER_TRACE`` set to a file, append ``name`` to it (tests wait on it
+    to interrupt a solve)."""
+    trace = os.environ.get("AUTOBAL_SOLVER_TRACE")
+    if trace:
+        with open(trace, "a") as fh:
+            fh.write(f"{name}\n")
 
 
 def _failure(function, exc: RuntimeError) -> SolverFailure:
@@ -160,6 +166,7 @@ def isolated(function, *args):
     if not hasattr(os, "fork"):
         return function(*args)
     check()
+    _trace(getattr(function, "__name__", "isolated"))
     read, write = os.pipe()
     pid = os.fork()
     if pid == 0:  # the child: compute, send, leave without running the parent's exit handlers

@@ -54,6 +54,26 @@ def named(scene) -> list[str]:
     return [key for key in MODULES if getattr(scene.analyses, key, None) is not None]
 
 
+#: optional extras: name -> (the module it installs, how to install it); an analysis module that needs one names it
+#: in ``EXTRA``
+EXTRAS = {"ross": ("ross", "pip install 'autobal[ross]'")}
+
+
+def extras(scene) -> dict[str, bool]:
+    """The extras the analyses of a validated scene need -> whether each is installed (nothing is imported)."""
+    import importlib.util
+    import sys
+
+    out = {}
+    for key in named(scene):
+        extra = getattr(module(key), "EXTRA", None)
+        if extra is not None:
+            name = EXTRAS[extra][0]
+            out[extra] = sys.modules[name] is not None if name in sys.modules else \
+                importlib.util.find_spec(name) is not None
+    return out
+
+
 def accuracy_studies() -> dict:
     """Analysis -> its work-precision study ``accuracy(scene, settings)``, for the analyses that have one
     (imports every analysis module: for ``autobal accuracy`` only)."""

@@ -19,6 +19,7 @@ from autobal.units import AngularAcceleration, AngularSpeed, SpeedOrZero, Time, 
 
 DESCRIPTION = "optimal spin-up of a ROSS rotor reduced to its modes (the ross extra)"
 NEEDS = "ross_rotor"
+EXTRA = "ross"  # the optional package it needs (autobal.analyses.EXTRAS)
 QUANTITIES_MODULE = "autobal.ocp.modal"  # its QUANTITIES declare every number of its block
 TITLE = "Optimal spin-up of a ROSS rotor (multi-mode)"  # of its section of report.html
 

@@ -16,6 +16,7 @@ from autobal.analyses.spinup_robust import SpinupRobust, report_section  # noqa:
 
 DESCRIPTION = "one spin-up profile of a ROSS rotor for a set of rotors (worst case; the ross extra)"
 NEEDS = "ross_rotor"
+EXTRA = "ross"  # the optional package it needs (autobal.analyses.EXTRAS)
 QUANTITIES_MODULE = "autobal.ocp.robust_study"  # the robust study's declarations: peaks in m for the modal rotor
 TITLE = "Robust spin-up of a ROSS rotor (multi-mode)"
 

@@ -18,6 +18,7 @@ from autobal.units import Length
 
 DESCRIPTION = "earliest arrival of a ROSS rotor with its peak deflection bounded, and the front (the ross extra)"
 NEEDS = "ross_rotor"
+EXTRA = "ross"  # the optional package it needs (autobal.analyses.EXTRAS)
 QUANTITIES_MODULE = "autobal.ocp.time_optimal_study"  # the time-optimal study's declarations: peaks in m here
 TITLE = "Time-optimal spin-up of a ROSS rotor (multi-mode)"
 
