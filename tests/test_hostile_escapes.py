@@ -7,9 +7,7 @@ import json
 import os
 import re
 import signal
-import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -18,6 +16,7 @@ from autobal import analyses, cli, scenario
 from autobal.analyses.stability import Stability
 from autobal.paths import SCENARIO_DIR
 from tests.hostile import refused
+from tests.test_interrupt import interrupted_run
 
 pytestmark = pytest.mark.cli
 FAST = "pump_pe600_statics"
@@ -89,6 +88,15 @@ def run_folder(tmp_path_factory):
     return out
 
 
+def copied(run_folder: Path, out: Path, but: str = "") -> Path:
+    """A copy of the files of ``run_folder`` (but the one named ``but``) in a new folder ``out``."""
+    out.mkdir()
+    for f in run_folder.iterdir():
+        if f.name != but:
+            (out / f.name).write_bytes(f.read_bytes())
+    return out
+
+
 @pytest.mark.parametrize("mask", [0o022, 0o027, 0o002])
 def test_output_folder_and_report_follow_the_umask(tmp_path, capsys, mask, run_folder):
     from autobal.output import OutputFolder
@@ -98,10 +106,7 @@ def test_output_folder_and_report_follow_the_umask(tmp_path, capsys, mask, run_f
         folder = OutputFolder(tmp_path / "out")
         assert folder.tmp.stat().st_mode & 0o777 == 0o777 & ~mask  # as mkdir makes it (mkdtemp's is 0o700)
         assert folder.commit().stat().st_mode & 0o777 == 0o777 & ~mask
-        out = tmp_path / "copy"
-        out.mkdir()
-        for f in run_folder.iterdir():
-            (out / f.name).write_bytes(f.read_bytes())
+        out = copied(run_folder, tmp_path / "copy")
         assert cli.main(["report", str(out)]) == 0
         assert (out / "report.html").stat().st_mode & 0o777 == 0o666 & ~mask  # as open() makes a file
     finally:
@@ -110,11 +115,7 @@ def test_output_folder_and_report_follow_the_umask(tmp_path, capsys, mask, run_f
 
 # ---- autobal report writes only regular files inside its folder --------------------------------------------------
 def test_report_replaces_a_symlinked_report_html_itself_and_never_writes_through_it(run_folder, tmp_path, capsys):
-    out = tmp_path / "out"
-    out.mkdir()
-    for f in run_folder.iterdir():
-        if f.name != "report.html":
-            (out / f.name).write_bytes(f.read_bytes())
+    out = copied(run_folder, tmp_path / "out", but="report.html")
     outside = tmp_path / "precious.txt"
     outside.write_text("not yours\n")
     (out / "report.html").symlink_to(outside)
@@ -126,11 +127,7 @@ def test_report_replaces_a_symlinked_report_html_itself_and_never_writes_through
 
 
 def test_report_html_that_is_a_folder_is_one_line_and_leaves_no_temp_file(run_folder, tmp_path, capsys):
-    out = tmp_path / "out"
-    out.mkdir()
-    for f in run_folder.iterdir():
-        if f.name != "report.html":
-            (out / f.name).write_bytes(f.read_bytes())
+    out = copied(run_folder, tmp_path / "out", but="report.html")
     (out / "report.html").mkdir()
     err = one_line(capsys, 2, "report", str(out))
     assert "report.html: cannot be written" in err
@@ -264,31 +261,7 @@ def test_the_ross_spinup_predicts_its_run_time_and_says_it_is_long():
     assert analyses.estimate_seconds(scn)["ross_spinup"] == pytest.approx(est - analyses.COST["ross_critical_speeds"])
 
 
-# ---- Ctrl-C and SIGTERM within 2 s in the ROSS spin-up (tests/test_interrupt.py's way) --------------------------
-def _interrupted_ross(tmp_path: Path, scene: str, step: str, sig: int, after: float, extra=()):
-    """Run ``scene``, send ``sig`` ``after`` s after ``step`` is first traced (analysis/interrupt.py); returns the exit
-    code, the stderr lines, the output folder and the seconds from the signal to the exit."""
-    trace, out = tmp_path / "trace.txt", tmp_path / "out"
-    env = os.environ | {"AUTOBAL_SOLVER_TRACE": str(trace)}
-    proc = subprocess.Popen([sys.executable, "-m", "autobal", "run", scene, "--out", str(out), "-q", *extra],
-                            cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-    deadline = time.monotonic() + 900
-    while not (trace.exists() and step in trace.read_text().split()):
-        assert proc.poll() is None, f"the run ended before {step}: {proc.stderr.read()[-2000:]}"
-        assert time.monotonic() < deadline, f"{step} never reached"
-        time.sleep(0.05)
-    time.sleep(after)
-    t0 = time.monotonic()
-    proc.send_signal(sig)
-    try:
-        _, err = proc.communicate(timeout=120)
-    finally:
-        proc.kill()
-    lines = [line for line in err.splitlines() if line.strip() and not line.startswith("CasADi - ")]
-    return proc.returncode, lines, out, time.monotonic() - t0
-
-
+# ---- Ctrl-C and SIGTERM within 2 s in the ROSS spin-up (tests/test_interrupt.py's run) --------------------------
 def _assert_stopped(code, lines, out, seconds, sig):
     assert code == 128 + sig, lines
     assert lines == [f"autobal: interrupted ({signal.Signals(sig).name})"], lines
@@ -302,13 +275,13 @@ def _assert_stopped(code, lines, out, seconds, sig):
 def test_ctrl_c_and_sigterm_stop_the_ross_computations_within_2_s(tmp_path, sig):
     """ROSS's numba compiles dropped a Ctrl-C and its critical speeds ran on for a minute: now in a child process
     (interrupt.isolated) that the interrupt kills."""
-    _assert_stopped(*_interrupted_ross(tmp_path, "spinup_ross_rotor", "_ross_side", sig, 1.0), sig)
+    _assert_stopped(*interrupted_run(tmp_path, "spinup_ross_rotor", "_ross_side", sig, 1.0), sig)
 
 
 @pytest.mark.slow
 def test_ctrl_c_stops_the_modal_nlp_solve_within_2_s(tmp_path):
-    _assert_stopped(*_interrupted_ross(tmp_path, "spinup_ross_rotor", "spinup", signal.SIGINT, 0.5,
-                                       ["--set", "analyses.ross_spinup.validate_with_ross=false"]), signal.SIGINT)
+    _assert_stopped(*interrupted_run(tmp_path, "spinup_ross_rotor", "spinup", signal.SIGINT, 0.5,
+                                     ["--set", "analyses.ross_spinup.validate_with_ross=false"]), signal.SIGINT)
 
 
 @pytest.mark.slow
