@@ -179,8 +179,14 @@ def isolated(function, *args):
                 out = (True, function(*args))
             except BaseException as exc:  # noqa: BLE001 - raised again in the parent
                 out = (False, exc)
+            try:
+                data = pickle.dumps(out)
+                pickle.loads(data)  # noqa: S301 - an exception whose __init__ takes other arguments does not load
+            except Exception as exc:  # noqa: BLE001
+                data = pickle.dumps((False, RuntimeError(f"{type(out[1]).__name__}: {out[1]}" if not out[0] else
+                                                         f"the answer cannot be sent back: {exc}")))
             with os.fdopen(write, "wb") as fh:
-                pickle.dump(out, fh)
+                fh.write(data)
         except BaseException:  # noqa: BLE001 - nothing to send it to
             code = 1
         finally:

@@ -8,6 +8,7 @@ import os
 import re
 import signal
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -290,3 +291,28 @@ def test_an_unreachable_ross_drive_is_refused_before_solving(capsys):
     err = refused(capsys, "spinup_ross_rotor", "ross_rotor.drive.max_torque=1e-3 N*m")
     assert "analyses.ross_spinup: the drive's torque, power and motor limits on its inertia" in err
     assert "at the earliest, after the horizon 4 s" in err
+
+
+def test_isolated_returns_raises_and_is_ended_by_an_interrupt():
+    """interrupt.isolated: the child's answer, its ScenarioError raised again here, and a signal during the wait
+    raises at once and kills the child (which ignores SIGINT and SIGTERM itself)."""
+    from autobal.analysis import interrupt
+    from autobal.errors import Interrupted, ScenarioError
+
+    assert interrupt.isolated(pow, 3, 4) == 81
+    with pytest.raises(ScenarioError, match="no such"):
+        interrupt.isolated(scenario.resolve, "no-such-scene")
+
+    def alarm(signum, frame):
+        raise Interrupted(signal.SIGINT)
+
+    previous = signal.signal(signal.SIGALRM, alarm)
+    t0 = time.monotonic()
+    try:
+        signal.setitimer(signal.ITIMER_REAL, 0.3)
+        with pytest.raises(Interrupted):
+            interrupt.isolated(time.sleep, 30.0)
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+    assert time.monotonic() - t0 < 2.0  # not the 30 s of the child, which was killed
