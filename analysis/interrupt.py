@@ -18,6 +18,7 @@ solver has not stopped 2 s after the signal.
 from __future__ import annotations
 
 import os
+import pickle
 import re
 import signal
 import sys
@@ -116,10 +117,7 @@ def call(function, *args, **kwargs):
     """
     ensure()
     check()
-    trace = os.environ.get("AUTOBAL_SOLVER_TRACE")
-    if trace:  # a file that receives the name of each solver called (tests wait on it to interrupt a solve)
-        with open(trace, "a") as fh:
-            fh.write(f"{function.name() if callable(getattr(function, 'name', None)) else function.__name__}\n")
+    _trace(function.name() if callable(getattr(function, "name", None)) else function.__name__)
     try:
         out = function(*args, **kwargs)
     except RuntimeError as exc:
@@ -134,6 +132,15 @@ def call(function, *args, **kwargs):
     return out
 
 
+def _trace(name: str) -> None:
+    """With the environment variable ``AUTOBAL_SOLVER_TRACE`` set to a file, append ``name`` to it (tests wait on it
+    to interrupt a solve)."""
+    trace = os.environ.get("AUTOBAL_SOLVER_TRACE")
+    if trace:
+        with open(trace, "a") as fh:
+            fh.write(f"{name}\n")
+
+
 def _failure(function, exc: RuntimeError) -> SolverFailure:
     """The SolverFailure of a CasADi function that raised: its name, the error's last line, and the return flag
     the message quotes (``CV_TOO_MUCH_WORK``) as its status."""
@@ -141,3 +148,62 @@ def _failure(function, exc: RuntimeError) -> SolverFailure:
     last = (str(exc).strip().splitlines() or ["(no message)"])[-1][:300]
     flag = re.search(r'"([A-Z][A-Z0-9_]{2,})"', last)
     return SolverFailure(f"{name}: {last}", flag.group(1) if flag else "solver_raised")
+
+
+def isolated(function, *args):
+    """``function(*args)`` in a forked child process, its result (or the exception it raised) sent back pickled.
+
+    For library code that would swallow an interrupt or ignore it for long (ROSS: numba compiles in ctypes
+    callbacks, which drop the exception a signal handler raises there, then minutes of Python without a check):
+    the parent waits in a read that a signal ends at once, so SIGINT and SIGTERM stop it there; the child, which
+    ignores them, is killed then.  What the child prints goes where the parent's output goes (the run's log).
+    Without ``os.fork`` (not POSIX) the function runs in this process.
+
+    Returns
+    -------
+    What ``function`` returns (picklable).
+    """
+    if not hasattr(os, "fork"):
+        return function(*args)
+    check()
+    _trace(getattr(function, "__name__", "isolated"))
+    read, write = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # the child: compute, send, leave without running the parent's exit handlers
+        code = 0
+        try:
+            os.close(read)
+            for sig in SIGNALS:
+                signal.signal(sig, signal.SIG_IGN)
+            try:
+                out = (True, function(*args))
+            except BaseException as exc:  # noqa: BLE001 - raised again in the parent
+                out = (False, exc)
+            try:
+                data = pickle.dumps(out)
+                pickle.loads(data)  # noqa: S301 - an exception whose __init__ takes other arguments does not load
+            except Exception as exc:  # noqa: BLE001
+                data = pickle.dumps((False, RuntimeError(f"{type(out[1]).__name__}: {out[1]}" if not out[0] else
+                                                         f"the answer cannot be sent back: {exc}")))
+            with os.fdopen(write, "wb") as fh:
+                fh.write(data)
+        except BaseException:  # noqa: BLE001 - nothing to send it to
+            code = 1
+        finally:
+            os._exit(code)
+    os.close(write)
+    try:
+        with os.fdopen(read, "rb") as fh:
+            data = fh.read()  # a signal ends the wait: its handler raises here
+    except BaseException:
+        os.kill(pid, signal.SIGKILL)
+        os.waitpid(pid, 0)
+        raise
+    _, status = os.waitpid(pid, 0)
+    if not data:
+        raise SolverFailure(f"{getattr(function, '__name__', 'function')}: its child process ended without an "
+                            f"answer (wait status {status})", "child_process_died")
+    ok, value = pickle.loads(data)  # noqa: S301 - our own child's answer
+    if not ok:
+        raise value
+    return value

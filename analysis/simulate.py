@@ -271,8 +271,9 @@ class TransientResult(Result):
         for c in self.data["series"]:
             ev = "; ".join(e.get("message", e["event"] + f" at t = {e['t']:.4g} s") for e in c["events"]) or "none"
             fail = f"; integrator failed at t = {c['failure']['t']:.4g} s" if c["failure"] else ""
-            lines.append(f"  {c['input']:17s} amplitude {c['amplitude']:g}: max |dz| = {dz.text(c['max_dz'], 3)}, "
-                         f"final dz = {dz.text(c['final_dz'], 3)}; events: {ev}{fail}")
+            response = "no response" if c["max_dz"] is None else \
+                f"max |dz| = {dz.text(c['max_dz'], 3)}, final dz = {dz.text(c['final_dz'], 3)}"
+            lines.append(f"  {c['input']:17s} amplitude {c['amplitude']:g}: {response}; events: {ev}{fail}")
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
@@ -350,11 +351,15 @@ def study(model: DynamicModel, cases: list, duration: float, points: int, integr
             t, X = t[keep], X[keep]
         z = X[:, model.index("u")] * sc["z_B"]
         dz = z - z[0]
+        why = None if r["failure"] is None else \
+            f"the integrator failed at t = {r['failure']['t']:.4g} s (the response up to there is in the CSV)"
         series.append({
             "input": kind, "amplitude": case["amplitude"], "frequency": omega if kind == "pressure_harmonic" else None,
             "t": t, "X": X, "z": z, "p2": X[:, model.index("psi2")] * sc["p_B"],
             "p3": X[:, model.index("psi3")] * sc["p_B"],
-            "max_dz": float(np.abs(dz).max()), "final_dz": float(dz[-1]), "events": ev,
+            # a failed case has no numbers: null with the reason, never those of the part it integrated
+            "max_dz": None if why else float(np.abs(dz).max()), "final_dz": None if why else float(dz[-1]),
+            **({"max_dz_status": why, "final_dz_status": why} if why else {}), "events": ev,
             "failure": r["failure"], "cpu_s": cpu, "t_end": float(t[-1]),
             **({"failure_status": "none: the integrator reached the end time or a stop event"}
                if r["failure"] is None else {}),
@@ -399,6 +404,11 @@ def accuracy(model: DynamicModel, res: TransientResult, cases: list, duration: f
     iu, z_B = model.index("u"), model.design.scales["z_B"]
     per = []
     for case, c in zip(cases, res.data["series"], strict=True):
+        if c["failure"]:  # no response to check
+            why = c["max_dz_status"]
+            per.append({"input": c["input"]} | {k: None for k in ("curve", "max_dz", "final_dz")}
+                       | {f"{k}_status": why for k in ("curve", "max_dz", "final_dz")})
+            continue
         omega = case.get("frequency") or model.data.omega0
         r = tight.run(tight.input_vector(case["input"], case["amplitude"], omega, case.get("couple", True)))
         k = min(len(c["z"]), len(r["t"]))
@@ -407,8 +417,11 @@ def accuracy(model: DynamicModel, res: TransientResult, cases: list, duration: f
         per.append({"input": c["input"], "curve": float(np.abs(dz - dz_t).max() / ref),
                     "max_dz": abs(c["max_dz"] - np.abs(dz_t).max()) / ref,
                     "final_dz": abs(c["final_dz"] - dz_t[-1]) / ref if k == len(c["z"]) else math.nan})
-    est = max(max(p["curve"], p["max_dz"], 0.0 if math.isnan(p["final_dz"]) else p["final_dz"]) for p in per)
-    return {"estimate": float(est), "cases": per, "rtol": sim.rtol, "atol": sim.atol,
-            "how": f"largest difference of the face-gap response dz(t) (and of max |dz|, final dz) between the run "
+    failed = [p["input"] for p in per if p["curve"] is None]
+    est = None if failed else \
+        float(max(max(p["curve"], p["max_dz"], 0.0 if math.isnan(p["final_dz"]) else p["final_dz"]) for p in per))
+    return {"estimate": est, "cases": per, "rtol": sim.rtol, "atol": sim.atol,
+            "how": ("none: the integrator failed in a case, which has no response to check; " if failed else "")
+            + f"largest difference of the face-gap response dz(t) (and of max |dz|, final dz) between the run "
                    f"at rtol {sim.rtol:g}, atol {sim.atol:g} and a rerun with {integrator} at {TIGHTER:g}x tighter "
                    "tolerances, relative to max |dz| of the case"}

@@ -322,6 +322,15 @@ def _end(previous: dict) -> None:
         signal.signal(sig, handler)
 
 
+def _extras_note(scn) -> str:
+    """`` (needs the ross extra: pip install 'autobal[ross]', not installed)`` for a scene whose analyses need an
+    optional extra, else ''."""
+    from autobal import analyses
+
+    return "".join(f" (needs the {name} extra{'' if ok else ': ' + analyses.EXTRAS[name][1] + ', not installed'})"
+                   for name, ok in analyses.extras(scn).items())
+
+
 def _main(args) -> int:
     from autobal import analyses, scenario, units
     from autobal.analysis import progress
@@ -329,7 +338,8 @@ def _main(args) -> int:
 
     if args.cmd == "list":
         for p in scenario.shipped():
-            _say(f"{p.stem:32s} {clean(scenario.load(p).title)}")
+            scn = scenario.load(p)
+            _say(f"{p.stem:32s} {clean(scn.title)}{_extras_note(scn)}")
         return EXIT_OK
     if args.cmd == "report":
         return _report(args)
@@ -337,10 +347,15 @@ def _main(args) -> int:
     chosen = {f"display.{kind}": unit for kind, unit in _units(getattr(args, "units", [])).items()}
     scn = scenario.load(args.scenario, overrides=_overrides(args.set) | chosen)
     if args.cmd == "check":
-        _say(f"{scn.name}: valid; analyses: {', '.join(analyses.named(scn)) or 'none'}")
+        _say(f"{scn.name}: valid; analyses: {', '.join(analyses.named(scn)) or 'none'}{_extras_note(scn)}")
         for path, value, kind in quantities(scn, units.ANGULAR):  # the speeds as read: rad/s and rpm
             _say(f"  {path} = {units.angular_text(value, kind)}")
         return EXIT_OK
+    if args.cmd in ("run", "accuracy"):
+        missing = [name for name, installed in analyses.extras(scn).items() if not installed]
+        if missing:
+            how = analyses.EXTRAS[missing[0]][1]
+            raise ScenarioError(f"{scn.name}: its analyses need the {missing[0]} extra, which is not installed: {how}")
     if args.cmd == "run":
         _check_scheduler(args.scheduler)
         return _run(args, scn)

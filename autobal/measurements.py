@@ -166,6 +166,10 @@ def _header_unit(cell: str) -> str:
 def _select(path: Path, head_line: int, header: list[str], columns: dict | None) -> list[tuple[int, str, str]]:
     """(column index, quantity, unit as written) of the columns to read.  Without ``columns`` every
     header cell must read 'quantity [unit]'; with it, the named headers are taken and others skipped."""
+    if not any(_HEADER.match(c) or _UNIT_AT_END.search(c) for c in header):
+        # not the expected table (a system file, a text): its content is not quoted
+        raise ScenarioError(f"{path}: not a data table: line {head_line} is no header of 'quantity [unit]' cells "
+                            f"(e.g. 'tau [1],u [1]'); name a CSV file of measurements")
     if columns is None:
         out = []
         for j, cell in enumerate(header):

@@ -71,6 +71,17 @@ def signals_held():
                 os.kill(os.getpid(), signum)
 
 
+def umask() -> int:
+    """The process's umask (read from /proc where it can be, else set and restored at once)."""
+    try:
+        with open("/proc/self/status") as fh:
+            return int(next(line.split()[1] for line in fh if line.startswith("Umask:")), 8)
+    except (OSError, StopIteration, ValueError):
+        mask = os.umask(0o022)
+        os.umask(mask)
+        return mask
+
+
 def discard_uncommitted() -> None:
     """Remove the temporary folders of this process that no run will commit (the CLI calls it last)."""
     for folder in list(_uncommitted):
@@ -99,6 +110,7 @@ class OutputFolder:
             with signals_held():
                 self.tmp = Path(tempfile.mkdtemp(prefix=f".{self.path.name}.", suffix=".tmp", dir=self.path.parent))
                 _uncommitted.add(self)
+            self.tmp.chmod(0o777 & ~umask())  # mkdtemp makes it 0o700; the output folder is made as mkdir makes one
         except OSError as exc:
             raise ScenarioError(f"{where}: cannot be written ({exc.strerror or exc})") from None
 

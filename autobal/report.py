@@ -15,12 +15,15 @@ dimensionless group named as in the source.
 from __future__ import annotations
 
 import base64
+import contextlib
 import functools
 import hashlib
 import importlib
 import json
 import math
+import os
 import re
+import tempfile
 import warnings
 from collections.abc import Mapping
 from html import escape as html_escape
@@ -53,6 +56,7 @@ from autobal.analysis.quantities import (
 )
 from autobal.analysis.result import html_verdict, plain
 from autobal.errors import ScenarioError
+from autobal.output import umask
 from autobal.report_input import MAX_FIGURE_BYTES
 from autobal.scenario import MAX_FILE_BYTES as MAX_SCENE_BYTES
 from autobal.text import clean as text_clean
@@ -800,8 +804,18 @@ def render(folder: str | Path, units: dict | None = None) -> Path:
     """
     page = html(folder, units)
     out = Path(folder) / REPORT
+    # a temporary file in the folder, then os.replace: a reader never sees half a page, and a report.html that is
+    # a symbolic link is replaced itself (the file it points to, maybe outside the folder, is left as it was)
+    tmp = None
     try:
-        out.write_text(page, encoding="utf-8")
-    except OSError as exc:  # a read-only folder, a full disk
+        fd, tmp = tempfile.mkstemp(prefix=f".{REPORT}.", suffix=".tmp", dir=Path(folder))
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(page)
+        os.chmod(tmp, 0o666 & ~umask())  # as a file open() makes (mkstemp's is 0o600)
+        os.replace(tmp, out)
+    except OSError as exc:  # a read-only folder, a full disk, a folder named report.html
+        if tmp is not None:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
         raise ScenarioError(f"{text_clean(out)}: cannot be written ({exc.strerror})") from None
     return out

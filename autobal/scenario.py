@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Annotated
 
 import yaml
-from pydantic import Field, PrivateAttr, ValidationError, create_model, model_validator
+from pydantic import Field, PrivateAttr, ValidationError, ValidationInfo, create_model, field_validator, model_validator
 
 from autobal import analyses, parts
 from autobal.errors import ScenarioError
@@ -49,11 +49,25 @@ def _part_field(key: str, named: bool, dynamics: bool):
     return (schema | None, _d(part.DESCRIPTION, None))
 
 
+def _empty_analysis(cls, value, info: ValidationInfo):
+    """``analyses.<key>`` given with no settings (``stability:`` or ``stability: {}``): the analysis with its
+    defaults when every setting has one; else one line naming the key and the settings it needs (YAML reads an
+    empty key as null, which would otherwise mean 'not named')."""
+    if value is None or (isinstance(value, dict) and not value):
+        needs = [k for k, f in analyses.module(info.field_name).SETTINGS.model_fields.items() if f.is_required()]
+        if needs:
+            raise ValueError(f"given without settings; it needs {', '.join(needs)} (docs/schema.md)")
+        return {}
+    return value
+
+
 @cache
 def analyses_model(named: frozenset[str]) -> type[Strict]:
     """The ``Analyses`` model with the schemas of the analyses in ``named``; the others must be absent."""
     return create_model("Analyses", __base__=Strict, __module__=__name__,
                         __doc__="The analyses to run; at least one.",
+                        __validators__={"_empty": field_validator(*named, mode="before")(_empty_analysis)}
+                        if named else None,
                         **{k: _analysis_field(k, k in named) for k in analyses.MODULES})
 
 
@@ -231,11 +245,15 @@ def _set(data: dict, path: str, value) -> None:
 
 
 class _UniqueKeyLoader(yaml.SafeLoader):
-    """A safe YAML loader that refuses a key given twice in one mapping (PyYAML keeps the last)."""
+    """A safe YAML loader that refuses a key given twice in one mapping (PyYAML keeps the last).  Anchors, aliases
+    and merge keys (``outer_seal: {<<: *seal, length: 40 mm}``, YAML 1.1) are read: a key of the mapping itself
+    overrides a merged one, as YAML says; still no custom tags, so nothing but plain data is built."""
 
     def construct_mapping(self, node, deep=False):
         seen = {}
         for key_node, _ in node.value:
+            if key_node.tag == "tag:yaml.org,2002:merge":  # '<<': merged by SafeLoader.flatten_mapping
+                continue
             key = self.construct_object(key_node, deep=True)
             try:
                 hash(key)

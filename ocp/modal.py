@@ -47,6 +47,7 @@ from autobal.ocp.simulation import (
     DRIVE_TOL,
     acceleration_at,
     best_within_limits,
+    drive_unreachable,
     drive_use,
     ramp_profile,
     ramp_runs,
@@ -118,6 +119,9 @@ class ModalSpinupOcp(Dimensionless):
         if self.deflection_limit is not None and not self.deflection_limit > 0:
             raise ValueError("the deflection limit must be positive (m)")
         self.check_drive()
+        why = drive_unreachable(self)
+        if why:  # before any solve: the search and the NLP would run for minutes to find no arrival
+            raise ValueError(why)
         for nd in self.nodes:
             self.rotor.node_rows(nd)
 

@@ -322,9 +322,10 @@ def test_extreme_but_valid_values_run_to_a_result_or_a_failed_solve(tmp_path, ca
 # ---- work limits ---------------------------------------------------------------------------------------
 
 
-def test_shipped_scenes_are_not_predicted_long():
+def test_shipped_scenes_are_predicted_long_only_when_they_are():
+    long = {"spinup_ross_rotor"}  # about 90 s (ROSS, issue #32): it says so before it starts
     for p in scenario.shipped():
-        assert analyses.long_run_note(scenario.load(p)) is None, p.stem
+        assert (analyses.long_run_note(scenario.load(p)) is not None) == (p.stem in long), p.stem
 
 
 @pytest.mark.parametrize("base, path, value, analysis", [

@@ -143,14 +143,16 @@ def test_report_of_a_missing_a_file_and_a_too_long_folder(tmp_path, capsys):
 
 def test_report_into_a_folder_that_cannot_be_written(copy_of_run, capsys, monkeypatch):
     """A read-only folder (simulated: root may write anywhere): one line, exit 2."""
-    write_text = Path.write_text
+    import tempfile
 
-    def refuse(self, *args, **kwargs):
-        if self.name == "report.html":
-            raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), str(self))
-        return write_text(self, *args, **kwargs)
+    mkstemp = tempfile.mkstemp
 
-    monkeypatch.setattr(Path, "write_text", refuse)
+    def refuse(*args, **kwargs):  # report.html is written to a temporary file in the folder first
+        if Path(kwargs.get("dir") or ".") == copy_of_run:
+            raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), str(copy_of_run))
+        return mkstemp(*args, **kwargs)
+
+    monkeypatch.setattr(tempfile, "mkstemp", refuse)
     assert_clean(*in_process(capsys, ["report", str(copy_of_run)]), 2, contains="report.html: cannot be written")
 
 

@@ -19,13 +19,13 @@ from autobal.analysis import interrupt
 from autobal.errors import Interrupted
 
 
-def interrupted_run(tmp_path: Path, scene: str, solver: str, sig: int, after: float = 0.05):
-    """Run ``autobal run scene``, send ``sig`` ``after`` s after the first call of ``solver``;
-    returns (exit code, stderr lines without CasADi's warnings, output folder, s from signal to exit)."""
+def interrupted_run(tmp_path: Path, scene: str, solver: str, sig: int, after: float = 0.05, extra=()):
+    """Run ``autobal run scene`` (with the ``extra`` arguments), send ``sig`` ``after`` s after the first call of
+    ``solver``; returns (exit code, stderr lines without CasADi's warnings, output folder, s from signal to exit)."""
     trace, out = tmp_path / "trace.txt", tmp_path / "out"
     env = os.environ | {"AUTOBAL_SOLVER_TRACE": str(trace)}
     # SIGINT at its default in the child, as on a terminal (a shell starts background jobs with SIGINT ignored)
-    proc = subprocess.Popen([sys.executable, "-m", "autobal", "run", scene, "--out", str(out)], cwd=tmp_path,
+    proc = subprocess.Popen([sys.executable, "-m", "autobal", "run", scene, "--out", str(out), *extra], cwd=tmp_path,
                             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.monotonic() + 300

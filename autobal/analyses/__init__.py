@@ -54,6 +54,26 @@ def named(scene) -> list[str]:
     return [key for key in MODULES if getattr(scene.analyses, key, None) is not None]
 
 
+#: optional extras: name -> (the module it installs, how to install it); an analysis module that needs one names it
+#: in ``EXTRA``
+EXTRAS = {"ross": ("ross", "pip install 'autobal[ross]'")}
+
+
+def extras(scene) -> dict[str, bool]:
+    """The extras the analyses of a validated scene need -> whether each is installed (nothing is imported)."""
+    import importlib.util
+    import sys
+
+    out = {}
+    for key in named(scene):
+        extra = getattr(module(key), "EXTRA", None)
+        if extra is not None:
+            name = EXTRAS[extra][0]
+            out[extra] = sys.modules[name] is not None if name in sys.modules else \
+                importlib.util.find_spec(name) is not None
+    return out
+
+
 def accuracy_studies() -> dict:
     """Analysis -> its work-precision study ``accuracy(scene, settings)``, for the analyses that have one
     (imports every analysis module: for ``autobal accuracy`` only)."""
@@ -74,6 +94,11 @@ COST = {
     "ocp_collocation_point": 5e-3,  # one collocation point of the spin-up OCP, per start
     "robust_validation_run": 4e-3,  # one profile on one validation rotor (exponential integrator)
     "modal_ocp_point": 0.02,  # one collocation point of the multi-mode (ROSS) spin-up OCP, per start
+    # ROSS: importing it, compiling its numba code and building the rotor's matrices; its own critical speeds (the
+    # shipped spinup_ross_rotor: about 90 s in all, of which these two are about 15 % and 25 % (5.5 s and 10 s of its
+    # 39 s of CPU measured on a loaded 2-core machine, the rest the search, the NLP solves and the re-simulations)
+    "ross_rotor": 12.0,
+    "ross_critical_speeds": 23.0,
     "reliability_node": 5e-7,  # one (time, load) node of the reliability integrals
     "rotor_run": 0.5,  # one CVODES passage / step response of the rotor studies
     "grid_point": 1e-5,  # one point of a dense cross-check grid

@@ -12,7 +12,6 @@ from typing import Annotated, Literal
 from pydantic import Field, model_validator
 
 from autobal.analyses import COST
-from autobal.errors import ScenarioError
 from autobal.schema import NonNegative, Positive, Strict
 from autobal.units import Length, to_si
 
@@ -94,6 +93,7 @@ class Design(Strict):
         for path in self.variables:
             if path not in VARIABLES:
                 raise ValueError(f"design variable {path!r} is not one of {sorted(VARIABLES)}")
+        self.bounds_si()  # units and lower < upper, when the scene is read (autobal check sees them)
         return self
 
     def bounds_si(self) -> dict:
@@ -105,9 +105,9 @@ class Design(Strict):
             try:
                 lo, hi = conv(b.lower), conv(b.upper)
             except ValueError as exc:
-                raise ValueError(f"analyses.design.variables.{path}: {exc}") from None
+                raise ValueError(f"variables.{path}: {exc}") from None
             if not hi > lo:
-                raise ValueError(f"analyses.design.variables.{path}: upper must exceed lower")
+                raise ValueError(f"variables.{path}: upper must exceed lower")
             out[path] = (key, lo, hi)
         return out
 
@@ -121,11 +121,7 @@ def run(scene, settings: Design):
     from autobal.analysis import design_study, progress
     from autobal.parts.device import dynamic_device
 
-    try:
-        bounds = settings.bounds_si()
-    except ValueError as exc:
-        raise ScenarioError(str(exc)) from None
-    variables = tuple(ds.Variable(path, key, lo, hi) for path, (key, lo, hi) in bounds.items())
+    variables = tuple(ds.Variable(path, key, lo, hi) for path, (key, lo, hi) in settings.bounds_si().items())
     gap = (settings.face_gap.lower, settings.face_gap.upper)
     weights = {"leakage": (1.0, 0.0), "stiffness": (0.0, 1.0), "mix": tuple(settings.weights)}[settings.objective]
     spec = ds.Spec(variables=variables, points=tuple(settings.operating_ratios), nominal_ratio=settings.nominal_ratio,

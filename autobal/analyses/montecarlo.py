@@ -100,6 +100,16 @@ class AfcMonteCarlo(Strict):
                              description="frequency grid; default 100 to 6000 rad/s, 120 points")
     parameters: dict[str, Distribution] = Field(min_length=1)
 
+    @model_validator(mode="after")
+    def _names(self):
+        from autobal.analysis.montecarlo_afc import afc_names  # the names of its model (imports the model)
+
+        try:
+            afc_names(self)
+        except ScenarioError as exc:  # checked when the scene is read, so that check sees it too
+            raise ValueError(str(exc).removeprefix("analyses.montecarlo.afc.")) from None
+        return self
+
 
 class MonteCarlo(Strict):
     """Monte Carlo over the device's uncertain dimensionless groups (ch. 3)."""

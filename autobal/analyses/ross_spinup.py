@@ -19,6 +19,7 @@ from autobal.units import AngularAcceleration, AngularSpeed, SpeedOrZero, Time, 
 
 DESCRIPTION = "optimal spin-up of a ROSS rotor reduced to its modes (the ross extra)"
 NEEDS = "ross_rotor"
+EXTRA = "ross"  # the optional package it needs (autobal.analyses.EXTRAS)
 QUANTITIES_MODULE = "autobal.ocp.modal"  # its QUANTITIES declare every number of its block
 TITLE = "Optimal spin-up of a ROSS rotor (multi-mode)"  # of its section of report.html
 
@@ -67,10 +68,9 @@ def run(scene, settings: RossSpinup):
     from autobal.parts.ross_rotor import adapt
 
     spec, unbalances = adapt(scene.ross_rotor)
-    rotor = rr.ross_rotor(spec)
-    reduced = rr.reduce(rr.lateral_matrices(rotor), unbalances, settings.final_speed, settings.mode_cutoff,
+    lateral, ross_cs = ross_side(spec, settings.final_speed if settings.validate_with_ross else None)
+    reduced = rr.reduce(lateral, unbalances, settings.final_speed, settings.mode_cutoff,
                         settings.gyroscopic_tolerance)
-    ross_cs = rr.ross_critical_speeds(rotor, settings.final_speed) if settings.validate_with_ross else None
     kw = {"omega_start": settings.start_speed, "omega_final": settings.final_speed, "horizon": settings.horizon,
           "alpha_max": settings.max_acceleration, "nodes": tuple(settings.nodes),
           "settling_time": settings.settling_time, "omega_max": settings.max_speed, "intervals": settings.intervals,
@@ -80,6 +80,22 @@ def run(scene, settings: RossSpinup):
             return modal.run(reduced, kw, scene.title, ross_cs, {"max_iter": settings.max_iterations})
     except ValueError as exc:
         raise ScenarioError(f"analyses.ross_spinup: {exc}") from None
+
+
+def _ross_side(spec, upper: float | None):
+    from autobal.models import ross_rotor as rr
+
+    rotor = rr.ross_rotor(spec)
+    return rr.lateral_matrices(rotor), None if upper is None else rr.ross_critical_speeds(rotor, upper)
+
+
+def ross_side(spec, upper: float | None = None):
+    """What ROSS computes of the rotor ``spec``: its lateral matrices and, with ``upper`` (rad/s), its own critical
+    speeds below it; in a child process (:func:`autobal.analysis.interrupt.isolated`), since ROSS's numba compiles
+    drop a Ctrl-C and its Python runs on for tens of seconds without a check."""
+    from autobal.analysis import interrupt
+
+    return interrupt.isolated(_ross_side, spec, upper)
 
 
 def drive(scene) -> dict:
@@ -109,8 +125,8 @@ def problem(scene, settings: RossSpinup, key: str = "ross_spinup", **extra):
                             "limit only; remove the drive section (ross_spinup takes its limits)")
 
     spec, unbalances = adapt(scene.ross_rotor)
-    reduced = rr.reduce(rr.lateral_matrices(rr.ross_rotor(spec)), unbalances, settings.final_speed,
-                        settings.mode_cutoff, settings.gyroscopic_tolerance)
+    reduced = rr.reduce(ross_side(spec)[0], unbalances, settings.final_speed, settings.mode_cutoff,
+                        settings.gyroscopic_tolerance)
     try:
         return modal.ModalSpinupOcp(reduced, settings.start_speed, settings.final_speed, settings.horizon,
                                     settings.max_acceleration, tuple(settings.nodes), settings.settling_time,
@@ -120,10 +136,11 @@ def problem(scene, settings: RossSpinup, key: str = "ross_spinup", **extra):
 
 
 def estimate_seconds(settings: RossSpinup) -> float:
-    """ROSS's import, numba compilation and critical speeds (about 30 s), then the four-phase search (about
-    5 s) and its starts on the modal envelope (4 modes, 160 intervals of degree 3: about 24 s measured)."""
-    return 30.0 * settings.validate_with_ross + COST["start"] + COST["modal_ocp_point"] * settings.intervals \
-        * settings.degree * 2
+    """ROSS's import, numba compilation and matrices, its critical speeds, then the four-phase search, its starts on
+    the coarse mesh and the refinement on the modal envelope: about 5.5 solves' worth on the full mesh (the shipped
+    scene, 4 modes, 160 intervals of degree 3: 53 s of its 90 s)."""
+    return COST["ross_rotor"] + COST["ross_critical_speeds"] * settings.validate_with_ross + COST["start"] \
+        + COST["modal_ocp_point"] * settings.intervals * settings.degree * 5.5
 
 
 def report_section(sec) -> None:

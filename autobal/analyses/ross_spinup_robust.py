@@ -16,6 +16,7 @@ from autobal.analyses.spinup_robust import SpinupRobust, report_section  # noqa:
 
 DESCRIPTION = "one spin-up profile of a ROSS rotor for a set of rotors (worst case; the ross extra)"
 NEEDS = "ross_rotor"
+EXTRA = "ross"  # the optional package it needs (autobal.analyses.EXTRAS)
 QUANTITIES_MODULE = "autobal.ocp.robust_study"  # the robust study's declarations: peaks in m for the modal rotor
 TITLE = "Robust spin-up of a ROSS rotor (multi-mode)"
 
@@ -70,5 +71,5 @@ def run(scene, settings: RossSpinupRobust):
 def estimate_seconds(settings: RossSpinupRobust) -> float:
     """ROSS's import and the rotor's matrices (about 10 s), the nominal and multi-rotor collocation NLPs of the
     modal envelope, then every profile on every validation rotor."""
-    return (10.0 + COST["start"] + COST["modal_ocp_point"] * settings.intervals * settings.degree * 8
+    return (COST["ross_rotor"] + COST["start"] + COST["modal_ocp_point"] * settings.intervals * settings.degree * 8
             + COST["robust_validation_run"] * 10 * settings.validation_samples * (settings.ramps + 2))

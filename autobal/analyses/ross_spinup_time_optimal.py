@@ -18,6 +18,7 @@ from autobal.units import Length
 
 DESCRIPTION = "earliest arrival of a ROSS rotor with its peak deflection bounded, and the front (the ross extra)"
 NEEDS = "ross_rotor"
+EXTRA = "ross"  # the optional package it needs (autobal.analyses.EXTRAS)
 QUANTITIES_MODULE = "autobal.ocp.time_optimal_study"  # the time-optimal study's declarations: peaks in m here
 TITLE = "Time-optimal spin-up of a ROSS rotor (multi-mode)"
 
@@ -60,5 +61,5 @@ def run(scene, settings: RossSpinupTimeOptimal):
 def estimate_seconds(settings: RossSpinupTimeOptimal) -> float:
     """ROSS's import and the rotor's matrices (about 10 s), then a minimum-peak study of the modal envelope (about
     four starts) per front point and the min_time solves."""
-    return 10.0 + COST["start"] + COST["modal_ocp_point"] * settings.intervals * settings.degree * (
+    return COST["ross_rotor"] + COST["start"] + COST["modal_ocp_point"] * settings.intervals * settings.degree * (
         4 + 4 * settings.front_points)

@@ -77,6 +77,7 @@ SETTINGS = Spinup
 def ocp(scene, settings: Spinup):
     """The declared spin-up problem (autobal.ocp.problem.SpinupOcp) of a scene's rotor and settings."""
     from autobal.ocp.problem import SpinupOcp
+    from autobal.ocp.simulation import drive_unreachable
     from autobal.parts.rotor import adapt
 
     if scene.rotor is None:
@@ -96,7 +97,7 @@ def ocp(scene, settings: Spinup):
             jerk_penalty=settings.jerk_penalty, jerk_variation=settings.jerk_variation)
     except ValueError as exc:
         raise ScenarioError(f"analyses.spinup: {exc}") from None
-    why = problem.ill_posed()
+    why = problem.ill_posed() or drive_unreachable(problem)
     if why:
         raise ScenarioError(f"analyses.spinup: {why}")
     return problem
