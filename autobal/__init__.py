@@ -2,7 +2,7 @@
 
 The public API::
 
-    scene = autobal.load("pump_pe600_statics", set={"device.disc.face.base_gap": "0.18 mm"})
+    scene = autobal.load("pump_pe600_statics", set={"device.disc.outer_seal.length": "300 mm"})
     run = autobal.run(scene)           # Run: analysis name -> Result
     run["statics"].summary(); run["statics"].plot(); run.save("out/pump")
 """

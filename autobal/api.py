@@ -1,7 +1,7 @@
 """The Python API: ``load`` a scene, ``run`` its analyses, get Result objects.
 
 >>> import autobal
->>> scene = autobal.load("pump_pe600_statics", set={"device.disc.face.base_gap": "0.18 mm"})
+>>> scene = autobal.load("pump_pe600_statics", set={"device.disc.outer_seal.length": "300 mm"})
 >>> run = autobal.run(scene)                     # nothing printed, nothing written
 >>> run["statics"].face_gap                      # m
 >>> run.save("out/pump")                         # results.json, CSV, PNG and SVG; atomically
@@ -40,7 +40,7 @@ def load(name_or_path: str | Path, set: dict | None = None) -> Scenario:  # noqa
         A YAML file, or the name of a shipped scenario (``autobal list``).
     set : dict, optional
         Overrides: dotted scene paths -> values with units, as they would be written in the YAML
-        (``{"device.disc.face.base_gap": "0.18 mm"}``; pint quantities are accepted too). They are
+        (``{"device.disc.outer_seal.length": "300 mm"}``; pint quantities are accepted too). They are
         validated exactly like the file.
 
     Returns

@@ -75,7 +75,7 @@ def _overrides(pairs: list[str]) -> dict:
     for pair in pairs:
         path, sep, value = pair.partition("=")
         if not sep or not path.strip():
-            raise ScenarioError(f"--set {pair}: write PATH=VALUE, e.g. device.disc.face.base_gap='0.18 mm'")
+            raise ScenarioError(f"--set {pair}: write PATH=VALUE, e.g. device.disc.outer_seal.length='300 mm'")
         out[path.strip()] = value.strip()
     return out
 
@@ -211,7 +211,7 @@ def parser() -> argparse.ArgumentParser:
         p.add_argument("scenario", help="a YAML file, or the name of a shipped scenario (see 'autobal list')")
         p.add_argument("--set", action="append", default=[], metavar="PATH=VALUE",
                        help="override a scene value, validated like the file "
-                            "(repeatable), e.g. --set device.disc.face.base_gap='0.18 mm'")
+                            "(repeatable), e.g. --set device.disc.outer_seal.length='300 mm'")
 
     def units_arg(p):
         p.add_argument("--units", action="append", default=[], metavar="KIND=UNIT[,...]",

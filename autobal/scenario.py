@@ -327,11 +327,11 @@ def _checked_overrides(overrides) -> dict:
     if overrides is None:
         return {}
     if not isinstance(overrides, Mapping):
-        raise ScenarioError(f"set: a mapping of dotted scene paths to values, e.g. {{'device.disc.face.base_gap': "
-                            f"'0.18 mm'}}; got {type(overrides).__name__}")
+        raise ScenarioError(f"set: a mapping of dotted scene paths to values, e.g. {{'device.disc.outer_seal.length': "
+                            f"'300 mm'}}; got {type(overrides).__name__}")
     for key, value in overrides.items():
         if not isinstance(key, str) or not key.strip() or any(not k for k in key.split(".")):
-            raise ScenarioError(f"set: {key!r} is not a dotted scene path such as 'device.disc.face.base_gap'")
+            raise ScenarioError(f"set: {key!r} is not a dotted scene path such as 'device.disc.outer_seal.length'")
         if not _plain(value) and not (hasattr(value, "units") and hasattr(value, "magnitude")):
             raise ScenarioError(f"set {key}: a value of type {type(value).__name__} is not a scene value (give a "
                                 "string with its unit, a number, a list or a mapping)")
@@ -357,7 +357,7 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> BaseScenari
     name_or_path : str or Path
         A YAML file, or the name of a shipped scenario.
     overrides : dict, optional
-        Dotted scene paths -> values (``{"device.disc.face.base_gap": "0.18 mm"}``), applied to
+        Dotted scene paths -> values (``{"device.disc.outer_seal.length": "300 mm"}``), applied to
         the file's content before validation, so they are checked exactly like YAML.
 
     Returns
