@@ -95,7 +95,8 @@ def test_estimation_summary_one_verdict_bootstrap_and_correlation(shipped_run):
     intervals and the adequacy verdict are printed; the source's closed forms only in the validation part."""
     out = shipped_run("rig_table43_fit")[0]["estimation"].summary()
     lines = out.splitlines()
-    assert lines[1].startswith("  ok: static_1p (alpha): adequate (F = 1.437 ≤ F_crit = 2.660)")
+    assert lines[1].startswith("  NOT OK: static_1p (alpha): NOT adequate: the lack-of-fit test fails, F = 3.135 > "
+                               "F_crit = 2.924 (p = 0.08721 < significance 0.1)")
     assert "correlation of alpha and tau_max: 0.9864 (the data hardly separate them)" in out
     assert re.search(r"alpha +2\.425 \+- 0\.48 +95 % CI \[1\.366, 3\.485\], bootstrap \(2000 refits\) "
                      r"\[1\.835, 5\.194\]", out)

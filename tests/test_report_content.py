@@ -24,7 +24,8 @@ def test_estimation_report_shows_bootstrap_correlation_and_adequacy(shipped_run)
     assert all(row[-2]["text"] != "—" for row in fitted["rows"]), "a free parameter without its bootstrap interval"
     correlation = next(t for t in sec["tables"] if t["caption"].startswith("Correlation of the free parameters"))
     assert [[c["text"] for c in r[:3]] for r in correlation["rows"]] == [["static_2p", "alpha, tau_max", "0.98636"]]
-    assert sec["overall"]["text"].startswith("static_1p (alpha): adequate (F = 1.437 ≤ F_crit = 2.660)")
+    assert sec["overall"]["text"].startswith("static_1p (alpha): NOT adequate: the lack-of-fit test fails, F = 3.135 > "
+                                             "F_crit = 2.924 (p = 0.08721 < significance 0.1)")
     assert not sec["warnings"], "the trivial nulls are a note, not warnings"
     assert [n for n in sec["notes"] if n.startswith("10 values are null") and "a fixed parameter (5 values)" in n]
 
