@@ -82,10 +82,10 @@ def test_washer_optimum_in_mm_and_ml_and_the_unbounded_efficiency_says_why(shipp
     out, lb = run["liquid_balancer"].summary(), run["liquid_balancer"].to_dict()
     assert value(line(out, "h_opt"), "mm") == pytest.approx(lb["optimal_height"]["optimum"] * 1e3, rel=5e-4)
     assert value(line(out, "V_opt"), "mL") == pytest.approx(lb["optimal_volume"]["optimum"] * 1e6, rel=5e-4)
-    assert "λ0 unbounded there (9.200e12 is how close IPOPT came, not an efficiency)" in out
+    assert "optimal height: λ0 = 9.200e12 there is how close IPOPT came to k_D = 1, not an efficiency" in out
     sec = next(s for s in report.context(folder)["sections"] if s["name"] == "liquid_balancer")
     rows = {r[0]["text"]: r for r in sec["tables"][0]["rows"]}
-    note = rows["efficiency (the source's algorithm)"][-1]["text"]
+    note = rows["efficiency e0/e_c (2.14), the source's algorithm"][-1]["text"]
     assert "Table 3.2 publishes 1.3 (theory)" in note and "D ≫ D0" in note, note
 
 

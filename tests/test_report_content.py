@@ -58,6 +58,7 @@ def test_washer_optimum_row_says_why_lambda0_is_unbounded(shipped_run):
     point (k_D = 1), where lambda0 is unbounded: the row says so."""
     ctx = report.context(shipped_run("washer_liquid_balancer")[1])
     rows = {r[0]["text"]: r for r in ctx["sections"][0]["tables"][0]["rows"]}
-    for label in ("optimal chamber height", "optimal liquid volume"):
+    for label in ("optimal chamber height (largest λ0)", "optimal liquid volume (largest λ0)"):
         note = rows[label][-1]["text"]
-        assert "complete balancing (k_D = 1)" in note and "Table 3.3" in note, note
+        assert "balances completely (k_D = D0/D = 1, λ0 unbounded)" in note and "how close IPOPT came" in note, note
+    assert "Table 3.3 measured 50-180 mL" in rows["optimal liquid volume (largest λ0)"][-1]["text"]
