@@ -343,8 +343,8 @@ def _physical_lines(f: dict, group: str) -> list[str]:
     q = QUANTITIES.find(f"fits.x.physical.{key}.estimate")
     line = f"    {'':10s} = {ph['meaning']} = {q.text(ph['estimate'])}"
     if "standard_error" in ph:
-        line += (f" +- {significant(q.shown(ph['standard_error']), 2)} {q.display}, CI [{significant(q.shown(ph['ci_low']))}, "
-                 f"{significant(q.shown(ph['ci_high']))}] {q.display}")
+        line += (f" +- {significant(q.shown(ph['standard_error']), 2)} {q.display}, "
+                 f"CI [{significant(q.shown(ph['ci_low']))}, {significant(q.shown(ph['ci_high']))}] {q.display}")
     if "bootstrap_ci_low" in ph:
         line += (f", bootstrap [{significant(q.shown(ph['bootstrap_ci_low']))}, "
                  f"{significant(q.shown(ph['bootstrap_ci_high']))}] {q.display}")
