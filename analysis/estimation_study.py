@@ -75,7 +75,8 @@ QUANTITIES = Declarations(
              "parameters"),
     Quantity(_adequacy("F", "F_crit", "p_value", "lack_of_fit.F", "lack_of_fit.F_crit", "lack_of_fit.p_value"), "1",
              "F, F_crit, p", "Fisher adequacy test: the fit's variance against the scatter within the load groups "
-             "(adequate when F ≤ F_crit), and the lack-of-fit test", source=f"{_P14}, Eqs. (4.14)-(4.15)"),
+             "(passed when F ≤ F_crit), and the lack-of-fit test; adequate when both pass",
+             source=f"{_P14}, Eqs. (4.14)-(4.15)"),
     Quantity(_adequacy("sigma1_sq", "sigma2_sq", "dof", "groups", "points", "parameters", "significance",
                        "group_load", "group_mean", "group_theory", "load_spread_in_groups", "lack_of_fit.dof")
              + " adequacy_reference.reference.*", "1", "σ², ν, τ, u",

@@ -373,7 +373,7 @@ def report_section(sec) -> None:
                                       f"{number(r.get('tau_max'))})", ref))
     if adequacy:
         sec.tables.append(table("Adequacy: Fisher test of the variance about the curve against the scatter within "
-                                "the load groups (Pavlenko 2014, Eqs. (4.14)-(4.15); adequate when F ≤ F_crit), and "
+                                "the load groups (Pavlenko 2014, Eqs. (4.14)-(4.15); passed when F ≤ F_crit), and "
                                 "the lack-of-fit test; adequate only when both pass at the significance; F and p "
                                 "dimensionless",
                                 ["fit", "Fisher F", "F_crit", "p", "passes", "lack-of-fit F", "F_crit", "p", "passes",
