@@ -106,6 +106,11 @@ QUANTITIES = Declarations(
              "a fitted force group in newtons: the closing load of the face F_max = τ_max p_B s_B (4.18), the "
              "push-off preload F_pr = χ p_B s_B; its estimate, standard error and intervals, and the scale p_B s_B",
              "kN", source=f"{_P14}, Eqs. (4.16)-(4.18)"),
+    Quantity("fits.*.physical.stiffness.value", "N/m", "c", "axial stiffness of the fitted disc c = −dF/dh = "
+             "κ p_B s_B/h_TB at the data's loads", "N/µm", source=f"{_P14}, Eqs. (4.16)-(4.18)"),
+    Quantity("fits.*.physical.stiffness.load", "N", "F", "the data's loads, where the stiffness is given", "kN"),
+    Quantity("fits.*.physical.stiffness.tau fits.*.physical.stiffness.kappa", "1", "τ, κ",
+             "the data's loads τ and the fitted disc's stiffness κ = −dτ/du (the groups of c and F)"),
     Quantity("bases.pressure fits.*.bases.pressure", "Pa", "p_B", "pressure base of the data", "MPa"),
     Quantity("bases.gap fits.*.bases.gap", "m", "h_TB", "gap base of the data", "mm"),
     Quantity("bases.flow fits.*.bases.flow", "m^3/s", "Q_B", "flow base of the data"),
@@ -196,6 +201,7 @@ class EstimationResult(Result):
                 r = corr[i][j]  # null when the covariance is undefined (a singular Hessian)
                 lines.append(f"    correlation of {free[i]} and {free[j]}: {significant(r)}"
                              + (" (the data hardly separate them)" if r is not None and abs(r) >= 0.9 else ""))
+            lines += _stiffness_lines(f)
             cc = f.get("cross_check_scipy")
             if cc:
                 lines.append(f"    scipy least_squares: max |difference| {cc['max_abs_difference']:.1e}")
@@ -352,6 +358,17 @@ def _physical_lines(f: dict, group: str) -> list[str]:
     return [line]
 
 
+def _stiffness_lines(f: dict) -> list[str]:
+    """The summary's line of the fitted disc's axial stiffness at the data's loads, in N/µm at F in kN."""
+    st = (f.get("physical") or {}).get("stiffness")
+    if not st or "value" not in st:
+        return []
+    c, F = QUANTITIES.find("fits.x.physical.stiffness.value"), QUANTITIES.find("fits.x.physical.stiffness.load")
+    pairs = ", ".join(f"{significant(c.shown(v))} at {significant(F.shown(x))}" for x, v in zip(
+        st["load"], st["value"], strict=True))
+    return [f"    axial stiffness c = -dF/dh of the fitted disc, {c.display} at F in {F.display}: {pairs}"]
+
+
 def _params_text(f: dict) -> str:
     return ", ".join(f"{k} {p['estimate']:.4g}" for k, p in f["parameters"].items() if p["free"])
 
@@ -484,7 +501,21 @@ def _one_fit(fit, settings, data, bases: dict, device) -> tuple[dict, FitResult]
         block["adequacy"] = fisher_adequacy(load, meas, group, theory, len(res.free),
                                             settings.adequacy.significance) | {"variable": var}
     block["physical"] = _physical(block, fb)
+    if fit.model == "traditional_disc" and data.has("load") in ("tau", "axial_force"):
+        block["physical"]["stiffness"] = _stiffness(res.estimate, np.unique(load), fb)
     return block, res
+
+
+def _stiffness(estimate: dict, loads, bases: dict) -> dict:
+    """The fitted disc's axial stiffness at the data's distinct loads: kappa = -d tau/du of (4.16) (1) and, where
+    the force and gap bases are given, c = kappa p_B s_B/h_TB (N/m) at the loads F = tau p_B s_B (N)."""
+    kappa = TurbulentDisc(estimate["alpha"], estimate["tau_max"]).stiffness(loads)
+    out = {"meaning": "axial stiffness of the fitted disc c = -dF/dh = κ p_B s_B/h_TB, κ = -dτ/du of (4.16)",
+           "tau": loads, "kappa": kappa}
+    force, gap = bases.get("force"), bases.get("gap")
+    if force and gap:
+        return out | {"load": loads * force, "value": kappa * force / gap}
+    return out | {"status": "in N/m only with the force and gap bases (analyses.estimation.bases)"}
 
 
 def _physical(block: dict, bases: dict) -> dict:

@@ -130,6 +130,25 @@ def test_fitted_tau_max_in_newtons_is_the_group_times_p_b_s_b(guide_fit):
     assert est.quantities.find("fits.both.physical.F_max.estimate").unit == "N"
 
 
+@pytest.mark.cli
+def test_fitted_disc_stiffness_in_newtons_per_micrometre_by_hand(guide_fit):
+    """c = -dF/dh = kappa p_B s_B/h_TB with kappa = -d tau/du of (4.16) = 3 alpha^2 u^2 tau^2/tau_max: both at
+    tau = 1 (F = 20 kN): u = cbrt(3.623/alpha^2), c = 368.5 N/um; checked against a central difference of (4.16)."""
+    est = guide_fit[0]["estimation"]
+    st = est.to_dict()["fits"]["both"]["physical"]["stiffness"]
+    alpha, tau_max = (est.estimates["both"][k] for k in ("alpha", "tau_max"))
+    assert st["tau"] == pytest.approx([0.5, 1.0, 1.5, 2.0]) and st["load"] == pytest.approx([1e4, 2e4, 3e4, 4e4])
+    u = ((tau_max / 1.0 - 1) / alpha**2) ** (1 / 3)
+    kappa = 3 * alpha**2 * u**2 / tau_max  # tau = 1
+    disc, du = TurbulentDisc(alpha, tau_max), 1e-6
+    assert kappa == pytest.approx(-(disc.load(u + du) - disc.load(u - du)) / (2 * du), rel=1e-8)
+    assert st["kappa"][1] == pytest.approx(kappa, rel=1e-12)
+    assert st["value"][1] == pytest.approx(kappa * FORCE_BASE / 0.15e-3, rel=1e-12)
+    assert st["value"][1] / 1e6 == pytest.approx(368.5, abs=0.05)
+    assert est.quantities.find("fits.both.physical.stiffness.value").display == "N/µm"
+    assert "N/µm at F in kN: 159.4 at 10.00, 368.5 at 20.00" in est.summary()
+
+
 def test_preload_group_in_newtons_and_a_missing_force_base_says_so():
     """A device fit's chi -> F_pr = chi p_B s_B; without the force base no number, a status naming the base."""
     block = {"parameters": {"chi": {"estimate": 0.05, "free": True, "standard_error": 0.01, "ci_low": 0.03,

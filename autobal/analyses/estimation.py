@@ -363,6 +363,14 @@ def report_section(sec) -> None:
                             "interval and the residual-bootstrap percentile interval",
                             ["fit", "parameter", "estimate", "standard error", "CI low", "CI high", "bootstrap low",
                              "bootstrap high", "unit"], rows, headline=True, unit_column=True))
+    stiffness = [[text(fit), *(sec.cell(f"fits.{fit}.physical.stiffness.{k}.{i}") for k in ("load", "tau", "value",
+                                                                                          "kappa"))]
+                 for fit, f in sec.get("fits", {}).items()
+                 for i in range(len(get_path(f, "physical.stiffness.value") or []))]
+    if stiffness:
+        sec.tables.append(table("Axial stiffness of the fitted disc c = −dF/dh = κ p_B s_B/h_TB at the data's loads "
+                                "(κ = −dτ/du of Pavlenko 2014, Eq. (4.16))",
+                                ["fit", "load F", "τ", "stiffness c", "κ"], stiffness))
     if correlations:
         sec.tables.append(table("Correlation of the free parameters (from the covariance at the optimum)",
                                 ["fit", "parameters", "correlation", "meaning"], correlations))
