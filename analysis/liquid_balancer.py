@@ -318,7 +318,10 @@ class LiquidBalancerResult(Result):
         return None if o is None or not np.isfinite(o["optimum"]) else float(o["optimum"])
 
     def to_dict(self) -> dict:
-        return with_statuses(self.data, NULL_REASONS)
+        """The results.json block, with the one verdict (``verdict.ok``, ``verdict.text``: what fails, by how much;
+        a design verdict, not the run's status)."""
+        ok, words = self.verdict()
+        return with_statuses(self.data, NULL_REASONS) | {"verdict": {"ok": ok, "text": words}}
 
     def verdict(self) -> tuple[bool, str]:
         """The one verdict on the balancer at its working speed (the headline model: the scene's variant of (2.13)

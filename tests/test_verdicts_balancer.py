@@ -33,6 +33,7 @@ def test_washer_verdict_is_not_ok_and_names_the_shortage_but_the_run_did_not_fai
             f"by {(op['f'] - LAYER) * 1e3:.2f} mm") in words
     assert "λ0 = e0/e_c = 0.1423 < 1, the system's eccentricity e_c is 7.03 times the rotor's e0" in words
     assert lb.summary().splitlines()[1] == f"  NOT OK: {words}"
+    assert lb.to_dict()["verdict"] == {"ok": False, "text": words}
     assert run.status == "ok" and run.failures == {} and lb.failures() == []
 
 
