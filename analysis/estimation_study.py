@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from autobal.analysis import disc_fit
-from autobal.analysis.adequacy import fisher_adequacy
+from autobal.analysis.adequacy import decision, fisher_adequacy
 from autobal.analysis.device_fit import DeviceFitter
 from autobal.analysis.least_squares import FitResult
 from autobal.analysis.quantities import Declarations, Quantity, is_number, significant
@@ -45,6 +45,15 @@ _ADEQUACY = ("F", "F_crit", "p_value", "sigma1_sq", "sigma2_sq", "dof", "groups"
              "lack_of_fit.F_crit", "lack_of_fit.p_value", "lack_of_fit.dof")
 
 
+#: the fitted groups that are a physical quantity over a base: group -> (its key in ``physical``, the base, meaning);
+#: the other groups are ratios of like quantities (α = g_TB/g1 a ratio of conductances, σ of areas) with no unit
+PHYSICAL = {"tau_max": ("F_max", "force", "closing load of the face F_max = τ_max p_B s_B"),
+            "chi": ("F_pr", "force", "push-off preload F_pr = χ p_B s_B")}
+_PHYSICAL_VALUES = ("estimate", "standard_error", "ci_low", "ci_high", "bootstrap_ci_low", "bootstrap_ci_high")
+#: the dimensional form of a data column: its group -> (the base, the physical symbol)
+COLUMNS = {"tau": ("force", "F"), "psi1": ("pressure", "p1"), "u": ("gap", "h"), "q": ("flow", "Q")}
+
+
 def _adequacy(*keys: str) -> str:
     """The keys of the fits' own adequacy tests and of the reference curve's."""
     return " ".join(f"{where}.{k}" for where in ("fits.*.adequacy", "adequacy_reference") for k in keys)
@@ -66,7 +75,8 @@ QUANTITIES = Declarations(
              "parameters"),
     Quantity(_adequacy("F", "F_crit", "p_value", "lack_of_fit.F", "lack_of_fit.F_crit", "lack_of_fit.p_value"), "1",
              "F, F_crit, p", "Fisher adequacy test: the fit's variance against the scatter within the load groups "
-             "(adequate when F ≤ F_crit), and the lack-of-fit test", source=f"{_P14}, Eqs. (4.14)-(4.15)"),
+             "(passed when F ≤ F_crit), and the lack-of-fit test; adequate when both pass",
+             source=f"{_P14}, Eqs. (4.14)-(4.15)"),
     Quantity(_adequacy("sigma1_sq", "sigma2_sq", "dof", "groups", "points", "parameters", "significance",
                        "group_load", "group_mean", "group_theory", "load_spread_in_groups", "lack_of_fit.dof")
              + " adequacy_reference.reference.*", "1", "σ², ν, τ, u",
@@ -91,6 +101,16 @@ QUANTITIES = Declarations(
              "loss_coefficient.check_alpha_from_solved loss_coefficient.friction_factor", "1", "α",
              "the fitted α and its interval, α of the nominal losses, α recomputed from the solved loss",
              source=f"{_P14}, Eq. (4.38)"),
+    Quantity(" ".join(f"fits.*.physical.{k}.{v}" for k in ("F_max", "F_pr") for v in _PHYSICAL_VALUES)
+             + " fits.*.physical.*.scale", "N", "F_max, F_pr",
+             "a fitted force group in newtons: the closing load of the face F_max = τ_max p_B s_B (4.18), the "
+             "push-off preload F_pr = χ p_B s_B; its estimate, standard error and intervals, and the scale p_B s_B",
+             "kN", source=f"{_P14}, Eqs. (4.16)-(4.18)"),
+    Quantity("fits.*.physical.stiffness.value", "N/m", "c", "axial stiffness of the fitted disc c = −dF/dh = "
+             "κ p_B s_B/h_TB at the data's loads", "N/µm", source=f"{_P14}, Eqs. (4.16)-(4.18)"),
+    Quantity("fits.*.physical.stiffness.load", "N", "F", "the data's loads, where the stiffness is given", "kN"),
+    Quantity("fits.*.physical.stiffness.tau fits.*.physical.stiffness.kappa", "1", "τ, κ",
+             "the data's loads τ and the fitted disc's stiffness κ = −dτ/du (the groups of c and F)"),
     Quantity("bases.pressure fits.*.bases.pressure", "Pa", "p_B", "pressure base of the data", "MPa"),
     Quantity("bases.gap fits.*.bases.gap", "m", "h_TB", "gap base of the data", "mm"),
     Quantity("bases.flow fits.*.bases.flow", "m^3/s", "Q_B", "flow base of the data"),
@@ -134,21 +154,17 @@ class EstimationResult(Result):
         return self.data
 
     def verdict(self) -> tuple[bool, str]:
-        """The one verdict over the fits: each solved and adequate by the Fisher test (4.14) (F <= F_crit), with
-        the lack-of-fit test beside it."""
+        """The one verdict over the fits: each solved and adequate, that is passing both Fisher's test (4.14) and
+        the lack-of-fit test at the scene's significance (:func:`autobal.analysis.adequacy.decision`); a fit that
+        fails one says which, with its F against F_crit and its p against the significance."""
         oks, words = [], []
         for name, f in self.data["fits"].items():
             free = [k for k, p in (f.get("parameters") or {}).items() if p.get("free")]
             solved = bool((f.get("solver") or {}).get("success"))
-            ad = f.get("adequacy") or {}
+            ok, said = decision(f["adequacy"]) if f.get("adequacy") else (None, "adequacy not tested")
             w = f"{name} ({', '.join(free)}): " + ("" if solved else f"solver FAILED ({f['solver'].get('status')}); ")
-            w += {True: f"adequate (F = {significant(ad.get('F'))} ≤ F_crit = {significant(ad.get('F_crit'))})",
-                  False: f"NOT adequate (F = {significant(ad.get('F'))} > F_crit = {significant(ad.get('F_crit'))})",
-                  None: "adequacy not tested"}[ad.get("adequate")]
-            if (ad.get("lack_of_fit") or {}).get("adequate") is False:
-                w += f", lack of fit at p = {significant(ad['lack_of_fit'].get('p_value'))}"
-            oks.append(solved and ad.get("adequate") is not False)
-            words.append(w)
+            oks.append(solved and ok is not False)
+            words.append(w + said)
         return all(oks), "; ".join(words)
 
     def summary(self) -> str:
@@ -168,13 +184,15 @@ class EstimationResult(Result):
             for k, p in f["parameters"].items():
                 if not p["free"]:
                     lines.append(f"    {k:10s} {significant(p['estimate'])} (fixed)")
-                    continue
-                line = (f"    {k:10s} {significant(p['estimate'])} +- {significant(p['standard_error'], 2)}  "
-                        f"{100 * f['confidence']:.0f} % CI [{significant(p['ci_low'])}, {significant(p['ci_high'])}]")
-                if k in boot:
-                    line += (f", bootstrap ({bs['samples']} refits) [{significant(boot[k]['ci_low'])}, "
-                             f"{significant(boot[k]['ci_high'])}]")
-                lines.append(line)
+                else:
+                    line = (f"    {k:10s} {significant(p['estimate'])} +- {significant(p['standard_error'], 2)}  "
+                            f"{100 * f['confidence']:.0f} % CI [{significant(p['ci_low'])}, "
+                            f"{significant(p['ci_high'])}]")
+                    if k in boot:
+                        line += (f", bootstrap ({bs['samples']} refits) [{significant(boot[k]['ci_low'])}, "
+                                 f"{significant(boot[k]['ci_high'])}]")
+                    lines.append(line)
+                lines += _physical_lines(f, k)
             if bs.get("status", "ok").startswith("failed"):
                 lines.append(f"    bootstrap {bs['status']}")
             free = f.get("free") or []
@@ -183,6 +201,7 @@ class EstimationResult(Result):
                 r = corr[i][j]  # null when the covariance is undefined (a singular Hessian)
                 lines.append(f"    correlation of {free[i]} and {free[j]}: {significant(r)}"
                              + (" (the data hardly separate them)" if r is not None and abs(r) >= 0.9 else ""))
+            lines += _stiffness_lines(f)
             cc = f.get("cross_check_scipy")
             if cc:
                 lines.append(f"    scipy least_squares: max |difference| {cc['max_abs_difference']:.1e}")
@@ -203,31 +222,57 @@ class EstimationResult(Result):
             lines.append(f"    closed forms {cf['status']}")
         ref = d.get("adequacy_reference")
         if ref and ref.get("F") is not None:
-            lines.append(f"    adequacy of the source's curve: sigma1^2 = {ref['sigma1_sq']:.3g}, sigma2^2 = "
-                         f"{ref['sigma2_sq']:.3g}, F = {ref['F']:.3g}, F_crit = {ref['F_crit']:.3g} -> "
-                         f"{'adequate' if ref['adequate'] else 'not adequate'} (the source's inverted rule: "
+            lines.append(f"    the source's curve (alpha {significant(ref['reference']['alpha'])}, tau_max "
+                         f"{significant(ref['reference']['tau_max'])}): sigma1^2 = {ref['sigma1_sq']:.3g}, sigma2^2 = "
+                         f"{ref['sigma2_sq']:.3g}; {decision(ref)[1]} (the source's inverted rule F > F_crit: "
                          f"{'adequate' if ref['source_rule_adequate'] else 'not adequate'})")
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
-        """estimation_parameters.csv; per fit its points (measured, fitted, residual) and its curve with band."""
+        """estimation_parameters.csv (each row's unit in its column 'unit': the groups and, beside them, the fitted
+        force groups in kN); per fit its points (measured, fitted, residual) and its curve with band, each group
+        headed '[1]' and, where the data's base is known, beside it its physical value headed with its unit."""
         out = {}
-        rows = {"fit": [], "parameter": [], "free": [], "estimate": [], "standard_error": [], "ci_low": [],
-                "ci_high": []}
+        cols = ("estimate", "standard_error", "ci_low", "ci_high")
+        rows = {k: [] for k in ("fit", "parameter", "free", *cols, "unit")}
         for name, f in self.solved.items():
             for k, p in f["parameters"].items():
-                for col in rows:
-                    rows[col].append({"fit": name, "parameter": k}.get(col, p.get(col)))
-            pts = {"load": f["data"]["load"]}
+                for col, v in ({"fit": name, "parameter": k, "free": p["free"], "unit": "1"}
+                               | {c: p.get(c) for c in cols}).items():
+                    rows[col].append(v)
+            for key, ph in (f.get("physical") or {}).items():
+                if "estimate" in ph:
+                    q = QUANTITIES.find(f"fits.{name}.physical.{key}.estimate")
+                    for col, v in ({"fit": name, "parameter": key, "free": ph["free"], "unit": q.display}
+                                   | {c: q.shown(ph[c]) if c in ph else None for c in cols}).items():
+                        rows[col].append(v)
+            kind = f.get("load_kind", "tau")
+            pts = self._columns(f, {kind: f["data"]["load"]})
+            cur = self._columns(f, {kind: f["curve"]["load"]})
             for k in f["data"]:
                 if k != "load":
-                    pts |= {f"{k}_{c}": f["data"][k][c] for c in ("measured", "fitted", "residual")}
-            cur = {"load": f["curve"]["load"]}
+                    pts |= self._columns(f, {c: f["data"][k][c] for c in ("measured", "fitted", "residual")}, k)
             for k in ("u", "q"):
-                cur |= {f"{k}_{c}": f["curve"][k][c] for c in ("value", "band_low", "band_high")}
+                cur |= self._columns(f, {c: f["curve"][k][c] for c in ("value", "band_low", "band_high")}, k)
             out[f"estimation_{name}_points.csv"] = pts
             out[f"estimation_{name}_curve.csv"] = cur
         return {"estimation_parameters.csv": rows, **out}
+
+    def _columns(self, f: dict, values: dict, group: str | None = None) -> dict:
+        """CSV columns of one group of the data (``group``, or the load's kind as the key of ``values``): each
+        column of ``values`` headed 'group_column [1]', then, where the base of the group is known, the same
+        columns in their physical unit ('F [kN]', 'h_measured [mm]': the group times its base)."""
+        out, physical = {}, {}
+        base, symbol = COLUMNS[group or next(iter(values))]
+        scale = (f.get("bases") or self.data.get("bases") or {}).get(base)
+        q = QUANTITIES.find(f"bases.{base}")
+        for col, v in values.items():
+            suffix = f"_{col}" if group else ""
+            out[f"{group or col}{suffix} [1]"] = v
+            if is_number(scale) and scale > 0:
+                physical[f"{symbol}{suffix} [{q.display}]"] = [q.shown(x * scale) if is_number(x) else None
+                                                               for x in v]
+        return out | physical
 
     def draw(self, ax) -> None:
         """The first fit's first measured variable: data, fitted curve and its confidence band."""
@@ -292,6 +337,36 @@ class EstimationResult(Result):
             fig.suptitle(f"{self.data['title']}: fit {name} ({f['model']}, residual in {f['residual']})", fontsize=9)
             figs[f"fig_estimation_{name}.png"] = fig
         return figs
+
+
+def _physical_lines(f: dict, group: str) -> list[str]:
+    """The summary's line of a fitted group in its physical unit (``PHYSICAL``), beside the group's own line."""
+    if group not in PHYSICAL:
+        return []
+    key = PHYSICAL[group][0]
+    ph = (f.get("physical") or {}).get(key) or {}
+    if "estimate" not in ph:
+        return [f"    {'':10s} {key}: {ph['status']}"] if "status" in ph else []
+    q = QUANTITIES.find(f"fits.x.physical.{key}.estimate")
+    line = f"    {'':10s} = {ph['meaning']} = {q.text(ph['estimate'])}"
+    if "standard_error" in ph:
+        line += (f" +- {significant(q.shown(ph['standard_error']), 2)} {q.display}, "
+                 f"CI [{significant(q.shown(ph['ci_low']))}, {significant(q.shown(ph['ci_high']))}] {q.display}")
+    if "bootstrap_ci_low" in ph:
+        line += (f", bootstrap [{significant(q.shown(ph['bootstrap_ci_low']))}, "
+                 f"{significant(q.shown(ph['bootstrap_ci_high']))}] {q.display}")
+    return [line]
+
+
+def _stiffness_lines(f: dict) -> list[str]:
+    """The summary's line of the fitted disc's axial stiffness at the data's loads, in N/µm at F in kN."""
+    st = (f.get("physical") or {}).get("stiffness")
+    if not st or "value" not in st:
+        return []
+    c, F = QUANTITIES.find("fits.x.physical.stiffness.value"), QUANTITIES.find("fits.x.physical.stiffness.load")
+    pairs = ", ".join(f"{significant(c.shown(v))} at {significant(F.shown(x))}" for x, v in zip(
+        st["load"], st["value"], strict=True))
+    return [f"    axial stiffness c = -dF/dh of the fitted disc, {c.display} at F in {F.display}: {pairs}"]
 
 
 def _params_text(f: dict) -> str:
@@ -425,7 +500,43 @@ def _one_fit(fit, settings, data, bases: dict, device) -> tuple[dict, FitResult]
 
         block["adequacy"] = fisher_adequacy(load, meas, group, theory, len(res.free),
                                             settings.adequacy.significance) | {"variable": var}
+    block["physical"] = _physical(block, fb)
+    if fit.model == "traditional_disc" and data.has("load") in ("tau", "axial_force"):
+        block["physical"]["stiffness"] = _stiffness(res.estimate, np.unique(load), fb)
     return block, res
+
+
+def _stiffness(estimate: dict, loads, bases: dict) -> dict:
+    """The fitted disc's axial stiffness at the data's distinct loads: kappa = -d tau/du of (4.16) (1) and, where
+    the force and gap bases are given, c = kappa p_B s_B/h_TB (N/m) at the loads F = tau p_B s_B (N)."""
+    kappa = TurbulentDisc(estimate["alpha"], estimate["tau_max"]).stiffness(loads)
+    out = {"meaning": "axial stiffness of the fitted disc c = -dF/dh = κ p_B s_B/h_TB, κ = -dτ/du of (4.16)",
+           "tau": loads, "kappa": kappa}
+    force, gap = bases.get("force"), bases.get("gap")
+    if force and gap:
+        return out | {"load": loads * force, "value": kappa * force / gap}
+    return out | {"status": "in N/m only with the force and gap bases (analyses.estimation.bases)"}
+
+
+def _physical(block: dict, bases: dict) -> dict:
+    """The fitted groups of ``PHYSICAL`` in SI (N): the group's estimate, standard error and intervals times its
+    base (p_B s_B), where the scene gives the base; a fixed group's value alone."""
+    out = {}
+    boot = (block.get("bootstrap") or {}).get("parameters") or {}
+    for group, p in block["parameters"].items():
+        if group not in PHYSICAL:
+            continue
+        key, base, meaning = PHYSICAL[group]
+        scale = bases.get(base)
+        if not scale:
+            out[key] = {"group": group, "meaning": meaning,
+                        "status": f"not computed: the {base} base (analyses.estimation.bases) is not given"}
+            continue
+        values = {v: p.get(v) for v in _PHYSICAL_VALUES[:4]} | {
+            f"bootstrap_{v}": (boot.get(group) or {}).get(v) for v in ("ci_low", "ci_high")}
+        out[key] = {"group": group, "meaning": meaning, "free": p["free"], "scale": scale,
+                    **{v: x * scale for v, x in values.items() if x is not None}}
+    return out
 
 
 def _identified(res: FitResult) -> None:

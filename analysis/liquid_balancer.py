@@ -51,7 +51,8 @@ def _row(system: System, variant: str, deflection: str, gammas) -> dict:
     sc = lb.self_consistent(p["omega"], system.omega_cr, system.n, system.R, system.h, system.V, system.rho,
                             system.M_sys)
     with np.errstate(invalid="ignore"):
-        suff = (system.R - o["r"]) >= o["f"]
+        suff = [bool(x) if np.isfinite(f) else None for x, f in zip((system.R - o["r"]) >= o["f"], o["f"],
+                                                                        strict=True)]
     return {"gamma": gammas, "omega": p["omega"], "delta_deg": np.degrees(o["delta"]),
             "phi_deg": np.degrees(o["phi"]), "G": o["G"], "f": o["f"], "r": o["r"], "x_p": o["x_p"],
             "D": o["D"], "k_D": o["k_D"], "alpha0_deg": np.degrees(o["alpha0"]), "lambda0": o["lambda0"],
@@ -130,6 +131,42 @@ def pashkov(system: System, kappa: float = 1.0) -> dict:
     return out
 
 
+#: what each efficiency of the block is (the summary and the report say it beside the numbers)
+EFFICIENCIES = (
+    "λ0 = e0/e_c (Khomyak (2020), Eq. (2.14)) is the rotor's eccentricity without the liquid over the system's with "
+    "it: a reduction factor, not a share of energy, so it exceeds 1 when the liquid reduces the unbalance (unbounded "
+    "at complete balancing, k_D = D0/D = 1) and is below 1 when the liquid adds to it",
+    "λ0 follows the source's algorithm (App. В: the deflection f = G e0 with e0 = D0/m_d); λ0⁺ is the same ratio "
+    "with f closed on the system's residual eccentricity, so that D and f agree (a toolkit extension)",
+    "E_e = e0/e = (m + κρπhΣR_i²)/m (Pashkov (2010); Khomyak (2020), Eqs. (3.9), (3.14)) is the reduction far above "
+    "the critical speed (ω ≫ ω_k), with its own deflection s of (3.2): at least 1 by construction",
+)
+
+
+def optimum_words(data: dict, key: str) -> str:
+    """What the optimal height or volume of the block is optimal for, and how it compares with the scene's chamber
+    and liquid (Khomyak (2020), App. В/Г; the summary and the report say it beside the number)."""
+    o, sy = data.get(key) or {}, data["system"]
+    x = o.get("optimum")
+    if x is None or not np.isfinite(x):
+        return ""
+    q, symbol = QUANTITIES.find(f"{key}.optimum"), {"optimal_height": "h_opt", "optimal_volume": "V_opt"}[key]
+    what = ("the fill at which the documented model balances completely (k_D = D0/D = 1, λ0 unbounded), "
+            "V_opt = πhR² − D0/(ρf): its liquid unbalance D = ρf(πhR² − V) falls as the chamber fills"
+            if key == "optimal_volume" else
+            "the height at which the documented model balances completely (k_D = D0/D = 1, λ0 unbounded), "
+            "h = (D0/(ρf) + V)/(πR²)") if o.get("singular") else "the largest λ0 within the bounds"
+    if key == "optimal_volume":
+        chamber, liquid = sy["chamber_volume"], sy["volume"]
+        return (f"{symbol} = {q.text(x)} is {what}; {significant(x / liquid, 3)} times the scene's liquid "
+                f"({q.text(liquid)}) and {significant(100 * x / chamber, 3)} % of the chamber πR²h = "
+                f"{q.text(chamber)}, which bounds the search (the fill cannot exceed the chamber): with the source's "
+                f"large deflection f = {QUANTITIES.find('operating_point.f').text(o.get('f'))} the empty core left, "
+                f"πhR² − V_opt = D0/(ρf) = {q.text(chamber - x)}, is what balances D0; a result of the documented "
+                "model, not a fill to pour in (Khomyak (2020), Table 3.3 measured 50-180 mL)")
+    return f"{symbol} = {q.text(x)} is {what}; the scene's chamber is {q.text(sy['height'])} high"
+
+
 NO_EQUILIBRIUM = "no equilibrium angle: (2.13) has no real root at this speed ratio (null)"
 # why a value of the block can be NaN (null in results.json); other nulls take their mapping's reason
 NULL_REASONS = {k: NO_EQUILIBRIUM for k in ("alpha0_deg", "lambda0", "lambda0_printed", "lambda0_program",
@@ -160,18 +197,18 @@ _OPT_X = ("lower_bound", "upper_bound", "feasible_lower", "feasible_upper", "opt
 QUANTITIES = Declarations(
     Quantity("operating_point.omega", "rad/s", "ω", "working speed", "rad/s", headline=True),
     Quantity("operating_point.gamma", "1", "γ", "speed ratio ω/ω_cr", source=f"{_K20}, Eq. (2.5)", headline=True),
-    Quantity("operating_point.lambda0", "1", "λ0", "efficiency e0/e_c, the source's algorithm",
-             source=f"{_K20}, Eqs. (2.13)-(2.14), Table 3.2", headline=True),
-    Quantity("operating_point.lambda0_self_consistent", "1", "λ0⁺", "efficiency, self-consistent closure (extension)",
-             headline=True),
+    Quantity("operating_point.lambda0", "1", "λ0", "efficiency e0/e_c (2.14), the source's algorithm",
+             source=f"{_K20}, Eqs. (2.13)-(2.14), App. В, Table 3.2", headline=True),
+    Quantity("operating_point.lambda0_self_consistent", "1", "λ0⁺",
+             "efficiency e0/e_c (2.14), self-consistent f (extension)", headline=True),
     Quantity("operating_point.k_D", "1", "k_D", "capacity ratio D0/D", source=f"{_K20}, Eq. (2.9)",
              headline=True),
     Quantity("system.D0", "kg*m", "D0", "initial unbalance m_d e_d", "g·cm", headline=True),
     Quantity("operating_point.D table.D", "kg*m", "D", "unbalance capacity ρV x_p of the liquid", "g·cm",
              source=f"{_K20}, step 2.8", headline=True),
-    Quantity(_optima("optimum", kind="height"), "m", "h_opt", "optimal chamber height", "mm",
+    Quantity(_optima("optimum", kind="height"), "m", "h_opt", "optimal chamber height (largest λ0)", "mm",
              source=f"{_K20}, App. В", headline=True),
-    Quantity(_optima("optimum", kind="volume"), "m^3", "V_opt", "optimal liquid volume", "mL",
+    Quantity(_optima("optimum", kind="volume"), "m^3", "V_opt", "optimal liquid volume (largest λ0)", "mL",
              source=f"{_K20}, App. Г, Table 3.3 (48.5-176.7 mL)", headline=True),
     Quantity(_optima(*_OPT_X, kind="height"), "m", "h", "optimal height: bounds, the grid's optimum and step", "mm"),
     Quantity(_optima(*_OPT_X, kind="volume") + " liquid_choice.candidates[].V_opt table_3_3.rows[].V_opt", "m^3",
@@ -214,11 +251,13 @@ QUANTITIES = Declarations(
              "pashkov.*.sufficiency.wall_margin pashkov.*.sufficiency.partition_margin pashkov.*.radii", "m",
              "e, R − r", "eccentricities, margins of the liquid to the walls, chamber radii", "mm",
              source=f"{_P10}, Eqs. (3.4), (3.7)-(3.11)"),
-    Quantity("system.chamber_volume pashkov.*.volumes", "m^3", "V", "chamber volume πR²h, liquid volumes", "mL"),
+    Quantity("system.chamber_volume system.volume pashkov.*.volumes", "m^3", "V", "chamber volume πR²h, liquid volumes",
+             "mL"),
     Quantity("pashkov.*.critical_speed", "rad/s", "ω_k", "critical speed with the liquid", "rad/s",
              source=f"{_P10}, Eq. (3.3)"),
     Quantity("pashkov.kappa pashkov.*.efficiency pashkov.*.efficiency_nested pashkov.*.psi", "1", "E_e, ψ",
-             "efficiency calculators (printed sum and the nested alternative), ψ = 1/E_e",
+             "efficiency E_e = e0/e = (m + κρπhΣR_i²)/m at ω ≫ ω_k (printed sum and the nested alternative), "
+             "ψ = 1/E_e",
              source=f"{_P10}, Eqs. (3.9), (3.14)"),
     Quantity("viscous_zone.nu", "m^2/s", "ν", "kinematic viscosity"),
     Quantity("viscous_zone.xi_rad", "rad", "ξ", "arc angle of (2.15)"),
@@ -242,7 +281,7 @@ QUANTITIES = Declarations(
              "table_3_3.rows[].experiment_V_opt_mL", "mL", "V_opt", "optimal volumes as Table 3.3",
              source=f"{_K20}, Table 3.3"),
     Quantity("table_3_3.rows[].k_D table_3_3.rows[].published_k_D", "1", "k_D", "capacity ratio at the optimum"),
-    Quantity("table_3_3.height", "m", "h", "chamber height of the Table 3.3 study", "mm"),
+    Quantity("table_3_3.height system.height", "m", "h", "chamber height (of the scene, of the Table 3.3 study)", "mm"),
     Quantity("table_3_3.speed", "rad/s", "ω", "speed of the Table 3.3 study", "rad/s"),
     Quantity("optimal_height.solver.iterations optimal_volume.solver.iterations", "1", "", "IPOPT iterations"),
     Quantity("run_time_s", "s", "t", "wall time"),
@@ -279,19 +318,39 @@ class LiquidBalancerResult(Result):
         return None if o is None or not np.isfinite(o["optimum"]) else float(o["optimum"])
 
     def to_dict(self) -> dict:
-        return with_statuses(self.data, NULL_REASONS)
+        """The results.json block, with the one verdict (``verdict.ok``, ``verdict.text``: what fails, by how much;
+        a design verdict, not the run's status)."""
+        ok, words = self.verdict()
+        return with_statuses(self.data, NULL_REASONS) | {"verdict": {"ok": ok, "text": words}}
 
     def verdict(self) -> tuple[bool, str]:
-        """The one verdict: a balancing equilibrium at the working speed and enough liquid for the deflection
-        (R - r >= f, Pashkov (2010))."""
-        op = self.data["operating_point"]
-        eq, enough = op["equilibrium_exists"], op.get("sufficiency_ok")
-        words = (f"balancing equilibrium at γ = {significant(op['gamma'])} (λ0 = {significant(op['lambda0'])})" if eq
-                 else f"NO balancing equilibrium at γ = {significant(op['gamma'])}: {op.get('reason')}")
-        if enough is not None:
-            words += ("; the liquid suffices (R − r ≥ f)" if enough else
-                      "; the liquid does NOT suffice: the deflection f exceeds the liquid layer R − r (Pashkov 2010)")
-        return bool(eq and enough is not False), words
+        """The one verdict on the balancer at its working speed (the headline model: the scene's variant of (2.13)
+        and deflection): a balancing equilibrium exists, it reduces the unbalance (λ0 = e0/e_c > 1, Khomyak (2020),
+        Eq. (2.14)) and the liquid suffices for the deflection (R − r ≥ f, Pashkov (2010); Khomyak (2020),
+        Eq. (3.4)).  Where one fails, the words say which and by how much; a failed design is a verdict, not a
+        solver failure (the run's status stays "ok")."""
+        op, sy = self.data["operating_point"], self.data["system"]
+        gamma, q = significant(op["gamma"]), QUANTITIES.find
+        fails, holds = [], []
+        lam, k = op.get("lambda0"), op.get("k_D")
+        if not op["equilibrium_exists"]:
+            fails.append(f"NO balancing equilibrium at γ = {gamma}: {op.get('reason')}")
+        elif lam is None or not np.isfinite(lam) or lam > 1:  # null or inf: complete balancing, k_D = 1
+            holds.append(f"a balancing equilibrium at γ = {gamma} reduces the unbalance (λ0 = e0/e_c = "
+                         f"{significant(lam) if lam is not None and np.isfinite(lam) else 'unbounded'} > 1)")
+        else:
+            fails.append(f"the liquid adds to the unbalance at γ = {gamma}: λ0 = e0/e_c = {significant(lam)} < 1, the "
+                         f"system's eccentricity e_c is {significant(1 / lam, 3)} times the rotor's e0 (the liquid's "
+                         f"unbalance D is {significant(1 / k, 3)} times D0, k_D = {significant(k)})")
+        enough, f, layer = op.get("sufficiency_ok"), op.get("f"), sy["R_minus_r"]
+        mm = q("operating_point.f")
+        if enough is True:
+            holds.append(f"the liquid suffices: the liquid layer R − r = {mm.text(layer)} ≥ the deflection f = "
+                         f"{mm.text(f)}")
+        elif enough is False:
+            fails.append(f"the liquid does NOT suffice: the deflection f = {mm.text(f)} exceeds the liquid layer "
+                         f"R − r = {mm.text(layer)} by {mm.text(f - layer)} (Khomyak (2020), Eq. (3.4))")
+        return not fails, "; ".join(fails + holds)
 
     def summary(self) -> str:
         d = self.data
@@ -299,11 +358,14 @@ class LiquidBalancerResult(Result):
         ok, words = self.verdict()
         lines = [f"liquid balancer ({st['variant']} (2.13), f from the {st['deflection']} eccentricity)",
                  f"  {'ok' if ok else 'NOT OK'}: {words}", *QUANTITIES.lines(d)]
+        lines += [f"  {x}" for x in EFFICIENCIES]
         for key in ("optimal_height", "optimal_volume"):
             o = d.get(key) or {}
-            if o.get("singular"):  # a headline far from the published optimum says why
-                lines.append(f"  {key.replace('_', ' ')}: k_D = 1 (complete balancing), λ0 unbounded there "
-                             f"({significant(o['lambda0_max'])} is how close IPOPT came, not an efficiency)")
+            if optimum_words(d, key):  # a headline far from the published optimum says what it is
+                lines.append(f"  {optimum_words(d, key)}")
+            if o.get("singular"):
+                lines.append(f"  {key.replace('_', ' ')}: λ0 = {significant(o['lambda0_max'])} there is how close "
+                             f"IPOPT came to k_D = 1, not an efficiency")
         q = QUANTITIES.find
         delta, f, lam = q("table.delta_deg"), q("table.f"), q("table.lambda0")
         lines.append(f"  {'gamma':>6s} {'delta ' + delta.display:>10s} {'f ' + f.display:>9s} {'k_D':>8s} "
@@ -320,9 +382,10 @@ class LiquidBalancerResult(Result):
         for key in ("single", "multi"):
             if key in pk:
                 b = pk[key]
-                extra = (f", ω_k = {q('pashkov.single.critical_speed').text(b['critical_speed'])}, s = "
-                         f"{q('pashkov.single.deflection').text(b['deflection'])}, sufficient: "
-                         f"{'yes' if b['sufficiency']['all_ok'] else 'NO'}" if "sufficiency" in b else "")
+                extra = (f", ω_k = {q('pashkov.single.critical_speed').text(b['critical_speed'])}, its own "
+                         f"deflection (3.2) s = {q('pashkov.single.deflection').text(b['deflection'])}, liquid "
+                         f"sufficient for s (3.4): {'yes' if b['sufficiency']['all_ok'] else 'NO'}"
+                         if "sufficiency" in b else "")
                 lines.append(f"  Pashkov {key}: E_e = {significant(b['efficiency'])} (nested alternative "
                              f"{significant(b['efficiency_nested'])}){extra}")
         if "table_3_2" in d:
@@ -484,7 +547,7 @@ def run(system: System, settings, title: str = "") -> LiquidBalancerResult:
         "system": {"D0": system.D0, "D0_gcm": system.D0 / lb.GCM, "m_l": system.m_l, "M_sys": system.M_sys,
                    "n": system.n, "two_n": 2 * system.n, "zeta_damping": system.n / system.omega_cr,
                    "e_f": system.e_f(dfl), "r": math.sqrt(r2), "R_minus_r": system.R - math.sqrt(r2),
-                   "chamber_volume": math.pi * system.R**2 * system.h,
+                   "chamber_volume": math.pi * system.R**2 * system.h, "volume": system.V, "height": system.h,
                    "rho_pi_h_R2": system.rho * math.pi * system.h * system.R**2,
                    "rho_pi_h_r2": system.rho * math.pi * system.h * r2},
         "operating_point": op,

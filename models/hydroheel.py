@@ -190,6 +190,11 @@ class TurbulentDisc:
         """Static characteristic u(tau) = cbrt[(tau_max/tau - 1)/alpha^2], Eq. (4.18)."""
         return gap_from_load(tau, self.alpha**2, self.tau_max)
 
+    def stiffness(self, tau):
+        """Axial stiffness of the disc kappa = -d tau/du = 3 alpha^2 u^2 tau^2/tau_max at the load tau (1: load over
+        p_B s_B per unit gap u = h/h_TB), the derivative of (4.16) at u(tau) of (4.18); c = kappa p_B s_B/h_TB, N/m."""
+        return 3.0 * self.alpha**2 * self.gap(tau) ** 2 * tau**2 / self.tau_max
+
     def flow_at_gap(self, u):
         """q = Q/Q_B = sqrt[(1 + alpha^2) u^3/(1 + alpha^2 u^3)], Eq. (4.30): the square root of
         the laminar characteristic (1.51) with alpha_T1 = alpha^2."""

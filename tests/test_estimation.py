@@ -222,12 +222,14 @@ def test_confidence_intervals_cover_the_truth():
 def test_fisher_adequacy_table43():
     """(4.14)-(4.15) on Table 4.3 with the source's theory curve (sigma 2.75, alpha 1.75), l = 2:
     sigma1^2 = 8.72e-3 (printed 8.8e-3), sigma2^2 = 3.33e-3 (printed 2.9e-3: not reproducible),
-    F = 2.62 (printed 3.1), F_crit(0.90; 2, 11) = 2.86 (printed 2.8); Sec. 4.3.3.  Correct rule: adequate
-    (F <= F_crit); the source's inverted rule would say the opposite."""
+    F = 2.62 (printed 3.1), F_crit(0.90; 2, 11) = 2.86 (printed 2.8); Sec. 4.3.3.  Correct rule: Fisher's
+    test passes (F <= F_crit), the source's inverted rule would say the opposite; the lack-of-fit test fails
+    (F = 5.71 > 3.11, p = 0.029), so the curve is not adequate: both tests must pass."""
     ad = fisher_adequacy(TAU, U, GROUP, lambda x: TurbulentDisc(1.75, 2.75).gap(x), 2, 0.1)
     assert_allclose([ad["sigma1_sq"], ad["sigma2_sq"], ad["F"], ad["F_crit"]], [8.72e-3, 3.33e-3, 2.62, 2.86],
                     rtol=5e-3)
-    assert ad["adequate"] and not ad["source_rule_adequate"]
+    assert ad["fisher_adequate"] and not ad["source_rule_adequate"]
+    assert ad["lack_of_fit"]["adequate"] is False and ad["adequate"] is False
     assert ad["dof"] == [2, 11] and ad["lack_of_fit"]["dof"] == [2, 8]
 
 

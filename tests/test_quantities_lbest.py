@@ -82,10 +82,10 @@ def test_washer_optimum_in_mm_and_ml_and_the_unbounded_efficiency_says_why(shipp
     out, lb = run["liquid_balancer"].summary(), run["liquid_balancer"].to_dict()
     assert value(line(out, "h_opt"), "mm") == pytest.approx(lb["optimal_height"]["optimum"] * 1e3, rel=5e-4)
     assert value(line(out, "V_opt"), "mL") == pytest.approx(lb["optimal_volume"]["optimum"] * 1e6, rel=5e-4)
-    assert "λ0 unbounded there (9.200e12 is how close IPOPT came, not an efficiency)" in out
+    assert "optimal height: λ0 = 9.200e12 there is how close IPOPT came to k_D = 1, not an efficiency" in out
     sec = next(s for s in report.context(folder)["sections"] if s["name"] == "liquid_balancer")
     rows = {r[0]["text"]: r for r in sec["tables"][0]["rows"]}
-    note = rows["efficiency (the source's algorithm)"][-1]["text"]
+    note = rows["efficiency e0/e_c (2.14), the source's algorithm"][-1]["text"]
     assert "Table 3.2 publishes 1.3 (theory)" in note and "D ≫ D0" in note, note
 
 
@@ -95,7 +95,8 @@ def test_estimation_summary_one_verdict_bootstrap_and_correlation(shipped_run):
     intervals and the adequacy verdict are printed; the source's closed forms only in the validation part."""
     out = shipped_run("rig_table43_fit")[0]["estimation"].summary()
     lines = out.splitlines()
-    assert lines[1].startswith("  ok: static_1p (alpha): adequate (F = 1.437 ≤ F_crit = 2.660)")
+    assert lines[1].startswith("  NOT OK: static_1p (alpha): NOT adequate: the lack-of-fit test fails, F = 3.135 > "
+                               "F_crit = 2.924 (p = 0.08721 < significance 0.1)")
     assert "correlation of alpha and tau_max: 0.9864 (the data hardly separate them)" in out
     assert re.search(r"alpha +2\.425 \+- 0\.48 +95 % CI \[1\.366, 3\.485\], bootstrap \(2000 refits\) "
                      r"\[1\.835, 5\.194\]", out)

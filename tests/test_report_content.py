@@ -24,7 +24,8 @@ def test_estimation_report_shows_bootstrap_correlation_and_adequacy(shipped_run)
     assert all(row[-2]["text"] != "—" for row in fitted["rows"]), "a free parameter without its bootstrap interval"
     correlation = next(t for t in sec["tables"] if t["caption"].startswith("Correlation of the free parameters"))
     assert [[c["text"] for c in r[:3]] for r in correlation["rows"]] == [["static_2p", "alpha, tau_max", "0.98636"]]
-    assert sec["overall"]["text"].startswith("static_1p (alpha): adequate (F = 1.437 ≤ F_crit = 2.660)")
+    assert sec["overall"]["text"].startswith("static_1p (alpha): NOT adequate: the lack-of-fit test fails, F = 3.135 > "
+                                             "F_crit = 2.924 (p = 0.08721 < significance 0.1)")
     assert not sec["warnings"], "the trivial nulls are a note, not warnings"
     assert [n for n in sec["notes"] if n.startswith("10 values are null") and "a fixed parameter (5 values)" in n]
 
@@ -57,6 +58,7 @@ def test_washer_optimum_row_says_why_lambda0_is_unbounded(shipped_run):
     point (k_D = 1), where lambda0 is unbounded: the row says so."""
     ctx = report.context(shipped_run("washer_liquid_balancer")[1])
     rows = {r[0]["text"]: r for r in ctx["sections"][0]["tables"][0]["rows"]}
-    for label in ("optimal chamber height", "optimal liquid volume"):
+    for label in ("optimal chamber height (largest λ0)", "optimal liquid volume (largest λ0)"):
         note = rows[label][-1]["text"]
-        assert "complete balancing (k_D = 1)" in note and "Table 3.3" in note, note
+        assert "balances completely (k_D = D0/D = 1, λ0 unbounded)" in note and "how close IPOPT came" in note, note
+    assert "Table 3.3 measured 50-180 mL" in rows["optimal liquid volume (largest λ0)"][-1]["text"]

@@ -307,13 +307,18 @@ def accuracy(scene, settings: Estimation):
                                           fit.free(), {k: p.value for k, p in fit.parameters.items()})
 
 
+#: what a fitted group without a physical unit is a ratio of (the unit column of the report's table)
+RATIOS = {"alpha": "1 (α = g_TB/g1, a ratio of conductances)", "tau_max": "1 (τ_max = F_max/(p_B s_B))"}
+
+
 def _adequacy_row(label: str, ad: dict) -> list[dict]:
     """One row of the adequacy table: the Fisher test (4.14) and the lack-of-fit test of a fit or a curve."""
     from autobal.report import cell, text
 
     lof = ad.get("lack_of_fit") or {}
-    return [text(label), *(cell(ad.get(k), "1") for k in ("F", "F_crit", "p_value")), text(ad.get("adequate")),
-            *(cell(lof.get(k), "1") for k in ("F", "F_crit", "p_value")), text(lof.get("adequate"))]
+    return [text(label), *(cell(ad.get(k), "1") for k in ("F", "F_crit", "p_value")), text(ad.get("fisher_adequate")),
+            *(cell(lof.get(k), "1") for k in ("F", "F_crit", "p_value")), text(lof.get("adequate")),
+            text(ad.get("adequate"))]
 
 
 def report_section(sec) -> None:
@@ -331,7 +336,13 @@ def report_section(sec) -> None:
             rows.append([text(fit), text(pname), *(sec.cell(f"{at}.{k}") for k in ("estimate", "standard_error",
                                                                                     "ci_low", "ci_high")),
                          *(sec.cell(f"fits.{fit}.bootstrap.parameters.{pname}.{k}") if k in (boot.get(pname) or {})
-                           else text(None) for k in ("ci_low", "ci_high")), text("dimensionless")])
+                           else text(None) for k in ("ci_low", "ci_high")), text(RATIOS.get(pname, "dimensionless"))])
+        for key, ph in (f.get("physical") or {}).items():  # a fitted force group in its unit, beside the group
+            if "estimate" in ph and ph["free"]:
+                at = f"fits.{fit}.physical.{key}"
+                cells = [sec.cell(f"{at}.{k}") if k in ph else text(None) for k in (
+                    "estimate", "standard_error", "ci_low", "ci_high", "bootstrap_ci_low", "bootstrap_ci_high")]
+                rows.append([text(fit), text(f"{key} = {ph['group']} p_B s_B"), *cells, text(cells[0]["unit"])])
         corr = f.get("correlation") or []
         for a, b in itertools.combinations(range(len(free)), 2):
             r = corr[a][b] if a < len(corr) and b < len(corr[a]) else None
@@ -352,6 +363,14 @@ def report_section(sec) -> None:
                             "interval and the residual-bootstrap percentile interval",
                             ["fit", "parameter", "estimate", "standard error", "CI low", "CI high", "bootstrap low",
                              "bootstrap high", "unit"], rows, headline=True, unit_column=True))
+    stiffness = [[text(fit), *(sec.cell(f"fits.{fit}.physical.stiffness.{k}.{i}") for k in ("load", "tau", "value",
+                                                                                          "kappa"))]
+                 for fit, f in sec.get("fits", {}).items()
+                 for i in range(len(get_path(f, "physical.stiffness.value") or []))]
+    if stiffness:
+        sec.tables.append(table("Axial stiffness of the fitted disc c = −dF/dh = κ p_B s_B/h_TB at the data's loads "
+                                "(κ = −dτ/du of Pavlenko 2014, Eq. (4.16))",
+                                ["fit", "load F", "τ", "stiffness c", "κ"], stiffness))
     if correlations:
         sec.tables.append(table("Correlation of the free parameters (from the covariance at the optimum)",
                                 ["fit", "parameters", "correlation", "meaning"], correlations))
@@ -362,11 +381,12 @@ def report_section(sec) -> None:
                                       f"{number(r.get('tau_max'))})", ref))
     if adequacy:
         sec.tables.append(table("Adequacy: Fisher test of the variance about the curve against the scatter within "
-                                "the load groups (Pavlenko 2014, Eqs. (4.14)-(4.15); adequate when F ≤ F_crit), and "
-                                "the lack-of-fit test; F and p dimensionless",
-                                ["fit", "F", "F_crit", "p", "adequate", "lack-of-fit F", "F_crit", "p",
+                                "the load groups (Pavlenko 2014, Eqs. (4.14)-(4.15); passed when F ≤ F_crit), and "
+                                "the lack-of-fit test; adequate only when both pass at the significance; F and p "
+                                "dimensionless",
+                                ["fit", "Fisher F", "F_crit", "p", "passes", "lack-of-fit F", "F_crit", "p", "passes",
                                  "adequate"], adequacy))
-    if "source_rule_adequate" in ref and ref["source_rule_adequate"] != ref.get("adequate"):
+    if "source_rule_adequate" in ref and ref["source_rule_adequate"] != ref.get("fisher_adequate"):
         sec.validation.append({"ok": None, "text": "the source's text calls F > F_crit adequate (inverted); by its "
                                                    "rule the reference curve would be "
                                                    + ("adequate" if ref["source_rule_adequate"] else "not adequate")})

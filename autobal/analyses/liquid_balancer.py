@@ -99,17 +99,18 @@ def report_section(sec) -> None:
                f"{number(published['published_experiment'])} (experiment) at γ = {number(published['gamma'])}: the "
                f"documented App. В algorithm makes the liquid's unbalance D ≫ D0 (k_D = {number(sec.get(f'{op}.k_D'))}"
                "); the table came from the thesis's C# program, which it does not show (docs/validation.md)")
-    sec.row("efficiency (the source's algorithm)", "λ0", f"{op}.lambda0", note=why)
-    sec.row("efficiency (self-consistent closure, toolkit extension)", "λ0⁺", f"{op}.lambda0_self_consistent")
-    for key, label, symbol in (("optimal_height", "optimal chamber height", "h_opt"),
-                               ("optimal_volume", "optimal liquid volume", "V_opt")):
-        why = ""
+    sec.row("efficiency e0/e_c (2.14), the source's algorithm", "λ0", f"{op}.lambda0", note=why)
+    sec.row("efficiency e0/e_c (2.14), self-consistent deflection (toolkit extension)", "λ0⁺",
+            f"{op}.lambda0_self_consistent")
+    from autobal.analysis.liquid_balancer import EFFICIENCIES, optimum_words  # what each number is: one copy
+
+    sec.notes.extend(EFFICIENCIES)
+    for key, label, symbol in (("optimal_height", "optimal chamber height (largest λ0)", "h_opt"),
+                               ("optimal_volume", "optimal liquid volume (largest λ0)", "V_opt")):
+        why = optimum_words(sec.block, key) if key in sec.block else ""
         if sec.get(f"{key}.singular"):  # orders of magnitude from the published optimum: the row says why
-            why = (f"complete balancing (k_D = 1) is reached here, where λ0 is unbounded: "
-                   f"λ0 = {number(sec.get(f'{key}.lambda0_max'))} says how close IPOPT came to k_D = 1, not how "
-                   "efficient the machine is; Khomyak (2020), Table 3.3 publishes optimal volumes of 48.5-176.7 mL: "
-                   "in the documented model D = ρf(πhR² − V) falls with V, the table's rises with D0 "
-                   "(docs/validation.md)")
+            why += (f"; λ0 = {number(sec.get(f'{key}.lambda0_max'))} there says how close IPOPT came to k_D = 1, not "
+                    "how efficient the machine is (docs/validation.md)")
         sec.row(label, symbol, f"{key}.optimum", note=why)
     if "equilibrium_exists" in sec.get(op, {}):
         from autobal.analysis.liquid_balancer import LiquidBalancerResult  # the verdict's one copy
