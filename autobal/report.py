@@ -18,6 +18,7 @@ import base64
 import functools
 import hashlib
 import importlib
+import inspect
 import json
 import math
 import re
@@ -33,6 +34,7 @@ from markupsafe import Markup
 
 from autobal import analyses as rooms
 from autobal import report_input
+from autobal.analysis.fields import Record
 from autobal.analysis.quantities import (
     Declarations,
     Quantity,
@@ -51,7 +53,7 @@ from autobal.analysis.quantities import (
     significant,
     spelled,
 )
-from autobal.analysis.result import html_verdict, plain
+from autobal.analysis.result import Result, html_verdict, plain
 from autobal.errors import ScenarioError
 from autobal.report_input import MAX_FIGURE_BYTES
 from autobal.scenario import MAX_FILE_BYTES as MAX_SCENE_BYTES
@@ -132,6 +134,32 @@ def units(results: dict, analyses: list[str] | None = None) -> dict[str, str]:
     return out
 
 
+def result_class(analysis: str) -> type | None:
+    """The Result class of an analysis: the one its declaring module (the room's ``QUANTITIES_MODULE``) defines
+    for it, or None for a key that is no analysis."""
+    if analysis not in DECLARED:
+        return None
+    module = importlib.import_module(DECLARED[analysis])
+    own = [c for c in vars(module).values()
+           if isinstance(c, type) and issubclass(c, Result) and c.__module__ == module.__name__ and c.name]
+    return next((c for c in own if c.name == analysis), own[0] if len(own) == 1 else None)
+
+
+def load_result(analysis: str, block: dict) -> Result:
+    """The Result of an analysis rebuilt from its results.json block: a typed Result (analysis/fields.py) by its
+    ``from_dict``; a Result that holds only ``data`` with the block as its data.  ValueError naming the analysis
+    where neither works (a Result that holds more than its block: samples, curves, solver runs)."""
+    cls = result_class(analysis)
+    if cls is None:
+        raise ValueError(f"{analysis}: no analysis of this name")
+    if issubclass(cls, Record):
+        return cls.from_dict(block)
+    try:
+        return cls(data=block, **({"name": analysis} if "name" in inspect.signature(cls).parameters else {}))
+    except TypeError as exc:
+        raise ValueError(f"{analysis}: {cls.__name__} holds more than its results.json block ({exc})") from None
+
+
 def get_path(data, path: str, default=None):
     """``data`` at a dotted path (``a.b.c``; an integer picks a list item), or ``default``."""
     return lookup(data, path, default)
@@ -210,6 +238,11 @@ class Section:
         self.validation_tables: list[dict] = []
         self.validation_notes: list[str] = []
         self.main: dict | None = None  # the one verdict of the analysis (the summary shows it)
+
+    @functools.cached_property
+    def result(self) -> Result:
+        """The analysis' Result loaded from its block (:func:`load_result`): what a typed section reads."""
+        return load_result(self.name, self.block)
 
     def get(self, path: str, default=None):
         return get_path(self.block, path, default)
