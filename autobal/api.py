@@ -255,3 +255,70 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
             folder.discard()
         raise
 
+
+
+class LoadedRun(Mapping):
+    """A finished run loaded back from its output folder (:func:`load_run`): analysis name -> Result.
+
+    ``results`` is results.json as read; ``unloaded`` names the analyses whose Result cannot be rebuilt from its
+    block (analysis -> why: a Result that holds more than its block), which are then only in ``results``.
+    """
+
+    def __init__(self, folder: Path, results: dict, loaded: dict[str, Result], unloaded: dict[str, str]):
+        self.folder, self.results, self.loaded, self.unloaded = folder, results, loaded, unloaded
+
+    def __getitem__(self, name: str) -> Result:
+        return self.loaded[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.loaded)
+
+    def __len__(self) -> int:
+        return len(self.loaded)
+
+    @property
+    def failures(self) -> dict[str, list[str]]:
+        """Analysis name -> what failed inside it, as results.json records it."""
+        return dict(self.results.get("failures") or {})
+
+    @property
+    def status(self) -> str:
+        return self.results.get("status", "")
+
+    def __repr__(self) -> str:
+        return f"<LoadedRun {self.results.get('scenario', '')}: {', '.join(self.loaded)}>"
+
+
+def load_run(folder: str | Path) -> LoadedRun:
+    """Load a finished run back from its output folder into Result objects.
+
+    Parameters
+    ----------
+    folder : str or Path
+        An output folder of ``autobal run`` (or :meth:`Run.save`) holding results.json.
+
+    Returns
+    -------
+    LoadedRun
+        Analysis name -> Result: a typed Result rebuilt by ``from_dict`` (``to_dict()`` gives its block of
+        results.json back), a Result holding only ``data`` with its block; ``unloaded`` says which could not be.
+
+    Raises
+    ------
+    ScenarioError
+        The folder holds no readable results.json.
+    """
+    from autobal import report_input
+    from autobal.errors import ScenarioError
+
+    where = report_input.folder_of(folder)
+    if not report_input.present(where, "results.json"):
+        raise ScenarioError(f"{where}: holds no results.json (not a finished run)")
+    results = report_input.read_json(where / "results.json")
+    loaded, unloaded = {}, {}
+    for name in (k for k in results if k in report.SECTIONS):
+        try:
+            loaded[name] = report.load_result(name, results[name])
+        except (ValueError, KeyError, TypeError) as exc:
+            unloaded[name] = str(exc)
+    return LoadedRun(where, results, loaded, unloaded)

@@ -147,17 +147,23 @@ def result_class(analysis: str) -> type | None:
 
 def load_result(analysis: str, block: dict) -> Result:
     """The Result of an analysis rebuilt from its results.json block: a typed Result (analysis/fields.py) by its
-    ``from_dict``; a Result that holds only ``data`` with the block as its data.  ValueError naming the analysis
-    where neither works (a Result that holds more than its block: samples, curves, solver runs)."""
+    ``from_dict``; a Result that holds only ``data`` with the block as its data, if its ``to_dict()`` gives the
+    block back.  ValueError naming the analysis where neither works (a Result that holds more than its block:
+    samples, curves, solver runs)."""
     cls = result_class(analysis)
     if cls is None:
         raise ValueError(f"{analysis}: no analysis of this name")
     if issubclass(cls, Record):
         return cls.from_dict(block)
     try:
-        return cls(data=block, **({"name": analysis} if "name" in inspect.signature(cls).parameters else {}))
-    except TypeError as exc:
-        raise ValueError(f"{analysis}: {cls.__name__} holds more than its results.json block ({exc})") from None
+        result = cls(data=block, **({"name": analysis} if "name" in inspect.signature(cls).parameters else {}))
+        same = plain(result.to_dict()) == plain(block)
+    except (TypeError, KeyError) as exc:
+        same, result = False, exc
+    if not same:
+        raise ValueError(f"{analysis}: {cls.__name__} holds more than its results.json block"
+                         + (f" ({type(result).__name__}: {result})" if isinstance(result, Exception) else ""))
+    return result
 
 
 def get_path(data, path: str, default=None):

@@ -1,0 +1,156 @@
+"""Typed Results (issue #34 item 1): a Result is a frozen dataclass whose fields carry their declarations; its
+results.json block, ``units`` map and headline come from the fields, ``from_dict`` rebuilds it, ``autobal.load_run``
+loads a finished run back, and the report section of a typed analysis reads the loaded Result's fields.  First
+analysis typed: ``stability``."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+
+import numpy as np
+import pytest
+
+import autobal
+from autobal import report
+from autobal.analysis import fields, stability
+from autobal.analysis.linearize import Setup
+from autobal.analysis.result import Failures, html_block, plain
+from autobal.analysis.stability import QUANTITIES, StabilityResult
+from autobal.api import Run
+from autobal.parts.device import dynamic_device
+
+
+@pytest.fixture(scope="module")
+def pump():
+    """Pump PE 600-300 (Pavlenko 2014, App. A): the stability study without a map, and its scene."""
+    scene = autobal.load("pump_pe600_dynamics")
+    setup = Setup(dynamic_device(scene), 1.0)
+    return scene, stability.study(setup, ["nonlinear", "program"], None, "pump", 50.0)
+
+
+def test_to_dict_and_from_dict_are_inverse(pump):
+    _, res = pump
+    d = res.to_dict()
+    back = StabilityResult.from_dict(json.loads(json.dumps(plain(d))))  # through JSON, as results.json
+    assert back == res and plain(back.to_dict()) == plain(d)
+    assert list(back.to_dict()) == list(d)  # the keys in the same order: results.json byte for byte
+    assert "maps" not in d and "failures" not in d  # not computed / none: not in the block
+    # the fields read as the block says: the energy-consistent model decays at 80.62 1/s (Pavlenko 2014 data)
+    assert back.margin.decay_rate == pytest.approx(80.62, abs=0.01) and back.decay_rate == back.margin.decay_rate
+    assert back.required_decay_rate == 50.0 == d["decay_rate"]
+    assert back.head.margin_to_required == pytest.approx(back.decay_rate - 50.0, rel=1e-12)
+    assert back.models["program"].poles.real.max() == pytest.approx(d["models"]["program"]["poles"]["real"].max())
+    # == compares the numbers: one pole moved is another result
+    moved = dataclasses.replace(back, poles=dataclasses.replace(back.poles, real=back.poles.real + 1e-9))
+    assert moved != back
+
+
+def test_a_null_in_results_json_comes_back_as_nan_and_goes_out_as_null(pump):
+    _, res = pump
+    d = json.loads(json.dumps(plain(res.to_dict())))
+    d["models"]["program"]["damping_ratio"][0] = None
+    back = StabilityResult.from_dict(d)
+    assert math.isnan(back.models["program"].damping_ratio[0])
+    assert plain(back.to_dict()) == d
+
+
+def test_a_renamed_or_missing_key_is_an_error_naming_it(pump):
+    _, res = pump
+    d = json.loads(json.dumps(plain(res.to_dict())))
+    renamed = json.loads(json.dumps(d))
+    renamed["margin"]["decay"] = renamed["margin"].pop("decay_rate")
+    with pytest.raises(KeyError, match="Margin has no field 'decay'"):
+        StabilityResult.from_dict(renamed)
+    del d["headline"]
+    with pytest.raises(KeyError, match="no 'headline'"):
+        StabilityResult.from_dict(d)
+
+
+def test_every_declaration_of_the_fields_is_a_field_path_with_its_unit():
+    """The declarations come from the fields: each key of a field's Quantity is the path of that field, and the
+    units map finds the field's unit at each path (a renamed field renames its key; nothing is written twice)."""
+    paths = fields.key_paths(StabilityResult)
+    assert {"decay_rate", "poles.real", "models.*.hurwitz.minors", "headline.leading_pole.imag",
+            "maps.*.max_real", "models.*.unstable_modes[].real"} <= set(paths)
+    own = [q for q in QUANTITIES if set(q.keys) & set(paths)]
+    assert sorted(k for q in own for k in q.keys) == sorted(paths)
+    for path, f in fields._walk(StabilityResult):
+        if fields.QUANTITY in f.metadata:
+            concrete = path.replace("*", "nonlinear").replace("[]", ".0")
+            assert QUANTITIES.find(concrete).unit == f.metadata[fields.QUANTITY][0], path
+    # the headline in the order of the fields' ranks (the summary's and the report's rows)
+    assert [q.symbol for q in QUANTITIES if q.headline] == ["α", "η", "η − α", "ζ_min", "Im λ"]
+
+
+def test_a_field_that_would_hide_a_result_method_is_refused():
+    @fields.record
+    class Bad(fields.TypedResult):
+        headline: float = fields.quantity("1/s", "η")  # Result.headline() would be lost
+
+    with pytest.raises(TypeError, match="headline"):
+        fields.declarations(Bad)
+
+
+def test_failures_are_a_field_and_fail_the_run(pump):
+    scene, res = pump
+    assert res.failures == () and res.failures() == []
+    failed = dataclasses.replace(res, failures=["map point 3: eigenvalues did not converge"])
+    assert isinstance(failed.failures, Failures) and failed.failures() == ["map point 3: eigenvalues did not converge"]
+    block = plain(failed.to_dict())
+    assert block["failures"] == ["map point 3: eigenvalues did not converge"]
+    assert StabilityResult.from_dict(block) == failed
+    run = Run(scene, {"stability": failed}, {"stability": 0.0})
+    assert run.status == "failed" and run.failures == {"stability": ["map point 3: eigenvalues did not converge"]}
+    (sec,) = report.sections({"scenario": "x", "stability": block})
+    assert sec["overall"] == {"ok": False, "text": "FAILED: map point 3: eigenvalues did not converge"}
+    assert "FAILED: map point 3" in html_block(failed, figures=False)
+
+
+def test_a_result_holding_data_keeps_its_failures():
+    from autobal.analysis.reliability import ReliabilityResult
+
+    r = ReliabilityResult({"failures": ["quadrature did not converge"]})
+    assert r.failures() == ["quadrature did not converge"] and r.failures == ("quadrature did not converge",)
+
+
+@pytest.mark.cli
+def test_load_run_gives_the_results_back_and_the_same_report(shipped_run):
+    """Pump PE 600-300 dynamics (with the stability map): load_run rebuilds the stability Result equal to the
+    run's; its block is results.json's; report.html rendered again from the loaded Results is the page the
+    run wrote, byte for byte."""
+    run, folder = shipped_run("pump_pe600_dynamics")
+    saved = json.loads((folder / "results.json").read_text())
+    done = autobal.load_run(folder)
+    assert done["stability"] == run["stability"] and done.status == saved["status"] == "ok"
+    assert plain(done["stability"].to_dict()) == saved["stability"]
+    assert done["stability"].maps["nonlinear"].stable_fraction == saved["stability"]["maps"]["nonlinear"][
+        "stable_fraction"]
+    assert done["stability"].summary() == run["stability"].summary()
+    # every analysis is loaded and gives its block back, or is named with the reason
+    for name in (k for k in saved if k in report.SECTIONS):
+        if name in done:
+            assert plain(done[name].to_dict()) == saved[name], name
+        else:
+            assert done.unloaded[name].startswith(f"{name}: "), name
+    assert report.html(folder) == (folder / report.REPORT).read_text(encoding="utf-8")
+    (sec,) = [s for s in report.context(folder)["sections"] if s["name"] == "stability"]
+    assert sec["overall"]["text"] == "energy-consistent (nonlinear): stable, disturbances decay at 80.62 1/s"
+    assert [row[1]["text"] for row in sec["tables"][0]["rows"]] == ["α", "η", "η − α", "ζ_min", "Im λ"]
+
+
+def test_load_run_of_a_folder_without_results_is_one_line(tmp_path):
+    with pytest.raises(autobal.ScenarioError, match="holds no results.json"):
+        autobal.load_run(tmp_path)
+
+
+def test_the_loaded_section_reads_the_fields_not_the_block(pump):
+    """The stability section is built from sec.result: a block whose models table differs from its fields
+    cannot exist, and the table's decay rate is the field's."""
+    _, res = pump
+    (sec,) = report.sections({"scenario": "x", "stability": plain(res.to_dict())})
+    rows = {r[0]["text"]: r for t in (*sec["tables"], *sec["validation_tables"]) for r in t["rows"]}
+    nonlinear = rows["energy-consistent (nonlinear)"]
+    assert nonlinear[3]["text"] == report.number(res.models["nonlinear"].margin.decay_rate)
+    assert np.isclose(float(nonlinear[3]["text"]), 80.62, atol=0.01)
