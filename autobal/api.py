@@ -260,33 +260,35 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
 class LoadedRun(Mapping):
     """A finished run loaded back from its output folder (:func:`load_run`): analysis name -> Result.
 
-    ``results`` is results.json as read; ``unloaded`` names the analyses whose Result cannot be rebuilt from its
-    block (analysis -> why: a Result that holds more than its block), which are then only in ``results``.
+    ``results`` holds the loaded Results (as :attr:`Run.results`), ``saved`` results.json as read; ``unloaded``
+    names the analyses whose Result cannot be rebuilt from its block (analysis -> why: a Result that holds more
+    than its block), which are then only in ``saved``.
     """
 
-    def __init__(self, folder: Path, results: dict, loaded: dict[str, Result], unloaded: dict[str, str]):
-        self.folder, self.results, self.loaded, self.unloaded = folder, results, loaded, unloaded
+    def __init__(self, folder: Path, saved: dict, results: dict[str, Result], unloaded: dict[str, str]):
+        self.folder, self.saved, self.results, self.unloaded = folder, saved, results, unloaded
 
     def __getitem__(self, name: str) -> Result:
-        return self.loaded[name]
+        return self.results[name]
 
     def __iter__(self) -> Iterator[str]:
-        return iter(self.loaded)
+        return iter(self.results)
 
     def __len__(self) -> int:
-        return len(self.loaded)
+        return len(self.results)
 
     @property
     def failures(self) -> dict[str, list[str]]:
         """Analysis name -> what failed inside it, as results.json records it."""
-        return dict(self.results.get("failures") or {})
+        return dict(self.saved.get("failures") or {})
 
     @property
     def status(self) -> str:
-        return self.results.get("status", "")
+        """The run's status as results.json records it ("ok" or "failed")."""
+        return self.saved.get("status", "")
 
     def __repr__(self) -> str:
-        return f"<LoadedRun {self.results.get('scenario', '')}: {', '.join(self.loaded)}>"
+        return f"<LoadedRun {self.saved.get('scenario', '')}: {', '.join(self.results)}>"
 
 
 def load_run(folder: str | Path) -> LoadedRun:
@@ -314,11 +316,11 @@ def load_run(folder: str | Path) -> LoadedRun:
     where = report_input.folder_of(folder)
     if not report_input.present(where, "results.json"):
         raise ScenarioError(f"{where}: holds no results.json (not a finished run)")
-    results = report_input.read_json(where / "results.json")
-    loaded, unloaded = {}, {}
-    for name in (k for k in results if k in report.SECTIONS):
+    saved = report_input.read_json(where / "results.json")
+    results, unloaded = {}, {}
+    for name in (k for k in saved if k in report.SECTIONS):
         try:
-            loaded[name] = report.load_result(name, results[name])
+            results[name] = report.load_result(name, saved[name])
         except (ValueError, KeyError, TypeError) as exc:
             unloaded[name] = str(exc)
-    return LoadedRun(where, results, loaded, unloaded)
+    return LoadedRun(where, saved, results, unloaded)

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import autobal
-from autobal import report
+from autobal import report, scenario
 from autobal.analysis import fields, stability
 from autobal.analysis.linearize import Setup
 from autobal.analysis.result import Failures, html_block, plain
@@ -154,3 +154,22 @@ def test_the_loaded_section_reads_the_fields_not_the_block(pump):
     nonlinear = rows["energy-consistent (nonlinear)"]
     assert nonlinear[3]["text"] == report.number(res.models["nonlinear"].margin.decay_rate)
     assert np.isclose(float(nonlinear[3]["text"]), 80.62, atol=0.01)
+
+
+EXTREME = sorted((scenario.resolve("pump_pe600_dynamics").parent / "extreme").glob("dynamics_*.yaml"))
+
+
+@pytest.mark.parametrize("path", [pytest.param(p, marks=pytest.mark.slow) if i else p
+                                  for i, p in enumerate(EXTREME)], ids=[p.stem for p in EXTREME])
+def test_the_round_trip_holds_on_the_extreme_scenes(path):
+    """Incompressible liquid, no damping, small chambers, the valve on its limits: whatever the poles, the block
+    comes back as it went out, and every number of it is declared by a field or the extra declarations."""
+    from autobal.analyses import stability as room
+
+    scene = autobal.load(path)
+    res = room.run(scene, scene.analyses.stability)
+    d = json.loads(json.dumps(plain(res.to_dict())))
+    back = StabilityResult.from_dict(d)
+    assert back == res and plain(back.to_dict()) == d and back.accuracy == d["accuracy"]
+    assert QUANTITIES.undeclared(d) == []
+    assert back.verdict() == res.verdict() and back.summary() == res.summary()
