@@ -134,6 +134,7 @@ def units(results: dict, analyses: list[str] | None = None) -> dict[str, str]:
     return out
 
 
+@functools.cache
 def result_class(analysis: str) -> type | None:
     """The Result class of an analysis: the one its declaring module (the room's ``QUANTITIES_MODULE``) defines
     for it, or None for a key that is no analysis."""
@@ -268,6 +269,9 @@ class Section:
         its declaration's.  A key the block lacks (the analysis did not compute it) gives no row."""
         if value is None and not has_path(self.block, path):
             return
+        typed = result_class(self.name)
+        if typed is not None and issubclass(typed, Record) and not unit and quantity(f"{self.name}.{path}") is None:
+            raise KeyError(f"{self.name}.{path}: no field of {type(self.result).__name__} declares it")
         v = self.get(path) if value is None else value
         c = cell(v, unit) if unit else self.cell(path, v)
         c["key"] = f"{self.name}.{path}"

@@ -109,10 +109,10 @@ def test_failures_are_a_field_and_fail_the_run(pump):
 
 
 def test_a_result_holding_data_keeps_its_failures():
-    from autobal.analysis.reliability import ReliabilityResult
+    from autobal.analysis.simulate import TransientResult
 
-    r = ReliabilityResult({"failures": ["quadrature did not converge"]})
-    assert r.failures() == ["quadrature did not converge"] and r.failures == ("quadrature did not converge",)
+    r = TransientResult({"failures": ["integrator: step size too small"]})
+    assert r.failures() == ["integrator: step size too small"] and r.failures == ("integrator: step size too small",)
 
 
 @pytest.mark.cli
@@ -173,3 +173,40 @@ def test_the_round_trip_holds_on_the_extreme_scenes(path):
     assert back == res and plain(back.to_dict()) == d and back.accuracy == d["accuracy"]
     assert QUANTITIES.undeclared(d) == []
     assert back.verdict() == res.verdict() and back.summary() == res.summary()
+
+
+@pytest.mark.cli
+def test_reliability_is_typed_loads_back_and_renders_the_same_report(tmp_path):
+    """Hydro-heel wear (Pavlenko 2014, ch. 1.2) on a coarse grid (201 times, 4001 load nodes): the Result's fields
+    are its block, a null (no time of reliable operation: P(0) = 0.776 < 0.8) comes back as NaN and goes out as
+    null with its status, load_run rebuilds it equal, and report.html rendered again from it is the same page."""
+    from autobal.analysis.reliability import QUANTITIES as REL
+    from autobal.analysis.reliability import ReliabilityResult
+
+    scene = autobal.load("hydroheel_wear", set={"analyses.reliability.time_points": 201,
+                                                "analyses.reliability.tau_nodes": 4001})
+    run = autobal.run(scene, out=tmp_path / "out")
+    res = run["reliability"]
+    assert isinstance(res, ReliabilityResult) and res.literal.P[0] == pytest.approx(0.671, abs=1e-3)
+    assert math.isnan(res.literal.time_at_h) and "(P(0) = 0.7758)" in res.literal.time_at_h_status
+    assert res.renormalised.time_at_h_status is None and 2000 < res.renormalised.time_at_h < 2600
+    assert res.mttf == res.renormalised.mttf_h and res.mttf_literal == res.literal.mttf_h
+    saved = json.loads((tmp_path / "out" / "results.json").read_text())
+    done = autobal.load_run(tmp_path / "out")
+    assert done["reliability"] == res and plain(done["reliability"].to_dict()) == saved["reliability"]
+    assert saved["reliability"]["literal"]["time_at_h"] is None
+    assert list(res.to_dict()) == list(saved["reliability"])  # the keys in the order results.json has them
+    assert done["reliability"].summary() == res.summary()
+    assert report.html(tmp_path / "out") == (tmp_path / "out" / report.REPORT).read_text(encoding="utf-8")
+    assert [q.key for q in REL if q.headline] == ["renormalised.mttf_h", "literal.mttf_h"]
+    assert set(fields.key_paths(ReliabilityResult)) == {k for q in REL for k in q.keys} - {
+        "table_1_2.mttf_kh", "table_1_2.time_at_P_0.8_kh", "accuracy.**"}
+
+
+def test_a_row_of_a_typed_section_must_name_a_declared_field(pump):
+    """A report row whose key no field declares is an error of the section, not a row without a unit."""
+    _, res = pump
+    sec = report.Section("stability", plain(res.to_dict()), {})
+    sec.row("decay rate", "η", "margin.decay_rate", value=80.0)
+    with pytest.raises(KeyError, match="stability.margin.decay: no field of StabilityResult declares it"):
+        sec.row("decay rate", "η", "margin.decay", value=80.0)
