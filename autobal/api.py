@@ -268,14 +268,7 @@ class LoadedRun(Mapping):
     def __init__(self, folder: Path, saved: dict, results: dict[str, Result], unloaded: dict[str, str]):
         self.folder, self.saved, self.results, self.unloaded = folder, saved, results, unloaded
 
-    def __getitem__(self, name: str) -> Result:
-        return self.results[name]
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self.results)
-
-    def __len__(self) -> int:
-        return len(self.results)
+    __getitem__, __iter__, __len__ = Run.__getitem__, Run.__iter__, Run.__len__  # name -> Result, as a Run
 
     @property
     def failures(self) -> dict[str, list[str]]:
