@@ -19,6 +19,7 @@ from autobal.analysis.linearize import Setup
 from autobal.analysis.result import Failures, html_block, plain
 from autobal.analysis.stability import QUANTITIES, StabilityResult
 from autobal.api import Run
+from autobal.cli import main
 from autobal.parts.device import dynamic_device
 
 
@@ -197,7 +198,11 @@ def test_reliability_is_typed_loads_back_and_renders_the_same_report(tmp_path):
     assert saved["reliability"]["literal"]["time_at_h"] is None
     assert list(res.to_dict()) == list(saved["reliability"])  # the keys in the order results.json has them
     assert done["reliability"].summary() == res.summary()
-    assert report.html(tmp_path / "out") == (tmp_path / "out" / report.REPORT).read_text(encoding="utf-8")
+    page = (tmp_path / "out" / report.REPORT).read_bytes()
+    assert report.html(tmp_path / "out") == page.decode("utf-8")
+    (tmp_path / "out" / report.REPORT).unlink()
+    assert main(["report", str(tmp_path / "out")]) == 0  # autobal report OUT: the same page from the loaded Results
+    assert (tmp_path / "out" / report.REPORT).read_bytes() == page
     assert [q.key for q in REL if q.headline] == ["renormalised.mttf_h", "literal.mttf_h"]
     assert set(fields.key_paths(ReliabilityResult)) == {k for q in REL for k in q.keys} - {
         "table_1_2.mttf_kh", "table_1_2.time_at_P_0.8_kh", "accuracy.**"}
