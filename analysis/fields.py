@@ -34,8 +34,25 @@ QUANTITY = "autobal.quantity"  # field metadata: the declaration's arguments
 OMIT = "autobal.omit"  # field metadata: left out of to_dict() when None (a block the analysis did not compute)
 KEY = "autobal.key"  # field metadata: its key in results.json where that is not the field's name
 
-#: a frozen dataclass compared by its results.json block (numpy arrays have no ``==`` a dataclass could use)
-record = dataclass(frozen=True, eq=False)
+#: what a frozen Result still takes after it is made: not its numbers, what a run sets on every Result (the display
+#: units of its scene)
+SETTABLE = ("display_choice",)
+
+
+def record(cls):
+    """``cls`` as a frozen dataclass compared by its results.json block (numpy arrays have no ``==`` a dataclass
+    could use); its fields cannot be assigned, the names of :data:`SETTABLE` can."""
+    cls = dataclass(frozen=True, eq=False)(cls)
+    frozen = cls.__setattr__
+
+    def __setattr__(self, name, value):
+        if name in SETTABLE:
+            object.__setattr__(self, name, value)
+        else:
+            frozen(self, name, value)
+
+    cls.__setattr__ = __setattr__
+    return cls
 
 
 def quantity(unit: str, symbol: str = "", description: str = "", display: str = "", *, source: str = "",

@@ -57,6 +57,17 @@ def test_a_null_in_results_json_comes_back_as_nan_and_goes_out_as_null(pump):
     assert plain(back.to_dict()) == d
 
 
+def test_a_result_is_frozen_but_takes_what_a_run_sets(pump):
+    _, res = pump
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        res.title = "another"
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        res.margin.decay_rate = 1.0
+    copy = dataclasses.replace(res)
+    copy.display_choice = {"speed": "rpm"}  # autobal.run sets the scene's display units on each Result
+    assert copy.display_choice == {"speed": "rpm"} and copy == res
+
+
 def test_a_renamed_or_missing_key_is_an_error_naming_it(pump):
     _, res = pump
     d = json.loads(json.dumps(plain(res.to_dict())))
