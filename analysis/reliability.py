@@ -32,8 +32,9 @@ from scipy.optimize import brentq
 from scipy.special import ndtr
 
 from autobal.analysis import progress
-from autobal.analysis.quantities import Declarations, Quantity
-from autobal.analysis.result import Result, new_figure, unit_axis
+from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record
+from autobal.analysis.quantities import Quantity
+from autobal.analysis.result import new_figure, unit_axis
 from autobal.models.hydroheel import (
     WearModel,
     WornDisc,
@@ -168,114 +169,218 @@ def _models(*keys: str) -> str:
     return " ".join(f"{m}.{k}" for m in _BOTH for k in keys)
 
 
-#: every number of the reliability block (Pavlenko 2014, ch. 1.2): times in hours as the keys say
-QUANTITIES = Declarations(
-    Quantity("renormalised.mttf_h", "h", "T", "mean time to failure, load density renormalised on [0, σψ1]",
-             source=f"{_P14}, Eq. (1.49)", headline=True),
-    Quantity("literal.mttf_h", "h", "T", "mean time to failure, (1.48)-(1.49) as printed",
-             source=f"{_P14}, Eq. (1.49)", headline=True),
-    Quantity(_models("mttf_sojourn_h", "mttf_infinite_h", "time_at_h"), "h", "T",
-             "mean time to failure by the sojourn cross-check / to an infinite horizon; time at a reliability"),
-    Quantity(_models("P0", "P") + " reliable_probability wear_le_base_gap", "1", "P(t)",
-             "probability of failure-free operation (at the times of times_h) / of wear ≤ z_B",
-             source=f"{_P14}, Eq. (1.48), Figs. 1.27-1.28"),
-    Quantity("times_h horizon_h curve.t_h", "h", "t", "operating times"),
-    Quantity("curve.P_literal curve.P_renormalised curve.P_wear_le_base_gap", "1", "P(t)", "reliability curves"),
-    Quantity("b_mean b_std", "1/s", "b", "wear rate of the inner-seal clearance ratio χ, mean and std",
-             source=f"{_P14}, Eqs. (1.38)-(1.43)"),
-    Quantity("source.b_mean_per_s source.b_std_per_s", "1/s", "b", "the source's wear rate, mean and std"),
-    Quantity("z_B", "m", "z_B", "base gap", "µm"),
-    Quantity("k alpha_T1 chi0 u_max u_min q_at_u_max a_b tau_mean tau_std sigma psi1 a_tau "
-             "load_mass_on_0_sigma_psi1", "1", "k, α, χ0, u, τ ...", "the source's groups of the wear model",
-             source=f"{_P14}, Eqs. (1.30)-(1.52)"),
-    Quantity("region.chi region.tau_u_min region.tau_u_max", "1", "χ, τ", "region B of Fig. 1.24",
-             source=f"{_P14}, Fig. 1.24"),
-    Quantity("source.u_max source.chi0 source.tau_std source.k source.a_b source.a_tau source.wear_le_zB_2000h "
-             "source.P_2000h source.P_4000h_about", "1", "", "the source's published groups and probabilities",
-             source=f"{_P14}, ch. 1.2"),
-    Quantity("source.mttf_h", "h", "T", "the source's mean time to failure", source=f"{_P14}, Eq. (1.49)"),
-    Quantity("table_1_2.mttf_kh table_1_2.time_at_P_0.8_kh", "kh", "T", "Table 1.2: times in thousands of hours",
-             source=f"{_P14}, Table 1.2"),
-)
+def _time(**kw):
+    return quantity("h", "t", "operating times", **kw)
 
 
-@dataclass
-class ReliabilityResult(Result):
+def _probability(**kw):
+    return quantity("1", "P(t)", "probability of failure-free operation (at the times of times_h) / of wear ≤ z_B",
+                    source=f"{_P14}, Eq. (1.48), Figs. 1.27-1.28", **kw)
+
+
+def _other_time(**kw):
+    return quantity("h", "T", "mean time to failure by the sojourn cross-check / to an infinite horizon; time at a "
+                    "reliability", **kw)
+
+
+def _group(**kw):
+    return quantity("1", "k, α, χ0, u, τ ...", "the source's groups of the wear model",
+                    source=f"{_P14}, Eqs. (1.30)-(1.52)", **kw)
+
+
+def _curve(**kw):
+    return quantity("1", "P(t)", "reliability curves", **kw)
+
+
+def _region(**kw):
+    return quantity("1", "χ, τ", "region B of Fig. 1.24", source=f"{_P14}, Fig. 1.24", **kw)
+
+
+def _published(**kw):
+    return quantity("1", "", "the source's published groups and probabilities", source=f"{_P14}, ch. 1.2", **kw)
+
+
+@record
+class Variant(Record):
+    """P(t), MTTF and the time of reliable operation of one reading of (1.48), times in hours."""
+
+    P0: float = _probability()
+    P: np.ndarray = _probability()
+    mttf_h: float
+    mttf_sojourn_h: float = _other_time()
+    mttf_infinite_h: float = _other_time()
+    time_at_h: float = _other_time()  # NaN (null) where P(t) never is the level
+    time_at_h_status: str | None = optional()
+
+
+@record
+class Literal(Variant):
+    """(1.48)-(1.49) as printed."""
+
+    mttf_h: float = quantity("h", "T", "mean time to failure, (1.48)-(1.49) as printed",
+                             source=f"{_P14}, Eq. (1.49)", headline=2)
+
+
+@record
+class Renormalised(Variant):
+    """The load density renormalised on [0, σψ1]."""
+
+    mttf_h: float = quantity("h", "T", "mean time to failure, load density renormalised on [0, σψ1]",
+                             source=f"{_P14}, Eq. (1.49)", headline=1)
+
+
+@record
+class Curve(Record):
+    t_h: np.ndarray = _time()
+    P_literal: np.ndarray = _curve()
+    P_renormalised: np.ndarray = _curve()
+    P_wear_le_base_gap: np.ndarray = _curve()
+
+
+@record
+class Region(Record):
+    """Region B of Fig. 1.24: the load between the curves of the smallest and the largest gap."""
+
+    chi: np.ndarray = _region()
+    tau_u_min: np.ndarray = _region()
+    tau_u_max: np.ndarray = _region()
+
+
+@record
+class Published(Record):
+    """The source's published values (:data:`SOURCE`)."""
+
+    u_max: float = _published()
+    chi0: float = _published()
+    b_mean_per_s: float = quantity("1/s", "b", "the source's wear rate, mean and std")
+    b_std_per_s: float = quantity("1/s", "b", "the source's wear rate, mean and std")
+    tau_std: float = _published()
+    k: float = _published()
+    a_b: float = _published()
+    a_tau: float = _published()
+    wear_le_zB_2000h: float = _published()
+    P_2000h: float = _published()
+    P_4000h_about: float = _published()
+    mttf_h: float = quantity("h", "T", "the source's mean time to failure", source=f"{_P14}, Eq. (1.49)")
+
+
+def _wear_rate(**kw):
+    return quantity("1/s", "b", "wear rate of the inner-seal clearance ratio χ, mean and std",
+                    source=f"{_P14}, Eqs. (1.38)-(1.43)", **kw)
+
+
+@record
+class ReliabilityResult(TypedResult):
     """Reliability of the traditional balance disc (Pavlenko 2014, ch. 1.2): P(t), MTTF, wear CDF."""
 
-    data: dict
+    title: str
+    k: float = _group()
+    alpha_T1: float = _group()
+    chi0: float = _group()
+    u_max: float = _group()
+    u_min: float = _group()
+    q_at_u_max: float = _group()
+    b_mean: float = _wear_rate()
+    b_std: float = _wear_rate()
+    a_b: float = _group()
+    tau_mean: float = _group()
+    tau_std: float = _group()
+    sigma: float = _group()
+    psi1: float = _group()
+    z_B: float = quantity("m", "z_B", "base gap", "µm")
+    a_tau: float = _group()
+    load_mass_on_0_sigma_psi1: float = _group()
+    times_h: np.ndarray = _time()
+    horizon_h: float = _time()
+    reliable_probability: float = _probability()
+    wear_le_base_gap: np.ndarray = _probability()
+    literal: Literal
+    curve: Curve
+    renormalised: Renormalised
+    region: Region
+    source: Published
+    #: Table 1.2 (:data:`TABLE_1_2`): its keys are the source's row names
+    table_1_2: dict
+    accuracy: dict | None = optional()
     name = "reliability"
-    quantities = QUANTITIES
 
     @property
     def mttf(self) -> float:
         """Mean time to failure by (1.49) with the load density renormalised on [0, sigma psi1], h."""
-        return self.data["renormalised"]["mttf_h"]
+        return self.renormalised.mttf_h
 
     @property
     def mttf_literal(self) -> float:
         """Mean time to failure by (1.48)-(1.49) as printed, h."""
-        return self.data["literal"]["mttf_h"]
-
-    def to_dict(self) -> dict:
-        return self.data
+        return self.literal.mttf_h
 
     def summary(self) -> str:
-        d, lit, ren = self.data, self.data["literal"], self.data["renormalised"]
-        s = d["source"]
+        s = self.source
         lines = [
             "reliability of the traditional balance disc (ch. 1.2)",
-            f"  u_max {d['u_max']:.4f} (source {s['u_max']}), chi0 {d['chi0']:.4f} ({s['chi0']}), k {d['k']:.4f} "
-            f"({s['k']}), b_mean {d['b_mean']:.4g} 1/s ({s['b_mean_per_s']})",
+            f"  u_max {self.u_max:.4f} (source {s.u_max}), chi0 {self.chi0:.4f} ({s.chi0}), k {self.k:.4f} "
+            f"({s.k}), b_mean {self.b_mean:.4g} 1/s ({s.b_mean_per_s})",
             "  P(wear <= z_B): " + ", ".join(f"{h:g} h: {p:.4f}" for h, p in
-                                             zip(d["times_h"], d["wear_le_base_gap"], strict=True)),
+                                             zip(self.times_h, self.wear_le_base_gap, strict=True)),
         ]
-        for name, r in (("literal (1.48)", lit), ("renormalised p_tau", ren)):
-            lines.append(f"  {name}: P(0) {r['P0']:.4f}; " + ", ".join(
-                f"P({h:g} h) {p:.4f}" for h, p in zip(d["times_h"], r["P"], strict=True))
-                + f"; MTTF {r['mttf_h']:.0f} h to {d['horizon_h']:g} h ({r['mttf_sojourn_h']:.0f} h by sojourn),"
-                f" {r['mttf_infinite_h']:.0f} h to infinity; t(P = {d['reliable_probability']}) {r['time_at_h']:.0f} h")
-        lines.append(f"  source: P(2000 h) {s['P_2000h']}, MTTF {s['mttf_h']:.0f} h: "
+        for name, r in (("literal (1.48)", self.literal), ("renormalised p_tau", self.renormalised)):
+            lines.append(f"  {name}: P(0) {r.P0:.4f}; " + ", ".join(
+                f"P({h:g} h) {p:.4f}" for h, p in zip(self.times_h, r.P, strict=True))
+                + f"; MTTF {r.mttf_h:.0f} h to {self.horizon_h:g} h ({r.mttf_sojourn_h:.0f} h by sojourn),"
+                f" {r.mttf_infinite_h:.0f} h to infinity; t(P = {self.reliable_probability}) {_hours(r.time_at_h)}")
+        lines.append(f"  source: P(2000 h) {s.P_2000h}, MTTF {s.mttf_h:.0f} h: "
                      "not reproduced (see the validation ledger)")
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
-        c = self.data["curve"]
+        c = self.curve
         q = QUANTITIES.find("curve.t_h")
-        curves = QUANTITIES.columns({k: c[k] for k in ("P_literal", "P_renormalised", "P_wear_le_base_gap")}, "curve")
-        return {"reliability_curve.csv": {f"t [{q.display}]": q.shown(np.asarray(c["t_h"], float))} | curves}
+        curves = QUANTITIES.columns({"P_literal": c.P_literal, "P_renormalised": c.P_renormalised,
+                                     "P_wear_le_base_gap": c.P_wear_le_base_gap}, "curve")
+        return {"reliability_curve.csv": {f"t [{q.display}]": q.shown(np.asarray(c.t_h, float))} | curves}
 
     def draw(self, ax) -> None:
         """Probability of failure-free operation against time, both readings of (1.48), Fig. 1.28."""
-        d, c = self.data, self.data["curve"]
+        c = self.curve
         f = unit_axis(ax, "time t", "h", which="x")  # hours unless a time unit is chosen
-        t = np.asarray(c["t_h"], float) * f
-        ax.plot(t, c["P_literal"], label="P(t), (1.48) literal")
-        ax.plot(t, c["P_renormalised"], ls="--", label=r"P(t), $p_\tau$ renormalised on [0, $\sigma\psi_1$]")
-        ax.plot(t, c["P_wear_le_base_gap"], ls=":", label=r"P(wear $\leq z_B$) (Fig. 1.27)")
+        t = np.asarray(c.t_h, float) * f
+        ax.plot(t, c.P_literal, label="P(t), (1.48) literal")
+        ax.plot(t, c.P_renormalised, ls="--", label=r"P(t), $p_\tau$ renormalised on [0, $\sigma\psi_1$]")
+        ax.plot(t, c.P_wear_le_base_gap, ls=":", label=r"P(wear $\leq z_B$) (Fig. 1.27)")
         ax.plot(np.array([2000, 4000]) * f, [0.75, 0.25], "kx", label="source (Fig. 1.28)")
-        ax.axvline(d["literal"]["mttf_h"] * f, color="0.4", lw=0.8, label="MTTF (1.49), literal")
+        ax.axvline(self.literal.mttf_h * f, color="0.4", lw=0.8, label="MTTF (1.49), literal")
         ax.set_xlim(0, min(t[-1], 12000 * f))
         ax.set_ylabel("probability")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
 
     def figures(self) -> dict:
-        d = self.data
         fig, (a1, a2) = new_figure((10, 4.2), 1, 2)
         self.draw(a1)
-        reg = d["region"]
-        a2.plot(reg["chi"], reg["tau_u_min"], label=r"$\tau_1(\chi)$, $u = u_{min}$")
-        a2.plot(reg["chi"], reg["tau_u_max"], label=r"$\tau_2(\chi)$, $u = u_{max}$")
-        a2.fill_between(reg["chi"], reg["tau_u_max"], reg["tau_u_min"], color="0.9", label="B: failure-free")
-        a2.axvline(d["chi0"], color="k", lw=0.8, ls=":", label=r"$\chi_0$")
-        a2.axhline(d["tau_mean"], color="0.5", lw=0.8, ls="--", label=r"$\bar\tau$")
+        reg = self.region
+        a2.plot(reg.chi, reg.tau_u_min, label=r"$\tau_1(\chi)$, $u = u_{min}$")
+        a2.plot(reg.chi, reg.tau_u_max, label=r"$\tau_2(\chi)$, $u = u_{max}$")
+        a2.fill_between(reg.chi, reg.tau_u_max, reg.tau_u_min, color="0.9", label="B: failure-free")
+        a2.axvline(self.chi0, color="k", lw=0.8, ls=":", label=r"$\chi_0$")
+        a2.axhline(self.tau_mean, color="0.5", lw=0.8, ls="--", label=r"$\bar\tau$")
         a2.set_xlabel(r"seal clearance $\chi = h_1/z_B$")
         a2.set_ylabel(r"axial force $\tau$")
         a2.grid(alpha=0.3)
         a2.legend(fontsize=7)
-        fig.suptitle(d["title"], fontsize=9)
+        fig.suptitle(self.title, fontsize=9)
         return {"fig_reliability.png": fig}
+
+
+def _hours(t: float) -> str:
+    """A time in hours for the summary, 'nan h' where there is none (NaN, or null read back)."""
+    return f"{math.nan if t is None else t:.0f} h"
+
+
+#: every number of the reliability block (Pavlenko 2014, ch. 1.2), from the fields; times in hours as the keys say
+ReliabilityResult.quantities = QUANTITIES = declarations(
+    ReliabilityResult,
+    Quantity("table_1_2.mttf_kh table_1_2.time_at_P_0.8_kh", "kh", "T", "Table 1.2: times in thousands of hours",
+             source=f"{_P14}, Table 1.2"))
 
 
 def build(settings) -> tuple[Reliability, Reliability, dict]:
@@ -335,7 +440,7 @@ def run(settings, title: str = "") -> ReliabilityResult:
         data["table_1_2"] = TABLE_1_2
         data["accuracy"] = accuracy({"literal": lit, "renormalised": ren}, settings, data)
         bar.tick(note="accuracy")
-    return ReliabilityResult(data)
+    return ReliabilityResult.from_dict(data)
 
 
 def accuracy(models: dict, settings, data: dict) -> dict:

@@ -254,6 +254,13 @@ def in_display_units(method):
     return shown
 
 
+class Failures(tuple):
+    """What failed inside an analysis, one line each (:attr:`Result.failures`); calling it gives the list."""
+
+    def __call__(self) -> list[str]:
+        return list(self)
+
+
 class Result:
     """Base of every analysis result.
 
@@ -285,12 +292,14 @@ class Result:
         """A short plain-text summary of the headline numbers."""
         raise NotImplementedError
 
-    def failures(self) -> list[str]:
+    @property
+    def failures(self) -> Failures:
         """What failed inside this analysis although it returned, one line each: a residual above the
         analysis' tolerance, an integrator failure, a case that did not finish.  Empty when everything it
-        reports was solved.  An analysis records them as ``data["failures"]``; a result with failures makes
-        the run's status "failed" (:class:`autobal.api.Run`; the CLI exits with 3)."""
-        return list(getattr(self, "data", {}).get("failures") or [])
+        reports was solved.  A typed Result (analysis/fields.py) has them as its field ``failures``; a Result
+        holding ``data`` records them as ``data["failures"]``.  A result with failures makes the run's status
+        "failed" (:class:`autobal.api.Run`; the CLI exits with 3).  ``failures()`` gives them as a list."""
+        return Failures(getattr(self, "data", {}).get("failures") or [])
 
     def tables(self) -> dict[str, dict]:
         """CSV tables: file name -> {column name: sequence of equal length}."""

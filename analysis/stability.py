@@ -16,7 +16,6 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
-from dataclasses import dataclass
 from fractions import Fraction
 
 import numpy as np
@@ -24,10 +23,11 @@ import scipy.linalg
 import scipy.optimize
 
 from autobal.analysis import progress
+from autobal.analysis.fields import Record, TypedResult, declarations, keyed, optional, quantity, record
 from autobal.analysis.frequency import MODEL_COLOURS, MODEL_LABELS
 from autobal.analysis.linearize import LinearModel, Setup, coefficient_table, jacobians, operator
-from autobal.analysis.quantities import Declarations, Quantity, convert, lookup, significant
-from autobal.analysis.result import Result, new_figure, unit_axis
+from autobal.analysis.quantities import Quantity, convert, lookup, significant
+from autobal.analysis.result import new_figure, unit_axis
 from autobal.models.dynamics import LONG_NAMES, DynamicData
 
 OMEGA_REF = 1000.0  # rad/s, time scale of the reported polynomial coefficients
@@ -233,137 +233,206 @@ def _map_axis(path: str, block: dict | None) -> Quantity | None:
     return None if q is None else dataclasses.replace(q, key=path, description=f"{q.description} on the map's axis")
 
 
-_MODELS = "models.*."
-QUANTITIES = Declarations(
-    Quantity("decay_rate", "1/s", "α", "required decay rate (the scene's; 0: none)", headline=True),
-    Quantity("headline.margin.decay_rate", "1/s", "η", "decay rate −max Re λ of the energy-consistent model",
-             headline=True),
-    Quantity("headline.margin_to_required", "1/s", "η − α", "margin to the required decay rate", headline=True),
-    Quantity("headline.margin.min_damping_ratio", "1", "ζ_min", "smallest damping ratio of its modes", headline=True),
-    Quantity("headline.leading_pole.real", "1/s", "Re λ", "real part of its least-stable pole"),
-    Quantity("headline.leading_pole.imag", "rad/s", "Im λ", "frequency of its least-stable mode", "rad/s",
-             headline=True, beside="Hz"),
-    Quantity("poles.real headline.unstable_modes[].real " + _MODELS + "poles.real " + _MODELS + "unstable_modes[].real",
-             "1/s", "Re λ", "real part of a pole (positive: an unstable mode)", source=f"{_P14}, Eq. (2.97)"),
-    Quantity("poles.imag headline.unstable_modes[].imag " + _MODELS + "poles.imag " + _MODELS + "unstable_modes[].imag",
-             "rad/s", "Im λ", "imaginary part of a pole, the mode's damped frequency", "rad/s", beside="Hz"),
-    Quantity(_MODELS + "natural_frequency", "rad/s", "ω_n", "natural frequency |λ| of a pole", "rad/s", beside="Hz"),
-    Quantity(_MODELS + "damping_ratio", "1", "ζ", "damping ratio −Re λ/|λ| of a pole"),
-    Quantity("margin.decay_rate " + _MODELS + "margin.decay_rate", "1/s", "η", "decay rate −max Re λ (negative: "
-             "the growth rate of an unstable model)"),
-    Quantity("margin.min_damping_ratio " + _MODELS + "margin.min_damping_ratio", "1", "ζ_min",
-             "smallest damping ratio"),
-    Quantity("hurwitz.omega_ref " + _MODELS + "hurwitz.omega_ref", "rad/s", "ω_ref",
-             "time scale of the characteristic polynomial p = ω_ref p~", "rad/s"),
-    Quantity("hurwitz.coefficients " + _MODELS + "hurwitz.coefficients", "1", "a_i",
-             "coefficients of the monic characteristic polynomial in p~ = p/ω_ref", source=f"{_P14}, Eq. (2.97)"),
-    Quantity("hurwitz.minors " + _MODELS + "hurwitz.minors", "1", "Δ_k",
-             "leading minors of the Hurwitz matrix, in p~", source=f"{_P14}, Eqs. (2.98)-(2.99)"),
-    Quantity("hurwitz.negative_minors " + _MODELS + "hurwitz.negative_minors", "1", "k",
-             "indices k of the Hurwitz minors Δ_k ≤ 0"),
-    Quantity("coefficients.columns.*.K*", "1", "K_i", "gain of the hand model (2.43), per model and mode",
-             source=f"{_P14}, Eqs. (2.44), (2.169), App. A/B"),
-    Quantity("coefficients.columns.*.T* coefficients.columns.*.tau*", "s", "T_i, τ_i",
-             "time constant of the hand model (2.43), per model and mode", "ms",
-             source=f"{_P14}, Eqs. (2.44), (2.169), App. A/B"),
-    Quantity("coefficients.columns.*.zeta*", "1", "ζ1, ζ2", "damping ratio of the hand model's rotor and stem",
-             source=f"{_P14}, Eq. (2.44)"),
-    Quantity("coefficients.extra.*.N0[*]", "1", "N0", "entry of the exact operator the hand model (2.101) lacks"),
-    Quantity("coefficients.extra.*.N1[*]", "s", "N1", "entry of p in the exact operator the hand model lacks",
-             "s"),
-    Quantity("coefficients.extra.*.N2[*]", "s^2", "N2", "entry of p² in the exact operator the hand model lacks"),
-    Quantity("maps.*.max_real maps.*.restoring.along_axes.*.max_real maps.*.restoring.nearest_stable.max_real "
-             "single_parameter.*.*.max_real", "1/s", "max Re λ", "spectral abscissa over a map or a scan"),
-    Quantity("maps.*.stable_fraction", "1", "", "fraction of the map's grid that is stable"),
-    *(Quantity(_scanned(k), q.unit, q.symbol, f"{q.description}: values scanned", q.declared)
-      for k, q in PARAMETERS.items()),
-    resolve=_map_axis,
-)
+def _re(**kw):
+    return quantity("1/s", "Re λ", "real part of a pole (positive: an unstable mode)", source=f"{_P14}, Eq. (2.97)",
+                    **kw)
 
 
-@dataclass
-class StabilityResult(Result):
-    """Poles, damping, Hurwitz test and margin of each linear model, coefficient table, maps
-    (Pavlenko (2014), Eqs. (2.73)-(2.75), (2.97)-(2.99)).  ``data`` is the results.json block."""
+def _im(**kw):
+    return quantity("rad/s", "Im λ", "imaginary part of a pole, the mode's damped frequency", "rad/s", beside="Hz",
+                    **kw)
 
-    data: dict
-    name = "stability"
-    quantities = QUANTITIES
+
+@record
+class Poles(Record):
+    """The poles of a linear model, least stable first."""
+
+    real: np.ndarray = _re()
+    imag: np.ndarray = _im()
 
     @property
-    def stable(self) -> bool:
-        """Whether the headline model (energy-consistent, nonlinear) is asymptotically stable."""
-        return bool(self.data["stable"])
+    def values(self) -> np.ndarray:
+        """The poles as complex numbers, 1/s."""
+        return np.asarray(self.real, float) + 1j * np.asarray(self.imag, float)
+
+
+@record
+class Mode(Record):
+    """An unstable mode: a pole of the upper half-plane with a positive real part."""
+
+    real: float = _re()
+    imag: float = _im()
+
+
+@record
+class Margin(Record):
+    decay_rate: float = quantity("1/s", "η", "decay rate −max Re λ (negative: the growth rate of an unstable model)")
+    min_damping_ratio: float = quantity("1", "ζ_min", "smallest damping ratio")
+
+
+@record
+class Hurwitz(Record):
+    """The Hurwitz test of the characteristic polynomial (Pavlenko 2014, Eqs. (2.97)-(2.99))."""
+
+    omega_ref: float = quantity("rad/s", "ω_ref", "time scale of the characteristic polynomial p = ω_ref p~", "rad/s")
+    coefficients: np.ndarray = quantity("1", "a_i", "coefficients of the monic characteristic polynomial in "
+                                        "p~ = p/ω_ref", source=f"{_P14}, Eq. (2.97)")
+    minors: list[float] = quantity("1", "Δ_k", "leading minors of the Hurwitz matrix, in p~",
+                                   source=f"{_P14}, Eqs. (2.98)-(2.99)")
+    coefficients_positive: bool
+    negative_minors: list[int] = quantity("1", "k", "indices k of the Hurwitz minors Δ_k ≤ 0")
+    stable: bool
+
+
+@record
+class ModelVerdict(Record):
+    """Poles, damping, margin and Hurwitz test of one linear model (:func:`verdict`)."""
+
+    stable: bool
+    poles: Poles
+    damping_ratio: np.ndarray = quantity("1", "ζ", "damping ratio −Re λ/|λ| of a pole")
+    natural_frequency: np.ndarray = quantity("rad/s", "ω_n", "natural frequency |λ| of a pole", "rad/s", beside="Hz")
+    unstable_modes: list[Mode]
+    margin: Margin
+    hurwitz: Hurwitz
+
+
+@record
+class HeadlineMargin(Record):
+    decay_rate: float = quantity("1/s", "η", "decay rate −max Re λ of the energy-consistent model", headline=2)
+    min_damping_ratio: float = quantity("1", "ζ_min", "smallest damping ratio of its modes", headline=4)
+
+
+@record
+class LeadingPole(Record):
+    real: float = quantity("1/s", "Re λ", "real part of its least-stable pole")
+    imag: float = quantity("rad/s", "Im λ", "frequency of its least-stable mode", "rad/s", headline=5, beside="Hz")
+
+
+@record
+class Headline(Record):
+    """The one verdict: the energy-consistent model's, with its margin to the required decay rate."""
+
+    model: str
+    stable: bool
+    margin: HeadlineMargin
+    margin_to_required: float = quantity("1/s", "η − α", "margin to the required decay rate", headline=3)
+    meets_requirement: bool
+    leading_pole: LeadingPole
+    unstable_modes: list[Mode]
+
+
+@record
+class MapAxis(Record):
+    """An axis of a map: the dynamic parameter (scene key) and its values, in that parameter's unit
+    (:data:`PARAMETERS`, declared through :func:`_map_axis`)."""
+
+    parameter: str
+    values: np.ndarray
+    nominal: float
+    scale: str
+
+
+@record
+class StabilityMap(Record):
+    """max Re λ of a model over the grid of two dynamic parameters (:func:`stability_map`)."""
+
+    x: MapAxis
+    y: MapAxis
+    max_real: np.ndarray = quantity("1/s", "max Re λ", "spectral abscissa over a map or a scan")
+    stable_fraction: float = quantity("1", "", "fraction of the map's grid that is stable")
+    #: per axis parameter its line through nominal, and the nearest stable point: keys are parameter names
+    restoring: dict
+
+
+@record
+class StabilityResult(TypedResult):
+    """Poles, damping, Hurwitz test and margin of each linear model, coefficient table, maps
+    (Pavlenko (2014), Eqs. (2.73)-(2.75), (2.97)-(2.99)).  The top-level ``stable``, ``poles``, ``hurwitz`` and
+    ``margin`` are the headline (energy-consistent) model's."""
+
+    title: str
+    model: str
+    stable: bool
+    poles: Poles
+    hurwitz: Hurwitz
+    margin: Margin
+    required_decay_rate: float = quantity("1/s", "α", "required decay rate (the scene's; 0: none)", headline=1,
+                                          key="decay_rate")
+    models: dict[str, ModelVerdict]
+    #: its key "headline"; Result.headline() is the headline rows
+    head: Headline = keyed("headline")
+    #: the hand model's constants beside the exact linearization's (linearize.coefficient_table): keys are names
+    coefficients: dict
+    maps: dict[str, StabilityMap] | None = optional()
+    #: model -> dynamic parameter -> its scan (:func:`single_parameter_scans`)
+    single_parameter: dict | None = optional()
+    #: model -> the sentence on what restores its stability
+    restoring: dict[str, str] | None = optional()
+    accuracy: dict | None = optional()
+    name = "stability"
 
     @property
     def decay_rate(self) -> float:
         """Stability margin of the headline model, -max Re lambda, 1/s (negative: unstable)."""
-        return self.data["margin"]["decay_rate"]
+        return self.margin.decay_rate
 
-    @property
-    def poles(self) -> np.ndarray:
-        """Poles of the headline model, 1/s (complex)."""
-        p = self.data["poles"]
-        return np.asarray(p["real"], float) + 1j * np.asarray(p["imag"], float)
-
-    def to_dict(self) -> dict:
-        return self.data
 
     def verdict(self) -> tuple[bool, str]:
         """The headline (energy-consistent) model's: stable or not, its decay rate and its margin to the scene's
         required decay rate α (ok: stable with a decay rate of at least α)."""
-        h, alpha = self.data["headline"], self.data.get("decay_rate", 0.0)
-        decay, eta = h["margin"]["decay_rate"], QUANTITIES.find("headline.margin.decay_rate")
-        ok = bool(h["stable"]) and decay >= alpha
+        h, alpha = self.head, self.required_decay_rate
+        decay, eta = h.margin.decay_rate, QUANTITIES.find("headline.margin.decay_rate")
+        ok = bool(h.stable) and decay >= alpha
         words = f"disturbances decay at {eta.text(decay)}" if decay > 0 else f"disturbances GROW at {eta.text(-decay)}"
         if alpha > 0:
             words += (f", {eta.text(decay - alpha)} above the required {eta.text(alpha)}" if ok else
                       f", the required {eta.text(alpha)} is NOT met")
-        return ok, f"{MODEL_LABELS[h['model']]}: {'stable' if h['stable'] else 'UNSTABLE'}, {words}"
+        return ok, f"{MODEL_LABELS[h.model]}: {'stable' if h.stable else 'UNSTABLE'}, {words}"
 
     def summary(self) -> str:
-        d = self.data
-        lines = [f"stability: {self.verdict()[1]}", *QUANTITIES.lines(d)]
-        source = [m for m in d["models"] if m != HEADLINE]
-        lines += _map_lines(d, [m for m in d.get("maps", {}) if m == HEADLINE])
+        lines = [f"stability: {self.verdict()[1]}", *QUANTITIES.lines(self.to_dict())]
+        maps = self.maps or {}
+        lines += _map_lines(maps, self.restoring or {}, [m for m in maps if m == HEADLINE])
         lines.append("  validation against the source (its models do not judge the machine):")
-        for m in source:
-            v = d["models"][m]
-            modes = ", ".join(_mode(x) for x in v["unstable_modes"]) or "none"
-            minors = ", ".join(f"Δ{k}" for k in v["hurwitz"]["negative_minors"]) or "none"
-            decay = v["margin"]["decay_rate"]
+        for m, v in self.models.items():
+            if m == HEADLINE:
+                continue
+            modes = ", ".join(_mode(x) for x in v.unstable_modes) or "none"
+            minors = ", ".join(f"Δ{k}" for k in v.hurwitz.negative_minors) or "none"
+            decay = v.margin.decay_rate
             rate = f"decays at {significant(decay)} 1/s" if decay > 0 else f"grows at {significant(-decay)} 1/s"
-            lines.append(f"    {MODEL_LABELS.get(m, m)}: {'stable' if v['stable'] else 'UNSTABLE'}, {rate}; unstable "
+            lines.append(f"    {MODEL_LABELS.get(m, m)}: {'stable' if v.stable else 'UNSTABLE'}, {rate}; unstable "
                          f"modes: {modes}; Hurwitz minors ≤ 0: {minors}")
-        lines += ["  " + x for x in _map_lines(d, [m for m in d.get("maps", {}) if m != HEADLINE])]
+        lines += ["  " + x for x in _map_lines(maps, self.restoring or {}, [m for m in maps if m != HEADLINE])]
         lines.append("    K/T of the hand model vs the exact linearization (consistent mode = nonlinear_chain to "
                      "1e-9); differences:")
-        lines += [f"      {k:5s} {v}" for k, v in d["coefficients"]["notes"].items()]
+        lines += [f"      {k:5s} {v}" for k, v in self.coefficients["notes"].items()]
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
         """Poles per model (frequencies in rad/s and Hz), the hand model's constants with their units, and the
         maps with the parameters in their display units; every header names its unit."""
         out = {}
-        for m, v in self.data["models"].items():
-            out[f"poles_{m}.csv"] = {"real [1/s]": v["poles"]["real"], "imag [rad/s]": v["poles"]["imag"],
-                                     "imag [Hz]": [convert(x, "rad/s", "Hz") for x in v["poles"]["imag"]],
-                                     "damping_ratio [1]": v["damping_ratio"],
-                                     "natural_frequency [rad/s]": v["natural_frequency"],
+        for m, v in self.models.items():
+            out[f"poles_{m}.csv"] = {"real [1/s]": v.poles.real, "imag [rad/s]": v.poles.imag,
+                                     "imag [Hz]": [convert(x, "rad/s", "Hz") for x in v.poles.imag],
+                                     "damping_ratio [1]": v.damping_ratio,
+                                     "natural_frequency [rad/s]": v.natural_frequency,
                                      "natural_frequency [Hz]": [convert(x, "rad/s", "Hz")
-                                                                for x in v["natural_frequency"]]}
-        co = self.data["coefficients"]
+                                                                for x in v.natural_frequency]}
+        co = self.coefficients
         columns = {m: [v.get(k) for k in co["names"]] for m, v in co["columns"].items() if not m.endswith("_status")}
         some = next(m for m in columns)
         units = [QUANTITIES.find(f"coefficients.columns.{some}.{k}").unit for k in co["names"]]
         out["coefficients.csv"] = ({"name": co["names"], "unit": units} | columns
                                    | {"note": [co["notes"].get(k, "") for k in co["names"]]})
-        for m, mp in self.data.get("maps", {}).items():
-            qx, qy = PARAMETERS[mp["x"]["parameter"]], PARAMETERS[mp["y"]["parameter"]]
-            X, Y = np.meshgrid(mp["x"]["values"], mp["y"]["values"])
-            out[f"stability_map_{m}.csv"] = {f"{mp['x']['parameter']} [{qx.display}]": qx.shown(X.ravel()),
-                                             f"{mp['y']['parameter']} [{qy.display}]": qy.shown(Y.ravel()),
-                                             "max_real [1/s]": np.asarray(mp["max_real"]).ravel()}
+        for m, mp in (self.maps or {}).items():
+            qx, qy = PARAMETERS[mp.x.parameter], PARAMETERS[mp.y.parameter]
+            X, Y = np.meshgrid(mp.x.values, mp.y.values)
+            out[f"stability_map_{m}.csv"] = {f"{mp.x.parameter} [{qx.display}]": qx.shown(X.ravel()),
+                                             f"{mp.y.parameter} [{qy.display}]": qy.shown(Y.ravel()),
+                                             "max_real [1/s]": np.asarray(mp.max_real).ravel()}
         return out
 
     def draw(self, ax) -> None:
@@ -372,8 +441,8 @@ class StabilityResult(Result):
         unstable half-plane shaded."""
         from matplotlib.ticker import NullLocator
 
-        models = _headline_first(self.data["models"])
-        re = np.concatenate([np.asarray(v["poles"]["real"], float) for v in models.values()])
+        models = _headline_first(self.models)
+        re = np.concatenate([np.asarray(v.poles.real, float) for v in models.values()])
         nz = np.abs(re[re != 0])
         lo = 10.0 ** math.floor(math.log10(nz.min())) if nz.size else 1.0
         hi = 10.0 ** math.ceil(math.log10(max(nz.max(), 10 * lo))) if nz.size else 10.0
@@ -382,8 +451,8 @@ class StabilityResult(Result):
         fi = unit_axis(ax, r"Im $\lambda$", "rad/s", other="Hz")
         for i, (m, v) in enumerate(models.items()):
             mk, size = POLE_MARKERS[i % len(POLE_MARKERS)]
-            label = MODEL_LABELS.get(m, m) + ("" if v["stable"] else " — unstable")
-            ax.plot(v["poles"]["real"], np.asarray(v["poles"]["imag"], float) * fi, mk, ms=size, mfc="none", mew=1.3,
+            label = MODEL_LABELS.get(m, m) + ("" if v.stable else " — unstable")
+            ax.plot(v.poles.real, np.asarray(v.poles.imag, float) * fi, mk, ms=size, mfc="none", mew=1.3,
                     label=label, color="tab:blue" if m == "nonlinear" else MODEL_COLOURS.get(m, "tab:orange"),
                     zorder=3 + i)
         ax.axvline(0, color="k", lw=0.8)
@@ -407,14 +476,14 @@ class StabilityResult(Result):
         ax.get_legend().remove()  # outside the data instead
         fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", ncols=2, fontsize=7.5,
                    frameon=False)
-        fig.suptitle(f"{self.data['title']}\npoles of the linearized models (energy-consistent first; nested "
+        fig.suptitle(f"{self.title}\npoles of the linearized models (energy-consistent first; nested "
                      "markers: coinciding poles)", fontsize=9)
         figs = {"fig_poles.png": fig}
-        maps = self.data.get("maps", {})
+        maps = self.maps or {}
         if not maps:
             return figs
         # one diverging scale for every map, centred on zero, symmetric, logarithmic beyond linthresh
-        allR = np.concatenate([np.asarray(mp["max_real"], float).ravel() for mp in maps.values()])
+        allR = np.concatenate([np.asarray(mp.max_real, float).ravel() for mp in maps.values()])
         allR = np.abs(allR[np.isfinite(allR)])
         lim = float(allR.max()) if allR.size else 1.0
         lin = max(float(np.percentile(allR, 10)), lim * 1e-4, 1e-12) if allR.size else 1.0
@@ -424,30 +493,52 @@ class StabilityResult(Result):
         cmap = ListedColormap(colormaps["RdBu_r"](np.r_[np.linspace(0.0, 0.4, 128), np.linspace(0.6, 1.0, 128)]))
         for m, mp in maps.items():
             fig, ax = new_figure(figsize=(6.8, 5.2))
-            (fx, _, lx), (fy, _, ly) = axis_label(mp["x"]["parameter"]), axis_label(mp["y"]["parameter"])
-            X, Y = np.meshgrid(np.asarray(mp["x"]["values"], float) / fx, np.asarray(mp["y"]["values"], float) / fy)
-            R = np.asarray(mp["max_real"], float)
+            (fx, _, lx), (fy, _, ly) = axis_label(mp.x.parameter), axis_label(mp.y.parameter)
+            X, Y = np.meshgrid(np.asarray(mp.x.values, float) / fx, np.asarray(mp.y.values, float) / fy)
+            R = np.asarray(mp.max_real, float)
             cs = ax.pcolormesh(X, Y, R, cmap=cmap, norm=norm, shading="auto")
             fig.colorbar(cs, ax=ax, label=r"max Re $\lambda$, 1/s (blue: stable, red: unstable)")
             handles = []
             if np.nanmin(R) < 0 < np.nanmax(R):
                 ax.contour(X, Y, R, levels=[0.0], colors="k", linewidths=1.8)
                 handles.append(Line2D([], [], color="k", lw=1.8, label=r"stability boundary max Re $\lambda$ = 0"))
-            st = ax.plot(mp["x"]["nominal"] / fx, mp["y"]["nominal"] / fy, "*", color="gold", mec="k", ms=16,
+            st = ax.plot(mp.x.nominal / fx, mp.y.nominal / fy, "*", color="gold", mec="k", ms=16,
                          clip_on=False, zorder=10, label="scene (nominal)")
             handles += st
-            for a, setter in ((mp["x"], ax.set_xscale), (mp["y"], ax.set_yscale)):
-                if a["scale"] == "log":
+            for a, setter in ((mp.x, ax.set_xscale), (mp.y, ax.set_yscale)):
+                if a.scale == "log":
                     setter("log")
             ax.set_xlabel(lx)
             ax.set_ylabel(ly)
-            verdict = self.data["models"].get(m, {}).get("stable")
+            verdict = self.models[m].stable if m in self.models else None
             tag = "" if verdict is None else (" (stable at nominal)" if verdict else " (unstable at nominal)")
             fig.legend(handles=handles, loc="outside lower center", ncols=2, fontsize=8, frameon=False)
-            ax.set_title(f"{self.data['title']}\nstability map, {MODEL_LABELS.get(m, m)}{tag}; "
+            ax.set_title(f"{self.title}\nstability map, {MODEL_LABELS.get(m, m)}{tag}; "
                          "colour scale shared by the maps", fontsize=8)
             figs[f"fig_stability_map_{m}.png"] = fig
         return figs
+
+
+_SCANS = "maps.*.restoring.along_axes.*.max_real maps.*.restoring.nearest_stable.max_real single_parameter.*.*.max_real"
+StabilityResult.quantities = QUANTITIES = declarations(
+    StabilityResult,
+    Quantity("coefficients.columns.*.K*", "1", "K_i", "gain of the hand model (2.43), per model and mode",
+             source=f"{_P14}, Eqs. (2.44), (2.169), App. A/B"),
+    Quantity("coefficients.columns.*.T* coefficients.columns.*.tau*", "s", "T_i, τ_i",
+             "time constant of the hand model (2.43), per model and mode", "ms",
+             source=f"{_P14}, Eqs. (2.44), (2.169), App. A/B"),
+    Quantity("coefficients.columns.*.zeta*", "1", "ζ1, ζ2", "damping ratio of the hand model's rotor and stem",
+             source=f"{_P14}, Eq. (2.44)"),
+    Quantity("coefficients.extra.*.N0[*]", "1", "N0", "entry of the exact operator the hand model (2.101) lacks"),
+    Quantity("coefficients.extra.*.N1[*]", "s", "N1", "entry of p in the exact operator the hand model lacks",
+             "s"),
+    Quantity("coefficients.extra.*.N2[*]", "s^2", "N2", "entry of p² in the exact operator the hand model lacks"),
+    Quantity(_SCANS, "1/s", "max Re λ", "spectral abscissa over a map or a scan"),
+    *(Quantity(_scanned(k), q.unit, q.symbol, f"{q.description}: values scanned", q.declared)
+      for k, q in PARAMETERS.items()),
+    resolve=_map_axis,
+)
+
 
 
 #: marker and size per model in the pole plot: nested hollow markers keep coinciding poles visible
@@ -480,10 +571,10 @@ def axis_label(parameter: str) -> tuple[float, str, str]:
 HEADLINE = "nonlinear"  # the energy-consistent model: the one verdict; the others are the source's (validation)
 
 
-def _mode(x: dict) -> str:
+def _mode(x: Mode) -> str:
     """An unstable mode as 'Re ± Im i 1/s (f Hz)'."""
-    hz = significant(convert(x["imag"], "rad/s", "Hz"))
-    return f"{significant(x['real'])} ± {significant(x['imag'])}i 1/s ({hz} Hz)"
+    hz = significant(convert(x.imag, "rad/s", "Hz"))
+    return f"{significant(x.real)} ± {significant(x.imag)}i 1/s ({hz} Hz)"
 
 
 def _span(q: Quantity, a: float, b: float) -> str:
@@ -491,20 +582,20 @@ def _span(q: Quantity, a: float, b: float) -> str:
     return f"{significant(q.shown(a))} to {q.text(b)}"
 
 
-def _map_lines(d: dict, models: list[str]) -> list[str]:
+def _map_lines(maps: dict[str, StabilityMap], restoring: dict[str, str], models: list[str]) -> list[str]:
     """The summary lines of the maps of ``models``: the grid's stable share, each axis alone, what restores."""
     lines = []
     for m in models:
-        mp = d["maps"][m]
-        qx, qy = PARAMETERS[mp["x"]["parameter"]], PARAMETERS[mp["y"]["parameter"]]
+        mp = maps[m]
+        qx, qy = PARAMETERS[mp.x.parameter], PARAMETERS[mp.y.parameter]
         lines.append(f"  map, {MODEL_LABELS.get(m, m)}: {qx.description} {qx.symbol} × {qy.description} "
-                     f"{qy.symbol}, stable on {100 * mp['stable_fraction']:.0f} % of the grid")
-        for name, line in mp["restoring"]["along_axes"].items():
+                     f"{qy.symbol}, stable on {100 * mp.stable_fraction:.0f} % of the grid")
+        for name, line in mp.restoring["along_axes"].items():
             q = PARAMETERS[name]
             iv = " or ".join(_span(q, a, b) for a, b in line["stable_intervals"]) or "no value in the range"
             lines.append(f"    {q.description} {q.symbol} alone (the other nominal): stable for {iv}")
-        if m in d.get("restoring", {}):
-            lines.append(f"    restores stability: {d['restoring'][m].removeprefix(m + ': ')}")
+        if m in restoring:
+            lines.append(f"    restores stability: {restoring[m].removeprefix(m + ': ')}")
     return lines
 
 
@@ -518,45 +609,45 @@ def study(setup: Setup, models: list[str], smap=None, title: str = "", decay_rat
     ``hurwitz``) and ``headline`` are the energy-consistent model's, the one verdict of the analysis (the
     source's models validate, they do not judge the machine), with its margin to the required ``decay_rate``
     (1/s); and the optional maps with their single-parameter scans."""
-    res = {m: verdict(setup.linear(m)) for m in models}
-    head = res.get(HEADLINE) or verdict(setup.linear(HEADLINE))
-    real, imag = head["poles"]["real"], head["poles"]["imag"]
+    res = {m: ModelVerdict.from_dict(verdict(setup.linear(m))) for m in models}
+    head = res.get(HEADLINE) or ModelVerdict.from_dict(verdict(setup.linear(HEADLINE)))
+    real, imag = head.poles.real, head.poles.imag
     upper = np.flatnonzero(imag >= 0)
     lead = upper[np.argmax(real[upper])]  # the least-stable pole of the upper half-plane
-    leading = {"real": float(real[lead]), "imag": float(imag[lead])}
-    decay = head["margin"]["decay_rate"]
-    data = {"title": title, "model": HEADLINE, "stable": head["stable"], "poles": head["poles"],
-            "hurwitz": head["hurwitz"], "margin": head["margin"], "decay_rate": float(decay_rate), "models": res,
-            "headline": {"model": HEADLINE, "stable": head["stable"], "margin": head["margin"],
-                         "margin_to_required": decay - decay_rate,
-                         "meets_requirement": bool(head["stable"] and decay >= decay_rate),
-                         "leading_pole": leading, "unstable_modes": head["unstable_modes"]},
-            "coefficients": coefficient_table(setup)}
+    decay = head.margin.decay_rate
+    maps = scans = restoring = None
     if smap is not None:
-        data["maps"] = {m: stability_map(setup, smap.x, smap.y, m) for m in smap.models}
-        data["single_parameter"] = {m: single_parameter_scans(setup, m) for m in smap.models}
-        data["restoring"] = {m: _statement(data, m) for m in smap.models}
-    return StabilityResult(data)
+        maps = {m: StabilityMap.from_dict(stability_map(setup, smap.x, smap.y, m)) for m in smap.models}
+        scans = {m: single_parameter_scans(setup, m) for m in smap.models}
+        restoring = {m: _statement(m, res.get(m), scans[m], maps[m]) for m in smap.models}
+    return StabilityResult(
+        title=title, model=HEADLINE, stable=head.stable, poles=head.poles, hurwitz=head.hurwitz, margin=head.margin,
+        required_decay_rate=float(decay_rate), models=res,
+        head=Headline(model=HEADLINE, stable=head.stable,
+                          margin=HeadlineMargin(head.margin.decay_rate, head.margin.min_damping_ratio),
+                          margin_to_required=decay - decay_rate,
+                          meets_requirement=bool(head.stable and decay >= decay_rate),
+                          leading_pole=LeadingPole(float(real[lead]), float(imag[lead])),
+                          unstable_modes=head.unstable_modes),
+        coefficients=coefficient_table(setup), maps=maps, single_parameter=scans, restoring=restoring)
 
 
-def _statement(data: dict, model: str) -> str:
-    """One sentence: which change restores stability of ``model``, read off its scans and map (display units)."""
-    v = data["models"].get(model)
-    if v is not None and v["stable"]:
-        return f"{model}: stable as given (decay rate {significant(v['margin']['decay_rate'])} 1/s)"
-    scans = data["single_parameter"][model]
+def _statement(model: str, v: ModelVerdict | None, scans: dict, mp: StabilityMap) -> str:
+    """One sentence: which change restores stability of ``model`` (its verdict ``v``, None if not computed), read
+    off its scans and map (display units)."""
+    if v is not None and v.stable:
+        return f"{model}: stable as given (decay rate {significant(v.margin.decay_rate)} 1/s)"
     single = [f"{PARAMETERS[k].description} {PARAMETERS[k].symbol} in "
               + " or ".join(_span(PARAMETERS[k], a, b) for a, b in s["stable_intervals"])
               for k, s in scans.items() if s["stable_intervals"]]
-    mp = data["maps"][model]
-    ns = mp["restoring"]["nearest_stable"]
+    ns = mp.restoring["nearest_stable"]
     text = f"{model}: " + ("a single change restores stability: " + "; ".join(single) if single else
                            "no single change of " + ", ".join(PARAMETERS[k].description for k in scans) +
                            " within 1e-3..1e3 × nominal restores stability")
     if ns:
-        (kx, qx), (ky, qy) = ((mp[a]["parameter"], PARAMETERS[mp[a]["parameter"]]) for a in ("x", "y"))
+        (kx, qx), (ky, qy) = ((a.parameter, PARAMETERS[a.parameter]) for a in (mp.x, mp.y))
         text += (f"; on the map the nearest stable point is {qx.symbol} = {qx.text(ns[kx])} with {qy.symbol} = "
-                 f"{qy.text(ns[ky])}, stable on {100 * mp['stable_fraction']:.0f} % of the map")
+                 f"{qy.text(ns[ky])}, stable on {100 * mp.stable_fraction:.0f} % of the map")
     else:
         text += "; nowhere stable on the map"
     return text

@@ -5,14 +5,16 @@ The public API::
     scene = autobal.load("pump_pe600_statics", set={"device.disc.outer_seal.length": "300 mm"})
     run = autobal.run(scene)           # Run: analysis name -> Result
     run["statics"].summary(); run["statics"].plot(); run.save("out/pump")
+    done = autobal.load_run("out/pump")  # a finished run back: analysis name -> Result
 """
 
 __version__ = "0.2.0"
 
 __all__ = ["AutobalError", "DeviceParams", "DynamicData", "LiquidLayer", "Result", "RotorParams", "Run", "Scenario",
-           "ScenarioError", "SolveError", "__version__", "display_units", "load", "run"]
+           "ScenarioError", "SolveError", "__version__", "display_units", "load", "load_run", "run"]
 
-_WHERE = {"load": "autobal.api", "run": "autobal.api", "Run": "autobal.api", "Result": "autobal.analysis.result",
+_WHERE = {"load": "autobal.api", "run": "autobal.api", "load_run": "autobal.api",
+          "Run": "autobal.api", "Result": "autobal.analysis.result",
           "Scenario": "autobal.scenario", "AutobalError": "autobal.errors", "ScenarioError": "autobal.errors",
           "SolveError": "autobal.errors", "DeviceParams": "autobal.models.device",
           "DynamicData": "autobal.models.dynamics", "RotorParams": "autobal.models.rotor",

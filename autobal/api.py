@@ -270,3 +270,65 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
             folder.discard()
         raise
 
+
+
+class LoadedRun(Mapping):
+    """A finished run loaded back from its output folder (:func:`load_run`): analysis name -> Result.
+
+    ``results`` holds the loaded Results (as :attr:`Run.results`), ``saved`` results.json as read; ``unloaded``
+    names the analyses whose Result cannot be rebuilt from its block (analysis -> why: a Result that holds more
+    than its block), which are then only in ``saved``.
+    """
+
+    def __init__(self, folder: Path, saved: dict, results: dict[str, Result], unloaded: dict[str, str]):
+        self.folder, self.saved, self.results, self.unloaded = folder, saved, results, unloaded
+
+    __getitem__, __iter__, __len__ = Run.__getitem__, Run.__iter__, Run.__len__  # name -> Result, as a Run
+
+    @property
+    def failures(self) -> dict[str, list[str]]:
+        """Analysis name -> what failed inside it, as results.json records it."""
+        return dict(self.saved.get("failures") or {})
+
+    @property
+    def status(self) -> str:
+        """The run's status as results.json records it ("ok" or "failed")."""
+        return self.saved.get("status", "")
+
+    def __repr__(self) -> str:
+        return f"<LoadedRun {self.saved.get('scenario', '')}: {', '.join(self.results)}>"
+
+
+def load_run(folder: str | Path) -> LoadedRun:
+    """Load a finished run back from its output folder into Result objects.
+
+    Parameters
+    ----------
+    folder : str or Path
+        An output folder of ``autobal run`` (or :meth:`Run.save`) holding results.json.
+
+    Returns
+    -------
+    LoadedRun
+        Analysis name -> Result: a typed Result rebuilt by ``from_dict`` (``to_dict()`` gives its block of
+        results.json back), a Result holding only ``data`` with its block; ``unloaded`` says which could not be.
+
+    Raises
+    ------
+    ScenarioError
+        The folder holds no readable results.json.
+    """
+    from autobal import report_input
+    from autobal.errors import ScenarioError
+
+    where = report_input.folder_of(folder)
+    if not report_input.present(where, "results.json"):
+        raise ScenarioError(f"{where}: holds no results.json (not a finished run)")
+    saved = report_input.read_json(where / "results.json")
+    results, unloaded = {}, {}
+    for name in (k for k in saved if k in report.SECTIONS):
+        try:
+            results[name] = report.load_result(name, saved[name])
+        except (ValueError, KeyError, TypeError) as exc:
+            unloaded[name] = str(exc)
+    return LoadedRun(where, saved, results, unloaded)

@@ -19,6 +19,7 @@ import contextlib
 import functools
 import hashlib
 import importlib
+import inspect
 import json
 import math
 import os
@@ -36,6 +37,7 @@ from markupsafe import Markup
 
 from autobal import analyses as rooms
 from autobal import report_input
+from autobal.analysis.fields import Record
 from autobal.analysis.quantities import (
     Declarations,
     Quantity,
@@ -54,7 +56,7 @@ from autobal.analysis.quantities import (
     significant,
     spelled,
 )
-from autobal.analysis.result import html_verdict, plain
+from autobal.analysis.result import Result, html_verdict, plain
 from autobal.errors import ScenarioError
 from autobal.output import umask
 from autobal.report_input import MAX_FIGURE_BYTES
@@ -136,6 +138,39 @@ def units(results: dict, analyses: list[str] | None = None) -> dict[str, str]:
     return out
 
 
+@functools.cache
+def result_class(analysis: str) -> type | None:
+    """The Result class of an analysis: the one its declaring module (the room's ``QUANTITIES_MODULE``) defines
+    for it, or None for a key that is no analysis."""
+    if analysis not in DECLARED:
+        return None
+    module = importlib.import_module(DECLARED[analysis])
+    own = [c for c in vars(module).values()
+           if isinstance(c, type) and issubclass(c, Result) and c.__module__ == module.__name__ and c.name]
+    return next((c for c in own if c.name == analysis), own[0] if len(own) == 1 else None)
+
+
+def load_result(analysis: str, block: dict) -> Result:
+    """The Result of an analysis rebuilt from its results.json block: a typed Result (analysis/fields.py) by its
+    ``from_dict``; a Result that holds only ``data`` with the block as its data, if its ``to_dict()`` gives the
+    block back.  ValueError naming the analysis where neither works (a Result that holds more than its block:
+    samples, curves, solver runs)."""
+    cls = result_class(analysis)
+    if cls is None:
+        raise ValueError(f"{analysis}: no analysis of this name")
+    if issubclass(cls, Record):
+        return cls.from_dict(block)
+    try:
+        result = cls(data=block, **({"name": analysis} if "name" in inspect.signature(cls).parameters else {}))
+        same = plain(result.to_dict()) == plain(block)
+    except (TypeError, KeyError) as exc:
+        same, result = False, exc
+    if not same:
+        raise ValueError(f"{analysis}: {cls.__name__} holds more than its results.json block"
+                         + (f" ({type(result).__name__}: {result})" if isinstance(result, Exception) else ""))
+    return result
+
+
 def get_path(data, path: str, default=None):
     """``data`` at a dotted path (``a.b.c``; an integer picks a list item), or ``default``."""
     return lookup(data, path, default)
@@ -215,6 +250,11 @@ class Section:
         self.validation_notes: list[str] = []
         self.main: dict | None = None  # the one verdict of the analysis (the summary shows it)
 
+    @functools.cached_property
+    def result(self) -> Result:
+        """The analysis' Result loaded from its block (:func:`load_result`): what a typed section reads."""
+        return load_result(self.name, self.block)
+
     def get(self, path: str, default=None):
         return get_path(self.block, path, default)
 
@@ -233,6 +273,9 @@ class Section:
         its declaration's.  A key the block lacks (the analysis did not compute it) gives no row."""
         if value is None and not has_path(self.block, path):
             return
+        typed = result_class(self.name)
+        if typed is not None and issubclass(typed, Record) and not unit and quantity(f"{self.name}.{path}") is None:
+            raise KeyError(f"{self.name}.{path}: no field of {type(self.result).__name__} declares it")
         v = self.get(path) if value is None else value
         c = cell(v, unit) if unit else self.cell(path, v)
         c["key"] = f"{self.name}.{path}"

@@ -91,7 +91,7 @@ def test_the_afc_is_in_rad_s_with_hz_beside_and_in_the_chosen_units(afc):
 
 def test_the_poles_imaginary_axis_in_rad_s_with_hz_beside_and_in_rpm_when_chosen(pump):
     st = stability.study(pump, ["nonlinear"], None, "pump")
-    imag = np.asarray(st.data["models"]["nonlinear"]["poles"]["imag"], float)
+    imag = np.asarray(st.models["nonlinear"].poles.imag, float)
     ax = st.figures()["fig_poles.png"].axes[0]
     assert ax.get_ylabel() == r"Im $\lambda$, rad/s" and secondary(ax) == ["Hz"]
     np.testing.assert_allclose(ax.get_lines()[0].get_ydata(), imag, rtol=1e-15)

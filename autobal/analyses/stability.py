@@ -3,6 +3,7 @@ an optional stability map over two dynamic parameters (Pavlenko (2014), §2.6)."
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
@@ -79,8 +80,7 @@ def run(scene, settings: Stability):
 
     setup = Setup(dynamic_device(scene), settings.operating_ratio)
     res = st.study(setup, list(settings.models), settings.map, scene.title, settings.decay_rate)
-    res.data["accuracy"] = st.accuracy(setup, list(settings.models))
-    return res
+    return dataclasses.replace(res, accuracy=st.accuracy(setup, list(settings.models)))
 
 
 def estimate_seconds(settings: Stability) -> float:
@@ -98,11 +98,12 @@ def _rate(decay) -> str:
 
 def report_section(sec) -> None:
     """Poles, Hurwitz determinants and margins (Pavlenko 2014, §2.7): the headline model (energy-consistent)
-    gives the verdict; the source's models are the validation part."""
+    gives the verdict; the source's models are the validation part.  Reads the fields of the loaded
+    :class:`~autobal.analysis.stability.StabilityResult` (``sec.result``)."""
+    from autobal.analysis.result import plain
     from autobal.report import (
         SOURCE_MODELS,
         cell,
-        get_path,
         leading_poles,
         model_name,
         ordered_models,
@@ -111,35 +112,30 @@ def report_section(sec) -> None:
         text,
     )
 
-    h = sec.get("headline")
-    if h:
-        from autobal.analysis.stability import QUANTITIES, StabilityResult  # the verdict's one copy
-
-        sec.conclude(*StabilityResult(sec.block).verdict())
-        for q, key, _ in QUANTITIES.headline(sec.block):
-            sec.row(q.description, q.symbol, key)
+    r = sec.result
+    sec.conclude(*r.verdict())
+    for q, key, v in r.quantities.headline(r.to_dict()):  # the rows of the fields declared headline
+        sec.row(q.description, q.symbol, key, value=v)
     own, source = [], []
-    for model, m in ordered_models(sec.get("models", {})):
-        poles = m.get("poles", {})
-        lead = leading_poles(poles.get("real", []), poles.get("imag", []))
-        st = m.get("stable")
-        row = [text(model_name(model)), text({True: "stable", False: "UNSTABLE"}.get(st, "—")),
-               {"text": lead, "unit": "1/s", "num": True}, cell(get_path(m, "margin.decay_rate"), "1/s"),
-               cell(get_path(m, "margin.min_damping_ratio"), "1")]
+    for model, m in ordered_models(r.models):
+        lead = leading_poles(plain(m.poles.real), plain(m.poles.imag))
+        row = [text(model_name(model)), text("stable" if m.stable else "UNSTABLE"),
+               {"text": lead, "unit": "1/s", "num": True}, cell(m.margin.decay_rate, "1/s"),
+               cell(m.margin.min_damping_ratio, "1")]
         if model in SOURCE_MODELS:
             source.append(row)
-            source_model_line(sec, model, st)
+            source_model_line(sec, model, m.stable)
             continue
         own.append(row)
-        if model != (h or {}).get("model"):  # another model of the toolkit's own: a check, not the verdict
-            sec.verdict(st, f"{model_name(model)}: {'stable' if st else 'UNSTABLE'}; leading poles {lead} 1/s; "
-                            f"{_rate(get_path(m, 'margin.decay_rate'))}")
+        if model != r.head.model:  # another model of the toolkit's own: a check, not the verdict
+            sec.verdict(m.stable, f"{model_name(model)}: {'stable' if m.stable else 'UNSTABLE'}; leading poles {lead} "
+                                  f"1/s; {_rate(m.margin.decay_rate)}")
     columns = ["model", "verdict", "leading poles", "decay rate", "min damping ratio ζ"]
     caption = "leading poles (largest real part), decay rate −max Re λ and the smallest damping ratio"
     if own:
         sec.tables.append(table(f"Stability: {caption}", columns, own, headline=True))
     if source:
         sec.validation_tables.append(table(f"Stability of the source's models: {caption}", columns, source))
-    for m, t in (sec.get("restoring") or {}).items():
+    for m, t in (r.restoring or {}).items():
         (sec.validation_notes if m in SOURCE_MODELS else sec.notes).append(
             f"{model_name(m)}: {t.removeprefix(m + ': ')}")

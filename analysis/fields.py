@@ -1,0 +1,222 @@
+"""Typed Results: a Result as a frozen dataclass whose fields carry their declarations.
+
+A typed Result (:class:`TypedResult`) and its nested blocks (:class:`Record`) are frozen dataclasses, made with
+:func:`record`.  A field is one of
+
+- a number, or an array or list of numbers, declared with :func:`quantity` (unit, symbol, meaning, display unit,
+  source: a :class:`~autobal.analysis.quantities.Quantity` without its key, which is the field's path);
+- words or a flag (a plain field: ``title: str``, ``stable: bool``);
+- a nested record (``margin: Margin``), a mapping of names to records (``models: dict[str, ModelVerdict]``, key
+  path ``models.*.``) or a list of records (``unstable_modes: list[Mode]``, key path ``unstable_modes[].``);
+- a block whose keys are names with units of their own (``coefficients: dict``), declared by the Result's extra
+  declarations.
+
+From the fields come ``to_dict()`` (the results.json block, keys in field order; an :func:`optional` field that
+is None is left out), ``from_dict()`` (its inverse: ``to_dict(from_dict(d)) == d``), :func:`declarations` (the
+Declarations of every key path, hence the ``units`` map, the summary's and the report's headline rows) and
+:func:`key_paths`.  A key renamed in a field breaks ``from_dict`` of an old block (an unknown or missing key is
+an error, not a silent None) and every attribute access of the old name.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import types
+import typing
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from autobal.analysis.quantities import Declarations, Quantity
+from autobal.analysis.result import Failures, Result, plain
+
+QUANTITY = "autobal.quantity"  # field metadata: the declaration's arguments
+OMIT = "autobal.omit"  # field metadata: left out of to_dict() when None (a block the analysis did not compute)
+KEY = "autobal.key"  # field metadata: its key in results.json where that is not the field's name
+
+#: what a frozen Result still takes after it is made: not its numbers, what a run sets on every Result (the display
+#: units of its scene)
+SETTABLE = ("display_choice",)
+
+
+def record(cls):
+    """``cls`` as a frozen dataclass compared by its results.json block (numpy arrays have no ``==`` a dataclass
+    could use); its fields cannot be assigned, the names of :data:`SETTABLE` can."""
+    cls = dataclass(frozen=True, eq=False)(cls)
+    frozen = cls.__setattr__
+
+    def __setattr__(self, name, value):
+        if name in SETTABLE:
+            object.__setattr__(self, name, value)
+        else:
+            frozen(self, name, value)
+
+    cls.__setattr__ = __setattr__
+    return cls
+
+
+def quantity(unit: str, symbol: str = "", description: str = "", display: str = "", *, source: str = "",
+             headline: int = 0, beside: str | None = None, optional: bool = False, key: str | None = None):
+    """A field holding a number (an array, a list of numbers) of results.json, in the SI unit ``unit``.
+
+    Parameters
+    ----------
+    unit, symbol, description, display, source, beside
+        As :class:`~autobal.analysis.quantities.Quantity`.
+    headline : int
+        0: not a headline number; else its place among the headline numbers (1 first).
+    optional : bool
+        The analysis may not compute it: default None, and then not in results.json.
+    key : str, optional
+        Its key in results.json where that is not the field's name (a name the Result's API uses otherwise).
+    """
+    meta = {QUANTITY: (unit, symbol, description, display, source, headline, beside)} | ({KEY: key} if key else {})
+    if optional:
+        return field(default=None, metadata=meta | {OMIT: True})
+    return field(metadata=meta)
+
+
+def keyed(key: str):
+    """A field whose key in results.json is ``key``, not its name (a name the Result's API uses otherwise)."""
+    return field(metadata={KEY: key})
+
+
+def optional():
+    """A field the analysis may not compute (a map, a scan): default None, and then not in results.json."""
+    return field(default=None, metadata={OMIT: True})
+
+
+@record
+class Record:
+    """A block of results.json as a frozen dataclass (see the module's docstring)."""
+
+    def to_dict(self) -> dict:
+        """The block: the fields in order, records as their blocks, numbers as they are (arrays stay arrays)."""
+        out = {}
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            if v is None and f.metadata.get(OMIT) or isinstance(v, Failures) and not v:
+                continue
+            out[_key(f)] = _out(v)
+        return out
+
+    @classmethod
+    def from_dict(cls, block: dict):
+        """The record of a results.json block; KeyError naming the record and the key for a key it does not have
+        or lacks (a renamed key is never read as missing)."""
+        if not isinstance(block, dict):
+            raise TypeError(f"{cls.__name__}: expected a mapping, got {type(block).__name__}")
+        names = [_key(f) for f in dataclasses.fields(cls)]
+        unknown = [k for k in block if k not in names]
+        if unknown:
+            raise KeyError(f"{cls.__name__} has no field {', '.join(map(repr, unknown))}")
+        hints = _hints(cls)
+        kwargs = {}
+        for f in dataclasses.fields(cls):
+            if _key(f) in block:
+                kwargs[f.name] = _in(hints[f.name], block[_key(f)])
+            elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+                raise KeyError(f"{cls.__name__}: the block has no {_key(f)!r}")
+        return cls(**kwargs)
+
+    def __eq__(self, other) -> bool:
+        return type(self) is type(other) and plain(self.to_dict()) == plain(other.to_dict())
+
+    __hash__ = None
+
+
+@record
+class TypedResult(Record, Result):
+    """Base of a typed Result: a :class:`Record` that is a :class:`~autobal.analysis.result.Result`, with its
+    failures a field (:class:`~autobal.analysis.result.Failures`; in results.json only when there are some)."""
+
+    failures: Failures = field(default=Failures(), kw_only=True)
+
+    def __post_init__(self):
+        object.__setattr__(self, "failures", Failures(self.failures))
+
+
+def _out(v):
+    if isinstance(v, Record):
+        return v.to_dict()
+    if isinstance(v, dict):
+        return {k: _out(x) for k, x in v.items()}
+    if isinstance(v, Failures):
+        return list(v)
+    if isinstance(v, list) and any(isinstance(x, Record) for x in v):
+        return [_out(x) for x in v]
+    return v
+
+
+def _key(f: dataclasses.Field) -> str:
+    return f.metadata.get(KEY, f.name)
+
+
+def _hints(cls) -> dict:
+    return typing.get_type_hints(cls)
+
+
+def _optional(tp):
+    """``X | None`` -> X; other types as they are."""
+    if typing.get_origin(tp) in (typing.Union, types.UnionType):
+        args = [a for a in typing.get_args(tp) if a is not type(None)]
+        return args[0] if len(args) == 1 else tp
+    return tp
+
+
+def _in(tp, v):
+    """A value of results.json as the field of type ``tp`` holds it."""
+    tp = _optional(tp)
+    if v is None:
+        return None
+    origin = typing.get_origin(tp)
+    if isinstance(tp, type) and issubclass(tp, Record):
+        return tp.from_dict(v)
+    if tp is np.ndarray:
+        return np.asarray(v, float)  # null -> NaN, as computed
+    if tp is Failures:
+        return Failures(v)
+    if origin is dict and len(typing.get_args(tp)) == 2:
+        return {k: _in(typing.get_args(tp)[1], x) for k, x in v.items()}
+    if origin is list and typing.get_args(tp):
+        return [_in(typing.get_args(tp)[0], x) for x in v]
+    return v
+
+
+def _walk(cls, prefix: str = ""):
+    """(key path, field) of every field of a record type, nested records walked (``*``: a mapping's names,
+    ``[]``: list items)."""
+    hints = _hints(cls)
+    for f in dataclasses.fields(cls):
+        path, tp = prefix + _key(f), _optional(hints[f.name])
+        yield path, f
+        inner, sep = tp, "."
+        if typing.get_origin(tp) is dict and len(typing.get_args(tp)) == 2:
+            inner, sep = typing.get_args(tp)[1], ".*."
+        elif typing.get_origin(tp) is list and typing.get_args(tp):
+            inner, sep = typing.get_args(tp)[0], "[]."
+        if isinstance(inner, type) and issubclass(inner, Record):
+            yield from _walk(inner, path + sep)
+
+
+def key_paths(cls) -> list[str]:
+    """The key path of every field of a record type that holds a declared number."""
+    return [path for path, f in _walk(cls) if QUANTITY in f.metadata]
+
+
+def declarations(cls, *extra: Quantity, resolve=None) -> Declarations:
+    """The Declarations of a typed Result: one :class:`Quantity` per declaration of its fields (the key paths of
+    equal declarations joined), the headline ones first in their order, then ``extra`` (the blocks whose keys are
+    names); ``resolve`` as :class:`Declarations`."""
+    clash = [f.name for f in dataclasses.fields(cls) if f.name != "failures" and hasattr(Result, f.name)]
+    if clash:
+        raise TypeError(f"{cls.__name__}: field(s) {', '.join(clash)} would hide Result's own; name them otherwise "
+                        "and give their results.json key with keyed()")
+    paths: dict[tuple, list[str]] = {}
+    for path, f in _walk(cls):
+        if QUANTITY in f.metadata:
+            paths.setdefault(f.metadata[QUANTITY], []).append(path)
+    specs = sorted(paths, key=lambda s: (s[5] == 0, s[5]))  # headline by rank, then the rest in field order
+    own = [Quantity(" ".join(paths[s]), s[0], s[1], s[2], s[3], source=s[4], headline=bool(s[5]), beside=s[6])
+           for s in specs]
+    return Declarations(*own, *extra, resolve=resolve)
