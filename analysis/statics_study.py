@@ -70,6 +70,8 @@ QUANTITIES = Declarations(
              source=f"{_P14}, Eq. (2.26)"),
     Quantity("exact.kappa_s closed_form.kappa_s", "1", "κ_s", "axial stiffness of the balancing force (group)",
              source=f"{_P14}, Eq. (2.36)"),
+    Quantity("exact.c_s", "N/m", "c_s", "axial stiffness of the balancing force −dF/dz at the operating point, "
+             "κ_s p_B s_B / z_B", "N/µm", headline=True, source=f"{_P14}, Eq. (2.36)"),
     Quantity("closed_form.kappa_u_2_162", "1", "κ_u", "stiffness along the pressure sweep (gas device)",
              source=f"{_P14}, Eq. (2.162)"),
     Quantity("exact.q_e exact.q_T exact.q_1 closed_form.q_T closed_form.q_1", "1", "q", "flow ratio Q/Q_B",
@@ -436,7 +438,8 @@ def _state(solver: StaticsSolver, pt: StaticPoint, q_base: float) -> dict:
         "pe": v["psi_e"] * sc["p_B"], "dp": (v["psi_e"] - pt.psi1) * sc["p_B"],
         **{f"Q_{k}": q[k] * sc["Q_scale"] for k in ("e", "1", "T", "3")},
         "q_e": q_e / q_base, "q_T": q["T"] / q_base, "q_1": q["1"] / q_base,
-        "kappa_s": solver.stiffness(pt),
+        "kappa_s": (kappa := solver.stiffness(pt)),
+        "c_s": kappa * sc["p_B"] * sc["s_B"] / sc["z_B"],  # F = phi p_B s_B, z = u z_B
         "contact": pt.contact, "r_contact": v["r_contact"],
         "solver": {"status": pt.status, "iterations": pt.iterations, "max_relative_residual": pt.max_residual},
     }
@@ -691,5 +694,6 @@ def _null_reasons(g) -> dict:
         "psi_cam": no_reg, "psi_cam0": no_reg, "x0": no_reg, "pcam": no_reg,
         "kappa_s": ("no fixed-pressure closed form of the stiffness for the gas device (see kappa_u_2_162)" if gas
                     else "the face is in contact (u = 0): the gap does not move with the force"),
+        "c_s": "the face is in contact (u = 0): the gap does not move with the force",
         "phi_closed_form": "the closed form (2.35) is the liquid device's" if gas else None,
     }

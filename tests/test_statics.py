@@ -305,3 +305,20 @@ def test_refinement_resolves_the_saturation_kink(pump):
     for p in (extra[0], extra[-1]):
         assert_allclose(p.x, pump.solve(p.psi1, 0.04).x, atol=1e-8)
     assert refine(pump, pts[:changes[0] + 1], 0.04) == []
+
+
+@pytest.mark.cli
+def test_the_stiffness_is_reported_in_n_per_um(pump, shipped_run):
+    """c_s = -dF/dz of the shipped pump (issue 32: the group kappa_s alone was shown): the force F = phi p_B s_B
+    against the gap z = u z_B, by a central difference of the force-gap curve, and shown in N/µm."""
+    run, _ = shipped_run("pump_pe600_statics")
+    exact = run["statics"].to_dict()["exact"]
+    sc = pump.design.scales
+    h, u0 = 1e-5, exact["u0"]
+    phi = pump.force_gap(exact["psi1"], run["statics"].to_dict()["dpsi"], [u0 - h, u0 + h])
+    by_difference = -(phi[1] - phi[0]) * sc["p_B"] * sc["s_B"] / (2 * h * sc["z_B"])
+    assert_allclose(exact["c_s"], by_difference, rtol=1e-5)
+    assert_allclose(exact["c_s"], 2.783e9, rtol=1e-3)  # N/m
+    row = {r["key"]: r for r in run["statics"].headline()}["exact.c_s"]
+    assert row["unit"] == "N/µm" and float(row["value"]) == pytest.approx(2783, rel=1e-3)
+    assert "N/µm" in run["statics"].summary()
