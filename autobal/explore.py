@@ -171,7 +171,7 @@ class DeviceExplorer:
         sc = self.scene
         if sc.device is None or sc.device.dynamics is None:
             raise ScenarioError(f"{sc.name}: explore needs a scene with device.dynamics (this version explores the "
-                                "device's statics and dynamics: pump_pe600_dynamics, compressor_dynamics)")
+                                "device's statics and dynamics: pump_pe600_dynamics, compressor_k180_dynamics)")
         a = sc.analyses
         freq, stab = getattr(a, "frequency", None), getattr(a, "stability", None)
         self.psi1 = (freq or stab).operating_ratio if (freq or stab) is not None else 1.0
