@@ -516,7 +516,11 @@ def make_document(explorer: DeviceExplorer, out: Path):
                     ans = explorer.evaluate(vals)
                 except Exception as exc:  # noqa: BLE001 (the server survives every setting)
                     ans = {"status": "failed", "message": f"{type(exc).__name__}: {exc}"}
-                show(ans, moved)
+                doc.hold("combine")  # one message to the browser per update, not one per property
+                try:
+                    show(ans, moved)
+                finally:
+                    doc.unhold()
             state["busy"] = False
 
         def on_change(path):

@@ -176,3 +176,16 @@ def test_latency_p90_from_key_press_to_update(page):
     p50, p90 = np.percentile(lat, [50, 90])
     print(f"explore latency over {CHANGES} changes: p50 {p50:.1f} ms, p90 {p90:.1f} ms, max {max(lat):.1f} ms")
     assert p90 < LATENCY_P90_MS
+
+
+def test_report_button_writes_the_report_of_autobal_run(server, page):
+    """"report": the saved scene run by autobal.run in a thread, its report.html written; the page stays live."""
+    page.locator("button", has_text="report").click()
+    handle = slider(page, "device.dynamics.regulator.stem_mass")
+    change(page, handle, "ArrowRight")  # the page answers while the run goes on
+    change(page, handle, "ArrowLeft")
+    page.wait_for_selector("#report_path", timeout=300_000)
+    report = Path(page.locator("#report_path").text_content())
+    assert report.name == "report.html" and report.is_file()
+    results = json.loads((report.parent / "results.json").read_text())
+    assert results["status"] == "ok" and {"frequency", "stability"} <= set(results)
