@@ -538,7 +538,10 @@ def make_document(explorer: DeviceExplorer, out: Path):
             vals, ans = dict(values), state["good"]
 
             def work():
-                text = explorer.check(vals, ans or {})
+                try:
+                    text = explorer.check(vals, ans or {})
+                except Exception as exc:  # noqa: BLE001 (the page says what failed; the server goes on)
+                    text = f"the cross-check failed: {type(exc).__name__}: {exc}"
 
                 def done():
                     if vals == values:  # still the setting checked
@@ -558,14 +561,22 @@ def make_document(explorer: DeviceExplorer, out: Path):
 
         def on_save():
             path = out / f"{explorer.scene.name}_explored.yaml"
-            out.mkdir(parents=True, exist_ok=True)
-            explorer.save(values, path)
+            try:
+                out.mkdir(parents=True, exist_ok=True)
+                explorer.save(values, path)
+            except OSError as exc:
+                saved.text = f"not saved: {html.escape(str(exc))}"
+                return
             saved.text = f"saved <code id='saved_path'>{path}</code>"
 
         def on_report():
             vals = dict(values)
-            out.mkdir(parents=True, exist_ok=True)
-            path = explorer.save(vals, out / f"{explorer.scene.name}_explored.yaml")
+            try:
+                out.mkdir(parents=True, exist_ok=True)
+                path = explorer.save(vals, out / f"{explorer.scene.name}_explored.yaml")
+            except OSError as exc:
+                saved.text = f"no report: the scene cannot be saved: {html.escape(str(exc))}"
+                return
             report_btn.disabled = True
             saved.text = "running the report (autobal.run) …"
 
@@ -577,7 +588,7 @@ def make_document(explorer: DeviceExplorer, out: Path):
                     autobal.run(autobal.load(path), out=folder)
                     msg = f"report written: <code id='report_path'>{folder / 'report.html'}</code>"
                 except Exception as exc:  # noqa: BLE001
-                    msg = f"report failed: {type(exc).__name__}: {exc}"
+                    msg = f"report failed: {html.escape(f'{type(exc).__name__}: {exc}')}"
 
                 def done():
                     saved.text = msg

@@ -109,3 +109,16 @@ def test_a_crossed_margin_turns_the_verdict(explorer):
     ans = explorer.evaluate(explorer.defaults() | {"device.dynamics.cavity_volume": 5e-4})
     assert ans["status"] == "ok" and not ans["stable"] and not ans["meets_requirement"]
     assert ans["decay_rate"] < 0 and math.isfinite(ans["decay_rate"])
+
+
+@pytest.mark.cli
+@pytest.mark.parametrize(("argv", "words"), [
+    (["explore", "pump_pe600_statics", "--no-browser"], "device.dynamics"),
+    (["explore", "pump_pe600_dynamics", "--no-browser", "--port", "70000"], "--port 70000"),
+])
+def test_explore_command_refuses_bad_input_with_exit_2(argv, words, capsys):
+    from autobal import cli
+
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    assert words in err or "pip install 'autobal[explore]'" in err  # without the extra: the one line saying so
