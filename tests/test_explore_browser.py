@@ -18,7 +18,8 @@ import pytest
 pytest.importorskip("bokeh")
 sync_api = pytest.importorskip("playwright.sync_api")
 CHROMIUM = Path("/usr/bin/chromium")
-pytestmark = [pytest.mark.slow, pytest.mark.cli,
+# one worker under pytest-xdist (--dist loadgroup): one server and one browser for the module
+pytestmark = [pytest.mark.slow, pytest.mark.cli, pytest.mark.xdist_group("explore_browser"),
               pytest.mark.skipif(not CHROMIUM.exists(), reason="needs Debian's chromium at /usr/bin/chromium")]
 
 SCENE = "pump_pe600_dynamics"
