@@ -154,54 +154,37 @@ def _with(model, path: str, value):
 
 # ---- the live computation -------------------------------------------------------------------------------------
 
-class DeviceExplorer:
-    """The what-if computation of a device-dynamics scene: operating point, poles, verdict and AFC of the
-    headline model (energy-consistent, physical forcing) for changed parameters.
-
-    Parameters
-    ----------
-    source : str or Path
-        A shipped scene name or a YAML file (what ``autobal.load`` takes).
-    """
+class Settings:
+    """A scene and its sliders: the settings (scene path -> value in the scene's unit), the section they make,
+    the scene they write."""
 
     def __init__(self, source: str | Path):
         self.path = scenario.resolve(source)
         self.raw = scenario.read(self.path)
         self.scene = scenario.load(self.path)
-        sc = self.scene
-        if sc.device is None or sc.device.dynamics is None:
-            raise ScenarioError(f"{sc.name}: explore needs a scene with device.dynamics (this version explores the "
-                                "device's statics and dynamics: pump_pe600_dynamics, compressor_k180_dynamics)")
-        a = sc.analyses
-        freq, stab = getattr(a, "frequency", None), getattr(a, "stability", None)
-        self.psi1 = (freq or stab).operating_ratio if (freq or stab) is not None else 1.0
-        o = freq.omega if freq is not None else None
-        self.omega_range = (o.start, o.stop, o.points) if o is not None else (10.0, 8000.0, 600)
-        self.required_decay = stab.decay_rate if stab is not None else 0.0
-        self.params = parameters(sc.device, self.raw, "device") + parameters(sc.device.dynamics, self.raw,
-                                                                              "device.dynamics")
-        self.by_path = {p.path: p for p in self.params}
-        self._statics_cache: dict = {}  # structure key -> (ParametricStatics, group names)
-        self._models: dict = {}  # structure key -> (Jacobian Function, model)
-        self._last = None  # (active set, W) of the last solved point: the warm start
+        self.params: list[Parameter] = []
 
-    # -- settings
+    @property
+    def by_path(self) -> dict:
+        return {p.path: p for p in self.params}
+
     def defaults(self) -> dict:
         """Scene path -> value in the scene's unit, as the scene writes it."""
         return {p.path: p.value for p in self.params}
 
-    def device(self, values: dict):
-        """DeviceParams (SI) of the settings ``values`` (path -> scene unit), by the scene's adapter."""
-        section = self.scene.device
+    def section(self, part: str, values: dict):
+        """The scene's validated section ``part`` with the settings ``values`` (path -> scene unit) in SI."""
+        section, by_path = getattr(self.scene, part), self.by_path
         for path, v in values.items():
-            p = self.by_path[path]
-            if v != p.value:
-                section = _with(section, path.removeprefix("device."), p.si(v))
-        return adapt(section)
+            p = by_path[path]
+            if v != p.value and path.startswith(part + "."):
+                section = _with(section, path.removeprefix(part + "."), p.si(v))
+        return section
 
     def overrides(self, values: dict) -> dict:
         """The changed settings as ``--set`` overrides: path -> text with the scene's unit."""
-        return {k: self.by_path[k].text(v) for k, v in values.items() if v != self.by_path[k].value}
+        by_path = self.by_path
+        return {k: by_path[k].text(v) for k, v in values.items() if v != by_path[k].value}
 
     def scene_yaml(self, values: dict) -> str:
         """The scene with the settings written in, as YAML with units (``autobal run`` reproduces it)."""
@@ -215,6 +198,39 @@ class DeviceExplorer:
         path = Path(path)
         path.write_text(self.scene_yaml(values))
         return path
+
+
+class DeviceExplorer(Settings):
+    """The what-if computation of a device-dynamics scene: operating point, poles, verdict and AFC of the
+    headline model (energy-consistent, physical forcing) for changed parameters.
+
+    Parameters
+    ----------
+    source : str or Path
+        A shipped scene name or a YAML file (what ``autobal.load`` takes).
+    """
+
+    def __init__(self, source: str | Path):
+        super().__init__(source)
+        sc = self.scene
+        if getattr(sc, "device", None) is None or sc.device.dynamics is None:
+            raise ScenarioError(f"{sc.name}: explore needs a scene with device.dynamics (this version explores the "
+                                "device's statics and dynamics: pump_pe600_dynamics, compressor_k180_dynamics)")
+        a = sc.analyses
+        freq, stab = getattr(a, "frequency", None), getattr(a, "stability", None)
+        self.psi1 = (freq or stab).operating_ratio if (freq or stab) is not None else 1.0
+        o = freq.omega if freq is not None else None
+        self.omega_range = (o.start, o.stop, o.points) if o is not None else (10.0, 8000.0, 600)
+        self.required_decay = stab.decay_rate if stab is not None else 0.0
+        self.params = parameters(sc.device, self.raw, "device") + parameters(sc.device.dynamics, self.raw,
+                                                                              "device.dynamics")
+        self._statics_cache: dict = {}  # structure key -> (ParametricStatics, group names)
+        self._models: dict = {}  # structure key -> (Jacobian Function, model)
+        self._last = None  # (active set, W) of the last solved point: the warm start
+
+    def device(self, values: dict):
+        """DeviceParams (SI) of the settings ``values`` (path -> scene unit), by the scene's adapter."""
+        return adapt(self.section("device", values))
 
     # -- the fast path
     def _statics(self, dd: dv.DeviceDesign) -> tuple[ParametricStatics, tuple]:
@@ -371,6 +387,70 @@ class DeviceExplorer:
         return ""
 
 
+class SpinupExplorer(Settings):
+    """The what-if computation of a spin-up scene (``analyses.spinup``): the current optimum's speed profile and the
+    constant ramps re-simulated (CVODES, :func:`autobal.ocp.simulation.resimulate` and
+    :func:`~autobal.ocp.simulation.baselines`, the batch run's re-simulations) for a changed rotor or drive; the
+    optimum itself is found again only on request (:meth:`optimise`: the batch run's optimisation)."""
+
+    def __init__(self, source: str | Path):
+        super().__init__(source)
+        sc = self.scene
+        if getattr(sc, "rotor", None) is None or getattr(sc.analyses, "spinup", None) is None:
+            raise ScenarioError(f"{sc.name}: explore needs a scene with device.dynamics or a rotor with "
+                                "analyses.spinup")
+        self.params = parameters(sc.rotor, self.raw, "rotor")
+        self.profile = None  # (u, h, the settings it was optimised for) of the current optimum
+
+    def problem(self, values: dict):
+        """The spin-up problem (SpinupOcp) of the settings: the scene's rotor section with them, its adapter."""
+        from autobal.analyses import spinup
+
+        scene = self.scene.model_copy(update={"rotor": self.section("rotor", values)})
+        return spinup.ocp(scene, scene.analyses.spinup)
+
+    def optimise(self, values: dict) -> dict:
+        """The batch run's optimisation (``analyses.spinup``) of the settings; keeps its profile as the current
+        optimum.  Returns its peak (delta/e) and its time (s)."""
+        from autobal.analyses import spinup
+
+        t0 = time.perf_counter()
+        scene = scenario.load(self.path, overrides=self.overrides(values))
+        res = spinup.run(scene, scene.analyses.spinup)
+        tr = res.optimum
+        ocp = spinup.ocp(scene, scene.analyses.spinup)
+        u = np.asarray(tr.alpha) / ocp.alpha_max
+        h = np.diff(np.append(tr.t_u, tr.t[-1])) * ocp.Om
+        self.profile = (u, h, dict(values))
+        return {"peak_over_e": res.data["peak_deflection_over_e"], "seconds": time.perf_counter() - t0}
+
+    def evaluate(self, values: dict) -> dict:
+        """The current optimum's profile and the constant ramps re-simulated for the settings: peaks (delta/e and
+        m), the critical speed (rad/s), the drive's use; ``status`` "ok", "refused" or "no_optimum"."""
+        from autobal.ocp.simulation import baselines, drive_use, resimulate
+
+        t0 = time.perf_counter()
+        try:
+            ocp = self.problem(values)
+        except (ValueError, ZeroDivisionError, AutobalError) as exc:
+            return {"status": "refused", "message": str(exc)}
+        P = ocp.params
+        out = {"status": "ok", "message": "", "critical_speed": P.omega_cr, "eccentricity": P.e, "ramps": {}}
+        for key, tr in baselines(ocp).items():
+            out["ramps"][key] = {"label": tr.label, "peak_over_e": tr.peak_delta, "t": tr.t, "delta": tr.delta,
+                                 "within_drive_limits": drive_use(ocp, tr)["within_drive_limits"]}
+        if self.profile is None:
+            return out | {"status": "no_optimum", "message": "the optimum is being found (autobal run's "
+                                                             "optimisation)"}
+        u, h, at = self.profile
+        tr = resimulate(ocp, u, h, "optimum")
+        out["optimum"] = {"peak_over_e": tr.peak_delta, "t": tr.t, "delta": tr.delta, "time_of_peak": tr.t_peak,
+                          "omega": tr.omega, "within_drive_limits": drive_use(ocp, tr)["within_drive_limits"],
+                          "optimised_for": self.overrides(at)}
+        out["compute_ms"] = 1e3 * (time.perf_counter() - t0)
+        return out
+
+
 def _exact(ans: dict) -> str:
     """The shown numbers at full precision (JSON, SI and µm), for the browser test's comparison."""
     import json
@@ -399,10 +479,71 @@ def _fmt(v: float, digits: int = 6) -> str:
     return "—" if v is None or not np.isfinite(v) else f"{v:.{digits}g}"
 
 
+def _sliders(explorer: Settings) -> dict:
+    """One Bokeh slider per parameter, in the scene's unit and within its bounds: path -> Slider."""
+    from bokeh.models import CustomJSTickFormatter, Slider
+
+    shown = CustomJSTickFormatter(code="return String(Number(tick.toPrecision(6)))")  # 6 digits, any scale
+    return {p.path: Slider(title=p.label, start=p.start, end=p.end, value=p.value,
+                           step=(p.end - p.start) / SLIDER_STEPS, format=shown, width=330, name=p.path)
+            for p in explorer.params}
+
+
+def _record_buttons(doc, explorer: Settings, values: dict, out: Path):
+    """"save scene" (the settings as a YAML scene with units) and "report" (``autobal.run`` of it, in a thread,
+    writing report.html): a row of both and the line that says what they wrote."""
+    from bokeh.layouts import row
+    from bokeh.models import Button, Div
+
+    save_btn, report_btn = Button(label="save scene", name="save"), Button(label="report", name="report")
+    saved = Div(text="", name="saved")
+
+    def on_save():
+        path = out / f"{explorer.scene.name}_explored.yaml"
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+            explorer.save(values, path)
+        except OSError as exc:
+            saved.text = f"not saved: {html.escape(str(exc))}"
+            return
+        saved.text = f"saved <code id='saved_path'>{path}</code>"
+
+    def on_report():
+        vals = dict(values)
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+            path = explorer.save(vals, out / f"{explorer.scene.name}_explored.yaml")
+        except OSError as exc:
+            saved.text = f"no report: the scene cannot be saved: {html.escape(str(exc))}"
+            return
+        report_btn.disabled = True
+        saved.text = "running the report (autobal.run) …"
+
+        def work():
+            import autobal
+
+            try:
+                folder = out / f"{explorer.scene.name}_explored"
+                autobal.run(autobal.load(path), out=folder)
+                msg = f"report written: <code id='report_path'>{folder / 'report.html'}</code>"
+            except Exception as exc:  # noqa: BLE001
+                msg = f"report failed: {html.escape(f'{type(exc).__name__}: {exc}')}"
+
+            def done():
+                saved.text = msg
+                report_btn.disabled = False
+            doc.add_next_tick_callback(done)
+        threading.Thread(target=work, daemon=True).start()
+
+    save_btn.on_click(on_save)
+    report_btn.on_click(on_report)
+    return row(save_btn, report_btn, saved)
+
+
 def make_document(explorer: DeviceExplorer, out: Path):
     """The Bokeh document builder of the page (one per browser session)."""
     from bokeh.layouts import column, row
-    from bokeh.models import Button, ColumnDataSource, CustomJSTickFormatter, Div, Slider
+    from bokeh.models import ColumnDataSource, Div
     from bokeh.plotting import figure
     from jinja2 import Template
 
@@ -411,12 +552,7 @@ def make_document(explorer: DeviceExplorer, out: Path):
     def modify(doc):
         values = explorer.defaults()
         state = {"pending": None, "busy": False, "good": None, "moved": None, "seq": 0}
-        sliders = {}
-        shown = CustomJSTickFormatter(code="return String(Number(tick.toPrecision(6)))")  # 6 digits, any scale
-        for p in explorer.params:
-            s = Slider(title=p.label, start=p.start, end=p.end, value=p.value, step=(p.end - p.start) / SLIDER_STEPS,
-                       format=shown, width=330, name=p.path)
-            sliders[p.path] = s
+        sliders = _sliders(explorer)
         # fixed sizes: a new text re-renders its Div only, not the page's layout
         verdict = Div(text="", name="verdict", width=1100, height=26,
                       styles={"font-size": "16px", "font-weight": "bold"})
@@ -436,8 +572,7 @@ def make_document(explorer: DeviceExplorer, out: Path):
                       y_axis_label="Im λ / 2π, Hz", x_axis_type="log", width=560, height=300, name="poles",
                       toolbar_location=None)
         pole_dots = pmap.scatter("abs_re", "hz", source=pole_src, size=9, marker="x", line_width=2, color="colour")
-        save_btn, report_btn = Button(label="save scene", name="save"), Button(label="report", name="report")
-        saved = Div(text="", name="saved")
+        record = _record_buttons(doc, explorer, values, out)
 
         def show(ans: dict, moved: str | None):
             good = ans.get("status") == "ok"
@@ -559,55 +694,166 @@ def make_document(explorer: DeviceExplorer, out: Path):
             s.on_change("value", on_change(path))
             s.on_change("value_throttled", on_release)
 
-        def on_save():
-            path = out / f"{explorer.scene.name}_explored.yaml"
-            try:
-                out.mkdir(parents=True, exist_ok=True)
-                explorer.save(values, path)
-            except OSError as exc:
-                saved.text = f"not saved: {html.escape(str(exc))}"
-                return
-            saved.text = f"saved <code id='saved_path'>{path}</code>"
-
-        def on_report():
-            vals = dict(values)
-            try:
-                out.mkdir(parents=True, exist_ok=True)
-                path = explorer.save(vals, out / f"{explorer.scene.name}_explored.yaml")
-            except OSError as exc:
-                saved.text = f"no report: the scene cannot be saved: {html.escape(str(exc))}"
-                return
-            report_btn.disabled = True
-            saved.text = "running the report (autobal.run) …"
-
-            def work():
-                import autobal
-
-                try:
-                    folder = out / f"{explorer.scene.name}_explored"
-                    autobal.run(autobal.load(path), out=folder)
-                    msg = f"report written: <code id='report_path'>{folder / 'report.html'}</code>"
-                except Exception as exc:  # noqa: BLE001
-                    msg = f"report failed: {html.escape(f'{type(exc).__name__}: {exc}')}"
-
-                def done():
-                    saved.text = msg
-                    report_btn.disabled = False
-                doc.add_next_tick_callback(done)
-            threading.Thread(target=work, daemon=True).start()
-
-        save_btn.on_click(on_save)
-        report_btn.on_click(on_report)
         show(explorer.evaluate(values), None)
         head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
         # separate roots placed by the template: a changed text lays out its own root, not the 40 sliders
-        doc.add_root(column(head, verdict, status, check, row(save_btn, report_btn, saved), name="head"))
+        doc.add_root(column(head, verdict, status, check, record, name="head"))
         doc.add_root(column(*sliders.values(), name="controls"))
         doc.add_root(numbers)
         doc.add_root(row(afc, pmap, name="plots"))
         doc.add_root(seq)
         doc.template = page
         doc.title = f"autobal explore: {explorer.scene.name}"
+
+    return modify
+
+
+RAMP_COLOURS = {"constant_ramp": "#7f7f7f", "max_acceleration_ramp": "#ff7f0e", "feasible_ramp": "#2ca02c"}
+
+
+def make_spinup_document(explorer: SpinupExplorer, out: Path):
+    """The Bokeh document builder of a spin-up scene's page: the deflection of the current optimum's profile and of
+    the ramps re-simulated for the settings, and "re-optimise" (the batch optimisation, in a thread)."""
+    from bokeh.layouts import column, row
+    from bokeh.models import Button, ColumnDataSource, Div
+    from bokeh.plotting import figure
+    from jinja2 import Template
+
+    page = Template(PAGE_HTML)
+    lock = threading.Lock()  # one optimisation at a time, whatever the sessions
+
+    def modify(doc):
+        values = explorer.defaults()
+        state = {"pending": None, "busy": False, "seq": 0, "started": None}
+        sliders = _sliders(explorer)
+        verdict = Div(text="", width=1100, height=26, styles={"font-size": "16px", "font-weight": "bold"})
+        status = Div(text="", width=1100, height=20)
+        numbers = Div(text="", name="numbers", width=1100, height=150)
+        seq = Div(text="<span id='seq'>0</span>", name="seq", width=40, height=10,
+                  styles={"font-size": "1px", "color": "white"})
+        fig = figure(title="deflection δ/e of the rotor", x_axis_label="time, s", y_axis_label="δ/e", width=900,
+                     height=360, name="plots", toolbar_location=None)
+        sources = {k: ColumnDataSource({"t": [], "d": []}) for k in ("optimum", *RAMP_COLOURS)}
+        lines = {"optimum": fig.line("t", "d", source=sources["optimum"], line_width=2.5, color="#1f77b4",
+                                     legend_label="current optimum's profile")}
+        for k, c in RAMP_COLOURS.items():
+            lines[k] = fig.line("t", "d", source=sources[k], line_width=1.5, color=c, legend_label=k.replace("_", " "))
+        reopt = Button(label="re-optimise", name="reoptimise", button_type="primary")
+
+        def show(ans: dict, moved: str | None):
+            good = ans["status"] in ("ok", "no_optimum")
+            rows = []
+            if good:
+                for k, r in ans["ramps"].items():
+                    sources[k].data = {"t": r["t"], "d": r["delta"]}
+                    rows.append((r["label"], r["peak_over_e"], r["within_drive_limits"]))
+                for k in RAMP_COLOURS:
+                    lines[k].visible = k in ans["ramps"]
+            opt = ans.get("optimum")
+            if opt is not None:
+                sources["optimum"].data = {"t": opt["t"], "d": opt["delta"]}
+                rows.insert(0, ("current optimum's profile", opt["peak_over_e"], opt["within_drive_limits"]))
+            e = ans.get("eccentricity", math.nan)
+            table = "".join(f"<tr><td>{html.escape(label)}</td><td id='peak_{i}'>{_fmt(pk)}</td>"
+                            f"<td>{_fmt(pk * e * 1e6)} µm</td><td>{'yes' if ok else 'NO' if ok is False else '—'}</td>"
+                            f"</tr>" for i, (label, pk, ok) in enumerate(rows))
+            if good:
+                crit = ans["critical_speed"]
+                numbers.text = (f"<p>critical speed <span id='critical'>{_fmt(crit * 30 / np.pi)}</span> rpm "
+                                f"({_fmt(crit)} rad/s)</p><table><tr><th>profile</th><th>peak δ/e</th><th>peak δ</th>"
+                                f"<th>within the drive's limits</th></tr>{table}</table>")
+            feasible = [pk for label, pk, ok in rows[1:] if ok is not False]
+            if opt is not None and good:
+                best = min(feasible) if feasible else math.inf
+                ok = opt["peak_over_e"] <= best and opt["within_drive_limits"] is not False
+                words = (f"the optimum's profile: peak δ/e {_fmt(opt['peak_over_e'], 5)}, "
+                         f"{'below' if ok else 'NOT below'} the best ramp the drive can run ({_fmt(best, 5)})")
+                if not ok and moved:
+                    words += f"; crossed by {moved} (re-optimise)"
+                if opt["optimised_for"] != explorer.overrides(values):
+                    words += " — profile optimised for other settings"
+                verdict.text = f"<span id='verdict_text'>{html.escape(words)}</span>"
+                verdict.styles = {"color": "green" if ok else "red", "font-size": "16px", "font-weight": "bold"}
+                status.text = f"<span id='status_text'>current (computed in {ans['compute_ms']:.0f} ms)</span>"
+            else:
+                verdict.text = f"<span id='verdict_text'>{html.escape(ans['status'].upper() + ': ' + ans['message'])}"\
+                               "</span>"
+                verdict.styles = {"color": "red" if not good else "#555", "font-size": "16px", "font-weight": "bold"}
+                status.text = ("<span id='status_text'>current ramps; " + ("the optimum is being found" if good else
+                               "the curves in the plot are the last good answer") + "</span>")
+            state["seq"] += 1
+            seq.text = f"<span id='seq'>{state['seq']}</span>"
+
+        def compute():
+            while state["pending"] is not None:
+                vals, moved = state["pending"]
+                state["pending"] = None
+                try:
+                    ans = explorer.evaluate(vals)
+                except Exception as exc:  # noqa: BLE001 (the server survives every setting)
+                    ans = {"status": "failed", "message": f"{type(exc).__name__}: {exc}"}
+                doc.hold("combine")
+                try:
+                    show(ans, moved)
+                finally:
+                    doc.unhold()
+            state["busy"] = False
+
+        def request(moved):
+            state["pending"] = (dict(values), moved)
+            if not state["busy"]:
+                state["busy"] = True
+                doc.add_next_tick_callback(compute)
+
+        def on_change(path):
+            def cb(attr, old, new):
+                values[path] = float(new)
+                request(path.removeprefix("rotor."))
+            return cb
+
+        for path, sl in sliders.items():
+            sl.on_change("value", on_change(path))
+
+        def tick():
+            if state["started"] is not None:
+                reopt.label = f"optimising … {time.perf_counter() - state['started']:.0f} s"
+
+        def optimise():
+            vals = dict(values)
+            reopt.disabled = True
+            state["started"] = time.perf_counter()
+
+            def work():
+                with lock:
+                    try:
+                        res = explorer.optimise(vals)
+                        msg = f"optimised in {res['seconds']:.1f} s"
+                    except Exception as exc:  # noqa: BLE001
+                        msg = f"optimisation failed: {type(exc).__name__}: {exc}"
+
+                def done():
+                    state["started"] = None
+                    reopt.disabled, reopt.label = False, "re-optimise"
+                    optimised.text = f"<span id='optimised'>{html.escape(msg)}</span>"
+                    request(None)
+                doc.add_next_tick_callback(done)
+            threading.Thread(target=work, daemon=True).start()
+
+        optimised = Div(text="", width=400)
+        reopt.on_click(optimise)
+        doc.add_periodic_callback(tick, 500)
+        record = _record_buttons(doc, explorer, values, out)
+        head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
+        doc.add_root(column(head, verdict, status, row(reopt, optimised), record, name="head"))
+        doc.add_root(column(*sliders.values(), name="controls"))
+        doc.add_root(numbers)
+        doc.add_root(fig)
+        doc.add_root(seq)
+        doc.template = page
+        doc.title = f"autobal explore: {explorer.scene.name}"
+        request(None)
+        if explorer.profile is None:
+            optimise()
 
     return modify
 
@@ -624,12 +870,16 @@ def serve(source: str | Path, port: int = 0, browser: bool = True, out: str | Pa
     from bokeh.server.server import Server
     from bokeh.server.views.ws import WSHandler
 
-    explorer = DeviceExplorer(source)
+    scene = scenario.load(source)
+    if getattr(scene, "device", None) is None and getattr(scene, "rotor", None) is not None:
+        explorer, builder = SpinupExplorer(source), make_spinup_document
+    else:
+        explorer, builder = DeviceExplorer(source), make_document
     if port == 0:  # a free port, known before the server starts (the websocket's allowed origin names it)
         with socket.socket() as s:
             s.bind((HOST, 0))
             port = s.getsockname()[1]
-    app = Application(FunctionHandler(make_document(explorer, Path(out).resolve())))
+    app = Application(FunctionHandler(builder(explorer, Path(out).resolve())))
     server = Server({"/": app}, address=HOST, port=port, allow_websocket_origin=[f"{HOST}:{port}"])
 
     class NoDelayWS(WSHandler):  # small messages each way: no Nagle delay on the websocket
