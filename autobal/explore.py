@@ -14,9 +14,13 @@ the same models and solvers the batch run uses:
   from one eigen-decomposition, H(jw) = C V (jw - Lambda)^-1 V^-1 B, its peaks refined by
   :func:`autobal.analysis.frequency.peaks`, as the batch run refines them.
 
+A spin-up scene (``analyses.spinup``) gets the rotor's sliders: the current optimum's speed profile and the
+constant ramps re-simulated by CVODES (:func:`autobal.ocp.simulation.resimulate`, ``baselines``) for the changed
+rotor, and "re-optimise" (the batch run's optimisation, in a thread).
+
 "save scene" writes the settings as a YAML scene with units that ``autobal run`` reproduces; "report" runs
-``autobal.run`` on it and writes its report.html.  :class:`DeviceExplorer` is the computation (no Bokeh);
-:func:`serve` the page.
+``autobal.run`` on it and writes its report.html.  :class:`DeviceExplorer` and :class:`SpinupExplorer` are the
+computations (no Bokeh); :func:`serve` the page.
 """
 
 from __future__ import annotations
@@ -540,6 +544,38 @@ def _record_buttons(doc, explorer: Settings, values: dict, out: Path):
     return row(save_btn, report_btn, saved)
 
 
+def _latest_wins(doc, evaluate, show, seq):
+    """``request(values, moved)``: compute the settings on the server's next tick and show them, the latest
+    winning (settings that arrive while one is computed are coalesced); every update one message to the browser
+    (``doc.hold``), counted in the ``seq`` Div (the browser test times them); the server survives every setting."""
+    state = {"pending": None, "busy": False, "seq": 0}
+
+    def compute():
+        while state["pending"] is not None:
+            vals, moved = state["pending"]
+            state["pending"] = None
+            try:
+                ans = evaluate(vals)
+            except Exception as exc:  # noqa: BLE001 (the server survives every setting)
+                ans = {"status": "failed", "message": f"{type(exc).__name__}: {exc}"}
+            doc.hold("combine")  # one message to the browser per update, not one per property
+            try:
+                show(ans, moved)
+                state["seq"] += 1
+                seq.text = f"<span id='seq'>{state['seq']}</span>"
+            finally:
+                doc.unhold()
+        state["busy"] = False
+
+    def request(values: dict, moved: str | None):
+        state["pending"] = (dict(values), moved)
+        if not state["busy"]:
+            state["busy"] = True
+            doc.add_next_tick_callback(compute)
+
+    return request
+
+
 def make_document(explorer: DeviceExplorer, out: Path):
     """The Bokeh document builder of the page (one per browser session)."""
     from bokeh.layouts import column, row
@@ -551,7 +587,7 @@ def make_document(explorer: DeviceExplorer, out: Path):
 
     def modify(doc):
         values = explorer.defaults()
-        state = {"pending": None, "busy": False, "good": None, "moved": None, "seq": 0}
+        state = {"good": None}
         sliders = _sliders(explorer)
         # fixed sizes: a new text re-renders its Div only, not the page's layout
         verdict = Div(text="", name="verdict", width=1100, height=26,
@@ -639,33 +675,14 @@ def make_document(explorer: DeviceExplorer, out: Path):
                 verdict.styles = {"color": "red", "font-size": "16px", "font-weight": "bold"}
                 status.text = ("<span id='status_text'>the numbers in grey are the last good answer, not the current "
                                "setting</span>")
-            state["seq"] += 1  # the updates shown, counted (the browser test times them)
-            seq.text = f"<span id='seq'>{state['seq']}</span>"
 
-        def compute():
-            # latest wins: the values at the time of computing, events that arrived meanwhile are coalesced
-            while state["pending"] is not None:
-                vals, moved = state["pending"]
-                state["pending"] = None
-                try:
-                    ans = explorer.evaluate(vals)
-                except Exception as exc:  # noqa: BLE001 (the server survives every setting)
-                    ans = {"status": "failed", "message": f"{type(exc).__name__}: {exc}"}
-                doc.hold("combine")  # one message to the browser per update, not one per property
-                try:
-                    show(ans, moved)
-                finally:
-                    doc.unhold()
-            state["busy"] = False
+        request = _latest_wins(doc, explorer.evaluate, show, seq)
 
         def on_change(path):
             def cb(attr, old, new):
                 values[path] = float(new)
-                state["pending"] = (dict(values), path)
                 check.text = ""
-                if not state["busy"]:
-                    state["busy"] = True
-                    doc.add_next_tick_callback(compute)
+                request(values, path)
             return cb
 
         def run_check():
@@ -724,7 +741,7 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
 
     def modify(doc):
         values = explorer.defaults()
-        state = {"pending": None, "busy": False, "seq": 0, "started": None}
+        state = {"started": None}
         sliders = _sliders(explorer)
         verdict = Div(text="", width=1100, height=26, styles={"font-size": "16px", "font-weight": "bold"})
         status = Div(text="", width=1100, height=20)
@@ -781,34 +798,13 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
                 verdict.styles = {"color": "red" if not good else "#555", "font-size": "16px", "font-weight": "bold"}
                 status.text = ("<span id='status_text'>current ramps; " + ("the optimum is being found" if good else
                                "the curves in the plot are the last good answer") + "</span>")
-            state["seq"] += 1
-            seq.text = f"<span id='seq'>{state['seq']}</span>"
 
-        def compute():
-            while state["pending"] is not None:
-                vals, moved = state["pending"]
-                state["pending"] = None
-                try:
-                    ans = explorer.evaluate(vals)
-                except Exception as exc:  # noqa: BLE001 (the server survives every setting)
-                    ans = {"status": "failed", "message": f"{type(exc).__name__}: {exc}"}
-                doc.hold("combine")
-                try:
-                    show(ans, moved)
-                finally:
-                    doc.unhold()
-            state["busy"] = False
-
-        def request(moved):
-            state["pending"] = (dict(values), moved)
-            if not state["busy"]:
-                state["busy"] = True
-                doc.add_next_tick_callback(compute)
+        request = _latest_wins(doc, explorer.evaluate, show, seq)
 
         def on_change(path):
             def cb(attr, old, new):
                 values[path] = float(new)
-                request(path.removeprefix("rotor."))
+                request(values, path.removeprefix("rotor."))
             return cb
 
         for path, sl in sliders.items():
@@ -835,7 +831,7 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
                     state["started"] = None
                     reopt.disabled, reopt.label = False, "re-optimise"
                     optimised.text = f"<span id='optimised'>{html.escape(msg)}</span>"
-                    request(None)
+                    request(values, None)
                 doc.add_next_tick_callback(done)
             threading.Thread(target=work, daemon=True).start()
 
@@ -851,7 +847,7 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
         doc.add_root(seq)
         doc.template = page
         doc.title = f"autobal explore: {explorer.scene.name}"
-        request(None)
+        request(values, None)
         if explorer.profile is None:
             optimise()
 
