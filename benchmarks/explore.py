@@ -8,7 +8,7 @@ every change moves the operating point or the dynamics):
   ``autobal.run`` of the scene loaded with that one override (frequency, stability with its map, transient: what
   the page's "report" runs) and against the batch functions of the same numbers alone (``autobal.load`` with the
   override, :class:`~autobal.analysis.linearize.Setup` with IPOPT's statics and the model built at its point,
-  ``frequency.study`` and ``stability.study`` of the headline model);
+  ``frequency.study`` and ``stability.verdict`` of the headline model);
 - its statics (the warm-started Newton solve) against IPOPT's (:class:`~autobal.analysis.statics.StaticsSolver`
   built and solved for the changed device, as the batch run does);
 - its dynamics (one call of the Jacobian Function, eigenvalues, AFC by the modal sum, peaks) against
@@ -63,7 +63,7 @@ def main(repeats: int = 5) -> list[dict]:
         setup = Setup(dynamic_device(scene), scene.analyses.frequency.operating_ratio)
         o = scene.analyses.frequency.omega
         f = fr.study(setup, ["nonlinear"], "physical", (o.start, o.stop, o.points)).data["headline"]
-        return f, st.study(setup, ["nonlinear"]).data
+        return f, st.verdict(setup.linear("nonlinear"))  # the headline verdict of stability.study
 
     t_batch = cpu_best_of(repeats, cycling(batch_numbers, settings))
     t_run = cpu_best_of(max(2, repeats // 2), cycling(lambda v: autobal.run(autobal.load(SCENE, set=ex.overrides(v))),
