@@ -65,26 +65,29 @@ def _det(M) -> Fraction:
     return det
 
 
-def verdict(lin: LinearModel) -> dict:
-    """Poles, damping ratios, natural frequencies, margin and Hurwitz test of one linear model."""
+def verdict(lin: LinearModel, hurwitz: bool = True) -> dict:
+    """Poles, damping ratios, natural frequencies, margin and (``hurwitz``) the Hurwitz test of one linear model
+    (its exact determinants take milliseconds: the live explorer, autobal/explore.py, leaves them out)."""
     lam = lin.poles()
     lam = lam[np.lexsort((lam.imag, -lam.real))]  # least stable first
     wn = np.abs(lam)
     zeta = np.where(wn > 0, -lam.real / np.where(wn > 0, wn, 1), 1.0)
-    a = np.real(np.poly(lam / OMEGA_REF))  # monic, in p~ = p / omega_ref
-    minors = hurwitz_minors(a)
     unstable = lam.real > 0
-    return {
+    out = {
         "stable": bool(not unstable.any()),
         "poles": {"real": lam.real, "imag": lam.imag},
         "damping_ratio": zeta, "natural_frequency": wn,
         "unstable_modes": [{"real": float(x.real), "imag": float(abs(x.imag))} for x in lam[unstable] if x.imag >= 0],
         "margin": {"decay_rate": float(-lam.real.max()), "min_damping_ratio": float(zeta.min())},
-        "hurwitz": {"omega_ref": OMEGA_REF, "coefficients": a, "minors": minors,
-                    "coefficients_positive": bool(np.all(a > 0)),
-                    "negative_minors": [i + 1 for i, m in enumerate(minors) if m <= 0],
-                    "stable": bool(np.all(a > 0) and all(m > 0 for m in minors))},
     }
+    if hurwitz:
+        a = np.real(np.poly(lam / OMEGA_REF))  # monic, in p~ = p / omega_ref
+        minors = hurwitz_minors(a)
+        out["hurwitz"] = {"omega_ref": OMEGA_REF, "coefficients": a, "minors": minors,
+                          "coefficients_positive": bool(np.all(a > 0)),
+                          "negative_minors": [i + 1 for i, m in enumerate(minors) if m <= 0],
+                          "stable": bool(np.all(a > 0) and all(m > 0 for m in minors))}
+    return out
 
 
 def _axis(ax) -> np.ndarray:

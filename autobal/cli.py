@@ -246,6 +246,10 @@ def parser() -> argparse.ArgumentParser:
     p_report.add_argument("folder", type=Path, metavar="OUT",
                           help="an output folder of 'autobal run' (holds results.json or failed_solve.json)")
     units_arg(p_report)
+    p_explore = sub.add_parser("explore", help="a live what-if page of a scene on 127.0.0.1 (the explore extra)")
+    p_explore.add_argument("scenario", help="a YAML file, or the name of a shipped scenario (see 'autobal list')")
+    p_explore.add_argument("--port", type=int, default=0, help="port on 127.0.0.1 (default: a free one)")
+    p_explore.add_argument("--no-browser", action="store_true", help="print the URL, do not open a browser")
     return ap
 
 
@@ -343,6 +347,10 @@ def _main(args) -> int:
         return EXIT_OK
     if args.cmd == "report":
         return _report(args)
+    if args.cmd == "explore":
+        from autobal.explore import command
+
+        return command(args)
     progress.set_quiet(getattr(args, "quiet", False))  # bars: on a terminal unless --quiet
     chosen = {f"display.{kind}": unit for kind, unit in _units(getattr(args, "units", [])).items()}
     scn = scenario.load(args.scenario, overrides=_overrides(args.set) | chosen)

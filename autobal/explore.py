@@ -1,0 +1,910 @@
+"""``autobal explore SCENE``: a live what-if page of a scene (Bokeh server on 127.0.0.1, the ``explore`` extra).
+
+One slider per parameter the scene writes in its ``device`` section, in the scene's own units and within the
+bounds the parameter's declaration gives; every change re-solves the scene's device through the fast paths of
+the same models and solvers the batch run uses:
+
+- statics: the Newton solve of the device's balances with every dimensionless group as a parameter
+  (:class:`autobal.analysis.statics.ParametricStatics`, the batch solver of sweeps and Monte Carlo), warm-started
+  from the previous point; on release of a slider IPOPT (:class:`~autobal.analysis.statics.StaticsSolver`, what
+  ``autobal run`` solves) cross-checks it, and its answer is shown where it differs;
+- dynamics: the exact Jacobians of the nonlinear model (:func:`autobal.models.dynamics.build`) built once with the
+  groups and scales as symbols, so a change is one call of the Jacobian Function, not a rebuild; poles and
+  verdict by :func:`autobal.analysis.stability.verdict`; the AFC on the grid of :func:`autobal.analysis.frequency.grid`
+  from one eigen-decomposition, H(jw) = C V (jw - Lambda)^-1 V^-1 B, its peaks refined by
+  :func:`autobal.analysis.frequency.peaks`, as the batch run refines them.
+
+A spin-up scene (``analyses.spinup``) gets the rotor's sliders: the current optimum's speed profile and the
+constant ramps re-simulated by CVODES (:func:`autobal.ocp.simulation.resimulate`, ``baselines``) for the changed
+rotor, and "re-optimise" (the batch run's optimisation, in a thread).
+
+"save scene" writes the settings as a YAML scene with units that ``autobal run`` reproduces; "report" runs
+``autobal.run`` on it and writes its report.html.  :class:`DeviceExplorer` and :class:`SpinupExplorer` are the
+computations (no Bokeh); :func:`serve` the page.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import html
+import math
+import re
+import socket
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import yaml
+
+from autobal import scenario
+from autobal.analysis import frequency as fr
+from autobal.analysis import stability as st
+from autobal.analysis.linearize import LinearModel
+from autobal.analysis.statics import ParametricStatics, StaticsSolver, ideal_guess
+from autobal.errors import AutobalError, ScenarioError, SolveError
+from autobal.models import device as dv
+from autobal.models.dynamics import build
+from autobal.parts import derived
+from autobal.parts.device import adapt
+from autobal.schema import section_at
+from autobal.units import to_si
+
+HOST = "127.0.0.1"
+#: scales of the device design that enter the dynamic model (symbols of the one built model)
+MODEL_SCALES = ("p_B", "s_B", "z_B", "x_B", "g1", "s_e")
+MODELS_KEPT = 8  # dynamic models kept built (one per structure: medium, regulator, margin)
+SLIDER_SPAN = 5.0  # a slider runs from value / SPAN to value * SPAN, inside the declared bounds
+SLIDER_STEPS = 400
+CHECK_RTOL = 1e-6  # IPOPT's operating point differs from Newton's when a value differs by more than this
+CHECK_AFTER_S = 1.0  # IPOPT cross-checks a setting once the sliders have rested this long
+_NUMBER = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
+
+
+# ---- the parameters of a scene --------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Parameter:
+    """One slider: a scene path, its quantity kind (None: dimensionless), the scene's unit and value in it, and
+    the slider's range in that unit (inside the declared bounds)."""
+
+    path: str
+    kind: str | None
+    unit: str
+    value: float
+    start: float
+    end: float
+    doc: str
+
+    def si(self, value: float) -> float:
+        """``value`` in the scene's unit -> SI, by the same conversion that loads a scene."""
+        return float(value) if self.kind is None else to_si(self.text(value), self.kind)
+
+    def text(self, value: float) -> str:
+        """``value`` as the scene writes it: the number (round-trip exact) and the unit."""
+        return f"{float(value)!r} {self.unit}".strip()
+
+    @property
+    def label(self) -> str:
+        return f"{self.path.removeprefix('device.')} ({self.unit or '1'})"
+
+
+def _raw_at(raw: dict, path: str):
+    node = raw
+    for part in path.split("."):
+        if not isinstance(node, dict) or part not in node:
+            return None
+        node = node[part]
+    return node
+
+
+def _slider_range(value: float, bounds: dict) -> tuple[float, float]:
+    if value == 0:
+        start, end = 0.0, 1.0
+    else:
+        start, end = sorted((value / SLIDER_SPAN, value * SLIDER_SPAN))
+    lo = bounds.get("ge", bounds.get("gt"))
+    hi = bounds.get("le", bounds.get("lt"))
+    if lo is not None:
+        start = max(start, lo if "ge" in bounds else lo + (end - start) / SLIDER_STEPS)
+    if hi is not None:
+        end = min(end, hi)
+    return start, end
+
+
+def parameters(section, raw: dict, prefix: str) -> list[Parameter]:
+    """The sliders of a validated scene section: every number it writes (``raw``: the scene as read) whose field
+    is declared with a unit in the models' parameter dataclasses (:mod:`autobal.parts.derived`)."""
+    cls = next(derived._PARAMS[c] for c in type(section).__mro__ if c in derived._PARAMS)
+    out = []
+    for f in dataclasses.fields(cls):
+        key = derived.key(f)
+        if key is None:
+            continue
+        value, path = section_at(section, key), f"{prefix}.{key}"
+        if value is None:
+            continue
+        if "unit" not in f.metadata:  # a nested part: its own declarations
+            if dataclasses.is_dataclass(f.type) or type(value) in derived._PARAMS or any(
+                    c in derived._PARAMS for c in type(value).__mro__):
+                out += parameters(value, raw, path)
+            continue
+        written = _raw_at(raw, path)
+        if isinstance(written, bool) or f.type in ("int", int) or isinstance(value, int) and not isinstance(
+                written, str):
+            continue  # counts (stages) are not slid
+        kind = f.metadata["kind"]
+        if kind is None and isinstance(written, int | float):
+            number, unit = float(written), ""
+        elif kind is not None and isinstance(written, str) and (m := _NUMBER.fullmatch(written)) and m.group(2):
+            number, unit = float(m.group(1)), m.group(2)
+        else:
+            continue
+        start, end = _slider_range(number, f.metadata["bounds"])
+        out.append(Parameter(path, kind, unit, number, start, end, f.metadata.get("doc", "")))
+    return out
+
+
+def _with(model, path: str, value):
+    """A copy of the pydantic ``model`` with the dotted ``path`` set to ``value`` (no validation: the slider
+    keeps each value inside its bounds; the dataclasses' own checks run when the section is adapted)."""
+    head, _, rest = path.partition(".")
+    new = _with(getattr(model, head), rest, value) if rest else value
+    return model.model_copy(update={head: new})
+
+
+# ---- the live computation -------------------------------------------------------------------------------------
+
+class Settings:
+    """A scene and its sliders: the settings (scene path -> value in the scene's unit), the section they make,
+    the scene they write."""
+
+    def __init__(self, source: str | Path):
+        self.path = scenario.resolve(source)
+        self.raw = scenario.read(self.path)
+        self.scene = scenario.load(self.path)
+        self.params: list[Parameter] = []
+
+    @property
+    def by_path(self) -> dict:
+        return {p.path: p for p in self.params}
+
+    def defaults(self) -> dict:
+        """Scene path -> value in the scene's unit, as the scene writes it."""
+        return {p.path: p.value for p in self.params}
+
+    def section(self, part: str, values: dict):
+        """The scene's validated section ``part`` with the settings ``values`` (path -> scene unit) in SI."""
+        section, by_path = getattr(self.scene, part), self.by_path
+        for path, v in values.items():
+            p = by_path[path]
+            if v != p.value and path.startswith(part + "."):
+                section = _with(section, path.removeprefix(part + "."), p.si(v))
+        return section
+
+    def overrides(self, values: dict) -> dict:
+        """The changed settings as ``--set`` overrides: path -> text with the scene's unit."""
+        by_path = self.by_path
+        return {k: by_path[k].text(v) for k, v in values.items() if v != by_path[k].value}
+
+    def scene_yaml(self, values: dict) -> str:
+        """The scene with the settings written in, as YAML with units (``autobal run`` reproduces it)."""
+        data = copy.deepcopy(self.raw)
+        for k, text in self.overrides(values).items():
+            scenario._set(data, k, text)
+        head = f"# written by autobal explore from {self.path.name}\n"
+        return head + yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
+
+    def save(self, values: dict, path: str | Path) -> Path:
+        path = Path(path)
+        path.write_text(self.scene_yaml(values))
+        return path
+
+
+class DeviceExplorer(Settings):
+    """The what-if computation of a device-dynamics scene: operating point, poles, verdict and AFC of the
+    headline model (energy-consistent, physical forcing) for changed parameters.
+
+    Parameters
+    ----------
+    source : str or Path
+        A shipped scene name or a YAML file (what ``autobal.load`` takes).
+    """
+
+    def __init__(self, source: str | Path):
+        super().__init__(source)
+        sc = self.scene
+        if getattr(sc, "device", None) is None or sc.device.dynamics is None:
+            raise ScenarioError(f"{sc.name}: explore needs a scene with device.dynamics (this version explores the "
+                                "device's statics and dynamics: pump_pe600_dynamics, compressor_k180_dynamics)")
+        a = sc.analyses
+        freq, stab = getattr(a, "frequency", None), getattr(a, "stability", None)
+        self.psi1 = (freq or stab).operating_ratio if (freq or stab) is not None else 1.0
+        o = freq.omega if freq is not None else None
+        self.omega_range = (o.start, o.stop, o.points) if o is not None else (10.0, 8000.0, 600)
+        self.required_decay = stab.decay_rate if stab is not None else 0.0
+        self.params = parameters(sc.device, self.raw, "device") + parameters(sc.device.dynamics, self.raw,
+                                                                              "device.dynamics")
+        self._statics_cache: dict = {}  # structure key -> (ParametricStatics, group names)
+        self._models: dict = {}  # structure key -> (Jacobian Function, model)
+        self._last = None  # (active set, W) of the last solved point: the warm start
+
+    def device(self, values: dict):
+        """DeviceParams (SI) of the settings ``values`` (path -> scene unit), by the scene's adapter."""
+        return adapt(self.section("device", values))
+
+    # -- the fast path
+    def _statics(self, dd: dv.DeviceDesign) -> tuple[ParametricStatics, tuple]:
+        """The device's balances with every group as a parameter, built once per structure (what the groups
+        cannot carry: the medium, the regulator and its valve's travel limit, the bounds of the unknowns)."""
+        g = dd.groups
+        key = (g.medium, g.regulator is not None, g.regulator.xi_max if g.regulator else None)
+        if key not in self._statics_cache:
+            names = tuple(dv.groups_by_name(g))
+            self._statics_cache[key] = (ParametricStatics(g, names), names)
+        return self._statics_cache[key]
+
+    def _model(self, dev: dv.DeviceParams, dd: dv.DeviceDesign, names: tuple, point: dict):
+        """The nonlinear dynamic model with the groups, the scales and the membrane area as symbols d, and its
+        Jacobians (x, w, p, d) -> (A, B), built once per structure: what the symbols cannot carry (the medium,
+        the regulator, the margin dpsi and the point, which enter only its constant terms, the gas's p_n)."""
+        g = dd.groups
+        reg = g.regulator
+        p_n = dev.dynamics.p_n
+        key = (g.medium, reg is not None, dd.dpsi, None if math.isnan(p_n) else p_n)
+        if key in self._models:
+            return self._models[key]
+        d = ca.SX.sym("d", len(names) + len(MODEL_SCALES) + 1)
+        sym = dict(zip(names, ca.vertsplit(d[:len(names)]), strict=True))
+        # b (tau = b psi1) enters the inputs only, which are given as numbers
+        g_sym = dataclasses.replace(g, **{k: v for k, v in sym.items() if k in dv.DEVICE_GROUPS and k != "b"})
+        if reg is not None:
+            g_sym = dataclasses.replace(g_sym, regulator=dataclasses.replace(
+                reg, **{k: v for k, v in sym.items() if k in dv.REGULATOR_GROUPS}))
+        scales = dict(dd.scales) | dict(zip(MODEL_SCALES, ca.vertsplit(d[len(names):-1]), strict=True))
+        data = dataclasses.replace(dev.dynamics, s_m=d[-1])
+        model = build(dataclasses.replace(dd, groups=g_sym, scales=scales), data,
+                      point | {"psi1": self.psi1, "dpsi": dd.dpsi}, "energy", symbols=d)
+        x, w, p = ca.SX.sym("x", len(model.states)), ca.SX.sym("w", 2), ca.SX.sym("p", len(model.p0))
+        f = model.ode(x, w, p, d)
+        if len(self._models) >= MODELS_KEPT:  # a slid margin builds one per value: keep the latest few
+            self._models.pop(next(iter(self._models)))
+        self._models[key] = (ca.Function("AB", [x, w, p, d], [ca.jacobian(f, x), ca.jacobian(f, w)]), model)
+        return self._models[key]
+
+    def _point(self, dd: dv.DeviceDesign) -> dict:
+        """The operating point: Newton's root of the balances at the groups of ``dd``, warm-started from the last
+        point (its stop set and unknowns), then from the closed form with each stop set; where none is accepted,
+        IPOPT with every stop (SolveError when it fails too)."""
+        statics, names = self._statics(dd)
+        g = dd.groups
+        theta = [dv.groups_by_name(g)[n] for n in names]
+        P = np.array([[self.psi1, dd.dpsi, *theta]])
+        guess = ideal_guess(g, statics.system.unknowns, self.psi1, dd.dpsi)
+        last = self._last if self._last is not None and self._last[1].shape == guess[0].shape else None
+        attempts = ([(last[0], np.atleast_2d(last[1]))] if last is not None else []) + [
+            (a, guess) for a in statics.active_sets]
+        res = statics.solve(P, attempts)
+        if res["valid"][0]:
+            W = res["W"][0]
+            active = attempts[res["active"][0]][0]
+            vals = dict(zip(statics.system.unknowns, map(float, W), strict=True))
+            vals.setdefault("psi_e", self.psi1 + dd.dpsi)
+            flows = dict(zip(statics.system.throttles, map(float, res["q"][0]), strict=True))
+        else:
+            sp = StaticsSolver(dd).solve(self.psi1, dd.dpsi)
+            W, active, vals, flows = np.asarray(sp.x, float), sp.active, dict(sp.values), sp.flows
+        self._last = (active, W.copy())
+        return vals | {"_flows": flows, "_active": active, "_names": names}
+
+    def evaluate(self, values: dict) -> dict:
+        """Operating point, poles, margin, verdict and AFC for the settings ``values`` (path -> scene unit).
+
+        Returns a dict with ``status`` "ok", "refused" (a setting the device's declarations refuse), "no_statics"
+        (no static solution, or the face in contact / the valve on its stop) or "failed"; ``message`` says why.
+        """
+        t0 = time.perf_counter()
+        try:
+            dev = self.device(values)
+            dd = dv.design(dev)
+        except (ValueError, ZeroDivisionError, AutobalError) as exc:
+            return {"status": "refused", "message": str(exc)}
+        try:
+            pt = self._point(dd)
+        except SolveError as exc:
+            return {"status": "no_statics", "message": f"the statics have no solution at this setting (IPOPT: "
+                                                       f"{exc.status})"}
+        sc = dd.scales
+        out = {"status": "ok", "message": "", **self._operating_point(pt, dd)}
+        if pt["_active"]:
+            what = "face in contact" if "r_contact" in pt["_active"] else "regulator valve on its stop"
+            return out | {"status": "no_statics", "message": f"operating point with the {what}: the dynamic model "
+                                                             "needs an open gap and a regulating valve"}
+        names = pt["_names"]
+        jac, model = self._model(dev, dd, names, pt)
+        x0 = np.array([0.0 if k in ("v", "w") else pt[k] for k in model.states])
+        groups = dv.groups_by_name(dd.groups)
+        d = [groups[n] for n in names] + [sc[k] for k in MODEL_SCALES] + [dev.dynamics.s_m]
+        A, B = (np.array(m) for m in jac(x0, [self.psi1, dd.groups.b * self.psi1], dev.dynamics.vector(), d))
+        S = np.diag([1.0 / model.t_ref if k in ("v", "w") else 1.0 for k in model.states])
+        lin = LinearModel(label="nonlinear", A=S @ A @ np.linalg.inv(S), B=(S @ B)[:, ::-1],
+                          states=[{"v": "du", "w": "dxi"}.get(k, k) for k in model.states],
+                          b=dd.groups.b, z_B=sc["z_B"], u_out=0)
+        out |= self._dynamics(lin, dev.dynamics)
+        out["compute_ms"] = 1e3 * (time.perf_counter() - t0)
+        return out
+
+    def _operating_point(self, pt: dict, dd: dv.DeviceDesign) -> dict:
+        sc, q = dd.scales, pt["_flows"]
+        pressures = {k: pt[k] * sc["p_B"] for k in ("psi2", "psi3", "psi_e", "psi_cam") if k in pt}
+        return {"gap": pt["u"] * sc["z_B"], "pressures": pressures, "leak": q["e"] * sc["Q_scale"],
+                "inner_seal_flow": q["1"] * sc["Q_scale"], "valve_opening": pt.get("xi", math.nan) * sc["x_B"],
+                "point": {k: v for k, v in pt.items() if not k.startswith("_")}}
+
+    def _dynamics(self, lin: LinearModel, data) -> dict:
+        """Verdict (:func:`analysis.stability.verdict`) and the AFC of the face gap under the physical forcing."""
+        v = st.verdict(lin, hurwitz=False)
+        decay = v["margin"]["decay_rate"]
+        ok = bool(v["stable"]) and decay >= self.required_decay
+        lam, V = np.linalg.eig(lin.A)
+        om = fr.grid(lin, *self.omega_range)
+        bvec = lin.forcing("physical")
+        left = np.linalg.solve(V, bvec)  # V^-1 b
+        scale = data.forcing_amplitude * lin.z_B * 1e6
+        # modal sum: du(jw) = sum_k V[u, k] (V^-1 b)_k / (jw - lambda_k)
+        amp = np.abs(((V[lin.u_out] * left)[:, None] / (1j * om[None, :] - lam[:, None])).sum(axis=0)) * scale
+        peaks = fr.peaks(lin, om, amp, "physical", scale)
+        w0 = data.omega0
+        at = abs(lin.response([w0], "physical")[0]) * scale if np.isfinite(w0) else math.nan
+        return {"poles": v["poles"], "damping_ratio": v["damping_ratio"], "stable": v["stable"],
+                "decay_rate": decay, "min_damping_ratio": v["margin"]["min_damping_ratio"],
+                "required_decay": self.required_decay, "meets_requirement": ok,
+                "omega": om, "amplitude_um": amp, "peaks": peaks, "omega0": w0, "amplitude_at_omega0_um": at,
+                "static_amplitude_um": float(abs(lin.response([0.0], "physical")[0]) * scale)}
+
+    # -- the cross-check on release
+    def check(self, values: dict, answer: dict) -> str:
+        """The scene validated as a file would be (``autobal.load`` with the settings as overrides) and its
+        operating point by IPOPT (what ``autobal run`` solves) against the live answer; '' when they agree."""
+        try:
+            scene = scenario.load(self.path, overrides=self.overrides(values))
+            from autobal.parts.device import dynamic_device
+
+            dd = dv.design(dynamic_device(scene))
+            point = StaticsSolver(dd).solve(self.psi1, dd.dpsi)
+        except ScenarioError as exc:
+            return f"refused by the scene's checks: {exc}"
+        except SolveError as exc:
+            return f"IPOPT: {exc} (status {exc.status})"
+        if answer.get("status") != "ok" and "point" not in answer:
+            return f"IPOPT finds an operating point (gap {point.values['u'] * dd.scales['z_B'] * 1e6:.6g} µm) " \
+                   "where the fast path found none"
+        live = answer["point"]
+        worst = max(abs(point.values[k] - live[k]) / max(abs(live[k]), 1e-12) for k in live if k in point.values
+                    and not k.startswith("r_"))
+        if worst > CHECK_RTOL:
+            return (f"IPOPT's operating point differs (largest relative difference {worst:.1e}): gap "
+                    f"{point.values['u'] * dd.scales['z_B'] * 1e6:.6g} µm")
+        return ""
+
+
+class SpinupExplorer(Settings):
+    """The what-if computation of a spin-up scene (``analyses.spinup``): the current optimum's speed profile and the
+    constant ramps re-simulated (CVODES, :func:`autobal.ocp.simulation.resimulate` and
+    :func:`~autobal.ocp.simulation.baselines`, the batch run's re-simulations) for a changed rotor or drive; the
+    optimum itself is found again only on request (:meth:`optimise`: the batch run's optimisation)."""
+
+    def __init__(self, source: str | Path):
+        super().__init__(source)
+        sc = self.scene
+        if getattr(sc, "rotor", None) is None or getattr(sc.analyses, "spinup", None) is None:
+            raise ScenarioError(f"{sc.name}: explore needs a scene with device.dynamics or a rotor with "
+                                "analyses.spinup")
+        self.params = parameters(sc.rotor, self.raw, "rotor")
+        self.profile = None  # (u, h, the settings it was optimised for) of the current optimum
+
+    def problem(self, values: dict):
+        """The spin-up problem (SpinupOcp) of the settings: the scene's rotor section with them, its adapter."""
+        from autobal.analyses import spinup
+
+        scene = self.scene.model_copy(update={"rotor": self.section("rotor", values)})
+        return spinup.ocp(scene, scene.analyses.spinup)
+
+    def optimise(self, values: dict) -> dict:
+        """The batch run's optimisation (``analyses.spinup``) of the settings; keeps its profile as the current
+        optimum.  Returns its peak (delta/e) and its time (s)."""
+        from autobal.analyses import spinup
+
+        t0 = time.perf_counter()
+        scene = scenario.load(self.path, overrides=self.overrides(values))
+        res = spinup.run(scene, scene.analyses.spinup)
+        tr = res.optimum
+        ocp = spinup.ocp(scene, scene.analyses.spinup)
+        u = np.asarray(tr.alpha) / ocp.alpha_max
+        h = np.diff(np.append(tr.t_u, tr.t[-1])) * ocp.Om
+        self.profile = (u, h, dict(values))
+        return {"peak_over_e": res.data["peak_deflection_over_e"], "seconds": time.perf_counter() - t0}
+
+    def evaluate(self, values: dict) -> dict:
+        """The current optimum's profile and the constant ramps re-simulated for the settings: peaks (delta/e and
+        m), the critical speed (rad/s), the drive's use; ``status`` "ok", "refused" or "no_optimum"."""
+        from autobal.ocp.simulation import baselines, drive_use, resimulate
+
+        t0 = time.perf_counter()
+        try:
+            ocp = self.problem(values)
+        except (ValueError, ZeroDivisionError, AutobalError) as exc:
+            return {"status": "refused", "message": str(exc)}
+        P = ocp.params
+        out = {"status": "ok", "message": "", "critical_speed": P.omega_cr, "eccentricity": P.e, "ramps": {}}
+        for key, tr in baselines(ocp).items():
+            out["ramps"][key] = {"label": tr.label, "peak_over_e": tr.peak_delta, "t": tr.t, "delta": tr.delta,
+                                 "within_drive_limits": drive_use(ocp, tr)["within_drive_limits"]}
+        if self.profile is None:
+            return out | {"status": "no_optimum", "message": "the optimum is being found (autobal run's "
+                                                             "optimisation)"}
+        u, h, at = self.profile
+        tr = resimulate(ocp, u, h, "optimum")
+        out["optimum"] = {"peak_over_e": tr.peak_delta, "t": tr.t, "delta": tr.delta, "time_of_peak": tr.t_peak,
+                          "omega": tr.omega, "within_drive_limits": drive_use(ocp, tr)["within_drive_limits"],
+                          "optimised_for": self.overrides(at)}
+        out["compute_ms"] = 1e3 * (time.perf_counter() - t0)
+        return out
+
+
+def _exact(ans: dict) -> str:
+    """The shown numbers at full precision (JSON, SI and µm), for the browser test's comparison."""
+    import json
+
+    keys = ("gap", "leak", "decay_rate", "min_damping_ratio", "amplitude_at_omega0_um", "static_amplitude_um")
+    return json.dumps({k: float(ans[k]) for k in keys} | {"peaks": ans["peaks"]})
+
+
+# ---- the page ----
+
+#: the page: the sliders on the left (scrolling), the answer on the right; each root is laid out on its own
+PAGE_HTML = """{% extends base %}
+{% block contents %}
+<div style="display:flex;gap:16px;align-items:flex-start">
+  <div style="width:370px;height:96vh;overflow-y:auto;flex:none">{{ embed(roots.controls) }}</div>
+  <div>{{ embed(roots.head) }}{{ embed(roots.numbers) }}{{ embed(roots.plots) }}{{ embed(roots.seq) }}</div>
+</div>
+{% endblock %}"""
+
+
+CHAMBERS = {"psi2": "p2, disc chamber", "psi3": "p3, cavity", "psi_e": "p_e, barrier chamber",
+            "psi_cam": "p_cam, valve chamber"}
+
+
+def _fmt(v: float, digits: int = 6) -> str:
+    return "—" if v is None or not np.isfinite(v) else f"{v:.{digits}g}"
+
+
+def _sliders(explorer: Settings) -> dict:
+    """One Bokeh slider per parameter, in the scene's unit and within its bounds: path -> Slider."""
+    from bokeh.models import CustomJSTickFormatter, Slider
+
+    shown = CustomJSTickFormatter(code="return String(Number(tick.toPrecision(6)))")  # 6 digits, any scale
+    return {p.path: Slider(title=p.label, start=p.start, end=p.end, value=p.value,
+                           step=(p.end - p.start) / SLIDER_STEPS, format=shown, width=330, name=p.path)
+            for p in explorer.params}
+
+
+def _record_buttons(doc, explorer: Settings, values: dict, out: Path):
+    """"save scene" (the settings as a YAML scene with units) and "report" (``autobal.run`` of it, in a thread,
+    writing report.html): a row of both and the line that says what they wrote."""
+    from bokeh.layouts import row
+    from bokeh.models import Button, Div
+
+    save_btn, report_btn = Button(label="save scene", name="save"), Button(label="report", name="report")
+    saved = Div(text="", name="saved")
+
+    def on_save():
+        path = out / f"{explorer.scene.name}_explored.yaml"
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+            explorer.save(values, path)
+        except OSError as exc:
+            saved.text = f"not saved: {html.escape(str(exc))}"
+            return
+        saved.text = f"saved <code id='saved_path'>{path}</code>"
+
+    def on_report():
+        vals = dict(values)
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+            path = explorer.save(vals, out / f"{explorer.scene.name}_explored.yaml")
+        except OSError as exc:
+            saved.text = f"no report: the scene cannot be saved: {html.escape(str(exc))}"
+            return
+        report_btn.disabled = True
+        saved.text = "running the report (autobal.run) …"
+
+        def work():
+            import autobal
+
+            try:
+                folder = out / f"{explorer.scene.name}_explored"
+                autobal.run(autobal.load(path), out=folder)
+                msg = f"report written: <code id='report_path'>{folder / 'report.html'}</code>"
+            except Exception as exc:  # noqa: BLE001
+                msg = f"report failed: {html.escape(f'{type(exc).__name__}: {exc}')}"
+
+            def done():
+                saved.text = msg
+                report_btn.disabled = False
+            doc.add_next_tick_callback(done)
+        threading.Thread(target=work, daemon=True).start()
+
+    save_btn.on_click(on_save)
+    report_btn.on_click(on_report)
+    return row(save_btn, report_btn, saved)
+
+
+def _latest_wins(doc, evaluate, show, seq):
+    """``request(values, moved)``: compute the settings on the server's next tick and show them, the latest
+    winning (settings that arrive while one is computed are coalesced); every update one message to the browser
+    (``doc.hold``), counted in the ``seq`` Div (the browser test times them); the server survives every setting."""
+    state = {"pending": None, "busy": False, "seq": 0}
+
+    def compute():
+        while state["pending"] is not None:
+            vals, moved = state["pending"]
+            state["pending"] = None
+            try:
+                ans = evaluate(vals)
+            except Exception as exc:  # noqa: BLE001 (the server survives every setting)
+                ans = {"status": "failed", "message": f"{type(exc).__name__}: {exc}"}
+            doc.hold("combine")  # one message to the browser per update, not one per property
+            try:
+                show(ans, moved)
+                state["seq"] += 1
+                seq.text = f"<span id='seq'>{state['seq']}</span>"
+            finally:
+                doc.unhold()
+        state["busy"] = False
+
+    def request(values: dict, moved: str | None):
+        state["pending"] = (dict(values), moved)
+        if not state["busy"]:
+            state["busy"] = True
+            doc.add_next_tick_callback(compute)
+
+    return request
+
+
+def make_document(explorer: DeviceExplorer, out: Path):
+    """The Bokeh document builder of the page (one per browser session)."""
+    from bokeh.layouts import column, row
+    from bokeh.models import ColumnDataSource, Div
+    from bokeh.plotting import figure
+    from jinja2 import Template
+
+    page = Template(PAGE_HTML)
+
+    def modify(doc):
+        values = explorer.defaults()
+        state = {"good": None}
+        sliders = _sliders(explorer)
+        # fixed sizes: a new text re-renders its Div only, not the page's layout
+        verdict = Div(text="", name="verdict", width=1100, height=26,
+                      styles={"font-size": "16px", "font-weight": "bold"})
+        status = Div(text="", name="status", width=1100, height=20)
+        numbers = Div(text="", name="numbers", width=1100, height=190)
+        check = Div(text="", name="check", width=1100, height=20)
+        seq = Div(text="<span id='seq'>0</span>", name="seq", width=40, height=10,
+                  styles={"font-size": "1px", "color": "white"})
+        afc_src = ColumnDataSource({"hz": [], "amp": []})
+        pole_src = ColumnDataSource({"abs_re": [], "hz": [], "colour": []})
+        afc = figure(title="AFC of the face gap (physical forcing)", x_axis_label="frequency, Hz",
+                     y_axis_label="amplitude, µm", x_axis_type="log", y_axis_type="log", width=560, height=300,
+                     name="afc", toolbar_location=None,
+                     x_range=(explorer.omega_range[0] / (2 * np.pi), explorer.omega_range[1] / (2 * np.pi)))
+        afc_line = afc.line("hz", "amp", source=afc_src, line_width=2)
+        pmap = figure(title="poles: decay rate −Re λ against frequency Im λ / 2π", x_axis_label="|Re λ|, 1/s",
+                      y_axis_label="Im λ / 2π, Hz", x_axis_type="log", width=560, height=300, name="poles",
+                      toolbar_location=None)
+        pole_dots = pmap.scatter("abs_re", "hz", source=pole_src, size=9, marker="x", line_width=2, color="colour")
+        record = _record_buttons(doc, explorer, values, out)
+
+        def show(ans: dict, moved: str | None):
+            good = ans.get("status") == "ok"
+            grey = "#999" if not good else "black"
+            if good:
+                state["good"] = ans
+            last = ans if good else state["good"]
+            if "gap" in ans or (last is not None):
+                src = ans if "gap" in ans else last
+                pr = "".join(f"<tr><td>{CHAMBERS[k]}</td><td id='p_{k}'>{_fmt(v / 1e6)}</td>"
+                             f"<td>MPa</td></tr>" for k, v in src["pressures"].items())
+                op = (f"<table style='color:{'black' if 'gap' in ans else '#999'}'><tr><th colspan=3>operating point"
+                      f"</th></tr><tr><td>face gap</td><td id='gap'>{_fmt(src['gap'] * 1e6)}</td><td>µm</td></tr>{pr}"
+                      f"<tr><td>barrier leak Q_e</td><td id='leak'>{_fmt(src['leak'] * 1e3)}</td><td>L/s</td></tr>"
+                      f"<tr><td>inner seal flow Q_1</td><td>{_fmt(src['inner_seal_flow'] * 1e3)}</td><td>L/s</td>"
+                      f"</tr></table>")
+            else:
+                op = ""
+            if last is not None and "poles" in last:
+                pk = "".join(f"<tr><td>resonance {i + 1}</td><td id='peak{i}_hz'>{_fmt(q['omega'] / (2 * np.pi))}"
+                             f"</td><td>Hz</td><td id='peak{i}_um'>{_fmt(q['amplitude_um'])}</td><td>µm</td></tr>"
+                             for i, q in enumerate(last["peaks"]))
+                dyn = (f"<table style='color:{grey}'><tr><th colspan=5>dynamics (energy-consistent model)</th></tr>"
+                       f"<tr><td>decay rate −max Re λ</td><td id='decay'>{_fmt(last['decay_rate'])}</td>"
+                       f"<td>1/s</td></tr><tr><td>min damping ratio</td><td id='zeta'>"
+                       f"{_fmt(last['min_damping_ratio'])}</td><td></td></tr>{pk}"
+                       f"<tr><td>amplitude at ω0 ({_fmt(last['omega0'] / (2 * np.pi), 4)} Hz)</td>"
+                       f"<td id='amp0'>{_fmt(last['amplitude_at_omega0_um'])}</td><td>µm</td></tr>"
+                       f"<tr><td>static amplitude</td><td id='amp_static'>{_fmt(last['static_amplitude_um'])}</td>"
+                       f"<td>µm</td></tr></table>")
+                re, im, zeta = last["poles"]["real"], last["poles"]["imag"], last["damping_ratio"]
+                rows = "".join(f"<tr><td>{_fmt(-a)}</td><td>{_fmt(b / (2 * np.pi))}</td><td>{_fmt(z, 4)}</td></tr>"
+                               for a, b, z in zip(re, im, zeta, strict=True) if b >= 0)
+                dyn += (f"<table id='pole_table' style='color:{grey}'><tr><th>decay rate −Re λ, 1/s</th>"
+                        f"<th>frequency Im λ / 2π, Hz</th><th>damping ratio ζ</th></tr>{rows}</table>")
+                if good:
+                    re, im = last["poles"]["real"], last["poles"]["imag"]
+                    pole_src.data = {"abs_re": np.abs(re), "hz": im / (2 * np.pi),
+                                     "colour": np.where(re < 0, "#1f77b4", "#d62728").tolist()}
+                    afc_src.data = {"hz": last["omega"] / (2 * np.pi), "amp": last["amplitude_um"]}
+            else:
+                dyn = ""
+            afc_line.glyph.line_color = "#1f77b4" if good else "#bbb"
+            pole_dots.glyph.line_alpha = 1.0 if good else 0.25
+            exact = _exact(ans) if good else "{}"
+            numbers.text = (f"<div style='display:flex;gap:24px'>{op}{dyn}</div>"
+                            f"<span id='exact' style='display:none'>{exact}</span>")
+            if good:
+                alpha = ans["required_decay"]
+                words = (f"stable: disturbances decay at {_fmt(ans['decay_rate'], 4)} 1/s" if ans["stable"] else
+                         f"UNSTABLE: disturbances grow at {_fmt(-ans['decay_rate'], 4)} 1/s")
+                if alpha > 0:
+                    words += f" (required {_fmt(alpha, 4)} 1/s)"
+                if not ans["meets_requirement"] and moved:
+                    words += f"; margin crossed by {moved.removeprefix('device.')}"
+                verdict.text = f"<span id='verdict_text'>{words}</span>"
+                verdict.styles = {"color": "green" if ans["meets_requirement"] else "red", "font-size": "16px",
+                                  "font-weight": "bold"}
+                status.text = f"<span id='status_text'>current (computed in {ans['compute_ms']:.1f} ms)</span>"
+            else:
+                words = ans["status"].replace("_", " ").upper() + ": " + ans["message"] + (
+                    f" (after changing {moved.removeprefix('device.')})" if moved else "")
+                verdict.text = f"<span id='verdict_text'>{html.escape(words)}</span>"
+                verdict.styles = {"color": "red", "font-size": "16px", "font-weight": "bold"}
+                status.text = ("<span id='status_text'>the numbers in grey are the last good answer, not the current "
+                               "setting</span>")
+
+        request = _latest_wins(doc, explorer.evaluate, show, seq)
+
+        def on_change(path):
+            def cb(attr, old, new):
+                values[path] = float(new)
+                check.text = ""
+                request(values, path)
+            return cb
+
+        def run_check():
+            state["timer"] = None
+            vals, ans = dict(values), state["good"]
+
+            def work():
+                try:
+                    text = explorer.check(vals, ans or {})
+                except Exception as exc:  # noqa: BLE001 (the page says what failed; the server goes on)
+                    text = f"the cross-check failed: {type(exc).__name__}: {exc}"
+
+                def done():
+                    if vals == values:  # still the setting checked
+                        check.text = (f"<span style='color:#b35900'>cross-check: {text}</span>" if text else
+                                      "cross-check: the scene's checks pass and IPOPT agrees with the operating point")
+                doc.add_next_tick_callback(done)
+            threading.Thread(target=work, daemon=True).start()
+
+        def on_release(attr, old, new):  # IPOPT's cross-check once the sliders rest for CHECK_AFTER_S
+            if state.get("timer") is not None:
+                doc.remove_timeout_callback(state["timer"])
+            state["timer"] = doc.add_timeout_callback(run_check, int(CHECK_AFTER_S * 1000))
+
+        for path, s in sliders.items():
+            s.on_change("value", on_change(path))
+            s.on_change("value_throttled", on_release)
+
+        show(explorer.evaluate(values), None)
+        head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
+        # separate roots placed by the template: a changed text lays out its own root, not the 40 sliders
+        doc.add_root(column(head, verdict, status, check, record, name="head"))
+        doc.add_root(column(*sliders.values(), name="controls"))
+        doc.add_root(numbers)
+        doc.add_root(row(afc, pmap, name="plots"))
+        doc.add_root(seq)
+        doc.template = page
+        doc.title = f"autobal explore: {explorer.scene.name}"
+
+    return modify
+
+
+RAMP_COLOURS = {"constant_ramp": "#7f7f7f", "max_acceleration_ramp": "#ff7f0e", "feasible_ramp": "#2ca02c"}
+
+
+def make_spinup_document(explorer: SpinupExplorer, out: Path):
+    """The Bokeh document builder of a spin-up scene's page: the deflection of the current optimum's profile and of
+    the ramps re-simulated for the settings, and "re-optimise" (the batch optimisation, in a thread)."""
+    from bokeh.layouts import column, row
+    from bokeh.models import Button, ColumnDataSource, Div
+    from bokeh.plotting import figure
+    from jinja2 import Template
+
+    page = Template(PAGE_HTML)
+    lock = threading.Lock()  # one optimisation at a time, whatever the sessions
+
+    def modify(doc):
+        values = explorer.defaults()
+        state = {"started": None}
+        sliders = _sliders(explorer)
+        verdict = Div(text="", width=1100, height=26, styles={"font-size": "16px", "font-weight": "bold"})
+        status = Div(text="", width=1100, height=20)
+        numbers = Div(text="", name="numbers", width=1100, height=150)
+        seq = Div(text="<span id='seq'>0</span>", name="seq", width=40, height=10,
+                  styles={"font-size": "1px", "color": "white"})
+        fig = figure(title="deflection δ/e of the rotor", x_axis_label="time, s", y_axis_label="δ/e", width=900,
+                     height=360, name="plots", toolbar_location=None)
+        sources = {k: ColumnDataSource({"t": [], "d": []}) for k in ("optimum", *RAMP_COLOURS)}
+        lines = {"optimum": fig.line("t", "d", source=sources["optimum"], line_width=2.5, color="#1f77b4",
+                                     legend_label="current optimum's profile")}
+        for k, c in RAMP_COLOURS.items():
+            lines[k] = fig.line("t", "d", source=sources[k], line_width=1.5, color=c, legend_label=k.replace("_", " "))
+        reopt = Button(label="re-optimise", name="reoptimise", button_type="primary")
+
+        def show(ans: dict, moved: str | None):
+            good = ans["status"] in ("ok", "no_optimum")
+            rows = []
+            if good:
+                for k, r in ans["ramps"].items():
+                    sources[k].data = {"t": r["t"], "d": r["delta"]}
+                    rows.append((r["label"], r["peak_over_e"], r["within_drive_limits"]))
+                for k in RAMP_COLOURS:
+                    lines[k].visible = k in ans["ramps"]
+            opt = ans.get("optimum")
+            if opt is not None:
+                sources["optimum"].data = {"t": opt["t"], "d": opt["delta"]}
+                rows.insert(0, ("current optimum's profile", opt["peak_over_e"], opt["within_drive_limits"]))
+            e = ans.get("eccentricity", math.nan)
+            table = "".join(f"<tr><td>{html.escape(label)}</td><td id='peak_{i}'>{_fmt(pk)}</td>"
+                            f"<td>{_fmt(pk * e * 1e6)} µm</td><td>{'yes' if ok else 'NO' if ok is False else '—'}</td>"
+                            f"</tr>" for i, (label, pk, ok) in enumerate(rows))
+            if good:
+                crit = ans["critical_speed"]
+                numbers.text = (f"<p>critical speed <span id='critical'>{_fmt(crit * 30 / np.pi)}</span> rpm "
+                                f"({_fmt(crit)} rad/s)</p><table><tr><th>profile</th><th>peak δ/e</th><th>peak δ</th>"
+                                f"<th>within the drive's limits</th></tr>{table}</table>")
+            feasible = [pk for label, pk, ok in rows[1:] if ok is not False]
+            if opt is not None and good:
+                best = min(feasible) if feasible else math.inf
+                ok = opt["peak_over_e"] <= best and opt["within_drive_limits"] is not False
+                words = (f"the optimum's profile: peak δ/e {_fmt(opt['peak_over_e'], 5)}, "
+                         f"{'below' if ok else 'NOT below'} the best ramp the drive can run ({_fmt(best, 5)})")
+                if not ok and moved:
+                    words += f"; crossed by {moved} (re-optimise)"
+                if opt["optimised_for"] != explorer.overrides(values):
+                    words += " — profile optimised for other settings"
+                verdict.text = f"<span id='verdict_text'>{html.escape(words)}</span>"
+                verdict.styles = {"color": "green" if ok else "red", "font-size": "16px", "font-weight": "bold"}
+                status.text = f"<span id='status_text'>current (computed in {ans['compute_ms']:.0f} ms)</span>"
+            else:
+                verdict.text = f"<span id='verdict_text'>{html.escape(ans['status'].upper() + ': ' + ans['message'])}"\
+                               "</span>"
+                verdict.styles = {"color": "red" if not good else "#555", "font-size": "16px", "font-weight": "bold"}
+                status.text = ("<span id='status_text'>current ramps; " + ("the optimum is being found" if good else
+                               "the curves in the plot are the last good answer") + "</span>")
+
+        request = _latest_wins(doc, explorer.evaluate, show, seq)
+
+        def on_change(path):
+            def cb(attr, old, new):
+                values[path] = float(new)
+                request(values, path.removeprefix("rotor."))
+            return cb
+
+        for path, sl in sliders.items():
+            sl.on_change("value", on_change(path))
+
+        def tick():
+            if state["started"] is not None:
+                reopt.label = f"optimising … {time.perf_counter() - state['started']:.0f} s"
+
+        def optimise():
+            vals = dict(values)
+            reopt.disabled = True
+            state["started"] = time.perf_counter()
+
+            def work():
+                with lock:
+                    try:
+                        res = explorer.optimise(vals)
+                        msg = f"optimised in {res['seconds']:.1f} s"
+                    except Exception as exc:  # noqa: BLE001
+                        msg = f"optimisation failed: {type(exc).__name__}: {exc}"
+
+                def done():
+                    state["started"] = None
+                    reopt.disabled, reopt.label = False, "re-optimise"
+                    optimised.text = f"<span id='optimised'>{html.escape(msg)}</span>"
+                    request(values, None)
+                doc.add_next_tick_callback(done)
+            threading.Thread(target=work, daemon=True).start()
+
+        optimised = Div(text="", width=400)
+        reopt.on_click(optimise)
+        doc.add_periodic_callback(tick, 500)
+        record = _record_buttons(doc, explorer, values, out)
+        head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
+        doc.add_root(column(head, verdict, status, row(reopt, optimised), record, name="head"))
+        doc.add_root(column(*sliders.values(), name="controls"))
+        doc.add_root(numbers)
+        doc.add_root(fig)
+        doc.add_root(seq)
+        doc.template = page
+        doc.title = f"autobal explore: {explorer.scene.name}"
+        request(values, None)
+        if explorer.profile is None:
+            optimise()
+
+    return modify
+
+
+def serve(source: str | Path, port: int = 0, browser: bool = True, out: str | Path = "out", ready=None) -> None:
+    """Serve the page of ``source`` on 127.0.0.1:``port`` (0: a free port) until interrupted; prints its URL.
+
+    ``ready``: called with the URL once the server listens (tests)."""
+    import os
+
+    os.environ.setdefault("BOKEH_RESOURCES", "server")  # BokehJS from this server, never a CDN
+    from bokeh.application import Application
+    from bokeh.application.handlers import FunctionHandler
+    from bokeh.server.server import Server
+    from bokeh.server.views.ws import WSHandler
+
+    scene = scenario.load(source)
+    if getattr(scene, "device", None) is None and getattr(scene, "rotor", None) is not None:
+        explorer, builder = SpinupExplorer(source), make_spinup_document
+    else:
+        explorer, builder = DeviceExplorer(source), make_document
+    if port == 0:  # a free port, known before the server starts (the websocket's allowed origin names it)
+        with socket.socket() as s:
+            s.bind((HOST, 0))
+            port = s.getsockname()[1]
+    app = Application(FunctionHandler(builder(explorer, Path(out).resolve())))
+    server = Server({"/": app}, address=HOST, port=port, allow_websocket_origin=[f"{HOST}:{port}"])
+
+    class NoDelayWS(WSHandler):  # small messages each way: no Nagle delay on the websocket
+        def open(self):
+            self.set_nodelay(True)
+            return super().open()
+
+    for rule in server._tornado.wildcard_router.rules:  # Bokeh's router: its websocket handler, without Nagle
+        if rule.target is WSHandler:
+            rule.target = NoDelayWS
+    server.start()
+    url = f"http://{HOST}:{server.port}/"
+    print(f"autobal explore: {url}  (Ctrl-C to stop)", flush=True)
+    if ready is not None:
+        ready(url, server)
+    if browser:
+        import webbrowser
+
+        server.io_loop.add_callback(webbrowser.open, url)
+    server.io_loop.start()
+
+
+def command(args) -> int:
+    """``autobal explore SCENE [--port N] [--no-browser]``: serve the page until interrupted (exit 130)."""
+    try:
+        import bokeh  # noqa: F401
+    except ImportError:
+        raise ScenarioError("autobal explore needs Bokeh: pip install 'autobal[explore]'") from None
+    if not 0 <= args.port <= 65535:
+        raise ScenarioError(f"--port {args.port}: a port number is 0 to 65535 (0: a free one)")
+    serve(args.scenario, port=args.port, browser=not args.no_browser)
+    return 0

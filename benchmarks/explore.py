@@ -1,0 +1,119 @@
+"""Benchmark: the per-change compute time of ``autobal explore`` (autobal/explore.py) in-process, against the batch
+path computing the same numbers for one changed setting.
+
+Cases, each a change of one slider of pump_pe600_dynamics (alternately the face base gap and the cavity volume, so
+every change moves the operating point or the dynamics):
+
+- the whole change (statics, poles, margin, AFC and its peaks: :meth:`DeviceExplorer.evaluate`) against
+  ``autobal.run`` of the scene loaded with that one override (frequency, stability with its map, transient: what
+  the page's "report" runs) and against the batch functions of the same numbers alone (``autobal.load`` with the
+  override, :class:`~autobal.analysis.linearize.Setup` with IPOPT's statics and the model built at its point,
+  ``frequency.study`` and ``stability.verdict`` of the headline model);
+- its statics (the warm-started Newton solve) against IPOPT's (:class:`~autobal.analysis.statics.StaticsSolver`
+  built and solved for the changed device, as the batch run does);
+- its dynamics (one call of the Jacobian Function, eigenvalues, AFC by the modal sum, peaks) against
+  ``Setup.linear`` (the model built at the point) with ``frequency.characteristic`` (python-control) and
+  ``stability.verdict``.
+
+Times are CPU times (best of repeats): a shared machine's load moves them less than wall times.  Errors: the
+largest relative difference of the decay rate, the first peak's frequency and amplitude and the amplitude at the
+operating speed between the live path and the batch functions.  Goal (issue 33): ratio >= 20.
+Run: ``python -m benchmarks explore``; writes benchmarks/results/explore.json and explore.md.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+
+from benchmarks._results import case, write
+from benchmarks._timing import cpu_best_of
+
+SCENE = "pump_pe600_dynamics"
+GOAL = 20.0
+CHANGES = [("device.disc.face.base_gap", 0.16), ("device.dynamics.cavity_volume", 1.2e-4),
+           ("device.disc.face.base_gap", 0.15), ("device.dynamics.cavity_volume", 1.0e-4)]
+
+
+def cycling(fn, items):
+    """A call of ``fn`` on the next of ``items`` each time (every timed call a change)."""
+    it = itertools.cycle(items)
+    return lambda: fn(next(it))
+
+
+def main(repeats: int = 5) -> list[dict]:
+    import autobal
+    from autobal.analysis import frequency as fr
+    from autobal.analysis import stability as st
+    from autobal.analysis.linearize import Setup
+    from autobal.analysis.statics import StaticsSolver
+    from autobal.explore import DeviceExplorer
+    from autobal.models import device as dv
+    from autobal.parts.device import dynamic_device
+
+    t0 = time.process_time()
+    ex = DeviceExplorer(SCENE)
+    ex.evaluate(ex.defaults())  # the one build of the statics and of the symbolic model
+    t_build = time.process_time() - t0
+    settings = [ex.defaults() | {k: v} for k, v in CHANGES]
+    t_live = cpu_best_of(repeats * 4, cycling(ex.evaluate, settings))
+
+    def batch_numbers(values):
+        scene = autobal.load(SCENE, set=ex.overrides(values))
+        setup = Setup(dynamic_device(scene), scene.analyses.frequency.operating_ratio)
+        o = scene.analyses.frequency.omega
+        f = fr.study(setup, ["nonlinear"], "physical", (o.start, o.stop, o.points)).data["headline"]
+        return f, st.verdict(setup.linear("nonlinear"))  # the headline verdict of stability.study
+
+    t_batch = cpu_best_of(repeats, cycling(batch_numbers, settings))
+    t_run = cpu_best_of(max(2, repeats // 2), cycling(lambda v: autobal.run(autobal.load(SCENE, set=ex.overrides(v))),
+                                                      settings))
+    err = 0.0
+    for values in settings:
+        live = ex.evaluate(values)
+        f, s = batch_numbers(values)
+        pairs = [(live["decay_rate"], s["margin"]["decay_rate"]), (live["peaks"][0]["omega"], f["peaks"][0]["omega"]),
+                 (live["peaks"][0]["amplitude_um"], f["peaks"][0]["amplitude_um"]),
+                 (live["amplitude_at_omega0_um"], f["at_operating_speed"]["amplitude_um"])]
+        err = max(err, *(abs(a - b) / abs(b) for a, b in pairs))
+
+    # the parts: statics, dynamics
+    devs = [dv.design(ex.device(v)) for v in settings]
+    t_newton = cpu_best_of(repeats * 4, cycling(ex._point, devs))
+    t_ipopt = cpu_best_of(repeats, cycling(lambda dd: StaticsSolver(dd).solve(ex.psi1, dd.dpsi), devs))
+    o = ex.omega_range
+    scene = autobal.load(SCENE)
+    setup = Setup(dynamic_device(scene), ex.psi1)
+    data = setup.data
+
+    def batch_dynamics():
+        setup._models.clear()  # the model built at the point, as a changed setting needs
+        lin = setup.linear("nonlinear")
+        return st.verdict(lin), fr.characteristic(lin, o, "physical", data.forcing_amplitude, data.omega0)
+
+    t_dyn_batch = cpu_best_of(repeats, batch_dynamics)
+    t_dyn_live = max(t_live - t_newton, 0.0)  # the change less its statics: Jacobian, eigenvalues, AFC, peaks
+    cases = [
+        case("one change: statics + poles + AFC", t_live, t_build, "autobal.run with the override", t_run, err,
+             None),
+        case("one change: statics + poles + AFC", t_live, t_build, "batch functions of the same numbers", t_batch, err,
+             None),
+        case("statics of the change", t_newton, None, "IPOPT (StaticsSolver built and solved)", t_ipopt),
+        case("dynamics of the change", t_dyn_live, None, "model built at the point + python-control AFC",
+             t_dyn_batch),
+    ]
+    ratio = t_run / t_live
+    notes = [f"scene {SCENE}; CPU time per change, best of {repeats * 4} (live) / {repeats} (batch)",
+             "autobal: the live path of autobal explore; peer: the batch path for the same setting",
+             "error: largest relative difference of decay rate, first peak (frequency, amplitude) and amplitude "
+             "at the operating speed, live path against the batch functions",
+             f"goal (issue 33): autobal.run / live >= {GOAL:g}: {'met' if ratio >= GOAL else 'NOT met'} "
+             f"({ratio:.0f}x)",
+             "dynamics of the change = the whole change less its statics; autobal build: loading the scene, building "
+             "the parametric statics and the symbolic model and the first solve, once per page"]
+    write("explore", "autobal explore: per-change compute against the batch run", cases, notes)
+    return cases
+
+
+if __name__ == "__main__":
+    main()
