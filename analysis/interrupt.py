@@ -117,7 +117,7 @@ def call(function, *args, **kwargs):
     """
     ensure()
     check()
-    _trace(function.name() if callable(getattr(function, "name", None)) else function.__name__)
+    _trace(function)
     try:
         out = function(*args, **kwargs)
     except RuntimeError as exc:
@@ -132,19 +132,24 @@ def call(function, *args, **kwargs):
     return out
 
 
-def _trace(name: str) -> None:
-    """With the environment variable ``AUTOBAL_SOLVER_TRACE`` set to a file, append ``name`` to it (tests wait on it
-    to interrupt a solve)."""
+def _name(function) -> str:
+    """The name of a CasADi function, or of a Python callable ("solver" for one without a name)."""
+    return function.name() if callable(getattr(function, "name", None)) else getattr(function, "__name__", "solver")
+
+
+def _trace(function) -> None:
+    """With the environment variable ``AUTOBAL_SOLVER_TRACE`` set to a file, append the name of ``function`` to it
+    (tests wait on it to interrupt a solve)."""
     trace = os.environ.get("AUTOBAL_SOLVER_TRACE")
     if trace:
         with open(trace, "a") as fh:
-            fh.write(f"{name}\n")
+            fh.write(f"{_name(function)}\n")
 
 
 def _failure(function, exc: RuntimeError) -> SolverFailure:
     """The SolverFailure of a CasADi function that raised: its name, the error's last line, and the return flag
     the message quotes (``CV_TOO_MUCH_WORK``) as its status."""
-    name = function.name() if callable(getattr(function, "name", None)) else getattr(function, "__name__", "solver")
+    name = _name(function)
     last = (str(exc).strip().splitlines() or ["(no message)"])[-1][:300]
     flag = re.search(r'"([A-Z][A-Z0-9_]{2,})"', last)
     return SolverFailure(f"{name}: {last}", flag.group(1) if flag else "solver_raised")
@@ -166,7 +171,7 @@ def isolated(function, *args):
     if not hasattr(os, "fork"):
         return function(*args)
     check()
-    _trace(getattr(function, "__name__", "isolated"))
+    _trace(function)
     read, write = os.pipe()
     pid = os.fork()
     if pid == 0:  # the child: compute, send, leave without running the parent's exit handlers

@@ -18,6 +18,8 @@ from autobal.analysis.linearize import Setup
 from autobal.analysis.quantities import DISPLAY_UNITS, display_units, flatten, is_number, significant
 from autobal.parts import device as device_part
 
+pytestmark = pytest.mark.cli  # end to end through autobal.run / the CLI
+
 RPM = 2 * math.pi / 60  # rad/s per rpm
 
 

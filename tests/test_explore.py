@@ -124,6 +124,7 @@ def test_explore_command_refuses_bad_input_with_exit_2(argv, words, capsys):
 
 
 @pytest.mark.slow
+@pytest.mark.cli
 def test_spinup_page_numbers_equal_autobal_run_after_reoptimising(tmp_path):
     """Spin-up: the ramps re-simulated for a changed rotor are the batch run's baselines; the current optimum's
     profile re-simulated for it differs from the batch run until "re-optimise", then equals it."""

@@ -203,7 +203,7 @@ def test_scene_without_ross_exits_2_naming_the_extra(monkeypatch, capsys, tmp_pa
     monkeypatch.setitem(sys.modules, "ross", None)
     assert cli.main(["run", "spinup_ross_rotor", "--out", str(tmp_path / "out"), "-q"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "pip install -e '.[ross]'" in err[0]
+    assert len(err) == 1 and "pip install 'autobal[ross]'" in err[0]
 
 
 def test_scene_schema_refuses_a_node_off_the_shaft(tmp_path):

@@ -15,6 +15,8 @@ from autobal.analysis import ipopt
 from autobal.errors import SolveError
 from autobal.output import SolverLog
 
+pytestmark = pytest.mark.cli  # end to end through autobal.run / the CLI
+
 
 def _solves(log: str) -> list[tuple[str, str, str]]:
     """(solver, status, its IPOPT text) of each solve in an autobal.log."""

@@ -5,7 +5,6 @@ spin-up, rotor_dynamics, the multi-mode ROSS rotor against ROSS's own unbalance 
 
 from __future__ import annotations
 
-import importlib.util
 import math
 from pathlib import Path
 
@@ -18,7 +17,6 @@ from autobal.analysis.rotor_study import api_margins
 from autobal.models.rotor import RotorParams
 
 RPM = 2 * math.pi / 60
-HAS_ROSS = importlib.util.find_spec("ross") is not None
 FAN = Path(__file__).resolve().parents[1] / "scenarios" / "examples" / "fan_rotor_spinup.yaml"  # the guide's scene
 
 
@@ -168,7 +166,7 @@ def test_the_scene_grade_is_the_standard_eccentricity():
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(not HAS_ROSS, reason="ross-rotordynamics is not installed (pip install -e '.[ross]')")
+@pytest.mark.extra("ross")
 def test_multi_mode_af_against_ross_unbalance_response():
     """The shipped ROSS rotor (spinup_ross_rotor): each critical speed's AF read off the reduced model's steady response
     at the nodes of interest (autobal.ocp.modal.api_readings) against an independent reading of ROSS's own
@@ -265,6 +263,7 @@ def test_the_critical_speed_label_says_whether_the_rotor_has_liquid(tmp_path, li
 
 
 @pytest.mark.slow
+@pytest.mark.cli
 def test_the_guides_ramp_table_dwell_near_the_critical_speed_is_cautioned(tmp_path, capsys):
     """Issue #32 item 4b, the spin-up guide's case (scenarios/examples/fan_rotor_spinup.yaml, docs/guides/spinup.md):
     its 4-segment ramp table holds the rotor at 1709 rpm, 95 % of the 1800 rpm critical speed, for 3.9 s; within
