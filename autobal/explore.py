@@ -353,7 +353,7 @@ class DeviceExplorer(Settings):
         om = fr.grid(lin, *self.omega_range)
         bvec = lin.forcing("physical")
         left = np.linalg.solve(V, bvec)  # V^-1 b
-        scale = data.forcing_amplitude * lin.z_B * 1e6
+        scale = data.forcing_amplitude * lin.z_B  # amplitudes in m, as results.json
         # modal sum: du(jw) = sum_k V[u, k] (V^-1 b)_k / (jw - lambda_k)
         amp = np.abs(((V[lin.u_out] * left)[:, None] / (1j * om[None, :] - lam[:, None])).sum(axis=0)) * scale
         peaks = fr.peaks(lin, om, amp, "physical", scale)
@@ -362,8 +362,8 @@ class DeviceExplorer(Settings):
         return {"poles": v["poles"], "damping_ratio": v["damping_ratio"], "stable": v["stable"],
                 "decay_rate": decay, "min_damping_ratio": v["margin"]["min_damping_ratio"],
                 "required_decay": self.required_decay, "meets_requirement": ok,
-                "omega": om, "amplitude_um": amp, "peaks": peaks, "omega0": w0, "amplitude_at_omega0_um": at,
-                "static_amplitude_um": float(abs(lin.response([0.0], "physical")[0]) * scale)}
+                "omega": om, "amplitude": amp, "peaks": peaks, "omega0": w0, "amplitude_at_omega0": at,
+                "static_amplitude": float(abs(lin.response([0.0], "physical")[0]) * scale)}
 
     # -- the cross-check on release
     def check(self, values: dict, answer: dict) -> str:
@@ -456,10 +456,10 @@ class SpinupExplorer(Settings):
 
 
 def _exact(ans: dict) -> str:
-    """The shown numbers at full precision (JSON, SI and µm), for the browser test's comparison."""
+    """The shown numbers at full precision (JSON, SI), for the browser test's comparison."""
     import json
 
-    keys = ("gap", "leak", "decay_rate", "min_damping_ratio", "amplitude_at_omega0_um", "static_amplitude_um")
+    keys = ("gap", "leak", "decay_rate", "min_damping_ratio", "amplitude_at_omega0", "static_amplitude")
     return json.dumps({k: float(ans[k]) for k in keys} | {"peaks": ans["peaks"]})
 
 
@@ -629,15 +629,15 @@ def make_document(explorer: DeviceExplorer, out: Path):
                 op = ""
             if last is not None and "poles" in last:
                 pk = "".join(f"<tr><td>resonance {i + 1}</td><td id='peak{i}_hz'>{_fmt(q['omega'] / (2 * np.pi))}"
-                             f"</td><td>Hz</td><td id='peak{i}_um'>{_fmt(q['amplitude_um'])}</td><td>µm</td></tr>"
+                             f"</td><td>Hz</td><td id='peak{i}_um'>{_fmt(q['amplitude'] * 1e6)}</td><td>µm</td></tr>"
                              for i, q in enumerate(last["peaks"]))
                 dyn = (f"<table style='color:{grey}'><tr><th colspan=5>dynamics (energy-consistent model)</th></tr>"
                        f"<tr><td>decay rate −max Re λ</td><td id='decay'>{_fmt(last['decay_rate'])}</td>"
                        f"<td>1/s</td></tr><tr><td>min damping ratio</td><td id='zeta'>"
                        f"{_fmt(last['min_damping_ratio'])}</td><td></td></tr>{pk}"
                        f"<tr><td>amplitude at ω0 ({_fmt(last['omega0'] / (2 * np.pi), 4)} Hz)</td>"
-                       f"<td id='amp0'>{_fmt(last['amplitude_at_omega0_um'])}</td><td>µm</td></tr>"
-                       f"<tr><td>static amplitude</td><td id='amp_static'>{_fmt(last['static_amplitude_um'])}</td>"
+                       f"<td id='amp0'>{_fmt(last['amplitude_at_omega0'] * 1e6)}</td><td>µm</td></tr>"
+                       f"<tr><td>static amplitude</td><td id='amp_static'>{_fmt(last['static_amplitude'] * 1e6)}</td>"
                        f"<td>µm</td></tr></table>")
                 re, im, zeta = last["poles"]["real"], last["poles"]["imag"], last["damping_ratio"]
                 rows = "".join(f"<tr><td>{_fmt(-a)}</td><td>{_fmt(b / (2 * np.pi))}</td><td>{_fmt(z, 4)}</td></tr>"
@@ -648,7 +648,7 @@ def make_document(explorer: DeviceExplorer, out: Path):
                     re, im = last["poles"]["real"], last["poles"]["imag"]
                     pole_src.data = {"abs_re": np.abs(re), "hz": im / (2 * np.pi),
                                      "colour": np.where(re < 0, "#1f77b4", "#d62728").tolist()}
-                    afc_src.data = {"hz": last["omega"] / (2 * np.pi), "amp": last["amplitude_um"]}
+                    afc_src.data = {"hz": last["omega"] / (2 * np.pi), "amp": last["amplitude"] * 1e6}
             else:
                 dyn = ""
             afc_line.glyph.line_color = "#1f77b4" if good else "#bbb"

@@ -73,8 +73,8 @@ def main(repeats: int = 5) -> list[dict]:
         live = ex.evaluate(values)
         f, s = batch_numbers(values)
         pairs = [(live["decay_rate"], s["margin"]["decay_rate"]), (live["peaks"][0]["omega"], f["peaks"][0]["omega"]),
-                 (live["peaks"][0]["amplitude_um"], f["peaks"][0]["amplitude_um"]),
-                 (live["amplitude_at_omega0_um"], f["at_operating_speed"]["amplitude_um"])]
+                 (live["peaks"][0]["amplitude"], f["peaks"][0]["amplitude"]),
+                 (live["amplitude_at_omega0"], f["at_operating_speed"]["amplitude"])]
         err = max(err, *(abs(a - b) / abs(b) for a, b in pairs))
 
     # the parts: statics, dynamics

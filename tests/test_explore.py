@@ -70,12 +70,12 @@ def test_live_numbers_equal_the_batch_run(explorer):
     assert len(live["peaks"]) == len(f["peaks"]) >= 1
     for a, b in zip(live["peaks"], f["peaks"], strict=True):
         assert a["omega"] == pytest.approx(b["omega"], rel=1e-7)
-        assert a["amplitude_um"] == pytest.approx(b["amplitude_um"], rel=1e-8)
-    assert live["amplitude_at_omega0_um"] == pytest.approx(f["at_operating_speed"]["amplitude_um"], rel=1e-8)
-    assert live["static_amplitude_um"] == pytest.approx(f["static_amplitude_um"], rel=1e-8)
+        assert a["amplitude"] == pytest.approx(b["amplitude"], rel=1e-8)
+    assert live["amplitude_at_omega0"] == pytest.approx(f["at_operating_speed"]["amplitude"], rel=1e-8)
+    assert live["static_amplitude"] == pytest.approx(f["static_amplitude"], rel=1e-8)
     # the AFC curve by the modal sum against python-control's on the same grid
     np.testing.assert_allclose(live["omega"], f["omega"], rtol=1e-9)  # the grid follows the poles
-    np.testing.assert_allclose(live["amplitude_um"], f["amplitude_um"], rtol=1e-8)
+    np.testing.assert_allclose(live["amplitude"], f["amplitude"], rtol=1e-8)
     assert explorer.check(values, live) == ""  # IPOPT agrees, the scene's checks pass
 
 
@@ -100,7 +100,8 @@ def test_bad_settings_are_reported_and_the_next_good_one_recovers(explorer, path
     assert ans["status"] == status and words in ans["message"]
     assert "decay_rate" not in ans  # no dynamics number for a setting without a regulated operating point
     good = explorer.evaluate(explorer.defaults())
-    assert good["status"] == "ok" and good["decay_rate"] == pytest.approx(80.6232963, rel=1e-6)
+    # the shipped scene's headline decay rate, as the batch stability analysis gives it (-max Re lambda = 82.64 1/s)
+    assert good["status"] == "ok" and good["decay_rate"] == pytest.approx(82.6444322, rel=1e-6)
 
 
 def test_a_crossed_margin_turns_the_verdict(explorer):

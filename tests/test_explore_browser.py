@@ -135,9 +135,9 @@ def test_numbers_shown_equal_autobal_run_on_the_saved_scene(server, page, tmp_pa
     assert len(live["peaks"]) == len(head["peaks"]) >= 1
     for a, b in zip(live["peaks"], head["peaks"], strict=True):
         assert a["omega"] == pytest.approx(b["omega"], rel=1e-7)
-        assert a["amplitude_um"] == pytest.approx(b["amplitude_um"], rel=1e-8)
-    assert live["amplitude_at_omega0_um"] == pytest.approx(head["at_operating_speed"]["amplitude_um"], rel=1e-8)
-    assert live["static_amplitude_um"] == pytest.approx(head["static_amplitude_um"], rel=1e-8)
+        assert a["amplitude"] == pytest.approx(b["amplitude"], rel=1e-8)
+    assert live["amplitude_at_omega0"] == pytest.approx(head["at_operating_speed"]["amplitude"], rel=1e-8)
+    assert live["static_amplitude"] == pytest.approx(head["static_amplitude"], rel=1e-8)
     # the gap: the batch path's IPOPT statics of the saved scene (the dynamic analyses' operating point)
     import autobal
     from autobal.analysis.linearize import Setup
@@ -149,7 +149,7 @@ def test_numbers_shown_equal_autobal_run_on_the_saved_scene(server, page, tmp_pa
     # and the 6-digit text the page shows is those numbers
     assert text["gap"] == pytest.approx(live["gap"] * 1e6, rel=1e-5)
     assert text["decay"] == pytest.approx(stab["margin"]["decay_rate"], rel=1e-5)
-    assert text["amp0"] == pytest.approx(head["at_operating_speed"]["amplitude_um"], rel=1e-5)
+    assert text["amp0"] == pytest.approx(head["at_operating_speed"]["amplitude"] * 1e6, rel=1e-5)  # µm
     assert text["peak0_hz"] == pytest.approx(head["peaks"][0]["omega"] / (2 * np.pi), rel=1e-5)
     assert page.outside == []  # BokehJS from this server, nothing fetched from elsewhere
 
