@@ -24,6 +24,7 @@ import signal
 import sys
 import threading
 
+from autobal.analysis import solver_output
 from autobal.errors import Interrupted, SolverFailure
 
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
@@ -119,7 +120,8 @@ def call(function, *args, **kwargs):
     check()
     _trace(function)
     try:
-        out = function(*args, **kwargs)
+        with solver_output.captured():  # CasADi's messages (a failed integrator's) go to the run's log
+            out = function(*args, **kwargs)
     except RuntimeError as exc:
         check()
         if type(exc) is not RuntimeError:  # ours (a SolveError), or Python's RecursionError, NotImplementedError

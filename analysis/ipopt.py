@@ -8,8 +8,8 @@ pays nothing.
 Every solver writes IPOPT's own log (the iteration table, the exit message) at ``FILE_PRINT_LEVEL`` into a file of
 its own (IPOPT's ``output_file``), never onto the terminal (``print_level`` 0); :func:`solve` appends what one
 solve wrote, headed by its name, status and iteration count, to the log of the run it belongs to
-(:func:`logging_to`: a context variable, so runs in several threads each get their own solves).  Nothing of the
-process (its standard output and error, file descriptors 1 and 2) is redirected.
+(:func:`~autobal.analysis.solver_output.logging_to`: a context variable, so runs in several threads each get their
+own solves).  Nothing of the process (its standard output and error, file descriptors 1 and 2) is redirected.
 """
 
 from __future__ import annotations
@@ -22,13 +22,12 @@ import tempfile
 import threading
 import time
 import weakref
-from collections.abc import Callable
-from contextvars import ContextVar
 
 import casadi as ca
 import numpy as np
 
-from autobal.analysis import interrupt, progress
+from autobal.analysis import interrupt, progress, solver_output
+from autobal.analysis.solver_output import log, logging_to  # noqa: F401 (the run log, as before)
 
 # Tight tolerances: the statics are small, well-scaled (dimensionless) and solved to
 # machine-level residuals; bound_relax_factor = 0 keeps bounds (u >= 0, xi <= xi_max) exact.
@@ -160,28 +159,8 @@ def _call(solver: ca.Function, args: dict) -> dict:
             bar.bar = None
 
 
-#: where the solves of this run append their logs (:func:`logging_to`); None: nowhere
-_RUN_LOG: ContextVar[Callable[[str], None] | None] = ContextVar("autobal_run_log", default=None)
 _FOLDER = {"path": None}
 _FOLDER_LOCK = threading.Lock()
-
-
-@contextlib.contextmanager
-def logging_to(write: Callable[[str], None]):
-    """Within the block (in this thread or task), each solve of :func:`solve` calls ``write`` with IPOPT's log of
-    that solve, headed by the solver's name, status and iteration count."""
-    token = _RUN_LOG.set(write)
-    try:
-        yield
-    finally:
-        _RUN_LOG.reset(token)
-
-
-def log(text: str) -> None:
-    """Add ``text`` to the log of the run in progress (:func:`logging_to`), if there is one."""
-    write = _RUN_LOG.get()
-    if write is not None:
-        write(text)
 
 
 class SolveLog:
@@ -208,7 +187,7 @@ class SolveLog:
                 yield
                 status = solver.stats().get("return_status", "?")
             finally:
-                if _RUN_LOG.get() is not None:
+                if solver_output.logging():
                     iterations = solver.stats().get("iter_count", "?") if status != "raised" else "?"
                     log(f"--- IPOPT {solver.name()}: {status}, {iterations} iterations\n{self.read(start)}\n")
 

@@ -7,10 +7,8 @@ import sys
 import threading
 
 import pytest
-import yaml
 
 import autobal
-from autobal import scenario
 from autobal.analysis import ipopt
 from autobal.errors import SolveError
 from autobal.output import SolverLog
@@ -128,16 +126,35 @@ def test_a_run_without_an_output_folder_writes_no_log_and_prints_nothing(tmp_pat
 
 @pytest.mark.slow
 def test_an_integrator_failure_is_in_the_log(tmp_path, capfd):
-    """CVODES stops at t = 0 with CV_TOO_MUCH_WORK on the compressor's force step of 100 (tests/test_status.py): the
-    run's log says which case failed and with what status; nothing of it reaches the caller's terminal."""
-    d = yaml.safe_load(scenario.resolve("compressor_k180_dynamics").read_text())
-    d["analyses"] = {"transient": {"duration": "2 ms", "points": 21, "cases": [
-        {"input": "force_step", "amplitude": 100}, {"input": "force_step", "amplitude": 0.01}]}}
-    path = tmp_path / "k180_failing.yaml"
-    path.write_text(yaml.safe_dump(d))
-    run = autobal.run(path, out=tmp_path / "o")
+    """CVODES stops at t = 0 with CV_TOO_MUCH_WORK on the undamped compressor's force step of 100
+    (tests/test_status.py): the run's log says which case failed and with what status; nothing of it reaches the
+    caller's terminal."""
+    from tests.test_status import failing_transient
+
+    run = autobal.run(failing_transient(tmp_path), out=tmp_path / "o")
     log = (tmp_path / "o" / "autobal.log").read_text()
     [line] = [x for x in log.splitlines() if x.startswith("=== transient")]
     assert run.status == "failed" and line.startswith("=== transient: failed: case 1 (force_step, amplitude 100)")
     assert "CV_TOO_MUCH_WORK" in line
     assert capfd.readouterr() == ("", "")
+
+
+def test_casadi_messages_of_a_solver_call_go_to_the_runs_log_and_the_streams_come_back(capfd):
+    """CasADi prints an integrator's failure (a NaN in the right-hand side) through Python's sys.stderr: within a
+    run's log (solver_output.logging_to) that text goes to the log, not to the caller, and the caller's streams are
+    the same objects afterwards; without a run log it reaches the caller as before."""
+    import casadi as ca
+
+    from autobal.analysis import interrupt, solver_output
+
+    x = ca.SX.sym("x")
+    F = ca.integrator("F", "cvodes", {"x": x, "ode": ca.sqrt(x)}, 0, 1)
+    streams, logged = (sys.stdout, sys.stderr), []
+    with solver_output.logging_to(logged.append), pytest.raises(SolveError):
+        interrupt.call(F, x0=-1)
+    assert (sys.stdout, sys.stderr) == streams
+    assert "NaN detected" in "".join(logged)
+    assert capfd.readouterr() == ("", "")
+    with pytest.raises(SolveError):
+        interrupt.call(F, x0=-1)
+    assert "NaN detected" in capfd.readouterr().err
