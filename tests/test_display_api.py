@@ -45,6 +45,7 @@ def pump():
     return Setup(device_part.adapt(scenario.load("pump_pe600_dynamics").device))
 
 
+@pytest.mark.extra("notebook")  # to_dataframe() needs pandas
 def test_the_scenes_display_reaches_summary_headline_html_and_dataframes_after_the_run(statics_bar):
     st = statics_bar["statics"]
     p1 = st.to_dict()["exact"]["p1"]  # Pa

@@ -22,6 +22,7 @@ def test_bad_drive_values_exit_2_naming_the_field_and_the_unit(capsys, sets, wor
     assert words in refused(capsys, "spinup_ross_rotor", *sets)
 
 
+@pytest.mark.extra("ross")  # without ross, run refuses the scene first, naming the extra
 @pytest.mark.parametrize("scene", ["ross_spinup_robust", "ross_spinup_time_optimal"])
 def test_studies_without_a_drive_model_refuse_a_drive_section(capsys, scene):
     err = refused(capsys, scene, f"{DRIVE}.max_power=2 kW")
