@@ -176,7 +176,8 @@ class SpinupResult(Result):
         d = self.data
         ok, words = self.verdict()
         q = QUANTITIES.find
-        lines = [f"spin-up ({d['objective'].replace('_', ' ')}): {'ok' if ok else 'NOT OK'}: {words}",
+        status = {True: "ok", False: "NOT OK", None: "to check"}[ok]
+        lines = [f"spin-up ({d['objective'].replace('_', ' ')}): {status}: {words}",
                  f"  {critical_label(d['rotor']['liquid_mass_kg'] > 0)}  ω_cr  "
                  f"{q('rotor.critical_speed_rad_s').text(d['rotor']['critical_speed_rad_s'])}",
                  *QUANTITIES.lines(d),
@@ -371,7 +372,8 @@ def verdict(d: dict) -> tuple[bool | None, str]:
     """The spin-up's one verdict from its results.json block: the optimum's peak deflection (physical, 0-peak,
     and delta/e), its gain against the best ramp within the drive limits (the only reference a gain is quoted
     against), whether it brakes and whether it keeps the drive limits; the NLP status first when it is not a
-    success."""
+    success.  An optimum that dwells near the critical speed (:func:`dwell`) is neither good nor bad (None) with a
+    CAUTION: its peak holds only for the critical speed of the scene."""
     peak = QUANTITIES.find("peak_deflection_m").text(d["peak_deflection_m"])
     words = f"peak deflection {peak} 0-peak ({significant(d['peak_deflection_over_e'])} e)"
     gain, key = d.get("gain_vs_best_feasible_ramp_pct"), d.get("baseline_ramp_key")
@@ -383,8 +385,8 @@ def verdict(d: dict) -> tuple[bool | None, str]:
         words += (f"; it brakes (smallest torque {QUANTITIES.find('min_torque_N_m').text(d['min_torque_N_m'])})"
                   if d["brakes"] else "; it does not brake")
     ok = gain is None or gain <= 0.01
-    if (d.get("dwell") or {}).get("dwells"):
-        ok, words = False, words + "; CAUTION: " + dwell_words("it", d["dwell"], d["omega_cr_rad_s"])
+    if (d.get("dwell") or {}).get("dwells"):  # good only if the critical speed is where the scene puts it: no verdict
+        ok, words = (None if ok else ok), words + "; CAUTION: " + dwell_words("it", d["dwell"], d["omega_cr_rad_s"])
     if d.get("within_drive_limits") is False:
         ok, words = False, words + f"; drive limits EXCEEDED ({', '.join(d.get('violated') or [])})"
     if d["status"] not in SOLVED:

@@ -317,3 +317,20 @@ def test_rotor_dynamics_states_the_margin_from_the_scenes_service_speed():
     assert bare["amplification_factor"] == pytest.approx(r["amplification_factor"])
     assert bare["separation_margin_pct"] is None and "no operating speed" in bare["separation_margin_pct_status"]
     assert bare["service_speed_rad_s_status"] == "the scene gives no service speed (rotor.unbalance)"
+
+
+@pytest.mark.parametrize("gain, dwells, ok", [(-13.0, False, True), (-13.0, True, None), (+2.0, True, False),
+                                              (+2.0, False, False)])
+def test_an_optimum_that_dwells_gets_a_caution_and_no_green_verdict(gain, dwells, ok):
+    """An optimum that beats the best ramp but dwells near the critical speed (the 5 s deadline scene: 1.1 s within
+    10 % of it, at 97 % of it) is neither good nor bad: its peak holds only for the scene's critical speed; one that
+    does not beat the ramp stays NOT OK."""
+    from autobal.ocp.spinup_study import verdict
+
+    d = {"peak_deflection_m": 1.231e-3, "peak_deflection_over_e": 12.31, "gain_vs_best_feasible_ramp_pct": gain,
+         "baseline_ramp_key": "hold", "baselines": {"hold": {"label": "ramp 40 rad/s² and hold"}}, "brakes": None,
+         "omega_cr_rad_s": 105.0, "status": "Solve_Succeeded",
+         "dwell": {"dwells": dwells, "time_near_critical_s": 1.1, "fastest_crossing_s": 0.53,
+                   "hold_speed_rad_s": 101.8, "hold_steady_deflection_over_e": 12.0}}
+    got, words = verdict(d)
+    assert got is ok and ("CAUTION" in words) is dwells
