@@ -44,12 +44,12 @@ from autobal import scenario
 from autobal.analysis import frequency as fr
 from autobal.analysis import stability as st
 from autobal.analysis.linearize import LinearModel
-from autobal.analysis.statics import ParametricStatics, StaticsSolver, ideal_guess
+from autobal.analysis.statics import NEWTON_ABSTOL, RESIDUAL_TOL, ParametricStatics, StaticsSolver, ideal_guess
 from autobal.errors import AutobalError, ScenarioError, SolveError
 from autobal.models import device as dv
 from autobal.models.dynamics import build
 from autobal.parts import derived
-from autobal.parts.device import adapt
+from autobal.parts.device import adapt, design
 from autobal.schema import section_at
 from autobal.units import to_si
 
@@ -61,6 +61,9 @@ SLIDER_SPAN = 5.0  # a slider runs from value / SPAN to value * SPAN, inside the
 SLIDER_STEPS = 400
 CHECK_RTOL = 1e-6  # IPOPT's operating point differs from Newton's when a value differs by more than this
 CHECK_AFTER_S = 1.0  # IPOPT cross-checks a setting once the sliders have rested this long
+CRITICAL_RTOL = 1e-12  # Brent's method's relative tolerance on the criticals psi1_kr, dpsi_kr
+PSI1_MAX = 100.0  # the largest discharge ratio a scene may give (analyses.statics): psi1_kr is looked for up to it
+DPSI_MIN, DPSI_MAX = 1e-6, 100.0  # the margins dpsi_kr is looked for between (IPOPT's lower bound: 1e-6)
 _NUMBER = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
 
 
@@ -204,7 +207,89 @@ class Settings:
         return path
 
 
-class DeviceExplorer(Settings):
+class DeviceSettings(Settings):
+    """A device scene's sliders and the fast path of its statics (both device pages): the device of the settings,
+    the parametric balances built once per structure, Newton's operating point warm-started from the last one."""
+
+    psi1 = 1.0  # the discharge ratio p1 / p_B of the operating point
+
+    def __init__(self, source: str | Path):
+        super().__init__(source)
+        self._statics_cache: dict = {}  # structure key -> (ParametricStatics, group names)
+        self._last = None  # (active set, W) of the last solved point: the warm start
+
+    def device(self, values: dict):
+        """DeviceParams (SI) of the settings ``values`` (path -> scene unit), by the scene's adapter."""
+        return adapt(self.section("device", values))
+
+    # -- the fast path
+    def _statics(self, dd: dv.DeviceDesign) -> tuple[ParametricStatics, tuple]:
+        """The device's balances with every group as a parameter, built once per structure (what the groups
+        cannot carry: the medium, the regulator and its valve's travel limit, the bounds of the unknowns)."""
+        g = dd.groups
+        key = (g.medium, g.regulator is not None, g.regulator.xi_max if g.regulator else None)
+        if key not in self._statics_cache:
+            names = tuple(dv.groups_by_name(g))
+            self._statics_cache[key] = (ParametricStatics(g, names), names)
+        return self._statics_cache[key]
+
+    def _point(self, dd: dv.DeviceDesign) -> dict:
+        """The operating point: Newton's root of the balances at the groups of ``dd``, warm-started from the last
+        point (its stop set and unknowns), then from the closed form with each stop set; where none is accepted,
+        IPOPT with every stop (SolveError when it fails too)."""
+        statics, names = self._statics(dd)
+        g = dd.groups
+        theta = [dv.groups_by_name(g)[n] for n in names]
+        P = np.array([[self.psi1, dd.dpsi, *theta]])
+        guess = ideal_guess(g, statics.system.unknowns, self.psi1, dd.dpsi)
+        last = self._last if self._last is not None and self._last[1].shape == guess[0].shape else None
+        attempts = ([(last[0], np.atleast_2d(last[1]))] if last is not None else []) + [
+            (a, guess) for a in statics.active_sets]
+        res = statics.solve(P, attempts)
+        if res["valid"][0]:
+            W = res["W"][0]
+            active = attempts[res["active"][0]][0]
+            vals = dict(zip(statics.system.unknowns, map(float, W), strict=True))
+            vals.setdefault("psi_e", self.psi1 + dd.dpsi)
+            flows = dict(zip(statics.system.throttles, map(float, res["q"][0]), strict=True))
+        else:
+            sp = StaticsSolver(dd).solve(self.psi1, dd.dpsi)
+            W, active, vals, flows = np.asarray(sp.x, float), sp.active, dict(sp.values), sp.flows
+        self._last = (active, W.copy())
+        return vals | {"_flows": flows, "_active": active, "_names": names}
+
+    def _operating_point(self, pt: dict, dd: dv.DeviceDesign) -> dict:
+        sc, q = dd.scales, pt["_flows"]
+        pressures = {k: pt[k] * sc["p_B"] for k in ("psi2", "psi3", "psi_e", "psi_cam") if k in pt}
+        return {"gap": pt["u"] * sc["z_B"], "pressures": pressures, "leak": q["e"] * sc["Q_scale"],
+                "inner_seal_flow": q["1"] * sc["Q_scale"], "valve_opening": pt.get("xi", math.nan) * sc["x_B"],
+                "point": {k: v for k, v in pt.items() if not k.startswith("_")}}
+
+    # -- the cross-check on release
+    def check(self, values: dict, answer: dict) -> str:
+        """The scene validated as a file would be (``autobal.load`` with the settings as overrides) and its
+        operating point by IPOPT (what ``autobal run`` solves) against the live answer; '' when they agree."""
+        try:
+            scene = scenario.load(self.path, overrides=self.overrides(values))
+            dd = design(scene.device)
+            point = StaticsSolver(dd).solve(self.psi1, dd.dpsi)
+        except ScenarioError as exc:
+            return f"refused by the scene's checks: {exc}"
+        except SolveError as exc:
+            return f"IPOPT: {exc} (status {exc.status})"
+        if answer.get("status") != "ok" and "point" not in answer:
+            return f"IPOPT finds an operating point (gap {point.values['u'] * dd.scales['z_B'] * 1e6:.6g} µm) " \
+                   "where the fast path found none"
+        live = answer["point"]
+        worst = max(abs(point.values[k] - live[k]) / max(abs(live[k]), 1e-12) for k in live if k in point.values
+                    and not k.startswith("r_"))
+        if worst > CHECK_RTOL:
+            return (f"IPOPT's operating point differs (largest relative difference {worst:.1e}): gap "
+                    f"{point.values['u'] * dd.scales['z_B'] * 1e6:.6g} µm")
+        return ""
+
+
+class DeviceExplorer(DeviceSettings):
     """The what-if computation of a device-dynamics scene: operating point, poles, verdict and AFC of the
     headline model (energy-consistent, physical forcing) for changed parameters.
 
@@ -228,24 +313,7 @@ class DeviceExplorer(Settings):
         self.required_decay = stab.decay_rate if stab is not None else 0.0
         self.params = parameters(sc.device, self.raw, "device") + parameters(sc.device.dynamics, self.raw,
                                                                               "device.dynamics")
-        self._statics_cache: dict = {}  # structure key -> (ParametricStatics, group names)
         self._models: dict = {}  # structure key -> (Jacobian Function, model)
-        self._last = None  # (active set, W) of the last solved point: the warm start
-
-    def device(self, values: dict):
-        """DeviceParams (SI) of the settings ``values`` (path -> scene unit), by the scene's adapter."""
-        return adapt(self.section("device", values))
-
-    # -- the fast path
-    def _statics(self, dd: dv.DeviceDesign) -> tuple[ParametricStatics, tuple]:
-        """The device's balances with every group as a parameter, built once per structure (what the groups
-        cannot carry: the medium, the regulator and its valve's travel limit, the bounds of the unknowns)."""
-        g = dd.groups
-        key = (g.medium, g.regulator is not None, g.regulator.xi_max if g.regulator else None)
-        if key not in self._statics_cache:
-            names = tuple(dv.groups_by_name(g))
-            self._statics_cache[key] = (ParametricStatics(g, names), names)
-        return self._statics_cache[key]
 
     def _model(self, dev: dv.DeviceParams, dd: dv.DeviceDesign, names: tuple, point: dict):
         """The nonlinear dynamic model with the groups, the scales and the membrane area as symbols d, and its
@@ -274,31 +342,6 @@ class DeviceExplorer(Settings):
             self._models.pop(next(iter(self._models)))
         self._models[key] = (ca.Function("AB", [x, w, p, d], [ca.jacobian(f, x), ca.jacobian(f, w)]), model)
         return self._models[key]
-
-    def _point(self, dd: dv.DeviceDesign) -> dict:
-        """The operating point: Newton's root of the balances at the groups of ``dd``, warm-started from the last
-        point (its stop set and unknowns), then from the closed form with each stop set; where none is accepted,
-        IPOPT with every stop (SolveError when it fails too)."""
-        statics, names = self._statics(dd)
-        g = dd.groups
-        theta = [dv.groups_by_name(g)[n] for n in names]
-        P = np.array([[self.psi1, dd.dpsi, *theta]])
-        guess = ideal_guess(g, statics.system.unknowns, self.psi1, dd.dpsi)
-        last = self._last if self._last is not None and self._last[1].shape == guess[0].shape else None
-        attempts = ([(last[0], np.atleast_2d(last[1]))] if last is not None else []) + [
-            (a, guess) for a in statics.active_sets]
-        res = statics.solve(P, attempts)
-        if res["valid"][0]:
-            W = res["W"][0]
-            active = attempts[res["active"][0]][0]
-            vals = dict(zip(statics.system.unknowns, map(float, W), strict=True))
-            vals.setdefault("psi_e", self.psi1 + dd.dpsi)
-            flows = dict(zip(statics.system.throttles, map(float, res["q"][0]), strict=True))
-        else:
-            sp = StaticsSolver(dd).solve(self.psi1, dd.dpsi)
-            W, active, vals, flows = np.asarray(sp.x, float), sp.active, dict(sp.values), sp.flows
-        self._last = (active, W.copy())
-        return vals | {"_flows": flows, "_active": active, "_names": names}
 
     def evaluate(self, values: dict) -> dict:
         """Operating point, poles, margin, verdict and AFC for the settings ``values`` (path -> scene unit).
@@ -337,13 +380,6 @@ class DeviceExplorer(Settings):
         out["compute_ms"] = 1e3 * (time.perf_counter() - t0)
         return out
 
-    def _operating_point(self, pt: dict, dd: dv.DeviceDesign) -> dict:
-        sc, q = dd.scales, pt["_flows"]
-        pressures = {k: pt[k] * sc["p_B"] for k in ("psi2", "psi3", "psi_e", "psi_cam") if k in pt}
-        return {"gap": pt["u"] * sc["z_B"], "pressures": pressures, "leak": q["e"] * sc["Q_scale"],
-                "inner_seal_flow": q["1"] * sc["Q_scale"], "valve_opening": pt.get("xi", math.nan) * sc["x_B"],
-                "point": {k: v for k, v in pt.items() if not k.startswith("_")}}
-
     def _dynamics(self, lin: LinearModel, data) -> dict:
         """Verdict (:func:`analysis.stability.verdict`) and the AFC of the face gap under the physical forcing."""
         v = st.verdict(lin, hurwitz=False)
@@ -365,30 +401,208 @@ class DeviceExplorer(Settings):
                 "omega": om, "amplitude": amp, "peaks": peaks, "omega0": w0, "amplitude_at_omega0": at,
                 "static_amplitude": float(abs(lin.response([0.0], "physical")[0]) * scale)}
 
-    # -- the cross-check on release
-    def check(self, values: dict, answer: dict) -> str:
-        """The scene validated as a file would be (``autobal.load`` with the settings as overrides) and its
-        operating point by IPOPT (what ``autobal run`` solves) against the live answer; '' when they agree."""
-        try:
-            scene = scenario.load(self.path, overrides=self.overrides(values))
-            from autobal.parts.device import dynamic_device
+class StaticsExplorer(DeviceSettings):
+    """The what-if computation of a device-statics scene (``analyses.statics``): the operating point, the critical
+    discharge pressure p1_kr and barrier margin dp_kr (the inner-seal flow q1 = 0, as the statics study's
+    ``critical_exact``), the static characteristic over the scene's discharge ratios and the study's verdict
+    (:meth:`autobal.analysis.statics_study.StaticsResult.verdict`), all by Newton's roots of the parametric balances
+    (the batch solver of sweeps); the criticals by Brent's method on q1 along psi1 (dpsi) over those roots."""
 
-            dd = dv.design(dynamic_device(scene))
-            point = StaticsSolver(dd).solve(self.psi1, dd.dpsi)
-        except ScenarioError as exc:
-            return f"refused by the scene's checks: {exc}"
+    def __init__(self, source: str | Path):
+        super().__init__(source)
+        sc = self.scene
+        settings = getattr(sc.analyses, "statics", None)
+        if getattr(sc, "device", None) is None or settings is None:
+            raise ScenarioError(f"{sc.name}: explore needs a scene with device.dynamics, analyses.statics or a rotor "
+                                "with analyses.spinup")
+        self.psi1 = settings.operating_ratio
+        r = settings.discharge_ratio
+        self.grid = np.linspace(r.start, r.stop, r.points)
+        self.psi1_max = r.stop
+        self.params = parameters(sc.device, self.raw, "device")
+        self._sweep = None  # the last sweep's rows of unknowns: its warm start
+        self._critical_systems: dict = {}  # (structure, psi1 or dpsi, stops) -> the critical's Newton system
+
+    def _roots(self, dd: dv.DeviceDesign, psi1s, dpsis, starts=None, stops=frozenset()) -> dict:
+        """Newton's roots at the rows (psi1, dpsi) (:meth:`ParametricStatics.solve`): from ``starts`` (rows of
+        unknowns), then from the closed form, each with every stop set (``stops`` first, then regulating, valve on
+        its stop, face in contact); ``stops`` per row: the stop set of the accepted root (None: no root)."""
+        statics, names = self._statics(dd)
+        groups = dv.groups_by_name(dd.groups)
+        psi1s, dpsis = np.broadcast_arrays(np.atleast_1d(np.asarray(psi1s, float)), np.asarray(dpsis, float))
+        P = np.column_stack([psi1s, dpsis, np.tile([groups[n] for n in names], (len(psi1s), 1))])
+        unknowns = statics.system.unknowns
+        guess = np.vstack([ideal_guess(dd.groups, unknowns, a, b) for a, b in zip(psi1s, dpsis, strict=True)]) \
+            if np.ptp(dpsis) else ideal_guess(dd.groups, unknowns, psi1s, float(dpsis[0]))
+        sets = statics.active_sets + [a | {"r_contact"} for a in statics.active_sets]
+        sets = [stops] + [a for a in sets if a != stops]
+        tries = ([np.where(np.isfinite(starts), starts, guess)] if starts is not None else []) + [guess]
+        attempts = [(a, w) for w in tries for a in sets]
+        res = statics.solve(P, attempts)
+        res["stops"] = [attempts[k][0] if k >= 0 else None for k in res["active"]]
+        res["q1"] = res["q"][:, statics.system.throttles.index("1")]
+        return res
+
+    def _critical_system(self, dd: dv.DeviceDesign, which: str, stops: frozenset):
+        """The balances with the stops fixed (as :meth:`ParametricStatics.newton`) and q1 = 0, square in the free
+        unknowns and psi1 (``which`` "psi1") or dpsi ("dpsi"): CasADi's Newton rootfinder, built once per
+        structure; ``(solver(z0, p) -> z, free indices, full(z) -> unknowns)``, z = [free unknowns, psi1 or dpsi];
+        None where the system is structurally singular."""
+        statics, names = self._statics(dd)
+        key = (id(statics), which, stops)
+        if key not in self._critical_systems:
+            sys_ = statics.system
+            free, fixed = statics.free(stops)
+            z, p = ca.SX.sym("z", len(free) + 1), ca.SX.sym("p", 2 + len(names))
+            full = ca.vertcat(*[z[free.index(i)] if i in free else fixed[i] for i in range(len(sys_.unknowns))])
+            psi1, dpsi = (z[-1], p[1]) if which == "psi1" else (p[0], z[-1])
+            q1 = statics.flows(full, psi1, dpsi, p[2:])[sys_.throttles.index("1")]
+            f = ca.Function("critical", [z, p], [ca.vertcat(statics.residual(full, psi1, dpsi, p[2:]), q1)])
+            try:
+                solver = ca.rootfinder(f"critical_{which}", "newton", f, {
+                    "abstol": NEWTON_ABSTOL, "max_iter": 50, "error_on_fail": False, "linear_solver": "qr",
+                    "show_eval_warnings": False})
+            except RuntimeError:  # structurally singular with these stops (q1 does not depend on the unknown)
+                self._critical_systems[key] = None
+            else:
+                self._critical_systems[key] = (solver, free, ca.Function("full", [z], [full]))
+        return self._critical_systems[key]
+
+    def _critical(self, dd: dv.DeviceDesign, which: str, start: np.ndarray, stops: frozenset, guess: float,
+                  bracket) -> float | None:
+        """The psi1 (``which`` "psi1", at the scene's dpsi) or dpsi ("dpsi", at the operating psi1) where q1 = 0:
+        Newton on the balances and q1 = 0 from the root ``start`` (its ``stops`` first, then each stop set) and
+        ``guess``, a root accepted as :meth:`ParametricStatics.solve` accepts one; else Brent's method on q1 over
+        Newton's roots inside ``bracket`` (q1 of opposite signs at its ends; None: no critical)."""
+        from scipy.optimize import brentq
+
+        statics, names = self._statics(dd)
+        groups = dv.groups_by_name(dd.groups)
+        p = [self.psi1, dd.dpsi, *(groups[n] for n in names)]
+        sets = statics.active_sets + [a | {"r_contact"} for a in statics.active_sets]
+        for active in [stops] + [a for a in sets if a != stops]:
+            system = self._critical_system(dd, which, active)
+            if system is None:
+                continue
+            solver, free, full = system
+            z = np.asarray(solver(np.append(start[free], guess), p), float).ravel()
+            if not np.all(np.isfinite(z)) or z[-1] <= 0 or bracket and not bracket[0] <= z[-1] <= bracket[1]:
+                continue
+            at = (z[-1], dd.dpsi) if which == "psi1" else (self.psi1, z[-1])
+            res = self._roots(dd, *at, starts=np.asarray(full(z), float).T, stops=active)
+            if res["valid"][0] and res["stops"][0] == active and abs(res["q1"][0]) <= RESIDUAL_TOL:
+                return float(z[-1])
+        if not bracket:
+            return None
+        last = [start, stops]  # each root starts from the one before, with its stops
+
+        def q1(s):
+            at = (s, dd.dpsi) if which == "psi1" else (self.psi1, s)
+            res = self._roots(dd, *at, starts=np.atleast_2d(last[0]), stops=last[1])
+            if not res["valid"][0]:
+                raise SolveError(f"no Newton root at {which} = {s:g} on the way to q1 = 0", "Newton_Failed")
+            last[:] = res["W"][0], res["stops"][0]
+            return float(res["q1"][0])
+
+        return float(brentq(q1, *bracket, xtol=1e-14, rtol=CRITICAL_RTOL))
+
+    def _find_critical(self, dd: dv.DeviceDesign, which: str, xs, q1s, W, stops, guess: float, far: float):
+        """The critical ``which`` (q1 = 0) from the roots (rows ``W`` with ``stops``) at ``xs`` with inner-seal flows
+        ``q1s``: inside the sign change of q1 nearest ``guess`` (from its interpolated zero); without one, from the
+        last root and ``guess``, then inside the first sign change of q1 followed beyond the last root towards
+        ``far`` in steps of x 1.5 (or / 1.5).  None: no critical there."""
+        ok = np.flatnonzero(np.isfinite(q1s))
+        x, q = xs[ok], q1s[ok]
+        flips = np.flatnonzero(np.sign(q[:-1]) * np.sign(q[1:]) <= 0)
+        if flips.size:
+            i = flips[np.argmin(np.abs(x[flips] - guess))]
+            zero = x[i] - q[i] * (x[i + 1] - x[i]) / (q[i + 1] - q[i]) if q[i + 1] != q[i] else x[i]
+            return self._critical(dd, which, W[ok[i]].copy(), stops[ok[i]], zero, (x[i], x[i + 1]))
+        start, at_stops = W[ok[-1]].copy(), stops[ok[-1]]
+        found = self._critical(dd, which, start, at_stops, guess, None)
+        x, q = x[-1], q[-1]
+        step = 1.5 if far > x else 1 / 1.5
+        while found is None and ((x < far) if step > 1 else (x > far)):
+            nxt = min(x * step, far) if step > 1 else max(x * step, far)
+            res = self._roots(dd, *((nxt, dd.dpsi) if which == "psi1" else (self.psi1, nxt)),
+                              starts=np.atleast_2d(start), stops=at_stops)
+            if not res["valid"][0]:
+                raise SolveError(f"no Newton root at {which} = {nxt:g} on the way to q1 = 0", "Newton_Failed")
+            if np.sign(res["q1"][0]) != np.sign(q):
+                found = self._critical(dd, which, start, at_stops, nxt, (x, nxt) if nxt > x else (nxt, x))
+            start, at_stops, x, q = res["W"][0], res["stops"][0], nxt, res["q1"][0]
+        return found
+
+    def evaluate(self, values: dict) -> dict:
+        """Operating point, criticals, characteristic and verdict for the settings ``values`` (path -> scene unit).
+
+        Returns a dict with ``status`` "ok", "refused" (a setting the device's declarations refuse) or "no_statics"
+        (no static solution at the operating point); ``message`` says why.  SI inside; a critical that has no value
+        is None with ``*_status`` saying why."""
+        from autobal.analysis import closed_form
+        from autobal.analysis.statics_study import StaticsResult
+
+        t0 = time.perf_counter()
+        try:
+            dev = self.device(values)
+            dd = dv.design(dev)
+        except (ValueError, ZeroDivisionError, AutobalError) as exc:
+            return {"status": "refused", "message": str(exc)}
+        try:
+            pt = self._point(dd)
         except SolveError as exc:
-            return f"IPOPT: {exc} (status {exc.status})"
-        if answer.get("status") != "ok" and "point" not in answer:
-            return f"IPOPT finds an operating point (gap {point.values['u'] * dd.scales['z_B'] * 1e6:.6g} µm) " \
-                   "where the fast path found none"
-        live = answer["point"]
-        worst = max(abs(point.values[k] - live[k]) / max(abs(live[k]), 1e-12) for k in live if k in point.values
-                    and not k.startswith("r_"))
-        if worst > CHECK_RTOL:
-            return (f"IPOPT's operating point differs (largest relative difference {worst:.1e}): gap "
-                    f"{point.values['u'] * dd.scales['z_B'] * 1e6:.6g} µm")
-        return ""
+            return {"status": "no_statics", "message": f"the statics have no solution at this setting (IPOPT: "
+                                                       f"{exc.status})"}
+        sc, g, reg = dd.scales, dd.groups, dd.groups.regulator is not None
+        out = {"status": "ok", "message": "", **self._operating_point(pt, dd), "has_regulator": reg,
+               "p1": self.psi1 * sc["p_B"], "dp": (pt["psi_e"] - self.psi1) * sc["p_B"]}
+        # the characteristic over the scene's discharge ratios, warm-started from the last one
+        start = self._sweep if self._sweep is not None and self._sweep.shape[1] == len(self._last[1]) else None
+        sw = self._roots(dd, self.grid, dd.dpsi, starts=start)
+        self._sweep = sw["W"].copy()
+        u = self._statics(dd)[0].system.index("u")
+        stops = sw["stops"]
+        out["sweep"] = {"p1": self.grid * sc["p_B"], "gap": sw["W"][:, u] * sc["z_B"],
+                        "leak": sw["q"][:, self._statics(dd)[0].system.throttles.index("e")] * sc["Q_scale"],
+                        "inner_seal_flow": sw["q1"] * sc["Q_scale"],
+                        "saturated": [s is not None and "r_valve" in s for s in stops],
+                        "contact": [s is not None and "r_contact" in s for s in stops],
+                        "solved": [s is not None for s in stops]}
+        # the criticals (q1 = 0), started as the study starts IPOPT: from the closed forms
+        cf = closed_form.for_medium(g, self.psi1, dd.dpsi)
+        psi1_kr, dpsi_kr = float(cf["psi1_kr"]), float(cf["dpsi_kr"])
+        here = np.array([[pt[k] for k in self._statics(dd)[0].system.unknowns]])
+        crit = {}
+        for which, xs, q1s, W, at_stops, guess, far, name, unit, where in (
+                ("psi1", self.grid, sw["q1"], sw["W"], stops, min(psi1_kr, self.psi1_max) if psi1_kr > 0 else
+                 self.psi1, PSI1_MAX, "p1_kr", "no discharge ratio with q1 = 0 found", f"up to psi1 = {PSI1_MAX:g}"),
+                ("dpsi", np.array([dd.dpsi]), np.array([pt["_flows"]["1"]]), here, [pt["_active"]],
+                 dpsi_kr if dpsi_kr > 0 else dd.dpsi, DPSI_MIN if pt["_flows"]["1"] > 0 else DPSI_MAX, "dp_kr",
+                 f"no margin with q1 = 0 at psi1 = {self.psi1:g}", f"between dpsi = {DPSI_MIN:g} and {DPSI_MAX:g}")):
+            try:
+                kr = self._find_critical(dd, which, xs, q1s, W, at_stops, guess, far)
+                why = f"q1 keeps its sign {where}"
+            except (SolveError, ValueError) as exc:
+                kr, why = None, str(exc)
+            crit |= {f"{which}_kr": kr, name: None if kr is None else kr * sc["p_B"]}
+            if kr is None:
+                crit[f"{which}_kr_status"] = f"{unit}: {why}"
+        out["critical"] = crit
+        out["margin_to_p1_kr"] = None if crit["p1_kr"] is None else crit["p1_kr"] - out["p1"]
+        exact = {"psi1": self.psi1, "z0": out["gap"], "Q_1": out["inner_seal_flow"], "dp": out["dp"],
+                 "contact": "r_contact" in pt["_active"]}
+        if reg:
+            exact["regulator_saturated"] = "r_valve" in pt["_active"]
+        out["verdict"] = StaticsResult({"exact": exact, "critical_exact": crit}).verdict()
+        # the sweep's checks, as the report's statics section words them
+        first = {what: self.grid[flags.index(True)] for what, flags in (
+            ("regulator saturated (valve on its stop)", out["sweep"]["saturated"]),
+            ("face contact", out["sweep"]["contact"]),
+            ("no Newton root (not drawn)", [not ok for ok in out["sweep"]["solved"]])) if any(flags)}
+        out["sweep_checks"] = [f"{what} in the sweep from p1 = {_fmt(x * sc['p_B'] / 1e6, 4)} MPa (ψ1 = {_fmt(x, 4)})"
+                               for what, x in first.items()]
+        out["compute_ms"] = 1e3 * (time.perf_counter() - t0)
+        return out
 
 
 class SpinupExplorer(Settings):
