@@ -644,7 +644,10 @@ class SpinupExplorer(Settings):
 
     def evaluate(self, values: dict) -> dict:
         """The current optimum's profile and the constant ramps re-simulated for the settings: peaks (delta/e and
-        m), the critical speed (rad/s), the drive's use; ``status`` "ok", "refused" or "no_optimum"."""
+        m), the critical speed (rad/s) with its API 684 margins (``api``: :func:`analysis.standards.margin_check`'s
+        dict, as the spin-up study's ``rotor`` block), the drive's use; ``status`` "ok", "refused" or
+        "no_optimum"."""
+        from autobal.analysis.rotor_study import api_margins
         from autobal.ocp.simulation import baselines, drive_use, resimulate
 
         t0 = time.perf_counter()
@@ -653,7 +656,9 @@ class SpinupExplorer(Settings):
         except (ValueError, ZeroDivisionError, AutobalError) as exc:
             return {"status": "refused", "message": str(exc)}
         P = ocp.params
-        out = {"status": "ok", "message": "", "critical_speed": P.omega_cr, "eccentricity": P.e, "ramps": {}}
+        out = {"status": "ok", "message": "", "critical_speed": P.omega_cr, "eccentricity": P.e, "ramps": {},
+               # API 684 (2005): AF and SM of the changed rotor from its service (final) speed, as the study's
+               "api": api_margins(P, ocp.omega_final)}
         for key, tr in baselines(ocp).items():
             out["ramps"][key] = {"label": tr.label, "peak_over_e": tr.peak_delta, "t": tr.t, "delta": tr.delta,
                                  "within_drive_limits": drive_use(ocp, tr)["within_drive_limits"]}
@@ -667,6 +672,14 @@ class SpinupExplorer(Settings):
                           "optimised_for": self.overrides(at)}
         out["compute_ms"] = 1e3 * (time.perf_counter() - t0)
         return out
+
+
+def _exact_statics(ans: dict) -> str:
+    """The statics page's numbers at full precision (JSON, SI), for the browser test's comparison."""
+    import json
+
+    return json.dumps({k: ans[k] for k in ("gap", "leak", "dp", "margin_to_p1_kr")} | {
+        k: ans["critical"][k] for k in ("p1_kr", "dp_kr")})
 
 
 def _exact(ans: dict) -> str:
@@ -790,6 +803,45 @@ def _latest_wins(doc, evaluate, show, seq):
     return request
 
 
+def _connect(doc, explorer: DeviceSettings, sliders: dict, values: dict, state: dict, check, request) -> None:
+    """A device page's sliders: each change computed (``request``), and IPOPT's cross-check (``explorer.check``, in
+    a thread) once the sliders have rested :data:`CHECK_AFTER_S`, said in the ``check`` Div; ``state["good"]``: the
+    last good answer."""
+
+    def on_change(path):
+        def cb(attr, old, new):
+            values[path] = float(new)
+            check.text = ""
+            request(values, path)
+        return cb
+
+    def run_check():
+        state["timer"] = None
+        vals, ans = dict(values), state["good"]
+
+        def work():
+            try:
+                text = explorer.check(vals, ans or {})
+            except Exception as exc:  # noqa: BLE001 (the page says what failed; the server goes on)
+                text = f"the cross-check failed: {type(exc).__name__}: {exc}"
+
+            def done():
+                if vals == values:  # still the setting checked
+                    check.text = (f"<span style='color:#b35900'>cross-check: {text}</span>" if text else
+                                  "cross-check: the scene's checks pass and IPOPT agrees with the operating point")
+            doc.add_next_tick_callback(done)
+        threading.Thread(target=work, daemon=True).start()
+
+    def on_release(attr, old, new):  # IPOPT's cross-check once the sliders rest for CHECK_AFTER_S
+        if state.get("timer") is not None:
+            doc.remove_timeout_callback(state["timer"])
+        state["timer"] = doc.add_timeout_callback(run_check, int(CHECK_AFTER_S * 1000))
+
+    for path, slider in sliders.items():
+        slider.on_change("value", on_change(path))
+        slider.on_change("value_throttled", on_release)
+
+
 def make_document(explorer: DeviceExplorer, out: Path):
     """The Bokeh document builder of the page (one per browser session)."""
     from bokeh.layouts import column, row
@@ -892,38 +944,7 @@ def make_document(explorer: DeviceExplorer, out: Path):
 
         request = _latest_wins(doc, explorer.evaluate, show, seq)
 
-        def on_change(path):
-            def cb(attr, old, new):
-                values[path] = float(new)
-                check.text = ""
-                request(values, path)
-            return cb
-
-        def run_check():
-            state["timer"] = None
-            vals, ans = dict(values), state["good"]
-
-            def work():
-                try:
-                    text = explorer.check(vals, ans or {})
-                except Exception as exc:  # noqa: BLE001 (the page says what failed; the server goes on)
-                    text = f"the cross-check failed: {type(exc).__name__}: {exc}"
-
-                def done():
-                    if vals == values:  # still the setting checked
-                        check.text = (f"<span style='color:#b35900'>cross-check: {text}</span>" if text else
-                                      "cross-check: the scene's checks pass and IPOPT agrees with the operating point")
-                doc.add_next_tick_callback(done)
-            threading.Thread(target=work, daemon=True).start()
-
-        def on_release(attr, old, new):  # IPOPT's cross-check once the sliders rest for CHECK_AFTER_S
-            if state.get("timer") is not None:
-                doc.remove_timeout_callback(state["timer"])
-            state["timer"] = doc.add_timeout_callback(run_check, int(CHECK_AFTER_S * 1000))
-
-        for path, s in sliders.items():
-            s.on_change("value", on_change(path))
-            s.on_change("value_throttled", on_release)
+        _connect(doc, explorer, sliders, values, state, check, request)
 
         show(explorer.evaluate(values), None)
         head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
@@ -932,6 +953,128 @@ def make_document(explorer: DeviceExplorer, out: Path):
         doc.add_root(column(*sliders.values(), name="controls"))
         doc.add_root(numbers)
         doc.add_root(row(afc, pmap, name="plots"))
+        doc.add_root(seq)
+        doc.template = page
+        doc.title = f"autobal explore: {explorer.scene.name}"
+
+    return modify
+
+
+def _rows(rows) -> str:
+    """Table rows (label, id, value shown, unit)."""
+    return "".join(f"<tr><td>{label}</td><td id='{key}'>{shown}</td><td>{unit}</td></tr>"
+                   for label, key, shown, unit in rows)
+
+
+def make_statics_document(explorer: StaticsExplorer, out: Path):
+    """The Bokeh document builder of a device-statics scene's page: operating point, critical discharge pressure
+    and margins, the static characteristic (face gap and flows against the discharge pressure), the verdict."""
+    from bokeh.layouts import column, row
+    from bokeh.models import ColumnDataSource, Div, Span
+    from bokeh.plotting import figure
+    from jinja2 import Template
+
+    page = Template(PAGE_HTML)
+
+    def modify(doc):
+        values = explorer.defaults()
+        state = {"good": None}
+        sliders = _sliders(explorer)
+        verdict = Div(text="", name="verdict", width=1100, height=44, styles={"font-size": "15px",
+                                                                               "font-weight": "bold"})
+        sweep_words = Div(text="", name="sweep_checks", width=1100, height=20)
+        status = Div(text="", name="status", width=1100, height=20)
+        check = Div(text="", name="check", width=1100, height=20)
+        numbers = Div(text="", name="numbers", width=1100, height=230)
+        seq = Div(text="<span id='seq'>0</span>", name="seq", width=40, height=10,
+                  styles={"font-size": "1px", "color": "white"})
+        curve = ColumnDataSource({"p1": [], "gap": [], "leak": [], "q1": [], "colour": []})
+        here = ColumnDataSource({"p1": [], "gap": [], "leak": [], "q1": []})
+        figs = {}
+        for key, title, label in (("gap", "face gap against discharge pressure", "face gap z, µm"),
+                                  ("flows", "barrier leak Q_e and inner-seal flow Q_1", "flow, L/s")):
+            figs[key] = figure(title=title, x_axis_label="discharge pressure p1, MPa", y_axis_label=label,
+                               width=560, height=320, name=key, toolbar_location=None)
+        lines = [figs["gap"].line("p1", "gap", source=curve, line_width=2),
+                 figs["flows"].line("p1", "leak", source=curve, line_width=2, legend_label="barrier leak Q_e"),
+                 figs["flows"].line("p1", "q1", source=curve, line_width=2, color="#2ca02c",
+                                    legend_label="inner-seal flow Q_1")]
+        figs["gap"].scatter("p1", "gap", source=curve, color="colour", size=5)
+        figs["flows"].scatter("p1", "leak", source=curve, color="colour", size=5)
+        for key, y in (("gap", "gap"), ("flows", "leak"), ("flows", "q1")):
+            figs[key].scatter("p1", y, source=here, marker="diamond", size=13, color="black")
+        figs["flows"].legend.location = "bottom_left"
+        crit = {k: Span(location=math.nan, dimension="height", line_color="#d62728", line_dash="dashed",
+                        line_width=1.5) for k in figs}
+        for k, f in figs.items():
+            f.add_layout(crit[k])
+        record = _record_buttons(doc, explorer, values, out)
+
+        def show(ans: dict, moved: str | None):
+            good = ans.get("status") == "ok"
+            if good:
+                state["good"] = ans
+            last = ans if good else state["good"]
+            if last is not None:
+                c, mpa = last["critical"], 1e-6
+                op = [("discharge pressure p1", "p1", _fmt(last["p1"] * mpa), "MPa"),
+                      ("face gap z0", "gap", _fmt(last["gap"] * 1e6), "µm")]
+                op += [(CHAMBERS[k], f"p_{k}", _fmt(v * mpa), "MPa") for k, v in last["pressures"].items()]
+                op += [("barrier leak Q_e", "leak", _fmt(last["leak"] * 1e3), "L/s"),
+                       ("inner-seal flow Q_1", "inner_seal_flow", _fmt(last["inner_seal_flow"] * 1e3), "L/s")]
+                if last["has_regulator"]:
+                    op.append(("valve opening x0", "valve", _fmt(last["valve_opening"] * 1e3), "mm"))
+                kr = [("critical discharge pressure p1_kr (Q_1 = 0)", "p1_kr",
+                       _fmt(c["p1_kr"] * mpa) if c["p1_kr"] is not None else "none", "MPa"),
+                      ("margin to it p1_kr − p1", "margin_p1_kr", _fmt(last["margin_to_p1_kr"] * mpa)
+                       if c["p1_kr"] is not None else "—", "MPa"),
+                      ("operating barrier margin Δp = p_e − p1", "dp", _fmt(last["dp"] * mpa), "MPa"),
+                      ("critical barrier margin Δp_kr (Q_1 = 0)", "dp_kr",
+                       _fmt(c["dp_kr"] * mpa) if c["dp_kr"] is not None else "none", "MPa")]
+                why = " ".join(html.escape(c[k]) for k in ("psi1_kr_status", "dpsi_kr_status") if k in c)
+                grey = "black" if good else "#999"
+                numbers.text = (f"<div style='display:flex;gap:24px;align-items:flex-start;color:{grey}'><table>"
+                                f"<tr><th colspan=3>operating point</th></tr>{_rows(op)}</table><table><tr><th "
+                                f"colspan=3>criticals (the inner-seal flow reverses)</th></tr>{_rows(kr)}</table>"
+                                f"</div><p>{why}</p><span id='exact' style='display:none'>{_exact_statics(last)}</span>"
+                                )
+                sw = last["sweep"]
+                curve.data = {"p1": sw["p1"] * mpa, "gap": sw["gap"] * 1e6, "leak": sw["leak"] * 1e3,
+                              "q1": sw["inner_seal_flow"] * 1e3,
+                              "colour": ["#d62728" if ct else "#ff7f0e" if sat else "#1f77b4"
+                                         for sat, ct in zip(sw["saturated"], sw["contact"], strict=True)]}
+                here.data = {"p1": [last["p1"] * mpa], "gap": [last["gap"] * 1e6], "leak": [last["leak"] * 1e3],
+                             "q1": [last["inner_seal_flow"] * 1e3]}
+                for span in crit.values():
+                    span.location = c["p1_kr"] * mpa if c["p1_kr"] is not None else math.nan
+                for line in lines:
+                    line.glyph.line_alpha = 1.0 if good else 0.3
+            if good:
+                ok, words = ans["verdict"]
+                if not ok and moved:
+                    words += f" (after changing {moved.removeprefix('device.')})"
+                verdict.text = f"<span id='verdict_text'>{html.escape(words)}</span>"
+                verdict.styles = {"color": "green" if ok else "red", "font-size": "15px", "font-weight": "bold"}
+                sweep_words.text = ("<span id='sweep_text' style='color:#b35900'>" + html.escape(
+                    "; ".join(ans["sweep_checks"])) + " (orange: valve on its stop, red: face contact)</span>"
+                                    if ans["sweep_checks"] else "<span id='sweep_text'></span>")
+                status.text = f"<span id='status_text'>current (computed in {ans['compute_ms']:.1f} ms)</span>"
+            else:
+                words = ans["status"].replace("_", " ").upper() + ": " + ans["message"] + (
+                    f" (after changing {moved.removeprefix('device.')})" if moved else "")
+                verdict.text = f"<span id='verdict_text'>{html.escape(words)}</span>"
+                verdict.styles = {"color": "red", "font-size": "15px", "font-weight": "bold"}
+                status.text = ("<span id='status_text'>the numbers in grey are the last good answer, not the current "
+                               "setting</span>")
+
+        request = _latest_wins(doc, explorer.evaluate, show, seq)
+        _connect(doc, explorer, sliders, values, state, check, request)
+        show(explorer.evaluate(values), None)
+        head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
+        doc.add_root(column(head, verdict, sweep_words, status, check, record, name="head"))
+        doc.add_root(column(*sliders.values(), name="controls"))
+        doc.add_root(numbers)
+        doc.add_root(row(figs["gap"], figs["flows"], name="plots"))
         doc.add_root(seq)
         doc.template = page
         doc.title = f"autobal explore: {explorer.scene.name}"
@@ -989,9 +1132,16 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
                             f"<td>{_fmt(pk * e * 1e6)} µm</td><td>{'yes' if ok else 'NO' if ok is False else '—'}</td>"
                             f"</tr>" for i, (label, pk, ok) in enumerate(rows))
             if good:
-                crit = ans["critical_speed"]
+                crit, api = ans["critical_speed"], ans["api"]
+                kept = api["separation_margin_ok"]
+                af = "—" if api["amplification_factor"] is None else _fmt(api["amplification_factor"], 4)
                 numbers.text = (f"<p>critical speed <span id='critical'>{_fmt(crit * 30 / np.pi)}</span> rpm "
-                                f"({_fmt(crit)} rad/s)</p><table><tr><th>profile</th><th>peak δ/e</th><th>peak δ</th>"
+                                f"({_fmt(crit)} rad/s); API 684: AF <span id='af'>{af}</span>, SM <span id='sm'>"
+                                f"{_fmt(api['separation_margin_pct'], 4)}</span> % from the service speed, required "
+                                f"<span id='sm_req'>{_fmt(api['required_separation_margin_pct'], 3)}</span> %: "
+                                f"<b id='sm_ok' style='color:{'green' if kept else 'red'}'>"
+                                f"{'kept' if kept else 'NOT kept' if kept is False else '—'}</b></p>"
+                                f"<table><tr><th>profile</th><th>peak δ/e</th><th>peak δ</th>"
                                 f"<th>within the drive's limits</th></tr>{table}</table>")
             feasible = [pk for label, pk, ok in rows[1:] if ok is not False]
             if opt is not None and good:
@@ -1083,6 +1233,9 @@ def serve(source: str | Path, port: int = 0, browser: bool = True, out: str | Pa
     scene = scenario.load(source)
     if getattr(scene, "device", None) is None and getattr(scene, "rotor", None) is not None:
         explorer, builder = SpinupExplorer(source), make_spinup_document
+    elif getattr(scene, "device", None) is not None and scene.device.dynamics is None and getattr(
+            scene.analyses, "statics", None) is not None:
+        explorer, builder = StaticsExplorer(source), make_statics_document
     else:
         explorer, builder = DeviceExplorer(source), make_document
     if port == 0:  # a free port, known before the server starts (the websocket's allowed origin names it)
