@@ -64,6 +64,8 @@ CHECK_AFTER_S = 1.0  # IPOPT cross-checks a setting once the sliders have rested
 CRITICAL_RTOL = 1e-12  # Brent's method's relative tolerance on the criticals psi1_kr, dpsi_kr
 PSI1_MAX = 100.0  # the largest discharge ratio a scene may give (analyses.statics): psi1_kr is looked for up to it
 DPSI_MIN, DPSI_MAX = 1e-6, 100.0  # the margins dpsi_kr is looked for between (IPOPT's lower bound: 1e-6)
+NEEDS = ("explore needs a scene with device.dynamics (e.g. pump_pe600_dynamics), a device with analyses.statics "
+         "(pump_pe600_statics) or a rotor with analyses.spinup (spinup_jeffcott_deadline_5s)")
 _NUMBER = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
 
 
@@ -233,6 +235,10 @@ class DeviceSettings(Settings):
             self._statics_cache[key] = (ParametricStatics(g, names), names)
         return self._statics_cache[key]
 
+    def stop_sets(self, statics: ParametricStatics) -> list:
+        """The stop sets Newton's roots are tried with, in turn: regulating, the valve on its stop."""
+        return statics.active_sets
+
     def _point(self, dd: dv.DeviceDesign) -> dict:
         """The operating point: Newton's root of the balances at the groups of ``dd``, warm-started from the last
         point (its stop set and unknowns), then from the closed form with each stop set; where none is accepted,
@@ -244,7 +250,7 @@ class DeviceSettings(Settings):
         guess = ideal_guess(g, statics.system.unknowns, self.psi1, dd.dpsi)
         last = self._last if self._last is not None and self._last[1].shape == guess[0].shape else None
         attempts = ([(last[0], np.atleast_2d(last[1]))] if last is not None else []) + [
-            (a, guess) for a in statics.active_sets]
+            (a, guess) for a in self.stop_sets(statics)]
         res = statics.solve(P, attempts)
         if res["valid"][0]:
             W = res["W"][0]
@@ -303,8 +309,7 @@ class DeviceExplorer(DeviceSettings):
         super().__init__(source)
         sc = self.scene
         if getattr(sc, "device", None) is None or sc.device.dynamics is None:
-            raise ScenarioError(f"{sc.name}: explore needs a scene with device.dynamics (this version explores the "
-                                "device's statics and dynamics: pump_pe600_dynamics, compressor_k180_dynamics)")
+            raise ScenarioError(f"{sc.name}: {NEEDS}")
         a = sc.analyses
         freq, stab = getattr(a, "frequency", None), getattr(a, "stability", None)
         self.psi1 = (freq or stab).operating_ratio if (freq or stab) is not None else 1.0
@@ -413,8 +418,7 @@ class StaticsExplorer(DeviceSettings):
         sc = self.scene
         settings = getattr(sc.analyses, "statics", None)
         if getattr(sc, "device", None) is None or settings is None:
-            raise ScenarioError(f"{sc.name}: explore needs a scene with device.dynamics, analyses.statics or a rotor "
-                                "with analyses.spinup")
+            raise ScenarioError(f"{sc.name}: {NEEDS}")
         self.psi1 = settings.operating_ratio
         r = settings.discharge_ratio
         self.grid = np.linspace(r.start, r.stop, r.points)
@@ -422,6 +426,10 @@ class StaticsExplorer(DeviceSettings):
         self.params = parameters(sc.device, self.raw, "device")
         self._sweep = None  # the last sweep's rows of unknowns: its warm start
         self._critical_systems: dict = {}  # (structure, psi1 or dpsi, stops) -> the critical's Newton system
+
+    def stop_sets(self, statics: ParametricStatics) -> list:
+        """Regulating, the valve on its stop, and each with the face in contact (a point of the characteristic)."""
+        return statics.active_sets + [a | {"r_contact"} for a in statics.active_sets]
 
     def _roots(self, dd: dv.DeviceDesign, psi1s, dpsis, starts=None, stops=frozenset()) -> dict:
         """Newton's roots at the rows (psi1, dpsi) (:meth:`ParametricStatics.solve`): from ``starts`` (rows of
@@ -434,8 +442,7 @@ class StaticsExplorer(DeviceSettings):
         unknowns = statics.system.unknowns
         guess = np.vstack([ideal_guess(dd.groups, unknowns, a, b) for a, b in zip(psi1s, dpsis, strict=True)]) \
             if np.ptp(dpsis) else ideal_guess(dd.groups, unknowns, psi1s, float(dpsis[0]))
-        sets = statics.active_sets + [a | {"r_contact"} for a in statics.active_sets]
-        sets = [stops] + [a for a in sets if a != stops]
+        sets = [stops] + [a for a in self.stop_sets(statics) if a != stops]
         tries = ([np.where(np.isfinite(starts), starts, guess)] if starts is not None else []) + [guess]
         attempts = [(a, w) for w in tries for a in sets]
         res = statics.solve(P, attempts)
@@ -479,8 +486,7 @@ class StaticsExplorer(DeviceSettings):
         statics, names = self._statics(dd)
         groups = dv.groups_by_name(dd.groups)
         p = [self.psi1, dd.dpsi, *(groups[n] for n in names)]
-        sets = statics.active_sets + [a | {"r_contact"} for a in statics.active_sets]
-        for active in [stops] + [a for a in sets if a != stops]:
+        for active in [stops] + [a for a in self.stop_sets(statics) if a != stops]:
             system = self._critical_system(dd, which, active)
             if system is None:
                 continue
@@ -615,8 +621,7 @@ class SpinupExplorer(Settings):
         super().__init__(source)
         sc = self.scene
         if getattr(sc, "rotor", None) is None or getattr(sc.analyses, "spinup", None) is None:
-            raise ScenarioError(f"{sc.name}: explore needs a scene with device.dynamics or a rotor with "
-                                "analyses.spinup")
+            raise ScenarioError(f"{sc.name}: {NEEDS}")
         self.params = parameters(sc.rotor, self.raw, "rotor")
         self.profile = None  # (u, h, the settings it was optimised for) of the current optimum
 
