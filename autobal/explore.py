@@ -14,13 +14,20 @@ the same models and solvers the batch run uses:
   from one eigen-decomposition, H(jw) = C V (jw - Lambda)^-1 V^-1 B, its peaks refined by
   :func:`autobal.analysis.frequency.peaks`, as the batch run refines them.
 
-A spin-up scene (``analyses.spinup``) gets the rotor's sliders: the current optimum's speed profile and the
+A device-statics scene (``analyses.statics``, no ``device.dynamics``) gets the device's sliders and the statics
+study's answers: the operating point, the critical discharge pressure p1_kr and barrier margin dp_kr (Q_1 = 0, by
+Newton on the same balances with the pressure as an unknown), the static characteristic over the scene's grid (the
+parametric Newton roots, every stop set) and the study's verdict
+(:meth:`autobal.analysis.statics_study.StaticsResult.verdict`).
+
+A spin-up scene (``analyses.spinup``) gets the rotor's sliders: its critical speed with the API 684 AF and SM
+(:func:`autobal.analysis.rotor_study.api_margins`, as the spin-up study), the current optimum's speed profile and the
 constant ramps re-simulated by CVODES (:func:`autobal.ocp.simulation.resimulate`, ``baselines``) for the changed
 rotor, and "re-optimise" (the batch run's optimisation, in a thread).
 
 "save scene" writes the settings as a YAML scene with units that ``autobal run`` reproduces; "report" runs
-``autobal.run`` on it and writes its report.html.  :class:`DeviceExplorer` and :class:`SpinupExplorer` are the
-computations (no Bokeh); :func:`serve` the page.
+``autobal.run`` on it and writes its report.html.  :class:`DeviceExplorer`, :class:`StaticsExplorer` and
+:class:`SpinupExplorer` are the computations (no Bokeh); :func:`serve` the page.
 """
 
 from __future__ import annotations
