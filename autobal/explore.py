@@ -242,6 +242,20 @@ class DeviceSettings(Settings):
             self._statics_cache[key] = (ParametricStatics(g, names), names)
         return self._statics_cache[key]
 
+    def _setting(self, values: dict) -> tuple:
+        """(DeviceParams, DeviceDesign, operating point :meth:`_point`) of the settings; where the device refuses
+        them or the statics have no solution, (None, the answer saying so, None)."""
+        try:
+            dev = self.device(values)
+            dd = dv.design(dev)
+        except (ValueError, ZeroDivisionError, AutobalError) as exc:
+            return None, {"status": "refused", "message": str(exc)}, None
+        try:
+            return dev, dd, self._point(dd)
+        except SolveError as exc:
+            return None, {"status": "no_statics", "message": f"the statics have no solution at this setting (IPOPT: "
+                                                             f"{exc.status})"}, None
+
     def stop_sets(self, statics: ParametricStatics) -> list:
         """The stop sets Newton's roots are tried with, in turn: regulating, the valve on its stop."""
         return statics.active_sets
@@ -362,16 +376,9 @@ class DeviceExplorer(DeviceSettings):
         (no static solution, or the face in contact / the valve on its stop) or "failed"; ``message`` says why.
         """
         t0 = time.perf_counter()
-        try:
-            dev = self.device(values)
-            dd = dv.design(dev)
-        except (ValueError, ZeroDivisionError, AutobalError) as exc:
-            return {"status": "refused", "message": str(exc)}
-        try:
-            pt = self._point(dd)
-        except SolveError as exc:
-            return {"status": "no_statics", "message": f"the statics have no solution at this setting (IPOPT: "
-                                                       f"{exc.status})"}
+        dev, dd, pt = self._setting(values)
+        if pt is None:
+            return dd
         sc = dd.scales
         out = {"status": "ok", "message": "", **self._operating_point(pt, dd)}
         if pt["_active"]:
@@ -556,16 +563,9 @@ class StaticsExplorer(DeviceSettings):
         from autobal.analysis.statics_study import StaticsResult
 
         t0 = time.perf_counter()
-        try:
-            dev = self.device(values)
-            dd = dv.design(dev)
-        except (ValueError, ZeroDivisionError, AutobalError) as exc:
-            return {"status": "refused", "message": str(exc)}
-        try:
-            pt = self._point(dd)
-        except SolveError as exc:
-            return {"status": "no_statics", "message": f"the statics have no solution at this setting (IPOPT: "
-                                                       f"{exc.status})"}
+        dev, dd, pt = self._setting(values)
+        if pt is None:
+            return dd
         sc, g, reg = dd.scales, dd.groups, dd.groups.regulator is not None
         out = {"status": "ok", "message": "", **self._operating_point(pt, dd), "has_regulator": reg,
                "p1": self.psi1 * sc["p_B"], "dp": (pt["psi_e"] - self.psi1) * sc["p_B"]}
@@ -815,6 +815,20 @@ def _latest_wins(doc, evaluate, show, seq):
     return request
 
 
+def _say(verdict, status, ans: dict, moved: str | None, words: str | None = None, ok: bool = False) -> None:
+    """The verdict and status lines of a device page: ``words`` (green when ``ok``, else red) for a computed
+    setting, or the failed setting's status and message (then the numbers shown are the last good answer)."""
+    if words is None:
+        words = ans["status"].replace("_", " ").upper() + ": " + ans["message"] + (
+            f" (after changing {moved.removeprefix('device.')})" if moved else "")
+        status.text = ("<span id='status_text'>the numbers in grey are the last good answer, not the current "
+                       "setting</span>")
+    else:
+        status.text = f"<span id='status_text'>current (computed in {ans['compute_ms']:.1f} ms)</span>"
+    verdict.text = f"<span id='verdict_text'>{html.escape(words)}</span>"
+    verdict.styles = {"color": "green" if ok else "red", "font-size": "16px", "font-weight": "bold"}
+
+
 def _connect(doc, explorer: DeviceSettings, sliders: dict, values: dict, state: dict, check, request) -> None:
     """A device page's sliders: each change computed (``request``), and IPOPT's cross-check (``explorer.check``, in
     a thread) once the sliders have rested :data:`CHECK_AFTER_S`, said in the ``check`` Div; ``state["good"]``: the
@@ -942,22 +956,12 @@ def make_document(explorer: DeviceExplorer, out: Path):
                     words += f" (required {_fmt(alpha, 4)} 1/s)"
                 if not ans["meets_requirement"] and moved:
                     words += f"; margin crossed by {moved.removeprefix('device.')}"
-                verdict.text = f"<span id='verdict_text'>{words}</span>"
-                verdict.styles = {"color": "green" if ans["meets_requirement"] else "red", "font-size": "16px",
-                                  "font-weight": "bold"}
-                status.text = f"<span id='status_text'>current (computed in {ans['compute_ms']:.1f} ms)</span>"
+                _say(verdict, status, ans, moved, words, ans["meets_requirement"])
             else:
-                words = ans["status"].replace("_", " ").upper() + ": " + ans["message"] + (
-                    f" (after changing {moved.removeprefix('device.')})" if moved else "")
-                verdict.text = f"<span id='verdict_text'>{html.escape(words)}</span>"
-                verdict.styles = {"color": "red", "font-size": "16px", "font-weight": "bold"}
-                status.text = ("<span id='status_text'>the numbers in grey are the last good answer, not the current "
-                               "setting</span>")
+                _say(verdict, status, ans, moved)
 
         request = _latest_wins(doc, explorer.evaluate, show, seq)
-
         _connect(doc, explorer, sliders, values, state, check, request)
-
         show(explorer.evaluate(values), None)
         head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
         # separate roots placed by the template: a changed text lays out its own root, not the 40 sliders
@@ -992,7 +996,7 @@ def make_statics_document(explorer: StaticsExplorer, out: Path):
         values = explorer.defaults()
         state = {"good": None}
         sliders = _sliders(explorer)
-        verdict = Div(text="", name="verdict", width=1100, height=44, styles={"font-size": "15px",
+        verdict = Div(text="", name="verdict", width=1100, height=48, styles={"font-size": "16px",
                                                                                "font-weight": "bold"})
         sweep_words = Div(text="", name="sweep_checks", width=1100, height=20)
         status = Div(text="", name="status", width=1100, height=20)
@@ -1065,19 +1069,12 @@ def make_statics_document(explorer: StaticsExplorer, out: Path):
                 ok, words = ans["verdict"]
                 if not ok and moved:
                     words += f" (after changing {moved.removeprefix('device.')})"
-                verdict.text = f"<span id='verdict_text'>{html.escape(words)}</span>"
-                verdict.styles = {"color": "green" if ok else "red", "font-size": "15px", "font-weight": "bold"}
+                _say(verdict, status, ans, moved, words, ok)
                 sweep_words.text = ("<span id='sweep_text' style='color:#b35900'>" + html.escape(
                     "; ".join(ans["sweep_checks"])) + " (orange: valve on its stop, red: face contact)</span>"
                                     if ans["sweep_checks"] else "<span id='sweep_text'></span>")
-                status.text = f"<span id='status_text'>current (computed in {ans['compute_ms']:.1f} ms)</span>"
             else:
-                words = ans["status"].replace("_", " ").upper() + ": " + ans["message"] + (
-                    f" (after changing {moved.removeprefix('device.')})" if moved else "")
-                verdict.text = f"<span id='verdict_text'>{html.escape(words)}</span>"
-                verdict.styles = {"color": "red", "font-size": "15px", "font-weight": "bold"}
-                status.text = ("<span id='status_text'>the numbers in grey are the last good answer, not the current "
-                               "setting</span>")
+                _say(verdict, status, ans, moved)
 
         request = _latest_wins(doc, explorer.evaluate, show, seq)
         _connect(doc, explorer, sliders, values, state, check, request)
