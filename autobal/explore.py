@@ -71,6 +71,7 @@ CHECK_AFTER_S = 1.0  # IPOPT cross-checks a setting once the sliders have rested
 CRITICAL_RTOL = 1e-12  # Brent's method's relative tolerance on the criticals psi1_kr, dpsi_kr
 PSI1_MAX = 100.0  # the largest discharge ratio a scene may give (analyses.statics): psi1_kr is looked for up to it
 DPSI_MIN, DPSI_MAX = 1e-6, 100.0  # the margins dpsi_kr is looked for between (IPOPT's lower bound: 1e-6)
+WALK_FACTOR = 3.0  # where the characteristic has no sign change of q1, it is followed in steps of this factor
 NEEDS = ("explore needs a scene with device.dynamics (e.g. pump_pe600_dynamics), a device with analyses.statics "
          "(pump_pe600_statics) or a rotor with analyses.spinup (spinup_jeffcott_deadline_5s)")
 _NUMBER = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
@@ -530,7 +531,7 @@ class StaticsExplorer(DeviceSettings):
         """The critical ``which`` (q1 = 0) from the roots (rows ``W`` with ``stops``) at ``xs`` with inner-seal flows
         ``q1s``: inside the sign change of q1 nearest ``guess`` (from its interpolated zero); without one, from the
         last root and ``guess``, then inside the first sign change of q1 followed beyond the last root towards
-        ``far`` in steps of x 1.5 (or / 1.5).  None: no critical there."""
+        ``far`` in steps of x WALK_FACTOR (or / WALK_FACTOR).  None: no critical there."""
         ok = np.flatnonzero(np.isfinite(q1s))
         x, q = xs[ok], q1s[ok]
         flips = np.flatnonzero(np.sign(q[:-1]) * np.sign(q[1:]) <= 0)
@@ -541,7 +542,7 @@ class StaticsExplorer(DeviceSettings):
         start, at_stops = W[ok[-1]].copy(), stops[ok[-1]]
         found = self._critical(dd, which, start, at_stops, guess, None)
         x, q = x[-1], q[-1]
-        step = 1.5 if far > x else 1 / 1.5
+        step = WALK_FACTOR if far > x else 1 / WALK_FACTOR
         while found is None and ((x < far) if step > 1 else (x > far)):
             nxt = min(x * step, far) if step > 1 else max(x * step, far)
             res = self._roots(dd, *((nxt, dd.dpsi) if which == "psi1" else (self.psi1, nxt)),
