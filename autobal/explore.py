@@ -14,13 +14,20 @@ the same models and solvers the batch run uses:
   from one eigen-decomposition, H(jw) = C V (jw - Lambda)^-1 V^-1 B, its peaks refined by
   :func:`autobal.analysis.frequency.peaks`, as the batch run refines them.
 
-A spin-up scene (``analyses.spinup``) gets the rotor's sliders: the current optimum's speed profile and the
+A device-statics scene (``analyses.statics``, no ``device.dynamics``) gets the device's sliders and the statics
+study's answers: the operating point, the critical discharge pressure p1_kr and barrier margin dp_kr (Q_1 = 0, by
+Newton on the same balances with the pressure as an unknown), the static characteristic over the scene's grid (the
+parametric Newton roots, every stop set) and the study's verdict
+(:meth:`autobal.analysis.statics_study.StaticsResult.verdict`).
+
+A spin-up scene (``analyses.spinup``) gets the rotor's sliders: its critical speed with the API 684 AF and SM
+(:func:`autobal.analysis.rotor_study.api_margins`, as the spin-up study), the current optimum's speed profile and the
 constant ramps re-simulated by CVODES (:func:`autobal.ocp.simulation.resimulate`, ``baselines``) for the changed
 rotor, and "re-optimise" (the batch run's optimisation, in a thread).
 
 "save scene" writes the settings as a YAML scene with units that ``autobal run`` reproduces; "report" runs
-``autobal.run`` on it and writes its report.html.  :class:`DeviceExplorer` and :class:`SpinupExplorer` are the
-computations (no Bokeh); :func:`serve` the page.
+``autobal.run`` on it and writes its report.html.  :class:`DeviceExplorer`, :class:`StaticsExplorer` and
+:class:`SpinupExplorer` are the computations (no Bokeh); :func:`serve` the page.
 """
 
 from __future__ import annotations
@@ -44,12 +51,12 @@ from autobal import scenario
 from autobal.analysis import frequency as fr
 from autobal.analysis import stability as st
 from autobal.analysis.linearize import LinearModel
-from autobal.analysis.statics import ParametricStatics, StaticsSolver, ideal_guess
+from autobal.analysis.statics import NEWTON_ABSTOL, RESIDUAL_TOL, ParametricStatics, StaticsSolver, ideal_guess
 from autobal.errors import AutobalError, ScenarioError, SolveError
 from autobal.models import device as dv
 from autobal.models.dynamics import build
 from autobal.parts import derived
-from autobal.parts.device import adapt
+from autobal.parts.device import adapt, design
 from autobal.schema import section_at
 from autobal.units import to_si
 
@@ -61,6 +68,12 @@ SLIDER_SPAN = 5.0  # a slider runs from value / SPAN to value * SPAN, inside the
 SLIDER_STEPS = 400
 CHECK_RTOL = 1e-6  # IPOPT's operating point differs from Newton's when a value differs by more than this
 CHECK_AFTER_S = 1.0  # IPOPT cross-checks a setting once the sliders have rested this long
+CRITICAL_RTOL = 1e-12  # Brent's method's relative tolerance on the criticals psi1_kr, dpsi_kr
+PSI1_MAX = 100.0  # the largest discharge ratio a scene may give (analyses.statics): psi1_kr is looked for up to it
+DPSI_MIN, DPSI_MAX = 1e-6, 100.0  # the margins dpsi_kr is looked for between (IPOPT's lower bound: 1e-6)
+WALK_FACTOR = 3.0  # where the characteristic has no sign change of q1, it is followed in steps of this factor
+NEEDS = ("explore needs a scene with device.dynamics (e.g. pump_pe600_dynamics), a device with analyses.statics "
+         "(pump_pe600_statics) or a rotor with analyses.spinup (spinup_jeffcott_deadline_5s)")
 _NUMBER = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
 
 
@@ -204,32 +217,15 @@ class Settings:
         return path
 
 
-class DeviceExplorer(Settings):
-    """The what-if computation of a device-dynamics scene: operating point, poles, verdict and AFC of the
-    headline model (energy-consistent, physical forcing) for changed parameters.
+class DeviceSettings(Settings):
+    """A device scene's sliders and the fast path of its statics (both device pages): the device of the settings,
+    the parametric balances built once per structure, Newton's operating point warm-started from the last one."""
 
-    Parameters
-    ----------
-    source : str or Path
-        A shipped scene name or a YAML file (what ``autobal.load`` takes).
-    """
+    psi1 = 1.0  # the discharge ratio p1 / p_B of the operating point
 
     def __init__(self, source: str | Path):
         super().__init__(source)
-        sc = self.scene
-        if getattr(sc, "device", None) is None or sc.device.dynamics is None:
-            raise ScenarioError(f"{sc.name}: explore needs a scene with device.dynamics (this version explores the "
-                                "device's statics and dynamics: pump_pe600_dynamics, compressor_k180_dynamics)")
-        a = sc.analyses
-        freq, stab = getattr(a, "frequency", None), getattr(a, "stability", None)
-        self.psi1 = (freq or stab).operating_ratio if (freq or stab) is not None else 1.0
-        o = freq.omega if freq is not None else None
-        self.omega_range = (o.start, o.stop, o.points) if o is not None else (10.0, 8000.0, 600)
-        self.required_decay = stab.decay_rate if stab is not None else 0.0
-        self.params = parameters(sc.device, self.raw, "device") + parameters(sc.device.dynamics, self.raw,
-                                                                              "device.dynamics")
         self._statics_cache: dict = {}  # structure key -> (ParametricStatics, group names)
-        self._models: dict = {}  # structure key -> (Jacobian Function, model)
         self._last = None  # (active set, W) of the last solved point: the warm start
 
     def device(self, values: dict):
@@ -246,6 +242,105 @@ class DeviceExplorer(Settings):
             names = tuple(dv.groups_by_name(g))
             self._statics_cache[key] = (ParametricStatics(g, names), names)
         return self._statics_cache[key]
+
+    def _setting(self, values: dict) -> tuple:
+        """(DeviceParams, DeviceDesign, operating point :meth:`_point`) of the settings; where the device refuses
+        them or the statics have no solution, (None, the answer saying so, None)."""
+        try:
+            dev = self.device(values)
+            dd = dv.design(dev)
+        except (ValueError, ZeroDivisionError, AutobalError) as exc:
+            return None, {"status": "refused", "message": str(exc)}, None
+        try:
+            return dev, dd, self._point(dd)
+        except SolveError as exc:
+            return None, {"status": "no_statics", "message": f"the statics have no solution at this setting (IPOPT: "
+                                                             f"{exc.status})"}, None
+
+    def stop_sets(self, statics: ParametricStatics) -> list:
+        """The stop sets Newton's roots are tried with, in turn: regulating, the valve on its stop."""
+        return statics.active_sets
+
+    def _point(self, dd: dv.DeviceDesign) -> dict:
+        """The operating point: Newton's root of the balances at the groups of ``dd``, warm-started from the last
+        point (its stop set and unknowns), then from the closed form with each stop set; where none is accepted,
+        IPOPT with every stop (SolveError when it fails too)."""
+        statics, names = self._statics(dd)
+        g = dd.groups
+        theta = [dv.groups_by_name(g)[n] for n in names]
+        P = np.array([[self.psi1, dd.dpsi, *theta]])
+        guess = ideal_guess(g, statics.system.unknowns, self.psi1, dd.dpsi)
+        last = self._last if self._last is not None and self._last[1].shape == guess[0].shape else None
+        attempts = ([(last[0], np.atleast_2d(last[1]))] if last is not None else []) + [
+            (a, guess) for a in self.stop_sets(statics)]
+        res = statics.solve(P, attempts)
+        if res["valid"][0]:
+            W = res["W"][0]
+            active = attempts[res["active"][0]][0]
+            vals = dict(zip(statics.system.unknowns, map(float, W), strict=True))
+            vals.setdefault("psi_e", self.psi1 + dd.dpsi)
+            flows = dict(zip(statics.system.throttles, map(float, res["q"][0]), strict=True))
+        else:
+            sp = StaticsSolver(dd).solve(self.psi1, dd.dpsi)
+            W, active, vals, flows = np.asarray(sp.x, float), sp.active, dict(sp.values), sp.flows
+        self._last = (active, W.copy())
+        return vals | {"_flows": flows, "_active": active, "_names": names}
+
+    def _operating_point(self, pt: dict, dd: dv.DeviceDesign) -> dict:
+        sc, q = dd.scales, pt["_flows"]
+        pressures = {k: pt[k] * sc["p_B"] for k in ("psi2", "psi3", "psi_e", "psi_cam") if k in pt}
+        return {"gap": pt["u"] * sc["z_B"], "pressures": pressures, "leak": q["e"] * sc["Q_scale"],
+                "inner_seal_flow": q["1"] * sc["Q_scale"], "valve_opening": pt.get("xi", math.nan) * sc["x_B"],
+                "point": {k: v for k, v in pt.items() if not k.startswith("_")}}
+
+    # -- the cross-check on release
+    def check(self, values: dict, answer: dict) -> str:
+        """The scene validated as a file would be (``autobal.load`` with the settings as overrides) and its
+        operating point by IPOPT (what ``autobal run`` solves) against the live answer; '' when they agree."""
+        try:
+            scene = scenario.load(self.path, overrides=self.overrides(values))
+            dd = design(scene.device)
+            point = StaticsSolver(dd).solve(self.psi1, dd.dpsi)
+        except ScenarioError as exc:
+            return f"refused by the scene's checks: {exc}"
+        except SolveError as exc:
+            return f"IPOPT: {exc} (status {exc.status})"
+        if answer.get("status") != "ok" and "point" not in answer:
+            return f"IPOPT finds an operating point (gap {point.values['u'] * dd.scales['z_B'] * 1e6:.6g} µm) " \
+                   "where the fast path found none"
+        live = answer["point"]
+        worst = max(abs(point.values[k] - live[k]) / max(abs(live[k]), 1e-12) for k in live if k in point.values
+                    and not k.startswith("r_"))
+        if worst > CHECK_RTOL:
+            return (f"IPOPT's operating point differs (largest relative difference {worst:.1e}): gap "
+                    f"{point.values['u'] * dd.scales['z_B'] * 1e6:.6g} µm")
+        return ""
+
+
+class DeviceExplorer(DeviceSettings):
+    """The what-if computation of a device-dynamics scene: operating point, poles, verdict and AFC of the
+    headline model (energy-consistent, physical forcing) for changed parameters.
+
+    Parameters
+    ----------
+    source : str or Path
+        A shipped scene name or a YAML file (what ``autobal.load`` takes).
+    """
+
+    def __init__(self, source: str | Path):
+        super().__init__(source)
+        sc = self.scene
+        if getattr(sc, "device", None) is None or sc.device.dynamics is None:
+            raise ScenarioError(f"{sc.name}: {NEEDS}")
+        a = sc.analyses
+        freq, stab = getattr(a, "frequency", None), getattr(a, "stability", None)
+        self.psi1 = (freq or stab).operating_ratio if (freq or stab) is not None else 1.0
+        o = freq.omega if freq is not None else None
+        self.omega_range = (o.start, o.stop, o.points) if o is not None else (10.0, 8000.0, 600)
+        self.required_decay = stab.decay_rate if stab is not None else 0.0
+        self.params = parameters(sc.device, self.raw, "device") + parameters(sc.device.dynamics, self.raw,
+                                                                              "device.dynamics")
+        self._models: dict = {}  # structure key -> (Jacobian Function, model)
 
     def _model(self, dev: dv.DeviceParams, dd: dv.DeviceDesign, names: tuple, point: dict):
         """The nonlinear dynamic model with the groups, the scales and the membrane area as symbols d, and its
@@ -275,31 +370,6 @@ class DeviceExplorer(Settings):
         self._models[key] = (ca.Function("AB", [x, w, p, d], [ca.jacobian(f, x), ca.jacobian(f, w)]), model)
         return self._models[key]
 
-    def _point(self, dd: dv.DeviceDesign) -> dict:
-        """The operating point: Newton's root of the balances at the groups of ``dd``, warm-started from the last
-        point (its stop set and unknowns), then from the closed form with each stop set; where none is accepted,
-        IPOPT with every stop (SolveError when it fails too)."""
-        statics, names = self._statics(dd)
-        g = dd.groups
-        theta = [dv.groups_by_name(g)[n] for n in names]
-        P = np.array([[self.psi1, dd.dpsi, *theta]])
-        guess = ideal_guess(g, statics.system.unknowns, self.psi1, dd.dpsi)
-        last = self._last if self._last is not None and self._last[1].shape == guess[0].shape else None
-        attempts = ([(last[0], np.atleast_2d(last[1]))] if last is not None else []) + [
-            (a, guess) for a in statics.active_sets]
-        res = statics.solve(P, attempts)
-        if res["valid"][0]:
-            W = res["W"][0]
-            active = attempts[res["active"][0]][0]
-            vals = dict(zip(statics.system.unknowns, map(float, W), strict=True))
-            vals.setdefault("psi_e", self.psi1 + dd.dpsi)
-            flows = dict(zip(statics.system.throttles, map(float, res["q"][0]), strict=True))
-        else:
-            sp = StaticsSolver(dd).solve(self.psi1, dd.dpsi)
-            W, active, vals, flows = np.asarray(sp.x, float), sp.active, dict(sp.values), sp.flows
-        self._last = (active, W.copy())
-        return vals | {"_flows": flows, "_active": active, "_names": names}
-
     def evaluate(self, values: dict) -> dict:
         """Operating point, poles, margin, verdict and AFC for the settings ``values`` (path -> scene unit).
 
@@ -307,16 +377,9 @@ class DeviceExplorer(Settings):
         (no static solution, or the face in contact / the valve on its stop) or "failed"; ``message`` says why.
         """
         t0 = time.perf_counter()
-        try:
-            dev = self.device(values)
-            dd = dv.design(dev)
-        except (ValueError, ZeroDivisionError, AutobalError) as exc:
-            return {"status": "refused", "message": str(exc)}
-        try:
-            pt = self._point(dd)
-        except SolveError as exc:
-            return {"status": "no_statics", "message": f"the statics have no solution at this setting (IPOPT: "
-                                                       f"{exc.status})"}
+        dev, dd, pt = self._setting(values)
+        if pt is None:
+            return dd
         sc = dd.scales
         out = {"status": "ok", "message": "", **self._operating_point(pt, dd)}
         if pt["_active"]:
@@ -336,13 +399,6 @@ class DeviceExplorer(Settings):
         out |= self._dynamics(lin, dev.dynamics)
         out["compute_ms"] = 1e3 * (time.perf_counter() - t0)
         return out
-
-    def _operating_point(self, pt: dict, dd: dv.DeviceDesign) -> dict:
-        sc, q = dd.scales, pt["_flows"]
-        pressures = {k: pt[k] * sc["p_B"] for k in ("psi2", "psi3", "psi_e", "psi_cam") if k in pt}
-        return {"gap": pt["u"] * sc["z_B"], "pressures": pressures, "leak": q["e"] * sc["Q_scale"],
-                "inner_seal_flow": q["1"] * sc["Q_scale"], "valve_opening": pt.get("xi", math.nan) * sc["x_B"],
-                "point": {k: v for k, v in pt.items() if not k.startswith("_")}}
 
     def _dynamics(self, lin: LinearModel, data) -> dict:
         """Verdict (:func:`analysis.stability.verdict`) and the AFC of the face gap under the physical forcing."""
@@ -365,30 +421,202 @@ class DeviceExplorer(Settings):
                 "omega": om, "amplitude": amp, "peaks": peaks, "omega0": w0, "amplitude_at_omega0": at,
                 "static_amplitude": float(abs(lin.response([0.0], "physical")[0]) * scale)}
 
-    # -- the cross-check on release
-    def check(self, values: dict, answer: dict) -> str:
-        """The scene validated as a file would be (``autobal.load`` with the settings as overrides) and its
-        operating point by IPOPT (what ``autobal run`` solves) against the live answer; '' when they agree."""
-        try:
-            scene = scenario.load(self.path, overrides=self.overrides(values))
-            from autobal.parts.device import dynamic_device
+class StaticsExplorer(DeviceSettings):
+    """The what-if computation of a device-statics scene (``analyses.statics``): the operating point, the critical
+    discharge pressure p1_kr and barrier margin dp_kr (the inner-seal flow q1 = 0, as the statics study's
+    ``critical_exact``), the static characteristic over the scene's discharge ratios and the study's verdict
+    (:meth:`autobal.analysis.statics_study.StaticsResult.verdict`), all by Newton's roots of the parametric balances
+    (the batch solver of sweeps); the criticals by Brent's method on q1 along psi1 (dpsi) over those roots."""
 
-            dd = dv.design(dynamic_device(scene))
-            point = StaticsSolver(dd).solve(self.psi1, dd.dpsi)
-        except ScenarioError as exc:
-            return f"refused by the scene's checks: {exc}"
-        except SolveError as exc:
-            return f"IPOPT: {exc} (status {exc.status})"
-        if answer.get("status") != "ok" and "point" not in answer:
-            return f"IPOPT finds an operating point (gap {point.values['u'] * dd.scales['z_B'] * 1e6:.6g} µm) " \
-                   "where the fast path found none"
-        live = answer["point"]
-        worst = max(abs(point.values[k] - live[k]) / max(abs(live[k]), 1e-12) for k in live if k in point.values
-                    and not k.startswith("r_"))
-        if worst > CHECK_RTOL:
-            return (f"IPOPT's operating point differs (largest relative difference {worst:.1e}): gap "
-                    f"{point.values['u'] * dd.scales['z_B'] * 1e6:.6g} µm")
-        return ""
+    def __init__(self, source: str | Path):
+        super().__init__(source)
+        sc = self.scene
+        settings = getattr(sc.analyses, "statics", None)
+        if getattr(sc, "device", None) is None or settings is None:
+            raise ScenarioError(f"{sc.name}: {NEEDS}")
+        self.psi1 = settings.operating_ratio
+        r = settings.discharge_ratio
+        self.grid = np.linspace(r.start, r.stop, r.points)
+        self.psi1_max = r.stop
+        self.params = parameters(sc.device, self.raw, "device")
+        self._sweep = None  # the last sweep's rows of unknowns: its warm start
+        self._critical_systems: dict = {}  # (structure, psi1 or dpsi, stops) -> the critical's Newton system
+
+    def stop_sets(self, statics: ParametricStatics) -> list:
+        """Regulating, the valve on its stop, and each with the face in contact (a point of the characteristic)."""
+        return statics.active_sets + [a | {"r_contact"} for a in statics.active_sets]
+
+    def _roots(self, dd: dv.DeviceDesign, psi1s, dpsis, starts=None, stops=frozenset()) -> dict:
+        """Newton's roots at the rows (psi1, dpsi) (:meth:`ParametricStatics.solve`): from ``starts`` (rows of
+        unknowns), then from the closed form, each with every stop set (``stops`` first, then regulating, valve on
+        its stop, face in contact); ``stops`` per row: the stop set of the accepted root (None: no root)."""
+        statics, names = self._statics(dd)
+        groups = dv.groups_by_name(dd.groups)
+        psi1s, dpsis = np.broadcast_arrays(np.atleast_1d(np.asarray(psi1s, float)), np.asarray(dpsis, float))
+        P = np.column_stack([psi1s, dpsis, np.tile([groups[n] for n in names], (len(psi1s), 1))])
+        unknowns = statics.system.unknowns
+        guess = np.vstack([ideal_guess(dd.groups, unknowns, a, b) for a, b in zip(psi1s, dpsis, strict=True)]) \
+            if np.ptp(dpsis) else ideal_guess(dd.groups, unknowns, psi1s, float(dpsis[0]))
+        sets = [stops] + [a for a in self.stop_sets(statics) if a != stops]
+        tries = ([np.where(np.isfinite(starts), starts, guess)] if starts is not None else []) + [guess]
+        attempts = [(a, w) for w in tries for a in sets]
+        res = statics.solve(P, attempts)
+        res["stops"] = [attempts[k][0] if k >= 0 else None for k in res["active"]]
+        res["q1"] = res["q"][:, statics.system.throttles.index("1")]
+        return res
+
+    def _critical_system(self, dd: dv.DeviceDesign, which: str, stops: frozenset):
+        """The balances with the stops fixed (as :meth:`ParametricStatics.newton`) and q1 = 0, square in the free
+        unknowns and psi1 (``which`` "psi1") or dpsi ("dpsi"): CasADi's Newton rootfinder, built once per
+        structure; ``(solver(z0, p) -> z, free indices, full(z) -> unknowns)``, z = [free unknowns, psi1 or dpsi];
+        None where the system is structurally singular."""
+        statics, names = self._statics(dd)
+        key = (id(statics), which, stops)
+        if key not in self._critical_systems:
+            sys_ = statics.system
+            free, fixed = statics.free(stops)
+            z, p = ca.SX.sym("z", len(free) + 1), ca.SX.sym("p", 2 + len(names))
+            full = ca.vertcat(*[z[free.index(i)] if i in free else fixed[i] for i in range(len(sys_.unknowns))])
+            psi1, dpsi = (z[-1], p[1]) if which == "psi1" else (p[0], z[-1])
+            q1 = statics.flows(full, psi1, dpsi, p[2:])[sys_.throttles.index("1")]
+            f = ca.Function("critical", [z, p], [ca.vertcat(statics.residual(full, psi1, dpsi, p[2:]), q1)])
+            try:
+                solver = ca.rootfinder(f"critical_{which}", "newton", f, {
+                    "abstol": NEWTON_ABSTOL, "max_iter": 50, "error_on_fail": False, "linear_solver": "qr",
+                    "show_eval_warnings": False})
+            except RuntimeError:  # structurally singular with these stops (q1 does not depend on the unknown)
+                self._critical_systems[key] = None
+            else:
+                self._critical_systems[key] = (solver, free, ca.Function("full", [z], [full]))
+        return self._critical_systems[key]
+
+    def _critical(self, dd: dv.DeviceDesign, which: str, start: np.ndarray, stops: frozenset, guess: float,
+                  bracket) -> float | None:
+        """The psi1 (``which`` "psi1", at the scene's dpsi) or dpsi ("dpsi", at the operating psi1) where q1 = 0:
+        Newton on the balances and q1 = 0 from the root ``start`` (its ``stops`` first, then each stop set) and
+        ``guess``, a root accepted as :meth:`ParametricStatics.solve` accepts one; else Brent's method on q1 over
+        Newton's roots inside ``bracket`` (q1 of opposite signs at its ends; None: no critical)."""
+        from scipy.optimize import brentq
+
+        statics, names = self._statics(dd)
+        groups = dv.groups_by_name(dd.groups)
+        p = [self.psi1, dd.dpsi, *(groups[n] for n in names)]
+        for active in [stops] + [a for a in self.stop_sets(statics) if a != stops]:
+            system = self._critical_system(dd, which, active)
+            if system is None:
+                continue
+            solver, free, full = system
+            z = np.asarray(solver(np.append(start[free], guess), p), float).ravel()
+            if not np.all(np.isfinite(z)) or z[-1] <= 0 or bracket and not bracket[0] <= z[-1] <= bracket[1]:
+                continue
+            at = (z[-1], dd.dpsi) if which == "psi1" else (self.psi1, z[-1])
+            res = self._roots(dd, *at, starts=np.asarray(full(z), float).T, stops=active)
+            if res["valid"][0] and res["stops"][0] == active and abs(res["q1"][0]) <= RESIDUAL_TOL:
+                return float(z[-1])
+        if not bracket:
+            return None
+        last = [start, stops]  # each root starts from the one before, with its stops
+
+        def q1(s):
+            at = (s, dd.dpsi) if which == "psi1" else (self.psi1, s)
+            res = self._roots(dd, *at, starts=np.atleast_2d(last[0]), stops=last[1])
+            if not res["valid"][0]:
+                raise SolveError(f"no Newton root at {which} = {s:g} on the way to q1 = 0", "Newton_Failed")
+            last[:] = res["W"][0], res["stops"][0]
+            return float(res["q1"][0])
+
+        return float(brentq(q1, *bracket, xtol=1e-14, rtol=CRITICAL_RTOL))
+
+    def _find_critical(self, dd: dv.DeviceDesign, which: str, xs, q1s, W, stops, guess: float, far: float):
+        """The critical ``which`` (q1 = 0) from the roots (rows ``W`` with ``stops``) at ``xs`` with inner-seal flows
+        ``q1s``: inside the sign change of q1 nearest ``guess`` (from its interpolated zero); without one, from the
+        last root and ``guess``, then inside the first sign change of q1 followed beyond the last root towards
+        ``far`` in steps of x WALK_FACTOR (or / WALK_FACTOR).  None: no critical there."""
+        ok = np.flatnonzero(np.isfinite(q1s))
+        x, q = xs[ok], q1s[ok]
+        flips = np.flatnonzero(np.sign(q[:-1]) * np.sign(q[1:]) <= 0)
+        if flips.size:
+            i = flips[np.argmin(np.abs(x[flips] - guess))]
+            zero = x[i] - q[i] * (x[i + 1] - x[i]) / (q[i + 1] - q[i]) if q[i + 1] != q[i] else x[i]
+            return self._critical(dd, which, W[ok[i]].copy(), stops[ok[i]], zero, (x[i], x[i + 1]))
+        start, at_stops = W[ok[-1]].copy(), stops[ok[-1]]
+        found = self._critical(dd, which, start, at_stops, guess, None)
+        x, q = x[-1], q[-1]
+        step = WALK_FACTOR if far > x else 1 / WALK_FACTOR
+        while found is None and ((x < far) if step > 1 else (x > far)):
+            nxt = min(x * step, far) if step > 1 else max(x * step, far)
+            res = self._roots(dd, *((nxt, dd.dpsi) if which == "psi1" else (self.psi1, nxt)),
+                              starts=np.atleast_2d(start), stops=at_stops)
+            if not res["valid"][0]:
+                raise SolveError(f"no Newton root at {which} = {nxt:g} on the way to q1 = 0", "Newton_Failed")
+            if np.sign(res["q1"][0]) != np.sign(q):
+                found = self._critical(dd, which, start, at_stops, nxt, (x, nxt) if nxt > x else (nxt, x))
+            start, at_stops, x, q = res["W"][0], res["stops"][0], nxt, res["q1"][0]
+        return found
+
+    def evaluate(self, values: dict) -> dict:
+        """Operating point, criticals, characteristic and verdict for the settings ``values`` (path -> scene unit).
+
+        Returns a dict with ``status`` "ok", "refused" (a setting the device's declarations refuse) or "no_statics"
+        (no static solution at the operating point); ``message`` says why.  SI inside; a critical that has no value
+        is None with ``*_status`` saying why."""
+        from autobal.analysis import closed_form
+        from autobal.analysis.statics_study import StaticsResult
+
+        t0 = time.perf_counter()
+        dev, dd, pt = self._setting(values)
+        if pt is None:
+            return dd
+        sc, g, reg = dd.scales, dd.groups, dd.groups.regulator is not None
+        out = {"status": "ok", "message": "", **self._operating_point(pt, dd), "has_regulator": reg,
+               "p1": self.psi1 * sc["p_B"], "dp": (pt["psi_e"] - self.psi1) * sc["p_B"]}
+        # the characteristic over the scene's discharge ratios, warm-started from the last one
+        start = self._sweep if self._sweep is not None and self._sweep.shape[1] == len(self._last[1]) else None
+        sw = self._roots(dd, self.grid, dd.dpsi, starts=start)
+        self._sweep = sw["W"].copy()
+        u = self._statics(dd)[0].system.index("u")
+        stops = sw["stops"]
+        out["sweep"] = {"p1": self.grid * sc["p_B"], "gap": sw["W"][:, u] * sc["z_B"],
+                        "leak": sw["q"][:, self._statics(dd)[0].system.throttles.index("e")] * sc["Q_scale"],
+                        "inner_seal_flow": sw["q1"] * sc["Q_scale"],
+                        "saturated": [s is not None and "r_valve" in s for s in stops],
+                        "contact": [s is not None and "r_contact" in s for s in stops],
+                        "solved": [s is not None for s in stops]}
+        # the criticals (q1 = 0), started as the study starts IPOPT: from the closed forms
+        cf = closed_form.for_medium(g, self.psi1, dd.dpsi)
+        psi1_kr, dpsi_kr = float(cf["psi1_kr"]), float(cf["dpsi_kr"])
+        here = np.array([[pt[k] for k in self._statics(dd)[0].system.unknowns]])
+        crit = {}
+        for which, xs, q1s, W, at_stops, guess, far, name, unit, where in (
+                ("psi1", self.grid, sw["q1"], sw["W"], stops, min(psi1_kr, self.psi1_max) if psi1_kr > 0 else
+                 self.psi1, PSI1_MAX, "p1_kr", "no discharge ratio with q1 = 0 found", f"up to psi1 = {PSI1_MAX:g}"),
+                ("dpsi", np.array([dd.dpsi]), np.array([pt["_flows"]["1"]]), here, [pt["_active"]],
+                 dpsi_kr if dpsi_kr > 0 else dd.dpsi, DPSI_MIN if pt["_flows"]["1"] > 0 else DPSI_MAX, "dp_kr",
+                 f"no margin with q1 = 0 at psi1 = {self.psi1:g}", f"between dpsi = {DPSI_MIN:g} and {DPSI_MAX:g}")):
+            try:
+                kr = self._find_critical(dd, which, xs, q1s, W, at_stops, guess, far)
+                why = f"q1 keeps its sign {where}"
+            except (SolveError, ValueError) as exc:
+                kr, why = None, str(exc)
+            crit |= {f"{which}_kr": kr, name: None if kr is None else kr * sc["p_B"]}
+            if kr is None:
+                crit[f"{which}_kr_status"] = f"{unit}: {why}"
+        out["critical"] = crit
+        out["margin_to_p1_kr"] = None if crit["p1_kr"] is None else crit["p1_kr"] - out["p1"]
+        exact = {"psi1": self.psi1, "z0": out["gap"], "Q_1": out["inner_seal_flow"], "dp": out["dp"],
+                 "contact": "r_contact" in pt["_active"]}
+        if reg:
+            exact["regulator_saturated"] = "r_valve" in pt["_active"]
+        out["verdict"] = StaticsResult({"exact": exact, "critical_exact": crit}).verdict()
+        # the sweep's checks, as the report's statics section words them
+        first = {what: self.grid[flags.index(True)] for what, flags in (
+            ("regulator saturated (valve on its stop)", out["sweep"]["saturated"]),
+            ("face contact", out["sweep"]["contact"]),
+            ("no Newton root (not drawn)", [not ok for ok in out["sweep"]["solved"]])) if any(flags)}
+        out["sweep_checks"] = [f"{what} in the sweep from p1 = {_fmt(x * sc['p_B'] / 1e6, 4)} MPa (ψ1 = {_fmt(x, 4)})"
+                               for what, x in first.items()]
+        out["compute_ms"] = 1e3 * (time.perf_counter() - t0)
+        return out
 
 
 class SpinupExplorer(Settings):
@@ -401,8 +629,7 @@ class SpinupExplorer(Settings):
         super().__init__(source)
         sc = self.scene
         if getattr(sc, "rotor", None) is None or getattr(sc.analyses, "spinup", None) is None:
-            raise ScenarioError(f"{sc.name}: explore needs a scene with device.dynamics or a rotor with "
-                                "analyses.spinup")
+            raise ScenarioError(f"{sc.name}: {NEEDS}")
         self.params = parameters(sc.rotor, self.raw, "rotor")
         self.profile = None  # (u, h, the settings it was optimised for) of the current optimum
 
@@ -430,7 +657,10 @@ class SpinupExplorer(Settings):
 
     def evaluate(self, values: dict) -> dict:
         """The current optimum's profile and the constant ramps re-simulated for the settings: peaks (delta/e and
-        m), the critical speed (rad/s), the drive's use; ``status`` "ok", "refused" or "no_optimum"."""
+        m), the critical speed (rad/s) with its API 684 margins (``api``: :func:`analysis.standards.margin_check`'s
+        dict, as the spin-up study's ``rotor`` block), the drive's use; ``status`` "ok", "refused" or
+        "no_optimum"."""
+        from autobal.analysis.rotor_study import api_margins
         from autobal.ocp.simulation import baselines, drive_use, resimulate
 
         t0 = time.perf_counter()
@@ -439,7 +669,9 @@ class SpinupExplorer(Settings):
         except (ValueError, ZeroDivisionError, AutobalError) as exc:
             return {"status": "refused", "message": str(exc)}
         P = ocp.params
-        out = {"status": "ok", "message": "", "critical_speed": P.omega_cr, "eccentricity": P.e, "ramps": {}}
+        out = {"status": "ok", "message": "", "critical_speed": P.omega_cr, "eccentricity": P.e, "ramps": {},
+               # API 684 (2005): AF and SM of the changed rotor from its service (final) speed, as the study's
+               "api": api_margins(P, ocp.omega_final)}
         for key, tr in baselines(ocp).items():
             out["ramps"][key] = {"label": tr.label, "peak_over_e": tr.peak_delta, "t": tr.t, "delta": tr.delta,
                                  "within_drive_limits": drive_use(ocp, tr)["within_drive_limits"]}
@@ -453,6 +685,14 @@ class SpinupExplorer(Settings):
                           "optimised_for": self.overrides(at)}
         out["compute_ms"] = 1e3 * (time.perf_counter() - t0)
         return out
+
+
+def _exact_statics(ans: dict) -> str:
+    """The statics page's numbers at full precision (JSON, SI), for the browser test's comparison."""
+    import json
+
+    return json.dumps({k: ans[k] for k in ("gap", "leak", "dp", "margin_to_p1_kr")} | {
+        k: ans["critical"][k] for k in ("p1_kr", "dp_kr")})
 
 
 def _exact(ans: dict) -> str:
@@ -576,6 +816,59 @@ def _latest_wins(doc, evaluate, show, seq):
     return request
 
 
+def _say(verdict, status, ans: dict, moved: str | None, words: str | None = None, ok: bool = False) -> None:
+    """The verdict and status lines of a device page: ``words`` (green when ``ok``, else red) for a computed
+    setting, or the failed setting's status and message (then the numbers shown are the last good answer)."""
+    if words is None:
+        words = ans["status"].replace("_", " ").upper() + ": " + ans["message"] + (
+            f" (after changing {moved.removeprefix('device.')})" if moved else "")
+        status.text = ("<span id='status_text'>the numbers in grey are the last good answer, not the current "
+                       "setting</span>")
+    else:
+        status.text = f"<span id='status_text'>current (computed in {ans['compute_ms']:.1f} ms)</span>"
+    verdict.text = f"<span id='verdict_text'>{html.escape(words)}</span>"
+    verdict.styles = {"color": "green" if ok else "red", "font-size": "16px", "font-weight": "bold"}
+
+
+def _connect(doc, explorer: DeviceSettings, sliders: dict, values: dict, state: dict, check, request) -> None:
+    """A device page's sliders: each change computed (``request``), and IPOPT's cross-check (``explorer.check``, in
+    a thread) once the sliders have rested :data:`CHECK_AFTER_S`, said in the ``check`` Div; ``state["good"]``: the
+    last good answer."""
+
+    def on_change(path):
+        def cb(attr, old, new):
+            values[path] = float(new)
+            check.text = ""
+            request(values, path)
+        return cb
+
+    def run_check():
+        state["timer"] = None
+        vals, ans = dict(values), state["good"]
+
+        def work():
+            try:
+                text = explorer.check(vals, ans or {})
+            except Exception as exc:  # noqa: BLE001 (the page says what failed; the server goes on)
+                text = f"the cross-check failed: {type(exc).__name__}: {exc}"
+
+            def done():
+                if vals == values:  # still the setting checked
+                    check.text = (f"<span style='color:#b35900'>cross-check: {text}</span>" if text else
+                                  "cross-check: the scene's checks pass and IPOPT agrees with the operating point")
+            doc.add_next_tick_callback(done)
+        threading.Thread(target=work, daemon=True).start()
+
+    def on_release(attr, old, new):  # IPOPT's cross-check once the sliders rest for CHECK_AFTER_S
+        if state.get("timer") is not None:
+            doc.remove_timeout_callback(state["timer"])
+        state["timer"] = doc.add_timeout_callback(run_check, int(CHECK_AFTER_S * 1000))
+
+    for path, slider in sliders.items():
+        slider.on_change("value", on_change(path))
+        slider.on_change("value_throttled", on_release)
+
+
 def make_document(explorer: DeviceExplorer, out: Path):
     """The Bokeh document builder of the page (one per browser session)."""
     from bokeh.layouts import column, row
@@ -664,53 +957,12 @@ def make_document(explorer: DeviceExplorer, out: Path):
                     words += f" (required {_fmt(alpha, 4)} 1/s)"
                 if not ans["meets_requirement"] and moved:
                     words += f"; margin crossed by {moved.removeprefix('device.')}"
-                verdict.text = f"<span id='verdict_text'>{words}</span>"
-                verdict.styles = {"color": "green" if ans["meets_requirement"] else "red", "font-size": "16px",
-                                  "font-weight": "bold"}
-                status.text = f"<span id='status_text'>current (computed in {ans['compute_ms']:.1f} ms)</span>"
+                _say(verdict, status, ans, moved, words, ans["meets_requirement"])
             else:
-                words = ans["status"].replace("_", " ").upper() + ": " + ans["message"] + (
-                    f" (after changing {moved.removeprefix('device.')})" if moved else "")
-                verdict.text = f"<span id='verdict_text'>{html.escape(words)}</span>"
-                verdict.styles = {"color": "red", "font-size": "16px", "font-weight": "bold"}
-                status.text = ("<span id='status_text'>the numbers in grey are the last good answer, not the current "
-                               "setting</span>")
+                _say(verdict, status, ans, moved)
 
         request = _latest_wins(doc, explorer.evaluate, show, seq)
-
-        def on_change(path):
-            def cb(attr, old, new):
-                values[path] = float(new)
-                check.text = ""
-                request(values, path)
-            return cb
-
-        def run_check():
-            state["timer"] = None
-            vals, ans = dict(values), state["good"]
-
-            def work():
-                try:
-                    text = explorer.check(vals, ans or {})
-                except Exception as exc:  # noqa: BLE001 (the page says what failed; the server goes on)
-                    text = f"the cross-check failed: {type(exc).__name__}: {exc}"
-
-                def done():
-                    if vals == values:  # still the setting checked
-                        check.text = (f"<span style='color:#b35900'>cross-check: {text}</span>" if text else
-                                      "cross-check: the scene's checks pass and IPOPT agrees with the operating point")
-                doc.add_next_tick_callback(done)
-            threading.Thread(target=work, daemon=True).start()
-
-        def on_release(attr, old, new):  # IPOPT's cross-check once the sliders rest for CHECK_AFTER_S
-            if state.get("timer") is not None:
-                doc.remove_timeout_callback(state["timer"])
-            state["timer"] = doc.add_timeout_callback(run_check, int(CHECK_AFTER_S * 1000))
-
-        for path, s in sliders.items():
-            s.on_change("value", on_change(path))
-            s.on_change("value_throttled", on_release)
-
+        _connect(doc, explorer, sliders, values, state, check, request)
         show(explorer.evaluate(values), None)
         head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
         # separate roots placed by the template: a changed text lays out its own root, not the 40 sliders
@@ -718,6 +970,121 @@ def make_document(explorer: DeviceExplorer, out: Path):
         doc.add_root(column(*sliders.values(), name="controls"))
         doc.add_root(numbers)
         doc.add_root(row(afc, pmap, name="plots"))
+        doc.add_root(seq)
+        doc.template = page
+        doc.title = f"autobal explore: {explorer.scene.name}"
+
+    return modify
+
+
+def _rows(rows) -> str:
+    """Table rows (label, id, value shown, unit)."""
+    return "".join(f"<tr><td>{label}</td><td id='{key}'>{shown}</td><td>{unit}</td></tr>"
+                   for label, key, shown, unit in rows)
+
+
+def make_statics_document(explorer: StaticsExplorer, out: Path):
+    """The Bokeh document builder of a device-statics scene's page: operating point, critical discharge pressure
+    and margins, the static characteristic (face gap and flows against the discharge pressure), the verdict."""
+    from bokeh.layouts import column, row
+    from bokeh.models import ColumnDataSource, Div, Span
+    from bokeh.plotting import figure
+    from jinja2 import Template
+
+    page = Template(PAGE_HTML)
+
+    def modify(doc):
+        values = explorer.defaults()
+        state = {"good": None}
+        sliders = _sliders(explorer)
+        verdict = Div(text="", name="verdict", width=1100, height=48, styles={"font-size": "16px",
+                                                                               "font-weight": "bold"})
+        sweep_words = Div(text="", name="sweep_checks", width=1100, height=20)
+        status = Div(text="", name="status", width=1100, height=20)
+        check = Div(text="", name="check", width=1100, height=20)
+        numbers = Div(text="", name="numbers", width=1100, height=230)
+        seq = Div(text="<span id='seq'>0</span>", name="seq", width=40, height=10,
+                  styles={"font-size": "1px", "color": "white"})
+        curve = ColumnDataSource({"p1": [], "gap": [], "leak": [], "q1": [], "colour": []})
+        here = ColumnDataSource({"p1": [], "gap": [], "leak": [], "q1": []})
+        figs = {}
+        for key, title, label in (("gap", "face gap against discharge pressure", "face gap z, µm"),
+                                  ("flows", "barrier leak Q_e and inner-seal flow Q_1", "flow, L/s")):
+            figs[key] = figure(title=title, x_axis_label="discharge pressure p1, MPa", y_axis_label=label,
+                               width=560, height=320, name=key, toolbar_location=None)
+        lines = [figs["gap"].line("p1", "gap", source=curve, line_width=2),
+                 figs["flows"].line("p1", "leak", source=curve, line_width=2, legend_label="barrier leak Q_e"),
+                 figs["flows"].line("p1", "q1", source=curve, line_width=2, color="#2ca02c",
+                                    legend_label="inner-seal flow Q_1")]
+        figs["gap"].scatter("p1", "gap", source=curve, color="colour", size=5)
+        figs["flows"].scatter("p1", "leak", source=curve, color="colour", size=5)
+        for key, y in (("gap", "gap"), ("flows", "leak"), ("flows", "q1")):
+            figs[key].scatter("p1", y, source=here, marker="diamond", size=13, color="black")
+        figs["flows"].legend.location = "bottom_left"
+        crit = {k: Span(location=math.nan, dimension="height", line_color="#d62728", line_dash="dashed",
+                        line_width=1.5) for k in figs}
+        for k, f in figs.items():
+            f.add_layout(crit[k])
+        record = _record_buttons(doc, explorer, values, out)
+
+        def show(ans: dict, moved: str | None):
+            good = ans.get("status") == "ok"
+            if good:
+                state["good"] = ans
+            last = ans if good else state["good"]
+            if last is not None:
+                c, mpa = last["critical"], 1e-6
+                op = [("discharge pressure p1", "p1", _fmt(last["p1"] * mpa), "MPa"),
+                      ("face gap z0", "gap", _fmt(last["gap"] * 1e6), "µm")]
+                op += [(CHAMBERS[k], f"p_{k}", _fmt(v * mpa), "MPa") for k, v in last["pressures"].items()]
+                op += [("barrier leak Q_e", "leak", _fmt(last["leak"] * 1e3), "L/s"),
+                       ("inner-seal flow Q_1", "inner_seal_flow", _fmt(last["inner_seal_flow"] * 1e3), "L/s")]
+                if last["has_regulator"]:
+                    op.append(("valve opening x0", "valve", _fmt(last["valve_opening"] * 1e3), "mm"))
+                kr = [("critical discharge pressure p1_kr (Q_1 = 0)", "p1_kr",
+                       _fmt(c["p1_kr"] * mpa) if c["p1_kr"] is not None else "none", "MPa"),
+                      ("margin to it p1_kr − p1", "margin_p1_kr", _fmt(last["margin_to_p1_kr"] * mpa)
+                       if c["p1_kr"] is not None else "—", "MPa"),
+                      ("operating barrier margin Δp = p_e − p1", "dp", _fmt(last["dp"] * mpa), "MPa"),
+                      ("critical barrier margin Δp_kr (Q_1 = 0)", "dp_kr",
+                       _fmt(c["dp_kr"] * mpa) if c["dp_kr"] is not None else "none", "MPa")]
+                why = " ".join(html.escape(c[k]) for k in ("psi1_kr_status", "dpsi_kr_status") if k in c)
+                grey = "black" if good else "#999"
+                numbers.text = (f"<div style='display:flex;gap:24px;align-items:flex-start;color:{grey}'><table>"
+                                f"<tr><th colspan=3>operating point</th></tr>{_rows(op)}</table><table><tr><th "
+                                f"colspan=3>criticals (the inner-seal flow reverses)</th></tr>{_rows(kr)}</table>"
+                                f"</div><p>{why}</p><span id='exact' style='display:none'>{_exact_statics(last)}</span>"
+                                )
+                sw = last["sweep"]
+                curve.data = {"p1": sw["p1"] * mpa, "gap": sw["gap"] * 1e6, "leak": sw["leak"] * 1e3,
+                              "q1": sw["inner_seal_flow"] * 1e3,
+                              "colour": ["#d62728" if ct else "#ff7f0e" if sat else "#1f77b4"
+                                         for sat, ct in zip(sw["saturated"], sw["contact"], strict=True)]}
+                here.data = {"p1": [last["p1"] * mpa], "gap": [last["gap"] * 1e6], "leak": [last["leak"] * 1e3],
+                             "q1": [last["inner_seal_flow"] * 1e3]}
+                for span in crit.values():
+                    span.location = c["p1_kr"] * mpa if c["p1_kr"] is not None else math.nan
+                for line in lines:
+                    line.glyph.line_alpha = 1.0 if good else 0.3
+            if good:
+                ok, words = ans["verdict"]
+                if not ok and moved:
+                    words += f" (after changing {moved.removeprefix('device.')})"
+                _say(verdict, status, ans, moved, words, ok)
+                sweep_words.text = ("<span id='sweep_text' style='color:#b35900'>" + html.escape(
+                    "; ".join(ans["sweep_checks"])) + " (orange: valve on its stop, red: face contact)</span>"
+                                    if ans["sweep_checks"] else "<span id='sweep_text'></span>")
+            else:
+                _say(verdict, status, ans, moved)
+
+        request = _latest_wins(doc, explorer.evaluate, show, seq)
+        _connect(doc, explorer, sliders, values, state, check, request)
+        show(explorer.evaluate(values), None)
+        head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
+        doc.add_root(column(head, verdict, sweep_words, status, check, record, name="head"))
+        doc.add_root(column(*sliders.values(), name="controls"))
+        doc.add_root(numbers)
+        doc.add_root(row(figs["gap"], figs["flows"], name="plots"))
         doc.add_root(seq)
         doc.template = page
         doc.title = f"autobal explore: {explorer.scene.name}"
@@ -775,9 +1142,16 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
                             f"<td>{_fmt(pk * e * 1e6)} µm</td><td>{'yes' if ok else 'NO' if ok is False else '—'}</td>"
                             f"</tr>" for i, (label, pk, ok) in enumerate(rows))
             if good:
-                crit = ans["critical_speed"]
+                crit, api = ans["critical_speed"], ans["api"]
+                kept = api["separation_margin_ok"]
+                af = "—" if api["amplification_factor"] is None else _fmt(api["amplification_factor"], 4)
                 numbers.text = (f"<p>critical speed <span id='critical'>{_fmt(crit * 30 / np.pi)}</span> rpm "
-                                f"({_fmt(crit)} rad/s)</p><table><tr><th>profile</th><th>peak δ/e</th><th>peak δ</th>"
+                                f"({_fmt(crit)} rad/s); API 684: AF <span id='af'>{af}</span>, SM <span id='sm'>"
+                                f"{_fmt(api['separation_margin_pct'], 4)}</span> % from the service speed, required "
+                                f"<span id='sm_req'>{_fmt(api['required_separation_margin_pct'], 3)}</span> %: "
+                                f"<b id='sm_ok' style='color:{'green' if kept else 'red'}'>"
+                                f"{'kept' if kept else 'NOT kept' if kept is False else '—'}</b></p>"
+                                f"<table><tr><th>profile</th><th>peak δ/e</th><th>peak δ</th>"
                                 f"<th>within the drive's limits</th></tr>{table}</table>")
             feasible = [pk for label, pk, ok in rows[1:] if ok is not False]
             if opt is not None and good:
@@ -869,6 +1243,9 @@ def serve(source: str | Path, port: int = 0, browser: bool = True, out: str | Pa
     scene = scenario.load(source)
     if getattr(scene, "device", None) is None and getattr(scene, "rotor", None) is not None:
         explorer, builder = SpinupExplorer(source), make_spinup_document
+    elif getattr(scene, "device", None) is not None and scene.device.dynamics is None and getattr(
+            scene.analyses, "statics", None) is not None:
+        explorer, builder = StaticsExplorer(source), make_statics_document
     else:
         explorer, builder = DeviceExplorer(source), make_document
     if port == 0:  # a free port, known before the server starts (the websocket's allowed origin names it)

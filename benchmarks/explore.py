@@ -15,6 +15,12 @@ every change moves the operating point or the dynamics):
   ``Setup.linear`` (the model built at the point) with ``frequency.characteristic`` (python-control) and
   ``stability.verdict``.
 
+A statics scene (pump_pe600_statics: alternately the regulator's supply pressure and the barrier supply throttle's
+diameter): the whole change (operating point, p1_kr and dp_kr, the characteristic over the scene's 36 discharge
+ratios and the verdict: :meth:`StaticsExplorer.evaluate`) against ``autobal.run`` of the scene with that override
+(IPOPT's operating point, criticals, continuation sweep and force-gap curve: what the page's "report" runs); its
+error: the largest relative difference of the gap, the leak, p1_kr and dp_kr against that run.
+
 Times are CPU times (best of repeats): a shared machine's load moves them less than wall times.  Errors: the
 largest relative difference of the decay rate, the first peak's frequency and amplitude and the amplitude at the
 operating speed between the live path and the batch functions.  Goal (issue 33): ratio >= 20.
@@ -30,6 +36,9 @@ from benchmarks._results import case, write
 from benchmarks._timing import cpu_best_of
 
 SCENE = "pump_pe600_dynamics"
+STATICS_SCENE = "pump_pe600_statics"
+STATICS_CHANGES = [("device.regulator.supply_pressure", 42.0), ("device.barrier.supply_throttle.diameter", 3.2),
+                   ("device.regulator.supply_pressure", 40.0), ("device.barrier.supply_throttle.diameter", 3.0)]
 GOAL = 20.0
 CHANGES = [("device.disc.face.base_gap", 0.16), ("device.dynamics.cavity_volume", 1.2e-4),
            ("device.disc.face.base_gap", 0.15), ("device.dynamics.cavity_volume", 1.0e-4)]
@@ -39,6 +48,33 @@ def cycling(fn, items):
     """A call of ``fn`` on the next of ``items`` each time (every timed call a change)."""
     it = itertools.cycle(items)
     return lambda: fn(next(it))
+
+
+def statics_case(repeats: int) -> tuple[dict, float]:
+    """The statics page's change against ``autobal.run`` of the statics scene with the override; the ratio."""
+    import autobal
+    from autobal.explore import StaticsExplorer
+
+    t0 = time.process_time()
+    ex = StaticsExplorer(STATICS_SCENE)
+    ex.evaluate(ex.defaults())  # the one build of the parametric statics (and the first solve)
+    t_build = time.process_time() - t0
+    settings = [ex.defaults() | {k: v} for k, v in STATICS_CHANGES]
+    t_live = cpu_best_of(repeats * 4, cycling(ex.evaluate, settings))
+
+    def run(values):
+        return autobal.run(autobal.load(STATICS_SCENE, set=ex.overrides(values)))["statics"].data
+
+    t_run = cpu_best_of(max(2, repeats // 2), cycling(run, settings))
+    err = 0.0
+    for values in settings:
+        live, block = ex.evaluate(values), run(values)
+        pairs = [(live["gap"], block["exact"]["z0"]), (live["leak"], block["exact"]["Q_e"]),
+                 (live["critical"]["p1_kr"], block["critical_exact"]["p1_kr"]),
+                 (live["critical"]["dp_kr"], block["critical_exact"]["dp_kr"])]
+        err = max(err, *(abs(a - b) / abs(b) for a, b in pairs))
+    return case("statics scene: one change (operating point, p1_kr, dp_kr, characteristic)", t_live, t_build,
+                "autobal.run with the override", t_run, err, None), t_run / t_live
 
 
 def main(repeats: int = 5) -> list[dict]:
@@ -102,6 +138,8 @@ def main(repeats: int = 5) -> list[dict]:
         case("dynamics of the change", t_dyn_live, None, "model built at the point + python-control AFC",
              t_dyn_batch),
     ]
+    row, statics_ratio = statics_case(repeats)
+    cases.append(row)
     ratio = t_run / t_live
     notes = [f"scene {SCENE}; CPU time per change, best of {repeats * 4} (live) / {repeats} (batch)",
              "autobal: the live path of autobal explore; peer: the batch path for the same setting",
@@ -109,6 +147,8 @@ def main(repeats: int = 5) -> list[dict]:
              "at the operating speed, live path against the batch functions",
              f"goal (issue 33): autobal.run / live >= {GOAL:g}: {'met' if ratio >= GOAL else 'NOT met'} "
              f"({ratio:.0f}x)",
+             f"statics scene {STATICS_SCENE}: autobal.run / live = {statics_ratio:.0f}x; error: largest relative "
+             "difference of gap, leak, p1_kr and dp_kr against that run",
              "dynamics of the change = the whole change less its statics; autobal build: loading the scene, building "
              "the parametric statics and the symbolic model and the first solve, once per page"]
     write("explore", "autobal explore: per-change compute against the batch run", cases, notes)

@@ -3,6 +3,7 @@ numbers for a changed setting, the saved scene reproduces the setting, bad setti
 
 import dataclasses
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,7 +12,7 @@ import autobal
 from autobal.analysis import frequency as fr
 from autobal.analysis import stability as st
 from autobal.analysis.linearize import Setup
-from autobal.explore import DeviceExplorer
+from autobal.explore import DeviceExplorer, SpinupExplorer, StaticsExplorer
 from autobal.parts.device import dynamic_device
 
 SCENE = "pump_pe600_dynamics"
@@ -113,7 +114,7 @@ def test_a_crossed_margin_turns_the_verdict(explorer):
 
 @pytest.mark.cli
 @pytest.mark.parametrize(("argv", "words"), [
-    (["explore", "pump_pe600_statics", "--no-browser"], "device.dynamics"),
+    (["explore", "hydroheel_wear", "--no-browser"], "explore needs a scene with device.dynamics"),
     (["explore", "pump_pe600_dynamics", "--no-browser", "--port", "70000"], "--port 70000"),
 ])
 def test_explore_command_refuses_bad_input_with_exit_2(argv, words, capsys):
@@ -129,8 +130,6 @@ def test_explore_command_refuses_bad_input_with_exit_2(argv, words, capsys):
 def test_spinup_page_numbers_equal_autobal_run_after_reoptimising(tmp_path):
     """Spin-up: the ramps re-simulated for a changed rotor are the batch run's baselines; the current optimum's
     profile re-simulated for it differs from the batch run until "re-optimise", then equals it."""
-    from autobal.explore import SpinupExplorer
-
     ex = SpinupExplorer("spinup_jeffcott_deadline_5s")
     values = ex.defaults() | {"rotor.damping": 6.2, "rotor.stiffness": 12000.0}
     ans = ex.evaluate(values)
@@ -142,9 +141,126 @@ def test_spinup_page_numbers_equal_autobal_run_after_reoptimising(tmp_path):
         assert ramp["peak_over_e"] == pytest.approx(run["baselines"][key]["peak_deflection_over_e"], rel=1e-9), key
         assert ramp["within_drive_limits"] == run["baselines"][key]["within_drive_limits"]
     assert ans["critical_speed"] == pytest.approx(run["omega_cr_rad_s"], rel=1e-12)
+    for key in ("amplification_factor", "separation_margin_pct", "required_separation_margin_pct",
+                "separation_margin_ok"):  # API 684 of the changed rotor, as the batch study's rotor block
+        assert ans["api"][key] == pytest.approx(run["rotor"][key], rel=1e-12), key
     assert stale["optimised_for"] == {} and stale["peak_over_e"] != pytest.approx(run["peak_deflection_over_e"],
                                                                                    rel=1e-6)
     ex.optimise(values)
     fresh = ex.evaluate(values)["optimum"]
     assert fresh["peak_over_e"] == pytest.approx(run["peak_deflection_over_e"], rel=1e-9)
     assert fresh["peak_over_e"] < min(r["peak_over_e"] for r in ans["ramps"].values())
+
+
+# ---- the statics page (a device-statics scene) ---------------------------------------------------------------------
+
+STATICS = "pump_pe600_statics"
+STATICS_CHANGED = {"device.regulator.supply_pressure": 42.0, "device.barrier.supply_throttle.diameter": 3.2}
+
+
+@pytest.fixture(scope="module")
+def statics_explorer():
+    return StaticsExplorer(STATICS)
+
+
+def assert_statics_equal(live: dict, block: dict, rel: float = 1e-8):
+    """The live statics against the batch study's results.json block (IPOPT): operating point, criticals,
+    characteristic, verdict."""
+    from autobal.analysis.statics_study import StaticsResult
+
+    ex, crit, sw = block["exact"], block["critical_exact"], block["sweep"]
+    assert live["gap"] == pytest.approx(ex["z0"], rel=rel)
+    assert live["leak"] == pytest.approx(ex["Q_e"], rel=rel)
+    assert live["inner_seal_flow"] == pytest.approx(ex["Q_1"], rel=rel)
+    assert live["dp"] == pytest.approx(ex["dp"], rel=rel)
+    for k, key in (("psi2", "p2"), ("psi3", "p3"), ("psi_e", "pe"), ("psi_cam", "pcam")):
+        assert (live["pressures"][k] == pytest.approx(ex[key], rel=rel)) if key in ex else k not in live["pressures"]
+    for key in ("p1_kr", "dp_kr", "psi1_kr", "dpsi_kr"):
+        assert live["critical"][key] == pytest.approx(crit[key], rel=rel), key
+    assert live["margin_to_p1_kr"] == pytest.approx(crit["p1_kr"] - ex["p1"], rel=rel)
+    assert live["verdict"] == StaticsResult(block).verdict()
+    np.testing.assert_allclose(live["sweep"]["p1"], np.asarray(sw["psi1"]) * block["scales"]["p_B"], rtol=1e-12)
+    np.testing.assert_allclose(live["sweep"]["gap"], np.asarray(sw["u"]) * block["scales"]["z_B"], rtol=rel)
+    np.testing.assert_allclose(live["sweep"]["leak"], sw["Q_e"], rtol=rel)
+    assert live["sweep"]["saturated"] == list(sw.get("regulator_saturated", [False] * len(sw["psi1"])))
+    assert live["sweep"]["contact"] == list(sw["contact"])
+
+
+def test_statics_live_numbers_equal_autobal_run_of_the_saved_scene(statics_explorer, tmp_path):
+    """A changed setting: the page's operating point, p1_kr, dp_kr, characteristic and verdict equal ``autobal.run``
+    of the scene it saves (IPOPT's operating point, critical and continuation sweep) to the solvers' tolerance."""
+    ex = statics_explorer
+    values = ex.defaults() | STATICS_CHANGED
+    live = ex.evaluate(values)
+    assert live["status"] == "ok", live["message"]
+    block = autobal.run(autobal.load(ex.save(values, tmp_path / "statics.yaml")), out=tmp_path / "run")[
+        "statics"].data
+    assert_statics_equal(live, block)
+    # the change moved the numbers: the shipped scene's gap 143.9 µm and p1_kr 39.49 MPa (its own run)
+    assert live["critical"]["p1_kr"] > 40e6 and abs(live["gap"] - 143.8646e-6) > 1e-7
+    assert any(live["sweep"]["saturated"]) and "regulator saturated" in live["sweep_checks"][0]
+
+
+def test_statics_page_of_a_device_without_regulator(tmp_path):
+    """No regulator: no valve rows, the verdict's words for it, p1_kr beyond the sweep's range found all the same;
+    equal to autobal.run of the scene."""
+    import yaml
+
+    raw = yaml.safe_load((Path(autobal.__file__).parents[1] / "scenarios" / f"{STATICS}.yaml").read_text())
+    del raw["device"]["regulator"]
+    raw["name"] = "pump_without_regulator"
+    path = tmp_path / "noreg.yaml"
+    path.write_text(yaml.safe_dump(raw, sort_keys=False))
+    ex = StaticsExplorer(path)
+    assert not any("regulator" in p.path for p in ex.params)
+    values = ex.defaults() | {"device.barrier.supply_throttle.diameter": 3.2}
+    live = ex.evaluate(values)
+    assert live["status"] == "ok" and not live["has_regulator"] and "psi_cam" not in live["pressures"]
+    assert "no regulator" in live["verdict"][1] and live["critical"]["psi1_kr"] > raw["analyses"]["statics"][
+        "discharge_ratio"]["stop"]
+    block = autobal.run(autobal.load(ex.save(values, tmp_path / "saved.yaml")), out=tmp_path / "run")["statics"].data
+    assert_statics_equal(live, block)
+
+
+@pytest.mark.parametrize(("path", "value", "status", "words"), [
+    ("device.disc.face.inner_diameter", 300.0, "refused", "outer_diameter must be larger than inner_diameter"),
+    ("device.regulator.supply_pressure", 8.0, "ok", "regulator SATURATED, inner-seal flow REVERSED"),
+    ("device.operating.nominal_pressure", 6.5, "ok", "face CONTACT"),
+])
+def test_statics_bad_settings_are_reported(statics_explorer, path, value, status, words):
+    """A setting the declarations refuse says why; an operating point on a stop is a failed verdict, in the
+    study's words; the next good setting recovers the shipped scene's numbers."""
+    ans = statics_explorer.evaluate(statics_explorer.defaults() | {path: value})
+    assert ans["status"] == status
+    assert words in (ans["message"] if status != "ok" else ans["verdict"][1])
+    if status == "ok":
+        assert ans["verdict"][0] is False
+    good = statics_explorer.evaluate(statics_explorer.defaults())
+    # the shipped scene's p1_kr by IPOPT (autobal run pump_pe600_statics: critical_exact.p1_kr = 39.4878 MPa)
+    assert good["verdict"][0] and good["critical"]["p1_kr"] == pytest.approx(39487806.18, rel=1e-9)
+
+
+# ---- the spin-up page: API 684 margins ------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("damping", [None, 2.0])
+def test_spinup_af_and_sm_are_the_half_power_reading_of_the_changed_rotor(damping):
+    """AF and SM of the page equal the hand calculation for the Jeffcott rotor (no liquid): the unbalance response
+    r^2 / sqrt((1 - r^2)^2 + (2 zeta r)^2) peaks at r_p = 1/sqrt(1 - 2 zeta^2), its half-power points are the roots
+    x = r^2 of (A^2 - 2) x^2 + A^2 (4 zeta^2 - 2) x + A^2 = 0 (A the peak), AF = r_p / (r_2 - r_1); SM from the
+    service (final) speed 210 rad/s; API 684 requires min(16, 17 (1 - 1/(AF - 1.5))) % below the speed range."""
+    ex = SpinupExplorer("spinup_jeffcott_deadline_5s")
+    values = ex.defaults() | ({} if damping is None else {"rotor.damping": damping})
+    api = ex.evaluate(values)["api"]
+    m, c = 1.0, 11025.0
+    chi = 5.0 if damping is None else damping
+    zeta, wn = chi / (2 * math.sqrt(c * m)), math.sqrt(c / m)
+    rp = 1 / math.sqrt(1 - 2 * zeta**2)
+    peak = rp**2 / math.sqrt((1 - rp**2) ** 2 + (2 * zeta * rp) ** 2)
+    x1, x2 = sorted(np.roots([peak**2 - 2, peak**2 * (4 * zeta**2 - 2), peak**2]).real)
+    af = rp / (math.sqrt(x2) - math.sqrt(x1))
+    assert api["amplification_factor"] == pytest.approx(af, rel=1e-6)
+    # the peak speed to the bounded search's precision on a flat top (half_power_readings refines it so)
+    assert api["response_peak_speed_rad_s"] == pytest.approx(rp * wn, rel=1e-7)
+    assert api["separation_margin_pct"] == pytest.approx(100 * (210 - rp * wn) / 210, rel=1e-7)
+    assert api["required_separation_margin_pct"] == pytest.approx(min(16.0, 17 * (1 - 1 / (af - 1.5))), rel=1e-6)
+    assert api["separation_margin_ok"] is True

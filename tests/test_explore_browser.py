@@ -1,7 +1,8 @@
 """autobal explore in a real browser (Playwright driving Debian's headless chromium): sliders moved by the keyboard,
 the numbers shown equal ``autobal run`` on the saved scene, the page loads nothing from outside 127.0.0.1, a bad
 setting is shown as such and the server survives it, and the p90 latency from a key press to the updated page over
-60 changes is under 50 ms.  Needs the ``explore`` and ``browser`` extras and /usr/bin/chromium; skipped without."""
+60 changes is under 50 ms; the statics page (pump_pe600_statics) shows autobal run's numbers too.  Needs the
+``explore`` and ``browser`` extras and /usr/bin/chromium; skipped without."""
 
 import json
 import os
@@ -52,9 +53,13 @@ window.__last = Number(window.__deep('#seq').textContent);
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
     """``autobal explore SCENE --no-browser`` in its own process (cwd: a temporary folder); its URL."""
-    cwd = tmp_path_factory.mktemp("explore")
+    yield from serving(SCENE, tmp_path_factory.mktemp("explore"))
+
+
+def serving(scene: str, cwd: Path):
+    """Start ``autobal explore scene --no-browser`` in ``cwd``; yield (URL, cwd, process); stop it."""
     env = os.environ | {"PYTHONUNBUFFERED": "1"}
-    proc = subprocess.Popen([sys.executable, "-m", "autobal", "explore", SCENE, "--no-browser"], cwd=cwd, env=env,
+    proc = subprocess.Popen([sys.executable, "-m", "autobal", "explore", scene, "--no-browser"], cwd=cwd, env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     lines: queue.Queue = queue.Queue()
     threading.Thread(target=lambda: [lines.put(line) for line in proc.stdout], daemon=True).start()
@@ -76,7 +81,11 @@ def server(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def page(server):
-    url = server[0]
+    yield from browsing(server[0])
+
+
+def browsing(url: str):
+    """Chromium on the page at ``url`` (its requests outside 127.0.0.1 in ``pg.outside``)."""
     with sync_api.sync_playwright() as p:
         browser = p.chromium.launch(executable_path=str(CHROMIUM), args=["--no-sandbox"])
         pg = browser.new_page(viewport={"width": 1400, "height": 1000})
@@ -91,11 +100,12 @@ def page(server):
         browser.close()
 
 
-def slider(pg, path: str):
-    """The keyboard handle of the slider of scene path ``path`` (the page lists them in DeviceExplorer's order)."""
+def slider(pg, path: str, explorer=None):
+    """The keyboard handle of the slider of scene path ``path`` (the page lists them in the explorer's order;
+    default the DeviceExplorer of SCENE)."""
     from autobal.explore import DeviceExplorer
 
-    order = [p.path for p in DeviceExplorer(SCENE).params]
+    order = [p.path for p in (explorer or DeviceExplorer(SCENE)).params]
     return pg.locator(".noUi-handle").nth(order.index(path))
 
 
@@ -190,3 +200,44 @@ def test_report_button_writes_the_report_of_autobal_run(server, page):
     assert report.name == "report.html" and report.is_file()
     results = json.loads((report.parent / "results.json").read_text())
     assert results["status"] == "ok" and {"frequency", "stability"} <= set(results)
+
+
+def test_statics_page_numbers_equal_autobal_run_on_the_saved_scene(tmp_path_factory):
+    """The statics page (pump_pe600_statics): after slider moves, the operating point, p1_kr and dp_kr it shows
+    equal ``autobal run`` of the scene it saves (IPOPT), and its 6-digit text is those numbers."""
+    from autobal.explore import StaticsExplorer
+
+    statics = "pump_pe600_statics"
+    serve = serving(statics, tmp_path_factory.mktemp("explore_statics"))
+    url = next(serve)[0]
+    view = browsing(url)
+    pg = next(view)
+    try:
+        ex = StaticsExplorer(statics)
+        for path, key, times in (("device.regulator.supply_pressure", "ArrowRight", 3),
+                                 ("device.barrier.supply_throttle.diameter", "ArrowLeft", 2)):
+            handle = slider(pg, path, ex)
+            for _ in range(times):
+                change(pg, handle, key)
+        live = shown(pg)
+        text = {k: float(pg.locator(f"#{k}").text_content()) for k in ("gap", "leak", "p1_kr", "dp_kr")}
+        pg.locator("button", has_text="save scene").click()
+        pg.wait_for_selector("#saved_path", timeout=10_000)
+        saved = Path(pg.locator("#saved_path").text_content())
+        out = saved.parent / "run"
+        done = subprocess.run([sys.executable, "-m", "autobal", "run", str(saved), "--out", str(out), "--quiet"],
+                              capture_output=True, text=True, timeout=600)
+        assert done.returncode == 0, done.stderr
+        res = json.loads((out / "results.json").read_text())["statics"]
+        ex_, crit = res["exact"], res["critical_exact"]
+        for key, ref in (("gap", ex_["z0"]), ("leak", ex_["Q_e"]), ("dp", ex_["dp"]), ("p1_kr", crit["p1_kr"]),
+                         ("dp_kr", crit["dp_kr"]), ("margin_to_p1_kr", crit["p1_kr"] - ex_["p1"])):
+            assert live[key] == pytest.approx(ref, rel=1e-8), key
+        assert crit["p1_kr"] != pytest.approx(39487806.18, rel=1e-6)  # moved from the shipped scene's
+        for key, factor in (("gap", 1e6), ("leak", 1e3), ("p1_kr", 1e-6), ("dp_kr", 1e-6)):  # µm, L/s, MPa
+            assert text[key] == pytest.approx(live[key] * factor, rel=1e-5), key
+        assert "regulating" in pg.locator("#verdict_text").text_content()
+        assert pg.outside == []
+    finally:  # the teardowns after each yield: the browser closed, the server stopped
+        next(view, None)
+        next(serve, None)
