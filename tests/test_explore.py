@@ -186,6 +186,7 @@ def assert_statics_equal(live: dict, block: dict, rel: float = 1e-8):
     assert live["sweep"]["contact"] == list(sw["contact"])
 
 
+@pytest.mark.cli
 def test_statics_live_numbers_equal_autobal_run_of_the_saved_scene(statics_explorer, tmp_path):
     """A changed setting: the page's operating point, p1_kr, dp_kr, characteristic and verdict equal ``autobal.run``
     of the scene it saves (IPOPT's operating point, critical and continuation sweep) to the solvers' tolerance."""
@@ -201,6 +202,7 @@ def test_statics_live_numbers_equal_autobal_run_of_the_saved_scene(statics_explo
     assert any(live["sweep"]["saturated"]) and "regulator saturated" in live["sweep_checks"][0]
 
 
+@pytest.mark.cli
 def test_statics_page_of_a_device_without_regulator(tmp_path):
     """No regulator: no valve rows, the verdict's words for it, p1_kr beyond the sweep's range found all the same;
     equal to autobal.run of the scene."""
