@@ -82,24 +82,32 @@ def serving(scene: str, cwd: Path):
 
 
 @pytest.fixture(scope="module")
-def page(server):
-    yield from browsing(server[0])
-
-
-def browsing(url: str):
-    """Chromium on the page at ``url`` (its requests outside 127.0.0.1 in ``pg.outside``)."""
+def browser():
+    """One headless Chromium for the module (Playwright's sync API runs one instance per thread)."""
     with sync_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=str(CHROMIUM), args=["--no-sandbox"])
-        pg = browser.new_page(viewport={"width": 1400, "height": 1000})
-        outside = []
-        pg.on("request", lambda r: None if r.url.startswith("http://127.0.0.1:") or r.url.startswith("ws://127.0.0.1:")
-              else outside.append(r.url))
-        pg.goto(url)
-        pg.wait_for_selector("#gap", timeout=60_000)
-        pg.evaluate(DEEP)
-        pg.outside = outside
-        yield pg
-        browser.close()
+        chromium = p.chromium.launch(executable_path=str(CHROMIUM), args=["--no-sandbox"])
+        yield chromium
+        chromium.close()
+
+
+@pytest.fixture(scope="module")
+def page(server, browser):
+    pg = browsing(browser, server[0])
+    yield pg
+    pg.close()
+
+
+def browsing(browser, url: str):
+    """A new page of ``browser`` on ``url`` (its requests outside 127.0.0.1 in ``pg.outside``)."""
+    pg = browser.new_page(viewport={"width": 1400, "height": 1000})
+    outside = []
+    pg.on("request", lambda r: None if r.url.startswith("http://127.0.0.1:") or r.url.startswith("ws://127.0.0.1:")
+          else outside.append(r.url))
+    pg.goto(url)
+    pg.wait_for_selector("#gap", timeout=60_000)
+    pg.evaluate(DEEP)
+    pg.outside = outside
+    return pg
 
 
 def slider(pg, path: str, explorer=None):
@@ -215,7 +223,7 @@ def test_report_button_writes_the_report_of_autobal_run(server, page):
     assert results["status"] == "ok" and {"frequency", "stability"} <= set(results)
 
 
-def test_statics_page_numbers_equal_autobal_run_on_the_saved_scene(tmp_path_factory):
+def test_statics_page_numbers_equal_autobal_run_on_the_saved_scene(browser, tmp_path_factory):
     """The statics page (pump_pe600_statics): after slider moves, the operating point, p1_kr and dp_kr it shows
     equal ``autobal run`` of the scene it saves (IPOPT), and its 6-digit text is those numbers."""
     from autobal.explore import StaticsExplorer
@@ -223,8 +231,7 @@ def test_statics_page_numbers_equal_autobal_run_on_the_saved_scene(tmp_path_fact
     statics = "pump_pe600_statics"
     serve = serving(statics, tmp_path_factory.mktemp("explore_statics"))
     url = next(serve)[0]
-    view = browsing(url)
-    pg = next(view)
+    pg = browsing(browser, url)
     try:
         ex = StaticsExplorer(statics)
         for path, key, times in (("device.regulator.supply_pressure", "ArrowRight", 3),
@@ -251,6 +258,6 @@ def test_statics_page_numbers_equal_autobal_run_on_the_saved_scene(tmp_path_fact
             assert text[key] == pytest.approx(live[key] * factor, rel=1e-5), key
         assert "regulating" in pg.locator("#verdict_text").text_content()
         assert pg.outside == []
-    finally:  # the teardowns after each yield: the browser closed, the server stopped
-        next(view, None)
+    finally:  # the page closed, the server stopped (the teardown after its yield)
+        pg.close()
         next(serve, None)
