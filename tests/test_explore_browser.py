@@ -26,8 +26,8 @@ pytestmark = [pytest.mark.slow, pytest.mark.cli, pytest.mark.xdist_group("explor
 SCENE = "pump_pe600_dynamics"
 LATENCY_P90_MS = 50.0
 CHANGES = 60
-WARMUP = 10
-ROUNDS = 3
+WARMUP = 40
+ROUNDS = 5
 START_S = 120.0  # the server prints its URL within this (imports, the first solve)
 
 # the page's Bokeh widgets live in shadow roots: find by id through them, watch the update counter
