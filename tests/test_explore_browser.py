@@ -231,8 +231,9 @@ def test_statics_page_numbers_equal_autobal_run_on_the_saved_scene(browser, tmp_
     statics = "pump_pe600_statics"
     serve = serving(statics, tmp_path_factory.mktemp("explore_statics"))
     url = next(serve)[0]
-    pg = browsing(browser, url)
+    pg = None
     try:
+        pg = browsing(browser, url)
         ex = StaticsExplorer(statics)
         for path, key, times in (("device.regulator.supply_pressure", "ArrowRight", 3),
                                  ("device.barrier.supply_throttle.diameter", "ArrowLeft", 2)):
@@ -258,6 +259,7 @@ def test_statics_page_numbers_equal_autobal_run_on_the_saved_scene(browser, tmp_
             assert text[key] == pytest.approx(live[key] * factor, rel=1e-5), key
         assert "regulating" in pg.locator("#verdict_text").text_content()
         assert pg.outside == []
-    finally:  # the page closed, the server stopped (the teardown after its yield)
-        pg.close()
+    finally:  # the page closed, the server stopped (the teardown after its yield), also when the page failed
+        if pg is not None:
+            pg.close()
         next(serve, None)
