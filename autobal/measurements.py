@@ -163,13 +163,15 @@ def _header_unit(cell: str) -> str:
     return (m.group(1) if m.group(1) is not None else m.group(2)).strip() if m else "1"
 
 
-def _select(path: Path, head_line: int, header: list[str], columns: dict | None) -> list[tuple[int, str, str]]:
+def _select(path: Path, head_line: int, header: list[str], columns: dict | None,
+            where: str = "analyses.estimation.columns", example: str = "tau [1],u [1]") -> list[tuple[int, str, str]]:
     """(column index, quantity, unit as written) of the columns to read.  Without ``columns`` every
-    header cell must read 'quantity [unit]'; with it, the named headers are taken and others skipped."""
+    header cell must read 'quantity [unit]'; with it, the named headers are taken and others skipped.
+    ``where`` is the scene key of ``columns`` and ``example`` a header line, both for the messages."""
     if not any(_HEADER.match(c) or _UNIT_AT_END.search(c) for c in header):
         # not the expected table (a system file, a text): its content is not quoted
         raise ScenarioError(f"{path}: not a data table: line {head_line} is no header of 'quantity [unit]' cells "
-                            f"(e.g. 'tau [1],u [1]'); name a CSV file of measurements")
+                            f"(e.g. '{example}'); name a CSV file of measurements")
     if columns is None:
         out = []
         for j, cell in enumerate(header):
@@ -177,7 +179,7 @@ def _select(path: Path, head_line: int, header: list[str], columns: dict | None)
             if m is None:
                 raise ScenarioError(f"{path}: line {head_line}, column {j + 1}: header {_short(cell)} must read "
                                     f"'quantity [unit]', e.g. 'u [1]' or 'gap [mm]' (or name the columns to read "
-                                    f"in analyses.estimation.columns)")
+                                    f"in {where})")
             out.append((j, m.group(1), m.group(2).strip()))
         return out
     norm = [" ".join(c.split()).casefold() for c in header]
@@ -186,7 +188,7 @@ def _select(path: Path, head_line: int, header: list[str], columns: dict | None)
         key = " ".join(head.split()).casefold()
         if norm.count(key) != 1:
             what = "no column" if key not in norm else "two columns"
-            raise ScenarioError(f"{path}: {what} headed {head!r} (analyses.estimation.columns.{name}); the headers "
+            raise ScenarioError(f"{path}: {what} headed {head!r} ({where}.{name}); the headers "
                                 f"are {', '.join(_short(c) for c in header)}")
         out.append((norm.index(key), name, _header_unit(head)))
     return out
@@ -209,15 +211,7 @@ def read_csv(path: str | Path, columns: dict | None = None, folder: Path | None 
     holds one, ';' or a tab (then a decimal comma is read as a decimal point).
     """
     path = resolve(path, folder)
-    comments, rows, sep = [], [], None
-    for lineno, line in enumerate(_text(path).splitlines(), start=1):
-        if line.lstrip().startswith("#"):
-            comments.append(line.strip().lstrip("#").strip())
-        elif line.strip():
-            sep = sep or _delimiter(line)
-            row = next(csv.reader([line], delimiter=sep))
-            if any(c.strip() for c in row):  # a spreadsheet's empty row ';;;' is no row
-                rows.append((lineno, row))
+    comments, rows, sep = _rows(path)
     if not rows:
         raise ScenarioError(f"{path}: no header row (expected e.g. 'tau [1],u [1]')")
     (head_line, header), body = rows[0], rows[1:]
@@ -249,11 +243,30 @@ def read_csv(path: str | Path, columns: dict | None = None, folder: Path | None 
             raise ScenarioError(f"{path}: line {lineno}: {len(row)} values, the header has {len(header)}")
     values = np.empty((len(body), len(names)))
     for k, (j, name, _) in enumerate(selected):
-        cells = [row[j].replace(",", ".") for _, row in body] if sep != "," else [row[j] for _, row in body]
+        cells = _cells(body, j, sep)
         values[:, k] = _numbers(path, cells, [lineno for lineno, _ in body], f"{name} [{units[name]}]",
                                 QUANTITIES[name][0]) * factors[k]
     return Measurements(path=path, columns={n: values[:, j] for j, n in enumerate(names)}, units=units,
                         comments=comments)
+
+
+def _rows(path: Path) -> tuple[list[str], list[tuple[int, list[str]]], str | None]:
+    """The comment lines, the (line number, cells) of the other non-empty lines and the separator of a file."""
+    comments, rows, sep = [], [], None
+    for lineno, line in enumerate(_text(path).splitlines(), start=1):
+        if line.lstrip().startswith("#"):
+            comments.append(line.strip().lstrip("#").strip())
+        elif line.strip():
+            sep = sep or _delimiter(line)
+            row = next(csv.reader([line], delimiter=sep))
+            if any(c.strip() for c in row):  # a spreadsheet's empty row ';;;' is no row
+                rows.append((lineno, row))
+    return comments, rows, sep
+
+
+def _cells(body: list[tuple[int, list[str]]], j: int, sep: str | None) -> list[str]:
+    """The cells of column ``j``, a decimal comma read as a point where the separator is not ','."""
+    return [row[j].replace(",", ".") for _, row in body] if sep != "," else [row[j] for _, row in body]
 
 
 def _numbers(path: Path, cells: list[str], lines: list[int], column: str, role: str) -> np.ndarray:
