@@ -98,6 +98,8 @@ LONG_REVOLUTION = 1.5  # a revolution this many times its neighbour missed a pul
 # changes by 2 pi alpha / omega^2 per revolution: 25 % at 50 rad/s and 100 rad/s^2)
 MAX_MISSED = 0.1  # fraction of revolutions with a missed pulse beyond which the key-phasor is refused
 DITHER = 0.01  # relative speed dither on a plateau dropped from tracked revolutions; a larger fall is a reversal
+FIT_PULSES = 8  # key-phasor pulses around a revolution fitted by its shaft angle (seven revolutions)
+MIN_SAMPLES = 8  # samples per revolution: offset, 1x and 2x are fitted (5 unknowns); 3x and above alias
 MAX_SAMPLES = 2_000_000  # rows of a raw-signal file (within autobal.measurements.MAX_DATA_BYTES)
 _ANGLE = {"deg": math.pi / 180, "°": math.pi / 180, "degree": math.pi / 180, "rad": 1.0}
 _VECTOR = re.compile(r"^(amplitude|phase)(?:_(x|y))?(?:_(pp|0p|lag|lead))?$")
@@ -375,3 +377,216 @@ def _finish(one: OneX, slow_roll) -> OneX:
                          f"{inside.sum()} vector(s) from {_rpm(one.speed[inside].min())} to "
                          f"{_rpm(one.speed[inside].max())})")
     return OneX(speed=one.speed, x=probes["x"], y=probes.get("y"), time=one.time, path=one.path, notes=tuple(notes))
+
+
+def read_signals(path, *, slow_roll=None, columns: dict | None = None, folder=None) -> OneX:
+    """Read a CSV of raw signals (time, probe x, optionally probe y, a key-phasor or a speed channel) and
+    extract the 1x vectors by order tracking, one per revolution (the method in the module docstring).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file: absolute, or relative to ``folder`` (the scene file's folder; default the working folder).
+    slow_roll : (float, float), optional
+        Speed range in rad/s whose mean 1x vector (the run-out) is subtracted from every vector.
+    columns : dict, optional
+        Quantity -> header of its column, e.g. ``{"time": "t (s)", "probe_x": "Weg x (µm)"}``.
+
+    Returns
+    -------
+    OneX
+        One vector per revolution at its speed ``2 pi / T`` and the time of its middle, speeds strictly
+        monotonic.
+    """
+    table = _Table(path, columns, folder, _signal_kind, _SIGNAL_EXAMPLE, MAX_SAMPLES)
+    p, v, notes = table.path, table.values, []
+    for need in ("time", "probe_x"):
+        if need not in v:
+            raise ScenarioError(f"{p}: no {need} column; add '{need} [{'s' if need == 'time' else 'um'}]'")
+    t = v["time"]
+    if (np.diff(t) <= 0).any():
+        i = int(np.argmax(np.diff(t) <= 0))
+        raise ScenarioError(f"{p}: line {table.line(i + 1)}, column 'time [{table.units['time']}]': the time does not "
+                            f"rise from line {table.line(i)}; the samples are in time order")
+    if "keyphasor" in v:
+        pulses, how = _pulses(table)
+        keep, turns = _whole_revolutions(table, pulses)
+        missed = int((~keep).sum())
+        notes.append(how + (f"; {missed} revolution(s) with a missed pulse dropped (the turns it missed counted)"
+                            if missed else ""))
+    elif "speed" in v:
+        speed = v["speed"]
+        if (speed < 0).any():
+            i = int(np.argmax(speed < 0))
+            raise ScenarioError(f"{p}: line {table.line(i)}, column 'speed [{table.units['speed']}]': a speed must "
+                                f"not be negative, got {speed[i]:g} rad/s")
+        angle = np.concatenate(([0.0], np.cumsum(0.5 * (speed[1:] + speed[:-1]) * np.diff(t))))
+        pulses = np.interp(2 * math.pi * np.arange(int(angle[-1] / (2 * math.pi)) + 1), angle, t)
+        keep, turns = np.ones(max(len(pulses) - 1, 0), bool), np.ones(max(len(pulses) - 1, 0))
+        notes.append(f"no key-phasor: the speed channel integrated to the shaft angle, zero at the first sample "
+                     f"(t = {t[0]:g} s); the phase is relative to that arbitrary zero, and an error of the speed "
+                     f"channel drifts it (0.36° per revolution for each 0.1 % of speed)")
+    else:
+        raise ScenarioError(f"{p}: no key-phasor and no speed channel: add 'keyphasor [V]' (a once-per-turn "
+                            f"pulse) or 'speed [rpm]'")
+    if keep.sum() < MIN_VECTORS:
+        raise ScenarioError(f"{p}: {keep.sum()} whole revolution(s) in the record; order tracking needs at least "
+                            f"{MIN_VECTORS}")
+    fit = _angle_fit(pulses, 2 * math.pi * np.concatenate(([0], np.cumsum(turns))))
+    probes = {probe: _track(table, t, v[f"probe_{probe}"], pulses, fit, keep)
+              for probe in ("x", "y") if f"probe_{probe}" in v}
+    time = (pulses[:-1] + 0.5 * np.diff(pulses))[keep]
+    speed = fit[keep, 1]
+    if "keyphasor" in v and "speed" in v:
+        notes.append(_agree(table, speed, np.interp(time, t, v["speed"])))
+    mono = _monotonic(table, speed, time)
+    if not mono.all():
+        notes.append(f"{(~mono).sum()} revolution(s) whose speed dithers within {DITHER:.0%} of the run's "
+                     f"extreme so far dropped (the speeds are strictly monotonic)")
+    notes.append(f"order tracking: {mono.sum()} revolutions from {_rpm(speed[mono][0])} to "
+                 f"{_rpm(speed[mono][-1])}; probe(s) {', '.join(probes)} from {table.units['probe_x']}")
+    one = OneX(speed=speed[mono], x=probes["x"][mono], y=probes["y"][mono] if "y" in probes else None,
+               time=time[mono], path=str(p), notes=tuple(notes))
+    return _finish(one, slow_roll)
+
+
+def _angle_fit(pulses: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """The shaft angle about the middle ``tm`` of each revolution, ``a + b (t - tm) + c (t - tm)^2``, fitted by
+    least squares to the angles at the :data:`FIT_PULSES` pulses around it (``[a, b, c]`` per revolution, ``b``
+    its speed): exact for a constant acceleration, and it averages the timing error of a sampled pulse edge
+    (up to half a sample) that makes ``2 pi / T`` jitter by ``dt / T``."""
+    n, m = len(pulses) - 1, min(FIT_PULSES, len(pulses))
+    first = np.clip(np.arange(n) - m // 2 + 1, 0, len(pulses) - m)
+    window = first[:, None] + np.arange(m)
+    mid = pulses[:-1] + 0.5 * np.diff(pulses)
+    scale = np.diff(pulses)[:, None]  # tau in periods keeps the normal equations well scaled
+    tau = (pulses[window] - mid[:, None]) / scale
+    basis = np.stack([np.ones_like(tau), tau, tau**2], axis=2)
+    normal = np.einsum("kia,kib->kab", basis, basis)
+    rhs = np.einsum("kia,ki->ka", basis, angle[window])
+    c = np.linalg.solve(normal, rhs[:, :, None])[:, :, 0]
+    return c / np.column_stack((np.ones(n), scale[:, 0], scale[:, 0] ** 2))
+
+
+def _pulses(table: _Table) -> tuple[np.ndarray, str]:
+    """The times of the key-phasor pulses (the leading edges of the rarer state) and a note saying how."""
+    p, t, k = table.path, table.values["time"], table.values["keyphasor"]
+    lo, hi = k.min(), k.max()
+    if not hi > lo:
+        raise ScenarioError(f"{p}: column 'keyphasor [{table.units['keyphasor']}]' is constant ({lo:g}): no pulses")
+    low, high = np.median(k[k <= 0.5 * (lo + hi)]), np.median(k[k > 0.5 * (lo + hi)])
+    mid = 0.5 * (low + high)
+    notch = (k > mid).mean() > 0.5  # the pulse is the rarer state: a notch is low for a short part of a turn
+    w, level = (-k, -mid) if notch else (k, mid)
+    above = w > level
+    cand = np.flatnonzero(~above[:-1] & above[1:]) + 1  # first sample past the level
+    # hysteresis: an edge counts when the channel was back below the level by a quarter of the step since the
+    # last one (noise on the edge does not make a second pulse)
+    below = np.concatenate(([0], np.cumsum(w < level - 0.25 * (high - low))))  # below[i]: in samples 0..i-1
+    since = np.concatenate(([0], cand[:-1] + 1))
+    fire = cand[below[cand] - below[since] > 0]
+    t0, t1 = t[fire - 1], t[fire]
+    pulses = t0 + (level - w[fire - 1]) / (w[fire] - w[fire - 1]) * (t1 - t0)
+    edge = "falling edges (a notch)" if notch else "rising edges"
+    unit = table.units["keyphasor"]
+    return pulses, (f"key-phasor: {len(pulses)} pulses, {edge} through {mid:.3g} {unit} (halfway between its levels "
+                    f"{low:.3g} and {high:.3g} {unit})")
+
+
+def _near(good: np.ndarray, k: int) -> np.ndarray:
+    """The (up to) four revolutions of ``good`` nearest to ``k``, two on each side where there are."""
+    g = good[good != k]
+    pos = int(np.searchsorted(g, k))
+    left, right = g[max(0, pos - 2):pos], g[pos:pos + 2]
+    if len(left) < 2:
+        right = g[pos:pos + 4 - len(left)]
+    if len(right) < 2:
+        left = g[max(0, pos - 4 + len(right)):pos]
+    return np.concatenate((left, right))
+
+
+def _whole_revolutions(table: _Table, pulses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Which revolutions between key-phasor pulses are whole (a missed pulse makes one
+    :data:`LONG_REVOLUTION` times the median of its nearest whole neighbours or more), and the turns between
+    each two pulses (that ratio rounded where a pulse was missed, else 1); a spurious pulse (a revolution that
+    much shorter) and too many missed pulses are refused."""
+    p, period = table.path, np.diff(pulses)
+    n = len(period)
+    missed = np.zeros(n, bool)
+    while n >= 3:
+        good = np.flatnonzero(~missed)
+        new = missed.copy()
+        for k in good:
+            new[k] = period[k] > LONG_REVOLUTION * np.median(period[_near(good, k)])
+        if (new == missed).all():
+            break
+        missed = new
+    good = np.flatnonzero(~missed)
+    for k in good if len(good) >= 3 else ():
+        typical = np.median(period[_near(good, k)])
+        if period[k] * LONG_REVOLUTION < typical:
+            raise ScenarioError(f"{p}: column 'keyphasor [{table.units['keyphasor']}]': the revolution from t = "
+                                f"{pulses[k]:.6g} s lasts "
+                                f"{period[k] / typical:.2f} of its neighbours: a spurious pulse (noise, a second mark "
+                                f"on the shaft); clean the channel")
+    if missed.sum() > MAX_MISSED * n:
+        raise ScenarioError(f"{p}: column 'keyphasor [{table.units['keyphasor']}]': {missed.sum()} of {n} revolutions "
+                            f"miss a pulse (more than {MAX_MISSED:.0%}): the key-phasor is unreliable; check its "
+                            f"gap and threshold, or give a speed channel instead")
+    turns = np.ones(n)
+    for k in np.flatnonzero(missed):
+        turns[k] = max(2, round(period[k] / np.median(period[_near(good, k)])))
+    return ~missed, turns
+
+
+def _track(table: _Table, t: np.ndarray, x: np.ndarray, pulses: np.ndarray, fit: np.ndarray,
+           keep: np.ndarray) -> np.ndarray:
+    """The 1x vector of ``x`` over each kept revolution between ``pulses``: offset, 1x and 2x fitted by least
+    squares to the samples at their shaft angle (from ``fit``, :func:`_angle_fit`): the revolution's DFT where
+    the samples are uniform in angle, and exact for these harmonics wherever the samples fall."""
+    first = np.searchsorted(t, pulses, side="left")  # revolution k: samples first[k] .. first[k + 1] - 1
+    count = np.diff(first)
+    if (count < MIN_SAMPLES).any():
+        k = int(np.argmax(count < MIN_SAMPLES))
+        raise ScenarioError(f"{table.path}: column 'time [{table.units['time']}]': the revolution from t = "
+                            f"{pulses[k]:.6g} s ({_rpm(2 * math.pi / (pulses[k + 1] - pulses[k]))}) holds {count[k]} "
+                            f"sample(s); order tracking needs at least {MIN_SAMPLES} per revolution: sample faster")
+    span = slice(first[0], first[-1])
+    rev = np.repeat(np.arange(len(count)), count)
+    tau = t[span] - (pulses[:-1] + 0.5 * np.diff(pulses))[rev]
+    phi = fit[rev, 0] + tau * (fit[rev, 1] + tau * fit[rev, 2])
+    basis = np.array([np.ones_like(phi), np.cos(phi), np.sin(phi), np.cos(2 * phi), np.sin(2 * phi)])
+    starts = first[:-1] - first[0]
+    normal = np.empty((len(starts), 5, 5))
+    for a in range(5):
+        for b in range(a, 5):
+            normal[:, a, b] = normal[:, b, a] = np.add.reduceat(basis[a] * basis[b], starts)
+    rhs = np.add.reduceat(basis * x[span], starts, axis=1).T
+    c = np.linalg.solve(normal[keep], rhs[keep][:, :, None])[:, :, 0]
+    return c[:, 1] - 1j * c[:, 2]  # x = c1 cos(phi) + c2 sin(phi) = Re((c1 - i c2) exp(i phi))
+
+
+def _agree(table: _Table, tracked: np.ndarray, channel: np.ndarray) -> str:
+    """The key-phasor's speeds against the speed channel's: a note when they agree, refused when not (a pulse
+    missed every turn, two marks on the shaft, a wrong unit)."""
+    ratio = float(np.median(tracked / channel))
+    if abs(ratio - 1) > 0.02:
+        raise ScenarioError(f"{table.path}: the key-phasor gives {ratio:.3g} times the speed of column "
+                            f"'speed [{table.units['speed']}]': a pulse missed each turn, two marks on the shaft, or "
+                            f"the speed's unit; correct the channel or leave one out")
+    return f"the speed channel agrees with the key-phasor within {abs(ratio - 1):.2%} (median); the key-phasor is used"
+
+
+def _monotonic(table: _Table, speed: np.ndarray, time: np.ndarray) -> np.ndarray:
+    """The revolutions that extend the run strictly (a run-up rising, a coast-down falling); a fall from the
+    run's extreme of more than :data:`DITHER` is a reversal, refused."""
+    up = speed[-1] > speed[0]
+    extreme = (np.maximum if up else np.minimum).accumulate(speed)
+    before = np.concatenate(([-np.inf if up else np.inf], extreme[:-1]))
+    keep = speed > before if up else speed < before
+    turned = speed < (1 - DITHER) * before if up else speed > (1 + DITHER) * before
+    if turned.any():
+        i = int(np.argmax(turned))
+        raise ScenarioError(f"{table.path}: at t = {time[i]:.6g} s the speed turns from {_rpm(before[i])} back to "
+                            f"{_rpm(speed[i])}: a run-up and a coast-down in one record; give each a file of its own")
+    return keep

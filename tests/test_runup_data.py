@@ -21,7 +21,7 @@ RPM = 2 * math.pi / 60
 SPEEDS = np.arange(600, 4801, 200.0) * RPM  # the files' speeds
 
 
-def jeffcott(speed, critical=3000 * RPM, zeta=0.05, e=5e-6, beta=math.radians(30)):
+def jeffcott(speed, critical=3000 * RPM, zeta=0.05, e=5e-6, beta=math.pi / 6):
     """Steady 0-peak 1x vector of a Jeffcott rotor in the toolkit's convention x = Re(X exp(i phi))."""
     r = speed / critical
     return e * r**2 / (1 - r**2 + 2j * zeta * r) * np.exp(1j * beta)
