@@ -133,7 +133,7 @@ def _rpm(w: float) -> str:
 class _Table:
     """The columns of a measured CSV read to SI by quantity name; ``lines`` the file's line of each row."""
 
-    def __init__(self, path, columns, folder, kinds, example, max_rows):
+    def __init__(self, path, columns, folder, kinds, example, max_rows, given=None):
         self.path = resolve(path, folder)
         _, rows, sep = _rows(self.path)
         if not rows:
@@ -156,6 +156,12 @@ class _Table:
                                     f"'{example}' (the formats: autobal.runup_data)")
             if name in self.values:
                 raise ScenarioError(f"{self.path}: column {name!r} appears twice")
+            if (given or {}).get(name) is not None:  # the unit given apart: for a header without one
+                if unit.strip() in ("1", "-", ""):
+                    unit = given[name]
+                elif not math.isclose(self._factor(name, unit, kind), self._factor(name, given[name], kind)):
+                    raise ScenarioError(f"{self.path}: column '{name} [{unit}]' is in {unit}, {name}_unit says "
+                                        f"{given[name]}; correct one of them")
             factor = self._factor(name, unit, kind)
             label = f"{name} [{unit}]"
             v = _numbers(self.path, _cells(body, j, sep), list(self.lines), label, "label")
@@ -177,7 +183,7 @@ class _Table:
         try:
             return unit_factor(unit, kind)
         except ValueError as exc:
-            raise ScenarioError(f"{self.path}: column {cell}: {exc} (a {kind})") from None
+            raise ScenarioError(f"{self.path}: column {cell}: {exc}") from None
 
     def line(self, i: int) -> int:
         return int(self.lines[i])
@@ -243,21 +249,11 @@ def read_vectors(path, *, amplitude: str, phase: str, speed_unit: str | None = N
         Speeds strictly monotonic in the file's order (a run-up rising, a coast-down falling).
     """
     _conventions(amplitude, phase)
-    table = _Table(path, columns, folder, _vector_kind, _EXAMPLE, MAX_POINTS)
+    table = _Table(path, columns, folder, _vector_kind, _EXAMPLE, MAX_POINTS, given={"speed": speed_unit})
     p, notes = table.path, []
     if "speed" not in table.values:
         raise ScenarioError(f"{p}: no speed column; add 'speed [rpm]' (or Hz, rad/s)")
     unit = table.units["speed"]
-    if speed_unit is not None:
-        factor = table._factor("speed", speed_unit, "angular speed")
-        if unit.strip() in ("1", "-", ""):
-            table.values["speed"] = table.values["speed"] * factor
-            unit = speed_unit
-        elif not math.isclose(table._factor("speed", unit, "angular speed"), factor):
-            raise ScenarioError(f"{p}: column 'speed [{unit}]' is in {unit}, speed_unit says {speed_unit}; "
-                                f"correct one of them")
-    elif unit.strip() in ("1", "-", ""):
-        raise ScenarioError(f"{p}: column 'speed [{unit}]': a speed has a unit: write rpm, Hz or rad/s")
     vectors = {}
     for probe in ("x", "y"):
         amp, ph = _probe_column(table, "amplitude", probe), _probe_column(table, "phase", probe)
