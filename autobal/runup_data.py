@@ -1,78 +1,81 @@
-"""A measured run-up or coast-down read into 1x vectors (:class:`OneX`), in SI and the toolkit's conventions.
+"""A measured run-up or coast-down read into 1x vectors (`OneX`), in SI and the toolkit's conventions.
 
-Two kinds of file are read, both CSV texts whose header cells read ``quantity [unit]`` (as the rig files of
-:mod:`autobal.measurements`: ``#`` comment lines, UTF-8 with or without a byte-order mark, ',' or, in a
-spreadsheet export, ';' with decimal commas; ``columns`` names the columns to take by their headers, others
-skipped, e.g. ``{"speed": "Drehzahl (rpm)", "amplitude": "Amplitude (µm)", "phase": "Phase (°)"}``).
+Two kinds of file are read, both CSV texts whose header cells read `quantity [unit]` (as the rig files of
+`autobal.measurements`: `#` comment lines, UTF-8 with or without a byte-order mark, ',' or, in a
+spreadsheet export, ';' with decimal commas; `columns` names the columns to take by their headers, others
+skipped, e.g. `{"speed": "Drehzahl (rpm)", "amplitude": "Amplitude (µm)", "phase": "Phase (°)"}`).
 
-**1x vectors** (:func:`read_vectors`), one row per vector as a vibration analyser exports them, in time order:
+**1x vectors** (`read_vectors`), one row per vector as a vibration analyser exports them, in time order:
 
-==========================  ===========================  ====================================================
-header                      unit                         meaning
-==========================  ===========================  ====================================================
-``speed``                   rpm, r/min, Hz, rad/s        shaft speed (required)
-``time``                    s, ms, min                   time stamp (optional; then it must rise)
-``amplitude``               µm (um), mm, m               1x amplitude of probe x (required; also ``amplitude_x``)
-``phase``                   deg (°), rad                 1x phase of probe x from the key-phasor (required;
-                                                         also ``phase_x``)
-``amplitude_y``, ``phase_y``  as above                   probe y, 90° from x in the direction of rotation
-                                                         (optional, both or neither)
-==========================  ===========================  ====================================================
+| header | unit | meaning |
+|---|---|---|
+| `speed` | rpm, r/min, 1/min, Hz, rad/s | shaft speed (required) |
+| `time` | s, ms | time stamp (optional; it must rise) |
+| `amplitude` (or `amplitude_x`) | µm (um), mm, m | 1x amplitude of probe x (required) |
+| `phase` (or `phase_x`) | deg (°), rad | 1x phase of probe x from the key-phasor (required) |
+| `amplitude_y`, `phase_y` | as above | probe y, 90° from x in the direction of rotation (optional, both or neither) |
 
-The conventions are the caller's (the scene's): ``amplitude`` "0-peak" or "peak-to-peak", ``phase`` "lag" or
-"lead".  A header may state its own with a suffix: ``amplitude_pp`` / ``amplitude_0p`` (``amplitude_x_pp``,
-``amplitude_y_0p``, ...) and ``phase_lag`` / ``phase_lead`` (``phase_y_lag``, ...); a suffix that contradicts
-the caller's convention is refused, never silently converted twice.
+The conventions are the caller's (the scene's): `amplitude` "0-peak" or "peak-to-peak", `phase` "lag" or
+"lead".  A header may state its own with a suffix: `amplitude_pp` / `amplitude_0p` (`amplitude_x_pp`,
+`amplitude_y_0p`, ...) and `phase_lag` / `phase_lead` (`phase_y_lag`, ...); a suffix that contradicts the
+caller's convention is refused, never converted twice.  A speed header without a unit (a column named in
+`columns`) takes `speed_unit`.
 
-**Raw signals** (:func:`read_signals`), one row per sample:
+**Raw signals** (`read_signals`), one row per sample, in a file of at most 20 MB (about 500 000 samples of
+four channels: cut the record to the run-up, or decimate it to some 50 samples a revolution at the top speed):
 
-==================  ================  ====================================================================
-header              unit              meaning
-==================  ================  ====================================================================
-``time``            s, ms             sample time (required, rising)
-``probe_x``         µm (um), mm, m    displacement of probe x (required)
-``probe_y``         µm (um), mm, m    displacement of probe y, 90° from x in the direction of rotation
-``keyphasor``       V, mV or 1        once-per-turn pulse (a voltage or a 0/1 channel)
-``speed``           rpm, Hz, rad/s    shaft speed (a tachometer), used when there is no ``keyphasor``
-==================  ================  ====================================================================
+| header | unit | meaning |
+|---|---|---|
+| `time` | s, ms | sample time (required, rising) |
+| `probe_x` | µm (um), mm, m | displacement of probe x (required) |
+| `probe_y` | µm (um), mm, m | displacement of probe y, 90° from x in the direction of rotation (optional) |
+| `keyphasor` | V, mV or 1 | once-per-turn pulse: a voltage or a 0/1 channel |
+| `speed` | rpm, Hz, rad/s | shaft speed (a tachometer): the angle when there is no `keyphasor`, else a cross-check |
 
-Conventions of the result: ``x(t) = Re(X exp(i phi(t)))`` with ``X`` the complex 0-peak 1x amplitude in m and
-``phi`` the shaft angle since the key-phasor pulse (0 at the pulse), positive in the direction of rotation.
-An analyser's phase lag ``theta`` (the probe's peak comes ``theta`` degrees of rotation after the pulse) is
-``X = A exp(-i theta)``; a phase lead is ``X = A exp(+i theta)``.
+Conventions of the result: `x(t) = Re(X exp(i phi(t)))` with `X` the complex 0-peak 1x amplitude in m and
+`phi` the shaft angle since the key-phasor pulse (0 at the pulse), positive in the direction of rotation.
+An analyser's phase lag `theta` (the probe's peak comes `theta` degrees of rotation after the pulse) is
+`X = A exp(-i theta)`; a phase lead is `X = A exp(+i theta)`.
 
-What the reading does, each step stated in :attr:`OneX.notes`:
+What the reading does, each step stated in `OneX.notes`:
 
 - units from the headers to SI; a peak-to-peak amplitude halved; the phase turned into the convention above;
 - a phase wrapped by the analyser at ±180° or 0-360° is unwrapped (a step of 360° is a wrap; the vector
-  itself does not change); a step that no multiple of 360° explains, of more than :data:`MAX_PHASE_STEP`
+  itself does not change); a step that no multiple of 360° explains, of more than `MAX_PHASE_STEP`
   between neighbouring vectors that stand above the noise, is refused (a key-phasor slip, a sign change, or
   a phase turn the speed steps do not resolve);
-- ``slow_roll=(low, high)`` in rad/s: the mean 1x vector of the vectors in that speed range (the run-out and
+- `slow_roll=(low, high)` in rad/s: the mean 1x vector of the vectors in that speed range (the run-out and
   electrical run-out of the probe track) is subtracted from every vector of its probe;
-- raw signals: order tracking per revolution.  The key-phasor's two levels are found from the channel
-  (the medians either side of its mid-range), the pulses are the edges through the level halfway between them
-  (with hysteresis, a quarter of the step), interpolated between samples; the pulse is the rarer state (a
-  projection gives a rising edge, a notch a falling one).  Between two pulses the shaft angle is interpolated
-  linearly in time, and the revolution's 1x vector is ``X = (1/pi) int_0^2pi x(phi) exp(-i phi) dphi``
-  (trapezoids on the samples, ``x`` interpolated at the pulses), at the speed ``2 pi / T`` of the revolution
-  and the time of its middle.  A revolution more than :data:`LONG_REVOLUTION` times its shorter neighbour is a
-  missed pulse: dropped and noted (more than :data:`MAX_MISSED` of them: refused); one shorter than its
-  neighbours by that factor is a spurious pulse: refused.  Without a key-phasor the speed channel is
-  integrated to the angle, whose zero (the first sample) is arbitrary: the phase is then relative, and an error
-  of the speed channel drifts it.  Revolutions whose speed dithers on a plateau (within
-  :data:`DITHER` of the run's extreme so far) are dropped so that the speed is strictly monotonic.
+- raw signals: order tracking per revolution.  The key-phasor's two levels are found from the channel (the
+  medians either side of its mid-range), the pulses are the edges through the level halfway between them (with
+  hysteresis of a quarter of the step), interpolated between samples: rising edges (a projection), or falling
+  ones when the channel is high for more than 1-`NOTCH` of the time (a notch).  The shaft angle over a revolution
+  is a quadratic in time fitted by least squares to the angles 2 pi k at the `FIT_PULSES` pulses around it: exact
+  for a constant acceleration (linear interpolation between two pulses errs by up to alpha T^2/8) and it averages
+  the timing error of a sampled pulse edge (up to half a sample, which makes 2 pi/T jitter by dt/T, more than a
+  run-up's change of speed from one revolution to the next).  The revolution's 1x vector is the least squares fit
+  of an offset, 1x and 2x to its samples at their angles (the revolution's DFT where the samples are uniform in
+  angle; exact for these harmonics wherever the samples fall; at least `MIN_SAMPLES` samples a revolution), at
+  the fitted speed and the time of the revolution's middle.  A revolution `LONG_REVOLUTION` times the median of
+  its nearest whole neighbours or more missed a pulse: dropped and noted, and the turns it missed counted (more
+  than `MAX_MISSED` of them: refused); one that much shorter is a spurious pulse: refused.  The period may change
+  by up to about 10 % a revolution (2 pi alpha/omega^2 < 0.1) for these tests to hold.  A key-phasor and a speed
+  channel together must agree within 2 %.  Without a key-phasor the speed channel is integrated to the angle,
+  whose zero (the first sample) is arbitrary: the phase is then relative, and an error of the speed channel
+  drifts it. Revolutions whose speed dithers on a plateau (within `DITHER` of the run's extreme so far) are
+  dropped so that the speed is strictly monotonic.
 
-Refused, each with one line naming the file, the line or column and the unit (:class:`ScenarioError`): an
-empty cell or a NaN, a negative amplitude, a speed that is not positive, a repeated speed, speeds out of order
-or a run-up and a coast-down in one file (one file, one direction), time stamps that do not rise, a
-contradictory header, fewer than :data:`MIN_VECTORS` vectors, no key-phasor and no speed channel, a slow-roll
-range that holds no vector.
+Refused, each with one line naming the file, the line or column and the unit (`ScenarioError`): an empty
+cell or a NaN, a negative amplitude, a speed that is not positive, a repeated speed, speeds out of order or a
+run-up and a coast-down in one file (one file, one direction), time stamps that do not rise, a header that
+contradicts the caller's convention or unit, fewer than `MIN_VECTORS` vectors, no key-phasor and no
+speed channel, a constant key-phasor, too few samples a revolution, a slow-roll range that holds no vector.
 
-Not detectable, so not checked: a phase column written in radians but headed ``[deg]`` (values within ±6.3
+Not detectable, so not checked: a phase column written in radians but headed `[deg]` (values within ±6.3
 are possible phases in degrees; a note says so when every phase lies in that band), a probe y mounted against
-the direction of rotation (its vectors come out mirrored), and an amplitude convention mislabelled by the
-analyser itself.
+the direction of rotation (its vectors come out mirrored), an amplitude convention mislabelled by the analyser
+itself, and a key-phasor that misses every other pulse without a speed channel beside it (every revolution
+alike twice as long: the speeds come out halved).
 """
 
 from __future__ import annotations
@@ -99,8 +102,9 @@ LONG_REVOLUTION = 1.5  # a revolution this many times its neighbour missed a pul
 MAX_MISSED = 0.1  # fraction of revolutions with a missed pulse beyond which the key-phasor is refused
 DITHER = 0.01  # relative speed dither on a plateau dropped from tracked revolutions; a larger fall is a reversal
 FIT_PULSES = 8  # key-phasor pulses around a revolution fitted by its shaft angle (seven revolutions)
+NOTCH = 0.35  # a key-phasor high for more than 1 - NOTCH of the time is a notch (its falling edges are the marks)
 MIN_SAMPLES = 8  # samples per revolution: offset, 1x and 2x are fitted (5 unknowns); 3x and above alias
-MAX_SAMPLES = 2_000_000  # rows of a raw-signal file (within autobal.measurements.MAX_DATA_BYTES)
+MAX_SAMPLES = 2_000_000  # rows of a raw-signal file (the 20 MB of autobal.measurements.MAX_DATA_BYTES bind first)
 _ANGLE = {"deg": math.pi / 180, "°": math.pi / 180, "degree": math.pi / 180, "rad": 1.0}
 _VECTOR = re.compile(r"^(amplitude|phase)(?:_(x|y))?(?:_(pp|0p|lag|lead))?$")
 _CONVENTION = {"pp": "peak-to-peak", "0p": "0-peak", "lag": "lag", "lead": "lead"}
@@ -188,6 +192,13 @@ class _Table:
     def line(self, i: int) -> int:
         return int(self.lines[i])
 
+    def rising_time(self, rows: str) -> None:
+        """Refuse a time column that does not rise from row to row (``rows``: what the rows are)."""
+        time = self.values.get("time")
+        if time is not None and (np.diff(time) <= 0).any():
+            i = int(np.argmax(np.diff(time) <= 0))
+            raise ScenarioError(f"{self.path}: line {self.line(i + 1)}, column 'time [{self.units['time']}]': the time "
+                                f"does not rise from line {self.line(i)}; the {rows} are in time order")
 
 
 def _vector_kind(name: str) -> str | None:
@@ -282,7 +293,7 @@ def read_vectors(path, *, amplitude: str, phase: str, speed_unit: str | None = N
     notes.insert(0, f"speed from {unit}; amplitude {amplitude}{halved}; phase {phase} from the key-phasor: "
                     f"X = A exp({'-' if phase == 'lag' else '+'}i phase)")
     speed, time = table.values["speed"], table.values.get("time")
-    _check_order(table, speed, time)
+    _check_order(table, speed)
     return _finish(OneX(speed=speed, x=vectors["x"], y=vectors.get("y"), time=time, path=str(p), notes=tuple(notes)),
                    slow_roll)
 
@@ -315,13 +326,10 @@ def _phase_notes(table: _Table, name: str, theta: np.ndarray, amp: np.ndarray) -
     return notes
 
 
-def _check_order(table: _Table, speed: np.ndarray, time: np.ndarray | None) -> None:
+def _check_order(table: _Table, speed: np.ndarray) -> None:
     """Refuse time stamps that do not rise, a speed that is not positive, repeats, reverses or is out of order."""
     p = table.path
-    if time is not None and (np.diff(time) <= 0).any():
-        i = int(np.argmax(np.diff(time) <= 0))
-        raise ScenarioError(f"{p}: line {table.line(i + 1)}, column 'time [{table.units['time']}]': the time does not "
-                            f"rise from line {table.line(i)}; the rows are in time order")
+    table.rising_time("rows")
     if (speed <= 0).any():
         i = int(np.argmax(speed <= 0))
         raise ScenarioError(f"{p}: line {table.line(i)}, column 'speed [{table.units['speed']}]': a speed must be "
@@ -332,15 +340,15 @@ def _check_order(table: _Table, speed: np.ndarray, time: np.ndarray | None) -> N
         raise ScenarioError(f"{p}: line {table.line(i + 1)}, column 'speed [{table.units['speed']}]': the speed "
                             f"{_rpm(speed[i])} repeats line {table.line(i)}; one vector per speed (average the "
                             f"repeats, or drop them)")
-    turns = np.flatnonzero(np.sign(d[1:]) != np.sign(d[:-1])) + 1
-    if turns.size == 1:
-        i = int(turns[0])
+    changes = np.flatnonzero(np.sign(d[1:]) != np.sign(d[:-1])) + 1
+    if changes.size == 1:
+        i = int(changes[0])
         rise = "rises" if d[0] > 0 else "falls"
         raise ScenarioError(f"{p}: line {table.line(i)}, column 'speed [{table.units['speed']}]': the speed {rise} to "
                             f"{_rpm(speed[i])} and then turns: a run-up and a coast-down in one file; give each a file "
                             f"of its own")
-    if turns.size:
-        i = int(turns[0])
+    if changes.size:
+        i = int(changes[0])
         raise ScenarioError(f"{p}: line {table.line(i + 1)}, column 'speed [{table.units['speed']}]': speeds out of "
                             f"order ({_rpm(speed[i + 1])} after {_rpm(speed[i])}); the rows of a run-up are in time "
                             f"order, the speed rising (of a coast-down, falling)")
@@ -391,8 +399,8 @@ def read_signals(path, *, slow_roll=None, columns: dict | None = None, folder=No
     Returns
     -------
     OneX
-        One vector per revolution at its speed ``2 pi / T`` and the time of its middle, speeds strictly
-        monotonic.
+        One vector per whole revolution at the speed of the fitted shaft angle and the time of the
+        revolution's middle, speeds strictly monotonic.
     """
     table = _Table(path, columns, folder, _signal_kind, _SIGNAL_EXAMPLE, MAX_SAMPLES)
     p, v, notes = table.path, table.values, []
@@ -400,10 +408,7 @@ def read_signals(path, *, slow_roll=None, columns: dict | None = None, folder=No
         if need not in v:
             raise ScenarioError(f"{p}: no {need} column; add '{need} [{'s' if need == 'time' else 'um'}]'")
     t = v["time"]
-    if (np.diff(t) <= 0).any():
-        i = int(np.argmax(np.diff(t) <= 0))
-        raise ScenarioError(f"{p}: line {table.line(i + 1)}, column 'time [{table.units['time']}]': the time does not "
-                            f"rise from line {table.line(i)}; the samples are in time order")
+    table.rising_time("samples")
     if "keyphasor" in v:
         pulses, how = _pulses(table)
         keep, turns = _whole_revolutions(table, pulses)
@@ -448,7 +453,7 @@ def read_signals(path, *, slow_roll=None, columns: dict | None = None, folder=No
 
 def _angle_fit(pulses: np.ndarray, angle: np.ndarray) -> np.ndarray:
     """The shaft angle about the middle ``tm`` of each revolution, ``a + b (t - tm) + c (t - tm)^2``, fitted by
-    least squares to the angles at the :data:`FIT_PULSES` pulses around it (``[a, b, c]`` per revolution, ``b``
+    least squares to the angles at the `FIT_PULSES` pulses around it (``[a, b, c]`` per revolution, ``b``
     its speed): exact for a constant acceleration, and it averages the timing error of a sampled pulse edge
     (up to half a sample) that makes ``2 pi / T`` jitter by ``dt / T``."""
     n, m = len(pulses) - 1, min(FIT_PULSES, len(pulses))
@@ -472,7 +477,8 @@ def _pulses(table: _Table) -> tuple[np.ndarray, str]:
         raise ScenarioError(f"{p}: column 'keyphasor [{table.units['keyphasor']}]' is constant ({lo:g}): no pulses")
     low, high = np.median(k[k <= 0.5 * (lo + hi)]), np.median(k[k > 0.5 * (lo + hi)])
     mid = 0.5 * (low + high)
-    notch = (k > mid).mean() > 0.5  # the pulse is the rarer state: a notch is low for a short part of a turn
+    duty = (k > mid).mean()
+    notch = duty > 1 - NOTCH  # the pulse is the rarer state: a notch is low for a short part of a turn
     w, level = (-k, -mid) if notch else (k, mid)
     above = w > level
     cand = np.flatnonzero(~above[:-1] & above[1:]) + 1  # first sample past the level
@@ -484,6 +490,8 @@ def _pulses(table: _Table) -> tuple[np.ndarray, str]:
     t0, t1 = t[fire - 1], t[fire]
     pulses = t0 + (level - w[fire - 1]) / (w[fire] - w[fire - 1]) * (t1 - t0)
     edge = "falling edges (a notch)" if notch else "rising edges"
+    if NOTCH <= duty <= 1 - NOTCH:
+        edge += f" (the channel is high {duty:.0%} of the time: neither state is a short pulse, its rising edge taken)"
     unit = table.units["keyphasor"]
     return pulses, (f"key-phasor: {len(pulses)} pulses, {edge} through {mid:.3g} {unit} (halfway between its levels "
                     f"{low:.3g} and {high:.3g} {unit})")
@@ -503,7 +511,7 @@ def _near(good: np.ndarray, k: int) -> np.ndarray:
 
 def _whole_revolutions(table: _Table, pulses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Which revolutions between key-phasor pulses are whole (a missed pulse makes one
-    :data:`LONG_REVOLUTION` times the median of its nearest whole neighbours or more), and the turns between
+    `LONG_REVOLUTION` times the median of its nearest whole neighbours or more), and the turns between
     each two pulses (that ratio rounded where a pulse was missed, else 1); a spurious pulse (a revolution that
     much shorter) and too many missed pulses are refused."""
     p, period = table.path, np.diff(pulses)
@@ -575,7 +583,7 @@ def _agree(table: _Table, tracked: np.ndarray, channel: np.ndarray) -> str:
 
 def _monotonic(table: _Table, speed: np.ndarray, time: np.ndarray) -> np.ndarray:
     """The revolutions that extend the run strictly (a run-up rising, a coast-down falling); a fall from the
-    run's extreme of more than :data:`DITHER` is a reversal, refused."""
+    run's extreme of more than `DITHER` is a reversal, refused."""
     up = speed[-1] > speed[0]
     extreme = (np.maximum if up else np.minimum).accumulate(speed)
     before = np.concatenate(([-np.inf if up else np.inf], extreme[:-1]))
