@@ -53,17 +53,19 @@ What the reading does, each step stated in `OneX.notes`:
   is a quadratic in time fitted by least squares to the angles 2 pi k at the `FIT_PULSES` pulses around it: exact
   for a constant acceleration (linear interpolation between two pulses errs by up to alpha T^2/8) and it averages
   the timing error of a sampled pulse edge (up to half a sample, which makes 2 pi/T jitter by dt/T, more than a
-  run-up's change of speed from one revolution to the next).  The revolution's 1x vector is the least squares fit
-  of an offset, 1x and 2x to its samples at their angles (the revolution's DFT where the samples are uniform in
-  angle; exact for these harmonics wherever the samples fall; at least `MIN_SAMPLES` samples a revolution), at
-  the fitted speed and the time of the revolution's middle.  A revolution `LONG_REVOLUTION` times the median of
-  its nearest whole neighbours or more missed a pulse: dropped and noted, and the turns it missed counted (more
-  than `MAX_MISSED` of them: refused); one that much shorter is a spurious pulse: refused.  The period may change
-  by up to about 10 % a revolution (2 pi alpha/omega^2 < 0.1) for these tests to hold.  A key-phasor and a speed
-  channel together must agree within 2 %.  Without a key-phasor the speed channel is integrated to the angle,
-  whose zero (the first sample) is arbitrary: the phase is then relative, and an error of the speed channel
-  drifts it. Revolutions whose speed dithers on a plateau (within `DITHER` of the run's extreme so far) are
-  dropped so that the speed is strictly monotonic.
+  run-up's change of speed from one revolution to the next); a sudden change of the acceleration by d_alpha (a
+  drive switched from a hold to a ramp) is smoothed over those pulses, the speed off by up to d_alpha T within
+  `FIT_PULSES`/2 revolutions of it.  The revolution's 1x vector is the least squares fit of an offset, 1x and 2x
+  to its samples at their angles (the revolution's DFT where the samples are uniform in angle; exact for these
+  harmonics wherever the samples fall; at least `MIN_SAMPLES` samples a revolution), at the fitted speed and the
+  time of the revolution's middle.  A revolution `LONG_REVOLUTION` times the median of its nearest whole
+  neighbours or more missed a pulse: dropped and noted, and the turns it missed counted (more than `MAX_MISSED`
+  of them: refused); one that much shorter is a spurious pulse: refused.  The period may change by up to about 10
+  % a revolution (2 pi alpha/omega^2 < 0.1) for these tests to hold.  A key-phasor and a speed channel together
+  must agree within 2 %.  Without a key-phasor the speed channel is integrated to the angle, whose zero (the
+  first sample) is arbitrary: the phase is then relative, and an error of the speed channel drifts it.
+  Revolutions whose speed dithers on a plateau (within `DITHER` of the run's extreme so far) are dropped so that
+  the speed is strictly monotonic.
 
 Refused, each with one line naming the file, the line or column and the unit (`ScenarioError`): an empty
 cell or a NaN, a negative amplitude, a speed that is not positive, a repeated speed, speeds out of order or a
