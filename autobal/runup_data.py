@@ -89,7 +89,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from autobal.errors import ScenarioError
-from autobal.measurements import MAX_POINTS, _cells, _numbers, _rows, _select, resolve
+from autobal.measurements import MAX_POINTS, read_table
 from autobal.units import unit_factor
 
 MIN_VECTORS = 5  # 10 real values for the at most 5 parameters of a run-up fit (critical, damping, unbalance x, y,
@@ -140,27 +140,15 @@ class _Table:
     """The columns of a measured CSV read to SI by quantity name; ``lines`` the file's line of each row."""
 
     def __init__(self, path, columns, folder, kinds, example, max_rows, given=None):
-        self.path = resolve(path, folder)
-        _, rows, sep = _rows(self.path)
-        if not rows:
-            raise ScenarioError(f"{self.path}: no header row (expected e.g. '{example}')")
-        (head_line, header), body = rows[0], rows[1:]
-        selected = _select(self.path, head_line, header, columns, where="columns", example=example)
-        if not body:
-            raise ScenarioError(f"{self.path}: no data rows")
-        if len(body) > max_rows:
-            raise ScenarioError(f"{self.path}: {len(body)} data rows; a file of this kind holds at most {max_rows}")
-        for lineno, row in body:
-            if len(row) != len(header):
-                raise ScenarioError(f"{self.path}: line {lineno}: {len(row)} values, the header has {len(header)}")
-        self.lines = np.array([lineno for lineno, _ in body])
+        table = read_table(path, columns, folder, where="columns", example=example)
+        self.path = table.path
         self.values, self.units = {}, {}
-        for j, name, unit in selected:
+        for j, name, unit in table.selected:
             kind = kinds(name)
             if kind is None:
                 raise ScenarioError(f"{self.path}: column {j + 1}: unknown quantity {name!r}; expected e.g. "
                                     f"'{example}' (the formats: autobal.runup_data)")
-            if name in self.values:
+            if name in self.units:
                 raise ScenarioError(f"{self.path}: column {name!r} appears twice")
             if (given or {}).get(name) is not None:  # the unit given apart: for a header without one
                 if unit.strip() in ("1", "-", ""):
@@ -168,10 +156,12 @@ class _Table:
                 elif not math.isclose(self._factor(name, unit, kind), self._factor(name, given[name], kind)):
                     raise ScenarioError(f"{self.path}: column '{name} [{unit}]' is in {unit}, {name}_unit says "
                                         f"{given[name]}; correct one of them")
-            factor = self._factor(name, unit, kind)
-            label = f"{name} [{unit}]"
-            v = _numbers(self.path, _cells(body, j, sep), list(self.lines), label, "label")
-            self.values[name], self.units[name] = v * factor, unit
+            self.units[name] = unit
+            self.values[name] = self._factor(name, unit, kind)  # the SI factor, until the rows are read
+        table.check_rows(max_rows)
+        self.lines = np.array(table.lines)
+        for j, name, _ in table.selected:
+            self.values[name] = table.numbers(j, f"{name} [{self.units[name]}]", "label") * self.values[name]
 
     def _factor(self, name: str, unit: str, kind: str) -> float:
         cell = f"'{name} [{unit}]'"
