@@ -203,6 +203,19 @@ def test_two_marks_on_the_shaft_against_the_speed_channel(tmp_path):
             "the key-phasor gives 2 times the speed of column 'speed [rpm]'")
 
 
+def test_a_key_phasor_high_half_a_turn_is_read_at_its_rising_edge_and_the_notes_say_so(tmp_path):
+    one = read_signals(short(tmp_path / "s.csv", width=math.pi))
+    assert "high 50% of the time: neither state is a short pulse, its rising edge taken" in one.notes[0]
+
+
+def test_a_missing_file_and_a_text_that_is_no_table(tmp_path):
+    refused(vectors(tmp_path / "none.csv"), "none.csv: no such data file")
+    (tmp_path / "notes.csv").write_text("run-up of 3 May\nall fine\n")
+    refused(vectors(tmp_path / "notes.csv"), "not a data table", "e.g. 'speed [rpm],amplitude [um],phase [deg]'")
+    (tmp_path / "head.csv").write_text(HEAD + "\n")
+    refused(vectors(tmp_path / "head.csv"), "head.csv: no data rows")
+
+
 def test_a_constant_key_phasor(tmp_path):
     f = tmp_path / "s.csv"
     f.write_text("time [s],probe_x [um],keyphasor [V]\n" + "\n".join(f"{k / 1000},{math.sin(k / 10)},0"

@@ -43,9 +43,9 @@ def ramp(t):
 
 
 def write_signals(path, *, t0=0.0, t_end=T_END, fs=FS, noise=NOISE, keyphasor="rising", speed=False, runout=0j,
-                  missing=(), extra=(), seed=1, profile=ramp):
+                  missing=(), extra=(), seed=1, profile=ramp, width=0.2):
     """A raw-signal CSV of the synthetic run-up: probes x and y (y 90° later in the rotation), a 0/5 V key-phasor
-    high for 0.2 rad after each turn of the shaft angle W0 t + ALPHA t^2 / 2 ("rising"), or low ("notch"), or
+    high for ``width`` rad after each turn of the shaft angle W0 t + ALPHA t^2 / 2 ("rising"), or low ("notch"), or
     none; the speed in rpm when ``speed``; ``runout`` a 1x vector fixed to the shaft added to probe x; the pulses
     of the turns in ``missing`` left out, one added at the half turns in ``extra``; ``profile(t)`` the shaft angle
     and speed (default: the ramp), the 1x vector the steady response at that speed."""
@@ -60,7 +60,7 @@ def write_signals(path, *, t0=0.0, t_end=T_END, fs=FS, noise=NOISE, keyphasor="r
     if keyphasor:
         turn = np.floor(phi / (2 * math.pi))
         into = phi - 2 * math.pi * turn
-        high = (into < 0.2) & ~np.isin(turn, missing) | (np.abs(into - math.pi) < 0.1) & np.isin(turn, extra)
+        high = (into < width) & ~np.isin(turn, missing) | (np.abs(into - math.pi) < 0.1) & np.isin(turn, extra)
         cols["keyphasor [V]"] = 5.0 * (high if keyphasor == "rising" else ~high)
     if speed:
         cols["speed [rpm]"] = omega / RPM
@@ -110,7 +110,7 @@ def signals(tmp_path_factory):
 
 
 def test_plain_vectors_are_the_jeffcott_response_in_si():
-    one = read_vectors(DATA / "vectors_plain.csv", amplitude="peak-to-peak", phase="lag")
+    one = read_vectors("vectors_plain.csv", amplitude="peak-to-peak", phase="lag", folder=DATA)
     assert isinstance(one, OneX) and one.y is None and one.path.endswith("vectors_plain.csv")
     assert_allclose(one.speed, SPEEDS, rtol=1e-12)
     assert_allclose(one.time, 0.5 * np.arange(len(SPEEDS)))
