@@ -32,9 +32,9 @@ def jeffcott(speed, critical=3000 * RPM, zeta=0.05, e=5e-6, beta=math.pi / 6):
     return e * r**2 / (1 - r**2 + 2j * zeta * r) * np.exp(1j * beta)
 
 
-def vector(t):
-    """The known 1x vector of the synthetic run-up at time t."""
-    return jeffcott(W0 + ALPHA * np.asarray(t), CRIT, ZETA, ECC)
+def vector(t, profile=None):
+    """The known 1x vector of the synthetic run-up (or of ``profile``) at time t."""
+    return jeffcott((profile or ramp)(np.asarray(t))[1], CRIT, ZETA, ECC)
 
 
 def ramp(t):
@@ -81,7 +81,7 @@ def lebesgue():
     return np.abs(value).sum(axis=1).max(), np.abs(slope).sum(axis=1).max()
 
 
-def tolerance(one: OneX, *, edge: bool = True):
+def tolerance(one: OneX, *, edge: bool = True, profile=None):
     """Bounds on |X_tracked - X(t)| and on |omega_tracked - omega(t)| per vector, derived term by term:
 
     - noise: the 1x least squares over the N = T fs samples of a revolution has a complex error of std
@@ -89,7 +89,7 @@ def tolerance(one: OneX, *, edge: bool = True):
       exp(-12.5) = 4e-6 a vector;
     - the key-phasor: a 0/5 V step sampled every dt puts each pulse at the sample's midpoint, off by at most
       dt / 2; through the fit that is an angle error <= omega dt/2 L0 and a speed error <= omega dt/2 L1 / T,
-      and the vector's time stamp (mid-revolution) off by dt/2 makes ALPHA dt/2 of speed (x 1.5 for the fit's
+      and the vector's time stamp (mid-revolution) off by dt/2 makes |alpha| dt/2 of speed (x 1.5 for the fit's
       uneven pulse spacing: the period changes by up to 6 % a revolution here);
     - the vector changing over the revolution: a linear change Xdot adds i conj(Xdot) / (2 omega) to the 1x
       least squares (the projection of tau Re(Xdot exp(i phi)) on exp(i phi) over a revolution).
@@ -97,10 +97,11 @@ def tolerance(one: OneX, *, edge: bool = True):
     dt, w = 1 / FS, one.speed
     period = 2 * math.pi / w
     l0, l1 = lebesgue()
-    xdot = (vector(one.time + 1e-4) - vector(one.time - 1e-4)) / 2e-4
+    xdot = (vector(one.time + 1e-4, profile) - vector(one.time - 1e-4, profile)) / 2e-4
+    alpha = np.abs((profile or ramp)(one.time + 1e-4)[1] - (profile or ramp)(one.time - 1e-4)[1]) / 2e-4
     jitter = 1.5 * w * dt / 2 * l0 if edge else 0.0
-    vec = np.abs(vector(one.time)) * jitter + np.abs(xdot) / (2 * w) + 5 * NOISE * np.sqrt(2 / (period * FS))
-    spd = 1.5 * (w * dt / 2 * l1 / period + ALPHA * dt / 2) if edge else 1e-6 * w
+    vec = np.abs(vector(one.time, profile)) * jitter + np.abs(xdot) / (2 * w) + 5 * NOISE * np.sqrt(2 / (period * FS))
+    spd = 1.5 * (w * dt / 2 * l1 / period + alpha * dt / 2) if edge else 1e-6 * w
     return vec, spd
 
 
@@ -256,3 +257,15 @@ def test_a_slow_roll_hold_before_the_run_up_keeps_the_speeds_strictly_rising(tmp
     assert (error[~near] <= jitter[~near]).all()
     assert (error[near] <= jitter[near] + 30.0 * period[near]).all() and error[near].max() > 1e-2 * 60
     assert (one.time < 2.0).sum() < 19 and (one.time > 2.0).sum() == 76  # 480 rad of ramp
+
+
+def test_a_coast_down_from_raw_signals(tmp_path):
+    """From 350 to 50 rad/s at -25 rad/s^2: the speeds fall strictly, the vectors within the derived bound."""
+    def down(t):
+        return 350.0 * t - 12.5 * t**2, 350.0 - 25.0 * t
+
+    one = read_signals(write_signals(tmp_path / "down.csv", profile=down))
+    tol, speed_tol = tolerance(one, profile=down)
+    assert (np.diff(one.speed) < 0).all() and len(one.speed) > 370
+    assert (np.abs(one.speed - down(one.time)[1]) <= speed_tol).all()
+    assert (np.abs(one.x - vector(one.time, down)) <= tol).all()
