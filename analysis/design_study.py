@@ -17,7 +17,8 @@ import numpy as np
 import scipy.linalg
 from matplotlib.ticker import NullFormatter
 
-from autobal.analysis.design import IPOPT_OPTIONS, UNITS, DesignProblem, Evaluation, Spec, apply, variable_key
+from autobal.analysis import solver_options
+from autobal.analysis.design import UNITS, DesignProblem, Evaluation, Spec, apply, variable_key
 from autobal.analysis.frequency import MODEL_LABELS
 from autobal.analysis.linearize import Setup, finite_difference, jacobians, operator
 from autobal.analysis.quantities import Declarations, Quantity, is_number, significant
@@ -337,8 +338,8 @@ def accuracy(problem: DesignProblem, out: dict, opt: Evaluation, best: float, sa
     return {
         "abscissa": per,
         "constraints": {"max_scaled_violation": viol_g, "max_bound_violation": viol_x,
-                        "ipopt_tol": IPOPT_OPTIONS["tol"],
-                        "ipopt_constr_viol_tol": IPOPT_OPTIONS["constr_viol_tol"]},
+                        "ipopt_tol": solver_options.defaults["design.tol"],
+                        "ipopt_constr_viol_tol": solver_options.defaults["design.constr_viol_tol"]},
         "objective": {"nlp": f_nlp, "statics_path": opt.objective,
                       "relative_difference": float(abs(f_nlp - opt.objective) / abs(opt.objective))},
         "search": {"samples": samples, "variables": d,

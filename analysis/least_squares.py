@@ -24,7 +24,7 @@ import casadi as ca
 import numpy as np
 from scipy import stats
 
-from autobal.analysis import ipopt
+from autobal.analysis import ipopt, solver_options
 
 
 def uncertainty(r, J, estimate, confidence: float = 0.95) -> dict:
@@ -81,10 +81,10 @@ class LeastSquares:
     states].  ``hessian``: "gauss-newton" (lam_f J'J through CasADi's ``hess_lag``) or "exact".
     Built once, called many times (data and fixed values are the NLP parameters ``p``)."""
 
-    def __init__(self, name: str, x, p, r, g, n_theta: int, hessian: str = "gauss-newton", max_iter: int = 300,
+    def __init__(self, name: str, x, p, r, g, n_theta: int, hessian: str = "gauss-newton", max_iter: int | None = None,
                  tol: float | None = None):
         f = 0.5 * ca.sumsqr(r)
-        opts = {"max_iter": max_iter} | ({"tol": tol, "constr_viol_tol": tol, "compl_inf_tol": tol} if tol else {})
+        opts = solver_options.get("fit") | solver_options.ipopt_options(max_iter, tol)  # None: the "fit" group's
         if hessian == "gauss-newton":
             J = ca.jacobian(r, x)
             sym = type(x)  # SX or MX, as the model is built

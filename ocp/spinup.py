@@ -21,7 +21,6 @@ from autobal.ocp.simulation import (
 )
 from autobal.ocp.solve import (
     INFEASIBLE,
-    IPOPT_OPTIONS,
     Optimum,
     Solver,
     SpinupSolution,
@@ -35,6 +34,6 @@ from autobal.ocp.transcription import DirectCollocation, Mesh, MultipleShooting,
 
 __all__ = ["OBJECTIVES", "PathConstraint", "SpinupOcp", "grid_search", "simulate_steps", "three_phase",
            "RESIM_POINTS", "RESIM_TOL", "Trajectory", "baselines", "initial_guess", "ramp_profile", "resimulate",
-           "runs", "simulate_profile", "INFEASIBLE", "IPOPT_OPTIONS", "Optimum", "Solver", "SpinupSolution",
+           "runs", "simulate_profile", "INFEASIBLE", "Optimum", "Solver", "SpinupSolution",
            "infeasibility_error", "ipopt_options", "optimize", "resimulated_scores", "starts",
            "DirectCollocation", "Mesh", "MultipleShooting", "Nlp", "mesh", "path_fractions", "transcribe"]
