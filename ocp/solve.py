@@ -342,7 +342,7 @@ def rank_coarse(ocp: SpinupOcp, found: list, n: int) -> tuple[int, dict[int, flo
     For the peak deflection the fixed-step exponential integrator (:func:`autobal.ocp.search.profile_peak`,
     step FAST_STEP: the peak within 1e-4 of CVODES) ranks them; those within RANK_TIE of its best, and the
     optima of every other objective, are re-simulated by CVODES (rtol 1e-10) and the smallest wins (ties:
-    the earlier start).  Only the winner is refined and re-simulated at RESIM_TOL."""
+    the earlier start).  Only the winner is refined and re-simulated at the resimulation.tol solver option."""
     close = list(range(len(found)))
     if ocp.objective == "peak_deflection" and horizon_steps(ocp) <= SEARCH_STEPS:
         rotor = FixedFrameModes.of(ocp)

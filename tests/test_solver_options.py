@@ -186,3 +186,22 @@ def test_the_api_page_holds_the_table_of_defaults():
     assert so.markdown_table() in (ROOT / "docs" / "api.md").read_text()
     rows = so.markdown_table().splitlines()
     assert len([r for r in rows if r.startswith("| `")]) == len(so.DEFAULTS)
+
+
+def test_the_spinup_resimulation_reads_its_group():
+    from autobal.analyses.spinup import ocp as spinup_ocp
+    from autobal.ocp.simulation import ramp_profile, resimulate
+
+    scene = autobal.load("spinup_jeffcott_deadline_5s")
+    ocp = spinup_ocp(scene, scene.analyses.spinup)
+    u, h = ramp_profile(ocp, 20, ocp.alpha_max), np.full(20, ocp.tau_h / 20)
+    shipped = resimulate(ocp, u, h, "ramp")
+    assert len(shipped.t) == 20 * 24 + 1  # resimulation.points samples per interval and the start
+    explicit = resimulate(ocp, u, h, "ramp", points=24, tol=1e-10)
+    assert shipped.peak_delta == explicit.peak_delta  # the documented defaults, bit for bit
+    with autobal.using_solver_defaults("resimulation", points=4, tol=1e-6):
+        coarse = resimulate(ocp, u, h, "ramp")
+    assert len(coarse.t) == 20 * 4 + 1
+    # cross-check: the loose, sparse re-simulation finds the same peak within its tolerance and sampling
+    assert coarse.peak_delta != shipped.peak_delta
+    np.testing.assert_allclose(coarse.peak_delta, shipped.peak_delta, rtol=2e-2)
