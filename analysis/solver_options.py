@@ -203,8 +203,11 @@ def rootfinder() -> dict:
 
 def markdown_table() -> str:
     """The documented defaults as a Markdown table (docs/api.md holds it; a test checks it is this)."""
+    def cell(text: str) -> str:
+        return text.replace("|", "\\|")
+
     rows = ["| option | default | what |", "|---|---|---|"]
     for g, (what, opts) in GROUPS.items():
-        rows.append(f"| **`{g}`** | | {what} |")
-        rows += [f"| `{g}.{k}` | `{v!r}` | {why} |" for k, (v, why) in opts.items()]
+        rows.append(f"| **`{g}`** | | {cell(what)} |")
+        rows += [f"| `{g}.{k}` | `{v!r}` | {cell(why)} |" for k, (v, why) in opts.items()]
     return "\n".join(rows)
