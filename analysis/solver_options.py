@@ -79,6 +79,11 @@ GROUPS = {
     "fit": ("IPOPT of the least-squares fits (estimation, Gauss-Newton)", {
         "max_iter": (300, "iteration limit (a scene's fit.max_iterations wins)"),
     }),
+    "gauss_newton": ("the batched projected Gauss-Newton of many small fits (the work-precision study's disc fits)", {
+        "block": (8, "Gauss-Newton steps unrolled into one Function"),
+        "tol": (1e-10, "a problem has converged when its last step is below this (scaled variables)"),
+        "max_blocks": (8, "blocks at most before the unconverged problems are left to IPOPT"),
+    }),
     "spinup": ("IPOPT of the spin-up OCPs (collocation, shooting, robust, time-optimal)", {
         "tol": (1e-8, "convergence tolerance (a scene's tolerance wins)"),
         "constr_viol_tol": (1e-8, "constraint violation accepted"),

@@ -205,3 +205,19 @@ def test_the_spinup_resimulation_reads_its_group():
     # cross-check: the loose, sparse re-simulation finds the same peak within its tolerance and sampling
     assert coarse.peak_delta != shipped.peak_delta
     np.testing.assert_allclose(coarse.peak_delta, shipped.peak_delta, rtol=2e-2)
+
+
+def test_the_batched_gauss_newton_reads_its_group():
+    from autobal.analysis.least_squares import GaussNewtonBatch
+
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 2)
+    residual = ca.Function("r", [x, p], [ca.vertcat(ca.exp(x[0]) - p[0], x[1] ** 3 - p[1])])
+    data = np.array([[2.0, 3.0, 5.0], [1.0, 8.0, 27.0]])  # roots (log 2, 1), (log 3, 2), (log 5, 3)
+    start, box = [np.full(2, 9.0)], [np.full(2, -10.0), np.full(2, 10.0)]
+    done = GaussNewtonBatch(residual).solve(*start, data, *box)
+    assert done["converged"].all() and 1 < done["blocks"] <= so.DEFAULTS["gauss_newton.max_blocks"]
+    np.testing.assert_allclose(done["x"], [np.log(data[0]), np.cbrt(data[1])], rtol=1e-12)  # hand calculation
+    with autobal.using_solver_defaults("gauss_newton", block=1, max_blocks=2):
+        short = GaussNewtonBatch(residual).solve(*start, data, *box)
+    assert short["blocks"] == 2 and not short["converged"].any()
+    assert GaussNewtonBatch(residual, max_blocks=1).solve(*start, data, *box)["blocks"] == 1
