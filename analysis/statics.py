@@ -498,7 +498,8 @@ class StaticsSolver:
         res, point = self._solved(psi1, dpsi, ipopt.solve(self._cold, **args, x0=self.guess(psi1, dpsi)))
         if self._stalled_at_root(point):
             return point
-        if not res["success"] and start is None and psi1 > (c := solver_options.get("continuation"))["start"]:
+        c = solver_options.get("continuation")
+        if not res["success"] and start is None and psi1 > c["start"]:
             # homotopy in the discharge ratio from a low, regulated pressure, warm-started along the path
             try:
                 return self.sweep(np.linspace(c["start"], psi1, c["steps"]), dpsi)[-1]
