@@ -38,7 +38,7 @@ import casadi as ca
 import numpy as np
 import scipy.linalg
 
-from autobal.analysis import ipopt
+from autobal.analysis import ipopt, solver_options
 from autobal.analysis.linearize import exact, jacobians
 from autobal.analysis.statics import StaticsSolver
 from autobal.errors import ScenarioError, SolveError
@@ -88,15 +88,8 @@ DESIGN_SCALES = ("g1", "Q_scale", "z_B", "x_B", "s_e")
 OMEGA_REF = 1000.0  # rad/s, time scale of the characteristic polynomial
 ACTIVE_TOL = 1e-6  # a constraint within this (scaled) distance of its bound ...
 MULTIPLIER_TOL = 1e-3  # ... and with a multiplier above this (relative to the objective, O(1)) is active
-# mu_strategy adaptive: the dynamic data the objective does not see (volumes, damping, spring) make the
-# optimum a manifold and the reduced Hessian singular; IPOPT's monotone barrier decrease then stalls near
-# mu ~ 1e-6 and falls into restoration (the pump with the outer-seal clearance or the supply-throttle
-# diameter as variables, 500 iterations); the adaptive rule converges in tens of iterations
-IPOPT_OPTIONS = {"mu_strategy": "adaptive", "tol": 1e-8, "constr_viol_tol": 1e-10, "compl_inf_tol": 1e-8,
-                 "acceptable_tol": 1e-6, "acceptable_iter": 5, "max_iter": 500}
-# ... and where the adaptive rule fails (the pump designed for the chain model, whose stability
-# constraints are active), the monotone one converges: the solve tries it second
-FALLBACK_OPTIONS = {"mu_strategy": "monotone", "max_iter": 1000}
+# the design's IPOPT options (the adaptive barrier, and the monotone one second where it fails): the groups
+# "design" and "design_fallback" of analysis/solver_options.py, with the measurements that chose them
 
 
 @dataclass(frozen=True)
@@ -418,7 +411,7 @@ class DesignProblem:
         self._x, self._f, self._g = x, f, g_all / s
         self.q_e = ca.Function("q_e", [x], [q_e * self.dev0.scales["Q_scale"]])
         self.objective_fn = ca.Function("objective", [x], [f])
-        self.solver = ipopt.nlpsol("design", x, ca.SX.sym("none", 0), f, self._g, warm=False, **IPOPT_OPTIONS)
+        self.solver = ipopt.nlpsol("design", x, ca.SX.sym("none", 0), f, self._g, **solver_options.get("design"))
         self._fallback = None
 
     def groups(self, si: dict) -> dict:
@@ -530,10 +523,10 @@ class DesignProblem:
         return np.concatenate([ylo, np.tile(lb, m)]), np.concatenate([yhi, np.tile(ub, m)])
 
     def fallback_solver(self):
-        """The same NLP with IPOPT's monotone barrier (FALLBACK_OPTIONS), built on first use."""
+        """The same NLP with IPOPT's monotone barrier ("design_fallback" options), built on first use."""
         if self._fallback is None:
             self._fallback = ipopt.nlpsol("design_monotone", self._x, ca.SX.sym("none", 0), self._f, self._g,
-                                          warm=False, **(IPOPT_OPTIONS | FALLBACK_OPTIONS))
+                                          **(solver_options.get("design") | solver_options.get("design_fallback")))
         return self._fallback
 
     def solve(self, start: Evaluation | None = None) -> dict:

@@ -17,7 +17,8 @@ import numpy as np
 import scipy.linalg
 from matplotlib.ticker import NullFormatter
 
-from autobal.analysis.design import IPOPT_OPTIONS, UNITS, DesignProblem, Evaluation, Spec, apply, variable_key
+from autobal.analysis import solver_options
+from autobal.analysis.design import UNITS, DesignProblem, Evaluation, Spec, apply, variable_key
 from autobal.analysis.frequency import MODEL_LABELS
 from autobal.analysis.linearize import Setup, finite_difference, jacobians, operator
 from autobal.analysis.quantities import Declarations, Quantity, is_number, significant
@@ -31,8 +32,6 @@ ACTIVE_MARGIN = 1e-6  # a decay-rate constraint is active where -max Re lambda <
 LOCAL_RADIUS = 0.005  # half-width of the local search box about the optimum, fraction of each variable's range
 
 
-#: display units of the design variables that are not dynamic parameters (those: stability.PARAMETERS), by SI unit
-SHOWN = {"m": "mm", "m^2": "cm²", "Pa": "MPa"}
 SUCCESS = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
 
@@ -48,7 +47,8 @@ def quantity(key: str, value: float) -> str:
 
 def variable(path: str) -> Quantity | None:
     """The declaration of the design variable at a scene path (None: not a design variable): a dynamic parameter's
-    (stability.PARAMETERS), else its SI unit (analysis/design.py UNITS) shown in mm, cm², MPa."""
+    (stability.PARAMETERS), else its SI unit (analysis/design.py UNITS) shown in the default display unit of its kind
+    (mm, MPa: analysis/kinds.py), an area in cm²."""
     key = variable_key(path)
     if key is None:
         return None
@@ -56,7 +56,7 @@ def variable(path: str) -> Quantity | None:
     if path.startswith("device.dynamics.") and name in PARAMETERS:
         return dataclasses.replace(PARAMETERS[name], key=path)
     unit = si_unit(key) or "1"
-    return Quantity(path, unit, key, f"design variable {path.removeprefix('device.')}", SHOWN.get(unit, ""))
+    return Quantity(path, unit, key, f"design variable {path.removeprefix('device.')}", "cm²" if unit == "m^2" else "")
 
 
 def _values(path: str, block: dict | None = None) -> Quantity | None:
@@ -337,8 +337,8 @@ def accuracy(problem: DesignProblem, out: dict, opt: Evaluation, best: float, sa
     return {
         "abscissa": per,
         "constraints": {"max_scaled_violation": viol_g, "max_bound_violation": viol_x,
-                        "ipopt_tol": IPOPT_OPTIONS["tol"],
-                        "ipopt_constr_viol_tol": IPOPT_OPTIONS["constr_viol_tol"]},
+                        "ipopt_tol": solver_options.defaults["design.tol"],
+                        "ipopt_constr_viol_tol": solver_options.defaults["design.constr_viol_tol"]},
         "objective": {"nlp": f_nlp, "statics_path": opt.objective,
                       "relative_difference": float(abs(f_nlp - opt.objective) / abs(opt.objective))},
         "search": {"samples": samples, "variables": d,

@@ -75,7 +75,7 @@ class DeviceFitter:
     """
 
     def __init__(self, device, dev, params: dict, residual: str = "u", flow_throttle: str = "T",
-                 hessian: str = "gauss-newton", max_iter: int = 300):
+                 hessian: str = "gauss-newton", max_iter: int | None = None):
         self.device, self.dev, self.params = device, dev, params
         self.residual, self.hessian, self.max_iter = residual, hessian, max_iter
         self.free = [k for k, v in params.items() if v[1]]

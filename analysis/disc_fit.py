@@ -212,7 +212,7 @@ class DiscFitter:
     """
 
     def __init__(self, n: int, residual: str = "u", free: tuple[str, ...] = DISC, hessian: str = "gauss-newton",
-                 max_iter: int = 300, tol: float | None = None, batch: dict | None = None):
+                 max_iter: int | None = None, tol: float | None = None, batch: dict | None = None):
         self.n, self.residual, self.free, self.hessian = n, residual, tuple(free), hessian
         # the residual of one point, mapped over the n points: the graph's size does not grow with n
         xs, point = ca.SX.sym("x", len(self.free)), ca.SX.sym("point", 3)  # tau, u, q of a point

@@ -26,29 +26,12 @@ import weakref
 import casadi as ca
 import numpy as np
 
-from autobal.analysis import interrupt, progress, solver_output
+from autobal.analysis import interrupt, progress, solver_options, solver_output
 from autobal.analysis.solver_output import log, logging_to  # noqa: F401 (the run log, as before)
 
-# Tight tolerances: the statics are small, well-scaled (dimensionless) and solved to
-# machine-level residuals; bound_relax_factor = 0 keeps bounds (u >= 0, xi <= xi_max) exact.
-COLD = {
-    "ipopt.tol": 1e-12,
-    "ipopt.constr_viol_tol": 1e-12,
-    "ipopt.compl_inf_tol": 1e-12,
-    "ipopt.acceptable_iter": 0,
-    "ipopt.bound_relax_factor": 0.0,
-    "ipopt.max_iter": 300,
-    "ipopt.print_level": 0,
-    "ipopt.sb": "yes",
-    "print_time": False,
-}
-# Continuation: start from the previous solution and its multipliers, close to the bounds.
-WARM = COLD | {
-    "ipopt.warm_start_init_point": "yes",
-    "ipopt.warm_start_bound_push": 1e-10,
-    "ipopt.warm_start_mult_bound_push": 1e-10,
-    "ipopt.mu_init": 1e-8,
-}
+# Where IPOPT writes: nothing on the terminal, its log into a file of its own (the options of the solves
+# themselves, with their documented defaults, are analysis/solver_options.py's)
+QUIET = {"ipopt.print_level": 0, "ipopt.sb": "yes", "print_time": False}
 FILE_PRINT_LEVEL = 5  # IPOPT's iteration table and exit message in the solver's log file, not on the terminal
 NOTE_EVERY_S = 0.2  # the bar's note (objective, infeasibility) is refreshed at most this often, s
 
@@ -102,14 +85,17 @@ class IterationBar(ca.Callback):
 
 def nlpsol(name: str, x, p, f, g, warm: bool = False, hess_lag: ca.Function | None = None,
            jac_g: ca.Function | None = None, **extra) -> ca.Function:
-    """An IPOPT solver for min f(x; p) s.t. g(x; p) in [lbg, ubg], x in [lbx, ubx].
+    """An IPOPT solver for min f(x; p) s.t. g(x; p) in [lbg, ubg], x in [lbx, ubx], with the options of the
+    ``ipopt`` group of :mod:`autobal.analysis.solver_options` (and ``ipopt_warm`` when ``warm``), ``extra`` (IPOPT
+    option names without the ``ipopt.`` prefix) laid over them.
 
     ``hess_lag``: a user Hessian of the Lagrangian, (x, p, lam_f, lam_g) -> its upper triangle,
     e.g. the Gauss-Newton lam_f J'J of a least-squares fit (analysis/least_squares.py).  ``jac_g``: a user
     Jacobian of the constraints, (x, p) -> (g, dg/dx).  Built while bars
     are drawn (a terminal, not quiet), the solver carries an :class:`IterationBar`.
     """
-    opts = (WARM if warm else COLD) | {f"ipopt.{k}": v for k, v in extra.items()}
+    base = solver_options.get("ipopt") | (solver_options.get("ipopt_warm") if warm else {})
+    opts = QUIET | {f"ipopt.{k}": v for k, v in (base | extra).items()}
     if hess_lag is not None:
         opts["hess_lag"] = hess_lag
     if jac_g is not None:

@@ -24,7 +24,7 @@ import casadi as ca
 import numpy as np
 from scipy import stats
 
-from autobal.analysis import ipopt
+from autobal.analysis import ipopt, solver_options
 
 
 def uncertainty(r, J, estimate, confidence: float = 0.95) -> dict:
@@ -81,10 +81,10 @@ class LeastSquares:
     states].  ``hessian``: "gauss-newton" (lam_f J'J through CasADi's ``hess_lag``) or "exact".
     Built once, called many times (data and fixed values are the NLP parameters ``p``)."""
 
-    def __init__(self, name: str, x, p, r, g, n_theta: int, hessian: str = "gauss-newton", max_iter: int = 300,
+    def __init__(self, name: str, x, p, r, g, n_theta: int, hessian: str = "gauss-newton", max_iter: int | None = None,
                  tol: float | None = None):
         f = 0.5 * ca.sumsqr(r)
-        opts = {"max_iter": max_iter} | ({"tol": tol, "constr_viol_tol": tol, "compl_inf_tol": tol} if tol else {})
+        opts = solver_options.get("fit") | solver_options.ipopt_options(max_iter, tol)  # None: the "fit" group's
         if hessian == "gauss-newton":
             J = ca.jacobian(r, x)
             sym = type(x)  # SX or MX, as the model is built
@@ -119,14 +119,18 @@ class GaussNewtonBatch:
     projected Gauss-Newton step x+ = clip(x - (J'J)^-1 J'r, lb, ub) unrolled ``block`` times into
     one Function, mapped over the N problems (columns; ``parallelization="thread"`` maps on two
     threads).  Blocks are repeated until every problem
-    has converged (last step below ``tol`` in the scaled variables) or ``max_blocks`` is reached.
+    has converged (last step below ``tol`` in the scaled variables) or ``max_blocks`` is reached (defaults: the
+    solver options ``gauss_newton``).
     A problem is *converged* when its last step is below ``tol``, its values are finite and no
     bound is active (a clipped Gauss-Newton point need not satisfy the bound-constrained
     optimality conditions); the others are for the caller to re-solve (e.g. by IPOPT).
     """
 
-    def __init__(self, residual: ca.Function, block: int = 8, tol: float = 1e-10, max_blocks: int = 8,
-                 parallelization: str = "serial"):
+    def __init__(self, residual: ca.Function, block: int | None = None, tol: float | None = None,
+                 max_blocks: int | None = None, parallelization: str = "serial"):
+        o = solver_options.get("gauss_newton")  # None: the option's
+        block, tol, max_blocks = (o[k] if v is None else v for k, v in (("block", block), ("tol", tol),
+                                                                         ("max_blocks", max_blocks)))
         nx, n_p = residual.size1_in(0), residual.size1_in(1)
         x, p = ca.SX.sym("x", nx), ca.SX.sym("p", n_p)
         lb, ub = ca.SX.sym("lb", nx), ca.SX.sym("ub", nx)

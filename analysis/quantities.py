@@ -22,45 +22,19 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass
 
-#: display unit -> (SI unit, SI value of one display unit): the one conversion table of the toolkit (a unit is
-#: also a display unit of itself, spelled as engineers write it: see :func:`spelled`)
-DISPLAY_UNITS = {
-    "m": ("m", 1.0), "mm": ("m", 1e-3), "µm": ("m", 1e-6),
-    "m²": ("m^2", 1.0), "mm²": ("m^2", 1e-6), "cm²": ("m^2", 1e-4),
-    "m³": ("m^3", 1.0), "L": ("m^3", 1e-3), "cm³": ("m^3", 1e-6), "mL": ("m^3", 1e-6),
-    "Pa": ("Pa", 1.0), "kPa": ("Pa", 1e3), "MPa": ("Pa", 1e6), "bar": ("Pa", 1e5), "mbar": ("Pa", 1e2),
-    "N": ("N", 1.0), "kN": ("N", 1e3),
-    "N/m": ("N/m", 1.0), "kN/m": ("N/m", 1e3), "MN/m": ("N/m", 1e6), "N/µm": ("N/m", 1e6),
-    "N·s/m": ("N*s/m", 1.0), "kN·s/m": ("N*s/m", 1e3),
-    "m³/s": ("m^3/s", 1.0), "L/s": ("m^3/s", 1e-3), "L/min": ("m^3/s", 1e-3 / 60), "m³/h": ("m^3/s", 1 / 3600),
-    "rad/s": ("rad/s", 1.0), "rpm": ("rad/s", 2 * math.pi / 60), "Hz": ("rad/s", 2 * math.pi),
-    "rad/s²": ("rad/s^2", 1.0), "rpm/s": ("rad/s^2", 2 * math.pi / 60),
-    "s": ("s", 1.0), "ms": ("s", 1e-3), "min": ("s", 60.0), "h": ("s", 3600.0), "kh": ("s", 3.6e6),
-    "kg": ("kg", 1.0), "g": ("kg", 1e-3), "kg·m": ("kg*m", 1.0), "g·cm": ("kg*m", 1e-5), "g·mm": ("kg*m", 1e-6),
-    "W": ("W", 1.0), "kW": ("W", 1e3),
-}
+from autobal.analysis import kinds
+
+#: display unit -> (SI unit, SI value of one display unit): the display units of the one unit vocabulary
+#: (:data:`autobal.analysis.kinds.TABLE`; a unit is also a display unit of itself, spelled as engineers write it:
+#: see :func:`spelled`)
+DISPLAY_UNITS = {u: (k.si, f) for k in kinds.TABLE for u, f in k.display.items()}
 
 #: SI unit -> the display unit used when a declaration names none (the field's habits: MPa, mm, L/s, kN)
-DEFAULT_DISPLAY = {"m": "mm", "m^2": "mm²", "m^3": "L", "Pa": "MPa", "N": "kN", "m^3/s": "L/s"}
+DEFAULT_DISPLAY = {k.si: k.default for k in kinds.TABLE if k.default}
 
-#: kind of quantity a scene (``display:``) or the CLI (``--units``) can choose the display unit of ->
-#: (its SI unit, what it covers); every quantity whose unit converts to that SI unit is shown in the choice
-KINDS = {
-    "length": ("m", "gaps, openings, clearances, deflections, AFC amplitudes"),
-    "area": ("m^2", "areas"),
-    "volume": ("m^3", "volumes"),
-    "pressure": ("Pa", "pressures and pressure margins"),
-    "force": ("N", "forces"),
-    "stiffness": ("N/m", "stiffnesses (springs)"),
-    "damping": ("N*s/m", "damping coefficients"),
-    "flow": ("m^3/s", "volume flows (leaks, barrier and seal flows)"),
-    "speed": ("rad/s", "angular speeds and frequencies"),
-    "acceleration": ("rad/s^2", "angular accelerations"),
-    "time": ("s", "times"),
-    "mass": ("kg", "masses"),
-    "unbalance": ("kg*m", "unbalances m·e"),
-    "power": ("W", "powers"),
-}
+#: kind of quantity a scene (``display:``) or the CLI (``--units``) can choose the display unit of, by its short
+#: name -> (its SI unit, what it covers); every quantity whose unit converts to that SI unit is shown in the choice
+KINDS = {k.choice: (k.si, k.covers) for k in kinds.TABLE if k.covers}
 
 #: the display units chosen for this run: SI unit -> display unit (see :func:`display_units`)
 _CHOSEN: ContextVar[dict[str, str] | None] = ContextVar("autobal_display_units", default=None)
@@ -78,30 +52,40 @@ def _base(unit: str) -> tuple[str, float]:
     return DISPLAY_UNITS.get(spelled(unit), (unit, 1.0))
 
 
+def _choosable(kind: str) -> kinds.Kind:
+    """The :class:`~autobal.analysis.kinds.Kind` of a kind of :data:`KINDS` named by its short name or its name
+    ("flow", "volume flow"); ValueError naming the kinds to choose units for."""
+    k = kinds.BY_NAME.get(kind)
+    if k is None or not k.covers:
+        raise ValueError(f"'{kind}' is not a kind of quantity; choose units for {', '.join(KINDS)}")
+    return k
+
+
 def units_of_kind(kind: str) -> list[str]:
-    """The display units of a kind of :data:`KINDS`, as engineers write them."""
-    return [u for u, (si, _) in DISPLAY_UNITS.items() if si == KINDS[kind][0]]
+    """The display units of a kind of :data:`KINDS` (its short name or its name), as engineers write them."""
+    return list(_choosable(kind).display)
 
 
 def unit_of_kind(kind: str, unit: str) -> str:
-    """``unit`` as written by a person ("m3/h", "um", "m^3/h", "l/s") spelled as :data:`DISPLAY_UNITS` spells it;
-    ValueError naming the kind and the units to write when it is not a display unit of ``kind``."""
-    if kind not in KINDS:
-        raise ValueError(f"'{kind}' is not a kind of quantity; choose units for {', '.join(KINDS)}")
-    text = str(unit).strip().replace("μ", "µ").replace("**", "^")
+    """``unit`` as written by a person ("m3/h", "um", "m^3/h", "l/s", "kN/mm", "r/min") spelled as
+    :data:`DISPLAY_UNITS` spells it; ValueError naming the kind and the units to write when it is not a display
+    unit of ``kind`` (its short name or its name, e.g. "flow" or "volume flow")."""
+    k = _choosable(kind)
+    text = str(unit).strip()
+    text = k.unit_aliases.get(text, text).replace("μ", "µ").replace("**", "^")
     text = re.sub(r"(?<![A-Za-z])u(?=m)", "µ", text)
     text = re.sub(r"\^?([23])", lambda m: "²³"[int(m.group(1)) - 2], text).replace("*", "·")
     text = re.sub(r"(?<![A-Za-z])(m?)l(?=$|/)", r"\1L", text)
-    if text not in units_of_kind(kind):
-        raise ValueError(f"'{unit}' is not a unit of {kind} ({KINDS[kind][0]}): write one of "
-                         f"{', '.join(units_of_kind(kind))}")
+    if text not in k.display:
+        raise ValueError(f"'{unit}' is not a unit of {kind} ({k.si}): write one of {', '.join(k.display)}")
     return text
 
 
 def checked_choice(choice: Mapping[str, str] | None) -> dict[str, str]:
-    """kind -> display unit, each unit spelled as :data:`DISPLAY_UNITS` spells it; ValueError for a kind or a
-    unit that is not one (see :func:`unit_of_kind`)."""
-    return {kind: unit_of_kind(kind, unit) for kind, unit in (choice or {}).items() if unit is not None}
+    """kind (its short name) -> display unit, each unit spelled as :data:`DISPLAY_UNITS` spells it; ValueError for
+    a kind or a unit that is not one (see :func:`unit_of_kind`)."""
+    return {_choosable(kind).choice: unit_of_kind(kind, unit) for kind, unit in (choice or {}).items()
+            if unit is not None}
 
 
 def current_choice() -> dict[str, str]:
@@ -118,7 +102,7 @@ def display_units(choice: Mapping[str, str] | None, under: bool = False):
     kinds an enclosing block did not choose (a scene's ``display`` section under the caller's choice)."""
     given = checked_choice(choice)
     given = given | current_choice() if under else current_choice() | given
-    token = _CHOSEN.set({KINDS[kind][0]: unit for kind, unit in given.items()})
+    token = _CHOSEN.set({KINDS[kind][0]: unit for kind, unit in given.items()})  # checked_choice: short names
     try:
         yield
     finally:
@@ -127,7 +111,7 @@ def display_units(choice: Mapping[str, str] | None, under: bool = False):
 
 def chosen(kind: str) -> str | None:
     """The display unit chosen for a kind of :data:`KINDS` in this block of :func:`display_units`, or None."""
-    return (_CHOSEN.get() or {}).get(KINDS[kind][0])
+    return (_CHOSEN.get() or {}).get(_choosable(kind).si)
 
 
 def display_unit_of(unit: str, declared: str = "") -> str:

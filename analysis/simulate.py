@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from autobal.analysis import interrupt
+from autobal.analysis import interrupt, solver_options
 from autobal.analysis.compiled import compiled_map
 from autobal.analysis.frequency import MODEL_LABELS
 from autobal.analysis.quantities import Declarations, Quantity
@@ -59,14 +59,15 @@ class Simulator:
     CasADi Function of ``attempts`` step attempts (default 2 chunk + 254) compiled to C through
     :func:`autobal.analysis.compiled.compiled_map` (cached on disk; CasADi's virtual machine without a C
     compiler or with ``AUTOBAL_COMPILE=0``), called again until the chunk's last output is reached.  Its
-    options: ``max_num_steps`` (step attempts allowed between two outputs, default 20000, as CVODES'),
+    options: ``max_num_steps`` (step attempts allowed between two outputs, default the solver option
+    ``transient.max_num_steps``, as CVODES'),
     ``attempts``, ``h0`` (first step, default 1e-4 of the output spacing, s) and ``linear_solver``
     (``"lu"``, default, or ``"qr"``).  A step size underflow or an exhausted step budget is a failure
     reported like a CVODES failure: the time reached and a message.
     """
 
     def __init__(self, model: DynamicModel, t_end: float, points: int, integrator: str = "cvodes",
-                 rtol: float = 1e-9, atol: float = 1e-11, chunk: int = 500, **opts):
+                 rtol: float | None = None, atol: float | None = None, chunk: int = 500, **opts):
         """Build the integrator.
 
         Parameters
@@ -79,15 +80,17 @@ class Simulator:
             Output times, uniform from 0 to ``t_end``.
         integrator : {"cvodes", "idas", "rodas4", "rodas4p"}
             CasADi's CVODES or IDAS, or the compiled RODAS4 / RODASP of analysis/rosenbrock.py.
-        rtol, atol : float
-            Relative (-) and absolute tolerance (units of the scaled states, -).
+        rtol, atol : float, optional
+            Relative (-) and absolute tolerance (units of the scaled states, -); default the solver options
+            ``transient.rtol`` and ``transient.atol`` (:mod:`autobal.analysis.solver_options`).
         chunk : int
             Outputs integrated in one call, between the checks of the stop events.
         **opts
             CasADi integrator options (CVODES, IDAS) or the RODAS4 options above.
         """
         self.model = model
-        self.rtol, self.atol = rtol, atol
+        tol = solver_options.get("transient")
+        self.rtol, self.atol = tol["rtol"] if rtol is None else rtol, tol["atol"] if atol is None else atol
         self.t = np.linspace(0.0, t_end, points)
         x = ca.SX.sym("x", len(model.states))
         t = ca.SX.sym("t")
@@ -97,7 +100,8 @@ class Simulator:
         w = ca.vertcat(model.w0[0] + dpsi1, model.w0[1] + s[1] + s[4] * dpsi1)
         self._inputs = ca.Function("inputs", [t, s], [w])
         dae = {"x": x, "t": t, "p": ca.vertcat(p, s), "ode": model.ode(x, w, p)}
-        o = {"reltol": rtol, "abstol": atol, "max_num_steps": 20000, "disable_internal_warnings": True} | opts
+        o = {"reltol": self.rtol, "abstol": self.atol, "max_num_steps": tol["max_num_steps"],
+             "disable_internal_warnings": True} | opts
         self.name = integrator
         self.compiled = False  # a compiled Rosenbrock loop (set by the RODAS4 build)
         self.chunk = max(1, min(chunk, points - 1))
@@ -109,7 +113,8 @@ class Simulator:
 
     def _rodas4(self, x, t, p, s, w, dt: float, opts: dict) -> None:
         """Build the RODAS4 loop of step attempts (compiled when a C compiler is found)."""
-        o = {"max_num_steps": 20000, "attempts": 2 * self.chunk + 254, "h0": 1e-4 * dt, "linear_solver": "lu"}
+        o = {"max_num_steps": solver_options.defaults["transient.max_num_steps"], "attempts": 2 * self.chunk + 254,
+             "h0": 1e-4 * dt, "linear_solver": "lu"}
         unknown = set(opts) - set(o)
         if unknown:
             raise ValueError(f"unknown RODAS4 options {sorted(unknown)}; expected some of {sorted(o)}")

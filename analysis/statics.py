@@ -30,15 +30,13 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from autobal.analysis import closed_form, interrupt, ipopt
+from autobal.analysis import closed_form, interrupt, ipopt, solver_options
 from autobal.analysis.compiled import compiled_map, compiler
 from autobal.errors import SolveError
 from autobal.models.device import DeviceDesign, StaticSystem, static_system
 
 REACTION_TOL = 1e-8  # a stop reaction above this (dimensionless force) means the stop is reached
 COMPLEMENTARITY_TOL = 1e-10  # sum of gap x reaction accepted as zero
-CONTINUATION_START, CONTINUATION_STEPS = 0.25, 16  # fallback path in psi1 when a cold start fails
-NEWTON_ABSTOL = 1e-14  # the Newton rootfinder stops when every balance's |residual| is below this
 FAST_NEWTON_ITER = 12  # batched Newton evaluations before the points left go to CasADi's rootfinder
 RESIDUAL_TOL = 1e-10  # a Newton root is accepted below this largest absolute balance residual
 # IPOPT stalls (search direction too small) where a square-root throttle's flow reverses: its derivative is
@@ -236,9 +234,7 @@ class ParametricStatics:
             rf = ca.Function("square", [wf, p], [self.residual(full, p[0], p[1], p[2:])], {"cse": True})
             self._square[active] = rf
             solver = ca.rootfinder(f"newton_{'_'.join(sorted(active)) or 'free'}", "newton", rf,
-                                   {"abstol": NEWTON_ABSTOL, "max_iter": 50, "error_on_fail": False,
-                                    "linear_solver": "qr",  # dense QR: 1.8x csparse on these 6-8 unknowns
-                                    "show_eval_warnings": False})
+                                   solver_options.rootfinder())
             self._newton[active] = (solver, free, ca.Function("full", [wf], [full]))
         return self._newton[active]
 
@@ -331,7 +327,7 @@ class ParametricStatics:
         Every iteration evaluates the residual and its exact Jacobian (CasADi, mapped) at the points
         still iterating and solves all their Newton systems at once (LAPACK LU with partial pivoting,
         batched), halving a step that does not reduce |r|; a point stops when all its balances
-        satisfy |r| <= NEWTON_ABSTOL (as CasADi's rootfinder) or when its Jacobian is singular.
+        satisfy |r| <= the ``newton.abstol`` solver option (as CasADi's rootfinder) or when its Jacobian is singular.
         The points still iterating after FAST_NEWTON_ITER evaluations (slow, e.g. a valve on its stop
         with almost no pressure drop) are solved again from their start by CasADi's rootfinder on the
         same system (its line search, at most 50 iterations).  No bounds.
@@ -367,7 +363,7 @@ class ParametricStatics:
             back = rows[worse]
             alpha[back] *= 0.5
             X[back] += alpha[back, None] * step[back]  # from x_prev - 2a dx to x_prev - a dx
-            ahead = ~worse & (np.abs(r).max(axis=1) > NEWTON_ABSTOL)
+            ahead = ~worse & (np.abs(r).max(axis=1) > solver_options.defaults["newton.abstol"])
             dx = _solve_each(J[ahead].reshape(-1, n, n), r[ahead])
             ok = np.all(np.isfinite(dx), axis=1)  # singular or not finite: the point stops where it is
             ahead[ahead] = ok
@@ -443,7 +439,7 @@ class ParametricStatics:
             start[:, list(fixed)] = list(fixed.values())
             # a start may be a root already (the closed form is exact when no stop is reached): accepted by
             # the Newton method's own first test, |r| <= its abstol, without a step
-            accept(start, active, k, min(tol, NEWTON_ABSTOL))
+            accept(start, active, k, min(tol, solver_options.defaults["newton.abstol"]))
             if todo.size:
                 accept(self.roots(active, starts[todo], P[todo]), active, k, tol)
         if out is None:  # no attempt
@@ -502,10 +498,11 @@ class StaticsSolver:
         res, point = self._solved(psi1, dpsi, ipopt.solve(self._cold, **args, x0=self.guess(psi1, dpsi)))
         if self._stalled_at_root(point):
             return point
-        if not res["success"] and start is None and psi1 > CONTINUATION_START:
+        c = solver_options.get("continuation")
+        if not res["success"] and start is None and psi1 > c["start"]:
             # homotopy in the discharge ratio from a low, regulated pressure, warm-started along the path
             try:
-                return self.sweep(np.linspace(CONTINUATION_START, psi1, CONTINUATION_STEPS), dpsi)[-1]
+                return self.sweep(np.linspace(c["start"], psi1, c["steps"]), dpsi)[-1]
             except SolveError:
                 pass
         if not res["success"]:

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from autobal.analysis import closed_form, workprecision
+from autobal.analysis import closed_form, solver_options, workprecision
 from autobal.analysis.quantities import Declarations, Quantity, convert, display_unit_of
 from autobal.analysis.result import Result, fixed_layout, fmt, new_figure, with_statuses
 from autobal.analysis.statics import StaticPoint, StaticsSolver
@@ -20,8 +20,6 @@ from autobal.models.device import groups_by_name
 
 SWEEP_KEYS = ("psi_e", "psi2", "psi3", "psi_cam", "u", "xi")
 REGULATOR_KEYS = ("psi_cam", "xi")  # the sweep's regulator states: none without a regulator
-PATH_NODES = 257  # continuation nodes across a sweep's range, whatever the number of requested points
-MAX_HALVINGS = 6  # a failed continuation step is halved at most this many times
 REFINE_POINTS = 12  # extra points inside each sweep interval where a stop is reached or left (figures)
 
 _P14 = "Pavlenko (2014)"
@@ -489,13 +487,13 @@ def continuation(solver: StaticsSolver, psi1s, dpsi: float,
                  span: tuple[float, float] | None = None) -> list[StaticPoint]:
     """Statics over the discharge ratios ``psi1s`` by a continuation that does not depend on their spacing.
 
-    A grid of at most :data:`PATH_NODES` points is solved as one continuation path, each point
-    warm-started from the one before.  A denser grid is not: a path of :data:`PATH_NODES` evenly
+    A grid of at most ``continuation.path_nodes`` points (a solver option) is solved as one continuation path,
+    each point warm-started from the one before.  A denser grid is not: a path of that many evenly
     spaced nodes across ``span`` is solved first, and each requested point is warm-started from its
     nearest node, so a 100,000-point sweep takes the same continuation steps as a 1,000-point one
     (thousands of tiny warm-started steps drift into a point IPOPT cannot leave, e.g. the compressor
     at psi1 = 1.26162 where its regulator saturates).  A step that fails is halved (at most
-    :data:`MAX_HALVINGS` times) before the sweep gives up.
+    ``continuation.max_halvings`` times) before the sweep gives up.
 
     Parameters
     ----------
@@ -520,10 +518,11 @@ def continuation(solver: StaticsSolver, psi1s, dpsi: float,
         A point that no halving of its continuation step reaches.
     """
     psi1s = np.asarray(psi1s, float)
-    if span is None and len(psi1s) <= PATH_NODES:
+    n_nodes = solver_options.defaults["continuation.path_nodes"]
+    if span is None and len(psi1s) <= n_nodes:
         return _path(solver, psi1s, dpsi)
     lo, hi = span if span is not None else (psi1s[0], psi1s[-1])
-    nodes = _path(solver, np.linspace(lo, hi, PATH_NODES), dpsi)
+    nodes = _path(solver, np.linspace(lo, hi, n_nodes), dpsi)
     at = np.array([p.psi1 for p in nodes])
     out = []
     for s in psi1s:
@@ -578,7 +577,7 @@ def _step(solver: StaticsSolver, start: StaticPoint, psi1: float, dpsi: float, h
     try:
         return solver.solve(psi1, dpsi, start)
     except SolveError:
-        if halvings >= MAX_HALVINGS:
+        if halvings >= solver_options.defaults["continuation.max_halvings"]:
             raise
     mid = _step(solver, start, 0.5 * (start.psi1 + psi1), dpsi, halvings + 1)
     return _step(solver, mid, psi1, dpsi, halvings + 1)

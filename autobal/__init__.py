@@ -11,14 +11,20 @@ The public API::
 __version__ = "0.2.0"
 
 __all__ = ["AutobalError", "DeviceParams", "DynamicData", "LiquidLayer", "Result", "RotorParams", "Run", "Scenario",
-           "ScenarioError", "SolveError", "__version__", "display_units", "load", "load_run", "run"]
+           "ScenarioError", "SolveError", "__version__", "display_units", "load", "load_run", "reset_solver_defaults",
+           "run", "set_solver_defaults", "solver_defaults", "using_solver_defaults"]
 
 _WHERE = {"load": "autobal.api", "run": "autobal.api", "load_run": "autobal.api",
           "Run": "autobal.api", "Result": "autobal.analysis.result",
           "Scenario": "autobal.scenario", "AutobalError": "autobal.errors", "ScenarioError": "autobal.errors",
           "SolveError": "autobal.errors", "DeviceParams": "autobal.models.device",
           "DynamicData": "autobal.models.dynamics", "RotorParams": "autobal.models.rotor",
-          "LiquidLayer": "autobal.models.rotor", "display_units": "autobal.analysis.quantities"}
+          "LiquidLayer": "autobal.models.rotor", "display_units": "autobal.analysis.quantities",
+          # module:name where the front door's name is not the module's
+          "solver_defaults": "autobal.analysis.solver_options:get",
+          "set_solver_defaults": "autobal.analysis.solver_options:set_defaults",
+          "reset_solver_defaults": "autobal.analysis.solver_options:reset_defaults",
+          "using_solver_defaults": "autobal.analysis.solver_options:using"}
 
 
 def __getattr__(name: str):
@@ -26,7 +32,8 @@ def __getattr__(name: str):
     if name in _WHERE:
         import importlib
 
-        return getattr(importlib.import_module(_WHERE[name]), name)
+        module, _, attr = _WHERE[name].partition(":")
+        return getattr(importlib.import_module(module), attr or name)
     raise AttributeError(f"module 'autobal' has no attribute {name!r}")
 
 

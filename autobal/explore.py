@@ -49,9 +49,10 @@ import yaml
 
 from autobal import scenario
 from autobal.analysis import frequency as fr
+from autobal.analysis import solver_options
 from autobal.analysis import stability as st
 from autobal.analysis.linearize import LinearModel
-from autobal.analysis.statics import NEWTON_ABSTOL, RESIDUAL_TOL, ParametricStatics, StaticsSolver, ideal_guess
+from autobal.analysis.statics import RESIDUAL_TOL, ParametricStatics, StaticsSolver, ideal_guess
 from autobal.errors import AutobalError, ScenarioError, SolveError
 from autobal.models import device as dv
 from autobal.models.dynamics import build
@@ -481,9 +482,7 @@ class StaticsExplorer(DeviceSettings):
             q1 = statics.flows(full, psi1, dpsi, p[2:])[sys_.throttles.index("1")]
             f = ca.Function("critical", [z, p], [ca.vertcat(statics.residual(full, psi1, dpsi, p[2:]), q1)])
             try:
-                solver = ca.rootfinder(f"critical_{which}", "newton", f, {
-                    "abstol": NEWTON_ABSTOL, "max_iter": 50, "error_on_fail": False, "linear_solver": "qr",
-                    "show_eval_warnings": False})
+                solver = ca.rootfinder(f"critical_{which}", "newton", f, solver_options.rootfinder())
             except RuntimeError:  # structurally singular with these stops (q1 does not depend on the unknown)
                 self._critical_systems[key] = None
             else:

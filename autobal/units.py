@@ -4,7 +4,8 @@ SI floats at load time.
 A quantity is read as a plain decimal number followed by a unit; only the unit is given to pint, and
 only after a strict grammar has accepted it (unit names joined by ``*``, ``/``, a space, and integer
 powers ``^n`` or ``**n``), so no text is ever evaluated as an arithmetic expression.  Values that are
-not finite, or that leave the physical range of their kind (:data:`DIMENSIONS`), are refused.
+not finite, or that leave the physical range of their kind (:data:`DIMENSIONS`, from the one unit vocabulary of
+:mod:`autobal.analysis.kinds` that the display reads too), are refused.
 The plain SI-prefixed units (``mm``, ``MPa``, ``kg/m^3``, ...) are read from a small table; pint's
 registry is built on first use of any other unit, or to explain an error.  A quantity is at most
 :data:`MAX_CHARS` characters, so that reading it takes linear time.
@@ -26,34 +27,11 @@ from typing import Annotated
 
 from pydantic import AfterValidator, BeforeValidator, Field
 
-# name -> (pint dimensionality, SI unit used inside the toolkit, example, (smallest positive, largest) in SI).
-# The range is the physical one of a rotor machine and its balancing devices, kept wide: it refuses
-# values no device has (a 1 km gap, a 1 TPa pressure) before they overflow the equations.
-DIMENSIONS = {
-    "length": ("[length]", "m", "0.35 mm", (1e-9, 1e3)),
-    "area": ("[length] ** 2", "m**2", "0.016 m^2", (1e-18, 1e6)),
-    "volume": ("[length] ** 3", "m**3", "4.7e-5 m^3", (1e-27, 1e9)),
-    "pressure": ("[mass] / [length] / [time] ** 2", "Pa", "32.3 MPa", (1e-3, 1e11)),
-    # bulk modulus of the barrier medium: up to 1e16 Pa, so that a scene can approach the incompressible limit
-    "bulk modulus": ("[mass] / [length] / [time] ** 2", "Pa", "1.42e5 Pa", (1e-3, 1e16)),
-    "force": ("[mass] * [length] / [time] ** 2", "N", "3.3e5 N", (1e-9, 1e10)),
-    "density": ("[mass] / [length] ** 3", "kg/m**3", "1000 kg/m^3", (1e-6, 1e5)),
-    "viscosity": ("[mass] / [length] / [time]", "Pa*s", "1e-3 Pa*s", (1e-8, 1e8)),
-    "volume flow": ("[length] ** 3 / [time]", "m**3/s", "0.167 m^3/s", (1e-15, 1e4)),
-    "angular speed": ("1 / [time]", "rad/s", "6300 rpm", (1e-9, 1e7)),
-    "rate": ("1 / [time]", "1/s", "7.85 1/s", (1e-9, 1e7)),  # a decay rate n, chi/m1: not an angle per time
-    "mass": ("[mass]", "kg", "3000 kg", (1e-12, 1e8)),  # dynamics (autobal/parts/device_dynamics.py)
-    "stiffness": ("[mass] / [time] ** 2", "N/m", "1e8 N/m", (1e-9, 1e14)),
-    "damping": ("[mass] / [time]", "N*s/m", "8.9e4 N*s/m", (1e-12, 1e12)),
-    "time": ("[time]", "s", "50 ms", (1e-12, 1e10)),
-    "angular acceleration": ("1 / [time] ** 2", "rad/s**2", "40 rad/s^2", (1e-9, 1e10)),  # autobal/analyses/spinup.py
-    "angular jerk": ("1 / [time] ** 3", "rad/s**3", "2000 rad/s^3", (1e-9, 1e12)),  # spin-up jerk bound
-    "torque": ("[mass] * [length] ** 2 / [time] ** 2", "N*m", "0.04 N*m", (1e-12, 1e9)),
-    "power": ("[mass] * [length] ** 2 / [time] ** 3", "W", "6 W", (1e-12, 1e10)),
-    "unbalance": ("[mass] * [length]", "kg*m", "120 g*mm", (1e-15, 1e6)),  # residual unbalance U = m e
-    "moment of inertia": ("[mass] * [length] ** 2", "kg*m**2", "1e-3 kg*m^2", (1e-15, 1e9)),
-    "rotational damping": ("[mass] * [length] ** 2 / [time]", "N*m*s", "1e-5 N*m*s", (1e-15, 1e9)),
-}
+from autobal.analysis.kinds import TABLE
+
+# name -> (pint dimensionality, SI unit used inside the toolkit, example, (smallest positive, largest) in SI): the
+# kinds of the one unit vocabulary (autobal/analysis/kinds.py), which the display reads too
+DIMENSIONS = {k.name: (k.dimension, k.written, k.example, k.magnitude) for k in TABLE}
 
 MAX_CHARS = 100  # a quantity as written, spaces at its ends stripped: "6300 rpm" is 8
 _NUMBER = r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d{1,3})?"

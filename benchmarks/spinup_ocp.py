@@ -6,7 +6,7 @@ The problem, as a drive is specified: Jeffcott rotor (psi = 1, Omega0 = 105 rad/
 the peak counts, never above 210 rad/s; minimum peak deflection (epigraph delta^2 <= S at every Radau
 point).  Both sides transcribe the same dimensionless model (the rotor model's CasADi Function) by
 Radau collocation of degree 3 on the same uniform mesh (N intervals to the deadline, 0.6 N more over the
-hold), use the same IPOPT options (autobal's ``IPOPT_OPTIONS``, MUMPS) and start from the same guess:
+hold), use the same IPOPT options (autobal's solver options ``spinup``, MUMPS) and start from the same guess:
 the best profile of autobal's global search (the first of its starts) on the N intervals, the states
 simulated to the interval ends and held over each interval at the collocation points (rockit's
 ``set_initial`` of interval values; autobal's ``hold_states``; a simulated guess at the collocation
@@ -45,6 +45,7 @@ import numpy as np
 
 from autobal import api
 from autobal.analyses.spinup import ocp as spinup_ocp
+from autobal.analysis import solver_options
 from autobal.models.rotor import rotor_model
 from autobal.ocp import solve as osolve
 from autobal.ocp.simulation import initial_guess, resimulate
@@ -150,7 +151,7 @@ def rockit_run(ocp, N, g):
     r.subject_to((qs[0] ** 2 + qs[1] ** 2 - s * REF) / REF <= 0, grid="integrator_roots")
     r.subject_to(s >= 0)
     r.add_objective(s)
-    opts = {f"ipopt.{k}": v for k, v in osolve.IPOPT_OPTIONS.items()} | {
+    opts = {f"ipopt.{k}": v for k, v in solver_options.get("spinup").items()} | {
         "ipopt.print_level": 0, "ipopt.sb": "yes", "print_time": False, "record_time": True, "expand": True,
         "ipopt.max_wall_time": WALL}
     r.solver("ipopt", opts)
@@ -335,13 +336,15 @@ def save(ocp, rows, start_label) -> list[dict]:
              "deadline, |alpha| <= 40 rad/s^2, 3 s hold at 210 rad/s over which the peak counts, speed cap 210 rad/s; "
              f"minimum peak deflection (epigraph at every Radau point). Radau collocation degree {DEGREE} on the same "
              "uniform mesh (N intervals to the deadline, 0.6 N over the hold); the same IPOPT options "
-             f"(tol {osolve.IPOPT_OPTIONS['tol']:g}, adaptive barrier, MUMPS, each solve capped at {WALL:g} s); the "
+             f"(tol {solver_options.defaults['spinup.tol']:g}, adaptive barrier, MUMPS, each solve capped at "
+             f"{WALL:g} s); the "
              f"same guess: autobal's global-search start ({start_label}), states simulated to the interval ends "
              "and held over each interval at the collocation points (autobal's last Radau point is the node "
              "itself, held like rockit's; rockit's node variables start simulated).",
              "autobal (fatrop): the same discrete problem in autobal's stage form (nlp_solver: fatrop; the node "
              f"states and the collocation points start as rockit's), fatrop with mu_init "
-             f"{osolve.FATROP_OPTIONS['mu_init']:g} and tol {osolve.IPOPT_OPTIONS['tol']:g}; its build includes "
+             f"{solver_options.defaults['fatrop.mu_init']:g} and tol {solver_options.defaults['spinup.tol']:g}; its "
+             "build includes "
              "CasADi's SX expansion and fatrop's setup.",
              "Solve = wall time of the one solver call, function evaluations included (rockit: CasADi's "
              "t_wall_total); build = declaration, transcription and solver construction (rockit: its solve() "

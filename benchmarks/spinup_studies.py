@@ -166,15 +166,16 @@ SCALING_SCENE = "spinup_jeffcott_deadline_5s"
 SCALING_N = (200, 400, 800, 1600)
 # one fresh process per N: the scene with `intervals` overridden, the spinup analysis as `autobal run` does it;
 # every IPOPT solve of the study timed (wall and CPU of the process) by wrapping Solver.solve; argv[3]: a JSON
-# dict naming a lever measured side by side ({} = the study as shipped): "warm", WARM_OPTIONS overrides;
-# "stage_tol", the IPOPT tolerance of the intermediate mesh stages (the finest keeps the scene's)
+# dict naming a lever measured side by side ({} = the study as shipped): "warm", overrides of the spinup_warm
+# solver options; "stage_tol", the IPOPT tolerance of the intermediate mesh stages (the finest keeps the scene's)
 SCALING_CHILD = """
 import json, os, sys, time
 from autobal import api
+from autobal.analysis import solver_options
 from autobal.ocp import solve as S
 from autobal import analyses
 lever, n_final = json.loads(sys.argv[3]), int(sys.argv[2])
-S.WARM_OPTIONS = S.WARM_OPTIONS | lever.get("warm", {})
+solver_options.set_defaults("spinup_warm", **lever.get("warm", {}))
 stages, solve, init = [], S.Solver.solve, S.Solver.__init__
 def looser(self, ocp, method, ref=None, options=None, warm=False):
     tol = lever.get("stage_tol")  # the intermediate warm stages (not the final mesh) to a looser tolerance

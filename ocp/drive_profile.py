@@ -24,7 +24,6 @@ from autobal.models.rotor import rotor_model
 from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.search import FAST_STEP, STEP, FixedFrameModes, simulate_steps
 from autobal.ocp.simulation import (
-    RESIM_TOL,
     Trajectory,
     acceleration_at,
     drive_excess,
@@ -104,9 +103,9 @@ def _profile(ocp: SpinupOcp, t, w, step: float):
 
 
 def simulate_segments(ocp: SpinupOcp, t, w, label: str = "segments", intervals: int = SEGMENT_INTERVALS,
-                      tol: float = RESIM_TOL) -> Trajectory:
+                      tol: float | None = None) -> Trajectory:
     """CVODES re-simulation of the piecewise-linear speed profile through (t, w) (s, rad/s), held after, sampled
-    as densely as a profile on ``intervals`` control intervals over the horizon (RESIM_POINTS per interval; one
+    as densely as a profile on ``intervals`` control intervals over the horizon (the resimulation solver options; one
     CVODES call per segment)."""
     u, h = _profile(ocp, t, w, ocp.horizon / intervals)
     return resimulate(ocp, u, h, label, tol=tol)

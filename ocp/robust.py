@@ -27,13 +27,13 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from autobal.analysis import ipopt
+from autobal.analysis import ipopt, solver_options
 from autobal.errors import SolveError
 from autobal.models.rotor import RotorParams
 from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.search import FAST_STEP, FixedFrameModes, simulate_steps, steps_of
 from autobal.ocp.simulation import initial_guess, ramp_profile, rate_text, resimulate
-from autobal.ocp.solve import IPOPT_OPTIONS, coarse_intervals
+from autobal.ocp.solve import coarse_intervals
 from autobal.ocp.transcription import DirectCollocation, jerk_regulariser, mesh, structured_derivatives, transcribe
 
 
@@ -315,7 +315,7 @@ class RobustSolver:
         self.lbx, self.ubx = np.concatenate(lbx), np.concatenate(ubx)
         self.lbg, self.ubg = np.concatenate(lbg), np.concatenate(ubg)
         self.solver = ipopt.nlpsol("robust_spinup", x, p, f, ca.vertcat(*g), **derivatives,
-                                   **(IPOPT_OPTIONS | (options or {})))
+                                   **(solver_options.get("spinup") | (options or {})))
         self.ref = ref
         self.build_time_s = time.perf_counter() - t0
 

@@ -9,17 +9,14 @@ from functools import cache
 import casadi as ca
 import numpy as np
 
-from autobal.analysis import interrupt
+from autobal.analysis import interrupt, solver_options
 from autobal.analysis.quantities import Quantity
 from autobal.analysis.rotor import deflection, peak, unbalance
 from autobal.models.rotor import rotor_model
 from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.transcription import Nlp, interval_integrator, mesh, path_fractions
 
-# CVODES tolerance of the re-simulation (Adams): the peak of the 5 s deadline optimum moves by 7e-10 relative
-# from 1e-12, in half the time (benchmarks/spinup_ocp.md, "Study time")
-RESIM_TOL = 1e-10
-RESIM_POINTS = 24  # re-simulation samples per interval
+# the re-simulation's CVODES tolerance and samples: the solver options "resimulation" (analysis/solver_options.py)
 
 
 def rate_text(alpha: float) -> str:
@@ -46,7 +43,7 @@ def runs(u: np.ndarray, h: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(starts.tolist(), np.diff(np.append(starts, len(u))).tolist(), strict=True))
 
 
-def simulate_profile(ocp: SpinupOcp, u, h, fractions, tol: float = RESIM_TOL, multistep: str = "bdf",
+def simulate_profile(ocp: SpinupOcp, u, h, fractions, tol: float | None = None, multistep: str = "bdf",
                      merge: bool = False) -> np.ndarray:
     """CVODES run of piecewise-constant u (over alpha_max) on intervals of lengths h (tau).
 
@@ -58,8 +55,8 @@ def simulate_profile(ocp: SpinupOcp, u, h, fractions, tol: float = RESIM_TOL, mu
         Acceleration over alpha_max and length (tau) of each interval.
     fractions : sequence of float
         Output instants as fractions of each interval, the last one 1.
-    tol : float
-        CVODES relative and absolute tolerance.
+    tol : float, optional
+        CVODES relative and absolute tolerance; default the solver option ``resimulation.tol``.
     multistep : str
         "bdf" or "adams" (:func:`autobal.ocp.transcription.interval_integrator`).
     merge : bool
@@ -71,6 +68,7 @@ def simulate_profile(ocp: SpinupOcp, u, h, fractions, tol: float = RESIM_TOL, mu
     ndarray, shape (K, len(fractions), nx)
         The states at the fractions of each interval.
     """
+    tol = solver_options.defaults["resimulation.tol"] if tol is None else tol
     if abs(fractions[-1] - 1) > 1e-14:
         raise ValueError("the last output fraction must be the interval end (1)")
     u, h = np.asarray(u, float), np.asarray(h, float)
@@ -184,10 +182,12 @@ def acceleration_at(t: np.ndarray, t_u: np.ndarray, alpha: np.ndarray) -> np.nda
     return np.asarray(alpha)[np.clip(k, 0, len(alpha) - 1)]
 
 
-def resimulate(ocp: SpinupOcp, u, h, label: str, points: int = RESIM_POINTS, tol: float = RESIM_TOL,
+def resimulate(ocp: SpinupOcp, u, h, label: str, points: int | None = None, tol: float | None = None,
                multistep: str = "adams", merge: bool = True) -> Trajectory:
     """CVODES at tight tolerance with the piecewise-constant profile u (over alpha_max) on intervals h
-    (``multistep``, ``merge``: :func:`simulate_profile`)."""
+    (``multistep``, ``merge``: :func:`simulate_profile`); ``points`` samples per interval, default the solver option
+    ``resimulation.points``, at ``tol`` (``resimulation.tol``)."""
+    points = solver_options.defaults["resimulation.points"] if points is None else points
     frac = list(np.linspace(0, 1, points + 1)[1:])
     sim = simulate_profile(ocp, u, h, frac, tol, multistep, merge)
     K = len(u)

@@ -13,7 +13,8 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from autobal.analysis import ipopt
+from autobal.analysis import ipopt, solver_options
+from autobal.analysis.solver_options import ipopt_options  # noqa: F401 (the rooms' and tests' name)
 from autobal.errors import SolveError
 from autobal.ocp.problem import PEAK_KEY, SpinupOcp
 from autobal.ocp.search import FixedFrameModes, controls_on_mesh, grid_search, horizon_steps, profile_peak
@@ -35,42 +36,8 @@ from autobal.ocp.transcription import (
     transcribe_stages,
 )
 
-# mumps_permuting_scaling 0: no maximum-weight matching and scaling of the KKT matrix in MUMPS (its
-# ICNTL(6); IPOPT's default 7 lets MUMPS choose).  With it, from 800 collocation intervals on, MUMPS'
-# factorisation of the spin-up KKT system delays so many pivots that it runs out of its estimated workspace
-# (INFO(1) = -9) and one IPOPT iteration takes minutes; without it one takes about a second and N = 800
-# solves in 71 iterations (benchmarks/spinup_ocp.md, "MUMPS levers at N = 800").  mumps_pivot_order 6: MUMPS'
-# approximate minimum degree with quasi-dense row detection (QAMD) instead of the automatic choice (METIS
-# here): per IPOPT iteration 5-28 % less CPU at 200-1600 intervals, the same optima (measured before the
-# Radau node states were eliminated; benchmarks/spinup_ocp.md, "Levers").
-IPOPT_OPTIONS = {"tol": 1e-8, "constr_viol_tol": 1e-8, "compl_inf_tol": 1e-8, "acceptable_iter": 0,
-                 "max_iter": 1000, "mu_strategy": "adaptive", "bound_relax_factor": 1e-10,
-                 "mumps_permuting_scaling": 0, "mumps_pivot_order": 6}
-
-
-def ipopt_options(max_iterations: int = 1000, tolerance: float = 1e-8) -> dict:
-    """The scene's ``max_iterations`` and ``tolerance`` as IPOPT options (tol, constraint violation and
-    complementarity at the same tolerance)."""
-    return {"max_iter": int(max_iterations), "tol": tolerance, "constr_viol_tol": tolerance,
-            "compl_inf_tol": tolerance}
-
-
-# the fine stages of the mesh continuation start from the coarser optimum and its multipliers: the
-# iterate and multipliers are pushed only slightly off their bounds, and the barrier parameter is monotone
-# from 1e-6.  The interpolated start is not feasible on the finer mesh (the coarse collocation polynomials
-# miss the finer collocation equations by up to 0.8 in the states of the liquid balancer, 0.4 of the
-# Jeffcott rotor); from there the adaptive barrier update (which ignores mu_init) drove the liquid
-# balancer's 200-interval stage into the restoration phase at its first iteration and then crept with
-# step sizes of 1e-2-1e-1: 114 + 376 iterations for the 100- and 200-interval stages, 69 + 47 monotone,
-# the same optimum (benchmarks/spinup_ocp.md, "Liquid balancer convergence")
-WARM_OPTIONS = {"warm_start_init_point": "yes", "mu_strategy": "monotone", "mu_init": 1e-6,
-                "warm_start_bound_push": 1e-9,
-                "warm_start_slack_bound_push": 1e-9, "warm_start_mult_bound_push": 1e-9}
-
-# fatrop on the stage form (transcribe_stages): its barrier parameter starts at 1e-5.  From the benchmark's
-# guess at 200-800 intervals that takes 28-32 iterations; fatrop's default (1e-2) 145-553, 1e-4 81-153 and
-# 1e-6 34-60 (benchmarks/spinup_ocp.md, "fatrop")
-FATROP_OPTIONS = {"mu_init": 1e-5, "print_level": 0}
+# the OCP's IPOPT options (the groups "spinup", "spinup_warm" for the fine stages of the mesh continuation,
+# "spinup_coarse" and "fatrop"): analysis/solver_options.py, with the measurements that chose them
 FATROP_STATUS = {0: "Solve_Succeeded", 1: "Maximum_Iterations_Exceeded"}  # fatrop's return flags
 
 INFEASIBLE = ("Infeasible_Problem_Detected", "Restoration_Failed")
@@ -153,7 +120,7 @@ class Solver:
             return
         self.nlp = transcribe(ocp, method, ref, "MX")
         nlp = self.nlp
-        extra = IPOPT_OPTIONS | (WARM_OPTIONS if warm else {}) | (options or {})
+        extra = solver_options.get("spinup") | (solver_options.get("spinup_warm") if warm else {}) | (options or {})
         if isinstance(method, MultipleShooting):
             extra["hessian_approximation"] = method.hessian
         # collocation: the Jacobian and Hessian from the interval Function's SX derivatives, mapped
@@ -205,9 +172,9 @@ class Solver:
 def fatrop_solver(nlp: Nlp, options: dict | None = None) -> ca.Function:
     """fatrop (through CasADi, structure given stage by stage) for the stage form ``nlp``; of ``options`` (IPOPT's
     names, as :func:`ipopt_options` writes them) it takes ``tol``, ``max_iter`` and ``mu_init``."""
-    opts = FATROP_OPTIONS | {k: v for k, v in (options or {}).items() if k in ("tol", "max_iter", "mu_init")}
-    opts.setdefault("tol", IPOPT_OPTIONS["tol"])
-    opts.setdefault("max_iter", IPOPT_OPTIONS["max_iter"])
+    spinup = solver_options.get("spinup")
+    opts = {"print_level": 0, "tol": spinup["tol"], "max_iter": spinup["max_iter"]} | solver_options.get("fatrop") | {
+        k: v for k, v in (options or {}).items() if k in ("tol", "max_iter", "mu_init")}
     return ca.nlpsol("spinup", "fatrop", {"x": nlp.x, "p": ca.MX.sym("p", 0), "f": nlp.f, "g": nlp.g},
                      {"structure_detection": "manual", **nlp.stages, "fatrop": opts, "print_time": False,
                       # CasADi's fatrop plugin takes no user derivatives (IPOPT's hess_lag, jac_g), so the stage
@@ -337,9 +304,6 @@ SEARCH_STEPS = 20000  # longer passages (quasi-static, thousands of whirl period
 # 80, which leads to the optimum the 160-interval mesh reaches from all its starts (19.57 um; 40 coarse intervals
 # lead to a worse one, 20.45 um).
 COARSE = 50
-# IPOPT iterations a start may take on the coarse mesh: a screening, not the answer.  The starts that reach
-# the best basins converge in 13-111 (benchmarks/spinup_ocp.md, "Study time" and "Liquid balancer convergence").
-COARSE_ITERATIONS = 200
 AHEAD = 0.05  # the constant ramps are not solved when the search's best is this far below them
 RANK_TIE = 2e-3  # relative: coarse optima this close to the best by the fast integrator are ranked by CVODES
 
@@ -353,8 +317,9 @@ def coarse_intervals(n: int) -> int:
 
 
 def coarse_options(options: dict | None) -> dict:
-    """IPOPT options of a coarse-stage solve: the iteration limit capped at COARSE_ITERATIONS."""
-    cap = min(int((options or {}).get("max_iter", IPOPT_OPTIONS["max_iter"])), COARSE_ITERATIONS)
+    """IPOPT options of a coarse-stage solve: the iteration limit capped at the solver option spinup_coarse.max_iter."""
+    cap = min(int((options or {}).get("max_iter", solver_options.defaults["spinup.max_iter"])),
+              solver_options.defaults["spinup_coarse.max_iter"])
     return (options or {}) | {"max_iter": cap}
 
 
@@ -377,7 +342,7 @@ def rank_coarse(ocp: SpinupOcp, found: list, n: int) -> tuple[int, dict[int, flo
     For the peak deflection the fixed-step exponential integrator (:func:`autobal.ocp.search.profile_peak`,
     step FAST_STEP: the peak within 1e-4 of CVODES) ranks them; those within RANK_TIE of its best, and the
     optima of every other objective, are re-simulated by CVODES (rtol 1e-10) and the smallest wins (ties:
-    the earlier start).  Only the winner is refined and re-simulated at RESIM_TOL."""
+    the earlier start).  Only the winner is refined and re-simulated at the resimulation.tol solver option."""
     close = list(range(len(found)))
     if ocp.objective == "peak_deflection" and horizon_steps(ocp) <= SEARCH_STEPS:
         rotor = FixedFrameModes.of(ocp)

@@ -9,8 +9,6 @@ The problem is declared once (:mod:`autobal.ocp.problem`), transcribed by a meth
 from autobal.ocp.problem import OBJECTIVES, PathConstraint, SpinupOcp
 from autobal.ocp.search import grid_search, simulate_steps, three_phase
 from autobal.ocp.simulation import (
-    RESIM_POINTS,
-    RESIM_TOL,
     Trajectory,
     baselines,
     initial_guess,
@@ -21,7 +19,6 @@ from autobal.ocp.simulation import (
 )
 from autobal.ocp.solve import (
     INFEASIBLE,
-    IPOPT_OPTIONS,
     Optimum,
     Solver,
     SpinupSolution,
@@ -34,7 +31,7 @@ from autobal.ocp.solve import (
 from autobal.ocp.transcription import DirectCollocation, Mesh, MultipleShooting, Nlp, mesh, path_fractions, transcribe
 
 __all__ = ["OBJECTIVES", "PathConstraint", "SpinupOcp", "grid_search", "simulate_steps", "three_phase",
-           "RESIM_POINTS", "RESIM_TOL", "Trajectory", "baselines", "initial_guess", "ramp_profile", "resimulate",
-           "runs", "simulate_profile", "INFEASIBLE", "IPOPT_OPTIONS", "Optimum", "Solver", "SpinupSolution",
+           "Trajectory", "baselines", "initial_guess", "ramp_profile", "resimulate",
+           "runs", "simulate_profile", "INFEASIBLE", "Optimum", "Solver", "SpinupSolution",
            "infeasibility_error", "ipopt_options", "optimize", "resimulated_scores", "starts",
            "DirectCollocation", "Mesh", "MultipleShooting", "Nlp", "mesh", "path_fractions", "transcribe"]

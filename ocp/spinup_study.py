@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from autobal.analysis import standards
+from autobal.analysis import solver_options, standards
 from autobal.analysis.quantities import Declarations, Quantity, significant
 from autobal.analysis.result import Result, new_figure, speed_axis, twin_axis, unit_axis
 from autobal.analysis.rotor_study import api_margins
@@ -23,8 +23,6 @@ from autobal.ocp.problem import SpinupOcp, pulse_variation
 from autobal.ocp.simulation import (
     DRIVE_QUANTITIES,
     DRIVE_TOL,
-    RESIM_POINTS,
-    RESIM_TOL,
     Trajectory,
     baselines,
     best_within_limits,
@@ -484,7 +482,8 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
         "dwell": dwell(P, tr, ocp.alpha_max),
         "accuracy": {"estimate": opt.resimulation_rel_error,
                      "how": "relative difference between the transcription's optimal objective and its CVODES "
-                            f"re-simulation (rtol {RESIM_TOL:g}, {RESIM_POINTS} samples per interval)"},
+                            f"re-simulation (rtol {solver_options.defaults['resimulation.tol']:g}, "
+                            f"{solver_options.defaults['resimulation.points']} samples per interval)"},
     }
     outside = "no ramp baseline keeps the drive limits (each is labelled outside them): no gain is quoted"
     for key, why in (("braking_torque_limit_N_m", "no braking-torque limit: the scene names no drive limit"),

@@ -8,7 +8,7 @@ from matplotlib.figure import Figure
 
 import autobal
 from autobal import cli
-from autobal.analysis import ipopt
+from autobal.analysis import solver_options
 from autobal.errors import ScenarioError, SolveError
 
 pytestmark = pytest.mark.cli
@@ -85,8 +85,7 @@ def test_a_failed_run_replaces_earlier_results(tmp_path, monkeypatch, capsys):
     out = tmp_path / "out"
     assert cli.main(["run", "pump_pe600_statics", "--out", str(out), "--quiet"]) == 0
     assert (out / "results.json").exists() and (out / "fig_gap.png").exists()
-    monkeypatch.setitem(ipopt.COLD, "ipopt.max_iter", 1)
-    monkeypatch.setitem(ipopt.WARM, "ipopt.max_iter", 1)
+    monkeypatch.setitem(solver_options.defaults, "ipopt.max_iter", 1)
     assert cli.main(["run", "compressor_k180_statics", "--out", str(out)]) == 3
     assert sorted(p.name for p in out.iterdir()) == ["autobal.log", "failed_solve.json", "report.html"]
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
@@ -97,8 +96,7 @@ def test_a_failed_run_replaces_earlier_results(tmp_path, monkeypatch, capsys):
 
 
 def test_api_failed_solve_keeps_the_last_iterate(tmp_path, monkeypatch):
-    monkeypatch.setitem(ipopt.COLD, "ipopt.max_iter", 1)
-    monkeypatch.setitem(ipopt.WARM, "ipopt.max_iter", 1)
+    monkeypatch.setitem(solver_options.defaults, "ipopt.max_iter", 1)
     with pytest.raises(SolveError) as err:
         autobal.run("compressor_k180_statics", out=tmp_path / "x")
     saved = json.loads((tmp_path / "x" / "failed_solve.json").read_text())

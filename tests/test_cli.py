@@ -6,7 +6,7 @@ import pytest
 import yaml
 
 from autobal import cli, scenario
-from autobal.analysis import ipopt
+from autobal.analysis import solver_options
 from autobal.errors import ScenarioError
 
 PUMP = yaml.safe_load(scenario.resolve("pump_pe600_statics").read_text())
@@ -89,8 +89,7 @@ def test_run_pump_writes_documented_results(tmp_path):
 @pytest.mark.cli
 def test_failed_solve_exits_3_with_status_and_last_iterate(tmp_path, capsys, monkeypatch):
     # an iteration limit the solve cannot meet: IPOPT really stops early
-    monkeypatch.setitem(ipopt.COLD, "ipopt.max_iter", 1)
-    monkeypatch.setitem(ipopt.WARM, "ipopt.max_iter", 1)
+    monkeypatch.setitem(solver_options.defaults, "ipopt.max_iter", 1)
     assert cli.main(["run", "compressor_k180_statics", "--out", str(tmp_path)]) == 3
     err = capsys.readouterr().err
     assert "Maximum_Iterations_Exceeded" in err

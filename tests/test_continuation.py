@@ -11,7 +11,8 @@ IPOPT could not leave.
 import numpy as np
 import pytest
 
-from autobal.analysis.statics_study import PATH_NODES, continuation
+from autobal.analysis.solver_options import defaults
+from autobal.analysis.statics_study import continuation
 
 DENSE = np.linspace(0.25, 2.0, 100_000)  # the grid that failed at psi1 = 1.26162
 AROUND = DENSE[(DENSE > 1.2605) & (DENSE < 1.2625)]
@@ -42,9 +43,9 @@ def test_a_point_does_not_depend_on_the_other_requested_points(pump):
 
 
 def test_a_coarse_grid_is_one_continuation_path(pump):
-    """Up to PATH_NODES points the sweep is solved along the grid itself, as before."""
+    """Up to continuation.path_nodes points the sweep is solved along the grid itself, as before."""
     grid = np.linspace(0.25, 2.0, 36)
     pts = continuation(pump, grid, pump.design.dpsi)
-    assert [p.psi1 for p in pts] == list(grid) and len(grid) <= PATH_NODES
+    assert [p.psi1 for p in pts] == list(grid) and len(grid) <= defaults["continuation.path_nodes"]
     seq = pump.sweep(grid, pump.design.dpsi)
     assert np.allclose(np.array([p.x for p in pts]), np.array([p.x for p in seq]), rtol=1e-9, atol=1e-12)

@@ -9,7 +9,7 @@ import threading
 import pytest
 
 import autobal
-from autobal.analysis import ipopt
+from autobal.analysis import ipopt, solver_options
 from autobal.errors import SolveError
 from autobal.output import SolverLog
 
@@ -105,8 +105,7 @@ def _iterations(text: str) -> list[str]:
 
 
 def test_a_failed_solve_leaves_its_status_in_the_log(tmp_path, monkeypatch, capfd):
-    monkeypatch.setitem(ipopt.COLD, "ipopt.max_iter", 1)
-    monkeypatch.setitem(ipopt.WARM, "ipopt.max_iter", 1)
+    monkeypatch.setitem(solver_options.defaults, "ipopt.max_iter", 1)
     with pytest.raises(SolveError) as err:
         autobal.run("compressor_k180_statics", out=tmp_path / "x")
     log = (tmp_path / "x" / "autobal.log").read_text()

@@ -102,7 +102,7 @@ def test_time_split_adds_up_to_the_wall_time(target):
 
 
 def test_resimulation_options_do_not_change_the_judge():
-    """The re-simulation (CVODES Adams with functional iteration at RESIM_TOL, each run of equal intervals in
+    """The re-simulation (CVODES Adams with functional iteration at resimulation.tol, each run of equal intervals in
     one call) against CVODES BDF at 1e-12 restarted at every interval: a ramp that holds below the critical
     speed (runs of equal intervals and jumps) on the 5 s deadline problem; states agree to 1e-8 of the peak."""
     ocp = real_problem(40.0)
@@ -110,7 +110,7 @@ def test_resimulation_options_do_not_change_the_judge():
     u = np.concatenate([S.ramp_profile(ocp, 50, 40.0, hold_at=75.0), np.zeros(ms.ns)]).round(12)
     h = np.concatenate([np.full(50, ms.h), np.full(ms.ns, ms.hs)])
     frac = list(np.linspace(0, 1, 9)[1:])
-    judge = S.simulate_profile(ocp, u, h, frac, S.RESIM_TOL, "adams", merge=True)
+    judge = S.simulate_profile(ocp, u, h, frac, None, "adams", merge=True)  # at the resimulation.tol option
     every = S.simulate_profile(ocp, u, h, frac, 1e-12, "bdf", merge=False)
     assert len(S.runs(u, h)) < 10  # the profile has runs to merge
     assert np.abs(judge - every).max() < 1e-8 * np.abs(every).max()

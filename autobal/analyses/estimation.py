@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Annotated, Literal
 from pydantic import Field, PrivateAttr, ValidationInfo, model_validator
 
 from autobal.analyses import COST
+from autobal.analysis.solver_options import DEFAULTS
 from autobal.errors import ScenarioError
 from autobal.measurements import QUANTITIES, Measurements, check_fit, read_csv
 from autobal.models.device import DEVICE_GROUPS, PRESSURE_GROUPS, REGULATOR_GROUPS
@@ -81,7 +82,8 @@ class Fit(Strict):
         description="device model: throttle whose flow is measured (e, 1, T, 3, in, valve)")] = "T"
     hessian: Annotated[Literal["gauss-newton", "exact"], Field(
         description="Hessian IPOPT uses: Gauss-Newton J'J or the exact Lagrangian Hessian")] = "gauss-newton"
-    max_iterations: Annotated[int, Field(ge=1, le=10000, description="IPOPT's iteration limit")] = 300
+    max_iterations: Annotated[int, Field(ge=1, le=10000, description="IPOPT's iteration limit")] = \
+        DEFAULTS["fit.max_iter"]
 
     @model_validator(mode="after")
     def _known(self):

@@ -12,6 +12,7 @@ from typing import Annotated
 from pydantic import Field, model_validator
 
 from autobal.analyses import COST
+from autobal.analysis.solver_options import DEFAULTS
 from autobal.errors import ScenarioError
 from autobal.parts.ross_rotor import Node
 from autobal.schema import Strict
@@ -44,7 +45,8 @@ class RossSpinup(Strict):
         1e-3, description="the gyroscopic terms are kept when they move a critical speed by more than this fraction")
     intervals: Annotated[int, Field(ge=4, le=2000)] = Field(160, description="control intervals over the horizon")
     degree: Annotated[int, Field(ge=1, le=9)] = Field(3, description="Radau collocation degree, 1 to 9")
-    max_iterations: Annotated[int, Field(ge=1, le=100000)] = Field(1000, description="IPOPT iterations per solve")
+    max_iterations: Annotated[int, Field(ge=1, le=100000)] = Field(DEFAULTS["spinup.max_iter"],
+                                                                   description="IPOPT iterations per solve")
     validate_with_ross: bool = Field(True, description="compare the reduced critical speeds with ROSS's own")
 
     @model_validator(mode="after")
@@ -62,7 +64,7 @@ SETTINGS = RossSpinup
 def run(scene, settings: RossSpinup):
     """Optimal spin-up of a ROSS rotor reduced to its modes, through its critical speeds, with the reduced
     model's critical speeds checked against ROSS's own (needs the ross extra)."""
-    from autobal.analysis import progress
+    from autobal.analysis import progress, solver_options
     from autobal.models import ross_rotor as rr
     from autobal.ocp import modal
     from autobal.parts.ross_rotor import adapt
@@ -77,7 +79,7 @@ def run(scene, settings: RossSpinup):
           "degree": settings.degree, **drive(scene)}
     try:
         with progress.steps(None, "multi-mode spin-up (starts)", "IPOPT solve", catch=True):
-            return modal.run(reduced, kw, scene.title, ross_cs, {"max_iter": settings.max_iterations})
+            return modal.run(reduced, kw, scene.title, ross_cs, solver_options.ipopt_options(settings.max_iterations))
     except ValueError as exc:
         raise ScenarioError(f"analyses.ross_spinup: {exc}") from None
 

@@ -55,7 +55,7 @@ def problem(scene, settings: RossSpinupRobust):
 def run(scene, settings: RossSpinupRobust):
     """One spin-up profile of the reduced ROSS rotor minimising the worst-case peak over a set of rotors,
     validated on a random sample (on the executor the CLI or the scene names; needs the ross extra)."""
-    from autobal.analysis import executor, progress
+    from autobal.analysis import executor, progress, solver_options
     from autobal.ocp import robust, robust_study
 
     ocp = problem(scene, settings)
@@ -65,7 +65,8 @@ def run(scene, settings: RossSpinupRobust):
                            catch=True):
         return robust_study.run(ocp, ocp.method, unc, settings.design_points, settings.validation_samples,
                                 settings.seed, settings.ramps, exe, scene.title,
-                                options={"max_iter": settings.max_iterations}, name="ross_spinup_robust")
+                                options=solver_options.ipopt_options(settings.max_iterations),
+                                name="ross_spinup_robust")
 
 
 def estimate_seconds(settings: RossSpinupRobust) -> float:

@@ -49,13 +49,14 @@ SETTINGS = RossSpinupTimeOptimal
 def run(scene, settings: RossSpinupTimeOptimal):
     """The earliest arrival of the reduced ROSS rotor with the peak bounded, and the front of peak against arrival
     time (needs the ross extra)."""
-    from autobal.analysis import progress
+    from autobal.analysis import progress, solver_options
     from autobal.ocp import time_optimal_study
 
     ocp = ross_spinup.problem(scene, settings, "ross_spinup_time_optimal", deflection_limit=settings.deflection_limit)
     with progress.steps(None, "time-optimal spin-up of the modal rotor (front deadlines)", "IPOPT solve", catch=True):
         return time_optimal_study.run(ocp, ocp.method, settings.front_points, scene.title,
-                                      options={"max_iter": settings.max_iterations}, name="ross_spinup_time_optimal")
+                                      options=solver_options.ipopt_options(settings.max_iterations),
+                                      name="ross_spinup_time_optimal")
 
 
 def estimate_seconds(settings: RossSpinupTimeOptimal) -> float:

@@ -10,6 +10,7 @@ from typing import Annotated, Literal
 from pydantic import Field, model_validator
 
 from autobal.analyses import COST
+from autobal.analysis.solver_options import DEFAULTS
 from autobal.errors import ScenarioError
 from autobal.schema import Positive, Strict
 from autobal.units import AngularAcceleration, AngularSpeed, SpeedOrZero, Time, TimeOrZero, quantity
@@ -54,9 +55,11 @@ class Spinup(Strict):
         4, description="ramp segments of the drive's table (drive_segments.csv), optimised for the same objective "
         "under the same limits, 1 to 12; 0: no table")
     max_iterations: Annotated[int, Field(ge=1, le=100000)] = Field(
-        1000, description="IPOPT's iteration limit per solve (each start and each mesh-continuation stage)")
+        DEFAULTS["spinup.max_iter"],
+        description="IPOPT's iteration limit per solve (each start and each mesh-continuation stage)")
     tolerance: Annotated[float, Field(gt=0, lt=1)] = Field(
-        1e-8, description="IPOPT's tolerance (dimensionless): optimality, constraint violation and complementarity")
+        DEFAULTS["spinup.tol"],
+        description="IPOPT's tolerance (dimensionless): optimality, constraint violation and complementarity")
 
     @model_validator(mode="after")
     def _consistent(self):
@@ -106,8 +109,8 @@ def ocp(scene, settings: Spinup):
 def run(scene, settings: Spinup):
     """Optimal spin-up through the critical speed (global search, collocation, CVODES re-simulation)."""
     from autobal.analysis import progress
+    from autobal.analysis.solver_options import ipopt_options
     from autobal.ocp import spinup_study
-    from autobal.ocp.solve import ipopt_options
 
     with progress.steps(None, "spin-up (starts, mesh stages)", "IPOPT solve", catch=True):
         return spinup_study.run(ocp(scene, settings), spinup_study.method_of(settings), scene.title,

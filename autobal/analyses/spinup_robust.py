@@ -60,8 +60,8 @@ def run(scene, settings: SpinupRobust):
     """One spin-up profile minimising the worst-case peak over a set of rotors, validated on a random sample
     (on the executor the CLI or the scene names)."""
     from autobal.analysis import executor, progress
+    from autobal.analysis.solver_options import ipopt_options
     from autobal.ocp import robust, robust_study
-    from autobal.ocp.solve import ipopt_options
     from autobal.ocp.transcription import DirectCollocation
 
     problem = ocp(scene, settings)

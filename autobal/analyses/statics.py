@@ -47,10 +47,12 @@ def run(scene, settings: Statics):
 
 def estimate_seconds(settings: Statics) -> float:
     """One warm-started IPOPT solve per sweep point (and path node) and per force-gap point."""
-    from autobal.analysis.statics_study import PATH_NODES
+    from autobal.analysis.solver_options import defaults
+
+    nodes = defaults["continuation.path_nodes"]
 
     n = settings.discharge_ratio.points
-    return COST["start"] + COST["ipopt_solve"] * (n + (PATH_NODES if n > PATH_NODES else 0)
+    return COST["start"] + COST["ipopt_solve"] * (n + (nodes if n > nodes else 0)
                                                   + settings.force_gap_points)
 
 
