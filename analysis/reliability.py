@@ -45,21 +45,22 @@ from autobal.models.hydroheel import (
     seal_shape_factor,
 )
 
-HOUR = 3600.0
+HOUR = 3600.0  # s
+KILOHOUR = 1000 * HOUR
 
 # Chapter 1.2 printed values (L871-L951), kept beside the computed ones in results.json.
 SOURCE = {
     "u_max": 1.5, "chi0": 1.76, "b_mean_per_s": 1.39e-7, "b_std_per_s": 2.78e-8, "tau_std": 0.19, "k": 3.3,
     "a_b": 1.0, "a_tau": 1.0, "wear_le_zB_2000h": 0.5, "P_2000h": 0.75, "P_4000h_about": 0.25,
-    "mttf_h": 2700.0,
+    "mttf": 2700.0 * HOUR,
 }
-# Table 1.2 (L944-L951): mean time to failure and time of reliable operation at P = 0.8, thousand h, for
+# Table 1.2 (L944-L951): mean time to failure and time of reliable operation at P = 0.8 (printed in thousand h), for
 # the bush materials; the meaning of the two rows is lost in the OCR and the wear rates of SCh20 and
 # 20Kh13 are not given, so the table is reference data only (Pavlenko 2014, ch. 1.2).
 TABLE_1_2 = {
     "materials": ["SCh20 (grey cast iron)", "20Kh13", "30Kh3MA"],
-    "mttf_kh": [[1.6, 3.9, 5.8], [3.5, 8.7, 14.0]],
-    "time_at_P_0.8_kh": [[1.0, 2.6, 3.5], [2.5, 7.4, 13.2]],
+    "mttf": [[x * KILOHOUR for x in row] for row in ([1.6, 3.9, 5.8], [3.5, 8.7, 14.0])],
+    "time_at_P_0.8": [[x * KILOHOUR for x in row] for row in ([1.0, 2.6, 3.5], [2.5, 7.4, 13.2])],
 }
 
 
@@ -170,17 +171,17 @@ def _models(*keys: str) -> str:
 
 
 def _time(**kw):
-    return quantity("h", "t", "operating times", **kw)
+    return quantity("s", "t", "operating times", "h", **kw)
 
 
 def _probability(**kw):
-    return quantity("1", "P(t)", "probability of failure-free operation (at the times of times_h) / of wear ≤ z_B",
+    return quantity("1", "P(t)", "probability of failure-free operation (at the times of times) / of wear ≤ z_B",
                     source=f"{_P14}, Eq. (1.48), Figs. 1.27-1.28", **kw)
 
 
 def _other_time(**kw):
-    return quantity("h", "T", "mean time to failure by the sojourn cross-check / to an infinite horizon; time at a "
-                    "reliability", **kw)
+    return quantity("s", "T", "mean time to failure by the sojourn cross-check / to an infinite horizon; time at a "
+                    "reliability", "h", **kw)
 
 
 def _group(**kw):
@@ -202,36 +203,36 @@ def _published(**kw):
 
 @record
 class Variant(Record):
-    """P(t), MTTF and the time of reliable operation of one reading of (1.48), times in hours."""
+    """P(t), MTTF and the time of reliable operation of one reading of (1.48), times in s."""
 
     P0: float = _probability()
     P: np.ndarray = _probability()
-    mttf_h: float
-    mttf_sojourn_h: float = _other_time()
-    mttf_infinite_h: float = _other_time()
-    time_at_h: float = _other_time()  # NaN (null) where P(t) never is the level
-    time_at_h_status: str | None = optional()
+    mttf: float
+    mttf_sojourn: float = _other_time()
+    mttf_infinite: float = _other_time()
+    time_at: float = _other_time()  # NaN (null) where P(t) never is the level
+    time_at_status: str | None = optional()
 
 
 @record
 class Literal(Variant):
     """(1.48)-(1.49) as printed."""
 
-    mttf_h: float = quantity("h", "T", "mean time to failure, (1.48)-(1.49) as printed",
-                             source=f"{_P14}, Eq. (1.49)", headline=2)
+    mttf: float = quantity("s", "T", "mean time to failure, (1.48)-(1.49) as printed", "h",
+                           source=f"{_P14}, Eq. (1.49)", headline=2)
 
 
 @record
 class Renormalised(Variant):
     """The load density renormalised on [0, σψ1]."""
 
-    mttf_h: float = quantity("h", "T", "mean time to failure, load density renormalised on [0, σψ1]",
-                             source=f"{_P14}, Eq. (1.49)", headline=1)
+    mttf: float = quantity("s", "T", "mean time to failure, load density renormalised on [0, σψ1]", "h",
+                           source=f"{_P14}, Eq. (1.49)", headline=1)
 
 
 @record
 class Curve(Record):
-    t_h: np.ndarray = _time()
+    t: np.ndarray = _time()
     P_literal: np.ndarray = _curve()
     P_renormalised: np.ndarray = _curve()
     P_wear_le_base_gap: np.ndarray = _curve()
@@ -261,7 +262,7 @@ class Published(Record):
     wear_le_zB_2000h: float = _published()
     P_2000h: float = _published()
     P_4000h_about: float = _published()
-    mttf_h: float = quantity("h", "T", "the source's mean time to failure", source=f"{_P14}, Eq. (1.49)")
+    mttf: float = quantity("s", "T", "the source's mean time to failure", "h", source=f"{_P14}, Eq. (1.49)")
 
 
 def _wear_rate(**kw):
@@ -290,8 +291,8 @@ class ReliabilityResult(TypedResult):
     z_B: float = quantity("m", "z_B", "base gap", "µm")
     a_tau: float = _group()
     load_mass_on_0_sigma_psi1: float = _group()
-    times_h: np.ndarray = _time()
-    horizon_h: float = _time()
+    times: np.ndarray = _time()
+    horizon: float = _time()
     reliable_probability: float = _probability()
     wear_le_base_gap: np.ndarray = _probability()
     literal: Literal
@@ -306,13 +307,13 @@ class ReliabilityResult(TypedResult):
 
     @property
     def mttf(self) -> float:
-        """Mean time to failure by (1.49) with the load density renormalised on [0, sigma psi1], h."""
-        return self.renormalised.mttf_h
+        """Mean time to failure by (1.49) with the load density renormalised on [0, sigma psi1], s."""
+        return self.renormalised.mttf
 
     @property
     def mttf_literal(self) -> float:
-        """Mean time to failure by (1.48)-(1.49) as printed, h."""
-        return self.literal.mttf_h
+        """Mean time to failure by (1.48)-(1.49) as printed, s."""
+        return self.literal.mttf
 
     def summary(self) -> str:
         s = self.source
@@ -321,35 +322,35 @@ class ReliabilityResult(TypedResult):
             f"  u_max {self.u_max:.4f} (source {s.u_max}), chi0 {self.chi0:.4f} ({s.chi0}), k {self.k:.4f} "
             f"({s.k}), b_mean {self.b_mean:.4g} 1/s ({s.b_mean_per_s})",
             "  P(wear <= z_B): " + ", ".join(f"{h:g} h: {p:.4f}" for h, p in
-                                             zip(self.times_h, self.wear_le_base_gap, strict=True)),
+                                             zip(self.times / HOUR, self.wear_le_base_gap, strict=True)),
         ]
         for name, r in (("literal (1.48)", self.literal), ("renormalised p_tau", self.renormalised)):
             lines.append(f"  {name}: P(0) {r.P0:.4f}; " + ", ".join(
-                f"P({h:g} h) {p:.4f}" for h, p in zip(self.times_h, r.P, strict=True))
-                + f"; MTTF {r.mttf_h:.0f} h to {self.horizon_h:g} h ({r.mttf_sojourn_h:.0f} h by sojourn),"
-                f" {r.mttf_infinite_h:.0f} h to infinity; t(P = {self.reliable_probability}) {_hours(r.time_at_h)}")
-        lines.append(f"  source: P(2000 h) {s.P_2000h}, MTTF {s.mttf_h:.0f} h: "
+                f"P({h:g} h) {p:.4f}" for h, p in zip(self.times / HOUR, r.P, strict=True))
+                + f"; MTTF {_hours(r.mttf)} to {_hours(self.horizon)} ({_hours(r.mttf_sojourn)} by sojourn),"
+                f" {_hours(r.mttf_infinite)} to infinity; t(P = {self.reliable_probability}) {_hours(r.time_at)}")
+        lines.append(f"  source: P(2000 h) {s.P_2000h}, MTTF {_hours(s.mttf)}: "
                      "not reproduced (see the validation ledger)")
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
         c = self.curve
-        q = QUANTITIES.find("curve.t_h")
+        q = QUANTITIES.find("curve.t")
         curves = QUANTITIES.columns({"P_literal": c.P_literal, "P_renormalised": c.P_renormalised,
                                      "P_wear_le_base_gap": c.P_wear_le_base_gap}, "curve")
-        return {"reliability_curve.csv": {f"t [{q.display}]": q.shown(np.asarray(c.t_h, float))} | curves}
+        return {"reliability_curve.csv": {f"t [{q.display}]": q.shown(np.asarray(c.t, float))} | curves}
 
     def draw(self, ax) -> None:
         """Probability of failure-free operation against time, both readings of (1.48), Fig. 1.28."""
         c = self.curve
-        f = unit_axis(ax, "time t", "h", which="x")  # hours unless a time unit is chosen
-        t = np.asarray(c.t_h, float) * f
+        f = unit_axis(ax, "time t", "s", "h", which="x")  # hours unless a time unit is chosen
+        t = np.asarray(c.t, float) * f
         ax.plot(t, c.P_literal, label="P(t), (1.48) literal")
         ax.plot(t, c.P_renormalised, ls="--", label=r"P(t), $p_\tau$ renormalised on [0, $\sigma\psi_1$]")
         ax.plot(t, c.P_wear_le_base_gap, ls=":", label=r"P(wear $\leq z_B$) (Fig. 1.27)")
-        ax.plot(np.array([2000, 4000]) * f, [0.75, 0.25], "kx", label="source (Fig. 1.28)")
-        ax.axvline(self.literal.mttf_h * f, color="0.4", lw=0.8, label="MTTF (1.49), literal")
-        ax.set_xlim(0, min(t[-1], 12000 * f))
+        ax.plot(np.array([2000, 4000]) * HOUR * f, [0.75, 0.25], "kx", label="source (Fig. 1.28)")
+        ax.axvline(self.literal.mttf * f, color="0.4", lw=0.8, label="MTTF (1.49), literal")
+        ax.set_xlim(0, min(t[-1], 12000 * HOUR * f))
         ax.set_ylabel("probability")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
@@ -372,14 +373,14 @@ class ReliabilityResult(TypedResult):
 
 
 def _hours(t: float) -> str:
-    """A time in hours for the summary, 'nan h' where there is none (NaN, or null read back)."""
-    return f"{math.nan if t is None else t:.0f} h"
+    """A time in s shown in hours for the summary, 'nan h' where there is none (NaN, or null read back)."""
+    return f"{math.nan if t is None else t / HOUR:.0f} h"
 
 
-#: every number of the reliability block (Pavlenko 2014, ch. 1.2), from the fields; times in hours as the keys say
+#: every number of the reliability block (Pavlenko 2014, ch. 1.2), from the fields; times in s, shown in hours
 ReliabilityResult.quantities = QUANTITIES = declarations(
     ReliabilityResult,
-    Quantity("table_1_2.mttf_kh table_1_2.time_at_P_0.8_kh", "kh", "T", "Table 1.2: times in thousands of hours",
+    Quantity("table_1_2.mttf table_1_2.time_at_P_0.8", "s", "T", "Table 1.2: times (printed in thousands of hours)", "kh",
              source=f"{_P14}, Table 1.2"))
 
 
@@ -414,7 +415,7 @@ def run(settings, title: str = "") -> ReliabilityResult:
     horizon = settings.horizon
     times = np.asarray(settings.times, float)
     data = {"title": title, **derived, "a_tau": lit.a_tau, "load_mass_on_0_sigma_psi1": lit.load_mass,
-            "times_h": times / HOUR, "horizon_h": horizon / HOUR, "reliable_probability": settings.reliable_probability,
+            "times": times, "horizon": horizon, "reliable_probability": settings.reliable_probability,
             "wear_le_base_gap": lit.wear.wear_probability(1.0, times)}
     with progress.steps(9, "reliability (P(t), MTTF, t(P), accuracy)", "stage") as bar:
         for name, model in (("literal", lit), ("renormalised", ren)):
@@ -422,17 +423,17 @@ def run(settings, title: str = "") -> ReliabilityResult:
             bar.tick(note=f"{name}: P(t)")
             data[name] = {
                 "P0": float(model.probability(0.0)[0]), "P": model.probability(times),
-                "mttf_h": mttf / HOUR, "mttf_sojourn_h": model.sojourn(horizon) / HOUR}
+                "mttf": mttf, "mttf_sojourn": model.sojourn(horizon)}
             bar.tick(note=f"{name}: MTTF (sojourn)")
-            data[name]["mttf_infinite_h"] = model.sojourn() / HOUR
+            data[name]["mttf_infinite"] = model.sojourn()
             bar.tick(note=f"{name}: MTTF to infinity")
-            data[name]["time_at_h"] = model.time_at(settings.reliable_probability, horizon) / HOUR
+            data[name]["time_at"] = model.time_at(settings.reliable_probability, horizon)
             bar.tick(note=f"{name}: t(P)")
-            if not np.isfinite(data[name]["time_at_h"]):
-                data[name]["time_at_h_status"] = (f"P(t) is not {settings.reliable_probability} at any time up to the "
+            if not np.isfinite(data[name]["time_at"]):
+                data[name]["time_at_status"] = (f"P(t) is not {settings.reliable_probability} at any time up to the "
                                                   f"horizon (P(0) = {data[name]['P0']:.4g})")
-            data["curve"] = data.get("curve", {"t_h": t / HOUR}) | {f"P_{name}": p}
-        data["curve"]["P_wear_le_base_gap"] = lit.wear.wear_probability(1.0, data["curve"]["t_h"] * HOUR)
+            data["curve"] = data.get("curve", {"t": t}) | {f"P_{name}": p}
+        data["curve"]["P_wear_le_base_gap"] = lit.wear.wear_probability(1.0, data["curve"]["t"])
         chi = np.linspace(0.5, 4.0 * derived["chi0"], 200)
         data["region"] = {"chi": chi, "tau_u_min": lit.disc.load(chi, lit.u_min),
                           "tau_u_max": lit.disc.load(chi, lit.u_max)}
@@ -460,16 +461,15 @@ def accuracy(models: dict, settings, data: dict) -> dict:
         coarse = Reliability(m.disc, m.wear, m.tau_mean, m.tau_std, m.u_min, m.u_max,
                              tau_nodes=(m.tau_nodes + 1) // 2, renormalise=m.renormalise)
         P = np.asarray(d["P"], float)
-        t_h, curve = np.asarray(data["curve"]["t_h"]), np.asarray(data["curve"][f"P_{name}"])
-        mttf = d["mttf_h"]
+        t_s, curve = np.asarray(data["curve"]["t"]), np.asarray(data["curve"][f"P_{name}"])
+        mttf = d["mttf"]
         p = {"P_tau": float(np.max(np.abs(coarse.probability(times) - P) / np.maximum(P, 1e-300))),
-             "mttf_tau": abs(coarse.sojourn(horizon) / HOUR - d["mttf_sojourn_h"]) / mttf,
-             "mttf_time": abs(np.trapezoid(curve[::2], t_h[::2]) - mttf) / mttf,
-             "mttf_sojourn": abs(d["mttf_sojourn_h"] - mttf) / mttf,
-             "mttf_infinite_tau": abs(coarse.sojourn() / HOUR - d["mttf_infinite_h"]) / d["mttf_infinite_h"]}
-        ta = d["time_at_h"]
-        if np.isfinite(ta) and ta > 0:
-            t = ta * HOUR
+             "mttf_tau": abs(coarse.sojourn(horizon) - d["mttf_sojourn"]) / mttf,
+             "mttf_time": abs(np.trapezoid(curve[::2], t_s[::2]) - mttf) / mttf,
+             "mttf_sojourn": abs(d["mttf_sojourn"] - mttf) / mttf,
+             "mttf_infinite_tau": abs(coarse.sojourn() - d["mttf_infinite"]) / d["mttf_infinite"]}
+        t = d["time_at"]
+        if np.isfinite(t) and t > 0:
             dp = abs(float(m.probability(t + HOUR)[0] - m.probability(t - HOUR)[0])) / (2 * HOUR)
             shift = abs(float(coarse.probability(t)[0] - m.probability(t)[0]))
             p["time_at_tau"] = (shift / dp + 1.0) / t if dp > 0 else math.inf

@@ -404,7 +404,7 @@ PUBLISHED = {
         ("P(wear ≤ z_B) at 2000 h", "", "wear_le_base_gap.0", 0.5, "1", "Pavlenko (2014), Fig. 1.27"),
         ("reliability at 2000 h", "P(t)", "literal.P.0", 0.75, "1", "Pavlenko (2014), Eq. (1.48), Fig. 1.28"),
         ("reliability at 4000 h", "P(t)", "literal.P.2", 0.25, "1", "Pavlenko (2014), Fig. 1.28 ('3 times lower')"),
-        ("mean time to failure", "T", "literal.mttf_h", 2700.0, "h", "Pavlenko (2014), Eq. (1.49)"),
+        ("mean time to failure", "T", "literal.mttf", 2700.0 * 3600.0, "s", "Pavlenko (2014), Eq. (1.49)"),
     ]},
     "rig_table43_fit": {"estimation": [
         ("conductance ratio from the nominal losses", "α", "loss_coefficient.alpha_nominal", 1.75, "1",

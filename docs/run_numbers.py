@@ -164,7 +164,7 @@ def reliability(results: dict) -> dict:
     toolkit computes them, P(wear <= z_B), P(t) and the MTTF (h) of both readings of the load density."""
     r = results["reliability"]
     scalars = {k: v for k, v in r.items() if isinstance(v, int | float) and not isinstance(v, bool)}
-    out = scalars | {k: _numbers(r[k]) for k in ("wear_le_base_gap", "literal", "renormalised", "times_h")}
+    out = scalars | {k: _numbers(r[k]) for k in ("wear_le_base_gap", "literal", "renormalised", "times")}
     out["literal"]["P_first_over_last"] = r["literal"]["P"][0] / r["literal"]["P"][-1]  # P(2000 h) / P(4000 h)
     parts = results["accuracy"]["reliability"]["parts"].values()
     out["accuracy"] = {"estimate": results["accuracy"]["reliability"]["estimate"],  # the MTTF to infinity
@@ -320,7 +320,7 @@ TOLERANCE: dict[str, dict[str, float | str]] = {
     "spinup_liquid_balancer": {"": 1e-4, "ipopt_iterations": ITERATIONS},
     # quadratures in tau (20 001 nodes) and in time: the MTTF to infinity moves by 1e-3 with the nodes (its
     # accuracy estimate), the rest by 1e-8..2.5e-4
-    "hydroheel_wear": {"": 1e-6, "literal.mttf_infinite_h": 1e-3, "renormalised.mttf_infinite_h": 1e-3,
+    "hydroheel_wear": {"": 1e-6, "literal.mttf_infinite": 1e-3, "renormalised.mttf_infinite": 1e-3,
                        "accuracy": ORDER},
     # the AFC's peaks are refined by a bounded search
     "pump_pe600_dynamics": {"afc": 1e-5, "accuracy": ORDER},

@@ -178,8 +178,8 @@ def test_scene_runs_and_writes(tmp_path, capsys):
     assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 0
     res = json.loads((tmp_path / "out" / "results.json").read_text())["reliability"]
     assert_allclose(res["literal"]["P"][0], 0.671, atol=1e-3)
-    assert res["literal"]["time_at_h"] is None  # P(0) = 0.776 < 0.8: no time of reliable operation
-    assert 2000 < res["renormalised"]["time_at_h"] < 2600
+    assert res["literal"]["time_at"] is None  # P(0) = 0.776 < 0.8: no time of reliable operation
+    assert 2000 * 3600 < res["renormalised"]["time_at"] < 2600 * 3600
     assert (tmp_path / "out" / "fig_reliability.png").stat().st_size > 1000
     assert "not reproduced" in capsys.readouterr().out
 

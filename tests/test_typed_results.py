@@ -205,13 +205,13 @@ def test_reliability_is_typed_loads_back_and_renders_the_same_report(tmp_path):
     run = autobal.run(scene, out=tmp_path / "out")
     res = run["reliability"]
     assert isinstance(res, ReliabilityResult) and res.literal.P[0] == pytest.approx(0.671, abs=1e-3)
-    assert math.isnan(res.literal.time_at_h) and "(P(0) = 0.7758)" in res.literal.time_at_h_status
-    assert res.renormalised.time_at_h_status is None and 2000 < res.renormalised.time_at_h < 2600
-    assert res.mttf == res.renormalised.mttf_h and res.mttf_literal == res.literal.mttf_h
+    assert math.isnan(res.literal.time_at) and "(P(0) = 0.7758)" in res.literal.time_at_status
+    assert res.renormalised.time_at_status is None and 2000 * 3600 < res.renormalised.time_at < 2600 * 3600
+    assert res.mttf == res.renormalised.mttf and res.mttf_literal == res.literal.mttf
     saved = json.loads((tmp_path / "out" / "results.json").read_text())
     done = autobal.load_run(tmp_path / "out")
     assert done["reliability"] == res and plain(done["reliability"].to_dict()) == saved["reliability"]
-    assert saved["reliability"]["literal"]["time_at_h"] is None
+    assert saved["reliability"]["literal"]["time_at"] is None
     assert list(res.to_dict()) == list(saved["reliability"])  # the keys in the order results.json has them
     assert done["reliability"].summary() == res.summary()
     page = (tmp_path / "out" / report.REPORT).read_bytes()
@@ -219,9 +219,9 @@ def test_reliability_is_typed_loads_back_and_renders_the_same_report(tmp_path):
     (tmp_path / "out" / report.REPORT).unlink()
     assert main(["report", str(tmp_path / "out")]) == 0  # autobal report OUT: the same page from the loaded Results
     assert (tmp_path / "out" / report.REPORT).read_bytes() == page
-    assert [q.key for q in REL if q.headline] == ["renormalised.mttf_h", "literal.mttf_h"]
+    assert [q.key for q in REL if q.headline] == ["renormalised.mttf", "literal.mttf"]
     assert set(fields.key_paths(ReliabilityResult)) == {k for q in REL for k in q.keys} - {
-        "table_1_2.mttf_kh", "table_1_2.time_at_P_0.8_kh", "accuracy.**"}
+        "table_1_2.mttf", "table_1_2.time_at_P_0.8", "accuracy.**"}
 
 
 def test_a_row_of_a_typed_section_must_name_a_declared_field(pump):

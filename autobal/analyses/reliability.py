@@ -118,6 +118,7 @@ def estimate_seconds(settings: Reliability) -> float:
 def report_section(sec) -> None:
     """Wear, reliability P(t) and mean time to failure of the traditional disc (Pavlenko 2014, ch. 1.2); reads the
     fields of the loaded :class:`~autobal.analysis.reliability.ReliabilityResult` (``sec.result``)."""
+    from autobal.analysis.reliability import HOUR
     from autobal.analysis.result import plain
     from autobal.report import number
 
@@ -125,16 +126,16 @@ def report_section(sec) -> None:
     sec.row("largest gap", "u_max", "u_max", value=r.u_max)
     sec.row("mean wear rate", "b̄", "b_mean", value=r.b_mean)
     sec.row("mean load", "τ̄", "tau_mean", value=r.tau_mean)
-    for i, t in enumerate(plain(r.times_h)):
-        sec.row(f"reliability at {number(t)} h (literal (1.48))", "P(t)", f"literal.P.{i}", value=plain(r.literal.P[i]))
-    sec.row("mean time to failure (literal)", "T", "literal.mttf_h", value=plain(r.literal.mttf_h))
-    sec.row("mean time to failure (renormalised load density)", "T", "renormalised.mttf_h",
-            value=plain(r.renormalised.mttf_h))
+    for i, t in enumerate(plain(r.times)):
+        sec.row(f"reliability at {number(t / HOUR)} h (literal (1.48))", "P(t)", f"literal.P.{i}", value=plain(r.literal.P[i]))
+    sec.row("mean time to failure (literal)", "T", "literal.mttf", value=plain(r.literal.mttf))
+    sec.row("mean time to failure (renormalised load density)", "T", "renormalised.mttf",
+            value=plain(r.renormalised.mttf))
     level = r.reliable_probability
     for variant, v in (("literal", r.literal), ("renormalised", r.renormalised)):
-        t = plain(v.time_at_h)
+        t = plain(v.time_at)
         if t is None and level is not None:
             sec.verdict(False, f"{variant}: P(t) never reaches {number(level)} (P(0) = {number(v.P0)}): no time of "
                                "reliable operation")
         elif t is not None:
-            sec.verdict(None, f"{variant}: P(t) ≥ {number(level)} up to t = {number(t)} h")
+            sec.verdict(None, f"{variant}: P(t) ≥ {number(level)} up to t = {number(t / HOUR)} h")
