@@ -380,8 +380,8 @@ def _hours(t: float) -> str:
 #: every number of the reliability block (Pavlenko 2014, ch. 1.2), from the fields; times in s, shown in hours
 ReliabilityResult.quantities = QUANTITIES = declarations(
     ReliabilityResult,
-    Quantity("table_1_2.mttf table_1_2.time_at_P_0.8", "s", "T", "Table 1.2: times (printed in thousands of hours)", "kh",
-             source=f"{_P14}, Table 1.2"))
+    Quantity("table_1_2.mttf table_1_2.time_at_P_0.8", "s", "T", "Table 1.2: times (printed in thousands of hours)",
+             "kh", source=f"{_P14}, Table 1.2"))
 
 
 def build(settings) -> tuple[Reliability, Reliability, dict]:

@@ -127,7 +127,8 @@ def report_section(sec) -> None:
     sec.row("mean wear rate", "b̄", "b_mean", value=r.b_mean)
     sec.row("mean load", "τ̄", "tau_mean", value=r.tau_mean)
     for i, t in enumerate(plain(r.times)):
-        sec.row(f"reliability at {number(t / HOUR)} h (literal (1.48))", "P(t)", f"literal.P.{i}", value=plain(r.literal.P[i]))
+        sec.row(f"reliability at {number(t / HOUR)} h (literal (1.48))", "P(t)", f"literal.P.{i}",
+                value=plain(r.literal.P[i]))
     sec.row("mean time to failure (literal)", "T", "literal.mttf", value=plain(r.literal.mttf))
     sec.row("mean time to failure (renormalised load density)", "T", "renormalised.mttf",
             value=plain(r.renormalised.mttf))
