@@ -121,8 +121,8 @@ def test_afc_amplitudes_are_si_in_results_json(pump):
     assert peak["omega"] == pytest.approx(1977.2, abs=1.0) and peak["amplitude"] == pytest.approx(25.20e-6, abs=0.02e-6)
     assert fr.amplitude_at_operating_speed == d["at_operating_speed"]["amplitude"]  # the property is m, as the key
     table = fr.tables()["afc_program.csv"]
-    curve = fr.data["curves"]["program"]
-    assert np.asarray(table["amplitude [µm]"]) == pytest.approx(np.asarray(curve["amplitude"]) * 1e6, rel=1e-12)
+    curve = fr.models["program"]
+    assert np.asarray(table["amplitude [µm]"]) == pytest.approx(np.asarray(curve.amplitude) * 1e6, rel=1e-12)
     assert np.max(table["amplitude [µm]"]) == pytest.approx(peak["amplitude"] * 1e6, rel=1e-3)
 
 

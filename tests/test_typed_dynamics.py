@@ -1,0 +1,111 @@
+"""Typed Results of the dynamics side (issue #34 item 1): frequency, transient, rotor dynamics and liquid balancer.
+
+For every shipped scene that runs one of them: the Result is a typed Result, ``from_dict(to_dict(r)) == r`` through
+JSON, its block is the one results.json holds, ``autobal.load_run`` loads it back (it is not in ``unloaded``), its
+summary is the run's, and report.html rendered again from the loaded Results is the page the run wrote, byte for
+byte.  Beside them the small pieces of analysis/fields.py and analysis/quantities.py these Results need."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+import autobal
+from autobal import report
+from autobal.analysis import fields
+from autobal.analysis.quantities import Declarations, Quantity
+from autobal.analysis.result import plain
+
+DYNAMICS = ("frequency",)  # the analyses typed here
+SCENES = [pytest.param("compressor_k180_dynamics", id="compressor_k180_dynamics"),
+          *(pytest.param(n, id=n, marks=pytest.mark.slow) for n in ("pump_pe600_dynamics", "pump_pe600_simplified"))]
+
+
+@pytest.mark.cli
+@pytest.mark.parametrize("scene", SCENES)
+def test_the_dynamics_results_round_trip_load_back_and_render_the_same_report(shipped_run, scene):
+    run, folder = shipped_run(scene)
+    saved = json.loads((folder / "results.json").read_text())
+    done = autobal.load_run(folder)
+    mine = [name for name in DYNAMICS if name in saved]
+    assert mine, scene
+    for name in mine:
+        res = run[name]
+        assert isinstance(res, fields.TypedResult), name
+        back = type(res).from_dict(json.loads(json.dumps(plain(res.to_dict()))))
+        assert back == res and plain(back.to_dict()) == saved[name], name
+        assert list(back.to_dict()) == list(saved[name]), name  # the keys in results.json's order
+        assert name not in done.unloaded and done[name] == res, name
+        assert done[name].summary() == res.summary(), name
+    assert report.html(folder) == (folder / report.REPORT).read_text(encoding="utf-8")
+
+
+@pytest.mark.cli
+def test_the_loaded_frequency_result_reads_its_fields_and_has_no_curves(shipped_run):
+    """Compressor K180: the headline (energy-consistent, physical forcing) read from the loaded Result's fields is
+    results.json's; the curves are not in results.json (afc_<model>.csv holds them), so a loaded Result says so
+    instead of drawing nothing."""
+    run, folder = shipped_run("compressor_k180_dynamics")
+    saved = json.loads((folder / "results.json").read_text())["frequency"]
+    loaded = autobal.load_run(folder)["frequency"]
+    h = loaded.head
+    assert (h.model, h.forcing) == ("nonlinear", "physical") == (saved["headline"]["model"], "physical")
+    assert h.peaks[0].omega == saved["headline"]["peaks"][0]["omega"] and 100 < h.peaks[0].omega < 8000  # rad/s
+    assert loaded.models["program"].static_amplitude == saved["models"]["program"]["static_amplitude"]
+    assert run["frequency"].head.omega is not None and h.omega is None
+    with pytest.raises(ValueError, match="a loaded Result holds no curves"):
+        loaded.tables()
+    # the CSV of the run is the curve the Result held: its peak is the refined peak to the grid's resolution
+    table = run["frequency"].tables()["afc_nonlinear.csv"]
+    assert max(table["amplitude [µm]"]) == pytest.approx(run["frequency"].models["nonlinear"].peaks[0].amplitude
+                                                         * 1e6, rel=1e-3)
+
+
+@fields.record
+class _Curve(fields.Record):
+    peak: float = fields.quantity("m", "A", "a peak", "µm", headline=1)
+    grid: np.ndarray | None = fields.unsaved()
+
+
+@fields.record
+class _Toy(fields.TypedResult):
+    title: str
+    curves: list[_Curve]
+    after: float = fields.quantity("s", "t", "a time")
+    failures_after = "title"
+    name = "toy"
+
+
+_Toy.quantities = fields.declarations(_Toy)
+
+
+def test_an_unsaved_field_is_held_not_written_and_none_when_loaded():
+    toy = _Toy(title="x", curves=[_Curve(2e-6, grid=np.arange(3.0))], after=1.0)
+    d = toy.to_dict()
+    assert d == {"title": "x", "failures": [], "curves": [{"peak": 2e-6}], "after": 1.0}
+    back = _Toy.from_dict(d)
+    assert back == toy and back.curves[0].grid is None and toy.curves[0].grid[2] == 2.0
+    assert fields.key_paths(_Toy) == ["curves[].peak", "after"]  # the unsaved grid has no key
+    with pytest.raises(KeyError, match="_Curve has no field 'grid'"):
+        _Toy.from_dict(d | {"curves": [{"peak": 2e-6, "grid": [0.0]}]})
+
+
+def test_failures_after_keeps_their_place_and_are_written_when_none():
+    failed = _Toy(title="x", curves=[], after=1.0, failures=["case 1: the integrator failed"])
+    d = failed.to_dict()
+    assert list(d) == ["title", "failures", "curves", "after"] and d["failures"] == ["case 1: the integrator failed"]
+    assert _Toy.from_dict(d) == failed and failed.failures() == ["case 1: the integrator failed"]
+    assert dataclasses.replace(failed, failures=[]).to_dict()["failures"] == []
+
+
+def test_a_headline_through_a_list_of_records_gives_each_item():
+    q = Quantity("head.peaks[].omega", "rad/s", "ω", "resonance", headline=True)
+    block = {"head": {"peaks": [{"omega": 10.0}, {"omega": 30.0}]}}
+    assert [(k, v) for _, k, v in Declarations(q).headline(block)] == [("head.peaks.0.omega", 10.0),
+                                                                        ("head.peaks.1.omega", 30.0)]
+    assert Declarations(q).headline({"head": {"peaks": []}}) == []
+    toy = _Toy(title="x", curves=[_Curve(2e-6), _Curve(5e-6)], after=1.0)
+    assert [r["value"] for r in toy.headline()] == ["2.000", "5.000"]  # µm, as declared
