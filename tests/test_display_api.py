@@ -130,12 +130,12 @@ def test_transient_gap_changes_are_si(pump):
     tr = simulate.study(pump.nonlinear("energy"), [{"input": "force_step", "amplitude": 0.01}], 0.002, 50,
                         title="pump")
     case = tr.to_dict()["cases"][0]
-    z = np.asarray(tr.data["series"][0]["z"])
+    z = np.asarray(tr.cases[0].z)
     assert case["max_dz"] == pytest.approx(np.abs(z - z[0]).max(), rel=1e-12) and 0 < case["max_dz"] < 1e-4  # m
     assert report.units({"transient": tr.to_dict()}, ["transient"])["transient.cases[].max_dz"] == "m"
     table = tr.tables()["transient_0_force_step.csv"]
     assert np.asarray(table["z [µm]"]) == pytest.approx(z * 1e6, rel=1e-12)
-    assert np.asarray(table["t [ms]"]) == pytest.approx(np.asarray(tr.data["series"][0]["t"]) * 1e3, rel=1e-12)
+    assert np.asarray(table["t [ms]"]) == pytest.approx(np.asarray(tr.cases[0].t) * 1e3, rel=1e-12)
 
 
 def _keys(block, path=""):

@@ -19,7 +19,7 @@ from autobal.analysis import fields
 from autobal.analysis.quantities import Declarations, Quantity
 from autobal.analysis.result import plain
 
-DYNAMICS = ("frequency",)  # the analyses typed here
+DYNAMICS = ("frequency", "transient")  # the analyses typed here
 SCENES = [pytest.param("compressor_k180_dynamics", id="compressor_k180_dynamics"),
           *(pytest.param(n, id=n, marks=pytest.mark.slow) for n in ("pump_pe600_dynamics", "pump_pe600_simplified"))]
 
@@ -109,3 +109,32 @@ def test_a_headline_through_a_list_of_records_gives_each_item():
     assert Declarations(q).headline({"head": {"peaks": []}}) == []
     toy = _Toy(title="x", curves=[_Curve(2e-6), _Curve(5e-6)], after=1.0)
     assert [r["value"] for r in toy.headline()] == ["2.000", "5.000"]  # µm, as declared
+
+
+@pytest.mark.cli
+def test_a_failed_transient_case_loads_back_with_its_nulls_and_failure(tmp_path):
+    """Compressor K180 without rotor damping, a force step of 100: CVODES stops at t = 0 (CV_TOO_MUCH_WORK); the
+    case's max |Δz| and final Δz are null with their status, its failure a record, the Result's failures a field
+    kept in results.json's place; all of it comes back from results.json and renders the same report."""
+    import yaml
+
+    from autobal import scenario
+
+    d = yaml.safe_load(scenario.resolve("compressor_k180_dynamics").read_text())
+    d["device"]["dynamics"]["rotor_damping"] = "0 N*s/m"
+    d["analyses"] = {"transient": {"duration": "2 ms", "points": 21, "cases": [
+        {"input": "force_step", "amplitude": 100}, {"input": "force_step", "amplitude": 0.01}]}}
+    (tmp_path / "k180_failing.yaml").write_text(yaml.safe_dump(d))
+    run = autobal.run(autobal.load(tmp_path / "k180_failing.yaml"), out=tmp_path / "o")
+    res, saved = run["transient"], json.loads((tmp_path / "o" / "results.json").read_text())["transient"]
+    failed, solved = res.cases
+    assert failed.failure.t == 0 and "CV_TOO_MUCH_WORK" in failed.failure.message and solved.failure is None
+    assert failed.max_dz is None and failed.max_dz_status.startswith("the integrator failed at t = 0 s")
+    assert saved["cases"][0]["max_dz"] is None and saved["cases"][0]["failure"] == failed.failure.to_dict()
+    assert list(saved)[list(saved).index("equilibrium_residual") + 1] == "failures" == list(res.to_dict())[5]
+    done = autobal.load_run(tmp_path / "o")
+    assert done["transient"] == res and done["transient"].failures() == res.failures() == saved["failures"]
+    assert done["transient"].max_gap_change == [None, solved.max_dz] and 0 < solved.max_dz < 1e-4  # m
+    with pytest.raises(ValueError, match="a loaded Result holds no time series"):
+        done["transient"].tables()
+    assert report.html(tmp_path / "o") == (tmp_path / "o" / report.REPORT).read_text(encoding="utf-8")
