@@ -19,9 +19,10 @@ from autobal.analysis import fields
 from autobal.analysis.quantities import Declarations, Quantity
 from autobal.analysis.result import plain
 
-DYNAMICS = ("frequency", "transient")  # the analyses typed here
+DYNAMICS = ("frequency", "transient", "rotor_dynamics")  # the analyses typed here
 SCENES = [pytest.param("compressor_k180_dynamics", id="compressor_k180_dynamics"),
-          *(pytest.param(n, id=n, marks=pytest.mark.slow) for n in ("pump_pe600_dynamics", "pump_pe600_simplified"))]
+          *(pytest.param(n, id=n, marks=pytest.mark.slow) for n in ("pump_pe600_dynamics", "pump_pe600_simplified",
+                                                                     "pashkov_runup"))]
 
 
 @pytest.mark.cli
@@ -138,3 +139,33 @@ def test_a_failed_transient_case_loads_back_with_its_nulls_and_failure(tmp_path)
     with pytest.raises(ValueError, match="a loaded Result holds no time series"):
         done["transient"].tables()
     assert report.html(tmp_path / "o") == (tmp_path / "o" / report.REPORT).read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize("service_speed", [None, 150.0])
+def test_the_rotor_block_keeps_the_margin_keys_in_the_order_margin_check_writes_them(service_speed):
+    """Pashkov's rotor (Ω0 = 100 rad/s, n = χ/m1 = 2 1/s, ψ = 0.5) with one (μ1, n) = (1, 1) case whose torque has
+    no extremum (μ1 < 3n/(6 − 2√5)): the rotor block is its groups, then the API margins in the order
+    standards.margin_check writes them (with or without a service speed), the nulls with their statuses; the
+    stationary case's z1..M2 null with theirs; everything comes back from results.json."""
+    from autobal.analyses.rotor_dynamics import RotorDynamics, Stationary
+    from autobal.analysis.rotor_study import RotorDynamicsResult, api_margins, run
+    from autobal.models.rotor import RotorParams
+    from autobal.schema import Range
+
+    P = RotorParams.from_groups(Omega0=100.0, chi_over_m1=2.0, psi=0.5)
+    res = run(P, RotorDynamics(stationary=Stationary(cases=[(1.0, 1.0)], z=Range(start=0.01, stop=3.0, points=40))),
+              service_speed=service_speed)
+    d = json.loads(json.dumps(plain(res.to_dict())))
+    groups = ["psi", "mu1", "Omega0_rad_s", "omega_cr_rad_s", "zeta0", "n_steady_1_s", "n_stationary",
+              "n_passage_1_s", "service_speed_rad_s"]
+    margins = list(api_margins(P, service_speed))
+    assert list(d["rotor"]) == groups + margins + ([] if service_speed else ["service_speed_rad_s_status"])
+    assert (d["rotor"]["separation_margin_pct"] is None) is (service_speed is None)
+    case = d["stationary"]["cases"][0]
+    assert case["z1"] is None and case["M2"] is None and "needs mu1 > 3 n" in case["z1_status"]
+    assert res.stationary.cases[0].z_kp == pytest.approx(2 / (2 * 1.0 - 1.0)) and res.critical_speed == P.omega_cr
+    back = RotorDynamicsResult.from_dict(d)
+    assert back == res and plain(back.to_dict()) == d and back.curves is None and res.curves["stationary"]
+    assert back.summary() == res.summary() and back.verdict() == res.verdict()
+    with pytest.raises(ValueError, match="a loaded Result holds no curves"):
+        back.figures()
