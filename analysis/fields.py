@@ -79,15 +79,17 @@ def quantity(unit: str, symbol: str = "", description: str = "", display: str = 
     return field(metadata=meta)
 
 
-def keyed(key: str):
-    """A field whose key in results.json is ``key``, not its name (a name the Result's API uses otherwise)."""
-    return field(metadata={KEY: key})
+def keyed(key: str, kw_only: bool = False):
+    """A field whose key in results.json is ``key``, not its name (a name the Result's API uses otherwise);
+    ``kw_only`` as :func:`optional`."""
+    return field(kw_only=kw_only, metadata={KEY: key})
 
 
-def optional(kw_only: bool = False):
+def optional(kw_only: bool = False, key: str | None = None):
     """A field the analysis may not compute (a map, a scan): default None, and then not in results.json;
-    ``kw_only``: keyword-only, for a field results.json has before fields without a default."""
-    return field(default=None, kw_only=kw_only, metadata={OMIT: True})
+    ``kw_only``: keyword-only, for a field results.json has before fields without a default; ``key`` as
+    :func:`keyed`."""
+    return field(default=None, kw_only=kw_only, metadata={OMIT: True} | ({KEY: key} if key else {}))
 
 
 def unsaved():

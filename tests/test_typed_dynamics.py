@@ -19,10 +19,11 @@ from autobal.analysis import fields
 from autobal.analysis.quantities import Declarations, Quantity
 from autobal.analysis.result import plain
 
-DYNAMICS = ("frequency", "transient", "rotor_dynamics")  # the analyses typed here
+DYNAMICS = ("frequency", "transient", "rotor_dynamics", "liquid_balancer")  # the analyses typed here
 SCENES = [pytest.param("compressor_k180_dynamics", id="compressor_k180_dynamics"),
           *(pytest.param(n, id=n, marks=pytest.mark.slow) for n in ("pump_pe600_dynamics", "pump_pe600_simplified",
-                                                                     "pashkov_runup"))]
+                                                                     "pashkov_runup", "washer_liquid_balancer",
+                                                                     "washer_liquid_balancer_nested"))]
 
 
 @pytest.mark.cli
@@ -42,6 +43,8 @@ def test_the_dynamics_results_round_trip_load_back_and_render_the_same_report(sh
         assert name not in done.unloaded and done[name] == res, name
         assert done[name].summary() == res.summary(), name
     assert report.html(folder) == (folder / report.REPORT).read_text(encoding="utf-8")
+    sections = {s["name"]: s for s in report.context(folder)["sections"]}
+    assert [sections[name]["error"] for name in mine] == [None] * len(mine)  # each section renders from its Result
 
 
 @pytest.mark.cli
