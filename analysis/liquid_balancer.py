@@ -224,6 +224,10 @@ def _radius():
     return quantity("m", "r", "free-surface radius of the liquid", "mm", source=f"{_K20}, step 2.3")
 
 
+def _damping():
+    return quantity("1/s", "n", "damping coefficient n = θω_p/(2π), 2n", source=f"{_K20}, Table 3.1")
+
+
 def _why():
     return optional(kw_only=True)
 
@@ -243,8 +247,8 @@ class SystemData(Record):
     D0_gcm: float = quantity("g*cm", "D", "unbalance and capacity, as Table 3.3", source=f"{_K20}, Table 3.3")
     m_l: float = _mass()
     M_sys: float = _mass()
-    n: float = quantity("1/s", "n", "damping coefficient n = θω_p/(2π), 2n", source=f"{_K20}, Table 3.1")
-    two_n: float = quantity("1/s", "n", "damping coefficient n = θω_p/(2π), 2n", source=f"{_K20}, Table 3.1")
+    n: float = _damping()
+    two_n: float = _damping()
     zeta_damping: float = quantity("1", "n/ω_cr", "damping ratio")
     e_f: float = _length()
     r: float = _radius()

@@ -60,12 +60,16 @@ class Cheapest(Record):
     best_error: float | None = quantity("1", "ε", "the smallest error the method reached")
 
 
+def _modulus():
+    return quantity("1/s", "|λ|", "smallest and largest eigenvalue modulus of the linear model")
+
+
 @record
 class Stiffness(Record):
     """Why the time integration is stiff, and the integrator chosen for it."""
 
-    min_abs_eigenvalue: float = quantity("1/s", "|λ|", "smallest and largest eigenvalue modulus of the linear model")
-    max_abs_eigenvalue: float = quantity("1/s", "|λ|", "smallest and largest eigenvalue modulus of the linear model")
+    min_abs_eigenvalue: float = _modulus()
+    max_abs_eigenvalue: float = _modulus()
     ratio: float = quantity("1", "", "stiffness ratio max |λ| / min |λ|")
     chosen: str
     why: str
