@@ -9,7 +9,9 @@ A typed Result (:class:`TypedResult`) and its nested blocks (:class:`Record`) ar
 - a nested record (``margin: Margin``), a mapping of names to records (``models: dict[str, ModelVerdict]``, key
   path ``models.*.``) or a list of records (``unstable_modes: list[Mode]``, key path ``unstable_modes[].``);
 - a block whose keys are names with units of their own (``coefficients: dict``), declared by the Result's extra
-  declarations.
+  declarations;
+- what the Result holds for its tables and figures but results.json does not (a curve on its grid, written as
+  CSV), declared with :func:`unsaved`: None in a Result rebuilt by ``from_dict``.
 
 From the fields come ``to_dict()`` (the results.json block, keys in field order; an :func:`optional` field that
 is None is left out), ``from_dict()`` (its inverse: ``to_dict(from_dict(d)) == d``), :func:`declarations` (the
@@ -33,6 +35,7 @@ from autobal.analysis.result import Failures, Result, plain
 QUANTITY = "autobal.quantity"  # field metadata: the declaration's arguments
 OMIT = "autobal.omit"  # field metadata: left out of to_dict() when None (a block the analysis did not compute)
 KEY = "autobal.key"  # field metadata: its key in results.json where that is not the field's name
+UNSAVED = "autobal.unsaved"  # field metadata: held by the Result, not in results.json (see unsaved())
 
 #: what a frozen Result still takes after it is made: not its numbers, what a run sets on every Result (the display
 #: units of its scene)
@@ -76,14 +79,24 @@ def quantity(unit: str, symbol: str = "", description: str = "", display: str = 
     return field(metadata=meta)
 
 
-def keyed(key: str):
-    """A field whose key in results.json is ``key``, not its name (a name the Result's API uses otherwise)."""
-    return field(metadata={KEY: key})
+def keyed(key: str, kw_only: bool = False):
+    """A field whose key in results.json is ``key``, not its name (a name the Result's API uses otherwise);
+    ``kw_only`` as :func:`optional`."""
+    return field(kw_only=kw_only, metadata={KEY: key})
 
 
-def optional():
-    """A field the analysis may not compute (a map, a scan): default None, and then not in results.json."""
-    return field(default=None, metadata={OMIT: True})
+def optional(kw_only: bool = False, key: str | None = None):
+    """A field the analysis may not compute (a map, a scan): default None, and then not in results.json;
+    ``kw_only``: keyword-only, for a field results.json has before fields without a default; ``key`` as
+    :func:`keyed`."""
+    return field(default=None, kw_only=kw_only, metadata={OMIT: True} | ({KEY: key} if key else {}))
+
+
+def unsaved():
+    """A field the Result holds for its tables and figures but results.json does not (a curve on its grid, whose
+    CSV the run writes): keyword-only, default None, never in to_dict(), None in a Result rebuilt by from_dict()
+    (and not compared by ``==``, which compares the results.json blocks)."""
+    return field(default=None, kw_only=True, metadata={UNSAVED: True})
 
 
 @record
@@ -95,7 +108,7 @@ class Record:
         out = {}
         for f in dataclasses.fields(self):
             v = getattr(self, f.name)
-            if v is None and f.metadata.get(OMIT) or isinstance(v, Failures) and not v:
+            if f.metadata.get(UNSAVED) or v is None and f.metadata.get(OMIT) or isinstance(v, Failures) and not v:
                 continue
             out[_key(f)] = _out(v)
         return out
@@ -106,13 +119,15 @@ class Record:
         or lacks (a renamed key is never read as missing)."""
         if not isinstance(block, dict):
             raise TypeError(f"{cls.__name__}: expected a mapping, got {type(block).__name__}")
-        names = [_key(f) for f in dataclasses.fields(cls)]
+        names = [_key(f) for f in dataclasses.fields(cls) if not f.metadata.get(UNSAVED)]
         unknown = [k for k in block if k not in names]
         if unknown:
             raise KeyError(f"{cls.__name__} has no field {', '.join(map(repr, unknown))}")
         hints = _hints(cls)
         kwargs = {}
         for f in dataclasses.fields(cls):
+            if f.metadata.get(UNSAVED):
+                continue
             if _key(f) in block:
                 kwargs[f.name] = _in(hints[f.name], block[_key(f)])
             elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
@@ -131,9 +146,21 @@ class TypedResult(Record, Result):
     failures a field (:class:`~autobal.analysis.result.Failures`; in results.json only when there are some)."""
 
     failures: Failures = field(default=Failures(), kw_only=True)
+    #: the key results.json has the failures after, written even when there are none (``[]``), for a Result whose
+    #: block had them there before it was typed; None: first, and only when there are some
+    failures_after: typing.ClassVar[str | None] = None
 
     def __post_init__(self):
         object.__setattr__(self, "failures", Failures(self.failures))
+
+    def to_dict(self) -> dict:
+        out = super().to_dict()
+        if self.failures_after is None:
+            return out
+        out.pop("failures", None)
+        items = list(out.items())
+        at = [k for k, _ in items].index(self.failures_after) + 1
+        return dict(items[:at] + [("failures", list(self.failures))] + items[at:])
 
 
 def _out(v):
@@ -188,6 +215,8 @@ def _walk(cls, prefix: str = ""):
     ``[]``: list items)."""
     hints = _hints(cls)
     for f in dataclasses.fields(cls):
+        if f.metadata.get(UNSAVED):
+            continue
         path, tp = prefix + _key(f), _optional(hints[f.name])
         yield path, f
         inner, sep = tp, "."

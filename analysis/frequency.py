@@ -10,16 +10,17 @@ pole; peaks are local maxima refined with a bounded scalar search.  The runner o
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import dataclasses
 
 import control
 import numpy as np
 from scipy.optimize import minimize_scalar
 
 from autobal.analysis import progress
+from autobal.analysis.fields import Record, TypedResult, declarations, keyed, optional, quantity, record, unsaved
 from autobal.analysis.linearize import LinearModel, Setup
-from autobal.analysis.quantities import Declarations, Quantity, significant
-from autobal.analysis.result import Result, new_figure, unit_axis
+from autobal.analysis.quantities import significant
+from autobal.analysis.result import new_figure, unit_axis
 
 #: what each model is, for legends (Pavlenko (2014): chain form (2.40)/(2.111), App. A/B program model)
 MODEL_LABELS = {"nonlinear": "energy-consistent (nonlinear)", "nonlinear_chain": "chain form (2.40)/(2.111)",
@@ -36,9 +37,9 @@ FORCING_WORDS = {"physical": "under the physical forcing δτ = b δψ1",
 HEADLINE = ("nonlinear", "physical")  # the energy-consistent model under the physical forcing
 
 
-def _is_headline(h: dict | None, model: str, c: dict) -> bool:
+def _is_headline(h: HeadlineCurve, model: str, c: Curve) -> bool:
     """Whether curve ``c`` of ``model`` is the headline curve itself (same model, same forcing)."""
-    return h is not None and model == h["model"] and c.get("forcing") == h["forcing"]
+    return model == h.model and c.forcing == h.forcing
 
 
 def grid(lin: LinearModel, start: float, stop: float, points: int) -> np.ndarray:
@@ -90,134 +91,185 @@ def characteristic(lin: LinearModel, omega_range: tuple, convention: str, amplit
     }
 
 
-def _others(*keys: str) -> str:
-    """The keys of the first model (top level) and of every named model."""
-    return " ".join(f"{k} models.*.{k}" for k in keys)
+_P14 = "Pavlenko (2014)"
 
 
-#: every number of the frequency block (Pavlenko 2014, §2.6): amplitudes of the face gap in m, shown in µm
-QUANTITIES = Declarations(
-    Quantity("headline.peaks[].omega", "rad/s", "ω_I, ω_II", "resonance frequencies of the headline model",
-             headline=True, beside="Hz"),
-    Quantity("headline.peaks[].amplitude", "m", "A_I, A_II", "face-gap amplitude at the resonances", "µm",
-             headline=True),
-    Quantity("headline.at_operating_speed.omega", "rad/s", "ω0", "operating speed", headline=True),
-    Quantity("headline.at_operating_speed.amplitude", "m", "A(ω0)", "face-gap amplitude at the operating speed",
-             "µm", headline=True),
-    Quantity("headline.static_amplitude", "m", "A(0)", "static face-gap amplitude", "µm", headline=True),
-    Quantity("headline.max_real", "1/s", "max Re λ", "spectral abscissa of the headline model", headline=True),
-    Quantity(_others("peaks[].omega"), "rad/s", "ω", "resonance frequency of a model", beside="Hz"),
-    Quantity(_others("at_operating_speed.omega"), "rad/s", "ω0", "operating speed of a model"),
-    Quantity(_others("peaks[].amplitude", "at_operating_speed.amplitude", "static_amplitude"), "m", "A",
-             "face-gap amplitude of a model", "µm"),
-    Quantity("headline.at_operating_speed.phase_deg " + _others("at_operating_speed.phase_deg"), "deg", "φ(ω0)",
-             "phase of the face gap at the operating speed"),
-    Quantity("max_real models.*.max_real", "1/s", "max Re λ", "spectral abscissa of a model"),
-    Quantity("forcing_amplitude", "1", "δψ_1a", "forcing amplitude, ratio of the discharge pressure",
-             source="Pavlenko (2014), §2.6"),
-    Quantity("z_B", "m", "z_B", "base gap of the amplitudes", "µm"),
-)
+def _omega(description: str, symbol: str = "ω", **kw):
+    return quantity("rad/s", symbol, description, beside="Hz", **kw)
 
 
-@dataclass
-class FrequencyResult(Result):
-    """AFC/PFC of the face gap for each model (Pavlenko (2014), Figs 2.7, 2.11).
+def _amplitude(description: str, symbol: str = "A", **kw):
+    return quantity("m", symbol, description, "µm", **kw)
 
-    ``data`` is the results.json block plus the curves; amplitudes are in metres for the forcing amplitude
-    dpsi1a, frequencies in rad/s.
-    """
 
-    data: dict
+def _phase():
+    return quantity("deg", "φ(ω0)", "phase of the face gap at the operating speed")
+
+
+@record
+class Peak(Record):
+    """A resonance peak of a model's AFC."""
+
+    omega: float = _omega("resonance frequency of a model")
+    amplitude: float = _amplitude("face-gap amplitude of a model")
+
+
+@record
+class AtSpeed(Record):
+    """A model's response at the operating speed ω0."""
+
+    omega: float = quantity("rad/s", "ω0", "operating speed of a model")
+    amplitude: float = _amplitude("face-gap amplitude of a model")
+    phase_deg: float = _phase()
+
+
+@record
+class Sampled(Record):
+    """The curve on its frequency grid (rad/s; amplitude m, unwrapped phase deg): held for the tables and figures,
+    not in results.json (afc_<model>.csv holds it), None in a loaded Result."""
+
+    omega: np.ndarray | None = unsaved()
+    amplitude: np.ndarray | None = unsaved()
+    phase_deg: np.ndarray | None = unsaved()
+
+
+@record
+class Curve(Sampled):
+    """The AFC/PFC of one model (:func:`characteristic`)."""
+
+    stable: bool
+    max_real: float = quantity("1/s", "max Re λ", "spectral abscissa of a model")
+    peaks: list[Peak]
+    at_operating_speed: AtSpeed
+    static_amplitude: float = _amplitude("face-gap amplitude of a model")
+    forcing: str
+
+
+@record
+class HeadlinePeak(Record):
+    omega: float = _omega("resonance frequencies of the headline model", "ω_I, ω_II", headline=1)
+    amplitude: float = _amplitude("face-gap amplitude at the resonances", "A_I, A_II", headline=2)
+
+
+@record
+class HeadlineAtSpeed(Record):
+    omega: float = quantity("rad/s", "ω0", "operating speed", headline=3)
+    amplitude: float = _amplitude("face-gap amplitude at the operating speed", "A(ω0)", headline=4)
+    phase_deg: float = _phase()
+
+
+@record
+class HeadlineCurve(Sampled):
+    """The headline curve: the energy-consistent model under the physical forcing, the one verdict."""
+
+    model: str
+    stable: bool
+    max_real: float = quantity("1/s", "max Re λ", "spectral abscissa of the headline model", headline=6)
+    peaks: list[HeadlinePeak]
+    at_operating_speed: HeadlineAtSpeed
+    static_amplitude: float = _amplitude("static face-gap amplitude", "A(0)", headline=5)
+    forcing: str
+
+
+@record
+class FrequencyResult(TypedResult):
+    """AFC/PFC of the face gap for each model (Pavlenko (2014), Figs 2.7, 2.11): amplitudes in metres for the
+    forcing amplitude dpsi1a, frequencies in rad/s.  The top-level ``peaks`` and ``at_operating_speed`` are the
+    first listed model's; ``head`` (results.json ``headline``) is the energy-consistent model under the physical
+    forcing, whatever the scene lists."""
+
+    title: str
+    model: str
+    forcing: str
+    forcing_amplitude: float = quantity("1", "δψ_1a", "forcing amplitude, ratio of the discharge pressure",
+                                        source=f"{_P14}, §2.6", headline=7)
+    z_B: float = quantity("m", "z_B", "base gap of the amplitudes", "µm")
+    peaks: list[Peak]
+    at_operating_speed: AtSpeed
+    #: the error estimate of :func:`accuracy` (its numbers are declared for every analysis: accuracy.**)
+    accuracy: dict | None = optional(kw_only=True)
+    head: HeadlineCurve = keyed("headline")
+    models: dict[str, Curve]
     name = "frequency"
-    quantities = QUANTITIES
-
-    @property
-    def peaks(self) -> list[dict]:
-        """Resonance peaks of the first model: ``{"omega": rad/s, "amplitude": m}`` each."""
-        return self.data["peaks"]
 
     @property
     def amplitude_at_operating_speed(self) -> float:
         """Face-gap amplitude of the first model at the operating speed omega0, m."""
-        return self.data["at_operating_speed"]["amplitude"]
-
-    def to_dict(self) -> dict:
-        arrays = ("omega", "amplitude", "phase_deg")
-        d = {k: v for k, v in self.data.items() if k not in ("curves", "headline")}
-        if "headline" in self.data:
-            d["headline"] = {k: v for k, v in self.data["headline"].items() if k not in arrays}
-        d["models"] = {m: {k: v for k, v in c.items() if k not in arrays}
-                       for m, c in self.data["curves"].items()}
-        return d
+        return self.at_operating_speed.amplitude
 
     def summary(self) -> str:
-        """The verdict (the headline model under the physical forcing) and its declared numbers in display units;
-        below the validation line every other curve, each with its forcing (the source's appendix forcing, when
-        the scene names it, is validation: it is not the machine's): the headline curve is shown once."""
-        d, h = self.data, self.data.get("headline")
+        """The verdict (the headline model under the physical forcing) and its headline numbers in display units, a
+        line per resonance; below the validation line every other curve, each with its forcing (the source's
+        appendix forcing, when the scene names it, is validation: it is not the machine's): the headline curve is
+        shown once."""
+        h = self.head
         q_omega, q_amp = QUANTITIES.find("peaks.0.omega"), QUANTITIES.find("peaks.0.amplitude")
 
-        def curve(c: dict) -> str:
-            pk = ", ".join(f"{q_omega.text(p['omega'])} with {q_amp.text(p['amplitude'])}" for p in c["peaks"])
-            a0 = c["at_operating_speed"]
-            return f"peaks {pk or 'none'}; at the operating speed {q_amp.text(a0['amplitude'])}"
+        def curve(c) -> str:
+            pk = ", ".join(f"{q_omega.text(p.omega)} with {q_amp.text(p.amplitude)}" for p in c.peaks)
+            return f"peaks {pk or 'none'}; at the operating speed {q_amp.text(c.at_operating_speed.amplitude)}"
 
-        lines = []
-        if h:
-            label = f"{MODEL_LABELS.get(h['model'], h['model'])}, {h['forcing']} forcing"
-            lines += [f"frequency response: {label}: {'stable' if h['stable'] else 'UNSTABLE'}, {curve(h)}",
-                      *QUANTITIES.lines(d)]
-        others = {m: c for m, c in d["curves"].items() if not _is_headline(h, m, c)}
+        label = f"{MODEL_LABELS.get(h.model, h.model)}, {h.forcing} forcing"
+        lines = [f"frequency response: {label}: {'stable' if h.stable else 'UNSTABLE'}",
+                 *QUANTITIES.lines(self.to_dict())]  # its resonances, A(ω0), A(0): each number once
+        others = {m: c for m, c in self.models.items() if not _is_headline(h, m, c)}
         if others:
-            forcing = FORCING_WORDS.get(d["forcing"], d["forcing"])
-            judge = "its models and its forcing" if d["forcing"] == "appendix" else "its models"
+            forcing = FORCING_WORDS.get(self.forcing, self.forcing)
+            judge = "its models and its forcing" if self.forcing == "appendix" else "its models"
             lines.append(f"  validation against the source ({judge} do not judge the machine), "
-                         f"{forcing}, δψ_1a = {significant(d['forcing_amplitude'])}:")
-            lines += [f"    {MODEL_LABELS.get(m, m)}{'' if c.get('stable', True) else ' (UNSTABLE)'}: {curve(c)}"
+                         f"{forcing}, δψ_1a = {significant(self.forcing_amplitude)}:")
+            lines += [f"    {MODEL_LABELS.get(m, m)}{'' if c.stable else ' (UNSTABLE)'}: {curve(c)}"
                       for m, c in others.items()]
         return "\n".join(lines)
 
+    def _curves(self) -> dict:
+        """The curves to draw and tabulate; ValueError for a Result loaded from results.json, which has none."""
+        if self.head.omega is None:
+            raise ValueError("frequency: a loaded Result holds no curves (results.json has the peaks; the curves "
+                             "are in afc_<model>.csv of the run)")
+        return self.models
+
     def tables(self) -> dict[str, dict]:
-        curves = dict(self.data["curves"])
-        h = self.data.get("headline")
-        if h is not None and (h["model"] not in curves or h["forcing"] != self.data["forcing"]):
-            curves[f"headline_{h['model']}_{h['forcing']}"] = h
+        curves = dict(self._curves())
+        h = self.head
+        if h.model not in curves or h.forcing != self.forcing:
+            curves[f"headline_{h.model}_{h.forcing}"] = h
         q_omega, q_amp = QUANTITIES.find("peaks.0.omega"), QUANTITIES.find("peaks.0.amplitude")
-        return {f"afc_{m}.csv": {f"omega [{q_omega.display}]": q_omega.shown(np.asarray(c["omega"])),
-                                 f"amplitude [{q_amp.display}]": q_amp.shown(np.asarray(c["amplitude"])),
-                                 "phase [deg]": c["phase_deg"]} for m, c in curves.items()}
+        return {f"afc_{m}.csv": {f"omega [{q_omega.display}]": q_omega.shown(np.asarray(c.omega)),
+                                 f"amplitude [{q_amp.display}]": q_amp.shown(np.asarray(c.amplitude)),
+                                 "phase [deg]": c.phase_deg} for m, c in curves.items()}
 
     def _styles(self) -> list[tuple[str, dict, dict, str]]:
         """(key, curve, line style, legend label) per drawn curve: the headline (energy-consistent model,
         physical forcing) first and thick; unstable models thin dashed in red/grey shades; a curve that
         coincides with one drawn before it dotted with markers and said so."""
-        d, out, drawn = self.data, [], []
-        h = d.get("headline")
-        curves = dict(d["curves"])
-        if h is not None and h.get("model") in curves and h.get("forcing") == d["forcing"]:
-            curves.pop(h["model"])  # the headline is that same curve
-        items = ([("headline", h)] if h is not None else []) + list(curves.items())
+        out, drawn = [], []
+        h = self.head
+        curves = dict(self._curves())
+        if h.model in curves and h.forcing == self.forcing:
+            curves.pop(h.model)  # the headline is that same curve
+        items = [("headline", h), *curves.items()]
         spare = iter(["tab:olive", "tab:brown", "tab:cyan", "tab:pink"])
         for key, c in items:
-            model = h["model"] if key == "headline" else key
+            model = h.model if key == "headline" else key
             label = MODEL_LABELS.get(model, model)
             if key == "headline":
-                style = {"color": "tab:blue", "lw": 2.4, "zorder": 4} | ({} if c["stable"] else {"ls": "--"})
-                label += f", {FORCING_LABELS.get(h['forcing'], h['forcing'])} (headline)"
-            elif c.get("stable", True):
+                style = {"color": "tab:blue", "lw": 2.4, "zorder": 4} | ({} if c.stable else {"ls": "--"})
+                label += f", {FORCING_LABELS.get(h.forcing, h.forcing)} (headline)"
+            elif c.stable:
                 style = {"color": MODEL_COLOURS.get(model) or next(spare), "lw": 1.5, "zorder": 3}
             else:
                 style = {"color": MODEL_COLOURS.get(model) or next(spare), "lw": 0.9, "ls": "--", "zorder": 2}
-            if key != "headline" and h is not None and c.get("forcing") != h["forcing"]:
-                label += f", {c.get('forcing')} forcing"
-            if not c.get("stable", True):
+            if key != "headline" and c.forcing != h.forcing:
+                label += f", {c.forcing} forcing"
+            if not c.stable:
                 label += " — unstable"
-            twin = next((lab for om, amp, lab in drawn if _coincide(om, amp, c["omega"], c["amplitude"])), None)
+            twin = next((lab for om, amp, lab in drawn if _coincide(om, amp, c.omega, c.amplitude)), None)
             if twin is not None:
                 style |= {"ls": (0, (1.5, 2.5)), "lw": 2.0, "marker": "o", "ms": 4, "mfc": "none",
                           "markevery": 0.07, "zorder": 5}
                 label += f"; same curve as {twin}"
-            drawn.append((c["omega"], c["amplitude"], MODEL_LABELS.get(model, model)))
+            drawn.append((c.omega, c.amplitude, MODEL_LABELS.get(model, model)))
             out.append((key, c, style, label))
         return out
 
@@ -227,17 +279,15 @@ class FrequencyResult(Result):
         in its display unit (µm)."""
         fw, fa = self._axes(ax)
         for _key, c, style, label in self._styles():
-            ax.semilogy(np.asarray(c["omega"]) * fw, np.asarray(c["amplitude"]) * fa, label=label, **style)
-            for p in c["peaks"]:
-                ax.plot(p["omega"] * fw, p["amplitude"] * fa, "o", ms=5, mec="w", mew=0.6, color=style["color"],
-                        zorder=6)
-        h = self.data.get("headline") or {"at_operating_speed": self.data["at_operating_speed"]}
-        a0 = h["at_operating_speed"]
+            ax.semilogy(np.asarray(c.omega) * fw, np.asarray(c.amplitude) * fa, label=label, **style)
+            for p in c.peaks:
+                ax.plot(p.omega * fw, p.amplitude * fa, "o", ms=5, mec="w", mew=0.6, color=style["color"], zorder=6)
+        a0 = self.head.at_operating_speed
         q_omega, q_amp = QUANTITIES.find("at_operating_speed.omega"), QUANTITIES.find("at_operating_speed.amplitude")
-        ax.axvline(a0["omega"] * fw, color="k", ls=":", lw=1.0,
-                   label=rf"operating speed $\omega_0$ = {q_omega.text(a0['omega'])}")
-        ax.plot(a0["omega"] * fw, a0["amplitude"] * fa, "D", color="k", ms=5, zorder=7,
-                label=rf"$A(\omega_0)$ = {q_amp.text(a0['amplitude'], 3)} (headline); dots: peaks")
+        ax.axvline(a0.omega * fw, color="k", ls=":", lw=1.0,
+                   label=rf"operating speed $\omega_0$ = {q_omega.text(a0.omega)}")
+        ax.plot(a0.omega * fw, a0.amplitude * fa, "D", color="k", ms=5, zorder=7,
+                label=rf"$A(\omega_0)$ = {q_amp.text(a0.amplitude, 3)} (headline); dots: peaks")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=6.5)
 
@@ -257,21 +307,26 @@ class FrequencyResult(Result):
         a1.set_xlabel("")  # the frequency is labelled below a2 (and on top of a1)
         fw = unit_axis(a2, r"frequency $\omega$", "rad/s", QUANTITIES.find("peaks.0.omega").declared, "x", "")
         for _key, c, style, _label in self._styles():
-            a2.plot(np.asarray(c["omega"]) * fw, c["phase_deg"], **style)
-        a2.axvline(self.data["at_operating_speed"]["omega"] * fw, color="k", ls=":", lw=1.0)
+            a2.plot(np.asarray(c.omega) * fw, c.phase_deg, **style)
+        a2.axvline(self.at_operating_speed.omega * fw, color="k", ls=":", lw=1.0)
         a2.grid(alpha=0.3)
         a2.set_ylabel("phase (unwrapped), deg")
-        span = max(np.ptp(c["phase_deg"]) for c in self.data["curves"].values())
+        span = max(np.ptp(c.phase_deg) for c in self.models.values())
         a2.yaxis.set_major_locator(MultipleLocator(90 if span <= 720 else 180))
         fig.legend(*a1.get_legend_handles_labels(), loc="outside lower center", ncols=2, fontsize=7.5,
                    frameon=False)
-        h, forcing = self.data.get("headline"), self.data["forcing"]
-        rest = ("" if h is None or h["forcing"] == forcing else
+        forcing = self.forcing
+        rest = ("" if self.head.forcing == forcing else
                 f"\nthe other models under the {FORCING_LABELS.get(forcing, forcing)}, as in the source")
-        fig.suptitle(f"{self.data['title']}\nAFC/PFC of the face gap, forcing amplitude "
-                     rf"$\delta\psi_{{1a}}$ = {self.data['forcing_amplitude']:g} (Pavlenko (2014), Figs 2.7/2.11)"
+        fig.suptitle(f"{self.title}\nAFC/PFC of the face gap, forcing amplitude "
+                     rf"$\delta\psi_{{1a}}$ = {self.forcing_amplitude:g} (Pavlenko (2014), Figs 2.7/2.11)"
                      f"{rest}", fontsize=9)
         return {"fig_afc.png": fig}
+
+
+#: every number of the frequency block (Pavlenko 2014, §2.6), from the fields: amplitudes of the face gap in m,
+#: shown in µm
+FrequencyResult.quantities = QUANTITIES = declarations(FrequencyResult)
 
 
 def _coincide(om1, a1, om2, a2, rtol: float = 2e-3) -> bool:
@@ -286,20 +341,28 @@ def study(setup: Setup, models: list[str], convention: str, omega_range: tuple, 
     holds the energy-consistent model under the physical forcing (dtau = b dpsi1), whatever the scene
     lists: the physically consistent result, the program model being the validation against the source."""
     d = setup.data
-    curves = {}
+    raw = {}
     with progress.steps(len(models), "frequency response", "model", delay=progress.AFTER_S) as bar:
         for m in models:
-            curves[m] = characteristic(setup.linear(m), omega_range, convention, d.forcing_amplitude, d.omega0)
+            raw[m] = characteristic(setup.linear(m), omega_range, convention, d.forcing_amplitude, d.omega0)
             bar.tick(note=m)
+    curves = {m: _curve(c, Curve) for m, c in raw.items()}
     first = curves[models[0]]
     model, forcing = HEADLINE
-    head = curves[model] if model in curves and convention == forcing else characteristic(
+    head = raw[model] if model in raw and convention == forcing else characteristic(
         setup.linear(model), omega_range, forcing, d.forcing_amplitude, d.omega0)
-    return FrequencyResult({
-        "title": title, "model": models[0], "forcing": convention, "forcing_amplitude": d.forcing_amplitude,
-        "z_B": setup.dev.scales["z_B"], "peaks": first["peaks"], "at_operating_speed": first["at_operating_speed"],
-        "headline": {"model": model} | head, "curves": curves,
-    })
+    return FrequencyResult(
+        title=title, model=models[0], forcing=convention, forcing_amplitude=d.forcing_amplitude,
+        z_B=setup.dev.scales["z_B"], peaks=first.peaks, at_operating_speed=first.at_operating_speed,
+        head=_curve(head, HeadlineCurve, model=model), models=curves)
+
+
+def _curve(c: dict, cls: type, **more):
+    """The curve ``c`` of :func:`characteristic` as the record ``cls`` with the fields ``more``, its sampled
+    arrays kept."""
+    sampled = ("omega", "amplitude", "phase_deg")
+    saved = cls.from_dict(more | {k: v for k, v in c.items() if k not in sampled})
+    return dataclasses.replace(saved, **{k: c[k] for k in sampled})
 
 
 def exact_response(lin: LinearModel, omega: float, convention: str, digits: int = 34) -> complex:
@@ -345,12 +408,12 @@ def accuracy(setup: Setup, curves: dict, convention: str) -> dict:
     loc, loss, rnd = [0.0], [0.0], [0.0]
     for m, c in curves.items():
         lin = setup.linear(m)
-        for p in c["peaks"]:
-            a, b = peak_error(lin, p["omega"], convention)
+        for p in c.peaks:
+            a, b = peak_error(lin, p.omega, convention)
             loc.append(a)
             loss.append(b)
-        pts = [p["omega"] for p in c["peaks"]] + [0.0] + (
-            [c["at_operating_speed"]["omega"]] if np.isfinite(c["at_operating_speed"]["omega"]) else [])
+        w0 = c.at_operating_speed.omega
+        pts = [p.omega for p in c.peaks] + [0.0] + ([w0] if np.isfinite(w0) else [])
         got = lin.response(pts, convention)
         ref = np.array([exact_response(lin, w, convention) for w in pts])
         rnd.append(float(np.max(np.abs(got - ref) / np.abs(ref))))

@@ -276,13 +276,14 @@ class Declarations:
         return None if self.resolve is None else self.resolve(path, block)
 
     def headline(self, block: dict) -> list[tuple[Quantity, str, object]]:
-        """(declaration, key, value) of the headline quantities ``block`` holds, in declaration order."""
+        """(declaration, key, value) of the headline quantities ``block`` holds, in declaration order (a key
+        through a list of records, ``peaks[].omega``, gives each item's: ``peaks.0.omega``, ``peaks.1.omega``)."""
         out = []
         for q in self.quantities:
             for k in q.keys if q.headline else ():
-                v = lookup(block, k)
-                if v is not MISSING and (v is None or is_number(v)):
-                    out.append((q, k, v))
+                for key, v in _items(block, k):
+                    if v is not MISSING and (v is None or is_number(v)):
+                        out.append((q, key, v))
         return out
 
     def lines(self, block: dict) -> list[str]:
@@ -309,6 +310,17 @@ class Declarations:
 
 
 MISSING = object()
+
+
+def _items(block, key: str):
+    """(concrete key, value) of a declared key in ``block``, a list of records (``[]``) walked item by item."""
+    if "[]" not in key:
+        yield key, lookup(block, key)
+        return
+    head, rest = key.split("[]", 1)
+    for i, item in enumerate(lookup(block, head, None) or []):
+        for k, v in _items(item, rest.removeprefix(".")):
+            yield f"{head}.{i}.{k}", v
 
 
 def lookup(block, path: str, default=MISSING):

@@ -9,14 +9,13 @@ table §5.4, crossover n*), ``lewis`` (table §5.5) and ``motor_runup``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import numpy as np
 
 from autobal.analysis import progress, standards
 from autobal.analysis import rotor as R
-from autobal.analysis.quantities import Declarations, Quantity
-from autobal.analysis.result import Result, new_figure, speed_axis, unit_axis
+from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
+from autobal.analysis.quantities import Quantity
+from autobal.analysis.result import new_figure, speed_axis, unit_axis
 from autobal.errors import ScenarioError
 from autobal.models.rotor import RotorParams
 
@@ -24,143 +23,298 @@ STEP_TOL = 1e-12  # CVODES tolerance of the step transients checked against the 
 
 _P10 = "Pashkov (2010), ch. 2"
 
-#: every number of the rotor_dynamics block: speeds in rad/s (rpm beside), the source's groups dimensionless
-#: (ν = ω/Ω0 and z of Eq. (9), deflections over the eccentricity e, the system unbalance d of (7))
-QUANTITIES = Declarations(
-    Quantity("rotor.omega_cr_rad_s", "rad/s", "ω_cr", "critical speed √(c/m) (m with the liquid mass, if any)", "rad/s",
-             source=_P10,
-             headline=True),
-    Quantity("rotor.Omega0_rad_s", "rad/s", "Ω0", "natural frequency without liquid", "rad/s",
-             headline=True),
-    Quantity("rotor.psi", "1", "ψ", "liquid mass ratio m1/m", source=_P10, headline=True),
-    Quantity("rotor.zeta0", "1", "ζ0", "damping ratio of the rotor", headline=True),
-    *standards.margin_quantities("rotor.", headline=True),
-    Quantity("rotor.service_speed_rad_s", "rad/s", "N_s", "service speed (the scene's rotor.unbalance.service_speed)"),
-    Quantity("rotor.mu1", "1", "μ1", "liquid-to-rotor mass group of Eq. (9)", source=f"{_P10}, Eq. (9)"),
-    Quantity("rotor.n_steady_1_s rotor.n_passage_1_s", "1/s", "n", "damping n = χ/m of the steady state (3) and "
-             "of the passage (8')", source=_P10),
-    Quantity("rotor.n_stationary", "1", "n", "damping group n = χ²/(c m1) of Eq. (9)", source=f"{_P10}, Eq. (9)"),
-    Quantity("stationary.stability.max_real_over_Omega0", "1", "Re λ/Ω0",
-             "stability of the steady whirl: largest real part of the eigenvalues", headline=True),
-    Quantity("stationary.cases[].mu1 stationary.cases[].n", "1", "μ1, n", "the (μ1, n) case of Eq. (9)",
-             source=f"{_P10}, Figs 5-6"),
-    Quantity("stationary.cases[].z_kp stationary.cases[].z_helps stationary.cases[].z1 stationary.cases[].z2 "
-             "stationary.cases[].z_d_max", "1", "z", "speed group z = (ω/Ω0)² of the stationary table's points",
-             source=f"{_P10}, Eq. (9), table §5.1"),
-    Quantity("stationary.cases[].a_kp stationary.cases[].a_inf", "1", "a/e", "whirl amplitude over the eccentricity",
-             source=f"{_P10}, Fig. 5"),
-    Quantity("stationary.cases[].M1 stationary.cases[].M2", "1", "M/(e²c)", "moment group of Fig. 6",
-             source=f"{_P10}, Fig. 6"),
-    Quantity("stationary.cases[].d_max", "1", "d/(m1 e)", "largest system unbalance", source=f"{_P10}, Eq. (7)"),
-    Quantity("stationary.steady_vs_eq9_max_rel_diff stationary.stability.max_eigenvalue_residual "
-             "steps.closed_form_vs_cvodes_max_rel_diff steps.table[].closed_form_vs_cvodes", "1", "",
-             "cross-checks: steady state (3) against (9), eigenpair residual, closed form (5)-(7) against CVODES"),
-    Quantity("steps.table[].omega_from steps.table[].omega_to", "rad/s", "ω", "speed before and after the step",
-             "rad/s", source=f"{_P10}, Figs 3-4"),
-    Quantity("steps.table[].psi passage.table[].psi", "1", "ψ", "liquid mass ratio of the case"),
-    Quantity("steps.table[].d0 steps.table[].d_max steps.table[].d_ss", "1", "d", "system unbalance (7): at the "
-             "step, its peak, the new steady value", source=f"{_P10}, Eq. (7), table §5.3"),
-    Quantity("steps.table[].a_max_over_e steps.table[].a_ss_over_e", "1", "a/e",
-             "whirl amplitude over the eccentricity: peak, new steady value", source=f"{_P10}, table §5.3"),
-    Quantity("steps.table[].t_d_max_ms steps.table[].t_5pct_ms", "ms", "t", "time of the peak of d, time to "
-             "settle within 5 %"),
-    Quantity("passage.table[].n", "1/s", "n", "damping n = χ/m1 of the run", source=f"{_P10}, Figs 7-9"),
-    Quantity("passage.table[].delta_max_over_e", "1", "δ*/e", "peak deflection over the eccentricity",
-             source=f"{_P10}, Fig. 9, table §5.4"),
-    Quantity("passage.table[].d_max", "1", "d*", "peak system unbalance", source=f"{_P10}, Fig. 9"),
-    Quantity("passage.table[].z_delta_max passage.table[].z_d_max", "1", "ν = ω/Ω0", "speed ratio at the peak"),
-    Quantity("passage.crossover_n_star.** passage.crossover_n_star_sensitivity.**", "1/s", "n*",
-             "damping above which the liquid raises the passage peak (per ψ; the second at the sensitivity "
-             "acceleration)", source=f"{_P10}, Fig. 9"),
-    Quantity("passage.acceleration_rad_s2 passage.sensitivity_acceleration_rad_s2", "rad/s^2", "2ε",
-             "angular acceleration of the passage", source=f"{_P10}, Eq. (8')"),
-    Quantity("lewis.table[].zeta", "1", "ζ", "damping ratio", source="Lewis (1932)"),
-    Quantity("lewis.table[].a_star", "1", "a* = α/Ω²", "acceleration group", source="Lewis (1932)"),
-    Quantity("lewis.table[].peak_over_e lewis.table[].undamped_asymptote", "1", "|u|/e",
-             "peak amplitude over the eccentricity; the undamped asymptote 1.4672/√a*", source="Lewis (1932)"),
-    Quantity("lewis.table[].nu_peak lewis.table[].nu_asymptote", "1", "ν = ω/Ω", "speed ratio at the peak"),
-    Quantity("motor_runup.omega_final_rad_s", "rad/s", "ω_end", "speed at the end of the motor run-up", "rad/s",
-             headline=True),
-    Quantity("motor_runup.peak_deflection_over_e", "1", "δ/e", "peak deflection of the run-up over the "
-             "eccentricity", headline=True),
-)
+def _declared(q, **kw):
+    """A field declared as the Quantity ``q`` of another module (the API margins of analysis/standards.py)."""
+    return quantity(q.unit, q.symbol, q.description, q.declared, source=q.source, beside=q.beside, **kw)
 
 
-@dataclass
-class RotorDynamicsResult(Result):
-    """The source's studies of the rotor with a liquid auto-balancer (Pashkov (2010), ch. 2).
+_AF, _SM, _SM_REQ, _N_C, _HALF_POWER = standards.margin_quantities()
 
-    ``data`` is the results.json block; ``curves`` the arrays of the tables and figures.
-    """
 
-    data: dict
-    curves: dict = field(default_factory=dict, repr=False)
+def _check():
+    return quantity("1", "", "cross-checks: steady state (3) against (9), eigenpair residual, closed form (5)-(7) "
+                             "against CVODES")
+
+
+def _damping():
+    return quantity("1/s", "n", "damping n = χ/m of the steady state (3) and of the passage (8')", source=_P10)
+
+
+@record
+class Rotor(Record):
+    """The scene's rotor: its groups, its critical speed and its API 684 (2005) margins
+    (:func:`api_margins`; a null beside its ``*_status``)."""
+
+    psi: float = quantity("1", "ψ", "liquid mass ratio m1/m", source=_P10, headline=3)
+    mu1: float = quantity("1", "μ1", "liquid-to-rotor mass group of Eq. (9)", source=f"{_P10}, Eq. (9)")
+    Omega0_rad_s: float = quantity("rad/s", "Ω0", "natural frequency without liquid", "rad/s", headline=2)
+    omega_cr_rad_s: float = quantity("rad/s", "ω_cr", "critical speed √(c/m) (m with the liquid mass, if any)",
+                                     "rad/s", source=_P10, headline=1)
+    zeta0: float = quantity("1", "ζ0", "damping ratio of the rotor", headline=4)
+    n_steady_1_s: float = _damping()
+    n_stationary: float = quantity("1", "n", "damping group n = χ²/(c m1) of Eq. (9)", source=f"{_P10}, Eq. (9)")
+    n_passage_1_s: float = _damping()
+    service_speed_rad_s: float | None = quantity("rad/s", "N_s",
+                                                 "service speed (the scene's rotor.unbalance.service_speed)")
+    amplification_factor: float | None = _declared(_AF, headline=5)
+    response_peak_speed_rad_s: float | None = _declared(_N_C, headline=6)
+    half_power_speeds_rad_s: list[float] | None = _declared(_HALF_POWER)
+    amplification_factor_status: str | None = optional(kw_only=True)
+    half_power_speeds_rad_s_status: str | None = optional(kw_only=True)
+    response_peak_speed_rad_s_status: str | None = optional(kw_only=True)
+    separation_margin_pct: float | None = _declared(_SM, headline=7)
+    required_separation_margin_pct: float | None = _declared(_SM_REQ, headline=8)
+    separation_margin_ok: bool | None
+    separation_margin_pct_status: str | None = optional(kw_only=True)
+    required_separation_margin_pct_status: str | None = optional(kw_only=True)
+    separation_margin_ok_status: str | None = optional(kw_only=True)
+    service_speed_rad_s_status: str | None = optional(kw_only=True)
+
+
+def _z():
+    return quantity("1", "z", "speed group z = (ω/Ω0)² of the stationary table's points",
+                    source=f"{_P10}, Eq. (9), table §5.1")
+
+
+def _whirl():
+    return quantity("1", "a/e", "whirl amplitude over the eccentricity", source=f"{_P10}, Fig. 5")
+
+
+def _moment():
+    return quantity("1", "M/(e²c)", "moment group of Fig. 6", source=f"{_P10}, Fig. 6")
+
+
+def _case():
+    return quantity("1", "μ1, n", "the (μ1, n) case of Eq. (9)", source=f"{_P10}, Figs 5-6")
+
+
+@record
+class StationaryCase(Record):
+    """The special points of the stationary curves (9) of one (μ1, n) (:func:`autobal.analysis.rotor.
+    stationary_points`): the torque's maximum and minimum null where they do not exist, with the reason."""
+
+    mu1: float = _case()
+    n: float = _case()
+    z_kp: float = _z()
+    a_kp: float = _whirl()
+    z_helps: float = _z()
+    a_inf: float = _whirl()
+    z1: float | None = _z()
+    M1: float | None = _moment()
+    z2: float | None = _z()
+    M2: float | None = _moment()
+    d_max: float = quantity("1", "d/(m1 e)", "largest system unbalance", source=f"{_P10}, Eq. (7)")
+    z_d_max: float = _z()
+    z1_status: str | None = optional()
+    M1_status: str | None = optional()
+    z2_status: str | None = optional()
+    M2_status: str | None = optional()
+
+
+@record
+class WhirlStability(Record):
+    max_real_over_Omega0: float = quantity("1", "Re λ/Ω0", "stability of the steady whirl: largest real part of "
+                                                           "the eigenvalues", headline=9)
+    max_eigenvalue_residual: float = _check()
+
+
+@record
+class Stationary(Record):
+    """Table §5.1 for each (μ1, n), and the steady state (3) and stability (P) of the scene's rotor."""
+
+    cases: list[StationaryCase]
+    steady_vs_eq9_max_rel_diff: float = _check()
+    stability: WhirlStability
+
+
+def _psi():
+    return quantity("1", "ψ", "liquid mass ratio of the case")
+
+
+def _unbalance():
+    return quantity("1", "d", "system unbalance (7): at the step, its peak, the new steady value",
+                    source=f"{_P10}, Eq. (7), table §5.3")
+
+
+def _whirl_step():
+    return quantity("1", "a/e", "whirl amplitude over the eccentricity: peak, new steady value",
+                    source=f"{_P10}, table §5.3")
+
+
+def _step_time():
+    return quantity("ms", "t", "time of the peak of d, time to settle within 5 %")
+
+
+def _step_speed():
+    return quantity("rad/s", "ω", "speed before and after the step", "rad/s", source=f"{_P10}, Figs 3-4")
+
+
+@record
+class Step(Record):
+    """One speed step (:func:`step_case`): the closed form (5)-(7) beside CVODES."""
+
+    step: str
+    omega_from: float = _step_speed()
+    omega_to: float = _step_speed()
+    psi: float = _psi()
+    d0: float = _unbalance()
+    d_max: float = _unbalance()
+    t_d_max_ms: float = _step_time()
+    d_ss: float = _unbalance()
+    a_max_over_e: float = _whirl_step()
+    a_ss_over_e: float = _whirl_step()
+    t_5pct_ms: float = _step_time()
+    closed_form_vs_cvodes: float = _check()
+
+
+@record
+class Steps(Record):
+    table: list[Step]
+    closed_form_vs_cvodes_max_rel_diff: float = _check()
+
+
+def _nu():
+    return quantity("1", "ν = ω/Ω0", "speed ratio at the peak")
+
+
+@record
+class PassageRun(Record):
+    """One run through the critical speed at a uniform acceleration (8')-(9')."""
+
+    n: float = quantity("1/s", "n", "damping n = χ/m1 of the run", source=f"{_P10}, Figs 7-9")
+    psi: float = _psi()
+    delta_max_over_e: float = quantity("1", "δ*/e", "peak deflection over the eccentricity",
+                                       source=f"{_P10}, Fig. 9, table §5.4")
+    z_delta_max: float = _nu()
+    d_max: float = quantity("1", "d*", "peak system unbalance", source=f"{_P10}, Fig. 9")
+    z_d_max: float = _nu()
+
+
+def _acceleration():
+    return quantity("rad/s^2", "2ε", "angular acceleration of the passage", source=f"{_P10}, Eq. (8')")
+
+
+@record
+class Passage(Record):
+    """The passage runs (table §5.4) and the crossover damping n* per ψ (keys: ψ as given)."""
+
+    table: list[PassageRun]
+    crossover_n_star: dict
+    crossover_n_star_sensitivity: dict
+    acceleration_rad_s2: float = _acceleration()
+    sensitivity_acceleration_rad_s2: float | None = _acceleration()
+
+
+def _lewis_peak():
+    return quantity("1", "|u|/e", "peak amplitude over the eccentricity; the undamped asymptote 1.4672/√a*",
+                    source="Lewis (1932)")
+
+
+def _lewis_nu():
+    return quantity("1", "ν = ω/Ω", "speed ratio at the peak")
+
+
+@record
+class LewisCase(Record):
+    zeta: float = quantity("1", "ζ", "damping ratio", source="Lewis (1932)")
+    a_star: float = quantity("1", "a* = α/Ω²", "acceleration group", source="Lewis (1932)")
+    peak_over_e: float = _lewis_peak()
+    nu_peak: float = _lewis_nu()
+    undamped_asymptote: float = _lewis_peak()
+    nu_asymptote: float = _lewis_nu()
+
+
+@record
+class Lewis(Record):
+    table: list[LewisCase]
+
+
+@record
+class MotorRunup(Record):
+    omega_final_rad_s: float = quantity("rad/s", "ω_end", "speed at the end of the motor run-up", "rad/s",
+                                        headline=10)
+    passed: bool
+    peak_deflection_over_e: float = quantity("1", "δ/e", "peak deflection of the run-up over the eccentricity",
+                                             headline=11)
+
+
+@record
+class RotorDynamicsResult(TypedResult):
+    """The source's studies of the rotor with a liquid auto-balancer (Pashkov (2010), ch. 2): speeds in rad/s
+    (rpm beside), the source's groups dimensionless (ν = ω/Ω0 and z of Eq. (9), deflections over the eccentricity e,
+    the system unbalance d of (7)); each part None where the scene does not ask for it.  ``curves`` holds the
+    arrays of the figures (not in results.json: None in a loaded Result)."""
+
+    title: str
+    rotor: Rotor
+    stationary: Stationary | None = optional()
+    steps: Steps | None = optional()
+    passage: Passage | None = optional()
+    lewis: Lewis | None = optional()
+    motor_runup: MotorRunup | None = optional()
+    accuracy: dict | None = optional()
+    curves: dict | None = unsaved()
     name = "rotor_dynamics"
-    quantities = QUANTITIES
 
     @property
     def psi(self) -> float:
         """psi = m1/m of the scene's rotor (dimensionless; 1 without liquid)."""
-        return self.data["rotor"]["psi"]
+        return self.rotor.psi
 
     @property
     def critical_speed(self) -> float:
         """Undamped critical speed with the liquid, omega_cr = sqrt(c/m), rad/s."""
-        return self.data["rotor"]["omega_cr_rad_s"]
-
-    def to_dict(self) -> dict:
-        return self.data
+        return self.rotor.omega_cr_rad_s
 
     def verdict(self) -> tuple[bool, str] | None:
         """The one verdict: the steady whirl's stability (P) over the speed range, else whether the motor
         run-up passes the critical speed; None when the scene asks for neither."""
-        d = self.data
-        if "stationary" in d:
-            mr = d["stationary"]["stability"]["max_real_over_Omega0"]
+        if self.stationary is not None:
+            mr = self.stationary.stability.max_real_over_Omega0
             return mr < 0, (f"steady whirl {'asymptotically stable' if mr < 0 else 'NOT stable'} over the speed "
                             f"range (max Re λ/Ω0 = {mr:.4g})")
-        if "motor_runup" in d:
-            m = d["motor_runup"]
-            speed = QUANTITIES.find("motor_runup.omega_final_rad_s").text(m["omega_final_rad_s"])
-            return m["passed"], ("the motor run-up passes the critical speed" if m["passed"] else
-                                 f"the motor run-up is captured below the critical speed, at {speed}")
+        if self.motor_runup is not None:
+            m = self.motor_runup
+            speed = QUANTITIES.find("motor_runup.omega_final_rad_s").text(m.omega_final_rad_s)
+            return m.passed, ("the motor run-up passes the critical speed" if m.passed else
+                              f"the motor run-up is captured below the critical speed, at {speed}")
         return None
 
     def summary(self) -> str:
-        d = self.data
         v = self.verdict()
         lines = ["rotor with a liquid auto-balancer (Pashkov 2010, ch. 2)",
-                 *([f"  {'ok' if v[0] else 'NOT OK'}: {v[1]}"] if v else []), *QUANTITIES.lines(d),
-                 f"  API 684 (2005): {standards.margin_words(d['rotor'])}"]
-        if "stationary" in d:
-            s = d["stationary"]
-            lines.append(f"  stationary (9): {len(s['cases'])} (mu1, n) cases; steady state (3) = (9) to "
-                         f"{s['steady_vs_eq9_max_rel_diff']:.1e}; eigenvalues = lambda +- i nu to "
-                         f"{s['stability']['max_eigenvalue_residual']:.1e}")
-        if "steps" in d:
-            s = d["steps"]
-            lines.append(f"  steps (5)-(7): {len(s['table'])} cases, closed form vs CVODES max difference "
-                         f"{s['closed_form_vs_cvodes_max_rel_diff']:.1e}")
-        if "passage" in d:
-            s = d["passage"]
+                 *([f"  {'ok' if v[0] else 'NOT OK'}: {v[1]}"] if v else []), *QUANTITIES.lines(self.to_dict()),
+                 f"  API 684 (2005): {standards.margin_words(self.rotor.to_dict())}"]
+        if (s := self.stationary) is not None:
+            lines.append(f"  stationary (9): {len(s.cases)} (mu1, n) cases; steady state (3) = (9) to "
+                         f"{s.steady_vs_eq9_max_rel_diff:.1e}; eigenvalues = lambda +- i nu to "
+                         f"{s.stability.max_eigenvalue_residual:.1e}")
+        if (s := self.steps) is not None:
+            lines.append(f"  steps (5)-(7): {len(s.table)} cases, closed form vs CVODES max difference "
+                         f"{s.closed_form_vs_cvodes_max_rel_diff:.1e}")
+        if (s := self.passage) is not None:
             n_star = QUANTITIES.find("passage.crossover_n_star.x")
-            cx = ", ".join(f"psi = {k}: {n_star.text(v)}" for k, v in s["crossover_n_star"].items())
-            accel = QUANTITIES.find("passage.acceleration_rad_s2").text(s["acceleration_rad_s2"])
-            lines.append(f"  passage (8')-(9') at {accel}: {len(s['table'])} runs; crossover n*: {cx or '-'}")
-        if "lewis" in d:
-            lines.append(f"  Lewis passage: {len(d['lewis']['table'])} cases")
+            cx = ", ".join(f"psi = {k}: {n_star.text(v)}" for k, v in s.crossover_n_star.items())
+            accel = QUANTITIES.find("passage.acceleration_rad_s2").text(s.acceleration_rad_s2)
+            lines.append(f"  passage (8')-(9') at {accel}: {len(s.table)} runs; crossover n*: {cx or '-'}")
+        if self.lewis is not None:
+            lines.append(f"  Lewis passage: {len(self.lewis.table)} cases")
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
         out = {}
         for key, rows in (("steps", "table"), ("passage", "table"), ("lewis", "table"), ("stationary", "cases")):
-            if key in self.data:
-                table = self.data[key][rows]  # headers with their units (ms, rad/s, 1/s; '[1]' for groups)
+            if getattr(self, key) is not None:
+                table = [r.to_dict() for r in getattr(getattr(self, key), rows)]
+                # headers with their units (ms, rad/s, 1/s; '[1]' for groups)
                 out[f"rotor_{key}.csv"] = QUANTITIES.columns({k: [r[k] for r in table] for k in table[0]},
                                                              f"{key}.{rows}[]")
         return out
 
     def figures(self) -> dict:
+        if self.curves is None:
+            raise ValueError("rotor_dynamics: a loaded Result holds no curves (results.json has the tables; the "
+                             "figures of the run are in its folder)")
         c, figs = self.curves, {}
 
         def save(fig, name):
@@ -208,12 +362,12 @@ class RotorDynamicsResult(Result):
                     ax[r, col].legend(fontsize=7)
             save(fig, "fig_rotor_passage.png")
             fig, ax = new_figure(figsize=(9, 3.8), ncols=2)
-            tab = self.data["passage"]["table"]
-            for psi in sorted({r["psi"] for r in tab}, reverse=True):
-                rows = [r for r in tab if r["psi"] == psi]
-                n = [r["n"] for r in rows]
-                ax[0].plot(n, [r["delta_max_over_e"] for r in rows], "o-", label=rf"$\psi$={psi:g}")
-                ax[1].plot(n, [r["d_max"] for r in rows], "o-", label=rf"$\psi$={psi:g}")
+            tab = self.passage.table
+            for psi in sorted({r.psi for r in tab}, reverse=True):
+                rows = [r for r in tab if r.psi == psi]
+                n = [r.n for r in rows]
+                ax[0].plot(n, [r.delta_max_over_e for r in rows], "o-", label=rf"$\psi$={psi:g}")
+                ax[1].plot(n, [r.d_max for r in rows], "o-", label=rf"$\psi$={psi:g}")
             for a, yl in zip(ax, (r"$\delta^*/e$", "d*"), strict=True):
                 a.set_xscale("symlog", linthresh=1)
                 a.set_xlabel(r"n = $\chi/m_1$ (1/s) (Fig. 9)")
@@ -221,13 +375,13 @@ class RotorDynamicsResult(Result):
                 a.grid(alpha=0.3)
                 a.legend(fontsize=7)
             save(fig, "fig_rotor_peaks.png")
-        if "lewis" in self.data:
+        if self.lewis is not None:
             fig, a = new_figure(figsize=(6, 4))
-            tab = self.data["lewis"]["table"]
-            for z in sorted({r["zeta"] for r in tab}):
-                rows = [r for r in tab if r["zeta"] == z]
-                a.loglog([r["a_star"] for r in rows], [r["peak_over_e"] for r in rows], "o-", label=rf"$\zeta$={z:g}")
-            aa = np.array(sorted({r["a_star"] for r in tab}))
+            tab = self.lewis.table
+            for z in sorted({r.zeta for r in tab}):
+                rows = [r for r in tab if r.zeta == z]
+                a.loglog([r.a_star for r in rows], [r.peak_over_e for r in rows], "o-", label=rf"$\zeta$={z:g}")
+            aa = np.array(sorted({r.a_star for r in tab}))
             a.loglog(aa, 1.4672 / np.sqrt(aa), "k--", lw=0.8, label=r"1.4672/$\sqrt{a^*}$ (undamped asymptote)")
             a.set_xlabel(r"$a^* = \alpha/\Omega^2$")
             a.set_ylabel("peak |u|/e")
@@ -239,7 +393,7 @@ class RotorDynamicsResult(Result):
             m = c["motor"]
             ft, fw = unit_axis(a[1], "time t", "s", which="x"), speed_axis(a[0])
             a[0].plot(np.asarray(m["t"]) * ft, np.asarray(m["omega"]) * fw)
-            a[0].axhline(self.data["rotor"]["omega_cr_rad_s"] * fw, color="k", ls=":", lw=0.8,
+            a[0].axhline(self.rotor.omega_cr_rad_s * fw, color="k", ls=":", lw=0.8,
                          label=r"$\omega_{cr}$")
             a[0].legend(fontsize=7)
             a[1].plot(np.asarray(m["t"]) * ft, m["delta"])
@@ -248,6 +402,14 @@ class RotorDynamicsResult(Result):
                 x.grid(alpha=0.3)
             save(fig, "fig_rotor_motor.png")
         return figs
+
+
+#: every number of the rotor_dynamics block, from the fields; the crossover damping n* per ψ (keys: ψ as given)
+RotorDynamicsResult.quantities = QUANTITIES = declarations(
+    RotorDynamicsResult,
+    Quantity("passage.crossover_n_star.** passage.crossover_n_star_sensitivity.**", "1/s", "n*",
+             "damping above which the liquid raises the passage peak (per ψ; the second at the sensitivity "
+             "acceleration)", source=f"{_P10}, Fig. 9"))
 
 
 def api_margins(P: RotorParams, min_speed: float | None, max_speed: float | None = None) -> dict:
@@ -262,23 +424,19 @@ def api_margins(P: RotorParams, min_speed: float | None, max_speed: float | None
 
 # ---- parts -----------------------------------------------------------------------------------------
 
-def stationary_part(P: RotorParams, cases, z) -> tuple[dict, dict]:
+def stationary_part(P: RotorParams, cases, z) -> tuple[Stationary, dict]:
     """Table §5.1 for each (mu1, n); (3) vs (9) and stability (P) of the scene's rotor over speed."""
     rows, curves = [], {}
     for mu1, n in cases:
-        sp = R.stationary_points(mu1, n)
-        rows.append({k: sp[k] for k in ("mu1", "n", "z_kp", "a_kp", "z_helps", "a_inf", "z1", "M1", "z2", "M2",
-                                        "d_max", "z_d_max")} | {k: v for k, v in sp.items() if k.endswith("_status")})
+        rows.append(StationaryCase(**R.stationary_points(mu1, n)))
         curves[(mu1, n)] = R.stationary(mu1, n, z)
     nu = np.sqrt(np.asarray(z))
     ss = R.steady_state(P, nu)
     eq9 = R.stationary(P.mu1, P.n_stationary(), nu**2)
     rel = float(np.max(np.abs(ss["a"] - eq9["a"]) / eq9["a"]))
     stab = [R.stability(P, float(v)) for v in np.linspace(0.05, float(nu.max()), 25)]
-    data = {"cases": rows, "steady_vs_eq9_max_rel_diff": rel,
-            "stability": {"max_real_over_Omega0": max(s["max_real"] for s in stab),
-                          "max_eigenvalue_residual": max(s["residual"] for s in stab)}}
-    return data, curves
+    return Stationary(rows, rel, WhirlStability(max(s["max_real"] for s in stab),
+                                                max(s["residual"] for s in stab))), curves
 
 
 def step_case(P: RotorParams, w0: float, w1: float, duration: float, points: int = 6000) -> dict:
@@ -305,7 +463,7 @@ def step_case(P: RotorParams, w0: float, w1: float, duration: float, points: int
             "_t": tau / Om, "_d": d}
 
 
-def passage_part(P: RotorParams, s) -> tuple[dict, dict]:
+def passage_part(P: RotorParams, s) -> tuple[Passage, dict]:
     Om = P.Omega0
     rows, curves, cross = [], {}, {}
     for n in s.friction:
@@ -313,8 +471,7 @@ def passage_part(P: RotorParams, s) -> tuple[dict, dict]:
         for psi in s.psi:
             Pn = P.with_chi(n * P.m1).with_psi(psi)
             r = R.passage(Pn, s.start_speed / Om, s.acceleration / Om**2, s.final_ratio)
-            rows.append({"n": n, "psi": psi, "delta_max_over_e": r["delta_max"], "z_delta_max": r["nu_delta_max"],
-                         "d_max": r["d_max"], "z_d_max": r["nu_d_max"]})
+            rows.append(PassageRun(n, psi, r["delta_max"], r["nu_delta_max"], r["d_max"], r["nu_d_max"]))
             keep = slice(None, None, max(1, len(r["nu"]) // 3000))
             curves[n][psi] = {"z": r["nu"][keep], "delta": r["delta"][keep], "d": r["d"][keep]}
     sens = {}
@@ -323,26 +480,23 @@ def passage_part(P: RotorParams, s) -> tuple[dict, dict]:
             cross[str(psi)] = R.crossover(Om, psi, s.start_speed, s.acceleration, s.final_ratio)
             if s.sensitivity_acceleration:
                 sens[str(psi)] = R.crossover(Om, psi, s.start_speed, s.sensitivity_acceleration, s.final_ratio)
-    return {"table": rows, "crossover_n_star": cross, "crossover_n_star_sensitivity": sens,
-            "acceleration_rad_s2": s.acceleration, "sensitivity_acceleration_rad_s2": s.sensitivity_acceleration}, {
-        "curves": curves}
+    return Passage(rows, cross, sens, s.acceleration, s.sensitivity_acceleration), {"curves": curves}
 
 
 def run(P: RotorParams, settings, title: str = "", motor=None, service_speed: float | None = None
         ) -> RotorDynamicsResult:
     """The parts the settings name; the rotor's API 684 margins (:func:`api_margins`) from ``service_speed`` (rad/s,
     the scene's rotor.unbalance.service_speed; None: the amplification factor alone)."""
-    data = {"title": title, "rotor": {"psi": P.psi, "mu1": P.mu1, "Omega0_rad_s": P.Omega0,
-                                      "omega_cr_rad_s": P.omega_cr, "zeta0": P.zeta0, "n_steady_1_s": P.n_steady(),
-                                      "n_stationary": P.n_stationary(), "n_passage_1_s": P.n_passage(),
-                                      "service_speed_rad_s": service_speed, **api_margins(P, service_speed)}}
-    if service_speed is None:
-        data["rotor"]["service_speed_rad_s_status"] = "the scene gives no service speed (rotor.unbalance)"
-    curves = {}
+    rotor = Rotor(psi=P.psi, mu1=P.mu1, Omega0_rad_s=P.Omega0, omega_cr_rad_s=P.omega_cr, zeta0=P.zeta0,
+                  n_steady_1_s=P.n_steady(), n_stationary=P.n_stationary(), n_passage_1_s=P.n_passage(),
+                  service_speed_rad_s=service_speed, **api_margins(P, service_speed),
+                  service_speed_rad_s_status=None if service_speed is not None else
+                  "the scene gives no service speed (rotor.unbalance)")
+    curves, stationary, steps, passage, lewis, runup = {}, None, None, None, None, None
     if settings.stationary is not None:
         s = settings.stationary
         z = np.linspace(s.z.start, s.z.stop, s.z.points)
-        data["stationary"], curves["stationary"] = stationary_part(P, s.cases, z)
+        stationary, curves["stationary"] = stationary_part(P, s.cases, z)
         progress.tick(note="stationary curves")
     if settings.steps is not None:
         s, rows, curves["steps"] = settings.steps, [], {}
@@ -352,22 +506,20 @@ def run(P: RotorParams, settings, title: str = "", motor=None, service_speed: fl
             for psi in s.psi:
                 r = step_case(P.with_psi(psi), w0, w1, s.duration)
                 curves["steps"][key][psi] = {"t": r.pop("_t"), "d": r.pop("_d")}
-                rows.append(r)
+                rows.append(Step(**r))
                 progress.tick(note=f"step {key}, psi {psi:g}")
-        data["steps"] = {"table": rows, "closed_form_vs_cvodes_max_rel_diff": max(r["closed_form_vs_cvodes"]
-                                                                                  for r in rows)}
+        steps = Steps(rows, max(r.closed_form_vs_cvodes for r in rows))
     if settings.passage is not None:
-        data["passage"], curves["passage"] = passage_part(P, settings.passage)
+        passage, curves["passage"] = passage_part(P, settings.passage)
         progress.tick(note="passage")
     if settings.lewis is not None:
         rows = []
         for z in settings.lewis.zeta:
             for a in settings.lewis.accel_ratio:
                 r = R.lewis(z, a)
-                rows.append({"zeta": z, "a_star": a, "peak_over_e": r["peak"], "nu_peak": r["nu_peak"],
-                             "undamped_asymptote": r["asymptote"], "nu_asymptote": r["nu_asymptote"]})
+                rows.append(LewisCase(z, a, r["peak"], r["nu_peak"], r["asymptote"], r["nu_asymptote"]))
                 progress.tick(note=f"Lewis zeta {z:g}, a* {a:g}")
-        data["lewis"] = {"table": rows}
+        lewis = Lewis(rows)
     if settings.motor_runup is not None:
         if motor is None:
             raise ScenarioError("analyses.rotor_dynamics.motor_runup needs rotor.drive.motor")
@@ -376,21 +528,20 @@ def run(P: RotorParams, settings, title: str = "", motor=None, service_speed: fl
         ts = P.torque_scale
         r = R.motor_runup(P, motor.stall_torque / ts, motor.no_load_speed / P.Omega0,
                           settings.motor_runup.duration * P.Omega0)
-        data["motor_runup"] = {"omega_final_rad_s": r["nu_final"] * P.Omega0, "passed": r["passed"],
-                               "peak_deflection_over_e": float(r["delta"].max())}
+        runup = MotorRunup(r["nu_final"] * P.Omega0, r["passed"], float(r["delta"].max()))
         curves["motor"] = {"t": r["tau"] / P.Omega0, "omega": r["nu"] * P.Omega0, "delta": r["delta"]}
-    data["accuracy"] = accuracy(data)
-    return RotorDynamicsResult(data, curves)
+    return RotorDynamicsResult(title, rotor, stationary, steps, passage, lewis, runup,
+                               accuracy=accuracy(stationary, steps), curves=curves)
 
 
-def accuracy(data: dict) -> dict:
+def accuracy(stationary: Stationary | None, steps: Steps | None) -> dict:
     """The run's own cross-checks as its error estimate: steady state (3) against the stationary
     curve (9), eigenpair residuals of the stability check, and the step transients' closed form
     (4)-(7) against CVODES; the passage and Lewis integrations run at TOL with no second method."""
     checks = {
-        "steady_state_vs_eq9": data.get("stationary", {}).get("steady_vs_eq9_max_rel_diff"),
-        "stability_eigen_residual": data.get("stationary", {}).get("stability", {}).get("max_eigenvalue_residual"),
-        "steps_closed_form_vs_cvodes": data.get("steps", {}).get("closed_form_vs_cvodes_max_rel_diff"),
+        "steady_state_vs_eq9": stationary and stationary.steady_vs_eq9_max_rel_diff,
+        "stability_eigen_residual": stationary and stationary.stability.max_eigenvalue_residual,
+        "steps_closed_form_vs_cvodes": steps and steps.closed_form_vs_cvodes_max_rel_diff,
     }
     checks = {k: v for k, v in checks.items() if v is not None}
     how = (f"largest of the run's cross-checks ({', '.join(checks) or 'none in this scene'}); the passage, Lewis "

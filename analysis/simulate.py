@@ -23,16 +23,15 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
 from autobal.analysis import interrupt, solver_options
 from autobal.analysis.compiled import compiled_map
+from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
 from autobal.analysis.frequency import MODEL_LABELS
-from autobal.analysis.quantities import Declarations, Quantity
-from autobal.analysis.result import Result, failed_head, new_figure, unit_axis
+from autobal.analysis.result import failed_head, new_figure, unit_axis
 from autobal.analysis.rosenbrock import STATUS, rodas4_grid
 from autobal.models.dynamics import DynamicModel
 
@@ -206,98 +205,116 @@ class Simulator:
         return np.array(self._inputs.map(len(t))(t, s)).T
 
 
-def events(model: DynamicModel, t: np.ndarray, X: np.ndarray, psi1: np.ndarray) -> list[dict]:
-    """Gap closure, valve closure/limit and inner-seal flow reversal along a response."""
-    out = []
-    i_u = model.index("u")
-    u = X[:, i_u]
-    k = np.flatnonzero(u <= 0)
-    if k.size:
-        j = k[0]
-        tc = t[j] if j == 0 else t[j - 1] + (t[j] - t[j - 1]) * u[j - 1] / (u[j - 1] - u[j])
-        out.append({"event": "gap_closed", "t": float(tc),
-                    "message": f"face gap reached zero at t = {tc:.6g} s: the disc touches the pad "
-                               "(no contact model); response cut there"})
-    if model.regulator:
-        xi = X[:, model.index("xi")]
-        xi_max = model.design.groups.regulator.xi_max
-        for name, mask in (("valve_closed", xi <= 0), ("valve_at_travel_limit", xi >= xi_max)):
-            if mask.any():
-                out.append({"event": name, "t": float(t[np.argmax(mask)])})
-    q1 = X[:, model.index("psi2")] - psi1
-    if (q1 < 0).any():
-        out.append({"event": "inner_seal_flow_reversed", "t": float(t[np.argmax(q1 < 0)]),
-                    "message": "process fluid enters the barrier chamber (q1 < 0)"})
-    if (u > U_RUNAWAY).any():
-        out.append({"event": "gap_runaway", "t": float(t[np.argmax(u > U_RUNAWAY)]),
-                    "message": f"face gap grew past {U_RUNAWAY:g} z_B (unstable): response stopped"})
-    return out
+def _time(description: str, symbol: str = "t"):
+    return quantity("s", symbol, description, "ms")
 
 
-#: every number of the transient block (Pavlenko 2014, §2.5); face-gap changes in m, shown in µm
-QUANTITIES = Declarations(
-    Quantity("cases[].max_dz", "m", "max |Δz|", "largest face-gap change of a case", "µm", headline=True),
-    Quantity("cases[].final_dz", "m", "Δz(t_end)", "face-gap change at the end of a case", "µm", headline=True),
-    Quantity("cases[].z", "m", "z", "face gap over time", "µm"),
-    Quantity("cases[].p2 cases[].p3", "Pa", "p2, p3", "chamber pressures over time"),
-    Quantity("cases[].amplitude", "1", "δψ1, δτ", "input amplitude, ratio of the discharge pressure or the load"),
-    Quantity("cases[].frequency", "rad/s", "ω", "frequency of a harmonic input", "rad/s"),
-    Quantity("cases[].t_end", "s", "t_end", "time reached", "ms"),
-    Quantity("cases[].events[].t", "s", "t", "time of an event (gap closed, valve at a stop, flow reversed)", "ms"),
-    Quantity("cases[].cpu_s", "s", "", "CPU time of the integration"),
-    Quantity("cases[].integrator_steps", "1", "", "integrator steps"),
-    Quantity("equilibrium_residual", "1", "", "residual of the nonlinear model at the static solution"),
-)
+@record
+class Event(Record):
+    """What happened along a response (:func:`events`): gap closed, valve at a stop, flow reversed, runaway."""
+
+    event: str
+    t: float = _time("time of an event (gap closed, valve at a stop, flow reversed)")
+    message: str | None = optional()
 
 
-@dataclass
-class TransientResult(Result):
-    """Time responses of the nonlinear model from its equilibrium (Pavlenko (2014), Eq. (2.111)).
+@record
+class IntegratorFailure(Record):
+    """Where and why the integrator stopped before the end time."""
 
-    ``data`` is the results.json block plus the time series of each case.
-    """
+    t: float = _time("time the integrator failed")
+    message: str
 
-    data: dict
+
+def _pressure():
+    return quantity("Pa", "p2, p3", "chamber pressures over time")
+
+
+@record
+class Case(Record):
+    """The time response of one case from the equilibrium; a failed case has no max |Δz|, final Δz (null with
+    their status)."""
+
+    input: str
+    amplitude: float = quantity("1", "δψ1, δτ", "input amplitude, ratio of the discharge pressure or the load")
+    frequency: float | None = quantity("rad/s", "ω", "frequency of a harmonic input", "rad/s")
+    z: np.ndarray = quantity("m", "z", "face gap over time", "µm")
+    p2: np.ndarray = _pressure()
+    p3: np.ndarray = _pressure()
+    max_dz: float | None = quantity("m", "max |Δz|", "largest face-gap change of a case", "µm", headline=1)
+    final_dz: float | None = quantity("m", "Δz(t_end)", "face-gap change at the end of a case", "µm", headline=2)
+    max_dz_status: str | None = optional(kw_only=True)
+    final_dz_status: str | None = optional(kw_only=True)
+    events: list[Event]
+    failure: IntegratorFailure | None
+    cpu_s: float = quantity("s", "", "CPU time of the integration")
+    t_end: float = _time("time reached", "t_end")
+    failure_status: str | None = optional(kw_only=True)
+    frequency_status: str | None = optional(kw_only=True)
+    integrator_steps: int = quantity("1", "", "integrator steps")
+    #: the output times (s) and the states (rows: time; the source's groups) of the response: in its CSV
+    t: np.ndarray | None = unsaved()
+    X: np.ndarray | None = unsaved()
+
+
+@record
+class TransientResult(TypedResult):
+    """Time responses of the nonlinear model from its equilibrium (Pavlenko (2014), Eq. (2.111)), a
+    :class:`Case` each; the times and states of each response are held (its CSV), not in results.json."""
+
+    title: str
+    model: str
+    integrator: str
+    states: list[str]
+    equilibrium_residual: float = quantity("1", "", "residual of the nonlinear model at the static solution",
+                                           headline=3)
+    #: the error estimate of :func:`accuracy` (its numbers are declared for every analysis: accuracy.**)
+    accuracy: dict | None = optional(kw_only=True)
+    cases: list[Case]
+    failures_after = "equilibrium_residual"  # where results.json had them before the Result was typed
     name = "transient"
-    quantities = QUANTITIES
 
     @property
-    def max_gap_change(self) -> list[float]:
-        """Largest face-gap change max |z - z0| of each case, m."""
-        return [c["max_dz"] for c in self.data["series"]]
-
-    def to_dict(self) -> dict:
-        return {k: v for k, v in self.data.items() if k != "series"} | {
-            "cases": [{k: v for k, v in c.items() if k not in ("t", "X", "inputs")} for c in self.data["series"]]}
+    def max_gap_change(self) -> list[float | None]:
+        """Largest face-gap change max |z - z0| of each case, m (None: the case failed)."""
+        return [c.max_dz for c in self.cases]
 
     def summary(self) -> str:
-        lines = [*failed_head(self.failures()), f"transients ({self.data['model']} model, {self.data['integrator']}):"]
+        lines = [*failed_head(self.failures()), f"transients ({self.model} model, {self.integrator}):"]
         dz = QUANTITIES.find("cases.0.max_dz")
-        for c in self.data["series"]:
-            ev = "; ".join(e.get("message", e["event"] + f" at t = {e['t']:.4g} s") for e in c["events"]) or "none"
-            fail = f"; integrator failed at t = {c['failure']['t']:.4g} s" if c["failure"] else ""
-            response = "no response" if c["max_dz"] is None else \
-                f"max |dz| = {dz.text(c['max_dz'], 3)}, final dz = {dz.text(c['final_dz'], 3)}"
-            lines.append(f"  {c['input']:17s} amplitude {c['amplitude']:g}: {response}; events: {ev}{fail}")
+        for c in self.cases:
+            ev = "; ".join(e.message or f"{e.event} at t = {e.t:.4g} s" for e in c.events) or "none"
+            fail = f"; integrator failed at t = {c.failure.t:.4g} s" if c.failure else ""
+            response = "no response" if c.max_dz is None else \
+                f"max |dz| = {dz.text(c.max_dz, 3)}, final dz = {dz.text(c.final_dz, 3)}"
+            lines.append(f"  {c.input:17s} amplitude {c.amplitude:g}: {response}; events: {ev}{fail}")
         return "\n".join(lines)
+
+    def _responses(self) -> list[Case]:
+        """The cases with their responses; ValueError for a Result loaded from results.json, which holds the face
+        gap and the pressures but not the times and states."""
+        if any(c.t is None for c in self.cases):
+            raise ValueError("transient: a loaded Result holds no time series (results.json has the face gap and "
+                             "pressures; the times and states are in transient_<i>_<input>.csv of the run)")
+        return self.cases
 
     def tables(self) -> dict[str, dict]:
         out = {}
-        for i, c in enumerate(self.data["series"]):
+        for i, c in enumerate(self._responses()):
             q_t, q_z, q_p = (QUANTITIES.find(f"cases.0.{k}") for k in ("t_end", "z", "p2"))
-            cols = {f"t [{q_t.display}]": q_t.shown(np.asarray(c["t"]))}
-            cols |= {f"{k} [1]": c["X"][:, j] for j, k in enumerate(self.data["states"])}  # the source's groups
-            out[f"transient_{i}_{c['input']}.csv"] = cols | {f"z [{q_z.display}]": q_z.shown(np.asarray(c["z"])),
-                                                             f"p2 [{q_p.display}]": q_p.shown(np.asarray(c["p2"])),
-                                                             f"p3 [{q_p.display}]": q_p.shown(np.asarray(c["p3"]))}
+            cols = {f"t [{q_t.display}]": q_t.shown(np.asarray(c.t))}
+            cols |= {f"{k} [1]": c.X[:, j] for j, k in enumerate(self.states)}  # the source's groups
+            out[f"transient_{i}_{c.input}.csv"] = cols | {f"z [{q_z.display}]": q_z.shown(np.asarray(c.z)),
+                                                          f"p2 [{q_p.display}]": q_p.shown(np.asarray(c.p2)),
+                                                          f"p3 [{q_p.display}]": q_p.shown(np.asarray(c.p3))}
         return out
 
     def draw(self, ax) -> None:
         """The face-gap change of every case against time (the display units of the events' time, ms, and of the
         gap, µm)."""
         ft, fz = self._time_axis(ax), self._gap_axis(ax, r"$\delta z$")
-        for c in self.data["series"]:
-            ax.plot(c["t"] * ft, (c["z"] - c["z"][0]) * fz, label=f"{c['input']} ({c['amplitude']:g})")
+        for c in self._responses():
+            ax.plot(c.t * ft, (c.z - c.z[0]) * fz, label=f"{c.input} ({c.amplitude:g})")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
 
@@ -308,30 +325,61 @@ class TransientResult(Result):
         return unit_axis(ax, label, "m", QUANTITIES.find("cases.0.z").declared)
 
     def figures(self) -> dict:
-        n = len(self.data["series"])
+        n = len(self._responses())
         fig, axes = new_figure(figsize=(9, 2.6 * n + 0.4), nrows=n, ncols=2, squeeze=False)
         qz, qp = QUANTITIES.find("cases.0.z"), QUANTITIES.find("cases.0.p2")
         ft = [self._time_axis(a) for a in axes[-1]][0]  # the time below the last row
-        for ax, c in zip(axes, self.data["series"], strict=True):
-            t = c["t"] * ft
-            ax[0].plot(t, (c["z"] - c["z"][0]) * self._gap_axis(ax[0], r"gap change $\delta z$"))
-            ax[0].set_title(f"{c['input'].replace('_', ' ')} ({c['amplitude']:g}): face gap, "
-                            rf"$z_0$ = {qz.text(c['z'][0])}", fontsize=8)
-            dp2, dp3 = c["p2"] - c["p2"][0], c["p3"] - c["p3"][0]
+        for ax, c in zip(axes, self._responses(), strict=True):
+            t = c.t * ft
+            ax[0].plot(t, (c.z - c.z[0]) * self._gap_axis(ax[0], r"gap change $\delta z$"))
+            ax[0].set_title(f"{c.input.replace('_', ' ')} ({c.amplitude:g}): face gap, "
+                            rf"$z_0$ = {qz.text(c.z[0])}", fontsize=8)
+            dp2, dp3 = c.p2 - c.p2[0], c.p3 - c.p3[0]
             big = max(np.abs(dp2).max(), np.abs(dp3).max())  # unless chosen: the unit of the changes' size
             fp = unit_axis(ax[1], r"pressure change $\Delta p$", "Pa",
                            "MPa" if big >= 1e6 else "kPa" if big >= 1e3 else "Pa")
-            ax[1].plot(t, dp2 * fp, label=rf"$\Delta p_2$ (static {qp.text(c['p2'][0], 3)})")
-            ax[1].plot(t, dp3 * fp, label=rf"$\Delta p_3$ (static {qp.text(c['p3'][0], 3)})")
+            ax[1].plot(t, dp2 * fp, label=rf"$\Delta p_2$ (static {qp.text(c.p2[0], 3)})")
+            ax[1].plot(t, dp3 * fp, label=rf"$\Delta p_3$ (static {qp.text(c.p3[0], 3)})")
             ax[1].set_title("chamber pressures relative to their static values", fontsize=8)
             ax[1].legend(fontsize=7, loc="best")
             for a in ax:
                 a.grid(alpha=0.3)
-                for e in c["events"]:
-                    a.axvline(e["t"] * ft, color="r", ls=":", lw=0.8)
-        fig.suptitle(f"{self.data['title']}\ntime responses of the {MODEL_LABELS.get(self.data['model'], '')} model "
+                for e in c.events:
+                    a.axvline(e.t * ft, color="r", ls=":", lw=0.8)
+        fig.suptitle(f"{self.title}\ntime responses of the {MODEL_LABELS.get(self.model, '')} model "
                      "from the static solution (red dotted: events)", fontsize=9)
         return {"fig_transients.png": fig}
+
+
+#: every number of the transient block (Pavlenko 2014, §2.5), from the fields: face-gap changes in m, shown in µm
+TransientResult.quantities = QUANTITIES = declarations(TransientResult)
+
+
+def events(model: DynamicModel, t: np.ndarray, X: np.ndarray, psi1: np.ndarray) -> list[Event]:
+    """Gap closure, valve closure/limit and inner-seal flow reversal along a response."""
+    out = []
+    i_u = model.index("u")
+    u = X[:, i_u]
+    k = np.flatnonzero(u <= 0)
+    if k.size:
+        j = k[0]
+        tc = t[j] if j == 0 else t[j - 1] + (t[j] - t[j - 1]) * u[j - 1] / (u[j - 1] - u[j])
+        out.append(Event("gap_closed", float(tc), f"face gap reached zero at t = {tc:.6g} s: the disc touches "
+                                                  "the pad (no contact model); response cut there"))
+    if model.regulator:
+        xi = X[:, model.index("xi")]
+        xi_max = model.design.groups.regulator.xi_max
+        for name, mask in (("valve_closed", xi <= 0), ("valve_at_travel_limit", xi >= xi_max)):
+            if mask.any():
+                out.append(Event(name, float(t[np.argmax(mask)])))
+    q1 = X[:, model.index("psi2")] - psi1
+    if (q1 < 0).any():
+        out.append(Event("inner_seal_flow_reversed", float(t[np.argmax(q1 < 0)]),
+                         "process fluid enters the barrier chamber (q1 < 0)"))
+    if (u > U_RUNAWAY).any():
+        out.append(Event("gap_runaway", float(t[np.argmax(u > U_RUNAWAY)]),
+                         f"face gap grew past {U_RUNAWAY:g} z_B (unstable): response stopped"))
+    return out
 
 
 def study(model: DynamicModel, cases: list, duration: float, points: int, integrator: str = "cvodes",
@@ -339,7 +387,7 @@ def study(model: DynamicModel, cases: list, duration: float, points: int, integr
     """Each case: dict with input, amplitude, frequency (harmonic; default omega0), couple."""
     sim = Simulator(model, duration, points, integrator)
     sc = model.design.scales
-    series = []
+    out = []
     for case in cases:
         kind = case["input"]
         omega = case.get("frequency") or model.data.omega0
@@ -350,37 +398,32 @@ def study(model: DynamicModel, cases: list, duration: float, points: int, integr
         t, X = r["t"], r["X"]
         ev = events(model, t, X, sim.inputs(s, t)[:, 0])
         # the response ends where the gap closes or runs away (the rest of the chunk beyond is not the device's)
-        cut = min((e["t"] for e in ev if e["event"] in ("gap_closed", "gap_runaway")), default=None)
+        cut = min((e.t for e in ev if e.event in ("gap_closed", "gap_runaway")), default=None)
         if cut is not None:
             keep = t <= cut
             t, X = t[keep], X[keep]
         z = X[:, model.index("u")] * sc["z_B"]
         dz = z - z[0]
-        why = None if r["failure"] is None else \
-            f"the integrator failed at t = {r['failure']['t']:.4g} s (the response up to there is in the CSV)"
-        series.append({
-            "input": kind, "amplitude": case["amplitude"], "frequency": omega if kind == "pressure_harmonic" else None,
-            "t": t, "X": X, "z": z, "p2": X[:, model.index("psi2")] * sc["p_B"],
-            "p3": X[:, model.index("psi3")] * sc["p_B"],
+        failure = None if r["failure"] is None else IntegratorFailure(**r["failure"])
+        why = None if failure is None else \
+            f"the integrator failed at t = {failure.t:.4g} s (the response up to there is in the CSV)"
+        harmonic = kind == "pressure_harmonic"
+        out.append(Case(
+            input=kind, amplitude=case["amplitude"], frequency=omega if harmonic else None,
+            t=t, X=X, z=z, p2=X[:, model.index("psi2")] * sc["p_B"], p3=X[:, model.index("psi3")] * sc["p_B"],
             # a failed case has no numbers: null with the reason, never those of the part it integrated
-            "max_dz": None if why else float(np.abs(dz).max()), "final_dz": None if why else float(dz[-1]),
-            **({"max_dz_status": why, "final_dz_status": why} if why else {}), "events": ev,
-            "failure": r["failure"], "cpu_s": cpu, "t_end": float(t[-1]),
-            **({"failure_status": "none: the integrator reached the end time or a stop event"}
-               if r["failure"] is None else {}),
-            **({"frequency_status": "not a harmonic input"} if kind != "pressure_harmonic" else {}),
-            "integrator_steps": r["steps"],
-        })
+            max_dz=None if why else float(np.abs(dz).max()), final_dz=None if why else float(dz[-1]),
+            max_dz_status=why, final_dz_status=why, events=ev, failure=failure, cpu_s=cpu, t_end=float(t[-1]),
+            failure_status=None if failure else "none: the integrator reached the end time or a stop event",
+            frequency_status=None if harmonic else "not a harmonic input", integrator_steps=r["steps"]))
     label = "nonlinear_chain" if model.form == "chain" else "nonlinear"
     eq = equilibrium_residual(model)
-    failures = [f"case {i + 1} ({c['input']}, amplitude {c['amplitude']:g}): the integrator failed at "
-                f"t = {c['failure']['t']:.4g} s: {c['failure']['message']}"
-                for i, c in enumerate(series) if c["failure"]]
+    failures = [f"case {i + 1} ({c.input}, amplitude {c.amplitude:g}): the integrator failed at "
+                f"t = {c.failure.t:.4g} s: {c.failure.message}" for i, c in enumerate(out) if c.failure]
     if not eq <= EQUILIBRIUM_TOL:
         failures.append(f"the start is not an equilibrium of the model: residual {eq:.1e} > {EQUILIBRIUM_TOL:g}")
-    return TransientResult({"title": title, "model": label,
-                            "integrator": integrator, "states": model.states, "series": series,
-                            "equilibrium_residual": eq, "failures": failures})
+    return TransientResult(title=title, model=label, integrator=integrator, states=model.states,
+                           equilibrium_residual=eq, cases=out, failures=failures)
 
 
 # the largest implicit-row residual accepted at the start (rows normalised to O(1) coefficients): the static
@@ -408,20 +451,20 @@ def accuracy(model: DynamicModel, res: TransientResult, cases: list, duration: f
     tight = Simulator(model, duration, points, integrator, rtol=sim.rtol / TIGHTER, atol=sim.atol / TIGHTER)
     iu, z_B = model.index("u"), model.design.scales["z_B"]
     per = []
-    for case, c in zip(cases, res.data["series"], strict=True):
-        if c["failure"]:  # no response to check
-            why = c["max_dz_status"]
-            per.append({"input": c["input"]} | {k: None for k in ("curve", "max_dz", "final_dz")}
+    for case, c in zip(cases, res.cases, strict=True):
+        if c.failure:  # no response to check
+            why = c.max_dz_status
+            per.append({"input": c.input} | {k: None for k in ("curve", "max_dz", "final_dz")}
                        | {f"{k}_status": why for k in ("curve", "max_dz", "final_dz")})
             continue
         omega = case.get("frequency") or model.data.omega0
         r = tight.run(tight.input_vector(case["input"], case["amplitude"], omega, case.get("couple", True)))
-        k = min(len(c["z"]), len(r["t"]))
-        dz, dz_t = c["z"][:k] - c["z"][0], (r["X"][:k, iu] - r["X"][0, iu]) * z_B
+        k = min(len(c.z), len(r["t"]))
+        dz, dz_t = c.z[:k] - c.z[0], (r["X"][:k, iu] - r["X"][0, iu]) * z_B
         ref = max(np.abs(dz_t).max(), 1e-300)
-        per.append({"input": c["input"], "curve": float(np.abs(dz - dz_t).max() / ref),
-                    "max_dz": abs(c["max_dz"] - np.abs(dz_t).max()) / ref,
-                    "final_dz": abs(c["final_dz"] - dz_t[-1]) / ref if k == len(c["z"]) else math.nan})
+        per.append({"input": c.input, "curve": float(np.abs(dz - dz_t).max() / ref),
+                    "max_dz": abs(c.max_dz - np.abs(dz_t).max()) / ref,
+                    "final_dz": abs(c.final_dz - dz_t[-1]) / ref if k == len(c.z) else math.nan})
     failed = [p["input"] for p in per if p["curve"] is None]
     est = None if failed else \
         float(max(max(p["curve"], p["max_dz"], 0.0 if math.isnan(p["final_dz"]) else p["final_dz"]) for p in per))

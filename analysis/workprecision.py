@@ -10,15 +10,17 @@ The studies of a scene (``autobal accuracy``) are the ``accuracy`` functions of 
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
 from autobal.analysis import closed_form, ipopt, progress
-from autobal.analysis.result import Result, new_figure
+from autobal.analysis.fields import Record, TypedResult, declarations, keyed, optional, quantity, record
+from autobal.analysis.result import new_figure
 from autobal.errors import ScenarioError
 
 TARGET = 1e-6  # relative error for the "cheapest setting" summary
@@ -34,45 +36,83 @@ class Method:
     setting_name: str = "tolerance"
 
 
-@dataclass
-class WorkPrecision(Result):
-    """Error against run time of every method of one analysis (``autobal accuracy``)."""
+@record
+class Trial(Record):
+    """One solve of one method at one setting against the reference (a setting that fails: NaN error and time,
+    and why)."""
+
+    method: str
+    setting: float = quantity("1", "", "the method's setting: a tolerance, a number of steps or intervals")
+    setting_name: str | None = optional(kw_only=True)
+    error: float = quantity("1", "ε", "max relative error of the main outputs against the reference")
+    time_s: float = quantity("s", "t", "run time per solve")
+    objective: float | None = optional(kw_only=True)  # the spin-up's objective, re-simulated, in its own unit
+    iterations: int | None = quantity("1", "", "IPOPT iterations", optional=True)
+    failed: str | None = optional()
+
+
+@record
+class Cheapest(Record):
+    """A method's fastest setting reaching the target error (None: none does), and the best error it reached."""
+
+    setting: float | None = quantity("1", "", "the cheapest setting reaching the target error")
+    time_s: float | None = quantity("s", "t", "its run time per solve")
+    best_error: float | None = quantity("1", "ε", "the smallest error the method reached")
+
+
+def _modulus():
+    return quantity("1/s", "|λ|", "smallest and largest eigenvalue modulus of the linear model")
+
+
+@record
+class Stiffness(Record):
+    """Why the time integration is stiff, and the integrator chosen for it."""
+
+    min_abs_eigenvalue: float = _modulus()
+    max_abs_eigenvalue: float = _modulus()
+    ratio: float = quantity("1", "", "stiffness ratio max |λ| / min |λ|")
+    chosen: str
+    why: str
+    reference_difference_cvodes_vs_radau: float = quantity("1", "", "difference of the two references (CVODES, "
+                                                                    "scipy Radau) relative to the state")
+    problem: str
+
+
+@record
+class WorkPrecision(TypedResult):
+    """Error against run time of every method of one analysis (``autobal accuracy``): a :class:`Trial` per method
+    and setting, and per method the cheapest setting reaching :data:`TARGET` (results.json key ``cheapest``)."""
 
     analysis: str
     reference: str  # how the reference was computed
     outputs: list[str]
-    rows: list[dict] = field(default_factory=list)
-    notes: dict = field(default_factory=dict)  # e.g. the stiffness report of a time integration
+    target_error: float = quantity("1", "ε_target", "relative error the cheapest setting has to reach")
+    rows: list[Trial]
+    cheapest_settings: dict[str, Cheapest] = keyed("cheapest")
+    stiffness: Stiffness | None = optional()
 
-    def cheapest(self, target: float = TARGET) -> dict:
+    @classmethod
+    def of(cls, analysis: str, reference: str, outputs: list[str], rows: list[Trial],
+           stiffness: Stiffness | None = None) -> WorkPrecision:
+        """The result of ``rows``, with each method's cheapest setting for :data:`TARGET`."""
+        return cls(analysis, reference, outputs, TARGET, rows, cheapest(rows, TARGET), stiffness)
+
+    def cheapest(self, target: float = TARGET) -> dict[str, Cheapest]:
         """Per method: the fastest setting whose error is <= target (None if none reaches it)."""
-        out = {}
-        for m in dict.fromkeys(r["method"] for r in self.rows):
-            ok = [r for r in self.rows if r["method"] == m and r["error"] <= target]
-            best = min(ok, key=lambda r: r["time_s"]) if ok else None
-            errors = [r["error"] for r in self.rows if r["method"] == m and np.isfinite(r["error"])]
-            reached = min(errors) if errors else None
-            out[m] = {"setting": best["setting"] if best else None, "time_s": best["time_s"] if best else None,
-                      "best_error": reached}
-        return out
-
-    def to_dict(self) -> dict:
-        return {"analysis": self.analysis, "reference": self.reference, "outputs": self.outputs,
-                "target_error": TARGET, "rows": self.rows, "cheapest": self.cheapest(), **self.notes}
+        return cheapest(self.rows, target)
 
     def summary(self) -> str:
         lines = [f"work-precision of {self.analysis} (reference: {self.reference})",
                  f"  {'method':44s}{'setting for 1e-6':>18s}{'time (s)':>12s}{'best error':>12s}"]
-        for m, c in self.cheapest().items():
-            s = "not reached" if c["setting"] is None else f"{c['setting']:g}"
-            t = "-" if c["time_s"] is None else f"{c['time_s']:.2e}"
-            best = "failed" if c["best_error"] is None else f"{c['best_error']:.1e}"
+        for m, c in self.cheapest_settings.items():
+            s = "not reached" if c.setting is None else f"{c.setting:g}"
+            t = "-" if c.time_s is None else f"{c.time_s:.2e}"
+            best = "failed" if c.best_error is None else f"{c.best_error:.1e}"
             lines.append(f"  {m:44s}{s:>18s}{t:>12s}{best:>12s}")
-        if "stiffness" in self.notes:
-            st = self.notes["stiffness"]
-            lines.append(f"  stiffness: eigenvalue moduli {st['min_abs_eigenvalue']:.3g} .. "
-                         f"{st['max_abs_eigenvalue']:.3g} 1/s (ratio {st['ratio']:.2g}); "
-                         f"integrator: {st['chosen']}: {st['why']}")
+        if (st := self.stiffness) is not None:
+            lines.append(f"  stiffness: eigenvalue moduli {st.min_abs_eigenvalue:.3g} .. "
+                         f"{st.max_abs_eigenvalue:.3g} 1/s (ratio {st.ratio:.2g}); "
+                         f"integrator: {st.chosen}: {st.why}")
         return "\n".join(lines)
 
     @property
@@ -81,7 +121,8 @@ class WorkPrecision(Result):
 
     def tables(self) -> dict[str, dict]:
         columns = {"method": "method", "setting [1]": "setting", "error [1]": "error", "time [s]": "time_s"}
-        return {f"workprecision_{self.analysis}.csv": {name: [r[k] for r in self.rows] for name, k in columns.items()}}
+        return {f"workprecision_{self.analysis}.csv": {name: [getattr(r, k) for r in self.rows]
+                                                       for name, k in columns.items()}}
 
     def figures(self) -> dict:
         fig, ax = new_figure((6.4, 4.6))
@@ -90,16 +131,32 @@ class WorkPrecision(Result):
 
     def draw(self, ax) -> None:
         """Error against run time per method, the target error dotted."""
-        for m in dict.fromkeys(r["method"] for r in self.rows):
-            rs = [r for r in self.rows if r["method"] == m]
-            err = np.maximum([r["error"] for r in rs], 1e-17)
-            ax.loglog([r["time_s"] for r in rs], err, "o-", label=m, ms=4)
+        for m in dict.fromkeys(r.method for r in self.rows):
+            rs = [r for r in self.rows if r.method == m]
+            err = np.maximum([r.error for r in rs], 1e-17)
+            ax.loglog([r.time_s for r in rs], err, "o-", label=m, ms=4)
         ax.axhline(TARGET, color="k", lw=0.7, ls=":")
         ax.set_xlabel("run time per solve (s)")
         ax.set_ylabel("max relative error of " + ", ".join(self.outputs))
         ax.set_title(f"work-precision: {self.analysis}\nreference: {self.reference}", fontsize=8)
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=7)
+
+
+def cheapest(rows: list[Trial], target: float = TARGET) -> dict[str, Cheapest]:
+    """Per method of ``rows``: the fastest setting whose error is <= target (None if none reaches it)."""
+    out = {}
+    for m in dict.fromkeys(r.method for r in rows):
+        ok = [r for r in rows if r.method == m and r.error <= target]
+        best = min(ok, key=lambda r: r.time_s) if ok else None
+        errors = [r.error for r in rows if r.method == m and np.isfinite(r.error)]
+        out[m] = Cheapest(best.setting if best else None, best.time_s if best else None,
+                          min(errors) if errors else None)
+    return out
+
+
+#: every number of a work-precision result, from the fields (the spin-up's objective is in its own unit)
+WorkPrecision.quantities = QUANTITIES = declarations(WorkPrecision)
 
 
 def timed(fn, repeats: int = 5):
@@ -117,7 +174,7 @@ def study(analysis: str, methods: list[Method], reference: np.ndarray, reference
     """Run every method over its settings; error = max |y - reference| / max(|reference|, floor)
     (floor = 1 on O(1) scaled states gives an absolute error there).  ``references`` maps a method
     name to its own reference (a method is never judged against itself)."""
-    wp = WorkPrecision(analysis, reference_how, outputs)
+    rows = []
     with progress.steps(sum(len(m.settings) for m in methods), f"accuracy {analysis}", "setting") as bar:
         for m in methods:
             ref = (references or {}).get(m.name, reference)
@@ -130,14 +187,12 @@ def study(analysis: str, methods: list[Method], reference: np.ndarray, reference
                     err = float(np.max(np.abs(np.asarray(y, float) - ref) / scale))
                 except Exception as exc:  # a setting that fails is a result: recorded, not hidden
                     t, err = float("nan"), float("nan")
-                    wp.rows.append({"method": m.name, "setting": s, "error": err, "time_s": t,
-                                    "failed": str(exc).strip().splitlines()[-1][:200]})
+                    rows.append(Trial(m.name, s, error=err, time_s=t, failed=str(exc).strip().splitlines()[-1][:200]))
                     bar.tick(note=f"{m.name}, {s}: failed")
                     continue
-                wp.rows.append({"method": m.name, "setting": s, "error": err if np.isfinite(err) else float("nan"),
-                                "time_s": t})
+                rows.append(Trial(m.name, s, error=err if np.isfinite(err) else float("nan"), time_s=t))
                 bar.tick(note=f"{m.name}, {s}")
-    return wp
+    return WorkPrecision.of(analysis, reference_how, outputs, rows)
 
 
 # ---- statics ---------------------------------------------------------------------------------
@@ -308,22 +363,19 @@ def dynamics_study(model, duration: float, dtau: float, quick: bool = False) -> 
     lam = exact(model).poles()
     mod = np.abs(lam[np.abs(lam) > 0])
     h_rk4 = 2.785 / mod.max()  # RK4 stability limit on the negative real axis
-    notes = {"stiffness": {
-        "min_abs_eigenvalue": float(mod.min()), "max_abs_eigenvalue": float(mod.max()),
-        "ratio": float(mod.max() / mod.min()),
-        "chosen": "CVODES (BDF, exact Jacobian)",
-        "why": (f"the fastest mode ({mod.max():.2g} 1/s) limits an explicit method to steps below "
-                f"{h_rk4:.2g} s, i.e. {duration / h_rk4:.2g} steps over {duration * 1e3:g} ms; a variable-order "
-                "implicit BDF with the exact Jacobian steps over it at the accuracy asked"),
-        "reference_difference_cvodes_vs_radau": float(np.max(np.abs(ref - ref_radau) / np.maximum(np.abs(ref), 1))),
-        "problem": f"axial-force step dtau = {dtau:g} over {duration * 1e3:g} ms from the static solution, "
-                   f"{model.form} chamber balances, {n} states",
-    }}
+    stiffness = Stiffness(
+        min_abs_eigenvalue=float(mod.min()), max_abs_eigenvalue=float(mod.max()), ratio=float(mod.max() / mod.min()),
+        chosen="CVODES (BDF, exact Jacobian)",
+        why=(f"the fastest mode ({mod.max():.2g} 1/s) limits an explicit method to steps below "
+             f"{h_rk4:.2g} s, i.e. {duration / h_rk4:.2g} steps over {duration * 1e3:g} ms; a variable-order "
+             "implicit BDF with the exact Jacobian steps over it at the accuracy asked"),
+        reference_difference_cvodes_vs_radau=float(np.max(np.abs(ref - ref_radau) / np.maximum(np.abs(ref), 1))),
+        problem=f"axial-force step dtau = {dtau:g} over {duration * 1e3:g} ms from the static solution, "
+                f"{model.form} chamber balances, {n} states")
     wp = study("dynamics", methods, ref, "CVODES at rtol 1e-13 (for the CVODES rows: scipy Radau at rtol 1e-12)",
                ["final state (O(1) scaled)"], repeats=1 if quick else 3, floor=1.0,
                references={"CVODES (BDF, exact Jacobian)": ref_radau})
-    wp.notes = notes
-    return wp
+    return dataclasses.replace(wp, stiffness=stiffness)
 
 
 # ---- estimation -------------------------------------------------------------------------------------

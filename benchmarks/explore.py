@@ -98,7 +98,7 @@ def main(repeats: int = 5) -> list[dict]:
         scene = autobal.load(SCENE, set=ex.overrides(values))
         setup = Setup(dynamic_device(scene), scene.analyses.frequency.operating_ratio)
         o = scene.analyses.frequency.omega
-        f = fr.study(setup, ["nonlinear"], "physical", (o.start, o.stop, o.points)).data["headline"]
+        f = fr.study(setup, ["nonlinear"], "physical", (o.start, o.stop, o.points)).head
         return f, st.verdict(setup.linear("nonlinear"))  # the headline verdict of stability.study
 
     t_batch = cpu_best_of(repeats, cycling(batch_numbers, settings))
@@ -108,9 +108,9 @@ def main(repeats: int = 5) -> list[dict]:
     for values in settings:
         live = ex.evaluate(values)
         f, s = batch_numbers(values)
-        pairs = [(live["decay_rate"], s["margin"]["decay_rate"]), (live["peaks"][0]["omega"], f["peaks"][0]["omega"]),
-                 (live["peaks"][0]["amplitude"], f["peaks"][0]["amplitude"]),
-                 (live["amplitude_at_omega0"], f["at_operating_speed"]["amplitude"])]
+        pairs = [(live["decay_rate"], s["margin"]["decay_rate"]), (live["peaks"][0]["omega"], f.peaks[0].omega),
+                 (live["peaks"][0]["amplitude"], f.peaks[0].amplitude),
+                 (live["amplitude_at_omega0"], f.at_operating_speed.amplitude)]
         err = max(err, *(abs(a - b) / abs(b) for a, b in pairs))
 
     # the parts: statics, dynamics

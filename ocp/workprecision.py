@@ -3,7 +3,7 @@ re-simulation, over the collocation degree and the number of intervals (and mult
 
 from __future__ import annotations
 
-from autobal.analysis.workprecision import WorkPrecision
+from autobal.analysis.workprecision import Trial, WorkPrecision
 from autobal.ocp.simulation import resimulate
 from autobal.ocp.solve import Solver, resimulated_scores
 from autobal.ocp.transcription import DirectCollocation, MultipleShooting
@@ -15,22 +15,20 @@ def spinup_study(ocp, degrees=(2, 3, 4), intervals=(50, 100, 200, 400), shooting
     over ``shooting`` intervals if given (by default not: one solve at 50 intervals takes about a
     minute; tests/test_spinup.py checks that both transcriptions reach the same optimum); one start
     (the constant ramp), solve time of IPOPT (the NLP is built beforehand)."""
-    wp = WorkPrecision("spinup", "each optimum's CVODES re-simulation at rtol 1e-12 (the exact response to the "
-                                 "optimal speed profile)", [f"{ocp.objective} (re-simulated)"])
+    rows = []
     ladders = [(f"direct collocation, Radau degree {d}", lambda n, d=d: DirectCollocation(n, d, "radau"), intervals)
                for d in degrees]
     if shooting:
         ladders.append(("multiple shooting (CVODES)", lambda n: MultipleShooting(n), shooting))
     for name, method, settings in ladders:
         for n in settings:
-            row = {"method": name, "setting": n, "setting_name": "intervals"}
             try:
                 sol = Solver(ocp, method(n)).solve()
                 score, own = resimulated_scores(ocp, sol, resimulate(ocp, sol.u, sol.h, "workprecision"))
-                row |= {"error": abs(own - score) / abs(score), "time_s": sol.solve_time_s, "objective": score,
-                        "iterations": sol.iterations}
+                rows.append(Trial(name, n, setting_name="intervals", error=abs(own - score) / abs(score),
+                                  time_s=sol.solve_time_s, objective=score, iterations=sol.iterations))
             except Exception as exc:  # a failed solve is a result: recorded, not hidden
-                row |= {"error": float("nan"), "time_s": float("nan"),
-                        "failed": str(exc).strip().splitlines()[-1][:200]}
-            wp.rows.append(row)
-    return wp
+                rows.append(Trial(name, n, setting_name="intervals", error=float("nan"), time_s=float("nan"),
+                                  failed=str(exc).strip().splitlines()[-1][:200]))
+    return WorkPrecision.of("spinup", "each optimum's CVODES re-simulation at rtol 1e-12 (the exact response to "
+                            "the optimal speed profile)", [f"{ocp.objective} (re-simulated)"], rows)

@@ -121,8 +121,8 @@ def test_afc_amplitudes_are_si_in_results_json(pump):
     assert peak["omega"] == pytest.approx(1977.2, abs=1.0) and peak["amplitude"] == pytest.approx(25.20e-6, abs=0.02e-6)
     assert fr.amplitude_at_operating_speed == d["at_operating_speed"]["amplitude"]  # the property is m, as the key
     table = fr.tables()["afc_program.csv"]
-    curve = fr.data["curves"]["program"]
-    assert np.asarray(table["amplitude [µm]"]) == pytest.approx(np.asarray(curve["amplitude"]) * 1e6, rel=1e-12)
+    curve = fr.models["program"]
+    assert np.asarray(table["amplitude [µm]"]) == pytest.approx(np.asarray(curve.amplitude) * 1e6, rel=1e-12)
     assert np.max(table["amplitude [µm]"]) == pytest.approx(peak["amplitude"] * 1e6, rel=1e-3)
 
 
@@ -130,12 +130,12 @@ def test_transient_gap_changes_are_si(pump):
     tr = simulate.study(pump.nonlinear("energy"), [{"input": "force_step", "amplitude": 0.01}], 0.002, 50,
                         title="pump")
     case = tr.to_dict()["cases"][0]
-    z = np.asarray(tr.data["series"][0]["z"])
+    z = np.asarray(tr.cases[0].z)
     assert case["max_dz"] == pytest.approx(np.abs(z - z[0]).max(), rel=1e-12) and 0 < case["max_dz"] < 1e-4  # m
     assert report.units({"transient": tr.to_dict()}, ["transient"])["transient.cases[].max_dz"] == "m"
     table = tr.tables()["transient_0_force_step.csv"]
     assert np.asarray(table["z [µm]"]) == pytest.approx(z * 1e6, rel=1e-12)
-    assert np.asarray(table["t [ms]"]) == pytest.approx(np.asarray(tr.data["series"][0]["t"]) * 1e3, rel=1e-12)
+    assert np.asarray(table["t [ms]"]) == pytest.approx(np.asarray(tr.cases[0].t) * 1e3, rel=1e-12)
 
 
 def _keys(block, path=""):

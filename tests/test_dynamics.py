@@ -319,10 +319,10 @@ def test_gap_closure_is_reported_and_the_response_cut(comp):
     # tests/test_squeeze_film.py)
     m = dy.build(comp.dev, comp.data, comp.point, "energy", damping_gap="base")
     res = simulate.study(m, [{"input": "force_step", "amplitude": 0.01}], 0.05, 1001)
-    case = res.data["series"][0]
-    ev = {e["event"]: e for e in case["events"]}
-    assert "gap_closed" in ev and 0 < ev["gap_closed"]["t"] < 0.05
-    assert case["t"][-1] <= ev["gap_closed"]["t"] and case["X"][:, 0].min() > 0
+    case = res.cases[0]
+    ev = {e.event: e for e in case.events}
+    assert "gap_closed" in ev and 0 < ev["gap_closed"].t < 0.05
+    assert case.t[-1] <= ev["gap_closed"].t and case.X[:, 0].min() > 0
     assert "gap closed" in res.summary() or "reached zero" in res.summary()
 
 

@@ -23,14 +23,14 @@ def afc(pump):
 
 def test_headline_is_the_energy_model_under_physical_forcing_beside_unchanged_top_level_keys(pump, afc):
     d = afc.to_dict()
-    assert d["model"] == "program" and d["peaks"] == afc.data["curves"]["program"]["peaks"]
+    assert d["model"] == "program" and d["peaks"] == afc.models["program"].to_dict()["peaks"]
     h = d["headline"]
     assert (h["model"], h["forcing"], h["stable"]) == ("nonlinear", "physical", True)
     assert "omega" not in h  # no curves in results.json
     # A(omega0) by the direct solve against the python-control curve interpolated at omega0
-    c = afc.data["headline"]
+    c = afc.head
     assert h["at_operating_speed"]["amplitude"] == pytest.approx(
-        np.interp(h["at_operating_speed"]["omega"], c["omega"], c["amplitude"]), rel=2e-3)
+        np.interp(h["at_operating_speed"]["omega"], c.omega, c.amplitude), rel=2e-3)
     # the stability block leads with the same model and agrees on its verdict
     st = stability.study(pump, ["program", "nonlinear"], None, "pump").to_dict()
     assert st["headline"]["model"] == "nonlinear" and st["headline"]["stable"] is True
@@ -39,9 +39,9 @@ def test_headline_is_the_energy_model_under_physical_forcing_beside_unchanged_to
 
 
 def test_phase_is_unwrapped_and_starts_at_minus_180_for_a_negative_static_gain(afc):
-    for c in [*afc.data["curves"].values(), afc.data["headline"]]:
-        assert np.max(np.abs(np.diff(c["phase_deg"]))) < 60.0
-        assert c["phase_deg"][0] == pytest.approx(-180.0, abs=15.0)
+    for c in [*afc.models.values(), afc.head]:
+        assert np.max(np.abs(np.diff(c.phase_deg))) < 60.0
+        assert c.phase_deg[0] == pytest.approx(-180.0, abs=15.0)
 
 
 def test_legend_names_models_marks_unstable_and_the_coinciding_curve(afc):

@@ -31,7 +31,7 @@ def batch(scene):
     built at its point, python-control's AFC (headline: energy-consistent model, physical forcing)."""
     setup = Setup(dynamic_device(scene), scene.analyses.frequency.operating_ratio)
     o = scene.analyses.frequency.omega
-    f = fr.study(setup, ["nonlinear"], "physical", (o.start, o.stop, o.points)).data["headline"]
+    f = fr.study(setup, ["nonlinear"], "physical", (o.start, o.stop, o.points)).head
     return setup, f, st.verdict(setup.linear("nonlinear"))  # the headline verdict of analyses.stability
 
 
@@ -68,15 +68,15 @@ def test_live_numbers_equal_the_batch_run(explorer):
                                np.sort_complex(np.asarray(s["poles"]["real"]) + 1j * np.asarray(s["poles"]["imag"])),
                                rtol=1e-8)
     assert live["stable"] == s["stable"]
-    assert len(live["peaks"]) == len(f["peaks"]) >= 1
-    for a, b in zip(live["peaks"], f["peaks"], strict=True):
-        assert a["omega"] == pytest.approx(b["omega"], rel=1e-7)
-        assert a["amplitude"] == pytest.approx(b["amplitude"], rel=1e-8)
-    assert live["amplitude_at_omega0"] == pytest.approx(f["at_operating_speed"]["amplitude"], rel=1e-8)
-    assert live["static_amplitude"] == pytest.approx(f["static_amplitude"], rel=1e-8)
+    assert len(live["peaks"]) == len(f.peaks) >= 1
+    for a, b in zip(live["peaks"], f.peaks, strict=True):
+        assert a["omega"] == pytest.approx(b.omega, rel=1e-7)
+        assert a["amplitude"] == pytest.approx(b.amplitude, rel=1e-8)
+    assert live["amplitude_at_omega0"] == pytest.approx(f.at_operating_speed.amplitude, rel=1e-8)
+    assert live["static_amplitude"] == pytest.approx(f.static_amplitude, rel=1e-8)
     # the AFC curve by the modal sum against python-control's on the same grid
-    np.testing.assert_allclose(live["omega"], f["omega"], rtol=1e-9)  # the grid follows the poles
-    np.testing.assert_allclose(live["amplitude"], f["amplitude"], rtol=1e-8)
+    np.testing.assert_allclose(live["omega"], f.omega, rtol=1e-9)  # the grid follows the poles
+    np.testing.assert_allclose(live["amplitude"], f.amplitude, rtol=1e-8)
     assert explorer.check(values, live) == ""  # IPOPT agrees, the scene's checks pass
 
 

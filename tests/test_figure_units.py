@@ -66,26 +66,26 @@ def afc(pump):
 
 
 def test_the_afc_is_in_rad_s_with_hz_beside_and_in_the_chosen_units(afc):
-    h = afc.data["headline"]
+    h = afc.head
     fig = afc.figures()["fig_afc.png"]
     a1, a2 = fig.axes[:2]
     assert a2.get_xlabel() == r"frequency $\omega$, rad/s" and a1.get_ylabel() == "gap amplitude $A_u$, µm"
     assert secondary(a1) == ["Hz"]  # on top of the amplitude plot
     line = a1.get_lines()[0]  # the headline curve, drawn first
-    np.testing.assert_allclose(line.get_xdata(), h["omega"], rtol=1e-15)
-    np.testing.assert_allclose(line.get_ydata(), np.asarray(h["amplitude"]) / 1e-6, rtol=1e-15)  # m -> µm
+    np.testing.assert_allclose(line.get_xdata(), h.omega, rtol=1e-15)
+    np.testing.assert_allclose(line.get_ydata(), np.asarray(h.amplitude) / 1e-6, rtol=1e-15)  # m -> µm
     with display_units({"speed": "Hz", "length": "mm"}):
         fig = afc.figures()["fig_afc.png"]
     a1, a2 = fig.axes[:2]
     assert a2.get_xlabel() == r"frequency $\omega$, Hz" and a1.get_ylabel() == "gap amplitude $A_u$, mm"
     assert secondary(a1) == ["rpm"]
     line = a1.get_lines()[0]
-    np.testing.assert_allclose(line.get_xdata(), np.asarray(h["omega"]) * HZ, rtol=1e-12)
-    np.testing.assert_allclose(line.get_ydata(), np.asarray(h["amplitude"]) * 1e3, rtol=1e-12)
+    np.testing.assert_allclose(line.get_xdata(), np.asarray(h.omega) * HZ, rtol=1e-12)
+    np.testing.assert_allclose(line.get_ydata(), np.asarray(h.amplitude) * 1e3, rtol=1e-12)
     phase = a2.get_lines()[0]
-    np.testing.assert_allclose(phase.get_xdata(), np.asarray(h["omega"]) * HZ, rtol=1e-12)
+    np.testing.assert_allclose(phase.get_xdata(), np.asarray(h.omega) * HZ, rtol=1e-12)
     marker = [x for x in a1.get_lines() if x.get_marker() == "D"][0]  # A(omega0), headline
-    assert marker.get_xdata()[0] == pytest.approx(h["at_operating_speed"]["omega"] * HZ, rel=1e-12)
+    assert marker.get_xdata()[0] == pytest.approx(h.at_operating_speed.omega * HZ, rel=1e-12)
     assert "Hz" in marker.get_label() or "mm" in marker.get_label()
 
 

@@ -143,13 +143,13 @@ def test_gap_closure_stops_a_rodas4_run():
     comp = build(s.dev, s.data, s.point, "energy", damping_gap="base")
     res = simulate.study(comp, [{"input": "force_step", "amplitude": 0.01}], 0.05, 1001, "rodas4")
     ref = simulate.study(comp, [{"input": "force_step", "amplitude": 0.01}], 0.05, 1001, "cvodes")
-    case, cv = res.data["series"][0], ref.data["series"][0]
-    ev = {e["event"]: e for e in case["events"]}
-    assert "gap_closed" in ev and 0 < ev["gap_closed"]["t"] < 0.05
-    assert case["t"][-1] <= ev["gap_closed"]["t"] and case["X"][:, 0].min() > 0
-    t_cv = next(e["t"] for e in cv["events"] if e["event"] == "gap_closed")
-    assert ev["gap_closed"]["t"] == pytest.approx(t_cv, rel=1e-4)
-    assert res.data["integrator"] == "rodas4" and case["failure"] is None
+    case, cv = res.cases[0], ref.cases[0]
+    ev = {e.event: e for e in case.events}
+    assert "gap_closed" in ev and 0 < ev["gap_closed"].t < 0.05
+    assert case.t[-1] <= ev["gap_closed"].t and case.X[:, 0].min() > 0
+    t_cv = next(e.t for e in cv.events if e.event == "gap_closed")
+    assert ev["gap_closed"].t == pytest.approx(t_cv, rel=1e-4)
+    assert res.integrator == "rodas4" and case.failure is None
 
 
 def test_virtual_machine_and_compiled_give_the_same_numbers(pump, monkeypatch):
@@ -169,9 +169,9 @@ def test_scene_key_and_accuracy_block(integrator):
     scene = scenario.load("pump_pe600_dynamics")
     settings = scene.analyses.transient.model_copy(update={"integrator": integrator})
     res = transient_analysis.run(scene, settings)
-    acc = res.data["accuracy"]
-    assert res.data["integrator"] == integrator and integrator in acc["how"]
-    assert all(c["failure"] is None and len(c["t"]) == 2001 for c in res.data["series"])
+    acc = res.accuracy
+    assert res.integrator == integrator and integrator in acc["how"]
+    assert all(c.failure is None and len(c.t) == 2001 for c in res.cases)
     assert 0 < acc["estimate"] < 1e-5  # rtol 1e-9 against 1e-11 (CVODES' block: 7e-7 measured)
 
 

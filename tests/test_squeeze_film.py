@@ -117,8 +117,8 @@ def test_the_film_at_the_gap_keeps_the_unstable_compressor_open():
     ends = {}
     for gap in ("instantaneous", "base"):
         m = dy.build(s.dev, s.data, s.point, "energy", damping_gap=gap)
-        case = simulate.study(m, [{"input": "force_step", "amplitude": 0.01}], 0.05, 1001).data["series"][0]
-        ends[gap] = ({e["event"] for e in case["events"]}, case["X"][:, 0].min())
+        case = simulate.study(m, [{"input": "force_step", "amplitude": 0.01}], 0.05, 1001).cases[0]
+        ends[gap] = ({e.event for e in case.events}, case.X[:, 0].min())
     assert "gap_closed" not in ends["instantaneous"][0] and ends["instantaneous"][1] > 0.05
     assert "gap_closed" in ends["base"][0]
 

@@ -309,14 +309,14 @@ def test_rotor_dynamics_states_the_margin_from_the_scenes_service_speed():
 
     P = rotor(2400, 0.02)
     with_speed = rotor_study.run(P, RotorDynamics(), service_speed=4000 * RPM)
-    r = with_speed.data["rotor"]
-    assert r["amplification_factor"] == pytest.approx(hand_af(0.02)[0], rel=1e-8)
-    assert r["required_separation_margin_pct"] == 16.0 and r["separation_margin_ok"] is True
+    r = with_speed.rotor
+    assert r.amplification_factor == pytest.approx(hand_af(0.02)[0], rel=1e-8)
+    assert r.required_separation_margin_pct == 16.0 and r.separation_margin_ok is True
     assert "API 684 (2005): AF 24.96, separation margin 39.98 % from the operating speed" in with_speed.summary()
-    bare = rotor_study.run(P, RotorDynamics()).data["rotor"]
-    assert bare["amplification_factor"] == pytest.approx(r["amplification_factor"])
-    assert bare["separation_margin_pct"] is None and "no operating speed" in bare["separation_margin_pct_status"]
-    assert bare["service_speed_rad_s_status"] == "the scene gives no service speed (rotor.unbalance)"
+    bare = rotor_study.run(P, RotorDynamics()).rotor
+    assert bare.amplification_factor == pytest.approx(r.amplification_factor)
+    assert bare.separation_margin_pct is None and "no operating speed" in bare.separation_margin_pct_status
+    assert bare.service_speed_rad_s_status == "the scene gives no service speed (rotor.unbalance)"
 
 
 @pytest.mark.parametrize("gain, dwells, ok", [(-13.0, False, True), (-13.0, True, None), (+2.0, True, False),

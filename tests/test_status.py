@@ -165,11 +165,11 @@ def test_the_issues_pump_force_step_is_a_runaway_reported_and_cut_there():
     run = autobal.run(autobal.load("pump_pe600_dynamics", set={"analyses": {"transient": {
         "cases": [{"input": "force_step", "amplitude": -50}]}}}))
     assert run.status == "ok"
-    [case] = run["transient"].data["series"]
-    assert [e["event"] for e in case["events"]] == ["gap_runaway"] and case["failure"] is None
+    [case] = run["transient"].cases
+    assert [e.event for e in case.events] == ["gap_runaway"] and case.failure is None
     z_b = 0.15e-3
-    assert case["z"][-2] <= 20 * z_b < case["z"][-1] < 21 * z_b
-    assert case["t_end"] == pytest.approx(case["events"][0]["t"]) and case["t_end"] < 2e-3
+    assert case.z[-2] <= 20 * z_b < case.z[-1] < 21 * z_b
+    assert case.t_end == pytest.approx(case.events[0].t) and case.t_end < 2e-3
 
 
 @pytest.mark.cli

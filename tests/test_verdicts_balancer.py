@@ -11,7 +11,7 @@ import math
 
 import pytest
 
-from autobal.analysis.liquid_balancer import EFFICIENCIES, QUANTITIES, LiquidBalancerResult
+from autobal.analysis.liquid_balancer import EFFICIENCIES, QUANTITIES, OperatingPoint, balance_verdict
 
 R, H, V, RHO, D0 = 0.2, 0.05, 150e-6, 1000.0, 0.15 * 0.2
 LAYER = R - math.sqrt(R**2 - V / (math.pi * H))  # R - r: 2.402 mm
@@ -50,24 +50,27 @@ def test_nested_washer_verdict_names_both_failures(tmp_path):
     assert f"exceeds the liquid layer R − r = 2.402 mm by {(op['f'] - LAYER) * 1e3:.1f} mm" in words
 
 
-def _block(lambda0, k_d, f, equilibrium=True):
-    """The two mappings the verdict reads, for a balancer at gamma = 0.4 with R - r = LAYER."""
-    return {"operating_point": {"gamma": 0.4, "equilibrium_exists": equilibrium, "lambda0": lambda0, "k_D": k_d,
-                                "f": f, "sufficiency_ok": bool(LAYER >= f), "reason": ""},
-            "system": {"R_minus_r": LAYER}}
+def _verdict(lambda0, k_d, f, equilibrium=True):
+    """The verdict of a balancer at gamma = 0.4 with R - r = LAYER (the numbers it does not read NaN)."""
+    unread = dict.fromkeys(("omega", "delta_deg", "phi_deg", "G", "r", "x_p", "D", "alpha0_deg",
+                            "lambda0_self_consistent", "lambda0_self_consistent_minus", "extremum_k_star",
+                            "extremum_lambda0_max", "zeta_over_ec"), math.nan)
+    op = OperatingPoint(**unread, gamma=0.4, f=f, k_D=k_d, lambda0=lambda0, variant="corrected",
+                        equilibrium_exists=equilibrium, sufficiency_ok=bool(LAYER >= f), reason="")
+    return balance_verdict(op, LAYER)
 
 
 def test_a_balancer_that_reduces_the_unbalance_with_enough_liquid_is_ok():
     """lambda0 = 1.5 > 1 and f = 1 mm <= R - r: ok; complete balancing (lambda0 unbounded, null in results.json)
     is ok too; lambda0 = 0.9 with enough liquid is not (the liquid adds to the unbalance)."""
-    ok, words = LiquidBalancerResult(_block(1.5, 0.6, 1e-3)).verdict()
+    ok, words = _verdict(1.5, 0.6, 1e-3)
     assert ok is True and words == ("a balancing equilibrium at γ = 0.4000 reduces the unbalance (λ0 = e0/e_c = 1.500 "
                                     "> 1); the liquid suffices: the liquid layer R − r = 2.402 mm ≥ the deflection "
                                     "f = 1.000 mm")
-    assert LiquidBalancerResult(_block(None, 1.0, 1e-3)).verdict()[0] is True
-    ok, words = LiquidBalancerResult(_block(0.9, 0.47, 1e-3)).verdict()
+    assert _verdict(None, 1.0, 1e-3)[0] is True
+    ok, words = _verdict(0.9, 0.47, 1e-3)
     assert ok is False and "λ0 = e0/e_c = 0.9000 < 1" in words and "1.11 times the rotor's e0" in words
-    ok, words = LiquidBalancerResult(_block(1.5, 0.6, 3e-3)).verdict()
+    ok, words = _verdict(1.5, 0.6, 3e-3)
     assert ok is False and words.startswith("the liquid does NOT suffice: the deflection f = 3.000 mm exceeds the "
                                             "liquid layer R − r = 2.402 mm by 0.5983 mm")
 

@@ -3,6 +3,7 @@ Eqs. (2.100)-(2.110)), on the device with its dynamic data (``device.dynamics``)
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
@@ -56,8 +57,7 @@ def run(scene, settings: Frequency):
     setup = Setup(dynamic_device(scene), settings.operating_ratio)
     o = settings.omega
     res = fr.study(setup, list(settings.models), settings.forcing, (o.start, o.stop, o.points), scene.title)
-    res.data["accuracy"] = fr.accuracy(setup, res.data["curves"], settings.forcing)
-    return res
+    return dataclasses.replace(res, accuracy=fr.accuracy(setup, res.models, settings.forcing))
 
 
 def estimate_seconds(settings: Frequency) -> float:
@@ -67,13 +67,12 @@ def estimate_seconds(settings: Frequency) -> float:
 
 def report_section(sec) -> None:
     """AFC of the face gap (Pavlenko 2014, §2.6): the headline model (energy-consistent, physical forcing)
-    gives the verdict; the source's models are the validation part."""
-    from autobal.analysis.frequency import QUANTITIES
+    gives the verdict; the source's models are the validation part.  Reads the fields of the loaded
+    :class:`~autobal.analysis.frequency.FrequencyResult` (``sec.result``)."""
+    from autobal.analysis.frequency import FORCING_WORDS, QUANTITIES
     from autobal.report import (
-        MODEL_ORDER,
         SOURCE_MODELS,
         cell,
-        get_path,
         model_name,
         number,
         ordered_models,
@@ -84,58 +83,39 @@ def report_section(sec) -> None:
     )
 
     amp = QUANTITIES.find("peaks.0.amplitude")  # face-gap amplitudes: m in results.json, shown in µm
+    r = sec.result
+    h = r.head
     stable = stable_models(sec.results)
-    models = sec.get("models", {})
-    h = sec.get("headline")
-    if h:
-        what = f"{model_name(h['model'])}, {h['forcing']} forcing"
-        verdict = "stable" if h.get("stable") else "UNSTABLE"
-        sec.conclude(h.get("stable"), f"{what}: {verdict} (max Re λ = {number(h.get('max_real'))} 1/s); first "
-                                      f"resonance at {number(get_path(h, 'peaks.0.omega'))} rad/s; amplitude at the "
-                                      f"operating speed {amp.text(get_path(h, 'at_operating_speed.amplitude'))}")
-        sec.row(f"first resonance ({what})", "ω_I", "headline.peaks.0.omega")
-        sec.row(f"amplitude at the first resonance ({what})", "A_I", "headline.peaks.0.amplitude")
-        sec.row("operating speed", "ω0", "headline.at_operating_speed.omega")
-        sec.row(f"amplitude at the operating speed ({what})", "A(ω0)", "headline.at_operating_speed.amplitude")
-        sec.row(f"static amplitude ({what})", "A(0)", "headline.static_amplitude")
-    else:  # no headline block: the toolkit's own first model, never one of the source's
-        lead = next((m for m in MODEL_ORDER if m in models and m not in SOURCE_MODELS), None)
-        if lead is not None:
-            what = model_name(lead)
-            sec.row(f"first resonance ({what})", "ω_I", f"models.{lead}.peaks.0.omega")
-            sec.row(f"amplitude at the first resonance ({what})", "A_I", f"models.{lead}.peaks.0.amplitude")
-            sec.row("operating speed", "ω0", f"models.{lead}.at_operating_speed.omega")
-            sec.row(f"amplitude at the operating speed ({what})", "A(ω0)",
-                    f"models.{lead}.at_operating_speed.amplitude")
-    sec.row("forcing amplitude", "δψ_1a", "forcing_amplitude")
-    from autobal.analysis.frequency import FORCING_WORDS
-
+    what = f"{model_name(h.model)}, {h.forcing} forcing"
+    first = h.peaks[0].omega if h.peaks else None
+    sec.conclude(h.stable, f"{what}: {'stable' if h.stable else 'UNSTABLE'} (max Re λ = {number(h.max_real)} 1/s); "
+                           f"first resonance at {number(first)} rad/s; amplitude at the operating speed "
+                           f"{amp.text(h.at_operating_speed.amplitude)}")
+    for q, key, v in r.quantities.headline(r.to_dict()):  # the rows of the fields declared headline
+        sec.row(q.description, q.symbol, key, value=v)
     own, source = [], []
-    for model, m in ordered_models(models):
-        peaks = m.get("peaks", [])
-        at = m.get("at_operating_speed", {})
+    for model, m in ordered_models(r.models):
         verdict = {True: "stable", False: "UNSTABLE", None: "—"}[stable.get(model)]
         # the verdict's part holds the toolkit's model under the headline's forcing, i.e. the headline curve itself
-        mine = model not in SOURCE_MODELS and (not h or m.get("forcing") == h.get("forcing"))
+        mine = model not in SOURCE_MODELS and m.forcing == h.forcing
         rows = own if mine else source
-        for i, pk in enumerate(peaks or [{}]):
+        for i, pk in enumerate(m.peaks or [None]):
             first = i == 0
-            rows.append([text(model_name(model) if first else ""), text(m.get("forcing") if first else ""),
-                         text(verdict if first else ""), cell(pk.get("omega"), "rad/s"),
-                         cell(pk.get("amplitude"), "m", amp.display),
-                         cell(at.get("amplitude") if i == 0 else None, "m", amp.display),
-                         cell(m.get("static_amplitude") if i == 0 else None, "m", amp.display)])
+            rows.append([text(model_name(model) if first else ""), text(m.forcing if first else ""),
+                         text(verdict if first else ""), cell(pk and pk.omega, "rad/s"),
+                         cell(pk and pk.amplitude, "m", amp.display),
+                         cell(m.at_operating_speed.amplitude if first else None, "m", amp.display),
+                         cell(m.static_amplitude if first else None, "m", amp.display)])
         if stable.get(model) is False and mine:
             sec.warnings.append(f"{model_name(model)}: the model is unstable at this operating point; its AFC is the "
                                 "response of an unstable system (no steady state exists)")
         if model in SOURCE_MODELS:
-            source_model_line(sec, model, stable.get(model), m.get("forcing"))
+            source_model_line(sec, model, stable.get(model), m.forcing)
     columns = ["model", "forcing", "stability", "peak ω", "peak amplitude", "amplitude at ω0", "static amplitude"]
-    forcing = sec.get("forcing")
-    caption = (f"{FORCING_WORDS.get(forcing, forcing)}, ω0 = {number(sec.get('at_operating_speed.omega'))} "
+    caption = (f"{FORCING_WORDS.get(r.forcing, r.forcing)}, ω0 = {number(r.at_operating_speed.omega)} "
                "rad/s: peaks, amplitude at the operating speed and the static amplitude")
     if own:
         sec.tables.append(table(f"AFC of the face gap, {caption}", columns, own, headline=True))
     if source:
-        whose = "the source's models" if forcing == "physical" or not h else "the models"
+        whose = "the source's models" if r.forcing == "physical" else "the models"
         sec.validation_tables.append(table(f"AFC of the face gap of {whose}, {caption}", columns, source))

@@ -3,7 +3,6 @@ Pashkov (2010), ch. 3): efficiency against the speed ratio, its extremum, the op
 
 from __future__ import annotations
 
-import math
 from typing import Annotated, Literal
 
 from pydantic import Field
@@ -80,62 +79,54 @@ def estimate_seconds(settings: LiquidBalancerAnalysis) -> float:
 
 def report_section(sec) -> None:
     """Efficiency of the liquid auto-balancer at the operating point (Khomyak 2020, ch. 3): one verdict (a balancing
-    equilibrium and enough liquid at the working speed); Tables 3.2/3.3 in the validation part."""
+    equilibrium and enough liquid at the working speed); Tables 3.2/3.3 in the validation part.  Reads the fields of
+    the loaded :class:`~autobal.analysis.liquid_balancer.LiquidBalancerResult` (``sec.result``)."""
+    from autobal.analysis.liquid_balancer import EFFICIENCIES, optimum_words  # what each number is: one copy
     from autobal.analysis.quantities import is_number
     from autobal.report import cell, number, table, text
 
-    op = "operating_point"
-    sec.row("speed ratio", "γ = ω/ω_cr", f"{op}.gamma")
-    sec.row("working speed", "ω", f"{op}.omega")
-    sec.row("phase lag of the deflection", "δ", f"{op}.delta_deg")
-    sec.row("initial unbalance", "D0", "system.D0")
-    sec.row("liquid unbalance capacity", "D", f"{op}.D")
-    sec.row("capacity ratio", "k_D = D0/D", f"{op}.k_D")
-    published = next((r for r in sec.get("table_3_2.rows", []) if is_number(r.get("gamma"))
-                      and abs(r["gamma"] - (sec.get(f"{op}.gamma") or math.nan)) < 1e-9), None)
-    why = ""
+    r = sec.result
+    op = r.operating_point
+    published = next((row for row in (r.table_3_2 or {}).get("rows", []) if is_number(row.get("gamma"))
+                      and abs(row["gamma"] - op.gamma) < 1e-9), None)
+    notes = {}  # key -> why the headline number is what it is
     if published and published.get("status") == "differs":  # the headline differs from the published value
-        why = (f"Khomyak (2020), Table 3.2 publishes {number(published['published_theory'])} (theory) and "
-               f"{number(published['published_experiment'])} (experiment) at γ = {number(published['gamma'])}: the "
-               f"documented App. В algorithm makes the liquid's unbalance D ≫ D0 (k_D = {number(sec.get(f'{op}.k_D'))}"
-               "); the table came from the thesis's C# program, which it does not show (docs/validation.md)")
-    sec.row("efficiency e0/e_c (2.14), the source's algorithm", "λ0", f"{op}.lambda0", note=why)
-    sec.row("efficiency e0/e_c (2.14), self-consistent deflection (toolkit extension)", "λ0⁺",
-            f"{op}.lambda0_self_consistent")
-    from autobal.analysis.liquid_balancer import EFFICIENCIES, optimum_words  # what each number is: one copy
-
+        notes["operating_point.lambda0"] = (
+            f"Khomyak (2020), Table 3.2 publishes {number(published['published_theory'])} (theory) and "
+            f"{number(published['published_experiment'])} (experiment) at γ = {number(published['gamma'])}: the "
+            f"documented App. В algorithm makes the liquid's unbalance D ≫ D0 (k_D = {number(op.k_D)}); the table "
+            "came from the thesis's C# program, which it does not show (docs/validation.md)")
+    for key in ("optimal_height", "optimal_volume"):
+        o = r.search(key)
+        why = optimum_words(r, key) if o is not None else ""
+        if o is not None and o.get("singular"):  # orders of magnitude from the published optimum: the row says why
+            why += (f"; λ0 = {number(o.get('lambda0_max'))} there says how close IPOPT came to k_D = 1, not how "
+                    "efficient the machine is (docs/validation.md)")
+        notes[f"{key}.optimum"] = why
+    for q, key, v in r.quantities.headline(r.to_dict()):  # the rows of the fields declared headline
+        sec.row(q.description, q.symbol, key, value=v, note=notes.get(key, ""))
     sec.notes.extend(EFFICIENCIES)
-    for key, label, symbol in (("optimal_height", "optimal chamber height (largest λ0)", "h_opt"),
-                               ("optimal_volume", "optimal liquid volume (largest λ0)", "V_opt")):
-        why = optimum_words(sec.block, key) if key in sec.block else ""
-        if sec.get(f"{key}.singular"):  # orders of magnitude from the published optimum: the row says why
-            why += (f"; λ0 = {number(sec.get(f'{key}.lambda0_max'))} there says how close IPOPT came to k_D = 1, not "
-                    "how efficient the machine is (docs/validation.md)")
-        sec.row(label, symbol, f"{key}.optimum", note=why)
-    if "equilibrium_exists" in sec.get(op, {}):
-        from autobal.analysis.liquid_balancer import LiquidBalancerResult  # the verdict's one copy
-
-        sec.conclude(*LiquidBalancerResult(sec.block).verdict())
-    rows = sec.get("table_3_2.rows", [])
+    sec.conclude(*r.verdict())
+    rows = (r.table_3_2 or {}).get("rows", [])
     if rows:
         sec.comparison = table("Comparison with Khomyak (2020), Table 3.2: efficiency λ0",
                                ["γ", "published theory", "published experiment", "toolkit (documented)",
                                 "toolkit (self-consistent)", "status"],
-                               [[cell(r.get("gamma"), "1"), cell(r.get("published_theory"), "1"),
-                                 cell(r.get("published_experiment"), "1"), cell(r.get("toolkit_documented"), "1"),
-                                 cell(r.get("toolkit_self_consistent"), "1"), text(r.get("status"))] for r in rows])
-        differs = next((r for r in rows if r.get("status") == "differs"), None)
+                               [[cell(row.get("gamma"), "1"), cell(row.get("published_theory"), "1"),
+                                 cell(row.get("published_experiment"), "1"), cell(row.get("toolkit_documented"), "1"),
+                                 cell(row.get("toolkit_self_consistent"), "1"), text(row.get("status"))]
+                                for row in rows])
+        differs = next((row for row in rows if row.get("status") == "differs"), None)
         if differs:
             sec.validation.append({"ok": None, "text": f"Table 3.2 is not reproduced by the documented algorithm: "
                                                        f"{differs.get('reason')}"})
-    rows = sec.get("table_3_3.rows", [])
+    rows = (r.table_3_3 or {}).get("rows", [])
     if rows:
+        columns = ("D0_gcm", "published_V_opt_mL", "experiment_V_opt_mL", "V_opt_mL", "V_opt_crescent_mL")
+        shown = [r.quantities.find(f"table_3_3.rows.0.{k}") for k in columns]
         sec.validation_tables.append(table("Khomyak (2020), Table 3.3: optimal liquid volume",
                                            ["D0", "published V_opt", "experiment V_opt", "toolkit (documented)",
                                             "toolkit (crescent)", "status"],
-                                           [[sec.cell(f"table_3_3.rows.{i}.D0_gcm"),
-                                             sec.cell(f"table_3_3.rows.{i}.published_V_opt_mL"),
-                                             sec.cell(f"table_3_3.rows.{i}.experiment_V_opt_mL"),
-                                             sec.cell(f"table_3_3.rows.{i}.V_opt_mL"),
-                                             sec.cell(f"table_3_3.rows.{i}.V_opt_crescent_mL"), text(r.get("status"))]
-                                            for i, r in enumerate(rows)]))
+                                           [[*(cell(row.get(k), q.unit, q.display, 4)
+                                               for k, q in zip(columns, shown, strict=True)), text(row.get("status"))]
+                                            for row in rows]))

@@ -114,35 +114,38 @@ def estimate_seconds(settings: RotorDynamics) -> float:
 
 
 def report_section(sec) -> None:
-    """Rotor with a liquid auto-balancer: stationary, steps, passage (Pashkov 2010); one verdict, the result's."""
-    from autobal.report import declarations, table
+    """Rotor with a liquid auto-balancer: stationary, steps, passage (Pashkov 2010); one verdict, the result's.
+    Reads the fields of the loaded :class:`~autobal.analysis.rotor_study.RotorDynamicsResult` (``sec.result``)."""
+    from autobal.report import cell, table
 
-    sec.row("critical speed √(c/m) (m with the liquid mass, if the rotor has a liquid layer)", "ω_cr",
-            "rotor.omega_cr_rad_s")
-    sec.row("natural frequency without liquid", "Ω0", "rotor.Omega0_rad_s")
-    sec.row("liquid mass ratio", "ψ", "rotor.psi")
-    sec.row("damping ratio", "ζ0", "rotor.zeta0")
-    api_rows(sec, "rotor.")
-    sec.row("largest real part of the eigenvalues over Ω0", "max Re λ/Ω0", "stationary.stability.max_real_over_Omega0")
-    for psi, n in (sec.get("passage.crossover_n_star") or {}).items():  # keys like "0.75": the value given
-        sec.row(f"damping above which the liquid raises the passage peak (ψ = {psi})", "n*",
-                f"passage.crossover_n_star.{psi}", value=n)
-    sec.row("speed at the end of the motor run-up", "ω_end", "motor_runup.omega_final_rad_s")
-    sec.row("peak deflection of the motor run-up", "δ/e", "motor_runup.peak_deflection_over_e")
-    from autobal.analysis.rotor_study import RotorDynamicsResult  # the verdict's one copy
-
-    verdict = RotorDynamicsResult(sec.block).verdict()
+    r = sec.result
+    for q, key, v in r.quantities.headline(r.to_dict()):  # the rows of the fields declared headline
+        sec.row(q.description, q.symbol, key, value=v)
+    verdict = r.verdict()
     if verdict:
         sec.conclude(*verdict)
-    api_verdict(sec, sec.get("rotor") or {})
-    rows = [[sec.cell(f"passage.table.{i}.{k}") for k in ("n", "psi", "delta_max_over_e", "z_delta_max", "d_max")]
-            for i, _ in enumerate(sec.get("passage.table", []))]
+    api_verdict(sec, r.rotor.to_dict())
+    p = r.passage
+    if p is None:
+        return
+    accel = r.quantities.find("passage.acceleration_rad_s2")
+    columns = ("n", "psi", "delta_max_over_e", "z_delta_max", "d_max")
+    shown = [r.quantities.find(f"passage.table.0.{k}") for k in columns]
+    rows = [[cell(getattr(run, k), q.unit, q.display, 4) for k, q in zip(columns, shown, strict=True)]
+            for run in p.table]
     if rows:
-        key = "passage.acceleration_rad_s2"
-        accel = declarations("rotor_dynamics").find(key).text(sec.get(key))
-        sec.tables.append(table(f"Passage through the critical speed at {accel}: peak "
+        sec.tables.append(table(f"Passage through the critical speed at {accel.text(p.acceleration_rad_s2)}: peak "
                                 "deflection δ*/e and its speed ratio ν = ω/Ω0",
                                 ["n", "ψ", "δ*/e", "ν at the peak", "d*"], rows, headline=True))
+    if p.crossover_n_star:  # keys: ψ as given
+        n_star = r.quantities.find("passage.crossover_n_star.x")
+        found = [(a, n) for a, n in ((p.acceleration_rad_s2, p.crossover_n_star),
+                                     (p.sensitivity_acceleration_rad_s2, p.crossover_n_star_sensitivity)) if a and n]
+        rows = [[cell(float(psi), "1"), *(cell(n.get(psi), n_star.unit) for _, n in found)]
+                for psi in p.crossover_n_star]
+        sec.tables.append(table("Damping n* above which the liquid raises the passage peak, per liquid mass ratio ψ "
+                                "(Pashkov (2010), Fig. 9)", ["ψ", *(f"n* at {accel.text(a)}" for a, _ in found)],
+                                rows))
 
 
 def api_rows(sec, prefix: str) -> None:

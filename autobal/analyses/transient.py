@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
@@ -72,8 +73,8 @@ def run(scene, settings: Transient):
     cases = [{"input": c.input, "amplitude": c.amplitude, "frequency": c.frequency,
               "couple": c.thrust_follows_pressure} for c in settings.cases]
     res = sim.study(model, cases, settings.duration, settings.points, settings.integrator, scene.title)
-    res.data["accuracy"] = sim.accuracy(model, res, cases, settings.duration, settings.points, settings.integrator)
-    return res
+    return dataclasses.replace(res, accuracy=sim.accuracy(model, res, cases, settings.duration, settings.points,
+                                                          settings.integrator))
 
 
 def estimate_seconds(settings: Transient) -> float:
@@ -90,21 +91,26 @@ def accuracy(scene, settings: Transient):
 
 
 def report_section(sec) -> None:
-    """Nonlinear transients by CVODES/IDAS (Pavlenko 2014, §2.5)."""
+    """Nonlinear transients by CVODES/IDAS (Pavlenko 2014, §2.5).  Reads the fields of the loaded
+    :class:`~autobal.analysis.simulate.TransientResult` (``sec.result``)."""
     from autobal.report import cell, table, text
 
-    sec.row("equilibrium residual of the nonlinear model", "", "equilibrium_residual")
+    r = sec.result
+    for q, key, v in r.quantities.headline(r.to_dict()):  # the rows of the fields declared headline
+        sec.row(q.description, q.symbol, key, value=v)
+    dz = r.quantities.find("cases.0.max_dz")
     rows = []
-    for i, c in enumerate(sec.get("cases", [])):
-        rows.append([text(c.get("input")), cell(c.get("amplitude"), "1"), cell(c.get("frequency"), "rad/s"),
-                     sec.cell(f"cases.{i}.max_dz"), sec.cell(f"cases.{i}.final_dz"), cell(c.get("t_end"), "s"),
-                     cell(c.get("integrator_steps"), "1"), text(c.get("failure") or "ok")])
-        if c.get("failure"):
-            sec.verdict(False, f"{c.get('input')}: integration failed: {c['failure']}")
-        for e in c.get("events") or []:
-            sec.warnings.append(f"{c.get('input')}: event {e}")
-    sec.tables.append(table(f"Transients of the {sec.get('model')} model ({sec.get('integrator')}): face-gap change "
-                            "dz", ["input", "amplitude", "frequency", "max |dz|", "final dz", "t_end", "steps",
-                                   "status"], rows, headline=True))
-    if rows and not any(c.get("failure") for c in sec.get("cases", [])):
+    for c in r.cases:
+        failure = c.failure and c.failure.to_dict()
+        rows.append([text(c.input), cell(c.amplitude, "1"), cell(c.frequency, "rad/s"),
+                     cell(c.max_dz, dz.unit, dz.display, 4), cell(c.final_dz, dz.unit, dz.display, 4),
+                     cell(c.t_end, "s"), cell(c.integrator_steps, "1"), text(failure or "ok")])
+        if failure:
+            sec.verdict(False, f"{c.input}: integration failed: {failure}")
+        for e in c.events:
+            sec.warnings.append(f"{c.input}: event {e.to_dict()}")
+    sec.tables.append(table(f"Transients of the {r.model} model ({r.integrator}): face-gap change dz",
+                            ["input", "amplitude", "frequency", "max |dz|", "final dz", "t_end", "steps", "status"],
+                            rows, headline=True))
+    if rows and not any(c.failure for c in r.cases):
         sec.verdict(True, "every transient integrated to its end time")
