@@ -1,0 +1,97 @@
+"""Typed Results of the device-side analyses (issue #34 item 1): statics.  For every shipped scene that runs them,
+the Result's block is results.json's, ``from_dict(to_dict(r)) == r`` through JSON with the keys in the same order at
+every level, ``autobal.load_run`` loads it back equal, and report.html rendered again from the loaded Results is
+the page the run wrote, byte for byte; a null's status comes from the fields as ``with_statuses`` wrote it from the
+dict before."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+
+import pytest
+
+import autobal
+from autobal import report
+from autobal.analysis import fields, statics_study
+from autobal.analysis.result import plain, with_statuses
+from autobal.analysis.statics_study import QUANTITIES, StaticsResult
+
+#: shipped scene -> the typed analyses of this file it runs; (slow): more than about 20 s
+SCENES = {"pump_pe600_statics": ("statics",), "compressor_k180_statics": ("statics",)}
+SLOW = set()
+
+
+def _json(d) -> str:
+    return json.dumps(plain(d), allow_nan=False)
+
+
+@pytest.mark.cli
+@pytest.mark.parametrize("scene", [pytest.param(s, marks=pytest.mark.slow) if s in SLOW else s for s in SCENES])
+def test_a_shipped_run_round_trips_and_loads_back_with_the_same_report(shipped_run, scene):
+    run, folder = shipped_run(scene)
+    saved = json.loads((folder / "results.json").read_text())
+    done = autobal.load_run(folder)
+    for name in SCENES[scene]:
+        res = run[name]
+        assert _json(res.to_dict()) == json.dumps(saved[name], allow_nan=False), name  # every key, in order
+        back = type(res).from_dict(json.loads(json.dumps(saved[name])))
+        assert back == res and _json(back.to_dict()) == _json(res.to_dict()), name
+        assert name not in done.unloaded and done[name] == res, name
+        assert done[name].summary() == res.summary() and done[name].verdict() == res.verdict(), name
+    assert report.html(folder) == (folder / report.REPORT).read_text(encoding="utf-8")
+
+
+@pytest.mark.cli
+def test_the_statics_statuses_are_with_statuses_of_the_block(shipped_run):
+    """Compressor K 180-131-1 (gas: no closed-form stiffness, no closed-form force-gap curve; the ideal regulator's
+    valve opening has no value at the high discharge ratios): the statuses the fields give (fields.explained) are
+    those with_statuses gives the same block without them, key for key and in place; they load back and a status
+    of a key the record lacks is refused."""
+    res = shipped_run("compressor_k180_statics")[0]["statics"]
+    bare = json.loads(_json(res.to_dict()), object_hook=lambda d: {k: v for k, v in d.items()
+                                                                   if not k.endswith("_status")})
+    g = res.groups
+    reasons = {"kappa_s": "no fixed-pressure closed form of the stiffness for the gas device (see kappa_u_2_162)",
+               "phi_closed_form": "the closed form (2.35) is the liquid device's",
+               "xi": "no valve opening of the ideal regulator (2.28) passes the barrier flow: the valve saturates"}
+    default = "the closed form has no physical value here"
+    assert _json(with_statuses(bare, reasons, default)) == _json(res.to_dict())
+    assert _json(fields.explained(StaticsResult.from_dict(bare), reasons, default).to_dict()) == _json(res.to_dict())
+    assert res.closed_form.kappa_s is None or math.isnan(res.closed_form.kappa_s)
+    assert res.closed_form.statuses == {"kappa_s": reasons["kappa_s"]}
+    assert res.force_gap.statuses == {"phi_closed_form": reasons["phi_closed_form"]}
+    assert res.sweep.closed_form["xi_status"] == reasons["xi"] and "xi_max" in g
+    d = json.loads(_json(res.to_dict()))
+    d["closed_form"]["u0_status"] = "no value"
+    assert StaticsResult.from_dict(d).closed_form.statuses["u0"] == "no value"  # a status of a field: kept
+    d["closed_form"]["psi9_status"] = "no value"
+    with pytest.raises(KeyError, match="ClosedForm has no field 'psi9_status'"):
+        StaticsResult.from_dict(d)
+
+
+@pytest.mark.cli
+def test_the_statics_fields_are_its_numbers(shipped_run):
+    """Pump PE 600-300 (Pavlenko 2014, App. A): the fields read as the block says, are frozen, and compare by the
+    numbers; every number of the block is declared by a field or the extra declarations (groups, conductances, the
+    closed forms along the sweep), each key path of a field once."""
+    res = shipped_run("pump_pe600_statics")[0]["statics"]
+    d = res.to_dict()
+    assert res.face_gap == res.exact.z0 == d["exact"]["z0"] and res.exact.z0 == pytest.approx(143.8646e-6, rel=1e-5)
+    assert res.exact.dp == pytest.approx(res.dpsi * res.scales.p_B, rel=1e-9)  # held by the regulator
+    assert res.critical_exact.p1_kr == pytest.approx(res.critical_exact.psi1_kr * res.scales.p_B, rel=1e-14)
+    assert res.has_regulator and res.exact.x0 == pytest.approx(res.exact.xi0 * res.scales.x_B, rel=1e-14)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        res.exact.z0 = 1.0
+    moved = dataclasses.replace(res, exact=dataclasses.replace(res.exact, z0=res.exact.z0 * (1 + 1e-12)))
+    assert moved != res and dataclasses.replace(res) == res
+    assert QUANTITIES.undeclared(plain(d)) == []
+    paths = fields.key_paths(StaticsResult)
+    assert sorted(k for q in QUANTITIES for k in q.keys if k in paths) == sorted(paths)
+    assert [q.symbol for q in QUANTITIES if q.headline] == ["z0", "x0", "p1", "p2", "p3", "p_e", "p_cam", "Q_e",
+                                                            "Q_T", "Q_1", "p1_kr", "Δp", "Δp_kr", "c_s"]
+    # the verdict is the one function the live explorer calls too
+    ex, crit = res.exact, res.critical_exact
+    assert res.verdict() == statics_study.verdict(ex.psi1, ex.z0, ex.Q_1, ex.contact, ex.regulator_saturated, ex.dp,
+                                                  crit.dp_kr, crit.psi1_kr)
