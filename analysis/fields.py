@@ -35,6 +35,7 @@ QUANTITY = "autobal.quantity"  # field metadata: the declaration's arguments
 OMIT = "autobal.omit"  # field metadata: left out of to_dict() when None (a block the analysis did not compute)
 KEY = "autobal.key"  # field metadata: its key in results.json where that is not the field's name
 STATUSES = "autobal.statuses"  # field metadata: the record's statuses (why a value is null), not a key of its own
+UNSAVED = "autobal.unsaved"  # field metadata: held in memory only, not in results.json (see unsaved())
 STATUS = "_status"  # the suffix of the key that says why the value of its key is null
 
 #: what a frozen Result still takes after it is made: not its numbers, what a run sets on every Result (the display
@@ -90,6 +91,15 @@ def keyed(key: str):
 def optional():
     """A field the analysis may not compute (a map, a scan): default None, and then not in results.json."""
     return field(default=None, metadata={OMIT: True})
+
+
+def unsaved(default=None, default_factory=None):
+    """A field the Result holds in memory only, not in its results.json block: what a figure of the run draws
+    that the block does not hold (an IPOPT history, the scene's title); ``from_dict`` gives it its default, and
+    ``==`` does not compare it."""
+    if default_factory is not None:
+        return field(default_factory=default_factory, kw_only=True, repr=False, metadata={UNSAVED: True})
+    return field(default=default, kw_only=True, repr=False, metadata={UNSAVED: True})
 
 
 @record
@@ -169,8 +179,8 @@ def _key(f: dataclasses.Field) -> str:
 
 
 def _fields(rec) -> list[dataclasses.Field]:
-    """The fields of a record (type) that are keys of its block (not its statuses)."""
-    return [f for f in dataclasses.fields(rec) if not f.metadata.get(STATUSES)]
+    """The fields of a record (type) that are keys of its block (not its statuses, not an unsaved field)."""
+    return [f for f in dataclasses.fields(rec) if not (f.metadata.get(STATUSES) or f.metadata.get(UNSAVED))]
 
 
 def explained(rec: Record, reasons: dict | None = None, default: str = "no value here (NaN)") -> Record:

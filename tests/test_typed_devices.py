@@ -1,4 +1,4 @@
-"""Typed Results of the device-side analyses (issue #34 item 1): statics.  For every shipped scene that runs them,
+"""Typed Results of the device-side analyses (issue #34 item 1): statics, design.  For every shipped scene that runs them,
 the Result's block is results.json's, ``from_dict(to_dict(r)) == r`` through JSON with the keys in the same order at
 every level, ``autobal.load_run`` loads it back equal, and report.html rendered again from the loaded Results is
 the page the run wrote, byte for byte; a null's status comes from the fields as ``with_statuses`` wrote it from the
@@ -19,8 +19,9 @@ from autobal.analysis.result import plain, with_statuses
 from autobal.analysis.statics_study import QUANTITIES, StaticsResult
 
 #: shipped scene -> the typed analyses of this file it runs; (slow): more than about 20 s
-SCENES = {"pump_pe600_statics": ("statics",), "compressor_k180_statics": ("statics",)}
-SLOW = set()
+SCENES = {"pump_pe600_statics": ("statics",), "compressor_k180_statics": ("statics",),
+          "pump_pe600_design": ("design",), "compressor_k180_design": ("design",)}
+SLOW = {"pump_pe600_design", "compressor_k180_design"}
 
 
 def _json(d) -> str:
