@@ -147,11 +147,12 @@ class MonteCarloResult(TypedResult):
     sensitivity: dict
     time_s: float = _time()
     time_monte_carlo_s: float = _time()
-    scales: Scales
-    p1: np.ndarray = quantity("Pa", "p1", "discharge pressures of the grid")
+    # the physical values (None in a results.json written before them)
+    scales: Scales | None = optional()
+    p1: np.ndarray | None = quantity("Pa", "p1", "discharge pressures of the grid", optional=True)
     #: the physical gap, valve opening and pressures (z, x, p2, p3, p_e, p_cam) over the samples
-    dimensional: dict
-    reference: Reference
+    dimensional: dict | None = optional()
+    reference: Reference | None = optional()
     afc: dict | None = optional()
     accuracy: dict
     raw: dict = unsaved(default_factory=dict)
@@ -288,10 +289,12 @@ class MonteCarloResult(TypedResult):
             ax.set_xlabel(r"discharge pressure ratio $\psi_1 = p_1/p_B$")
             ax.set_ylabel(lab)
             ax.grid(alpha=0.3)
-            q = QUANTITIES.find("p1")  # the physical discharge pressure on top, in its display unit
-            twin_axis(ax, q.shown(self.scales.p_B), f"discharge pressure $p_1$, {q.display}", "x")
-        q = QUANTITIES.find("scales.z_B")  # the face gap beside u = z/z_B (q_T is over a per-sample base flow: no axis)
-        twin_axis(axes[0], q.shown(self.scales.z_B), f"face gap z, {q.display}")
+            if self.scales is not None:  # the physical discharge pressure on top, in its display unit
+                q = QUANTITIES.find("p1")
+                twin_axis(ax, q.shown(self.scales.p_B), f"discharge pressure $p_1$, {q.display}", "x")
+        if self.scales is not None:  # the face gap beside u = z/z_B (q_T is over a per-sample base flow: no axis)
+            q = QUANTITIES.find("scales.z_B")
+            twin_axis(axes[0], q.shown(self.scales.z_B), f"face gap z, {q.display}")
         sens = self.sensitivity
         j = self._reference()
         names = self.parameters

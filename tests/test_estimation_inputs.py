@@ -130,10 +130,10 @@ def test_start_where_the_model_is_undefined_is_moved_and_reaches_the_same_optimu
     est = res.estimates
     for k in ("alpha", "tau_max"):
         assert_allclose(est["low"][k], est["good"][k], rtol=1e-8)
-    moved = res.data["fits"]["low"]["extra"]["start_moved"]["tau_max"]
+    moved = res.fits["low"].extra["start_moved"]["tau_max"]
     assert moved["from"] == 1.5 and moved["to"] == pytest.approx(2.1) and "undefined" in moved["why"]
-    assert "start_moved" not in res.data["fits"]["good"]["extra"]
-    assert res.data["fits"]["low"]["parameters"]["tau_max"]["lower"] > 2.0
+    assert "start_moved" not in res.fits["good"].extra
+    assert res.fits["low"].parameters["tau_max"]["lower"] > 2.0
     assert "start moved" in res.summary()
 
 

@@ -1,8 +1,8 @@
-"""Typed Results of the device-side analyses (issue #34 item 1): statics, design.  For every shipped scene that runs them,
-the Result's block is results.json's, ``from_dict(to_dict(r)) == r`` through JSON with the keys in the same order at
-every level, ``autobal.load_run`` loads it back equal, and report.html rendered again from the loaded Results is
-the page the run wrote, byte for byte; a null's status comes from the fields as ``with_statuses`` wrote it from the
-dict before."""
+"""Typed Results of the device-side analyses (issue #34 item 1): statics, design, estimation, Monte Carlo.  For
+every shipped scene that runs them, the Result's block is results.json's, ``from_dict(to_dict(r)) == r`` through JSON
+with the keys in the same order at every level, ``autobal.load_run`` loads it back equal, and report.html rendered
+again from the loaded Results is the page the run wrote, byte for byte; a null's status comes from the fields as
+``with_statuses`` wrote it from the dict before."""
 
 from __future__ import annotations
 
@@ -20,8 +20,9 @@ from autobal.analysis.statics_study import QUANTITIES, StaticsResult
 
 #: shipped scene -> the typed analyses of this file it runs; (slow): more than about 20 s
 SCENES = {"pump_pe600_statics": ("statics",), "compressor_k180_statics": ("statics",),
-          "pump_pe600_design": ("design",), "compressor_k180_design": ("design",)}
-SLOW = {"pump_pe600_design", "compressor_k180_design"}
+          "pump_pe600_design": ("design",), "compressor_k180_design": ("design",),
+          "pump_pe600_montecarlo": ("montecarlo",), "rig_table43_fit": ("estimation",)}
+SLOW = {"pump_pe600_design", "compressor_k180_design", "pump_pe600_montecarlo"}
 
 
 def _json(d) -> str:
@@ -96,3 +97,50 @@ def test_the_statics_fields_are_its_numbers(shipped_run):
     ex, crit = res.exact, res.critical_exact
     assert res.verdict() == statics_study.verdict(ex.psi1, ex.z0, ex.Q_1, ex.contact, ex.regulator_saturated, ex.dp,
                                                   crit.dp_kr, crit.psi1_kr)
+
+
+@pytest.mark.cli
+def test_a_small_monte_carlo_round_trips_with_its_failures_last(tmp_path):
+    """Pump PE 600-300, 1000 samples at ψ1 = 1 (Pavlenko 2014, ch. 3): the block ends with its failures (none),
+    the null correlation has its status, the sampled arrays are held but not written, and the failures a run adds
+    stay last and fail the result."""
+    from autobal.analysis.montecarlo import MonteCarloResult
+
+    scene = autobal.load("pump_pe600_montecarlo", set={
+        "analyses.montecarlo.samples": 1000, "analyses.montecarlo.chunk_size": 1000, "analyses.montecarlo.afc": None,
+        "analyses.montecarlo.discharge_ratio": [1.0]})
+    res = autobal.run(scene, out=tmp_path / "out")["montecarlo"]
+    saved = json.loads((tmp_path / "out" / "results.json").read_text())["montecarlo"]
+    assert list(saved)[-1] == "failures" and saved["failures"] == [] and "afc" not in saved
+    assert saved["correlation"] is None and res.statuses["correlation"] == saved["correlation_status"]
+    assert res.reference.z_mean == saved["reference"]["z_mean"] == pytest.approx(143.9e-6, rel=0.01)
+    back = MonteCarloResult.from_dict(json.loads(json.dumps(saved)))
+    assert back == res and _json(back.to_dict()) == json.dumps(saved, allow_nan=False)
+    assert res.raw["exact"]["u"].shape == (1000, 1) and back.raw == {}  # the samples: in memory only
+    done = autobal.load_run(tmp_path / "out")
+    assert done["montecarlo"] == res and report.html(tmp_path / "out") == (
+        tmp_path / "out" / report.REPORT).read_text(encoding="utf-8")
+    failed = dataclasses.replace(res, failures=["psi1 = 1: 20 of 1000 samples unsolved"])
+    assert list(failed.to_dict())[-1] == "failures" and failed.failures() == ["psi1 = 1: 20 of 1000 samples unsolved"]
+    assert MonteCarloResult.from_dict(json.loads(_json(failed.to_dict()))) == failed and not failed.verdict()[0]
+
+
+@pytest.mark.cli
+def test_a_failed_fit_loads_back_as_a_failed_fit(shipped_run):
+    """Table 4.3 fits (Pavlenko 2014, §4.4): the solved fits are Fit records, the failures stay after the status;
+    a fit whose block says it failed comes back as a FailedFit, with its solver's status in the verdict."""
+    from autobal.analysis.estimation_study import EstimationResult, FailedFit, Fit
+
+    res = shipped_run("rig_table43_fit")[0]["estimation"]
+    assert all(isinstance(f, Fit) for f in res.fits.values()) and res.solved == res.fits
+    d = json.loads(_json(res.to_dict()))
+    assert list(d)[list(d).index("status") + 1] == "failures" and d["failures"] == []
+    assert res.fits["static_1p"].parameters["alpha"]["estimate"] == pytest.approx(1.6643, abs=5e-5)  # Table 4.4
+    d["fits"]["static_2p"] = {"status": "failed", "model": "traditional_disc", "residual": "u", "reason": "no",
+                              "solver": {"status": "Maximum_Iterations_Exceeded", "success": False},
+                              "last_iterate": {"alpha": 2.0}, "hint": "raise max_iterations"}
+    d["failures"] = ["fit 'static_2p' did not converge"]
+    back = EstimationResult.from_dict(d)
+    assert isinstance(back.fits["static_2p"], FailedFit) and list(back.solved) == ["static_1p"]
+    assert _json(back.to_dict()) == json.dumps(d) and back.failures() == d["failures"]
+    assert "static_2p (): solver FAILED (Maximum_Iterations_Exceeded)" in back.verdict()[1]

@@ -185,16 +185,11 @@ def estimate_seconds(settings: MonteCarlo) -> float:
     return t
 
 
-def report_section(sec) -> None:
-    """Spreads of face gap, pressures and leak over the sampled groups (Pavlenko 2014, ch. 3): the physical values
-    beside the source's groups; its closed forms in the validation part.  Reads the fields of the loaded
-    :class:`~autobal.analysis.montecarlo.MonteCarloResult` (``sec.result``)."""
-    from autobal.analysis.quantities import significant
-    from autobal.report import SOURCE_MODELS, model_name, number, stable_models, table, text
+def _reference_rows(sec, r) -> None:
+    """The headline rows: the face gap and leak at the reference discharge ratio, with their spreads."""
+    from autobal.report import number
 
-    r = sec.result
     ref = r.reference
-    sec.row("samples", "N", "samples", value=r.samples)
     sec.row("discharge pressure of the reference point", "p1", "reference.p1", value=ref.p1,
             note=f"ψ1 = p1/p_B = {number(ref.psi1)}")
     sec.row("face gap, mean", "z̄", "reference.z_mean", value=ref.z_mean)
@@ -206,18 +201,33 @@ def report_section(sec) -> None:
     sec.row("face-leak spread kσ/mean", "δq_T", "reference.leak_spread", value=ref.leak_spread)
     sec.row("samples with the regulator valve on its stop", "", "reference.saturated_fraction",
             value=ref.saturated_fraction)
+
+
+def report_section(sec) -> None:
+    """Spreads of face gap, pressures and leak over the sampled groups (Pavlenko 2014, ch. 3): the physical values
+    beside the source's groups; its closed forms in the validation part.  Reads the fields of the loaded
+    :class:`~autobal.analysis.montecarlo.MonteCarloResult` (``sec.result``)."""
+    from autobal.analysis.quantities import significant
+    from autobal.report import SOURCE_MODELS, model_name, number, stable_models, table, text
+
+    r = sec.result
+    ref = r.reference
+    sec.row("samples", "N", "samples", value=r.samples)
+    if ref is not None:  # a results.json written before the physical values has none
+        _reference_rows(sec, r)
     ex, src, dim = r.exact, r.source, r.dimensional
     rows, validation = [], []
     for i, p in enumerate(r.psi1):  # each cell in the display unit of its key's declaration
-        rows.append([sec.cell(f"psi1.{i}", p), sec.cell(f"p1.{i}", r.p1[i]),
-                     *(sec.cell(f"dimensional.{k}.{stat}.{i}", dim[k][stat][i]) for k, stat in (
-                         ("z", "mean"), ("z", "std"))),
-                     sec.cell(f"exact.u.spread.{i}", ex["u"]["spread"][i]),
-                     sec.cell(f"dimensional.p2.mean.{i}", dim["p2"]["mean"][i]),
-                     *(sec.cell(f"exact.{k}.{stat}.{i}", ex[k][stat][i]) for k, stat in (
-                         ("Q_T", "mean"), ("Q_T", "std"), ("q_T", "spread"))),
-                     sec.cell(f"saturated_fraction.{i}", r.saturated_fraction[i]),
-                     sec.cell(f"exact.u.invalid.{i}", ex["u"]["invalid"][i])])
+        if dim is not None:
+            rows.append([sec.cell(f"psi1.{i}", p), sec.cell(f"p1.{i}", r.p1[i]),
+                         *(sec.cell(f"dimensional.{k}.{stat}.{i}", dim[k][stat][i]) for k, stat in (
+                             ("z", "mean"), ("z", "std"))),
+                         sec.cell(f"exact.u.spread.{i}", ex["u"]["spread"][i]),
+                         sec.cell(f"dimensional.p2.mean.{i}", dim["p2"]["mean"][i]),
+                         *(sec.cell(f"exact.{k}.{stat}.{i}", ex[k][stat][i]) for k, stat in (
+                             ("Q_T", "mean"), ("Q_T", "std"), ("q_T", "spread"))),
+                         sec.cell(f"saturated_fraction.{i}", r.saturated_fraction[i]),
+                         sec.cell(f"exact.u.invalid.{i}", ex["u"]["invalid"][i])])
         validation.append([sec.cell(f"psi1.{i}", p), *(sec.cell(f"{part}.{k}.{stat}.{i}", block[k][stat][i])
                                                        for k in ("u", "q_T") for part, block in (("exact", ex),
                                                                                                  ("source", src))
@@ -227,15 +237,21 @@ def report_section(sec) -> None:
     if saturated:  # one line: the source's closed forms assume an ideal regulator
         sec.warnings.append("samples with the regulator valve on its stop (the closed forms assume an ideal "
                             "regulator): " + ", ".join(saturated))
-    sec.tables.append(table("Exact statics over the samples: the physical values (mean, standard deviation) "
-                            "beside the source's groups' spread kσ/mean",
-                            ["ψ1", "p1", "mean z", "std z", "spread u", "mean p2", "mean Q_T", "std Q_T",
-                             "spread q_T", "saturated fraction", "invalid samples"], rows, headline=True))
+    if dim is not None:
+        sec.tables.append(table("Exact statics over the samples: the physical values (mean, standard deviation) "
+                                "beside the source's groups' spread kσ/mean",
+                                ["ψ1", "p1", "mean z", "std z", "spread u", "mean p2", "mean Q_T", "std Q_T",
+                                 "spread q_T", "saturated fraction", "invalid samples"], rows, headline=True))
     sec.validation_tables.append(table("The source's closed forms (ideal regulator, Figs 3.3-3.4) beside the exact "
                                        "statics over the same samples: mean and spread of u = z/z_B and q_T = Q_T/Q_B",
                                        ["ψ1", "u exact", "spread", "u closed form", "spread", "q_T exact", "spread",
                                         "q_T closed form", "spread"], validation))
-    sec.conclude(*r.verdict())
+    if ref is not None:
+        sec.conclude(*r.verdict())
+    else:  # a results.json written before the physical values
+        invalid = sum(ex["u"]["invalid"])
+        sec.conclude(not r.failures(), f"{invalid} sample solves without a converged exact solution"
+                     if invalid else "every sample has a converged exact solution")
     at = (r.afc or {}).get("at") or {}
     if at:
         model, forcing = r.afc["model"], r.afc["forcing"]
