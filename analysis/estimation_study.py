@@ -16,7 +16,7 @@ import numpy as np
 from autobal.analysis import disc_fit
 from autobal.analysis.adequacy import decision, fisher_adequacy
 from autobal.analysis.device_fit import DeviceFitter
-from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record
+from autobal.analysis.fields import Record, TypedResult, declarations, keyed, optional, quantity, record
 from autobal.analysis.least_squares import FitResult
 from autobal.analysis.quantities import Quantity, is_number, significant
 from autobal.analysis.result import new_figure, plain, twin_axis
@@ -108,7 +108,8 @@ class Fit(Record):
     t_quantile: float = _stat()
     jtj_condition: float | None = _stat()
     solver: dict
-    data: dict
+    #: its key "data": the load and, per measured variable, the measured, fitted and residual values
+    table: dict = keyed("data")
     curve: dict
     extra: dict
     cross_check_scipy: dict | None = optional()
@@ -279,11 +280,11 @@ class EstimationResult(TypedResult):
                                    | {c: q.shown(ph[c]) if c in ph else None for c in cols}).items():
                         rows[col].append(v)
             kind = f.load_kind
-            pts = self._columns(f, {kind: f.data["load"]})
+            pts = self._columns(f, {kind: f.table["load"]})
             cur = self._columns(f, {kind: f.curve["load"]})
-            for k in f.data:
+            for k in f.table:
                 if k != "load":
-                    pts |= self._columns(f, {c: f.data[k][c] for c in ("measured", "fitted", "residual")}, k)
+                    pts |= self._columns(f, {c: f.table[k][c] for c in ("measured", "fitted", "residual")}, k)
             for k in ("u", "q"):
                 cur |= self._columns(f, {c: f.curve[k][c] for c in ("value", "band_low", "band_high")}, k)
             out[f"estimation_{name}_points.csv"] = pts
@@ -309,7 +310,7 @@ class EstimationResult(TypedResult):
     def draw(self, ax) -> None:
         """The first fit's first measured variable: data, fitted curve and its confidence band."""
         name, f = next(iter(self.solved.items()))
-        self._draw_fit(ax, name, f, next(k for k in ("u", "q") if k in f.data))
+        self._draw_fit(ax, name, f, next(k for k in ("u", "q") if k in f.table))
 
     def _base(self, f: Fit, base: str) -> float | None:
         """The SI base of a group of the fit's data: the device fit's own, else the scene's."""
@@ -324,7 +325,7 @@ class EstimationResult(TypedResult):
         ax.fill_between(grid, c["band_low"], c["band_high"], color="C0", alpha=0.2,
                         label=f"{100 * f.confidence:.0f}% confidence band")
         ax.plot(grid, c["value"], color="C0", label=f"fit {name}: {_params_text(f)}")
-        ax.plot(np.asarray(f.data["load"], float), f.data[k]["measured"], "ko", ms=4, label="measured")
+        ax.plot(np.asarray(f.table["load"], float), f.table[k]["measured"], "ko", ms=4, label="measured")
         cf = self.closed_forms or {}
         if f.model == "traditional_disc":
             keys = ("static_1p_4_23", "static_2p_4_26") if k == "u" else ("flow_1p_4_35", "flow_2p_4_36")
@@ -354,10 +355,10 @@ class EstimationResult(TypedResult):
         the traditional disc), and the residuals below."""
         figs = {}
         for name, f in self.solved.items():
-            parts = [k for k in ("u", "q") if k in f.data]
+            parts = [k for k in ("u", "q") if k in f.table]
             fig, axes = new_figure((6.4 * len(parts), 6.4), 2, len(parts), squeeze=False,
                                    gridspec_kw={"height_ratios": [3, 1]}, sharex="col")
-            x = np.asarray(f.data["load"], float)
+            x = np.asarray(f.table["load"], float)
             tau = f.load_kind == "tau"
             xl = r"load $\tau$" if tau else r"discharge pressure $\psi_1$"
             for j, k in enumerate(parts):
@@ -366,7 +367,7 @@ class EstimationResult(TypedResult):
                                     "axial force F" if tau else "discharge pressure $p_1$", "x")
                 axr = axes[1, j]
                 axr.axhline(0, color="k", lw=0.6)
-                axr.plot(x, f.data[k]["residual"], "ko", ms=4)
+                axr.plot(x, f.table[k]["residual"], "ko", ms=4)
                 axr.set_ylabel("fit - measured")
                 axr.set_xlabel(xl)
                 axr.grid(alpha=0.3)
@@ -595,7 +596,7 @@ def _one_fit(fit, settings, data, bases: dict, device) -> tuple[Fit, FitResult]:
     block["physical"] = _physical(block, fb)
     if fit.model == "traditional_disc" and data.has("load") in ("tau", "axial_force"):
         block["physical"]["stiffness"] = _stiffness(res.estimate, np.unique(load), fb)
-    return Fit(**plain(block)), res
+    return Fit.from_dict(plain(block)), res
 
 
 def _stiffness(estimate: dict, loads, bases: dict) -> dict:
