@@ -144,3 +144,66 @@ def test_a_failed_fit_loads_back_as_a_failed_fit(shipped_run):
     assert isinstance(back.fits["static_2p"], FailedFit) and list(back.solved) == ["static_1p"]
     assert _json(back.to_dict()) == json.dumps(d) and back.failures() == d["failures"]
     assert "static_2p (): solver FAILED (Maximum_Iterations_Exceeded)" in back.verdict()[1]
+
+
+# ---- what fields.py gained for these Results: statuses beside nulls, unsaved fields, keyword-only records ----------
+
+@fields.record
+class _Point(fields.Record):
+    x: float = fields.quantity("m", "x", "a length")
+    table: dict = fields.keyed("data")
+
+
+@fields.record(kw_only=True)
+class _Toy(fields.TypedResult):
+    title: str
+    gap: float | None = fields.quantity("m", "z", "a gap", optional=True)  # optional before a required field
+    ratio: float = fields.quantity("1", "u", "a ratio")
+    point: _Point
+    points: list[_Point]
+    curve: dict
+    history: dict = fields.unsaved(default_factory=dict)
+    name = "toy"
+
+
+def _toy(**kw) -> _Toy:
+    return _Toy(**({"title": "t", "gap": 1e-4, "ratio": math.nan, "point": _Point(math.nan, {"a": 1}),
+                    "points": [_Point(2.0, {}), _Point(None, {})], "curve": {"y": [1.0, math.nan]},
+                    "history": {"obj": [3.0, 2.0]}} | kw))
+
+
+def test_explained_gives_the_statuses_with_statuses_gives_the_dict():
+    """A status beside every null, in records, lists of records and plain blocks alike: the typed with_statuses, by
+    key (``reasons``) or the default; a status already given is kept; an optional field left out gets none."""
+    toy = fields.explained(_toy(), {"ratio": "no ratio here"}, "no value")
+    assert _json(toy.to_dict()) == _json(with_statuses(_toy().to_dict(), {"ratio": "no ratio here"}, "no value"))
+    assert toy.statuses == {"ratio": "no ratio here"} and toy.point.statuses == {"x": "no value"}
+    assert toy.points[1].statuses == {"x": "no value"} and toy.curve["y_status"] == "no value"
+    d = json.loads(_json(toy.to_dict()))
+    assert list(d)[:4] == ["title", "gap", "ratio", "ratio_status"] and d["point"] == {
+        "x": None, "x_status": "no value", "data": {"a": 1}}
+    back = _Toy.from_dict(d)
+    assert back == toy and back.statuses == toy.statuses and _json(back.to_dict()) == _json(d)
+    kept = fields.explained(dataclasses.replace(_toy(), statuses={"ratio": "given"}), {"ratio": "other"})
+    assert kept.statuses == {"ratio": "given"}
+    assert "gap_status" not in fields.explained(_toy(gap=None)).to_dict() and "gap" not in _toy(gap=None).to_dict()
+    assert fields.explained(_toy(ratio=0.5, point=_Point(1.0, {}), points=[], curve={})).to_dict() == \
+        _toy(ratio=0.5, point=_Point(1.0, {}), points=[], curve={}).to_dict()  # nothing null: no status
+
+
+def test_an_unsaved_field_is_held_but_not_written_nor_compared():
+    toy = _toy()
+    assert "history" not in toy.to_dict() and toy.history == {"obj": [3.0, 2.0]}
+    back = _Toy.from_dict(json.loads(_json(toy.to_dict())))
+    assert back.history == {} and back == toy
+    assert "history" not in fields.key_paths(_Toy) and "history" not in str(fields.declarations(_Toy).quantities)
+    with pytest.raises(KeyError, match="_Toy has no field 'history'"):
+        _Toy.from_dict(json.loads(_json(toy.to_dict())) | {"history": {}})
+
+
+def test_a_keyword_only_record_takes_keywords_and_keeps_its_field_order():
+    with pytest.raises(TypeError):
+        _Toy("t", 1e-4, 0.5)  # the fields are keywords
+    assert list(_toy().to_dict()) == ["title", "gap", "ratio", "point", "points", "curve"]
+    assert [list(q.keys) for q in fields.declarations(_Toy) if q.symbol in ("z", "u", "x")] == [
+        ["gap"], ["ratio"], ["point.x", "points[].x"]]
