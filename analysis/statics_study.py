@@ -1,6 +1,6 @@
 """The static calculation of a scene: exact IPOPT solution beside the source's closed forms.
 
-``run(design, settings)`` returns a :class:`StaticsResult`, plain data that writes itself as
+``run(solver, spec)`` (a frozen :class:`Spec`) returns a :class:`StaticsResult`, plain data that writes itself as
 the ``statics`` block of results.json, CSV tables and the figures equivalent to the source's
 Figs 2.4-2.6 (pump) and 2.9-2.10 (compressor), plus the force-gap characteristic (2.35).
 """
@@ -8,6 +8,7 @@ Figs 2.4-2.6 (pump) and 2.9-2.10 (compressor), plus the force-gap characteristic
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -26,6 +27,35 @@ MAX_HALVINGS = 6  # a failed continuation step is halved at most this many times
 REFINE_POINTS = 12  # extra points inside each sweep interval where a stop is reached or left (figures)
 
 _P14 = "Pavlenko (2014)"
+
+
+@dataclass(frozen=True)
+class Spec:
+    """What the static calculation of a device computes (the validated ``analyses.statics`` of a scene).
+
+    Attributes
+    ----------
+    operating_ratio : float
+        psi1 = p1/p_B of the reported operating point, dimensionless.
+    start, stop : float
+        The sweep's range of psi1, dimensionless (Pavlenko (2014), Figs 2.4-2.6).
+    points : int
+        Points of the sweep.
+    force_gap_points : int
+        Points of the force-gap characteristic phi(u), Eq. (2.35).
+    """
+
+    operating_ratio: float
+    start: float
+    stop: float
+    points: int
+    force_gap_points: int = 60
+
+    def __post_init__(self):
+        if not 0 < self.start < self.stop:
+            raise ValueError(f"discharge_ratio: start {self.start:g} and stop {self.stop:g} need 0 < start < stop (1)")
+        if self.points < 2 or self.force_gap_points < 2:
+            raise ValueError("discharge_ratio.points and force_gap_points: at least 2")
 
 
 # the declarations several fields share (one Quantity each: the key paths of equal declarations are joined);
@@ -813,12 +843,12 @@ def _step(solver: StaticsSolver, start: StaticPoint, psi1: float, dpsi: float, h
     return _step(solver, mid, psi1, dpsi, halvings + 1)
 
 
-def run(solver: StaticsSolver, settings, title: str = "") -> StaticsResult:
+def run(solver: StaticsSolver, spec: Spec, title: str = "") -> StaticsResult:
     """Operating point, criticals, continuation sweep and force-gap curve of one device."""
     dev = solver.design
     g, sc = dev.groups, dev.scales
     dpsi = dev.dpsi
-    psi1 = settings.operating_ratio
+    psi1 = spec.operating_ratio
     cf = closed_form.for_medium(g, psi1, dpsi)
     q_base = float(cf["Q_B_over_g1pB"])
 
@@ -837,11 +867,9 @@ def run(solver: StaticsSolver, settings, title: str = "") -> StaticsResult:
         q_1=cf["q_1"], kappa_s=cf["kappa_s"], **regulator, kappa_u_2_162=cf.get("kappa_u_2_162"),
         Q_e_over_Q_n=cf["Q_e_over_g1pB"] * sc["Q_scale"] / sc["Q_n"], **quad).items() if v is not None})
 
-    critical = _criticals(solver, psi1, dpsi, float(cf["psi1_kr"]), float(cf["dpsi_kr"]),
-                          settings.discharge_ratio.stop)
+    critical = _criticals(solver, psi1, dpsi, float(cf["psi1_kr"]), float(cf["dpsi_kr"]), spec.stop)
 
-    r = settings.discharge_ratio
-    grid = np.linspace(r.start, r.stop, r.points)
+    grid = np.linspace(spec.start, spec.stop, spec.points)
     try:
         points = continuation(solver, grid, dpsi)
     except SolveError as exc:
@@ -880,7 +908,7 @@ def run(solver: StaticsSolver, settings, title: str = "") -> StaticsResult:
                              else None),
         closed_form=closed_forms(fine))
 
-    us = np.linspace(0.3, 2.0, settings.force_gap_points)
+    us = np.linspace(0.3, 2.0, spec.force_gap_points)
     force_gap = ForceGap(psi1=psi1, u=us, phi_exact=solver.force_gap(psi1, dpsi, us),
                          phi_closed_form=(closed_form.force_gap(g, psi1, dpsi, us) if g.medium == "liquid"
                                           else np.full(us.shape, np.nan)),

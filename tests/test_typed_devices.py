@@ -207,3 +207,22 @@ def test_a_keyword_only_record_takes_keywords_and_keeps_its_field_order():
     assert list(_toy().to_dict()) == ["title", "gap", "ratio", "point", "points", "curve"]
     assert [list(q.keys) for q in fields.declarations(_Toy) if q.symbol in ("z", "u", "x")] == [
         ["gap"], ["ratio"], ["point.x", "points[].x"]]
+
+
+@pytest.mark.cli
+def test_the_statics_study_takes_a_frozen_spec():
+    """issue #34 item 3: the room validates its settings into statics_study.Spec; the study run on a Spec built in
+    code gives the room's Result (compressor K 180-131-1, a coarse sweep), and a Spec is frozen and checked."""
+    from autobal.analysis.statics import StaticsSolver
+    from autobal.parts.device import design
+
+    scene = autobal.load("compressor_k180_statics", set={"analyses.statics.discharge_ratio.points": 6,
+                                                         "analyses.statics.force_gap_points": 5})
+    r = scene.analyses.statics.discharge_ratio
+    spec = statics_study.Spec(scene.analyses.statics.operating_ratio, r.start, r.stop, 6, 5)
+    direct = statics_study.run(StaticsSolver(design(scene.device)), spec, scene.title)
+    assert direct == autobal.run(scene)["statics"] and len(direct.sweep.psi1) == 6 and len(direct.force_gap.u) == 5
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        spec.points = 7
+    with pytest.raises(ValueError, match="discharge_ratio: start 2 and stop 1"):
+        statics_study.Spec(1.0, 2.0, 1.0, 6)

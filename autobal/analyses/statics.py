@@ -41,8 +41,10 @@ def run(scene, settings: Statics):
     from autobal.analysis.statics import StaticsSolver
     from autobal.parts.device import design
 
+    r = settings.discharge_ratio
+    spec = statics_study.Spec(settings.operating_ratio, r.start, r.stop, r.points, settings.force_gap_points)
     with progress.steps(None, "statics", "IPOPT solve", catch=True):
-        return statics_study.run(StaticsSolver(design(scene.device)), settings, scene.title)
+        return statics_study.run(StaticsSolver(design(scene.device)), spec, scene.title)
 
 
 def estimate_seconds(settings: Statics) -> float:
