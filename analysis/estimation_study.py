@@ -659,14 +659,16 @@ def _failed(fit, exc: SolveError) -> FailedFit:
                      hint=HINTS.get(exc.status, "check the initial values and bounds of its parameters"))
 
 
-def run(settings, device: DeviceParams | None = None, title: str = "") -> EstimationResult:
+def run(settings, data, device: DeviceParams | None = None, title: str = "") -> EstimationResult:
     """Every fit of the scene's ``analyses.estimation`` block, the closed forms, the adequacy tests,
     bootstrap intervals and (4.38).
 
     Parameters
     ----------
     settings : Estimation
-        The validated ``analyses.estimation`` block (its data file is read here).
+        The validated ``analyses.estimation`` block: the fits and what to compute beside them.
+    data : autobal.measurements.Measurements
+        The measurements, read by the caller (``settings.measurements()``): the study reads no file.
     device : DeviceParams, optional
         The device in SI, for fits of the device model.
     title : str
@@ -677,7 +679,6 @@ def run(settings, device: DeviceParams | None = None, title: str = "") -> Estima
     EstimationResult
     """
     t0 = time.perf_counter()
-    data = settings.measurements()
     bases = settings.bases.values()
     role_load = data.has("load")
     group = data.columns.get("group")

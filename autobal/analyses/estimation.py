@@ -282,7 +282,7 @@ def run(scene, settings: Estimation):
 
     device = adapt(scene.device) if scene.device is not None else None
     with progress.steps(None, "estimation", "IPOPT solve", catch=True):
-        return estimation_study.run(settings, device, scene.title)
+        return estimation_study.run(settings, settings.measurements(), device, scene.title)
 
 
 def estimate_seconds(settings: Estimation) -> float:
