@@ -18,7 +18,7 @@ import scipy.linalg
 from matplotlib.ticker import NullFormatter
 
 from autobal.analysis.design import IPOPT_OPTIONS, UNITS, DesignProblem, Evaluation, Spec, apply, variable_key
-from autobal.analysis.fields import Record, TypedResult, declarations, explained, record, unsaved
+from autobal.analysis.fields import Record, TypedResult, declarations, explained, record, shared, unsaved
 from autobal.analysis.fields import quantity as field_quantity
 from autobal.analysis.frequency import MODEL_LABELS
 from autobal.analysis.linearize import Setup, finite_difference, jacobians, operator
@@ -72,20 +72,16 @@ _PSI = "at each operating point ψ1"
 _P14 = "Pavlenko (2014)"
 
 
-def _points(**kw):
-    return field_quantity("1", "ψ1", "operating discharge ratios p1/p_B", **kw)
+_points = shared("1", "ψ1", "operating discharge ratios p1/p_B")
 
 
-def _objective(**kw):
-    return field_quantity("1", "J", "objective (over the nominal design's)", **kw)
+_objective = shared("1", "J", "objective (over the nominal design's)")
 
 
-def _abscissa(**kw):
-    return field_quantity("1/s", "max Re λ", "spectral abscissa (designed-for model)", **kw)
+_abscissa = shared("1/s", "max Re λ", "spectral abscissa (designed-for model)")
 
 
-def _samples(**kw):
-    return field_quantity("1", "", "designs sampled / feasible in the certification", **kw)
+_samples = shared("1", "", "designs sampled / feasible in the certification")
 
 
 @record

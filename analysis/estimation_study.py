@@ -16,7 +16,7 @@ import numpy as np
 from autobal.analysis import disc_fit
 from autobal.analysis.adequacy import decision, fisher_adequacy
 from autobal.analysis.device_fit import DeviceFitter
-from autobal.analysis.fields import Record, TypedResult, declarations, keyed, optional, quantity, record
+from autobal.analysis.fields import Record, TypedResult, declarations, keyed, optional, quantity, record, shared
 from autobal.analysis.least_squares import FitResult
 from autobal.analysis.quantities import Quantity, is_number, significant
 from autobal.analysis.result import new_figure, plain, twin_axis
@@ -60,13 +60,11 @@ def _adequacy(*keys: str) -> str:
     return " ".join(f"{where}.{k}" for where in ("fits.*.adequacy", "adequacy_reference") for k in keys)
 
 
-def _stat(**kw):
-    return quantity("1", "", "the fit's statistics (in the residual's group), solver counts, the scipy cross-check, "
-                    "the bootstrap's settings, the device fit's groups", **kw)
+_stat = shared("1", "", "the fit's statistics (in the residual's group), solver counts, the scipy cross-check, "
+               "the bootstrap's settings, the device fit's groups")
 
 
-def _matrix(**kw):
-    return quantity("1", "r, Σ", "correlation and covariance of the free parameters", **kw)
+_matrix = shared("1", "r, Σ", "correlation and covariance of the free parameters")
 
 
 @record

@@ -22,6 +22,7 @@ missing key is an error, not a silent None) and every attribute access of the ol
 from __future__ import annotations
 
 import dataclasses
+import functools
 import types
 import typing
 from dataclasses import dataclass, field
@@ -81,6 +82,13 @@ def quantity(unit: str, symbol: str = "", description: str = "", display: str = 
     if optional:
         return field(default=None, metadata=meta | {OMIT: True})
     return field(metadata=meta)
+
+
+def shared(unit: str, symbol: str = "", description: str = "", display: str = "", *, source: str = "",
+           beside: str | None = None):
+    """A declaration several fields share (their key paths are joined into one Quantity): ``q = shared("1", "u0",
+    "face-gap ratio")``, then ``u0: float = q()`` in each record, ``q(headline=1)``, ``q(optional=True)``."""
+    return functools.partial(quantity, unit, symbol, description, display, source=source, beside=beside)
 
 
 def keyed(key: str):

@@ -24,7 +24,17 @@ import time
 import numpy as np
 
 from autobal.analysis import closed_form
-from autobal.analysis.fields import Record, TypedResult, declarations, explained, optional, quantity, record, unsaved
+from autobal.analysis.fields import (
+    Record,
+    TypedResult,
+    declarations,
+    explained,
+    optional,
+    quantity,
+    record,
+    shared,
+    unsaved,
+)
 from autobal.analysis.frequency import MODEL_LABELS
 from autobal.analysis.montecarlo_afc import afc_names, afc_study
 from autobal.analysis.montecarlo_statics import (
@@ -73,21 +83,17 @@ _STATS = " ".join(f"{part}.*.{k}" for part in ("exact", "source") for k in ("cv"
 _AFC_AMPLITUDES = "afc.nominal afc.mean afc.std afc.band_low afc.band_high afc.at.*.nominal " \
                   "afc.at.*.mean afc.at.*.std afc.quantiles.** afc.nominal_peaks[].amplitude"
 
-def _psi1(**kw):
-    return quantity("1", "ψ1", "discharge pressure ratio p1/p_B", source=f"{_P14}, Figs 3.3-3.4", **kw)
+_psi1 = shared("1", "ψ1", "discharge pressure ratio p1/p_B", source=f"{_P14}, Figs 3.3-3.4")
 
 
-def _count(**kw):
-    return quantity("1", "", "counts, the band width k, the AFC's operating ratio and coefficients of variation", **kw)
+_count = shared("1", "", "counts, the band width k, the AFC's operating ratio and coefficients of variation")
 
 
-def _sampled(**kw):
-    return quantity("1", "θ", "the sampled groups: distribution parameters, sample mean and std, correlations",
-                    source=f"{_P14}, Eq. (2.18)", **kw)
+_sampled = shared("1", "θ", "the sampled groups: distribution parameters, sample mean and std, correlations",
+                  source=f"{_P14}, Eq. (2.18)")
 
 
-def _time(**kw):
-    return quantity("s", "t", "wall time", **kw)
+_time = shared("s", "t", "wall time")
 
 
 @record

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from autobal.analysis import closed_form, workprecision
-from autobal.analysis.fields import Record, TypedResult, declarations, explained, optional, quantity, record
+from autobal.analysis.fields import Record, TypedResult, declarations, explained, optional, quantity, record, shared
 from autobal.analysis.quantities import Quantity, convert, display_unit_of
 from autobal.analysis.result import fixed_layout, fmt, new_figure
 from autobal.analysis.statics import StaticPoint, StaticsSolver
@@ -60,78 +60,59 @@ class Spec:
 
 # the declarations several fields share (one Quantity each: the key paths of equal declarations are joined);
 # Pavlenko (2014), ch. 2: groups (2.18); psi = p/p_B, u = z/z_B, xi = x/x_B, q = Q/Q_B
-def _psi1(**kw):
-    return quantity("1", "ψ1", "discharge pressure ratio p1/p_B", **kw)
+_psi1 = shared("1", "ψ1", "discharge pressure ratio p1/p_B")
 
 
-def _psi1_kr(**kw):
-    return quantity("1", "ψ1_kr", "critical discharge ratio", source=f"{_P14}, Eq. (2.32)", **kw)
+_psi1_kr = shared("1", "ψ1_kr", "critical discharge ratio", source=f"{_P14}, Eq. (2.32)")
 
 
-def _dpsi_kr(**kw):
-    return quantity("1", "δψ_kr", "critical barrier margin (p_e − p1)/p_B", source=f"{_P14}, Eq. (2.31)", **kw)
+_dpsi_kr = shared("1", "δψ_kr", "critical barrier margin (p_e − p1)/p_B", source=f"{_P14}, Eq. (2.31)")
 
 
-def _u0(**kw):
-    return quantity("1", "u0", "face-gap ratio z0/z_B", source=f"{_P14}, Eq. (2.27)", **kw)
+_u0 = shared("1", "u0", "face-gap ratio z0/z_B", source=f"{_P14}, Eq. (2.27)")
 
 
-def _xi0(**kw):
-    return quantity("1", "ξ0", "valve-opening ratio x0/x_B", source=f"{_P14}, Eq. (2.28)", **kw)
+_xi0 = shared("1", "ξ0", "valve-opening ratio x0/x_B", source=f"{_P14}, Eq. (2.28)")
 
 
-def _psi2_0(**kw):
-    return quantity("1", "ψ20", "disc-chamber ratio p2/p_B", source=f"{_P14}, Eq. (2.24)", **kw)
+_psi2_0 = shared("1", "ψ20", "disc-chamber ratio p2/p_B", source=f"{_P14}, Eq. (2.24)")
 
 
-def _psi3_0(**kw):
-    return quantity("1", "ψ30", "cavity ratio p3/p_B", source=f"{_P14}, Eq. (2.25)", **kw)
+_psi3_0 = shared("1", "ψ30", "cavity ratio p3/p_B", source=f"{_P14}, Eq. (2.25)")
 
 
-def _psi_e0(**kw):
-    return quantity("1", "ψ_e0", "barrier-chamber ratio p_e/p_B", **kw)
+_psi_e0 = shared("1", "ψ_e0", "barrier-chamber ratio p_e/p_B")
 
 
-def _psi_cam0(**kw):
-    return quantity("1", "ψ_cam0", "valve-chamber ratio p_cam/p_B", source=f"{_P14}, Eq. (2.26)", **kw)
+_psi_cam0 = shared("1", "ψ_cam0", "valve-chamber ratio p_cam/p_B", source=f"{_P14}, Eq. (2.26)")
 
 
-def _kappa_s(**kw):
-    return quantity("1", "κ_s", "axial stiffness of the balancing force (group)", source=f"{_P14}, Eq. (2.36)", **kw)
+_kappa_s = shared("1", "κ_s", "axial stiffness of the balancing force (group)", source=f"{_P14}, Eq. (2.36)")
 
 
-def _q(**kw):
-    return quantity("1", "q", "flow ratio Q/Q_B", source=f"{_P14}, Eq. (2.30)", **kw)
+_q = shared("1", "q", "flow ratio Q/Q_B", source=f"{_P14}, Eq. (2.30)")
 
 
-def _residual(**kw):
-    return quantity("1", "", "largest relative residual of the static equations / difference from a Newton polish",
-                    **kw)
+_residual = shared("1", "", "largest relative residual of the static equations / difference from a Newton polish")
 
 
-def _residuals(**kw):
-    return quantity("1", "r", "complementarity residuals of the valve stop and the contact", **kw)
+_residuals = shared("1", "r", "complementarity residuals of the valve stop and the contact")
 
 
-def _area(**kw):
-    return quantity("m^2", "s", "areas", **kw)
+_area = shared("m^2", "s", "areas")
 
 
-def _conductance(**kw):
-    return quantity("m^3/(Pa*s)", "g", "hydraulic conductances", **kw)
+_conductance = shared("m^3/(Pa*s)", "g", "hydraulic conductances")
 
 
-def _ratio(**kw):
-    return quantity("1", "", "the ratios of the sweep over ψ1", **kw)
+_ratio = shared("1", "", "the ratios of the sweep over ψ1")
 
 
-def _flow(**kw):
-    return quantity("m^3/s", "Q", "flows over the sweep", **kw)
+_flow = shared("m^3/s", "Q", "flows over the sweep")
 
 
-def _force_gap(**kw):
-    return quantity("1", "u, φ, τ", "balancing force against the gap at the operating pressure",
-                    source=f"{_P14}, Eq. (2.35)", **kw)
+_force_gap = shared("1", "u, φ, τ", "balancing force against the gap at the operating pressure",
+                    source=f"{_P14}, Eq. (2.35)")
 
 
 @record
@@ -158,8 +139,7 @@ class Scales(Record):
     Q_n: float = quantity("m^3/s", "Q_n", "nominal flow of the machine", "m³/h")
 
 
-def _loss(**kw):
-    return quantity("1", "ζ, b", "loss coefficients and the impeller group", **kw)
+_loss = shared("1", "ζ, b", "loss coefficients and the impeller group")
 
 
 @record
@@ -259,8 +239,8 @@ class Critical(Record):
 
 
 @record(kw_only=True)
-class Refined(Record):
-    """The extra points inside each sweep interval where a stop is reached or left (figures)."""
+class Ratios(Record):
+    """The source's ratios over a grid of discharge ratios ψ1 (the sweep, its refined points)."""
 
     psi1: np.ndarray = _ratio()
     psi_e: np.ndarray = _ratio()
@@ -272,25 +252,21 @@ class Refined(Record):
     q_e: np.ndarray = _ratio()
     q_T: np.ndarray = _ratio()
     q_1: np.ndarray = _ratio()
+
+
+@record(kw_only=True)
+class Refined(Ratios):
+    """The extra points inside each sweep interval where a stop is reached or left (figures)."""
+
     regulator_saturated: np.ndarray | None = _ratio(optional=True)  # 1.0 where saturated
     #: the closed forms at the same ratios: keys are the ratios' names
     closed_form: dict
 
 
 @record(kw_only=True)
-class Sweep(Record):
+class Sweep(Ratios):
     """The continuation sweep over the discharge ratio ψ1 (Pavlenko (2014), Figs 2.4-2.6, 2.9-2.10)."""
 
-    psi1: np.ndarray = _ratio()
-    psi_e: np.ndarray = _ratio()
-    psi2: np.ndarray = _ratio()
-    psi3: np.ndarray = _ratio()
-    psi_cam: np.ndarray | None = _ratio(optional=True)  # with a regulator
-    u: np.ndarray = _ratio()
-    xi: np.ndarray | None = _ratio(optional=True)
-    q_e: np.ndarray = _ratio()
-    q_T: np.ndarray = _ratio()
-    q_1: np.ndarray = _ratio()
     Q_e: np.ndarray = _flow()
     Q_1: np.ndarray = _flow()
     Q_T: np.ndarray = _flow()
