@@ -19,10 +19,12 @@ from matplotlib.ticker import NullFormatter
 
 from autobal.analysis import solver_options
 from autobal.analysis.design import UNITS, DesignProblem, Evaluation, Spec, apply, variable_key
+from autobal.analysis.fields import Record, TypedResult, declarations, explained, record, shared, unsaved
+from autobal.analysis.fields import quantity as field_quantity
 from autobal.analysis.frequency import MODEL_LABELS
 from autobal.analysis.linearize import Setup, finite_difference, jacobians, operator
-from autobal.analysis.quantities import Declarations, Quantity, is_number, significant
-from autobal.analysis.result import Result, new_figure, with_statuses
+from autobal.analysis.quantities import Quantity, is_number, significant
+from autobal.analysis.result import new_figure
 from autobal.analysis.stability import PARAMETERS, pencil
 from autobal.errors import SolveError
 from autobal.models.device import DeviceParams
@@ -67,184 +69,230 @@ def _values(path: str, block: dict | None = None) -> Quantity | None:
 
 
 _PSI = "at each operating point ψ1"
-QUANTITIES = Declarations(
-    Quantity("decay_rate", "1/s", "α", "required decay rate (every pole Re λ ≤ −α)", headline=True),
-    Quantity("nominal.leakage", "m^3/s", "Q_e", "barrier leakage of the nominal design", headline=True),
-    Quantity("optimum.leakage", "m^3/s", "Q_e", "barrier leakage of the optimum", headline=True),
-    Quantity("optimum.objective", "1", "J/J_nom", "objective of the optimum over the nominal design's",
-             headline=True),
-    Quantity("nominal.objective certification.best_sample certification.best_local_sample", "1", "J",
-             "objective (over the nominal design's)"),
-    Quantity("optimum.margin.** nominal.margin.**", "1/s", "−max Re λ", f"decay rate {_PSI}"),
-    Quantity("optimum.spectral_abscissa.** nominal.spectral_abscissa.** abscissa_sweep.nominal "
-             "abscissa_sweep.optimum", "1/s", "max Re λ", "spectral abscissa (designed-for model)"),
-    Quantity("other_model.nominal.** other_model.optimum.**", "1/s", "max Re λ",
-             "spectral abscissa under the other chamber form (validation)"),
-    Quantity("program_model.nominal.** program_model.optimum.**", "1/s", "max Re λ",
-             "spectral abscissa under the source's program model (validation)", source="Pavlenko (2014), App. A/B"),
-    Quantity("optimum.stiffness.** nominal.stiffness.**", "1", "κ_s", f"static stiffness of the balancing force {_PSI}",
-             source="Pavlenko (2014), Eq. (2.33)"),
-    Quantity("optimum.face_gap.** nominal.face_gap.**", "m", "z0", f"face gap {_PSI}", "µm"),
-    Quantity("optimum.valve_travel.** nominal.valve_travel.**", "1", "x0/x_max",
-             f"valve opening over its travel {_PSI}"),
-    Quantity("points abscissa_sweep.psi1", "1", "ψ1", "operating discharge ratios p1/p_B"),
-    Quantity("iterations", "1", "", "IPOPT iterations"),
-    Quantity("active[].multiplier", "1", "λ", "multiplier of an active constraint (the objective is O(1))"),
-    Quantity("active[].value", "1", "", "the NLP's (scaled) value of an active constraint row or variable"),
-    Quantity("active[].decay_rate", "1/s", "−max Re λ", "decay rate at an active decay-rate constraint"),
-    Quantity("certification.samples certification.feasible_samples certification.local_samples "
-             "certification.feasible_local_samples", "1", "", "designs sampled / feasible in the certification"),
-    Quantity("certification.tolerance", "1", "", "relative amount a sample may beat the optimum by"),
-    Quantity("certification.local_radius", "1", "", "half-width of the local search box, fraction of each range"),
-    resolve=_values,
-)
+_P14 = "Pavlenko (2014)"
 
 
-def verdict(d: dict, which: str = "optimum") -> tuple[bool, str]:
-    """The verdict on the ``which`` design under the model it was designed for: stable or not, its smallest decay
-    rate over the operating points and the margin to the required α (ok: α met at every point, IPOPT converged)."""
-    alpha, eta = d["decay_rate"], QUANTITIES.find("decay_rate")
-    margins = {p: v for p, v in d[which]["margin"].items() if not p.endswith("_status")}
-    values = [v for v in margins.values() if is_number(v) and math.isfinite(v)]
-    missing = [p for p, v in margins.items() if not (is_number(v) and math.isfinite(v))]
-    model = MODEL_LABELS[{"chain": "nonlinear_chain"}.get(d["form"], "nonlinear")]
-    if not values:
-        return False, f"{which} design, {model}: no operating point has a static solution off the stops"
-    worst = min(values)
-    met = worst >= alpha * (1 - 1e-6) and not missing
-    where = ("at every operating point" if not missing else f"at {len(values)} of {len(margins)} operating points "
-             f"(none at ψ1 = {', '.join(missing)}: no static solution off the stops there)")
-    state = (f"stable, decay rate ≥ {eta.text(worst)}" if worst > 0 else
-             f"UNSTABLE, disturbances grow at up to {eta.text(-worst)}")
-    margin = (f"{eta.text(worst - alpha)} above the required {eta.text(alpha)}" if met else
-              f"the required {eta.text(alpha)} is NOT met")
-    words = f"{which} design, {model}: {state} {where}, {margin}"
-    if which == "optimum" and d["status"] not in SUCCESS:
-        return False, f"{words}; IPOPT did NOT converge ({d['status']})"
-    return met, words
+_points = shared("1", "ψ1", "operating discharge ratios p1/p_B")
 
 
-def _signed(v: float) -> str:
-    return ("+" if v > 0 else "") + significant(v)
+_objective = shared("1", "J", "objective (over the nominal design's)")
 
 
-def source_models(d: dict) -> list[tuple[str, str]]:
-    """(model, sentence) per model the design is checked under but not designed for (the other chamber form, the
-    source's program model): its spectral abscissa of the optimum and of the starting design, and whether the
-    optimum is unstable, and more so than the starting design, under it."""
-    out = []
-    for key in ("other_model", "program_model"):
-        block = d.get(key) or {}
-        model = {"chain": "nonlinear_chain", "energy": "nonlinear"}.get(block.get("model"), block.get("model"))
-        opt, nom = ([v for k, v in (block.get(w) or {}).items() if not k.endswith("_status") and is_number(v)
-                     and math.isfinite(v)] for w in ("optimum", "nominal"))
-        if not model or not opt:
-            continue
-        words = (f"{MODEL_LABELS.get(model, model)}: spectral abscissa max Re λ of the optimum {_signed(min(opt))} to "
-                 f"{_signed(max(opt))} 1/s over the operating points"
-                 + (f" (nominal design {_signed(min(nom))} to {_signed(max(nom))} 1/s)" if nom else ""))
-        if min(opt) > 0:
-            words += ": UNSTABLE under this model" + ("" if not nom else ", MORE unstable than the nominal design"
-                                                       if max(opt) > max(nom) else ", less unstable than the nominal "
-                                                       "design")
-        out.append((model, words))
-    return out
+_abscissa = shared("1/s", "max Re λ", "spectral abscissa (designed-for model)")
 
 
-def block(problem: DesignProblem, ev: Evaluation) -> dict:
-    """results.json block of one evaluated design: parameters by scene path, objective, margins."""
-    paths = {v.key: v.path for v in problem.spec.variables}
-    return {
-        "parameters": {paths[k]: quantity(k, v) for k, v in ev.values.items()},
-        "values_si": {paths[k]: v for k, v in ev.values.items()},
-        "objective": ev.objective,
-        "leakage": ev.leakage,
-        "feasible": ev.feasible,
-        "infeasible_reason": ev.reason,
-        "margin": {f"{p:g}": -a for p, a in ev.abscissa.items()},
-        "spectral_abscissa": {f"{p:g}": a for p, a in ev.abscissa.items()},
-        "stiffness": {f"{p:g}": k for p, k in ev.stiffness.items()},
-        "face_gap": {f"{p:g}": z for p, z in ev.gap.items()},
-        "valve_travel": {f"{p:g}": x for p, x in ev.valve.items()},
-    }
+_samples = shared("1", "", "designs sampled / feasible in the certification")
 
 
-class DesignResult(Result):
-    """Result of ``analyses.design``: the optimum, the starting design, certification and history."""
+@record
+class Design(Record):
+    """One evaluated design (:func:`block`): its parameters by scene path, objective, leakage and, by operating
+    point ψ1 (keys "0.5", "1"), its decay rate, spectral abscissa, stiffness, face gap and valve travel."""
 
+    #: scene path -> value with its SI unit, at full precision (what ``--set`` reads)
+    parameters: dict
+    #: scene path -> SI value (declared by the scene path's variable: :func:`variable`)
+    values_si: dict
+    objective: float = _objective()
+    leakage: float = field_quantity("m^3/s", "Q_e", "barrier leakage")
+    feasible: bool
+    infeasible_reason: str
+    #: by operating point: keys are the discharge ratios ψ1
+    margin: dict
+    spectral_abscissa: dict
+    stiffness: dict
+    face_gap: dict
+    valve_travel: dict
+
+
+@record
+class Nominal(Design):
+    """The starting design (the scene's)."""
+
+    leakage: float = field_quantity("m^3/s", "Q_e", "barrier leakage of the nominal design", headline=2)
+
+
+@record
+class Optimum(Design):
+    """The optimum."""
+
+    objective: float = field_quantity("1", "J/J_nom", "objective of the optimum over the nominal design's", headline=4)
+    leakage: float = field_quantity("m^3/s", "Q_e", "barrier leakage of the optimum", headline=3)
+
+
+@record(kw_only=True)
+class Active(Record):
+    """A constraint active at the optimum, with its multiplier."""
+
+    constraint: str
+    multiplier: float = field_quantity("1", "λ", "multiplier of an active constraint (the objective is O(1))")
+    value: float = field_quantity("1", "", "the NLP's (scaled) value of an active constraint row or variable")
+    decay_rate: float | None = field_quantity("1/s", "−max Re λ", "decay rate at an active decay-rate constraint",
+                                        optional=True)
+
+
+@record
+class Certification(Record):
+    """The optimum's certificate: eigenvalues at every operating point, a random and a local search."""
+
+    eigenvalues_ok: bool
+    samples: int = _samples()
+    feasible_samples: int = _samples()
+    best_sample: float = _objective()
+    tolerance: float = field_quantity("1", "", "relative amount a sample may beat the optimum by")
+    local_samples: int = _samples()
+    local_radius: float = field_quantity("1", "", "half-width of the local search box, fraction of each range")
+    feasible_local_samples: int = _samples()
+    best_local_sample: float = _objective()
+    beaten: bool
+
+
+@record
+class ModelCheck(Record):
+    """The spectral abscissa of the nominal design and of the optimum under a model it was not designed for, by
+    operating point (keys are the discharge ratios ψ1)."""
+
+    model: str
+    nominal: dict
+    optimum: dict
+
+
+@record
+class AbscissaSweep(Record):
+    """The spectral abscissa of both designs over the operating range."""
+
+    psi1: np.ndarray = _points()
+    nominal: np.ndarray = _abscissa()
+    optimum: np.ndarray = _abscissa()
+
+
+@record
+class DesignResult(TypedResult):
+    """Result of ``analyses.design``: the optimum, the starting design, certification and IPOPT's history."""
+
+    form: str
+    decay_rate: float = field_quantity("1/s", "α", "required decay rate (every pole Re λ ≤ −α)", headline=1)
+    points: list[float] = _points()
+    status: str
+    iterations: int = field_quantity("1", "", "IPOPT iterations")
+    barrier: str
+    optimum: Optimum
+    nominal: Nominal
+    active: list[Active]
+    certification: Certification
+    #: spectral abscissa (1/s) of the same designs in the other chamber form
+    other_model: ModelCheck
+    #: the same for the source's program model (hand constants, closed-form point)
+    program_model: ModelCheck
+    abscissa_sweep: AbscissaSweep
+    accuracy: dict
+    #: IPOPT's iterates (obj, inf_pr, inf_du) for the convergence figure, and the scene's title: not in results.json
+    history: dict = unsaved(default_factory=dict)
+    title: str = unsaved("")
     name = "design"
-    quantities = QUANTITIES
-
-    def __init__(self, data: dict, sweep: dict, history: dict, title: str = ""):
-        self.data, self.sweep, self.history, self.title = data, sweep, history, title
 
     @property
     def parameters(self) -> dict:
         """Optimum design values by scene path, as strings with SI units."""
-        return self.data["optimum"]["parameters"]
+        return self.optimum.parameters
 
     @property
     def objective(self) -> float:
         """Objective at the optimum (dimensionless: Q_e / Q_e,nominal by default)."""
-        return self.data["optimum"]["objective"]
+        return self.optimum.objective
 
     @property
     def margin(self) -> dict:
         """Decay rate -max Re lambda at each operating point of the optimum, 1/s."""
-        return self.data["optimum"]["margin"]
+        return self.optimum.margin
 
-    def to_dict(self) -> dict:
-        return with_statuses(self.data, default="no value at this operating point: the design has no static "
-                             "solution or spectral abscissa there (NaN)")
+    def verdict(self, which: str = "optimum") -> tuple[bool, str]:
+        """The verdict on the ``which`` design under the model it was designed for: stable or not, its smallest
+        decay rate over the operating points and the margin to the required α (ok: α met at every point, IPOPT
+        converged)."""
+        alpha, eta = self.decay_rate, QUANTITIES.find("decay_rate")
+        margins = {p: v for p, v in getattr(self, which).margin.items() if not p.endswith("_status")}
+        values = [v for v in margins.values() if is_number(v) and math.isfinite(v)]
+        missing = [p for p, v in margins.items() if not (is_number(v) and math.isfinite(v))]
+        model = MODEL_LABELS[{"chain": "nonlinear_chain"}.get(self.form, "nonlinear")]
+        if not values:
+            return False, f"{which} design, {model}: no operating point has a static solution off the stops"
+        worst = min(values)
+        met = worst >= alpha * (1 - 1e-6) and not missing
+        where = ("at every operating point" if not missing else f"at {len(values)} of {len(margins)} operating "
+                 f"points (none at ψ1 = {', '.join(missing)}: no static solution off the stops there)")
+        state = (f"stable, decay rate ≥ {eta.text(worst)}" if worst > 0 else
+                 f"UNSTABLE, disturbances grow at up to {eta.text(-worst)}")
+        margin = (f"{eta.text(worst - alpha)} above the required {eta.text(alpha)}" if met else
+                  f"the required {eta.text(alpha)} is NOT met")
+        words = f"{which} design, {model}: {state} {where}, {margin}"
+        if which == "optimum" and self.status not in SUCCESS:
+            return False, f"{words}; IPOPT did NOT converge ({self.status})"
+        return met, words
 
-    def verdict(self) -> tuple[bool, str]:
-        """The optimum's under the model it was designed for, with the margin to the required decay rate."""
-        return verdict(self.data)
+    def source_models(self) -> list[tuple[str, str]]:
+        """(model, sentence) per model the design is checked under but not designed for (the other chamber form,
+        the source's program model): its spectral abscissa of the optimum and of the starting design, and whether
+        the optimum is unstable, and more so than the starting design, under it."""
+        out = []
+        for block in (self.other_model, self.program_model):
+            model = {"chain": "nonlinear_chain", "energy": "nonlinear"}.get(block.model, block.model)
+            opt, nom = ([v for k, v in values.items() if not k.endswith("_status") and is_number(v)
+                         and math.isfinite(v)] for values in (block.optimum, block.nominal))
+            if not model or not opt:
+                continue
+            words = (f"{MODEL_LABELS.get(model, model)}: spectral abscissa max Re λ of the optimum {_signed(min(opt))} "
+                     f"to {_signed(max(opt))} 1/s over the operating points"
+                     + (f" (nominal design {_signed(min(nom))} to {_signed(max(nom))} 1/s)" if nom else ""))
+            if min(opt) > 0:
+                words += ": UNSTABLE under this model" + ("" if not nom else ", MORE unstable than the nominal "
+                                                           "design" if max(opt) > max(nom) else ", less unstable "
+                                                           "than the nominal design")
+            out.append((model, words))
+        return out
 
     def summary(self) -> str:
-        d = self.data
-        o, n = d["optimum"], d["nominal"]
-        lines = [f"design: {self.verdict()[1]}", f"  IPOPT {d['status']}, {d['iterations']} iterations",
-                 *QUANTITIES.lines(d),
-                 f"  nominal design: {verdict(d, 'nominal')[1].removeprefix('nominal design, ')}",
+        o, n, c = self.optimum, self.nominal, self.certification
+        lines = [f"design: {self.verdict()[1]}", f"  IPOPT {self.status}, {self.iterations} iterations",
+                 *QUANTITIES.lines(self.to_dict()),
+                 f"  nominal design: {self.verdict('nominal')[1].removeprefix('nominal design, ')}",
                  "  decay rate −max Re λ (nominal design → optimum), 1/s: " + "; ".join(
-                     f"ψ1 = {p}: {significant(n['margin'].get(p))} → {significant(a)}"
-                     for p, a in o["margin"].items() if not p.endswith("_status")),
+                     f"ψ1 = {p}: {significant(n.margin.get(p))} → {significant(a)}"
+                     for p, a in o.margin.items() if not p.endswith("_status")),
                  "  design variables (nominal design → optimum; results.json optimum.parameters in full):"]
-        width = max((len(p) for p in o["values_si"]), default=0)
-        for path, v in o["values_si"].items():
+        width = max((len(p) for p in o.values_si), default=0)
+        for path, v in o.values_si.items():
             q = variable(path)
-            lines.append(f"    {path:<{width}s}  {q.symbol:<7s} {q.text(n['values_si'][path])} → {q.text(v)}")
-        lines.append("  active constraints: " + (", ".join(a["constraint"] for a in d["active"]) or "none"))
-        c = d["certification"]
-        lines.append(f"  certified: eigenvalues {'confirm' if c['eigenvalues_ok'] else 'do NOT confirm'} the optimum; "
-                     f"random search {c['feasible_samples']} of {c['samples']} samples feasible, best "
-                     f"{significant(c['best_sample'])}; local search {c['feasible_local_samples']} of "
-                     f"{c['local_samples']} feasible, best {significant(c['best_local_sample'])} (optimum "
-                     f"{significant(o['objective'])})" + ("; a sample BEATS the optimum" if c["beaten"] else ""))
+            lines.append(f"    {path:<{width}s}  {q.symbol:<7s} {q.text(n.values_si[path])} → {q.text(v)}")
+        lines.append("  active constraints: " + (", ".join(a.constraint for a in self.active) or "none"))
+        lines.append(f"  certified: eigenvalues {'confirm' if c.eigenvalues_ok else 'do NOT confirm'} the optimum; "
+                     f"random search {c.feasible_samples} of {c.samples} samples feasible, best "
+                     f"{significant(c.best_sample)}; local search {c.feasible_local_samples} of "
+                     f"{c.local_samples} feasible, best {significant(c.best_local_sample)} (optimum "
+                     f"{significant(o.objective)})" + ("; a sample BEATS the optimum" if c.beaten else ""))
         lines.append("  validation against the source (its models do not judge the design):")
-        lines += [f"    {words}" for _, words in source_models(d)]
+        lines += [f"    {words}" for _, words in self.source_models()]
         return "\n".join(lines)
 
     def tables(self) -> dict[str, dict]:
-        return {"design_abscissa.csv": QUANTITIES.columns({k: self.sweep[k] for k in ("psi1", "nominal", "optimum")},
-                                                          "abscissa_sweep")}
+        s = self.abscissa_sweep
+        return {"design_abscissa.csv": QUANTITIES.columns({"psi1": s.psi1, "nominal": s.nominal,
+                                                           "optimum": s.optimum}, "abscissa_sweep")}
 
     def draw(self, ax) -> None:
-        s = self.sweep
-        ax.plot(s["psi1"], s["nominal"], "o-", label="nominal")
-        ax.plot(s["psi1"], s["optimum"], "s-", label="optimum")
-        ax.axhline(-self.data["decay_rate"], color="k", ls="--", lw=0.8, label=r"$-\alpha$")
+        s = self.abscissa_sweep
+        ax.plot(s.psi1, s.nominal, "o-", label="nominal")
+        ax.plot(s.psi1, s.optimum, "s-", label="optimum")
+        ax.axhline(-self.decay_rate, color="k", ls="--", lw=0.8, label=r"$-\alpha$")
         ax.set_xlabel(r"discharge ratio $\psi_1$")
         ax.set_ylabel(r"spectral abscissa max Re $\lambda$, 1/s")
         ax.legend()
 
     def figures(self) -> dict:
-        d = self.data
         fig1, ax = new_figure()
         self.draw(ax)
         fig2, ax2 = new_figure((8.0, 4.4))
-        o, n = d["optimum"]["values_si"], d["nominal"]["values_si"]
+        o, n = self.optimum.values_si, self.nominal.values_si
         names = list(o)
         ratio = np.array([o[k] / n[k] if n[k] else math.nan for k in names])
         ax2.barh(range(len(names)), ratio - 1.0, left=1.0, color=np.where(ratio >= 1, "C0", "C1"))
@@ -273,13 +321,50 @@ class DesignResult(Result):
             ax3.semilogy(np.maximum(h["inf_du"], 1e-18), label="dual infeasibility")
             ax3.legend()
         ax3.set_xlabel("IPOPT iteration")
-        model = {"energy": "energy-consistent", "chain": "chain (printed)"}[d["form"]]
+        model = {"energy": "energy-consistent", "chain": "chain (printed)"}[self.form]
         what = {fig1: f"spectral abscissa over the operating range ({model} model)",
                 fig2: "design variables, optimum against the nominal design",
-                fig3: f"IPOPT convergence ({d['status']}, {d['iterations']} iterations, {d['barrier']} barrier)"}
+                fig3: f"IPOPT convergence ({self.status}, {self.iterations} iterations, {self.barrier} barrier)"}
         for fig, sub in what.items():
             fig.suptitle(textwrap.fill(self.title, 80) + "\n" + sub if self.title else sub, fontsize=9)
         return {"design_abscissa.png": fig1, "design_parameters.png": fig2, "design_convergence.png": fig3}
+
+
+DesignResult.quantities = QUANTITIES = declarations(
+    DesignResult,
+    Quantity("optimum.margin.** nominal.margin.**", "1/s", "−max Re λ", f"decay rate {_PSI}"),
+    Quantity("optimum.spectral_abscissa.** nominal.spectral_abscissa.**", "1/s", "max Re λ",
+             "spectral abscissa (designed-for model)"),
+    Quantity("other_model.nominal.** other_model.optimum.**", "1/s", "max Re λ",
+             "spectral abscissa under the other chamber form (validation)"),
+    Quantity("program_model.nominal.** program_model.optimum.**", "1/s", "max Re λ",
+             "spectral abscissa under the source's program model (validation)", source=f"{_P14}, App. A/B"),
+    Quantity("optimum.stiffness.** nominal.stiffness.**", "1", "κ_s", f"static stiffness of the balancing force {_PSI}",
+             source=f"{_P14}, Eq. (2.33)"),
+    Quantity("optimum.face_gap.** nominal.face_gap.**", "m", "z0", f"face gap {_PSI}", "µm"),
+    Quantity("optimum.valve_travel.** nominal.valve_travel.**", "1", "x0/x_max",
+             f"valve opening over its travel {_PSI}"),
+    resolve=_values,
+)
+
+
+def _signed(v: float) -> str:
+    return ("+" if v > 0 else "") + significant(v)
+
+
+def block(problem: DesignProblem, ev: Evaluation, kind: type[Design]) -> Design:
+    """One evaluated design as its record ``kind`` (:class:`Nominal`, :class:`Optimum`): parameters by scene path,
+    objective, margins."""
+    paths = {v.key: v.path for v in problem.spec.variables}
+    return kind(
+        parameters={paths[k]: quantity(k, v) for k, v in ev.values.items()},
+        values_si={paths[k]: v for k, v in ev.values.items()},
+        objective=ev.objective, leakage=ev.leakage, feasible=ev.feasible, infeasible_reason=ev.reason,
+        margin={f"{p:g}": -a for p, a in ev.abscissa.items()},
+        spectral_abscissa={f"{p:g}": a for p, a in ev.abscissa.items()},
+        stiffness={f"{p:g}": k for p, k in ev.stiffness.items()},
+        face_gap={f"{p:g}": z for p, z in ev.gap.items()},
+        valve_travel={f"{p:g}": x for p, x in ev.valve.items()})
 
 
 def accuracy(problem: DesignProblem, out: dict, opt: Evaluation, best: float, samples: int) -> dict:
@@ -432,29 +517,25 @@ def run(device: DeviceParams, spec: Spec, samples: int = 200, seed: int = 0, swe
     best_local = min((s.objective for s in local), default=math.nan)
     lo, hi = min(prob.points), max(prob.points)
     psi1s = np.linspace(lo, hi, sweep_points)
-    sweep = {"psi1": psi1s, "nominal": abscissa_sweep(prob, prob.nominal, psi1s),
-             "optimum": abscissa_sweep(prob, out["values"], psi1s)}
+    sweep = AbscissaSweep(psi1s, *(np.asarray(abscissa_sweep(prob, v, psi1s), float)
+                                   for v in (prob.nominal, out["values"])))
     other = "chain" if spec.form == "energy" else "energy"
-    compare = {"model": other} | {k: {f"{p:g}": a for p, a in prob.evaluate(v, form=other).abscissa.items()}
-                                  for k, v in (("nominal", prob.nominal), ("optimum", out["values"]))}
-    program = {"model": "program"} | {k: program_abscissa(prob, v) for k, v in (("nominal", prob.nominal),
-                                                                               ("optimum", out["values"]))}
-    data = {
-        "form": spec.form, "decay_rate": spec.decay_rate, "points": prob.points,
-        "status": out["res"]["status"], "iterations": out["res"]["iterations"], "barrier": out["res"]["barrier"],
-        "optimum": block(prob, opt), "nominal": block(prob, nominal),
-        "active": out["active"] + decay_rate_active(prob, out, opt),
-        "certification": {
-            "eigenvalues_ok": bool(opt.feasible), "samples": samples, "feasible_samples": len(feasible),
-            "best_sample": best, "tolerance": CERTIFY_TOL,
-            "local_samples": samples // 2, "local_radius": LOCAL_RADIUS, "feasible_local_samples": len(local),
-            "best_local_sample": best_local,
-            "beaten": bool(any(math.isfinite(b) and b < opt.objective - CERTIFY_TOL * abs(opt.objective)
-                               for b in (best, best_local))),
-        },
-        "other_model": compare,  # spectral abscissa (1/s) of the same designs in the other chamber form
-        "program_model": program,  # the same for the source's program model (hand constants, closed-form point)
-        "abscissa_sweep": {"psi1": psi1s, "nominal": sweep["nominal"], "optimum": sweep["optimum"]},
-    }
-    data["accuracy"] = accuracy(prob, out, opt, best, samples)
-    return DesignResult(data, sweep, out["history"], title)
+    compare = ModelCheck(other, *({f"{p:g}": a for p, a in prob.evaluate(v, form=other).abscissa.items()}
+                                  for v in (prob.nominal, out["values"])))
+    program = ModelCheck("program", *(program_abscissa(prob, v) for v in (prob.nominal, out["values"])))
+    res = DesignResult(
+        form=spec.form, decay_rate=spec.decay_rate, points=prob.points,
+        status=out["res"]["status"], iterations=out["res"]["iterations"], barrier=out["res"]["barrier"],
+        optimum=block(prob, opt, Optimum), nominal=block(prob, nominal, Nominal),
+        active=[Active(**a) for a in out["active"] + decay_rate_active(prob, out, opt)],
+        certification=Certification(
+            eigenvalues_ok=bool(opt.feasible), samples=samples, feasible_samples=len(feasible),
+            best_sample=best, tolerance=CERTIFY_TOL, local_samples=samples // 2, local_radius=LOCAL_RADIUS,
+            feasible_local_samples=len(local), best_local_sample=best_local,
+            beaten=bool(any(math.isfinite(b) and b < opt.objective - CERTIFY_TOL * abs(opt.objective)
+                            for b in (best, best_local)))),
+        other_model=compare, program_model=program,
+        abscissa_sweep=sweep,
+        accuracy=accuracy(prob, out, opt, best, samples), history=out["history"], title=title)
+    return explained(res, default="no value at this operating point: the design has no static solution or spectral "
+                                  "abscissa there (NaN)")

@@ -9,16 +9,17 @@ from __future__ import annotations
 
 import itertools
 import time
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 
 from autobal.analysis import disc_fit
 from autobal.analysis.adequacy import decision, fisher_adequacy
 from autobal.analysis.device_fit import DeviceFitter
+from autobal.analysis.fields import Record, TypedResult, declarations, keyed, optional, quantity, record, shared
 from autobal.analysis.least_squares import FitResult
-from autobal.analysis.quantities import Declarations, Quantity, is_number, significant
-from autobal.analysis.result import Result, new_figure, plain, twin_axis
+from autobal.analysis.quantities import Quantity, is_number, significant
+from autobal.analysis.result import new_figure, plain, twin_axis
 from autobal.errors import ScenarioError, SolveError
 from autobal.models.device import DeviceParams, design
 from autobal.models.hydroheel import TurbulentDisc
@@ -59,9 +60,322 @@ def _adequacy(*keys: str) -> str:
     return " ".join(f"{where}.{k}" for where in ("fits.*.adequacy", "adequacy_reference") for k in keys)
 
 
-#: every number of the estimation block (Pavlenko 2014, §4.3-4.4): the fitted parameters are the source's groups
-#: (α, τ_max) or loss coefficients, all dimensionless; the data's bases are SI
-QUANTITIES = Declarations(
+_stat = shared("1", "", "the fit's statistics (in the residual's group), solver counts, the scipy cross-check, "
+               "the bootstrap's settings, the device fit's groups")
+
+
+_matrix = shared("1", "r, Σ", "correlation and covariance of the free parameters")
+
+
+@record
+class Data(Record):
+    """The measurements the fits were made to: the file, its points, its columns' units and load groups."""
+
+    file: str
+    path: str
+    points: int = _stat()
+    #: column -> its unit in the file
+    columns: dict
+    groups: int | None = _stat()
+    provenance: list[str]
+
+
+@record(kw_only=True)
+class Fit(Record):
+    """A solved fit: estimates with their standard errors and intervals, statistics, the data and the fitted curve
+    with its band (all in the source's groups), and what was computed beside it.  Its blocks by parameter, data
+    column or group (``parameters``, ``data``, ``curve``, ``bootstrap``, ``adequacy``, ``physical``) are declared
+    by path."""
+
+    status: str
+    model: str
+    residual: str
+    hessian: str
+    weights: dict
+    load_kind: str
+    #: parameter -> estimate, free, start, bounds, standard error and interval
+    parameters: dict
+    free: list[str]
+    correlation: list = _matrix()
+    covariance: list = _matrix()
+    residual_std: float = _stat()
+    ssr: float = _stat()
+    dof: int = _stat()
+    points: int = _stat()
+    confidence: float = _stat()
+    t_quantile: float = _stat()
+    jtj_condition: float | None = _stat()
+    solver: dict
+    #: its key "data": the load and, per measured variable, the measured, fitted and residual values
+    table: dict = keyed("data")
+    curve: dict
+    extra: dict
+    cross_check_scipy: dict | None = optional()
+    bases: dict | None = optional()
+    bootstrap: dict | None = optional()
+    adequacy: dict | None = optional()
+    physical: dict
+
+    @classmethod
+    def from_dict(cls, block: dict):
+        """A solved fit, or the :class:`FailedFit` of a fit whose block says it failed."""
+        return FailedFit.from_dict(block) if block.get("status") == "failed" else super().from_dict(block)
+
+
+@record
+class FailedFit(Record):
+    """A fit that failed: IPOPT's status, its last iterate and a hint."""
+
+    status: str
+    model: str
+    residual: str
+    reason: str
+    solver: dict
+    #: parameter -> its value at the last iterate
+    last_iterate: dict
+    hint: str
+
+
+@record(kw_only=True)
+class EstimationResult(TypedResult):
+    """Parameter fits of one scene, with the source's closed forms, adequacy tests, bootstrap intervals and (4.38)
+    (Pavlenko (2014), Secs. 4.3.3-4.4); headline numbers are the properties."""
+
+    title: str
+    data: Data
+    #: group -> the SI base of the data's groups (null: not given in the scene)
+    bases: dict
+    status: str
+    #: fit name -> its results (a :class:`FailedFit` where it failed)
+    fits: dict[str, Fit]
+    closed_forms: dict | None
+    adequacy_reference: dict | None
+    loss_coefficient: dict | None
+    accuracy: dict
+    run_time_s: float = quantity("s", "t", "wall time")
+    name = "estimation"
+
+    def to_dict(self) -> dict:
+        """The block, its failures after its status (in results.json also when there are none)."""
+        out = {k: v for k, v in super().to_dict().items() if k != "failures"}
+        keys = list(out)
+        at = keys.index("status") + 1
+        return {k: out[k] for k in keys[:at]} | {"failures": list(self.failures)} | {k: out[k] for k in keys[at:]}
+
+    @property
+    def solved(self) -> dict[str, Fit]:
+        """Fit name -> results block, of the fits that converged (a failed fit's block has status "failed")."""
+        return {n: f for n, f in self.fits.items() if isinstance(f, Fit)}
+
+    @property
+    def estimates(self) -> dict[str, dict[str, float]]:
+        """Fit name -> parameter -> estimate (dimensionless groups, or loss coefficients), of the solved fits."""
+        return {n: {k: p["estimate"] for k, p in f.parameters.items()} for n, f in self.solved.items()}
+
+    @property
+    def intervals(self) -> dict[str, dict[str, tuple[float, float]]]:
+        """Fit name -> free parameter -> linearised (Student-t) confidence interval, in the parameter's unit."""
+        return {n: {k: (p["ci_low"], p["ci_high"]) for k, p in f.parameters.items() if p["free"]}
+                for n, f in self.solved.items()}
+
+    @property
+    def bootstrap_intervals(self) -> dict[str, dict[str, tuple[float, float]]]:
+        """Fit name -> free parameter -> bootstrap percentile interval (fits that have one)."""
+        return {n: {k: (p["ci_low"], p["ci_high"]) for k, p in f.bootstrap["parameters"].items()}
+                for n, f in self.solved.items() if "parameters" in (f.bootstrap or {})}
+
+    def verdict(self) -> tuple[bool, str]:
+        """The one verdict over the fits: each solved and adequate, that is passing both Fisher's test (4.14) and
+        the lack-of-fit test at the scene's significance (:func:`autobal.analysis.adequacy.decision`); a fit that
+        fails one says which, with its F against F_crit and its p against the significance."""
+        oks, words = [], []
+        for name, f in self.fits.items():
+            free = [k for k, p in f.parameters.items() if p.get("free")] if isinstance(f, Fit) else []
+            solved = bool(f.solver.get("success"))
+            adequacy = f.adequacy if isinstance(f, Fit) else None
+            ok, said = decision(adequacy) if adequacy else (None, "adequacy not tested")
+            w = f"{name} ({', '.join(free)}): " + ("" if solved else f"solver FAILED ({f.solver.get('status')}); ")
+            oks.append(solved and ok is not False)
+            words.append(w + said)
+        return all(oks), "; ".join(words)
+
+    def summary(self) -> str:
+        ok, words = self.verdict()
+        lines = [f"estimation on {self.data.file} ({self.data.points} points)",
+                 f"  {'ok' if ok else 'NOT OK'}: {words}"]
+        lines += [f"  FAILED {x}" for x in self.failures]
+        for name, f in self.solved.items():
+            lines.append(f"  fit {name} ({f.model}, residual in {f.residual}, {f.hessian} Hessian): "
+                         f"IPOPT {f.solver['status']} in {f.solver['iterations']} iterations, "
+                         f"residual std {significant(f.residual_std)}")
+            for m in f.extra.get("start_moved", {}).values():
+                lines.append(f"    start moved: {m['why']}")
+            bs = f.bootstrap or {}
+            boot = bs.get("parameters", {}) if bs.get("status") == "ok" else {}
+            for k, p in f.parameters.items():
+                if not p["free"]:
+                    lines.append(f"    {k:10s} {significant(p['estimate'])} (fixed)")
+                else:
+                    line = (f"    {k:10s} {significant(p['estimate'])} +- {significant(p['standard_error'], 2)}  "
+                            f"{100 * f.confidence:.0f} % CI [{significant(p['ci_low'])}, "
+                            f"{significant(p['ci_high'])}]")
+                    if k in boot:
+                        line += (f", bootstrap ({bs['samples']} refits) [{significant(boot[k]['ci_low'])}, "
+                                 f"{significant(boot[k]['ci_high'])}]")
+                    lines.append(line)
+                lines += _physical_lines(f, k)
+            if bs.get("status", "ok").startswith("failed"):
+                lines.append(f"    bootstrap {bs['status']}")
+            free = f.free or []
+            corr = f.correlation or []
+            for i, j in itertools.combinations(range(min(len(free), len(corr))), 2):
+                r = corr[i][j]  # null when the covariance is undefined (a singular Hessian)
+                lines.append(f"    correlation of {free[i]} and {free[j]}: {significant(r)}"
+                             + (" (the data hardly separate them)" if r is not None and abs(r) >= 0.9 else ""))
+            lines += _stiffness_lines(f)
+            cc = f.cross_check_scipy
+            if cc:
+                lines.append(f"    scipy least_squares: max |difference| {cc['max_abs_difference']:.1e}")
+        lc = self.loss_coefficient
+        if lc and "status" in lc:
+            lines.append(f"  (4.38) {lc['status']}")
+        elif lc:
+            lines.append(f"  (4.38): {lc['unknown']} = {significant(lc['value'])} [{significant(lc['ci_low'])}, "
+                         f"{significant(lc['ci_high'])}] from alpha = {significant(lc['alpha'])} of fit {lc['fit']} "
+                         f"(nominal alpha {significant(lc['alpha_nominal'])})")
+        lines.append("  validation against the source (Pavlenko 2014, Secs. 4.3.3-4.4):")
+        cf = self.closed_forms or {}
+        for k, v in cf.items():
+            if isinstance(v, dict) and "alpha" in v:
+                lines.append(f"    closed form {k:16s} alpha = {significant(v['alpha'])}, tau_max = "
+                             f"{significant(v['tau_max'])}")
+        if "status" in cf:
+            lines.append(f"    closed forms {cf['status']}")
+        ref = self.adequacy_reference
+        if ref and ref.get("F") is not None:
+            lines.append(f"    the source's curve (alpha {significant(ref['reference']['alpha'])}, tau_max "
+                         f"{significant(ref['reference']['tau_max'])}): sigma1^2 = {ref['sigma1_sq']:.3g}, sigma2^2 = "
+                         f"{ref['sigma2_sq']:.3g}; {decision(ref)[1]} (the source's inverted rule F > F_crit: "
+                         f"{'adequate' if ref['source_rule_adequate'] else 'not adequate'})")
+        return "\n".join(lines)
+
+    def tables(self) -> dict[str, dict]:
+        """estimation_parameters.csv (each row's unit in its column 'unit': the groups and, beside them, the fitted
+        force groups in kN); per fit its points (measured, fitted, residual) and its curve with band, each group
+        headed '[1]' and, where the data's base is known, beside it its physical value headed with its unit."""
+        out = {}
+        cols = ("estimate", "standard_error", "ci_low", "ci_high")
+        rows = {k: [] for k in ("fit", "parameter", "free", *cols, "unit")}
+        for name, f in self.solved.items():
+            for k, p in f.parameters.items():
+                for col, v in ({"fit": name, "parameter": k, "free": p["free"], "unit": "1"}
+                               | {c: p.get(c) for c in cols}).items():
+                    rows[col].append(v)
+            for key, ph in (f.physical or {}).items():
+                if "estimate" in ph:
+                    q = QUANTITIES.find(f"fits.{name}.physical.{key}.estimate")
+                    for col, v in ({"fit": name, "parameter": key, "free": ph["free"], "unit": q.display}
+                                   | {c: q.shown(ph[c]) if c in ph else None for c in cols}).items():
+                        rows[col].append(v)
+            kind = f.load_kind
+            pts = self._columns(f, {kind: f.table["load"]})
+            cur = self._columns(f, {kind: f.curve["load"]})
+            for k in f.table:
+                if k != "load":
+                    pts |= self._columns(f, {c: f.table[k][c] for c in ("measured", "fitted", "residual")}, k)
+            for k in ("u", "q"):
+                cur |= self._columns(f, {c: f.curve[k][c] for c in ("value", "band_low", "band_high")}, k)
+            out[f"estimation_{name}_points.csv"] = pts
+            out[f"estimation_{name}_curve.csv"] = cur
+        return {"estimation_parameters.csv": rows, **out}
+
+    def _columns(self, f: Fit, values: dict, group: str | None = None) -> dict:
+        """CSV columns of one group of the data (``group``, or the load's kind as the key of ``values``): each
+        column of ``values`` headed 'group_column [1]', then, where the base of the group is known, the same
+        columns in their physical unit ('F [kN]', 'h_measured [mm]': the group times its base)."""
+        out, physical = {}, {}
+        base, symbol = COLUMNS[group or next(iter(values))]
+        scale = self._base(f, base)
+        q = QUANTITIES.find(f"bases.{base}")
+        for col, v in values.items():
+            suffix = f"_{col}" if group else ""
+            out[f"{group or col}{suffix} [1]"] = v
+            if is_number(scale) and scale > 0:
+                physical[f"{symbol}{suffix} [{q.display}]"] = [q.shown(x * scale) if is_number(x) else None
+                                                               for x in v]
+        return out | physical
+
+    def draw(self, ax) -> None:
+        """The first fit's first measured variable: data, fitted curve and its confidence band."""
+        name, f = next(iter(self.solved.items()))
+        self._draw_fit(ax, name, f, next(k for k in ("u", "q") if k in f.table))
+
+    def _base(self, f: Fit, base: str) -> float | None:
+        """The SI base of a group of the fit's data: the device fit's own, else the scene's."""
+        return (f.bases if f.bases else self.bases).get(base)
+
+    def _draw_fit(self, ax, name: str, f: Fit, k: str) -> None:
+        label = {"u": r"face gap $u = z/z_B$",
+                 "q": r"flow $q = Q/Q_B$ (4.29)" if f.model == "traditional_disc" else
+                 rf"flow $q_{{{f.extra.get('flow_throttle', 'T')}}} = Q/(g_1 p_B)$"}
+        grid = np.asarray(f.curve["load"], float)
+        c = f.curve[k]
+        ax.fill_between(grid, c["band_low"], c["band_high"], color="C0", alpha=0.2,
+                        label=f"{100 * f.confidence:.0f}% confidence band")
+        ax.plot(grid, c["value"], color="C0", label=f"fit {name}: {_params_text(f)}")
+        ax.plot(np.asarray(f.table["load"], float), f.table[k]["measured"], "ko", ms=4, label="measured")
+        cf = self.closed_forms or {}
+        if f.model == "traditional_disc":
+            keys = ("static_1p_4_23", "static_2p_4_26") if k == "u" else ("flow_1p_4_35", "flow_2p_4_36")
+            for key, ls in zip(keys, ("--", ":"), strict=True):
+                v = cf.get(key)
+                if v and v.get("alpha") is not None and v.get("tau_max") is not None:
+                    disc = TurbulentDisc(v["alpha"], v["tau_max"])
+                    with np.errstate(invalid="ignore"):
+                        ax.plot(grid, (disc.gap if k == "u" else disc.flow)(grid), ls=ls, color="0.4",
+                                label=f"({key.split('_', 2)[2].replace('_', '.')}): alpha {v['alpha']:.4g}, "
+                                      f"tau_max {v['tau_max']:.4g}")
+        ax.set_ylabel(label[k])
+        self._physical_axis(ax, f, {"u": "gap", "q": "flow"}[k], "face gap z" if k == "u" else "flow Q")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+
+    def _physical_axis(self, ax, f: Fit, base: str, label: str, which: str = "y") -> None:
+        """The physical values beside a group of the data (u = z/z_B ...) on a secondary axis, in their display
+        unit, where the data's base (SI) is known."""
+        value = self._base(f, base)
+        if is_number(value) and value > 0:
+            q = QUANTITIES.find(f"bases.{base}")
+            twin_axis(ax, q.shown(value), f"{label}, {q.display}", which)
+
+    def figures(self) -> dict:
+        """One figure per fit: data, fitted curve, confidence band (and the closed forms' curves for
+        the traditional disc), and the residuals below."""
+        figs = {}
+        for name, f in self.solved.items():
+            parts = [k for k in ("u", "q") if k in f.table]
+            fig, axes = new_figure((6.4 * len(parts), 6.4), 2, len(parts), squeeze=False,
+                                   gridspec_kw={"height_ratios": [3, 1]}, sharex="col")
+            x = np.asarray(f.table["load"], float)
+            tau = f.load_kind == "tau"
+            xl = r"load $\tau$" if tau else r"discharge pressure $\psi_1$"
+            for j, k in enumerate(parts):
+                self._draw_fit(axes[0, j], name, f, k)
+                self._physical_axis(axes[0, j], f, "force" if tau else "pressure",
+                                    "axial force F" if tau else "discharge pressure $p_1$", "x")
+                axr = axes[1, j]
+                axr.axhline(0, color="k", lw=0.6)
+                axr.plot(x, f.table[k]["residual"], "ko", ms=4)
+                axr.set_ylabel("fit - measured")
+                axr.set_xlabel(xl)
+                axr.grid(alpha=0.3)
+            fig.suptitle(f"{self.title}: fit {name} ({f.model}, residual in {f.residual})", fontsize=9)
+            figs[f"fig_estimation_{name}.png"] = fig
+        return figs
+
+
+EstimationResult.quantities = QUANTITIES = declarations(
+    EstimationResult,
     Quantity("fits.*.parameters.*.estimate fits.*.parameters.*.initial fits.*.parameters.*.lower "
              "fits.*.parameters.*.upper fits.*.cross_check_scipy.estimate.*", "1", "α, τ_max",
              "fitted parameter (a group of the model or a loss coefficient): estimate, start, bounds",
@@ -71,8 +385,6 @@ QUANTITIES = Declarations(
     Quantity("fits.*.bootstrap.parameters.*.ci_low fits.*.bootstrap.parameters.*.ci_high "
              "fits.*.bootstrap.parameters.*.std fits.*.bootstrap.parameters.*.mean", "1", "CI*",
              "residual-bootstrap percentile interval, std and mean of the refits"),
-    Quantity("fits.*.correlation fits.*.covariance", "1", "r, Σ", "correlation and covariance of the free "
-             "parameters"),
     Quantity(_adequacy("F", "F_crit", "p_value", "lack_of_fit.F", "lack_of_fit.F_crit", "lack_of_fit.p_value"), "1",
              "F, F_crit, p", "Fisher adequacy test: the fit's variance against the scatter within the load groups "
              "(passed when F ≤ F_crit), and the lack-of-fit test; adequate when both pass",
@@ -85,11 +397,10 @@ QUANTITIES = Declarations(
     Quantity("fits.*.data.** fits.*.curve.**", "1", "τ, u, q",
              "load and measured, fitted, residual gap u = h/h_TB or flow q; the fitted curve and its band",
              source=f"{_P14}, Table 4.3"),
-    Quantity("fits.*.residual_std fits.*.ssr fits.*.dof fits.*.points fits.*.confidence fits.*.t_quantile "
-             "fits.*.jtj_condition fits.*.weights.* fits.*.solver.iterations fits.*.solver.objective "
-             "fits.*.cross_check_scipy.cost fits.*.cross_check_scipy.nfev fits.*.cross_check_scipy.max_abs_difference "
-             "fits.*.bootstrap.samples fits.*.bootstrap.seed fits.*.bootstrap.confidence fits.*.bootstrap.failed "
-             "fits.*.bootstrap.ipopt_fallback fits.*.last_iterate.* fits.*.extra.** data.points data.groups", "1", "",
+    Quantity("fits.*.weights.* fits.*.solver.iterations fits.*.solver.objective fits.*.cross_check_scipy.cost "
+             "fits.*.cross_check_scipy.nfev fits.*.cross_check_scipy.max_abs_difference fits.*.bootstrap.samples "
+             "fits.*.bootstrap.seed fits.*.bootstrap.confidence fits.*.bootstrap.failed "
+             "fits.*.bootstrap.ipopt_fallback fits.*.last_iterate.* fits.*.extra.**", "1", "",
              "the fit's statistics (in the residual's group), solver counts, the scipy cross-check, the bootstrap's "
              "settings, the device fit's groups"),
     Quantity("closed_forms.**", "1", "α, τ_max", "the source's closed-form estimators and their sums",
@@ -115,236 +426,16 @@ QUANTITIES = Declarations(
     Quantity("bases.gap fits.*.bases.gap", "m", "h_TB", "gap base of the data", "mm"),
     Quantity("bases.flow fits.*.bases.flow", "m^3/s", "Q_B", "flow base of the data"),
     Quantity("bases.force fits.*.bases.force", "N", "F_B", "force base of the data"),
-    Quantity("run_time_s fits.*.bootstrap.time_s", "s", "t", "wall time"),
+    Quantity("fits.*.bootstrap.time_s", "s", "t", "wall time"),
 )
 
 
-@dataclass
-class EstimationResult(Result):
-    """Parameter fits of one scene, with the source's closed forms, adequacy tests, bootstrap
-    intervals and (4.38).  ``data`` is the results.json block; headline numbers are the properties."""
-
-    data: dict  # the results.json block
-    name = "estimation"
-    quantities = QUANTITIES
-
-    @property
-    def solved(self) -> dict[str, dict]:
-        """Fit name -> results block, of the fits that converged (a failed fit's block has status "failed")."""
-        return {n: f for n, f in self.data["fits"].items() if f.get("status") != "failed"}
-
-    @property
-    def estimates(self) -> dict[str, dict[str, float]]:
-        """Fit name -> parameter -> estimate (dimensionless groups, or loss coefficients), of the solved fits."""
-        return {n: {k: p["estimate"] for k, p in f["parameters"].items()} for n, f in self.solved.items()}
-
-    @property
-    def intervals(self) -> dict[str, dict[str, tuple[float, float]]]:
-        """Fit name -> free parameter -> linearised (Student-t) confidence interval, in the parameter's unit."""
-        return {n: {k: (p["ci_low"], p["ci_high"]) for k, p in f["parameters"].items() if p["free"]}
-                for n, f in self.solved.items()}
-
-    @property
-    def bootstrap_intervals(self) -> dict[str, dict[str, tuple[float, float]]]:
-        """Fit name -> free parameter -> bootstrap percentile interval (fits that have one)."""
-        return {n: {k: (p["ci_low"], p["ci_high"]) for k, p in f["bootstrap"]["parameters"].items()}
-                for n, f in self.solved.items() if "parameters" in (f.get("bootstrap") or {})}
-
-    def to_dict(self) -> dict:
-        return self.data
-
-    def verdict(self) -> tuple[bool, str]:
-        """The one verdict over the fits: each solved and adequate, that is passing both Fisher's test (4.14) and
-        the lack-of-fit test at the scene's significance (:func:`autobal.analysis.adequacy.decision`); a fit that
-        fails one says which, with its F against F_crit and its p against the significance."""
-        oks, words = [], []
-        for name, f in self.data["fits"].items():
-            free = [k for k, p in (f.get("parameters") or {}).items() if p.get("free")]
-            solved = bool((f.get("solver") or {}).get("success"))
-            ok, said = decision(f["adequacy"]) if f.get("adequacy") else (None, "adequacy not tested")
-            w = f"{name} ({', '.join(free)}): " + ("" if solved else f"solver FAILED ({f['solver'].get('status')}); ")
-            oks.append(solved and ok is not False)
-            words.append(w + said)
-        return all(oks), "; ".join(words)
-
-    def summary(self) -> str:
-        d = self.data
-        ok, words = self.verdict()
-        lines = [f"estimation on {d['data']['file']} ({d['data']['points']} points)",
-                 f"  {'ok' if ok else 'NOT OK'}: {words}"]
-        lines += [f"  FAILED {x}" for x in d.get("failures", [])]
-        for name, f in self.solved.items():
-            lines.append(f"  fit {name} ({f['model']}, residual in {f['residual']}, {f['hessian']} Hessian): "
-                         f"IPOPT {f['solver']['status']} in {f['solver']['iterations']} iterations, "
-                         f"residual std {significant(f['residual_std'])}")
-            for m in f["extra"].get("start_moved", {}).values():
-                lines.append(f"    start moved: {m['why']}")
-            bs = f.get("bootstrap") or {}
-            boot = bs.get("parameters", {}) if bs.get("status") == "ok" else {}
-            for k, p in f["parameters"].items():
-                if not p["free"]:
-                    lines.append(f"    {k:10s} {significant(p['estimate'])} (fixed)")
-                else:
-                    line = (f"    {k:10s} {significant(p['estimate'])} +- {significant(p['standard_error'], 2)}  "
-                            f"{100 * f['confidence']:.0f} % CI [{significant(p['ci_low'])}, "
-                            f"{significant(p['ci_high'])}]")
-                    if k in boot:
-                        line += (f", bootstrap ({bs['samples']} refits) [{significant(boot[k]['ci_low'])}, "
-                                 f"{significant(boot[k]['ci_high'])}]")
-                    lines.append(line)
-                lines += _physical_lines(f, k)
-            if bs.get("status", "ok").startswith("failed"):
-                lines.append(f"    bootstrap {bs['status']}")
-            free = f.get("free") or []
-            corr = f.get("correlation") or []
-            for i, j in itertools.combinations(range(min(len(free), len(corr))), 2):
-                r = corr[i][j]  # null when the covariance is undefined (a singular Hessian)
-                lines.append(f"    correlation of {free[i]} and {free[j]}: {significant(r)}"
-                             + (" (the data hardly separate them)" if r is not None and abs(r) >= 0.9 else ""))
-            lines += _stiffness_lines(f)
-            cc = f.get("cross_check_scipy")
-            if cc:
-                lines.append(f"    scipy least_squares: max |difference| {cc['max_abs_difference']:.1e}")
-        lc = d.get("loss_coefficient")
-        if lc and "status" in lc:
-            lines.append(f"  (4.38) {lc['status']}")
-        elif lc:
-            lines.append(f"  (4.38): {lc['unknown']} = {significant(lc['value'])} [{significant(lc['ci_low'])}, "
-                         f"{significant(lc['ci_high'])}] from alpha = {significant(lc['alpha'])} of fit {lc['fit']} "
-                         f"(nominal alpha {significant(lc['alpha_nominal'])})")
-        lines.append("  validation against the source (Pavlenko 2014, Secs. 4.3.3-4.4):")
-        cf = d.get("closed_forms") or {}
-        for k, v in cf.items():
-            if isinstance(v, dict) and "alpha" in v:
-                lines.append(f"    closed form {k:16s} alpha = {significant(v['alpha'])}, tau_max = "
-                             f"{significant(v['tau_max'])}")
-        if "status" in cf:
-            lines.append(f"    closed forms {cf['status']}")
-        ref = d.get("adequacy_reference")
-        if ref and ref.get("F") is not None:
-            lines.append(f"    the source's curve (alpha {significant(ref['reference']['alpha'])}, tau_max "
-                         f"{significant(ref['reference']['tau_max'])}): sigma1^2 = {ref['sigma1_sq']:.3g}, sigma2^2 = "
-                         f"{ref['sigma2_sq']:.3g}; {decision(ref)[1]} (the source's inverted rule F > F_crit: "
-                         f"{'adequate' if ref['source_rule_adequate'] else 'not adequate'})")
-        return "\n".join(lines)
-
-    def tables(self) -> dict[str, dict]:
-        """estimation_parameters.csv (each row's unit in its column 'unit': the groups and, beside them, the fitted
-        force groups in kN); per fit its points (measured, fitted, residual) and its curve with band, each group
-        headed '[1]' and, where the data's base is known, beside it its physical value headed with its unit."""
-        out = {}
-        cols = ("estimate", "standard_error", "ci_low", "ci_high")
-        rows = {k: [] for k in ("fit", "parameter", "free", *cols, "unit")}
-        for name, f in self.solved.items():
-            for k, p in f["parameters"].items():
-                for col, v in ({"fit": name, "parameter": k, "free": p["free"], "unit": "1"}
-                               | {c: p.get(c) for c in cols}).items():
-                    rows[col].append(v)
-            for key, ph in (f.get("physical") or {}).items():
-                if "estimate" in ph:
-                    q = QUANTITIES.find(f"fits.{name}.physical.{key}.estimate")
-                    for col, v in ({"fit": name, "parameter": key, "free": ph["free"], "unit": q.display}
-                                   | {c: q.shown(ph[c]) if c in ph else None for c in cols}).items():
-                        rows[col].append(v)
-            kind = f.get("load_kind", "tau")
-            pts = self._columns(f, {kind: f["data"]["load"]})
-            cur = self._columns(f, {kind: f["curve"]["load"]})
-            for k in f["data"]:
-                if k != "load":
-                    pts |= self._columns(f, {c: f["data"][k][c] for c in ("measured", "fitted", "residual")}, k)
-            for k in ("u", "q"):
-                cur |= self._columns(f, {c: f["curve"][k][c] for c in ("value", "band_low", "band_high")}, k)
-            out[f"estimation_{name}_points.csv"] = pts
-            out[f"estimation_{name}_curve.csv"] = cur
-        return {"estimation_parameters.csv": rows, **out}
-
-    def _columns(self, f: dict, values: dict, group: str | None = None) -> dict:
-        """CSV columns of one group of the data (``group``, or the load's kind as the key of ``values``): each
-        column of ``values`` headed 'group_column [1]', then, where the base of the group is known, the same
-        columns in their physical unit ('F [kN]', 'h_measured [mm]': the group times its base)."""
-        out, physical = {}, {}
-        base, symbol = COLUMNS[group or next(iter(values))]
-        scale = (f.get("bases") or self.data.get("bases") or {}).get(base)
-        q = QUANTITIES.find(f"bases.{base}")
-        for col, v in values.items():
-            suffix = f"_{col}" if group else ""
-            out[f"{group or col}{suffix} [1]"] = v
-            if is_number(scale) and scale > 0:
-                physical[f"{symbol}{suffix} [{q.display}]"] = [q.shown(x * scale) if is_number(x) else None
-                                                               for x in v]
-        return out | physical
-
-    def draw(self, ax) -> None:
-        """The first fit's first measured variable: data, fitted curve and its confidence band."""
-        name, f = next(iter(self.solved.items()))
-        self._draw_fit(ax, name, f, next(k for k in ("u", "q") if k in f["data"]))
-
-    def _draw_fit(self, ax, name: str, f: dict, k: str) -> None:
-        label = {"u": r"face gap $u = z/z_B$",
-                 "q": r"flow $q = Q/Q_B$ (4.29)" if f["model"] == "traditional_disc" else
-                 rf"flow $q_{{{f['extra'].get('flow_throttle', 'T')}}} = Q/(g_1 p_B)$"}
-        grid = np.asarray(f["curve"]["load"], float)
-        c = f["curve"][k]
-        ax.fill_between(grid, c["band_low"], c["band_high"], color="C0", alpha=0.2,
-                        label=f"{100 * f['confidence']:.0f}% confidence band")
-        ax.plot(grid, c["value"], color="C0", label=f"fit {name}: {_params_text(f)}")
-        ax.plot(np.asarray(f["data"]["load"], float), f["data"][k]["measured"], "ko", ms=4, label="measured")
-        cf = self.data.get("closed_forms") or {}
-        if f["model"] == "traditional_disc":
-            keys = ("static_1p_4_23", "static_2p_4_26") if k == "u" else ("flow_1p_4_35", "flow_2p_4_36")
-            for key, ls in zip(keys, ("--", ":"), strict=True):
-                v = cf.get(key)
-                if v and v.get("alpha") is not None and v.get("tau_max") is not None:
-                    disc = TurbulentDisc(v["alpha"], v["tau_max"])
-                    with np.errstate(invalid="ignore"):
-                        ax.plot(grid, (disc.gap if k == "u" else disc.flow)(grid), ls=ls, color="0.4",
-                                label=f"({key.split('_', 2)[2].replace('_', '.')}): alpha {v['alpha']:.4g}, "
-                                      f"tau_max {v['tau_max']:.4g}")
-        ax.set_ylabel(label[k])
-        self._physical_axis(ax, f, {"u": "gap", "q": "flow"}[k], "face gap z" if k == "u" else "flow Q")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
-
-    def _physical_axis(self, ax, f: dict, base: str, label: str, which: str = "y") -> None:
-        """The physical values beside a group of the data (u = z/z_B ...) on a secondary axis, in their display
-        unit, where the data's base (SI) is known."""
-        value = (f.get("bases") or self.data.get("bases") or {}).get(base)
-        if is_number(value) and value > 0:
-            q = QUANTITIES.find(f"bases.{base}")
-            twin_axis(ax, q.shown(value), f"{label}, {q.display}", which)
-
-    def figures(self) -> dict:
-        """One figure per fit: data, fitted curve, confidence band (and the closed forms' curves for
-        the traditional disc), and the residuals below."""
-        figs = {}
-        for name, f in self.solved.items():
-            parts = [k for k in ("u", "q") if k in f["data"]]
-            fig, axes = new_figure((6.4 * len(parts), 6.4), 2, len(parts), squeeze=False,
-                                   gridspec_kw={"height_ratios": [3, 1]}, sharex="col")
-            x = np.asarray(f["data"]["load"], float)
-            tau = f.get("load_kind", "tau") == "tau"
-            xl = r"load $\tau$" if tau else r"discharge pressure $\psi_1$"
-            for j, k in enumerate(parts):
-                self._draw_fit(axes[0, j], name, f, k)
-                self._physical_axis(axes[0, j], f, "force" if tau else "pressure",
-                                    "axial force F" if tau else "discharge pressure $p_1$", "x")
-                axr = axes[1, j]
-                axr.axhline(0, color="k", lw=0.6)
-                axr.plot(x, f["data"][k]["residual"], "ko", ms=4)
-                axr.set_ylabel("fit - measured")
-                axr.set_xlabel(xl)
-                axr.grid(alpha=0.3)
-            fig.suptitle(f"{self.data['title']}: fit {name} ({f['model']}, residual in {f['residual']})", fontsize=9)
-            figs[f"fig_estimation_{name}.png"] = fig
-        return figs
-
-
-def _physical_lines(f: dict, group: str) -> list[str]:
+def _physical_lines(f: Fit, group: str) -> list[str]:
     """The summary's line of a fitted group in its physical unit (``PHYSICAL``), beside the group's own line."""
     if group not in PHYSICAL:
         return []
     key = PHYSICAL[group][0]
-    ph = (f.get("physical") or {}).get(key) or {}
+    ph = (f.physical or {}).get(key) or {}
     if "estimate" not in ph:
         return [f"    {'':10s} {key}: {ph['status']}"] if "status" in ph else []
     q = QUANTITIES.find(f"fits.x.physical.{key}.estimate")
@@ -358,9 +449,9 @@ def _physical_lines(f: dict, group: str) -> list[str]:
     return [line]
 
 
-def _stiffness_lines(f: dict) -> list[str]:
+def _stiffness_lines(f: Fit) -> list[str]:
     """The summary's line of the fitted disc's axial stiffness at the data's loads, in N/µm at F in kN."""
-    st = (f.get("physical") or {}).get("stiffness")
+    st = (f.physical or {}).get("stiffness")
     if not st or "value" not in st:
         return []
     c, F = QUANTITIES.find("fits.x.physical.stiffness.value"), QUANTITIES.find("fits.x.physical.stiffness.load")
@@ -369,8 +460,8 @@ def _stiffness_lines(f: dict) -> list[str]:
     return [f"    axial stiffness c = -dF/dh of the fitted disc, {c.display} at F in {F.display}: {pairs}"]
 
 
-def _params_text(f: dict) -> str:
-    return ", ".join(f"{k} {p['estimate']:.4g}" for k, p in f["parameters"].items() if p["free"])
+def _params_text(f: Fit) -> str:
+    return ", ".join(f"{k} {p['estimate']:.4g}" for k, p in f.parameters.items() if p["free"])
 
 
 def _device_bases(bases: dict, dev) -> dict:
@@ -448,9 +539,9 @@ def _closed_forms(tau, u, q, group, tau_max: float) -> dict:
     return out
 
 
-def _one_fit(fit, settings, data, bases: dict, device) -> tuple[dict, FitResult]:
-    """One fit of the scene: its results block (with the cross-check, bootstrap and adequacy test)
-    and its FitResult; SolveError when it does not converge or the data do not identify it."""
+def _one_fit(fit, settings, data, bases: dict, device) -> tuple[Fit, FitResult]:
+    """One fit of the scene: its results (with the cross-check, bootstrap and adequacy test) and its FitResult;
+    SolveError when it does not converge or the data do not identify it."""
     group = data.columns.get("group")
     fb = bases
     if fit.model == "device":
@@ -503,7 +594,7 @@ def _one_fit(fit, settings, data, bases: dict, device) -> tuple[dict, FitResult]
     block["physical"] = _physical(block, fb)
     if fit.model == "traditional_disc" and data.has("load") in ("tau", "axial_force"):
         block["physical"]["stiffness"] = _stiffness(res.estimate, np.unique(load), fb)
-    return block, res
+    return Fit.from_dict(plain(block)), res
 
 
 def _stiffness(estimate: dict, loads, bases: dict) -> dict:
@@ -557,23 +648,25 @@ HINTS = {
 }
 
 
-def _failed_block(fit, exc: SolveError) -> dict:
-    """The results block of a fit that failed: its status, IPOPT's status, the last iterate and a hint."""
-    return {"status": "failed", "model": fit.model, "residual": fit.residual, "reason": exc.message,
-            "solver": {"status": exc.status, "success": False,
-                       "iterations": exc.last_iterate.get("iterations")},
-            "last_iterate": {k: v for k, v in exc.last_iterate.items() if k != "iterations"},
-            "hint": HINTS.get(exc.status, "check the initial values and bounds of its parameters")}
+def _failed(fit, exc: SolveError) -> FailedFit:
+    """A fit that failed: its status, IPOPT's status, the last iterate and a hint."""
+    return FailedFit(status="failed", model=fit.model, residual=fit.residual, reason=exc.message,
+                     solver=plain({"status": exc.status, "success": False,
+                                   "iterations": exc.last_iterate.get("iterations")}),
+                     last_iterate=plain({k: v for k, v in exc.last_iterate.items() if k != "iterations"}),
+                     hint=HINTS.get(exc.status, "check the initial values and bounds of its parameters"))
 
 
-def run(settings, device: DeviceParams | None = None, title: str = "") -> EstimationResult:
+def run(settings, data, device: DeviceParams | None = None, title: str = "") -> EstimationResult:
     """Every fit of the scene's ``analyses.estimation`` block, the closed forms, the adequacy tests,
     bootstrap intervals and (4.38).
 
     Parameters
     ----------
     settings : Estimation
-        The validated ``analyses.estimation`` block (its data file is read here).
+        The validated ``analyses.estimation`` block: the fits and what to compute beside them.
+    data : autobal.measurements.Measurements
+        The measurements, read by the caller (``settings.measurements()``): the study reads no file.
     device : DeviceParams, optional
         The device in SI, for fits of the device model.
     title : str
@@ -584,7 +677,6 @@ def run(settings, device: DeviceParams | None = None, title: str = "") -> Estima
     EstimationResult
     """
     t0 = time.perf_counter()
-    data = settings.measurements()
     bases = settings.bases.values()
     role_load = data.has("load")
     group = data.columns.get("group")
@@ -592,16 +684,16 @@ def run(settings, device: DeviceParams | None = None, title: str = "") -> Estima
     for fit in settings.fits:
         try:
             fits[fit.name], solvers[fit.name] = _one_fit(fit, settings, data, bases, device)
-            boot = fits[fit.name].get("bootstrap") or {}
+            boot = fits[fit.name].bootstrap or {}
             if boot.get("status", "").startswith("failed"):
                 failures.append(f"fit {fit.name!r}: bootstrap {boot['status']}")
         except SolveError as exc:
-            fits[fit.name] = _failed_block(fit, exc)
-            failures.append(f"{exc.message} (status {exc.status}); {fits[fit.name]['hint']}")
+            fits[fit.name] = _failed(fit, exc)
+            failures.append(f"{exc.message} (status {exc.status}); {fits[fit.name].hint}")
     if not solvers:
         first = fits[settings.fits[0].name]
         head = "" if len(failures) == 1 else f"all {len(failures)} fits failed: "
-        raise SolveError(head + "; ".join(failures), first["solver"]["status"], first["last_iterate"])
+        raise SolveError(head + "; ".join(failures), first.solver["status"], first.last_iterate)
 
     first_disc = next((f for f in settings.fits if f.model == "traditional_disc"), None)
     closed = None
@@ -642,21 +734,19 @@ def run(settings, device: DeviceParams | None = None, title: str = "") -> Estima
                 "friction_factor": lc.friction_factor,
                 "check_alpha_from_solved": replace(losses, **{lc.unknown: value}).conductance_ratio()}
 
-    diffs = [b["cross_check_scipy"]["max_abs_difference"] for b in fits.values() if "cross_check_scipy" in b]
+    diffs = [b.cross_check_scipy["max_abs_difference"] for b in fits.values()
+             if isinstance(b, Fit) and b.cross_check_scipy is not None]
     n_failed = len(fits) - len(solvers)
     status = f"{n_failed} of {len(fits)} fits failed" if n_failed else "a bootstrap failed" if failures else "ok"
-    block = {
-        "title": title,
-        "data": {"file": data.path.name, "path": str(data.path), "points": data.points, "columns": data.units,
-                 "groups": int(len(np.unique(group))) if group is not None else None, "provenance": data.comments},
-        "bases": bases | {f"{k}_status": "not given in the scene (not needed by its fits)" for k, v in bases.items()
-                          if v is None},
-        "status": status, "failures": failures,
-        "fits": fits, "closed_forms": closed, "adequacy_reference": reference,
-        "loss_coefficient": loss,
-        "accuracy": {"estimate": max(diffs) if diffs else None,
-                     "how": "largest difference of a fitted parameter between IPOPT and scipy least_squares on "
-                            "the same residual" if diffs else "no cross-check for these fits"},
-        "run_time_s": time.perf_counter() - t0,
-    }
-    return EstimationResult(plain(block))
+    return EstimationResult(
+        title=title,
+        data=Data(file=data.path.name, path=str(data.path), points=data.points, columns=plain(data.units),
+                  groups=int(len(np.unique(group))) if group is not None else None, provenance=plain(data.comments)),
+        bases=plain(bases | {f"{k}_status": "not given in the scene (not needed by its fits)"
+                             for k, v in bases.items() if v is None}),
+        status=status, failures=failures, fits=fits, closed_forms=plain(closed), adequacy_reference=plain(reference),
+        loss_coefficient=plain(loss),
+        accuracy={"estimate": plain(max(diffs)) if diffs else None,
+                  "how": "largest difference of a fitted parameter between IPOPT and scipy least_squares on "
+                         "the same residual" if diffs else "no cross-check for these fits"},
+        run_time_s=time.perf_counter() - t0)

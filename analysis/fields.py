@@ -11,18 +11,20 @@ A typed Result (:class:`TypedResult`) and its nested blocks (:class:`Record`) ar
 - a block whose keys are names with units of their own (``coefficients: dict``), declared by the Result's extra
   declarations;
 - what the Result holds for its tables and figures but results.json does not (a curve on its grid, written as
-  CSV), declared with :func:`unsaved`: None in a Result rebuilt by ``from_dict``.
+  CSV), declared with :func:`unsaved`: its default in a Result rebuilt by ``from_dict``.
 
 From the fields come ``to_dict()`` (the results.json block, keys in field order; an :func:`optional` field that
 is None is left out), ``from_dict()`` (its inverse: ``to_dict(from_dict(d)) == d``), :func:`declarations` (the
 Declarations of every key path, hence the ``units`` map, the summary's and the report's headline rows) and
-:func:`key_paths`.  A key renamed in a field breaks ``from_dict`` of an old block (an unknown or missing key is
-an error, not a silent None) and every attribute access of the old name.
+:func:`key_paths`.  Why a value is null (its ``<key>_status`` in results.json) is in the record's ``statuses``,
+filled in by :func:`explained`.  A key renamed in a field breaks ``from_dict`` of an old block (an unknown or
+missing key is an error, not a silent None) and every attribute access of the old name.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import types
 import typing
 from dataclasses import dataclass, field
@@ -30,22 +32,27 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from autobal.analysis.quantities import Declarations, Quantity
-from autobal.analysis.result import Failures, Result, plain
+from autobal.analysis.result import Failures, Result, plain, with_statuses
 
 QUANTITY = "autobal.quantity"  # field metadata: the declaration's arguments
 OMIT = "autobal.omit"  # field metadata: left out of to_dict() when None (a block the analysis did not compute)
 KEY = "autobal.key"  # field metadata: its key in results.json where that is not the field's name
-UNSAVED = "autobal.unsaved"  # field metadata: held by the Result, not in results.json (see unsaved())
+STATUSES = "autobal.statuses"  # field metadata: the record's statuses (why a value is null), not a key of its own
+UNSAVED = "autobal.unsaved"  # field metadata: held in memory only, not in results.json (see unsaved())
+STATUS = "_status"  # the suffix of the key that says why the value of its key is null
 
 #: what a frozen Result still takes after it is made: not its numbers, what a run sets on every Result (the display
 #: units of its scene)
 SETTABLE = ("display_choice",)
 
 
-def record(cls):
+def record(cls=None, *, kw_only: bool = False):
     """``cls`` as a frozen dataclass compared by its results.json block (numpy arrays have no ``==`` a dataclass
-    could use); its fields cannot be assigned, the names of :data:`SETTABLE` can."""
-    cls = dataclass(frozen=True, eq=False)(cls)
+    could use); its fields cannot be assigned, the names of :data:`SETTABLE` can.  ``@record(kw_only=True)``: its
+    fields are keywords of the constructor (a block whose optional keys come before keys it always has)."""
+    if cls is None:
+        return lambda c: record(c, kw_only=kw_only)
+    cls = dataclass(frozen=True, eq=False, kw_only=kw_only)(cls)
     frozen = cls.__setattr__
 
     def __setattr__(self, name, value):
@@ -79,6 +86,13 @@ def quantity(unit: str, symbol: str = "", description: str = "", display: str = 
     return field(metadata=meta)
 
 
+def shared(unit: str, symbol: str = "", description: str = "", display: str = "", *, source: str = "",
+           beside: str | None = None):
+    """A declaration several fields share (their key paths are joined into one Quantity): ``q = shared("1", "u0",
+    "face-gap ratio")``, then ``u0: float = q()`` in each record, ``q(headline=1)``, ``q(optional=True)``."""
+    return functools.partial(quantity, unit, symbol, description, display, source=source, beside=beside)
+
+
 def keyed(key: str, kw_only: bool = False):
     """A field whose key in results.json is ``key``, not its name (a name the Result's API uses otherwise);
     ``kw_only`` as :func:`optional`."""
@@ -92,25 +106,35 @@ def optional(kw_only: bool = False, key: str | None = None):
     return field(default=None, kw_only=kw_only, metadata={OMIT: True} | ({KEY: key} if key else {}))
 
 
-def unsaved():
-    """A field the Result holds for its tables and figures but results.json does not (a curve on its grid, whose
-    CSV the run writes): keyword-only, default None, never in to_dict(), None in a Result rebuilt by from_dict()
-    (and not compared by ``==``, which compares the results.json blocks)."""
-    return field(default=None, kw_only=True, metadata={UNSAVED: True})
+def unsaved(default=None, default_factory=None):
+    """A field the Result holds in memory only, not in its results.json block: what a figure of the run draws
+    that the block does not hold (an IPOPT history, the scene's title); ``from_dict`` gives it its default, and
+    ``==`` does not compare it."""
+    if default_factory is not None:
+        return field(default_factory=default_factory, kw_only=True, repr=False, metadata={UNSAVED: True})
+    return field(default=default, kw_only=True, repr=False, metadata={UNSAVED: True})
 
 
 @record
 class Record:
-    """A block of results.json as a frozen dataclass (see the module's docstring)."""
+    """A block of results.json as a frozen dataclass (see the module's docstring).
+
+    ``statuses`` says why a value is null: field key -> the ``<key>_status`` written beside it (:func:`explained`
+    fills it in as :func:`~autobal.analysis.result.with_statuses` does for a dict)."""
+
+    statuses: dict[str, str] = field(default_factory=dict, kw_only=True, repr=False, metadata={STATUSES: True})
 
     def to_dict(self) -> dict:
-        """The block: the fields in order, records as their blocks, numbers as they are (arrays stay arrays)."""
+        """The block: the fields in order, records as their blocks, numbers as they are (arrays stay arrays); a
+        null's ``<key>_status`` right after its key."""
         out = {}
-        for f in dataclasses.fields(self):
+        for f in _fields(self):
             v = getattr(self, f.name)
-            if f.metadata.get(UNSAVED) or v is None and f.metadata.get(OMIT) or isinstance(v, Failures) and not v:
+            if v is None and f.metadata.get(OMIT) or isinstance(v, Failures) and not v:
                 continue
             out[_key(f)] = _out(v)
+            if _key(f) in self.statuses:
+                out[_key(f) + STATUS] = self.statuses[_key(f)]
         return out
 
     @classmethod
@@ -119,15 +143,15 @@ class Record:
         or lacks (a renamed key is never read as missing)."""
         if not isinstance(block, dict):
             raise TypeError(f"{cls.__name__}: expected a mapping, got {type(block).__name__}")
-        names = [_key(f) for f in dataclasses.fields(cls) if not f.metadata.get(UNSAVED)]
-        unknown = [k for k in block if k not in names]
+        names = [_key(f) for f in _fields(cls)]
+        statuses = {k.removesuffix(STATUS): v for k, v in block.items()
+                    if k not in names and k.endswith(STATUS) and k.removesuffix(STATUS) in names}
+        unknown = [k for k in block if k not in names and k.removesuffix(STATUS) not in statuses]
         if unknown:
             raise KeyError(f"{cls.__name__} has no field {', '.join(map(repr, unknown))}")
         hints = _hints(cls)
-        kwargs = {}
-        for f in dataclasses.fields(cls):
-            if f.metadata.get(UNSAVED):
-                continue
+        kwargs = {"statuses": statuses} if statuses else {}
+        for f in _fields(cls):
             if _key(f) in block:
                 kwargs[f.name] = _in(hints[f.name], block[_key(f)])
             elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
@@ -179,6 +203,42 @@ def _key(f: dataclasses.Field) -> str:
     return f.metadata.get(KEY, f.name)
 
 
+def _fields(rec) -> list[dataclasses.Field]:
+    """The fields of a record (type) that are keys of its block (not its statuses, not an unsaved field)."""
+    return [f for f in dataclasses.fields(rec) if not (f.metadata.get(STATUSES) or f.metadata.get(UNSAVED))]
+
+
+def explained(rec: Record, reasons: dict | None = None, default: str = "no value here (NaN)") -> Record:
+    """``rec`` with a status beside every number that is or holds NaN or None (null in results.json), nested
+    records and blocks alike, as :func:`~autobal.analysis.result.with_statuses` does for a dict: the status is
+    ``reasons[key]``, else the record's own non-empty ``reason``, else ``default``; a status already given, or a
+    field of its own (``<key>_status``), is kept."""
+    reasons = reasons or {}
+    own = getattr(rec, "reason", None) if isinstance(getattr(rec, "reason", None), str) else None
+    names, statuses, changes = [_key(f) for f in _fields(rec)], dict(rec.statuses), {}
+    for f in _fields(rec):
+        v, key = getattr(rec, f.name), _key(f)
+        if isinstance(v, Record):
+            changes[f.name] = explained(v, reasons, default)
+        elif isinstance(v, dict) and v and all(isinstance(x, Record) for x in v.values()):
+            changes[f.name] = {k: explained(x, reasons, default) for k, x in v.items()}
+        elif isinstance(v, list) and v and all(isinstance(x, Record) for x in v):
+            changes[f.name] = [explained(x, reasons, default) for x in v]
+        elif isinstance(v, dict):
+            changes[f.name] = with_statuses(v, reasons, default)
+        elif (v is None and f.metadata.get(OMIT) or isinstance(v, str | bool | Failures) or key in statuses
+              or key + STATUS in names):
+            continue
+        else:
+            try:
+                values = np.asarray(np.nan if v is None else v, float)
+            except (TypeError, ValueError):
+                continue
+            if not np.all(np.isfinite(values)):
+                statuses[key] = reasons.get(key) or own or default
+    return dataclasses.replace(rec, **changes, statuses=statuses)
+
+
 def _hints(cls) -> dict:
     return typing.get_type_hints(cls)
 
@@ -214,9 +274,7 @@ def _walk(cls, prefix: str = ""):
     """(key path, field) of every field of a record type, nested records walked (``*``: a mapping's names,
     ``[]``: list items)."""
     hints = _hints(cls)
-    for f in dataclasses.fields(cls):
-        if f.metadata.get(UNSAVED):
-            continue
+    for f in _fields(cls):
         path, tp = prefix + _key(f), _optional(hints[f.name])
         yield path, f
         inner, sep = tp, "."

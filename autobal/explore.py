@@ -18,7 +18,7 @@ A device-statics scene (``analyses.statics``, no ``device.dynamics``) gets the d
 study's answers: the operating point, the critical discharge pressure p1_kr and barrier margin dp_kr (Q_1 = 0, by
 Newton on the same balances with the pressure as an unknown), the static characteristic over the scene's grid (the
 parametric Newton roots, every stop set) and the study's verdict
-(:meth:`autobal.analysis.statics_study.StaticsResult.verdict`).
+(:func:`autobal.analysis.statics_study.verdict`).
 
 A spin-up scene (``analyses.spinup``) gets the rotor's sliders: its critical speed with the API 684 AF and SM
 (:func:`autobal.analysis.rotor_study.api_margins`, as the spin-up study), the current optimum's speed profile and the
@@ -426,7 +426,7 @@ class StaticsExplorer(DeviceSettings):
     """The what-if computation of a device-statics scene (``analyses.statics``): the operating point, the critical
     discharge pressure p1_kr and barrier margin dp_kr (the inner-seal flow q1 = 0, as the statics study's
     ``critical_exact``), the static characteristic over the scene's discharge ratios and the study's verdict
-    (:meth:`autobal.analysis.statics_study.StaticsResult.verdict`), all by Newton's roots of the parametric balances
+    (:func:`autobal.analysis.statics_study.verdict`), all by Newton's roots of the parametric balances
     (the batch solver of sweeps); the criticals by Brent's method on q1 along psi1 (dpsi) over those roots."""
 
     def __init__(self, source: str | Path):
@@ -560,7 +560,7 @@ class StaticsExplorer(DeviceSettings):
         (no static solution at the operating point); ``message`` says why.  SI inside; a critical that has no value
         is None with ``*_status`` saying why."""
         from autobal.analysis import closed_form
-        from autobal.analysis.statics_study import StaticsResult
+        from autobal.analysis.statics_study import verdict
 
         t0 = time.perf_counter()
         dev, dd, pt = self._setting(values)
@@ -602,11 +602,9 @@ class StaticsExplorer(DeviceSettings):
                 crit[f"{which}_kr_status"] = f"{unit}: {why}"
         out["critical"] = crit
         out["margin_to_p1_kr"] = None if crit["p1_kr"] is None else crit["p1_kr"] - out["p1"]
-        exact = {"psi1": self.psi1, "z0": out["gap"], "Q_1": out["inner_seal_flow"], "dp": out["dp"],
-                 "contact": "r_contact" in pt["_active"]}
-        if reg:
-            exact["regulator_saturated"] = "r_valve" in pt["_active"]
-        out["verdict"] = StaticsResult({"exact": exact, "critical_exact": crit}).verdict()
+        out["verdict"] = verdict(self.psi1, out["gap"], out["inner_seal_flow"], "r_contact" in pt["_active"],
+                                 ("r_valve" in pt["_active"]) if reg else None, out["dp"], crit["dp_kr"],
+                                 crit["psi1_kr"])
         # the sweep's checks, as the report's statics section words them
         first = {what: self.grid[flags.index(True)] for what, flags in (
             ("regulator saturated (valve on its stop)", out["sweep"]["saturated"]),

@@ -118,7 +118,7 @@ def test_a_callers_choice_stands_over_the_scenes_and_blocks_nest():
 
 def test_a_run_summary_in_a_callers_display_units(shipped_run):
     run = shipped_run("pump_pe600_statics")[0]
-    p2 = run["statics"].data["exact"]["p2"]
+    p2 = run["statics"].exact.p2
     assert summary_line(run.summary(), "p2").endswith(f" {significant(p2 / 1e6)} MPa")
     with display_units({"pressure": "bar"}):
         assert summary_line(run.summary(), "p2").endswith(f" {significant(p2 / 1e5)} bar")
@@ -194,7 +194,7 @@ def test_statics_figure_axes_follow_the_choice(shipped_run):
     assert figs["fig_flows.png"].axes[0].get_ylabel().startswith("flow Q, m³/h")
     assert figs["fig_gap.png"].axes[0].get_ylabel().startswith("face gap z, mm")
     assert figs["fig_force_gap.png"].axes[0].get_ylabel().startswith("balancing force F, N")
-    p1 = result.data["exact"]["p1"]
+    p1 = result.exact.p1
     star = [line for line in figs["fig_pressures.png"].axes[0].lines if line.get_marker() == "*"][0]
     assert star.get_xdata()[0] == pytest.approx(p1 / 1e5, rel=1e-9)  # the operating point at p1 in bar
 

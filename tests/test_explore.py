@@ -178,7 +178,7 @@ def assert_statics_equal(live: dict, block: dict, rel: float = 1e-8):
     for key in ("p1_kr", "dp_kr", "psi1_kr", "dpsi_kr"):
         assert live["critical"][key] == pytest.approx(crit[key], rel=rel), key
     assert live["margin_to_p1_kr"] == pytest.approx(crit["p1_kr"] - ex["p1"], rel=rel)
-    assert live["verdict"] == StaticsResult(block).verdict()
+    assert live["verdict"] == StaticsResult.from_dict(block).verdict()
     np.testing.assert_allclose(live["sweep"]["p1"], np.asarray(sw["psi1"]) * block["scales"]["p_B"], rtol=1e-12)
     np.testing.assert_allclose(live["sweep"]["gap"], np.asarray(sw["u"]) * block["scales"]["z_B"], rtol=rel)
     np.testing.assert_allclose(live["sweep"]["leak"], sw["Q_e"], rtol=rel)
@@ -195,7 +195,7 @@ def test_statics_live_numbers_equal_autobal_run_of_the_saved_scene(statics_explo
     live = ex.evaluate(values)
     assert live["status"] == "ok", live["message"]
     block = autobal.run(autobal.load(ex.save(values, tmp_path / "statics.yaml")), out=tmp_path / "run")[
-        "statics"].data
+        "statics"].to_dict()
     assert_statics_equal(live, block)
     # the change moved the numbers: the shipped scene's gap 143.9 µm and p1_kr 39.49 MPa (its own run)
     assert live["critical"]["p1_kr"] > 40e6 and abs(live["gap"] - 143.8646e-6) > 1e-7
@@ -220,7 +220,8 @@ def test_statics_page_of_a_device_without_regulator(tmp_path):
     assert live["status"] == "ok" and not live["has_regulator"] and "psi_cam" not in live["pressures"]
     assert "no regulator" in live["verdict"][1] and live["critical"]["psi1_kr"] > raw["analyses"]["statics"][
         "discharge_ratio"]["stop"]
-    block = autobal.run(autobal.load(ex.save(values, tmp_path / "saved.yaml")), out=tmp_path / "run")["statics"].data
+    block = autobal.run(autobal.load(ex.save(values, tmp_path / "saved.yaml")), out=tmp_path / "run")[
+        "statics"].to_dict()
     assert_statics_equal(live, block)
 
 

@@ -61,9 +61,9 @@ def test_a_failed_fit_makes_the_one_verdict_not_ok(shipped_run):
                                  "solver": {"status": "Maximum_Iterations_Exceeded", "success": False},
                                  "last_iterate": {"alpha": 2.0}, "hint": "raise max_iterations"}
     data["failures"] = ["fit 'static_2p' did not converge (status Maximum_Iterations_Exceeded); raise max_iterations"]
-    ok, words = EstimationResult(data).verdict()
+    ok, words = EstimationResult.from_dict(data).verdict()
     assert not ok and "static_2p (): solver FAILED (Maximum_Iterations_Exceeded)" in words
-    out = EstimationResult(data).summary()
+    out = EstimationResult.from_dict(data).summary()
     assert out.splitlines()[1].startswith("  NOT OK: static_1p (alpha): NOT adequate")
     assert "FAILED fit 'static_2p'" in out
 
@@ -74,5 +74,5 @@ def test_an_undefined_correlation_prints_as_a_dash(shipped_run):
     estimation inputs found): the summary prints '—' and the report leaves the row out, no TypeError."""
     data = copy.deepcopy(shipped_run("rig_table43_fit")[0]["estimation"].to_dict())
     data["fits"]["static_2p"]["correlation"] = [[1.0, None], [None, 1.0]]
-    out = EstimationResult(data).summary()
+    out = EstimationResult.from_dict(data).summary()
     assert "correlation of alpha and tau_max: —" in out and "hardly separate" not in out

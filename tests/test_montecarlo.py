@@ -150,8 +150,7 @@ def test_first_order_variance_matches_monte_carlo(scene, dev):
     for cv, tol in ((0.05, 0.015), (0.005, 0.002)):
         params = {n: Distribution(cv=cv) for n in THESIS}
         s = small(scene, samples=40_000, chunk_size=40_000, discharge_ratio=[0.75], parameters=params)
-        res = mc.run(dev, s, ex.InProcess(progress=False)).data
-        sens = res["sensitivity"]
+        sens = mc.run(dev, s, ex.InProcess(progress=False)).sensitivity
         assert max(sens["finite_difference_max_relative_error"]) < 1e-6
         for k in ("u", "q_T", "Q_T"):
             assert_allclose(sens["std_ratio"][k][0], 1.0, atol=tol + 3 / np.sqrt(2 * 40_000))
@@ -166,13 +165,13 @@ def test_study_is_reproducible_and_seeded(scene, dev):
     a = mc.run(dev, small(scene), ex.InProcess(progress=False))
     b = mc.run(dev, small(scene), ex.InProcess(progress=False))
     c = mc.run(dev, small(scene, seed=1), ex.InProcess(progress=False))
-    assert np.array_equal(a.samples["exact"]["u"], b.samples["exact"]["u"])
-    assert not np.array_equal(a.samples["exact"]["u"], c.samples["exact"]["u"])
-    d = a.data
+    assert np.array_equal(a.raw["exact"]["u"], b.raw["exact"]["u"])
+    assert not np.array_equal(a.raw["exact"]["u"], c.raw["exact"]["u"])
+    u = a.exact["u"]
     # the mean curve is the deterministic one to 0.2 % (Pavlenko (2014): 'expectations coincide with the curves')
-    assert_allclose(d["exact"]["u"]["mean"], d["exact"]["u"]["nominal"], rtol=2e-3 + 3 * 0.07 / np.sqrt(2000))
-    assert d["exact"]["u"]["invalid"].sum() == 0
-    assert d["saturated_fraction"][0] == 0 and d["saturated_fraction"][1] > 0.5
+    assert_allclose(u["mean"], u["nominal"], rtol=2e-3 + 3 * 0.07 / np.sqrt(2000))
+    assert u["invalid"].sum() == 0
+    assert a.saturated_fraction[0] == 0 and a.saturated_fraction[1] > 0.5
     # the Result protocol: typed headline arrays, figures without pyplot, tables as columns
     import matplotlib
     from matplotlib.figure import Figure
@@ -181,7 +180,7 @@ def test_study_is_reproducible_and_seeded(scene, dev):
     figs = a.plot()
     assert list(a.figures()) == ["fig_montecarlo.png", "fig_montecarlo_hist.png"]  # bands; histograms of the samples
     assert all(isinstance(f, Figure) for f in figs) and matplotlib.get_backend() == backend
-    assert_allclose(a.gap_spread, 3 * np.asarray(d["exact"]["u"]["cv"]))
+    assert_allclose(a.gap_spread, 3 * np.asarray(u["cv"]))
     assert set(a.tables()) == {"montecarlo_statics.csv", "montecarlo_sensitivities.csv"}
 
 
@@ -203,9 +202,9 @@ def test_dask_cluster_gives_the_in_process_numbers(scene, dev, cluster, tmp_path
         remote = mc.run(dev, s, exe)
         assert len(exe.client.scheduler_info()["workers"]) == 2
     for part in ("exact", "source"):
-        for k, v in local.samples[part].items():
-            assert np.array_equal(v, remote.samples[part][k], equal_nan=True), (part, k)
-    assert np.array_equal(local.samples["X"], remote.samples["X"])
+        for k, v in local.raw[part].items():
+            assert np.array_equal(v, remote.raw[part][k], equal_nan=True), (part, k)
+    assert np.array_equal(local.raw["X"], remote.raw["X"])
     # the CLI's --scheduler runs the scene's study on the cluster: results.json identical but the executor
     d = yaml.safe_load(scenario.resolve("pump_pe600_montecarlo").read_text())
     d["analyses"]["montecarlo"] |= {"samples": 600, "chunk_size": 200, "discharge_ratio": [1.0]}

@@ -18,6 +18,7 @@ import yaml
 import autobal
 from autobal import report
 from autobal.analysis import frequency
+from autobal.analysis.result import plain
 from autobal.analysis.statics import StaticsSolver
 from autobal.analysis.statics_study import QUANTITIES
 from autobal.parts.device import design
@@ -101,33 +102,45 @@ def test_no_regulator_closed_forms_state_their_assumption_and_it_holds_here(no_r
     exactly that barrier supply, so its exact operating point is the exact ideal-regulator root (2.22) of the
     source (closed_form.pump_quadratic), an independent solution, to round-off."""
     _, res, _ = no_regulator
-    d = res.data
-    ex, cf = d["exact"], d["closed_form"]
+    ex, cf = res.exact, res.closed_form
     text = res.summary()
     assert "ideal regulator" in text and "as the barrier supply of this device (no regulator) does" in text
-    for k in ("psi2_0", "psi3_0", "u0"):
-        assert ex[k] == pytest.approx(cf[k.replace("_0", "") + "_0_quadratic" if k != "u0" else "u0_quadratic"],
-                                      rel=1e-10)
+    assert ex.psi2_0 == pytest.approx(cf.psi2_0_quadratic, rel=1e-10)
+    assert ex.psi3_0 == pytest.approx(cf.psi3_0_quadratic, rel=1e-10)
+    assert ex.u0 == pytest.approx(cf.u0_quadratic, rel=1e-10)
     # the barrier margin is the scene's, held: p_e - p1 = dpsi p_B (Pavlenko 2014, Eq. (2.18))
-    assert ex["dp"] == pytest.approx(d["dpsi"] * d["scales"]["p_B"], rel=1e-12)
-    assert ex["dp"] == pytest.approx(ex["pe"] - ex["p1"], rel=1e-12)
-    assert ex["psi_e0"] == pytest.approx(cf["psi_e0"], rel=1e-14)
+    assert ex.dp == pytest.approx(res.dpsi * res.scales.p_B, rel=1e-12)
+    assert ex.dp == pytest.approx(ex.pe - ex.p1, rel=1e-12)
+    assert ex.psi_e0 == pytest.approx(cf.psi_e0, rel=1e-14)
+
+
+def test_no_regulator_result_round_trips_without_the_regulator_keys(no_regulator):
+    """The typed StaticsResult of a device without a regulator: its block has none of the regulator's keys (the
+    optional fields are left out), comes back equal through results.json, and loads back with the same report."""
+    _, res, out = no_regulator
+    saved = json.loads((out / "results.json").read_text())["statics"]
+    assert not REGULATOR_KEYS & set(saved["exact"]) and "x_B" not in saved["scales"]
+    assert "psi_cam" not in saved["sweep"] and "xi" not in saved["sweep_refined"]
+    back = type(res).from_dict(saved)
+    assert back == res and json.dumps(plain(back.to_dict())) == json.dumps(saved)
+    assert not back.has_regulator and back.exact.x0 is None and back.sweep.regulator_saturated is None
+    done = autobal.load_run(out)
+    assert done["statics"] == res and report.html(out) == (out / report.REPORT).read_text(encoding="utf-8")
 
 
 def test_no_regulator_numbers_beside_the_verdict_agree(no_regulator):
     """The verdict's ratio p1_kr/p1 is the critical row's; the exact critical discharge ratio is where the
     inner-seal flow changes sign (re-solved on either side of it); the critical margin is below the operating one."""
     scene, res, _ = no_regulator
-    d = res.data
-    ex, crit = d["exact"], d["critical_exact"]
+    ex, crit = res.exact, res.critical_exact
     _, words = res.verdict()
-    assert f"reverses at {crit['p1_kr'] / ex['p1']:.3g} × the operating discharge pressure" in words
+    assert f"reverses at {crit.p1_kr / ex.p1:.3g} × the operating discharge pressure" in words
     q = QUANTITIES.find("exact.dp")
-    assert f"operating barrier margin {q.text(ex['dp'])} against the critical {q.text(crit['dp_kr'])}" in words
-    assert 0 < crit["dp_kr"] < ex["dp"]
+    assert f"operating barrier margin {q.text(ex.dp)} against the critical {q.text(crit.dp_kr)}" in words
+    assert 0 < crit.dp_kr < ex.dp
     solver = StaticsSolver(design(scene.device))
-    kr = crit["psi1_kr"]
-    below, above = solver.solve(0.99 * kr, d["dpsi"]), solver.solve(1.01 * kr, d["dpsi"])
+    kr = crit.psi1_kr
+    below, above = solver.solve(0.99 * kr, res.dpsi), solver.solve(1.01 * kr, res.dpsi)
     assert below.flows["1"] > 0 > above.flows["1"]
 
 
@@ -174,8 +187,7 @@ def test_margin_labels_say_operating_and_critical(with_regulator):
     """The shipped pump: p_e - p1 = 12.91 bar at the operating point (dpsi p_B = 0.04 x 32.27 MPa, held by the
     regulator), the critical margin 3.162 bar: each line says which it is."""
     res, out = with_regulator
-    ex = res.data["exact"]
-    assert ex["dp"] == pytest.approx(0.04 * 32.27490e6, rel=1e-9)  # Pavlenko (2014), App. A: dpsi = 0.04
+    assert res.exact.dp == pytest.approx(0.04 * 32.27490e6, rel=1e-9)  # Pavlenko (2014), App. A: dpsi = 0.04
     text = res.summary()
     assert re.search(r"operating barrier margin p_e − p1\s+Δp\s+12\.91 bar$", _line(text, "Δp"))
     assert re.search(r"critical barrier margin p_e − p1 .*Δp_kr\s+3\.162 bar$", _line(text, "Δp_kr"))
@@ -195,13 +207,13 @@ def test_regulated_closed_forms_say_where_the_ideal_regulator_fails(with_regulat
     App. A's supply saturates near psi1 = 1.19): the closed form's 1.73 of (2.32) assumes an ideal regulator, and
     the summary says so beside it."""
     res, _ = with_regulator
-    assert res.data["critical_exact"]["psi1_kr_regulator_saturated"] is True
+    assert res.critical_exact.psi1_kr_regulator_saturated is True
     text = res.summary()
     assert "they assume an ideal regulator (p_e − p1 held at δψ p_B = 12.91 bar)" in text
     row = next(x for x in text.splitlines() if x.split()[:1] == ["psi1_kr"])
     assert "where the ideal regulator does not hold" in row
     assert "regulating" in res.verdict()[1]
-    assert {"xi0", "psi_cam0"} <= set(res.data["closed_form"]) and len(res.figures()["fig_gap.png"].axes) == 2
+    assert None not in (res.closed_form.xi0, res.closed_form.psi_cam0) and len(res.figures()["fig_gap.png"].axes) == 2
 
 
 # --------------------------------------------------------------------------------------------------------------

@@ -197,4 +197,5 @@ def test_the_report_concludes_with_the_same_verdict(guide_fit):
     fitted = sec["tables"][0]
     row = next(r for r in fitted["rows"] if r[1]["text"].startswith("F_max"))
     assert row[0]["text"] == "both" and row[-1]["text"] == "kN" and row[2]["text"] == "92.46"
-    assert EstimationResult(run["estimation"].to_dict()).verdict() == run["estimation"].verdict()
+    assert EstimationResult.from_dict(run["estimation"].to_dict()).verdict() == run[
+        "estimation"].verdict()

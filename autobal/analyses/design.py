@@ -142,36 +142,35 @@ def estimate_seconds(settings: Design) -> float:
 
 def report_section(sec) -> None:
     """Stability-constrained design: the optimum's verdict with its margin to the required decay rate, its
-    certificate, the parameters in display units; the designs under the source's models in the validation part."""
-    from autobal.analysis import design_study as ds  # the verdicts, declarations and validation: one copy each
+    certificate, the parameters in display units; the designs under the source's models in the validation part.
+    Reads the fields of the loaded :class:`~autobal.analysis.design_study.DesignResult` (``sec.result``)."""
+    from autobal.analysis import design_study as ds  # the declarations and the variables: one copy each
     from autobal.analysis.quantities import is_number, significant
     from autobal.report import WHY_UNSTABLE, table, text
 
-    ok, words = ds.verdict(sec.block)
-    sec.conclude(ok, words)
-    sec.verdict(sec.get("status") in ds.SUCCESS, f"IPOPT: {sec.get('status')} ({sec.get('iterations')} iterations)")
-    for q, key, _ in ds.QUANTITIES.headline(sec.block):
-        sec.row(q.description, q.symbol, key)
-    for which in ("nominal", "optimum"):  # keys are the discharge ratios ("0.5"), so read them whole
-        for p, margin in (sec.get(f"{which}.margin") or {}).items():
+    r = sec.result
+    sec.conclude(*r.verdict())
+    sec.verdict(r.status in ds.SUCCESS, f"IPOPT: {r.status} ({r.iterations} iterations)")
+    for q, key, v in r.quantities.headline(r.to_dict()):  # the rows of the fields declared headline
+        sec.row(q.description, q.symbol, key, value=v)
+    for which, design in (("nominal", r.nominal), ("optimum", r.optimum)):  # keys are the discharge ratios ("0.5")
+        for p, margin in design.margin.items():
             if not p.endswith("_status"):
                 sec.row(f"decay rate at ψ1 = {p}, {which} design", "−max Re λ", f"{which}.margin.{p}", value=margin)
-    sec.verdict(*ds.verdict(sec.block, "nominal"))
-    for model, text_ in ds.source_models(sec.block):
+    sec.verdict(*r.verdict("nominal"))
+    for model, text_ in r.source_models():
         sec.validation.append({"ok": None, "text": text_ + (f"; the headline verdict stands: {WHY_UNSTABLE[model]}"
                                                             if "UNSTABLE" in text_ and model in WHY_UNSTABLE else "")})
-    cert = sec.get("certification") or {}
-    if cert:
-        sec.verdict(bool(cert.get("eigenvalues_ok")), "eigenvalues confirm every constraint at the optimum"
-                    if cert.get("eigenvalues_ok") else "eigenvalues do NOT confirm the smooth stability conditions")
-        sec.verdict(not cert.get("beaten"), f"random search: {cert.get('feasible_samples')} of {cert.get('samples')} "
-                    f"samples feasible, best {significant(cert.get('best_sample'))} "
-                    + ("(none better by more than 0.5 %)" if not cert.get("beaten") else "BEATS the optimum"))
-    for a in sec.get("active", []):
-        sec.verdict(None, f"active constraint: {a.get('constraint')} (multiplier {significant(a.get('multiplier'))})")
-    nominal, optimum = sec.get("nominal.values_si") or {}, sec.get("optimum.values_si") or {}
-    rows = []
-    for path, value in optimum.items():
+    cert = r.certification
+    sec.verdict(cert.eigenvalues_ok, "eigenvalues confirm every constraint at the optimum"
+                if cert.eigenvalues_ok else "eigenvalues do NOT confirm the smooth stability conditions")
+    sec.verdict(not cert.beaten, f"random search: {cert.feasible_samples} of {cert.samples} samples feasible, best "
+                f"{significant(cert.best_sample)} "
+                + ("(none better by more than 0.5 %)" if not cert.beaten else "BEATS the optimum"))
+    for a in r.active:
+        sec.verdict(None, f"active constraint: {a.constraint} (multiplier {significant(a.multiplier)})")
+    nominal, rows = r.nominal.values_si, []
+    for path, value in r.optimum.values_si.items():
         q, n = ds.variable(path), nominal.get(path)
         ratio = value / n if is_number(n) and n and is_number(value) else None
         rows.append([text(path), text(q.symbol), text(q.text(n)), text(q.text(value)),

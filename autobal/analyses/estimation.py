@@ -284,7 +284,7 @@ def run(scene, settings: Estimation):
 
     device = adapt(scene.device) if scene.device is not None else None
     with progress.steps(None, "estimation", "IPOPT solve", catch=True):
-        return estimation_study.run(settings, device, scene.title)
+        return estimation_study.run(settings, settings.measurements(), device, scene.title)
 
 
 def estimate_seconds(settings: Estimation) -> float:
@@ -325,50 +325,52 @@ def _adequacy_row(label: str, ad: dict) -> list[dict]:
 
 def report_section(sec) -> None:
     """Least-squares fits with standard errors, bootstrap intervals, parameter correlation and adequacy
-    (Pavlenko 2014, §4.3-4.4), the loss coefficient of (4.38): one verdict over the fits (solved and adequate)."""
+    (Pavlenko 2014, §4.3-4.4), the loss coefficient of (4.38): one verdict over the fits (solved and adequate).
+    Reads the fields of the loaded :class:`~autobal.analysis.estimation_study.EstimationResult` (``sec.result``)."""
     from autobal.analysis.quantities import is_number
-    from autobal.report import cell, get_path, number, table, text
+    from autobal.report import cell, number, table, text
 
+    r = sec.result
     rows, correlations, adequacy, moved = [], [], [], []
-    for fit, f in sec.get("fits", {}).items():
-        boot = get_path(f, "bootstrap.parameters") or {}
-        free = [p for p, v in f.get("parameters", {}).items() if v.get("free")]
+    for fit, f in r.solved.items():  # each cell in the display unit of its key's declaration
+        boot = (f.bootstrap or {}).get("parameters") or {}
+        free = [p for p, v in f.parameters.items() if v.get("free")]
         for pname in free:
-            at = f"fits.{fit}.parameters.{pname}"
-            rows.append([text(fit), text(pname), *(sec.cell(f"{at}.{k}") for k in ("estimate", "standard_error",
-                                                                                    "ci_low", "ci_high")),
-                         *(sec.cell(f"fits.{fit}.bootstrap.parameters.{pname}.{k}") if k in (boot.get(pname) or {})
-                           else text(None) for k in ("ci_low", "ci_high")), text(RATIOS.get(pname, "dimensionless"))])
-        for key, ph in (f.get("physical") or {}).items():  # a fitted force group in its unit, beside the group
+            at, p = f"fits.{fit}.parameters.{pname}", f.parameters[pname]
+            rows.append([text(fit), text(pname), *(sec.cell(f"{at}.{k}", p.get(k)) for k in (
+                "estimate", "standard_error", "ci_low", "ci_high")),
+                *(sec.cell(f"fits.{fit}.bootstrap.parameters.{pname}.{k}", boot[pname][k])
+                  if k in (boot.get(pname) or {}) else text(None) for k in ("ci_low", "ci_high")),
+                text(RATIOS.get(pname, "dimensionless"))])
+        for key, ph in (f.physical or {}).items():  # a fitted force group in its unit, beside the group
             if "estimate" in ph and ph["free"]:
                 at = f"fits.{fit}.physical.{key}"
-                cells = [sec.cell(f"{at}.{k}") if k in ph else text(None) for k in (
+                cells = [sec.cell(f"{at}.{k}", ph[k]) if k in ph else text(None) for k in (
                     "estimate", "standard_error", "ci_low", "ci_high", "bootstrap_ci_low", "bootstrap_ci_high")]
                 rows.append([text(fit), text(f"{key} = {ph['group']} p_B s_B"), *cells, text(cells[0]["unit"])])
-        corr = f.get("correlation") or []
+        corr = f.correlation or []
         for a, b in itertools.combinations(range(len(free)), 2):
-            r = corr[a][b] if a < len(corr) and b < len(corr[a]) else None
-            if is_number(r):
-                correlations.append([text(fit), text(f"{free[a]}, {free[b]}"), cell(r, "1"),
+            c = corr[a][b] if a < len(corr) and b < len(corr[a]) else None
+            if is_number(c):
+                correlations.append([text(fit), text(f"{free[a]}, {free[b]}"), cell(c, "1"),
                                      text("the data hardly separate them: the intervals are wide along the ridge"
-                                          if abs(r) >= 0.9 else "")])
-        moved += [f"{fit}: {m.get('why')}" for m in (get_path(f, "extra.start_moved") or {}).values()]
-        ad = f.get("adequacy") or {}
+                                          if abs(c) >= 0.9 else "")])
+        moved += [f"{fit}: {m.get('why')}" for m in (f.extra.get("start_moved") or {}).values()]
+        ad = f.adequacy or {}
         if "adequate" in ad:
             adequacy.append(_adequacy_row(f"fit {fit}", ad))
-    if sec.get("fits"):
-        from autobal.analysis.estimation_study import EstimationResult  # the verdict's one copy
-
-        sec.conclude(*EstimationResult(sec.block).verdict())
-    level = number(100 * (next(iter(sec.get("fits", {}).values()), {}).get("confidence") or 0.95))
+    if r.fits:
+        sec.conclude(*r.verdict())
+    first = next(iter(r.fits.values()), None)
+    level = number(100 * (first.confidence if first is not None and first.status != "failed" else 0.95))
     sec.tables.append(table(f"Fitted parameters: estimate, standard error, the linearised {level} % confidence "
                             "interval and the residual-bootstrap percentile interval",
                             ["fit", "parameter", "estimate", "standard error", "CI low", "CI high", "bootstrap low",
                              "bootstrap high", "unit"], rows, headline=True, unit_column=True))
-    stiffness = [[text(fit), *(sec.cell(f"fits.{fit}.physical.stiffness.{k}.{i}") for k in ("load", "tau", "value",
-                                                                                          "kappa"))]
-                 for fit, f in sec.get("fits", {}).items()
-                 for i in range(len(get_path(f, "physical.stiffness.value") or []))]
+    stiffness = [[text(fit), *(sec.cell(f"fits.{fit}.physical.stiffness.{k}.{i}", st[k][i]) for k in (
+                      "load", "tau", "value", "kappa"))]
+                 for fit, f in r.solved.items() for st in [(f.physical or {}).get("stiffness") or {}]
+                 for i in range(len(st.get("value") or []))]
     if stiffness:
         sec.tables.append(table("Axial stiffness of the fitted disc c = −dF/dh = κ p_B s_B/h_TB at the data's loads "
                                 "(κ = −dτ/du of Pavlenko 2014, Eq. (4.16))",
@@ -376,11 +378,11 @@ def report_section(sec) -> None:
     if correlations:
         sec.tables.append(table("Correlation of the free parameters (from the covariance at the optimum)",
                                 ["fit", "parameters", "correlation", "meaning"], correlations))
-    ref = sec.get("adequacy_reference") or {}
+    ref = r.adequacy_reference or {}
     if "adequate" in ref:
-        r = ref.get("reference") or {}
-        adequacy.append(_adequacy_row(f"the source's curve (α {number(r.get('alpha'))}, τ_max "
-                                      f"{number(r.get('tau_max'))})", ref))
+        curve = ref.get("reference") or {}
+        adequacy.append(_adequacy_row(f"the source's curve (α {number(curve.get('alpha'))}, τ_max "
+                                      f"{number(curve.get('tau_max'))})", ref))
     if adequacy:
         sec.tables.append(table("Adequacy: Fisher test of the variance about the curve against the scatter within "
                                 "the load groups (Pavlenko 2014, Eqs. (4.14)-(4.15); passed when F ≤ F_crit), and "
@@ -392,12 +394,12 @@ def report_section(sec) -> None:
         sec.validation.append({"ok": None, "text": "the source's text calls F > F_crit adequate (inverted); by its "
                                                    "rule the reference curve would be "
                                                    + ("adequate" if ref["source_rule_adequate"] else "not adequate")})
-    lc = sec.get("loss_coefficient") or {}
+    lc = r.loss_coefficient or {}
     if "value" in lc:
         sec.tables.append(table(f"Loss coefficient {lc.get('unknown')} that the fitted α of {lc.get('fit')} implies "
                                 "(Pavlenko 2014, Eq. (4.38)); dimensionless",
                                 ["unknown", "value", "CI low", "CI high", "nominal", "α fitted", "α nominal"],
-                                [[text(lc.get("unknown")), *(sec.cell(f"loss_coefficient.{k}") for k in (
+                                [[text(lc.get("unknown")), *(sec.cell(f"loss_coefficient.{k}", lc.get(k)) for k in (
                                     "value", "ci_low", "ci_high", "nominal", "alpha", "alpha_nominal"))]]))
         if lc.get("physical") is False:
             sec.warnings.append(f"(4.38): the fitted α implies a negative {lc.get('unknown')}: the loss model does "

@@ -185,39 +185,59 @@ def estimate_seconds(settings: MonteCarlo) -> float:
     return t
 
 
+def _reference_rows(sec, r) -> None:
+    """The headline rows: the face gap and leak at the reference discharge ratio, with their spreads."""
+    from autobal.report import number
+
+    ref = r.reference
+    sec.row("discharge pressure of the reference point", "p1", "reference.p1", value=ref.p1,
+            note=f"ψ1 = p1/p_B = {number(ref.psi1)}")
+    sec.row("face gap, mean", "z̄", "reference.z_mean", value=ref.z_mean)
+    sec.row("face gap, standard deviation", "σ_z", "reference.z_std", value=ref.z_std)
+    sec.row("face-gap spread kσ/mean", "δu", "reference.gap_spread", value=ref.gap_spread,
+            note=f"k = {number(r.band_sigma)}")
+    sec.row("face leak, mean", "Q̄_T", "reference.Q_T_mean", value=ref.Q_T_mean)
+    sec.row("face leak, standard deviation", "σ_Q", "reference.Q_T_std", value=ref.Q_T_std)
+    sec.row("face-leak spread kσ/mean", "δq_T", "reference.leak_spread", value=ref.leak_spread)
+    sec.row("samples with the regulator valve on its stop", "", "reference.saturated_fraction",
+            value=ref.saturated_fraction)
+
+
 def report_section(sec) -> None:
     """Spreads of face gap, pressures and leak over the sampled groups (Pavlenko 2014, ch. 3): the physical values
-    beside the source's groups; its closed forms in the validation part."""
+    beside the source's groups; its closed forms in the validation part.  Reads the fields of the loaded
+    :class:`~autobal.analysis.montecarlo.MonteCarloResult` (``sec.result``)."""
     from autobal.analysis.quantities import significant
-    from autobal.report import SOURCE_MODELS, get_path, has_path, model_name, number, stable_models, table, text
+    from autobal.report import SOURCE_MODELS, model_name, number, stable_models, table, text
 
-    sec.row("samples", "N", "samples")
-    ref = "reference"
-    sec.row("discharge pressure of the reference point", "p1", f"{ref}.p1",
-            note=f"ψ1 = p1/p_B = {number(sec.get(f'{ref}.psi1'))}")
-    sec.row("face gap, mean", "z̄", f"{ref}.z_mean")
-    sec.row("face gap, standard deviation", "σ_z", f"{ref}.z_std")
-    sec.row("face-gap spread kσ/mean", "δu", f"{ref}.gap_spread", note=f"k = {number(sec.get('band_sigma'))}")
-    sec.row("face leak, mean", "Q̄_T", f"{ref}.Q_T_mean")
-    sec.row("face leak, standard deviation", "σ_Q", f"{ref}.Q_T_std")
-    sec.row("face-leak spread kσ/mean", "δq_T", f"{ref}.leak_spread")
-    sec.row("samples with the regulator valve on its stop", "", f"{ref}.saturated_fraction")
-    psi1 = sec.get("psi1", [])
-    rows, src = [], []
-    for i in range(len(psi1)):
-        rows.append([sec.cell(f"psi1.{i}"), sec.cell(f"p1.{i}"), sec.cell(f"dimensional.z.mean.{i}"),
-                     sec.cell(f"dimensional.z.std.{i}"), sec.cell(f"exact.u.spread.{i}"),
-                     sec.cell(f"dimensional.p2.mean.{i}"), sec.cell(f"exact.Q_T.mean.{i}"),
-                     sec.cell(f"exact.Q_T.std.{i}"), sec.cell(f"exact.q_T.spread.{i}"),
-                     sec.cell(f"saturated_fraction.{i}"), sec.cell(f"exact.u.invalid.{i}")])
-        src.append([sec.cell(f"psi1.{i}"), *(sec.cell(f"{part}.{k}.{stat}.{i}") for k in ("u", "q_T")
-                                             for part in ("exact", "source") for stat in ("mean", "spread"))])
+    r = sec.result
+    ref = r.reference
+    sec.row("samples", "N", "samples", value=r.samples)
+    if ref is not None:  # a results.json written before the physical values has none
+        _reference_rows(sec, r)
+    ex, src, dim = r.exact, r.source, r.dimensional
+    rows, validation = [], []
+    for i, p in enumerate(r.psi1):  # each cell in the display unit of its key's declaration
+        if dim is not None:
+            rows.append([sec.cell(f"psi1.{i}", p), sec.cell(f"p1.{i}", r.p1[i]),
+                         *(sec.cell(f"dimensional.{k}.{stat}.{i}", dim[k][stat][i]) for k, stat in (
+                             ("z", "mean"), ("z", "std"))),
+                         sec.cell(f"exact.u.spread.{i}", ex["u"]["spread"][i]),
+                         sec.cell(f"dimensional.p2.mean.{i}", dim["p2"]["mean"][i]),
+                         *(sec.cell(f"exact.{k}.{stat}.{i}", ex[k][stat][i]) for k, stat in (
+                             ("Q_T", "mean"), ("Q_T", "std"), ("q_T", "spread"))),
+                         sec.cell(f"saturated_fraction.{i}", r.saturated_fraction[i]),
+                         sec.cell(f"exact.u.invalid.{i}", ex["u"]["invalid"][i])])
+        validation.append([sec.cell(f"psi1.{i}", p), *(sec.cell(f"{part}.{k}.{stat}.{i}", block[k][stat][i])
+                                                       for k in ("u", "q_T") for part, block in (("exact", ex),
+                                                                                                 ("source", src))
+                                                       for stat in ("mean", "spread"))])
     saturated = [f"ψ1 = {number(p)}: {significant(100 * f, 3)} %" for p, f in
-                 zip(psi1, sec.get("saturated_fraction") or [], strict=False) if f]
+                 zip(r.psi1, r.saturated_fraction, strict=True) if f]
     if saturated:  # one line: the source's closed forms assume an ideal regulator
         sec.warnings.append("samples with the regulator valve on its stop (the closed forms assume an ideal "
                             "regulator): " + ", ".join(saturated))
-    if has_path(sec.block, "dimensional"):
+    if dim is not None:
         sec.tables.append(table("Exact statics over the samples: the physical values (mean, standard deviation) "
                                 "beside the source's groups' spread kσ/mean",
                                 ["ψ1", "p1", "mean z", "std z", "spread u", "mean p2", "mean Q_T", "std Q_T",
@@ -225,24 +245,22 @@ def report_section(sec) -> None:
     sec.validation_tables.append(table("The source's closed forms (ideal regulator, Figs 3.3-3.4) beside the exact "
                                        "statics over the same samples: mean and spread of u = z/z_B and q_T = Q_T/Q_B",
                                        ["ψ1", "u exact", "spread", "u closed form", "spread", "q_T exact", "spread",
-                                        "q_T closed form", "spread"], src))
-    if has_path(sec.block, "reference"):
-        from autobal.analysis.montecarlo import MonteCarloResult  # the verdict's one copy
-
-        sec.conclude(*MonteCarloResult(sec.block).verdict())
+                                        "q_T closed form", "spread"], validation))
+    if ref is not None:
+        sec.conclude(*r.verdict())
     else:  # a results.json written before the physical values
-        invalid = sum(get_path(sec.block, "exact.u.invalid") or [])
-        sec.conclude(not sec.block.get("failures"), f"{invalid} sample solves without a converged exact solution"
+        invalid = sum(ex["u"]["invalid"])
+        sec.conclude(not r.failures(), f"{invalid} sample solves without a converged exact solution"
                      if invalid else "every sample has a converged exact solution")
-    at = sec.get("afc.at") or {}
+    at = (r.afc or {}).get("at") or {}
     if at:
-        model, forcing = sec.get("afc.model"), sec.get("afc.forcing")
+        model, forcing = r.afc["model"], r.afc["forcing"]
         st = stable_models(sec.results).get(model)
         sec.tables.append(table(f"AFC amplitude spread of the {model_name(model)} model under the {forcing} forcing "
-                                f"({sec.get('afc.samples')} samples of {len(sec.get('afc.parameters') or [])} "
-                                "uncertain parameters)", ["where", "ω", "nominal", "mean", "std", "cv"],
-                                [[text(k.replace("_", " ")), *(sec.cell(f"afc.at.{k}.{x}") for x in (
-                                    "omega", "nominal", "mean", "std", "cv"))] for k in at], headline=True))
+                                f"({r.afc['samples']} samples of {len(r.afc['parameters'])} uncertain parameters)",
+                                ["where", "ω", "nominal", "mean", "std", "cv"],
+                                [[text(k.replace("_", " ")), *(sec.cell(f"afc.at.{k}.{x}", v[x]) for x in (
+                                    "omega", "nominal", "mean", "std", "cv"))] for k, v in at.items()], headline=True))
         if model in SOURCE_MODELS:
             sec.warnings.append(f"the AFC spread is computed on the {model_name(model)}, which the stability analysis "
                                 "reports unstable at the pumps' operating points (see the dynamics scenes): a "

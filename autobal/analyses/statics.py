@@ -41,8 +41,10 @@ def run(scene, settings: Statics):
     from autobal.analysis.statics import StaticsSolver
     from autobal.parts.device import design
 
+    r = settings.discharge_ratio
+    spec = statics_study.Spec(settings.operating_ratio, r.start, r.stop, r.points, settings.force_gap_points)
     with progress.steps(None, "statics", "IPOPT solve", catch=True):
-        return statics_study.run(StaticsSolver(design(scene.device)), settings, scene.title)
+        return statics_study.run(StaticsSolver(design(scene.device)), spec, scene.title)
 
 
 def estimate_seconds(settings: Statics) -> float:
@@ -67,55 +69,49 @@ def accuracy(scene, settings: Statics):
 
 
 def report_section(sec) -> None:
-    """Operating point, criticals, saturation and contact (Pavlenko 2014, ch. 2.2-2.3)."""
+    """Operating point, criticals, saturation and contact (Pavlenko 2014, ch. 2.2-2.3); reads the fields of the
+    loaded :class:`~autobal.analysis.statics_study.StaticsResult` (``sec.result``)."""
     from autobal.report import cell, number, table, text
 
-    sec.row("discharge pressure ratio at the operating point", "ψ1 = p1/p_B", "exact.psi1")
-    sec.row("discharge pressure", "p1", "exact.p1")
-    sec.row("base pressure", "p_B", "scales.p_B")
-    sec.row("face gap", "z0", "exact.z0")
-    sec.row("face gap ratio", "u0 = z0/z_B", "exact.u0")
-    sec.row("valve opening", "x0", "exact.x0")
-    sec.row("valve opening ratio", "ξ0 = x0/x_B", "exact.xi0")
-    for k, sym, what in (("p2", "p2", "disc chamber"), ("p3", "p3", "cavity behind the disc"),
-                         ("pe", "p_e", "barrier chamber"), ("pcam", "p_cam", "valve chamber")):
-        sec.row(f"{what} pressure", sym, f"exact.{k}")
-    sec.row("barrier flow", "Q_e", "exact.Q_e")
-    sec.row("face-throttle leak", "Q_T", "exact.Q_T")
-    sec.row("inner-seal flow", "Q_1", "exact.Q_1")
-    sec.row("base flow of the source's flow ratios q", "Q_B", "closed_form.Q_B")
-    sec.row("axial stiffness of the balancing force", "c_s", "exact.c_s")
-    sec.row("axial stiffness of the balancing force (group)", "κ_s", "exact.kappa_s")
-    sec.row("critical discharge pressure (inner-seal flow reverses)", "p1_kr", "critical_exact.p1_kr")
-    sec.row("critical discharge ratio", "ψ1_kr", "critical_exact.psi1_kr")
-    sec.row("operating barrier margin p_e − p1", "Δp", "exact.dp")
-    sec.row("critical barrier margin p_e − p1 (inner-seal flow reverses)", "Δp_kr", "critical_exact.dp_kr")
-    sec.row("critical barrier margin ratio", "δψ_kr", "critical_exact.dpsi_kr")
-    ex, sw = sec.get("exact", {}), sec.get("sweep", {})
-    sat, contact, psi1 = sw.get("regulator_saturated", []), sw.get("contact", []), sw.get("psi1", [])
-    from autobal.analysis.statics_study import StaticsResult  # the verdict's one copy
-
-    if {"contact", "Q_1", "z0", "psi1"} <= set(ex):
-        sec.conclude(*StaticsResult(sec.block).verdict())  # the operating point: regulator, contact, inner seal
-    if any(sat):
-        first = psi1[sat.index(True)]
+    r = sec.result
+    ex, cf, crit, sc = r.exact, r.closed_form, r.critical_exact, r.scales
+    for label, symbol, key, v in (
+            ("discharge pressure ratio at the operating point", "ψ1 = p1/p_B", "exact.psi1", ex.psi1),
+            ("discharge pressure", "p1", "exact.p1", ex.p1),
+            ("base pressure", "p_B", "scales.p_B", sc.p_B),
+            ("face gap", "z0", "exact.z0", ex.z0),
+            ("face gap ratio", "u0 = z0/z_B", "exact.u0", ex.u0),
+            ("valve opening", "x0", "exact.x0", ex.x0),
+            ("valve opening ratio", "ξ0 = x0/x_B", "exact.xi0", ex.xi0),
+            ("disc chamber pressure", "p2", "exact.p2", ex.p2),
+            ("cavity behind the disc pressure", "p3", "exact.p3", ex.p3),
+            ("barrier chamber pressure", "p_e", "exact.pe", ex.pe),
+            ("valve chamber pressure", "p_cam", "exact.pcam", ex.pcam),
+            ("barrier flow", "Q_e", "exact.Q_e", ex.Q_e),
+            ("face-throttle leak", "Q_T", "exact.Q_T", ex.Q_T),
+            ("inner-seal flow", "Q_1", "exact.Q_1", ex.Q_1),
+            ("base flow of the source's flow ratios q", "Q_B", "closed_form.Q_B", cf.Q_B),
+            ("axial stiffness of the balancing force", "c_s", "exact.c_s", ex.c_s),
+            ("axial stiffness of the balancing force (group)", "κ_s", "exact.kappa_s", ex.kappa_s),
+            ("critical discharge pressure (inner-seal flow reverses)", "p1_kr", "critical_exact.p1_kr", crit.p1_kr),
+            ("critical discharge ratio", "ψ1_kr", "critical_exact.psi1_kr", crit.psi1_kr),
+            ("operating barrier margin p_e − p1", "Δp", "exact.dp", ex.dp),
+            ("critical barrier margin p_e − p1 (inner-seal flow reverses)", "Δp_kr", "critical_exact.dp_kr",
+             crit.dp_kr),
+            ("critical barrier margin ratio", "δψ_kr", "critical_exact.dpsi_kr", crit.dpsi_kr)):
+        sec.row(label, symbol, key, value=v)  # the field's value; its key names its declaration
+    sec.conclude(*r.verdict())  # the operating point: regulator, contact, inner seal
+    first = r.saturated_from()
+    if first is not None:
         sec.verdict(False, f"regulator saturated (valve on its stop) from ψ1 = {number(first)} in the sweep")
         sec.warnings.append(f"regulator saturation from ψ1 = {number(first)}: the closed forms assume an ideal "
                             "regulator and are not valid there")
-    if any(contact):
-        sec.verdict(False, f"face contact in the sweep from ψ1 = {number(psi1[contact.index(True)])}")
-    cf = sec.get("closed_form", {})
+    if r.contact_from() is not None:
+        sec.verdict(False, f"face contact in the sweep from ψ1 = {number(r.contact_from())}")
     rows = []
-    for key, sym, path in (("u0", "u0", "exact.u0"), ("xi0", "ξ0", "exact.xi0"), ("psi2_0", "ψ20", "exact.psi2_0"),
-                           ("psi3_0", "ψ30", "exact.psi3_0"), ("psi_e0", "ψ_e0", "exact.psi_e0"),
-                           ("psi_cam0", "ψ_cam0", "exact.psi_cam0"), ("kappa_s", "κ_s", "exact.kappa_s"),
-                           ("psi1_kr", "ψ1_kr", "critical_exact.psi1_kr"),
-                           ("dpsi_kr", "δψ_kr", "critical_exact.dpsi_kr"), ("Q_e", "Q_e", "exact.Q_e")):
-        if key in cf:
-            u = sec.unit(path) or "?"
-            rows.append([text(sym), cell(cf[key], u), cell(sec.get(path), u)])
-    if rows:
-        note = StaticsResult(sec.block).closed_form_note() if {"dpsi", "scales"} <= set(sec.block) else \
-            "they assume an ideal regulator"
-        sec.tables.append(table(f"The source's closed forms (Eqs. (2.24)-(2.36)) beside the exact IPOPT solution of "
-                                f"the full static system: {note}", ["quantity", "closed form", "exact"], rows))
+    for key, _, symbol, closed, exact in r.compared():
+        unit = sec.unit(key) or "?"
+        rows.append([text(symbol), cell(closed, unit), cell(exact, unit)])
+    sec.tables.append(table(f"The source's closed forms (Eqs. (2.24)-(2.36)) beside the exact IPOPT solution of "
+                            f"the full static system: {r.closed_form_note()}", ["quantity", "closed form", "exact"],
+                            rows))
