@@ -28,11 +28,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from autobal.analysis.quantities import Declarations, Quantity
-from autobal.analysis.result import Failures, Result, plain
+from autobal.analysis.result import Failures, Result, plain, with_statuses
 
 QUANTITY = "autobal.quantity"  # field metadata: the declaration's arguments
 OMIT = "autobal.omit"  # field metadata: left out of to_dict() when None (a block the analysis did not compute)
 KEY = "autobal.key"  # field metadata: its key in results.json where that is not the field's name
+RUN = "autobal.run"  # field metadata: what the run holds beyond results.json (not in to_dict(), None when loaded)
 
 #: what a frozen Result still takes after it is made: not its numbers, what a run sets on every Result (the display
 #: units of its scene)
@@ -81,9 +82,17 @@ def keyed(key: str):
     return field(metadata={KEY: key})
 
 
-def optional():
-    """A field the analysis may not compute (a map, a scan): default None, and then not in results.json."""
-    return field(default=None, metadata={OMIT: True})
+def optional(present_with: str | None = None):
+    """A field the analysis may not compute (a map, a scan): default None, and then not in results.json; with
+    ``present_with``, the name of another field of the record, it is there (null) whenever that field is not None
+    (the earliest arrival under a peak limit: none when the ramp keeps the limit, no key without a limit)."""
+    return field(default=None, metadata={OMIT: present_with or True})
+
+
+def run_only():
+    """A field the run holds beyond its results.json block (the re-simulations its figures draw, samples its CSV
+    tables list): not in ``to_dict()`` and not compared; None in a Result loaded from results.json."""
+    return field(default=None, kw_only=True, metadata={RUN: True})
 
 
 @record
@@ -95,7 +104,10 @@ class Record:
         out = {}
         for f in dataclasses.fields(self):
             v = getattr(self, f.name)
-            if v is None and f.metadata.get(OMIT) or isinstance(v, Failures) and not v:
+            omit = f.metadata.get(OMIT)
+            if v is None and isinstance(omit, str):
+                omit = getattr(self, omit) is None
+            if f.metadata.get(RUN) or v is None and omit or isinstance(v, Failures) and not v:
                 continue
             out[_key(f)] = _out(v)
         return out
@@ -106,7 +118,7 @@ class Record:
         or lacks (a renamed key is never read as missing)."""
         if not isinstance(block, dict):
             raise TypeError(f"{cls.__name__}: expected a mapping, got {type(block).__name__}")
-        names = [_key(f) for f in dataclasses.fields(cls)]
+        names = [_key(f) for f in dataclasses.fields(cls) if not f.metadata.get(RUN)]
         unknown = [k for k in block if k not in names]
         if unknown:
             raise KeyError(f"{cls.__name__} has no field {', '.join(map(repr, unknown))}")
@@ -131,9 +143,31 @@ class TypedResult(Record, Result):
     failures a field (:class:`~autobal.analysis.result.Failures`; in results.json only when there are some)."""
 
     failures: Failures = field(default=Failures(), kw_only=True)
+    #: key -> why its value may be null; when set, ``to_dict()`` writes a ``<key>_status`` beside every null of the
+    #: block (:func:`~autobal.analysis.result.with_statuses`) and ``from_dict()`` reads the block without them: a
+    #: status is made from the numbers, not stored
+    null_reasons: typing.ClassVar[dict | None] = None
 
     def __post_init__(self):
         object.__setattr__(self, "failures", Failures(self.failures))
+
+    def to_dict(self) -> dict:
+        out = super().to_dict()
+        return out if self.null_reasons is None else with_statuses(out, self.null_reasons)
+
+    @classmethod
+    def from_dict(cls, block: dict):
+        return super().from_dict(block if cls.null_reasons is None else _without_statuses(block))
+
+
+def _without_statuses(block):
+    """``block`` without the ``<key>_status`` beside a key (:func:`~autobal.analysis.result.with_statuses`'s)."""
+    if isinstance(block, dict):
+        return {k: _without_statuses(v) for k, v in block.items()
+                if not (k.endswith("_status") and isinstance(v, str) and k[:-7] in block)}
+    if isinstance(block, list):
+        return [_without_statuses(v) for v in block]
+    return block
 
 
 def _out(v):

@@ -17,7 +17,8 @@ from autobal.analysis.result import Result, new_figure, speed_axis, unit_axis, w
 from autobal.ocp import time_optimal as to
 from autobal.ocp.drive_profile import drive_table
 from autobal.ocp.problem import PEAK_KEY, SpinupOcp
-from autobal.ocp.robust_study import PEAK_SYMBOL, deflection_of, peak_text
+from autobal.ocp.robust_study import PEAK_SYMBOL, deflection_of
+from autobal.ocp.robust_study import peak_text as _peak_text
 from autobal.ocp.solve import TIE
 from autobal.ocp.spinup_study import deflection_axis
 from autobal.ocp.transcription import DirectCollocation
@@ -202,6 +203,11 @@ class TimeOptimalResult(Result):
             a.legend(fontsize=6, ncols=2)
         fig2.suptitle(title, fontsize=8)
         return {f"{self.name}_front.png": fig, f"{self.name}_profiles.png": fig2}
+
+
+def peak_text(d: dict, x) -> str:
+    """A peak of the block as read (:func:`autobal.ocp.robust_study.peak_text`)."""
+    return _peak_text(x, d.get("peak_unit", "1"), d.get("eccentricity_m"))
 
 
 def verdict(d: dict) -> tuple[bool | None, str]:

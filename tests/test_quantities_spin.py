@@ -170,14 +170,14 @@ def test_a_failed_solve_or_a_worse_optimum_is_not_ok():
 
 
 def test_robust_verdict_never_compares_with_a_ramp_outside_the_drive_limits():
-    prof = {"robust": {"validation_worst_over_e": 17.4}, "nominal": {"validation_worst_over_e": 23.1},
-            "ramp": {"validation_worst_over_e": 15.0, "within_drive_limits": False}}
-    d = {"profiles": prof, "validation_samples": 1000, "eccentricity_m": 1e-4}
-    ok, words = robust_study.verdict(d)
+    prof = {"robust": {"label": "robust", "validation_worst_over_e": 17.4},
+            "nominal": {"label": "nominal", "validation_worst_over_e": 23.1},
+            "ramp": {"label": "ramp", "validation_worst_over_e": 15.0, "within_drive_limits": False}}
+    ok, words = robust_study.verdict(robust_study.Profiles.from_dict(prof), 1000, "1", 1e-4)
     assert ok and words.startswith("worst peak over 1000 validation rotors: robust 17.40 e (1.740 mm)")
     assert words.endswith("(outside the drive limits, not compared)")
     prof["ramp"]["within_drive_limits"] = True
-    assert robust_study.verdict(d)[0] is False
+    assert robust_study.verdict(robust_study.Profiles.from_dict(prof), 1000, "1", 1e-4)[0] is False
 
 
 def test_time_optimal_verdict_is_the_earliest_arrival_under_the_limit():

@@ -124,12 +124,12 @@ def test_robust_profile_beats_nominal_optimum_and_every_ramp_on_1000_rotors():
     assert w["robust"] < w["nominal"]
     assert w["robust"] < w["ramp"]
     assert res.worst_design["robust"] < min(res.worst_design["nominal"], res.worst_design["ramp"])
-    assert all(r["validation_worst_over_e"] > w["robust"] for r in res.data["ramps"])
-    assert res.data["validation_check_rel_error"] < 2e-4
-    assert res.data["resimulation_rel_error"] < 0.01  # 100 ms control step
-    split = res.data["time_split"]  # the parts do not overlap: they add up to the wall time, none negative
-    assert sum(split.values()) == pytest.approx(res.data["wall_time_s"], rel=1e-9) and min(split.values()) >= 0
-    assert split["robust_build_time_s"] == res.data["build_time_s"]
+    assert all(r.validation_worst_over_e > w["robust"] for r in res.ramps)
+    assert res.validation_check_rel_error < 2e-4
+    assert res.resimulation_rel_error < 0.01  # 100 ms control step
+    split = res.time_split  # the parts do not overlap: they add up to the wall time, none negative
+    assert sum(split.values()) == pytest.approx(res.wall_time_s, rel=1e-9) and min(split.values()) >= 0
+    assert split["robust_build_time_s"] == res.build_time_s
     assert res.nominal_runs["nominal"].peak_delta < res.nominal_runs["robust"].peak_delta  # the price on nominal
     assert set(res.figures()) == {"spinup_robust_profiles.png", "spinup_robust_distribution.png",
                                   "spinup_robust_scatter.png"}
