@@ -11,6 +11,10 @@ A typed Result (:class:`TypedResult`) and its nested blocks (:class:`Record`) ar
 - a block whose keys are names with units of their own (``coefficients: dict``), declared by the Result's extra
   declarations.
 
+A field made with :func:`run_only` holds what the run has beyond results.json (re-simulations, samples): not in
+``to_dict()``, not compared, None when loaded.  A Result whose block has a ``<key>_status`` beside each null sets
+``null_reasons`` (:class:`TypedResult`): the statuses are made from the nulls by ``to_dict()``, not stored.
+
 From the fields come ``to_dict()`` (the results.json block, keys in field order; an :func:`optional` field that
 is None is left out), ``from_dict()`` (its inverse: ``to_dict(from_dict(d)) == d``), :func:`declarations` (the
 Declarations of every key path, hence the ``units`` map, the summary's and the report's headline rows) and

@@ -7,6 +7,7 @@ gain against the best ramp within the drive limits and whether it brakes."""
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 import math
 import re
@@ -181,14 +182,15 @@ def test_robust_verdict_never_compares_with_a_ramp_outside_the_drive_limits():
 
 
 def test_time_optimal_verdict_is_the_earliest_arrival_under_the_limit():
-    d = {"deflection_limit_over_e": 13.0, "peak_deflection_over_e": 12.99, "arrival_time_s": 4.3, "front": [],
-         "ramp_arrival_time_s": 4.25, "ramp_peak_over_e": 14.15, "eccentricity_m": 1e-4, "final_speed_rad_s": 210.0,
-         "monotone": True}
-    ok, words = time_optimal_study.verdict(d)
+    res = time_optimal_study.TimeOptimalResult(
+        "t", "collocation", "1", eccentricity_m=1e-4, horizon_s=6.0, ramp_label="ramp", final_speed_rad_s=210.0,
+        ramp_arrival_time_s=4.25, ramp_peak=14.15, front=[], monotone=True, build_time_s=0.0, solve_time_s=0.0,
+        resimulation_rel_error=0.0, accuracy={}, deflection_limit=13.0, arrival_time_s=4.3, peak_deflection=12.99)
+    ok, words = res.verdict()
     assert ok and words.startswith("earliest arrival at 210.0 rad/s (2005 rpm) with the peak ≤ 13.00 e (1.300 mm): "
                                    "4.300 s, peak 12.99 e (1.299 mm) (0.07692 % below the limit)")
-    assert time_optimal_study.verdict(d | {"peak_deflection_over_e": 13.5})[0] is False
-    ok, words = time_optimal_study.verdict(d | {"deflection_limit_over_e": None, "monotone": False})
+    assert dataclasses.replace(res, peak_deflection=13.5).verdict()[0] is False
+    ok, words = dataclasses.replace(res, deflection_limit=None, monotone=False).verdict()
     assert ok is False and "NOT monotone" in words
 
 

@@ -151,17 +151,17 @@ def test_time_optimal_front_is_monotone_and_every_point_resimulates_within_half_
     res = time_optimal_study.run(ocp, DirectCollocation(120), 4, multistart=False)
     t, pk = res.arrival_times, res.peaks
     assert np.all(np.diff(t) > 0)
-    steps = np.diff(np.concatenate([[res.data["ramp_peak_over_e"]], pk]))
+    steps = np.diff(np.concatenate([[res.ramp_peak], pk]))
     assert np.all(steps <= 1e-4 * pk)
     assert steps[0] < -0.01 * pk[0]  # the first deadline after the ramp lowers the peak by more than 1 %
-    assert res.data["monotone"]
-    for p in res.data["front"]:
-        assert p["resimulation_rel_error"] < 0.005
-    T, lower = res.data["arrival_time_s"], res.data["arrival_time_lower_bound_s"]
-    peak = res.data["peak_deflection_over_e"]
+    assert res.monotone
+    for p in res.front:
+        assert p.resimulation_rel_error < 0.005
+    T, lower = res.arrival_time_s, res.arrival_time_lower_bound_s
+    peak = res.peak_deflection
     assert peak <= 13.0
     assert peak >= 13.0 * (1 - 1e-3) or T - lower < 0.01
-    above = np.concatenate([[res.data["ramp_arrival_time_s"]], t[pk > 13.0]])
+    above = np.concatenate([[res.ramp_arrival_time_s], t[pk > 13.0]])
     assert above.max() <= lower < T <= t[pk <= 13.0].min()
     assert res.limited.resimulation_rel_error < 0.005
 

@@ -111,3 +111,38 @@ def test_ross_spinup_robust_round_trip_and_report(shipped_run):
     assert "eccentricity_m" not in d and d["nodes"] == res.nodes
     assert d["ramps"][0]["within_drive_limits_status"].startswith("the modal rotor's problem has no drive")
     _loads_back(folder, "ross_spinup_robust", res)
+
+
+@fields.record
+class _Arrival(fields.Record):
+    time_s: float = fields.quantity("s", "T", "arrival")
+
+
+@fields.record
+class _Toy(fields.TypedResult):
+    limit: float | None = fields.quantity("1", "", "a limit; None: none")
+    peak: float = fields.quantity("1", "", "a peak")
+    arrival: _Arrival | None = fields.optional(present_with="limit")
+    trace: list | None = fields.run_only()
+    null_reasons = {"limit": "no limit given", "arrival": "the ramp keeps the limit"}
+
+
+def test_run_only_fields_statuses_and_a_null_present_with_another_field():
+    """fields.py as the spin-up Results use it: a run-only field is neither in the block nor compared and is None
+    when loaded; a null gets its status from null_reasons going out and loses it coming back; an optional field
+    present_with another is null (with its status) when that one is set, and absent when it is not."""
+    a = _Toy(limit=2.0, peak=1.5, arrival=None, trace=[1, 2, 3])
+    d = a.to_dict()
+    assert d == {"limit": 2.0, "peak": 1.5, "arrival": None, "arrival_status": "the ramp keeps the limit"}
+    back = _Toy.from_dict(d)
+    assert back == a and back.trace is None and back.to_dict() == d
+    b = _Toy(limit=None, peak=1.5)
+    assert b.to_dict() == {"limit": None, "limit_status": "no limit given", "peak": 1.5}
+    assert _Toy.from_dict(b.to_dict()) == b
+    c = _Toy(limit=2.0, peak=float("nan"), arrival=_Arrival(3.0))
+    assert plain(c.to_dict()) == {"limit": 2.0, "peak": None, "peak_status": "no value here (NaN)",
+                                  "arrival": {"time_s": 3.0}}
+    assert _Toy.from_dict(plain(c.to_dict())) == c and c != b
+    with pytest.raises(KeyError, match="_Toy has no field 'trace'"):
+        _Toy.from_dict(d | {"trace": [1]})
+    assert fields.key_paths(_Toy) == ["limit", "peak", "arrival.time_s"]
