@@ -163,6 +163,12 @@ class TypedResult(Record, Result):
     def from_dict(cls, block: dict):
         return super().from_dict(block if cls.null_reasons is None else _without_statuses(block))
 
+    @classmethod
+    def from_folder(cls, block: dict, folder=None):
+        """The Result of its results.json block and of the files its run wrote in ``folder`` (None: the block
+        alone): a Result whose run-only fields its files hold reads them here (``autobal.load_run``, the report)."""
+        return cls.from_dict(block)
+
 
 def _without_statuses(block):
     """``block`` without the ``<key>_status`` beside a key (:func:`~autobal.analysis.result.with_statuses`'s)."""

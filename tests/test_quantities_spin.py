@@ -151,22 +151,23 @@ def test_spinup_verdict_is_the_peak_the_gain_and_braking(datasheet):
     assert "Solve_Succeeded" not in main["text"]
     assert run["spinup"].verdict() == (True, main["text"])
     headline = {r[0]["text"]: (r[2]["text"], r[3]["text"]) for r in sec["tables"][0]["rows"]}
-    assert headline["largest drive power"] == (significant(d["max_power_W"] / 1e3), "kW")
+    assert headline["largest drive power of the optimum"] == (significant(d["max_power_W"] / 1e3), "kW")
     assert headline["peak deflection of the optimum over the eccentricity"][1] == "dimensionless"
 
 
 def test_a_failed_solve_or_a_worse_optimum_is_not_ok():
-    d = {"peak_deflection_m": 1.2e-3, "peak_deflection_over_e": 12.0, "gain_vs_best_feasible_ramp_pct": -5.0,
-         "baseline_ramp_key": "constant_ramp", "baselines": {"constant_ramp": {"label": "constant ramp"}},
-         "brakes": True, "min_torque_N_m": -120.0, "within_drive_limits": True, "status": "Solve_Succeeded"}
-    ok, words = spinup_study.verdict(d)
+    from tests.test_typed_ocp import spinup_result
+
+    res = spinup_result(peak_deflection_m=1.2e-3, peak_deflection_over_e=12.0, gain_vs_best_feasible_ramp_pct=-5.0,
+                        brakes=True, min_torque_N_m=-120.0, within_drive_limits=True)
+    ok, words = res.verdict()
     assert ok and words.endswith("it brakes (smallest torque -120.0 N·m)") and "1.200 mm" in words
-    ok, words = spinup_study.verdict(d | {"status": "Maximum_Iterations_Exceeded"})
+    ok, words = dataclasses.replace(res, status="Maximum_Iterations_Exceeded").verdict()
     assert ok is False and words.startswith("NLP solver Maximum_Iterations_Exceeded: peak deflection 1.200 mm")
-    assert spinup_study.verdict(d | {"gain_vs_best_feasible_ramp_pct": 3.0})[0] is False
-    ok, words = spinup_study.verdict(d | {"gain_vs_best_feasible_ramp_pct": None, "baseline_ramp_key": None})
+    assert dataclasses.replace(res, gain_vs_best_feasible_ramp_pct=3.0).verdict()[0] is False
+    ok, words = dataclasses.replace(res, gain_vs_best_feasible_ramp_pct=None, baseline_ramp_key=None).verdict()
     assert "no ramp keeps the drive limits: no gain is quoted" in words
-    ok, words = spinup_study.verdict(d | {"within_drive_limits": False, "violated": ["power limit"]})
+    ok, words = dataclasses.replace(res, within_drive_limits=False, violated=["power limit"]).verdict()
     assert ok is False and "drive limits EXCEEDED (power limit)" in words
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import json
 
+import numpy as np
 import pytest
 
 import autobal
@@ -18,6 +19,8 @@ from autobal.analysis import fields
 from autobal.analysis.result import plain
 from autobal.ocp import robust_study
 from autobal.ocp.robust_study import ModalRobustResult, Profiles, RobustResult
+from autobal.ocp.spinup_study import Baseline, Dwell, Rotor, SpinupResult
+from autobal.ocp.time_optimal_study import ModalTimeOptimalResult, TimeOptimalResult
 
 
 def _round_trip(res, cls):
@@ -146,3 +149,89 @@ def test_run_only_fields_statuses_and_a_null_present_with_another_field():
     with pytest.raises(KeyError, match="_Toy has no field 'trace'"):
         _Toy.from_dict(d | {"trace": [1]})
     assert fields.key_paths(_Toy) == ["limit", "peak", "arrival.time_s"]
+
+
+@pytest.mark.cli
+@pytest.mark.slow
+@pytest.mark.parametrize("name, analysis, cls", [
+    ("spinup_time_optimal", "spinup_time_optimal", TimeOptimalResult),
+    pytest.param("ross_spinup_time_optimal", "ross_spinup_time_optimal", ModalTimeOptimalResult,
+                 marks=pytest.mark.extra("ross"))])
+def test_time_optimal_round_trip_and_report(shipped_run, name, analysis, cls):
+    """The shipped time-optimal scenes (Jeffcott rotor delta/e, modal rotor m): the typed Result round trip, the
+    earliest arrival as a Point record (its FrontPoint held by the run only), load_run and the report byte for
+    byte."""
+    run, folder = shipped_run(name)
+    res = run[analysis]
+    assert type(res) is cls and res.deflection_limit is not None and res.limited is not None
+    assert res.limited.resimulated_peak == res.peak_deflection == res.limited_point.peak
+    assert res.limit_margin == pytest.approx(1 - res.peak_deflection / res.deflection_limit, rel=1e-12)
+    assert list(res.arrival_times) == [p.arrival_time_s for p in res.front]
+    back = _round_trip(res, cls)
+    assert back.limited_point is None and back.limited == res.limited
+    d = res.to_dict()
+    assert d["front"][0]["held_from_s_status"] == "the point's own minimum-peak optimum"
+    _loads_back(folder, analysis, res)
+
+
+def spinup_result(**changes) -> SpinupResult:
+    """A SpinupResult of made-up numbers (a 1 kg Jeffcott rotor, delta/e 12.31 against the ramp's 14.15, no drive
+    data) with ``changes``: for the tests of its verdict and words, which read its fields."""
+    rotor = Rotor(1.0, 1.1025e4, 5.0, 1e-4, 0.0, 105.0, 0.0238, 210.0, 20.0, 105.1, [102.5, 107.5],
+                  separation_margin_pct=50.0, required_separation_margin_pct=16.0, separation_margin_ok=True,
+                  amplitude_convention="0-peak (the radius of the whirl orbit)")
+    ramp = Baseline("ramp 40 rad/s² and hold", 14.15, 13.5, 2.2, 120.0, None, None, None, None, [])
+    res = SpinupResult(
+        "made up", "peak_deflection", "collocation", "Solve_Succeeded", 12.31, 14.15, "hold", -13.0, None, 1.231e-3,
+        rotor, 1e-3, 1.0, 20, 12.30, 12.31, 12.30, 13.1, 2.61, 8e-4, 116.7, 150.0, 5.0, 0.5, 5.0, 12.0, [],
+        {"hold": ramp}, 1.0, 1e-4, 105.0, 105.0, 0.0238, 0.0, None, None, None, None, [], None, None, None, None,
+        dwell=Dwell(0.5, 0.53, False, 101.8, 12.0), accuracy={})
+    return dataclasses.replace(res, **changes)
+
+
+def test_a_made_up_spinup_result_goes_out_and_comes_back():
+    """The helper's Result is a complete record: its block comes back equal, every number declared."""
+    res = spinup_result(brakes=True, min_torque_N_m=-120.0)
+    d = json.loads(json.dumps(plain(res.to_dict())))
+    assert SpinupResult.from_dict(d) == res and SpinupResult.quantities.undeclared(d) == []
+    assert res.verdict()[0] is True and "it brakes (smallest torque -120.0 N·m)" in res.verdict()[1]
+
+
+@pytest.mark.cli
+@pytest.mark.slow
+def test_spinup_round_trip_loads_its_controls_and_renders_the_same_report(shipped_run):
+    """The shipped 5 s deadline scene (Jeffcott rotor, a 4-segment ramp table): the typed Result round trip; load_run
+    gives it back with the controls and the ramp table its run wrote (what the report's binding-constraint line and
+    ramp table read, no longer from the CSV files in the section), and the report byte for byte."""
+    run, folder = shipped_run("spinup_jeffcott_deadline_5s")
+    res = run["spinup"]
+    assert type(res) is SpinupResult and res.segments is not None and res.ramp_table is not None
+    back = _round_trip(res, SpinupResult)
+    assert back.controls is None and back.rotor == res.rotor and back.dwell.dwells is res.dwell.dwells
+    loaded = _loads_back(folder, "spinup", res)
+    assert loaded.controls["alpha_rad_s2"] == list(res.optimum.alpha)  # full precision through the CSV
+    assert loaded.ramp_table["t_end_s"] == list(res.ramp_table["t_end_s"])
+    amax = 40.0  # the scene's max_acceleration, rad/s^2
+    on = int(np.sum(np.abs(res.optimum.alpha) >= 0.999 * amax))
+    assert f"on {on} of {len(res.optimum.alpha)} control intervals" in (folder / report.REPORT).read_text()
+
+
+def robust_result(robust: float, nominal: float, ramp: float, ramp_ok: bool | None) -> RobustResult:
+    """A RobustResult of made-up numbers (delta/e) whose three profiles have these worst validation peaks."""
+    from autobal.ocp.robust_study import NominalProfile, RampProfile, RobustProfile
+
+    def peaks(cls, label, worst, **kw):
+        return cls(label, nominal_peak_over_e=worst, design_peaks_over_e=[worst], design_worst_over_e=worst,
+                   validation_worst_over_e=worst, validation_mean_over_e=worst,
+                   validation_quantiles_over_e={"0.5": worst, "0.9": worst, "0.99": worst}, **kw)
+
+    profiles = Profiles(peaks(RobustProfile, "robust", robust), peaks(NominalProfile, "nominal", nominal),
+                        peaks(RampProfile, "ramp", ramp, within_drive_limits=ramp_ok))
+    return RobustResult("made up", "collocation", "1", 105.0, eccentricity_m=1e-4, validation_step_tau=0.05,
+                        critical_speed_spread=0.05, damping_factor=[0.5, 2.0], liquid=False, liquid_mass_factor=None,
+                        design_set=[[1.0, 1.0, 1.0]], design_scenarios=1, active_scenarios=1,
+                        active_design_rotors=[[1.0, 1.0, 1.0]], worst_design_rotor=[1.0, 1.0, 1.0],
+                        robust_collocation_worst_over_e=robust, resimulation_rel_error=0.0, build_time_s=0.0,
+                        solve_time_s=0.0, rounds=[], nominal_build_time_s=0.0, nominal_solve_time_s=0.0,
+                        validation_samples=10, seed=1, executor="in-process", validation_time_s=0.0,
+                        validation_check_rel_error=0.0, profiles=profiles, ramps=[], accuracy={}, wall_time_s=0.0)
