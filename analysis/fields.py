@@ -24,6 +24,7 @@ an error, not a silent None) and every attribute access of the old name.
 
 from __future__ import annotations
 
+import contextvars
 import dataclasses
 import types
 import typing
@@ -37,6 +38,8 @@ from autobal.analysis.result import Failures, Result, plain, with_statuses
 QUANTITY = "autobal.quantity"  # field metadata: the declaration's arguments
 OMIT = "autobal.omit"  # field metadata: left out of to_dict() when None (a block the analysis did not compute)
 KEY = "autobal.key"  # field metadata: its key in results.json where that is not the field's name
+#: while a Result whose statuses are made (``null_reasons``) is read: a ``<key>_status`` no field holds is skipped
+_MADE = contextvars.ContextVar("autobal_made_statuses", default=False)
 RUN = "autobal.run"  # field metadata: what the run holds beyond results.json (not in to_dict(), None when loaded)
 
 #: what a frozen Result still takes after it is made: not its numbers, what a run sets on every Result (the display
@@ -123,7 +126,8 @@ class Record:
         if not isinstance(block, dict):
             raise TypeError(f"{cls.__name__}: expected a mapping, got {type(block).__name__}")
         names = [_key(f) for f in dataclasses.fields(cls) if not f.metadata.get(RUN)]
-        unknown = [k for k in block if k not in names]
+        made = _MADE.get()  # a status beside a key that no field holds: made by to_dict(), not read
+        unknown = [k for k in block if k not in names and not (made and k.endswith("_status") and k[:-7] in names)]
         if unknown:
             raise KeyError(f"{cls.__name__} has no field {', '.join(map(repr, unknown))}")
         hints = _hints(cls)
@@ -161,23 +165,17 @@ class TypedResult(Record, Result):
 
     @classmethod
     def from_dict(cls, block: dict):
-        return super().from_dict(block if cls.null_reasons is None else _without_statuses(block))
+        token = _MADE.set(cls.null_reasons is not None)
+        try:
+            return super().from_dict(block)
+        finally:
+            _MADE.reset(token)
 
     @classmethod
     def from_folder(cls, block: dict, folder=None):
         """The Result of its results.json block and of the files its run wrote in ``folder`` (None: the block
         alone): a Result whose run-only fields its files hold reads them here (``autobal.load_run``, the report)."""
         return cls.from_dict(block)
-
-
-def _without_statuses(block):
-    """``block`` without the ``<key>_status`` beside a key (:func:`~autobal.analysis.result.with_statuses`'s)."""
-    if isinstance(block, dict):
-        return {k: _without_statuses(v) for k, v in block.items()
-                if not (k.endswith("_status") and isinstance(v, str) and k[:-7] in block)}
-    if isinstance(block, list):
-        return [_without_statuses(v) for v in block]
-    return block
 
 
 def _out(v):

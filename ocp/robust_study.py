@@ -48,8 +48,22 @@ def _either(over_e, m):
     return m if over_e is None else over_e
 
 
+class _Worst:
+    """The worst peaks of a profile or a ramp in the block's ``peak_unit``, whichever its fields hold."""
+
+    @property
+    def design_worst(self) -> float:
+        """Worst peak over the design set (CVODES), in the block's ``peak_unit``."""
+        return _either(self.design_worst_over_e, self.design_worst_m)
+
+    @property
+    def validation_worst(self) -> float:
+        """Worst peak over the validation sample, in the block's ``peak_unit``."""
+        return _either(self.validation_worst_over_e, self.validation_worst_m)
+
+
 @record
-class Profile(Record):
+class Profile(_Worst, Record):
     """A profile's peaks on the nominal rotor, the design set (CVODES on its worst) and the validation sample, in the
     block's ``peak_unit`` (the ``*_over_e`` fields for the Jeffcott rotor, ``*_m`` for the modal rotor)."""
 
@@ -77,16 +91,6 @@ class Profile(Record):
     def design_peaks(self) -> list[float]:
         """Peak on each design rotor, in the block's ``peak_unit``."""
         return _either(self.design_peaks_over_e, self.design_peaks_m)
-
-    @property
-    def design_worst(self) -> float:
-        """Worst peak over the design set (CVODES), in the block's ``peak_unit``."""
-        return _either(self.design_worst_over_e, self.design_worst_m)
-
-    @property
-    def validation_worst(self) -> float:
-        """Worst peak over the validation sample, in the block's ``peak_unit``."""
-        return _either(self.validation_worst_over_e, self.validation_worst_m)
 
     @property
     def validation_quantiles(self) -> dict[str, float]:
@@ -186,7 +190,7 @@ def _ramp_peak(unit: str):
 
 
 @record
-class Ramp(Record):
+class Ramp(_Worst, Record):
     """A constant ramp: its worst peaks and whether it keeps the drive limits (None: no drive data)."""
 
     label: str
@@ -199,13 +203,6 @@ class Ramp(Record):
     within_drive_limits: bool | None
     violated: str
 
-    @property
-    def design_worst(self) -> float:
-        return _either(self.design_worst_over_e, self.design_worst_m)
-
-    @property
-    def validation_worst(self) -> float:
-        return _either(self.validation_worst_over_e, self.validation_worst_m)
 
 
 def _factor_range():

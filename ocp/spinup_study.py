@@ -21,6 +21,7 @@ from autobal.analysis.fields import Record, TypedResult, declarations, optional,
 from autobal.analysis.quantities import Quantity, significant
 from autobal.analysis.result import new_figure, speed_axis, twin_axis, unit_axis
 from autobal.analysis.rotor_study import api_margins
+from autobal.analysis.standards import Margin
 from autobal.ocp import drive_profile
 from autobal.ocp.drive_profile import RPM
 from autobal.ocp.problem import SpinupOcp, pulse_variation
@@ -107,11 +108,7 @@ class Dwell(Record):
 
 
 @record
-class Rotor(Record):
-    """The rotor as the scene gives it, and its critical speed against the service speed (API 684 (2005), API 617
-    (2014): :func:`autobal.analysis.standards.margin_check`, declared by
-    :func:`autobal.analysis.standards.margin_quantities`)."""
-
+class _RotorData(Record):
     mass_kg: float = quantity("kg", "m1", "rotor mass", source=f"{_P10}, ch. 3")
     stiffness_N_per_m: float = quantity("N/m", "c", "shaft stiffness")
     damping_N_s_per_m: float = quantity("N*s/m", "χ", "external viscous damping")
@@ -122,19 +119,15 @@ class Rotor(Record):
                                                             "which)")
     damping_ratio: float = quantity("1", "ζ", "damping ratio χ/(2√(c m)) of the rotor with its liquid mass")
     service_speed_rad_s: float = quantity("rad/s", "N_s", "service speed (the final speed of the spin-up)")
-    amplification_factor: float | None
-    response_peak_speed_rad_s: float | None
-    half_power_speeds_rad_s: list[float] | None
-    amplification_factor_status: str | None = optional()
-    half_power_speeds_rad_s_status: str | None = optional()
-    response_peak_speed_rad_s_status: str | None = optional()
+
+
+@record
+class Rotor(Margin, _RotorData):
+    """The rotor as the scene gives it, then its critical speed against the service speed (API 684 (2005), API 617
+    (2014): the fields of :class:`autobal.analysis.standards.Margin`, :func:`~autobal.analysis.standards.margin_check`'s
+    block), then the amplitude convention."""
+
     _: KW_ONLY
-    separation_margin_pct: float | None
-    required_separation_margin_pct: float | None
-    separation_margin_ok: bool | None
-    separation_margin_pct_status: str | None = optional()
-    required_separation_margin_pct_status: str | None = optional()
-    separation_margin_ok_status: str | None = optional()
     amplitude_convention: str
 
     def margins(self) -> dict:

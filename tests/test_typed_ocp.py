@@ -75,8 +75,8 @@ def test_robust_statuses_are_made_from_the_nulls_not_stored():
                                                       "nominal optimum 20.00 µm, best ramp 30.00 µm")
     with pytest.raises(KeyError, match="RampProfile has no field 'within_drive_limits_status'"):
         Profiles.from_dict(prof | {"ramp": prof["ramp"] | {"within_drive_limits_status": "why"}})
-    assert fields._without_statuses({"a": None, "a_status": "why", "b_status": "kept: no b"}) == {
-        "a": None, "b_status": "kept: no b"}
+    with pytest.raises(KeyError, match="_Toy has no field 'other_status'"):  # a status is skipped beside a field only
+        _Toy.from_dict({"limit": 1.0, "peak": 1.0, "other_status": "why"})
 
 
 @pytest.mark.cli
@@ -235,3 +235,22 @@ def robust_result(robust: float, nominal: float, ramp: float, ramp_ok: bool | No
                         solve_time_s=0.0, rounds=[], nominal_build_time_s=0.0, nominal_solve_time_s=0.0,
                         validation_samples=10, seed=1, executor="in-process", validation_time_s=0.0,
                         validation_check_rel_error=0.0, profiles=profiles, ramps=[], accuracy={}, wall_time_s=0.0)
+
+
+@pytest.mark.cli
+@pytest.mark.slow
+@pytest.mark.extra("ross")
+def test_ross_spinup_round_trip_and_report(shipped_run):
+    """The shipped ROSS spin-up (modal rotor): a ModalSpinupResult whose API 684 margins keep margin_check's
+    statuses where it puts them, its own nulls' statuses made; the round trip, load_run and the report byte for
+    byte."""
+    from autobal.ocp.modal import ModalSpinupResult
+
+    run, folder = shipped_run("spinup_ross_rotor")
+    res = run["ross_spinup"]
+    assert type(res) is ModalSpinupResult and res.final_speed_rad_s == res.optimum.omega[-1]
+    assert len(res.critical_speeds.margins) == len(res.critical_speeds.reduced_wd_rad_s)
+    _round_trip(res, ModalSpinupResult)
+    d = res.to_dict()
+    assert d["torque_limit_N_m"] is None and d["torque_limit_N_m_status"] == "no torque limit in the scene"
+    _loads_back(folder, "ross_spinup", res)

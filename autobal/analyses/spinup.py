@@ -217,10 +217,10 @@ def report_section(sec) -> None:
     for k, b in r.baselines.items():
         pk = b.peak_deflection_over_e
         limits = {True: "within", False: "OUTSIDE: " + ", ".join(b.violated), None: "no drive data"}
-        rows.append([text(b.label), _cell(q("baselines.*.peak_deflection_over_e"), pk),
-                     _cell(q("peak_deflection_m"), None if pk is None or e is None else pk * e),
-                     _cell(q("baselines.*.max_torque_N_m"), b.max_torque_N_m),
-                     _cell(q("baselines.*.max_power_W"), b.max_power_W),
+        rows.append([text(b.label), declared_cell(q("baselines.*.peak_deflection_over_e"), pk),
+                     declared_cell(q("peak_deflection_m"), None if pk is None or e is None else pk * e),
+                     declared_cell(q("baselines.*.max_torque_N_m"), b.max_torque_N_m),
+                     declared_cell(q("baselines.*.max_power_W"), b.max_power_W),
                      text(limits[b.within_drive_limits]),
                      text("reference of the gain" if k == r.baseline_ramp_key else "")])
         if b.within_drive_limits is False:
@@ -265,7 +265,7 @@ def report_section(sec) -> None:
     keeps = {True: "yes", False: "NO", None: "—"}
     j = q("starts.0.objective", r.to_dict())
     rows = [[text(s.get("start")), text(s.get("stage", "final mesh")), text(s.get("status")),
-             text(s.get("iterations", "—")), cell(s.get("solve_time_s"), "s"), _cell(j, s.get("objective")),
+             text(s.get("iterations", "—")), cell(s.get("solve_time_s"), "s"), declared_cell(j, s.get("objective")),
              text(keeps[s.get("keeps_limit")])] for s in r.starts]
     if rows:
         sec.tables.append(table("NLP solves of the multi-start: every start on the coarse mesh, the best one "
@@ -274,8 +274,9 @@ def report_section(sec) -> None:
                                  "keeps limit"], rows))
 
 
-def _cell(q, v) -> dict:
-    """The cell of a value declared by ``q`` in its display unit, to the 4 significant digits of the terminal."""
+def declared_cell(q, v) -> dict:
+    """The cell of a value declared by ``q`` in its display unit, to the 4 significant digits of the terminal (the
+    spin-up sections' tables of typed fields)."""
     from autobal.report import cell
 
     return cell(v, q.unit, q.display, 4) if q is not None else cell(v, "?")
