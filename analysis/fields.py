@@ -11,7 +11,7 @@ A typed Result (:class:`TypedResult`) and its nested blocks (:class:`Record`) ar
 - a block whose keys are names with units of their own (``coefficients: dict``), declared by the Result's extra
   declarations.
 
-A field made with :func:`run_only` holds what the run has beyond results.json (re-simulations, samples): not in
+A field made with :func:`unsaved` holds what the run has beyond results.json (re-simulations, samples): not in
 ``to_dict()``, not compared, None when loaded.  A Result whose block has a ``<key>_status`` beside each null sets
 ``null_reasons`` (:class:`TypedResult`): the statuses are made from the nulls by ``to_dict()``, not stored.
 
@@ -40,7 +40,7 @@ OMIT = "autobal.omit"  # field metadata: left out of to_dict() when None (a bloc
 KEY = "autobal.key"  # field metadata: its key in results.json where that is not the field's name
 #: while a Result whose statuses are made (``null_reasons``) is read: a ``<key>_status`` no field holds is skipped
 _MADE = contextvars.ContextVar("autobal_made_statuses", default=False)
-RUN = "autobal.run"  # field metadata: what the run holds beyond results.json (not in to_dict(), None when loaded)
+UNSAVED = "autobal.unsaved"  # field metadata: held in memory only, not in results.json (see unsaved())
 
 #: what a frozen Result still takes after it is made: not its numbers, what a run sets on every Result (the display
 #: units of its scene)
@@ -96,10 +96,13 @@ def optional(present_with: str | None = None):
     return field(default=None, metadata={OMIT: present_with or True})
 
 
-def run_only():
-    """A field the run holds beyond its results.json block (the re-simulations its figures draw, samples its CSV
-    tables list): not in ``to_dict()`` and not compared; None in a Result loaded from results.json."""
-    return field(default=None, kw_only=True, metadata={RUN: True})
+def unsaved(default=None, default_factory=None):
+    """A field the Result holds in memory only, not in its results.json block (the re-simulations its figures draw,
+    samples its CSV tables list): not in ``to_dict()`` and not compared; its default in a Result loaded from
+    results.json."""
+    if default_factory is not None:
+        return field(default_factory=default_factory, kw_only=True, repr=False, metadata={UNSAVED: True})
+    return field(default=default, kw_only=True, repr=False, metadata={UNSAVED: True})
 
 
 @record
@@ -114,7 +117,7 @@ class Record:
             omit = f.metadata.get(OMIT)
             if v is None and isinstance(omit, str):
                 omit = getattr(self, omit) is None
-            if f.metadata.get(RUN) or v is None and omit or isinstance(v, Failures) and not v:
+            if f.metadata.get(UNSAVED) or v is None and omit or isinstance(v, Failures) and not v:
                 continue
             out[_key(f)] = _out(v)
         return out
@@ -125,7 +128,7 @@ class Record:
         or lacks (a renamed key is never read as missing)."""
         if not isinstance(block, dict):
             raise TypeError(f"{cls.__name__}: expected a mapping, got {type(block).__name__}")
-        names = [_key(f) for f in dataclasses.fields(cls) if not f.metadata.get(RUN)]
+        names = [_key(f) for f in dataclasses.fields(cls) if not f.metadata.get(UNSAVED)]
         made = _MADE.get()  # a status beside a key that no field holds: made by to_dict(), not read
         unknown = [k for k in block if k not in names and not (made and k.endswith("_status") and k[:-7] in names)]
         if unknown:

@@ -34,7 +34,7 @@ from functools import cached_property
 import casadi as ca
 import numpy as np
 
-from autobal.analysis.fields import Record, TypedResult, declarations, quantity, record, run_only
+from autobal.analysis.fields import Record, TypedResult, declarations, quantity, record, unsaved
 from autobal.analysis.quantities import Quantity, convert
 from autobal.analysis.result import new_figure, speed_axis, unit_axis
 from autobal.analysis.standards import Margin, half_power_readings, margin_check, margin_quantities, margin_words
@@ -763,9 +763,9 @@ class ModalSpinupResult(TypedResult):
     critical_speeds: CriticalSpeeds
     accuracy: dict
     final_speed_rad_s: float = quantity("rad/s", "ω_f", "final (service) speed", headline=6)
-    optimum: ModalTrajectory | None = run_only()
-    ramp_runs: dict | None = run_only()  # baseline key -> its ModalTrajectory
-    campbell: dict | None = run_only()  # "omega" (rad/s), "wd" (rad/s, speeds x modes) of the reduced model
+    optimum: ModalTrajectory | None = unsaved()
+    ramp_runs: dict | None = unsaved()  # baseline key -> its ModalTrajectory
+    campbell: dict | None = unsaved()  # "omega" (rad/s), "wd" (rad/s, speeds x modes) of the reduced model
     name = "ross_spinup"
     null_reasons = {"ross_wd_rad_s": _NOT_COMPARED, "ross_damping_ratio": _NOT_COMPARED,
                     "max_rel_error_vs_ross": _NOT_COMPARED,

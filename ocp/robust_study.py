@@ -15,7 +15,7 @@ from dataclasses import KW_ONLY, field
 
 import numpy as np
 
-from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record, run_only
+from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
 from autobal.analysis.quantities import Quantity, significant
 from autobal.analysis.result import new_figure, speed_axis, unit_axis
 from autobal.ocp import robust as rb
@@ -278,9 +278,9 @@ class RobustResult(TypedResult):
     wall_time_s: float = _time()
     #: part -> its wall time, s
     time_split: dict[str, float] = field(default_factory=dict)
-    nominal_runs: dict | None = run_only()  # key -> re-simulation on the nominal rotor
-    worst_runs: dict | None = run_only()  # key -> re-simulation on the robust profile's worst design rotor
-    validation: dict | None = run_only()  # key -> (samples,) peaks; "factors" -> (samples, 3)
+    nominal_runs: dict | None = unsaved()  # key -> re-simulation on the nominal rotor
+    worst_runs: dict | None = unsaved()  # key -> re-simulation on the robust profile's worst design rotor
+    validation: dict | None = unsaved()  # key -> (samples,) peaks; "factors" -> (samples, 3)
     name = "spinup_robust"
     null_reasons = {"liquid_mass_factor": "the rotor has no liquid block (or its mass is not uncertain)",
                     "omega_cr_rad_s": "no critical speed below the final speed",

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from autobal.analysis import standards
-from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record, run_only
+from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
 from autobal.analysis.quantities import Quantity, significant
 from autobal.analysis.result import new_figure, speed_axis, twin_axis, unit_axis
 from autobal.analysis.rotor_study import api_margins
@@ -256,11 +256,11 @@ class SpinupResult(TypedResult):
     segments: RampTable | None = optional()
     #: part -> its wall time, s
     time_split: dict[str, float] = field(default_factory=dict)
-    optimum: Trajectory | None = run_only()
-    ramp_runs: dict | None = run_only()  # baseline key -> its Trajectory
-    ramp_table_run: drive_profile.Segments | None = run_only()
-    controls: dict | None = run_only()  # spinup_controls.csv: t_start_s, alpha_rad_s2
-    ramp_table: dict | None = run_only()  # drive_segments.csv, None without a ramp table
+    optimum: Trajectory | None = unsaved()
+    ramp_runs: dict | None = unsaved()  # baseline key -> its Trajectory
+    ramp_table_run: drive_profile.Segments | None = unsaved()
+    controls: dict | None = unsaved()  # spinup_controls.csv: t_start_s, alpha_rad_s2
+    ramp_table: dict | None = unsaved()  # drive_segments.csv, None without a ramp table
     name = "spinup"
 
     @property

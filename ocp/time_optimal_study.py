@@ -13,7 +13,7 @@ from dataclasses import KW_ONLY
 
 import numpy as np
 
-from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record, run_only
+from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
 from autobal.analysis.quantities import Declarations, significant
 from autobal.analysis.result import new_figure, speed_axis, unit_axis
 from autobal.ocp import time_optimal as to
@@ -127,8 +127,8 @@ class TimeOptimalResult(TypedResult):
     limited: Point | None = optional(present_with="deflection_limit")  # None: the ramp keeps the limit
     limit_margin: float | None = quantity("1", "", "margin of the earliest arrival's peak below the limit, "
                                                    "1 − peak/limit", headline=4, optional=True)
-    points: list | None = run_only()  # the front's FrontPoints (their re-simulations)
-    limited_point: to.FrontPoint | None = run_only()  # the earliest arrival's (None: the ramp)
+    points: list | None = unsaved()  # the front's FrontPoints (their re-simulations)
+    limited_point: to.FrontPoint | None = unsaved()  # the earliest arrival's (None: the ramp)
     name = "spinup_time_optimal"
     null_reasons = {"deflection_limit_over_e": "no deflection_limit in the scene: the front only",
                     "held_from_s": "the point's own minimum-peak optimum",

@@ -126,7 +126,7 @@ class _Toy(fields.TypedResult):
     limit: float | None = fields.quantity("1", "", "a limit; None: none")
     peak: float = fields.quantity("1", "", "a peak")
     arrival: _Arrival | None = fields.optional(present_with="limit")
-    trace: list | None = fields.run_only()
+    trace: list | None = fields.unsaved()
     null_reasons = {"limit": "no limit given", "arrival": "the ramp keeps the limit"}
 
 
