@@ -11,7 +11,12 @@ A typed Result (:class:`TypedResult`) and its nested blocks (:class:`Record`) ar
 - a block whose keys are names with units of their own (``coefficients: dict``), declared by the Result's extra
   declarations;
 - what the Result holds for its tables and figures but results.json does not (a curve on its grid, written as
-  CSV), declared with :func:`unsaved`: its default in a Result rebuilt by ``from_dict``.
+  CSV; re-simulations, samples), declared with :func:`unsaved`: not in ``to_dict()``, not compared, its default
+  in a Result rebuilt by ``from_dict``.
+
+A null says why: a record's ``statuses`` (filled by :func:`explained`) are written as ``<key>_status`` right after
+their keys; a Result that sets ``null_reasons`` (:class:`TypedResult`) has them made from its nulls by
+``to_dict()``; ``from_dict()`` keeps the statuses it reads in ``statuses``.
 
 From the fields come ``to_dict()`` (the results.json block, keys in field order; an :func:`optional` field that
 is None is left out), ``from_dict()`` (its inverse: ``to_dict(from_dict(d)) == d``), :func:`declarations` (the
@@ -99,17 +104,19 @@ def keyed(key: str, kw_only: bool = False):
     return field(kw_only=kw_only, metadata={KEY: key})
 
 
-def optional(kw_only: bool = False, key: str | None = None):
+def optional(kw_only: bool = False, key: str | None = None, present_with: str | None = None):
     """A field the analysis may not compute (a map, a scan): default None, and then not in results.json;
     ``kw_only``: keyword-only, for a field results.json has before fields without a default; ``key`` as
-    :func:`keyed`."""
-    return field(default=None, kw_only=kw_only, metadata={OMIT: True} | ({KEY: key} if key else {}))
+    :func:`keyed`; with ``present_with``, the name of another field of the record, it is there (null) whenever
+    that field is not None (the earliest arrival under a peak limit: none when the ramp keeps the limit, no key
+    without a limit)."""
+    return field(default=None, kw_only=kw_only, metadata={OMIT: present_with or True} | ({KEY: key} if key else {}))
 
 
 def unsaved(default=None, default_factory=None):
     """A field the Result holds in memory only, not in its results.json block: what a figure of the run draws
-    that the block does not hold (an IPOPT history, the scene's title); ``from_dict`` gives it its default, and
-    ``==`` does not compare it."""
+    that the block does not hold (an IPOPT history, the scene's title, the re-simulations, samples its CSV tables
+    list); ``from_dict`` gives it its default, and ``==`` does not compare it."""
     if default_factory is not None:
         return field(default_factory=default_factory, kw_only=True, repr=False, metadata={UNSAVED: True})
     return field(default=default, kw_only=True, repr=False, metadata={UNSAVED: True})
@@ -130,7 +137,10 @@ class Record:
         out = {}
         for f in _fields(self):
             v = getattr(self, f.name)
-            if v is None and f.metadata.get(OMIT) or isinstance(v, Failures) and not v:
+            omit = f.metadata.get(OMIT)
+            if v is None and isinstance(omit, str):
+                omit = getattr(self, omit) is None
+            if f.metadata.get(UNSAVED) or v is None and omit or isinstance(v, Failures) and not v:
                 continue
             out[_key(f)] = _out(v)
             if _key(f) in self.statuses:
@@ -173,18 +183,29 @@ class TypedResult(Record, Result):
     #: the key results.json has the failures after, written even when there are none (``[]``), for a Result whose
     #: block had them there before it was typed; None: first, and only when there are some
     failures_after: typing.ClassVar[str | None] = None
+    #: key -> why its value may be null; when set, ``to_dict()`` writes a ``<key>_status`` beside every null of the
+    #: block (:func:`~autobal.analysis.result.with_statuses`; ``from_dict()`` keeps them in ``statuses``)
+    null_reasons: typing.ClassVar[dict | None] = None
 
     def __post_init__(self):
         object.__setattr__(self, "failures", Failures(self.failures))
 
     def to_dict(self) -> dict:
         out = super().to_dict()
+        if self.null_reasons is not None:
+            out = with_statuses(out, self.null_reasons)
         if self.failures_after is None:
             return out
         out.pop("failures", None)
         items = list(out.items())
         at = [k for k, _ in items].index(self.failures_after) + 1
         return dict(items[:at] + [("failures", list(self.failures))] + items[at:])
+
+    @classmethod
+    def from_folder(cls, block: dict, folder=None):
+        """The Result of its results.json block and of the files its run wrote in ``folder`` (None: the block
+        alone): a Result whose unsaved fields its files hold reads them here (``autobal.load_run``, the report)."""
+        return cls.from_dict(block)
 
 
 def _out(v):

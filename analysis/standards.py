@@ -20,9 +20,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import KW_ONLY, dataclass
 
 import numpy as np
+
+from autobal.analysis.fields import Record, optional, record
 
 API_AF = "API 684 (2005); API 617 (2014), Part 1, lateral analysis: amplification factor"
 API_SM = "API 684 (2005); API 617 (2014), Part 1, lateral analysis: separation margin"
@@ -257,6 +259,26 @@ def margin_check(reading: HalfPower, min_speed: float | None, max_continuous_spe
     req = required_separation_margin(math.inf if reading.undamped else reading.factor, below)
     return out | {"separation_margin_pct": sm, "required_separation_margin_pct": req,
                   "separation_margin_ok": bool(sm >= req)}
+
+
+@record
+class Margin(Record):
+    """The block of :func:`margin_check` as a record: its keys in its order, the reason beside each null (declared by
+    :func:`margin_quantities`)."""
+
+    amplification_factor: float | None
+    response_peak_speed_rad_s: float | None
+    half_power_speeds_rad_s: list[float] | None
+    amplification_factor_status: str | None = optional()
+    half_power_speeds_rad_s_status: str | None = optional()
+    response_peak_speed_rad_s_status: str | None = optional()
+    _: KW_ONLY
+    separation_margin_pct: float | None
+    required_separation_margin_pct: float | None
+    separation_margin_ok: bool | None
+    separation_margin_pct_status: str | None = optional()
+    required_separation_margin_pct_status: str | None = optional()
+    separation_margin_ok_status: str | None = optional()
 
 
 def margin_quantities(prefix: str = "", headline: bool = False) -> tuple:

@@ -328,7 +328,7 @@ def load_run(folder: str | Path) -> LoadedRun:
     results, unloaded = {}, {}
     for name in (k for k in saved if k in report.SECTIONS):
         try:
-            results[name] = report.load_result(name, saved[name])
+            results[name] = report.load_result(name, saved[name], where)
         except (ValueError, KeyError, TypeError) as exc:
             unloaded[name] = str(exc)
     return LoadedRun(where, saved, results, unloaded)

@@ -150,7 +150,7 @@ def result_class(analysis: str) -> type | None:
     return next((c for c in own if c.name == analysis), own[0] if len(own) == 1 else None)
 
 
-def load_result(analysis: str, block: dict) -> Result:
+def load_result(analysis: str, block: dict, folder: Path | None = None) -> Result:
     """The Result of an analysis rebuilt from its results.json block: a typed Result (analysis/fields.py) by its
     ``from_dict``; a Result that holds only ``data`` with the block as its data, if its ``to_dict()`` gives the
     block back.  ValueError naming the analysis where neither works (a Result that holds more than its block:
@@ -159,7 +159,7 @@ def load_result(analysis: str, block: dict) -> Result:
     if cls is None:
         raise ValueError(f"{analysis}: no analysis of this name")
     if issubclass(cls, Record):
-        return cls.from_dict(block)
+        return cls.from_folder(block, folder)  # with what the run's files in ``folder`` hold (its CSV tables)
     try:
         result = cls(data=block, **({"name": analysis} if "name" in inspect.signature(cls).parameters else {}))
         same = plain(result.to_dict()) == plain(block)
@@ -253,7 +253,7 @@ class Section:
     @functools.cached_property
     def result(self) -> Result:
         """The analysis' Result loaded from its block (:func:`load_result`): what a typed section reads."""
-        return load_result(self.name, self.block)
+        return load_result(self.name, self.block, self.folder)
 
     def get(self, path: str, default=None):
         return get_path(self.block, path, default)

@@ -45,7 +45,7 @@ def main() -> list[dict]:
         s = scene.analyses.spinup
         ocp = spinup_ocp(scene, s)
         res = spinup_study.run(ocp, spinup_study.method_of(s), options=ipopt_options(s.max_iterations, s.tolerance))
-        tr, full = res.optimum, res.data["objective_value"]
+        tr, full = res.optimum, res.objective_value
         shipped, cpu0 = _timed(ocp, tr, K)
         fast = dp.fast_segments(ocp, shipped.t, shipped.omega, dp.SEGMENT_STEP)
         integrator = dp.objective_of(ocp, fast) / shipped.objective - 1

@@ -4,19 +4,20 @@ CVODES on a few validation rotors; each profile's worst design rotors re-simulat
 
 ``run(...)`` returns a :class:`RobustResult` (results.json block, CSV tables, figures: the profiles and their
 deflection on the worst design rotor, the distribution of the validation peaks, the peak against the
-critical-speed factor).
+critical-speed factor); the modal rotor's ``ross_spinup_robust`` a :class:`ModalRobustResult`.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import KW_ONLY, field
 
 import numpy as np
 
-from autobal.analysis.quantities import Declarations, Quantity, significant
-from autobal.analysis.result import Result, new_figure, speed_axis, unit_axis, with_statuses
+from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
+from autobal.analysis.quantities import Quantity, significant
+from autobal.analysis.result import new_figure, speed_axis, unit_axis
 from autobal.ocp import robust as rb
 from autobal.ocp.drive_profile import drive_table
 from autobal.ocp.problem import PEAK_KEY, SpinupOcp
@@ -31,120 +32,284 @@ QUANTILES = (0.5, 0.9, 0.99)
 CHECKED = 4  # validation rotors re-simulated with CVODES to check the fast integrator
 CVODES_WORST = 3  # design rotors re-simulated with CVODES per profile (its worst by the fast integrator)
 
-_PROFILE = "profiles.*."
 PEAK_SYMBOL = {"1": "δ*/e", "m": "r*"}
 
 
-def _peak_quantities(unit: str) -> tuple[Quantity, ...]:
-    """The peaks of the block in ``unit`` ("1": delta/e, "m": shown in µm)."""
-    s, sym, shown = PEAK_KEY[unit], PEAK_SYMBOL[unit], "" if unit == "1" else "µm"
-    return (
-        Quantity(f"profiles.robust.validation_worst_{s}", unit, sym, "robust profile: worst peak over the "
-                 "validation rotors", shown, headline=True),
-        Quantity(f"profiles.nominal.validation_worst_{s}", unit, sym, "nominal optimum: worst peak over the "
-                 "validation rotors", shown, headline=True),
-        Quantity(f"profiles.ramp.validation_worst_{s}", unit, sym, "best ramp: worst peak over the validation rotors",
-                 shown, headline=True),
-        Quantity(f"profiles.robust.design_worst_{s}", unit, sym, "robust profile: worst peak over the design rotors "
-                 "(CVODES)", shown, headline=True),
-        Quantity(f"profiles.robust.nominal_peak_{s}", unit, sym, "robust profile: peak on the nominal rotor", shown,
-                 headline=True),
-        Quantity(" ".join(_PROFILE + k.format(s) for k in (
-            "nominal_peak_{}", "design_worst_{}", "design_peaks_{}", "validation_worst_{}", "validation_mean_{}",
-            "validation_quantiles_{}.**")), unit, sym, "peaks of a profile: nominal rotor, design set (worst, each), "
-                 "validation sample (worst, mean, quantiles)", shown),
-        Quantity(f"robust_collocation_worst_{s}", unit, sym, "worst collocation peak of the robust NLP", shown),
-        Quantity(f"rounds[].worst_design_peak_{s} rounds[].collocation_worst_{s}", unit, sym,
-                 "worst design peak after an NLP solve (re-simulated, collocation)", shown),
-        Quantity(f"ramps[].design_worst_{s} ramps[].validation_worst_{s}", unit, sym,
-                 "worst peak of a ramp over the design set / the validation sample", shown),
-    )
+def _peak(unit: str, description: str = "peaks of a profile: nominal rotor, design set (worst, each), validation "
+          "sample (worst, mean, quantiles)", headline: int = 0):
+    """A peak of the block in ``unit`` ("1": delta/e, Pashkov (2010), Eq. (2); "m": the modal rotor's, shown in
+    µm): the Jeffcott rotor's block has the one, the modal rotor's the other."""
+    return quantity(unit, PEAK_SYMBOL[unit], description, "" if unit == "1" else "µm", headline=headline,
+                    optional=True)
 
 
-#: every number of a robust spin-up block (``spinup_robust``: the Jeffcott rotor, peaks delta/e (Pashkov (2010),
-#: Eq. (2)) with the physical deflection (0-peak) e delta/e beside them in the summary; ``ross_spinup_robust``: the
-#: modal rotor, peaks in m shown in µm); the rotors as factors on the nominal critical speed, damping and liquid
-#: mass; the headline quantities first, in summary order
-QUANTITIES = Declarations(
-    *_peak_quantities("1")[:5], *_peak_quantities("m")[:5],
-    Quantity("omega_cr_rad_s", "rad/s", "ω_cr", "nominal critical speed (the lowest below the final "
-             "speed)", headline=True),
-    Quantity("eccentricity_m", "m", "e", "eccentricity (a peak δ*/e is the deflection δ* = e δ*/e, 0-peak)", "µm"),
-    *_peak_quantities("1")[5:], *_peak_quantities("m")[5:],
-    Quantity("critical_speed_spread", "1", "", "relative spread of the critical speed (± factor − 1)"),
-    Quantity("damping_factor liquid_mass_factor", "1", "", "range of the factor on the damping / liquid mass"),
-    Quantity("design_set active_design_rotors worst_design_rotor", "1", "",
-             "design rotors as factors (critical speed, damping, liquid mass)"),
-    Quantity("design_scenarios active_scenarios validation_samples seed", "1", "",
-             "design rotors, those in the final NLP, validation rotors, seed of the sample"),
-    Quantity("resimulation_rel_error validation_check_rel_error", "1", "",
-             "relative difference: robust NLP vs CVODES; validation integrator vs CVODES"),
-    Quantity("validation_step_tau", "1", "Δτ", "step of the validation integrator in Ω0 t"),
-    Quantity("modes nodes", "1", "", "modes of the reduced rotor; the nodes whose deflection counts"),
-    Quantity("build_time_s solve_time_s nominal_build_time_s nominal_solve_time_s validation_time_s wall_time_s "
-             "time_split.*", "s", "", "times: robust NLPs, nominal optimum, validation, the analysis; the wall time by "
-             "part"),
-    Quantity("rounds[].intervals rounds[].scenarios rounds[].active rounds[].iterations", "1", "",
-             "an NLP solve of the scenario generation: intervals, design rotors (which), iterations"),
-    Quantity("rounds[].build_time_s rounds[].solve_time_s", "s", "", "build and solve time of an NLP solve"),
-    Quantity("ramps[].alpha_rad_s2", "rad/s^2", "α", "acceleration of a constant ramp"),
-)
+def _either(over_e, m):
+    """The peak the block has: delta/e (Jeffcott rotor) or m (modal rotor)."""
+    return m if over_e is None else over_e
 
 
-def peak_key(d: dict) -> str:
-    """The suffix of the block's peaks (``over_e`` or ``m``), from the unit the block states (``peak_unit``)."""
-    return PEAK_KEY[d.get("peak_unit", "1")]
+class _Worst:
+    """The worst peaks of a profile or a ramp in the block's ``peak_unit``, whichever its fields hold."""
+
+    @property
+    def design_worst(self) -> float:
+        """Worst peak over the design set (CVODES), in the block's ``peak_unit``."""
+        return _either(self.design_worst_over_e, self.design_worst_m)
+
+    @property
+    def validation_worst(self) -> float:
+        """Worst peak over the validation sample, in the block's ``peak_unit``."""
+        return _either(self.validation_worst_over_e, self.validation_worst_m)
 
 
-def peak_text(d: dict, x) -> str:
-    """A peak of the block as read: delta/e with the deflection e delta/e beside it (Jeffcott rotor), or in µm
-    (modal rotor)."""
-    if d.get("peak_unit", "1") == "1":
-        return deflection_text(x, d.get("eccentricity_m"))
-    return QUANTITIES.find("profiles.robust.validation_worst_m").text(x)
+@record
+class Profile(_Worst, Record):
+    """A profile's peaks on the nominal rotor, the design set (CVODES on its worst) and the validation sample, in the
+    block's ``peak_unit`` (the ``*_over_e`` fields for the Jeffcott rotor, ``*_m`` for the modal rotor)."""
+
+    label: str
+    nominal_peak_over_e: float | None = _peak("1")
+    nominal_peak_m: float | None = _peak("m")
+    design_peaks_over_e: list[float] | None = _peak("1")
+    design_peaks_m: list[float] | None = _peak("m")
+    design_worst_over_e: float | None = _peak("1")
+    design_worst_m: float | None = _peak("m")
+    validation_worst_over_e: float | None = _peak("1")
+    validation_worst_m: float | None = _peak("m")
+    validation_mean_over_e: float | None = _peak("1")
+    validation_mean_m: float | None = _peak("m")
+    #: quantile ("0.5", "0.9", "0.99") -> peak
+    validation_quantiles_over_e: dict[str, float] | None = optional()
+    validation_quantiles_m: dict[str, float] | None = optional()
+
+    @property
+    def nominal_peak(self) -> float:
+        """Peak on the nominal rotor (re-simulated), in the block's ``peak_unit``."""
+        return _either(self.nominal_peak_over_e, self.nominal_peak_m)
+
+    @property
+    def design_peaks(self) -> list[float]:
+        """Peak on each design rotor, in the block's ``peak_unit``."""
+        return _either(self.design_peaks_over_e, self.design_peaks_m)
+
+    @property
+    def validation_quantiles(self) -> dict[str, float]:
+        """Quantile ("0.5", "0.9", "0.99") -> peak over the validation sample, in the block's ``peak_unit``."""
+        return _either(self.validation_quantiles_over_e, self.validation_quantiles_m)
 
 
-def deflection_of(tr) -> np.ndarray:
-    """The deflection of a re-simulation against its time: delta/e, or the largest node's in m."""
-    return tr.delta if isinstance(tr, Trajectory) else tr.deflection.max(axis=0)
+_ROBUST = "robust profile: worst peak over the validation rotors"
 
 
-@dataclass
-class RobustResult(Result):
+@record
+class RobustProfile(Profile):
+    """The robust profile: its worst validation and design peaks and its peak on the nominal rotor are headline."""
+
+    nominal_peak_over_e: float | None = _peak("1", "robust profile: peak on the nominal rotor", 5)
+    nominal_peak_m: float | None = _peak("m", "robust profile: peak on the nominal rotor", 5)
+    design_worst_over_e: float | None = _peak("1", "robust profile: worst peak over the design rotors (CVODES)", 4)
+    design_worst_m: float | None = _peak("m", "robust profile: worst peak over the design rotors (CVODES)", 4)
+    validation_worst_over_e: float | None = _peak("1", _ROBUST, 1)
+    validation_worst_m: float | None = _peak("m", _ROBUST, 1)
+
+
+_NOMINAL = "nominal optimum: worst peak over the validation rotors"
+
+
+@record
+class NominalProfile(Profile):
+    """The nominal optimum: its worst validation peak is headline."""
+
+    validation_worst_over_e: float | None = _peak("1", _NOMINAL, 2)
+    validation_worst_m: float | None = _peak("m", _NOMINAL, 2)
+
+
+_RAMP = "best ramp: worst peak over the validation rotors"
+
+
+@record
+class RampProfile(Profile):
+    """The best ramp: its worst validation peak is headline; whether it keeps the drive limits (None: no drive
+    data)."""
+
+    validation_worst_over_e: float | None = _peak("1", _RAMP, 3)
+    validation_worst_m: float | None = _peak("m", _RAMP, 3)
+    _: KW_ONLY
+    within_drive_limits: bool | None
+
+
+@record
+class Profiles(Record):
+    robust: RobustProfile
+    nominal: NominalProfile
+    ramp: RampProfile
+
+    def items(self) -> list[tuple[str, Profile]]:
+        """(key, profile) of the three profiles compared, in the order of the tables and figures."""
+        return [("robust", self.robust), ("nominal", self.nominal), ("ramp", self.ramp)]
+
+
+def _count(**kw):
+    return quantity("1", "", "an NLP solve of the scenario generation: intervals, design rotors (which), iterations",
+                    optional=True, **kw)
+
+
+def _nlp_time():
+    return quantity("s", "", "build and solve time of an NLP solve", optional=True)
+
+
+def _round_peak(unit: str):
+    return _peak(unit, "worst design peak after an NLP solve (re-simulated, collocation)")
+
+
+@record
+class Round(Record):
+    """One NLP solve of the scenario generation (a failed solve has only its start, scenarios and status)."""
+
+    start: str
+    intervals: int | None = _count()
+    scenarios: int | None = _count()
+    active: list[int] | None = _count()
+    status: str | None = optional()
+    iterations: int | None = _count()
+    solve_time_s: float | None = _nlp_time()
+    build_time_s: float | None = _nlp_time()
+    worst_design_peak_over_e: float | None = _round_peak("1")
+    worst_design_peak_m: float | None = _round_peak("m")
+    collocation_worst_over_e: float | None = _round_peak("1")
+    collocation_worst_m: float | None = _round_peak("m")
+
+    @property
+    def worst_design_peak(self) -> float | None:
+        """Worst design peak after the solve (re-simulated), in the block's ``peak_unit``; None for a failed solve."""
+        return _either(self.worst_design_peak_over_e, self.worst_design_peak_m)
+
+
+def _ramp_peak(unit: str):
+    return _peak(unit, "worst peak of a ramp over the design set / the validation sample")
+
+
+@record
+class Ramp(_Worst, Record):
+    """A constant ramp: its worst peaks and whether it keeps the drive limits (None: no drive data)."""
+
+    label: str
+    alpha_rad_s2: float = quantity("rad/s^2", "α", "acceleration of a constant ramp")
+    design_worst_over_e: float | None = _ramp_peak("1")
+    design_worst_m: float | None = _ramp_peak("m")
+    validation_worst_over_e: float | None = _ramp_peak("1")
+    validation_worst_m: float | None = _ramp_peak("m")
+    _: KW_ONLY
+    within_drive_limits: bool | None
+    violated: str
+
+
+
+def _factor_range():
+    return quantity("1", "", "range of the factor on the damping / liquid mass")
+
+
+def _rotors():
+    return quantity("1", "", "design rotors as factors (critical speed, damping, liquid mass)")
+
+
+def _counts():
+    return quantity("1", "", "design rotors, those in the final NLP, validation rotors, seed of the sample")
+
+
+def _rel_error():
+    return quantity("1", "", "relative difference: robust NLP vs CVODES; validation integrator vs CVODES")
+
+
+def _time():
+    return quantity("s", "", "times: robust NLPs, nominal optimum, validation, the analysis; the wall time by part")
+
+
+def _model(**kw):
+    return quantity("1", "", "modes of the reduced rotor; the nodes whose deflection counts", optional=True, **kw)
+
+
+@record
+class RobustResult(TypedResult):
     """The robust profile, the nominal optimum and the best constant ramp, each on the design set and on the
-    validation sample (peaks in the unit the block states: delta/e for the Jeffcott rotor, m for the modal
-    rotor)."""
+    validation sample (peaks in the unit the block states, ``peak_unit``: delta/e for the Jeffcott rotor (Pashkov
+    (2010), Eq. (2), the deflection e delta/e, 0-peak, beside them in the summary), m for the modal rotor (shown in
+    µm)); the rotors as factors on the nominal critical speed, damping and liquid mass.  The run also holds the
+    re-simulations its figures draw and the validation sample's peaks (None in a Result loaded from
+    results.json)."""
 
-    data: dict
-    nominal_runs: dict  # key -> re-simulation on the nominal rotor
-    worst_runs: dict  # key -> re-simulation on the robust profile's worst design rotor
-    validation: dict  # key -> (samples,) peaks; "factors" -> (samples, 3)
-    name: str = "spinup_robust"
-    quantities = QUANTITIES
+    title: str
+    method: str
+    peak_unit: str
+    omega_cr_rad_s: float | None = quantity("rad/s", "ω_cr", "nominal critical speed (the lowest below the final "
+                                                              "speed)", headline=6)
+    _: KW_ONLY
+    eccentricity_m: float | None = quantity("m", "e", "eccentricity (a peak δ*/e is the deflection δ* = e δ*/e, "
+                                                      "0-peak)", "µm", optional=True)
+    validation_step_tau: float | None = quantity("1", "Δτ", "step of the validation integrator in Ω0 t",
+                                                 optional=True)
+    nodes: list[int] | None = _model()
+    modes: int | None = _model()
+    critical_speed_spread: float = quantity("1", "", "relative spread of the critical speed (± factor − 1)")
+    damping_factor: list[float] = _factor_range()
+    liquid: bool
+    liquid_mass_factor: list[float] | None = _factor_range()
+    design_set: list[list[float]] = _rotors()
+    design_scenarios: int = _counts()
+    active_scenarios: int = _counts()
+    active_design_rotors: list[list[float]] = _rotors()
+    worst_design_rotor: list[float] = _rotors()
+    robust_collocation_worst_over_e: float | None = _peak("1", "worst collocation peak of the robust NLP")
+    robust_collocation_worst_m: float | None = _peak("m", "worst collocation peak of the robust NLP")
+    resimulation_rel_error: float = _rel_error()
+    build_time_s: float = _time()
+    solve_time_s: float = _time()
+    rounds: list[Round]
+    nominal_build_time_s: float = _time()
+    nominal_solve_time_s: float = _time()
+    validation_samples: int = _counts()
+    seed: int = _counts()
+    executor: str
+    validation_time_s: float = _time()
+    validation_check_rel_error: float = _rel_error()
+    profiles: Profiles
+    ramps: list[Ramp]
+    accuracy: dict
+    wall_time_s: float = _time()
+    #: part -> its wall time, s
+    time_split: dict[str, float] = field(default_factory=dict)
+    nominal_runs: dict | None = unsaved()  # key -> re-simulation on the nominal rotor
+    worst_runs: dict | None = unsaved()  # key -> re-simulation on the robust profile's worst design rotor
+    validation: dict | None = unsaved()  # key -> (samples,) peaks; "factors" -> (samples, 3)
+    name = "spinup_robust"
+    null_reasons = {"liquid_mass_factor": "the rotor has no liquid block (or its mass is not uncertain)",
+                    "omega_cr_rad_s": "no critical speed below the final speed",
+                    "within_drive_limits": "no drive torque data (the scene's drive)"}
 
     KEYS = ("robust", "nominal", "ramp")
     COLORS = {"robust": "C3", "nominal": "C0", "ramp": "C2"}
 
     @property
-    def peak_unit(self) -> str:
-        """SI unit of the peaks: "1" (delta/e) or "m"."""
-        return self.data["peak_unit"]
-
-    @property
     def worst_validation(self) -> dict:
         """Worst peak over the validation sample of each profile (robust, nominal, ramp), in :attr:`peak_unit`."""
-        return {k: self.data["profiles"][k][f"validation_worst_{peak_key(self.data)}"] for k in self.KEYS}
+        return {k: p.validation_worst for k, p in self.profiles.items()}
 
     @property
     def worst_design(self) -> dict:
         """Worst CVODES peak over the design set of each profile, in :attr:`peak_unit`."""
-        return {k: self.data["profiles"][k][f"design_worst_{peak_key(self.data)}"] for k in self.KEYS}
+        return {k: p.design_worst for k, p in self.profiles.items()}
 
-    def to_dict(self) -> dict:
-        return self.data
+    @property
+    def robust_collocation_worst(self) -> float:
+        """Worst collocation peak of the robust NLP, in :attr:`peak_unit`."""
+        return _either(self.robust_collocation_worst_over_e, self.robust_collocation_worst_m)
+
+    def peak_text(self, x) -> str:
+        """A peak of the block as read: delta/e with the deflection e delta/e beside it, or in µm."""
+        return peak_text(x, self.peak_unit, self.eccentricity_m)
 
     def verdict(self) -> tuple[bool | None, str]:
-        return verdict(self.data)
+        return verdict(self.profiles, self.validation_samples, self.peak_unit, self.eccentricity_m)
 
     def _shown(self) -> tuple[float, str, str]:
         """(factor, axis label, CSV suffix) of the peaks as a person reads them: delta/e, or µm."""
@@ -154,50 +319,51 @@ class RobustResult(Result):
         return q.shown(1.0), f"peak deflection r*, {q.display} 0-peak", q.display.replace("µ", "u")
 
     def summary(self) -> str:
-        d = self.data
         ok, words = self.verdict()
-        s = peak_key(d)
-        if d["peak_unit"] == "1":
+        if self.peak_unit == "1":
             unit_line = ("  peaks δ*/e and the deflection δ* = e δ*/e, 0-peak (e = "
-                         f"{QUANTITIES.find('eccentricity_m').text(d.get('eccentricity_m'))}):")
+                         f"{QUANTITIES.find('eccentricity_m').text(self.eccentricity_m)}):")
+
             def quantile(x):
                 return f"{significant(x)} e"
         else:
-            unit_line = f"  peaks r*, the largest whirl radius over the nodes {d['nodes']}, 0-peak:"
-            def quantile(x):
-                return peak_text(d, x)
-        lines = [f"robust spin-up: {'ok' if ok else 'NOT OK'}: {words}", *QUANTITIES.lines(d),
-                 f"  {d['design_scenarios']} design rotors ({d['active_scenarios']} in the final NLP), {d['method']}: "
-                 f"build {d['build_time_s']:.2f} s, solve {d['solve_time_s']:.2f} s; validation on "
-                 f"{d['validation_samples']} rotors ({d['executor']}, {d['validation_time_s']:.2f} s)",
+            unit_line = f"  peaks r*, the largest whirl radius over the nodes {self.nodes}, 0-peak:"
+            quantile = self.peak_text
+        lines = [f"robust spin-up: {'ok' if ok else 'NOT OK'}: {words}", *self.quantities.lines(self.to_dict()),
+                 f"  {self.design_scenarios} design rotors ({self.active_scenarios} in the final NLP), {self.method}: "
+                 f"build {self.build_time_s:.2f} s, solve {self.solve_time_s:.2f} s; validation on "
+                 f"{self.validation_samples} rotors ({self.executor}, {self.validation_time_s:.2f} s)",
                  "  wall time split: " + ", ".join(f"{k[:-7].replace('_', ' ')} {v:.2f} s" for k, v in
-                                                   d.get("time_split", {}).items()),
+                                                   self.time_split.items()),
                  unit_line]
-        for k in self.KEYS:
-            p = d["profiles"][k]
-            lines.append(f"  {p['label']:28s} nominal rotor {peak_text(d, p[f'nominal_peak_{s}'])}, worst design "
-                         f"{peak_text(d, p[f'design_worst_{s}'])}, validation worst "
-                         f"{peak_text(d, p[f'validation_worst_{s}'])} "
-                         f"(median {quantile(p[f'validation_quantiles_{s}']['0.5'])}, 99 % "
-                         f"{quantile(p[f'validation_quantiles_{s}']['0.99'])})")
+        for _, p in self.profiles.items():
+            q = p.validation_quantiles
+            lines.append(f"  {p.label:28s} nominal rotor {self.peak_text(p.nominal_peak)}, worst design "
+                         f"{self.peak_text(p.design_worst)}, validation worst {self.peak_text(p.validation_worst)} "
+                         f"(median {quantile(q['0.5'])}, 99 % {quantile(q['0.99'])})")
         return "\n".join(lines)
 
+    def _runs(self):
+        if self.nominal_runs is None:
+            raise ValueError(f"{self.name}: a Result loaded from results.json holds no re-simulations; its tables and "
+                             "figures are the files of its run")
+
     def tables(self) -> dict[str, dict]:
+        self._runs()
         factor, _, col = self._shown()
-        s = peak_key(self.data)
         f = self.validation["factors"]
         cols = {"critical_speed_factor": f[:, 0], "damping_factor": f[:, 1], "liquid_mass_factor": f[:, 2]}
         cols |= {f"{k}_peak_{col}": factor * self.validation[k] for k in self.KEYS}
         r = self.nominal_runs["robust"]
         design = {"critical_speed_factor": [], "damping_factor": [], "liquid_mass_factor": []}
-        for row in self.data["design_set"]:
+        for row in self.design_set:
             for key, v in zip(design, row, strict=True):
                 design[key].append(v)
-        design |= {f"{k}_peak_{col}": factor * np.asarray(self.data["profiles"][k][f"design_peaks_{s}"])
-                   for k in self.KEYS}
+        design |= {f"{k}_peak_{col}": factor * np.asarray(p.design_peaks) for k, p in self.profiles.items()}
+        s = PEAK_KEY[self.peak_unit]
         ramps = {}
-        for k in self.data["ramps"][0]:
-            v = [row[k] for row in self.data["ramps"]]
+        for k in self.ramps[0].to_dict():
+            v = [row.to_dict()[k] for row in self.ramps]
             peak = k.endswith("_" + s)
             ramps[k[:-len(s)] + col if peak else k] = list(factor * np.asarray(v)) if peak else v
         return {f"{self.name}_validation.csv": cols, f"{self.name}_design.csv": design,
@@ -206,14 +372,14 @@ class RobustResult(Result):
 
     def draw(self, ax) -> None:
         """Empirical distribution of the validation peaks of the three profiles."""
+        self._runs()
         factor, label, _ = self._shown()
-        for k in self.KEYS:
+        for k, p in self.profiles.items():
             v = np.sort(self.validation[k])
-            lab = self.data["profiles"][k]["label"]
             ax.step(factor * v, np.arange(1, v.size + 1) / v.size, where="post", color=self.COLORS[k],
-                    label=f"{lab} (worst {peak_text(self.data, v[-1])})")
+                    label=f"{p.label} (worst {self.peak_text(v[-1])})")
         ax.set_xlabel(label)
-        deflection_axis(ax, self.data.get("eccentricity_m"), "x")
+        deflection_axis(ax, self.eccentricity_m, "x")
         ax.set_ylabel(f"fraction of the {self.validation['factors'].shape[0]} validation rotors")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
@@ -221,25 +387,25 @@ class RobustResult(Result):
     def figures(self) -> dict:
         """Profiles and the deflection on the worst design rotor; validation distribution; peak against the
         critical-speed factor."""
+        self._runs()
         factor, label, _ = self._shown()
-        title = self.data["title"]
+        title = self.title
         fig, (a0, a1) = new_figure((8, 7), 2, 1, sharex=True)
         ft, fw = unit_axis(a1, "time t", "s", which="x"), speed_axis(a0)
-        for k in self.KEYS:
+        for k, p in self.profiles.items():
             tr, tw = self.nominal_runs[k], self.worst_runs[k]
-            lab = self.data["profiles"][k]["label"]
-            a0.plot(tr.t * ft, tr.omega * fw, color=self.COLORS[k], label=lab)
+            a0.plot(tr.t * ft, tr.omega * fw, color=self.COLORS[k], label=p.label)
             a1.plot(tw.t * ft, factor * deflection_of(tw), color=self.COLORS[k],
-                    label=f"{lab} (peak {peak_text(self.data, tw.peak)})")
-        wc = self.data["omega_cr_rad_s"]
+                    label=f"{p.label} (peak {self.peak_text(tw.peak)})")
+        wc = self.omega_cr_rad_s
         if wc is not None:
             a0.axhline(wc * fw, color="k", ls=":", lw=0.8,
                        label="nominal critical speed " + QUANTITIES.find("omega_cr_rad_s").text(wc))
-        w = self.data["worst_design_rotor"]
+        w = self.worst_design_rotor
         a1.set_title(f"on the robust profile's worst design rotor (critical speed x{w[0]:.3g}, damping x{w[1]:.3g}"
-                     + (f", liquid x{w[2]:.3g}" if self.data["liquid"] else "") + ")", fontsize=8, loc="left")
+                     + (f", liquid x{w[2]:.3g}" if self.liquid else "") + ")", fontsize=8, loc="left")
         a1.set_ylabel(label.replace("peak deflection", "deflection").replace("^*", "").replace("r*", "r"))
-        deflection_axis(a1, self.data.get("eccentricity_m"))
+        deflection_axis(a1, self.eccentricity_m)
         for ax in (a0, a1):
             ax.grid(alpha=0.3)
             ax.legend(fontsize=7)
@@ -249,12 +415,11 @@ class RobustResult(Result):
         fig2.suptitle(title, fontsize=8)
         fig3, ax3 = new_figure((8.5, 4.8))
         f = self.validation["factors"]
-        for k in self.KEYS:
-            ax3.scatter(f[:, 0], factor * self.validation[k], s=3, color=self.COLORS[k], alpha=0.5,
-                        label=self.data["profiles"][k]["label"])
+        for k, p in self.profiles.items():
+            ax3.scatter(f[:, 0], factor * self.validation[k], s=3, color=self.COLORS[k], alpha=0.5, label=p.label)
         ax3.set_xlabel("critical-speed factor (1 = nominal)")
         ax3.set_ylabel(label)
-        deflection_axis(ax3, self.data.get("eccentricity_m"))
+        deflection_axis(ax3, self.eccentricity_m)
         ax3.grid(alpha=0.3)
         ax3.legend(fontsize=7, markerscale=4)
         fig3.suptitle(title, fontsize=8)
@@ -262,19 +427,55 @@ class RobustResult(Result):
                 f"{self.name}_scatter.png": fig3}
 
 
-def verdict(d: dict) -> tuple[bool | None, str]:
-    """The robust spin-up's one verdict from its results.json block: the robust profile's worst peak over the
-    validation rotors against the nominal optimum's and the best ramp's (a ramp outside the drive limits is shown,
-    never compared)."""
-    w = {k: d["profiles"][k][f"validation_worst_{peak_key(d)}"] for k in RobustResult.KEYS}
-    ramp_ok = d["profiles"]["ramp"].get("within_drive_limits") is not False
+@record
+class ModalRobustResult(RobustResult):
+    """The robust study of the modal (ROSS) rotor (``ross_spinup_robust``): peaks in m, the nodes and modes of the
+    reduced rotor; its problem has no drive torque or power model."""
+
+    name = "ross_spinup_robust"
+    null_reasons = RobustResult.null_reasons | {
+        "within_drive_limits": "the modal rotor's problem has no drive torque or power model (its ramps keep the "
+                               "acceleration bound and the speed cap)"}
+
+
+def _quantiles(unit: str) -> Quantity:
+    return Quantity(f"profiles.*.validation_quantiles_{PEAK_KEY[unit]}.**", unit, PEAK_SYMBOL[unit],
+                    "quantiles of a profile's peaks over the validation sample", "" if unit == "1" else "µm")
+
+
+#: every number of a robust spin-up block (``spinup_robust``: the Jeffcott rotor, peaks delta/e; ``ross_spinup_robust``:
+#: the modal rotor, peaks in m shown in µm), from the fields; the headline quantities first, in summary order
+RobustResult.quantities = ModalRobustResult.quantities = QUANTITIES = declarations(
+    RobustResult, _quantiles("1"), _quantiles("m"),
+    Quantity("time_split.*", "s", "", "the wall time by part"))
+
+
+def peak_text(x, unit: str = "1", e: float | None = None) -> str:
+    """A peak as read: delta/e (``unit`` "1") with the deflection e delta/e beside it when the eccentricity ``e``
+    (m) is known (Jeffcott rotor), or in µm (``unit`` "m", modal rotor)."""
+    if unit == "1":
+        return deflection_text(x, e)
+    return QUANTITIES.find("profiles.robust.validation_worst_m").text(x)
+
+
+def deflection_of(tr) -> np.ndarray:
+    """The deflection of a re-simulation against its time: delta/e, or the largest node's in m."""
+    return tr.delta if isinstance(tr, Trajectory) else tr.deflection.max(axis=0)
+
+
+def verdict(profiles: Profiles, samples: int | None, unit: str = "1", e: float | None = None
+            ) -> tuple[bool | None, str]:
+    """The robust spin-up's one verdict: the robust profile's worst peak over the validation rotors against the
+    nominal optimum's and the best ramp's (a ramp outside the drive limits is shown, never compared)."""
+    w = {k: p.validation_worst for k, p in profiles.items()}
+    ramp_ok = profiles.ramp.within_drive_limits is not False
 
     def pk(x):
-        return peak_text(d, x)
+        return peak_text(x, unit, e)
 
     ok = w["robust"] < min(w["nominal"], w["ramp"] if ramp_ok else math.inf)
-    return ok, (f"worst peak over {d.get('validation_samples', 'the')} validation rotors: robust {pk(w['robust'])}, "
-                f"nominal optimum {pk(w['nominal'])}, best ramp {pk(w['ramp'])}"
+    return ok, (f"worst peak over {samples if samples is not None else 'the'} validation rotors: robust "
+                f"{pk(w['robust'])}, nominal optimum {pk(w['nominal'])}, best ramp {pk(w['ramp'])}"
                 + ("" if ramp_ok else " (outside the drive limits, not compared)"))
 
 
@@ -377,7 +578,7 @@ def robust_starts(ocp: SpinupOcp, factors: np.ndarray, nominal: rb.Profile, ramp
 
 def run(ocp, method: DirectCollocation, uncertainty: rb.Uncertainty, design_points: int,
         samples: int, seed: int, ramps: int, executor, title: str = "", multistart: bool = True,
-        options: dict | None = None, name: str = "spinup_robust") -> RobustResult:
+        options: dict | None = None) -> RobustResult:
     """Nominal optimum, robust optimum over the design grid, constant ramps; all validated on a sample.
 
     Parameters
@@ -404,13 +605,12 @@ def run(ocp, method: DirectCollocation, uncertainty: rb.Uncertainty, design_poin
         Multi-start of the nominal optimum (the Jeffcott rotor's).
     options : dict, optional
         IPOPT options.
-    name : str
-        The analysis (the results.json block, the file names).
 
     Returns
     -------
     RobustResult
-        Peaks in delta/e (Jeffcott) or m (modal), as its ``peak_unit`` states; times in s.
+        Peaks in delta/e (Jeffcott) or m (:class:`ModalRobustResult` of the modal rotor), as its ``peak_unit``
+        states; times in s.
     """
     jeffcott = isinstance(ocp, SpinupOcp)
     unit = "1" if jeffcott else "m"
@@ -447,16 +647,19 @@ def run(ocp, method: DirectCollocation, uncertainty: rb.Uncertainty, design_poin
     fast_err = float(np.max(np.abs(peaks[:CHECKED, 0] / check - 1)))
     nominal_runs = {k: _on(ocp, [1.0, 1.0, 1.0], p) for k, (p, _) in chosen.items()}
     worst_runs = {k: _on(ocp, worst_rotor, p) for k, (p, _) in chosen.items()}
+    kinds = {"robust": RobustProfile, "nominal": NominalProfile, "ramp": RampProfile}
     prof = {}
     for k, (p, v) in chosen.items():
-        prof[k] = {"label": p.label, f"nominal_peak_{s}": nominal_runs[k].peak,
-                   f"design_peaks_{s}": design[k].tolist(), f"design_worst_{s}": float(design[k].max()),
-                   f"validation_worst_{s}": float(v.max()), f"validation_mean_{s}": float(v.mean()),
-                   f"validation_quantiles_{s}": {str(q): float(np.quantile(v, q)) for q in QUANTILES}}
-    prof["ramp"]["within_drive_limits"] = ramp_use[ib]["within_drive_limits"]
+        extra = {"within_drive_limits": ramp_use[ib]["within_drive_limits"]} if k == "ramp" else {}
+        prof[k] = kinds[k](p.label, **{
+            f"nominal_peak_{s}": nominal_runs[k].peak, f"design_peaks_{s}": design[k].tolist(),
+            f"design_worst_{s}": float(design[k].max()), f"validation_worst_{s}": float(v.max()),
+            f"validation_mean_{s}": float(v.mean()),
+            f"validation_quantiles_{s}": {str(q): float(np.quantile(v, q)) for q in QUANTILES}}, **extra)
     # the scenario generation names a round's peaks in delta/e (:func:`autobal.ocp.robust.optimize_robust`); the
     # modal rotor's are in m
-    rounds = [{(k[:-len("over_e")] + s if k.endswith("_over_e") else k): v for k, v in r.items()} for r in ro.rounds]
+    rounds = [Round(**{(k[:-len("over_e")] + s if k.endswith("_over_e") else k): v for k, v in r.items()})
+              for r in ro.rounds]
     if jeffcott:
         model = {"omega_cr_rad_s": ocp.params.omega_cr, "eccentricity_m": ocp.params.e,
                  "validation_step_tau": FAST_STEP}
@@ -466,42 +669,33 @@ def run(ocp, method: DirectCollocation, uncertainty: rb.Uncertainty, design_poin
         model = {"omega_cr_rad_s": float(cs[0]) if len(cs) else None, "nodes": list(ocp.nodes),
                  "modes": ocp.rotor.n}
         how = "the validation integrator (Runge-Kutta screening of the envelope, autobal.ocp.modal.screen)"
-    data = {
-        "title": title, "method": method.label, "peak_unit": unit, **model,
-        "critical_speed_spread": uncertainty.critical_speed_spread,
-        "damping_factor": list(uncertainty.damping_factor), "liquid": uncertainty.liquid_mass_factor is not None,
-        "liquid_mass_factor": list(uncertainty.liquid_mass_factor) if uncertainty.liquid_mass_factor else None,
-        "design_set": F.tolist(), "design_scenarios": len(F), "active_scenarios": len(ro.active),
-        "active_design_rotors": F[ro.active].tolist(), "worst_design_rotor": worst_rotor.tolist(),
-        f"robust_collocation_worst_{s}": ro.collocation_worst,
-        "resimulation_rel_error": abs(ro.collocation_worst - design["robust"].max()) / design["robust"].max(),
-        "build_time_s": ro.build_time_s, "solve_time_s": ro.solve_time_s, "rounds": rounds,
-        "nominal_build_time_s": nominal_build, "nominal_solve_time_s": nominal_solve,
-        "validation_samples": int(samples), "seed": int(seed), "executor": executor.name,
-        "validation_time_s": t_val,
-        "validation_check_rel_error": fast_err,
-        "profiles": prof,
-        "ramps": [{"label": p.label, "alpha_rad_s2": float(p.u[0] * ocp.alpha_max),
-                   f"design_worst_{s}": float(d), f"validation_worst_{s}": float(w),
-                   "within_drive_limits": ramp_use[i]["within_drive_limits"],
-                   "violated": ", ".join(ramp_use[i]["violated"])}
-                  for i, (p, d, w) in enumerate(zip(family, design_ramps, ramp_worst, strict=True))],
-        "accuracy": {"estimate": fast_err,
-                     "how": f"largest relative difference of {how} against CVODES on {CHECKED} validation rotors"},
-    }
-    validation = {"factors": factors} | {k: v for k, (_, v) in chosen.items()}
+    ramp_rows = [Ramp(p.label, float(p.u[0] * ocp.alpha_max), **{f"design_worst_{s}": float(d),
+                                                                   f"validation_worst_{s}": float(w)},
+                      within_drive_limits=ramp_use[i]["within_drive_limits"],
+                      violated=", ".join(ramp_use[i]["violated"]))
+                 for i, (p, d, w) in enumerate(zip(family, design_ramps, ramp_worst, strict=True))]
     # the wall time by part (s): the nominal optimum (global search, multi-start, its builds and solves), the
     # robust starts (the ramps on the design set, the global search), the robust NLPs' builds and solves, the
     # validation; rest: the scenario generation's design-set checks and the CVODES re-simulations
     split = {"nominal_optimum": t_nominal, "robust_starts": t_starts, "robust_build": ro.build_time_s,
              "robust_solve": ro.solve_time_s, "validation": t_val}
-    data["wall_time_s"] = time.perf_counter() - t_start
-    split["rest"] = data["wall_time_s"] - sum(split.values())
-    data["time_split"] = {f"{k}_time_s": v for k, v in split.items()}
-    data = with_statuses(data, {
-        "liquid_mass_factor": "the rotor has no liquid block (or its mass is not uncertain)",
-        "omega_cr_rad_s": "no critical speed below the final speed",
-        "within_drive_limits": "no drive torque data (the scene's drive)" if jeffcott else
-        "the modal rotor's problem has no drive torque or power model (its ramps keep the acceleration bound and "
-        "the speed cap)"})
-    return RobustResult(data, nominal_runs, worst_runs, validation, name)
+    wall = time.perf_counter() - t_start
+    split["rest"] = wall - sum(split.values())
+    return (RobustResult if jeffcott else ModalRobustResult)(
+        title, method.label, unit, **model,
+        critical_speed_spread=uncertainty.critical_speed_spread, damping_factor=list(uncertainty.damping_factor),
+        liquid=uncertainty.liquid_mass_factor is not None,
+        liquid_mass_factor=list(uncertainty.liquid_mass_factor) if uncertainty.liquid_mass_factor else None,
+        design_set=F.tolist(), design_scenarios=len(F), active_scenarios=len(ro.active),
+        active_design_rotors=F[ro.active].tolist(), worst_design_rotor=worst_rotor.tolist(),
+        **{f"robust_collocation_worst_{s}": ro.collocation_worst},
+        resimulation_rel_error=abs(ro.collocation_worst - design["robust"].max()) / design["robust"].max(),
+        build_time_s=ro.build_time_s, solve_time_s=ro.solve_time_s, rounds=rounds,
+        nominal_build_time_s=nominal_build, nominal_solve_time_s=nominal_solve,
+        validation_samples=int(samples), seed=int(seed), executor=executor.name, validation_time_s=t_val,
+        validation_check_rel_error=fast_err, profiles=Profiles(**prof), ramps=ramp_rows,
+        accuracy={"estimate": fast_err,
+                  "how": f"largest relative difference of {how} against CVODES on {CHECKED} validation rotors"},
+        wall_time_s=wall, time_split={f"{k}_time_s": v for k, v in split.items()},
+        nominal_runs=nominal_runs, worst_runs=worst_runs,
+        validation={"factors": factors} | {k: v for k, (_, v) in chosen.items()})

@@ -7,16 +7,21 @@ optimum and both ramps on each plot).
 
 from __future__ import annotations
 
+import csv
+import dataclasses
 import re
 import time
-from dataclasses import dataclass
+from dataclasses import KW_ONLY, field
+from pathlib import Path
 
 import numpy as np
 
 from autobal.analysis import solver_options, standards
-from autobal.analysis.quantities import Declarations, Quantity, significant
-from autobal.analysis.result import Result, new_figure, speed_axis, twin_axis, unit_axis
+from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
+from autobal.analysis.quantities import Quantity, significant
+from autobal.analysis.result import new_figure, speed_axis, twin_axis, unit_axis
 from autobal.analysis.rotor_study import api_margins
+from autobal.analysis.standards import Margin
 from autobal.ocp import drive_profile
 from autobal.ocp.drive_profile import RPM
 from autobal.ocp.problem import SpinupOcp, pulse_variation
@@ -41,10 +46,6 @@ SOLVED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 #: large AF), more than DWELL_FACTOR times the time the maximum acceleration takes across that band
 DWELL_BAND = 0.10
 DWELL_FACTOR = 2.0
-
-
-def _drive(prefix: str = "") -> str:
-    return " ".join(f"{prefix}{k}" for k in ("max_torque_N_m", "min_torque_N_m"))
 
 
 #: the objective J of each ``objective`` of a scene: (SI unit, symbol, what it measures); Pashkov (2010), Eq. (2)
@@ -77,185 +78,326 @@ def objective_quantity(path: str, block: dict | None) -> Quantity | None:
     return Quantity(path, unit, f"J = {symbol}", f"{_OBJECTIVE_KEYS[key]}: the {words}")
 
 
-#: every number of the spinup block: deflections delta/e (the source's group, Pashkov (2010), Eq. (2)) beside the
-#: physical deflection (0-peak, the radius of the whirl orbit); the headline quantities first, in summary order
-QUANTITIES = Declarations(
-    Quantity("peak_deflection_m", "m", "δ*", "peak deflection of the optimum, 0-peak (re-simulated)", "mm",
-             headline=True),
-    Quantity("peak_deflection_over_e", "1", "δ*/e", "peak deflection of the optimum over the eccentricity",
-             headline=True),
-    Quantity("baseline_ramp_peak_over_e", "1", "δ*/e", "peak of the best ramp within the drive limits",
-             headline=True),
-    Quantity("gain_vs_best_feasible_ramp_pct", "%", "", "gain of the optimum against that ramp", headline=True),
-    Quantity("gain_vs_constant_ramp_pct", "%", "", "gain of the optimum against the constant ramp"),
-    Quantity("rotor.critical_speed_rad_s", "rad/s", "ω_cr", "undamped critical speed √(c/m), m the rotor's mass with "
-             "its liquid layer's if it has one (critical_label says which)"),
-    Quantity("omega_cr_rad_s", "rad/s", "ω_cr", "critical speed Ω0 √ψ", source=f"{_P10}, ch. 3"),
-    *standards.margin_quantities("rotor.", headline=True),
-    Quantity("rotor.service_speed_rad_s", "rad/s", "N_s", "service speed (the final speed of the spin-up)"),
-    *DRIVE_QUANTITIES,
-    Quantity("time_of_peak_s", "s", "t*", "time of the peak"),
-    Quantity("omega_at_peak_rad_s", "rad/s", "ω*", "speed at the peak"),
-    Quantity("final_time_s", "s", "T", "final time (the deadline, or the arrival with min_time)"),
-    Quantity("rotor.mass_kg", "kg", "m1", "rotor mass", source=f"{_P10}, ch. 3"),
-    Quantity("rotor.liquid_mass_kg", "kg", "m2*", "full-chamber liquid mass ρπR²h", source=f"{_P10}, ch. 3"),
-    Quantity("rotor.stiffness_N_per_m", "N/m", "c", "shaft stiffness"),
-    Quantity("rotor.damping_N_s_per_m", "N*s/m", "χ", "external viscous damping"),
-    Quantity("rotor.eccentricity_m eccentricity_m", "m", "e", "eccentricity (mass centre from the shaft axis)", "µm"),
-    Quantity("rotor.damping_ratio", "1", "ζ", "damping ratio χ/(2√(c m)) of the rotor with its liquid mass"),
-    Quantity("psi", "1", "ψ", "mass ratio m1/(m1 + m2*)", source=f"{_P10}, ch. 3"),
-    Quantity("Omega0_rad_s", "rad/s", "Ω0", "natural frequency √(c/m1) of the rotor without liquid",
-             source=f"{_P10}, ch. 3"),
-    Quantity("zeta0", "1", "ζ0", "damping group of the source", source=f"{_P10}, ch. 3"),
-    Quantity("drive_polar_inertia_kg_m2", "kg*m^2", "J_p", "polar inertia of the rotor and drive"),
-    Quantity("peak_unbalance collocation_peak_unbalance", "1", "d*", "peak system unbalance",
-             source=f"{_P10}, Eq. (2)"),
-    Quantity("collocation_peak_over_e", "1", "δ*/e", "peak deflection of the collocation (before re-simulation)"),
-    Quantity("integral_deflection2_s", "s", "∫(δ/e)² dt", "integral of the squared deflection over the window"),
-    Quantity("control_pulse_variation", "1", "", "chattering: total variation of the one-interval pulses of α/α_max"),
-    Quantity("resimulation_rel_error", "1", "", "relative difference, CVODES re-simulation vs transcription"),
-    Quantity("ipopt_iterations", "1", "", "iterations of the final solve"),
-    Quantity("solve_time_s total_solve_time_s build_time_s wall_time_s time_split.*", "s", "",
-             "times: final solve, every solve, NLP builds, the analysis; the wall time by part"),
-    Quantity("starts[].iterations", "1", "", "iterations of a start's solve"),
-    Quantity("starts[].solve_time_s starts[].build_time_s", "s", "", "solve and build time of a start"),
-    Quantity("starts[].resimulated_peak_over_e", "1", "δ*/e", "re-simulated peak of a start"),
-    Quantity("baselines.*.peak_deflection_over_e", "1", "δ*/e", "peak deflection of a ramp baseline"),
-    Quantity("baselines.*.peak_unbalance", "1", "d*", "peak system unbalance of a ramp baseline"),
-    Quantity("baselines.*.time_of_peak_s", "s", "t*", "time of a ramp baseline's peak"),
-    Quantity("baselines.*.integral_deflection2_s", "s", "∫(δ/e)² dt", "integral of a ramp baseline's δ²"),
-    Quantity(_drive("baselines.*.") + " " + _drive("segments."), "N*m", "M", "largest and smallest drive torque"),
-    Quantity("baselines.*.max_power_W segments.max_power_W", "W", "P", "largest drive power", "kW"),
-    Quantity("segments.segments", "1", "K", "ramp segments of the drive's table"),
-    Quantity("dwell.time_near_critical_s segments.dwell.time_near_critical_s", "s", "t_cr",
-             f"time within {100 * DWELL_BAND:.0f} % of the critical speed (optimum, ramp table)"),
-    Quantity("dwell.fastest_crossing_s segments.dwell.fastest_crossing_s", "s", "",
-             f"time the maximum acceleration takes across {100 * DWELL_BAND:.0f} % either side of the critical speed"),
-    Quantity("dwell.hold_speed_rad_s segments.dwell.hold_speed_rad_s", "rad/s", "ω_hold",
-             f"speed held longest within {100 * DWELL_BAND:.0f} % of the critical speed (time-weighted median)"),
-    Quantity("dwell.hold_steady_deflection_over_e segments.dwell.hold_steady_deflection_over_e", "1", "δ_ss/e",
-             "steady whirl of the rotor at that speed"),
-    Quantity("segments.peak_deflection_over_e", "1", "δ*/e", "peak deflection of the ramp table (re-simulated)"),
-    Quantity("segments.peak_unbalance", "1", "d*", "peak system unbalance of the ramp table"),
-    Quantity("segments.loss_vs_optimum_pct", "%", "", "loss of the ramp table against the full optimum"),
-    Quantity("segments.evaluations", "1", "", "re-simulations of the ramp table's search"),
-    resolve=objective_quantity,
-)
+def _drive_torque():
+    return quantity("N*m", "M", "largest and smallest drive torque")
 
 
-@dataclass
-class SpinupResult(Result):
-    """The optimal spin-up profile beside the constant-ramp baselines (every peak re-simulated)."""
+def _drive_power():
+    return quantity("W", "P", "largest drive power", "kW")
 
-    data: dict  # the results.json block
-    optimum: Trajectory
-    baselines: dict  # key -> Trajectory
-    segments: drive_profile.Segments | None = None
+
+def _dwell_time():
+    return quantity("s", "t_cr", f"time within {100 * DWELL_BAND:.0f} % of the critical speed (optimum, ramp table)")
+
+
+@record
+class Dwell(Record):
+    """How long a profile stays near the critical speed (:func:`dwell`)."""
+
+    time_near_critical_s: float = _dwell_time()
+    fastest_crossing_s: float = quantity("s", "", f"time the maximum acceleration takes across {100 * DWELL_BAND:.0f}"
+                                                  " % either side of the critical speed")
+    dwells: bool
+    hold_speed_rad_s: float | None = quantity("rad/s", "ω_hold", f"speed held longest within {100 * DWELL_BAND:.0f} "
+                                                                 "% of the critical speed (time-weighted median)")
+    hold_steady_deflection_over_e: float | None = quantity("1", "δ_ss/e", "steady whirl of the rotor at that speed")
+    hold_speed_rad_s_status: str | None = optional()  # the profile never comes near the critical speed
+    hold_steady_deflection_over_e_status: str | None = optional()
+
+
+@record
+class _RotorData(Record):
+    mass_kg: float = quantity("kg", "m1", "rotor mass", source=f"{_P10}, ch. 3")
+    stiffness_N_per_m: float = quantity("N/m", "c", "shaft stiffness")
+    damping_N_s_per_m: float = quantity("N*s/m", "χ", "external viscous damping")
+    eccentricity_m: float = quantity("m", "e", "eccentricity (mass centre from the shaft axis)", "µm")
+    liquid_mass_kg: float = quantity("kg", "m2*", "full-chamber liquid mass ρπR²h", source=f"{_P10}, ch. 3")
+    critical_speed_rad_s: float = quantity("rad/s", "ω_cr", "undamped critical speed √(c/m), m the rotor's mass with "
+                                                            "its liquid layer's if it has one (critical_label says "
+                                                            "which)")
+    damping_ratio: float = quantity("1", "ζ", "damping ratio χ/(2√(c m)) of the rotor with its liquid mass")
+    service_speed_rad_s: float = quantity("rad/s", "N_s", "service speed (the final speed of the spin-up)")
+
+
+@record
+class Rotor(Margin, _RotorData):
+    """The rotor as the scene gives it, then its critical speed against the service speed (API 684 (2005), API 617
+    (2014): the fields of :class:`autobal.analysis.standards.Margin`, :func:`~autobal.analysis.standards.margin_check`'s
+    block), then the amplitude convention."""
+
+    _: KW_ONLY
+    amplitude_convention: str
+
+    def margins(self) -> dict:
+        """The API 684 check as :func:`autobal.analysis.standards.margin_check` gives it (its words, its rows)."""
+        return {k: v for k, v in self.to_dict().items() if k not in _ROTOR_OWN}
+
+
+_ROTOR_OWN = ("mass_kg", "stiffness_N_per_m", "damping_N_s_per_m", "eccentricity_m", "liquid_mass_kg",
+              "critical_speed_rad_s", "damping_ratio", "service_speed_rad_s", "amplitude_convention")
+
+
+@record
+class Baseline(Record):
+    """A constant-ramp baseline, re-simulated, and its drive use."""
+
+    label: str
+    peak_deflection_over_e: float = quantity("1", "δ*/e", "peak deflection of a ramp baseline")
+    peak_unbalance: float = quantity("1", "d*", "peak system unbalance of a ramp baseline")
+    time_of_peak_s: float = quantity("s", "t*", "time of a ramp baseline's peak")
+    integral_deflection2_s: float = quantity("s", "∫(δ/e)² dt", "integral of a ramp baseline's δ²")
+    max_torque_N_m: float | None = _drive_torque()
+    min_torque_N_m: float | None = _drive_torque()
+    max_power_W: float | None = _drive_power()
+    within_drive_limits: bool | None
+    violated: list[str]
+
+
+@record
+class RampTable(Record):
+    """The drive's K-segment ramp table (:func:`autobal.ocp.drive_profile.segment_profile`), re-simulated."""
+
+    segments: int = quantity("1", "K", "ramp segments of the drive's table")
+    peak_deflection_over_e: float = quantity("1", "δ*/e", "peak deflection of the ramp table (re-simulated)")
+    peak_unbalance: float = quantity("1", "d*", "peak system unbalance of the ramp table")
+    objective_value: float  # in the objective's unit (objective_quantity)
+    loss_vs_optimum_pct: float = quantity("%", "", "loss of the ramp table against the full optimum")
+    evaluations: int = quantity("1", "", "re-simulations of the ramp table's search")
+    start: str
+    start_objectives: dict[str, float]  # start -> its penalised objective (objective_quantity)
+    max_torque_N_m: float | None = _drive_torque()
+    min_torque_N_m: float | None = _drive_torque()
+    max_power_W: float | None = _drive_power()
+    within_drive_limits: bool | None
+    violated: list[str]
+    dwell: Dwell
+
+
+def _time():
+    return quantity("s", "", "times: final solve, every solve, NLP builds, the analysis")
+
+
+def _unbalance(**kw):
+    return quantity("1", "d*", "peak system unbalance", source=f"{_P10}, Eq. (2)", **kw)
+
+
+@record
+class SpinupResult(TypedResult):
+    """The optimal spin-up profile beside the constant-ramp baselines (every peak re-simulated): deflections delta/e
+    (the source's group, Pashkov (2010), Eq. (2)) beside the physical deflection (0-peak, the radius of the whirl
+    orbit).  The run also holds the optimum's re-simulation, the ramps' and the ramp table's (None in a Result loaded
+    from results.json); ``controls`` and ``ramp_table`` (its controls table and the drive's segment table) are read
+    back from the run's files by :meth:`from_folder`."""
+
+    title: str
+    objective: str
+    method: str
+    status: str
+    peak_deflection_over_e: float = quantity("1", "δ*/e", "peak deflection of the optimum over the eccentricity",
+                                             headline=2)
+    baseline_ramp_peak_over_e: float | None = quantity("1", "δ*/e", "peak of the best ramp within the drive limits",
+                                                       headline=3)
+    baseline_ramp_key: str | None
+    gain_vs_best_feasible_ramp_pct: float | None = quantity("%", "", "gain of the optimum against that ramp",
+                                                            headline=4)
+    gain_vs_constant_ramp_pct: float | None = quantity("%", "", "gain of the optimum against the constant ramp")
+    peak_deflection_m: float = quantity("m", "δ*", "peak deflection of the optimum, 0-peak (re-simulated)", "mm",
+                                        headline=1)
+    rotor: Rotor
+    resimulation_rel_error: float = quantity("1", "", "relative difference, CVODES re-simulation vs transcription")
+    solve_time_s: float = _time()
+    ipopt_iterations: int = quantity("1", "", "iterations of the final solve")
+    collocation_peak_over_e: float | None = quantity("1", "δ*/e", "peak deflection of the collocation (before "
+                                                                  "re-simulation)")
+    objective_value: float | None  # in the objective's unit (objective_quantity)
+    objective_value_transcription: float | None
+    peak_unbalance: float = _unbalance()
+    time_of_peak_s: float = quantity("s", "t*", "time of the peak")
+    control_pulse_variation: float = quantity("1", "", "chattering: total variation of the one-interval pulses of "
+                                                       "α/α_max")
+    omega_at_peak_rad_s: float = quantity("rad/s", "ω*", "speed at the peak")
+    integral_deflection2_s: float = quantity("s", "∫(δ/e)² dt", "integral of the squared deflection over the window")
+    final_time_s: float = quantity("s", "T", "final time (the deadline, or the arrival with min_time)")
+    build_time_s: float = _time()
+    total_solve_time_s: float = _time()
+    wall_time_s: float = _time()
+    #: one row per NLP solve of the multi-start (its keys by stage: the solver's log)
+    starts: list[dict]
+    baselines: dict[str, Baseline]
+    psi: float = quantity("1", "ψ", "mass ratio m1/(m1 + m2*)", source=f"{_P10}, ch. 3")
+    eccentricity_m: float = quantity("m", "e", "eccentricity (mass centre from the shaft axis)", "µm")
+    omega_cr_rad_s: float = quantity("rad/s", "ω_cr", "critical speed Ω0 √ψ", source=f"{_P10}, ch. 3")
+    Omega0_rad_s: float = quantity("rad/s", "Ω0", "natural frequency √(c/m1) of the rotor without liquid",
+                                   source=f"{_P10}, ch. 3")
+    zeta0: float = quantity("1", "ζ0", "damping group of the source", source=f"{_P10}, ch. 3")
+    drive_polar_inertia_kg_m2: float = quantity("kg*m^2", "J_p", "polar inertia of the rotor and drive")
+    max_torque_N_m: float | None  # DRIVE_QUANTITIES
+    min_torque_N_m: float | None
+    max_power_W: float | None
+    within_drive_limits: bool | None
+    violated: list[str]
+    braking_torque_limit_N_m: float | None
+    torque_limit_N_m: float | None
+    power_limit_W: float | None
+    brakes: bool | None
+    dwell: Dwell
+    accuracy: dict
+    braking_torque_limit_N_m_status: str | None = optional()
+    torque_limit_N_m_status: str | None = optional()
+    power_limit_W_status: str | None = optional()
+    brakes_status: str | None = optional()
+    baseline_ramp_peak_over_e_status: str | None = optional()
+    baseline_ramp_key_status: str | None = optional()
+    gain_vs_best_feasible_ramp_pct_status: str | None = optional()
+    gain_vs_constant_ramp_pct_status: str | None = optional()
+    collocation_peak_unbalance: float | None = _unbalance(optional=True)  # the peak_unbalance objective's
+    segments: RampTable | None = optional()
+    #: part -> its wall time, s
+    time_split: dict[str, float] = field(default_factory=dict)
+    optimum: Trajectory | None = unsaved()
+    ramp_runs: dict | None = unsaved()  # baseline key -> its Trajectory
+    ramp_table_run: drive_profile.Segments | None = unsaved()
+    controls: dict | None = unsaved()  # spinup_controls.csv: t_start_s, alpha_rad_s2
+    ramp_table: dict | None = unsaved()  # drive_segments.csv, None without a ramp table
     name = "spinup"
-    quantities = QUANTITIES
 
     @property
     def peak_deflection(self) -> float:
         """Re-simulated peak deflection of the optimum over the horizon and the settling window, delta/e."""
-        return self.data["peak_deflection_over_e"]
+        return self.peak_deflection_over_e
 
-    @property
-    def resimulation_rel_error(self) -> float:
-        """Relative difference between the transcription's optimum and its CVODES re-simulation."""
-        return self.data["resimulation_rel_error"]
-
-    def to_dict(self) -> dict:
-        return self.data
+    @classmethod
+    def from_folder(cls, block: dict, folder=None):
+        """The Result of its results.json block with the controls and the drive's ramp table its run wrote in
+        ``folder`` (spinup_controls.csv, drive_segments.csv; None: the block alone)."""
+        res = cls.from_dict(block)
+        if folder is None:
+            return res
+        tables = {name: _read_csv(Path(folder) / name) for name in ("spinup_controls.csv", "drive_segments.csv")}
+        return dataclasses.replace(res, controls=tables["spinup_controls.csv"],
+                                   ramp_table=tables["drive_segments.csv"])
 
     def verdict(self) -> tuple[bool | None, str]:
-        return verdict(self.data)
+        """The spin-up's one verdict: the optimum's peak deflection (physical, 0-peak, and delta/e), its gain against
+        the best ramp within the drive limits (the only reference a gain is quoted against), whether it brakes and
+        whether it keeps the drive limits; the NLP status first when it is not a success.  An optimum that dwells
+        near the critical speed (:func:`dwell`) is neither good nor bad (None) with a CAUTION: its peak holds only for
+        the critical speed of the scene."""
+        q = self.quantities.find
+        words = (f"peak deflection {q('peak_deflection_m').text(self.peak_deflection_m)} 0-peak "
+                 f"({significant(self.peak_deflection_over_e)} e)")
+        gain, key = self.gain_vs_best_feasible_ramp_pct, self.baseline_ramp_key
+        if gain is not None:
+            words += f", {gain:+.1f} % against the best ramp within the drive limits ({self.baselines[key].label})"
+        else:
+            words += ", no ramp keeps the drive limits: no gain is quoted"
+        if self.brakes is not None:
+            words += (f"; it brakes (smallest torque {q('min_torque_N_m').text(self.min_torque_N_m)})"
+                      if self.brakes else "; it does not brake")
+        ok = gain is None or gain <= 0.01
+        if self.dwell.dwells:  # good only if the critical speed is where the scene puts it: no verdict
+            ok, words = (None if ok else ok), words + "; CAUTION: " + dwell_words("it", self.dwell,
+                                                                                  self.omega_cr_rad_s)
+        if self.within_drive_limits is False:
+            ok, words = False, words + f"; drive limits EXCEEDED ({', '.join(self.violated or [])})"
+        if self.status not in SOLVED:
+            ok, words = False, f"NLP solver {self.status}: " + words
+        return ok, words
 
     def summary(self) -> str:
-        d = self.data
         ok, words = self.verdict()
-        q = QUANTITIES.find
+        q = self.quantities.find
+        r = self.rotor
         status = {True: "ok", False: "NOT OK", None: "to check"}[ok]
-        lines = [f"spin-up ({d['objective'].replace('_', ' ')}): {status}: {words}",
-                 f"  {critical_label(d['rotor']['liquid_mass_kg'] > 0)}  ω_cr  "
-                 f"{q('rotor.critical_speed_rad_s').text(d['rotor']['critical_speed_rad_s'])}",
-                 *QUANTITIES.lines(d),
-                 f"  API 684 (2005): {standards.margin_words(d['rotor'])}",
-                 f"  NLP ({d['method']}): {d['status']}, {d['ipopt_iterations']} iterations in the final solve "
-                 f"({d['solve_time_s']:.2f} s); {len(d['starts'])} starts and mesh stages "
-                 f"{d['total_solve_time_s']:.2f} s (" + ", ".join(f"{r['solve_time_s']:.2f}" for r in d["starts"]
-                                                               if "solve_time_s" in r)
-                 + f" s), NLP build {d['build_time_s']:.2f} s, wall {d['wall_time_s']:.2f} s (with the global "
+        lines = [f"spin-up ({self.objective.replace('_', ' ')}): {status}: {words}",
+                 f"  {critical_label(r.liquid_mass_kg > 0)}  ω_cr  "
+                 f"{q('rotor.critical_speed_rad_s').text(r.critical_speed_rad_s)}",
+                 *self.quantities.lines(self.to_dict()),
+                 f"  API 684 (2005): {standards.margin_words(r.margins())}",
+                 f"  NLP ({self.method}): {self.status}, {self.ipopt_iterations} iterations in the final solve "
+                 f"({self.solve_time_s:.2f} s); {len(self.starts)} starts and mesh stages "
+                 f"{self.total_solve_time_s:.2f} s (" + ", ".join(f"{s['solve_time_s']:.2f}" for s in self.starts
+                                                                 if "solve_time_s" in s)
+                 + f" s), NLP build {self.build_time_s:.2f} s, wall {self.wall_time_s:.2f} s (with the global "
                  "search, re-simulations and baselines)",
                  "  wall time split: " + ", ".join(f"{k[:-7].replace('_', ' ')} {v:.2f} s" for k, v in
-                                                   d.get("time_split", {}).items()),
-                 f"  optimum: collocation peak {significant(d['collocation_peak_over_e'])} e (re-simulation "
-                 f"difference {d['resimulation_rel_error']:.2e}), peak unbalance {significant(d['peak_unbalance'])}, "
-                 f"peak at t = {q('time_of_peak_s').text(d['time_of_peak_s'])} and "
-                 f"{q('omega_at_peak_rad_s').text(d['omega_at_peak_rad_s'])}, final time "
-                 f"{q('final_time_s').text(d['final_time_s'])}, chattering (pulse variation of alpha/alpha_max) "
-                 f"{d['control_pulse_variation']:.3g}"]
-        j = QUANTITIES.find("objective_value", d)
-        if j is not None and d.get("objective_value") is not None:
-            lines.append(f"  objective {j.symbol} ({d['objective'].replace('_', ' ')}): {j.text(d['objective_value'])}")
-        r = d["rotor"]
-        rotor = ", ".join(f"{sym} {q(f'rotor.{k}').text(r[k])}" for sym, k in (
+                                                   self.time_split.items()),
+                 f"  optimum: collocation peak {significant(self.collocation_peak_over_e)} e (re-simulation "
+                 f"difference {self.resimulation_rel_error:.2e}), peak unbalance {significant(self.peak_unbalance)}, "
+                 f"peak at t = {q('time_of_peak_s').text(self.time_of_peak_s)} and "
+                 f"{q('omega_at_peak_rad_s').text(self.omega_at_peak_rad_s)}, final time "
+                 f"{q('final_time_s').text(self.final_time_s)}, chattering (pulse variation of alpha/alpha_max) "
+                 f"{self.control_pulse_variation:.3g}"]
+        j = objective_quantity("objective_value", {"objective": self.objective})
+        if j is not None and self.objective_value is not None:
+            lines.append(f"  objective {j.symbol} ({self.objective.replace('_', ' ')}): {j.text(self.objective_value)}")
+        rotor = ", ".join(f"{sym} {q(f'rotor.{k}').text(getattr(r, k))}" for sym, k in (
             ("m1", "mass_kg"), ("c", "stiffness_N_per_m"), ("χ", "damping_N_s_per_m"), ("ζ", "damping_ratio"),
             ("e", "eccentricity_m")))
         lines.append(f"  rotor: {rotor}; deflections are 0-peak (the radius of the whirl orbit)")
-        e = d["eccentricity_m"]
-        for k, v in d["baselines"].items():
-            lim = {True: "", False: " (outside the drive limits: " + ", ".join(v["violated"]) + ")",
-                   None: ""}[v["within_drive_limits"]]
-            ref = " [reference]" if k == d["baseline_ramp_key"] else ""
-            lines.append(f"  {v['label']:52s} peak {deflection_text(v['peak_deflection_over_e'], e)}{lim}{ref}")
-        if d["gain_vs_constant_ramp_pct"] is not None:
-            lines.append(f"  gain against the constant ramp: {d['gain_vs_constant_ramp_pct']:+.2f} %")
-        sg = d.get("segments")
+        e = self.eccentricity_m
+        for k, v in self.baselines.items():
+            lim = {True: "", False: " (outside the drive limits: " + ", ".join(v.violated) + ")",
+                   None: ""}[v.within_drive_limits]
+            ref = " [reference]" if k == self.baseline_ramp_key else ""
+            lines.append(f"  {v.label:52s} peak {deflection_text(v.peak_deflection_over_e, e)}{lim}{ref}")
+        if self.gain_vs_constant_ramp_pct is not None:
+            lines.append(f"  gain against the constant ramp: {self.gain_vs_constant_ramp_pct:+.2f} %")
+        sg = self.segments
         if sg:
-            lines.append(f"  {sg['segments']}-segment ramp table: peak "
-                         f"{deflection_text(sg['peak_deflection_over_e'], e)}, {sg['loss_vs_optimum_pct']:+.2f} % "
-                         f"against the full optimum (searched from the {sg['start']} start)"
-                         + ("" if sg["within_drive_limits"] else " (outside the drive limits)"))
-            if (sg.get("dwell") or {}).get("dwells"):
-                lines.append("  CAUTION: " + dwell_words(f"the {sg['segments']}-segment ramp table", sg["dwell"],
-                                                         d["omega_cr_rad_s"]))
+            lines.append(f"  {sg.segments}-segment ramp table: peak "
+                         f"{deflection_text(sg.peak_deflection_over_e, e)}, {sg.loss_vs_optimum_pct:+.2f} % "
+                         f"against the full optimum (searched from the {sg.start} start)"
+                         + ("" if sg.within_drive_limits else " (outside the drive limits)"))
+            if sg.dwell.dwells:
+                lines.append("  CAUTION: " + dwell_words(f"the {sg.segments}-segment ramp table", sg.dwell,
+                                                         self.omega_cr_rad_s))
         return "\n".join(lines)
 
+    def _held(self):
+        if self.optimum is None:
+            raise ValueError(f"{self.name}: a Result loaded from results.json holds no re-simulations; its tables and "
+                             "figures are the files of its run")
+
     def tables(self) -> dict[str, dict]:
+        self._held()
         o = self.optimum
-        cols = {"t_s": next(iter(self.baselines.values())).t}
-        for k, v in self.baselines.items():
+        cols = {"t_s": next(iter(self.ramp_runs.values())).t}
+        for k, v in self.ramp_runs.items():
             cols |= {f"{k}_omega_rad_s": v.omega, f"{k}_deflection_over_e": v.delta, f"{k}_unbalance_d": v.d}
-        e = self.data.get("eccentricity_m") or np.nan
+        e = self.eccentricity_m or np.nan
         return {"spinup_optimum.csv": {"t_s": o.t, "omega_rad_s": o.omega, "omega_rpm": o.omega * RPM,
                                        "deflection_over_e": o.delta, "deflection_mm": o.delta * e * 1e3,
                                        "unbalance_d": o.d, "torque_N_m": o.torque},
-                "spinup_controls.csv": {"t_start_s": o.t_u, "alpha_rad_s2": o.alpha},
-                "spinup_baselines.csv": cols, "drive_profile.csv": drive_profile.drive_table(o)} | (
-            {} if self.segments is None else {"drive_segments.csv": self.segments.table(o.t[-1])})
+                "spinup_controls.csv": self.controls, "spinup_baselines.csv": cols,
+                "drive_profile.csv": drive_profile.drive_table(o)} | (
+            {} if self.ramp_table is None else {"drive_segments.csv": self.ramp_table})
 
     def _runs(self):
-        seg = [] if self.segments is None else [(self.segments.trajectory, "C4", "-.", 1.0,
-                                                 self.segments.trajectory.label)]
-        return [(self.optimum, "C3", "-", 1.4, "optimum"), *seg, *ramp_runs(self.baselines, self.data["baselines"])]
+        self._held()
+        seg = [] if self.ramp_table_run is None else [(self.ramp_table_run.trajectory, "C4", "-.", 1.0,
+                                                       self.ramp_table_run.trajectory.label)]
+        uses = {k: {"within_drive_limits": b.within_drive_limits} for k, b in self.baselines.items()}
+        return [(self.optimum, "C3", "-", 1.4, "optimum"), *seg, *ramp_runs(self.ramp_runs, uses)]
 
     def draw(self, ax) -> None:
         """Deflection against time of the optimum and both ramps (delta/e; mm on the right)."""
         ft = unit_axis(ax, "time t", "s", which="x")
         for tr, c, ls, lw, lab in self._runs():
             ax.plot(tr.t * ft, tr.delta, color=c, ls=ls, lw=lw,
-                    label=f"{lab} (peak {deflection_text(tr.peak_delta, self.data.get('eccentricity_m'))})")
+                    label=f"{lab} (peak {deflection_text(tr.peak_delta, self.eccentricity_m)})")
         ax.set_ylabel(r"deflection $\delta/e$")
-        deflection_axis(ax, self.data.get("eccentricity_m"))
+        deflection_axis(ax, self.eccentricity_m)
         ax.grid(alpha=0.3)
         legend_above_curves(ax)  # every run's peak stays visible
 
     def figures(self) -> dict:
         """Speed (rpm, rad/s), acceleration steps (rad/s², rpm/s), drive torque (N·m) and, with drive data, power (kW)
         against time; deflection (delta/e, mm) against time and speed; every axis in its display unit."""
-        title = self.data["title"]
-        wc = self.data["omega_cr_rad_s"]
-        drive = self.data["drive_polar_inertia_kg_m2"] != 0
+        title = self.title
+        wc = self.omega_cr_rad_s
+        drive = self.drive_polar_inertia_kg_m2 != 0
+        runs = self._runs()
         fig, axes = new_figure((8, 10 if drive else 8), 4 if drive else 3, 1, sharex=True)
         kw = QUANTITIES.find("max_power_W")
         ft = unit_axis(axes[-1], "time t", "s", which="x")
@@ -263,21 +405,21 @@ class SpinupResult(Result):
         fa = unit_axis(axes[1], r"acceleration $\alpha$", "rad/s^2")
         fm = unit_axis(axes[2], "drive torque M" if drive else "torque M", "N*m")
         fp = unit_axis(axes[3], "drive power P", "W", kw.declared) if drive else None
-        for tr, c, ls, lw, lab in self._runs():
+        for tr, c, ls, lw, lab in runs:
             axes[0].plot(tr.t * ft, tr.omega * fw, color=c, ls=ls, lw=lw, label=lab)
             axes[1].plot(np.append(tr.t_u, tr.t[-1]) * ft, np.append(tr.alpha, tr.alpha[-1]) * fa,
                          drawstyle="steps-post", color=c, ls=ls, lw=lw)
             axes[2].plot(tr.t * ft, tr.torque * fm, color=c, ls=ls, lw=lw)
             if drive:
                 axes[3].plot(tr.t * ft, tr.torque * tr.omega * fp, color=c, ls=ls, lw=lw)
-        liquid = self.data["rotor"]["liquid_mass_kg"] > 0
+        liquid = self.rotor.liquid_mass_kg > 0
         axes[0].axhline(wc * fw, color="k", lw=0.8, ls=":", label=critical_label(liquid, tex=True) + " = "
                         + QUANTITIES.find("omega_cr_rad_s").text(wc))
         if drive:
-            brake = self.data.get("braking_torque_limit_N_m")
-            for ax, limit, f in ((axes[2], self.data.get("torque_limit_N_m"), fm),
+            brake = self.braking_torque_limit_N_m
+            for ax, limit, f in ((axes[2], self.torque_limit_N_m, fm),
                                  (axes[2], None if brake is None else -brake, fm),
-                                 (axes[3], self.data.get("power_limit_W"), fp)):
+                                 (axes[3], self.power_limit_W, fp)):
                 if limit is not None:
                     ax.axhline(limit * f, color="k", lw=0.8, ls=":")  # the drive's limits
         else:
@@ -290,19 +432,50 @@ class SpinupResult(Result):
         fig2, (a1, a2) = new_figure((8, 7), 2, 1)
         self.draw(a1)
         fw = speed_axis(a2, "x")
-        for tr, c, ls, lw, _ in self._runs():
+        for tr, c, ls, lw, _ in runs:
             a2.plot(tr.omega * fw, tr.delta, color=c, ls=ls, lw=lw)
         a2.axvline(wc * fw, color="k", lw=0.8, ls=":", label=critical_label(liquid, tex=True) + " = "
                    + QUANTITIES.find("omega_cr_rad_s").text(wc))
         a2.set_ylabel(r"deflection $\delta/e$")
-        deflection_axis(a2, self.data.get("eccentricity_m"))
+        deflection_axis(a2, self.eccentricity_m)
         a2.grid(alpha=0.3)
         a2.legend(fontsize=7)
         fig2.suptitle(title, fontsize=9)
         return {"spinup_profiles.png": fig, "spinup_deflection.png": fig2}
 
 
-def dwell(P, tr: Trajectory, alpha_max: float) -> dict:
+def _read_csv(path: Path) -> dict | None:
+    """A CSV table the run wrote (column -> numbers, or words where a column holds them), None where it has none."""
+    if not path.is_file():
+        return None
+    with path.open(newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    names = list(rows[0]) if rows else []
+
+    def value(x: str):
+        try:
+            return float(x)
+        except ValueError:
+            return x
+
+    return {n: [value(r[n]) for r in rows] for n in names}
+
+
+#: every number of the spinup block, from the fields; the API 684 margins of the rotor, the drive's use of the optimum
+#: (declared where they are computed) and the solver log of the starts as extra declarations; an objective's value in
+#: the unit of the block's objective (:func:`objective_quantity`)
+SpinupResult.quantities = QUANTITIES = declarations(
+    SpinupResult,
+    *standards.margin_quantities("rotor.", headline=True),
+    *DRIVE_QUANTITIES,
+    Quantity("starts[].iterations", "1", "", "iterations of a start's solve"),
+    Quantity("starts[].solve_time_s starts[].build_time_s", "s", "", "solve and build time of a start"),
+    Quantity("starts[].resimulated_peak_over_e", "1", "δ*/e", "re-simulated peak of a start"),
+    Quantity("time_split.*", "s", "", "the wall time by part"),
+    resolve=objective_quantity)
+
+
+def dwell(P, tr: Trajectory, alpha_max: float) -> Dwell:
     """How long a profile stays near the critical speed: its time within DWELL_BAND of omega_cr (s), the time
     the maximum acceleration ``alpha_max`` takes across that band, the speed it spends the most time at there
     (the time-weighted median, rad/s) with the rotor's steady whirl at that speed (delta/e, the model's steady state
@@ -314,29 +487,26 @@ def dwell(P, tr: Trajectory, alpha_max: float) -> dict:
     mid = 0.5 * (tr.omega[1:] + tr.omega[:-1])
     inside = np.abs(mid - wc) <= DWELL_BAND * wc
     t_in, crossing = float(dt[inside].sum()), 2 * DWELL_BAND * wc / alpha_max
-    out = {"time_near_critical_s": t_in, "fastest_crossing_s": crossing, "dwells": t_in > DWELL_FACTOR * crossing,
-           "hold_speed_rad_s": None, "hold_steady_deflection_over_e": None}
-    if t_in > 0:
-        order = np.argsort(mid[inside])
-        cum = np.cumsum(dt[inside][order])
-        hold = float(mid[inside][order][np.searchsorted(cum, 0.5 * cum[-1])])
-        out |= {"hold_speed_rad_s": hold, "hold_steady_deflection_over_e": float(steady_state(P, hold / P.Omega0)["a"])}
-    else:
-        out |= {k: "the profile never comes within 10 % of the critical speed" for k in (
-            "hold_speed_rad_s_status", "hold_steady_deflection_over_e_status")}
-    return out
+    if t_in == 0:
+        never = "the profile never comes within 10 % of the critical speed"
+        return Dwell(t_in, crossing, False, None, None, never, never)
+    order = np.argsort(mid[inside])
+    cum = np.cumsum(dt[inside][order])
+    hold = float(mid[inside][order][np.searchsorted(cum, 0.5 * cum[-1])])
+    return Dwell(t_in, crossing, t_in > DWELL_FACTOR * crossing, hold,
+                 float(steady_state(P, hold / P.Omega0)["a"]))
 
 
-def dwell_words(what: str, dw: dict, omega_cr: float) -> str:
+def dwell_words(what: str, dw: Dwell, omega_cr: float) -> str:
     """'the 4-segment ramp table holds the rotor 4.3 s within 10 % of its critical speed (most of it at 1709 rpm,
     95 % of ω_cr, where its steady whirl is 8.0 e), more than twice the 0.75 s the maximum acceleration takes across:
     a dwell near the critical speed'."""
     q = QUANTITIES.find
-    hold = dw["hold_speed_rad_s"]
-    return (f"{what} holds the rotor {dw['time_near_critical_s']:.2g} s within {100 * DWELL_BAND:.0f} % of its "
+    hold = dw.hold_speed_rad_s
+    return (f"{what} holds the rotor {dw.time_near_critical_s:.2g} s within {100 * DWELL_BAND:.0f} % of its "
             f"critical speed (most of it at {q('omega_at_peak_rad_s').text(hold)}, {100 * hold / omega_cr:.0f} % of "
-            f"ω_cr, where its steady whirl is {significant(dw['hold_steady_deflection_over_e'], 2)} e), more than "
-            f"{DWELL_FACTOR:g} × the {dw['fastest_crossing_s']:.2g} s the maximum acceleration takes across: a dwell "
+            f"ω_cr, where its steady whirl is {significant(dw.hold_steady_deflection_over_e, 2)} e), more than "
+            f"{DWELL_FACTOR:g} × the {dw.fastest_crossing_s:.2g} s the maximum acceleration takes across: a dwell "
             "near the critical speed (a critical speed a few per cent off the datasheet's puts it at resonance)")
 
 
@@ -364,32 +534,6 @@ def deflection_text(over_e: float | None, e: float | None) -> str:
     peak deflection: '12.31 e (1.231 mm)'."""
     out = f"{significant(over_e)} e"
     return out if e is None or over_e is None else out + f" ({QUANTITIES.find('peak_deflection_m').text(over_e * e)})"
-
-
-def verdict(d: dict) -> tuple[bool | None, str]:
-    """The spin-up's one verdict from its results.json block: the optimum's peak deflection (physical, 0-peak,
-    and delta/e), its gain against the best ramp within the drive limits (the only reference a gain is quoted
-    against), whether it brakes and whether it keeps the drive limits; the NLP status first when it is not a
-    success.  An optimum that dwells near the critical speed (:func:`dwell`) is neither good nor bad (None) with a
-    CAUTION: its peak holds only for the critical speed of the scene."""
-    peak = QUANTITIES.find("peak_deflection_m").text(d["peak_deflection_m"])
-    words = f"peak deflection {peak} 0-peak ({significant(d['peak_deflection_over_e'])} e)"
-    gain, key = d.get("gain_vs_best_feasible_ramp_pct"), d.get("baseline_ramp_key")
-    if gain is not None:
-        words += f", {gain:+.1f} % against the best ramp within the drive limits ({d['baselines'][key]['label']})"
-    else:
-        words += ", no ramp keeps the drive limits: no gain is quoted"
-    if d.get("brakes") is not None:
-        words += (f"; it brakes (smallest torque {QUANTITIES.find('min_torque_N_m').text(d['min_torque_N_m'])})"
-                  if d["brakes"] else "; it does not brake")
-    ok = gain is None or gain <= 0.01
-    if (d.get("dwell") or {}).get("dwells"):  # good only if the critical speed is where the scene puts it: no verdict
-        ok, words = (None if ok else ok), words + "; CAUTION: " + dwell_words("it", d["dwell"], d["omega_cr_rad_s"])
-    if d.get("within_drive_limits") is False:
-        ok, words = False, words + f"; drive limits EXCEEDED ({', '.join(d.get('violated') or [])})"
-    if d["status"] not in SOLVED:
-        ok, words = False, f"NLP solver {d['status']}: " + words
-    return ok, words
 
 
 def method_of(settings):
@@ -445,72 +589,55 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
     opt_use = drive_use(ocp, tr)
     # API 684 (2005) / API 617 (2014): AF off the half-power points of the rotor's own steady unbalance response, the
     # separation margin from the service speed (the final speed: the scene gives no operating range)
-    rotor = {"mass_kg": P.m1, "stiffness_N_per_m": P.c, "damping_N_s_per_m": P.chi, "eccentricity_m": P.e,
-             "liquid_mass_kg": P.m2_star, "critical_speed_rad_s": P.omega_cr,
-             "damping_ratio": zeta, "service_speed_rad_s": ocp.omega_final,
-             **api_margins(P, ocp.omega_final),
-             "amplitude_convention": "0-peak (the radius of the whirl orbit)"}
-    data = {
-        "title": title, "objective": ocp.objective, "method": method.label, "status": sol.status,
-        "peak_deflection_over_e": tr.peak_delta,
-        "baseline_ramp_peak_over_e": ref_peak, "baseline_ramp_key": ref_key,
-        "gain_vs_best_feasible_ramp_pct": _pct(tr.peak_delta, ref_peak),
-        "gain_vs_constant_ramp_pct": _pct(tr.peak_delta, base["constant_ramp"].peak_delta)
-        if use["constant_ramp"]["within_drive_limits"] is not False else None,
-        "peak_deflection_m": tr.peak_delta * P.e, "rotor": rotor,
-        "resimulation_rel_error": opt.resimulation_rel_error,
-        "solve_time_s": sol.solve_time_s,
-        "ipopt_iterations": sol.iterations,
-        "collocation_peak_over_e": sol.peak_collocation if ocp.objective != "peak_unbalance" else None,
-        "objective_value": opt.score, "objective_value_transcription": opt.collocation_value,
-        "peak_unbalance": tr.peak_d, "time_of_peak_s": tr.t_peak,
-        # chattering of the optimal acceleration: the one-interval pulses' total variation (alpha/alpha_max)
-        "control_pulse_variation": pulse_variation(sol.u[:method.intervals]),
-        "omega_at_peak_rad_s": float(np.interp(tr.t_peak, tr.t, tr.omega)),
-        "integral_deflection2_s": tr.integral_delta2, "final_time_s": sol.final_time_s,
-        "build_time_s": opt.build_time_s, "total_solve_time_s": sum(r.get("solve_time_s", 0.0) for r in opt.starts),
-        "wall_time_s": time.perf_counter() - t0,
-        "starts": opt.starts, "baselines": {k: v.to_dict() | use[k] for k, v in base.items()},
-        "psi": ocp.params.psi, "eccentricity_m": ocp.params.e,
-        "omega_cr_rad_s": ocp.params.omega_cr, "Omega0_rad_s": ocp.params.Omega0,
-        "zeta0": ocp.params.zeta0, "drive_polar_inertia_kg_m2": ocp.params.J_p, **opt_use,
-        "braking_torque_limit_N_m": -ocp.torque_bounds[0] if np.isfinite(ocp.torque_bounds[0]) else None,
-        "torque_limit_N_m": ocp.torque_max, "power_limit_W": ocp.power_max,
-        # the optimum brakes when its smallest torque is below zero by more than the limit check's tolerance
-        "brakes": None if opt_use["min_torque_N_m"] is None or P.J_p == 0 else
-        bool(opt_use["min_torque_N_m"] < -DRIVE_TOL * torque_reference(ocp)),
-        "dwell": dwell(P, tr, ocp.alpha_max),
-        "accuracy": {"estimate": opt.resimulation_rel_error,
-                     "how": "relative difference between the transcription's optimal objective and its CVODES "
-                            f"re-simulation (rtol {solver_options.defaults['resimulation.tol']:g}, "
-                            f"{solver_options.defaults['resimulation.points']} samples per interval)"},
-    }
+    rotor = Rotor(P.m1, P.c, P.chi, P.e, P.m2_star, P.omega_cr, zeta, ocp.omega_final,
+                  **api_margins(P, ocp.omega_final), amplitude_convention="0-peak (the radius of the whirl orbit)")
+    gain = _pct(tr.peak_delta, ref_peak)
+    gain_constant = _pct(tr.peak_delta, base["constant_ramp"].peak_delta) \
+        if use["constant_ramp"]["within_drive_limits"] is not False else None
+    braking = -ocp.torque_bounds[0] if np.isfinite(ocp.torque_bounds[0]) else None
+    # the optimum brakes when its smallest torque is below zero by more than the limit check's tolerance
+    brakes = None if opt_use["min_torque_N_m"] is None or P.J_p == 0 else \
+        bool(opt_use["min_torque_N_m"] < -DRIVE_TOL * torque_reference(ocp))
     outside = "no ramp baseline keeps the drive limits (each is labelled outside them): no gain is quoted"
-    for key, why in (("braking_torque_limit_N_m", "no braking-torque limit: the scene names no drive limit"),
-                     ("torque_limit_N_m", "no torque limit in the scene"),
-                     ("power_limit_W", "no power limit in the scene"),
-                     ("brakes", "unknown: the scene gives no drive inertia, so the optimum's torque is not known"),
-                     ("baseline_ramp_peak_over_e", outside), ("baseline_ramp_key", outside),
-                     ("gain_vs_best_feasible_ramp_pct", outside),
-                     ("gain_vs_constant_ramp_pct", "the constant ramp is outside the drive limits: no gain is quoted")):
-        if data[key] is None:
-            data[f"{key}_status"] = why
-    if ocp.objective == "peak_unbalance":
-        data["collocation_peak_unbalance"] = opt.collocation_value
-    if seg is not None:
-        data["segments"] = {"segments": segments, "peak_deflection_over_e": seg.trajectory.peak_delta,
-                            "peak_unbalance": seg.trajectory.peak_d, "objective_value": seg.objective,
-                            "loss_vs_optimum_pct": _pct(seg.objective, opt.score),
-                            "evaluations": seg.evaluations, "start": seg.start,
-                            "start_objectives": seg.start_objectives, **seg.drive,
-                            "dwell": dwell(P, seg.trajectory, ocp.alpha_max)}
+    statuses = {f"{key}_status": why for key, value, why in (
+        ("braking_torque_limit_N_m", braking, "no braking-torque limit: the scene names no drive limit"),
+        ("torque_limit_N_m", ocp.torque_max, "no torque limit in the scene"),
+        ("power_limit_W", ocp.power_max, "no power limit in the scene"),
+        ("brakes", brakes, "unknown: the scene gives no drive inertia, so the optimum's torque is not known"),
+        ("baseline_ramp_peak_over_e", ref_peak, outside), ("baseline_ramp_key", ref_key, outside),
+        ("gain_vs_best_feasible_ramp_pct", gain, outside),
+        ("gain_vs_constant_ramp_pct", gain_constant, "the constant ramp is outside the drive limits: no gain is "
+                                                     "quoted")) if value is None}
+    table = None if seg is None else RampTable(
+        segments, seg.trajectory.peak_delta, seg.trajectory.peak_d, seg.objective, _pct(seg.objective, opt.score),
+        seg.evaluations, seg.start, seg.start_objectives, **seg.drive, dwell=dwell(P, seg.trajectory, ocp.alpha_max))
     # the wall time by part (s): what the global search, the initial guesses, the NLP builds, the IPOPT solves,
     # the CVODES re-simulations (reference ramp, ranking near-ties, the optimum) and the baselines took
+    total_solve = sum(r.get("solve_time_s", 0.0) for r in opt.starts)
     split = {"global_search": opt.times.get("global_search", 0.0), "guesses": opt.times.get("guesses", 0.0),
-             "build": opt.build_time_s, "solve": data["total_solve_time_s"],
+             "build": opt.build_time_s, "solve": total_solve,
              "resimulation": opt.times.get("resimulation", 0.0), "baselines": t_base,
              "segments": t_seg}
-    data["wall_time_s"] = time.perf_counter() - t0
-    split["rest"] = data["wall_time_s"] - sum(split.values())
-    data["time_split"] = {f"{k}_time_s": v for k, v in split.items()}
-    return SpinupResult(data, tr, base, seg)
+    wall = time.perf_counter() - t0
+    split["rest"] = wall - sum(split.values())
+    return SpinupResult(
+        title, ocp.objective, method.label, sol.status, tr.peak_delta, ref_peak, ref_key, gain, gain_constant,
+        tr.peak_delta * P.e, rotor, opt.resimulation_rel_error, sol.solve_time_s, sol.iterations,
+        sol.peak_collocation if ocp.objective != "peak_unbalance" else None, opt.score, opt.collocation_value,
+        tr.peak_d, tr.t_peak,
+        # chattering of the optimal acceleration: the one-interval pulses' total variation (alpha/alpha_max)
+        pulse_variation(sol.u[:method.intervals]), float(np.interp(tr.t_peak, tr.t, tr.omega)),
+        tr.integral_delta2, sol.final_time_s, opt.build_time_s, total_solve, wall, opt.starts,
+        {k: Baseline(v.label, v.peak_delta, v.peak_d, v.t_peak, v.integral_delta2, **use[k]) for k, v in base.items()},
+        ocp.params.psi, ocp.params.e, ocp.params.omega_cr, ocp.params.Omega0, ocp.params.zeta0, ocp.params.J_p,
+        **opt_use, braking_torque_limit_N_m=braking, torque_limit_N_m=ocp.torque_max, power_limit_W=ocp.power_max,
+        brakes=brakes, dwell=dwell(P, tr, ocp.alpha_max),
+        accuracy={"estimate": opt.resimulation_rel_error,
+                  "how": "relative difference between the transcription's optimal objective and its CVODES "
+                         f"re-simulation (rtol {solver_options.defaults['resimulation.tol']:g}, "
+                         f"{solver_options.defaults['resimulation.points']} samples per interval)"},
+        **statuses,
+        collocation_peak_unbalance=opt.collocation_value if ocp.objective == "peak_unbalance" else None,
+        segments=table, time_split={f"{k}_time_s": v for k, v in split.items()},
+        optimum=tr, ramp_runs=base, ramp_table_run=seg, controls={"t_start_s": tr.t_u, "alpha_rad_s2": tr.alpha},
+        ramp_table=None if seg is None else seg.table(tr.t[-1]))

@@ -89,16 +89,16 @@ class FrontPoint:
         """|collocation peak - re-simulated peak| / re-simulated peak."""
         return abs(self.collocation_peak - self.peak) / self.peak
 
-    def to_dict(self) -> dict:
+    @property
+    def iterations(self) -> int:
+        """Solver iterations: of every start of the min_time OCP (free final time), else of the final solve."""
         o = self.optimum
-        s = PEAK_KEY[o.ocp.deflection_unit]
-        return {"arrival_time_s": self.arrival_time_s, f"resimulated_peak_{s}": self.peak,
-                f"collocation_peak_{s}": self.collocation_peak,
-                "resimulation_rel_error": self.resimulation_rel_error, "objective": o.ocp.objective,
-                "intervals": self.intervals, "held_from_s": self.held_from_s,
-                "iterations": sum(r.get("iterations", 0) for r in o.starts) if o.ocp.free_time
-                else o.solution.iterations, "build_time_s": o.build_time_s,
-                "solve_time_s": sum(r.get("solve_time_s", 0.0) for r in o.starts)}
+        return sum(r.get("iterations", 0) for r in o.starts) if o.ocp.free_time else o.solution.iterations
+
+    @property
+    def solve_time_s(self) -> float:
+        """Solve time of every start, s."""
+        return sum(r.get("solve_time_s", 0.0) for r in self.optimum.starts)
 
 
 def deadline_point(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation, deadline: float,

@@ -136,7 +136,7 @@ def test_spinup_page_numbers_equal_autobal_run_after_reoptimising(tmp_path):
     assert ans["status"] == "no_optimum" and "optimum" not in ans  # nothing shown as the optimum before one exists
     ex.optimise(ex.defaults())
     stale = ex.evaluate(values)["optimum"]
-    run = autobal.run(autobal.load(ex.save(values, tmp_path / "spin.yaml")))["spinup"].data
+    run = autobal.run(autobal.load(ex.save(values, tmp_path / "spin.yaml")))["spinup"].to_dict()
     for key, ramp in ans["ramps"].items():
         assert ramp["peak_over_e"] == pytest.approx(run["baselines"][key]["peak_deflection_over_e"], rel=1e-9), key
         assert ramp["within_drive_limits"] == run["baselines"][key]["within_drive_limits"]

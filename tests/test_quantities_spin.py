@@ -7,12 +7,11 @@ gain against the best ramp within the drive limits and whether it brakes."""
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 import math
 import re
-from types import SimpleNamespace
 
-import numpy as np
 import pytest
 
 import autobal
@@ -20,7 +19,6 @@ from autobal import report
 from autobal.analysis.quantities import significant
 from autobal.ocp import robust_study, spinup_study, time_optimal_study
 from autobal.ocp.modal import QUANTITIES as MODAL
-from autobal.ocp.modal import ModalSpinupResult
 from autobal.ocp.solve import ipopt_options
 from tests.test_quantities import check_declared
 
@@ -150,45 +148,47 @@ def test_spinup_verdict_is_the_peak_the_gain_and_braking(datasheet):
     assert "Solve_Succeeded" not in main["text"]
     assert run["spinup"].verdict() == (True, main["text"])
     headline = {r[0]["text"]: (r[2]["text"], r[3]["text"]) for r in sec["tables"][0]["rows"]}
-    assert headline["largest drive power"] == (significant(d["max_power_W"] / 1e3), "kW")
+    assert headline["largest drive power of the optimum"] == (significant(d["max_power_W"] / 1e3), "kW")
     assert headline["peak deflection of the optimum over the eccentricity"][1] == "dimensionless"
 
 
 def test_a_failed_solve_or_a_worse_optimum_is_not_ok():
-    d = {"peak_deflection_m": 1.2e-3, "peak_deflection_over_e": 12.0, "gain_vs_best_feasible_ramp_pct": -5.0,
-         "baseline_ramp_key": "constant_ramp", "baselines": {"constant_ramp": {"label": "constant ramp"}},
-         "brakes": True, "min_torque_N_m": -120.0, "within_drive_limits": True, "status": "Solve_Succeeded"}
-    ok, words = spinup_study.verdict(d)
+    from tests.test_typed_ocp import spinup_result
+
+    res = spinup_result(peak_deflection_m=1.2e-3, peak_deflection_over_e=12.0, gain_vs_best_feasible_ramp_pct=-5.0,
+                        brakes=True, min_torque_N_m=-120.0, within_drive_limits=True)
+    ok, words = res.verdict()
     assert ok and words.endswith("it brakes (smallest torque -120.0 N·m)") and "1.200 mm" in words
-    ok, words = spinup_study.verdict(d | {"status": "Maximum_Iterations_Exceeded"})
+    ok, words = dataclasses.replace(res, status="Maximum_Iterations_Exceeded").verdict()
     assert ok is False and words.startswith("NLP solver Maximum_Iterations_Exceeded: peak deflection 1.200 mm")
-    assert spinup_study.verdict(d | {"gain_vs_best_feasible_ramp_pct": 3.0})[0] is False
-    ok, words = spinup_study.verdict(d | {"gain_vs_best_feasible_ramp_pct": None, "baseline_ramp_key": None})
+    assert dataclasses.replace(res, gain_vs_best_feasible_ramp_pct=3.0).verdict()[0] is False
+    ok, words = dataclasses.replace(res, gain_vs_best_feasible_ramp_pct=None, baseline_ramp_key=None).verdict()
     assert "no ramp keeps the drive limits: no gain is quoted" in words
-    ok, words = spinup_study.verdict(d | {"within_drive_limits": False, "violated": ["power limit"]})
+    ok, words = dataclasses.replace(res, within_drive_limits=False, violated=["power limit"]).verdict()
     assert ok is False and "drive limits EXCEEDED (power limit)" in words
 
 
 def test_robust_verdict_never_compares_with_a_ramp_outside_the_drive_limits():
-    prof = {"robust": {"validation_worst_over_e": 17.4}, "nominal": {"validation_worst_over_e": 23.1},
-            "ramp": {"validation_worst_over_e": 15.0, "within_drive_limits": False}}
-    d = {"profiles": prof, "validation_samples": 1000, "eccentricity_m": 1e-4}
-    ok, words = robust_study.verdict(d)
+    prof = {"robust": {"label": "robust", "validation_worst_over_e": 17.4},
+            "nominal": {"label": "nominal", "validation_worst_over_e": 23.1},
+            "ramp": {"label": "ramp", "validation_worst_over_e": 15.0, "within_drive_limits": False}}
+    ok, words = robust_study.verdict(robust_study.Profiles.from_dict(prof), 1000, "1", 1e-4)
     assert ok and words.startswith("worst peak over 1000 validation rotors: robust 17.40 e (1.740 mm)")
     assert words.endswith("(outside the drive limits, not compared)")
     prof["ramp"]["within_drive_limits"] = True
-    assert robust_study.verdict(d)[0] is False
+    assert robust_study.verdict(robust_study.Profiles.from_dict(prof), 1000, "1", 1e-4)[0] is False
 
 
 def test_time_optimal_verdict_is_the_earliest_arrival_under_the_limit():
-    d = {"deflection_limit_over_e": 13.0, "peak_deflection_over_e": 12.99, "arrival_time_s": 4.3, "front": [],
-         "ramp_arrival_time_s": 4.25, "ramp_peak_over_e": 14.15, "eccentricity_m": 1e-4, "final_speed_rad_s": 210.0,
-         "monotone": True}
-    ok, words = time_optimal_study.verdict(d)
+    res = time_optimal_study.TimeOptimalResult(
+        "t", "collocation", "1", eccentricity_m=1e-4, horizon_s=6.0, ramp_label="ramp", final_speed_rad_s=210.0,
+        ramp_arrival_time_s=4.25, ramp_peak=14.15, front=[], monotone=True, build_time_s=0.0, solve_time_s=0.0,
+        resimulation_rel_error=0.0, accuracy={}, deflection_limit=13.0, arrival_time_s=4.3, peak_deflection=12.99)
+    ok, words = res.verdict()
     assert ok and words.startswith("earliest arrival at 210.0 rad/s (2005 rpm) with the peak ≤ 13.00 e (1.300 mm): "
                                    "4.300 s, peak 12.99 e (1.299 mm) (0.07692 % below the limit)")
-    assert time_optimal_study.verdict(d | {"peak_deflection_over_e": 13.5})[0] is False
-    ok, words = time_optimal_study.verdict(d | {"deflection_limit_over_e": None, "monotone": False})
+    assert dataclasses.replace(res, peak_deflection=13.5).verdict()[0] is False
+    ok, words = dataclasses.replace(res, deflection_limit=None, monotone=False).verdict()
     assert ok is False and "NOT monotone" in words
 
 
@@ -197,18 +197,17 @@ def test_ross_api684_values_of_each_critical_speed():
     the run): in to_dict beside the critical speeds with their statuses, the final speed the optimum ends at; declared
     with the standard as the source."""
     from autobal.analysis.standards import HalfPower, margin_check
+    from autobal.ocp.modal import CriticalSpeeds, Margin
 
     margins = [margin_check(HalfPower(91.78, 91.8, 1.0, 90.5, 93.1, 91.8 / 2.6), 350.0),
                margin_check(HalfPower(270.99, status="no peak of its own"), 350.0)]
-    cs = {"reduced_wd_rad_s": [91.78, 270.99], "reduced_damping_ratio": [0.01309, 0.0], "ross_wd_rad_s": None,
-          "ross_damping_ratio": None, "max_rel_error_vs_ross": None, "margins": margins}
-    res = ModalSpinupResult({"critical_speeds": cs}, SimpleNamespace(omega=np.array([50.0, 350.0])), {}, {})
-    d = res.to_dict()["critical_speeds"]["margins"]
+    cs = CriticalSpeeds([91.78, 270.99], [0.01309, 0.0], [Margin(**m) for m in margins], None, None, None)
+    d = cs.to_dict()["margins"]
     assert d[0]["amplification_factor"] == pytest.approx(91.8 / 2.6) and d[1]["amplification_factor"] is None
     assert d[1]["amplification_factor_status"] == "no peak of its own"
     assert [m["separation_margin_pct"] for m in d] == pytest.approx([100 * (350 - 91.8) / 350,
                                                                      100 * (350 - 270.99) / 350])
-    assert res.to_dict()["final_speed_rad_s"] == 350.0
+    assert d == margins and list(d[1]) == list(margins[1])  # margin_check's block, its statuses where it puts them
     assert MODAL.find("critical_speeds.margins.0.amplification_factor").source.startswith("API 684 (2005)")
 
 

@@ -28,11 +28,11 @@ def test_peaks_are_declared_in_the_models_unit():
                  "rounds.0.worst_design_peak_{}", "robust_collocation_worst_{}"):
         m, e = QUANTITIES.find(path.format("m")), QUANTITIES.find(path.format("over_e"))
         assert (m.unit, m.display, e.unit) == ("m", "µm", "1"), path
-    assert peak_text({"peak_unit": "m"}, 2.2222e-5) == "22.22 µm"
-    assert peak_text({"peak_unit": "1", "eccentricity_m": 1e-4}, 18.6548) == "18.65 e (1.865 mm)"
-    assert peak_text({"peak_unit": "1"}, 18.6548) == "18.65 e"
+    assert peak_text(2.2222e-5, "m") == "22.22 µm"
+    assert peak_text(18.6548, "1", 1e-4) == "18.65 e (1.865 mm)"
+    assert peak_text(18.6548, "1") == "18.65 e"
     with display_units({"length": "mm"}):  # a length unit the scene or the CLI chooses
-        assert peak_text({"peak_unit": "m"}, 2.2222e-5) == "0.02222 mm"
+        assert peak_text(2.2222e-5, "m") == "0.02222 mm"
 
 
 def test_a_coarse_profile_has_the_peaks_of_the_same_profile_on_the_full_mesh():
@@ -61,11 +61,10 @@ def test_shipped_scene_end_to_end(shipped_run):
     with a 3 % margin, its measured error 1.8 %; against CVODES on the nominal's worst screened rotor)."""
     run, folder = shipped_run("ross_spinup_robust")
     res = run["ross_spinup_robust"]
-    d = res.to_dict()
     check_declared(folder)
-    assert d["peak_unit"] == "m" and json.loads((folder / "results.json").read_text())["ross_spinup_robust"]
+    assert res.peak_unit == "m" and json.loads((folder / "results.json").read_text())["ross_spinup_robust"]
     assert res.verdict()[0] is True
-    assert d["modes"] >= 2 and d["omega_cr_rad_s"] < 200.0
+    assert res.modes >= 2 and res.omega_cr_rad_s < 200.0
     scene = scenario.load("ross_spinup_robust")
     s = scene.analyses.ross_spinup_robust
     ocp = analysis.problem(scene, s)
@@ -79,8 +78,8 @@ def test_shipped_scene_end_to_end(shipped_run):
                                     rb.Profile("nominal", u["nominal"]))[0]
     assert robust_bound < nominal_worst
     # the nominal optimum is the better profile on the nominal rotor (re-simulated)
-    p = d["profiles"]
-    assert p["nominal"]["nominal_peak_m"] <= p["robust"]["nominal_peak_m"] * (1 + 1e-3)
+    p = res.profiles
+    assert p.nominal.nominal_peak_m <= p.robust.nominal_peak_m * (1 + 1e-3)
     text = res.summary()
     assert "µm" in text and " e (" not in text
     assert "Robust spin-up of a ROSS rotor" in (folder / "report.html").read_text()

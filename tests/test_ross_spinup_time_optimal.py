@@ -58,8 +58,8 @@ def test_peaks_are_declared_in_the_models_unit():
                 "limited.collocation_peak_{}"):
         m, e = QUANTITIES.find(key.format("m")), QUANTITIES.find(key.format("over_e"))
         assert (m.unit, m.display, e.unit) == ("m", "µm", "1"), key
-    assert peak_text({"peak_unit": "m"}, 6.9846e-6) == "6.985 µm"
-    assert peak_text({"peak_unit": "1", "eccentricity_m": 1e-4}, 12.99) == "12.99 e (1.299 mm)"
+    assert peak_text(6.9846e-6, "m") == "6.985 µm"
+    assert peak_text(12.99, "1", 1e-4) == "12.99 e (1.299 mm)"
 
 
 def ramp_peak(ocp: modal.ModalSpinupOcp, alpha: float) -> float:
@@ -99,31 +99,30 @@ def test_shipped_scene_end_to_end(shipped_run, scene):
     maximum-acceleration ramp, which breaks it."""
     run, folder = shipped_run(scene)
     res = run[scene]
-    d = res.to_dict()
     check_declared(folder)
-    assert d["peak_unit"] == "m" and json.loads((folder / "results.json").read_text())[scene]
-    assert res.verdict()[0] is True and d["limited"]["objective"] == "min_time"
+    assert res.peak_unit == "m" and json.loads((folder / "results.json").read_text())[scene]
+    assert res.verdict()[0] is True and res.limited.objective == "min_time"
     lim = 7e-6
-    assert d["deflection_limit_m"] == pytest.approx(lim, rel=1e-12)
+    assert res.deflection_limit == pytest.approx(lim, rel=1e-12)
 
     s = scenario.load(scene).analyses.ross_spinup_time_optimal
     ocp = analysis.ross_spinup.problem(scenario.load(scene), s)
-    sol = res.limited.optimum.solution
+    sol = res.limited_point.optimum.solution
     t, w, xy = rr.simulate_fixed(ocp.rotor, ocp.omega_start, sol.u * ocp.alpha_max, sol.h / ocp.Om, ocp.nodes,
                                     tol=1e-11)
     peak = float(np.hypot(xy[:, 0], xy[:, 1]).max())
     assert lim * (1 - 3e-3) <= peak <= lim * (1 + 1e-5)
-    assert_allclose(peak, d["peak_deflection_m"], rtol=1e-5)
+    assert_allclose(peak, res.peak_deflection, rtol=1e-5)
     assert w[-1] == pytest.approx(s.final_speed, rel=1e-9)
-    assert d["arrival_time_s"] == pytest.approx(float(np.sum(sol.h[:res.limited.intervals])) / ocp.Om, rel=1e-12)
+    assert res.arrival_time_s == pytest.approx(float(np.sum(sol.h[:res.limited.intervals])) / ocp.Om, rel=1e-12)
     # the collocation's own equation (the complex envelope), integrated by CVODES on the same profile
     env = simulate_profile(ocp, sol.u, sol.h, list(np.linspace(0, 1, 33)[1:]), tol=1e-10)
     assert_allclose(np.sqrt(ocp.epigraph2(env).max()) * ocp.amplitude_scale, peak, rtol=5e-3)
 
     a_ramp = fastest_ramp_within(ocp, lim)
     t_ramp = (s.final_speed - s.start_speed) / a_ramp
-    assert d["arrival_time_s"] < 0.5 * t_ramp
-    assert d["ramp_arrival_time_s"] < d["arrival_time_s"] and d["ramp_peak_m"] > lim
+    assert res.arrival_time_s < 0.5 * t_ramp
+    assert res.ramp_arrival_time_s < res.arrival_time_s and res.ramp_peak > lim
     text = res.summary()
     assert "µm" in text and " e (" not in text and "acceleration limit only" in text
     page = (folder / "report.html").read_text()

@@ -62,42 +62,42 @@ def target():
 
 def test_baseline_ramps_spec_8_7(target):
     # recomputed: 20 s^-2 ramp peaks at 16.39 e, the 40 s^-2 ramp + hold at 14.15 e
-    b = target.data["baselines"]
-    assert_allclose(b["constant_ramp"]["peak_deflection_over_e"], 16.39, atol=5e-3)
-    assert_allclose(b["max_acceleration_ramp"]["peak_deflection_over_e"], 14.15, atol=5e-3)
-    assert_allclose(b["constant_ramp"]["peak_deflection_over_e"], 16.393, atol=5e-4)  # passage table: n = 5, psi = 1
+    b = target.baselines
+    assert_allclose(b["constant_ramp"].peak_deflection_over_e, 16.39, atol=5e-3)
+    assert_allclose(b["max_acceleration_ramp"].peak_deflection_over_e, 14.15, atol=5e-3)
+    assert_allclose(b["constant_ramp"].peak_deflection_over_e, 16.393, atol=5e-4)  # passage table: n = 5, psi = 1
 
 
 def test_optimum_beats_both_ramps_and_resimulates(target):
-    d = target.data
-    assert d["status"] == "Solve_Succeeded"
+    d = target
+    assert d.status == "Solve_Succeeded"
     # the reported peak is the CVODES re-simulation's: an independent integrator (scipy LSODA at tight
     # tolerance on the rotor ODE of autobal.models.rotor, dense output sampled finely) gives the same peak
-    assert_allclose(d["peak_deflection_over_e"], independent_peak(target.optimum), rtol=1e-3)
-    assert d["peak_deflection_over_e"] <= 14.15  # recomputed: any optimiser with alpha_max >= 40 must reach this
-    assert d["peak_deflection_over_e"] <= min(v["peak_deflection_over_e"] for v in d["baselines"].values())
-    assert d["resimulation_rel_error"] < 0.01  # the issue: re-simulated peak within 1 % of the collocation peak
+    assert_allclose(d.peak_deflection_over_e, independent_peak(target.optimum), rtol=1e-3)
+    assert d.peak_deflection_over_e <= 14.15  # recomputed: any optimiser with alpha_max >= 40 must reach this
+    assert d.peak_deflection_over_e <= min(v.peak_deflection_over_e for v in d.baselines.values())
+    assert d.resimulation_rel_error < 0.01  # the issue: re-simulated peak within 1 % of the collocation peak
     # the profile keeps the limits and ends at omega_final
     assert np.all(np.abs(target.optimum.alpha) <= 40.0 * (1 + 1e-9))
     assert_allclose(target.optimum.omega[-1], 210.0, rtol=1e-6)
     for key in ("peak_deflection_over_e", "baseline_ramp_peak_over_e", "resimulation_rel_error", "solve_time_s",
                 "ipopt_iterations"):
-        assert key in d
+        assert key in d.to_dict()
     # the chattering measure of the reported controls is the measure of the optimum's own steps
-    assert d["control_pulse_variation"] == pytest.approx(pulse_variation(target.optimum.alpha[:200] / 40.0), abs=1e-12)
+    assert d.control_pulse_variation == pytest.approx(pulse_variation(target.optimum.alpha[:200] / 40.0), abs=1e-12)
     assert "chattering (pulse variation of alpha/alpha_max)" in target.summary()
 
 
 def test_time_split_adds_up_to_the_wall_time(target):
     # the study's wall time by part (global search, guesses, builds, solves, re-simulations, baselines, rest)
     # is what the summary prints: every part is non-negative and they add up to the reported wall time
-    d = target.data
-    split = d["time_split"]
+    d = target
+    split = d.time_split
     assert set(split) == {f"{k}_time_s" for k in ("global_search", "guesses", "build", "solve", "resimulation",
                                                   "baselines", "segments", "rest")}
     assert all(v >= 0 for v in split.values())
-    assert_allclose(sum(split.values()), d["wall_time_s"], rtol=1e-12)
-    assert split["build_time_s"] == d["build_time_s"] and split["solve_time_s"] == d["total_solve_time_s"]
+    assert_allclose(sum(split.values()), d.wall_time_s, rtol=1e-12)
+    assert split["build_time_s"] == d.build_time_s and split["solve_time_s"] == d.total_solve_time_s
     assert "wall time split: global search" in target.summary()
 
 
@@ -161,9 +161,9 @@ def test_other_objectives_never_worse_than_the_ramps(objective):
     ocp = small(objective=objective, settling_time=10.0 if objective == "integrated_deflection" else 0.0)
     res = run(ocp, S.DirectCollocation(40, 3, "radau"), multistart=False)
     key = {"peak_unbalance": "peak_unbalance", "integrated_deflection": "integral_deflection2_s"}[objective]
-    best = min(v[key] for v in res.data["baselines"].values())
-    assert res.data[key] <= best * (1 + 1e-3)
-    assert res.data["resimulation_rel_error"] < 0.02
+    best = min(getattr(v, key) for v in res.baselines.values())
+    assert getattr(res, key) <= best * (1 + 1e-3)
+    assert res.resimulation_rel_error < 0.02
     if objective == "integrated_deflection":  # the settling window holds omega_final
         assert_allclose(res.optimum.omega[-1], 1.5, rtol=1e-9)
         assert_allclose(res.optimum.t[-1], 60.0, rtol=1e-12)
@@ -174,16 +174,15 @@ def test_min_time_keeps_the_deflection_limit():
     # a 5.8 e limit makes the minimum time longer than that ramp's, yet shorter than the horizon
     ocp = small(objective="min_time", deflection_limit=5.8)
     res = run(ocp, S.DirectCollocation(40, 3, "radau"), multistart=False)
-    T = res.data["final_time_s"]
+    T = res.final_time_s
     assert (1.5 - 0.5) / 0.03 < T < 50.0
-    assert res.data["peak_deflection_over_e"] <= 5.8 * 1.01
-    assert res.data["baselines"]["max_acceleration_ramp"]["peak_deflection_over_e"] > 5.8
+    assert res.peak_deflection_over_e <= 5.8 * 1.01
+    assert res.baselines["max_acceleration_ramp"].peak_deflection_over_e > 5.8
     # the minimum-peak stage it starts from is part of the study: its solves are listed and timed, so the wall
     # time split leaves little to "rest" (before, the whole stage fell there)
-    d = res.data
-    assert any(r["start"].startswith("minimum-peak stage: ") and r.get("solve_time_s", 0) > 0 for r in d["starts"])
-    assert d["total_solve_time_s"] == pytest.approx(sum(r.get("solve_time_s", 0.0) for r in d["starts"]))
-    assert 0 <= d["time_split"]["rest_time_s"] < 0.2 * d["wall_time_s"]
+    assert any(r["start"].startswith("minimum-peak stage: ") and r.get("solve_time_s", 0) > 0 for r in res.starts)
+    assert res.total_solve_time_s == pytest.approx(sum(r.get("solve_time_s", 0.0) for r in res.starts))
+    assert 0 <= res.time_split["rest_time_s"] < 0.2 * res.wall_time_s
     # below the smallest peak reachable in the horizon the limit itself is the binding constraint
     with pytest.raises(SolveError, match=r"binding constraint: deflection limit delta/e <= 5"):
         S.optimize(small(objective="min_time", deflection_limit=5.0), S.DirectCollocation(40, 3, "radau"), False)
@@ -193,11 +192,11 @@ def test_drive_torque_and_power_limits_hold_in_the_resimulation():
     p = RotorParams(m1=1.0, c=105.0**2, chi=5.0, e=1e-3, J_p=1e-3).with_psi(0.5)
     ocp = S.SpinupOcp(p, 40.0, 210.0, 8.5, 40.0, torque_max=0.05, power_max=6.0)
     res = run(ocp, S.DirectCollocation(120, 3, "radau"), multistart=False)
-    assert res.data["status"] == "Solve_Succeeded"
-    assert res.data["max_torque_N_m"] <= 0.05 * 1.01
-    assert res.data["max_power_W"] <= 6.0 * 1.01
+    assert res.status == "Solve_Succeeded"
+    assert res.max_torque_N_m <= 0.05 * 1.01
+    assert res.max_power_W <= 6.0 * 1.01
     # the unconstrained 40 s^-2 ramp would need more torque than the drive has
-    assert not res.data["baselines"]["max_acceleration_ramp"]["within_drive_limits"]
+    assert not res.baselines["max_acceleration_ramp"].within_drive_limits
 
 
 def test_infeasible_acceleration_limit_names_the_binding_constraint():

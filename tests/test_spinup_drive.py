@@ -150,10 +150,9 @@ def test_braking_allowed_by_default_and_the_optimum_may_brake():
     ocp = spinup_ocp(scene, scene.analyses.spinup)
     assert ocp.torque_bounds == (-150.0, 150.0)
     res = spinup_study.run(ocp, spinup_study.method_of(scene.analyses.spinup), multistart=False)
-    d = res.data
-    assert d["braking_torque_limit_N_m"] == 150.0
-    assert d["brakes"] == (d["min_torque_N_m"] < -0.15)
-    assert d["min_torque_N_m"] >= -150 * 1.001
+    assert res.braking_torque_limit_N_m == 150.0
+    assert res.brakes == (res.min_torque_N_m < -0.15)
+    assert res.min_torque_N_m >= -150 * 1.001
     assert "brake" in res.summary()
 
 
@@ -196,15 +195,15 @@ def test_datasheet_rotor_gives_the_same_optimum_as_the_rotor_in_si(tmp_path):
     p = out["sheet"][0]
     assert_allclose([p.m1, p.c, p.chi, p.e], [120, 120 * wc**2, 2 * 0.02 * 120 * wc, e], rtol=1e-12)
     assert p.zeta0 == pytest.approx(0.02, rel=1e-12) and p.Omega0 == pytest.approx(wc, rel=1e-12)
-    a, b = out["sheet"][1].data, out["si"][1].data
-    assert_allclose(a["peak_deflection_over_e"], b["peak_deflection_over_e"], rtol=1e-9)
-    assert_allclose(a["peak_deflection_m"], b["peak_deflection_m"], rtol=1e-9)
-    r = a["rotor"]
-    assert r["critical_speed_rad_s"] == pytest.approx(wc)
-    assert r["damping_ratio"] == pytest.approx(0.02)
-    assert r["amplification_factor"] == pytest.approx(24.96, abs=0.005)  # API 684: half-power points, not 1/(2 zeta)
-    assert r["separation_margin_pct"] == pytest.approx(100 * (4000 - 2400 / math.sqrt(1 - 8e-4)) / 4000)  # from N_s
-    assert a["peak_deflection_m"] == pytest.approx(a["peak_deflection_over_e"] * e)
+    a, b = out["sheet"][1], out["si"][1]
+    assert_allclose(a.peak_deflection_over_e, b.peak_deflection_over_e, rtol=1e-9)
+    assert_allclose(a.peak_deflection_m, b.peak_deflection_m, rtol=1e-9)
+    r = a.rotor
+    assert r.critical_speed_rad_s == pytest.approx(wc)
+    assert r.damping_ratio == pytest.approx(0.02)
+    assert r.amplification_factor == pytest.approx(24.96, abs=0.005)  # API 684: half-power points, not 1/(2 zeta)
+    assert r.separation_margin_pct == pytest.approx(100 * (4000 - 2400 / math.sqrt(1 - 8e-4)) / 4000)  # from N_s
+    assert a.peak_deflection_m == pytest.approx(a.peak_deflection_over_e * e)
 
 
 def test_residual_unbalance_in_g_mm():

@@ -109,6 +109,6 @@ def test_the_study_with_fatrop_finds_ipopt_s_optimum():
     peaks = {}
     for solver in ("ipopt", "fatrop"):
         r = spinup_study.run(ocp, spinup_study.method_of(s.model_copy(update={"nlp_solver": solver})))
-        assert r.data["status"] == "Solve_Succeeded"
-        peaks[solver] = r.data["peak_deflection_over_e"]
+        assert r.status == "Solve_Succeeded"
+        peaks[solver] = r.peak_deflection_over_e
     assert_allclose(peaks["fatrop"], peaks["ipopt"], rtol=1e-4)

@@ -124,12 +124,12 @@ def test_robust_profile_beats_nominal_optimum_and_every_ramp_on_1000_rotors():
     assert w["robust"] < w["nominal"]
     assert w["robust"] < w["ramp"]
     assert res.worst_design["robust"] < min(res.worst_design["nominal"], res.worst_design["ramp"])
-    assert all(r["validation_worst_over_e"] > w["robust"] for r in res.data["ramps"])
-    assert res.data["validation_check_rel_error"] < 2e-4
-    assert res.data["resimulation_rel_error"] < 0.01  # 100 ms control step
-    split = res.data["time_split"]  # the parts do not overlap: they add up to the wall time, none negative
-    assert sum(split.values()) == pytest.approx(res.data["wall_time_s"], rel=1e-9) and min(split.values()) >= 0
-    assert split["robust_build_time_s"] == res.data["build_time_s"]
+    assert all(r.validation_worst_over_e > w["robust"] for r in res.ramps)
+    assert res.validation_check_rel_error < 2e-4
+    assert res.resimulation_rel_error < 0.01  # 100 ms control step
+    split = res.time_split  # the parts do not overlap: they add up to the wall time, none negative
+    assert sum(split.values()) == pytest.approx(res.wall_time_s, rel=1e-9) and min(split.values()) >= 0
+    assert split["robust_build_time_s"] == res.build_time_s
     assert res.nominal_runs["nominal"].peak_delta < res.nominal_runs["robust"].peak_delta  # the price on nominal
     assert set(res.figures()) == {"spinup_robust_profiles.png", "spinup_robust_distribution.png",
                                   "spinup_robust_scatter.png"}
@@ -151,17 +151,17 @@ def test_time_optimal_front_is_monotone_and_every_point_resimulates_within_half_
     res = time_optimal_study.run(ocp, DirectCollocation(120), 4, multistart=False)
     t, pk = res.arrival_times, res.peaks
     assert np.all(np.diff(t) > 0)
-    steps = np.diff(np.concatenate([[res.data["ramp_peak_over_e"]], pk]))
+    steps = np.diff(np.concatenate([[res.ramp_peak], pk]))
     assert np.all(steps <= 1e-4 * pk)
     assert steps[0] < -0.01 * pk[0]  # the first deadline after the ramp lowers the peak by more than 1 %
-    assert res.data["monotone"]
-    for p in res.data["front"]:
-        assert p["resimulation_rel_error"] < 0.005
-    T, lower = res.data["arrival_time_s"], res.data["arrival_time_lower_bound_s"]
-    peak = res.data["peak_deflection_over_e"]
+    assert res.monotone
+    for p in res.front:
+        assert p.resimulation_rel_error < 0.005
+    T, lower = res.arrival_time_s, res.arrival_time_lower_bound_s
+    peak = res.peak_deflection
     assert peak <= 13.0
     assert peak >= 13.0 * (1 - 1e-3) or T - lower < 0.01
-    above = np.concatenate([[res.data["ramp_arrival_time_s"]], t[pk > 13.0]])
+    above = np.concatenate([[res.ramp_arrival_time_s], t[pk > 13.0]])
     assert above.max() <= lower < T <= t[pk <= 13.0].min()
     assert res.limited.resimulation_rel_error < 0.005
 

@@ -80,12 +80,12 @@ def test_segment_table_loses_little_against_the_full_optimum_and_keeps_the_limit
     ocp = _ocp(scene)
     s = autobal.load(scene).analyses.spinup
     res = spinup_study.run(ocp, spinup_study.method_of(s), segments=4)
-    seg = res.data["segments"]
-    assert 0 <= seg["loss_vs_optimum_pct"] < bound
-    assert seg["within_drive_limits"]
+    seg = res.segments
+    assert 0 <= seg.loss_vs_optimum_pct < bound
+    assert seg.within_drive_limits
     # the reported peak is the CVODES re-simulation of the reported breakpoints
-    ref = dp.simulate_segments(ocp, res.segments.t, res.segments.omega)
-    assert seg["peak_deflection_over_e"] == pytest.approx(ref.peak_delta, rel=1e-9)
+    ref = dp.simulate_segments(ocp, res.ramp_table_run.t, res.ramp_table_run.omega)
+    assert seg.peak_deflection_over_e == pytest.approx(ref.peak_delta, rel=1e-9)
 
 
 def test_robust_best_ramp_keeps_the_drive_limits():
@@ -112,12 +112,11 @@ def test_robust_report_verdict_never_against_a_ramp_outside_the_drive_limits(ram
     """The robust profile beats the nominal optimum but not a ramp: against a ramp within the limits the verdict
     fails; against a ramp outside them it is not compared and says so."""
     from autobal.analyses.spinup_robust import report_section
+    from autobal.analysis.result import plain
     from autobal.report import Section
+    from tests.test_typed_ocp import robust_result
 
-    prof = {k: {"label": k, "validation_worst_over_e": v} for k, v in (("robust", 1.5), ("nominal", 2.0),
-                                                                        ("ramp", 1.2))}
-    prof["ramp"]["within_drive_limits"] = ramp_ok
-    sec = Section("spinup_robust", {"profiles": prof}, {})
+    sec = Section("spinup_robust", plain(robust_result(1.5, 2.0, 1.2, ramp_ok).to_dict()), {})
     report_section(sec)
     (v,) = sec.verdicts
     assert v["ok"] is ok

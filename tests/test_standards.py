@@ -252,9 +252,9 @@ def test_the_critical_speed_label_says_whether_the_rotor_has_liquid(tmp_path, li
     rotor with a liquid layer (psi = 0.8) is labelled with it, Omega0 sqrt(psi) = 2400 sqrt(0.8) rpm."""
     res = _small_spinup(tmp_path, liquid)
     text = res.summary()
-    wc = res.data["rotor"]["critical_speed_rad_s"]
+    wc = res.rotor.critical_speed_rad_s
     assert wc == pytest.approx(2400 * RPM * (math.sqrt(0.8) if liquid else 1.0), rel=1e-12)
-    assert (res.data["rotor"]["liquid_mass_kg"] > 0) is liquid
+    assert (res.rotor.liquid_mass_kg > 0) is liquid
     if liquid:
         assert "critical speed with the liquid mass, Ω0 √ψ  ω_cr" in text and "dry rotor" not in text
     else:
@@ -325,12 +325,9 @@ def test_an_optimum_that_dwells_gets_a_caution_and_no_green_verdict(gain, dwells
     """An optimum that beats the best ramp but dwells near the critical speed (the 5 s deadline scene: 1.1 s within
     10 % of it, at 97 % of it) is neither good nor bad: its peak holds only for the scene's critical speed; one that
     does not beat the ramp stays NOT OK."""
-    from autobal.ocp.spinup_study import verdict
+    from autobal.ocp.spinup_study import Dwell
+    from tests.test_typed_ocp import spinup_result
 
-    d = {"peak_deflection_m": 1.231e-3, "peak_deflection_over_e": 12.31, "gain_vs_best_feasible_ramp_pct": gain,
-         "baseline_ramp_key": "hold", "baselines": {"hold": {"label": "ramp 40 rad/s² and hold"}}, "brakes": None,
-         "omega_cr_rad_s": 105.0, "status": "Solve_Succeeded",
-         "dwell": {"dwells": dwells, "time_near_critical_s": 1.1, "fastest_crossing_s": 0.53,
-                   "hold_speed_rad_s": 101.8, "hold_steady_deflection_over_e": 12.0}}
-    got, words = verdict(d)
+    res = spinup_result(gain_vs_best_feasible_ramp_pct=gain, dwell=Dwell(1.1, 0.53, dwells, 101.8, 12.0))
+    got, words = res.verdict()
     assert got is ok and ("CAUTION" in words) is dwells

@@ -147,54 +147,50 @@ def estimate_seconds(settings: RossSpinup) -> float:
 
 def report_section(sec) -> None:
     """Optimal spin-up of a ROSS rotor reduced to its modes: the optimum's peak against the best ramp (the verdict),
-    the reduction checked against ROSS, the API 684 (2005) margins of each critical speed."""
+    the reduction checked against ROSS, the API 684 (2005) margins of each critical speed.  Reads the fields of the
+    loaded :class:`~autobal.ocp.modal.ModalSpinupResult` (``sec.result``)."""
+    from autobal.analyses.spinup import declared_cell
     from autobal.analysis.quantities import convert
     from autobal.analysis.standards import margin_words
-    from autobal.ocp.modal import ModalSpinupResult  # the verdict's one copy
-    from autobal.report import cell, get_path, has_path, number, table, text
+    from autobal.report import cell, number, table, text
 
-    st = sec.get("status")
-    sec.conclude(*ModalSpinupResult.verdict_of(sec.block))
-    sec.row("peak deflection of the optimum, 0-peak (re-simulated)", "r*", "peak_deflection_m")
-    sec.row("peak deflection of the best ramp within the drive limits", "r*", "baseline_ramp_peak_m")
-    sec.row("improvement over that ramp", "", "improvement_over_best_ramp")
-    sec.row("largest drive torque of the optimum, J α", "M_max", "max_torque_N_m")
-    sec.row("smallest drive torque of the optimum (below 0: it brakes)", "M_min", "min_torque_N_m")
-    sec.row("largest drive power of the optimum", "P_max", "max_power_W")
-    sec.row("node of the peak", "", "node_of_peak")
-    sec.row("time of the peak", "t*", "time_of_peak_s")
-    sec.row("speed at the peak", "ω*", "omega_at_peak_rad_s")
-    sec.row("final (service) speed", "ω_f", "final_speed_rad_s")
-    sec.row("modes kept", "", "modes")
-    sec.row("mode cutoff", "ω_c", "mode_cutoff_rad_s")
-    sec.row("shift of a critical speed by the gyroscopic terms", "", "gyroscopic_shift")
-    sec.row("largest critical-speed difference vs ROSS", "", "critical_speeds.max_rel_error_vs_ross")
-    sec.row("relative difference, CVODES re-simulation vs collocation", "", "resimulation_rel_error")
-    sec.row("build time", "", "build_time_s")
-    sec.row("solve time (all starts)", "", "total_solve_time_s")
-    sec.verdict(st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"IPOPT: {st} ({sec.get('method')})")
-    err = sec.get("critical_speeds.max_rel_error_vs_ross")
+    r = sec.result
+    sec.conclude(*r.verdict())
+    for q, key, v in r.quantities.headline(r.to_dict()):  # the rows of the fields declared headline
+        sec.row(q.description, q.symbol, key, value=v)
+    for label, sym, key, v in (("node of the peak", "", "node_of_peak", r.node_of_peak),
+                               ("modes kept", "", "modes", r.modes),
+                               ("mode cutoff", "ω_c", "mode_cutoff_rad_s", r.mode_cutoff_rad_s),
+                               ("shift of a critical speed by the gyroscopic terms", "", "gyroscopic_shift",
+                                r.gyroscopic_shift),
+                               ("relative difference, CVODES re-simulation vs collocation", "",
+                                "resimulation_rel_error", r.resimulation_rel_error),
+                               ("build time", "", "build_time_s", r.build_time_s),
+                               ("solve time (all starts)", "", "total_solve_time_s", r.total_solve_time_s)):
+        sec.row(label, sym, key, value=v)
+    st = r.status
+    sec.verdict(st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"IPOPT: {st} ({r.method})")
+    cs = r.critical_speeds
+    err = cs.max_rel_error_vs_ross
     if err is not None:
         sec.verdict(err <= 0.01, f"critical speeds of the reduced model within {number(100 * err)} % of ROSS's")
-    cs = sec.get("critical_speeds") or {}
-    ross = cs.get("ross_wd_rad_s") or []
+    ross = cs.ross_wd_rad_s or []
+    q = r.quantities.find
     rows = []
-    for i, w in enumerate(cs.get("reduced_wd_rad_s") or []):
-        at = f"critical_speeds.margins.{i}.{{}}"
-        m = get_path(cs, f"margins.{i}") or {}
-        kept = {True: "yes", False: "NO", None: "—"}[m.get("separation_margin_ok")]
+    for i, (w, m) in enumerate(zip(cs.reduced_wd_rad_s, cs.margins, strict=False)):
+        kept = {True: "yes", False: "NO", None: "—"}[m.separation_margin_ok]
         rows.append([text(str(i + 1)), cell(w, "rad/s"), cell(convert(w, "rad/s", "rpm"), "rpm"),
                      cell(ross[i] if i < len(ross) else None, "rad/s"),
-                     sec.cell(f"critical_speeds.reduced_damping_ratio.{i}"),
-                     *(sec.cell(at.format(k)) if has_path(sec.block, at.format(k)) else text(None)
+                     declared_cell(q("critical_speeds.reduced_damping_ratio"), cs.reduced_damping_ratio[i]),
+                     *(declared_cell(q(f"critical_speeds.margins[].{k}"), getattr(m, k))
                        for k in ("amplification_factor", "separation_margin_pct", "required_separation_margin_pct")),
                      text(kept)])
-        if m:
-            sec.verdict(m.get("separation_margin_ok"), f"critical speed {i + 1} ({number(w)} rad/s), API 684 (2005): "
-                        + margin_words(m))
+        sec.verdict(m.separation_margin_ok, f"critical speed {i + 1} ({number(w)} rad/s), API 684 (2005): "
+                    + margin_words(m.to_dict()))
     if rows:
         sec.tables.append(table("Critical speeds below the final speed: the API 684 (2005) amplification factor at the "
                                 "half-power points of the unbalance response at the nodes of interest, the separation "
                                 "margin from the final (service) speed and the margin API 684 requires for that AF",
                                 ["#", "reduced model", "reduced model, rpm", "ROSS", "damping ratio", "AF", "SM",
                                  "SM required", "kept"], rows))
+

@@ -65,8 +65,7 @@ def run(scene, settings: RossSpinupRobust):
                            catch=True):
         return robust_study.run(ocp, ocp.method, unc, settings.design_points, settings.validation_samples,
                                 settings.seed, settings.ramps, exe, scene.title,
-                                options=solver_options.ipopt_options(settings.max_iterations),
-                                name="ross_spinup_robust")
+                                options=solver_options.ipopt_options(settings.max_iterations))
 
 
 def estimate_seconds(settings: RossSpinupRobust) -> float:

@@ -55,8 +55,7 @@ def run(scene, settings: RossSpinupTimeOptimal):
     ocp = ross_spinup.problem(scene, settings, "ross_spinup_time_optimal", deflection_limit=settings.deflection_limit)
     with progress.steps(None, "time-optimal spin-up of the modal rotor (front deadlines)", "IPOPT solve", catch=True):
         return time_optimal_study.run(ocp, ocp.method, settings.front_points, scene.title,
-                                      options=solver_options.ipopt_options(settings.max_iterations),
-                                      name="ross_spinup_time_optimal")
+                                      options=solver_options.ipopt_options(settings.max_iterations))
 
 
 def estimate_seconds(settings: RossSpinupTimeOptimal) -> float:

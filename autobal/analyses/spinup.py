@@ -4,7 +4,6 @@ share."""
 
 from __future__ import annotations
 
-import csv
 from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
@@ -133,30 +132,30 @@ def accuracy(scene, settings: Spinup):
         return spinup_study(ocp(scene, settings))
 
 
-def _spinup_binding(sec) -> list[str]:
-    """The limits the optimum runs on: acceleration (from the controls table), torque, power, deflection."""
-    from autobal.report import get_path, number, quantity
+def _spinup_binding(sec, r) -> list[str]:
+    """The limits the optimum ``r`` (the loaded Result) runs on: acceleration (its controls), torque, power,
+    deflection."""
+    from autobal.report import get_path, number
 
     scene = get_path(sec.results, "meta.scene_si") or {}
     ocp, drive = get_path(scene, "analyses.spinup") or {}, get_path(scene, "rotor.drive") or {}
     out = []
-    amax, controls = ocp.get("max_acceleration"), sec.folder / "spinup_controls.csv" if sec.folder else None
-    if amax and controls is not None and controls.exists():
-        with controls.open() as fh:
-            alpha = [float(r["alpha_rad_s2"]) for r in csv.DictReader(fh)]
+    amax = ocp.get("max_acceleration")
+    if amax and r.controls is not None:
+        alpha = r.controls["alpha_rad_s2"]
         on = sum(abs(a) >= 0.999 * amax for a in alpha)
         if on:
             from autobal.ocp.simulation import rate_text  # rad/s² with rpm/s beside, the one copy
 
             out.append(f"acceleration limit |α| ≤ {rate_text(amax)} on {on} of {len(alpha)} control intervals "
                        f"({number(100 * on / len(alpha))} %)")
-    for key, limit, what in (("max_torque_N_m", drive.get("max_torque"), "drive torque limit"),
-                             ("max_power_W", drive.get("max_power"), "drive power limit")):
-        got, q = sec.get(key), quantity(f"spinup.{key}")
+    for got, limit, what, q in ((r.max_torque_N_m, drive.get("max_torque"), "drive torque limit", "max_torque_N_m"),
+                                (r.max_power_W, drive.get("max_power"), "drive power limit", "max_power_W")):
         if limit and got is not None and got >= 0.999 * limit:
+            q = r.quantities.find(q)
             out.append(f"{what} {q.text(limit)} reached (largest {q.text(got)})")
     lim = ocp.get("deflection_limit")
-    if lim and sec.get("peak_deflection_over_e") is not None and sec.get("peak_deflection_over_e") >= 0.999 * lim:
+    if lim and r.peak_deflection_over_e is not None and r.peak_deflection_over_e >= 0.999 * lim:
         out.append(f"deflection limit δ/e ≤ {number(lim)} reached")
     if not out:
         out.append("none of the acceleration, torque, power and deflection limits is active at the optimum")
@@ -165,114 +164,122 @@ def _spinup_binding(sec) -> list[str]:
 
 def report_section(sec) -> None:
     """Optimal spin-up through the critical speed (direct collocation, CVODES re-simulation): the verdict is the
-    optimum's peak deflection, its gain against the best ramp within the drive limits and whether it brakes."""
-    from autobal.analyses.rotor_dynamics import api_rows, api_verdict  # the API 684 rows' one copy
-    from autobal.ocp.spinup_study import DWELL_BAND, OBJECTIVES, critical_label, dwell_words, verdict
+    optimum's peak deflection, its gain against the best ramp within the drive limits and whether it brakes.  Reads
+    the fields of the loaded :class:`~autobal.ocp.spinup_study.SpinupResult` (``sec.result``, with the controls and
+    the ramp table its run wrote)."""
+    from autobal.analyses.rotor_dynamics import api_verdict  # the API 684 check line's one copy
+    from autobal.ocp.spinup_study import DWELL_BAND, OBJECTIVES, critical_label, dwell_words
     from autobal.report import cell, get_path, number, table, text
 
-    sec.conclude(*verdict(sec.block))
-    sec.verdict(None, f"objective: {str(sec.get('objective', '')).replace('_', ' ')}; {sec.get('method')}; "
-                      f"wall time {number(sec.get('wall_time_s'))} s (NLP build {number(sec.get('build_time_s'))} s, "
-                      f"NLP solves {number(sec.get('total_solve_time_s'))} s over {len(sec.get('starts', []))} solves, "
+    r = sec.result
+    sec.conclude(*r.verdict())
+    sec.verdict(None, f"objective: {r.objective.replace('_', ' ')}; {r.method}; "
+                      f"wall time {number(r.wall_time_s)} s (NLP build {number(r.build_time_s)} s, "
+                      f"NLP solves {number(r.total_solve_time_s)} s over {len(r.starts)} solves, "
                       "the rest global search, re-simulations and baselines)")
-    sec.row("peak deflection of the optimum, 0-peak (the whirl orbit's radius; re-simulated)", "δ*",
-            "peak_deflection_m")
-    sec.row("peak deflection of the optimum over the eccentricity", "δ*/e", "peak_deflection_over_e")
-    sec.row("peak deflection of the best ramp within the drive limits", "δ*/e", "baseline_ramp_peak_over_e")
-    sec.row("gain against the best ramp within the drive limits", "", "gain_vs_best_feasible_ramp_pct")
-    sec.row("gain against the constant ramp", "", "gain_vs_constant_ramp_pct")
-    sec.row("eccentricity of the rotor", "e", "eccentricity_m")
-    liquid = (sec.get("rotor.liquid_mass_kg") or 0) > 0
-    for label, sym, key in (("rotor mass", "m1", "mass_kg"),
-                            ("shaft stiffness (c = m1 Ω_c²)", "c", "stiffness_N_per_m"),
-                            ("damping (χ = 2 ζ m1 Ω_c)", "χ", "damping_N_s_per_m"),
-                            ("damping ratio", "ζ", "damping_ratio"),
-                            (critical_label(liquid), "ω_cr", "critical_speed_rad_s"),
-                            ("service speed (the final speed)", "N_s", "service_speed_rad_s")):
-        sec.row(label, sym, f"rotor.{key}")
-    api_rows(sec, "rotor.")
-    api_verdict(sec, sec.get("rotor") or {})
-    objective = OBJECTIVES.get(sec.get("objective"))
-    if objective is not None:
+    for q, key, v in r.quantities.headline(r.to_dict()):  # the rows of the fields declared headline
+        sec.row(q.description, q.symbol, key, value=v)
+    ro, band = r.rotor, f"{100 * DWELL_BAND:.0f} %"
+    objective = OBJECTIVES.get(r.objective)
+    for label, sym, key, v in (
+            ("gain against the constant ramp", "", "gain_vs_constant_ramp_pct", r.gain_vs_constant_ramp_pct),
+            ("eccentricity of the rotor", "e", "eccentricity_m", r.eccentricity_m),
+            ("rotor mass", "m1", "rotor.mass_kg", ro.mass_kg),
+            ("shaft stiffness (c = m1 Ω_c²)", "c", "rotor.stiffness_N_per_m", ro.stiffness_N_per_m),
+            ("damping (χ = 2 ζ m1 Ω_c)", "χ", "rotor.damping_N_s_per_m", ro.damping_N_s_per_m),
+            ("damping ratio", "ζ", "rotor.damping_ratio", ro.damping_ratio),
+            (critical_label(ro.liquid_mass_kg > 0), "ω_cr", "rotor.critical_speed_rad_s", ro.critical_speed_rad_s),
+            ("service speed (the final speed)", "N_s", "rotor.service_speed_rad_s", ro.service_speed_rad_s),
+            ("speed of the unbalance response's peak", "N_c", "rotor.response_peak_speed_rad_s",
+             ro.response_peak_speed_rad_s),
+            (f"time of the optimum within {band} of the critical speed", "t_cr", "dwell.time_near_critical_s",
+             r.dwell.time_near_critical_s),
+            *([(f"time of the ramp table within {band} of the critical speed", "t_cr",
+                "segments.dwell.time_near_critical_s", r.segments.dwell.time_near_critical_s)] if r.segments else []),
+            (f"time of the maximum acceleration across {band} either side of the critical speed", "",
+             "dwell.fastest_crossing_s", r.dwell.fastest_crossing_s),
+            ("time of the peak", "t*", "time_of_peak_s", r.time_of_peak_s),
+            ("speed at the peak", "ω*", "omega_at_peak_rad_s", r.omega_at_peak_rad_s),
+            ("final time", "T", "final_time_s", r.final_time_s),
+            ("relative difference, CVODES re-simulation vs transcription", "", "resimulation_rel_error",
+             r.resimulation_rel_error),
+            ("chattering of the optimal acceleration (pulse variation of α/α_max; 0: none)", "",
+             "control_pulse_variation", r.control_pulse_variation),
+            ("NLP build time", "", "build_time_s", r.build_time_s),
+            ("NLP solve time (IPOPT or fatrop), all starts and mesh stages", "", "total_solve_time_s",
+             r.total_solve_time_s),
+            ("wall time of the analysis (search, solves, re-simulations)", "", "wall_time_s", r.wall_time_s)):
+        sec.row(label, sym, key, value=v)  # a null (no value) with the reason its status gives
+    if objective is not None:  # in the objective's unit (objective_quantity)
         sec.row(f"objective of the optimum (re-simulated): the {objective[2]}", f"J = {objective[1]}",
-                "objective_value")
-    band = f"{100 * DWELL_BAND:.0f} %"
-    sec.row(f"time of the optimum within {band} of the critical speed", "t_cr", "dwell.time_near_critical_s")
-    sec.row(f"time of the ramp table within {band} of the critical speed", "t_cr",
-            "segments.dwell.time_near_critical_s")
-    sec.row(f"time of the maximum acceleration across {band} either side of the critical speed", "",
-            "dwell.fastest_crossing_s")
-    sec.row("time of the peak", "t*", "time_of_peak_s")
-    sec.row("speed at the peak", "ω*", "omega_at_peak_rad_s")
-    sec.row("final time", "T", "final_time_s")
-    sec.row("largest drive torque", "M_max", "max_torque_N_m")
-    sec.row("smallest drive torque (below 0: the drive brakes)", "M_min", "min_torque_N_m")
-    sec.row("largest drive power", "P_max", "max_power_W")
-    sec.row("relative difference, CVODES re-simulation vs transcription", "", "resimulation_rel_error")
-    sec.row("chattering of the optimal acceleration (pulse variation of α/α_max; 0: none)", "",
-            "control_pulse_variation")
-    sec.row("NLP build time", "", "build_time_s")
-    sec.row("NLP solve time (IPOPT or fatrop), all starts and mesh stages", "", "total_solve_time_s")
-    sec.row("wall time of the analysis (search, solves, re-simulations)", "", "wall_time_s")
-    st = sec.get("status")
-    sec.verdict(st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"NLP solver: {st} ({sec.get('method')})")
-    base = sec.get("baselines") or {}
-    e = sec.get("eccentricity_m")
+                "objective_value", objective[0], r.objective_value)
+    api_verdict(sec, ro.margins())
+    sec.verdict(r.status in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"NLP solver: {r.status} ({r.method})")
+    e, q = r.eccentricity_m, r.quantities.find
     rows = []
-    for k, b in base.items():
-        pk = b.get("peak_deflection_over_e")
-        limits = {True: "within", False: "OUTSIDE: " + ", ".join(b.get("violated", [])), None: "no drive data"}
-        rows.append([text(b.get("label")), sec.cell(f"baselines.{k}.peak_deflection_over_e"),
-                     sec.cell("peak_deflection_m", None if pk is None or e is None else pk * e),
-                     sec.cell(f"baselines.{k}.max_torque_N_m"), sec.cell(f"baselines.{k}.max_power_W"),
-                     text(limits[b.get("within_drive_limits")]),
-                     text("reference of the gain" if k == sec.get("baseline_ramp_key") else "")])
-        if b.get("within_drive_limits") is False:
-            sec.verdict(None, f"{b.get('label')}: outside the drive limits ({', '.join(b.get('violated', []))}), "
+    for k, b in r.baselines.items():
+        pk = b.peak_deflection_over_e
+        limits = {True: "within", False: "OUTSIDE: " + ", ".join(b.violated), None: "no drive data"}
+        rows.append([text(b.label), declared_cell(q("baselines.*.peak_deflection_over_e"), pk),
+                     declared_cell(q("peak_deflection_m"), None if pk is None or e is None else pk * e),
+                     declared_cell(q("baselines.*.max_torque_N_m"), b.max_torque_N_m),
+                     declared_cell(q("baselines.*.max_power_W"), b.max_power_W),
+                     text(limits[b.within_drive_limits]),
+                     text("reference of the gain" if k == r.baseline_ramp_key else "")])
+        if b.within_drive_limits is False:
+            sec.verdict(None, f"{b.label}: outside the drive limits ({', '.join(b.violated)}), "
                               f"peak {number(pk)} e, drawn but no reference")
     if rows:
         sec.tables.append(table("Ramp baselines (re-simulated): a gain is quoted only against a ramp within the drive "
                                 "limits", ["baseline", "peak δ*/e", "peak δ*, 0-peak", "largest torque",
                                            "largest power", "drive limits", ""], rows))
-    if sec.get("brakes") is not None:
-        sec.verdict(None, f"the optimum {'brakes' if sec.get('brakes') else 'does not brake'} (smallest drive "
-                          f"torque {number(sec.get('min_torque_N_m'))} N·m; braking limit "
-                          f"{number(sec.get('braking_torque_limit_N_m'))} N·m)")
-    seg = sec.get("segments")
+    if r.brakes is not None:
+        sec.verdict(None, f"the optimum {'brakes' if r.brakes else 'does not brake'} (smallest drive "
+                          f"torque {number(r.min_torque_N_m)} N·m; braking limit "
+                          f"{number(r.braking_torque_limit_N_m)} N·m)")
+    seg = r.segments
     if seg:
-        dw = seg.get("dwell") or {}
-        sec.verdict(seg.get("within_drive_limits") and not dw.get("dwells"),
-                    f"{seg['segments']}-segment ramp table (drive_segments.csv): peak "
-                    f"{number(seg.get('peak_deflection_over_e'))} e, {number(seg.get('loss_vs_optimum_pct'))} % "
-                    "against the full optimum, " + ("within" if seg.get("within_drive_limits") else "OUTSIDE")
-                    + " the drive limits" + ("; CAUTION: " + dwell_words("it", dw, sec.get("omega_cr_rad_s"))
-                                             if dw.get("dwells") else ""))
+        dw = seg.dwell
+        sec.verdict(seg.within_drive_limits and not dw.dwells,
+                    f"{seg.segments}-segment ramp table (drive_segments.csv): peak "
+                    f"{number(seg.peak_deflection_over_e)} e, {number(seg.loss_vs_optimum_pct)} % "
+                    "against the full optimum, " + ("within" if seg.within_drive_limits else "OUTSIDE")
+                    + " the drive limits" + ("; CAUTION: " + dwell_words("it", dw, r.omega_cr_rad_s)
+                                             if dw.dwells else ""))
     drive = get_path(sec.results, "meta.scene_si.rotor.drive") or {}
     if not (drive.get("max_torque") or drive.get("max_power")):
         sec.verdict(None, "no drive torque or power limit in the scene")
-    elif "within_drive_limits" in sec.block:
-        sec.verdict(sec.get("within_drive_limits"), "drive torque and power limits " +
-                    ("kept" if sec.get("within_drive_limits") else "EXCEEDED") + " in the re-simulation")
-    for b in _spinup_binding(sec):
+    else:
+        sec.verdict(r.within_drive_limits, "drive torque and power limits " +
+                    ("kept" if r.within_drive_limits else "EXCEEDED") + " in the re-simulation")
+    for b in _spinup_binding(sec, r):
         sec.verdict(None, f"binding constraint: {b}")
-    segs = sec.folder / "drive_segments.csv" if sec.folder else None
-    if segs is not None and segs.exists():
-        with segs.open() as fh:
-            rows = [[text(r["segment"]), cell(float(r["t_start_s"]), "s"), cell(float(r["t_end_s"]), "s"),
-                     text(number(float(r["speed_start_rpm"]))), text(number(float(r["speed_end_rpm"]))),
-                     text(number(float(r["rate_rpm_s"]))), cell(float(r["rate_rad_s2"]), "rad/s^2")]
-                    for r in csv.DictReader(fh)]
-        caution = "; CAUTION: it dwells near the critical speed (the checks above)" if (
-            (seg or {}).get("dwell") or {}).get("dwells") else ""
+    t = r.ramp_table
+    if t is not None:
+        rows = [[text(f"{s:g}"), cell(t0, "s"), cell(t1, "s"), text(number(w0)), text(number(w1)), text(number(rpm)),
+                 cell(rad, "rad/s^2")]
+                for s, t0, t1, w0, w1, rpm, rad in zip(t["segment"], t["t_start_s"], t["t_end_s"],
+                                                        t["speed_start_rpm"], t["speed_end_rpm"], t["rate_rpm_s"],
+                                                        t["rate_rad_s2"], strict=True)]
+        caution = "; CAUTION: it dwells near the critical speed (the checks above)" if seg and seg.dwell.dwells else ""
         sec.tables.append(table("Ramp table for the drive (drive_segments.csv; the last row the hold): speeds in "
                                 "rpm, rates in rpm/s" + caution, ["segment", "start", "end", "start speed, rpm",
                                                         "end speed, rpm", "rate, rpm/s", "rate"], rows))
     keeps = {True: "yes", False: "NO", None: "—"}
+    j = q("starts.0.objective", r.to_dict())
     rows = [[text(s.get("start")), text(s.get("stage", "final mesh")), text(s.get("status")),
-             text(s.get("iterations", "—")), cell(s.get("solve_time_s"), "s"), sec.cell(f"starts.{i}.objective"),
-             text(keeps[s.get("keeps_limit")])] for i, s in enumerate(sec.get("starts", []))]
+             text(s.get("iterations", "—")), cell(s.get("solve_time_s"), "s"), declared_cell(j, s.get("objective")),
+             text(keeps[s.get("keeps_limit")])] for s in r.starts]
     if rows:
         sec.tables.append(table("NLP solves of the multi-start: every start on the coarse mesh, the best one "
                                 "refined on the final mesh and judged by its CVODES re-simulation",
                                 ["start", "stage", "status", "iterations", "solve time", "re-simulated objective",
                                  "keeps limit"], rows))
+
+
+def declared_cell(q, v) -> dict:
+    """The cell of a value declared by ``q`` in its display unit, to the 4 significant digits of the terminal (the
+    spin-up sections' tables of typed fields)."""
+    from autobal.report import cell
+
+    return cell(v, q.unit, q.display, 4) if q is not None else cell(v, "?")

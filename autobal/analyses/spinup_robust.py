@@ -88,62 +88,59 @@ def report_section(sec) -> None:
     """Robust spin-up (the Jeffcott rotor's ``spinup_robust``, peaks delta/e; the modal rotor's
     ``ross_spinup_robust``, peaks in m shown in µm or the chosen length unit, as the block's ``peak_unit`` states):
     the robust profile, the nominal optimum and the best ramp on the design set and on the validation sample; the
-    verdict is the robust profile's worst validation peak against the others'."""
-    from autobal.ocp.robust_study import PEAK_SYMBOL, QUANTITIES, peak_key, verdict  # the verdict's one copy
+    verdict is the robust profile's worst validation peak against the others'.  Reads the fields of the loaded
+    :class:`~autobal.ocp.robust_study.RobustResult` (``sec.result``)."""
+    from autobal.ocp.robust_study import PEAK_SYMBOL
     from autobal.ocp.spinup_study import QUANTITIES as SPINUP
     from autobal.report import cell, table, text
 
-    prof = sec.get("profiles") or {}
-    if prof:
-        sec.conclude(*verdict(sec.block))
-    unit = sec.get("peak_unit") or "1"
-    s, sym = peak_key(sec.block), PEAK_SYMBOL[unit]
-    shown = None if unit == "1" else QUANTITIES.find(f"profiles.robust.validation_worst_{s}").display
+    r = sec.result
+    sec.conclude(*r.verdict())
+    for q, key, v in r.quantities.headline(r.to_dict()):  # the rows of the fields declared headline
+        sec.row(q.description, q.symbol, key, value=v)
+    for label, key, v in (("eccentricity (δ* = e δ*/e, 0-peak)", "eccentricity_m", r.eccentricity_m),
+                          ("design rotors (grid)", "design_scenarios", r.design_scenarios),
+                          ("design rotors in the final NLP (binding)", "active_scenarios", r.active_scenarios),
+                          ("validation rotors", "validation_samples", r.validation_samples),
+                          ("build time (robust NLPs)", "build_time_s", r.build_time_s),
+                          ("solve time (robust NLPs)", "solve_time_s", r.solve_time_s),
+                          ("validation time", "validation_time_s", r.validation_time_s),
+                          ("validation integrator against CVODES (largest relative difference)",
+                           "validation_check_rel_error", r.validation_check_rel_error)):
+        if v is not None:
+            sec.row(label, "e" if key == "eccentricity_m" else "", key, value=v)
+    unit, sym, e = r.peak_unit, PEAK_SYMBOL[r.peak_unit], r.eccentricity_m
+    shown = None if unit == "1" else r.quantities.find("profiles.robust.validation_worst_m").display
 
     def pc(v):
         return cell(v, unit, shown)
 
-    for key, label in (("robust", "robust profile"), ("nominal", "nominal optimum"), ("ramp", "best ramp")):
-        sec.row(f"{label}: worst peak over the validation rotors", sym, f"profiles.{key}.validation_worst_{s}")
-    sec.row("robust profile: worst peak over the design rotors (CVODES)", sym, f"profiles.robust.design_worst_{s}")
-    sec.row("nominal critical speed", "ω_cr", "omega_cr_rad_s")
-    sec.row("eccentricity (δ* = e δ*/e, 0-peak)", "e", "eccentricity_m")
-    sec.row("design rotors (grid)", "", "design_scenarios")
-    sec.row("design rotors in the final NLP (binding)", "", "active_scenarios")
-    sec.row("validation rotors", "", "validation_samples")
-    sec.row("build time (robust NLPs)", "", "build_time_s")
-    sec.row("solve time (robust NLPs)", "", "solve_time_s")
-    sec.row("validation time", "", "validation_time_s")
-    sec.row("validation integrator against CVODES (largest relative difference)", "", "validation_check_rel_error")
-    e = sec.get("eccentricity_m")
     physical = SPINUP.find("peak_deflection_m")
     rows = []
-    for key in ("robust", "nominal", "ramp"):
-        p = prof.get(key) or {}
-        q = p.get(f"validation_quantiles_{s}") or {}
-        worst = p.get(f"validation_worst_{s}")
-        rows.append([text(p.get("label")), pc(p.get(f"nominal_peak_{s}")), pc(p.get(f"design_worst_{s}")),
-                     pc(q.get("0.5")), pc(q.get("0.99")), pc(worst)]
+    for _, p in r.profiles.items():
+        q, worst = p.validation_quantiles, p.validation_worst
+        rows.append([text(p.label), pc(p.nominal_peak), pc(p.design_worst), pc(q.get("0.5")), pc(q.get("0.99")),
+                     pc(worst)]
                     + ([cell(None if e is None or worst is None else worst * e, "m", physical.display)]
                        if unit == "1" else []))
-    if prof:
-        what = ("δ*/e", "; the worst as a deflection δ* (0-peak)") if unit == "1" else \
-            ("r* (the largest whirl radius over the nodes, 0-peak)", "")
-        sec.tables.append(table(f"Peak deflection {what[0]} of each profile: on the nominal rotor, worst over the "
-                                f"design set (CVODES), and over the validation sample{what[1]}",
-                                ["profile", "nominal rotor", "design worst", "validation median", "validation 99 %",
-                                 "validation worst"] + (["validation worst δ*"] if unit == "1" else []), rows,
-                                headline=True))
-    rows = [[text(r.get("label")), sec.cell(f"ramps.{i}.alpha_rad_s2"), pc(r.get(f"design_worst_{s}")),
-             pc(r.get(f"validation_worst_{s}")),
-             text({True: "within", False: f"OUTSIDE: {r.get('violated')}", None: "no drive data"}
-                  [r.get("within_drive_limits")])] for i, r in enumerate(sec.get("ramps") or [])]
+    what = ("δ*/e", "; the worst as a deflection δ* (0-peak)") if unit == "1" else \
+        ("r* (the largest whirl radius over the nodes, 0-peak)", "")
+    sec.tables.append(table(f"Peak deflection {what[0]} of each profile: on the nominal rotor, worst over the "
+                            f"design set (CVODES), and over the validation sample{what[1]}",
+                            ["profile", "nominal rotor", "design worst", "validation median", "validation 99 %",
+                             "validation worst"] + (["validation worst δ*"] if unit == "1" else []), rows,
+                            headline=True))
+    alpha = r.quantities.find("ramps[].alpha_rad_s2")
+    rows = [[text(p.label), cell(p.alpha_rad_s2, alpha.unit, alpha.display, 4), pc(p.design_worst),
+             pc(p.validation_worst),
+             text({True: "within", False: f"OUTSIDE: {p.violated}", None: "no drive data"}[p.within_drive_limits])]
+            for p in r.ramps]
     if rows:
         sec.tables.append(table(f"Constant ramps: worst peak {sym} over the design set and the validation sample",
                                 ["ramp", "acceleration", "design worst", "validation worst", "drive limits"], rows))
-    rows = [[text(r.get("start")), cell(r.get("intervals"), "1"), cell(r.get("scenarios"), "1"), text(r.get("status")),
-             cell(r.get("iterations"), "1"), cell(r.get("build_time_s"), "s"), cell(r.get("solve_time_s"), "s"),
-             pc(r.get(f"worst_design_peak_{s}"))] for r in sec.get("rounds", [])]
+    rows = [[text(x.start), cell(x.intervals, "1"), cell(x.scenarios, "1"), text(x.status), cell(x.iterations, "1"),
+             cell(x.build_time_s, "s"), cell(x.solve_time_s, "s"),
+             pc(x.worst_design_peak)] for x in r.rounds]
     if rows:
         sec.tables.append(table("Scenario generation: each NLP solve", ["start", "intervals", "scenarios", "status",
                                                                         "iterations", "build", "solve",

@@ -61,42 +61,38 @@ def estimate_seconds(settings: SpinupTimeOptimal) -> float:
 def report_section(sec) -> None:
     """Time-optimal spin-up (the Jeffcott rotor's ``spinup_time_optimal``, peaks delta/e; the modal rotor's
     ``ross_spinup_time_optimal``, peaks in m shown in µm or the chosen length unit, as the block's ``peak_unit``
-    states): the earliest arrival under the peak limit (the verdict) and the front."""
-    from autobal.ocp.problem import PEAK_KEY
+    states): the earliest arrival under the peak limit (the verdict) and the front.  Reads the fields of the loaded
+    :class:`~autobal.ocp.time_optimal_study.TimeOptimalResult` (``sec.result``)."""
     from autobal.ocp.robust_study import PEAK_SYMBOL
     from autobal.ocp.spinup_study import QUANTITIES as SPINUP
-    from autobal.ocp.time_optimal_study import QUANTITIES, verdict  # the verdict's one copy
     from autobal.report import cell, number, table, text
 
-    unit = sec.get("peak_unit") or "1"
-    s, sym = PEAK_KEY[unit], PEAK_SYMBOL[unit]
-    sec.conclude(*verdict(sec.block))
-    sec.row("final speed", "ω_f", "final_speed_rad_s")
-    sec.row("peak limit", "δ/e" if unit == "1" else "r_lim", f"deflection_limit_{s}")
-    sec.row("earliest arrival at the final speed", "T", "arrival_time_s")
-    sec.row("latest front deadline whose minimum peak exceeds the limit", "", "arrival_time_lower_bound_s")
-    sec.row("peak deflection of the earliest arrival (re-simulated)", sym, f"peak_deflection_{s}")
-    sec.row("margin below the limit, 1 − peak/limit", "", "limit_margin")
-    sec.row("arrival of the maximum-acceleration ramp", "", "ramp_arrival_time_s")
-    sec.row("peak of the maximum-acceleration ramp", sym, f"ramp_peak_{s}")
-    sec.row("eccentricity (δ* = e δ*/e, 0-peak)", "e", "eccentricity_m")
-    sec.row("largest relative difference, collocation vs CVODES re-simulation", "", "resimulation_rel_error")
-    sec.row("build time", "", "build_time_s")
-    sec.row("solve time", "", "solve_time_s")
-    if sec.get(f"deflection_limit_{s}") is not None:  # else the front's monotonicity is the verdict
-        sec.verdict(sec.get("monotone"), "the front's peak does not rise with the arrival deadline"
-                    if sec.get("monotone") else "the front is NOT monotone (a local optimum)")
-    if sec.get("drive"):
-        sec.notes.append(f"Drive: {sec.get('drive')}.")
-    e, physical = sec.get("eccentricity_m"), SPINUP.find("peak_deflection_m")
-    shown = None if unit == "1" else QUANTITIES.find(f"peak_deflection_{s}").display
-    rows = [[cell(p.get("arrival_time_s"), "s"), cell(p.get(f"resimulated_peak_{s}"), unit, shown)]
-            + ([cell(None if e is None else p.get(f"resimulated_peak_{s}") * e, "m", physical.display)]
-               if unit == "1" else [])
-            + [cell(p.get(f"collocation_peak_{s}"), unit, shown), cell(p.get("resimulation_rel_error"), "1"),
-               cell(p.get("intervals"), "1"), cell(p.get("solve_time_s"), "s"),
-               text(f"held from {number(p['held_from_s'])} s" if p.get("held_from_s") else "")]
-            for p in sec.get("front", [])]
+    r = sec.result
+    unit, sym = r.peak_unit, PEAK_SYMBOL[r.peak_unit]
+    sec.conclude(*r.verdict())
+    for q, key, v in r.quantities.headline(r.to_dict()):  # the rows of the fields declared headline
+        sec.row(q.description, q.symbol, key, value=v)
+    for label, key, v in (("latest front deadline whose minimum peak exceeds the limit", "arrival_time_lower_bound_s",
+                           r.arrival_time_lower_bound_s),
+                          ("eccentricity (δ* = e δ*/e, 0-peak)", "eccentricity_m", r.eccentricity_m),
+                          ("largest relative difference, collocation vs CVODES re-simulation",
+                           "resimulation_rel_error", r.resimulation_rel_error),
+                          ("build time", "build_time_s", r.build_time_s), ("solve time", "solve_time_s",
+                                                                           r.solve_time_s)):
+        if v is not None:
+            sec.row(label, "e" if key == "eccentricity_m" else "", key, value=v)
+    if r.deflection_limit is not None:  # else the front's monotonicity is the verdict
+        sec.verdict(r.monotone, "the front's peak does not rise with the arrival deadline"
+                    if r.monotone else "the front is NOT monotone (a local optimum)")
+    if r.drive:
+        sec.notes.append(f"Drive: {r.drive}.")
+    e, physical = r.eccentricity_m, SPINUP.find("peak_deflection_m")
+    shown = None if unit == "1" else r.quantities.find("peak_deflection_m").display
+    rows = [[cell(p.arrival_time_s, "s"), cell(p.resimulated_peak, unit, shown)]
+            + ([cell(None if e is None else p.resimulated_peak * e, "m", physical.display)] if unit == "1" else [])
+            + [cell(p.collocation_peak, unit, shown), cell(p.resimulation_rel_error, "1"), cell(p.intervals, "1"),
+               cell(p.solve_time_s, "s"), text(f"held from {number(p.held_from_s)} s" if p.held_from_s else "")]
+            for p in r.front]
     if rows:
         sec.tables.append(table("Front: the smallest peak for each arrival deadline",
                                 ["arrival by", f"{sym} (re-simulated)"] + (["δ* (0-peak)"] if unit == "1" else [])
