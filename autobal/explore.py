@@ -650,7 +650,7 @@ class SpinupExplorer(Settings):
         u = np.asarray(tr.alpha) / ocp.alpha_max
         h = np.diff(np.append(tr.t_u, tr.t[-1])) * ocp.Om
         self.profile = (u, h, dict(values))
-        return {"peak_over_e": res.data["peak_deflection_over_e"], "seconds": time.perf_counter() - t0}
+        return {"peak_over_e": res.peak_deflection_over_e, "seconds": time.perf_counter() - t0}
 
     def evaluate(self, values: dict) -> dict:
         """The current optimum's profile and the constant ramps re-simulated for the settings: peaks (delta/e and

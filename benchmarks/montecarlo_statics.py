@@ -141,7 +141,7 @@ def main(repeats: int = 5) -> list[dict]:
     t0 = time.perf_counter()
     res = mc.run(dev, settings_.model_copy(update={"afc": None}), ex.InProcess(progress=False), scn.title)
     t_study = time.perf_counter() - t0
-    d = res.data
+    d = res.to_dict()
     j = d["psi1"].index(1.0)
 
     notes = [
