@@ -98,15 +98,16 @@ def shared(unit: str, symbol: str = "", description: str = "", display: str = ""
     return functools.partial(quantity, unit, symbol, description, display, source=source, beside=beside)
 
 
-def keyed(key: str, kw_only: bool = False):
+def keyed(key: str, kw_only=dataclasses.MISSING):
     """A field whose key in results.json is ``key``, not its name (a name the Result's API uses otherwise);
     ``kw_only`` as :func:`optional`."""
     return field(kw_only=kw_only, metadata={KEY: key})
 
 
-def optional(kw_only: bool = False, key: str | None = None, present_with: str | None = None):
+def optional(kw_only=dataclasses.MISSING, key: str | None = None, present_with: str | None = None):
     """A field the analysis may not compute (a map, a scan): default None, and then not in results.json;
-    ``kw_only``: keyword-only, for a field results.json has before fields without a default; ``key`` as
+    ``kw_only``: keyword-only, for a field results.json has before fields without a default (unset: as the
+    record's other fields, e.g. after a ``KW_ONLY`` marker); ``key`` as
     :func:`keyed`; with ``present_with``, the name of another field of the record, it is there (null) whenever
     that field is not None (the earliest arrival under a peak limit: none when the ramp keeps the limit, no key
     without a limit)."""

@@ -64,8 +64,8 @@ def test_the_robust_key_paths_are_the_declarations():
 
 
 def test_robust_statuses_are_made_from_the_nulls_not_stored():
-    """A null of the block gets its ``<key>_status`` from the Result's null reasons when it goes out, and the status
-    is dropped when it comes back (it is not a field)."""
+    """A null of the block gets its ``<key>_status`` from the Result's null reasons when it goes out; a status read
+    back beside a field's key is kept in the record's statuses, one beside no field is refused."""
     prof = {"robust": {"label": "robust", "validation_worst_m": 1e-5},
             "nominal": {"label": "nominal", "validation_worst_m": 2e-5},
             "ramp": {"label": "ramp", "validation_worst_m": 3e-5, "within_drive_limits": None}}
@@ -73,8 +73,9 @@ def test_robust_statuses_are_made_from_the_nulls_not_stored():
     assert p.ramp.within_drive_limits is None and p.ramp.validation_worst == 3e-5
     assert robust_study.verdict(p, 10, "m") == (True, "worst peak over 10 validation rotors: robust 10.00 µm, "
                                                       "nominal optimum 20.00 µm, best ramp 30.00 µm")
-    with pytest.raises(KeyError, match="RampProfile has no field 'within_drive_limits_status'"):
-        Profiles.from_dict(prof | {"ramp": prof["ramp"] | {"within_drive_limits_status": "why"}})
+    with_status = prof | {"ramp": prof["ramp"] | {"within_drive_limits_status": "why"}}
+    back = Profiles.from_dict(with_status)  # a status read back is kept beside its key, and goes out again
+    assert back.ramp.statuses == {"within_drive_limits": "why"} and back.to_dict()["ramp"] == with_status["ramp"]
     with pytest.raises(KeyError, match="_Toy has no field 'other_status'"):  # a status is skipped beside a field only
         _Toy.from_dict({"limit": 1.0, "peak": 1.0, "other_status": "why"})
 
