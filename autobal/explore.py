@@ -695,6 +695,18 @@ def _exact_statics(ans: dict) -> str:
         k: ans["critical"][k] for k in ("p1_kr", "dp_kr")})
 
 
+def _exact_spinup(ans: dict, current: dict) -> str:
+    """The spin-up page's numbers at full precision (JSON, SI; ``optimum_current``: the optimum's profile was
+    optimised for the ``current`` settings), for the browser test's comparison."""
+    import json
+
+    opt = ans.get("optimum")
+    return json.dumps({"critical_speed": ans["critical_speed"], "eccentricity": ans["eccentricity"],
+                       "api": ans["api"], "ramps": {k: r["peak_over_e"] for k, r in ans["ramps"].items()},
+                       "optimum": None if opt is None else opt["peak_over_e"],
+                       "optimum_current": opt is not None and opt["optimised_for"] == current})
+
+
 def _exact(ans: dict) -> str:
     """The shown numbers at full precision (JSON, SI), for the browser test's comparison."""
     import json
@@ -1117,7 +1129,7 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
                   styles={"font-size": "1px", "color": "white"})
         fig = figure(title="deflection δ/e of the rotor", x_axis_label="time, s", y_axis_label="δ/e", width=900,
                      height=360, name="plots", toolbar_location=None)
-        sources = {k: ColumnDataSource({"t": [], "d": []}) for k in ("optimum", *RAMP_COLOURS)}
+        sources = {k: ColumnDataSource({"t": [], "d": []}, name=f"{k}_profile") for k in ("optimum", *RAMP_COLOURS)}
         lines = {"optimum": fig.line("t", "d", source=sources["optimum"], line_width=2.5, color="#1f77b4",
                                      legend_label="current optimum's profile")}
         for k, c in RAMP_COLOURS.items():
@@ -1139,7 +1151,8 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
                 rows.insert(0, ("current optimum's profile", opt["peak_over_e"], opt["within_drive_limits"]))
             e = ans.get("eccentricity", math.nan)
             table = "".join(f"<tr><td>{html.escape(label)}</td><td id='peak_{i}'>{_fmt(pk)}</td>"
-                            f"<td>{_fmt(pk * e * 1e6)} µm</td><td>{'yes' if ok else 'NO' if ok is False else '—'}</td>"
+                            f"<td><span id='peak_um_{i}'>{_fmt(pk * e * 1e6)}</span> µm</td>"
+                            f"<td>{'yes' if ok else 'NO' if ok is False else '—'}</td>"
                             f"</tr>" for i, (label, pk, ok) in enumerate(rows))
             if good:
                 crit, api = ans["critical_speed"], ans["api"]
@@ -1152,7 +1165,9 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
                                 f"<b id='sm_ok' style='color:{'green' if kept else 'red'}'>"
                                 f"{'kept' if kept else 'NOT kept' if kept is False else '—'}</b></p>"
                                 f"<table><tr><th>profile</th><th>peak δ/e</th><th>peak δ</th>"
-                                f"<th>within the drive's limits</th></tr>{table}</table>")
+                                f"<th>within the drive's limits</th></tr>{table}</table><span id='exact' "
+                                f"style='display:none'>{html.escape(_exact_spinup(ans, explorer.overrides(values)))}"
+                                "</span>")
             feasible = [pk for label, pk, ok in rows[1:] if ok is not False]
             if opt is not None and good:
                 best = min(feasible) if feasible else math.inf
@@ -1190,7 +1205,8 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
 
         def optimise():
             vals = dict(values)
-            reopt.disabled = True
+            reopt.disabled, reopt.label = True, "optimising … 0 s"
+            optimised.text = "<span id='optimising'>autobal run's optimisation of the current settings</span>"
             state["started"] = time.perf_counter()
 
             def work():
