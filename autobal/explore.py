@@ -465,6 +465,26 @@ class StaticsExplorer(DeviceSettings):
         res["q1"] = res["q"][:, statics.system.throttles.index("1")]
         return res
 
+    def _continued(self, dd: dv.DeviceDesign, sw: dict) -> dict:
+        """The characteristic's roots ``sw`` (:meth:`_roots` over the grid) with the points it has no root at solved
+        again from the root of their nearest solved neighbour, pass by pass while that finds more (a continuation
+        along the grid, as the batch sweep's: Newton from the closed form misses the face-contact branch where the
+        closed form is far from it)."""
+        for _ in range(len(self.grid)):
+            good, bad = np.flatnonzero(sw["valid"]), np.flatnonzero(~sw["valid"])
+            if not good.size or not bad.size:
+                break
+            near = good[np.abs(good[None, :] - bad[:, None]).argmin(axis=1)]
+            res = self._roots(dd, self.grid[bad], dd.dpsi, starts=sw["W"][near])
+            if not res["valid"].any():
+                break
+            for k in ("W", "q", "q1", "valid"):
+                sw[k][bad[res["valid"]]] = res[k][res["valid"]]
+            for i, j in zip(bad, range(len(bad)), strict=True):
+                if res["valid"][j]:
+                    sw["stops"][i] = res["stops"][j]
+        return sw
+
     def _critical_system(self, dd: dv.DeviceDesign, which: str, stops: frozenset):
         """The balances with the stops fixed (as :meth:`ParametricStatics.newton`) and q1 = 0, square in the free
         unknowns and psi1 (``which`` "psi1") or dpsi ("dpsi"): CasADi's Newton rootfinder, built once per
@@ -572,7 +592,7 @@ class StaticsExplorer(DeviceSettings):
                "p1": self.psi1 * sc["p_B"], "dp": (pt["psi_e"] - self.psi1) * sc["p_B"]}
         # the characteristic over the scene's discharge ratios, warm-started from the last one
         start = self._sweep if self._sweep is not None and self._sweep.shape[1] == len(self._last[1]) else None
-        sw = self._roots(dd, self.grid, dd.dpsi, starts=start)
+        sw = self._continued(dd, self._roots(dd, self.grid, dd.dpsi, starts=start))
         self._sweep = sw["W"].copy()
         u = self._statics(dd)[0].system.index("u")
         stops = sw["stops"]
@@ -722,7 +742,7 @@ PAGE_HTML = """{% extends base %}
 {% block contents %}
 <div style="display:flex;gap:16px;align-items:flex-start">
   <div style="width:370px;height:96vh;overflow-y:auto;flex:none">{{ embed(roots.controls) }}</div>
-  <div>{{ embed(roots.head) }}{{ embed(roots.numbers) }}{{ embed(roots.plots) }}{{ embed(roots.seq) }}</div>
+  <div>{{ embed(roots.head) }}{{ embed(roots.numbers) }}{{ embed(roots.plots) }}</div>
 </div>
 {% endblock %}"""
 
@@ -796,10 +816,14 @@ def _record_buttons(doc, explorer: Settings, values: dict, out: Path):
     return row(save_btn, report_btn, saved)
 
 
-def _latest_wins(doc, evaluate, show, seq):
+_SEQ = re.compile(r"<span id='seq'[^>]*>\d+</span>$")
+
+
+def _latest_wins(doc, evaluate, show, numbers):
     """``request(values, moved)``: compute the settings on the server's next tick and show them, the latest
-    winning (settings that arrive while one is computed are coalesced); every update one message to the browser
-    (``doc.hold``), counted in the ``seq`` Div (the browser test times them); the server survives every setting."""
+    winning (settings that arrive while one is computed are coalesced); each property changed by an update is one
+    message to the browser (``doc.hold``: a property set twice is sent once); the updates are counted in a hidden
+    ``#seq`` at the end of the ``numbers`` Div (the browser test times them); the server survives every setting."""
     state = {"pending": None, "busy": False, "seq": 0}
 
     def compute():
@@ -813,8 +837,8 @@ def _latest_wins(doc, evaluate, show, seq):
             doc.hold("combine")  # one message to the browser per update, not one per property
             try:
                 show(ans, moved)
-                state["seq"] += 1
-                seq.text = f"<span id='seq'>{state['seq']}</span>"
+                state["seq"] += 1  # with the numbers: one message, after the plots' data
+                numbers.text = _SEQ.sub("", numbers.text) + f"<span id='seq' hidden>{state['seq']}</span>"
             finally:
                 doc.unhold()
         state["busy"] = False
@@ -828,18 +852,33 @@ def _latest_wins(doc, evaluate, show, seq):
     return request
 
 
-def _say(verdict, status, ans: dict, moved: str | None, words: str | None = None, ok: bool = False) -> None:
+def _verdict_html(words: str, colour: str, status: str) -> str:
+    """The verdict line (``words`` in ``colour``, bold) and the status line under it: one Div's text, so that an
+    update changes one property."""
+    return (f"<div style='color:{colour};font-size:16px;font-weight:bold'><span id='verdict_text'>"
+            f"{html.escape(words)}</span></div><div><span id='status_text'>{html.escape(status)}</span></div>")
+
+
+def _say(verdict, ans: dict, moved: str | None, words: str | None = None, ok: bool = False) -> None:
     """The verdict and status lines of a device page: ``words`` (green when ``ok``, else red) for a computed
     setting, or the failed setting's status and message (then the numbers shown are the last good answer)."""
     if words is None:
         words = ans["status"].replace("_", " ").upper() + ": " + ans["message"] + (
             f" (after changing {moved.removeprefix('device.')})" if moved else "")
-        status.text = ("<span id='status_text'>the numbers in grey are the last good answer, not the current "
-                       "setting</span>")
+        status = "the numbers in grey are the last good answer, not the current setting"
     else:
-        status.text = f"<span id='status_text'>current (computed in {ans['compute_ms']:.1f} ms)</span>"
-    verdict.text = f"<span id='verdict_text'>{html.escape(words)}</span>"
-    verdict.styles = {"color": "green" if ok else "red", "font-size": "16px", "font-weight": "bold"}
+        status = f"current (computed in {ans['compute_ms']:.1f} ms)"
+    verdict.text = _verdict_html(words, "green" if ok else "red", status)
+
+
+def _local_ranges(doc, *figs) -> None:
+    """The plots' automatic ranges stay in the browser: without this BokehJS sends each range the browser computes
+    after an update back to the server (a message and its reply per range, every update)."""
+    from bokeh.models import CustomJS, DataRange1d
+
+    ranges = [r for f in figs for r in (f.x_range, f.y_range) if isinstance(r, DataRange1d)]
+    doc.js_on_event("document_ready", CustomJS(args={"ranges": ranges}, code=(
+        "for (const r of ranges) Object.defineProperty(r, 'is_syncable', {get: () => false})")))
 
 
 def _connect(doc, explorer: DeviceSettings, sliders: dict, values: dict, state: dict, check, request) -> None:
@@ -895,13 +934,9 @@ def make_document(explorer: DeviceExplorer, out: Path):
         state = {"good": None}
         sliders = _sliders(explorer)
         # fixed sizes: a new text re-renders its Div only, not the page's layout
-        verdict = Div(text="", name="verdict", width=1100, height=26,
-                      styles={"font-size": "16px", "font-weight": "bold"})
-        status = Div(text="", name="status", width=1100, height=20)
+        verdict = Div(text="", name="verdict", width=1100, height=46)  # and the status line under it
         numbers = Div(text="", name="numbers", width=1100, height=190)
         check = Div(text="", name="check", width=1100, height=20)
-        seq = Div(text="<span id='seq'>0</span>", name="seq", width=40, height=10,
-                  styles={"font-size": "1px", "color": "white"})
         afc_src = ColumnDataSource({"hz": [], "amp": []})
         pole_src = ColumnDataSource({"abs_re": [], "hz": [], "colour": []})
         afc = figure(title="AFC of the face gap (physical forcing)", x_axis_label="frequency, Hz",
@@ -914,6 +949,7 @@ def make_document(explorer: DeviceExplorer, out: Path):
                       toolbar_location=None)
         pole_dots = pmap.scatter("abs_re", "hz", source=pole_src, size=9, marker="x", line_width=2, color="colour")
         record = _record_buttons(doc, explorer, values, out)
+        _local_ranges(doc, afc, pmap)
 
         def show(ans: dict, moved: str | None):
             good = ans.get("status") == "ok"
@@ -969,20 +1005,19 @@ def make_document(explorer: DeviceExplorer, out: Path):
                     words += f" (required {_fmt(alpha, 4)} 1/s)"
                 if not ans["meets_requirement"] and moved:
                     words += f"; margin crossed by {moved.removeprefix('device.')}"
-                _say(verdict, status, ans, moved, words, ans["meets_requirement"])
+                _say(verdict, ans, moved, words, ans["meets_requirement"])
             else:
-                _say(verdict, status, ans, moved)
+                _say(verdict, ans, moved)
 
-        request = _latest_wins(doc, explorer.evaluate, show, seq)
+        request = _latest_wins(doc, explorer.evaluate, show, numbers)
         _connect(doc, explorer, sliders, values, state, check, request)
-        show(explorer.evaluate(values), None)
+        request(values, None)
         head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
         # separate roots placed by the template: a changed text lays out its own root, not the 40 sliders
-        doc.add_root(column(head, verdict, status, check, record, name="head"))
+        doc.add_root(column(head, verdict, check, record, name="head"))
         doc.add_root(column(*sliders.values(), name="controls"))
         doc.add_root(numbers)
         doc.add_root(row(afc, pmap, name="plots"))
-        doc.add_root(seq)
         doc.template = page
         doc.title = f"autobal explore: {explorer.scene.name}"
 
@@ -1009,14 +1044,10 @@ def make_statics_document(explorer: StaticsExplorer, out: Path):
         values = explorer.defaults()
         state = {"good": None}
         sliders = _sliders(explorer)
-        verdict = Div(text="", name="verdict", width=1100, height=48, styles={"font-size": "16px",
-                                                                               "font-weight": "bold"})
+        verdict = Div(text="", name="verdict", width=1100, height=68)  # and the status line under it
         sweep_words = Div(text="", name="sweep_checks", width=1100, height=20)
-        status = Div(text="", name="status", width=1100, height=20)
         check = Div(text="", name="check", width=1100, height=20)
         numbers = Div(text="", name="numbers", width=1100, height=230)
-        seq = Div(text="<span id='seq'>0</span>", name="seq", width=40, height=10,
-                  styles={"font-size": "1px", "color": "white"})
         curve = ColumnDataSource({"p1": [], "gap": [], "leak": [], "q1": [], "colour": []})
         here = ColumnDataSource({"p1": [], "gap": [], "leak": [], "q1": []})
         figs = {}
@@ -1033,6 +1064,7 @@ def make_statics_document(explorer: StaticsExplorer, out: Path):
         for key, y in (("gap", "gap"), ("flows", "leak"), ("flows", "q1")):
             figs[key].scatter("p1", y, source=here, marker="diamond", size=13, color="black")
         figs["flows"].legend.location = "bottom_left"
+        _local_ranges(doc, *figs.values())
         crit = {k: Span(location=math.nan, dimension="height", line_color="#d62728", line_dash="dashed",
                         line_width=1.5) for k in figs}
         for k, f in figs.items():
@@ -1082,22 +1114,21 @@ def make_statics_document(explorer: StaticsExplorer, out: Path):
                 ok, words = ans["verdict"]
                 if not ok and moved:
                     words += f" (after changing {moved.removeprefix('device.')})"
-                _say(verdict, status, ans, moved, words, ok)
+                _say(verdict, ans, moved, words, ok)
                 sweep_words.text = ("<span id='sweep_text' style='color:#b35900'>" + html.escape(
                     "; ".join(ans["sweep_checks"])) + " (orange: valve on its stop, red: face contact)</span>"
                                     if ans["sweep_checks"] else "<span id='sweep_text'></span>")
             else:
-                _say(verdict, status, ans, moved)
+                _say(verdict, ans, moved)
 
-        request = _latest_wins(doc, explorer.evaluate, show, seq)
+        request = _latest_wins(doc, explorer.evaluate, show, numbers)
         _connect(doc, explorer, sliders, values, state, check, request)
-        show(explorer.evaluate(values), None)
+        request(values, None)
         head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
-        doc.add_root(column(head, verdict, sweep_words, status, check, record, name="head"))
+        doc.add_root(column(head, verdict, sweep_words, check, record, name="head"))
         doc.add_root(column(*sliders.values(), name="controls"))
         doc.add_root(numbers)
         doc.add_root(row(figs["gap"], figs["flows"], name="plots"))
-        doc.add_root(seq)
         doc.template = page
         doc.title = f"autobal explore: {explorer.scene.name}"
 
@@ -1122,11 +1153,8 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
         values = explorer.defaults()
         state = {"started": None}
         sliders = _sliders(explorer)
-        verdict = Div(text="", width=1100, height=26, styles={"font-size": "16px", "font-weight": "bold"})
-        status = Div(text="", width=1100, height=20)
+        verdict = Div(text="", width=1100, height=46)  # and the status line under it
         numbers = Div(text="", name="numbers", width=1100, height=150)
-        seq = Div(text="<span id='seq'>0</span>", name="seq", width=40, height=10,
-                  styles={"font-size": "1px", "color": "white"})
         fig = figure(title="deflection δ/e of the rotor", x_axis_label="time, s", y_axis_label="δ/e", width=900,
                      height=360, name="plots", toolbar_location=None)
         sources = {k: ColumnDataSource({"t": [], "d": []}, name=f"{k}_profile") for k in ("optimum", *RAMP_COLOURS)}
@@ -1135,6 +1163,7 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
         for k, c in RAMP_COLOURS.items():
             lines[k] = fig.line("t", "d", source=sources[k], line_width=1.5, color=c, legend_label=k.replace("_", " "))
         reopt = Button(label="re-optimise", name="reoptimise", button_type="primary")
+        _local_ranges(doc, fig)
 
         def show(ans: dict, moved: str | None):
             good = ans["status"] in ("ok", "no_optimum")
@@ -1178,17 +1207,14 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
                     words += f"; crossed by {moved} (re-optimise)"
                 if opt["optimised_for"] != explorer.overrides(values):
                     words += " — profile optimised for other settings"
-                verdict.text = f"<span id='verdict_text'>{html.escape(words)}</span>"
-                verdict.styles = {"color": "green" if ok else "red", "font-size": "16px", "font-weight": "bold"}
-                status.text = f"<span id='status_text'>current (computed in {ans['compute_ms']:.0f} ms)</span>"
+                verdict.text = _verdict_html(words, "green" if ok else "red",
+                                             f"current (computed in {ans['compute_ms']:.0f} ms)")
             else:
-                verdict.text = f"<span id='verdict_text'>{html.escape(ans['status'].upper() + ': ' + ans['message'])}"\
-                               "</span>"
-                verdict.styles = {"color": "red" if not good else "#555", "font-size": "16px", "font-weight": "bold"}
-                status.text = ("<span id='status_text'>current ramps; " + ("the optimum is being found" if good else
-                               "the curves in the plot are the last good answer") + "</span>")
+                verdict.text = _verdict_html(ans["status"].upper() + ": " + ans["message"], "#555" if good else "red",
+                                             "current ramps; " + ("the optimum is being found" if good else
+                                                                  "the curves in the plot are the last good answer"))
 
-        request = _latest_wins(doc, explorer.evaluate, show, seq)
+        request = _latest_wins(doc, explorer.evaluate, show, numbers)
 
         def on_change(path):
             def cb(attr, old, new):
@@ -1230,11 +1256,10 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
         doc.add_periodic_callback(tick, 500)
         record = _record_buttons(doc, explorer, values, out)
         head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
-        doc.add_root(column(head, verdict, status, row(reopt, optimised), record, name="head"))
+        doc.add_root(column(head, verdict, row(reopt, optimised), record, name="head"))
         doc.add_root(column(*sliders.values(), name="controls"))
         doc.add_root(numbers)
         doc.add_root(fig)
-        doc.add_root(seq)
         doc.template = page
         doc.title = f"autobal explore: {explorer.scene.name}"
         request(values, None)

@@ -91,6 +91,26 @@ def test_saved_scene_reproduces_the_setting(explorer, tmp_path):
         == dataclasses.asdict(dynamic_device(autobal.load(SCENE)))
 
 
+@pytest.mark.cli
+def test_statics_characteristic_keeps_its_face_contact_points(statics_explorer):
+    """A nominal pressure at which the face is in contact over the whole characteristic (autobal run: contact at
+    every one of the 36 discharge ratios, gap < 5e-12 m): every point is drawn, at gap 0 and marked as contact (none
+    dropped as "no Newton root": the points Newton misses from the closed form are continued from their solved
+    neighbours), leaks equal to the batch sweep's; the sweep's check says so."""
+    ex = statics_explorer
+    values = ex.defaults() | {"device.operating.nominal_pressure": 6.5}
+    live = ex.evaluate(values)["sweep"]
+    block = autobal.run(autobal.load(STATICS, set=ex.overrides(values)))["statics"].data
+    sw = block["sweep"]
+    assert all(sw["contact"]) and max(sw["u"]) * block["scales"]["z_B"] < 5e-12
+    assert all(live["solved"]) and live["contact"] == list(sw["contact"])
+    np.testing.assert_array_equal(live["gap"], 0.0)
+    np.testing.assert_allclose(live["leak"], sw["Q_e"], rtol=1e-8)
+    np.testing.assert_allclose(live["inner_seal_flow"], sw["Q_1"], rtol=1e-8)
+    checks = ex.evaluate(values)["sweep_checks"]
+    assert checks[0].startswith("face contact in the sweep from p1 = 1.625 MPa") and len(checks) == 1
+
+
 @pytest.mark.parametrize(("path", "value", "status", "words"), [
     ("device.disc.face.inner_diameter", 300.0, "refused", "outer_diameter must be larger than inner_diameter"),
     ("device.regulator.supply_pressure", 8.0, "no_statics", "regulator valve on its stop"),
@@ -222,6 +242,26 @@ def test_statics_page_of_a_device_without_regulator(tmp_path):
         "discharge_ratio"]["stop"]
     block = autobal.run(autobal.load(ex.save(values, tmp_path / "saved.yaml")), out=tmp_path / "run")["statics"].data
     assert_statics_equal(live, block)
+
+
+@pytest.mark.cli
+def test_statics_characteristic_keeps_its_face_contact_points(statics_explorer):
+    """A nominal pressure at which the face is in contact over the whole characteristic (autobal run: contact at
+    every one of the 36 discharge ratios, gap < 5e-12 m): every point is drawn, at gap 0 and marked as contact (none
+    dropped as "no Newton root": the points Newton misses from the closed form are continued from their solved
+    neighbours), leaks equal to the batch sweep's; the sweep's check says so."""
+    ex = statics_explorer
+    values = ex.defaults() | {"device.operating.nominal_pressure": 6.5}
+    live = ex.evaluate(values)["sweep"]
+    block = autobal.run(autobal.load(STATICS, set=ex.overrides(values)))["statics"].data
+    sw = block["sweep"]
+    assert all(sw["contact"]) and max(sw["u"]) * block["scales"]["z_B"] < 5e-12
+    assert all(live["solved"]) and live["contact"] == list(sw["contact"])
+    np.testing.assert_array_equal(live["gap"], 0.0)
+    np.testing.assert_allclose(live["leak"], sw["Q_e"], rtol=1e-8)
+    np.testing.assert_allclose(live["inner_seal_flow"], sw["Q_1"], rtol=1e-8)
+    checks = ex.evaluate(values)["sweep_checks"]
+    assert checks[0].startswith("face contact in the sweep from p1 = 1.625 MPa") and len(checks) == 1
 
 
 @pytest.mark.parametrize(("path", "value", "status", "words"), [
