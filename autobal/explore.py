@@ -819,11 +819,12 @@ def _record_buttons(doc, explorer: Settings, values: dict, out: Path):
 _SEQ = re.compile(r"<span id='seq'[^>]*>\d+</span>$")
 
 
-def _latest_wins(doc, evaluate, show, numbers):
+def _latest_wins(doc, evaluate, show, verdict):
     """``request(values, moved)``: compute the settings on the server's next tick and show them, the latest
     winning (settings that arrive while one is computed are coalesced); each property changed by an update is one
-    message to the browser (``doc.hold``: a property set twice is sent once); the updates are counted in a hidden
-    ``#seq`` at the end of the ``numbers`` Div (the browser test times them); the server survives every setting."""
+    message to the browser (``doc.hold``: a property set twice is sent once, in the order first set); the updates
+    are counted in a hidden ``#seq`` at the end of the ``verdict`` Div, which ``show`` sets last (the browser test
+    times them: the page is updated when it changes); the server survives every setting."""
     state = {"pending": None, "busy": False, "seq": 0}
 
     def compute():
@@ -837,8 +838,8 @@ def _latest_wins(doc, evaluate, show, numbers):
             doc.hold("combine")  # one message to the browser per update, not one per property
             try:
                 show(ans, moved)
-                state["seq"] += 1  # with the numbers: one message, after the plots' data
-                numbers.text = _SEQ.sub("", numbers.text) + f"<span id='seq' hidden>{state['seq']}</span>"
+                state["seq"] += 1  # with the verdict: one message, the update's last
+                verdict.text = _SEQ.sub("", verdict.text) + f"<span id='seq' hidden>{state['seq']}</span>"
             finally:
                 doc.unhold()
         state["busy"] = False
@@ -871,14 +872,17 @@ def _say(verdict, ans: dict, moved: str | None, words: str | None = None, ok: bo
     verdict.text = _verdict_html(words, "green" if ok else "red", status)
 
 
-def _local_ranges(doc, *figs) -> None:
-    """The plots' automatic ranges stay in the browser: without this BokehJS sends each range the browser computes
-    after an update back to the server (a message and its reply per range, every update)."""
+def _browser_only(doc, sliders: dict, *figs) -> None:
+    """What the server does not use stays in the browser: the plots' automatic ranges (BokehJS would send each range
+    it computes after an update back to the server) and the sliders' ``value_throttled`` (sent beside ``value`` at
+    every key press): a message and its reply each, every change."""
     from bokeh.models import CustomJS, DataRange1d
 
     ranges = [r for f in figs for r in (f.x_range, f.y_range) if isinstance(r, DataRange1d)]
-    doc.js_on_event("document_ready", CustomJS(args={"ranges": ranges}, code=(
-        "for (const r of ranges) Object.defineProperty(r, 'is_syncable', {get: () => false})")))
+    doc.js_on_event("document_ready", CustomJS(args={"ranges": ranges, "sliders": list(sliders.values())}, code=(
+        "for (const r of ranges) Object.defineProperty(r, 'is_syncable', {get: () => false});\n"
+        "for (const s of sliders) Object.defineProperty(s.properties.value_throttled, 'syncable', "
+        "{get: () => false});")))
 
 
 def _connect(doc, explorer: DeviceSettings, sliders: dict, values: dict, state: dict, check, request) -> None:
@@ -891,6 +895,7 @@ def _connect(doc, explorer: DeviceSettings, sliders: dict, values: dict, state: 
             values[path] = float(new)
             check.text = ""
             request(values, path)
+            rested()
         return cb
 
     def run_check():
@@ -910,14 +915,13 @@ def _connect(doc, explorer: DeviceSettings, sliders: dict, values: dict, state: 
             doc.add_next_tick_callback(done)
         threading.Thread(target=work, daemon=True).start()
 
-    def on_release(attr, old, new):  # IPOPT's cross-check once the sliders rest for CHECK_AFTER_S
+    def rested():  # IPOPT's cross-check once the sliders rest for CHECK_AFTER_S
         if state.get("timer") is not None:
             doc.remove_timeout_callback(state["timer"])
         state["timer"] = doc.add_timeout_callback(run_check, int(CHECK_AFTER_S * 1000))
 
     for path, slider in sliders.items():
         slider.on_change("value", on_change(path))
-        slider.on_change("value_throttled", on_release)
 
 
 def make_document(explorer: DeviceExplorer, out: Path):
@@ -949,7 +953,7 @@ def make_document(explorer: DeviceExplorer, out: Path):
                       toolbar_location=None)
         pole_dots = pmap.scatter("abs_re", "hz", source=pole_src, size=9, marker="x", line_width=2, color="colour")
         record = _record_buttons(doc, explorer, values, out)
-        _local_ranges(doc, afc, pmap)
+        _browser_only(doc, sliders, afc, pmap)
 
         def show(ans: dict, moved: str | None):
             good = ans.get("status") == "ok"
@@ -1009,7 +1013,7 @@ def make_document(explorer: DeviceExplorer, out: Path):
             else:
                 _say(verdict, ans, moved)
 
-        request = _latest_wins(doc, explorer.evaluate, show, numbers)
+        request = _latest_wins(doc, explorer.evaluate, show, verdict)
         _connect(doc, explorer, sliders, values, state, check, request)
         request(values, None)
         head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
@@ -1064,7 +1068,7 @@ def make_statics_document(explorer: StaticsExplorer, out: Path):
         for key, y in (("gap", "gap"), ("flows", "leak"), ("flows", "q1")):
             figs[key].scatter("p1", y, source=here, marker="diamond", size=13, color="black")
         figs["flows"].legend.location = "bottom_left"
-        _local_ranges(doc, *figs.values())
+        _browser_only(doc, sliders, *figs.values())
         crit = {k: Span(location=math.nan, dimension="height", line_color="#d62728", line_dash="dashed",
                         line_width=1.5) for k in figs}
         for k, f in figs.items():
@@ -1114,14 +1118,14 @@ def make_statics_document(explorer: StaticsExplorer, out: Path):
                 ok, words = ans["verdict"]
                 if not ok and moved:
                     words += f" (after changing {moved.removeprefix('device.')})"
-                _say(verdict, ans, moved, words, ok)
                 sweep_words.text = ("<span id='sweep_text' style='color:#b35900'>" + html.escape(
-                    "; ".join(ans["sweep_checks"])) + " (orange: valve on its stop, red: face contact)</span>"
+                    "; ".join(ans["sweep_checks"])) + " (orange: valve on its stop, red: face contact, gap 0)</span>"
                                     if ans["sweep_checks"] else "<span id='sweep_text'></span>")
+                _say(verdict, ans, moved, words, ok)
             else:
                 _say(verdict, ans, moved)
 
-        request = _latest_wins(doc, explorer.evaluate, show, numbers)
+        request = _latest_wins(doc, explorer.evaluate, show, verdict)
         _connect(doc, explorer, sliders, values, state, check, request)
         request(values, None)
         head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
@@ -1163,7 +1167,7 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
         for k, c in RAMP_COLOURS.items():
             lines[k] = fig.line("t", "d", source=sources[k], line_width=1.5, color=c, legend_label=k.replace("_", " "))
         reopt = Button(label="re-optimise", name="reoptimise", button_type="primary")
-        _local_ranges(doc, fig)
+        _browser_only(doc, sliders, fig)
 
         def show(ans: dict, moved: str | None):
             good = ans["status"] in ("ok", "no_optimum")
@@ -1214,7 +1218,7 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
                                              "current ramps; " + ("the optimum is being found" if good else
                                                                   "the curves in the plot are the last good answer"))
 
-        request = _latest_wins(doc, explorer.evaluate, show, numbers)
+        request = _latest_wins(doc, explorer.evaluate, show, verdict)
 
         def on_change(path):
             def cb(attr, old, new):
