@@ -991,7 +991,8 @@ def make_document(explorer: DeviceExplorer, out: Path):
                         f"<th>frequency Im λ / 2π, Hz</th><th>damping ratio ζ</th></tr>{rows}</table>")
                 if good:
                     re, im = last["poles"]["real"], last["poles"]["imag"]
-                    pole_src.data = {"abs_re": np.abs(re), "hz": im / (2 * np.pi),
+                    # a few numbers: lists, inline in the patch's JSON (an array is a binary frame pair of its own)
+                    pole_src.data = {"abs_re": np.abs(re).tolist(), "hz": (im / (2 * np.pi)).tolist(),
                                      "colour": np.where(re < 0, "#1f77b4", "#d62728").tolist()}
                     afc_src.data = {"hz": last["omega"] / (2 * np.pi), "amp": last["amplitude"] * 1e6}
             else:
