@@ -71,6 +71,7 @@ CHECK_AFTER_S = 1.0  # IPOPT cross-checks a setting once the sliders have rested
 CRITICAL_RTOL = 1e-12  # Brent's method's relative tolerance on the criticals psi1_kr, dpsi_kr
 PSI1_MAX = 100.0  # the largest discharge ratio a scene may give (analyses.statics): psi1_kr is looked for up to it
 DPSI_MIN, DPSI_MAX = 1e-6, 100.0  # the margins dpsi_kr is looked for between (IPOPT's lower bound: 1e-6)
+DRIVE_SETTINGS = ("max_acceleration",)  # analyses.spinup settings slid beside the rotor: the drive's limit
 WALK_FACTOR = 3.0  # where the characteristic has no sign change of q1, it is followed in steps of this factor
 NEEDS = ("explore needs a scene with device.dynamics (e.g. pump_pe600_dynamics), a device with analyses.statics "
          "(pump_pe600_statics) or a rotor with analyses.spinup (spinup_jeffcott_deadline_5s)")
@@ -159,6 +160,19 @@ def parameters(section, raw: dict, prefix: str) -> list[Parameter]:
         start, end = _slider_range(number, f.metadata["bounds"])
         out.append(Parameter(path, kind, unit, number, start, end, f.metadata.get("doc", "")))
     return out
+
+
+def setting(settings, raw: dict, path: str) -> Parameter | None:
+    """The slider of a quantity of an analysis' validated ``settings`` (``path``: its scene path) as the scene
+    writes it (``raw``), from its field's declared kind (:func:`autobal.units.quantity`); None where the scene
+    does not write it with a unit."""
+    field = type(settings).model_fields[path.rsplit(".", 1)[1]]
+    kind = (field.json_schema_extra or {}).get("kind") if isinstance(field.json_schema_extra, dict) else None
+    written = _raw_at(raw, path)
+    if kind is None or not isinstance(written, str) or not (m := _NUMBER.fullmatch(written)) or not m.group(2):
+        return None
+    number = float(m.group(1))
+    return Parameter(path, kind, m.group(2), number, *_slider_range(number, {"gt": 0.0}), field.description or "")
 
 
 def _with(model, path: str, value):
@@ -650,14 +664,21 @@ class SpinupExplorer(Settings):
         sc = self.scene
         if getattr(sc, "rotor", None) is None or getattr(sc.analyses, "spinup", None) is None:
             raise ScenarioError(f"{sc.name}: {NEEDS}")
-        self.params = parameters(sc.rotor, self.raw, "rotor")
-        self.profile = None  # (u, h, the settings it was optimised for) of the current optimum
+        self.params = parameters(sc.rotor, self.raw, "rotor") + [
+            p for key in DRIVE_SETTINGS if (p := setting(sc.analyses.spinup, self.raw, f"analyses.spinup.{key}"))]
+        # the current optimum's speed profile: (acceleration rad/s^2 and duration s of each interval, the settings
+        # it was optimised for); in physical units, so that a changed rotor or drive re-simulates the same profile
+        self.profile = None
 
     def problem(self, values: dict):
-        """The spin-up problem (SpinupOcp) of the settings: the scene's rotor section with them, its adapter."""
+        """The spin-up problem (SpinupOcp) of the settings: the scene's rotor section and the drive's settings of
+        ``analyses.spinup`` with them, by the analysis' own adapter."""
         from autobal.analyses import spinup
 
         scene = self.scene.model_copy(update={"rotor": self.section("rotor", values)})
+        for path, p in self.by_path.items():
+            if path.startswith("analyses.") and values[path] != p.value:
+                scene = _with(scene, path, p.si(values[path]))
         return spinup.ocp(scene, scene.analyses.spinup)
 
     def optimise(self, values: dict) -> dict:
@@ -669,10 +690,7 @@ class SpinupExplorer(Settings):
         scene = scenario.load(self.path, overrides=self.overrides(values))
         res = spinup.run(scene, scene.analyses.spinup)
         tr = res.optimum
-        ocp = spinup.ocp(scene, scene.analyses.spinup)
-        u = np.asarray(tr.alpha) / ocp.alpha_max
-        h = np.diff(np.append(tr.t_u, tr.t[-1])) * ocp.Om
-        self.profile = (u, h, dict(values))
+        self.profile = (np.asarray(tr.alpha, float), np.diff(np.append(tr.t_u, tr.t[-1])), dict(values))
         return {"peak_over_e": res.data["peak_deflection_over_e"], "seconds": time.perf_counter() - t0}
 
     def evaluate(self, values: dict) -> dict:
@@ -698,8 +716,8 @@ class SpinupExplorer(Settings):
         if self.profile is None:
             return out | {"status": "no_optimum", "message": "the optimum is being found (autobal run's "
                                                              "optimisation)"}
-        u, h, at = self.profile
-        tr = resimulate(ocp, u, h, "optimum")
+        alpha, dt, at = self.profile
+        tr = resimulate(ocp, alpha / ocp.alpha_max, dt * ocp.Om, "optimum")  # in the changed problem's scales
         out["optimum"] = {"peak_over_e": tr.peak_delta, "t": tr.t, "delta": tr.delta, "time_of_peak": tr.t_peak,
                           "omega": tr.omega, "within_drive_limits": drive_use(ocp, tr)["within_drive_limits"],
                           "optimised_for": self.overrides(at)}

@@ -2,8 +2,8 @@
 the numbers shown equal ``autobal run`` on the saved scene, the page loads nothing from outside 127.0.0.1, a bad
 setting is shown as such and the server survives it, and the p90 latency from a key press to the updated page over
 60 changes is under 50 ms; the statics page (pump_pe600_statics) shows autobal run's numbers too, and so does the
-spin-up page (spinup_jeffcott_deadline_5s) after "re-optimise", which shows its progress while the page answers.  Needs the
-``explore`` and ``browser`` extras and /usr/bin/chromium; skipped without."""
+spin-up page (spinup_jeffcott_deadline_5s) after "re-optimise", which shows its progress while the page answers.
+Needs the ``explore`` and ``browser`` extras and /usr/bin/chromium; skipped without."""
 
 import json
 import os
