@@ -309,7 +309,8 @@ def test_spinup_page_numbers_equal_autobal_run_and_reoptimise_keeps_the_page_liv
 
         optimised_now()  # the page finds the scene's optimum when it opens
         shipped = exact()
-        for path, key, times in (("rotor.damping", "ArrowRight", 3), ("rotor.stiffness", "ArrowLeft", 4)):
+        for path, key, times in (("rotor.damping", "ArrowRight", 3), ("rotor.stiffness", "ArrowLeft", 4),
+                                 ("analyses.spinup.max_acceleration", "ArrowRight", 2)):  # the rotor and the drive
             handle = slider(pg, path, ex)
             for _ in range(times):
                 change(pg, handle, key, timeout_s=60.0)
@@ -356,6 +357,11 @@ def test_spinup_page_numbers_equal_autobal_run_and_reoptimise_keeps_the_page_liv
         for key in ("amplification_factor", "separation_margin_pct", "required_separation_margin_pct"):
             assert live["api"][key] == pytest.approx(run["rotor"][key], rel=1e-12), key
         assert run["omega_cr_rad_s"] != pytest.approx(105.0, rel=1e-3)  # moved from the shipped rotor's
+        import yaml
+
+        alpha = float(yaml.safe_load(saved.read_text())["analyses"]["spinup"]["max_acceleration"].split()[0])
+        ramp = run["baselines"]["max_acceleration_ramp"]["label"]
+        assert alpha > 40.0 and ramp.startswith(f"ramp {alpha:.4g} rad/s²"), ramp
         # the text shown: 6 digits (AF and SM 4) of those numbers, in δ/e, µm and rpm
         assert text["peak_0"] == pytest.approx(run["peak_deflection_over_e"], rel=1e-5)
         assert text["peak_um_0"] == pytest.approx(run["peak_deflection_m"] * 1e6, rel=1e-5)
