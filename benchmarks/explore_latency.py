@@ -41,25 +41,11 @@ SLIDERS = ("device.disc.face.base_gap", "device.dynamics.cavity_volume")
 WARMUP, CHANGES = 30, 60
 CHROMIUM = "/usr/bin/chromium"
 
-PAGE = """
-window.__deep = (sel, root = document) => {
-  const hit = root.querySelector(sel);
-  if (hit) return hit;
-  for (const el of root.querySelectorAll('*')) {
-    if (el.shadowRoot) { const x = window.__deep(sel, el.shadowRoot); if (x) return x; }
-  }
-  return null;
-};
-window.__down = []; window.__shown = []; window.__paint = [];
-document.addEventListener('keydown', () => window.__down.push(performance.now()), true);
-window.__last = Number(window.__deep('#seq').textContent);
-new MutationObserver(() => {
-  const s = window.__deep('#seq');
-  if (s && Number(s.textContent) !== window.__last) {
-    window.__last = Number(s.textContent); window.__shown.push(performance.now());
-    requestAnimationFrame(() => setTimeout(() => window.__paint.push(performance.now()), 0));
-  }
-}).observe(window.__deep('#seq').getRootNode(), {subtree: true, childList: true, characterData: true});
+# after the browser test's page script (window.__deep, the key presses and the updates' times): the paints' times
+PAINT = """
+window.__paint = [];
+new MutationObserver(() => requestAnimationFrame(() => setTimeout(() => window.__paint.push(performance.now()), 0)))
+  .observe(window.__deep('#seq').getRootNode(), {subtree: true, childList: true, characterData: true});
 """
 SOCKET = """
 window.__ws = [];
@@ -145,6 +131,7 @@ def drive(url: str, log: Path) -> tuple[list[dict], dict, float]:
     from playwright.sync_api import sync_playwright
 
     from autobal.explore import DeviceExplorer
+    from tests.test_explore_browser import DEEP
 
     order = [p.path for p in DeviceExplorer(SCENE).params]
     with sync_playwright() as pw:
@@ -153,7 +140,8 @@ def drive(url: str, log: Path) -> tuple[list[dict], dict, float]:
         page.add_init_script(SOCKET)
         page.goto(url)
         page.wait_for_selector("#gap", timeout=60_000)
-        page.evaluate(PAGE)
+        page.evaluate(DEEP)
+        page.evaluate(PAINT)
         handles = [page.locator(".noUi-handle").nth(order.index(s)) for s in SLIDERS]
 
         def change(i: int) -> None:

@@ -132,6 +132,20 @@ def change(pg, handle, key: str, timeout_s: float = 10.0) -> float:
     return pg.evaluate("window.__shown[window.__shown.length - 1] - window.__down[window.__down.length - 1]")
 
 
+def save_and_run(pg, out: Path | None = None) -> tuple[Path, dict]:
+    """Press "save scene" and run ``autobal run`` on the scene the page saved (into ``out``, default beside it): the
+    scene's path and its results.json."""
+    pg.locator("button", has_text="save scene").click()
+    pg.wait_for_selector("#saved_path", timeout=10_000)
+    saved = Path(pg.locator("#saved_path").text_content())
+    assert saved.is_file()
+    out = out or saved.parent / "run"
+    done = subprocess.run([sys.executable, "-m", "autobal", "run", str(saved), "--out", str(out), "--quiet"],
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    return saved, json.loads((out / "results.json").read_text())
+
+
 def shown(pg) -> dict:
     return json.loads(pg.locator("#exact").text_content())
 
@@ -145,15 +159,7 @@ def test_numbers_shown_equal_autobal_run_on_the_saved_scene(server, page, tmp_pa
             change(page, handle, key)
     live = shown(page)
     text = {k: float(page.locator(f"#{k}").text_content()) for k in ("gap", "decay", "amp0", "peak0_hz")}
-    page.locator("button", has_text="save scene").click()
-    page.wait_for_selector("#saved_path", timeout=10_000)
-    saved = Path(page.locator("#saved_path").text_content())
-    assert saved.is_file()
-    out = tmp_path / "run"
-    done = subprocess.run([sys.executable, "-m", "autobal", "run", str(saved), "--out", str(out), "--quiet"],
-                          capture_output=True, text=True, timeout=600)
-    assert done.returncode == 0, done.stderr
-    res = json.loads((out / "results.json").read_text())
+    saved, res = save_and_run(page, tmp_path / "run")
     head, stab = res["frequency"]["headline"], res["stability"]
     assert live["decay_rate"] == pytest.approx(stab["margin"]["decay_rate"], rel=1e-8)
     assert live["min_damping_ratio"] == pytest.approx(stab["margin"]["min_damping_ratio"], rel=1e-8)
@@ -247,14 +253,7 @@ def test_statics_page_numbers_equal_autobal_run_on_the_saved_scene(browser, tmp_
                 change(pg, handle, key)
         live = shown(pg)
         text = {k: float(pg.locator(f"#{k}").text_content()) for k in ("gap", "leak", "p1_kr", "dp_kr")}
-        pg.locator("button", has_text="save scene").click()
-        pg.wait_for_selector("#saved_path", timeout=10_000)
-        saved = Path(pg.locator("#saved_path").text_content())
-        out = saved.parent / "run"
-        done = subprocess.run([sys.executable, "-m", "autobal", "run", str(saved), "--out", str(out), "--quiet"],
-                              capture_output=True, text=True, timeout=600)
-        assert done.returncode == 0, done.stderr
-        res = json.loads((out / "results.json").read_text())["statics"]
+        res = save_and_run(pg)[1]["statics"]
         ex_, crit = res["exact"], res["critical_exact"]
         for key, ref in (("gap", ex_["z0"]), ("leak", ex_["Q_e"]), ("dp", ex_["dp"]), ("p1_kr", crit["p1_kr"]),
                          ("dp_kr", crit["dp_kr"]), ("margin_to_p1_kr", crit["p1_kr"] - ex_["p1"])):
@@ -340,14 +339,8 @@ def test_spinup_page_numbers_equal_autobal_run_and_reoptimise_keeps_the_page_liv
         optimised_now()
         live = exact()
         text = {k: float(pg.locator(f"#{k}").text_content()) for k in ("peak_0", "peak_um_0", "critical", "af", "sm")}
-        pg.locator("button", has_text="save scene").click()
-        pg.wait_for_selector("#saved_path", timeout=10_000)
-        saved = Path(pg.locator("#saved_path").text_content())
-        out = saved.parent / "run"
-        done = subprocess.run([sys.executable, "-m", "autobal", "run", str(saved), "--out", str(out), "--quiet"],
-                              capture_output=True, text=True, timeout=600)
-        assert done.returncode == 0, done.stderr
-        run = json.loads((out / "results.json").read_text())["spinup"]
+        saved, results = save_and_run(pg)
+        run = results["spinup"]
         # the re-simulations are CVODES at the batch run's tolerance on the same profile: equal to 1e-9
         assert live["optimum"] == pytest.approx(run["peak_deflection_over_e"], rel=1e-9)
         assert live["optimum"] * live["eccentricity"] == pytest.approx(run["peak_deflection_m"], rel=1e-9)
