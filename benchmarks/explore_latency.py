@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import json
 import os
+import socket
 import subprocess
 import sys
 import tempfile
@@ -79,7 +80,7 @@ def serve(scene: str, log_path: str) -> None:
 
     async def received(self, fragment):
         if isinstance(fragment, str) and '"attr":"value"' in fragment:
-            note("value")
+            note("value", self.ws_connection.stream.socket.getsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY))
         return await on_message(self, fragment)
 
     async def sent(self, message):
@@ -178,7 +179,7 @@ def server_parts(log: Path, start: float) -> list[dict]:
     parts, cur = [], None
     for e in events:
         if e[1] == "value":
-            cur = {"in": e[0], "patches": 0, "json_bytes": 0}
+            cur = {"in": e[0], "patches": 0, "json_bytes": 0, "nodelay": e[2]}
             parts.append(cur)
         elif cur is None:
             continue
@@ -252,6 +253,7 @@ def main() -> list[dict]:
              "messages per change: the browser sends {browser_messages_per_change:g} (3 frames each), the server "
              "{server_patch_messages_per_change:g} PATCH-DOC and an OK ({frames_received_per_change:g} frames, "
              "{bytes_received_per_change:.0f} bytes)".format(**counts),
+             f"TCP_NODELAY on the server's websocket at every change: {all(p['nodelay'] for p in srv)}",
              "CPU per change: CPU time of each process over the changes / their number (the benchmark's own "
              "process and the Playwright driver included: they press the keys and wait)"]
     write("explore_latency", "autobal explore: where the time of one change goes (browser to browser)",
