@@ -99,10 +99,12 @@ def page(server, browser):
     pg.close()
 
 
-def browsing(browser, url: str, ready: str = "#gap"):
-    """A new page of ``browser`` on ``url``, once it shows ``ready`` (its requests outside 127.0.0.1 in
-    ``pg.outside``)."""
+def browsing(browser, url: str, ready: str = "#gap", init: str | None = None):
+    """A new page of ``browser`` on ``url`` (``init``: a script run first), once it shows ``ready`` (its requests
+    outside 127.0.0.1 in ``pg.outside``)."""
     pg = browser.new_page(viewport={"width": 1400, "height": 1000})
+    if init:
+        pg.add_init_script(init)
     outside = []
     pg.on("request", lambda r: None if r.url.startswith("http://127.0.0.1:") or r.url.startswith("ws://127.0.0.1:")
           else outside.append(r.url))
@@ -197,6 +199,31 @@ def test_a_setting_without_a_regulated_point_is_shown_and_the_server_survives(se
     assert server[2].poll() is None
     assert "current" in page.locator("#status_text").text_content()
     assert shown(page)["decay_rate"] > 0
+
+
+# the websocket frames the page sends, counted
+SENT = """const Native = window.WebSocket; window.__sent = 0;
+window.WebSocket = function (...args) { const w = new Native(...args), send = w.send.bind(w);
+  w.send = (d) => { window.__sent += 1; send(d); }; return w; };
+window.WebSocket.prototype = Native.prototype;"""
+
+
+def test_a_change_is_one_message_from_the_browser(server, browser):
+    """The page sends the server one Bokeh message per slider change (its value: header, metadata and content, three
+    websocket frames) and nothing else: the sliders' value_throttled and the plots' automatic ranges stay in the
+    browser (explore._browser_only), which would otherwise add a message each, and the server's reply each."""
+    pg = browsing(browser, server[0], init=SENT)
+    try:
+        handle = slider(pg, "device.dynamics.cavity_volume")
+        change(pg, handle, "ArrowRight")
+        time.sleep(1.0)  # what the browser would send back after an update (the ranges) is sent by now
+        before = pg.evaluate("window.__sent")
+        for key in ("ArrowLeft", "ArrowRight") * 3:
+            change(pg, handle, key)
+        time.sleep(1.0)
+        assert pg.evaluate("window.__sent") - before == 6 * 3
+    finally:
+        pg.close()
 
 
 def test_latency_p90_from_key_press_to_update(page):
