@@ -238,7 +238,7 @@ def test_statics_characteristic_keeps_its_face_contact_points(statics_explorer):
     ex = statics_explorer
     values = ex.defaults() | {"device.operating.nominal_pressure": 6.5}
     live = ex.evaluate(values)["sweep"]
-    block = autobal.run(autobal.load(STATICS, set=ex.overrides(values)))["statics"].data
+    block = autobal.run(autobal.load(STATICS, set=ex.overrides(values)))["statics"].to_dict()
     sw = block["sweep"]
     assert all(sw["contact"]) and max(sw["u"]) * block["scales"]["z_B"] < 5e-12
     assert all(live["solved"]) and live["contact"] == list(sw["contact"])
