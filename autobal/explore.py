@@ -72,6 +72,7 @@ CHECK_AFTER_S = 1.0  # IPOPT cross-checks a setting once the sliders have rested
 CRITICAL_RTOL = 1e-12  # Brent's method's relative tolerance on the criticals psi1_kr, dpsi_kr
 PSI1_MAX = 100.0  # the largest discharge ratio a scene may give (analyses.statics): psi1_kr is looked for up to it
 DPSI_MIN, DPSI_MAX = 1e-6, 100.0  # the margins dpsi_kr is looked for between (IPOPT's lower bound: 1e-6)
+DRIVE_SETTINGS = ("max_acceleration",)  # analyses.spinup settings slid beside the rotor: the drive's limit
 WALK_FACTOR = 3.0  # where the characteristic has no sign change of q1, it is followed in steps of this factor
 NEEDS = ("explore needs a scene with device.dynamics (e.g. pump_pe600_dynamics), a device with analyses.statics "
          "(pump_pe600_statics) or a rotor with analyses.spinup (spinup_jeffcott_deadline_5s)")
@@ -160,6 +161,19 @@ def parameters(section, raw: dict, prefix: str) -> list[Parameter]:
         start, end = _slider_range(number, f.metadata["bounds"])
         out.append(Parameter(path, kind, unit, number, start, end, f.metadata.get("doc", "")))
     return out
+
+
+def setting(settings, raw: dict, path: str) -> Parameter | None:
+    """The slider of a quantity of an analysis' validated ``settings`` (``path``: its scene path) as the scene
+    writes it (``raw``), from its field's declared kind (:func:`autobal.units.quantity`); None where the scene
+    does not write it with a unit."""
+    field = type(settings).model_fields[path.rsplit(".", 1)[1]]
+    kind = (field.json_schema_extra or {}).get("kind") if isinstance(field.json_schema_extra, dict) else None
+    written = _raw_at(raw, path)
+    if kind is None or not isinstance(written, str) or not (m := _NUMBER.fullmatch(written)) or not m.group(2):
+        return None
+    number = float(m.group(1))
+    return Parameter(path, kind, m.group(2), number, *_slider_range(number, {"gt": 0.0}), field.description or "")
 
 
 def _with(model, path: str, value):
@@ -466,6 +480,26 @@ class StaticsExplorer(DeviceSettings):
         res["q1"] = res["q"][:, statics.system.throttles.index("1")]
         return res
 
+    def _continued(self, dd: dv.DeviceDesign, sw: dict) -> dict:
+        """The characteristic's roots ``sw`` (:meth:`_roots` over the grid) with the points it has no root at solved
+        again from the root of their nearest solved neighbour, pass by pass while that finds more (a continuation
+        along the grid, as the batch sweep's: Newton from the closed form misses the face-contact branch where the
+        closed form is far from it)."""
+        for _ in range(len(self.grid)):
+            good, bad = np.flatnonzero(sw["valid"]), np.flatnonzero(~sw["valid"])
+            if not good.size or not bad.size:
+                break
+            near = good[np.abs(good[None, :] - bad[:, None]).argmin(axis=1)]
+            res = self._roots(dd, self.grid[bad], dd.dpsi, starts=sw["W"][near])
+            if not res["valid"].any():
+                break
+            for k in ("W", "q", "q1", "valid"):
+                sw[k][bad[res["valid"]]] = res[k][res["valid"]]
+            for i, j in zip(bad, range(len(bad)), strict=True):
+                if res["valid"][j]:
+                    sw["stops"][i] = res["stops"][j]
+        return sw
+
     def _critical_system(self, dd: dv.DeviceDesign, which: str, stops: frozenset):
         """The balances with the stops fixed (as :meth:`ParametricStatics.newton`) and q1 = 0, square in the free
         unknowns and psi1 (``which`` "psi1") or dpsi ("dpsi"): CasADi's Newton rootfinder, built once per
@@ -571,7 +605,7 @@ class StaticsExplorer(DeviceSettings):
                "p1": self.psi1 * sc["p_B"], "dp": (pt["psi_e"] - self.psi1) * sc["p_B"]}
         # the characteristic over the scene's discharge ratios, warm-started from the last one
         start = self._sweep if self._sweep is not None and self._sweep.shape[1] == len(self._last[1]) else None
-        sw = self._roots(dd, self.grid, dd.dpsi, starts=start)
+        sw = self._continued(dd, self._roots(dd, self.grid, dd.dpsi, starts=start))
         self._sweep = sw["W"].copy()
         u = self._statics(dd)[0].system.index("u")
         stops = sw["stops"]
@@ -627,14 +661,21 @@ class SpinupExplorer(Settings):
         sc = self.scene
         if getattr(sc, "rotor", None) is None or getattr(sc.analyses, "spinup", None) is None:
             raise ScenarioError(f"{sc.name}: {NEEDS}")
-        self.params = parameters(sc.rotor, self.raw, "rotor")
-        self.profile = None  # (u, h, the settings it was optimised for) of the current optimum
+        self.params = parameters(sc.rotor, self.raw, "rotor") + [
+            p for key in DRIVE_SETTINGS if (p := setting(sc.analyses.spinup, self.raw, f"analyses.spinup.{key}"))]
+        # the current optimum's speed profile: (acceleration rad/s^2 and duration s of each interval, the settings
+        # it was optimised for); in physical units, so that a changed rotor or drive re-simulates the same profile
+        self.profile = None
 
     def problem(self, values: dict):
-        """The spin-up problem (SpinupOcp) of the settings: the scene's rotor section with them, its adapter."""
+        """The spin-up problem (SpinupOcp) of the settings: the scene's rotor section and the drive's settings of
+        ``analyses.spinup`` with them, by the analysis' own adapter."""
         from autobal.analyses import spinup
 
         scene = self.scene.model_copy(update={"rotor": self.section("rotor", values)})
+        for path, p in self.by_path.items():
+            if path.startswith("analyses.") and values[path] != p.value:
+                scene = _with(scene, path, p.si(values[path]))
         return spinup.ocp(scene, scene.analyses.spinup)
 
     def optimise(self, values: dict) -> dict:
@@ -646,10 +687,7 @@ class SpinupExplorer(Settings):
         scene = scenario.load(self.path, overrides=self.overrides(values))
         res = spinup.run(scene, scene.analyses.spinup)
         tr = res.optimum
-        ocp = spinup.ocp(scene, scene.analyses.spinup)
-        u = np.asarray(tr.alpha) / ocp.alpha_max
-        h = np.diff(np.append(tr.t_u, tr.t[-1])) * ocp.Om
-        self.profile = (u, h, dict(values))
+        self.profile = (np.asarray(tr.alpha, float), np.diff(np.append(tr.t_u, tr.t[-1])), dict(values))
         return {"peak_over_e": res.peak_deflection_over_e, "seconds": time.perf_counter() - t0}
 
     def evaluate(self, values: dict) -> dict:
@@ -675,8 +713,8 @@ class SpinupExplorer(Settings):
         if self.profile is None:
             return out | {"status": "no_optimum", "message": "the optimum is being found (autobal run's "
                                                              "optimisation)"}
-        u, h, at = self.profile
-        tr = resimulate(ocp, u, h, "optimum")
+        alpha, dt, at = self.profile
+        tr = resimulate(ocp, alpha / ocp.alpha_max, dt * ocp.Om, "optimum")  # in the changed problem's scales
         out["optimum"] = {"peak_over_e": tr.peak_delta, "t": tr.t, "delta": tr.delta, "time_of_peak": tr.t_peak,
                           "omega": tr.omega, "within_drive_limits": drive_use(ocp, tr)["within_drive_limits"],
                           "optimised_for": self.overrides(at)}
@@ -690,6 +728,18 @@ def _exact_statics(ans: dict) -> str:
 
     return json.dumps({k: ans[k] for k in ("gap", "leak", "dp", "margin_to_p1_kr")} | {
         k: ans["critical"][k] for k in ("p1_kr", "dp_kr")})
+
+
+def _exact_spinup(ans: dict, current: dict) -> str:
+    """The spin-up page's numbers at full precision (JSON, SI; ``optimum_current``: the optimum's profile was
+    optimised for the ``current`` settings), for the browser test's comparison."""
+    import json
+
+    opt = ans.get("optimum")
+    return json.dumps({"critical_speed": ans["critical_speed"], "eccentricity": ans["eccentricity"],
+                       "api": ans["api"], "ramps": {k: r["peak_over_e"] for k, r in ans["ramps"].items()},
+                       "optimum": None if opt is None else opt["peak_over_e"],
+                       "optimum_current": opt is not None and opt["optimised_for"] == current})
 
 
 def _exact(ans: dict) -> str:
@@ -707,7 +757,7 @@ PAGE_HTML = """{% extends base %}
 {% block contents %}
 <div style="display:flex;gap:16px;align-items:flex-start">
   <div style="width:370px;height:96vh;overflow-y:auto;flex:none">{{ embed(roots.controls) }}</div>
-  <div>{{ embed(roots.head) }}{{ embed(roots.numbers) }}{{ embed(roots.plots) }}{{ embed(roots.seq) }}</div>
+  <div>{{ embed(roots.head) }}{{ embed(roots.numbers) }}{{ embed(roots.plots) }}</div>
 </div>
 {% endblock %}"""
 
@@ -781,10 +831,15 @@ def _record_buttons(doc, explorer: Settings, values: dict, out: Path):
     return row(save_btn, report_btn, saved)
 
 
-def _latest_wins(doc, evaluate, show, seq):
+_SEQ = re.compile(r"<span id='seq'[^>]*>\d+</span>$")
+
+
+def _latest_wins(doc, evaluate, show, verdict):
     """``request(values, moved)``: compute the settings on the server's next tick and show them, the latest
-    winning (settings that arrive while one is computed are coalesced); every update one message to the browser
-    (``doc.hold``), counted in the ``seq`` Div (the browser test times them); the server survives every setting."""
+    winning (settings that arrive while one is computed are coalesced); each property changed by an update is one
+    message to the browser (``doc.hold``: a property set twice is sent once, in the order first set); the updates
+    are counted in a hidden ``#seq`` at the end of the ``verdict`` Div, which ``show`` sets last (the browser test
+    times them: the page is updated when it changes); the server survives every setting."""
     state = {"pending": None, "busy": False, "seq": 0}
 
     def compute():
@@ -798,8 +853,8 @@ def _latest_wins(doc, evaluate, show, seq):
             doc.hold("combine")  # one message to the browser per update, not one per property
             try:
                 show(ans, moved)
-                state["seq"] += 1
-                seq.text = f"<span id='seq'>{state['seq']}</span>"
+                state["seq"] += 1  # with the verdict: one message, the update's last
+                verdict.text = _SEQ.sub("", verdict.text) + f"<span id='seq' hidden>{state['seq']}</span>"
             finally:
                 doc.unhold()
         state["busy"] = False
@@ -813,18 +868,36 @@ def _latest_wins(doc, evaluate, show, seq):
     return request
 
 
-def _say(verdict, status, ans: dict, moved: str | None, words: str | None = None, ok: bool = False) -> None:
+def _verdict_html(words: str, colour: str, status: str) -> str:
+    """The verdict line (``words`` in ``colour``, bold) and the status line under it: one Div's text, so that an
+    update changes one property."""
+    return (f"<div style='color:{colour};font-size:16px;font-weight:bold'><span id='verdict_text'>"
+            f"{html.escape(words)}</span></div><div><span id='status_text'>{html.escape(status)}</span></div>")
+
+
+def _say(verdict, ans: dict, moved: str | None, words: str | None = None, ok: bool = False) -> None:
     """The verdict and status lines of a device page: ``words`` (green when ``ok``, else red) for a computed
     setting, or the failed setting's status and message (then the numbers shown are the last good answer)."""
     if words is None:
         words = ans["status"].replace("_", " ").upper() + ": " + ans["message"] + (
             f" (after changing {moved.removeprefix('device.')})" if moved else "")
-        status.text = ("<span id='status_text'>the numbers in grey are the last good answer, not the current "
-                       "setting</span>")
+        status = "the numbers in grey are the last good answer, not the current setting"
     else:
-        status.text = f"<span id='status_text'>current (computed in {ans['compute_ms']:.1f} ms)</span>"
-    verdict.text = f"<span id='verdict_text'>{html.escape(words)}</span>"
-    verdict.styles = {"color": "green" if ok else "red", "font-size": "16px", "font-weight": "bold"}
+        status = f"current (computed in {ans['compute_ms']:.1f} ms)"
+    verdict.text = _verdict_html(words, "green" if ok else "red", status)
+
+
+def _browser_only(doc, sliders: dict, *figs) -> None:
+    """What the server does not use stays in the browser: the plots' automatic ranges (BokehJS would send each range
+    it computes after an update back to the server) and the sliders' ``value_throttled`` (sent beside ``value`` at
+    every key press): a message and its reply each, every change."""
+    from bokeh.models import CustomJS, DataRange1d
+
+    ranges = [r for f in figs for r in (f.x_range, f.y_range) if isinstance(r, DataRange1d)]
+    doc.js_on_event("document_ready", CustomJS(args={"ranges": ranges, "sliders": list(sliders.values())}, code=(
+        "for (const r of ranges) Object.defineProperty(r, 'is_syncable', {get: () => false});\n"
+        "for (const s of sliders) Object.defineProperty(s.properties.value_throttled, 'syncable', "
+        "{get: () => false});")))
 
 
 def _connect(doc, explorer: DeviceSettings, sliders: dict, values: dict, state: dict, check, request) -> None:
@@ -837,6 +910,7 @@ def _connect(doc, explorer: DeviceSettings, sliders: dict, values: dict, state: 
             values[path] = float(new)
             check.text = ""
             request(values, path)
+            rested()
         return cb
 
     def run_check():
@@ -856,14 +930,13 @@ def _connect(doc, explorer: DeviceSettings, sliders: dict, values: dict, state: 
             doc.add_next_tick_callback(done)
         threading.Thread(target=work, daemon=True).start()
 
-    def on_release(attr, old, new):  # IPOPT's cross-check once the sliders rest for CHECK_AFTER_S
+    def rested():  # IPOPT's cross-check once the sliders rest for CHECK_AFTER_S
         if state.get("timer") is not None:
             doc.remove_timeout_callback(state["timer"])
         state["timer"] = doc.add_timeout_callback(run_check, int(CHECK_AFTER_S * 1000))
 
     for path, slider in sliders.items():
         slider.on_change("value", on_change(path))
-        slider.on_change("value_throttled", on_release)
 
 
 def make_document(explorer: DeviceExplorer, out: Path):
@@ -880,13 +953,9 @@ def make_document(explorer: DeviceExplorer, out: Path):
         state = {"good": None}
         sliders = _sliders(explorer)
         # fixed sizes: a new text re-renders its Div only, not the page's layout
-        verdict = Div(text="", name="verdict", width=1100, height=26,
-                      styles={"font-size": "16px", "font-weight": "bold"})
-        status = Div(text="", name="status", width=1100, height=20)
+        verdict = Div(text="", name="verdict", width=1100, height=46)  # and the status line under it
         numbers = Div(text="", name="numbers", width=1100, height=190)
         check = Div(text="", name="check", width=1100, height=20)
-        seq = Div(text="<span id='seq'>0</span>", name="seq", width=40, height=10,
-                  styles={"font-size": "1px", "color": "white"})
         afc_src = ColumnDataSource({"hz": [], "amp": []})
         pole_src = ColumnDataSource({"abs_re": [], "hz": [], "colour": []})
         afc = figure(title="AFC of the face gap (physical forcing)", x_axis_label="frequency, Hz",
@@ -899,6 +968,7 @@ def make_document(explorer: DeviceExplorer, out: Path):
                       toolbar_location=None)
         pole_dots = pmap.scatter("abs_re", "hz", source=pole_src, size=9, marker="x", line_width=2, color="colour")
         record = _record_buttons(doc, explorer, values, out)
+        _browser_only(doc, sliders, afc, pmap)
 
         def show(ans: dict, moved: str | None):
             good = ans.get("status") == "ok"
@@ -936,7 +1006,8 @@ def make_document(explorer: DeviceExplorer, out: Path):
                         f"<th>frequency Im λ / 2π, Hz</th><th>damping ratio ζ</th></tr>{rows}</table>")
                 if good:
                     re, im = last["poles"]["real"], last["poles"]["imag"]
-                    pole_src.data = {"abs_re": np.abs(re), "hz": im / (2 * np.pi),
+                    # a few numbers: lists, inline in the patch's JSON (an array is a binary frame pair of its own)
+                    pole_src.data = {"abs_re": np.abs(re).tolist(), "hz": (im / (2 * np.pi)).tolist(),
                                      "colour": np.where(re < 0, "#1f77b4", "#d62728").tolist()}
                     afc_src.data = {"hz": last["omega"] / (2 * np.pi), "amp": last["amplitude"] * 1e6}
             else:
@@ -954,20 +1025,19 @@ def make_document(explorer: DeviceExplorer, out: Path):
                     words += f" (required {_fmt(alpha, 4)} 1/s)"
                 if not ans["meets_requirement"] and moved:
                     words += f"; margin crossed by {moved.removeprefix('device.')}"
-                _say(verdict, status, ans, moved, words, ans["meets_requirement"])
+                _say(verdict, ans, moved, words, ans["meets_requirement"])
             else:
-                _say(verdict, status, ans, moved)
+                _say(verdict, ans, moved)
 
-        request = _latest_wins(doc, explorer.evaluate, show, seq)
+        request = _latest_wins(doc, explorer.evaluate, show, verdict)
         _connect(doc, explorer, sliders, values, state, check, request)
-        show(explorer.evaluate(values), None)
+        request(values, None)
         head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
         # separate roots placed by the template: a changed text lays out its own root, not the 40 sliders
-        doc.add_root(column(head, verdict, status, check, record, name="head"))
+        doc.add_root(column(head, verdict, check, record, name="head"))
         doc.add_root(column(*sliders.values(), name="controls"))
         doc.add_root(numbers)
         doc.add_root(row(afc, pmap, name="plots"))
-        doc.add_root(seq)
         doc.template = page
         doc.title = f"autobal explore: {explorer.scene.name}"
 
@@ -994,14 +1064,10 @@ def make_statics_document(explorer: StaticsExplorer, out: Path):
         values = explorer.defaults()
         state = {"good": None}
         sliders = _sliders(explorer)
-        verdict = Div(text="", name="verdict", width=1100, height=48, styles={"font-size": "16px",
-                                                                               "font-weight": "bold"})
+        verdict = Div(text="", name="verdict", width=1100, height=68)  # and the status line under it
         sweep_words = Div(text="", name="sweep_checks", width=1100, height=20)
-        status = Div(text="", name="status", width=1100, height=20)
         check = Div(text="", name="check", width=1100, height=20)
         numbers = Div(text="", name="numbers", width=1100, height=230)
-        seq = Div(text="<span id='seq'>0</span>", name="seq", width=40, height=10,
-                  styles={"font-size": "1px", "color": "white"})
         curve = ColumnDataSource({"p1": [], "gap": [], "leak": [], "q1": [], "colour": []})
         here = ColumnDataSource({"p1": [], "gap": [], "leak": [], "q1": []})
         figs = {}
@@ -1018,6 +1084,7 @@ def make_statics_document(explorer: StaticsExplorer, out: Path):
         for key, y in (("gap", "gap"), ("flows", "leak"), ("flows", "q1")):
             figs[key].scatter("p1", y, source=here, marker="diamond", size=13, color="black")
         figs["flows"].legend.location = "bottom_left"
+        _browser_only(doc, sliders, *figs.values())
         crit = {k: Span(location=math.nan, dimension="height", line_color="#d62728", line_dash="dashed",
                         line_width=1.5) for k in figs}
         for k, f in figs.items():
@@ -1067,22 +1134,21 @@ def make_statics_document(explorer: StaticsExplorer, out: Path):
                 ok, words = ans["verdict"]
                 if not ok and moved:
                     words += f" (after changing {moved.removeprefix('device.')})"
-                _say(verdict, status, ans, moved, words, ok)
                 sweep_words.text = ("<span id='sweep_text' style='color:#b35900'>" + html.escape(
-                    "; ".join(ans["sweep_checks"])) + " (orange: valve on its stop, red: face contact)</span>"
+                    "; ".join(ans["sweep_checks"])) + " (orange: valve on its stop, red: face contact, gap 0)</span>"
                                     if ans["sweep_checks"] else "<span id='sweep_text'></span>")
+                _say(verdict, ans, moved, words, ok)
             else:
-                _say(verdict, status, ans, moved)
+                _say(verdict, ans, moved)
 
-        request = _latest_wins(doc, explorer.evaluate, show, seq)
+        request = _latest_wins(doc, explorer.evaluate, show, verdict)
         _connect(doc, explorer, sliders, values, state, check, request)
-        show(explorer.evaluate(values), None)
+        request(values, None)
         head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
-        doc.add_root(column(head, verdict, sweep_words, status, check, record, name="head"))
+        doc.add_root(column(head, verdict, sweep_words, check, record, name="head"))
         doc.add_root(column(*sliders.values(), name="controls"))
         doc.add_root(numbers)
         doc.add_root(row(figs["gap"], figs["flows"], name="plots"))
-        doc.add_root(seq)
         doc.template = page
         doc.title = f"autobal explore: {explorer.scene.name}"
 
@@ -1107,19 +1173,17 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
         values = explorer.defaults()
         state = {"started": None}
         sliders = _sliders(explorer)
-        verdict = Div(text="", width=1100, height=26, styles={"font-size": "16px", "font-weight": "bold"})
-        status = Div(text="", width=1100, height=20)
+        verdict = Div(text="", width=1100, height=46)  # and the status line under it
         numbers = Div(text="", name="numbers", width=1100, height=150)
-        seq = Div(text="<span id='seq'>0</span>", name="seq", width=40, height=10,
-                  styles={"font-size": "1px", "color": "white"})
         fig = figure(title="deflection δ/e of the rotor", x_axis_label="time, s", y_axis_label="δ/e", width=900,
                      height=360, name="plots", toolbar_location=None)
-        sources = {k: ColumnDataSource({"t": [], "d": []}) for k in ("optimum", *RAMP_COLOURS)}
+        sources = {k: ColumnDataSource({"t": [], "d": []}, name=f"{k}_profile") for k in ("optimum", *RAMP_COLOURS)}
         lines = {"optimum": fig.line("t", "d", source=sources["optimum"], line_width=2.5, color="#1f77b4",
                                      legend_label="current optimum's profile")}
         for k, c in RAMP_COLOURS.items():
             lines[k] = fig.line("t", "d", source=sources[k], line_width=1.5, color=c, legend_label=k.replace("_", " "))
         reopt = Button(label="re-optimise", name="reoptimise", button_type="primary")
+        _browser_only(doc, sliders, fig)
 
         def show(ans: dict, moved: str | None):
             good = ans["status"] in ("ok", "no_optimum")
@@ -1136,7 +1200,8 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
                 rows.insert(0, ("current optimum's profile", opt["peak_over_e"], opt["within_drive_limits"]))
             e = ans.get("eccentricity", math.nan)
             table = "".join(f"<tr><td>{html.escape(label)}</td><td id='peak_{i}'>{_fmt(pk)}</td>"
-                            f"<td>{_fmt(pk * e * 1e6)} µm</td><td>{'yes' if ok else 'NO' if ok is False else '—'}</td>"
+                            f"<td><span id='peak_um_{i}'>{_fmt(pk * e * 1e6)}</span> µm</td>"
+                            f"<td>{'yes' if ok else 'NO' if ok is False else '—'}</td>"
                             f"</tr>" for i, (label, pk, ok) in enumerate(rows))
             if good:
                 crit, api = ans["critical_speed"], ans["api"]
@@ -1149,7 +1214,9 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
                                 f"<b id='sm_ok' style='color:{'green' if kept else 'red'}'>"
                                 f"{'kept' if kept else 'NOT kept' if kept is False else '—'}</b></p>"
                                 f"<table><tr><th>profile</th><th>peak δ/e</th><th>peak δ</th>"
-                                f"<th>within the drive's limits</th></tr>{table}</table>")
+                                f"<th>within the drive's limits</th></tr>{table}</table><span id='exact' "
+                                f"style='display:none'>{html.escape(_exact_spinup(ans, explorer.overrides(values)))}"
+                                "</span>")
             feasible = [pk for label, pk, ok in rows[1:] if ok is not False]
             if opt is not None and good:
                 best = min(feasible) if feasible else math.inf
@@ -1160,17 +1227,14 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
                     words += f"; crossed by {moved} (re-optimise)"
                 if opt["optimised_for"] != explorer.overrides(values):
                     words += " — profile optimised for other settings"
-                verdict.text = f"<span id='verdict_text'>{html.escape(words)}</span>"
-                verdict.styles = {"color": "green" if ok else "red", "font-size": "16px", "font-weight": "bold"}
-                status.text = f"<span id='status_text'>current (computed in {ans['compute_ms']:.0f} ms)</span>"
+                verdict.text = _verdict_html(words, "green" if ok else "red",
+                                             f"current (computed in {ans['compute_ms']:.0f} ms)")
             else:
-                verdict.text = f"<span id='verdict_text'>{html.escape(ans['status'].upper() + ': ' + ans['message'])}"\
-                               "</span>"
-                verdict.styles = {"color": "red" if not good else "#555", "font-size": "16px", "font-weight": "bold"}
-                status.text = ("<span id='status_text'>current ramps; " + ("the optimum is being found" if good else
-                               "the curves in the plot are the last good answer") + "</span>")
+                verdict.text = _verdict_html(ans["status"].upper() + ": " + ans["message"], "#555" if good else "red",
+                                             "current ramps; " + ("the optimum is being found" if good else
+                                                                  "the curves in the plot are the last good answer"))
 
-        request = _latest_wins(doc, explorer.evaluate, show, seq)
+        request = _latest_wins(doc, explorer.evaluate, show, verdict)
 
         def on_change(path):
             def cb(attr, old, new):
@@ -1187,7 +1251,8 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
 
         def optimise():
             vals = dict(values)
-            reopt.disabled = True
+            reopt.disabled, reopt.label = True, "optimising … 0 s"
+            optimised.text = "<span id='optimising'>autobal run's optimisation of the current settings</span>"
             state["started"] = time.perf_counter()
 
             def work():
@@ -1211,11 +1276,10 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
         doc.add_periodic_callback(tick, 500)
         record = _record_buttons(doc, explorer, values, out)
         head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
-        doc.add_root(column(head, verdict, status, row(reopt, optimised), record, name="head"))
+        doc.add_root(column(head, verdict, row(reopt, optimised), record, name="head"))
         doc.add_root(column(*sliders.values(), name="controls"))
         doc.add_root(numbers)
         doc.add_root(fig)
-        doc.add_root(seq)
         doc.template = page
         doc.title = f"autobal explore: {explorer.scene.name}"
         request(values, None)

@@ -128,10 +128,14 @@ def test_explore_command_refuses_bad_input_with_exit_2(argv, words, capsys):
 @pytest.mark.slow
 @pytest.mark.cli
 def test_spinup_page_numbers_equal_autobal_run_after_reoptimising(tmp_path):
-    """Spin-up: the ramps re-simulated for a changed rotor are the batch run's baselines; the current optimum's
-    profile re-simulated for it differs from the batch run until "re-optimise", then equals it."""
+    """Spin-up: the ramps re-simulated for a changed rotor and drive (its acceleration limit) are the batch run's
+    baselines; the current optimum's speed profile re-simulated for them (the same accelerations for the same
+    seconds: 40 -> 210 rad/s by 5 s, held 3 s, whatever the rotor's critical speed that scales the problem) differs
+    from the batch run until "re-optimise", then equals it."""
     ex = SpinupExplorer("spinup_jeffcott_deadline_5s")
-    values = ex.defaults() | {"rotor.damping": 6.2, "rotor.stiffness": 12000.0}
+    assert [p.path for p in ex.params][-1] == "analyses.spinup.max_acceleration" and ex.params[-1].unit == "rad/s^2"
+    values = ex.defaults() | {"rotor.damping": 6.2, "rotor.stiffness": 12000.0,
+                              "analyses.spinup.max_acceleration": 45.0}
     ans = ex.evaluate(values)
     assert ans["status"] == "no_optimum" and "optimum" not in ans  # nothing shown as the optimum before one exists
     ex.optimise(ex.defaults())
@@ -146,6 +150,7 @@ def test_spinup_page_numbers_equal_autobal_run_after_reoptimising(tmp_path):
         assert ans["api"][key] == pytest.approx(run["rotor"][key], rel=1e-12), key
     assert stale["optimised_for"] == {} and stale["peak_over_e"] != pytest.approx(run["peak_deflection_over_e"],
                                                                                    rel=1e-6)
+    assert stale["t"][-1] == pytest.approx(8.0, rel=1e-12) and stale["omega"][-1] == pytest.approx(210.0, rel=1e-9)
     ex.optimise(values)
     fresh = ex.evaluate(values)["optimum"]
     assert fresh["peak_over_e"] == pytest.approx(run["peak_deflection_over_e"], rel=1e-9)
@@ -223,6 +228,26 @@ def test_statics_page_of_a_device_without_regulator(tmp_path):
     block = autobal.run(autobal.load(ex.save(values, tmp_path / "saved.yaml")), out=tmp_path / "run")[
         "statics"].to_dict()
     assert_statics_equal(live, block)
+
+
+@pytest.mark.cli
+def test_statics_characteristic_keeps_its_face_contact_points(statics_explorer):
+    """A nominal pressure at which the face is in contact over the whole characteristic (autobal run: contact at
+    every one of the 36 discharge ratios, gap < 5e-12 m): every point is drawn, at gap 0 and marked as contact (none
+    dropped as "no Newton root": the points Newton misses from the closed form are continued from their solved
+    neighbours), leaks equal to the batch sweep's; the sweep's check says so."""
+    ex = statics_explorer
+    values = ex.defaults() | {"device.operating.nominal_pressure": 6.5}
+    live = ex.evaluate(values)["sweep"]
+    block = autobal.run(autobal.load(STATICS, set=ex.overrides(values)))["statics"].to_dict()
+    sw = block["sweep"]
+    assert all(sw["contact"]) and max(sw["u"]) * block["scales"]["z_B"] < 5e-12
+    assert all(live["solved"]) and live["contact"] == list(sw["contact"])
+    np.testing.assert_array_equal(live["gap"], 0.0)
+    np.testing.assert_allclose(live["leak"], sw["Q_e"], rtol=1e-8)
+    np.testing.assert_allclose(live["inner_seal_flow"], sw["Q_1"], rtol=1e-8)
+    checks = ex.evaluate(values)["sweep_checks"]
+    assert checks[0].startswith("face contact in the sweep from p1 = 1.625 MPa") and len(checks) == 1
 
 
 @pytest.mark.parametrize(("path", "value", "status", "words"), [
