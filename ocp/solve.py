@@ -16,7 +16,15 @@ import numpy as np
 from autobal.analysis import ipopt
 from autobal.errors import SolveError
 from autobal.ocp.problem import PEAK_KEY, SpinupOcp
-from autobal.ocp.search import FixedFrameModes, controls_on_mesh, grid_search, horizon_steps, profile_peak
+from autobal.ocp.search import (
+    FixedFrameModes,
+    backoff_controls,
+    backoff_search,
+    controls_on_mesh,
+    grid_search,
+    horizon_steps,
+    profile_peak,
+)
 from autobal.ocp.simulation import (
     Trajectory,
     initial_guess,
@@ -269,7 +277,9 @@ def starts(ocp: SpinupOcp, n: int, multistart: bool = True) -> list[tuple[str, n
     """Initial control profiles on the n control intervals.
 
     For a peak objective with a fixed deadline, the best profiles of the cheap global search over
-    three-phase profiles (:func:`autobal.ocp.search.grid_search`) come first; then the constant ramp,
+    three-phase profiles (:func:`autobal.ocp.search.grid_search`) come first, then the best profile of each
+    back-off family the problem's numbers choose (:func:`backoff_families`, :func:`autobal.ocp.search.backoff_search`;
+    without ``multistart`` only the best of all these); then the constant ramp,
     and with ``multistart`` the maximum-acceleration ramp with hold, a faster constant ramp, and a
     piecewise ramp that holds below the critical speed.  For the peak deflection, the three constant ramps
     are left out when the search's best profile is AHEAD (relative) below each of their peaks (the exponential
@@ -282,8 +292,18 @@ def starts(ocp: SpinupOcp, n: int, multistart: bool = True) -> list[tuple[str, n
         out += [(f"global search: {p[0] * ocp.alpha_max:.3g} rad/s^2 to {p[1]:.4g} rad/s, {p[2] * ocp.alpha_max:.3g} "
                  f"rad/s^2 for {p[3]:.3g} s, then {ocp.alpha_max:.3g} rad/s^2 (peak {pk:.4g} e)",
                  controls_on_mesh(ocp, p, n)) for p, pk in zip(found.params, found.peaks, strict=True)]
-        if ocp.objective == "peak_deflection" and found.peaks.size and multistart:
-            lead = found.peaks[0]
+        peaks = list(found.peaks)
+        edges = np.linspace(0.0, ocp.horizon, n + 1)
+        for k, above in backoff_families(ocp):
+            x, pk, _ = backoff_search(ocp, k, above)
+            out.append((f"back-off search: {k} back-off{'s' if k > 1 else ''}, the first excursion "
+                        f"{'above' if above else 'below'} the critical speed (peak {pk:.4g} e)",
+                        backoff_controls(ocp, x[None], k, edges)[0]))
+            peaks.append(pk)
+        if not multistart and out:  # the search's best profile alone
+            out = [out[int(np.argmin(peaks))]]
+        if ocp.objective == "peak_deflection" and peaks and multistart:
+            lead = min(peaks)
     ramps = [("constant ramp", ramp_profile(ocp, n, min(const, ocp.alpha_max) if not ocp.free_time
                                             else ocp.alpha_max))]
     if multistart:
@@ -304,6 +324,24 @@ def starts(ocp: SpinupOcp, n: int, multistart: bool = True) -> list[tuple[str, n
             out.append(("ramp, hold at 0.8 omega_cr, ramp", ramp_profile(ocp, n, ocp.alpha_max, hold_at=w_hold,
                                                                          accel2=a2)))
     return out
+
+
+def backoff_families(ocp: SpinupOcp) -> list[tuple[int, bool]]:
+    """The back-off families the global search covers (:func:`autobal.ocp.search.backoff_search`), as (back-offs,
+    whether the first excursion ends above the critical speed), chosen by the problem's own numbers: none without
+    slack (the deadline leaves no time beyond the full-rate ramp's); one back-off, and two when the slack is at
+    least two natural periods 2 pi/omega_cr (each back-off and the climb back take about one); the first
+    excursion below the critical speed when the start is below it, above it when the top speed is above it (the
+    lightly damped rotors of the shipped scenes win with a back-off just above or below the critical speed, the
+    heavily damped rotor of issue 35 from below)."""
+    a, wc = ocp.alpha_max, ocp.params.omega_cr
+    slack = ocp.horizon - (ocp.omega_final - ocp.omega_start) / a
+    top = ocp.omega_final if ocp.omega_max is None else min(ocp.omega_final, ocp.omega_max)
+    if ocp.free_time or slack <= 0 or ocp.omega_final <= ocp.omega_start:
+        return []
+    sides = [s for s, ok in ((False, ocp.omega_start < wc), (True, wc < top)) if ok]
+    counts = (1, 2) if slack >= 2 * (2 * np.pi / wc) else (1,)
+    return [(k, s) for k in counts for s in sides]
 
 
 def drive_acceleration(ocp: SpinupOcp, omega: float) -> float:
@@ -367,7 +405,11 @@ def coarse_solver(ocp: SpinupOcp, method, ref: float, options: dict | None) -> S
     n = coarse_intervals(method.intervals)
     if n == method.intervals:
         return None
-    return Solver(ocp, dataclasses.replace(method, intervals=n), ref, coarse_options(options))
+    # the screening is solved without the total-variation regulariser (the refined stages keep it): with it the
+    # heavily damped rotor's coarse solves stop at the iteration cap from 7 of 10 starts, without it all converge
+    # in 20-133 iterations (docs/dev/spinup.md, "Screening without the regulariser")
+    screen = dataclasses.replace(ocp, jerk_variation=0.0) if getattr(ocp, "jerk_variation", 0.0) else ocp
+    return Solver(screen, dataclasses.replace(method, intervals=n), ref, coarse_options(options))
 
 
 def rank_coarse(ocp: SpinupOcp, found: list, n: int) -> tuple[int, dict[int, float]]:

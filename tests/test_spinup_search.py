@@ -1,4 +1,4 @@
-"""The best profiles found on the real spin-up problem (issue 26, item 5) against the study.
+"""The best profiles found on the real spin-up problem against the study, and the heavily damped rotor of issue 35.
 
 The reference profiles are the best of two independent searches (benchmarks/spinup_ocp.md, "The best optimum of
 the real problem"): full-braking back-offs with switching instants free in continuous time (differential evolution
@@ -6,8 +6,10 @@ on the modal integrator, `python -m benchmarks spinup_search`), then polished as
 free instants, linear between, any rate within |alpha| <= alpha_max; Nelder-Mead on the integrator at a 1 ms
 step, `python -m benchmarks spinup_waypoints`).  They are written as segments (duration to 1 us, rate over
 alpha_max to 1e-6), re-simulated by CVODES and checked feasible, and the shipped scenes' studies are held to them.
-Issue 26 asks for 12.295 e (40 rad/s^2) and 15.235 e (20 rad/s^2): no profile found reaches the first (the best is
-0.065 % above it); the second is reached by the search's profile, not by the study with its default regulariser."""
+The reproducible targets (issue 35; issue 26's 12.295 e and 15.235 e were wrong: an independent re-run of the
+reference that produced them gives 12.3029 e and 15.2335 e, the developers' profiles 12.3031 e and 15.2332 e) are
+12.3029 e at 40 rad/s^2 and 15.2332 e at 20 rad/s^2; the study is held within 0.05 % of each (12.309 e, 15.241 e)
+with its default regulariser."""
 
 import numpy as np
 import pytest
@@ -28,13 +30,9 @@ BEST = {
     "spinup_jeffcott_horizon_10s": ([(3.016849, 1.0), (5.6e-05, -1.0), (0.002098, 1.0), (0.247027, -1.0),
                                      (0.533299, 1.0), (0.500742, -1.0)], 15.23318),
 }
-# issue 26, item 5, and whether the best profile reaches it (20 rad/s^2: by 0.012 %; 40 rad/s^2: 0.065 % above,
-# no searched family reaches it)
-TARGET = {"spinup_jeffcott_deadline_5s": (12.295, False), "spinup_jeffcott_horizon_10s": (15.235, True)}
-# how far the shipped study stays above the best profile (relative): 0.051 % and 0.030 % measured, the control
-# step (40 rad/s^2) and the default regulariser (20 rad/s^2) holding it there; the next basins the study's solve
-# path reaches are 0.055 % and more above (benchmarks/spinup_ocp.md)
-GAP = {"spinup_jeffcott_deadline_5s": 5.3e-4, "spinup_jeffcott_horizon_10s": 4e-4}
+# the reproducible targets of issue 35 and the study's bound, 0.05 % above each (delta/e)
+TARGET = {"spinup_jeffcott_deadline_5s": 12.3029, "spinup_jeffcott_horizon_10s": 15.2332}
+STUDY_AT_MOST = {"spinup_jeffcott_deadline_5s": 12.309, "spinup_jeffcott_horizon_10s": 15.241}
 
 
 def scene_ocp(name: str) -> S.SpinupOcp:
@@ -67,14 +65,51 @@ def test_best_profile_is_feasible_and_resimulates(name):
     assert abs(t[-1] - ocp.horizon - ocp.settling_time) < 1e-9
     resimulated = S.resimulate(ocp, u, h, "best profile").peak_delta
     assert resimulated == pytest.approx(peak, rel=2e-6)
-    target, reached = TARGET[name]
-    assert (resimulated <= target) == reached
+    assert resimulated <= TARGET[name] * (1 + 1e-4)  # the best profile is the target, to its 4 digits
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(BEST))
-def test_study_within_its_measured_gap_of_the_best_profile(name):
+def test_study_within_0_05_pct_of_the_target(name):
     ocp = scene_ocp(name)
     scene = api.load(name)
     opt = S.optimize(ocp, S.DirectCollocation(scene.analyses.spinup.intervals, 3, "radau"))
-    assert opt.score <= BEST[name][1] * (1 + GAP[name])
+    assert ocp.jerk_variation == 1e-4  # the default regulariser
+    assert opt.score <= STUDY_AT_MOST[name]
+    assert opt.score >= BEST[name][1] * (1 - 1e-3)  # a peak far below the best profile would be a wrong judge
+
+
+def damped_ocp() -> S.SpinupOcp:
+    """Issue 35's heavily damped rotor: zeta = 0.1 (2 kg, 20 kN/m, 40 N s/m, e = 0.05 mm), 50 -> 200 rad/s, at
+    most 160 rad/s^2, a 3 s deadline, a 1 s hold, never above 200 rad/s."""
+    from autobal.models.rotor import RotorParams
+
+    return S.SpinupOcp(RotorParams(m1=2.0, c=20e3, chi=40.0, e=5e-5), 50.0, 200.0, 3.0, 160.0, settling_time=1.0,
+                       omega_max=200.0)
+
+
+def test_damped_issue_profile_resimulates_below_the_old_optimum():
+    """The profile issue 35 describes (up to just above the critical speed, back off, up, back, a partial-rate
+    ramp to 200 rad/s; its corners polished by Nelder-Mead on CVODES, full rates) re-simulates at 4.5347 e, below
+    the 4.5875 e the study stopped at before the back-off search."""
+    ocp = damped_ocp()
+    corners = [108.597093, 74.203991, 114.553675, 105.901565]  # rad/s, reached at +-alpha_max
+    w, t, u, d = ocp.omega_start, 0.0, [], []
+    for c in corners:
+        d.append(abs(c - w) / ocp.alpha_max)
+        u.append(np.sign(c - w))
+        t, w = t + d[-1], c
+    u.append((ocp.omega_final - w) / (ocp.horizon - t) / ocp.alpha_max)  # the last leg ends at the deadline
+    d.append(ocp.horizon - t)
+    seg = list(zip(d, u, strict=True))
+    uu, hh, ww = profile(ocp, seg)
+    assert ww.max() <= ocp.omega_max * (1 + 1e-12) and 0 < u[-1] < 1
+    assert S.resimulate(ocp, uu, hh, "issue 35").peak_delta == pytest.approx(4.5347, abs=1e-4)
+
+
+@pytest.mark.slow
+def test_damped_rotor_study_finds_the_basin():
+    """Issue 35: at most 4.54 e (the study stopped at 4.5875 e; the issue's profile peaks at 4.5347 e)."""
+    ocp = damped_ocp()
+    opt = S.optimize(ocp, S.DirectCollocation(200, 3, "radau"))
+    assert 4.5347 * (1 - 2e-3) <= opt.score <= 4.54
