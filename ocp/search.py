@@ -243,16 +243,32 @@ def profile_peak(ocp: SpinupOcp, u: np.ndarray, dt: float = FAST_STEP, rotor: Fi
     return float(simulate_steps(ocp, steps_of(ocp, np.asarray(u, float), dt)[None, :], dt, rotor)[0])
 
 
+def drive_rates(ocp: SpinupOcp) -> tuple[float, float]:
+    """The accelerations (rad/s^2) the back-off family runs at: the full rate, alpha_max or what the torque and
+    power limits leave at the final speed after the drag (the lowest along a spin-up whose limits fall with the
+    speed), and the back-off rate, -alpha_max, u_min alpha_max, or what the braking-torque limit and the drag give
+    at the start speed (0 without braking: the back-off is a hold)."""
+    up, down = ocp.alpha_max, ocp.u_min * ocp.alpha_max
+    J, w, b = ocp.inertia, ocp.omega_final, ocp.drag
+    if J > 0:
+        limits = [m for m in (ocp.torque_max, ocp.power_max / w if ocp.power_max else None) if m is not None]
+        up = min([up] + [(m - b * w) / J for m in limits])
+        if ocp.braking_torque_max is not None:
+            down = max(down, -(ocp.braking_torque_max + b * ocp.omega_start) / J)
+    return up, min(down, 0.0)
+
+
 def backoff_breakpoints(ocp: SpinupOcp, x: np.ndarray, backoffs: int) -> tuple[np.ndarray, np.ndarray]:
     """Instants (s) and speeds (rad/s) at the corners of the back-off family for the points ``x`` of the unit box
-    (C, 2 ``backoffs`` + 1): full acceleration to a speed a_1, the lowest acceleration the drive allows
-    (u_min alpha_max: full braking, or a hold without braking) for a time d_1, full acceleration to a_2, ...,
+    (C, 2 ``backoffs`` + 1): the full rate to a speed a_1, the back-off rate (full braking, or a hold without
+    braking; both rates from :func:`drive_rates`) for a time d_1, the full rate to a_2, ...,
     then a last leg at a constant rate to omega_final that arrives by the deadline (a partial rate when it uses
     the slack left), and the hold.  Every point of the box is feasible: a_(k+1) lies between the speed before it
     and omega_final (a_1 from the start), each d_k takes a fraction of the deadline's slack that is left (the time
-    the full-rate ramp does not need), the last leg's extra time the rest's fraction x_last."""
+    the ramp at the full rate does not need), the last leg's extra time the rest's fraction x_last."""
     x = np.atleast_2d(np.asarray(x, float))
-    a, ub = ocp.alpha_max, ocp.u_min
+    a, down = drive_rates(ocp)
+    ub = down / a
     top = ocp.omega_final if ocp.omega_max is None else min(ocp.omega_final, ocp.omega_max)
     slack = np.full(len(x), ocp.horizon - (ocp.omega_final - ocp.omega_start) / a)
     t, w = [np.zeros(len(x))], [np.full(len(x), ocp.omega_start)]

@@ -21,6 +21,7 @@ from autobal.ocp.search import (
     backoff_controls,
     backoff_search,
     controls_on_mesh,
+    drive_rates,
     grid_search,
     horizon_steps,
     profile_peak,
@@ -329,13 +330,13 @@ def starts(ocp: SpinupOcp, n: int, multistart: bool = True) -> list[tuple[str, n
 def backoff_families(ocp: SpinupOcp) -> list[tuple[int, bool]]:
     """The back-off families the global search covers (:func:`autobal.ocp.search.backoff_search`), as (back-offs,
     whether the first excursion ends above the critical speed), chosen by the problem's own numbers: none without
-    slack (the deadline leaves no time beyond the full-rate ramp's); one back-off, and two when the slack is at
-    least two natural periods 2 pi/omega_cr (each back-off and the climb back take about one); the first
-    excursion below the critical speed when the start is below it, above it when the top speed is above it (the
-    lightly damped rotors of the shipped scenes win with a back-off just above or below the critical speed, the
-    heavily damped rotor of issue 35 from below)."""
-    a, wc = ocp.alpha_max, ocp.params.omega_cr
-    slack = ocp.horizon - (ocp.omega_final - ocp.omega_start) / a
+    slack (the deadline leaves no time beyond the ramp's at the drive's full rate, :func:`drive_rates`); one
+    back-off, and two when the slack is at least two natural periods 2 pi/omega_cr (each back-off and the climb
+    back take about one); the first excursion below the critical speed when the start is below it, above it when
+    the top speed is above it (the lightly damped rotors of the shipped scenes win with a back-off just above or
+    below the critical speed, the heavily damped rotor of issue 35 from below)."""
+    a, wc = drive_rates(ocp)[0], ocp.params.omega_cr
+    slack = ocp.horizon - (ocp.omega_final - ocp.omega_start) / a if a > 0 else -1.0
     top = ocp.omega_final if ocp.omega_max is None else min(ocp.omega_final, ocp.omega_max)
     if ocp.free_time or slack <= 0 or ocp.omega_final <= ocp.omega_start:
         return []
