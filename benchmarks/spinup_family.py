@@ -44,7 +44,7 @@ from autobal import api
 from autobal.analyses.spinup import ocp as spinup_ocp
 from autobal.models.rotor import rotor_model
 from autobal.ocp import search
-from benchmarks._results import case, write
+from benchmarks._results import case, machine, write
 
 DATA = Path(__file__).resolve().parent.parent / "tests" / "data" / "spinup_family.json"
 DT = 0.5  # step of the search integrator, Omega0 t (its FAST_STEP: the peak within 1e-4 of CVODES)
@@ -294,13 +294,68 @@ def study(name: str, scene: dict, python: str = sys.executable) -> dict:
         path = Path(tmp) / f"{name}.yaml"
         path.write_text(yaml.safe_dump({"name": name, "title": name} | scene, sort_keys=False))
         t0 = time.perf_counter()
-        out = subprocess.run([python, "-c", SNIPPET, str(path)], capture_output=True, text=True, check=True)
+        out = subprocess.run([python, "-c", SNIPPET, str(path)], capture_output=True, text=True, check=True,
+                             cwd=tmp)  # not the worktree: its autobal/ would shadow the python's own
         return {"study_peak_over_e": float(out.stdout.split()[-1]), "study_s": time.perf_counter() - t0}
+
+
+def levers(names: list[str]) -> None:
+    """The study's levers side by side on some problems, in this process, back to back (ratios to the study as it
+    is; the load of the shared machine stretches the times alike): the regulariser in the coarse screening too (as
+    before issue 35), the lean start list (the one-back-off searches and the hold ramp: no three-phase grid, no
+    two-back-off search, no constant ramps), and the cross-entropy search at half its generations."""
+    import dataclasses
+    from unittest import mock
+
+    from autobal.ocp import solve
+
+    screen = solve.coarse_solver
+
+    def regularised_screen(ocp, method, ref, options):  # the coarse stage with the regulariser (before)
+        if not isinstance(method, solve.DirectCollocation) or ocp.free_time:
+            return None
+        n = solve.coarse_intervals(method.intervals)
+        return None if n == method.intervals else solve.Solver(ocp, dataclasses.replace(method, intervals=n), ref,
+                                                               solve.coarse_options(options))
+
+    def lean(ocp, n, multistart=True):
+        out = [s for s in full(ocp, n, multistart) if "2 back-offs" not in s[0] and not s[0].startswith("global")
+               and "ramp" not in s[0] or s[0].startswith("ramp, hold")]
+        return out
+
+    full = solve.starts
+    variants = {"as is": {}, "regulariser in the screening": {"coarse_solver": regularised_screen},
+                "lean starts": {"starts": lean}}
+    cases = []
+    for name in names:
+        ocp, sc = load_problem(name, PROBLEMS[name][1])
+        method = spinup_method(sc)
+        for label, patch in variants.items():
+            with mock.patch.multiple(solve, **patch) if patch else mock.patch.object(solve, "coarse_solver", screen):
+                t0 = time.perf_counter()
+                opt = solve.optimize(ocp, method)
+                dt = time.perf_counter() - t0
+            ref = json.loads(DATA.read_text())["problems"][name]["reference_peak_over_e"]
+            cases.append({"case": name, "variant": label, "optimize_s": dt, "peak_over_e": opt.score,
+                          "gap_pct": 100 * (opt.score / ref - 1), "starts": sum(1 for r in opt.starts
+                                                                                 if "coarse" in str(r.get("stage"))),
+                          "load_average": os.getloadavg()[0]})
+            print(cases[-1], flush=True)
+    path = Path(__file__).parent / "results" / "spinup_family_levers.json"
+    path.write_text(json.dumps({"machine": machine(), "cases": cases}, indent=1) + "\n")
+
+
+def spinup_method(sc):
+    from autobal.ocp.spinup_study import method_of
+
+    return method_of(sc.analyses.spinup)
 
 
 def main(argv: list[str] | None = None) -> None:
     argv = sys.argv[1:] if argv is None else argv
     names = [a for a in argv if not a.startswith("-")] or list(PROBLEMS)
+    if "--levers" in argv:
+        return levers(names)
     data = json.loads(DATA.read_text()) if DATA.exists() else {"problems": {}}
     if "--study" not in argv:  # the references (--refs: only they)
         for name in names:
