@@ -280,7 +280,7 @@ def backoff_breakpoints(ocp: SpinupOcp, x: np.ndarray, backoffs: int) -> tuple[n
         d = x[:, 2 * k + 1] * slack / (1 - ub)
         d = np.minimum(d, wk / (-ub * a)) if ub < 0 else d  # never below standstill
         t.append(t[-1] + d)
-        w.append(wk + ub * a * d)
+        w.append(np.maximum(wk + ub * a * d, 0.0))  # standstill to rounding
         slack = slack - d * (1 - ub)
     extra = x[:, -1] * slack  # the last leg's time beyond the full-rate ramp's
     t.append(t[-1] + (ocp.omega_final - w[-1]) / a + extra)

@@ -13,6 +13,7 @@ with its default regulariser."""
 
 import numpy as np
 import pytest
+from numpy.testing import assert_allclose
 
 from autobal import api
 from autobal.analyses.spinup import ocp as spinup_ocp
@@ -118,3 +119,49 @@ def test_damped_rotor_study_finds_the_basin():
     ocp = damped_ocp()
     opt = S.optimize(ocp, S.DirectCollocation(200, 3, "radau"))
     assert 4.5347 * (1 - 2e-3) <= opt.score <= 4.54
+
+
+@pytest.mark.parametrize("brakes", [True, False])
+def test_every_point_of_the_backoff_family_is_feasible(brakes):
+    """Random points of the back-off family's unit box (one and two back-offs) keep 0 <= omega <= the cap, the drive's
+    rates (:func:`search.drive_rates`; without braking the back-off is a hold) and reach omega_final by the deadline,
+    exactly at every step end of their controls."""
+    import dataclasses
+
+    from autobal.ocp import search
+
+    ocp = damped_ocp()
+    if not brakes:  # a torque limit (80 rad/s^2 over J_p = 0.01 kg m^2) and no braking
+        P = dataclasses.replace(ocp.params, J_p=0.01)
+        ocp = dataclasses.replace(ocp, params=P, torque_max=0.8, braking_torque_max=0.0)
+    up, down = search.drive_rates(ocp)
+    assert (up, down) == ((160.0, -160.0) if brakes else (pytest.approx(80.0, rel=1e-6), 0.0))
+    rng = np.random.default_rng(3)
+    for k in (1, 2):
+        x = rng.uniform(0, 1, (200, 2 * k + 1))
+        t, w = search.backoff_breakpoints(ocp, x, k)
+        rate = np.diff(w, axis=1) / np.maximum(np.diff(t, axis=1), 1e-300)
+        assert np.all(np.diff(t, axis=1) >= 0) and np.all(t[:, -1] <= ocp.horizon * (1 + 1e-12))
+        assert np.all(rate <= up * (1 + 1e-9)) and np.all(rate >= down * (1 + 1e-9) - 1e-9)
+        assert w.min() >= 0 and w.max() <= ocp.omega_max * (1 + 1e-12) and np.all(w[:, -1] == ocp.omega_final)
+        edges = np.linspace(0, ocp.horizon, 301)
+        u = search.backoff_controls(ocp, x, k, edges)
+        assert np.abs(u).max() <= 1 + 1e-9
+        assert_allclose(ocp.omega_start + np.sum(u * np.diff(edges), axis=1) * ocp.alpha_max, ocp.omega_final,
+                         rtol=1e-12)
+
+
+def test_backoff_families_follow_the_problems_numbers():
+    """One and two back-offs when the slack is at least two natural periods, one below that, none without slack;
+    the first excursion below the critical speed only when the start is below it."""
+    import dataclasses
+
+    from autobal.ocp.solve import backoff_families
+
+    ocp = damped_ocp()  # slack 3 - 150/160 = 2.06 s, natural period 2 pi/100 = 0.063 s
+    assert backoff_families(ocp) == [(1, False), (1, True), (2, False), (2, True)]
+    tight = dataclasses.replace(ocp, horizon=150 / 160 + 0.1)  # 0.1 s of slack: under two periods
+    assert backoff_families(tight) == [(1, False), (1, True)]
+    assert backoff_families(dataclasses.replace(ocp, horizon=150 / 160)) == []
+    above = dataclasses.replace(ocp, omega_start=120.0)
+    assert backoff_families(above) == [(1, True), (2, True)]
