@@ -294,9 +294,12 @@ def study(name: str, scene: dict, python: str = sys.executable) -> dict:
         path = Path(tmp) / f"{name}.yaml"
         path.write_text(yaml.safe_dump({"name": name, "title": name} | scene, sort_keys=False))
         t0 = time.perf_counter()
-        out = subprocess.run([python, "-c", SNIPPET, str(path)], capture_output=True, text=True, check=True,
+        out = subprocess.run([python, "-c", SNIPPET, str(path)], capture_output=True, text=True,
                              cwd=tmp)  # not the worktree: its autobal/ would shadow the python's own
-        return {"study_peak_over_e": float(out.stdout.split()[-1]), "study_s": time.perf_counter() - t0}
+        dt = time.perf_counter() - t0
+        if out.returncode:  # a failed study: no peak, its last line
+            return {"study_peak_over_e": None, "study_s": dt, "failure": (out.stderr.strip().splitlines() or ["?"])[-1]}
+        return {"study_peak_over_e": float(out.stdout.split()[-1]), "study_s": dt}
 
 
 def levers(names: list[str]) -> None:
@@ -376,11 +379,13 @@ def main(argv: list[str] | None = None) -> None:
         ref = data["problems"][name]["reference_peak_over_e"]
         runs = {key: study(name, PROBLEMS[name][1], python) for key, python in (("before", base),
                                                                                 ("after", sys.executable)) if python}
-        gap = {k: 100 * (r["study_peak_over_e"] / ref - 1) for k, r in runs.items()}
+        gap = {k: None if r["study_peak_over_e"] is None else 100 * (r["study_peak_over_e"] / ref - 1)
+               for k, r in runs.items()}
         b = runs.get("before", {})
         cases.append(case(name, runs["after"]["study_s"], None, "the study before issue 35" if b else None,
                           b.get("study_s"), gap["after"], gap.get("before"), reference_peak_over_e=ref,
                           peak_over_e=runs["after"]["study_peak_over_e"], before_peak_over_e=b.get("study_peak_over_e"),
+                          failure=runs["after"].get("failure"), before_failure=b.get("failure"),
                           load_average=os.getloadavg()[0]))
         print(cases[-1], flush=True)
     med = {k: float(np.median([c[k] for c in cases if c[k] is not None] or [np.nan])) for k in ("autobal_s", "peer_s")}

@@ -18,6 +18,7 @@ from autobal.errors import SolveError
 from autobal.ocp.problem import PEAK_KEY, SpinupOcp
 from autobal.ocp.search import (
     FixedFrameModes,
+    SearchResult,
     backoff_controls,
     backoff_search,
     controls_on_mesh,
@@ -277,25 +278,28 @@ def infeasibility_error(ocp: SpinupOcp, nlp: Nlp, wopt: np.ndarray, r: dict) -> 
 def starts(ocp: SpinupOcp, n: int, multistart: bool = True) -> list[tuple[str, np.ndarray]]:
     """Initial control profiles on the n control intervals.
 
-    For a peak objective with a fixed deadline, the best profiles of the cheap global search over
-    three-phase profiles (:func:`autobal.ocp.search.grid_search`) come first, then the best profile of each
-    back-off family the problem's numbers choose (:func:`backoff_families`, :func:`autobal.ocp.search.backoff_search`;
-    without ``multistart`` only the best of all these); then the constant ramp,
-    and with ``multistart`` the maximum-acceleration ramp with hold, a faster constant ramp, and a
-    piecewise ramp that holds below the critical speed.  For the peak deflection, the three constant ramps
-    are left out when the search's best profile is AHEAD (relative) below each of their peaks (the exponential
-    integrator): on the shipped problems their optima were never the best (benchmarks/spinup_ocp.md, "Study
-    time"); the ramp that holds below the critical speed, a structure outside the searched family, stays."""
+    For a peak objective with a fixed deadline, the best profile of each back-off family the problem's numbers
+    choose comes first (:func:`backoff_families`, :func:`autobal.ocp.search.backoff_search`), or, when none is
+    chosen, the two best of the grid over three-phase profiles (:func:`autobal.ocp.search.grid_search`); without
+    ``multistart`` only the best of these.  Then the constant ramp, and with ``multistart`` the maximum-acceleration
+    ramp with hold, a faster constant ramp, and a piecewise ramp that holds below the critical speed.  For the peak
+    deflection the three constant ramps are left out after the back-off search, and after the grid when its best
+    profile is AHEAD (relative) below each of their peaks (the exponential integrator): on the issue-35 family
+    (benchmarks/spinup_family.py) the back-off starts and the hold alone reach the same optima as with the grid's
+    and the ramps' starts too, in a quarter to a half of the time (docs/dev/spinup.md); the ramp that holds below the
+    critical speed, a structure outside the searched families, stays."""
     const = abs(ocp.omega_final - ocp.omega_start) / ocp.horizon
-    out, lead = [], None
+    out, lead, families = [], None, []
     if ocp.objective in ("peak_deflection", "peak_unbalance") and horizon_steps(ocp) <= SEARCH_STEPS:
-        found = grid_search(ocp, keep=2 if multistart else 1)
+        families = backoff_families(ocp)
+        found = grid_search(ocp, keep=2 if multistart else 1) if not families else SearchResult(
+            np.empty((0, 4)), np.empty(0), 0)
         out += [(f"global search: {p[0] * ocp.alpha_max:.3g} rad/s^2 to {p[1]:.4g} rad/s, {p[2] * ocp.alpha_max:.3g} "
                  f"rad/s^2 for {p[3]:.3g} s, then {ocp.alpha_max:.3g} rad/s^2 (peak {pk:.4g} e)",
                  controls_on_mesh(ocp, p, n)) for p, pk in zip(found.params, found.peaks, strict=True)]
         peaks = list(found.peaks)
         edges = np.linspace(0.0, ocp.horizon, n + 1)
-        for k, above in backoff_families(ocp):
+        for k, above in families:
             x, pk, _ = backoff_search(ocp, k, above)
             out.append((f"back-off search: {k} back-off{'s' if k > 1 else ''}, the first excursion "
                         f"{'above' if above else 'below'} the critical speed (peak {pk:.4g} e)",
@@ -311,7 +315,8 @@ def starts(ocp: SpinupOcp, n: int, multistart: bool = True) -> list[tuple[str, n
         ramps.append(("maximum-acceleration ramp and hold", ramp_profile(ocp, n, ocp.alpha_max)))
         if not ocp.free_time:
             ramps.append(("ramp at the mean of both", ramp_profile(ocp, n, 0.5 * (const + ocp.alpha_max))))
-    if lead is None or AHEAD <= 0 or min(profile_peak(ocp, u) for _, u in ramps) * (1 - AHEAD) < lead:
+    if not (lead is not None and families) and (
+            lead is None or AHEAD <= 0 or min(profile_peak(ocp, u) for _, u in ramps) * (1 - AHEAD) < lead):
         out += ramps
     if multistart and not ocp.free_time:
         w_hold = 0.8 * ocp.params.omega_cr
