@@ -44,7 +44,7 @@ from autobal import api
 from autobal.analyses.spinup import ocp as spinup_ocp
 from autobal.models.rotor import rotor_model
 from autobal.ocp import search
-from benchmarks._results import case, machine, write
+from benchmarks._results import case, write
 
 DATA = Path(__file__).resolve().parent.parent / "tests" / "data" / "spinup_family.json"
 DT = 0.5  # step of the search integrator, Omega0 t (its FAST_STEP: the peak within 1e-4 of CVODES)
@@ -339,13 +339,15 @@ def levers(names: list[str]) -> None:
                 opt = solve.optimize(ocp, method)
                 dt = time.perf_counter() - t0
             ref = json.loads(DATA.read_text())["problems"][name]["reference_peak_over_e"]
-            cases.append({"case": name, "variant": label, "optimize_s": dt, "peak_over_e": opt.score,
-                          "gap_pct": 100 * (opt.score / ref - 1), "starts": sum(1 for r in opt.starts
-                                                                                 if "coarse" in str(r.get("stage"))),
-                          "load_average": os.getloadavg()[0]})
+            cases.append(case(f"{name}: {label}", dt, opt.build_time_s, None, None, 100 * (opt.score / ref - 1),
+                              variant=label, problem=name, peak_over_e=opt.score,
+                              starts=sum(1 for r in opt.starts if "coarse" in str(r.get("stage"))),
+                              load_average=os.getloadavg()[0]))
             print(cases[-1], flush=True)
-    path = Path(__file__).parent / "results" / "spinup_family_levers.json"
-    path.write_text(json.dumps({"machine": machine(), "cases": cases}, indent=1) + "\n")
+    write("spinup_family_levers", "Spin-up study levers on problems of the issue-35 family (optimize, in one process)",
+          cases, notes=["autobal (s): the wall time of autobal.ocp.solve.optimize (starts, NLP builds and solves, "
+                        "re-simulations) with each variant, back to back; autobal error: its peak against the "
+                        "reference, % (negative: below)"])
 
 
 def spinup_method(sc):
@@ -388,6 +390,10 @@ def main(argv: list[str] | None = None) -> None:
                           failure=runs["after"].get("failure"), before_failure=b.get("failure"),
                           load_average=os.getloadavg()[0]))
         print(cases[-1], flush=True)
+    old = Path(__file__).parent / "results" / "spinup_family.json"  # the rows of problems not re-run are kept
+    kept = {c["case"]: c for c in json.loads(old.read_text())["cases"]} if old.exists() else {}
+    kept |= {c["case"]: c for c in cases}
+    cases = [kept[n] for n in PROBLEMS if n in kept]
     med = {k: float(np.median([c[k] for c in cases if c[k] is not None] or [np.nan])) for k in ("autobal_s", "peer_s")}
     write("spinup_family", "Spin-up study on the issue-35 family: peak against the independent reference, wall time",
           cases, notes=["autobal (s): the study's wall time in a new process (start-up included), this branch; peer "
