@@ -113,16 +113,19 @@ def load_problem(name: str, scene: dict):
     return spinup_ocp(sc, sc.analyses.spinup), sc
 
 
+MARGIN = 1e-3  # relative: the torque the legs leave for the unbalance reaction, which the caps do not model
+
+
 def rate_caps(ocp, omega: np.ndarray) -> tuple[np.ndarray, float]:
     """(largest acceleration over alpha_max the drive gives at ``omega``, lowest control u_min): alpha_max and the
-    torque, power and motor limits after the drag b omega, over the drive's inertia."""
+    torque and power limits (less MARGIN) after the drag b omega, over the drive's inertia."""
     top = np.full_like(omega, ocp.alpha_max)
     if ocp.inertia > 0:
         lim = [np.full_like(omega, ocp.torque_max)] if ocp.torque_max else []
         if ocp.power_max:
             lim.append(ocp.power_max / np.maximum(omega, 1e-9))
         for m in lim:
-            top = np.minimum(top, (m - ocp.drag * omega) / ocp.inertia)
+            top = np.minimum(top, (m * (1 - MARGIN) - ocp.drag * omega) / ocp.inertia)
     lo = ocp.u_min
     if ocp.braking_torque_max is not None and ocp.inertia > 0:  # braking torque limit, drag helps
         lo = max(lo, -(ocp.braking_torque_max + ocp.drag * omega.min()) / (ocp.inertia * ocp.alpha_max))
@@ -150,7 +153,7 @@ def execute(ocp, legs: list[tuple], steps: int) -> tuple[np.ndarray, np.ndarray]
             done = ((np.abs(targets[rows, k] - w) < 1e-9) | (spent >= durs[rows, k] - 1e-12)) & (k < last)
             k, spent = k + done, np.where(done, 0.0, spent)
         tgt = targets[rows, k] if j < h_steps else np.full(C, float(ocp.omega_final))
-        top, lo = rate_caps(ocp, w)
+        top, lo = rate_caps(ocp, w + da)  # at the highest speed the step may end at: the power limit kept at its end
         up, down = np.minimum(rates[rows, k], top), np.maximum(-rates[rows, k], lo)
         frac = np.clip((durs[rows, k] - spent) / dts, 0, 1)  # a timed leg ending inside the step
         step = np.clip(tgt - w, down * da * frac, up * da * frac)
