@@ -395,7 +395,11 @@ def main(argv: list[str] | None = None) -> None:
         print(cases[-1], flush=True)
     old = Path(__file__).parent / "results" / "spinup_family.json"  # the rows of problems not re-run are kept
     kept = {c["case"]: c for c in json.loads(old.read_text())["cases"]} if old.exists() else {}
-    kept |= {c["case"]: c for c in cases}
+    for c in cases:  # without --base the rows keep their measured "before"
+        prev = kept.get(c["case"], {})
+        keep = {k: prev.get(k) for k in ("peer", "peer_s", "peer_error", "before_peak_over_e", "before_failure")
+                if c.get(k) is None and prev.get(k) is not None}
+        kept[c["case"]] = c | keep | ({"ratio": keep["peer_s"] / c["autobal_s"]} if "peer_s" in keep else {})
     cases = [kept[n] for n in PROBLEMS if n in kept]
     med = {k: float(np.median([c[k] for c in cases if c[k] is not None] or [np.nan])) for k in ("autobal_s", "peer_s")}
     write("spinup_family", "Spin-up study on the issue-35 family: peak against the independent reference, wall time",

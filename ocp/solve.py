@@ -18,7 +18,6 @@ from autobal.errors import SolveError
 from autobal.ocp.problem import PEAK_KEY, SpinupOcp
 from autobal.ocp.search import (
     FixedFrameModes,
-    SearchResult,
     backoff_controls,
     backoff_search,
     controls_on_mesh,
@@ -278,22 +277,21 @@ def infeasibility_error(ocp: SpinupOcp, nlp: Nlp, wopt: np.ndarray, r: dict) -> 
 def starts(ocp: SpinupOcp, n: int, multistart: bool = True) -> list[tuple[str, np.ndarray]]:
     """Initial control profiles on the n control intervals.
 
-    For a peak objective with a fixed deadline, the best profile of each back-off family the problem's numbers
-    choose comes first (:func:`backoff_families`, :func:`autobal.ocp.search.backoff_search`), or, when none is
-    chosen, the two best of the grid over three-phase profiles (:func:`autobal.ocp.search.grid_search`); without
-    ``multistart`` only the best of these.  Then the constant ramp, and with ``multistart`` the maximum-acceleration
-    ramp with hold, a faster constant ramp, and a piecewise ramp that holds below the critical speed.  For the peak
-    deflection the three constant ramps are left out after the back-off search, and after the grid when its best
-    profile is AHEAD (relative) below each of their peaks (the exponential integrator): on the issue-35 family
-    (benchmarks/spinup_family.py) the back-off starts and the hold alone reach the same optima as with the grid's
-    and the ramps' starts too, in a quarter to a half of the time (docs/dev/spinup.md); the ramp that holds below the
-    critical speed, a structure outside the searched families, stays."""
+    For a peak objective with a fixed deadline, the two best profiles of the grid over three-phase profiles
+    (:func:`autobal.ocp.search.grid_search`: its partial-rate middle phase wins on the liquid balancer) come first,
+    then the best profile of each back-off family the problem's numbers choose (:func:`backoff_families`,
+    :func:`autobal.ocp.search.backoff_search`); without ``multistart`` only the best of these.  Then the constant
+    ramp, and with ``multistart`` the maximum-acceleration ramp with hold, a faster constant ramp, and a piecewise
+    ramp that holds below the critical speed.  For the peak deflection the three constant ramps are left out after
+    the back-off search, and after the grid alone when its best profile is AHEAD (relative) below each of their
+    peaks (the exponential integrator): on the issue-35 family (benchmarks/spinup_family.py) their optima were
+    never the best (docs/dev/spinup.md); the ramp that holds below the critical speed, a structure outside the
+    searched families, stays."""
     const = abs(ocp.omega_final - ocp.omega_start) / ocp.horizon
     out, lead, families = [], None, []
     if ocp.objective in ("peak_deflection", "peak_unbalance") and horizon_steps(ocp) <= SEARCH_STEPS:
         families = backoff_families(ocp)
-        found = grid_search(ocp, keep=2 if multistart else 1) if not families else SearchResult(
-            np.empty((0, 4)), np.empty(0), 0)
+        found = grid_search(ocp, keep=2 if multistart else 1)
         out += [(f"global search: {p[0] * ocp.alpha_max:.3g} rad/s^2 to {p[1]:.4g} rad/s, {p[2] * ocp.alpha_max:.3g} "
                  f"rad/s^2 for {p[3]:.3g} s, then {ocp.alpha_max:.3g} rad/s^2 (peak {pk:.4g} e)",
                  controls_on_mesh(ocp, p, n)) for p, pk in zip(found.params, found.peaks, strict=True)]
