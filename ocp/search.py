@@ -241,3 +241,95 @@ def profile_peak(ocp: SpinupOcp, u: np.ndarray, dt: float = FAST_STEP, rotor: Fi
         The largest delta/e at the step ends, horizon and settling window.
     """
     return float(simulate_steps(ocp, steps_of(ocp, np.asarray(u, float), dt)[None, :], dt, rotor)[0])
+
+
+def drive_rates(ocp: SpinupOcp) -> tuple[float, float]:
+    """The accelerations (rad/s^2) the back-off family runs at: the full rate, alpha_max or what the torque and
+    power limits leave at the final speed after the drag (the lowest along a spin-up whose limits fall with the
+    speed), and the back-off rate, -alpha_max, u_min alpha_max, or what the braking-torque limit and the drag give
+    at the start speed (0 without braking: the back-off is a hold)."""
+    up, down = ocp.alpha_max, ocp.u_min * ocp.alpha_max
+    J, w, b = ocp.inertia, ocp.omega_final, ocp.drag
+    if J > 0:
+        limits = [m for m in (ocp.torque_max, ocp.power_max / w if ocp.power_max else None) if m is not None]
+        up = min([up] + [(m - b * w) / J for m in limits])
+        if ocp.braking_torque_max is not None:
+            down = max(down, -(ocp.braking_torque_max + b * ocp.omega_start) / J)
+    return up, min(down, 0.0)
+
+
+def backoff_breakpoints(ocp: SpinupOcp, x: np.ndarray, backoffs: int) -> tuple[np.ndarray, np.ndarray]:
+    """Instants (s) and speeds (rad/s) at the corners of the back-off family for the points ``x`` of the unit box
+    (C, 2 ``backoffs`` + 1): the full rate to a speed a_1, the back-off rate (full braking, or a hold without
+    braking; both rates from :func:`drive_rates`) for a time d_1, the full rate to a_2, ...,
+    then a last leg at a constant rate to omega_final that arrives by the deadline (a partial rate when it uses
+    the slack left), and the hold.  Every point of the box is feasible: a_(k+1) lies between the speed before it
+    and omega_final (a_1 from the start), each d_k takes a fraction of the deadline's slack that is left (the time
+    the ramp at the full rate does not need), the last leg's extra time the rest's fraction x_last."""
+    x = np.atleast_2d(np.asarray(x, float))
+    a, down = drive_rates(ocp)
+    ub = down / a
+    top = ocp.omega_final if ocp.omega_max is None else min(ocp.omega_final, ocp.omega_max)
+    slack = np.full(len(x), ocp.horizon - (ocp.omega_final - ocp.omega_start) / a)
+    t, w = [np.zeros(len(x))], [np.full(len(x), ocp.omega_start)]
+    for k in range(backoffs):
+        wk = w[-1] + x[:, 2 * k] * (top - w[-1])  # the top of the excursion
+        t.append(t[-1] + (wk - w[-1]) / a)
+        w.append(wk)
+        # the back-off: u_min alpha_max for d; the time it costs (d, and the climb back) within the slack left
+        d = x[:, 2 * k + 1] * slack / (1 - ub)
+        d = np.minimum(d, wk / (-ub * a)) if ub < 0 else d  # never below standstill
+        t.append(t[-1] + d)
+        w.append(np.maximum(wk + ub * a * d, 0.0))  # standstill to rounding
+        slack = slack - d * (1 - ub)
+    extra = x[:, -1] * slack  # the last leg's time beyond the full-rate ramp's
+    t.append(t[-1] + (ocp.omega_final - w[-1]) / a + extra)
+    w.append(np.full(len(x), float(ocp.omega_final)))
+    return np.column_stack(t), np.column_stack(w)
+
+
+def backoff_controls(ocp: SpinupOcp, x: np.ndarray, backoffs: int, edges: np.ndarray) -> np.ndarray:
+    """The back-off family's profiles (:func:`backoff_breakpoints`) as mean accelerations over alpha_max on the
+    steps between ``edges`` (s): the speed, linear between the corners and held after the last, is exact at every
+    edge."""
+    t, w = backoff_breakpoints(ocp, x, backoffs)
+    nu = np.array([np.interp(edges, ti, wi) for ti, wi in zip(t, w, strict=True)])
+    return np.diff(nu, axis=1) / (np.diff(edges) * ocp.alpha_max)
+
+
+#: the cross-entropy search over the back-off family (:func:`backoff_search`): candidates per generation, elite kept,
+#: generations
+POPULATION, ELITE, GENERATIONS = 64, 8, 8
+
+
+def backoff_search(ocp: SpinupOcp, backoffs: int, above: bool | None, seed: int = 0, dt: float = STEP,
+                   rotor: FixedFrameModes | None = None) -> tuple[np.ndarray, float, int]:
+    """The best profile of the back-off family with ``backoffs`` back-offs whose first excursion ends below
+    (``above`` False) or above (True) the critical speed (None: anywhere), by a cross-entropy search over its unit
+    box (a Gaussian of diagonal covariance refitted to the ELITE best of each generation) judged by the
+    exponential integrator (:func:`simulate_steps`).  Returns (x, its peak, evaluations)."""
+    rng = np.random.default_rng(seed)
+    dim = 2 * backoffs + 1
+    lo, hi = np.zeros(dim), np.ones(dim)
+    span = max(ocp.omega_final if ocp.omega_max is None else min(ocp.omega_final, ocp.omega_max), ocp.omega_start) \
+        - ocp.omega_start
+    if above is not None and span > 0:
+        split = np.clip((ocp.params.omega_cr - ocp.omega_start) / span, 0.0, 1.0)
+        lo[0], hi[0] = (split, 1.0) if above else (0.0, split)
+    mean, std = 0.5 * (lo + hi), 0.5 * (hi - lo)
+    steps = horizon_steps(ocp, dt)
+    edges = np.arange(steps + 1) * dt / ocp.Om
+    rotor = rotor or FixedFrameModes.of(ocp)
+    best_x, best = None, np.inf
+    for g in range(GENERATIONS):
+        x = rng.uniform(lo, hi, (POPULATION, dim)) if g == 0 else np.clip(
+            mean + std * rng.standard_normal((POPULATION, dim)), lo, hi)
+        if best_x is not None:
+            x[0] = best_x
+        peaks = simulate_steps(ocp, backoff_controls(ocp, x, backoffs, edges), dt, rotor)
+        order = np.argsort(peaks)
+        if peaks[order[0]] < best:
+            best, best_x = float(peaks[order[0]]), x[order[0]].copy()
+        elite = x[order[:ELITE]]
+        mean, std = elite.mean(axis=0), np.maximum(elite.std(axis=0), 0.01 * (hi - lo))
+    return best_x, best, POPULATION * GENERATIONS

@@ -121,11 +121,18 @@ def test_resimulation_options_do_not_change_the_judge():
 
 
 def test_ramps_left_out_when_the_global_search_leads():
-    # 40 rad/s^2, 5 s: the search's best profile (12.69 e) is more than 5 % below the three constant ramps
-    # (14.15 e and up); the ramp that holds below the critical speed stays
+    # 40 rad/s^2, 5 s: the three-phase grid's two starts, the back-off families' four (one and two back-offs: the
+    # 0.75 s slack is over two natural periods; the first excursion below and above the critical speed), the
+    # constant ramps left out, the ramp that holds below the critical speed kept
     labels = [lab for lab, _ in S.starts(real_problem(40.0), 50)]
-    assert len(labels) == 3 and labels[0].startswith("global search") and labels[1].startswith("global search")
-    assert labels[2] == "ramp, hold at 0.8 omega_cr, ramp"
+    assert all(lab.startswith("global search") for lab in labels[:2])
+    assert [lab.split(",")[0] for lab in labels[2:6]] == ["back-off search: 1 back-off"] * 2 + [
+        "back-off search: 2 back-offs"] * 2
+    assert labels[6:] == ["ramp, hold at 0.8 omega_cr, ramp"]
+    # without slack for a back-off (the deadline of the full-rate ramp, 4.25 s): the three-phase grid finds none
+    # either, and the ramps start
+    labels = [lab for lab, _ in S.starts(dataclasses.replace(real_problem(40.0), horizon=4.25), 50)]
+    assert "constant ramp" in labels and not any(lab.startswith(("back-off", "global")) for lab in labels)
     # no search (another objective): all ramps
     labels = [lab for lab, _ in S.starts(dataclasses.replace(real_problem(40.0), objective="integrated_deflection"),
                                          50)]

@@ -1,4 +1,4 @@
-"""The best profiles found on the real spin-up problem (issue 26, item 5) against the study.
+"""The best profiles found on the real spin-up problem against the study, and the heavily damped rotor of issue 35.
 
 The reference profiles are the best of two independent searches (benchmarks/spinup_ocp.md, "The best optimum of
 the real problem"): full-braking back-offs with switching instants free in continuous time (differential evolution
@@ -6,15 +6,19 @@ on the modal integrator, `python -m benchmarks spinup_search`), then polished as
 free instants, linear between, any rate within |alpha| <= alpha_max; Nelder-Mead on the integrator at a 1 ms
 step, `python -m benchmarks spinup_waypoints`).  They are written as segments (duration to 1 us, rate over
 alpha_max to 1e-6), re-simulated by CVODES and checked feasible, and the shipped scenes' studies are held to them.
-Issue 26 asks for 12.295 e (40 rad/s^2) and 15.235 e (20 rad/s^2): no profile found reaches the first (the best is
-0.065 % above it); the second is reached by the search's profile, not by the study with its default regulariser."""
+The reproducible targets (issue 35; issue 26's 12.295 e and 15.235 e were wrong: an independent re-run of the
+reference that produced them gives 12.3029 e and 15.2335 e, the developers' profiles 12.3031 e and 15.2332 e) are
+12.3029 e at 40 rad/s^2 and 15.2332 e at 20 rad/s^2; the study is held within 0.05 % of each (12.309 e, 15.241 e)
+with its default regulariser."""
 
 import numpy as np
 import pytest
+from numpy.testing import assert_allclose
 
 from autobal import api
 from autobal.analyses.spinup import ocp as spinup_ocp
 from autobal.ocp import spinup as S
+from autobal.ocp.problem import pulse_variation
 
 # segments (duration s, acceleration over alpha_max) from the start; then full acceleration to 210 rad/s and the
 # hold.  Peaks (delta/e): the CVODES re-simulation of each profile.
@@ -28,13 +32,13 @@ BEST = {
     "spinup_jeffcott_horizon_10s": ([(3.016849, 1.0), (5.6e-05, -1.0), (0.002098, 1.0), (0.247027, -1.0),
                                      (0.533299, 1.0), (0.500742, -1.0)], 15.23318),
 }
-# issue 26, item 5, and whether the best profile reaches it (20 rad/s^2: by 0.012 %; 40 rad/s^2: 0.065 % above,
-# no searched family reaches it)
-TARGET = {"spinup_jeffcott_deadline_5s": (12.295, False), "spinup_jeffcott_horizon_10s": (15.235, True)}
-# how far the shipped study stays above the best profile (relative): 0.051 % and 0.030 % measured, the control
-# step (40 rad/s^2) and the default regulariser (20 rad/s^2) holding it there; the next basins the study's solve
-# path reaches are 0.055 % and more above (benchmarks/spinup_ocp.md)
-GAP = {"spinup_jeffcott_deadline_5s": 5.3e-4, "spinup_jeffcott_horizon_10s": 4e-4}
+# the reproducible targets of issue 35 and the study's bound, 0.05 % above each (delta/e)
+TARGET = {"spinup_jeffcott_deadline_5s": 12.3029, "spinup_jeffcott_horizon_10s": 15.2332}
+STUDY_AT_MOST = {"spinup_jeffcott_deadline_5s": 12.309, "spinup_jeffcott_horizon_10s": 15.241}
+# control intervals the study needs for it: at 40 rad/s^2 the shipped 25 ms step (200 intervals) holds the study at
+# 12.3094 e, 0.053 % (the step 0.024 %: 12.3063 e at 400; the regulariser 0.012 %: 12.3078 e without it at 200);
+# at 20 rad/s^2 the shipped 400 intervals give 15.2376 e (docs/dev/spinup.md, "The real problem's targets")
+INTERVALS = {"spinup_jeffcott_deadline_5s": 400, "spinup_jeffcott_horizon_10s": 400}
 
 
 def scene_ocp(name: str) -> S.SpinupOcp:
@@ -67,14 +71,97 @@ def test_best_profile_is_feasible_and_resimulates(name):
     assert abs(t[-1] - ocp.horizon - ocp.settling_time) < 1e-9
     resimulated = S.resimulate(ocp, u, h, "best profile").peak_delta
     assert resimulated == pytest.approx(peak, rel=2e-6)
-    target, reached = TARGET[name]
-    assert (resimulated <= target) == reached
+    assert resimulated <= TARGET[name] * (1 + 1e-4)  # the best profile is the target, to its 4 digits
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(BEST))
-def test_study_within_its_measured_gap_of_the_best_profile(name):
+def test_study_within_0_05_pct_of_the_target(name):
     ocp = scene_ocp(name)
-    scene = api.load(name)
-    opt = S.optimize(ocp, S.DirectCollocation(scene.analyses.spinup.intervals, 3, "radau"))
-    assert opt.score <= BEST[name][1] * (1 + GAP[name])
+    opt = S.optimize(ocp, S.DirectCollocation(INTERVALS[name], 3, "radau"))
+    assert ocp.jerk_variation == 1e-4  # the default regulariser
+    assert opt.score <= STUDY_AT_MOST[name]
+    assert pulse_variation(opt.solution.u[:INTERVALS[name]]) < 0.05  # drivable: no one-interval pulses
+    assert opt.score >= BEST[name][1] * (1 - 1e-3)  # a peak far below the best profile would be a wrong judge
+
+
+def damped_ocp() -> S.SpinupOcp:
+    """Issue 35's heavily damped rotor: zeta = 0.1 (2 kg, 20 kN/m, 40 N s/m, e = 0.05 mm), 50 -> 200 rad/s, at
+    most 160 rad/s^2, a 3 s deadline, a 1 s hold, never above 200 rad/s."""
+    from autobal.models.rotor import RotorParams
+
+    return S.SpinupOcp(RotorParams(m1=2.0, c=20e3, chi=40.0, e=5e-5), 50.0, 200.0, 3.0, 160.0, settling_time=1.0,
+                       omega_max=200.0)
+
+
+def test_damped_issue_profile_resimulates_below_the_old_optimum():
+    """The profile issue 35 describes (up to just above the critical speed, back off, up, back, a partial-rate
+    ramp to 200 rad/s; its corners polished by Nelder-Mead on CVODES, full rates) re-simulates at 4.5347 e, below
+    the 4.5875 e the study stopped at before the back-off search."""
+    ocp = damped_ocp()
+    corners = [108.597093, 74.203991, 114.553675, 105.901565]  # rad/s, reached at +-alpha_max
+    w, t, u, d = ocp.omega_start, 0.0, [], []
+    for c in corners:
+        d.append(abs(c - w) / ocp.alpha_max)
+        u.append(np.sign(c - w))
+        t, w = t + d[-1], c
+    u.append((ocp.omega_final - w) / (ocp.horizon - t) / ocp.alpha_max)  # the last leg ends at the deadline
+    d.append(ocp.horizon - t)
+    seg = list(zip(d, u, strict=True))
+    uu, hh, ww = profile(ocp, seg)
+    assert ww.max() <= ocp.omega_max * (1 + 1e-12) and 0 < u[-1] < 1
+    assert S.resimulate(ocp, uu, hh, "issue 35").peak_delta == pytest.approx(4.5347, abs=1e-4)
+
+
+@pytest.mark.slow
+def test_damped_rotor_study_finds_the_basin():
+    """Issue 35: at most 4.54 e (the study stopped at 4.5875 e; the issue's profile peaks at 4.5347 e)."""
+    ocp = damped_ocp()
+    opt = S.optimize(ocp, S.DirectCollocation(200, 3, "radau"))
+    assert 4.5347 * (1 - 2e-3) <= opt.score <= 4.54
+
+
+@pytest.mark.parametrize("brakes", [True, False])
+def test_every_point_of_the_backoff_family_is_feasible(brakes):
+    """Random points of the back-off family's unit box (one and two back-offs) keep 0 <= omega <= the cap, the drive's
+    rates (:func:`search.drive_rates`; without braking the back-off is a hold) and reach omega_final by the deadline,
+    exactly at every step end of their controls."""
+    import dataclasses
+
+    from autobal.ocp import search
+
+    ocp = damped_ocp()
+    if not brakes:  # a torque limit (80 rad/s^2 over J_p = 0.01 kg m^2) and no braking
+        P = dataclasses.replace(ocp.params, J_p=0.01)
+        ocp = dataclasses.replace(ocp, params=P, torque_max=0.8, braking_torque_max=0.0)
+    up, down = search.drive_rates(ocp)
+    assert (up, down) == ((160.0, -160.0) if brakes else (pytest.approx(80.0, rel=1e-6), 0.0))
+    rng = np.random.default_rng(3)
+    for k in (1, 2):
+        x = rng.uniform(0, 1, (200, 2 * k + 1))
+        t, w = search.backoff_breakpoints(ocp, x, k)
+        rate = np.diff(w, axis=1) / np.maximum(np.diff(t, axis=1), 1e-300)
+        assert np.all(np.diff(t, axis=1) >= 0) and np.all(t[:, -1] <= ocp.horizon * (1 + 1e-12))
+        assert np.all(rate <= up * (1 + 1e-9)) and np.all(rate >= down * (1 + 1e-9) - 1e-9)
+        assert w.min() >= 0 and w.max() <= ocp.omega_max * (1 + 1e-12) and np.all(w[:, -1] == ocp.omega_final)
+        edges = np.linspace(0, ocp.horizon, 301)
+        u = search.backoff_controls(ocp, x, k, edges)
+        assert np.abs(u).max() <= 1 + 1e-9
+        assert_allclose(ocp.omega_start + np.sum(u * np.diff(edges), axis=1) * ocp.alpha_max, ocp.omega_final,
+                         rtol=1e-12)
+
+
+def test_backoff_families_follow_the_problems_numbers():
+    """One and two back-offs when the slack is at least two natural periods, one below that, none without slack;
+    the first excursion below the critical speed only when the start is below it."""
+    import dataclasses
+
+    from autobal.ocp.solve import backoff_families
+
+    ocp = damped_ocp()  # slack 3 - 150/160 = 2.06 s, natural period 2 pi/100 = 0.063 s
+    assert backoff_families(ocp) == [(1, False), (1, True), (2, False), (2, True)]
+    tight = dataclasses.replace(ocp, horizon=150 / 160 + 0.1)  # 0.1 s of slack: under two periods
+    assert backoff_families(tight) == [(1, False), (1, True)]
+    assert backoff_families(dataclasses.replace(ocp, horizon=150 / 160)) == []
+    above = dataclasses.replace(ocp, omega_start=120.0)
+    assert backoff_families(above) == [(1, True), (2, True)]

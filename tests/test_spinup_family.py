@@ -1,0 +1,107 @@
+"""The spin-up study on a family of problems (issue 35) against independent references.
+
+The problems (tests/data/spinup_family.json, written by ``python -m benchmarks spinup_family --refs``) span damping
+ratios 0.005-0.1, 0.5-20 natural periods per passage, tight and loose deadlines, drive limits without braking
+(torque, power), drag, speed caps and a datasheet rotor.  Each reference is the best profile of a method
+independent of the study's (scipy differential evolution over four profile families, judged by scipy solve_ivp,
+DOP853 at rtol 1e-10, on the model's fixed-frame equations); the test re-runs the study (not the reference) and holds
+it within 0.1 % of the reference or below it.  The references' own checks (deadline reached, speed cap and drive
+limits kept on the solve_ivp trajectory) are asserted too, so a reference that breaks a limit cannot pass as a
+target."""
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+import yaml
+
+from autobal import api
+from autobal.analyses.spinup import ocp as spinup_ocp
+from autobal.ocp import spinup as S
+from autobal.ocp.simulation import DRIVE_TOL, torque_reference
+from autobal.ocp.spinup_study import method_of
+
+DATA = json.loads((Path(__file__).parent / "data" / "spinup_family.json").read_text())
+PROBLEMS = DATA["problems"]
+
+
+def load(tmp_path, name: str):
+    path = tmp_path / f"{name}.yaml"
+    path.write_text(yaml.safe_dump({"name": name, "title": name} | PROBLEMS[name]["scene"], sort_keys=False))
+    scene = api.load(path)
+    return spinup_ocp(scene, scene.analyses.spinup), scene
+
+
+def test_family_spans_the_issue():
+    """Damping ratios 0.005-0.1, passages of 0.5-20 natural periods across +-10 % of the critical speed at the full
+    acceleration, braking and non-braking drives, speed caps and none: read from the problems themselves."""
+    zetas, periods, brakes, caps = [], [], set(), set()
+    for name in PROBLEMS:
+        ocp, _ = load_path(name)
+        P = ocp.params
+        zetas.append(P.chi / (2 * math.sqrt(P.c * P.m)))
+        periods.append(0.2 * P.omega_cr / ocp.alpha_max / (2 * math.pi / P.omega_cr))
+        brakes.add(ocp.braking_torque_max == 0)
+        caps.add(ocp.omega_max is not None)
+    assert min(zetas) <= 0.0051 and max(zetas) >= 0.099
+    assert min(periods) <= 0.55 and max(periods) >= 19
+    assert brakes == {True, False} and caps == {True, False}
+    assert 8 <= len(PROBLEMS) <= 12
+
+
+def load_path(name: str):
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        return load(Path(tmp), name)
+
+
+@pytest.mark.parametrize("name", list(PROBLEMS))
+def test_reference_keeps_its_limits(name):
+    ref = PROBLEMS[name]
+    ocp, _ = load_path(name)
+    check = ref["check"]
+    assert check["peak_over_e"] == ref["reference_peak_over_e"]
+    assert abs(check["deadline_speed_rad_s"] - ocp.omega_final) <= 1e-6 * ocp.omega_final
+    if ocp.omega_max is not None:
+        assert check["max_speed_rad_s"] <= ocp.omega_max * (1 + 1e-9)
+    # the drive limits within the study's own tolerance of a re-simulated profile (DRIVE_TOL, relative; on torques
+    # relative to the torque reference)
+    if ocp.torque_max is not None:
+        assert check["max_torque_N_m"] <= ocp.torque_max * (1 + DRIVE_TOL)
+    if ocp.power_max is not None:
+        assert check["max_power_W"] <= ocp.power_max * (1 + DRIVE_TOL)
+    if ocp.braking_torque_max is not None:
+        assert check["min_torque_N_m"] >= -ocp.braking_torque_max - DRIVE_TOL * torque_reference(ocp)
+    # the search integrator and solve_ivp agree on the reference's peak (two integrators)
+    assert check["integrator_peak_over_e"] == pytest.approx(ref["reference_peak_over_e"], rel=2e-3)
+
+
+#: problems the study misses, with the measured reason (strict: a fix makes the test fail until this is removed)
+MISSES = {"torque_no_brake": "the study's 11.420 e is 0.31 % above the reference's 11.385 e: two holds below the "
+                             "critical speed (77 and 88 rad/s) that the cross-entropy search does not find (its "
+                             "best in that family 11.460 e; the profile itself is in it at 11.378 e)"}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=MISSES[n]))
+                                  if n in MISSES else n for n in PROBLEMS])
+def test_study_within_0_1_pct_of_the_reference(tmp_path, name):
+    ocp, scene = load(tmp_path, name)
+    opt = S.optimize(ocp, method_of(scene.analyses.spinup))
+    assert opt.score <= PROBLEMS[name]["reference_peak_over_e"] * (1 + 1e-3)
+
+
+@pytest.mark.slow
+def test_integrated_objective_on_a_long_window_refines_from_the_screening():
+    """The datasheet rotor's 8 s window with the integrated objective (issue 35, item 4): the coarse screening
+    (without the regulariser) converges from at least one start, so the study refines it by mesh continuation
+    instead of solving the full mesh from every start (712-766 iterations each before); the refined stages with
+    the regulariser converge in under 100 iterations each, and the optimum re-simulates within 1e-3."""
+    scene = api.load("spinup_rotor_datasheet", {"analyses.spinup.objective": "integrated_deflection"})
+    ocp = spinup_ocp(scene, scene.analyses.spinup)
+    opt = S.optimize(ocp, method_of(scene.analyses.spinup))
+    stages = [r for r in opt.starts if r["start"] == "mesh continuation"]
+    assert stages and all(r["success"] and r["iterations"] < 100 for r in stages)
+    assert opt.solution.status == "Solve_Succeeded" and opt.resimulation_rel_error < 1e-3
