@@ -32,6 +32,7 @@ Units: SI inside and in the Result (rad/s, m, kg, kg m); angles in degrees as th
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from functools import cached_property
@@ -40,7 +41,11 @@ import casadi as ca
 import numpy as np
 from scipy import stats
 
+from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record
 from autobal.analysis.least_squares import LeastSquares, uncertainty
+from autobal.analysis.quantities import convert
+from autobal.analysis.result import new_figure, unit_axis
+from autobal.analysis.standards import API_AF, API_SM, ISO_G
 from autobal.models.rotor import rotor_model
 
 #: fixed-step RK4 steps per revolution at the highest speed (and per natural period at the highest w_n searched)
@@ -676,3 +681,460 @@ def identify(time, speed, x, y=None, *, runout: bool = True, noise: float | None
     head = transient or steady
     ad = adequacy(head.residual_std, head.dof, sigma, (len(speed) - 2) * 2 * probes if noise is None else 10**9)
     return Identification(transient, steady, classical, sigma, ad, w_hi, w_lo)
+
+
+# ---- the typed Result ----------------------------------------------------------------------------------------------
+
+_LEWIS = "Lewis (1932) passage through the critical speed"
+
+
+def _speed(description: str, **kw):
+    return quantity("rad/s", "ω", description, "rpm", **kw)
+
+
+def _length(description: str, symbol: str = "e", **kw):
+    return quantity("m", symbol, description, "µm", **kw)
+
+
+def _angle(description: str, symbol: str = "θ", **kw):
+    return quantity("deg", symbol, description, **kw)
+
+
+def _ratio(description: str, symbol: str = "ζ", **kw):
+    return quantity("1", symbol, description, **kw)
+
+
+@record
+class Fitted(Record):
+    """One fit of the 1x vectors (transient or steady-state): estimates with 95 % Student-t intervals (Gauss-Newton
+    covariance), the residual, the conditioning and the solver's report."""
+
+    critical_speed: float = _speed("critical speed ω_n = sqrt(c/m) fitted")
+    critical_speed_ci: np.ndarray = _speed("95 % interval of the critical speed")
+    damping_ratio: float = _ratio("damping ratio ζ = χ/(2 sqrt(c m)) fitted")
+    damping_ratio_ci: np.ndarray = _ratio("95 % interval of the damping ratio")
+    eccentricity: float = _length("eccentricity e = |ε| of the mass centre fitted")
+    eccentricity_ci: np.ndarray = _length("95 % interval of the eccentricity (delta method)")
+    unbalance_angle_deg: float = _angle("unbalance angle θ = arg ε from the key-phasor mark, in the direction of "
+                                        "rotation")
+    unbalance_angle_ci_deg: np.ndarray = _angle("95 % interval of the unbalance angle")
+    residual_std: float = _length("standard deviation of the residual per component of a vector", "s")
+    dof: int = quantity("1", "ν", "degrees of freedom of the residual (components - parameters)")
+    parameters: list[str]
+    correlation: np.ndarray = _ratio("correlation matrix of the parameters (order of parameters)", "ρ")
+    condition_number: float = _ratio("condition number of the Jacobian scaled by the parameters' magnitudes",
+                                     "κ")
+    weakest_direction: np.ndarray = _ratio("right singular vector of the smallest singular value (relative "
+                                           "changes of the parameters that change the fit least)", "v_min")
+    status: str
+    iterations: int = quantity("1", "", "IPOPT iterations")
+    runout_x: np.ndarray | None = quantity("m", "r_x", "run-out 1x vector of probe x [Re, Im] (x = Re(r e^{iφ}))",
+                                           "µm", optional=True)
+    runout_y: np.ndarray | None = quantity("m", "r_y", "run-out 1x vector of probe y [Re, Im]", "µm", optional=True)
+
+
+@record
+class ClassicalReading(Record):
+    """The classical readings of the amplitude (slow, steady run-up assumed) and their difference from the transient
+    fit (their bias at the run's rate)."""
+
+    peak_speed: float | None = _speed("speed of the amplitude's peak, read as the critical speed", optional=True)
+    peak_amplitude: float | None = _length("amplitude at the peak (0-peak)", "A_max", optional=True)
+    damping_ratio: float | None = _ratio("damping ratio from the half-power points, 1/(2 AF)", optional=True)
+    half_power_speeds: np.ndarray | None = _speed("half-power speeds N_1, N_2 (0.707 of the peak)", optional=True)
+    eccentricity: float | None = _length("eccentricity read from the 1x vector at the service speed over the "
+                                         "steady response of the classical critical speed and damping",
+                                         optional=True)
+    service_amplitude: float | None = _length("1x amplitude of probe x at the service speed (0-peak)", "A_s",
+                                              optional=True)
+    service_lag_deg: float | None = _angle("phase lag of probe x at the service speed", "φ_s", optional=True)
+    critical_speed_bias_pct: float | None = quantity("%", "Δω", "peak speed over the transient fit's critical "
+                                                     "speed, - 1", optional=True)
+    damping_ratio_bias_pct: float | None = quantity("%", "Δζ", "half-power damping over the transient fit's, - 1",
+                                                    optional=True)
+    status: str = ""
+
+
+@record
+class Adequacy(Record):
+    """F test of the residual variance against the noise of the vectors (their second differences' spread)."""
+
+    noise: float = _length("noise of a vector per component (given, or 1.4826 MAD of the second differences / √6)",
+                           "σ")
+    residual_std: float = _length("residual standard deviation per component", "s")
+    significance: float = _ratio("significance of the test", "α")
+    F: float | None = _ratio("F = s²/σ²", "F", optional=True)
+    F_crit: float | None = _ratio("F_crit at the significance", "F_crit", optional=True)
+    p_value: float | None = _ratio("p value of F", "p", optional=True)
+    adequate: bool | None = None
+    note: str = ""
+
+
+@record
+class Margins(Record):
+    """API 684 (2005) amplification factor and separation margin of the identified rotor's steady response."""
+
+    amplification_factor: float | None = _ratio("AF = N_c/(N_2 - N_1) of the identified rotor's steady response",
+                                                "AF", source=API_AF, optional=True)
+    separation_margin_pct: float | None = quantity("%", "SM", "separation margin from the service speed",
+                                                   source=API_SM, optional=True)
+    required_separation_margin_pct: float | None = quantity("%", "SM_req", "separation margin required for the AF",
+                                                            source=API_SM, optional=True)
+    separation_margin_ok: bool | None = None
+    words: str = ""
+
+
+@record
+class Series(Record):
+    """The measured and fitted 1x vectors, amplitude (0-peak) and phase lag from the key-phasor, per vector."""
+
+    speed: np.ndarray = _speed("shaft speed of each vector")
+    x_amplitude: np.ndarray = _length("measured 1x amplitude of probe x (0-peak)", "|X|")
+    x_lag_deg: np.ndarray = _angle("measured phase lag of probe x", "φ_x")
+    steady_x_amplitude: np.ndarray = _length("fitted 1x amplitude of probe x (steady-state fit)", "|X|")
+    steady_x_lag_deg: np.ndarray = _angle("fitted phase lag of probe x (steady-state fit)", "φ_x")
+    fit_x_amplitude: np.ndarray | None = _length("fitted 1x amplitude of probe x (transient)", "|X|", optional=True)
+    fit_x_lag_deg: np.ndarray | None = _angle("fitted phase lag of probe x (transient)", "φ_x", optional=True)
+    time: np.ndarray | None = quantity("s", "t", "time of each vector", optional=True)
+    y_amplitude: np.ndarray | None = _length("measured 1x amplitude of probe y (0-peak)", "|Y|", optional=True)
+    y_lag_deg: np.ndarray | None = _angle("measured phase lag of probe y", "φ_y", optional=True)
+    fit_y_amplitude: np.ndarray | None = _length("fitted 1x amplitude of probe y", "|Y|", optional=True)
+    fit_y_lag_deg: np.ndarray | None = _angle("fitted phase lag of probe y", "φ_y", optional=True)
+
+
+@record
+class RunupResult(TypedResult):
+    """The rotor identified from a measured run-up or coast-down (see the module docstring)."""
+
+    title: str
+    identified: bool
+    reason: str
+    max_speed: float = _speed("highest measured speed")
+    min_speed: float = _speed("lowest measured speed")
+    acceleration: float = quantity("rad/s^2", "α", "mean rate of the run (speed range over duration; 0 without time)")
+    undetermined: str
+    critical_speed: float | None = _speed("critical speed ω_n identified (transient fit)", headline=1,
+                                          optional=True)
+    damping_ratio: float | None = _ratio("damping ratio ζ identified (transient fit)", headline=2, optional=True)
+    eccentricity: float | None = _length("eccentricity e of the mass centre identified", headline=3, optional=True)
+    unbalance_angle_deg: float | None = _angle("unbalance angle from the key-phasor mark, in the direction of "
+                                               "rotation", headline=4, optional=True)
+    mass: float | None = quantity("kg", "m", "modal mass (given, or the given stiffness over ω_n²)", optional=True)
+    unbalance: float | None = quantity("kg*m", "U", "unbalance U = m e", "g·mm", headline=5, optional=True)
+    unbalance_ci: np.ndarray | None = quantity("kg*m", "U", "95 % interval of the unbalance", "g·mm",
+                                               optional=True)
+    stiffness: float | None = quantity("N/m", "c", "shaft stiffness c = m ω_n²", "kN/m", optional=True)
+    damping: float | None = quantity("N*s/m", "χ", "viscous damping χ = 2 ζ m ω_n", optional=True)
+    service_speed: float | None = _speed("service speed (given)", optional=True)
+    balance_grade: float | None = quantity("m/s", "G", "balance quality grade G = e Ω at the service speed",
+                                           "mm/s", source=ISO_G, headline=6, optional=True)
+    transient: Fitted | None = optional()
+    steady: Fitted | None = optional()
+    classical: ClassicalReading | None = optional()
+    adequacy: Adequacy | None = optional()
+    margins: Margins | None = optional()
+    series: Series | None = optional()
+    rotor_yaml: str = ""
+    notes: list[str] = dataclasses.field(default_factory=list)
+    name = "runup"
+
+    def verdict(self) -> tuple[bool | None, str]:
+        return self.identified, self.reason
+
+    def summary(self) -> str:
+        lines = [f"run-up identification: {'identified' if self.identified else 'NOT identified'} - {self.reason}"]
+        for row in self.headline():
+            lines.append(f"  {row['quantity']}: {row['value']} {row['unit']}".rstrip()
+                         + (f" ({row['beside']})" if row["beside"] else ""))
+        c = self.classical
+        if c is not None and c.peak_speed is not None:
+            q = QUANTITIES.find("classical.peak_speed")
+            lines.append(f"  classical: peak at {q.text(c.peak_speed)}"
+                         + (f" ({c.critical_speed_bias_pct:+.2f} % from the transient fit)"
+                            if c.critical_speed_bias_pct is not None else "")
+                         + (f", half-power ζ {c.damping_ratio:.4g}" if c.damping_ratio is not None else "")
+                         + (f" ({c.damping_ratio_bias_pct:+.1f} %)" if c.damping_ratio_bias_pct is not None else ""))
+        return "\n".join(lines)
+
+    def tables(self) -> dict[str, dict]:
+        s = self.series
+        if s is None:
+            return {}
+        cols = {k: v for k, v in s.to_dict().items() if v is not None}
+        return {"runup_vectors.csv": QUANTITIES.columns(cols, "series")}
+
+    def save(self, folder):
+        from pathlib import Path
+
+        paths = super().save(folder)
+        if self.rotor_yaml:
+            p = Path(folder) / "identified_rotor.yaml"
+            p.write_text(self.rotor_yaml, encoding="utf-8")
+            paths.append(p)
+        return paths
+
+    def draw(self, ax) -> None:
+        """Bode amplitude of probe x: measured, transient fit, steady-state fit."""
+        s = self.series
+        f = unit_axis(ax, "1x amplitude |X| (0-peak)", "m", "µm")
+        rpm = unit_axis(ax, "speed ω", "rad/s", "rpm", which="x")
+        ax.plot(s.speed * rpm, s.x_amplitude * f, ".", ms=3, color="0.5", label="measured")
+        if s.fit_x_amplitude is not None:
+            ax.plot(s.speed * rpm, s.fit_x_amplitude * f, "-", lw=1.2, label="transient fit")
+        ax.plot(s.speed * rpm, s.steady_x_amplitude * f, "--", lw=1.0, label="steady-state fit")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+
+    def figures(self) -> dict:
+        s = self.series
+        if s is None:
+            return {}
+        fig, (a1, a2) = new_figure((7.5, 7.0), 2, 1)
+        self.draw(a1)
+        rpm = unit_axis(a2, "speed ω", "rad/s", "rpm", which="x")
+        a2.plot(s.speed * rpm, s.x_lag_deg, ".", ms=3, color="0.5", label="measured")
+        if s.fit_x_lag_deg is not None:
+            a2.plot(s.speed * rpm, s.fit_x_lag_deg, "-", lw=1.2, label="transient fit")
+        a2.plot(s.speed * rpm, s.steady_x_lag_deg, "--", lw=1.0, label="steady-state fit")
+        a2.set_ylabel("phase lag φ_x (deg, from the key-phasor)")
+        a2.grid(alpha=0.3)
+        fig.suptitle(f"{self.title}: Bode plot of probe x", fontsize=9)
+        out = {"fig_runup_bode.png": fig}
+        fig2, (b1, b2) = new_figure((10, 4.6), 1, 2)
+        f = convert(1.0, "m", "µm")
+        rpm = unit_axis(b2, "speed ω", "rad/s", "rpm", which="x")
+        for amp, lag, style, label in ((s.x_amplitude, s.x_lag_deg, ".", "measured"),
+                                       (s.fit_x_amplitude, s.fit_x_lag_deg, "-", "transient fit"),
+                                       (s.steady_x_amplitude, s.steady_x_lag_deg, "--", "steady-state fit")):
+            if amp is None:
+                continue
+            z = amp * f * np.exp(-1j * np.radians(lag))  # X = |X| e^{-i lag}
+            b1.plot(z.real, z.imag, style, ms=3, lw=1, label=label)
+        b1.set_aspect("equal", adjustable="datalim")
+        b1.set_xlabel("Re X (µm)")
+        b1.set_ylabel("Im X (µm)")
+        b1.set_title("polar plot of probe x (x = Re(X e^{iφ}))", fontsize=8)
+        b1.grid(alpha=0.3)
+        b1.legend(fontsize=7)
+        if s.fit_x_amplitude is not None:
+            meas = s.x_amplitude * np.exp(-1j * np.radians(s.x_lag_deg))
+            fitx = s.fit_x_amplitude * np.exp(-1j * np.radians(s.fit_x_lag_deg))
+            b2.plot(s.speed * rpm, np.abs(meas - fitx) * f, ".", ms=3, label="|measured - transient fit|")
+        stx = s.steady_x_amplitude * np.exp(-1j * np.radians(s.steady_x_lag_deg))
+        meas = s.x_amplitude * np.exp(-1j * np.radians(s.x_lag_deg))
+        b2.plot(s.speed * rpm, np.abs(meas - stx) * f, "x", ms=3, label="|measured - steady-state fit|")
+        if self.adequacy is not None:
+            b2.axhline(self.adequacy.noise * f * math.sqrt(2), color="k", lw=0.8, ls=":",
+                       label="noise √2 σ (a vector's)")
+        b2.set_ylabel("residual |ΔX| (µm)")
+        b2.grid(alpha=0.3)
+        b2.legend(fontsize=7)
+        fig2.suptitle(self.title, fontsize=9)
+        out["fig_runup_polar_residual.png"] = fig2
+        return out
+
+
+RunupResult.quantities = QUANTITIES = declarations(RunupResult)
+
+
+# ---- the study -----------------------------------------------------------------------------------------------------
+
+def _fitted(f: Fit) -> Fitted:
+    e, elo, ehi = f.eccentricity()
+    th, tlo, thi = f.angle()
+    names = list(f.names)
+    ro = {k: np.array([f.value(f"runout_{k}_re"), f.value(f"runout_{k}_im")]) if f"runout_{k}_re" in names else None
+          for k in ("x", "y")}
+    return Fitted(critical_speed=f.value("critical_speed"), critical_speed_ci=np.array(f.interval("critical_speed")),
+                  damping_ratio=f.value("damping_ratio"), damping_ratio_ci=np.array(f.interval("damping_ratio")),
+                  eccentricity=e, eccentricity_ci=np.array([elo, ehi]), unbalance_angle_deg=math.degrees(th),
+                  unbalance_angle_ci_deg=np.degrees([tlo, thi]), residual_std=f.residual_std, dof=f.dof,
+                  parameters=names, correlation=f.correlation, condition_number=f.condition,
+                  weakest_direction=f.weakest, status=f.status, iterations=f.iterations, runout_x=ro["x"],
+                  runout_y=ro["y"])
+
+
+def _half_width(value: float, ci) -> float:
+    return (ci[1] - ci[0]) / 2 / abs(value) if value else math.inf
+
+
+def _weakest_words(f: Fit) -> str:
+    """The smallest singular vector of the scaled Jacobian in words: the relative changes that move the fit least."""
+    v = f.weakest * np.sign(f.weakest[np.argmax(np.abs(f.weakest))])
+    parts = [f"{SYMBOLS[n]} {c:+.2f}" for n, c in zip(f.names, v, strict=True) if abs(c) >= 0.3]
+    return (f"the data determine least the combination of relative changes ({', '.join(parts)}) "
+            f"(condition number {f.condition:.3g})")
+
+
+def _lag(v: np.ndarray) -> np.ndarray:
+    """The analyser's phase lag in degrees of x(t) = Re(X e^{i phi}): -angle(X), unwrapped, in (-180, 540]."""
+    return np.degrees(np.unwrap(-np.angle(v)))
+
+
+def rotor_section(mass: float | None, fit: Fitted, unbalance: tuple | None) -> str:
+    """The identified rotor as the ``rotor:`` section of a spin-up scene (datasheet form, units written), with
+    the 95 % intervals as comments; without a mass the ``mass`` line is left for the engineer to fill in."""
+    rpm = convert(1.0, "rad/s", "rpm")
+    lo, hi = fit.critical_speed_ci * rpm
+    zlo, zhi = fit.damping_ratio_ci
+    elo, ehi = fit.eccentricity_ci * 1e6
+    lines = ["# the rotor identified from a run-up (autobal analyses.runup, transient fit); 95 % intervals as "
+             "comments", "rotor:"]
+    lines.append(f"  mass: {mass:.6g} kg" if mass is not None else
+                 "  # mass: ... kg        # not identified from vibration alone: give the modal mass")
+    lines.append(f"  critical_speed: {fit.critical_speed * rpm:.6g} rpm   # 95 %: {lo:.6g} to {hi:.6g} rpm")
+    lines.append(f"  damping_ratio: {fit.damping_ratio:.5g}   # 95 %: {zlo:.4g} to {zhi:.4g}")
+    if unbalance is not None:
+        u, ulo, uhi = (x * 1e6 for x in unbalance)
+        lines.append(f"  unbalance: {{residual: {u:.5g} g*mm}}   # 95 %: {ulo:.4g} to {uhi:.4g} g*mm; e = "
+                     f"{fit.eccentricity * 1e6:.4g} um ({elo:.4g} to {ehi:.4g})")
+    else:
+        lines.append(f"  eccentricity: {fit.eccentricity * 1e6:.5g} um   # 95 %: {elo:.4g} to {ehi:.4g} um")
+    lines.append(f"  # unbalance angle {fit.unbalance_angle_deg:.4g} deg from the key-phasor mark in the direction "
+                 "of rotation")
+    return "\n".join(lines) + "\n"
+
+
+def run(data, *, title: str = "", mass: float | None = None, stiffness: float | None = None,
+        service_speed: float | None = None, runout: bool = True, noise: float | None = None,
+        max_relative_interval: float = 0.25, significance: float = 0.05) -> RunupResult:
+    """Identify the rotor from one run-up's 1x vectors.
+
+    Parameters
+    ----------
+    data
+        The 1x vectors: an object with ``speed`` (rad/s), ``x``, ``y`` (complex, m, or y None), ``time`` (s or None)
+        and ``notes`` (autobal.runup_data.OneX).
+    mass, stiffness : float, optional
+        The modal mass (kg) or the shaft stiffness (N/m, e.g. a static deflection under a known load): then
+        m e (kg m), c and chi are reported; not both.
+    service_speed : float, optional
+        rad/s: the 1x vector read there, the ISO 21940-11 grade, the API 684 separation margin.
+    runout : bool
+        Fit a constant run-out vector per probe.
+    noise : float, optional
+        The vectors' noise, m per component (default: from their second differences).
+    max_relative_interval : float
+        Identified only when each of w_n, zeta and e has a 95 % interval half-width below this fraction of its value.
+    """
+    from autobal.analysis.standards import balance_grade, half_power_readings, margin_check, margin_words
+    from autobal.errors import SolveError
+
+    if mass is not None and stiffness is not None:
+        raise ValueError("give the modal mass or the stiffness, not both")
+    speed, x = np.asarray(data.speed, float), np.asarray(data.x, complex)
+    y = None if data.y is None else np.asarray(data.y, complex)
+    time = None if data.time is None else np.asarray(data.time, float)
+    idn = identify(time, speed, x, y, runout=runout, noise=noise)
+    for name, f in (("transient", idn.transient), ("steady-state", idn.steady)):
+        if f is not None and not f.success:
+            raise SolveError(f"the {name} fit of the run-up did not converge", f.status,
+                             {"estimate": dict(zip(f.names, f.estimate.tolist(), strict=True))})
+    head = idn.transient or idn.steady
+    T = _fitted(head)
+    steady = _fitted(idn.steady)
+    wn, zeta, ecc = T.critical_speed, T.damping_ratio, T.eccentricity
+    # what the data determine
+    widths = {"ω_n": _half_width(wn, T.critical_speed_ci), "ζ": _half_width(zeta, T.damping_ratio_ci),
+              "e": _half_width(ecc, T.eccentricity_ci)}
+    loose = [f"{k} ± {100 * v:.3g} %" for k, v in widths.items() if not v <= max_relative_interval]
+    weakest = _weakest_words(head)
+    rpm = convert(1.0, "rad/s", "rpm")
+    crossed = idn.max_speed > T.critical_speed_ci[1] and idn.min_speed < T.critical_speed_ci[0]
+    reasons = []
+    if not crossed:
+        side = "ends" if idn.max_speed <= T.critical_speed_ci[1] else "starts"
+        at = idn.max_speed if side == "ends" else idn.min_speed
+        reasons.append(
+            f"the run {side} at {at * rpm:.5g} rpm, {'below' if side == 'ends' else 'above'} the critical speed "
+            f"(fitted {wn * rpm:.5g} rpm, 95 %: {T.critical_speed_ci[0] * rpm:.5g} to "
+            f"{T.critical_speed_ci[1] * rpm:.5g}): the response far from the critical speed is the unbalance over "
+            "the stiffness (X ≈ ε ω²/ω_n² below it, X ≈ -ε above it), so e/ω_n² (below) or e (above) is "
+            "determined; the damping ratio and the critical speed are not")
+    if loose:
+        reasons.append(f"95 % intervals wider than ±{100 * max_relative_interval:.3g} %: {', '.join(loose)}; "
+                       + weakest)
+    if time is None:
+        reasons.append("the vectors have no time stamps: only the steady-state fit, biased by the run's rate")
+    identified = not reasons
+    if identified:
+        reason = (f"identified from the {'run-up' if speed[-1] > speed[0] else 'coast-down'} as it was run: "
+                  f"ω_n {wn * rpm:.5g} rpm ± {100 * widths['ω_n']:.2g} %, ζ {zeta:.4g} ± {100 * widths['ζ']:.2g} %, "
+                  f"e {ecc * 1e6:.4g} µm ± {100 * widths['e']:.2g} % (95 %)")
+    else:
+        reason = "not identifiable from these data: " + "; ".join(reasons)
+    ad = idn.adequacy
+    adequacy = Adequacy(noise=idn.noise, residual_std=head.residual_std, significance=ad["significance"], F=ad["F"],
+                        F_crit=ad["F_crit"], p_value=ad["p_value"], adequate=ad["adequate"], note=ad.get("note", ""))
+    if identified and ad["adequate"] is False:
+        identified = False
+        reason = (f"the Jeffcott rotor does not fit these data within their noise (F = {ad['F']:.3g} > F_crit = "
+                  f"{ad['F_crit']:.3g}): a second mode, anisotropic supports or a rub; the numbers are not "
+                  "identified")
+    # mass, unbalance, grade
+    m = mass if mass is not None else (stiffness / wn**2 if stiffness is not None else None)
+    unb = None
+    if m is not None:
+        if mass is not None:
+            unb = (m * ecc, m * T.eccentricity_ci[0], m * T.eccentricity_ci[1])
+        else:  # U = c e / w_n^2: the interval by the delta method over (w_n, eps)
+            i = [head.names.index(k) for k in ("critical_speed", "eps_re", "eps_im")]
+            eps = head.eps
+            g = np.array([-2 * stiffness * ecc / wn**3, stiffness * eps.real / ecc / wn**2,
+                          stiffness * eps.imag / ecc / wn**2])
+            se = math.sqrt(float(g @ head.covariance[np.ix_(i, i)] @ g))
+            u = stiffness * ecc / wn**2
+            unb = (u, u - head._t() * se, u + head._t() * se)
+    classical = idn.classical
+    cl_e = sa = sl = None
+    if service_speed is not None:
+        Xs = complex(np.interp(service_speed, speed, x.real), np.interp(service_speed, speed, x.imag)) \
+            if speed.min() <= service_speed <= speed.max() else None
+        if Xs is not None:
+            sa, sl = abs(Xs), math.degrees(-np.angle(Xs))
+            if classical.peak_speed is not None and classical.damping_ratio is not None:
+                H = steady_response(service_speed, classical.peak_speed, classical.damping_ratio)[0]
+                cl_e = abs(Xs) / abs(H)
+
+    def bias(a, b):
+        return None if a is None or b is None else 100 * (a / b - 1)
+
+    cr = ClassicalReading(
+        peak_speed=classical.peak_speed, peak_amplitude=classical.peak_amplitude,
+        damping_ratio=classical.damping_ratio,
+        half_power_speeds=None if classical.lower is None else np.array([classical.lower, classical.upper]),
+        eccentricity=cl_e, service_amplitude=sa, service_lag_deg=sl,
+        critical_speed_bias_pct=bias(classical.peak_speed, wn) if idn.transient else None,
+        damping_ratio_bias_pct=bias(classical.damping_ratio, zeta) if idn.transient else None, status=classical.status)
+    margins = None
+    if identified:
+        reading = half_power_readings(lambda w: np.abs(steady_response(w, wn, zeta)), [wn],
+                                      high=3 * max(wn, service_speed or 0), points=8001)[0]
+        chk = margin_check(reading, service_speed)
+        margins = Margins(amplification_factor=chk["amplification_factor"],
+                          separation_margin_pct=chk["separation_margin_pct"],
+                          required_separation_margin_pct=chk["required_separation_margin_pct"],
+                          separation_margin_ok=chk["separation_margin_ok"], words=margin_words(chk))
+    # the series
+    fx, fy = (idn.transient.fitted_x, idn.transient.fitted_y) if idn.transient else (None, None)
+    sx = idn.steady.fitted_x
+    series = Series(speed=speed, x_amplitude=np.abs(x), x_lag_deg=_lag(x), steady_x_amplitude=np.abs(sx),
+                    steady_x_lag_deg=_lag(sx), time=time, fit_x_amplitude=None if fx is None else np.abs(fx),
+                    fit_x_lag_deg=None if fx is None else _lag(fx), y_amplitude=None if y is None else np.abs(y),
+                    y_lag_deg=None if y is None else _lag(y), fit_y_amplitude=None if fy is None else np.abs(fy),
+                    fit_y_lag_deg=None if fy is None else _lag(fy))
+    acc = 0.0 if time is None else float((speed[-1] - speed[0]) / (time[-1] - time[0]))
+    ok = identified
+    known = ok and m is not None
+    return RunupResult(
+        title=title, identified=ok, reason=reason, max_speed=idn.max_speed, min_speed=idn.min_speed,
+        acceleration=acc, undetermined=weakest,
+        critical_speed=wn if ok else None, damping_ratio=zeta if ok else None, eccentricity=ecc if ok else None,
+        unbalance_angle_deg=T.unbalance_angle_deg if ok else None, mass=m if known else None,
+        unbalance=unb[0] if known else None, unbalance_ci=np.array(unb[1:]) if known else None,
+        stiffness=m * wn**2 if known else None, damping=2 * zeta * m * wn if known else None,
+        service_speed=service_speed,
+        balance_grade=balance_grade(ecc, service_speed) if ok and service_speed else None,
+        transient=_fitted(idn.transient) if idn.transient else None, steady=steady, classical=cr,
+        adequacy=adequacy, margins=margins, series=series, rotor_yaml=rotor_section(m, T, unb) if ok else "",
+        notes=list(getattr(data, "notes", ()) or ()))
