@@ -52,8 +52,9 @@ from autobal.models.rotor import rotor_model
 STEPS_PER_REV = 12
 #: the critical speeds searched: up to this multiple of the highest measured speed
 WN_MAX_FACTOR = 2.0
-#: revolutions of steady whirl at the first speed before the first vector's window
-LEAD_REVS = 1.0
+#: revolutions before the first vector's revolution where the model starts in the steady whirl (0: at its
+#: key-phasor pulse, as a run from a hold at the first speed)
+LEAD_REVS = 0.0
 
 
 # ---- the model's response, from models/rotor.py's fixed-frame equations -----------------------------------------
@@ -162,7 +163,7 @@ class SpeedProfile:
 
 def _extended(t: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The profile carried on at its end rates for 1 + LEAD_REVS revolutions before and one after (the first and last
-    vectors' revolutions reach beyond their times), the speed kept above half its end value."""
+    vectors' revolutions reach beyond their times: half a revolution), the speed kept above half its end value."""
     out_t, out_w = [t], [w]
     for end, nxt, side in ((0, 1, -1), (-1, -2, 1)):
         slope = (w[nxt] - w[end]) / (t[nxt] - t[end])
@@ -187,7 +188,7 @@ def _window_weights(grid: np.ndarray, ta: float, tb: float, f: np.ndarray) -> tu
     """Indices and trapezoid weights of int_{ta}^{tb} v(t) f(t) dt over the samples v(grid) of a uniform grid, v f
     linear between samples (f sampled on the grid: the weights multiply v only)."""
     h = grid[1] - grid[0]
-    ia, ib = int(np.floor((ta - grid[0]) / h)), int(np.floor((tb - grid[0]) / h))
+    ia, ib = max(int(np.floor((ta - grid[0]) / h)), 0), int(np.floor((tb - grid[0]) / h))
     idx = np.arange(ia, ib + 2)
     w = np.zeros(idx.size, complex)
     # pieces [grid[j], grid[j+1]] cut to [ta, tb]: the integral of the linear interpolant of v f on each piece
@@ -230,7 +231,7 @@ class TransientModel:
         self.profile = prof = SpeedProfile(t, w, -float(SpeedProfile(t, w).angle_at(ta[0])))
         fastest = max(float(np.max(w)), wn_max)
         self.step = h = 2 * math.pi / (STEPS_PER_REV * fastest)
-        start = float(prof.time_at(-2 * math.pi * LEAD_REVS))
+        start = min(float(prof.time_at(-2 * math.pi * LEAD_REVS)), float(ta[0]))
         n = int(math.ceil((tb[-1] - start) / h)) + 2
         grid = start + h * np.arange(n + 1)
         self.grid = grid
@@ -1037,18 +1038,20 @@ def run(data, *, title: str = "", mass: float | None = None, stiffness: float | 
     # what the data determine
     widths = {"ω_n": _half_width(wn, T.critical_speed_ci), "ζ": _half_width(zeta, T.damping_ratio_ci),
               "e": _half_width(ecc, T.eccentricity_ci)}
-    loose = [f"{k} ± {100 * v:.3g} %" for k, v in widths.items() if not v <= max_relative_interval]
+    loose = [f"{k} ± {100 * v:.3g} %" if math.isfinite(v) else f"{k} undetermined (singular Jacobian)"
+             for k, v in widths.items() if not v <= max_relative_interval]
     weakest = _weakest_words(head)
     rpm = convert(1.0, "rad/s", "rpm")
-    crossed = idn.max_speed > T.critical_speed_ci[1] and idn.min_speed < T.critical_speed_ci[0]
+    lo, hi = (wn, wn) if not np.all(np.isfinite(T.critical_speed_ci)) else T.critical_speed_ci
+    crossed = idn.max_speed > hi and idn.min_speed < lo
     reasons = []
     if not crossed:
-        side = "ends" if idn.max_speed <= T.critical_speed_ci[1] else "starts"
+        side = "ends" if idn.max_speed <= hi else "starts"
         at = idn.max_speed if side == "ends" else idn.min_speed
         reasons.append(
             f"the run {side} at {at * rpm:.5g} rpm, {'below' if side == 'ends' else 'above'} the critical speed "
             f"(fitted {wn * rpm:.5g} rpm, 95 %: {T.critical_speed_ci[0] * rpm:.5g} to "
-            f"{T.critical_speed_ci[1] * rpm:.5g}): the response far from the critical speed is the unbalance over "
+            f"{T.critical_speed_ci[1] * rpm:.5g} rpm): the response far from the critical speed is the unbalance over "
             "the stiffness (X ≈ ε ω²/ω_n² below it, X ≈ -ε above it), so e/ω_n² (below) or e (above) is "
             "determined; the damping ratio and the critical speed are not")
     if loose:
