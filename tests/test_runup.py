@@ -4,6 +4,7 @@ the critical speed, damping ratio and unbalance within their 95 % intervals at m
 classical readings' bias beside it, the coverage of the intervals over many noisy run-ups (slow), a run that never
 reaches the critical speed, and the adequacy test against a rotor the Jeffcott model does not describe."""
 
+import json
 import math
 import types
 
@@ -14,6 +15,7 @@ from numpy.testing import assert_allclose
 from autobal.analysis import runup as R
 from autobal.analysis.rotor import steady_state
 from autobal.models.rotor import RotorParams
+from tests.hostile import refused
 
 WN, ZETA, ECC, ANGLE = 100.0, 0.05, 20e-6, 0.7  # rad/s, 1, m, rad
 NOISE = 8e-6  # m per sample, 32 samples a revolution: 2 µm per vector component, 1 % of the peak (200 µm)
@@ -226,3 +228,80 @@ def test_coverage_of_the_intervals_over_120_noisy_run_ups():
     est = np.array(est)
     se = est.std(axis=0, ddof=1) / math.sqrt(n)
     assert np.all(np.abs(est.mean(axis=0) - [WN, ZETA, ECC]) < 3 * se)
+
+
+# ---- the shipped measurement: made by the independent simulator --------------------------------------------------
+
+RPM = 2 * math.pi / 60
+#: the shipped scene's rotor and run (scenarios/runup_identification.yaml, scenarios/data/runup_vectors.csv)
+SHIPPED = dict(critical_speed=2400 * RPM, damping_ratio=0.03, eccentricity=12e-6, angle=math.radians(60.0),
+               start_speed=900 * RPM, end_speed=3600 * RPM, duration=(2700 * RPM) / 60.0,
+               runout_x=4e-6 * np.exp(0.5j), runout_y=3e-6 * np.exp(-1.0j))
+SHIPPED_NOISE, SHIPPED_SEED = 3e-6, 36
+
+
+def shipped_measurement() -> str:
+    """The CSV text of scenarios/data/runup_vectors.csv: the independent simulator's run-up of :data:`SHIPPED`,
+    white noise of 3 µm on each of 32 samples a revolution (seed 36), exported as an analyser does: peak-to-peak
+    amplitudes in µm, phase lags in degrees (0 to 360) from the key-phasor, both probes."""
+    sim = R.SyntheticRunup(**SHIPPED)
+    v = sim.vectors(SHIPPED_NOISE, np.random.default_rng(SHIPPED_SEED))
+    s = SHIPPED
+    lines = [
+        "# Synthetic run-up of a 120 kg Jeffcott rotor, made by autobal.analysis.runup.SyntheticRunup (scipy",
+        "# DOP853, order tracking by its own DFT from key-phasor pulse to pulse), not by the fitting model's code:",
+        "# tests/test_runup.py::shipped_measurement writes this file and",
+        "# test_the_shipped_measurement_is_the_simulators checks it. Truth: critical speed 2400 rpm, damping ratio",
+        "# 0.03, eccentricity 12 um at 60 deg from the key-phasor mark in the direction of rotation (1440 g*mm at",
+        "# 120 kg); run-out 4 um at 28.6 deg (x) and 3 um at -57.3 deg (y); 900 -> 3600 rpm in",
+        f"# {s['duration']:.4g} s (alpha = 60 rad/s^2); noise 3 um rms per sample, 32 samples a revolution,",
+        f"# seed {SHIPPED_SEED}.",
+        "# Conventions: amplitude peak-to-peak, phase lag from the key-phasor pulse; probe y 90 deg from x in the",
+        "# direction of rotation.",
+        "time [s],speed [rpm],amplitude_x [um],phase_x [deg],amplitude_y [um],phase_y [deg]",
+    ]
+    for t, w, x, y in zip(v["time"], v["speed"], v["x"], v["y"], strict=True):
+        lag = [math.degrees(-np.angle(z)) % 360 for z in (x, y)]
+        lines.append(f"{t:.5f},{w / RPM:.3f},{2e6 * abs(x):.3f},{lag[0]:.2f},{2e6 * abs(y):.3f},{lag[1]:.2f}")
+    return "\n".join(lines) + "\n"
+
+
+@pytest.mark.slow
+def test_the_shipped_measurement_is_the_simulators():
+    """scenarios/data/runup_vectors.csv is what :func:`shipped_measurement` writes (its provenance)."""
+    from importlib.resources import files
+
+    shipped = files("autobal.scenarios").joinpath("data/runup_vectors.csv").read_text(encoding="utf-8")
+    assert shipped == shipped_measurement()
+
+
+# ---- the shipped scene end to end, and bad settings ---------------------------------------------------------------
+
+@pytest.mark.cli
+def test_the_shipped_scene_identifies_the_simulated_rotor(shipped_run):
+    """autobal run runup_identification: the transient fit's intervals hold the simulator's truth (2400 rpm, zeta
+    0.03, 1440 g*mm at 60 deg), the classical peak lies above them, and the run folder holds the rotor section."""
+    run, folder = shipped_run("runup_identification")
+    data = json.loads((folder / "results.json").read_text(encoding="utf-8"))
+    block = data["runup"]
+    t, s = block["transient"], SHIPPED
+    assert block["identified"] is True
+    assert _near(s["critical_speed"], t["critical_speed_ci"]) and _near(s["damping_ratio"], t["damping_ratio_ci"])
+    assert _near(s["eccentricity"], t["eccentricity_ci"]) and _near(60.0, t["unbalance_angle_ci_deg"])
+    assert block["classical"]["peak_speed"] > t["critical_speed_ci"][1]
+    assert_allclose(block["unbalance"], 120 * block["eccentricity"], rtol=1e-12)
+    assert (folder / "identified_rotor.yaml").is_file() and (folder / "fig_runup_bode.png").is_file()
+    assert data["units"]["runup.unbalance"] == "kg*m"
+
+
+@pytest.mark.cli
+@pytest.mark.parametrize("override, words", [
+    ("analyses.runup.stiffness=1e6 N/m", "give the modal mass (kg) or the stiffness (N/m), not both"),
+    ("analyses.runup.measurement.amplitude=null", "a vectors file needs its conventions"),
+    ("analyses.runup.measurement.kind=signals", "amplitude and phase conventions belong to a vectors file"),
+    ("analyses.runup.measurement.slow_roll=['400 rpm', '200 rpm']", "slow_roll: give [low, high]"),
+    ("analyses.runup.max_relative_interval=0", "max_relative_interval"),
+    ("analyses.runup.measurement.file=data/no_such_file.csv", "no_such_file.csv"),
+])
+def test_bad_settings_are_refused_in_one_line(capsys, override, words):
+    assert words in refused(capsys, "runup_identification", override)
