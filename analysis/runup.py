@@ -497,18 +497,32 @@ class SyntheticRunup:
 
         u0 = eps * w0**2 / (wn**2 - w0**2 + 2j * z * wn * w0)
         sol = solve_ivp(f, (0, t[-1]), [u0.real, u0.imag, (1j * w0 * u0).real, (1j * w0 * u0).imag],
-                        method="DOP853", t_eval=t, rtol=1e-10, atol=1e-10 * eccentricity)
-        u = sol.y[0] + 1j * sol.y[1]
-        e_phi = np.exp(1j * phis)
-        self.phi, self.t = phis, t
-        self.clean_x = u.real + (runout_x * e_phi).real
-        self.clean_y = u.imag + (runout_y * e_phi).real
+                        method="DOP853", t_eval=t, rtol=1e-10, atol=1e-10 * eccentricity, dense_output=True)
+        self.phi, self.t, self.solution, self.runout = phis, t, sol.sol, (runout_x, runout_y)
+        self.clean_x, self.clean_y = self._probes(t, phis)
         self.samples, self.revs = samples, revs
+
+    def _probes(self, t, phi):
+        u = self.solution(t)
+        e_phi = np.exp(1j * phi)
+        return u[0] + (self.runout[0] * e_phi).real, u[1] + (self.runout[1] * e_phi).real
 
     def _time(self, phi):
         if self.alpha == 0:
             return phi / self.w0
         return (-self.w0 + np.sqrt(self.w0**2 + 2 * self.alpha * phi)) / self.alpha
+
+    def signals(self, rate: float, noise: float = 0.0, rng: np.random.Generator | None = None,
+                width: float = 0.3) -> dict:
+        """Raw signals sampled at ``rate`` (Hz) over the whole revolutions: time (s), probe x and y (m, with white
+        noise ``noise``) and a key-phasor (5 V over ``width`` rad after each pulse at phi = 2 pi k, else 0 V)."""
+        rng = rng or np.random.default_rng(0)
+        t = np.arange(0.0, self.t[-1], 1.0 / rate)
+        phi = self.w0 * t + self.alpha * t**2 / 2
+        x, y = self._probes(t, phi)
+        if noise:
+            x, y = x + noise * rng.standard_normal(t.size), y + noise * rng.standard_normal(t.size)
+        return {"time": t, "x": x, "y": y, "keyphasor": np.where(np.mod(phi, 2 * math.pi) < width, 5.0, 0.0)}
 
     def vectors(self, noise: float = 0.0, rng: np.random.Generator | None = None) -> dict:
         """The 1x vectors of each revolution (pulse to pulse): time (s, its middle), speed (rad/s, 2 pi over its
