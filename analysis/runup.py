@@ -35,7 +35,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cache, cached_property
 
 import casadi as ca
 import numpy as np
@@ -87,22 +87,16 @@ def _steady_whirl():
     return ca.Function("steady_whirl", [nu, zeta], [Z[:4], Z[4:]])
 
 
-_RHS = None
-_WHIRL = None
+@cache
+def rhs() -> ca.Function:
+    """The fixed-frame right-hand side in the measurement's time (built once)."""
+    return _rhs_time()
 
 
-def rhs():
-    global _RHS
-    if _RHS is None:
-        _RHS = _rhs_time()
-    return _RHS
-
-
-def steady_whirl():
-    global _WHIRL
-    if _WHIRL is None:
-        _WHIRL = _steady_whirl()
-    return _WHIRL
+@cache
+def steady_whirl() -> ca.Function:
+    """The steady whirl Function (built once)."""
+    return _steady_whirl()
 
 
 def steady_response(speed, critical_speed: float, damping_ratio: float) -> np.ndarray:
@@ -600,8 +594,8 @@ def _stack(x: np.ndarray, y: np.ndarray | None) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Identification:
-    """What :func:`identify` found (SI): the transient fit, the steady-state fit (None without time stamps for the
-    former is never the case: the steady fit needs no time), the classical readings, the noise and the adequacy."""
+    """What :func:`identify` found (SI): the transient fit (None without time stamps), the steady-state fit, the
+    classical readings, the noise of the vectors and the adequacy test."""
 
     transient: Fit | None
     steady: Fit
