@@ -120,6 +120,17 @@ def test_classical_readings_are_biased_at_a_fast_rate_and_the_transient_fit_is_n
     assert _near(WN, t.critical_speed_ci) and _near(ZETA, t.damping_ratio_ci)
 
 
+def test_a_coast_down_is_identified_and_its_peak_lies_below_the_critical_speed():
+    """A coast-down 1.5 -> 0.5 w_n at alpha = -0.002 w_n^2: identified within 3 standard errors; the classical peak
+    now lies below the critical speed (the passage effect reversed)."""
+    sim = synthetic("moderate", start=150.0, end=50.0)
+    res = R.run(one_x(sim.vectors(NOISE, np.random.default_rng(21))), title="coast-down")
+    t = res.transient
+    assert res.identified and res.reason.startswith("identified from the coast-down")
+    assert _near(WN, t.critical_speed_ci) and _near(ZETA, t.damping_ratio_ci) and _near(ECC, t.eccentricity_ci)
+    assert res.classical.critical_speed_bias_pct < -2
+
+
 def test_one_probe_and_the_run_out_fitted(moderate):
     """Probe x alone, with a run-out of 5 µm added to the signal: the run-out vector and the rotor are recovered
     within their intervals."""
