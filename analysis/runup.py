@@ -887,10 +887,10 @@ class RunupResult(TypedResult):
         s = self.series
         f = unit_axis(ax, "1x amplitude |X| (0-peak)", "m", "µm")
         rpm = unit_axis(ax, "speed ω", "rad/s", "rpm", which="x")
-        ax.plot(s.speed * rpm, s.x_amplitude * f, ".", ms=3, color="0.5", label="measured")
         if s.fit_x_amplitude is not None:
-            ax.plot(s.speed * rpm, s.fit_x_amplitude * f, "-", lw=1.2, label="transient fit")
+            ax.plot(s.speed * rpm, s.fit_x_amplitude * f, "-", lw=1.0, label="transient fit")
         ax.plot(s.speed * rpm, s.steady_x_amplitude * f, "--", lw=1.0, label="steady-state fit")
+        ax.plot(s.speed * rpm, s.x_amplitude * f, "o", ms=2.5, mfc="none", color="k", lw=0, label="measured")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
 
@@ -901,10 +901,10 @@ class RunupResult(TypedResult):
         fig, (a1, a2) = new_figure((7.5, 7.0), 2, 1)
         self.draw(a1)
         rpm = unit_axis(a2, "speed ω", "rad/s", "rpm", which="x")
-        a2.plot(s.speed * rpm, s.x_lag_deg, ".", ms=3, color="0.5", label="measured")
         if s.fit_x_lag_deg is not None:
-            a2.plot(s.speed * rpm, s.fit_x_lag_deg, "-", lw=1.2, label="transient fit")
+            a2.plot(s.speed * rpm, s.fit_x_lag_deg, "-", lw=1.0, label="transient fit")
         a2.plot(s.speed * rpm, s.steady_x_lag_deg, "--", lw=1.0, label="steady-state fit")
+        a2.plot(s.speed * rpm, s.x_lag_deg, "o", ms=2.5, mfc="none", color="k", lw=0, label="measured")
         a2.set_ylabel("phase lag φ_x (deg, from the key-phasor)")
         a2.grid(alpha=0.3)
         fig.suptitle(f"{self.title}: Bode plot of probe x", fontsize=9)

@@ -153,9 +153,11 @@ def report_section(sec) -> None:
             if f is None:
                 continue
             lo, hi = getattr(f, ci)
+            value = getattr(f, key)
+            half = f"± {number(abs(hi - lo) / 2 / abs(value) * 100)} %" if value else "—"
             rows.append([text(label), text(name), sec.cell(f"{prefix}.{key}"), sec.cell(f"{prefix}.{ci}", float(lo)),
-                         sec.cell(f"{prefix}.{ci}", float(hi))])
-    sec.tables.append(table("The fits", ["parameter", "fit", "value", "95 % low", "95 % high"], rows))
+                         sec.cell(f"{prefix}.{ci}", float(hi)), text(half)])
+    sec.tables.append(table("The fits", ["parameter", "fit", "value", "95 % low", "95 % high", "half-width"], rows))
     c = r.classical
     if c is not None:
         crow = []
