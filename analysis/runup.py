@@ -1054,14 +1054,17 @@ def run(data, *, title: str = "", mass: float | None = None, stiffness: float | 
     crossed = idn.max_speed > hi and idn.min_speed < lo
     reasons = []
     if not crossed:
-        side = "ends" if idn.max_speed <= hi else "starts"
-        at = idn.max_speed if side == "ends" else idn.min_speed
-        reasons.append(
-            f"the run {side} at {at * rpm:.5g} rpm, {'below' if side == 'ends' else 'above'} the critical speed "
-            f"(fitted {wn * rpm:.5g} rpm, 95 %: {T.critical_speed_ci[0] * rpm:.5g} to "
-            f"{T.critical_speed_ci[1] * rpm:.5g} rpm): the response far from the critical speed is the unbalance over "
-            "the stiffness (X ≈ ε ω²/ω_n² below it, X ≈ -ε above it), so e/ω_n² (below) or e (above) is "
-            "determined; the damping ratio and the critical speed are not")
+        below = idn.max_speed <= hi
+        at = idn.max_speed if below else idn.min_speed
+        band = (f"95 %: {T.critical_speed_ci[0] * rpm:.5g} to {T.critical_speed_ci[1] * rpm:.5g} rpm"
+                if np.all(np.isfinite(T.critical_speed_ci)) else "its interval undetermined")
+        what = ("below it the response is the unbalance over the stiffness, X ≈ ε ω²/ω_n², so only e/ω_n² is "
+                "determined" if below else
+                "above it the response tends to X ≈ -ε, which a constant run-out vector imitates, so e is determined "
+                "only without run-out (slow-roll subtracted, runout false)")
+        reasons.append(f"the run's {'highest' if below else 'lowest'} speed {at * rpm:.5g} rpm is "
+                       f"{'below' if below else 'above'} the critical speed (fitted {wn * rpm:.5g} rpm, {band}): "
+                       f"{what}; the damping ratio and the critical speed are not")
     if loose:
         reasons.append(f"95 % intervals wider than ±{100 * max_relative_interval:.3g} %: {', '.join(loose)}; "
                        + weakest)

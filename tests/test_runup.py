@@ -158,6 +158,15 @@ def test_a_run_that_never_reaches_the_critical_speed_is_not_identified():
     assert res.verdict() == (False, res.reason)
 
 
+def test_a_coast_down_that_stays_above_the_critical_speed_is_not_identified():
+    """A coast-down from 3 to 1.3 w_n: not identifiable, the reason says the run stays above the critical speed and
+    that the run-out imitates the response there."""
+    sim = synthetic("fast", start=300.0, end=130.0)
+    res = R.run(one_x(sim.vectors(NOISE, np.random.default_rng(6)), y=False), title="above")
+    assert not res.identified and "is above the critical speed" in res.reason and "run-out" in res.reason
+    assert res.critical_speed is None and res.eccentricity is None
+
+
 def test_without_time_stamps_only_the_steady_fit_is_made(fast):
     """Vectors without time: no transient fit; the verdict says why (the steady-state fit is biased by the rate)."""
     res = R.run(one_x(fast.vectors(NOISE, np.random.default_rng(2)), time=False), title="no time")
