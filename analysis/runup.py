@@ -11,7 +11,8 @@ phi(t) = integral of w dt (0 at the key-phasor pulse, positive in the direction 
 eps = e e^{i theta} is the mass centre's eccentricity e and its angle theta from the key-phasor mark in the
 direction of rotation.  The response is complex-linear in eps: u = eps g(t; w_n, zeta), g the response to a unit
 eccentricity at angle 0.  The probes read x = Re u and y = Im u (y 90 degrees from x in the direction of rotation),
-and their 1x vectors are taken as from the measurement, one revolution centred on each vector's time:
+and their 1x vectors are taken as from the measurement, over the revolution (key-phasor pulse to pulse) whose middle
+is the vector's time (autobal.runup_data's order tracking):
 
     X_k = (1/pi) int x e^{-i phi} dphi = eps A_k + conj(eps) B_k,   Y_k = -i (eps A_k - conj(eps) B_k),
     A_k = (1/2pi) int g e^{-i phi} dphi,   B_k = (1/2pi) int conj(g) e^{-i phi} dphi
@@ -693,9 +694,6 @@ def identify(time, speed, x, y=None, *, runout: bool = True, noise: float | None
 
 
 # ---- the typed Result ----------------------------------------------------------------------------------------------
-
-_LEWIS = "Lewis (1932) passage through the critical speed"
-
 
 def _speed(description: str, **kw):
     return quantity("rad/s", "ω", description, "rpm", **kw)
