@@ -163,13 +163,15 @@ def _header_unit(cell: str) -> str:
     return (m.group(1) if m.group(1) is not None else m.group(2)).strip() if m else "1"
 
 
-def _select(path: Path, head_line: int, header: list[str], columns: dict | None) -> list[tuple[int, str, str]]:
+def _select(path: Path, head_line: int, header: list[str], columns: dict | None,
+            where: str = "analyses.estimation.columns", example: str = "tau [1],u [1]") -> list[tuple[int, str, str]]:
     """(column index, quantity, unit as written) of the columns to read.  Without ``columns`` every
-    header cell must read 'quantity [unit]'; with it, the named headers are taken and others skipped."""
+    header cell must read 'quantity [unit]'; with it, the named headers are taken and others skipped.
+    ``where`` is the scene key of ``columns`` and ``example`` a header line, both for the messages."""
     if not any(_HEADER.match(c) or _UNIT_AT_END.search(c) for c in header):
         # not the expected table (a system file, a text): its content is not quoted
         raise ScenarioError(f"{path}: not a data table: line {head_line} is no header of 'quantity [unit]' cells "
-                            f"(e.g. 'tau [1],u [1]'); name a CSV file of measurements")
+                            f"(e.g. '{example}'); name a CSV file of measurements")
     if columns is None:
         out = []
         for j, cell in enumerate(header):
@@ -177,7 +179,7 @@ def _select(path: Path, head_line: int, header: list[str], columns: dict | None)
             if m is None:
                 raise ScenarioError(f"{path}: line {head_line}, column {j + 1}: header {_short(cell)} must read "
                                     f"'quantity [unit]', e.g. 'u [1]' or 'gap [mm]' (or name the columns to read "
-                                    f"in analyses.estimation.columns)")
+                                    f"in {where})")
             out.append((j, m.group(1), m.group(2).strip()))
         return out
     norm = [" ".join(c.split()).casefold() for c in header]
@@ -186,7 +188,7 @@ def _select(path: Path, head_line: int, header: list[str], columns: dict | None)
         key = " ".join(head.split()).casefold()
         if norm.count(key) != 1:
             what = "no column" if key not in norm else "two columns"
-            raise ScenarioError(f"{path}: {what} headed {head!r} (analyses.estimation.columns.{name}); the headers "
+            raise ScenarioError(f"{path}: {what} headed {head!r} ({where}.{name}); the headers "
                                 f"are {', '.join(_short(c) for c in header)}")
         out.append((norm.index(key), name, _header_unit(head)))
     return out
@@ -208,22 +210,10 @@ def read_csv(path: str | Path, columns: dict | None = None, folder: Path | None 
     The text is UTF-8 (a byte-order mark is dropped); the separator is ',' or, when the header
     holds one, ';' or a tab (then a decimal comma is read as a decimal point).
     """
-    path = resolve(path, folder)
-    comments, rows, sep = [], [], None
-    for lineno, line in enumerate(_text(path).splitlines(), start=1):
-        if line.lstrip().startswith("#"):
-            comments.append(line.strip().lstrip("#").strip())
-        elif line.strip():
-            sep = sep or _delimiter(line)
-            row = next(csv.reader([line], delimiter=sep))
-            if any(c.strip() for c in row):  # a spreadsheet's empty row ';;;' is no row
-                rows.append((lineno, row))
-    if not rows:
-        raise ScenarioError(f"{path}: no header row (expected e.g. 'tau [1],u [1]')")
-    (head_line, header), body = rows[0], rows[1:]
-    selected = _select(path, head_line, header, columns)
+    table = read_table(path, columns, folder)
+    path = table.path
     names, units, factors = [], {}, []
-    for j, name, unit in selected:
+    for j, name, unit in table.selected:
         if name not in QUANTITIES:
             raise ScenarioError(f"{path}: column {j + 1}: unknown quantity {name!r}; expected one of "
                                 f"{', '.join(QUANTITIES)}")
@@ -240,20 +230,74 @@ def read_csv(path: str | Path, columns: dict | None = None, folder: Path | None 
     if not any(QUANTITIES[n][0] == "load" for n in names):
         raise ScenarioError(f"{path}: no load column; add one of 'tau [1]', 'axial_force [kN]', 'psi1 [1]', "
                             f"'discharge_pressure [MPa]'")
-    if not body:
-        raise ScenarioError(f"{path}: no data rows")
-    if len(body) > MAX_POINTS:
-        raise ScenarioError(f"{path}: {len(body)} data rows; a data file holds at most {MAX_POINTS}")
-    for lineno, row in body:
-        if len(row) != len(header):
-            raise ScenarioError(f"{path}: line {lineno}: {len(row)} values, the header has {len(header)}")
-    values = np.empty((len(body), len(names)))
-    for k, (j, name, _) in enumerate(selected):
-        cells = [row[j].replace(",", ".") for _, row in body] if sep != "," else [row[j] for _, row in body]
-        values[:, k] = _numbers(path, cells, [lineno for lineno, _ in body], f"{name} [{units[name]}]",
-                                QUANTITIES[name][0]) * factors[k]
+    table.check_rows(MAX_POINTS)
+    values = np.empty((len(table.body), len(names)))
+    for k, (j, name, _) in enumerate(table.selected):
+        values[:, k] = table.numbers(j, f"{name} [{units[name]}]", QUANTITIES[name][0]) * factors[k]
     return Measurements(path=path, columns={n: values[:, j] for j, n in enumerate(names)}, units=units,
-                        comments=comments)
+                        comments=table.comments)
+
+
+@dataclass
+class Table:
+    """A measured CSV as read (:func:`read_table`): its comments, its header, the columns to take (column
+    index, quantity, unit as written) and its data rows (line number, cells)."""
+
+    path: Path
+    comments: list[str]
+    header: list[str]
+    selected: list[tuple[int, str, str]]
+    body: list[tuple[int, list[str]]]
+    sep: str | None
+
+    @property
+    def lines(self) -> list[int]:
+        """The file's line number of each data row."""
+        return [lineno for lineno, _ in self.body]
+
+    def check_rows(self, max_rows: int) -> None:
+        """Refuse a file without data rows, with more than ``max_rows`` or with a row of the wrong length."""
+        if not self.body:
+            raise ScenarioError(f"{self.path}: no data rows")
+        if len(self.body) > max_rows:
+            raise ScenarioError(f"{self.path}: {len(self.body)} data rows; a data file of this kind holds at most "
+                                f"{max_rows}")
+        for lineno, row in self.body:
+            if len(row) != len(self.header):
+                raise ScenarioError(f"{self.path}: line {lineno}: {len(row)} values, the header has "
+                                    f"{len(self.header)}")
+
+    def numbers(self, j: int, column: str, role: str) -> np.ndarray:
+        """Column ``j`` as numbers (a decimal comma read as a point where the separator is not ','), checked
+        for its ``role`` by :func:`_numbers`; ``column`` names it in the messages."""
+        cells = [row[j].replace(",", ".") if self.sep != "," else row[j] for _, row in self.body]
+        return _numbers(self.path, cells, self.lines, column, role)
+
+
+def read_table(path: str | Path, columns: dict | None = None, folder: Path | None = None, *,
+               where: str = "analyses.estimation.columns", example: str = "tau [1],u [1]") -> Table:
+    """The header and data rows of a measured CSV (the text rules of :func:`read_csv`); the columns to take
+    chosen by :func:`_select` (``where`` the scene key of ``columns``, ``example`` a header, for the messages)."""
+    path = resolve(path, folder)
+    comments, rows, sep = _rows(path)
+    if not rows:
+        raise ScenarioError(f"{path}: no header row (expected e.g. '{example}')")
+    (head_line, header), body = rows[0], rows[1:]
+    return Table(path, comments, header, _select(path, head_line, header, columns, where, example), body, sep)
+
+
+def _rows(path: Path) -> tuple[list[str], list[tuple[int, list[str]]], str | None]:
+    """The comment lines, the (line number, cells) of the other non-empty lines and the separator of a file."""
+    comments, rows, sep = [], [], None
+    for lineno, line in enumerate(_text(path).splitlines(), start=1):
+        if line.lstrip().startswith("#"):
+            comments.append(line.strip().lstrip("#").strip())
+        elif line.strip():
+            sep = sep or _delimiter(line)
+            if line.strip(sep + " \t"):  # a spreadsheet's empty row ';;;' is no row
+                # a line without quotes splits as csv reads it, several times faster (raw signals are long)
+                rows.append((lineno, line.split(sep) if '"' not in line else next(csv.reader([line], delimiter=sep))))
+    return comments, rows, sep
 
 
 def _numbers(path: Path, cells: list[str], lines: list[int], column: str, role: str) -> np.ndarray:
