@@ -154,7 +154,7 @@ def report_section(sec) -> None:
                 continue
             lo, hi = getattr(f, ci)
             value = getattr(f, key)
-            half = f"± {number(abs(hi - lo) / 2 / abs(value) * 100)} %" if value else "—"
+            half = f"± {abs(hi - lo) / 2 / abs(value) * 100:.2g} %" if value else "—"
             rows.append([text(label), text(name), sec.cell(f"{prefix}.{key}"), sec.cell(f"{prefix}.{ci}", float(lo)),
                          sec.cell(f"{prefix}.{ci}", float(hi)), text(half)])
     sec.tables.append(table("The fits", ["parameter", "fit", "value", "95 % low", "95 % high", "half-width"], rows))
@@ -175,7 +175,7 @@ def report_section(sec) -> None:
                                     "transient fit", ["reading", "value", "bias"], crow))
         if c.status:
             sec.notes.append(f"classical readings: {c.status}")
-    sec.notes.append(f"what the data determine least: {r.undetermined}")
+    sec.notes.append(r.undetermined[0].upper() + r.undetermined[1:])
     for n in r.notes:
         sec.notes.append(f"reading: {n}")
     if r.rotor_yaml:
