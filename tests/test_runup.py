@@ -315,8 +315,26 @@ def test_the_shipped_scene_identifies_the_simulated_rotor(shipped_run):
 
 
 @pytest.mark.cli
+def test_a_static_test_gives_the_modal_mass(tmp_path):
+    """static_test (a load and its deflection) instead of the mass: c = load/deflection and m = c/w_n^2, the
+    unbalance m e with its interval (delta method over w_n and eps)."""
+    import autobal
+
+    c = 120 * (2400 * RPM) ** 2  # the simulated rotor's stiffness, N/m
+    scene = autobal.load("runup_identification", set={"analyses.runup.mass": None, "analyses.runup.static_test": {
+        "load": f"{c * 1e-4:.6g} N", "deflection": "0.1 mm"}})
+    res = autobal.run(scene)["runup"]
+    assert_allclose(res.stiffness, c, rtol=1e-5)
+    assert_allclose(res.mass, res.stiffness / res.critical_speed**2, rtol=1e-12)
+    assert_allclose(res.mass, 120.0, rtol=1e-3)
+    assert res.unbalance_ci[0] < res.unbalance < res.unbalance_ci[1]
+    assert_allclose(res.unbalance, res.mass * res.eccentricity, rtol=1e-12)
+
+
+@pytest.mark.cli
 @pytest.mark.parametrize("override, words", [
-    ("analyses.runup.stiffness=1e6 N/m", "give the modal mass (kg) or the stiffness (N/m), not both"),
+    ("analyses.runup.stiffness=1e6 N/m", "give one of the modal mass (kg), the stiffness (N/m) or a static_test"),
+    ("analyses.runup.static_test={load: '1 kN', deflection: '0.1 mm'}", "give one of the modal mass"),
     ("analyses.runup.measurement.amplitude=null", "a vectors file needs its conventions"),
     ("analyses.runup.measurement.kind=signals", "amplitude and phase conventions belong to a vectors file"),
     ("analyses.runup.measurement.slow_roll=['400 rpm', '200 rpm']", "slow_roll: give [low, high]"),

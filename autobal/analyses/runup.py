@@ -13,7 +13,7 @@ from pydantic import Field, PrivateAttr, ValidationInfo, model_validator
 
 from autobal.analyses import COST
 from autobal.schema import Strict
-from autobal.units import AngularSpeed, Length, Mass, Stiffness
+from autobal.units import AngularSpeed, Force, Length, Mass, Stiffness
 
 DESCRIPTION = "the rotor (critical speed, damping, unbalance) identified from a measured run-up"
 NEEDS = None
@@ -53,6 +53,13 @@ class Measurement(Strict):
         return self
 
 
+class StaticTest(Strict):
+    """A static deflection under a known load at the rotor's modal point: the shaft stiffness c = load/deflection."""
+
+    load: Annotated[Force, Field(description="the static load, N")]
+    deflection: Annotated[Length, Field(description="the deflection it makes, m")]
+
+
 class Runup(Strict):
     """The rotor identified from a run-up: transient Jeffcott fit, steady-state fit, classical readings."""
 
@@ -60,7 +67,9 @@ class Runup(Strict):
     mass: Annotated[Mass | None, Field(description="modal mass m, kg: the unbalance m e and c, chi are reported "
                                                    "(give mass or stiffness, not both)")] = None
     stiffness: Annotated[Stiffness | None, Field(
-        description="shaft stiffness c, N/m (e.g. from a static deflection under a known load): m = c/w_n^2")] = None
+        description="shaft stiffness c, N/m: the modal mass is then m = c/w_n^2")] = None
+    static_test: Annotated[StaticTest | None, Field(
+        description="a static deflection under a known load (c = load/deflection), instead of stiffness")] = None
     service_speed: Annotated[AngularSpeed | None, Field(
         description="service speed: the 1x vector read there, the ISO 21940-11 grade, the API 684 separation "
                     "margin")] = None
@@ -78,8 +87,9 @@ class Runup(Strict):
 
     @model_validator(mode="after")
     def _read(self, info: ValidationInfo):
-        if self.mass is not None and self.stiffness is not None:
-            raise ValueError("give the modal mass (kg) or the stiffness (N/m), not both")
+        if sum(v is not None for v in (self.mass, self.stiffness, self.static_test)) > 1:
+            raise ValueError("give one of the modal mass (kg), the stiffness (N/m) or a static_test (load N, "
+                             "deflection m), not more")
         ctx = info.context or {}
         overridden = any(FILE_KEY == k or FILE_KEY.startswith(k + ".") for k in ctx.get("overrides", ()))
         self._folder = Path.cwd() if overridden or ctx.get("folder") is None else Path(ctx["folder"])
@@ -112,7 +122,8 @@ def run(scene, settings: Runup):
     from autobal.analysis import runup
 
     s = settings
-    return runup.run(s.data, title=scene.title, mass=s.mass, stiffness=s.stiffness, service_speed=s.service_speed,
+    stiffness = s.stiffness if s.static_test is None else s.static_test.load / s.static_test.deflection
+    return runup.run(s.data, title=scene.title, mass=s.mass, stiffness=stiffness, service_speed=s.service_speed,
                      runout=s.runout, noise=s.noise, max_relative_interval=s.max_relative_interval,
                      significance=s.significance)
 
