@@ -631,14 +631,17 @@ def fit(fitter: Fitter, data: np.ndarray, starts, lower, upper) -> Fit:
 def adequacy(residual_std: float, dof: int, noise: float, noise_dof: int, significance: float = 0.05) -> dict:
     """F test of the residual variance against the noise variance of the vectors (:func:`noise_level`): adequate
     when F = s^2/sigma^2 <= F_crit(1 - significance; dof, noise_dof), the lack-of-fit test of analysis/adequacy.py
-    with the vectors' own scatter as the pure error."""
+    with the vectors' own scatter as the pure error; a given noise (``noise_dof`` infinite) by the chi-square test
+    F_crit = chi2(1 - significance; dof)/dof."""
     if not (noise > 0 and dof > 0 and noise_dof > 0):
         return {"F": None, "F_crit": None, "p_value": None, "adequate": None, "significance": significance,
                 "note": "no noise level: the vectors are too few or identical"}
     F = residual_std**2 / noise**2
-    crit = float(stats.f.ppf(1 - significance, dof, noise_dof))
-    return {"F": F, "F_crit": crit, "p_value": float(stats.f.sf(F, dof, noise_dof)), "adequate": bool(F <= crit),
-            "significance": significance}
+    if math.isinf(noise_dof):  # a noise given: known, the chi-square test of s^2/sigma^2 on dof
+        crit, p = float(stats.chi2.ppf(1 - significance, dof)) / dof, float(stats.chi2.sf(F * dof, dof))
+    else:
+        crit, p = float(stats.f.ppf(1 - significance, dof, noise_dof)), float(stats.f.sf(F, dof, noise_dof))
+    return {"F": float(F), "F_crit": crit, "p_value": p, "adequate": bool(F <= crit), "significance": significance}
 
 
 def identify(time, speed, x, y=None, *, runout: bool = True, noise: float | None = None,
@@ -686,10 +689,12 @@ def identify(time, speed, x, y=None, *, runout: bool = True, noise: float | None
         if key not in fitters:
             fitters[key] = Fitter(model.unit, len(speed), probes, runout)
         transient = fit(fitters[key], data, starts, lower, upper)
-    sigma = noise if noise is not None else math.sqrt(
+    sigma = float(noise) if noise is not None else math.sqrt(
         np.mean([noise_level(v) ** 2 for v in ([x] if y is None else [x, y])]))
     head = transient or steady
-    ad = adequacy(head.residual_std, head.dof, sigma, (len(speed) - 2) * 2 * probes if noise is None else 10**9)
+    # a given noise is known (infinite degrees of freedom: the chi-square test); an estimated one has the second
+    # differences' components
+    ad = adequacy(head.residual_std, head.dof, sigma, (len(speed) - 2) * 2 * probes if noise is None else math.inf)
     return Identification(transient, steady, classical, sigma, ad, w_hi, w_lo)
 
 
