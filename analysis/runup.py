@@ -607,10 +607,12 @@ class Identification:
     min_speed: float
 
 
-def _starts(classical: Classical, w_lo: float, w_hi: float) -> list[tuple[float, float]]:
+def _starts(classical: Classical, w_lo: float, w_hi: float, rising: bool) -> list[tuple[float, float]]:
+    """Starting points (w_n, zeta): about the classical readings, the critical speed below the peak of a run-up and
+    above that of a coast-down (the passage effect); above the speed range when there is no peak."""
     if classical.peak_speed is not None:
         z0 = classical.damping_ratio or 0.05
-        wns = classical.peak_speed * np.linspace(0.8, 1.08, 8)
+        wns = classical.peak_speed * (np.linspace(0.8, 1.08, 8) if rising else np.linspace(0.92, 1.25, 8))
         zs = [min(max(z0 * f, 2e-3), 0.5) for f in (0.4, 1.0, 2.0)]
     else:
         wns = w_hi * np.array([1.05, 1.25, 1.5, 1.9])
@@ -672,7 +674,7 @@ def identify(time, speed, x, y=None, *, runout: bool = True, noise: float | None
     amp = np.abs(x) if y is None else np.sqrt((np.abs(x) ** 2 + np.abs(y) ** 2) / 2)
     classical = classical_readings(speed, amp)
     w_lo, w_hi = float(speed.min()), float(speed.max())
-    starts = _starts(classical, w_lo, w_hi)
+    starts = _starts(classical, w_lo, w_hi, bool(speed[-1] > speed[0]))
     n = 4 + (2 * probes if runout else 0)
     lower = np.concatenate([[0.2 * w_lo if w_lo > 0 else 1e-3 * w_hi, 1e-4], np.full(n - 2, -np.inf)])
     upper = np.concatenate([[WN_MAX_FACTOR * w_hi, 1.0], np.full(n - 2, np.inf)])
