@@ -38,7 +38,6 @@ DISPLAY_UNITS = {
     "s": ("s", 1.0), "ms": ("s", 1e-3), "min": ("s", 60.0), "h": ("s", 3600.0), "kh": ("s", 3.6e6),
     "kg": ("kg", 1.0), "g": ("kg", 1e-3), "kg·m": ("kg*m", 1.0), "g·cm": ("kg*m", 1e-5), "g·mm": ("kg*m", 1e-6),
     "W": ("W", 1.0), "kW": ("W", 1e3),
-    "m/s": ("m/s", 1.0), "mm/s": ("m/s", 1e-3),  # ISO 21940-11 balance grades (G 2.5 is 2.5 mm/s)
 }
 
 #: SI unit -> the display unit used when a declaration names none (the field's habits: MPa, mm, L/s, kN)
