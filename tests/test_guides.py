@@ -106,7 +106,7 @@ PAGES = sorted(GUIDES.glob("*.md"))
 
 def test_every_guide_is_in_the_navigation_and_every_example_in_a_guide():
     nav = (ROOT / "mkdocs.yml").read_text()
-    assert [p.stem for p in PAGES] == sorted(["spinup", "device", "fit"])
+    assert [p.stem for p in PAGES] == sorted(["spinup", "device", "fit", "runup"])
     for p in PAGES:
         assert f"guides/{p.name}" in nav, p.name
     included = {m for p in PAGES for m in INCLUDE_CODE.findall(p.read_text(encoding="utf-8"))}

@@ -41,6 +41,7 @@ MODULES = {
     "ross_spinup": "autobal.analyses.ross_spinup",
     "ross_spinup_robust": "autobal.analyses.ross_spinup_robust",
     "ross_spinup_time_optimal": "autobal.analyses.ross_spinup_time_optimal",
+    "runup": "autobal.analyses.runup",
 }
 
 
@@ -108,6 +109,7 @@ COST = {
     # one statics solve with the eigenvalues of the design at one operating point (the shipped design scenes:
     # 32 s and 15 s of CPU for about 1230 and 930 of them, on a loaded machine)
     "design_point": 0.02,
+    "runup_vector": 0.05,  # one measured revolution of a run-up identification (its RK4 steps, both fits, figures)
 }
 LONG_RUN_S = 60.0  # a run predicted to take longer says so first
 
