@@ -97,6 +97,8 @@ TABLE = (
          {"rad/s²": 1.0, "rpm/s": RPM}, alias="acceleration", covers="angular accelerations"),
     Kind("time", "s", "[time]", "50 ms", (1e-12, 1e10), {"s": 1.0, "ms": 1e-3, "min": 60.0, "h": 3600.0,
                                                         "kh": 3.6e6}, covers="times"),
+    Kind("velocity", "m/s", "[length] / [time]", "2.5 mm/s", (1e-12, 1e4), {"m/s": 1.0, "mm/s": 1e-3}, "mm/s",
+         covers="velocities (ISO 21940-11 balance grades G = e Ω)"),
     Kind("mass", "kg", "[mass]", "3000 kg", (1e-12, 1e8), {"kg": 1.0, "g": 1e-3}, covers="masses"),
     Kind("unbalance", "kg*m", "[mass] * [length]", "120 g*mm", (1e-15, 1e6),
          {"kg·m": 1.0, "g·cm": 1e-5, "g·mm": 1e-6}, covers="unbalances m·e"),  # residual unbalance U = m e

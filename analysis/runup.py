@@ -841,7 +841,7 @@ class RunupResult(TypedResult):
     damping: float | None = quantity("N*s/m", "χ", "viscous damping χ = 2 ζ m ω_n", optional=True)
     service_speed: float | None = _speed("service speed (given)", optional=True)
     balance_grade: float | None = quantity("m/s", "G", "balance quality grade G = e Ω at the service speed (G 2.5 "
-                                           "is 2.5e-3 m/s)", source=ISO_G, headline=6, optional=True)
+                                           "is 2.5 mm/s)", "mm/s", source=ISO_G, headline=6, optional=True)
     transient: Fitted | None = optional()
     steady: Fitted | None = optional()
     classical: ClassicalReading | None = optional()
