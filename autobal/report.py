@@ -294,13 +294,14 @@ class Section:
         the scene decides its words (the critical speed with or without a liquid layer).  A name that is no field
         of ``rec`` is a KeyError at once: a renamed field leaves no stale row."""
         at = place(self.result, rec)
-        for name in names:
-            key, v = at + field_key(rec, name), plain(getattr(rec, name))
+        keys = [at + field_key(rec, name) for name in names]  # every name checked before a row is written
+        for name, key in zip(names, keys, strict=True):
+            v = plain(getattr(rec, name))
             items = (enumerate(v) if isinstance(v, list) else
                      [(k, x) for k, x in v.items() if not k.endswith(STATUS)] if isinstance(v, dict) else [(None, v)])
             for item, x in items:
                 path = key if item is None else f"{key}.{item}"
-                q = quantity(f"{self.name}.{path}", self.results)
+                q = self.result.quantities.find(path, self.block)
                 if q is None:
                     raise KeyError(f"{self.name}.{path}: no declaration")
                 words = label if isinstance(label, str) else q.description if label is None or item is None else \
