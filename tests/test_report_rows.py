@@ -4,6 +4,7 @@ room names a key path as a string, and a renamed field fails at once instead of 
 from __future__ import annotations
 
 import ast
+import json
 from pathlib import Path
 
 import numpy as np
@@ -124,3 +125,27 @@ def test_a_number_without_a_declaration_is_an_error_not_a_row(toy, monkeypatch):
     monkeypatch.setattr(Toy, "quantities", declarations(Toy))  # without the declaration of the margins
     with pytest.raises(KeyError, match="toy.margin.0.5: no declaration"):
         sec.rows_of(r, "margin")
+
+
+def _field(result, path: str):
+    """The value at a key path, read by attribute from the Result (the field, not its results.json block)."""
+    v = result
+    for part in path.split("."):
+        v = v[int(part)] if isinstance(v, list | np.ndarray) else v[part] if isinstance(v, dict) else getattr(v, part)
+    return v
+
+
+def test_the_statics_rows_are_its_fields_in_their_display_units(shipped_run):
+    """The statics section of a run: every headline row is a field of the Result with its declaration's words,
+    its value the field's in the declaration's display unit (MPa, µm, L/min ...), to the table's 4 digits."""
+    _, folder = shipped_run("compressor_k180_statics")
+    results = json.loads((folder / "results.json").read_text(encoding="utf-8"))
+    sec = report.Section("statics", results["statics"], results, folder)
+    report.SECTIONS["statics"](sec)
+    r = sec.result
+    keys = [row[2]["key"].removeprefix("statics.") for row in sec.rows]
+    assert keys[:3] == ["exact.psi1", "exact.p1", "scales.p_B"] and "critical_exact.dpsi_kr" in keys
+    for label, symbol, c, *_ in sec.rows:
+        q = r.quantities.find(c["key"].removeprefix("statics."))
+        assert (label["text"], symbol["text"]) == (q.description, q.symbol)
+        assert float(c["text"]) == pytest.approx(q.shown(_field(r, c["key"].removeprefix("statics."))), rel=1e-3)
