@@ -293,6 +293,8 @@ class Section:
         the declaration's words cannot tell the items apart; ``label`` a string: the label of one field's row where
         the scene decides its words (the critical speed with or without a liquid layer).  A name that is no field
         of ``rec`` is a KeyError at once: a renamed field leaves no stale row."""
+        if label is not None and len(names) != 1:
+            raise ValueError("a label names the row(s) of one field")
         at = place(self.result, rec)
         keys = [at + field_key(rec, name) for name in names]  # every name checked before a row is written
         for name, key in zip(names, keys, strict=True):
@@ -304,8 +306,12 @@ class Section:
                 q = self.result.quantities.find(path, self.block)
                 if q is None:
                     raise KeyError(f"{self.name}.{path}: no declaration")
-                words = label if isinstance(label, str) else q.description if label is None or item is None else \
-                    label(item)
+                if isinstance(label, str):
+                    words = label
+                elif label is not None and item is not None:
+                    words = label(item)
+                else:
+                    words = q.description
                 self.row(words, q.symbol, path, value=x, note=note)
 
     def headline_rows(self, notes: Mapping | None = None) -> None:

@@ -104,6 +104,8 @@ def test_a_renamed_field_is_a_key_error_at_once(toy):
     with pytest.raises(KeyError, match="Gap has no field 'z_mean'"):
         sec.rows_of(r.gap, "z", "z_mean")
     assert sec.rows == []  # every name is checked before a row is written
+    with pytest.raises(ValueError, match="a label names the row"):
+        sec.rows_of(r.gap, "z", "Q", label="face gap")
 
 
 def test_the_rows_are_the_fields_with_their_declarations(toy):
