@@ -230,6 +230,38 @@ def _fields(rec) -> list[dataclasses.Field]:
     return [f for f in dataclasses.fields(rec) if not (f.metadata.get(STATUSES) or f.metadata.get(UNSAVED))]
 
 
+def field_key(rec, name: str) -> str:
+    """The results.json key of the field ``name`` of a record (type); KeyError naming the record for a name it
+    has no field of (a renamed field fails at once, not as a missing row)."""
+    for f in _fields(rec):
+        if f.name == name:
+            return _key(f)
+    cls = rec if isinstance(rec, type) else type(rec)
+    raise KeyError(f"{cls.__name__} has no field {name!r}")
+
+
+def place(root: Record, rec: Record) -> str:
+    """The key path of the record ``rec`` within ``root``, found by identity: '' for ``root`` itself, else the
+    path ending in '.' (``reference.``, ``models.exact.``, ``peaks.0.``); ValueError if ``root`` does not hold it."""
+    path = _place(root, rec)
+    if path is None:
+        raise ValueError(f"{type(root).__name__} does not hold this {type(rec).__name__}")
+    return path
+
+
+def _place(root: Record, rec: Record) -> str | None:
+    if rec is root:
+        return ""
+    for f in _fields(root):
+        v = getattr(root, f.name)
+        items = v.items() if isinstance(v, dict) else enumerate(v) if isinstance(v, list) else [(None, v)]
+        for k, x in items:
+            inner = _place(x, rec) if isinstance(x, Record) else None
+            if inner is not None:
+                return f"{_key(f)}." + ("" if k is None else f"{k}.") + inner
+    return None
+
+
 def explained(rec: Record, reasons: dict | None = None, default: str = "no value here (NaN)") -> Record:
     """``rec`` with a status beside every number that is or holds NaN or None (null in results.json), nested
     records and blocks alike, as :func:`~autobal.analysis.result.with_statuses` does for a dict: the status is

@@ -113,11 +113,11 @@ class Reference(Record):
     p1: float = quantity("Pa", "p1", "discharge pressure of the reference point", headline=1)
     z_mean: float = quantity("m", "z̄", "face gap, mean over the samples", "µm", headline=2)
     z_std: float = quantity("m", "σ_z", "face gap, standard deviation", "µm", headline=3)
-    gap_spread: float = quantity("1", "kσ/mean", "spread of the face gap (k = band_sigma)",
+    gap_spread: float = quantity("1", "δu", "face-gap spread kσ/mean (k: band_sigma)",
                                  source=f"{_P14}, conclusion 4 (about 0.20 with k = 3)", headline=4)
     Q_T_mean: float = quantity("m^3/s", "Q̄_T", "face leak, mean over the samples", headline=5)
     Q_T_std: float = quantity("m^3/s", "σ_Q", "face leak, standard deviation", headline=6)
-    leak_spread: float = quantity("1", "kσ/mean", "spread of the face leak q_T (k = band_sigma)",
+    leak_spread: float = quantity("1", "δq_T", "face-leak spread kσ/mean (k: band_sigma)",
                                   source=f"{_P14}, conclusion 4 (about 0.25 with k = 3)", headline=7)
     saturated_fraction: float = quantity("1", "", "share of samples with the regulator valve on its stop",
                                          headline=8)
@@ -131,7 +131,7 @@ class MonteCarloResult(TypedResult):
     ``raw`` the sampled arrays (samples x discharge ratios), not written."""
 
     title: str
-    samples: int = _count()
+    samples: int = quantity("1", "N", "samples")
     seed: int = _count()
     chunk_size: int = _count()
     executor: str

@@ -37,7 +37,7 @@ from markupsafe import Markup
 
 from autobal import analyses as rooms
 from autobal import report_input
-from autobal.analysis.fields import Record
+from autobal.analysis.fields import STATUS, Record, field_key, place
 from autobal.analysis.quantities import (
     Declarations,
     Quantity,
@@ -273,18 +273,52 @@ class Section:
         its declaration's.  A key the block lacks (the analysis did not compute it) gives no row."""
         if value is None and not has_path(self.block, path):
             return
-        typed = result_class(self.name)
-        if typed is not None and issubclass(typed, Record) and not unit and quantity(f"{self.name}.{path}") is None:
+        typed, declared = result_class(self.name), quantity(f"{self.name}.{path}", self.results)
+        if typed is not None and issubclass(typed, Record) and not unit and declared is None:
             raise KeyError(f"{self.name}.{path}: no field of {type(self.result).__name__} declares it")
         v = self.get(path) if value is None else value
         c = cell(v, unit) if unit else self.cell(path, v)
         c["key"] = f"{self.name}.{path}"
         note = f"{note} {self.get(path + '_status') or ''}"
-        si = unit or getattr(quantity(f"{self.name}.{path}"), "unit", None) or self.unit(path)
+        si = unit or getattr(declared, "unit", None) or self.unit(path)
         if si is not None and is_number(v) and beside(si, c["unit"]):  # speeds, accelerations in the other units
             others = ("rad/s", "rpm", "Hz") if is_display_unit("rpm", si) else ("rad/s²", "rpm/s")
             note = " = ".join(f"{number(convert(v, si, u))} {u}" for u in others if u != c["unit"]) + f" {note}"
         self.rows.append([text(label), text(symbol), c, text(c["unit"]), text(note.strip())])
+
+    def rows_of(self, rec: Record, *names: str, label=None, note: str = "") -> None:
+        """Headline rows of the fields ``names`` of ``rec`` (``sec.result`` or a record it holds; its key path is
+        its place in the Result), each labelled by its declaration's description and symbol; a list or mapping of
+        numbers gives a row per item (key ``<key>.<i>``, ``<key>.<name>``), labelled ``label(i or name)`` where
+        the declaration's words cannot tell the items apart; ``label`` a string: the label of one field's row where
+        the scene decides its words (the critical speed with or without a liquid layer).  A name that is no field
+        of ``rec`` is a KeyError at once: a renamed field leaves no stale row."""
+        if label is not None and len(names) != 1:
+            raise ValueError("a label names the row(s) of one field")
+        at = place(self.result, rec)
+        keys = [at + field_key(rec, name) for name in names]  # every name checked before a row is written
+        for name, key in zip(names, keys, strict=True):
+            v = plain(getattr(rec, name))
+            items = (enumerate(v) if isinstance(v, list) else
+                     [(k, x) for k, x in v.items() if not k.endswith(STATUS)] if isinstance(v, dict) else [(None, v)])
+            for item, x in items:
+                path = key if item is None else f"{key}.{item}"
+                q = self.result.quantities.find(path, self.block)
+                if q is None:
+                    raise KeyError(f"{self.name}.{path}: no declaration")
+                if isinstance(label, str):
+                    words = label
+                elif label is not None and item is not None:
+                    words = label(item)
+                else:
+                    words = q.description
+                self.row(words, q.symbol, path, value=x, note=note)
+
+    def headline_rows(self, notes: Mapping | None = None) -> None:
+        """The rows of the Result's fields declared ``headline=N``, in that order; ``notes``: key -> its note."""
+        r = self.result
+        for q, key, v in r.quantities.headline(r.to_dict()):
+            self.row(q.description, q.symbol, key, value=v, note=(notes or {}).get(key, ""))
 
     def verdict(self, ok: bool | None, message: str) -> None:
         """A check of the section: ok True (good), False (bad), None (information)."""

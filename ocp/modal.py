@@ -690,12 +690,7 @@ class CriticalSpeeds(Record):
 
 
 def _time():
-    return quantity("s", "", "times: final solve, NLP build, search for starts, every solve, a start's solve and "
-                             "build")
-
-
-def _count():
-    return quantity("1", "", "modes kept; iterations; relative difference, CVODES re-simulation vs collocation")
+    return quantity("s", "", "times: final solve, search for starts")
 
 
 def _frequency():
@@ -723,15 +718,15 @@ class ModalSpinupResult(TypedResult):
     objective: str
     method: str
     status: str
-    ipopt_iterations: int = _count()
+    ipopt_iterations: int = quantity("1", "", "iterations of the final solve")
     solve_time_s: float = _time()
-    build_time_s: float = _time()
+    build_time_s: float = quantity("s", "", "build time")
     search_time_s: float = _time()
-    total_solve_time_s: float = _time()
+    total_solve_time_s: float = quantity("s", "", "solve time (all starts)")
     peak_deflection_m: float = _peak("peak deflection of the optimum, 0-peak (re-simulated)", 1)
     collocation_peak_m: float = _peak("peak deflection of the collocation / of a start's optimum, re-simulated")
-    resimulation_rel_error: float = _count()
-    node_of_peak: int = _node()
+    resimulation_rel_error: float = quantity("1", "", "relative difference, CVODES re-simulation vs collocation")
+    node_of_peak: int = quantity("1", "", "node of the peak")
     time_of_peak_s: float = quantity("s", "t*", "time of the peak", headline=4)
     omega_at_peak_rad_s: float = quantity("rad/s", "ω*", "speed at the peak", headline=5)
     baseline_ramp_peak_m: float | None = _peak("peak deflection of the best ramp within the drive limits", 2)
@@ -753,9 +748,9 @@ class ModalSpinupResult(TypedResult):
     braking_torque_limit_N_m: float | None
     max_deceleration_rad_s2: float = quantity("rad/s^2", "−α_min", "largest deceleration the drive allows")
     brakes: bool | None
-    modes: int = _count()
+    modes: int = quantity("1", "", "modes kept")
     natural_frequencies_rad_s: list[float] = _frequency()
-    mode_cutoff_rad_s: float = _frequency()
+    mode_cutoff_rad_s: float = quantity("rad/s", "ω_c", "mode cutoff")
     lowest_dropped_natural_frequency_rad_s: float | None = _frequency()
     gyroscopic: bool
     gyroscopic_shift: float = quantity("1", "", "largest relative shift of a critical speed by the gyroscopic terms")

@@ -213,16 +213,8 @@ def _rotors():
     return quantity("1", "", "design rotors as factors (critical speed, damping, liquid mass)")
 
 
-def _counts():
-    return quantity("1", "", "design rotors, those in the final NLP, validation rotors, seed of the sample")
-
-
-def _rel_error():
-    return quantity("1", "", "relative difference: robust NLP vs CVODES; validation integrator vs CVODES")
-
-
 def _time():
-    return quantity("s", "", "times: robust NLPs, nominal optimum, validation, the analysis; the wall time by part")
+    return quantity("s", "", "times: the nominal optimum's NLP build and solve, the analysis")
 
 
 def _model(**kw):
@@ -255,23 +247,24 @@ class RobustResult(TypedResult):
     liquid: bool
     liquid_mass_factor: list[float] | None = _factor_range()
     design_set: list[list[float]] = _rotors()
-    design_scenarios: int = _counts()
-    active_scenarios: int = _counts()
+    design_scenarios: int = quantity("1", "", "design rotors (grid)")
+    active_scenarios: int = quantity("1", "", "design rotors in the final NLP (binding)")
     active_design_rotors: list[list[float]] = _rotors()
     worst_design_rotor: list[float] = _rotors()
     robust_collocation_worst_over_e: float | None = _peak("1", "worst collocation peak of the robust NLP")
     robust_collocation_worst_m: float | None = _peak("m", "worst collocation peak of the robust NLP")
-    resimulation_rel_error: float = _rel_error()
-    build_time_s: float = _time()
-    solve_time_s: float = _time()
+    resimulation_rel_error: float = quantity("1", "", "relative difference, robust NLP vs CVODES")
+    build_time_s: float = quantity("s", "", "build time (robust NLPs)")
+    solve_time_s: float = quantity("s", "", "solve time (robust NLPs)")
     rounds: list[Round]
     nominal_build_time_s: float = _time()
     nominal_solve_time_s: float = _time()
-    validation_samples: int = _counts()
-    seed: int = _counts()
+    validation_samples: int = quantity("1", "", "validation rotors")
+    seed: int = quantity("1", "", "seed of the validation sample")
     executor: str
-    validation_time_s: float = _time()
-    validation_check_rel_error: float = _rel_error()
+    validation_time_s: float = quantity("s", "", "validation time")
+    validation_check_rel_error: float = quantity("1", "", "validation integrator against CVODES (largest relative "
+                                                          "difference)")
     profiles: Profiles
     ramps: list[Ramp]
     accuracy: dict

@@ -108,8 +108,8 @@ class Dwell(Record):
 @record
 class _RotorData(Record):
     mass_kg: float = quantity("kg", "m1", "rotor mass", source=f"{_P10}, ch. 3")
-    stiffness_N_per_m: float = quantity("N/m", "c", "shaft stiffness")
-    damping_N_s_per_m: float = quantity("N*s/m", "χ", "external viscous damping")
+    stiffness_N_per_m: float = quantity("N/m", "c", "shaft stiffness (c = m1 Ω_c²)")
+    damping_N_s_per_m: float = quantity("N*s/m", "χ", "external viscous damping (χ = 2 ζ m1 Ω_c)")
     eccentricity_m: float = quantity("m", "e", "eccentricity (mass centre from the shaft axis)", "µm")
     liquid_mass_kg: float = quantity("kg", "m2*", "full-chamber liquid mass ρπR²h", source=f"{_P10}, ch. 3")
     critical_speed_rad_s: float = quantity("rad/s", "ω_cr", "undamped critical speed √(c/m), m the rotor's mass with "
@@ -173,10 +173,6 @@ class RampTable(Record):
     dwell: Dwell
 
 
-def _time():
-    return quantity("s", "", "times: final solve, every solve, NLP builds, the analysis")
-
-
 def _unbalance(**kw):
     return quantity("1", "d*", "peak system unbalance", source=f"{_P10}, Eq. (2)", **kw)
 
@@ -205,7 +201,7 @@ class SpinupResult(TypedResult):
                                         headline=1)
     rotor: Rotor
     resimulation_rel_error: float = quantity("1", "", "relative difference, CVODES re-simulation vs transcription")
-    solve_time_s: float = _time()
+    solve_time_s: float = quantity("s", "", "time of the final solve")
     ipopt_iterations: int = quantity("1", "", "iterations of the final solve")
     collocation_peak_over_e: float | None = quantity("1", "δ*/e", "peak deflection of the collocation (before "
                                                                   "re-simulation)")
@@ -213,14 +209,14 @@ class SpinupResult(TypedResult):
     objective_value_transcription: float | None
     peak_unbalance: float = _unbalance()
     time_of_peak_s: float = quantity("s", "t*", "time of the peak")
-    control_pulse_variation: float = quantity("1", "", "chattering: total variation of the one-interval pulses of "
-                                                       "α/α_max")
+    control_pulse_variation: float = quantity("1", "", "chattering of the optimal acceleration (pulse variation of "
+                                                       "α/α_max; 0: none)")
     omega_at_peak_rad_s: float = quantity("rad/s", "ω*", "speed at the peak")
     integral_deflection2_s: float = quantity("s", "∫(δ/e)² dt", "integral of the squared deflection over the window")
     final_time_s: float = quantity("s", "T", "final time (the deadline, or the arrival with min_time)")
-    build_time_s: float = _time()
-    total_solve_time_s: float = _time()
-    wall_time_s: float = _time()
+    build_time_s: float = quantity("s", "", "NLP build time")
+    total_solve_time_s: float = quantity("s", "", "NLP solve time (IPOPT or fatrop), all starts and mesh stages")
+    wall_time_s: float = quantity("s", "", "wall time of the analysis (search, solves, re-simulations)")
     #: one row per NLP solve of the multi-start (its keys by stage: the solver's log)
     starts: list[dict]
     baselines: dict[str, Baseline]

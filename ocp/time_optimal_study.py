@@ -114,9 +114,10 @@ class TimeOptimalResult(TypedResult):
     ramp_peak: float = _ramp_peak("1")
     front: list[Point]
     monotone: bool
-    build_time_s: float = _times()
-    solve_time_s: float = _times()
-    resimulation_rel_error: float = _numbers()
+    build_time_s: float = quantity("s", "", "build time")
+    solve_time_s: float = quantity("s", "", "solve time")
+    resimulation_rel_error: float = quantity("1", "", "largest relative difference, collocation vs CVODES "
+                                                      "re-simulation")
     accuracy: dict
     deflection_limit: float | None = _limit("1")  # None: no limit, the front only
     arrival_time_s: float | None = quantity("s", "T", "earliest arrival at the final speed with the peak within the "

@@ -151,12 +151,9 @@ def report_section(sec) -> None:
     r = sec.result
     sec.conclude(*r.verdict())
     sec.verdict(r.status in ds.SUCCESS, f"IPOPT: {r.status} ({r.iterations} iterations)")
-    for q, key, v in r.quantities.headline(r.to_dict()):  # the rows of the fields declared headline
-        sec.row(q.description, q.symbol, key, value=v)
+    sec.headline_rows()  # the rows of the fields declared headline
     for which, design in (("nominal", r.nominal), ("optimum", r.optimum)):  # keys are the discharge ratios ("0.5")
-        for p, margin in design.margin.items():
-            if not p.endswith("_status"):
-                sec.row(f"decay rate at ψ1 = {p}, {which} design", "−max Re λ", f"{which}.margin.{p}", value=margin)
+        sec.rows_of(design, "margin", label=lambda p, which=which: f"decay rate at ψ1 = {p}, {which} design")
     sec.verdict(*r.verdict("nominal"))
     for model, text_ in r.source_models():
         sec.validation.append({"ok": None, "text": text_ + (f"; the headline verdict stands: {WHY_UNSTABLE[model]}"

@@ -91,8 +91,7 @@ def report_section(sec) -> None:
     sec.conclude(h.stable, f"{what}: {'stable' if h.stable else 'UNSTABLE'} (max Re λ = {number(h.max_real)} 1/s); "
                            f"first resonance at {number(first)} rad/s; amplitude at the operating speed "
                            f"{amp.text(h.at_operating_speed.amplitude)}")
-    for q, key, v in r.quantities.headline(r.to_dict()):  # the rows of the fields declared headline
-        sec.row(q.description, q.symbol, key, value=v)
+    sec.headline_rows()  # the rows of the fields declared headline
     own, source = [], []
     for model, m in ordered_models(r.models):
         verdict = {True: "stable", False: "UNSTABLE", None: "—"}[stable.get(model)]

@@ -103,8 +103,7 @@ def report_section(sec) -> None:
             why += (f"; λ0 = {number(o.get('lambda0_max'))} there says how close IPOPT came to k_D = 1, not how "
                     "efficient the machine is (docs/validation.md)")
         notes[f"{key}.optimum"] = why
-    for q, key, v in r.quantities.headline(r.to_dict()):  # the rows of the fields declared headline
-        sec.row(q.description, q.symbol, key, value=v, note=notes.get(key, ""))
+    sec.headline_rows(notes)  # the rows of the fields declared headline
     sec.notes.extend(EFFICIENCIES)
     sec.conclude(*r.verdict())
     rows = (r.table_3_2 or {}).get("rows", [])

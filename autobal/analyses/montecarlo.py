@@ -190,17 +190,10 @@ def _reference_rows(sec, r) -> None:
     from autobal.report import number
 
     ref = r.reference
-    sec.row("discharge pressure of the reference point", "p1", "reference.p1", value=ref.p1,
-            note=f"ψ1 = p1/p_B = {number(ref.psi1)}")
-    sec.row("face gap, mean", "z̄", "reference.z_mean", value=ref.z_mean)
-    sec.row("face gap, standard deviation", "σ_z", "reference.z_std", value=ref.z_std)
-    sec.row("face-gap spread kσ/mean", "δu", "reference.gap_spread", value=ref.gap_spread,
-            note=f"k = {number(r.band_sigma)}")
-    sec.row("face leak, mean", "Q̄_T", "reference.Q_T_mean", value=ref.Q_T_mean)
-    sec.row("face leak, standard deviation", "σ_Q", "reference.Q_T_std", value=ref.Q_T_std)
-    sec.row("face-leak spread kσ/mean", "δq_T", "reference.leak_spread", value=ref.leak_spread)
-    sec.row("samples with the regulator valve on its stop", "", "reference.saturated_fraction",
-            value=ref.saturated_fraction)
+    sec.rows_of(ref, "p1", note=f"ψ1 = p1/p_B = {number(ref.psi1)}")
+    sec.rows_of(ref, "z_mean", "z_std")
+    sec.rows_of(ref, "gap_spread", note=f"k = {number(r.band_sigma)}")
+    sec.rows_of(ref, "Q_T_mean", "Q_T_std", "leak_spread", "saturated_fraction")
 
 
 def report_section(sec) -> None:
@@ -212,7 +205,7 @@ def report_section(sec) -> None:
 
     r = sec.result
     ref = r.reference
-    sec.row("samples", "N", "samples", value=r.samples)
+    sec.rows_of(r, "samples")
     if ref is not None:  # a results.json written before the physical values has none
         _reference_rows(sec, r)
     ex, src, dim = r.exact, r.source, r.dimensional

@@ -123,15 +123,10 @@ def report_section(sec) -> None:
     from autobal.report import number
 
     r = sec.result
-    sec.row("largest gap", "u_max", "u_max", value=r.u_max)
-    sec.row("mean wear rate", "b̄", "b_mean", value=r.b_mean)
-    sec.row("mean load", "τ̄", "tau_mean", value=r.tau_mean)
-    for i, t in enumerate(plain(r.times)):
-        sec.row(f"reliability at {number(t / HOUR)} h (literal (1.48))", "P(t)", f"literal.P.{i}",
-                value=plain(r.literal.P[i]))
-    sec.row("mean time to failure (literal)", "T", "literal.mttf", value=plain(r.literal.mttf))
-    sec.row("mean time to failure (renormalised load density)", "T", "renormalised.mttf",
-            value=plain(r.renormalised.mttf))
+    sec.rows_of(r, "u_max", "b_mean", "tau_mean")
+    sec.rows_of(r.literal, "P", label=lambda i: f"reliability at {number(r.times[i] / HOUR)} h (literal (1.48))")
+    sec.rows_of(r.literal, "mttf")
+    sec.rows_of(r.renormalised, "mttf")
     level = r.reliable_probability
     for variant, v in (("literal", r.literal), ("renormalised", r.renormalised)):
         t = plain(v.time_at)

@@ -156,18 +156,9 @@ def report_section(sec) -> None:
 
     r = sec.result
     sec.conclude(*r.verdict())
-    for q, key, v in r.quantities.headline(r.to_dict()):  # the rows of the fields declared headline
-        sec.row(q.description, q.symbol, key, value=v)
-    for label, sym, key, v in (("node of the peak", "", "node_of_peak", r.node_of_peak),
-                               ("modes kept", "", "modes", r.modes),
-                               ("mode cutoff", "ω_c", "mode_cutoff_rad_s", r.mode_cutoff_rad_s),
-                               ("shift of a critical speed by the gyroscopic terms", "", "gyroscopic_shift",
-                                r.gyroscopic_shift),
-                               ("relative difference, CVODES re-simulation vs collocation", "",
-                                "resimulation_rel_error", r.resimulation_rel_error),
-                               ("build time", "", "build_time_s", r.build_time_s),
-                               ("solve time (all starts)", "", "total_solve_time_s", r.total_solve_time_s)):
-        sec.row(label, sym, key, value=v)
+    sec.headline_rows()  # the rows of the fields declared headline
+    sec.rows_of(r, "node_of_peak", "modes", "mode_cutoff_rad_s", "gyroscopic_shift", "resimulation_rel_error",
+                "build_time_s", "total_solve_time_s")
     st = r.status
     sec.verdict(st in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"IPOPT: {st} ({r.method})")
     cs = r.critical_speeds

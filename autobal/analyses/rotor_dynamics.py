@@ -119,8 +119,7 @@ def report_section(sec) -> None:
     from autobal.report import cell, table
 
     r = sec.result
-    for q, key, v in r.quantities.headline(r.to_dict()):  # the rows of the fields declared headline
-        sec.row(q.description, q.symbol, key, value=v)
+    sec.headline_rows()  # the rows of the fields declared headline
     verdict = r.verdict()
     if verdict:
         sec.conclude(*verdict)
@@ -146,19 +145,6 @@ def report_section(sec) -> None:
         sec.tables.append(table("Damping n* above which the liquid raises the passage peak, per liquid mass ratio ψ "
                                 "(Pashkov (2010), Fig. 9)", ["ψ", *(f"n* at {accel.text(a)}" for a, _ in found)],
                                 rows))
-
-
-def api_rows(sec, prefix: str) -> None:
-    """The rows of a Jeffcott rotor's API 684 (2005) margins (:func:`autobal.analysis.standards.margin_check`) under
-    ``prefix`` of the block; the spin-up's section shows them too."""
-    for label, sym, key in (("amplification factor at the half-power points of the unbalance response, API 684 "
-                             "(2005)", "AF", "amplification_factor"),
-                            ("speed of the unbalance response's peak", "N_c", "response_peak_speed_rad_s"),
-                            ("separation margin from the operating speed, API 684 (2005)", "SM",
-                             "separation_margin_pct"),
-                            ("separation margin required for that AF, API 684 (2005)", "SM_req",
-                             "required_separation_margin_pct")):
-        sec.row(label, sym, prefix + key)
 
 
 def api_verdict(sec, margins: dict) -> None:

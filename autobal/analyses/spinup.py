@@ -177,42 +177,21 @@ def report_section(sec) -> None:
                       f"wall time {number(r.wall_time_s)} s (NLP build {number(r.build_time_s)} s, "
                       f"NLP solves {number(r.total_solve_time_s)} s over {len(r.starts)} solves, "
                       "the rest global search, re-simulations and baselines)")
-    for q, key, v in r.quantities.headline(r.to_dict()):  # the rows of the fields declared headline
-        sec.row(q.description, q.symbol, key, value=v)
+    sec.headline_rows()  # the rows of the fields declared headline
     ro, band = r.rotor, f"{100 * DWELL_BAND:.0f} %"
-    objective = OBJECTIVES.get(r.objective)
-    for label, sym, key, v in (
-            ("gain against the constant ramp", "", "gain_vs_constant_ramp_pct", r.gain_vs_constant_ramp_pct),
-            ("eccentricity of the rotor", "e", "eccentricity_m", r.eccentricity_m),
-            ("rotor mass", "m1", "rotor.mass_kg", ro.mass_kg),
-            ("shaft stiffness (c = m1 Ω_c²)", "c", "rotor.stiffness_N_per_m", ro.stiffness_N_per_m),
-            ("damping (χ = 2 ζ m1 Ω_c)", "χ", "rotor.damping_N_s_per_m", ro.damping_N_s_per_m),
-            ("damping ratio", "ζ", "rotor.damping_ratio", ro.damping_ratio),
-            (critical_label(ro.liquid_mass_kg > 0), "ω_cr", "rotor.critical_speed_rad_s", ro.critical_speed_rad_s),
-            ("service speed (the final speed)", "N_s", "rotor.service_speed_rad_s", ro.service_speed_rad_s),
-            ("speed of the unbalance response's peak", "N_c", "rotor.response_peak_speed_rad_s",
-             ro.response_peak_speed_rad_s),
-            (f"time of the optimum within {band} of the critical speed", "t_cr", "dwell.time_near_critical_s",
-             r.dwell.time_near_critical_s),
-            *([(f"time of the ramp table within {band} of the critical speed", "t_cr",
-                "segments.dwell.time_near_critical_s", r.segments.dwell.time_near_critical_s)] if r.segments else []),
-            (f"time of the maximum acceleration across {band} either side of the critical speed", "",
-             "dwell.fastest_crossing_s", r.dwell.fastest_crossing_s),
-            ("time of the peak", "t*", "time_of_peak_s", r.time_of_peak_s),
-            ("speed at the peak", "ω*", "omega_at_peak_rad_s", r.omega_at_peak_rad_s),
-            ("final time", "T", "final_time_s", r.final_time_s),
-            ("relative difference, CVODES re-simulation vs transcription", "", "resimulation_rel_error",
-             r.resimulation_rel_error),
-            ("chattering of the optimal acceleration (pulse variation of α/α_max; 0: none)", "",
-             "control_pulse_variation", r.control_pulse_variation),
-            ("NLP build time", "", "build_time_s", r.build_time_s),
-            ("NLP solve time (IPOPT or fatrop), all starts and mesh stages", "", "total_solve_time_s",
-             r.total_solve_time_s),
-            ("wall time of the analysis (search, solves, re-simulations)", "", "wall_time_s", r.wall_time_s)):
-        sec.row(label, sym, key, value=v)  # a null (no value) with the reason its status gives
-    if objective is not None:  # in the objective's unit (objective_quantity)
-        sec.row(f"objective of the optimum (re-simulated): the {objective[2]}", f"J = {objective[1]}",
-                "objective_value", objective[0], r.objective_value)
+    sec.rows_of(r, "gain_vs_constant_ramp_pct", "eccentricity_m")
+    sec.rows_of(ro, "mass_kg", "stiffness_N_per_m", "damping_N_s_per_m", "damping_ratio")
+    sec.rows_of(ro, "critical_speed_rad_s", label=critical_label(ro.liquid_mass_kg > 0))
+    sec.rows_of(ro, "service_speed_rad_s", "response_peak_speed_rad_s")
+    sec.rows_of(r.dwell, "time_near_critical_s", label=f"time of the optimum within {band} of the critical speed")
+    if r.segments:
+        sec.rows_of(r.segments.dwell, "time_near_critical_s",
+                    label=f"time of the ramp table within {band} of the critical speed")
+    sec.rows_of(r.dwell, "fastest_crossing_s")
+    sec.rows_of(r, "time_of_peak_s", "omega_at_peak_rad_s", "final_time_s", "resimulation_rel_error",
+                "control_pulse_variation", "build_time_s", "total_solve_time_s", "wall_time_s")
+    if OBJECTIVES.get(r.objective) is not None:  # in the objective's unit (objective_quantity)
+        sec.rows_of(r, "objective_value")
     api_verdict(sec, ro.margins())
     sec.verdict(r.status in ("Solve_Succeeded", "Solved_To_Acceptable_Level"), f"NLP solver: {r.status} ({r.method})")
     e, q = r.eccentricity_m, r.quantities.find

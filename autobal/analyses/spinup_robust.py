@@ -96,19 +96,9 @@ def report_section(sec) -> None:
 
     r = sec.result
     sec.conclude(*r.verdict())
-    for q, key, v in r.quantities.headline(r.to_dict()):  # the rows of the fields declared headline
-        sec.row(q.description, q.symbol, key, value=v)
-    for label, key, v in (("eccentricity (δ* = e δ*/e, 0-peak)", "eccentricity_m", r.eccentricity_m),
-                          ("design rotors (grid)", "design_scenarios", r.design_scenarios),
-                          ("design rotors in the final NLP (binding)", "active_scenarios", r.active_scenarios),
-                          ("validation rotors", "validation_samples", r.validation_samples),
-                          ("build time (robust NLPs)", "build_time_s", r.build_time_s),
-                          ("solve time (robust NLPs)", "solve_time_s", r.solve_time_s),
-                          ("validation time", "validation_time_s", r.validation_time_s),
-                          ("validation integrator against CVODES (largest relative difference)",
-                           "validation_check_rel_error", r.validation_check_rel_error)):
-        if v is not None:
-            sec.row(label, "e" if key == "eccentricity_m" else "", key, value=v)
+    sec.headline_rows()  # the rows of the fields declared headline
+    sec.rows_of(r, "eccentricity_m", "design_scenarios", "active_scenarios", "validation_samples", "build_time_s",
+                "solve_time_s", "validation_time_s", "validation_check_rel_error")
     unit, sym, e = r.peak_unit, PEAK_SYMBOL[r.peak_unit], r.eccentricity_m
     shown = None if unit == "1" else r.quantities.find("profiles.robust.validation_worst_m").display
 

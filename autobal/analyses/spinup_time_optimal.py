@@ -70,17 +70,9 @@ def report_section(sec) -> None:
     r = sec.result
     unit, sym = r.peak_unit, PEAK_SYMBOL[r.peak_unit]
     sec.conclude(*r.verdict())
-    for q, key, v in r.quantities.headline(r.to_dict()):  # the rows of the fields declared headline
-        sec.row(q.description, q.symbol, key, value=v)
-    for label, key, v in (("latest front deadline whose minimum peak exceeds the limit", "arrival_time_lower_bound_s",
-                           r.arrival_time_lower_bound_s),
-                          ("eccentricity (δ* = e δ*/e, 0-peak)", "eccentricity_m", r.eccentricity_m),
-                          ("largest relative difference, collocation vs CVODES re-simulation",
-                           "resimulation_rel_error", r.resimulation_rel_error),
-                          ("build time", "build_time_s", r.build_time_s), ("solve time", "solve_time_s",
-                                                                           r.solve_time_s)):
-        if v is not None:
-            sec.row(label, "e" if key == "eccentricity_m" else "", key, value=v)
+    sec.headline_rows()  # the rows of the fields declared headline
+    sec.rows_of(r, "arrival_time_lower_bound_s", "eccentricity_m", "resimulation_rel_error", "build_time_s",
+                "solve_time_s")
     if r.deflection_limit is not None:  # else the front's monotonicity is the verdict
         sec.verdict(r.monotone, "the front's peak does not rise with the arrival deadline"
                     if r.monotone else "the front is NOT monotone (a local optimum)")

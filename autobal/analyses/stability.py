@@ -114,8 +114,7 @@ def report_section(sec) -> None:
 
     r = sec.result
     sec.conclude(*r.verdict())
-    for q, key, v in r.quantities.headline(r.to_dict()):  # the rows of the fields declared headline
-        sec.row(q.description, q.symbol, key, value=v)
+    sec.headline_rows()  # the rows of the fields declared headline
     own, source = [], []
     for model, m in ordered_models(r.models):
         lead = leading_poles(plain(m.poles.real), plain(m.poles.imag))

@@ -75,31 +75,14 @@ def report_section(sec) -> None:
 
     r = sec.result
     ex, cf, crit, sc = r.exact, r.closed_form, r.critical_exact, r.scales
-    for label, symbol, key, v in (
-            ("discharge pressure ratio at the operating point", "ψ1 = p1/p_B", "exact.psi1", ex.psi1),
-            ("discharge pressure", "p1", "exact.p1", ex.p1),
-            ("base pressure", "p_B", "scales.p_B", sc.p_B),
-            ("face gap", "z0", "exact.z0", ex.z0),
-            ("face gap ratio", "u0 = z0/z_B", "exact.u0", ex.u0),
-            ("valve opening", "x0", "exact.x0", ex.x0),
-            ("valve opening ratio", "ξ0 = x0/x_B", "exact.xi0", ex.xi0),
-            ("disc chamber pressure", "p2", "exact.p2", ex.p2),
-            ("cavity behind the disc pressure", "p3", "exact.p3", ex.p3),
-            ("barrier chamber pressure", "p_e", "exact.pe", ex.pe),
-            ("valve chamber pressure", "p_cam", "exact.pcam", ex.pcam),
-            ("barrier flow", "Q_e", "exact.Q_e", ex.Q_e),
-            ("face-throttle leak", "Q_T", "exact.Q_T", ex.Q_T),
-            ("inner-seal flow", "Q_1", "exact.Q_1", ex.Q_1),
-            ("base flow of the source's flow ratios q", "Q_B", "closed_form.Q_B", cf.Q_B),
-            ("axial stiffness of the balancing force", "c_s", "exact.c_s", ex.c_s),
-            ("axial stiffness of the balancing force (group)", "κ_s", "exact.kappa_s", ex.kappa_s),
-            ("critical discharge pressure (inner-seal flow reverses)", "p1_kr", "critical_exact.p1_kr", crit.p1_kr),
-            ("critical discharge ratio", "ψ1_kr", "critical_exact.psi1_kr", crit.psi1_kr),
-            ("operating barrier margin p_e − p1", "Δp", "exact.dp", ex.dp),
-            ("critical barrier margin p_e − p1 (inner-seal flow reverses)", "Δp_kr", "critical_exact.dp_kr",
-             crit.dp_kr),
-            ("critical barrier margin ratio", "δψ_kr", "critical_exact.dpsi_kr", crit.dpsi_kr)):
-        sec.row(label, symbol, key, value=v)  # the field's value; its key names its declaration
+    sec.rows_of(ex, "psi1", "p1")
+    sec.rows_of(sc, "p_B")
+    sec.rows_of(ex, "z0", "u0", "x0", "xi0", "p2", "p3", "pe", "pcam", "Q_e", "Q_T", "Q_1")
+    sec.rows_of(cf, "Q_B")
+    sec.rows_of(ex, "c_s", "kappa_s")
+    sec.rows_of(crit, "p1_kr", "psi1_kr")
+    sec.rows_of(ex, "dp")
+    sec.rows_of(crit, "dp_kr", "dpsi_kr")
     sec.conclude(*r.verdict())  # the operating point: regulator, contact, inner seal
     first = r.saturated_from()
     if first is not None:

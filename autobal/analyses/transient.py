@@ -96,8 +96,7 @@ def report_section(sec) -> None:
     from autobal.report import cell, table, text
 
     r = sec.result
-    for q, key, v in r.quantities.headline(r.to_dict()):  # the rows of the fields declared headline
-        sec.row(q.description, q.symbol, key, value=v)
+    sec.headline_rows()  # the rows of the fields declared headline
     dz = r.quantities.find("cases.0.max_dz")
     rows = []
     for c in r.cases:
