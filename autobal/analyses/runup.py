@@ -142,13 +142,8 @@ def report_section(sec) -> None:
 
     r = sec.result
     sec.conclude(r.identified, r.reason)
-    for label, symbol, path in (("critical speed", "ω_n", "critical_speed"), ("damping ratio", "ζ", "damping_ratio"),
-                                ("eccentricity", "e", "eccentricity"),
-                                ("unbalance angle from the key-phasor", "θ", "unbalance_angle_deg"),
-                                ("unbalance", "U", "unbalance"), ("modal mass", "m", "mass"),
-                                ("stiffness", "c", "stiffness"), ("damping", "χ", "damping"),
-                                ("balance grade at the service speed (ISO 21940-11)", "G", "balance_grade")):
-        sec.row(label, symbol, path)
+    sec.headline_rows()  # ω_n, ζ, e, θ, U, G: the fields declared headline
+    sec.rows_of(r, "mass", "stiffness", "damping")
     if r.margins is not None:
         sec.verdict(r.margins.separation_margin_ok, "API 684 (2005) of the identified rotor: " + r.margins.words)
     ad = r.adequacy
