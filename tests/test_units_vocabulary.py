@@ -43,7 +43,8 @@ def test_every_display_unit_is_read_by_the_loader_with_its_factor(kind, unit, fa
 def test_the_loader_and_the_display_are_made_from_the_one_table():
     assert units.DIMENSIONS == {k.name: (k.dimension, k.written, k.example, k.magnitude) for k in kinds.TABLE}
     assert list(KINDS) == ["length", "area", "volume", "pressure", "force", "stiffness", "damping", "flow", "speed",
-                           "acceleration", "time", "velocity", "mass", "unbalance", "power"]  # the documented display kinds
+                           "acceleration", "time", "velocity", "mass", "unbalance",
+                           "power"]  # the documented display kinds
     for name, (si, _) in KINDS.items():
         k = kinds.BY_NAME[name]
         assert k.si == si and units.DIMENSIONS[k.name][1] == si.replace("^", "**")
