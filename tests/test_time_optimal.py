@@ -57,13 +57,13 @@ def test_earliest_arrival_is_min_times_own_and_earlier_than_the_regula_falsi():
     earliest arrival is monotone."""
     ocp, method, s, opts = shipped()
     res = time_optimal_study.run(ocp, method, s.front_points, "", s.multistart, opts)
-    d = res.data
+    d = res.to_dict()
     own = optimize(dataclasses.replace(ocp, objective="min_time"), method, s.multistart, opts)
     assert d["limited"]["objective"] == "min_time"
     assert d["arrival_time_s"] <= own.score * (1 + 1e-3)
     assert 13.0 * (1 - 1e-3) <= d["peak_deflection_over_e"] <= 13.0
-    assert res.limited.trajectory.peak_delta == d["peak_deflection_over_e"]  # the CVODES re-simulation
-    assert res.limited.resimulation_rel_error < 0.005
+    assert res.limited_point.trajectory.peak_delta == d["peak_deflection_over_e"]  # the CVODES re-simulation
+    assert res.limited_point.resimulation_rel_error < 0.005
     falsi, _ = to.earliest_arrival(ocp, method, 13.0, res.front, opts, s.multistart, min_time=False)
     assert falsi.peak <= 13.0
     assert d["arrival_time_s"] <= falsi.arrival_time_s
