@@ -14,6 +14,7 @@ import numpy as np
 from autobal.analysis import progress, standards
 from autobal.analysis import rotor as R
 from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
+from autobal.analysis.figures import Figure
 from autobal.analysis.quantities import Quantity
 from autobal.analysis.result import new_figure, speed_axis, unit_axis
 from autobal.errors import ScenarioError
@@ -311,14 +312,15 @@ class RotorDynamicsResult(TypedResult):
                                                              f"{key}.{rows}[]")
         return out
 
-    def figures(self) -> dict:
+    def figures(self) -> dict[str, Figure]:
         if self.curves is None:
             raise ValueError("rotor_dynamics: a loaded Result holds no curves (results.json has the tables; the "
                              "figures of the run are in its folder)")
         c, figs = self.curves, {}
 
         def save(fig, name):
-            figs[name] = fig
+            what = name.removeprefix("fig_rotor_").removesuffix(".png")
+            figs[name] = Figure(fig, f"Rotor with a liquid auto-balancer: {what} (Pashkov 2010)")
 
         if "stationary" in c:
             fig, ax = new_figure(figsize=(9, 7), nrows=2, ncols=2)

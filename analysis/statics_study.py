@@ -14,6 +14,7 @@ import numpy as np
 
 from autobal.analysis import closed_form, solver_options, workprecision
 from autobal.analysis.fields import Record, TypedResult, declarations, explained, optional, quantity, record, shared
+from autobal.analysis.figures import Figure
 from autobal.analysis.quantities import Quantity, convert, display_unit_of
 from autobal.analysis.result import fixed_layout, fmt, new_figure
 from autobal.analysis.statics import StaticPoint, StaticsSolver
@@ -538,7 +539,7 @@ class StaticsResult(TypedResult):
         self._operating_point(ax, ex.xi0 * X if ex.xi0 is not None else None)
         self._decorate(ax, "x", "valve opening x")
 
-    def figures(self) -> dict:
+    def figures(self) -> dict[str, Figure]:
         """Pressures (Fig 2.4/2.9), gap and valve (Fig 2.5), flows (Fig 2.6/2.10), phi(u) (2.35); dimensional
         axes in the display units (MPa, µm, mm, L/s, kN unless the scene or the CLI chooses others) whose labels
         name the source's groups and their bases."""
@@ -551,7 +552,9 @@ class StaticsResult(TypedResult):
         fig, ax = new_figure((8, 4.6))
         self.draw(ax)
         _legend(fig, ax)
-        figs["fig_pressures.png"] = fig
+        figs["fig_pressures.png"] = Figure(
+            fig, "Chamber pressures (MPa; ψ = p/p_B on the right) against the discharge pressure, exact (solid) and "
+            "the source's closed forms (dashed); Pavlenko (2014), Fig. 2.4 / 2.9")
 
         if self.has_regulator:
             fig, (a1, a2) = new_figure((8, 6.4), 2, 1, sharex=True)
@@ -569,7 +572,9 @@ class StaticsResult(TypedResult):
         if self.has_regulator:
             self._valve_panel(a2)
         _legend(fig, *fig.axes)
-        figs["fig_gap.png"] = fig
+        figs["fig_gap.png"] = Figure(
+            fig, "Face gap z (u = z/z_B) and, with a regulator, its valve opening x (ξ = x/x_B) against the "
+            "discharge pressure; Pavlenko (2014), Fig. 2.5")
 
         fig, ax = new_figure((8, 4.6))
         Q, _ = self._base("Q")
@@ -592,7 +597,9 @@ class StaticsResult(TypedResult):
                     f"{neg / Q:.3g} $Q_B$)", transform=ax.transAxes, fontsize=7, color="C3")
         self._decorate(ax, "Q", "flow Q")
         _legend(fig, ax)
-        figs["fig_flows.png"] = fig
+        figs["fig_flows.png"] = Figure(
+            fig, "Flows (L/min; Q/Q_B on the right) against the discharge pressure, reversed flows cut and "
+            "annotated; Pavlenko (2014), Fig. 2.6 / 2.10")
 
         fg = self.force_gap
         fig, ax = new_figure((8, 4.6))
@@ -610,7 +617,9 @@ class StaticsResult(TypedResult):
         ax.set_ylabel(f"balancing force F, {force}\nφ = F/($p_B s_B$), $p_B s_B$ = {F:.3g} {force}")
         ax.grid(alpha=0.3)
         _legend(fig, ax)
-        figs["fig_force_gap.png"] = fig
+        figs["fig_force_gap.png"] = Figure(
+            fig, "Balancing force φ(u) against the face gap at the operating ψ1 and the load τ − χ; "
+            "Pavlenko (2014), Eq. (2.35)")
         for f in figs.values():
             f.suptitle(self.title, fontsize=9)
             fixed_layout(f, **self._MARGINS)

@@ -514,84 +514,6 @@ SECTIONS: Mapping = _FromRooms("report_section")
 #: analysis -> the title of its section, in its room
 TITLES: Mapping = _FromRooms("TITLE")
 
-#: figure file name (regex) -> (analysis, caption)
-CAPTIONS = [
-    (r"fig_pressures", "statics", "Chamber pressures (MPa; ψ = p/p_B on the right) against the discharge pressure, "
-                                  "exact (solid) and the source's closed forms (dashed); Pavlenko (2014), Fig. 2.4 / "
-                                  "2.9"),
-    (r"fig_gap", "statics", "Face gap z (u = z/z_B) and, with a regulator, its valve opening x (ξ = x/x_B) against the "
-                            "discharge pressure; "
-                            "Pavlenko (2014), Fig. 2.5"),
-    (r"fig_flows", "statics", "Flows (L/min; Q/Q_B on the right) against the discharge pressure, reversed flows cut "
-                              "and annotated; Pavlenko (2014), Fig. 2.6 / 2.10"),
-    (r"fig_force_gap", "statics", "Balancing force φ(u) against the face gap at the operating ψ1 and the load τ − χ; "
-                                  "Pavlenko (2014), Eq. (2.35)"),
-    (r"fig_afc", "frequency", "Amplitude and phase of the face-gap response (AFC): the headline energy-consistent "
-                              "model under the physical forcing (thick), the other models under the scene's forcing, "
-                              "unstable ones dashed and labelled; Pavlenko (2014), §2.6"),
-    (r"fig_poles", "stability", "Poles per model (right half-plane = unstable)"),
-    (r"fig_stability_map_(\w+)", "stability", "Stability map of the {0} model: largest real part of the poles over "
-                                              "two parameters, the nominal design marked"),
-    (r"fig_transients", "transient", "Nonlinear transients of the face gap and the chamber pressures"),
-    (r"fig_liquid_efficiency", "liquid_balancer", "Efficiency λ0 against the speed ratio γ, the source's variants and "
-                                                  "the self-consistent closure, with Khomyak (2020) Table 3.2"),
-    (r"fig_liquid_optimum", "liquid_balancer", "Efficiency against liquid height and volume: the IPOPT optimum and a "
-                                               "dense grid"),
-    (r"fig_estimation_(\w+)", "estimation", "Fit {0}: data, fitted curve and its 95 % band; "
-                                             "Pavlenko (2014), Table 4.3"),
-    (r"fig_montecarlo_afc", "montecarlo", "AFC amplitude over the sampled parameters (by default the "
-                                          "energy-consistent model under the physical forcing, its dynamic data "
-                                          "uncertain): nominal, mean, the 0.135-99.865 % quantile band and the ±3σ "
-                                          "lines"),
-    (r"fig_montecarlo_hist", "montecarlo", "Distribution of the face gap and the face leak at the reference "
-                                           "discharge ratio, with the fitted normal, ±3σ and the quantiles"),
-    (r"fig_montecarlo", "montecarlo", "Face gap, valve opening and leak over the samples against ψ1: mean and "
-                                      "0.135-99.865 % quantile bands; Pavlenko (2014), Figs. 3.8-3.9"),
-    (r"fig_reliability", "reliability", "Reliability P(t) (literal and renormalised load density) and the wear "
-                                        "probability; Pavlenko (2014), Figs. 1.27-1.28"),
-    (r"fig_rotor_(\w+)", "rotor_dynamics", "Rotor with a liquid auto-balancer: {0} (Pashkov 2010)"),
-    (r"spinup_robust_profiles", "spinup_robust", "Robust spin-up: speed of the robust profile, the nominal optimum "
-                                                 "and the best ramp, and their deflection on the worst design rotor"),
-    (r"spinup_robust_distribution", "spinup_robust", "Robust spin-up: distribution of the peak deflection over the "
-                                                     "validation rotors, each profile"),
-    (r"spinup_robust_scatter", "spinup_robust", "Robust spin-up: peak deflection of each validation rotor against "
-                                                "its critical-speed factor"),
-    (r"spinup_time_optimal_front", "spinup_time_optimal", "Time-optimal spin-up: the smallest re-simulated peak "
-                                                          "against the arrival deadline, the ramp and the earliest "
-                                                          "arrival under the limit"),
-    (r"spinup_time_optimal_profiles", "spinup_time_optimal", "Time-optimal spin-up: speed and deflection of the "
-                                                             "front's points"),
-    (r"ross_spinup_robust_(profiles|distribution|scatter)", "ross_spinup_robust", "Robust spin-up of the ROSS rotor "
-                                                                                   "(multi-mode): {0}, peaks in µm"),
-    (r"ross_spinup_time_optimal_front", "ross_spinup_time_optimal", "Time-optimal spin-up of the ROSS rotor: the "
-                                                                    "smallest re-simulated peak (µm) against the "
-                                                                    "arrival deadline, the ramp and the earliest "
-                                                                    "arrival under the limit"),
-    (r"ross_spinup_time_optimal_profiles", "ross_spinup_time_optimal", "Time-optimal spin-up of the ROSS rotor: speed "
-                                                                       "and deflection (µm) of the front's points and "
-                                                                       "of the earliest arrival"),
-    (r"ross_spinup_(\w+)", "ross_spinup", "Multi-mode spin-up: {0} of the optimum beside the ramps, critical "
-                                          "speeds of the reduced model dotted"),
-    (r"ross_campbell", "ross_spinup", "Campbell diagram of the reduced rotor: damped natural frequencies against "
-                                      "speed, critical speeds of the reduced model (o) and of ROSS (x)"),
-    (r"spinup_(\w+)", "spinup", "Optimal spin-up: {0} of the optimum beside the ramps"),
-    (r"design_abscissa", "design", "Spectral abscissa max Re λ against the discharge ratio, nominal and optimum "
-                                   "designs, with the required −α"),
-    (r"design_parameters", "design", "Design parameters: optimum relative to nominal"),
-    (r"design_convergence", "design", "IPOPT convergence of the design NLP"),
-]
-
-
-def caption(name: str) -> tuple[str | None, str]:
-    """(analysis, caption) of a figure file."""
-    stem = Path(name).stem
-    for pattern, analysis, words in CAPTIONS:
-        m = re.fullmatch(pattern, stem)
-        if m:
-            return analysis, words.format(*(g.replace("_", " ") for g in m.groups()))
-    return None, stem.replace("_", " ")
-
-
 def data_uri(path: Path) -> str:
     kind = {".png": "image/png", ".svg": "image/svg+xml", ".jpg": "image/jpeg"}[path.suffix.lower()]
     return f"data:{kind};base64," + base64.b64encode(report_input.read_regular(path, MAX_FIGURE_BYTES)).decode("ascii")
@@ -601,8 +523,11 @@ FIGURE_SUFFIXES = (".png", ".svg", ".jpg")
 
 
 def _figures(folder: Path, results: dict) -> dict[str, list[dict]]:
-    """analysis -> its figures {name, caption, uri}, from results.json ``outputs`` or the file names."""
+    """analysis -> its figures {name, caption, uri}, from results.json ``outputs`` (the analysis whose files they
+    are, else none) and ``captions`` (written by ``Result.write`` from its figures; a file without one shows its
+    name)."""
     outputs = results.get("outputs") if isinstance(results.get("outputs"), dict) else {}
+    captions = results.get("captions") if isinstance(results.get("captions"), dict) else {}
     owner = {f: name for name, files in outputs.items() if isinstance(files, list) for f in files
              if isinstance(f, str)}
     named = results.get("files")
@@ -618,9 +543,9 @@ def _figures(folder: Path, results: dict) -> dict[str, list[dict]]:
         refused += [name] if out_of_folder else []
         if path is None:
             continue
-        analysis, words = caption(name)
-        out.setdefault(owner.get(name, analysis) or "", []).append({"name": name, "caption": words,
-                                                                   "uri": data_uri(path)})
+        words = captions.get(name)
+        out.setdefault(owner.get(name, ""), []).append({"name": name, "caption": words if isinstance(words, str)
+                                                        else name, "uri": data_uri(path)})
     if refused:
         shown = ", ".join(text_clean(n, 60) for n in refused[:3]) + (", …" if len(refused) > 3 else "")
         warnings.warn(f"{folder / 'results.json'} names {len(refused)} file(s) outside the folder ({shown}): "

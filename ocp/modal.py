@@ -35,6 +35,7 @@ import casadi as ca
 import numpy as np
 
 from autobal.analysis.fields import Record, TypedResult, declarations, quantity, record, unsaved
+from autobal.analysis.figures import Figure
 from autobal.analysis.quantities import Quantity, convert
 from autobal.analysis.result import new_figure, speed_axis, unit_axis
 from autobal.analysis.standards import Margin, half_power_readings, margin_check, margin_quantities, margin_words
@@ -900,7 +901,7 @@ class ModalSpinupResult(TypedResult):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
 
-    def figures(self) -> dict:
+    def figures(self) -> dict[str, Figure]:
         """Speed (rpm, rad/s) and acceleration (rad/s², rpm/s) against time; deflection (µm) against time and speed;
         Campbell diagram (rad/s, rpm and Hz); every axis in its display unit."""
         title, q = self.title, QUANTITIES.find("peak_deflection_m")
@@ -943,7 +944,12 @@ class ModalSpinupResult(TypedResult):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
         ax.set_title("Campbell diagram of the reduced rotor", fontsize=9)
-        return {"ross_spinup_profiles.png": fig, "ross_spinup_deflection.png": fig2, "ross_campbell.png": fig3}
+        what = "of the optimum beside the ramps, critical speeds of the reduced model dotted"
+        return {"ross_spinup_profiles.png": Figure(fig, f"Multi-mode spin-up: profiles {what}"),
+                "ross_spinup_deflection.png": Figure(fig2, f"Multi-mode spin-up: deflection {what}"),
+                "ross_campbell.png": Figure(fig3, "Campbell diagram of the reduced rotor: damped natural frequencies "
+                                                  "against speed, critical speeds of the reduced model (o) and of "
+                                                  "ROSS (x)")}
 
 
 #: every number of the ross_spinup block, from the fields: deflections in m (the largest radius of the whirl orbit

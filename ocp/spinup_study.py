@@ -18,6 +18,7 @@ import numpy as np
 
 from autobal.analysis import solver_options, standards
 from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
+from autobal.analysis.figures import Figure
 from autobal.analysis.quantities import Quantity, significant
 from autobal.analysis.result import new_figure, speed_axis, twin_axis, unit_axis
 from autobal.analysis.rotor_study import api_margins
@@ -391,7 +392,7 @@ class SpinupResult(TypedResult):
         ax.grid(alpha=0.3)
         legend_above_curves(ax)  # every run's peak stays visible
 
-    def figures(self) -> dict:
+    def figures(self) -> dict[str, Figure]:
         """Speed (rpm, rad/s), acceleration steps (rad/s², rpm/s), drive torque (N·m) and, with drive data, power (kW)
         against time; deflection (delta/e, mm) against time and speed; every axis in its display unit."""
         title = self.title
@@ -441,7 +442,8 @@ class SpinupResult(TypedResult):
         a2.grid(alpha=0.3)
         a2.legend(fontsize=7)
         fig2.suptitle(title, fontsize=9)
-        return {"spinup_profiles.png": fig, "spinup_deflection.png": fig2}
+        return {f"spinup_{k}.png": Figure(f, f"Optimal spin-up: {k} of the optimum beside the ramps")
+                for k, f in (("profiles", fig), ("deflection", fig2))}
 
 
 def _read_csv(path: Path) -> dict | None:
