@@ -440,7 +440,7 @@ class ModalRobustResult(RobustResult):
     reduced rotor; its problem has no drive torque or power model."""
 
     name = "ross_spinup_robust"
-    CAPTIONS = {k: f"Robust spin-up of the ROSS rotor (multi-mode): {k}, peaks in µm" for k in RobustResult.CAPTIONS}
+    CAPTIONS = {k: f"Robust spin-up of the ROSS rotor (multi-mode): {k}" for k in RobustResult.CAPTIONS}
     null_reasons = RobustResult.null_reasons | {
         "within_drive_limits": "the modal rotor's problem has no drive torque or power model (its ramps keep the "
                                "acceleration bound and the speed cap)"}

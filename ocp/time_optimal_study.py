@@ -285,9 +285,9 @@ class ModalTimeOptimalResult(TimeOptimalResult):
     peak_deflection: float | None = _peak_deflection("m")
     limited: ModalPoint | None = optional(present_with="deflection_limit")
     name = "ross_spinup_time_optimal"
-    CAPTIONS = {"front": "Time-optimal spin-up of the ROSS rotor: the smallest re-simulated peak (µm) against the "
+    CAPTIONS = {"front": "Time-optimal spin-up of the ROSS rotor: the smallest re-simulated peak against the "
                          "arrival deadline, the ramp and the earliest arrival under the limit",
-                "profiles": "Time-optimal spin-up of the ROSS rotor: speed and deflection (µm) of the front's points "
+                "profiles": "Time-optimal spin-up of the ROSS rotor: speed and deflection of the front's points "
                             "and of the earliest arrival"}
     null_reasons = {"deflection_limit_m" if k == "deflection_limit_over_e" else k: v
                     for k, v in TimeOptimalResult.null_reasons.items()}
