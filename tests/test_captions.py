@@ -14,7 +14,7 @@ from autobal.analysis.quantities import display_units
 from autobal.analysis.result import new_figure
 
 SHIPPED = [p.stem for p in scenario.shipped()]
-FAST = ("pump_pe600_statics", "hydroheel_wear")
+FAST = ("pump_pe600_statics", "compressor_k180_dynamics", "rig_table43_fit")
 #: a display unit for each kind the fast scenes' axes show, none of them the default
 CHOICE = {"length": "mm", "pressure": "bar", "force": "N", "flow": "L/min", "time": "h"}
 
