@@ -21,7 +21,7 @@ from autobal.analysis import solver_options
 from autobal.analysis.design import UNITS, DesignProblem, Evaluation, Spec, apply, variable_key
 from autobal.analysis.fields import Record, TypedResult, declarations, explained, record, shared, unsaved
 from autobal.analysis.fields import quantity as field_quantity
-from autobal.analysis.figures import Figure
+from autobal.analysis.figures import Figure, record_axis
 from autobal.analysis.frequency import MODEL_LABELS
 from autobal.analysis.linearize import Setup, finite_difference, jacobians, operator
 from autobal.analysis.quantities import Quantity, is_number, significant
@@ -287,6 +287,7 @@ class DesignResult(TypedResult):
         ax.axhline(-self.decay_rate, color="k", ls="--", lw=0.8, label=r"$-\alpha$")
         ax.set_xlabel(r"discharge ratio $\psi_1$")
         ax.set_ylabel(r"spectral abscissa max Re $\lambda$, 1/s")
+        record_axis(ax, "y", "1/s", "1/s")
         ax.legend()
 
     def figures(self) -> dict[str, Figure]:

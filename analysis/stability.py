@@ -24,7 +24,7 @@ import scipy.optimize
 
 from autobal.analysis import progress
 from autobal.analysis.fields import Record, TypedResult, declarations, keyed, optional, quantity, record
-from autobal.analysis.figures import Figure
+from autobal.analysis.figures import Figure, record_axis
 from autobal.analysis.frequency import MODEL_COLOURS, MODEL_LABELS
 from autobal.analysis.linearize import LinearModel, Setup, coefficient_table, jacobians, operator
 from autobal.analysis.quantities import Quantity, convert, lookup, significant
@@ -467,6 +467,7 @@ class StabilityResult(TypedResult):
         ax.set_xticks([-d for d in reversed(dec)] + [0.0] + [d for d in dec if d <= right])
         ax.xaxis.set_minor_locator(NullLocator())
         ax.set_xlabel(rf"Re $\lambda$, 1/s (symlog, linear within $\pm${lo:g})")
+        record_axis(ax, "x", "1/s", "1/s")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=6.5)
 

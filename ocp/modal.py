@@ -35,7 +35,7 @@ import casadi as ca
 import numpy as np
 
 from autobal.analysis.fields import Record, TypedResult, declarations, quantity, record, unsaved
-from autobal.analysis.figures import Figure
+from autobal.analysis.figures import Figure, record_axis
 from autobal.analysis.quantities import Quantity, convert
 from autobal.analysis.result import new_figure, speed_axis, unit_axis
 from autobal.analysis.standards import Margin, half_power_readings, margin_check, margin_quantities, margin_words
@@ -898,6 +898,7 @@ class ModalSpinupResult(TypedResult):
                     label=f"{lab} (peak {q.text(tr.peak)})")
         self._criticals(ax, True, fw)
         ax.set_ylabel(rf"deflection $\max_{{nodes}}\sqrt{{x^2+y^2}}$, {q.display} 0-peak")
+        record_axis(ax, "y", q.unit, q.display)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
 
@@ -923,6 +924,7 @@ class ModalSpinupResult(TypedResult):
         for tr, c, ls, lw, _ in self._runs():
             a1.plot(tr.t * ft, q.shown(tr.deflection.max(axis=0)), color=c, ls=ls, lw=lw)
         a1.set_ylabel(f"deflection, {q.display} 0-peak")
+        record_axis(a1, "y", q.unit, q.display)
         a1.grid(alpha=0.3)
         self.draw(a2)
         fig2.suptitle(title, fontsize=9)
