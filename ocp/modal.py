@@ -947,8 +947,10 @@ class ModalSpinupResult(TypedResult):
         ax.legend(fontsize=7)
         ax.set_title("Campbell diagram of the reduced rotor", fontsize=9)
         what = "of the optimum beside the ramps, critical speeds of the reduced model dotted"
-        return {"ross_spinup_profiles.png": Figure(fig, f"Multi-mode spin-up: profiles {what}"),
-                "ross_spinup_deflection.png": Figure(fig2, f"Multi-mode spin-up: deflection {what}"),
+        return {"ross_spinup_profiles.png": Figure(fig, f"Multi-mode spin-up: speed and acceleration against time "
+                                                        f"{what}"),
+                "ross_spinup_deflection.png": Figure(fig2, "Multi-mode spin-up: deflection (largest over the nodes) "
+                                                           f"against time and against speed {what}"),
                 "ross_campbell.png": Figure(fig3, "Campbell diagram of the reduced rotor: damped natural frequencies "
                                                   "against speed, critical speeds of the reduced model (o) and of "
                                                   "ROSS (x)")}

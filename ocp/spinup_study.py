@@ -442,8 +442,11 @@ class SpinupResult(TypedResult):
         a2.grid(alpha=0.3)
         a2.legend(fontsize=7)
         fig2.suptitle(title, fontsize=9)
-        return {f"spinup_{k}.png": Figure(f, f"Optimal spin-up: {k} of the optimum beside the ramps")
-                for k, f in (("profiles", fig), ("deflection", fig2))}
+        return {"spinup_profiles.png": Figure(fig, "Optimal spin-up: speed, acceleration, drive torque (and power) "
+                                                   "of the optimum beside the ramps against time, the critical speed "
+                                                   "and the drive's limits dotted"),
+                "spinup_deflection.png": Figure(fig2, "Optimal spin-up: deflection of the optimum beside the ramps "
+                                                      "against time and against speed")}
 
 
 def _read_csv(path: Path) -> dict | None:
