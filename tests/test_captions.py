@@ -15,6 +15,7 @@ from autobal.analysis.result import new_figure
 
 SHIPPED = [p.stem for p in scenario.shipped()]
 FAST = ("pump_pe600_statics", "compressor_k180_dynamics", "rig_table43_fit")
+NEEDS_ROSS = pytest.mark.extra("ross")  # a scene with a ross_rotor section
 #: a display unit for each kind the fast scenes' axes show, none of them the default
 CHOICE = {"length": "mm", "pressure": "bar", "force": "N", "flow": "L/min", "time": "h"}
 
@@ -79,7 +80,8 @@ def test_the_statics_axes_carry_their_quantities_in_the_chosen_units(shipped_run
 
 @pytest.mark.cli
 @pytest.mark.slow
-@pytest.mark.parametrize("name", [n for n in SHIPPED if n not in FAST])
+@pytest.mark.parametrize("name", [pytest.param(p.stem, marks=[NEEDS_ROSS] * ("ross_rotor:" in p.read_text()))
+                                  for p in scenario.shipped() if p.stem not in FAST])
 def test_every_figure_of_a_shipped_scene_has_its_caption(shipped_run, name):
     run, folder = shipped_run(name)
     figures = captioned(run)
