@@ -471,8 +471,7 @@ FIGURE_SUFFIXES = (".png", ".svg", ".jpg")
 
 def _figures(folder: Path, results: dict) -> dict[str, list[dict]]:
     """analysis -> its figures {name, caption, uri}, from results.json ``outputs`` (the analysis whose files they
-    are, else none) and ``captions`` (written by ``Result.write`` from its figures; a file without one shows its
-    name)."""
+    are, else none) and ``captions`` (written by ``Result.write`` from its figures; a file without one says so)."""
     outputs = results.get("outputs") if isinstance(results.get("outputs"), dict) else {}
     captions = results.get("captions") if isinstance(results.get("captions"), dict) else {}
     owner = {f: name for name, files in outputs.items() if isinstance(files, list) for f in files
@@ -491,8 +490,8 @@ def _figures(folder: Path, results: dict) -> dict[str, list[dict]]:
         if path is None:
             continue
         words = captions.get(name)
-        out.setdefault(owner.get(name, ""), []).append({"name": name, "caption": words if isinstance(words, str)
-                                                        else name, "uri": data_uri(path)})
+        words = words if isinstance(words, str) else "no caption in results.json"
+        out.setdefault(owner.get(name, ""), []).append({"name": name, "caption": words, "uri": data_uri(path)})
     if refused:
         shown = ", ".join(text_clean(n, 60) for n in refused[:3]) + (", …" if len(refused) > 3 else "")
         warnings.warn(f"{folder / 'results.json'} names {len(refused)} file(s) outside the folder ({shown}): "
