@@ -45,12 +45,13 @@ class Figure:
 
     @property
     def quantities(self) -> list[Axis]:
-        """The quantity of each axis labelled by ``unit_axis`` (an axis of a dimensionless group has none)."""
+        """The quantity of each axis labelled by ``unit_axis`` or :func:`record_axis` (an axis of a dimensionless group
+        has none; one whose label was taken off, as the upper of two axes sharing x, is left out)."""
         out = []
         for ax in self.figure.axes:
             for which, (si, shown) in ax.__dict__.get("autobal_axes", {}).items():
                 label = ax.get_xlabel() if which == "x" else ax.get_ylabel()
-                out.append(Axis(label, which, si, shown))
+                out += [Axis(label, which, si, shown)] if label else []
         return out
 
     def __getattr__(self, name):
