@@ -21,6 +21,7 @@ from autobal.analysis import solver_options
 from autobal.analysis.design import UNITS, DesignProblem, Evaluation, Spec, apply, variable_key
 from autobal.analysis.fields import Record, TypedResult, declarations, explained, record, shared, unsaved
 from autobal.analysis.fields import quantity as field_quantity
+from autobal.analysis.figures import Figure, record_axis
 from autobal.analysis.frequency import MODEL_LABELS
 from autobal.analysis.linearize import Setup, finite_difference, jacobians, operator
 from autobal.analysis.quantities import Quantity, is_number, significant
@@ -286,9 +287,10 @@ class DesignResult(TypedResult):
         ax.axhline(-self.decay_rate, color="k", ls="--", lw=0.8, label=r"$-\alpha$")
         ax.set_xlabel(r"discharge ratio $\psi_1$")
         ax.set_ylabel(r"spectral abscissa max Re $\lambda$, 1/s")
+        record_axis(ax, "y", "1/s", "1/s")
         ax.legend()
 
-    def figures(self) -> dict:
+    def figures(self) -> dict[str, Figure]:
         fig1, ax = new_figure()
         self.draw(ax)
         fig2, ax2 = new_figure((8.0, 4.4))
@@ -327,7 +329,10 @@ class DesignResult(TypedResult):
                 fig3: f"IPOPT convergence ({self.status}, {self.iterations} iterations, {self.barrier} barrier)"}
         for fig, sub in what.items():
             fig.suptitle(textwrap.fill(self.title, 80) + "\n" + sub if self.title else sub, fontsize=9)
-        return {"design_abscissa.png": fig1, "design_parameters.png": fig2, "design_convergence.png": fig3}
+        return {"design_abscissa.png": Figure(fig1, "Spectral abscissa max Re λ against the discharge ratio, nominal "
+                                                    "and optimum designs, with the required −α"),
+                "design_parameters.png": Figure(fig2, "Design parameters: optimum relative to nominal"),
+                "design_convergence.png": Figure(fig3, "IPOPT convergence of the design NLP")}
 
 
 DesignResult.quantities = QUANTITIES = declarations(

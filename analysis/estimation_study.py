@@ -17,6 +17,7 @@ from autobal.analysis import disc_fit
 from autobal.analysis.adequacy import decision, fisher_adequacy
 from autobal.analysis.device_fit import DeviceFitter
 from autobal.analysis.fields import Record, TypedResult, declarations, keyed, optional, quantity, record, shared
+from autobal.analysis.figures import Figure
 from autobal.analysis.least_squares import FitResult
 from autobal.analysis.quantities import Quantity, is_number, significant
 from autobal.analysis.result import new_figure, plain, twin_axis
@@ -348,7 +349,7 @@ class EstimationResult(TypedResult):
             q = QUANTITIES.find(f"bases.{base}")
             twin_axis(ax, q.shown(value), f"{label}, {q.display}", which)
 
-    def figures(self) -> dict:
+    def figures(self) -> dict[str, Figure]:
         """One figure per fit: data, fitted curve, confidence band (and the closed forms' curves for
         the traditional disc), and the residuals below."""
         figs = {}
@@ -370,7 +371,9 @@ class EstimationResult(TypedResult):
                 axr.set_xlabel(xl)
                 axr.grid(alpha=0.3)
             fig.suptitle(f"{self.title}: fit {name} ({f.model}, residual in {f.residual})", fontsize=9)
-            figs[f"fig_estimation_{name}.png"] = fig
+            figs[f"fig_estimation_{name}.png"] = Figure(
+                fig, f"Fit {name.replace('_', ' ')}: data, fitted curve and its 95 % band; Pavlenko (2014), "
+                "Table 4.3")
         return figs
 
 

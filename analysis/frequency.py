@@ -18,6 +18,7 @@ from scipy.optimize import minimize_scalar
 
 from autobal.analysis import progress
 from autobal.analysis.fields import Record, TypedResult, declarations, keyed, optional, quantity, record, unsaved
+from autobal.analysis.figures import Figure
 from autobal.analysis.linearize import LinearModel, Setup
 from autobal.analysis.quantities import significant
 from autobal.analysis.result import new_figure, unit_axis
@@ -298,7 +299,7 @@ class FrequencyResult(TypedResult):
         fw = unit_axis(ax, r"frequency $\omega$", q_omega.unit, q_omega.declared, "x", q_omega.beside)
         return fw, unit_axis(ax, "gap amplitude $A_u$", q_amp.unit, q_amp.declared)
 
-    def figures(self) -> dict:
+    def figures(self) -> dict[str, Figure]:
         from matplotlib.ticker import MultipleLocator
 
         fig, (a1, a2) = new_figure(figsize=(9.5, 7.8), nrows=2, sharex=True)
@@ -321,7 +322,10 @@ class FrequencyResult(TypedResult):
         fig.suptitle(f"{self.title}\nAFC/PFC of the face gap, forcing amplitude "
                      rf"$\delta\psi_{{1a}}$ = {self.forcing_amplitude:g} (Pavlenko (2014), Figs 2.7/2.11)"
                      f"{rest}", fontsize=9)
-        return {"fig_afc.png": fig}
+        return {"fig_afc.png": Figure(fig, "Amplitude and phase of the face-gap response (AFC): the headline "
+                                           "energy-consistent model under the physical forcing (thick), the other "
+                                           "models under the scene's forcing, unstable ones dashed and labelled; "
+                                           "Pavlenko (2014), §2.6")}
 
 
 #: every number of the frequency block (Pavlenko 2014, §2.6), from the fields: amplitudes of the face gap in m,

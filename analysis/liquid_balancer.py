@@ -20,6 +20,7 @@ import numpy as np
 
 from autobal.analysis import interrupt
 from autobal.analysis.fields import Record, TypedResult, declarations, keyed, optional, quantity, record
+from autobal.analysis.figures import Figure
 from autobal.analysis.liquid_balancer_optimum import crescent_volume, optimise
 from autobal.analysis.quantities import Quantity, convert, display_unit_of, significant
 from autobal.analysis.result import new_figure, twin_axis, unit_axis, with_statuses
@@ -450,12 +451,14 @@ class LiquidBalancerResult(TypedResult):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
 
-    def figures(self) -> dict:
+    def figures(self) -> dict[str, Figure]:
         """Efficiency vs gamma with the Table 3.2 points; lambda0 against h and V near the optimum."""
         fig, ax = new_figure(figsize=(6.4, 4.6))
         self.draw(ax)
         fig.suptitle(self.title, fontsize=9)
-        figs = {"fig_liquid_efficiency.png": fig}
+        figs = {"fig_liquid_efficiency.png": Figure(
+            fig, "Efficiency λ0 against the speed ratio γ, the source's variants and the self-consistent closure, "
+            "with Khomyak (2020) Table 3.2")}
         opts = [k for k in ("optimal_height", "optimal_volume") if self.search(k) and len(self.search(k)["grid"]["x"])]
         if opts:
             fig, axes = new_figure(figsize=(5.2 * len(opts), 4.2), ncols=len(opts), squeeze=False)
@@ -470,7 +473,8 @@ class LiquidBalancerResult(TypedResult):
                 ax.grid(alpha=0.3)
                 ax.legend(fontsize=7)
                 ax.set_title(f"{key.replace('_', ' ')} ({o['variant']})", fontsize=9)
-            figs["fig_liquid_optimum.png"] = fig
+            figs["fig_liquid_optimum.png"] = Figure(
+                fig, "Efficiency against liquid height and volume: the IPOPT optimum and a dense grid")
         return figs
 
 

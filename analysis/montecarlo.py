@@ -35,6 +35,7 @@ from autobal.analysis.fields import (
     shared,
     unsaved,
 )
+from autobal.analysis.figures import Figure
 from autobal.analysis.frequency import MODEL_LABELS
 from autobal.analysis.montecarlo_afc import afc_names, afc_study
 from autobal.analysis.montecarlo_statics import (
@@ -276,7 +277,7 @@ class MonteCarloResult(TypedResult):
     def _reference(self) -> int:
         return reference_index(self.psi1, self.reference_psi1)
 
-    def figures(self) -> dict:
+    def figures(self) -> dict[str, Figure]:
         """Bands against the discharge ratio with the sensitivities (Figs 3.3-3.6), histograms of the
         headline outputs at the reference discharge ratio with the fitted normal, and the AFC bands."""
         psi1 = np.asarray(self.psi1, float)
@@ -315,9 +316,13 @@ class MonteCarloResult(TypedResult):
         seen = dict(zip(*reversed(axes[1].get_legend_handles_labels()), strict=True))
         fig.legend(list(seen.values()), list(seen), loc="outside lower center", ncols=3, fontsize=7)
         fig.suptitle(self.title, fontsize=9)
-        figs = {"fig_montecarlo.png": fig}
+        figs = {"fig_montecarlo.png": Figure(
+            fig, "Face gap, valve opening and leak over the samples against ψ1: mean and 0.135-99.865 % quantile "
+            "bands; Pavlenko (2014), Figs. 3.8-3.9")}
         if self.raw.get("exact"):
-            figs["fig_montecarlo_hist.png"] = self._histograms(j)
+            figs["fig_montecarlo_hist.png"] = Figure(
+                self._histograms(j), "Distribution of the face gap and the face leak at the reference discharge "
+                "ratio, with the fitted normal, ±3σ and the quantiles")
         if self.afc is not None:
             a = self.afc
             fig, ax = new_figure(figsize=(7, 4.8))
@@ -339,7 +344,10 @@ class MonteCarloResult(TypedResult):
                    "the source's Figs 3.7/3.10 use its program model")
             ax.set_title(f"{self.title}\nAFC Monte Carlo: {MODEL_LABELS.get(a['model'], a['model'])} model, "
                          f"{a['forcing']} forcing, {len(a['parameters'])} uncertain parameters\n({src})", fontsize=8)
-            figs["fig_montecarlo_afc.png"] = fig
+            figs["fig_montecarlo_afc.png"] = Figure(
+                fig, "AFC amplitude over the sampled parameters (by default the energy-consistent model under the "
+                "physical forcing, its dynamic data uncertain): nominal, mean, the 0.135-99.865 % quantile band and "
+                "the ±3σ lines")
         return figs
 
     def _histograms(self, j: int):

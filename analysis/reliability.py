@@ -33,6 +33,7 @@ from scipy.special import ndtr
 
 from autobal.analysis import progress
 from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record
+from autobal.analysis.figures import Figure
 from autobal.analysis.quantities import Quantity
 from autobal.analysis.result import new_figure, unit_axis
 from autobal.models.hydroheel import (
@@ -356,7 +357,7 @@ class ReliabilityResult(TypedResult):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
 
-    def figures(self) -> dict:
+    def figures(self) -> dict[str, Figure]:
         fig, (a1, a2) = new_figure((10, 4.2), 1, 2)
         self.draw(a1)
         reg = self.region
@@ -370,7 +371,8 @@ class ReliabilityResult(TypedResult):
         a2.grid(alpha=0.3)
         a2.legend(fontsize=7)
         fig.suptitle(self.title, fontsize=9)
-        return {"fig_reliability.png": fig}
+        return {"fig_reliability.png": Figure(fig, "Reliability P(t) (literal and renormalised load density) and the "
+                                                   "wear probability; Pavlenko (2014), Figs. 1.27-1.28")}
 
 
 def _hours(t: float) -> str:

@@ -22,6 +22,8 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
+    from autobal.analysis.figures import Figure as Captioned
+
 DPI = 120
 
 
@@ -103,10 +105,12 @@ def unit_axis(ax: Axes, label: str, si: str, declared: str = "", which: str = "y
     other : str, optional
         The unit of the secondary axis; "" for none.
     """
+    from autobal.analysis.figures import record_axis
     from autobal.analysis.quantities import beside, convert, display_unit_of
 
     shown = display_unit_of(si, declared)
     factor = convert(1.0, si, shown)
+    record_axis(ax, which, si, shown)
     (ax.set_xlabel if which == "x" else ax.set_ylabel)(label if shown == "1" else f"{label}, {shown}")
     other = beside(si, shown) if other is None or other == shown else other
     if other:
@@ -305,8 +309,9 @@ class Result:
         """CSV tables: file name -> {column name: sequence of equal length}."""
         return {}
 
-    def figures(self) -> dict[str, Figure]:
-        """Figures: file name -> new :class:`~matplotlib.figure.Figure` (made with :func:`new_figure`)."""
+    def figures(self) -> dict[str, Captioned]:
+        """Figures: file name -> :class:`~autobal.analysis.figures.Figure`, a new matplotlib figure (made with
+        :func:`new_figure`) with its caption."""
         return {}
 
     def draw(self, ax: Axes) -> None:
@@ -327,17 +332,23 @@ class Result:
             Without ``ax``, every figure of :meth:`figures`; with ``ax``, ``ax.figure``.
         """
         if ax is None:
-            return list(self.figures().values())
+            return [f.figure for f in self.figures().values()]
         self.draw(ax)
         return ax.figure
 
     def save(self, folder: str | Path) -> list[Path]:
         """Write :meth:`tables` as CSV and :meth:`figures` as PNG with SVG beside into ``folder``; returns the
         paths."""
+        return self.write(folder)[0]
+
+    def write(self, folder: str | Path) -> tuple[list[Path], dict[str, str]]:
+        """:meth:`save`, and the captions of the figures written: (paths, file name -> caption)."""
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
         paths = [write_csv(folder / name, cols) for name, cols in self.tables().items()]
-        return paths + [p for name, fig in self.figures().items() for p in save_figures(fig, folder / name)]
+        figures = self.figures()
+        paths += [p for name, f in figures.items() for p in save_figures(f.figure, folder / name)]
+        return paths, {name: f.caption for name, f in figures.items()}
 
     def verdict(self) -> tuple[bool | None, str] | None:
         """The one verdict of the analysis, (ok, words), where it has one (the headline model's)."""
@@ -423,7 +434,7 @@ def html_block(result: Result, figures: bool = True) -> str:
     where it declares no headline) and its figures."""
     rows = result.headline()
     body = html_table(rows) if rows else f"<pre>{escape(result.summary())}</pre>"
-    figs = "".join(html_figure(f) for f in result.figures().values()) if figures else ""
+    figs = "".join(html_figure(f.figure) for f in result.figures().values()) if figures else ""
     verdict = (False, "FAILED: " + "; ".join(result.failures())) if result.failures() else result.verdict()
     return (f"<div><h3>{escape(result.name or type(result).__name__)}</h3>{html_verdict(verdict)}"
             f"{body}{figs}</div>")

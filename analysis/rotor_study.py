@@ -14,6 +14,7 @@ import numpy as np
 from autobal.analysis import progress, standards
 from autobal.analysis import rotor as R
 from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
+from autobal.analysis.figures import Figure
 from autobal.analysis.quantities import Quantity
 from autobal.analysis.result import new_figure, speed_axis, unit_axis
 from autobal.errors import ScenarioError
@@ -311,14 +312,31 @@ class RotorDynamicsResult(TypedResult):
                                                              f"{key}.{rows}[]")
         return out
 
-    def figures(self) -> dict:
+    #: figure -> its caption
+    CAPTIONS = {
+        "fig_rotor_stationary.png": "Rotor with a liquid auto-balancer, stationary whirl against the squared speed "
+                                    "ratio: amplitude a/e, moment, system unbalance and the amplitude ratio per μ1 = "
+                                    "m/m1 and damping n; Pashkov (2010), Figs. 5-6, Eq. (10)",
+        "fig_rotor_steps.png": "Rotor with a liquid auto-balancer: the system unbalance d after a step of the speed, "
+                               "per mass ratio ψ = m1/m; Pashkov (2010), Figs. 3-4",
+        "fig_rotor_passage.png": "Rotor with a liquid auto-balancer passing its critical speed: deflection δ/e and "
+                                 "system unbalance d against the speed ratio, the least and the largest damping; "
+                                 "Pashkov (2010), Figs. 7-8",
+        "fig_rotor_peaks.png": "Rotor with a liquid auto-balancer: the largest deflection δ*/e and unbalance d* of "
+                               "the passage against the damping n, per mass ratio ψ; Pashkov (2010), Fig. 9",
+        "fig_rotor_lewis.png": "Peak deflection of a rotor accelerated through its critical speed at a constant rate "
+                               "a* = α/Ω², per damping ratio ζ, with the undamped asymptote 1.4672/√a*",
+        "fig_rotor_motor.png": "Rotor with a liquid auto-balancer driven by its motor: speed and deflection δ/e "
+                               "against time, the critical speed dotted"}
+
+    def figures(self) -> dict[str, Figure]:
         if self.curves is None:
             raise ValueError("rotor_dynamics: a loaded Result holds no curves (results.json has the tables; the "
                              "figures of the run are in its folder)")
         c, figs = self.curves, {}
 
         def save(fig, name):
-            figs[name] = fig
+            figs[name] = Figure(fig, self.CAPTIONS[name])
 
         if "stationary" in c:
             fig, ax = new_figure(figsize=(9, 7), nrows=2, ncols=2)

@@ -30,6 +30,7 @@ import numpy as np
 from autobal.analysis import interrupt, solver_options
 from autobal.analysis.compiled import compiled_map
 from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
+from autobal.analysis.figures import Figure
 from autobal.analysis.frequency import MODEL_LABELS
 from autobal.analysis.result import failed_head, new_figure, unit_axis
 from autobal.analysis.rosenbrock import STATUS, rodas4_grid
@@ -324,7 +325,7 @@ class TransientResult(TypedResult):
     def _gap_axis(self, ax, label: str) -> float:
         return unit_axis(ax, label, "m", QUANTITIES.find("cases.0.z").declared)
 
-    def figures(self) -> dict:
+    def figures(self) -> dict[str, Figure]:
         n = len(self._responses())
         fig, axes = new_figure(figsize=(9, 2.6 * n + 0.4), nrows=n, ncols=2, squeeze=False)
         qz, qp = QUANTITIES.find("cases.0.z"), QUANTITIES.find("cases.0.p2")
@@ -348,7 +349,7 @@ class TransientResult(TypedResult):
                     a.axvline(e.t * ft, color="r", ls=":", lw=0.8)
         fig.suptitle(f"{self.title}\ntime responses of the {MODEL_LABELS.get(self.model, '')} model "
                      "from the static solution (red dotted: events)", fontsize=9)
-        return {"fig_transients.png": fig}
+        return {"fig_transients.png": Figure(fig, "Nonlinear transients of the face gap and the chamber pressures")}
 
 
 #: every number of the transient block (Pavlenko 2014, §2.5), from the fields: face-gap changes in m, shown in µm

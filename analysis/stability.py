@@ -24,6 +24,7 @@ import scipy.optimize
 
 from autobal.analysis import progress
 from autobal.analysis.fields import Record, TypedResult, declarations, keyed, optional, quantity, record
+from autobal.analysis.figures import Figure, record_axis
 from autobal.analysis.frequency import MODEL_COLOURS, MODEL_LABELS
 from autobal.analysis.linearize import LinearModel, Setup, coefficient_table, jacobians, operator
 from autobal.analysis.quantities import Quantity, convert, lookup, significant
@@ -466,10 +467,11 @@ class StabilityResult(TypedResult):
         ax.set_xticks([-d for d in reversed(dec)] + [0.0] + [d for d in dec if d <= right])
         ax.xaxis.set_minor_locator(NullLocator())
         ax.set_xlabel(rf"Re $\lambda$, 1/s (symlog, linear within $\pm${lo:g})")
+        record_axis(ax, "x", "1/s", "1/s")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=6.5)
 
-    def figures(self) -> dict:
+    def figures(self) -> dict[str, Figure]:
         from matplotlib import colormaps
         from matplotlib.colors import ListedColormap, SymLogNorm
         from matplotlib.lines import Line2D
@@ -481,7 +483,7 @@ class StabilityResult(TypedResult):
                    frameon=False)
         fig.suptitle(f"{self.title}\npoles of the linearized models (energy-consistent first; nested "
                      "markers: coinciding poles)", fontsize=9)
-        figs = {"fig_poles.png": fig}
+        figs = {"fig_poles.png": Figure(fig, "Poles per model (right half-plane = unstable)")}
         maps = self.maps or {}
         if not maps:
             return figs
@@ -518,7 +520,9 @@ class StabilityResult(TypedResult):
             fig.legend(handles=handles, loc="outside lower center", ncols=2, fontsize=8, frameon=False)
             ax.set_title(f"{self.title}\nstability map, {MODEL_LABELS.get(m, m)}{tag}; "
                          "colour scale shared by the maps", fontsize=8)
-            figs[f"fig_stability_map_{m}.png"] = fig
+            figs[f"fig_stability_map_{m}.png"] = Figure(
+                fig, f"Stability map of the {m.replace('_', ' ')} model: largest real part of the poles over two "
+                "parameters, the nominal design marked")
         return figs
 
 

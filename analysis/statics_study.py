@@ -14,6 +14,7 @@ import numpy as np
 
 from autobal.analysis import closed_form, solver_options, workprecision
 from autobal.analysis.fields import Record, TypedResult, declarations, explained, optional, quantity, record, shared
+from autobal.analysis.figures import Figure, record_axis
 from autobal.analysis.quantities import Quantity, convert, display_unit_of
 from autobal.analysis.result import fixed_layout, fmt, new_figure
 from autobal.analysis.statics import StaticPoint, StaticsSolver
@@ -489,11 +490,13 @@ class StaticsResult(TypedResult):
         ax.set_xlim(p1.min(), p1.max())
         if xlabel:  # the groups in the labels: a secondary axis costs about a tenth of a draw
             ax.set_xlabel(rf"discharge pressure p₁, {p_unit}  (ψ₁ = p₁/$p_B$, $p_B$ = {P:.3g} {p_unit})")
+            record_axis(ax, "x", "Pa", p_unit)
         if kind in self._BASES:
             F, unit = self._base(kind)
             group = {"p": "ψ = p/$p_B$", "z": "u = z/$z_B$", "x": "ξ = x/$x_B$", "Q": "Q/$Q_B$"}[kind]
             base = "" if kind == "p" else f", ${self._BASES[kind][0]}$ = {F:.3g} {unit}"
             ax.set_ylabel(f"{ylabel}, {unit}\n{group}{base}")
+            record_axis(ax, "y", QUANTITIES.find(self._BASES[kind][1]).unit, unit)
         else:
             ax.set_ylabel(ylabel)
         ax.grid(alpha=0.3)
@@ -538,7 +541,7 @@ class StaticsResult(TypedResult):
         self._operating_point(ax, ex.xi0 * X if ex.xi0 is not None else None)
         self._decorate(ax, "x", "valve opening x")
 
-    def figures(self) -> dict:
+    def figures(self) -> dict[str, Figure]:
         """Pressures (Fig 2.4/2.9), gap and valve (Fig 2.5), flows (Fig 2.6/2.10), phi(u) (2.35); dimensional
         axes in the display units (MPa, µm, mm, L/s, kN unless the scene or the CLI chooses others) whose labels
         name the source's groups and their bases."""
@@ -551,7 +554,9 @@ class StaticsResult(TypedResult):
         fig, ax = new_figure((8, 4.6))
         self.draw(ax)
         _legend(fig, ax)
-        figs["fig_pressures.png"] = fig
+        figs["fig_pressures.png"] = Figure(
+            fig, "Chamber pressures (ψ = p/p_B on the right) against the discharge pressure, exact (solid) and "
+            "the source's closed forms (dashed); Pavlenko (2014), Fig. 2.4 / 2.9")
 
         if self.has_regulator:
             fig, (a1, a2) = new_figure((8, 6.4), 2, 1, sharex=True)
@@ -569,7 +574,9 @@ class StaticsResult(TypedResult):
         if self.has_regulator:
             self._valve_panel(a2)
         _legend(fig, *fig.axes)
-        figs["fig_gap.png"] = fig
+        figs["fig_gap.png"] = Figure(
+            fig, "Face gap z (u = z/z_B) and, with a regulator, its valve opening x (ξ = x/x_B) against the "
+            "discharge pressure; Pavlenko (2014), Fig. 2.5")
 
         fig, ax = new_figure((8, 4.6))
         Q, _ = self._base("Q")
@@ -592,7 +599,9 @@ class StaticsResult(TypedResult):
                     f"{neg / Q:.3g} $Q_B$)", transform=ax.transAxes, fontsize=7, color="C3")
         self._decorate(ax, "Q", "flow Q")
         _legend(fig, ax)
-        figs["fig_flows.png"] = fig
+        figs["fig_flows.png"] = Figure(
+            fig, "Flows (Q/Q_B on the right) against the discharge pressure, reversed flows cut and "
+            "annotated; Pavlenko (2014), Fig. 2.6 / 2.10")
 
         fg = self.force_gap
         fig, ax = new_figure((8, 4.6))
@@ -608,9 +617,13 @@ class StaticsResult(TypedResult):
             ax.plot([ex.u0 * Z], [fg.tau * F], "k*", ms=9, zorder=5, label="operating point")
         ax.set_xlabel(f"face gap z, {unit}  (u = z/$z_B$, $z_B$ = {Z:.3g} {unit})")
         ax.set_ylabel(f"balancing force F, {force}\nφ = F/($p_B s_B$), $p_B s_B$ = {F:.3g} {force}")
+        record_axis(ax, "x", "m", unit)
+        record_axis(ax, "y", "N", force)
         ax.grid(alpha=0.3)
         _legend(fig, ax)
-        figs["fig_force_gap.png"] = fig
+        figs["fig_force_gap.png"] = Figure(
+            fig, "Balancing force φ(u) against the face gap at the operating ψ1 and the load τ − χ; "
+            "Pavlenko (2014), Eq. (2.35)")
         for f in figs.values():
             f.suptitle(self.title, fontsize=9)
             fixed_layout(f, **self._MARGINS)

@@ -20,6 +20,7 @@ import numpy as np
 
 from autobal.analysis import closed_form, ipopt, progress
 from autobal.analysis.fields import Record, TypedResult, declarations, keyed, optional, quantity, record
+from autobal.analysis.figures import Figure
 from autobal.analysis.result import new_figure
 from autobal.errors import ScenarioError
 
@@ -124,10 +125,11 @@ class WorkPrecision(TypedResult):
         return {f"workprecision_{self.analysis}.csv": {name: [getattr(r, k) for r in self.rows]
                                                        for name, k in columns.items()}}
 
-    def figures(self) -> dict:
+    def figures(self) -> dict[str, Figure]:
         fig, ax = new_figure((6.4, 4.6))
         self.draw(ax)
-        return {f"workprecision_{self.analysis}.png": fig}
+        caption = f"Work-precision of {self.analysis}: error against run time of every solver and setting"
+        return {f"workprecision_{self.analysis}.png": Figure(fig, caption)}
 
     def draw(self, ax) -> None:
         """Error against run time per method, the target error dotted."""

@@ -107,10 +107,14 @@ class Run(Mapping):
     def write(self, folder: Path) -> list[Path]:
         """Write every result's files (tables and figures in the display units of the scene), results.json (SI)
         and report.html into an existing ``folder``."""
+        outputs, captions = {}, {}
         with display_units(display(self.scene), under=True):
-            outputs = {name: [f.name for f in r.save(folder)] for name, r in self.results.items()}
+            for name, r in self.results.items():
+                paths, words = r.write(folder)
+                outputs[name], captions = [p.name for p in paths], captions | words
         files = [name for names in outputs.values() for name in names]
-        write_json(folder / "results.json", self.to_dict() | {"files": [*files, report.REPORT], "outputs": outputs})
+        write_json(folder / "results.json", self.to_dict() | {"files": [*files, report.REPORT], "outputs": outputs,
+                                                              "captions": captions})
         written = _render_report(folder)
         if not written:
             warnings.warn("report.html not written (see autobal.log)", stacklevel=2)
@@ -138,7 +142,7 @@ class Run(Mapping):
 
     def _repr_html_(self, figures: bool = True) -> str:
         """Jupyter's view: per analysis the one verdict, the headline table in display units and the figures."""
-        imgs = {name: [html_figure(f) for f in r.figures().values()] if figures else []
+        imgs = {name: [html_figure(f.figure) for f in r.figures().values()] if figures else []
                 for name, r in self.results.items()}
         return report.notebook(self.to_dict(), imgs)
 

@@ -394,86 +394,33 @@ def _null_note(block, path: str) -> str | None:
 # --------------------------------------------------------------------------------------------
 # the source's published values per shipped scene (docs/validation.md has the full ledger)
 # --------------------------------------------------------------------------------------------
-_STATICS = (("critical margin", "δψ_kr", "dpsi_kr", "1"), ("critical discharge ratio", "ψ1_kr", "psi1_kr", "1"),
-            ("barrier flow", "Q_e", "Q_e", "m^3/s"), ("face gap", "u0", "u0", "1"), ("valve opening", "ξ0", "xi0", "1"),
-            ("valve chamber pressure", "ψ_cam0", "psi_cam0", "1"), ("disc chamber pressure", "ψ20", "psi2_0", "1"),
-            ("cavity pressure", "ψ30", "psi3_0", "1"))
-_AFC = (("first AFC peak", "ω_I", "peaks.0.omega", "rad/s"),
-        ("first peak amplitude", "A_I", "peaks.0.amplitude", "m"),
-        ("second AFC peak", "ω_II", "peaks.1.omega", "rad/s"),
-        ("second peak amplitude", "A_II", "peaks.1.amplitude", "m"),
-        ("amplitude at the operating speed", "A(ω0)", "at_operating_speed.amplitude", "m"))
+#: the data file of the sources' published values (scene -> analysis -> rows)
+PUBLISHED_FILE = "published.yaml"
 
 
-def _statics_published(values: tuple, where: tuple) -> list:
-    """Rows of the appendix's closed-form statics (Pavlenko 2014): published values and where printed."""
-    return [(label, sym, f"closed_form.{key}", v, unit, f"Pavlenko (2014), {w}")
-            for (label, sym, key, unit), v, w in zip(_STATICS, values, where, strict=True)]
-
-
-def _afc_published(values: tuple, where: str) -> list:
-    """Rows of the published AFC of the source's program model (Pavlenko 2014)."""
-    return [(label, sym, f"models.program.{key}", v, unit, f"Pavlenko (2014), {where}")
-            for (label, sym, key, unit), v in zip(_AFC, values, strict=True)]
-
-
-#: scene -> analysis -> rows (quantity, symbol, key in the block or None, published value, unit, where)
-PUBLISHED = {
-    "pump_pe600_statics": {"statics": _statics_published(
-        (0.030, 1.73, 7.448e-3, 0.964, 1.294, 1.238, 1.027, 0.513),
-        ("Eq. (2.31), App. A", "Eq. (2.32), App. A", "App. A", "Eq. (2.27), App. A", "Eq. (2.28), App. A",
-         "Eq. (2.26), App. A", "Eq. (2.24), App. A", "Eq. (2.25), App. A"))},
-    "compressor_k180_statics": {"statics": _statics_published(
-        (0.017, 1.471, 0.029, 0.967, 0.356, 1.367, 1.007, 0.223),
-        ("Eq. (2.160), App. B", "Eq. (2.160), App. B", "App. B", "Eq. (2.147), App. B", "App. B", "App. B",
-         "Eq. (2.145), App. B", "Eq. (2.146), App. B"))},
-    "pump_pe600_dynamics": {"frequency": _afc_published((1980.0, 25.0e-6, 2920.0, 10.0e-6, 7.0e-6),
-                                                        "§2.6, AFC figure")},
-    "compressor_k180_dynamics": {"frequency": _afc_published((2340.0, 33.0e-6, 4810.0, 18.0e-6, 20.0e-6),
-                                                             "§2.7, AFC figure")},
-    "hydroheel_wear": {"reliability": [
-        ("largest gap", "u_max", "u_max", 1.5, "1", "Pavlenko (2014), Eq. (1.52)"),
-        ("load group", "χ0", "chi0", 1.76, "1", "Pavlenko (2014), Eq. (1.30)"),
-        ("exponent", "k", "k", 3.3, "1", "Pavlenko (2014), Eq. (1.32)"),
-        ("P(wear ≤ z_B) at 2000 h", "", "wear_le_base_gap.0", 0.5, "1", "Pavlenko (2014), Fig. 1.27"),
-        ("reliability at 2000 h", "P(t)", "literal.P.0", 0.75, "1", "Pavlenko (2014), Eq. (1.48), Fig. 1.28"),
-        ("reliability at 4000 h", "P(t)", "literal.P.2", 0.25, "1", "Pavlenko (2014), Fig. 1.28 ('3 times lower')"),
-        ("mean time to failure", "T", "literal.mttf", 2700.0 * 3600.0, "s", "Pavlenko (2014), Eq. (1.49)"),
-    ]},
-    "rig_table43_fit": {"estimation": [
-        ("conductance ratio from the nominal losses", "α", "loss_coefficient.alpha_nominal", 1.75, "1",
-         "Pavlenko (2014), §4.5, Eq. (4.38)"),
-        ("one-parameter static estimate", "α", "fits.static_1p.parameters.alpha.estimate", 1.68, "1",
-         "Pavlenko (2014), Eq. (4.23)"),
-        ("two-parameter static estimate", "α", "fits.static_2p.parameters.alpha.estimate", 1.72, "1",
-         "Pavlenko (2014), Eqs. (4.26)-(4.27)"),
-        ("two-parameter static estimate", "τ_max", "fits.static_2p.parameters.tau_max.estimate", 2.75, "1",
-         "Pavlenko (2014), Eqs. (4.26)-(4.27)"),
-    ]},
-    "pump_pe600_montecarlo": {"montecarlo": [
-        ("face-gap spread (3σ/mean) at ψ1 = 1", "δu", "exact.u.spread.2", 0.20, "1",
-         "Pavlenko (2014), ch. 3, conclusion 4"),
-        ("face-leak spread (3σ/mean) at ψ1 = 1", "δq_T", "source.q_T.spread.2", 0.25, "1",
-         "Pavlenko (2014), ch. 3, conclusion 4"),
-        ("AFC amplitude spread", "cv", "afc.at.peak_2.cv", 0.40, "1",
-         "Pavlenko (2014), ch. 3, conclusion 4 ('up to 40 %')"),
-    ]},
-}
+@functools.cache
+def published() -> dict[str, dict[str, list[tuple]]]:
+    """scene -> analysis -> rows (quantity, symbol, key in the block or None, published value in SI, its SI unit,
+    where the source prints it), read from :data:`PUBLISHED_FILE`."""
+    data = yaml.safe_load(resources.files("autobal").joinpath(PUBLISHED_FILE).read_text(encoding="utf-8"))
+    return {scene: {analysis: [(r["quantity"], r["symbol"], r.get("key"), r["published"], r["unit"], r["source"])
+                               for r in rows] for analysis, rows in analyses.items()}
+            for scene, analyses in data.items()}
 
 
 def _comparison(sec: Section, scenario: str) -> None:
-    rows = PUBLISHED.get(scenario, {}).get(sec.name)
+    rows = published().get(scenario, {}).get(sec.name)
     if not rows:
         return
     out = []
-    for label, symbol, key, published, unit, where in rows:
+    for label, symbol, key, value, unit, where in rows:
         if key and key.startswith("afc.") and sec.get("afc.model") not in SOURCE_MODELS:
             continue  # the published AFC spread is the program model's (the montecarlo room's report_section says so)
         got = sec.get(key) if key else None
-        rel = (got - published) / abs(published) if isinstance(got, int | float) and published else None
+        rel = (got - value) / abs(value) if isinstance(got, int | float) and value else None
         q = quantity(f"{sec.name}.{key}", sec.results) if key else None  # its declared display unit (µm, not mm)
         shown = q.display if q is not None and q.unit == unit else None
-        out.append([text(label), text(symbol), cell(published, unit, shown), cell(got, unit, shown),
+        out.append([text(label), text(symbol), cell(value, unit, shown), cell(got, unit, shown),
                     cell(None if rel is None else 100 * rel, "%"), text(where)])
     sec.comparison = table("Comparison with the source's published values (docs/validation.md explains each "
                            "difference)",
@@ -524,7 +471,7 @@ WHY_UNSTABLE = {
 def source_model_line(sec: Section, model: str, stable: bool | None, forcing: str | None = None) -> None:
     """The validation line of one of the source's models: how closely it reproduces the scene's published
     values (the comparison table, program model), whether it is stable, and why not."""
-    rows = PUBLISHED.get(sec.results.get("scenario", ""), {}).get(sec.name) or []
+    rows = published().get(sec.results.get("scenario", ""), {}).get(sec.name) or []
     diffs = [abs(sec.get(key) - pub) / abs(pub) for _, _, key, pub, _, _ in rows
              if key and key.startswith(f"models.{model}.") and isinstance(sec.get(key), int | float) and pub]
     where = rows[0][5] if rows else "the source"
@@ -548,84 +495,6 @@ SECTIONS: Mapping = _FromRooms("report_section")
 #: analysis -> the title of its section, in its room
 TITLES: Mapping = _FromRooms("TITLE")
 
-#: figure file name (regex) -> (analysis, caption)
-CAPTIONS = [
-    (r"fig_pressures", "statics", "Chamber pressures (MPa; ψ = p/p_B on the right) against the discharge pressure, "
-                                  "exact (solid) and the source's closed forms (dashed); Pavlenko (2014), Fig. 2.4 / "
-                                  "2.9"),
-    (r"fig_gap", "statics", "Face gap z (u = z/z_B) and, with a regulator, its valve opening x (ξ = x/x_B) against the "
-                            "discharge pressure; "
-                            "Pavlenko (2014), Fig. 2.5"),
-    (r"fig_flows", "statics", "Flows (L/min; Q/Q_B on the right) against the discharge pressure, reversed flows cut "
-                              "and annotated; Pavlenko (2014), Fig. 2.6 / 2.10"),
-    (r"fig_force_gap", "statics", "Balancing force φ(u) against the face gap at the operating ψ1 and the load τ − χ; "
-                                  "Pavlenko (2014), Eq. (2.35)"),
-    (r"fig_afc", "frequency", "Amplitude and phase of the face-gap response (AFC): the headline energy-consistent "
-                              "model under the physical forcing (thick), the other models under the scene's forcing, "
-                              "unstable ones dashed and labelled; Pavlenko (2014), §2.6"),
-    (r"fig_poles", "stability", "Poles per model (right half-plane = unstable)"),
-    (r"fig_stability_map_(\w+)", "stability", "Stability map of the {0} model: largest real part of the poles over "
-                                              "two parameters, the nominal design marked"),
-    (r"fig_transients", "transient", "Nonlinear transients of the face gap and the chamber pressures"),
-    (r"fig_liquid_efficiency", "liquid_balancer", "Efficiency λ0 against the speed ratio γ, the source's variants and "
-                                                  "the self-consistent closure, with Khomyak (2020) Table 3.2"),
-    (r"fig_liquid_optimum", "liquid_balancer", "Efficiency against liquid height and volume: the IPOPT optimum and a "
-                                               "dense grid"),
-    (r"fig_estimation_(\w+)", "estimation", "Fit {0}: data, fitted curve and its 95 % band; "
-                                             "Pavlenko (2014), Table 4.3"),
-    (r"fig_montecarlo_afc", "montecarlo", "AFC amplitude over the sampled parameters (by default the "
-                                          "energy-consistent model under the physical forcing, its dynamic data "
-                                          "uncertain): nominal, mean, the 0.135-99.865 % quantile band and the ±3σ "
-                                          "lines"),
-    (r"fig_montecarlo_hist", "montecarlo", "Distribution of the face gap and the face leak at the reference "
-                                           "discharge ratio, with the fitted normal, ±3σ and the quantiles"),
-    (r"fig_montecarlo", "montecarlo", "Face gap, valve opening and leak over the samples against ψ1: mean and "
-                                      "0.135-99.865 % quantile bands; Pavlenko (2014), Figs. 3.8-3.9"),
-    (r"fig_reliability", "reliability", "Reliability P(t) (literal and renormalised load density) and the wear "
-                                        "probability; Pavlenko (2014), Figs. 1.27-1.28"),
-    (r"fig_rotor_(\w+)", "rotor_dynamics", "Rotor with a liquid auto-balancer: {0} (Pashkov 2010)"),
-    (r"spinup_robust_profiles", "spinup_robust", "Robust spin-up: speed of the robust profile, the nominal optimum "
-                                                 "and the best ramp, and their deflection on the worst design rotor"),
-    (r"spinup_robust_distribution", "spinup_robust", "Robust spin-up: distribution of the peak deflection over the "
-                                                     "validation rotors, each profile"),
-    (r"spinup_robust_scatter", "spinup_robust", "Robust spin-up: peak deflection of each validation rotor against "
-                                                "its critical-speed factor"),
-    (r"spinup_time_optimal_front", "spinup_time_optimal", "Time-optimal spin-up: the smallest re-simulated peak "
-                                                          "against the arrival deadline, the ramp and the earliest "
-                                                          "arrival under the limit"),
-    (r"spinup_time_optimal_profiles", "spinup_time_optimal", "Time-optimal spin-up: speed and deflection of the "
-                                                             "front's points"),
-    (r"ross_spinup_robust_(profiles|distribution|scatter)", "ross_spinup_robust", "Robust spin-up of the ROSS rotor "
-                                                                                   "(multi-mode): {0}, peaks in µm"),
-    (r"ross_spinup_time_optimal_front", "ross_spinup_time_optimal", "Time-optimal spin-up of the ROSS rotor: the "
-                                                                    "smallest re-simulated peak (µm) against the "
-                                                                    "arrival deadline, the ramp and the earliest "
-                                                                    "arrival under the limit"),
-    (r"ross_spinup_time_optimal_profiles", "ross_spinup_time_optimal", "Time-optimal spin-up of the ROSS rotor: speed "
-                                                                       "and deflection (µm) of the front's points and "
-                                                                       "of the earliest arrival"),
-    (r"ross_spinup_(\w+)", "ross_spinup", "Multi-mode spin-up: {0} of the optimum beside the ramps, critical "
-                                          "speeds of the reduced model dotted"),
-    (r"ross_campbell", "ross_spinup", "Campbell diagram of the reduced rotor: damped natural frequencies against "
-                                      "speed, critical speeds of the reduced model (o) and of ROSS (x)"),
-    (r"spinup_(\w+)", "spinup", "Optimal spin-up: {0} of the optimum beside the ramps"),
-    (r"design_abscissa", "design", "Spectral abscissa max Re λ against the discharge ratio, nominal and optimum "
-                                   "designs, with the required −α"),
-    (r"design_parameters", "design", "Design parameters: optimum relative to nominal"),
-    (r"design_convergence", "design", "IPOPT convergence of the design NLP"),
-]
-
-
-def caption(name: str) -> tuple[str | None, str]:
-    """(analysis, caption) of a figure file."""
-    stem = Path(name).stem
-    for pattern, analysis, words in CAPTIONS:
-        m = re.fullmatch(pattern, stem)
-        if m:
-            return analysis, words.format(*(g.replace("_", " ") for g in m.groups()))
-    return None, stem.replace("_", " ")
-
-
 def data_uri(path: Path) -> str:
     kind = {".png": "image/png", ".svg": "image/svg+xml", ".jpg": "image/jpeg"}[path.suffix.lower()]
     return f"data:{kind};base64," + base64.b64encode(report_input.read_regular(path, MAX_FIGURE_BYTES)).decode("ascii")
@@ -635,8 +504,10 @@ FIGURE_SUFFIXES = (".png", ".svg", ".jpg")
 
 
 def _figures(folder: Path, results: dict) -> dict[str, list[dict]]:
-    """analysis -> its figures {name, caption, uri}, from results.json ``outputs`` or the file names."""
+    """analysis -> its figures {name, caption, uri}, from results.json ``outputs`` (the analysis whose files they
+    are, else none) and ``captions`` (written by ``Result.write`` from its figures; a file without one says so)."""
     outputs = results.get("outputs") if isinstance(results.get("outputs"), dict) else {}
+    captions = results.get("captions") if isinstance(results.get("captions"), dict) else {}
     owner = {f: name for name, files in outputs.items() if isinstance(files, list) for f in files
              if isinstance(f, str)}
     named = results.get("files")
@@ -652,9 +523,9 @@ def _figures(folder: Path, results: dict) -> dict[str, list[dict]]:
         refused += [name] if out_of_folder else []
         if path is None:
             continue
-        analysis, words = caption(name)
-        out.setdefault(owner.get(name, analysis) or "", []).append({"name": name, "caption": words,
-                                                                   "uri": data_uri(path)})
+        words = captions.get(name)
+        words = words if isinstance(words, str) else "no caption in results.json"
+        out.setdefault(owner.get(name, ""), []).append({"name": name, "caption": words, "uri": data_uri(path)})
     if refused:
         shown = ", ".join(text_clean(n, 60) for n in refused[:3]) + (", …" if len(refused) > 3 else "")
         warnings.warn(f"{folder / 'results.json'} names {len(refused)} file(s) outside the folder ({shown}): "

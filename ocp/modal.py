@@ -35,6 +35,7 @@ import casadi as ca
 import numpy as np
 
 from autobal.analysis.fields import Record, TypedResult, declarations, quantity, record, unsaved
+from autobal.analysis.figures import Figure, record_axis
 from autobal.analysis.quantities import Quantity, convert
 from autobal.analysis.result import new_figure, speed_axis, unit_axis
 from autobal.analysis.standards import Margin, half_power_readings, margin_check, margin_quantities, margin_words
@@ -892,10 +893,11 @@ class ModalSpinupResult(TypedResult):
                     label=f"{lab} (peak {q.text(tr.peak)})")
         self._criticals(ax, True, fw)
         ax.set_ylabel(rf"deflection $\max_{{nodes}}\sqrt{{x^2+y^2}}$, {q.display} 0-peak")
+        record_axis(ax, "y", q.unit, q.display)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
 
-    def figures(self) -> dict:
+    def figures(self) -> dict[str, Figure]:
         """Speed (rpm, rad/s) and acceleration (rad/s², rpm/s) against time; deflection (µm) against time and speed;
         Campbell diagram (rad/s, rpm and Hz); every axis in its display unit."""
         title, q = self.title, QUANTITIES.find("peak_deflection_m")
@@ -917,6 +919,7 @@ class ModalSpinupResult(TypedResult):
         for tr, c, ls, lw, _ in self._runs():
             a1.plot(tr.t * ft, q.shown(tr.deflection.max(axis=0)), color=c, ls=ls, lw=lw)
         a1.set_ylabel(f"deflection, {q.display} 0-peak")
+        record_axis(a1, "y", q.unit, q.display)
         a1.grid(alpha=0.3)
         self.draw(a2)
         fig2.suptitle(title, fontsize=9)
@@ -938,7 +941,14 @@ class ModalSpinupResult(TypedResult):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
         ax.set_title("Campbell diagram of the reduced rotor", fontsize=9)
-        return {"ross_spinup_profiles.png": fig, "ross_spinup_deflection.png": fig2, "ross_campbell.png": fig3}
+        what = "of the optimum beside the ramps, critical speeds of the reduced model dotted"
+        return {"ross_spinup_profiles.png": Figure(fig, f"Multi-mode spin-up: speed and acceleration against time "
+                                                        f"{what}"),
+                "ross_spinup_deflection.png": Figure(fig2, "Multi-mode spin-up: deflection (largest over the nodes) "
+                                                           f"against time and against speed {what}"),
+                "ross_campbell.png": Figure(fig3, "Campbell diagram of the reduced rotor: damped natural frequencies "
+                                                  "against speed, critical speeds of the reduced model (o) and of "
+                                                  "ROSS (x)")}
 
 
 #: every number of the ross_spinup block, from the fields: deflections in m (the largest radius of the whirl orbit

@@ -16,6 +16,7 @@ from dataclasses import KW_ONLY, field
 import numpy as np
 
 from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
+from autobal.analysis.figures import Figure
 from autobal.analysis.quantities import Quantity, significant
 from autobal.analysis.result import new_figure, speed_axis, unit_axis
 from autobal.ocp import robust as rb
@@ -275,6 +276,12 @@ class RobustResult(TypedResult):
     worst_runs: dict | None = unsaved()  # key -> re-simulation on the robust profile's worst design rotor
     validation: dict | None = unsaved()  # key -> (samples,) peaks; "factors" -> (samples, 3)
     name = "spinup_robust"
+    #: figure -> its caption
+    CAPTIONS = {"profiles": "Robust spin-up: speed of the robust profile, the nominal optimum and the best ramp, and "
+                            "their deflection on the worst design rotor",
+                "distribution": "Robust spin-up: distribution of the peak deflection over the validation rotors, each "
+                                "profile",
+                "scatter": "Robust spin-up: peak deflection of each validation rotor against its critical-speed factor"}
     null_reasons = {"liquid_mass_factor": "the rotor has no liquid block (or its mass is not uncertain)",
                     "omega_cr_rad_s": "no critical speed below the final speed",
                     "within_drive_limits": "no drive torque data (the scene's drive)"}
@@ -377,7 +384,7 @@ class RobustResult(TypedResult):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
 
-    def figures(self) -> dict:
+    def figures(self) -> dict[str, Figure]:
         """Profiles and the deflection on the worst design rotor; validation distribution; peak against the
         critical-speed factor."""
         self._runs()
@@ -416,8 +423,8 @@ class RobustResult(TypedResult):
         ax3.grid(alpha=0.3)
         ax3.legend(fontsize=7, markerscale=4)
         fig3.suptitle(title, fontsize=8)
-        return {f"{self.name}_profiles.png": fig, f"{self.name}_distribution.png": fig2,
-                f"{self.name}_scatter.png": fig3}
+        figs = {"profiles": fig, "distribution": fig2, "scatter": fig3}
+        return {f"{self.name}_{k}.png": Figure(f, self.CAPTIONS[k]) for k, f in figs.items()}
 
 
 @record
@@ -426,6 +433,7 @@ class ModalRobustResult(RobustResult):
     reduced rotor; its problem has no drive torque or power model."""
 
     name = "ross_spinup_robust"
+    CAPTIONS = {k: f"Robust spin-up of the ROSS rotor (multi-mode): {k}" for k in RobustResult.CAPTIONS}
     null_reasons = RobustResult.null_reasons | {
         "within_drive_limits": "the modal rotor's problem has no drive torque or power model (its ramps keep the "
                                "acceleration bound and the speed cap)"}

@@ -18,6 +18,7 @@ import numpy as np
 
 from autobal.analysis import solver_options, standards
 from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
+from autobal.analysis.figures import Figure
 from autobal.analysis.quantities import Quantity, significant
 from autobal.analysis.result import new_figure, speed_axis, twin_axis, unit_axis
 from autobal.analysis.rotor_study import api_margins
@@ -387,7 +388,7 @@ class SpinupResult(TypedResult):
         ax.grid(alpha=0.3)
         legend_above_curves(ax)  # every run's peak stays visible
 
-    def figures(self) -> dict:
+    def figures(self) -> dict[str, Figure]:
         """Speed (rpm, rad/s), acceleration steps (rad/s², rpm/s), drive torque (N·m) and, with drive data, power (kW)
         against time; deflection (delta/e, mm) against time and speed; every axis in its display unit."""
         title = self.title
@@ -437,7 +438,11 @@ class SpinupResult(TypedResult):
         a2.grid(alpha=0.3)
         a2.legend(fontsize=7)
         fig2.suptitle(title, fontsize=9)
-        return {"spinup_profiles.png": fig, "spinup_deflection.png": fig2}
+        return {"spinup_profiles.png": Figure(fig, "Optimal spin-up: speed, acceleration, drive torque (and power) "
+                                                   "of the optimum beside the ramps against time, the critical speed "
+                                                   "and the drive's limits dotted"),
+                "spinup_deflection.png": Figure(fig2, "Optimal spin-up: deflection of the optimum beside the ramps "
+                                                      "against time and against speed")}
 
 
 def _read_csv(path: Path) -> dict | None:

@@ -14,6 +14,7 @@ from dataclasses import KW_ONLY
 import numpy as np
 
 from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
+from autobal.analysis.figures import Figure
 from autobal.analysis.quantities import Declarations, significant
 from autobal.analysis.result import new_figure, speed_axis, unit_axis
 from autobal.ocp import time_optimal as to
@@ -131,6 +132,10 @@ class TimeOptimalResult(TypedResult):
     points: list | None = unsaved()  # the front's FrontPoints (their re-simulations)
     limited_point: to.FrontPoint | None = unsaved()  # the earliest arrival's (None: the ramp)
     name = "spinup_time_optimal"
+    #: figure -> its caption
+    CAPTIONS = {"front": "Time-optimal spin-up: the smallest re-simulated peak against the arrival deadline, the ramp "
+                         "and the earliest arrival under the limit",
+                "profiles": "Time-optimal spin-up: speed and deflection of the front's points"}
     null_reasons = {"deflection_limit_over_e": "no deflection_limit in the scene: the front only",
                     "held_from_s": "the point's own minimum-peak optimum",
                     "limited": "the maximum-acceleration ramp keeps the limit: it arrives first"}
@@ -239,7 +244,7 @@ class TimeOptimalResult(TypedResult):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
 
-    def figures(self) -> dict:
+    def figures(self) -> dict[str, Figure]:
         """The front; the speed and deflection of its points and of the earliest arrival (black, the limit dotted)."""
         self._runs()
         title = self.title
@@ -265,7 +270,8 @@ class TimeOptimalResult(TypedResult):
             a.grid(alpha=0.3)
             a.legend(fontsize=6, ncols=2)
         fig2.suptitle(title, fontsize=8)
-        return {f"{self.name}_front.png": fig, f"{self.name}_profiles.png": fig2}
+        return {f"{self.name}_front.png": Figure(fig, self.CAPTIONS["front"]),
+                f"{self.name}_profiles.png": Figure(fig2, self.CAPTIONS["profiles"])}
 
 
 @record
@@ -280,6 +286,10 @@ class ModalTimeOptimalResult(TimeOptimalResult):
     peak_deflection: float | None = _peak_deflection("m")
     limited: ModalPoint | None = optional(present_with="deflection_limit")
     name = "ross_spinup_time_optimal"
+    CAPTIONS = {"front": "Time-optimal spin-up of the ROSS rotor: the smallest re-simulated peak against the "
+                         "arrival deadline, the ramp and the earliest arrival under the limit",
+                "profiles": "Time-optimal spin-up of the ROSS rotor: speed and deflection of the front's points "
+                            "and of the earliest arrival"}
     null_reasons = {"deflection_limit_m" if k == "deflection_limit_over_e" else k: v
                     for k, v in TimeOptimalResult.null_reasons.items()}
 

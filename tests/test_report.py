@@ -109,7 +109,7 @@ def test_report_of_a_fast_scene(output, name):
 def test_report_of_every_other_shipped_scene(output, name):
     page = check_report(output(name))
     body = " ".join(page.text)
-    if name in report.PUBLISHED:
+    if name in report.published():
         assert "Comparison with the source's published values" in body
 
 
