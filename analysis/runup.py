@@ -43,6 +43,7 @@ import numpy as np
 from scipy import stats
 
 from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record
+from autobal.analysis.figures import Figure, record_axis
 from autobal.analysis.least_squares import LeastSquares, uncertainty
 from autobal.analysis.quantities import convert
 from autobal.analysis.result import new_figure, unit_axis
@@ -877,15 +878,16 @@ class RunupResult(TypedResult):
         cols = {k: v for k, v in s.to_dict().items() if v is not None}
         return {"runup_vectors.csv": QUANTITIES.columns(cols, "series")}
 
-    def save(self, folder):
+    def write(self, folder):
+        """The tables and figures, and the identified rotor as a spin-up scene's ``rotor:`` section."""
         from pathlib import Path
 
-        paths = super().save(folder)
+        paths, captions = super().write(folder)
         if self.rotor_yaml:
             p = Path(folder) / "identified_rotor.yaml"
             p.write_text(self.rotor_yaml, encoding="utf-8")
             paths.append(p)
-        return paths
+        return paths, captions
 
     def draw(self, ax) -> None:
         """Bode amplitude of probe x: measured, transient fit, steady-state fit."""
@@ -913,7 +915,10 @@ class RunupResult(TypedResult):
         a2.set_ylabel("phase lag φ_x (deg, from the key-phasor)")
         a2.grid(alpha=0.3)
         fig.suptitle(f"{self.title}: Bode plot of probe x", fontsize=9)
-        out = {"fig_runup_bode.png": fig}
+        out = {"fig_runup_bode.png": Figure(
+            fig, "Bode plot of probe x: the measured 1x vectors (amplitude 0-peak and phase lag from the key-phasor) "
+                 "against speed, beside the transient fit driven by the measured speed profile and the steady-state "
+                 "fit; the gap between the two fits is the passage effect of the run-up rate")}
         fig2, (b1, b2) = new_figure((10, 4.6), 1, 2)
         f = convert(1.0, "m", "µm")
         rpm = unit_axis(b2, "speed ω", "rad/s", "rpm", which="x")
@@ -927,6 +932,8 @@ class RunupResult(TypedResult):
         b1.set_aspect("equal", adjustable="datalim")
         b1.set_xlabel("Re X (µm)")
         b1.set_ylabel("Im X (µm)")
+        record_axis(b1, "x", "m", "µm")
+        record_axis(b1, "y", "m", "µm")
         b1.set_title("polar plot of probe x (x = Re(X e^{iφ}))", fontsize=8)
         b1.grid(alpha=0.3)
         b1.legend(fontsize=7)
@@ -941,10 +948,14 @@ class RunupResult(TypedResult):
             b2.axhline(self.adequacy.noise * f * math.sqrt(2), color="k", lw=0.8, ls=":",
                        label="noise √2 σ (a vector's)")
         b2.set_ylabel("residual |ΔX| (µm)")
+        record_axis(b2, "y", "m", "µm")
         b2.grid(alpha=0.3)
         b2.legend(fontsize=7)
         fig2.suptitle(self.title, fontsize=9)
-        out["fig_runup_polar_residual.png"] = fig2
+        out["fig_runup_polar_residual.png"] = Figure(
+            fig2, "Polar plot of probe x's 1x vectors (measured, transient fit, steady-state fit) and the residual "
+                  "|measured − fit| against speed beside the noise of a vector: a residual above the noise where the "
+                  "rotor crosses its critical speed is what the steady-state reading misses")
         return out
 
 
