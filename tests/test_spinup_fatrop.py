@@ -70,7 +70,7 @@ def test_fatrop_reaches_ipopt_s_optimum_from_the_same_guess():
     ocp = dataclasses.replace(spinup_ocp(scene, scene.analyses.spinup), jerk_variation=0.0)
     ipopt = osolve.Solver(ocp, DirectCollocation(100), 200.0)
     fatrop = osolve.Solver(ocp, DirectCollocation(100, solver="fatrop"), 200.0)
-    u = osolve.starts(ocp, 100, multistart=False)[0][1]
+    u = osolve.starts(ocp, 100)[0][1]  # the global search's three-phase profile
     a = ipopt.solve(u, hold_states=True)
     b = fatrop.solve(u, hold_states=True)
     assert a.success and b.success and b.status == "Solve_Succeeded"
