@@ -930,8 +930,8 @@ class RunupResult(TypedResult):
             z = amp * f * np.exp(-1j * np.radians(lag))  # X = |X| e^{-i lag}
             b1.plot(z.real, z.imag, style, ms=3, lw=1, label=label)
         b1.set_aspect("equal", adjustable="datalim")
-        b1.set_xlabel("Re X (µm)")
-        b1.set_ylabel("Im X (µm)")
+        b1.set_xlabel("Re X, µm")
+        b1.set_ylabel("Im X, µm")
         record_axis(b1, "x", "m", "µm")
         record_axis(b1, "y", "m", "µm")
         b1.set_title("polar plot of probe x (x = Re(X e^{iφ}))", fontsize=8)
@@ -947,7 +947,7 @@ class RunupResult(TypedResult):
         if self.adequacy is not None:
             b2.axhline(self.adequacy.noise * f * math.sqrt(2), color="k", lw=0.8, ls=":",
                        label="noise √2 σ (a vector's)")
-        b2.set_ylabel("residual |ΔX| (µm)")
+        b2.set_ylabel("residual |ΔX|, µm")
         record_axis(b2, "y", "m", "µm")
         b2.grid(alpha=0.3)
         b2.legend(fontsize=7)

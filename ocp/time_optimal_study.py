@@ -131,6 +131,7 @@ class TimeOptimalResult(TypedResult):
                                                    "1 − peak/limit", headline=4, optional=True)
     points: list | None = unsaved()  # the front's FrontPoints (their re-simulations)
     limited_point: to.FrontPoint | None = unsaved()  # the earliest arrival's (None: the ramp)
+    front_run: to.Front | None = unsaved()  # the front as solved (points, the ramp's re-simulation)
     name = "spinup_time_optimal"
     #: figure -> its caption
     CAPTIONS = {"front": "Time-optimal spin-up: the smallest re-simulated peak against the arrival deadline, the ramp "
@@ -367,7 +368,7 @@ def run(ocp, method: DirectCollocation, points: int, title: str = "", multistart
                          "re-simulation"},
         deflection_limit=limit, **end,
         limit_margin=None if limit is None else 1 - end["peak_deflection"] / limit,
-        points=fr.points, limited_point=limited)
+        points=fr.points, limited_point=limited, front_run=fr)
 
 
 def _point(cls, p: to.FrontPoint) -> Point:

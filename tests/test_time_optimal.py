@@ -64,7 +64,7 @@ def test_earliest_arrival_is_min_times_own_and_earlier_than_the_regula_falsi():
     assert 13.0 * (1 - 1e-3) <= d["peak_deflection_over_e"] <= 13.0
     assert res.limited_point.trajectory.peak_delta == d["peak_deflection_over_e"]  # the CVODES re-simulation
     assert res.limited_point.resimulation_rel_error < 0.005
-    falsi, _ = to.earliest_arrival(ocp, method, 13.0, res.front, opts, s.multistart, min_time=False)
+    falsi, _ = to.earliest_arrival(ocp, method, 13.0, res.front_run, opts, s.multistart, min_time=False)
     assert falsi.peak <= 13.0
     assert d["arrival_time_s"] <= falsi.arrival_time_s
     # monotone: the ramp, the front's points and the earliest arrival by arrival time
