@@ -43,7 +43,7 @@ import numpy as np
 from scipy import stats
 
 from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record
-from autobal.analysis.figures import Figure, record_axis
+from autobal.analysis.figures import Figure
 from autobal.analysis.least_squares import LeastSquares, uncertainty
 from autobal.analysis.quantities import convert
 from autobal.analysis.result import new_figure, unit_axis
@@ -920,7 +920,8 @@ class RunupResult(TypedResult):
                  "against speed, beside the transient fit driven by the measured speed profile and the steady-state "
                  "fit; the gap between the two fits is the passage effect of the run-up rate")}
         fig2, (b1, b2) = new_figure((10, 4.6), 1, 2)
-        f = convert(1.0, "m", "µm")
+        f = unit_axis(b1, "Re X", "m", "µm", which="x", other="")  # the chosen length unit
+        unit_axis(b1, "Im X", "m", "µm", other="")
         rpm = unit_axis(b2, "speed ω", "rad/s", "rpm", which="x")
         for amp, lag, style, label in ((s.x_amplitude, s.x_lag_deg, ".", "measured"),
                                        (s.fit_x_amplitude, s.fit_x_lag_deg, "-", "transient fit"),
@@ -930,10 +931,6 @@ class RunupResult(TypedResult):
             z = amp * f * np.exp(-1j * np.radians(lag))  # X = |X| e^{-i lag}
             b1.plot(z.real, z.imag, style, ms=3, lw=1, label=label)
         b1.set_aspect("equal", adjustable="datalim")
-        b1.set_xlabel("Re X, µm")
-        b1.set_ylabel("Im X, µm")
-        record_axis(b1, "x", "m", "µm")
-        record_axis(b1, "y", "m", "µm")
         b1.set_title("polar plot of probe x (x = Re(X e^{iφ}))", fontsize=8)
         b1.grid(alpha=0.3)
         b1.legend(fontsize=7)
@@ -947,8 +944,7 @@ class RunupResult(TypedResult):
         if self.adequacy is not None:
             b2.axhline(self.adequacy.noise * f * math.sqrt(2), color="k", lw=0.8, ls=":",
                        label="noise √2 σ (a vector's)")
-        b2.set_ylabel("residual |ΔX|, µm")
-        record_axis(b2, "y", "m", "µm")
+        unit_axis(b2, "residual |ΔX|", "m", "µm", other="")
         b2.grid(alpha=0.3)
         b2.legend(fontsize=7)
         fig2.suptitle(self.title, fontsize=9)
