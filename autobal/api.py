@@ -20,6 +20,8 @@ import warnings
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 
+from threadpoolctl import threadpool_limits
+
 from autobal import __version__, analyses, report, scenario
 from autobal.analysis import executor, interrupt
 from autobal.analysis.quantities import display_units
@@ -209,6 +211,11 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
         environment variable ``AUTOBAL_SCHEDULER``, else in this process).  A scene cannot name one: a
         scheduler's results are unpickled here, so it is trusted like code.
 
+    The run's dense linear algebra (numpy, scipy, ROSS) uses one BLAS thread: a multithreaded BLAS sums in an order
+    that changes from run to run, and the ROSS rotors' eigenvectors, then the spin-up optimum chosen from them,
+    changed with it (at 1e-8, and by 1 % in the robust ROSS scene); with one thread a scene gives the same numbers
+    on every run.  The solvers' own threads (IPOPT's MUMPS, CVODES) are not affected.
+
     Returns
     -------
     Run
@@ -232,7 +239,7 @@ def run(scene: Scenario | str | Path, out: str | Path | None = None, on_result=N
     results, timing, current = {}, {}, None
     log = SolverLog(folder.tmp / LOG) if folder is not None else None
     try:
-        with log or contextlib.nullcontext(), executor.using(scheduler), \
+        with log or contextlib.nullcontext(), executor.using(scheduler), threadpool_limits(1, user_api="blas"), \
                 display_units(display(scene), under=True):  # the summaries on_result prints
             for current in analyses.named(scene):
                 t0 = time.perf_counter()

@@ -137,3 +137,20 @@ def test_public_names_resolve():
     for name in autobal.__all__:
         assert getattr(autobal, name) is not None
     assert autobal.DeviceParams is device.DeviceParams
+
+
+def test_a_run_uses_one_blas_thread_and_gives_it_back():
+    """Bit-identical runs: during a run the BLAS of numpy and scipy has one thread (a multithreaded BLAS sums in a
+    varying order; the ROSS spin-up scenes changed by up to 1 % from run to run), and the caller's setting is back
+    afterwards."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    def blas_threads():
+        return {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
+
+    seen = []
+    with threadpool_limits(2, user_api="blas"):
+        autobal.run("compressor_k180_statics", on_result=lambda *_: seen.append(blas_threads()))
+        after = blas_threads()
+    assert seen and all(s == {1} for s in seen)
+    assert after == {2}
