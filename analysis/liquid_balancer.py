@@ -18,7 +18,7 @@ import time
 import casadi as ca
 import numpy as np
 
-from autobal.analysis import interrupt
+from autobal.analysis import interrupt, solver_options
 from autobal.analysis.fields import Record, TypedResult, declarations, keyed, optional, quantity, record
 from autobal.analysis.figures import Figure
 from autobal.analysis.liquid_balancer_optimum import crescent_volume, optimise
@@ -735,12 +735,18 @@ def run(system: System, settings, title: str = "") -> LiquidBalancerResult:
 
 # ---- time-domain Jeffcott rotor: the independent check of (2.5)/(2.7) ----------------------------
 
-@functools.cache
 def jeffcott_integrator(t_end: float, n_out: int) -> ca.Function:
-    """CVODES integrator of x'' + 2n x' + omega_cr^2 x = e_c omega^2 cos(omega t) (and y with sin), per unit e_c.
+    """CVODES integrator of x'' + 2n x' + omega_cr^2 x = e_c omega^2 cos(omega t) (and y with sin), per unit e_c,
+    with the solver options' group ``liquid_balancer_check``.
 
     Parameters p = (omega, omega_cr, n); states (x, y, x', y'); outputs on a grid of ``n_out`` times in (0, t_end].
     """
+    opts = solver_options.get("liquid_balancer_check")
+    return _jeffcott_integrator(t_end, n_out, opts["tol"], opts["max_num_steps"])
+
+
+@functools.cache
+def _jeffcott_integrator(t_end: float, n_out: int, tol: float, max_num_steps: int) -> ca.Function:
     x = ca.SX.sym("x", 4)
     p = ca.SX.sym("p", 3)
     t = ca.SX.sym("t")
@@ -749,7 +755,7 @@ def jeffcott_integrator(t_end: float, n_out: int) -> ca.Function:
                      -2 * n * x[3] - wcr**2 * x[1] + w**2 * ca.sin(w * t))
     grid = np.linspace(0.0, t_end, n_out + 1)[1:]
     return ca.integrator("jeffcott", "cvodes", {"x": x, "p": p, "t": t, "ode": rhs}, 0.0, grid,
-                         {"abstol": 1e-11, "reltol": 1e-11, "max_num_steps": 200000})
+                         {"abstol": tol, "reltol": tol, "max_num_steps": max_num_steps})
 
 
 def accuracy(system: System, searches: dict) -> dict:

@@ -23,10 +23,9 @@ from functools import cache
 import casadi as ca
 import numpy as np
 
-from autobal.analysis import interrupt
+from autobal.analysis import interrupt, solver_options
 from autobal.models.rotor import RotorParams, rotor_model
 
-TOL = 1e-10  # CVODES relative and absolute tolerance of the studies (states are O(1)-O(100))
 SEGMENT_POINTS = 256  # output samples per CVODES call on long uniform runs (fewer restarts)
 
 
@@ -137,7 +136,7 @@ def step_closed_form(p: RotorParams, nu0: float, nu: float, tau) -> np.ndarray:
 # ---- integration -----------------------------------------------------------------------------------
 
 @cache
-def _integrator(points: int, tol: float) -> ca.Function:
+def _integrator(points: int, tol: float, max_num_steps: int) -> ca.Function:
     """CVODES over one segment in normalized time s in [0, 1], dq/ds = h f(q, a*, p); outputs at
     s = 1/points, ..., 1.  Parameters [a*, h, p]."""
     m = rotor_model()
@@ -146,14 +145,16 @@ def _integrator(points: int, tol: float) -> ca.Function:
     ode = par[1] * m.ode(q, par[0], par[2:])
     grid = np.linspace(0, 1, points + 1)[1:].tolist()
     return ca.integrator(f"rotor_seg_{points}", "cvodes", {"x": q, "p": par, "ode": ode}, 0, grid,
-                         {"abstol": tol, "reltol": tol, "max_num_steps": 100000})
+                         {"abstol": tol, "reltol": tol, "max_num_steps": max_num_steps})
 
 
-def simulate(p: RotorParams, q0, a_seg, h_seg, points: int = 16, tol: float = TOL) -> dict:
+def simulate(p: RotorParams, q0, a_seg, h_seg, points: int = 16, tol: float | None = None) -> dict:
     """Integrate the rotating-frame model with piecewise-constant a* (segment k has a_seg[k] over the
     dimensionless duration h_seg[k]) from q0 = (x, y, x', y', nu); states at ``points`` instants
-    per segment.  Returns tau (with 0) and q (5 x len(tau))."""
-    F = _integrator(points, tol)
+    per segment (CVODES, the solver options' group ``rotor``; ``tol`` overrides its tolerance).  Returns tau
+    (with 0) and q (5 x len(tau))."""
+    opts = solver_options.get("rotor")
+    F = _integrator(points, opts["tol"] if tol is None else tol, opts["max_num_steps"])
     a_seg, h_seg = np.atleast_1d(a_seg).astype(float), np.atleast_1d(h_seg).astype(float)
     pv = list(p.p)
     qs, taus, q, t0 = [np.asarray(q0, float)[:, None]], [np.zeros(1)], np.asarray(q0, float), 0.0
@@ -197,7 +198,7 @@ def _segments(duration: float, dt: float) -> tuple[np.ndarray, int]:
 
 
 def passage(p: RotorParams, nu0: float, a_star: float, nu_end: float, q0=None, per_unit: float = 24.0,
-            tol: float = TOL) -> dict:
+            tol: float | None = None) -> dict:
     """Uniform acceleration nu = nu0 + a* tau (the source's omega = omega0 + 2 eps t) from the steady
     state (8') at nu0 (or q0) to nu_end: delta/e and d (9') on a dense grid, and their peaks
     (max, nu at the max).  ``per_unit`` samples per unit of tau (a whirl period is 2 pi / (nu + 1))."""
@@ -233,7 +234,7 @@ def lewis_end(a_star: float) -> float:
     return 1 + 2.1574 * np.sqrt(a_star) + max(0.15, 5 * np.sqrt(a_star))
 
 
-def lewis(zeta: float, a_star: float, per_unit: float = 12.0, tol: float = TOL) -> dict:
+def lewis(zeta: float, a_star: float, per_unit: float = 12.0, tol: float | None = None) -> dict:
     """Lewis (1932) problem: Jeffcott rotor (psi = 1) from rest, u = u' = 0,
     nu(0) = 0, constant a* = alpha/Omega^2.  |u| = |w|, so the rotating frame is used; it runs
     past the asymptotic peak speed 1 + 2.1574 sqrt(a*).  Returns the peak |u|/e and nu there."""
@@ -253,8 +254,9 @@ def motor_runup(p: RotorParams, stall: float, no_load: float, tau_end: float, q0
     q = ca.SX.sym("q", 5)
     L = stall * (1 - q[4] / no_load)
     grid = np.linspace(0, tau_end, points + 1)[1:].tolist()
+    opts = solver_options.get("rotor")
     F = ca.integrator("motor", "cvodes", {"x": q, "ode": m.ode_torque(q, L, p.p)}, 0, grid,
-                      {"abstol": TOL, "reltol": TOL, "max_num_steps": 200000})
+                      {"abstol": opts["tol"], "reltol": opts["tol"], "max_num_steps": opts["max_num_steps"]})
     q0 = [0, 0, 0, 0, 0] if q0 is None else q0
     qq = np.hstack([np.asarray(q0, float)[:, None], np.array(interrupt.call(F, x0=q0)["xf"])])
     tau = np.concatenate([[0.0], grid])

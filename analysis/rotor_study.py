@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from autobal.analysis import progress, standards
+from autobal.analysis import progress, solver_options, standards
 from autobal.analysis import rotor as R
 from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
 from autobal.analysis.figures import Figure
@@ -555,7 +555,9 @@ def run(P: RotorParams, settings, title: str = "", motor=None, service_speed: fl
 def accuracy(stationary: Stationary | None, steps: Steps | None) -> dict:
     """The run's own cross-checks as its error estimate: steady state (3) against the stationary
     curve (9), eigenpair residuals of the stability check, and the step transients' closed form
-    (4)-(7) against CVODES; the passage and Lewis integrations run at TOL with no second method."""
+    (4)-(7) against CVODES; the passage and Lewis integrations run at the solver options' ``rotor.tol`` with no
+    second method."""
+    tol = solver_options.get("rotor")["tol"]
     checks = {
         "steady_state_vs_eq9": stationary and stationary.steady_vs_eq9_max_rel_diff,
         "stability_eigen_residual": stationary and stationary.stability.max_eigenvalue_residual,
@@ -563,5 +565,5 @@ def accuracy(stationary: Stationary | None, steps: Steps | None) -> dict:
     }
     checks = {k: v for k, v in checks.items() if v is not None}
     how = (f"largest of the run's cross-checks ({', '.join(checks) or 'none in this scene'}); the passage, Lewis "
-           f"and run-up integrations use CVODES at rtol = atol = {R.TOL:g} and are bounded by that tolerance only")
-    return {"estimate": max(checks.values(), default=R.TOL), "how": how, **checks, "integration_tol": R.TOL}
+           f"and run-up integrations use CVODES at rtol = atol = {tol:g} and are bounded by that tolerance only")
+    return {"estimate": max(checks.values(), default=tol), "how": how, **checks, "integration_tol": tol}

@@ -19,7 +19,9 @@ An option is read when its solver is built or run (a solver built before a chang
 own setting (``analyses.spinup.max_iterations`` and ``tolerance``, a fit's ``max_iterations``) and a caller's
 argument (``Simulator(rtol=...)``) win over the session's default; those settings default to :data:`DEFAULTS`.
 Where IPOPT writes (``print_level`` 0, its log into a file of its own: :mod:`autobal.analysis.ipopt`) is no option
-here.  Options are of this process: the workers of a dask cluster (:mod:`autobal.analysis.executor`)
+here.  The models' own numerics (models/, a layer below this module: the Newton equilibrium of a dynamic model,
+the ROSS rotor's fixed-frame re-simulation tolerance ``RESIM_TOL``) are constants of their modules, which every
+caller may override by argument.  Options are of this process: the workers of a dask cluster (:mod:`autobal.analysis.executor`)
 use the documented ones.
 """
 
@@ -135,6 +137,16 @@ GROUPS = {
         # (benchmarks/spinup_ocp.md, "Study time")
         "tol": (1e-10, "relative and absolute tolerance, -"),
         "points": (24, "samples per control interval"),
+    }),
+    "rotor": ("CVODES of the Jeffcott rotor's studies (the passage of the critical speed, Lewis' run-up, the motor "
+              "run-up: analysis/rotor.py)", {
+        "tol": (1e-10, "relative and absolute tolerance (states are O(1)-O(100)), -"),
+        "max_num_steps": (200000, "step attempts between two outputs"),
+    }),
+    "liquid_balancer_check": ("CVODES of the time-domain Jeffcott rotor that checks the liquid balancer's closed-form "
+                              "phase and deflection (analysis/liquid_balancer.py)", {
+        "tol": (1e-11, "relative and absolute tolerance, -"),
+        "max_num_steps": (200000, "step attempts between two outputs"),
     }),
     "transient": ("the transient study's integrator (CVODES, IDAS; RODAS4 reads rtol, atol, max_num_steps)", {
         "rtol": (1e-9, "relative tolerance, -"),

@@ -159,6 +159,20 @@ def test_the_transient_integrator_reads_its_group():
     assert "step budget" in short.run(short.input_vector("force_step", 0.01))["failure"]["message"]
 
 
+def test_the_rotor_studies_read_their_group():
+    """Lewis' run-up (analysis/rotor.py): a looser tolerance of the group moves the peak, within it, and a step
+    budget of 3 does not reach the first output (CVODES fails)."""
+    from autobal.analysis import rotor
+
+    ref = rotor.lewis(0.05, 0.01)["peak"]
+    with autobal.using_solver_defaults("rotor", tol=1e-5):
+        loose = rotor.lewis(0.05, 0.01)["peak"]
+    assert 0 < abs(loose - ref) < 1e-3 * ref
+    assert rotor.lewis(0.05, 0.01, tol=1e-5)["peak"] == loose  # the caller's own wins
+    with autobal.using_solver_defaults("rotor", max_num_steps=3), pytest.raises(RuntimeError):
+        rotor.lewis(0.05, 0.01)
+
+
 def test_the_scene_defaults_are_the_documented_ones():
     from autobal.analyses.estimation import Fit
     from autobal.analyses.spinup import Spinup
