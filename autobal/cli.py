@@ -355,7 +355,10 @@ def _main(args) -> int:
     chosen = {f"display.{kind}": unit for kind, unit in _units(getattr(args, "units", [])).items()}
     scn = scenario.load(args.scenario, overrides=_overrides(args.set) | chosen)
     if args.cmd == "check":
+        posed = analyses.check(scn)  # the spin-up problems posed as the run would, the drive's reach checked
         _say(f"{scn.name}: valid; analyses: {', '.join(analyses.named(scn)) or 'none'}{_extras_note(scn)}")
+        if posed:
+            _say(f"  posed without solving: {', '.join(posed)} (the drive reaches the final speed by the deadline)")
         for path, value, kind in quantities(scn, units.ANGULAR):  # the speeds as read: rad/s and rpm
             _say(f"  {path} = {units.angular_text(value, kind)}")
         return EXIT_OK

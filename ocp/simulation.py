@@ -319,23 +319,25 @@ def rate_cap(ocp: SpinupOcp, omega: float) -> float:
 
 def drive_unreachable(ocp: SpinupOcp, points: int = 401) -> str | None:
     """Why the drive cannot take the rotor from omega_start up to omega_final by the deadline, or None: its earliest
-    arrival, at :func:`rate_cap` at every speed (the torque, power and motor limits on the inertia it accelerates,
-    and alpha_max), later than the horizon, or a speed it cannot accelerate past.  A check before solving (the
-    Jeffcott and the modal rotor); without torque, power or motor limits the acceleration limit alone is checked
-    where the problem is posed."""
+    arrival, at :func:`rate_cap` at every speed (the acceleration limit alpha_max, and the torque, power and motor
+    limits on the inertia it accelerates), later than the horizon, or a speed it cannot accelerate past.  A check
+    before solving (the Jeffcott and the modal rotor)."""
     w0, wf = ocp.omega_start, ocp.omega_final
-    limited = ocp.torque_max is not None or ocp.power_max is not None or ocp.motor_stall_torque is not None
-    if wf <= w0 or not limited or ocp.inertia <= 0:
+    if wf <= w0:
         return None
+    limited = ocp.inertia > 0 and (ocp.torque_max is not None or ocp.power_max is not None
+                                   or ocp.motor_stall_torque is not None)
     w = np.linspace(w0, wf, points)
     a = np.array([rate_cap(ocp, x) for x in w])
-    what = f"the drive's torque, power and motor limits on its inertia {ocp.inertia:.4g} kg m^2"
+    what = (f"the drive's torque, power and motor limits on its inertia {ocp.inertia:.4g} kg m^2 and "
+            if limited else "")
     if (a <= 0).any():
-        return (f"{what} accelerate it no further than {w[np.argmax(a <= 0)]:.4g} rad/s: it never reaches the final "
+        return (f"{what.removesuffix(' and ')} accelerate it no further than {w[np.argmax(a <= 0)]:.4g} rad/s: it never reaches the final "
                 f"speed {wf:.4g} rad/s")
     t = float(np.sum(np.diff(w) * 0.5 * (1.0 / a[1:] + 1.0 / a[:-1])))  # dt = d omega / alpha, trapezoids
     if t > ocp.horizon * (1 + 1e-6):
-        return (f"{what} and |alpha| <= {ocp.alpha_max:g} rad/s^2 take it from {w0:.4g} to {wf:.4g} rad/s in "
+        return (f"{what or 'the acceleration limit '}|alpha| <= {ocp.alpha_max:g} rad/s^2 "
+                f"take{'' if what else 's'} it from {w0:.4g} to {wf:.4g} rad/s in "
                 f"{t:.4g} s at the earliest, after the horizon {ocp.horizon:g} s")
     return None
 

@@ -229,6 +229,20 @@ def test_an_unreachable_jeffcott_drive_is_refused_before_solving(capsys):
     assert "7.121e+05 s at the earliest" in refused(capsys, "spinup_rotor_datasheet", "rotor.drive.max_torque=1e-3 N*m")
 
 
+def test_an_acceleration_limit_that_cannot_reach_the_final_speed_is_refused_by_check_and_run(capsys):
+    """40 -> 210 rad/s at |alpha| <= 40 rad/s^2 takes 170/40 = 4.25 s: a 0.5 s deadline is refused with that reason,
+    by ``autobal check`` as by ``autobal run`` (before, the run solved and reported a violated deflection limit)."""
+    why = "analyses.spinup: the acceleration limit |alpha| <= 40 rad/s^2 takes it from 40 to 210 rad/s in 4.25 s " \
+          "at the earliest, after the horizon 0.5 s"
+    assert why in refused(capsys, "spinup_jeffcott_deadline_5s", "analyses.spinup.horizon=0.5 s")
+    assert cli.main(["check", "spinup_jeffcott_deadline_5s", "--set", "analyses.spinup.horizon=0.5 s"]) == 2
+    assert why in capsys.readouterr().err
+    assert cli.main(["check", "spinup_rotor_datasheet", "--set", "rotor.drive.max_torque=50 N*m"]) == 2
+    assert "14.24 s at the earliest, after the horizon 8 s" in capsys.readouterr().err
+    assert cli.main(["check", "spinup_jeffcott_deadline_5s", "--set", "analyses.spinup.horizon=4.25 s"]) == 0
+    assert "posed without solving: spinup" in capsys.readouterr().out
+
+
 def test_an_unreachable_modal_drive_is_refused_when_posed():
     """The one-disk modal rotor (tests/test_ross_rotor.py) with J = I_p + 0.05 = 0.13 kg m^2 on a 100 W drive: power
     limited from the start (100/(0.13 x 50) = 15.4 < 100 rad/s^2), the earliest arrival J (w_f^2 - w_0^2)/(2P) =

@@ -75,6 +75,21 @@ def extras(scene) -> dict[str, bool]:
     return out
 
 
+def check(scene) -> list[str]:
+    """Pose each analysis' problem as its run would, without solving (``autobal check``): the analyses whose room
+    has ``check(scene, settings)`` (the spin-up problems: a drive that cannot reach the final speed by the deadline
+    is refused here, as by the run).  A problem that cannot be posed raises ScenarioError; returns the analyses
+    posed (an analysis whose extra is missing is not)."""
+    missing = {name for name, installed in extras(scene).items() if not installed}
+    posed = []
+    for key in named(scene):
+        mod = module(key)
+        if hasattr(mod, "check") and getattr(mod, "EXTRA", None) not in missing:
+            mod.check(scene, getattr(scene.analyses, key))
+            posed.append(key)
+    return posed
+
+
 def accuracy_studies() -> dict:
     """Analysis -> its work-precision study ``accuracy(scene, settings)``, for the analyses that have one
     (imports every analysis module: for ``autobal accuracy`` only)."""

@@ -137,6 +137,12 @@ def problem(scene, settings: RossSpinup, key: str = "ross_spinup", **extra):
         raise ScenarioError(f"analyses.{key}: {exc}") from None
 
 
+def check(scene, settings: RossSpinup) -> None:
+    """``autobal check``: the modal problem posed (ROSS's rotor built and reduced, a few seconds), the drive's reach
+    checked, nothing solved."""
+    problem(scene, settings)
+
+
 def estimate_seconds(settings: RossSpinup) -> float:
     """ROSS's import, numba compilation and matrices, its critical speeds, then the four-phase search, its starts on
     the coarse mesh and the refinement on the modal envelope: about 5.5 solves' worth on the full mesh (the shipped

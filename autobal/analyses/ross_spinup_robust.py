@@ -52,6 +52,11 @@ def problem(scene, settings: RossSpinupRobust):
     return ross_spinup.problem(scene, settings, "ross_spinup_robust")
 
 
+def check(scene, settings: RossSpinupRobust) -> None:
+    """``autobal check``: the nominal modal problem posed, nothing solved."""
+    problem(scene, settings)
+
+
 def run(scene, settings: RossSpinupRobust):
     """One spin-up profile of the reduced ROSS rotor minimising the worst-case peak over a set of rotors,
     validated on a random sample (on the executor the CLI or the scene names; needs the ross extra)."""

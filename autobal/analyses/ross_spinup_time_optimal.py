@@ -46,6 +46,11 @@ class RossSpinupTimeOptimal(create_model("_RossSpinupWithFront", __base__=RossSp
 SETTINGS = RossSpinupTimeOptimal
 
 
+def check(scene, settings: RossSpinupTimeOptimal) -> None:
+    """``autobal check``: the modal problem posed, nothing solved."""
+    ross_spinup.problem(scene, settings, "ross_spinup_time_optimal", deflection_limit=settings.deflection_limit)
+
+
 def run(scene, settings: RossSpinupTimeOptimal):
     """The earliest arrival of the reduced ROSS rotor with the peak bounded, and the front of peak against arrival
     time (needs the ross extra)."""

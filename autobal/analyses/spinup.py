@@ -105,6 +105,11 @@ def ocp(scene, settings: Spinup):
     return problem
 
 
+def check(scene, settings: Spinup) -> None:
+    """``autobal check``: the problem posed, the drive's reach checked (:func:`ocp`), nothing solved."""
+    ocp(scene, settings)
+
+
 def run(scene, settings: Spinup):
     """Optimal spin-up through the critical speed (global search, collocation, CVODES re-simulation)."""
     from autobal.analysis import progress

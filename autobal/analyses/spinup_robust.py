@@ -8,7 +8,7 @@ from typing import Annotated
 from pydantic import Field, model_validator
 
 from autobal.analyses import COST
-from autobal.analyses.spinup import Spinup, ocp
+from autobal.analyses.spinup import Spinup, check, ocp  # noqa: F401 (check: the same as spinup's)
 from autobal.errors import ScenarioError
 from autobal.schema import Positive
 
