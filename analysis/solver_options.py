@@ -21,8 +21,8 @@ argument (``Simulator(rtol=...)``) win over the session's default; those setting
 Where IPOPT writes (``print_level`` 0, its log into a file of its own: :mod:`autobal.analysis.ipopt`) is no option
 here.  The models' own numerics (models/, a layer below this module: the Newton equilibrium of a dynamic model,
 the ROSS rotor's fixed-frame re-simulation tolerance ``RESIM_TOL``) are constants of their modules, which every
-caller may override by argument.  Options are of this process: the workers of a dask cluster (:mod:`autobal.analysis.executor`)
-use the documented ones.
+caller may override by argument.  Options are of this process: the workers of a dask cluster
+(:mod:`autobal.analysis.executor`) use the documented ones.
 """
 
 from __future__ import annotations

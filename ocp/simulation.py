@@ -332,8 +332,8 @@ def drive_unreachable(ocp: SpinupOcp, points: int = 401) -> str | None:
     what = (f"the drive's torque, power and motor limits on its inertia {ocp.inertia:.4g} kg m^2 and "
             if limited else "")
     if (a <= 0).any():
-        return (f"{what.removesuffix(' and ')} accelerate it no further than {w[np.argmax(a <= 0)]:.4g} rad/s: it never reaches the final "
-                f"speed {wf:.4g} rad/s")
+        return (f"{what.removesuffix(' and ')} accelerate it no further than {w[np.argmax(a <= 0)]:.4g} rad/s: "
+                f"it never reaches the final speed {wf:.4g} rad/s")
     t = float(np.sum(np.diff(w) * 0.5 * (1.0 / a[1:] + 1.0 / a[:-1])))  # dt = d omega / alpha, trapezoids
     if t > ocp.horizon * (1 + 1e-6):
         return (f"{what or 'the acceleration limit '}|alpha| <= {ocp.alpha_max:g} rad/s^2 "
