@@ -4,18 +4,21 @@ schema object or a file reader it was not handed."""
 
 import ast
 import dataclasses
-from pathlib import Path
+import inspect
 
 import pytest
 from pydantic import BaseModel
 
 from autobal import scenario
 from autobal.analyses import estimation, liquid_balancer, montecarlo, reliability, rotor_dynamics
+from autobal.analysis import design_study, estimation_study, rotor_study, statics_study
+from autobal.analysis import liquid_balancer as liquid_balancer_study
+from autobal.analysis import montecarlo as montecarlo_study
+from autobal.analysis import reliability as reliability_study
 
-ROOT = Path(__file__).resolve().parents[1]
 #: the studies that take a spec: their modules read no schema, no file and no settings
-STUDIES = ("estimation_study", "liquid_balancer", "montecarlo", "reliability", "rotor_study", "design_study",
-           "statics_study")
+STUDIES = (estimation_study, liquid_balancer_study, montecarlo_study, reliability_study, rotor_study, design_study,
+           statics_study)
 #: what a study may not import: the schema, its settings, the scene parts, the file readers
 FRONT_DOOR = ("pydantic", "autobal.schema", "autobal.analyses", "autobal.parts", "autobal.measurements",
               "autobal.scenario", "autobal.units")
@@ -80,7 +83,6 @@ def test_a_spec_carries_the_settings_values_unchanged():
 
 
 def test_a_motor_runup_without_a_motor_is_refused_by_the_study():
-    from autobal.analysis import rotor_study
     from autobal.errors import ScenarioError
     from autobal.models.rotor import RotorParams
 
@@ -89,11 +91,11 @@ def test_a_motor_runup_without_a_motor_is_refused_by_the_study():
         rotor_study.run(RotorParams.from_groups(Omega0=100.0, chi_over_m1=2.0, psi=0.5), spec)
 
 
-@pytest.mark.parametrize("study", STUDIES)
+@pytest.mark.parametrize("study", STUDIES, ids=[m.__name__.rsplit(".", 1)[1] for m in STUDIES])
 def test_a_study_reads_no_schema_and_no_settings(study):
     """Its module imports none of the front door's schema, parts or readers, and no name it reads is ``settings``
     (a field of its Result may be)."""
-    tree = ast.parse((ROOT / "analysis" / f"{study}.py").read_text())
+    tree = ast.parse(inspect.getsource(study))
     imported = [n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)] + [
         a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names]
     assert [m for m in imported if m and m.startswith(FRONT_DOOR)] == []
