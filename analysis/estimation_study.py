@@ -1,15 +1,15 @@
 """The estimation study of a scene: fits, the source's closed-form estimators, the adequacy test,
 bootstrap intervals and the back-calculation of a loss coefficient (Pavlenko (2014), Secs. 4.3.3-4.4).
 
-``run(scenario, settings)`` returns an :class:`EstimationResult`: the ``estimation`` block of
-results.json, a summary, CSV tables and one figure per fit (the Result protocol).
+``run(spec, data)`` (a frozen :class:`Spec` and the measurements) returns an :class:`EstimationResult`: the
+``estimation`` block of results.json, a summary, CSV tables and one figure per fit (the Result protocol).
 """
 
 from __future__ import annotations
 
 import itertools
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -23,7 +23,7 @@ from autobal.analysis.quantities import Quantity, is_number, significant
 from autobal.analysis.result import new_figure, plain, twin_axis
 from autobal.errors import ScenarioError, SolveError
 from autobal.models.device import DeviceParams, design
-from autobal.models.hydroheel import TurbulentDisc
+from autobal.models.hydroheel import DiscLosses, TurbulentDisc
 
 # The source's Table 4.4 (printed as a second "Table 4.3"), from points it does not publish.
 SOURCE_TABLE_4_4 = {
@@ -467,6 +467,100 @@ def _params_text(f: Fit) -> str:
     return ", ".join(f"{k} {p['estimate']:.4g}" for k, p in f.parameters.items() if p["free"])
 
 
+@dataclass(frozen=True)
+class Parameter:
+    """One model parameter of a fit: its value (the initial guess when free) in its unit (a group: 1), free or
+    fixed, its bounds (None: none given)."""
+
+    value: float
+    free: bool
+    lower: float | None
+    upper: float | None
+
+
+@dataclass(frozen=True)
+class FitSpec:
+    """One nonlinear least-squares fit: ``model`` (traditional_disc, device) in ``residual`` (u, q, both) with the
+    residual ``weights`` {"u": .., "q": ..}, its ``parameters`` (name -> :class:`Parameter`), the device model's
+    measured ``flow_throttle``, IPOPT's ``hessian`` and ``max_iterations``."""
+
+    name: str
+    model: str
+    residual: str
+    weights: dict
+    parameters: dict
+    flow_throttle: str
+    hessian: str
+    max_iterations: int
+
+    def free(self) -> list[str]:
+        return [k for k, p in self.parameters.items() if p.free]
+
+
+@dataclass(frozen=True)
+class AdequacySpec:
+    """The Fisher adequacy test (4.14)-(4.15) at ``significance``; ``reference`` (alpha, tau_max) a theory curve to
+    test with ``reference_parameters`` = l of (4.15), or None."""
+
+    significance: float
+    reference: dict | None
+    reference_parameters: int
+
+
+@dataclass(frozen=True)
+class LossSpec:
+    """Solve (4.38) for the loss coefficient ``unknown`` of ``losses`` (SI) from the alpha of the fit ``fit``."""
+
+    fit: str
+    unknown: str
+    losses: DiscLosses
+
+
+@dataclass(frozen=True)
+class BootstrapSpec:
+    """Residual-bootstrap intervals of the traditional_disc fits: ``samples`` data sets from ``seed``."""
+
+    samples: int
+    seed: int
+
+
+@dataclass(frozen=True)
+class Spec:
+    """What the estimation study computes (the validated ``analyses.estimation`` of a scene, SI).
+
+    Attributes
+    ----------
+    fits : tuple of FitSpec
+    bases : dict
+        Base values by the key the data columns use: pressure (Pa), gap (m), flow (m^3/s), force p_B s_B (N); None
+        where not given.
+    closed_forms : bool
+        The source's estimators (4.23), (4.26)-(4.27), (4.35), (4.36).
+    tau_max : float or None
+        Their fixed tau_max; None: the first disc fit's value.
+    adequacy : AdequacySpec or None
+    loss_coefficient : LossSpec or None
+    confidence : float
+        Level of every confidence interval and band.
+    band_points : int
+        Points of the fitted curve and its band.
+    cross_check : bool
+        Re-fit with scipy.optimize.least_squares (traditional_disc fits).
+    bootstrap : BootstrapSpec or None
+    """
+
+    fits: tuple
+    bases: dict
+    closed_forms: bool
+    tau_max: float | None
+    adequacy: AdequacySpec | None
+    loss_coefficient: LossSpec | None
+    confidence: float
+    band_points: int
+    cross_check: bool
+    bootstrap: BootstrapSpec | None
+
+
 def _device_bases(bases: dict, dev) -> dict:
     sc = dev.scales
     own = {"pressure": sc["p_B"], "gap": sc["z_B"], "flow": sc["Q_scale"], "force": sc["p_B"] * sc["s_B"]}
@@ -542,7 +636,7 @@ def _closed_forms(tau, u, q, group, tau_max: float) -> dict:
     return out
 
 
-def _one_fit(fit, settings, data, bases: dict, device) -> tuple[Fit, FitResult]:
+def _one_fit(fit: FitSpec, spec: Spec, data, bases: dict, device) -> tuple[Fit, FitResult]:
     """One fit of the scene: its results (with the cross-check, bootstrap and adequacy test) and its FitResult;
     SolveError when it does not converge or the data do not identify it."""
     group = data.columns.get("group")
@@ -556,36 +650,36 @@ def _one_fit(fit, settings, data, bases: dict, device) -> tuple[Fit, FitResult]:
     u = data.dimensionless("gap", fb) if fit.residual in ("u", "both") else None
     q = data.dimensionless("flow", fb) if fit.residual in ("q", "both") else None
     values = {k: p.value for k, p in fit.parameters.items()}
-    weights = {"u": fit.weights.u, "q": fit.weights.q}
-    grid = np.linspace(load.min(), load.max(), settings.band_points)
+    weights = dict(fit.weights)
+    grid = np.linspace(load.min(), load.max(), spec.band_points)
     if fit.model == "traditional_disc":
         free = tuple(fit.free())
         bounds = {k: (fit.parameters[k].lower, fit.parameters[k].upper) for k in free}
         fitter = disc_fit.DiscFitter(len(load), fit.residual, free, fit.hessian, fit.max_iterations)
         res = fitter.fit(load, u, q, values=values, bounds=bounds, weights=weights, name=fit.name,
-                         confidence=settings.confidence)
+                         confidence=spec.confidence)
         _identified(res)
         curve = disc_fit.disc_curve(grid, res.estimate, res.free, res.stats["covariance"], res.stats["t_quantile"])
         block = _fit_block(res, curve)
-        if settings.cross_check:
+        if spec.cross_check:
             sp = disc_fit.scipy_disc_fit(load, u, q, fit.residual, res.initial, free, bounds, weights)
             block["cross_check_scipy"] = sp | {"max_abs_difference": max(
                 abs(sp["estimate"][k] - res.estimate[k]) for k in free)}
-        if settings.bootstrap is not None:
-            block["bootstrap"] = _bootstrap_block(fitter, res, settings.bootstrap, settings.confidence)
+        if spec.bootstrap is not None:
+            block["bootstrap"] = _bootstrap_block(fitter, res, spec.bootstrap, spec.confidence)
     else:
         params = {k: (p.value, p.free, p.lower, p.upper) for k, p in fit.parameters.items()}
         kind = "tau" if data.has("load") in ("tau", "axial_force") else "psi1"
         fitter = DeviceFitter(device, dev, params, fit.residual, fit.flow_throttle, fit.hessian, fit.max_iterations)
-        res = fitter.fit(load, kind, u, q, weights=weights, name=fit.name, confidence=settings.confidence)
+        res = fitter.fit(load, kind, u, q, weights=weights, name=fit.name, confidence=spec.confidence)
         _identified(res)
         curve = fitter.curve(res, grid)
         block = _fit_block(res, curve)
         block["bases"] = fb
-        if settings.bootstrap is not None:
+        if spec.bootstrap is not None:
             block["bootstrap"] = {"status": "not available",
                                   "note": "bootstrap intervals are computed for traditional_disc fits only"}
-    if settings.adequacy is not None and group is not None:
+    if spec.adequacy is not None and group is not None:
         var = "u" if "u" in res.measured else "q"
         fitted, meas = res.fitted[var], res.measured[var]
 
@@ -593,7 +687,7 @@ def _one_fit(fit, settings, data, bases: dict, device) -> tuple[Fit, FitResult]:
             return np.array([fitted[np.isclose(load, x, rtol=1e-12)].mean() for x in loads])
 
         block["adequacy"] = fisher_adequacy(load, meas, group, theory, len(res.free),
-                                            settings.adequacy.significance) | {"variable": var}
+                                            spec.adequacy.significance) | {"variable": var}
     block["physical"] = _physical(block, fb)
     if fit.model == "traditional_disc" and data.has("load") in ("tau", "axial_force"):
         block["physical"]["stiffness"] = _stiffness(res.estimate, np.unique(load), fb)
@@ -651,7 +745,7 @@ HINTS = {
 }
 
 
-def _failed(fit, exc: SolveError) -> FailedFit:
+def _failed(fit: FitSpec, exc: SolveError) -> FailedFit:
     """A fit that failed: its status, IPOPT's status, the last iterate and a hint."""
     return FailedFit(status="failed", model=fit.model, residual=fit.residual, reason=exc.message,
                      solver=plain({"status": exc.status, "success": False,
@@ -660,16 +754,16 @@ def _failed(fit, exc: SolveError) -> FailedFit:
                      hint=HINTS.get(exc.status, "check the initial values and bounds of its parameters"))
 
 
-def run(settings, data, device: DeviceParams | None = None, title: str = "") -> EstimationResult:
+def run(spec: Spec, data, device: DeviceParams | None = None, title: str = "") -> EstimationResult:
     """Every fit of the scene's ``analyses.estimation`` block, the closed forms, the adequacy tests,
     bootstrap intervals and (4.38).
 
     Parameters
     ----------
-    settings : Estimation
-        The validated ``analyses.estimation`` block: the fits and what to compute beside them.
+    spec : Spec
+        The fits and what to compute beside them.
     data : autobal.measurements.Measurements
-        The measurements, read by the caller (``settings.measurements()``): the study reads no file.
+        The measurements, read by the caller: the study reads no file.
     device : DeviceParams, optional
         The device in SI, for fits of the device model.
     title : str
@@ -680,13 +774,13 @@ def run(settings, data, device: DeviceParams | None = None, title: str = "") -> 
     EstimationResult
     """
     t0 = time.perf_counter()
-    bases = settings.bases.values()
+    bases = spec.bases
     role_load = data.has("load")
     group = data.columns.get("group")
     fits, solvers, failures = {}, {}, []
-    for fit in settings.fits:
+    for fit in spec.fits:
         try:
-            fits[fit.name], solvers[fit.name] = _one_fit(fit, settings, data, bases, device)
+            fits[fit.name], solvers[fit.name] = _one_fit(fit, spec, data, bases, device)
             boot = fits[fit.name].bootstrap or {}
             if boot.get("status", "").startswith("failed"):
                 failures.append(f"fit {fit.name!r}: bootstrap {boot['status']}")
@@ -694,14 +788,14 @@ def run(settings, data, device: DeviceParams | None = None, title: str = "") -> 
             fits[fit.name] = _failed(fit, exc)
             failures.append(f"{exc.message} (status {exc.status}); {fits[fit.name].hint}")
     if not solvers:
-        first = fits[settings.fits[0].name]
+        first = fits[spec.fits[0].name]
         head = "" if len(failures) == 1 else f"all {len(failures)} fits failed: "
         raise SolveError(head + "; ".join(failures), first.solver["status"], first.last_iterate)
 
-    first_disc = next((f for f in settings.fits if f.model == "traditional_disc"), None)
+    first_disc = next((f for f in spec.fits if f.model == "traditional_disc"), None)
     closed = None
-    if settings.closed_forms and role_load in ("tau", "axial_force"):
-        tau_max = settings.tau_max or (first_disc.parameters["tau_max"].value if first_disc else None)
+    if spec.closed_forms and role_load in ("tau", "axial_force"):
+        tau_max = spec.tau_max or (first_disc.parameters["tau_max"].value if first_disc else None)
         top = float(data.dimensionless("load", bases).max())
         if tau_max is not None and tau_max <= top:
             closed = {"status": f"not computed: their fixed tau_max {tau_max:g} is not above the largest load "
@@ -713,7 +807,7 @@ def run(settings, data, device: DeviceParams | None = None, title: str = "") -> 
             closed = _closed_forms(tau, u, q, group, tau_max)
 
     reference = None
-    ad = settings.adequacy
+    ad = spec.adequacy
     if ad is not None and ad.reference is not None and group is not None and data.has("gap"):
         ref = {"alpha": 1.75, "tau_max": 2.75} | ad.reference
         tau, u = data.dimensionless("load", bases), data.dimensionless("gap", bases)
@@ -721,20 +815,20 @@ def run(settings, data, device: DeviceParams | None = None, title: str = "") -> 
                                         ad.reference_parameters, ad.significance) | {"reference": ref}
 
     loss = None
-    lc = settings.loss_coefficient
+    lc = spec.loss_coefficient
     if lc is not None and lc.fit not in solvers:
         loss = {"fit": lc.fit, "status": f"not computed: fit {lc.fit} failed"}
     elif lc is not None:
         f = solvers[lc.fit]
         alpha = f.estimate["alpha"]
         lo, hi = f.interval("alpha")
-        losses = lc.losses()
+        losses = lc.losses
         ends = sorted(losses.solve(lc.unknown, a) for a in (lo, hi))
         value = losses.solve(lc.unknown, alpha)
         loss = {"fit": lc.fit, "alpha": alpha, "alpha_ci": [lo, hi], "unknown": lc.unknown, "value": value,
                 "ci_low": ends[0], "ci_high": ends[1], "physical": bool(value >= 0),
-                "nominal": getattr(lc, lc.unknown), "alpha_nominal": losses.conductance_ratio(),
-                "friction_factor": lc.friction_factor,
+                "nominal": getattr(losses, lc.unknown), "alpha_nominal": losses.conductance_ratio(),
+                "friction_factor": losses.friction_factor,
                 "check_alpha_from_solved": replace(losses, **{lc.unknown: value}).conductance_ratio()}
 
     diffs = [b.cross_check_scipy["max_abs_difference"] for b in fits.values()

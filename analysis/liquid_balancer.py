@@ -1,7 +1,7 @@
 """Liquid auto-balancer design calculations (Khomyak 2020 ch. 2-3, App. В/Г; Pashkov 2010 ch. 3).
 
-``run(system, settings, title)`` returns a :class:`LiquidBalancerResult`: efficiency lambda0 against
-the speed ratio gamma (three variants of (2.13), the documented App. В closure and the self-consistent
+``run(system, spec, title)`` (a frozen :class:`Spec`) returns a :class:`LiquidBalancerResult`: efficiency lambda0
+against the speed ratio gamma (three variants of (2.13), the documented App. В closure and the self-consistent
 closure, a toolkit extension), the results table, the extremum analysis, the viscous
 equilibrium zone (2.15), the optimal chamber height and liquid volume (IPOPT problems of
 :mod:`autobal.analysis.liquid_balancer_optimum`, checked against a dense grid), the liquid
@@ -14,6 +14,7 @@ from __future__ import annotations
 import functools
 import math
 import time
+from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
@@ -42,6 +43,77 @@ REASON_3_3 = ("in the documented model D = rho f (pi h R^2 - V) falls with V, so
               "the table are not stated")
 
 
+# ---- the spec ----------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class HeightSearch:
+    """The optimal chamber height for the system's radius (App. В OPTIMUM_KAMERA): between ``min_height`` (m; None:
+    just above V/(pi R^2)) and ``max_height`` (m), checked on a dense grid of ``grid_points``."""
+
+    max_height: float
+    min_height: float | None
+    grid_points: int
+
+
+@dataclass(frozen=True)
+class VolumeSearch:
+    """The optimal liquid volume for the system's unbalance (App. Г OPTIMUM_LIQUID): from ``min_volume`` (m^3;
+    None: 1e-6 of the chamber volume), checked on a dense grid of ``grid_points``."""
+
+    min_volume: float | None
+    grid_points: int
+
+
+@dataclass(frozen=True)
+class Liquid:
+    """A candidate liquid of the choice by viscosity (App. Г): density kg/m^3, dynamic viscosity Pa s."""
+
+    name: str
+    density: float
+    viscosity: float
+
+
+@dataclass(frozen=True)
+class Spec:
+    """What the liquid auto-balancer study computes (the validated ``analyses.liquid_balancer`` of a scene, SI).
+
+    Attributes
+    ----------
+    variant : {"printed", "program", "corrected"}
+        The equilibrium angle of (2.13).
+    deflection : {"program", "system"}
+        f = G D0/m_d (App. В code) or G D0/M_sys.
+    speed_ratio : (float, float, int)
+        gamma = omega/omega_cr of the efficiency curve: start, stop, points.
+    table_ratios : tuple of float
+        gamma of the results table.
+    arc_angle_deg : float or None
+        xi of (2.15), degrees; None: program Г's.
+    conversion_coefficient : float
+        kappa of (3.5), (3.6), (3.9), (3.13).
+    height, volume : HeightSearch, VolumeSearch or None
+        The optimal height and volume searches (None: not run).
+    liquids : tuple of Liquid
+        The candidates of the liquid choice (App. Г).
+    unbalance_masses : tuple of float
+        Unbalance masses, kg, of the optimal volume per unbalance (Table 3.3).
+    thesis_comparison : bool
+        Compare with Tables 3.2 / 3.3.
+    """
+
+    variant: str
+    deflection: str
+    speed_ratio: tuple
+    table_ratios: tuple
+    arc_angle_deg: float | None
+    conversion_coefficient: float
+    height: HeightSearch | None
+    volume: VolumeSearch | None
+    liquids: tuple
+    unbalance_masses: tuple
+    thesis_comparison: bool
+
+
 # ---- the study ---------------------------------------------------------------------------------
 
 def _row(system: System, variant: str, deflection: str, gammas) -> dict:
@@ -62,7 +134,7 @@ def _row(system: System, variant: str, deflection: str, gammas) -> dict:
             "lambda0_self_consistent": sc["lambda0_plus"], "lambda0_self_consistent_minus": sc["lambda0_minus"]}
 
 
-def _viscous(system: System, settings, f: float, delta: float, k: float) -> dict:
+def _viscous(system: System, spec: Spec, f: float, delta: float, k: float) -> dict:
     """Viscous equilibrium zone (2.15) at the working speed, with the zone's range of lambda0 [derived].
 
     The zone is |Delta| <= Delta* (:func:`autobal.models.liquid_balancer.zone_half_width`); its lambda0 range is
@@ -73,7 +145,7 @@ def _viscous(system: System, settings, f: float, delta: float, k: float) -> dict
         return {"reason": "liquid.viscosity not given"}
     nu = system.mu / system.rho
     arc = lb.program_arc(system.R, system.h, system.V, f)
-    xi = math.radians(settings.arc_angle_deg) if settings.arc_angle_deg else float(arc["xi"])
+    xi = math.radians(spec.arc_angle_deg) if spec.arc_angle_deg else float(arc["xi"])
     sb = float(lb.sin_beta_star_nu(nu, system.R, xi, system.V, system.speed))
     r2 = system.R**2 - system.V / (math.pi * system.h)
     q = r2 / (system.R**2 - r2)
@@ -81,7 +153,7 @@ def _viscous(system: System, settings, f: float, delta: float, k: float) -> dict
     lam_zone = lb.lambda0_corrected(k, np.linspace(delta - dstar, delta + dstar, 201)) if np.isfinite(dstar) \
         else np.array([math.nan])
     finite = lam_zone[np.isfinite(lam_zone)]
-    return {"nu": nu, "xi_rad": xi, "xi_deg": math.degrees(xi), "xi_source": "scenario" if settings.arc_angle_deg
+    return {"nu": nu, "xi_rad": xi, "xi_deg": math.degrees(xi), "xi_source": "scenario" if spec.arc_angle_deg
             else ("program Г (clipped: free surface does not cut the wall)" if bool(arc["clipped"])
                   else "program Г"), "z_program": float(arc["z"]),
             "sin_beta_star": sb, "beta_star_deg": math.degrees(math.asin(min(sb, 1.0))),
@@ -234,7 +306,9 @@ def _why():
 
 
 @record
-class Settings(Record):
+class Choices(Record):
+    """The spec's choices the results were computed with (results.json ``settings``)."""
+
     variant: str
     deflection: str
     thesis_comparison: bool
@@ -325,7 +399,7 @@ class LiquidBalancerResult(TypedResult):
     ``liquid_choice``, ``table_3_3``) are mappings declared by the extra declarations of :data:`QUANTITIES`."""
 
     title: str
-    settings: Settings
+    settings: Choices
     system: SystemData
     operating_point: OperatingPoint
     table: dict
@@ -599,15 +673,15 @@ def _pct(a, b):
     return 100.0 * (a - b) / b
 
 
-def _table_3_2(system: System, settings) -> dict:
+def _table_3_2(system: System, spec: Spec) -> dict:
     gam = np.array(TABLE_3_2["gamma"])
     doc = {v: _row(system, v, "program", gam)["lambda0"] for v in lb.VARIANTS}
-    sysd = _row(system, settings.variant, "system", gam)["lambda0"]
-    sc = _row(system, settings.variant, settings.deflection, gam)["lambda0_self_consistent"]
+    sysd = _row(system, spec.variant, "system", gam)["lambda0"]
+    sc = _row(system, spec.variant, spec.deflection, gam)["lambda0_self_consistent"]
     rows = []
     for i, gi in enumerate(gam):
         T, X = TABLE_3_2["theory"][i], TABLE_3_2["experiment"][i]
-        tk = float(doc[settings.variant][i])
+        tk = float(doc[spec.variant][i])
         rows.append({"gamma": gi, "published_theory": T, "published_experiment": X,
                      "theory_minus_experiment_pct": 100.0 * (T - X) / T,
                      "toolkit_documented_printed": float(doc["printed"][i]),
@@ -617,26 +691,26 @@ def _table_3_2(system: System, settings) -> dict:
                      "toolkit_self_consistent": float(sc[i]),
                      "documented_minus_theory": tk - T, "self_consistent_vs_experiment_pct": _pct(float(sc[i]), X),
                      "status": "reproduced" if abs(tk - T) <= 0.005 else "differs", "reason": REASON_3_2})
-    return {"rows": rows, "variant": settings.variant,
+    return {"rows": rows, "variant": spec.variant,
             "max_theory_experiment_pct": max(abs(r["theory_minus_experiment_pct"]) for r in rows),
             "max_self_consistent_experiment_pct": max(abs(r["self_consistent_vs_experiment_pct"]) for r in rows),
             "note": "toolkit_documented uses the App. В closure (f from D0/m_d); toolkit_self_consistent is the "
                     "toolkit extension, not the thesis's algorithm"}
 
 
-def _table_3_3(system: System, settings, masses, vol_settings) -> dict:
+def _table_3_3(system: System, spec: Spec, masses, volume: VolumeSearch | None) -> dict:
     rows = []
-    vmin = (vol_settings.min_volume if vol_settings and vol_settings.min_volume else
+    vmin = (volume.min_volume if volume and volume.min_volume else
             1e-6 * math.pi * system.R**2 * system.h)
-    pts = vol_settings.grid_points if vol_settings else 20001
+    pts = volume.grid_points if volume else 20001
     for i, md in enumerate(masses):
         sysi = System(**{**system.__dict__, "unbalance_mass": md})
-        o = optimise(sysi, "volume", settings.variant, settings.deflection, vmin, math.inf, pts)
+        o = optimise(sysi, "volume", spec.variant, spec.deflection, vmin, math.inf, pts)
         cr = crescent_volume(system.R, system.h, o["f"], sysi.D0, system.rho)
         row = {"m_d": md, "D0": sysi.D0, "D0_gcm": sysi.D0 / lb.GCM, "V_opt": o["optimum"],
                "V_opt_mL": o["optimum"] * 1e6, "k_D": o["k_D"], "capacity_gcm": sysi.D0 / o["k_D"] / lb.GCM,
                "V_opt_crescent_mL": cr["V"] * 1e6}
-        if settings.thesis_comparison and i < 4 and abs(row["D0_gcm"] - TABLE_3_3["D0_gcm"][i]) < 1e-6:
+        if spec.thesis_comparison and i < 4 and abs(row["D0_gcm"] - TABLE_3_3["D0_gcm"][i]) < 1e-6:
             row |= {"published_V_opt_mL": TABLE_3_3["V_opt_mL"][i], "published_capacity_gcm":
                     TABLE_3_3["capacity_gcm"][i], "published_k_D": row["D0_gcm"] / TABLE_3_3["capacity_gcm"][i],
                     "experiment_V_opt_mL": TABLE_3_3["V_exp_mL"][i],
@@ -650,10 +724,10 @@ def _table_3_3(system: System, settings, masses, vol_settings) -> dict:
                     "with the same deflection f, k_D = 1 (toolkit extension)"}
 
 
-def run(system: System, settings, title: str = "") -> LiquidBalancerResult:
+def run(system: System, spec: Spec, title: str = "") -> LiquidBalancerResult:
     """The whole study for one system (see the module docstring)."""
     t0 = time.perf_counter()
-    var, dfl = settings.variant, settings.deflection
+    var, dfl = spec.variant, spec.deflection
     gamma_op = system.speed / system.omega_cr
     oprow = _row(system, var, dfl, [gamma_op])
     op = {k: (v[0] if not isinstance(v, str) else v) for k, v in oprow.items()}
@@ -666,8 +740,7 @@ def run(system: System, settings, title: str = "") -> LiquidBalancerResult:
     if system.inclination is not None:
         op["paraboloid"] = lb.paraboloid(system.R, system.h, system.V, system.speed, system.inclination)
 
-    r = settings.speed_ratio
-    gs = np.linspace(r.start, r.stop, r.points)
+    gs = np.linspace(*spec.speed_ratio)
     sweep = {"gamma": gs}
     for v in lb.VARIANTS:
         sweep[f"lambda0_{v}"] = _row(system, v, dfl, gs)["lambda0"]
@@ -689,27 +762,27 @@ def run(system: System, settings, title: str = "") -> LiquidBalancerResult:
         return None if d is None else with_statuses(d, NULL_REASONS)
 
     searches = {}
-    if settings.height is not None:
-        hs = settings.height
+    if spec.height is not None:
+        hs = spec.height
         searches["optimal_height"] = optimise(system, "height", var, dfl, hs.min_height or 0.0, hs.max_height,
                                               hs.grid_points)
-    vs = settings.volume
+    vs = spec.volume
     vmin = vs.min_volume if vs and vs.min_volume else 1e-6 * math.pi * system.R**2 * system.h
     if vs is not None:
         searches["optimal_volume"] = optimise(system, "volume", var, dfl, vmin, math.inf, vs.grid_points)
     choice = None
-    if settings.liquids:
+    if spec.liquids:
         cands = []
-        for c in settings.liquids:
+        for c in spec.liquids:
             o = optimise(System(**{**system.__dict__, "rho": c.density, "mu": c.viscosity}), "volume", var, dfl,
                          vmin, math.inf, vs.grid_points if vs else 2001)
             row = {"name": c.name, "density": c.density, "viscosity": c.viscosity, "V_opt": o["optimum"],
                    "k_D": o["k_D"], "lambda0_max": o["lambda0_max"], "sin_beta_star": math.nan}
             if np.isfinite(o["optimum"]):
                 arc = lb.program_arc(system.R, system.h, o["optimum"], o["f"])
-                xi = math.radians(settings.arc_angle_deg) if settings.arc_angle_deg else float(arc["xi"])
+                xi = math.radians(spec.arc_angle_deg) if spec.arc_angle_deg else float(arc["xi"])
                 row["xi_deg"] = math.degrees(xi)
-                row["xi_clipped"] = bool(arc["clipped"]) and not settings.arc_angle_deg
+                row["xi_clipped"] = bool(arc["clipped"]) and not spec.arc_angle_deg
                 row["sin_beta_star"] = float(lb.sin_beta_star_nu(c.viscosity / c.density, system.R, xi,
                                                                  o["optimum"], system.speed))
             cands.append(row)
@@ -720,15 +793,15 @@ def run(system: System, settings, title: str = "") -> LiquidBalancerResult:
     extremum = {"alpha0_deg": [120.0, 150.0, 170.0, 179.0],
                 **{k: v.tolist() for k, v in lb.extremum(np.radians([120.0, 150.0, 170.0, 179.0])).items()}}
     return LiquidBalancerResult(
-        title=title, settings=Settings(var, dfl, settings.thesis_comparison), system=sy, operating_point=op,
-        table=block(_row(system, var, dfl, settings.table_ratios)), sweep=block(sweep), extremum=block(extremum),
-        viscous_zone=block(_viscous(system, settings, op.f, delta_op, op.k_D)),
-        pashkov=block(pashkov(system, settings.conversion_coefficient)),
-        table_3_2=block(_table_3_2(system, settings) if settings.thesis_comparison else None),
+        title=title, settings=Choices(var, dfl, spec.thesis_comparison), system=sy, operating_point=op,
+        table=block(_row(system, var, dfl, spec.table_ratios)), sweep=block(sweep), extremum=block(extremum),
+        viscous_zone=block(_viscous(system, spec, op.f, delta_op, op.k_D)),
+        pashkov=block(pashkov(system, spec.conversion_coefficient)),
+        table_3_2=block(_table_3_2(system, spec) if spec.thesis_comparison else None),
         height_search=block(searches.get("optimal_height")), volume_search=block(searches.get("optimal_volume")),
         liquid_choice=block(choice),
-        table_3_3=block(_table_3_3(system, settings, settings.unbalance_masses, vs)
-                        if settings.unbalance_masses else None),
+        table_3_3=block(_table_3_3(system, spec, spec.unbalance_masses, vs)
+                        if spec.unbalance_masses else None),
         accuracy=block(accuracy(system, searches)), run_time_s=time.perf_counter() - t0,
         verdict_block=Verdict(*balance_verdict(op, sy.R_minus_r)))
 

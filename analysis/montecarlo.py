@@ -20,6 +20,7 @@ at a discharge ratio is a failure of the result (:meth:`MonteCarloResult.failure
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -408,24 +409,105 @@ MonteCarloResult.quantities = QUANTITIES = declarations(
 )
 
 
-def run(dev: DeviceDesign, settings, executor, title: str = "", solver=None, device=None) -> MonteCarloResult:
+@dataclass(frozen=True)
+class Distribution:
+    """One uncertain parameter: normal, lognormal, gauss12 (the source's sum of 12 uniforms, Fig. 3.1) by ``mean``
+    (None: the model's nominal value) and ``std`` or ``cv``; uniform by ``low`` and ``high`` or as the others
+    (:func:`autobal.analysis.sampling.marginals`).  In the parameter's unit (a group: 1)."""
+
+    distribution: str
+    mean: float | None = None
+    std: float | None = None
+    cv: float | None = None
+    low: float | None = None
+    high: float | None = None
+
+
+@dataclass(frozen=True)
+class Correlation:
+    """The correlation coefficient ``rho`` of two uncertain parameters (Gaussian copula)."""
+
+    between: tuple
+    rho: float
+
+
+@dataclass(frozen=True)
+class Grid:
+    """A logarithmic frequency grid: ``points`` from ``start`` to ``stop``, rad/s."""
+
+    start: float
+    stop: float
+    points: int
+
+
+@dataclass(frozen=True)
+class AfcSpec:
+    """The AFC Monte Carlo (Fig. 3.7): the linear ``model`` and its uncertain ``parameters`` (name ->
+    :class:`Distribution`), ``samples`` in tasks of ``chunk_size``, at psi1 = ``operating_ratio`` under the
+    ``forcing`` (appendix or physical), over the frequency grid ``omega``."""
+
+    model: str
+    samples: int
+    chunk_size: int
+    operating_ratio: float
+    forcing: str
+    omega: Grid
+    parameters: dict
+
+
+@dataclass(frozen=True)
+class Spec:
+    """What the Monte Carlo study computes (the validated ``analyses.montecarlo`` of a scene).
+
+    Attributes
+    ----------
+    samples, seed, chunk_size : int
+        Samples, the seed of their streams, samples per executor task.
+    discharge_ratio : tuple of float
+        psi1 = p1/p_B at which the statics are sampled.
+    parameters : dict
+        The uncertain groups of (2.18): name -> :class:`Distribution`.
+    correlations : tuple of Correlation
+    band_sigma : float
+        k of the bands mean +- k sigma.
+    quantiles : tuple of float
+        The probabilities of the quantiles reported.
+    sensitivity_step : float
+        Relative step of the finite-difference check of the exact derivatives.
+    afc : AfcSpec or None
+        The AFC Monte Carlo (None: not run).
+    """
+
+    samples: int
+    seed: int
+    chunk_size: int
+    discharge_ratio: tuple
+    parameters: dict
+    correlations: tuple
+    band_sigma: float
+    quantiles: tuple
+    sensitivity_step: float
+    afc: AfcSpec | None = None
+
+
+def run(dev: DeviceDesign, spec: Spec, executor, title: str = "", solver=None, device=None) -> MonteCarloResult:
     """The Monte Carlo study of a device: spreads vs discharge ratio, sensitivities, first-order variance,
-    and with ``settings.afc`` the AFC amplitude (``device``: the scene's device with its dynamics)."""
+    and with ``spec.afc`` the AFC amplitude (``device``: the scene's device with its dynamics)."""
     t0 = time.perf_counter()
-    names = list(settings.parameters)
+    names = list(spec.parameters)
     if dev.groups.regulator is None:
         bad = [n for n in names if n in REGULATOR_PARAMETERS]
         if bad:
             raise ScenarioError(f"analyses.montecarlo.parameters.{bad[0]}: not a parameter of this device "
                                 f"(it has no regulator section)")
-    if settings.afc is not None:
-        afc_names(settings.afc)
+    if spec.afc is not None:
+        afc_names(spec.afc)
     ev = evaluator(dev, names)
-    margs = marginals(settings.parameters, ev.nominal())
-    corr = correlation_matrix(names, settings.correlations) if settings.correlations else None
-    sampler = Sampler(margs, corr, settings.seed)
-    grid = tuple(float(p) for p in settings.discharge_ratio)
-    task = Task(sampler, settings.samples, min(settings.chunk_size, settings.samples), design=dev, grid=grid)
+    margs = marginals(spec.parameters, ev.nominal())
+    corr = correlation_matrix(names, spec.correlations) if spec.correlations else None
+    sampler = Sampler(margs, corr, spec.seed)
+    grid = tuple(float(p) for p in spec.discharge_ratio)
+    task = Task(sampler, spec.samples, min(spec.chunk_size, spec.samples), design=dev, grid=grid)
     raw = simulate(task, executor)
     t_mc = time.perf_counter() - t0
 
@@ -441,26 +523,26 @@ def run(dev: DeviceDesign, settings, executor, title: str = "", solver=None, dev
             nom[k].append(float(o[k][0]))
     cf_nom = closed_form.for_medium(dev.groups, np.array(grid), dev.dpsi)
 
-    exact = {k: statistics(raw["exact"][k], settings.band_sigma, settings.quantiles) | {"nominal": nom[k]}
+    exact = {k: statistics(raw["exact"][k], spec.band_sigma, spec.quantiles) | {"nominal": nom[k]}
              for k in OUTPUTS}
-    source = {k: statistics(raw["source"][k], settings.band_sigma, settings.quantiles)
+    source = {k: statistics(raw["source"][k], spec.band_sigma, spec.quantiles)
               | {"nominal": np.asarray(cf_nom.get(k, np.nan), float) * np.ones(len(grid))} for k in SOURCE_OUTPUTS}
     sens = sensitivities(ev, sampler, grid, nominal_points, {k: exact[k]["std"] for k in SENSITIVITY_OUTPUTS},
-                         settings.sensitivity_step)
+                         spec.sensitivity_step)
     samples_X = raw["X"]
     sc = {k: float(dev.scales[k]) for k in ("p_B", "z_B", "x_B")}
     dim = dimensional(exact, sc)
     afc = None
-    if settings.afc is not None:
+    if spec.afc is not None:
         t1 = time.perf_counter()
-        afc = afc_study(device, settings.afc, settings.seed, executor, settings.band_sigma, settings.quantiles)
+        afc = afc_study(device, spec.afc, spec.seed, executor, spec.band_sigma, spec.quantiles)
         raw["afc"] = afc.pop("amplitude_samples")
         afc["time_s"] = time.perf_counter() - t1
     grid_list, saturated = list(grid), raw["saturated"].mean(axis=0)
     j = reference_index(grid_list, 1.0)
     res = MonteCarloResult(
-        title=title, samples=settings.samples, seed=settings.seed, chunk_size=task.chunk_size,
-        executor=executor.name, band_sigma=settings.band_sigma, psi1=grid_list, reference_psi1=1.0,
+        title=title, samples=spec.samples, seed=spec.seed, chunk_size=task.chunk_size,
+        executor=executor.name, band_sigma=spec.band_sigma, psi1=grid_list, reference_psi1=1.0,
         parameters=names,
         distributions={m.name: {"distribution": m.kind, "mean": m.mean, "std": m.std,
                                 **({"low": m.low, "high": m.high} if m.kind == "uniform" else {})} for m in margs},
@@ -474,10 +556,10 @@ def run(dev: DeviceDesign, settings, executor, title: str = "", solver=None, dev
             Q_T_mean=float(exact["Q_T"]["mean"][j]), Q_T_std=float(exact["Q_T"]["std"][j]),
             leak_spread=float(exact["q_T"]["spread"][j]), saturated_fraction=float(saturated[j])),
         afc=afc, accuracy=accuracy(afc, sens, raw), raw=raw,
-        failures=[f"psi1 = {p:g}: the exact statics did not solve for {k} of {settings.samples} samples "
+        failures=[f"psi1 = {p:g}: the exact statics did not solve for {k} of {spec.samples} samples "
                   f"(more than {100 * MAX_INVALID_SHARE:g} %: the statistics would be of a selection)"
                   for p, k in zip(grid, exact["u"]["invalid"], strict=True)
-                  if k > MAX_INVALID_SHARE * settings.samples])
+                  if k > MAX_INVALID_SHARE * spec.samples])
     return explained(res, {"correlation": "no correlations given: the parameters are independent"},
                      "null where the valve opening xi has no spread (the valve on its stop at every sample) or the "
                      "source's closed form has no valve opening (the valve saturates)")

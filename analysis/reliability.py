@@ -387,42 +387,111 @@ ReliabilityResult.quantities = QUANTITIES = declarations(
              "kh", source=f"{_P14}, Table 1.2"))
 
 
-def build(settings) -> tuple[Reliability, Reliability, dict]:
-    """The literal and renormalised models of a validated ``analyses.reliability`` block, and the
+@dataclass(frozen=True)
+class Disc:
+    """The traditional balance disc, (1.30)-(1.32): inner annular seal r1, l1, face r2 < r3, base gap z_B (m); the
+    new seal by its clearance h1 (m) or by the face/seal conductance ratio alpha_T1, the other None."""
+
+    seal_radius: float
+    seal_length: float
+    face_inner_radius: float
+    face_outer_radius: float
+    base_gap: float
+    effective_area_ratio: float  # sigma = s_e/s_B
+    conductance_ratio: float | None = None  # alpha_T1
+    seal_clearance: float | None = None  # h1, m
+
+
+@dataclass(frozen=True)
+class Wear:
+    """Mean wear of the seal clearance (Fig. 1.25): ``depth`` (m) per ``per`` (s); its coefficient of variation."""
+
+    depth: float
+    per: float
+    cv: float  # kappa = sigma_b / b_mean (1.50)
+
+
+@dataclass(frozen=True)
+class Load:
+    """The load tau = T/(p_B s_B): its mean and coefficient of variation (1.50); the discharge ratio psi1."""
+
+    mean: float
+    cv: float
+    discharge_ratio: float
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Region B of Fig. 1.24: the smallest gap u_min and the largest flow q_max (-> u_max by (1.52))."""
+
+    min_gap: float
+    max_flow: float
+
+
+@dataclass(frozen=True)
+class Spec:
+    """What the reliability study computes (the validated ``analyses.reliability`` of a scene; times in s).
+
+    Attributes
+    ----------
+    disc, wear, load, limits : Disc, Wear, Load, Limits
+    times : tuple of float
+        Times at which P(t) is reported, s.
+    horizon : float
+        Upper limit of (1.49), s.
+    time_points, tau_nodes : int
+        Points of the P(t) curve; nodes of the load integral.
+    reliable_probability : float
+        The level P of Table 1.2's time of reliable operation.
+    """
+
+    disc: Disc
+    wear: Wear
+    load: Load
+    limits: Limits
+    times: tuple
+    horizon: float
+    time_points: int
+    tau_nodes: int
+    reliable_probability: float
+
+
+def build(spec: Spec) -> tuple[Reliability, Reliability, dict]:
+    """The literal and renormalised models of a spec, and the
     derived inputs (k, chi0, alpha_T1, u_max, b_mean, ...)."""
-    d = settings.disc
+    d = spec.disc
     k = seal_shape_factor(d.seal_radius, d.seal_length, d.face_inner_radius, d.face_outer_radius)
     if d.conductance_ratio is not None:
         alpha, chi0 = d.conductance_ratio, initial_clearance(k, d.conductance_ratio)
     else:
         chi0 = d.seal_clearance / d.base_gap
         alpha = float(conductance_ratio(k, chi0))
-    u_max = max_gap(settings.limits.max_flow, alpha)
-    b_mean = settings.wear.depth / settings.wear.per / d.base_gap  # (dchi/dt)_0, 1/s
-    b_std = settings.wear.cv * b_mean  # (1.50), sigma = kappa * mean (erratum 3)
-    ld = settings.load
+    u_max = max_gap(spec.limits.max_flow, alpha)
+    b_mean = spec.wear.depth / spec.wear.per / d.base_gap  # (dchi/dt)_0, 1/s
+    b_std = spec.wear.cv * b_mean  # (1.50), sigma = kappa * mean (erratum 3)
+    ld = spec.load
     disc = WornDisc(sigma=d.effective_area_ratio, k=k, psi1=ld.discharge_ratio)
     wear = WearModel(chi0=chi0, b_mean=b_mean, b_std=b_std)
-    common = dict(disc=disc, wear=wear, tau_mean=ld.mean, tau_std=ld.cv * ld.mean, u_min=settings.limits.min_gap,
-                  u_max=u_max, tau_nodes=settings.tau_nodes)
-    derived = {"k": k, "alpha_T1": alpha, "chi0": chi0, "u_max": u_max, "u_min": settings.limits.min_gap,
+    common = dict(disc=disc, wear=wear, tau_mean=ld.mean, tau_std=ld.cv * ld.mean, u_min=spec.limits.min_gap,
+                  u_max=u_max, tau_nodes=spec.tau_nodes)
+    derived = {"k": k, "alpha_T1": alpha, "chi0": chi0, "u_max": u_max, "u_min": spec.limits.min_gap,
                "q_at_u_max": float(flow_ratio(u_max, alpha)), "b_mean": b_mean, "b_std": b_std,
                "a_b": wear.a_b, "tau_mean": ld.mean, "tau_std": ld.cv * ld.mean, "sigma": d.effective_area_ratio,
                "psi1": ld.discharge_ratio, "z_B": d.base_gap}
     return Reliability(**common), Reliability(**common, renormalise=True), derived
 
 
-def run(settings, title: str = "") -> ReliabilityResult:
+def run(spec: Spec, title: str = "") -> ReliabilityResult:
     """The chapter 1.2 study of a scene: P(t), MTTF both ways, wear CDF, region B, source values."""
-    lit, ren, derived = build(settings)
-    horizon = settings.horizon
-    times = np.asarray(settings.times, float)
+    lit, ren, derived = build(spec)
+    horizon = spec.horizon
+    times = np.asarray(spec.times, float)
     data = {"title": title, **derived, "a_tau": lit.a_tau, "load_mass_on_0_sigma_psi1": lit.load_mass,
-            "times": times, "horizon": horizon, "reliable_probability": settings.reliable_probability,
+            "times": times, "horizon": horizon, "reliable_probability": spec.reliable_probability,
             "wear_le_base_gap": lit.wear.wear_probability(1.0, times)}
     with progress.steps(9, "reliability (P(t), MTTF, t(P), accuracy)", "stage") as bar:
         for name, model in (("literal", lit), ("renormalised", ren)):
-            mttf, t, p = model.mttf(horizon, settings.time_points)
+            mttf, t, p = model.mttf(horizon, spec.time_points)
             bar.tick(note=f"{name}: P(t)")
             data[name] = {
                 "P0": float(model.probability(0.0)[0]), "P": model.probability(times),
@@ -430,10 +499,10 @@ def run(settings, title: str = "") -> ReliabilityResult:
             bar.tick(note=f"{name}: MTTF (sojourn)")
             data[name]["mttf_infinite"] = model.sojourn()
             bar.tick(note=f"{name}: MTTF to infinity")
-            data[name]["time_at"] = model.time_at(settings.reliable_probability, horizon)
+            data[name]["time_at"] = model.time_at(spec.reliable_probability, horizon)
             bar.tick(note=f"{name}: t(P)")
             if not np.isfinite(data[name]["time_at"]):
-                data[name]["time_at_status"] = (f"P(t) is not {settings.reliable_probability} at any time up to the "
+                data[name]["time_at_status"] = (f"P(t) is not {spec.reliable_probability} at any time up to the "
                                                   f"horizon (P(0) = {data[name]['P0']:.4g})")
             data["curve"] = data.get("curve", {"t": t}) | {f"P_{name}": p}
         data["curve"]["P_wear_le_base_gap"] = lit.wear.wear_probability(1.0, data["curve"]["t"])
@@ -442,12 +511,12 @@ def run(settings, title: str = "") -> ReliabilityResult:
                           "tau_u_max": lit.disc.load(chi, lit.u_max)}
         data["source"] = SOURCE
         data["table_1_2"] = TABLE_1_2
-        data["accuracy"] = accuracy({"literal": lit, "renormalised": ren}, settings, data)
+        data["accuracy"] = accuracy({"literal": lit, "renormalised": ren}, spec, data)
         bar.tick(note="accuracy")
     return ReliabilityResult.from_dict(data)
 
 
-def accuracy(models: dict, settings, data: dict) -> dict:
+def accuracy(models: dict, spec: Spec, data: dict) -> dict:
     """Error estimate of P(times), the MTTF to the horizon and to infinity and t(P = level), per model:
 
     * load quadrature: everything again with every other tau node (the same trapezoid rule at twice the
@@ -457,7 +526,7 @@ def accuracy(models: dict, settings, data: dict) -> dict:
     * method: MTTF by the time integral against the sojourn identity (quadrature in b);
     * t(P = level): the load-quadrature change of P there over |dP/dt|, plus brentq's 1 s tolerance.
     """
-    times, horizon = np.asarray(settings.times, float), settings.horizon
+    times, horizon = np.asarray(spec.times, float), spec.horizon
     parts = {}
     for name, m in models.items():
         d = data[name]

@@ -9,6 +9,8 @@ table §5.4, crossover n*), ``lewis`` (table §5.5) and ``motor_runup``.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from autobal.analysis import progress, solver_options, standards
@@ -440,6 +442,68 @@ def api_margins(P: RotorParams, min_speed: float | None, max_speed: float | None
     return standards.margin_check(reading, min_speed, max_speed)
 
 
+# ---- the spec ----------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class StationarySpec:
+    """Stationary curves (9) of Figs 5-6 for pairs (mu1, n), n = chi^2/(c m1), over z = (omega/Omega0)^2 from
+    ``z = (start, stop, points)``."""
+
+    cases: tuple
+    z: tuple
+
+
+@dataclass(frozen=True)
+class StepsSpec:
+    """Speed steps (4)-(7), Figs 3-4, for each psi: ``steps`` (from, to) in rad/s, each run for ``duration`` s."""
+
+    psi: tuple
+    steps: tuple
+    duration: float
+
+
+@dataclass(frozen=True)
+class PassageSpec:
+    """Uniform acceleration through the critical speed (8')-(9'), Figs 7-9: rad/s, rad/s^2, n = chi/m1 in 1/s."""
+
+    psi: tuple
+    friction: tuple
+    start_speed: float
+    acceleration: float
+    final_ratio: float  # run to omega/Omega0
+    crossover: bool  # find n* where max d(psi) = max d(1)
+    sensitivity_acceleration: float | None = None
+
+
+@dataclass(frozen=True)
+class LewisSpec:
+    """The Jeffcott rotor from rest at constant acceleration: the table over zeta and a* = alpha/Omega^2."""
+
+    zeta: tuple
+    accel_ratio: tuple
+
+
+@dataclass(frozen=True)
+class MotorRunupSpec:
+    """A run-up of ``duration`` s on the linear motor characteristic L = stall_torque (1 - omega/no_load_speed)
+    (N m, rad/s; None: the scene has no motor)."""
+
+    duration: float
+    stall_torque: float | None = None
+    no_load_speed: float | None = None
+
+
+@dataclass(frozen=True)
+class Spec:
+    """The parts of the rotor study a scene asks for (the validated ``analyses.rotor_dynamics``; None: not run)."""
+
+    stationary: StationarySpec | None = None
+    steps: StepsSpec | None = None
+    passage: PassageSpec | None = None
+    lewis: LewisSpec | None = None
+    motor_runup: MotorRunupSpec | None = None
+
+
 # ---- parts -----------------------------------------------------------------------------------------
 
 def stationary_part(P: RotorParams, cases, z) -> tuple[Stationary, dict]:
@@ -481,7 +545,7 @@ def step_case(P: RotorParams, w0: float, w1: float, duration: float, points: int
             "_t": tau / Om, "_d": d}
 
 
-def passage_part(P: RotorParams, s) -> tuple[Passage, dict]:
+def passage_part(P: RotorParams, s: PassageSpec) -> tuple[Passage, dict]:
     Om = P.Omega0
     rows, curves, cross = [], {}, {}
     for n in s.friction:
@@ -501,9 +565,8 @@ def passage_part(P: RotorParams, s) -> tuple[Passage, dict]:
     return Passage(rows, cross, sens, s.acceleration, s.sensitivity_acceleration), {"curves": curves}
 
 
-def run(P: RotorParams, settings, title: str = "", motor=None, service_speed: float | None = None
-        ) -> RotorDynamicsResult:
-    """The parts the settings name; the rotor's API 684 margins (:func:`api_margins`) from ``service_speed`` (rad/s,
+def run(P: RotorParams, spec: Spec, title: str = "", service_speed: float | None = None) -> RotorDynamicsResult:
+    """The parts the spec names; the rotor's API 684 margins (:func:`api_margins`) from ``service_speed`` (rad/s,
     the scene's rotor.unbalance.service_speed; None: the amplification factor alone)."""
     rotor = Rotor(psi=P.psi, mu1=P.mu1, Omega0_rad_s=P.Omega0, omega_cr_rad_s=P.omega_cr, zeta0=P.zeta0,
                   n_steady_1_s=P.n_steady(), n_stationary=P.n_stationary(), n_passage_1_s=P.n_passage(),
@@ -511,13 +574,13 @@ def run(P: RotorParams, settings, title: str = "", motor=None, service_speed: fl
                   service_speed_rad_s_status=None if service_speed is not None else
                   "the scene gives no service speed (rotor.unbalance)")
     curves, stationary, steps, passage, lewis, runup = {}, None, None, None, None, None
-    if settings.stationary is not None:
-        s = settings.stationary
-        z = np.linspace(s.z.start, s.z.stop, s.z.points)
+    if spec.stationary is not None:
+        s = spec.stationary
+        z = np.linspace(*s.z)
         stationary, curves["stationary"] = stationary_part(P, s.cases, z)
         progress.tick(note="stationary curves")
-    if settings.steps is not None:
-        s, rows, curves["steps"] = settings.steps, [], {}
+    if spec.steps is not None:
+        s, rows, curves["steps"] = spec.steps, [], {}
         for w0, w1 in s.steps:
             key = f"{w0:g}->{w1:g}"
             curves["steps"][key] = {}
@@ -527,25 +590,26 @@ def run(P: RotorParams, settings, title: str = "", motor=None, service_speed: fl
                 rows.append(Step(**r))
                 progress.tick(note=f"step {key}, psi {psi:g}")
         steps = Steps(rows, max(r.closed_form_vs_cvodes for r in rows))
-    if settings.passage is not None:
-        passage, curves["passage"] = passage_part(P, settings.passage)
+    if spec.passage is not None:
+        passage, curves["passage"] = passage_part(P, spec.passage)
         progress.tick(note="passage")
-    if settings.lewis is not None:
+    if spec.lewis is not None:
         rows = []
-        for z in settings.lewis.zeta:
-            for a in settings.lewis.accel_ratio:
+        for z in spec.lewis.zeta:
+            for a in spec.lewis.accel_ratio:
                 r = R.lewis(z, a)
                 rows.append(LewisCase(z, a, r["peak"], r["nu_peak"], r["asymptote"], r["nu_asymptote"]))
                 progress.tick(note=f"Lewis zeta {z:g}, a* {a:g}")
         lewis = Lewis(rows)
-    if settings.motor_runup is not None:
-        if motor is None:
+    if spec.motor_runup is not None:
+        motor = spec.motor_runup
+        if motor.stall_torque is None:
             raise ScenarioError("analyses.rotor_dynamics.motor_runup needs rotor.drive.motor")
         if P.J_p + P.m1 * P.e**2 * (1 - P.psi) <= 0:
             raise ScenarioError("analyses.rotor_dynamics.motor_runup needs rotor.drive.polar_inertia > 0")
         ts = P.torque_scale
         r = R.motor_runup(P, motor.stall_torque / ts, motor.no_load_speed / P.Omega0,
-                          settings.motor_runup.duration * P.Omega0)
+                          motor.duration * P.Omega0)
         runup = MotorRunup(r["nu_final"] * P.Omega0, r["passed"], float(r["delta"].max()))
         curves["motor"] = {"t": r["tau"] / P.Omega0, "omega": r["nu"] * P.Omega0, "delta": r["delta"]}
     return RotorDynamicsResult(title, rotor, stationary, steps, passage, lewis, runup,

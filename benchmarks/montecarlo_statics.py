@@ -21,6 +21,7 @@ import time
 import numpy as np
 
 from autobal import scenario
+from autobal.analyses import montecarlo as mc_room
 from autobal.analysis import closed_form
 from autobal.analysis import executor as ex
 from autobal.analysis import montecarlo as mc
@@ -139,7 +140,7 @@ def main(repeats: int = 5) -> list[dict]:
 
     # the whole scene study, in-process
     t0 = time.perf_counter()
-    res = mc.run(dev, settings_.model_copy(update={"afc": None}), ex.InProcess(progress=False), scn.title)
+    res = mc.run(dev, mc_room.spec(settings_.model_copy(update={"afc": None})), ex.InProcess(progress=False), scn.title)
     t_study = time.perf_counter() - t0
     d = res.to_dict()
     j = d["psi1"].index(1.0)

@@ -18,6 +18,7 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from autobal import analyses, cli, scenario
+from autobal.analyses.estimation import spec
 from autobal.analysis import estimation_study
 from autobal.errors import ScenarioError
 from autobal.models.hydroheel import TurbulentDisc
@@ -51,7 +52,7 @@ def _other_table(folder: Path) -> Path:
 def _alpha_1p(scn) -> float:
     e = scn.analyses.estimation.model_copy(update={"fits": scn.analyses.estimation.fits[:1], "bootstrap": None,
                                                    "cross_check": False, "adequacy": None, "loss_coefficient": None})
-    return estimation_study.run(e, e.measurements()).estimates["static_1p"]["alpha"]
+    return estimation_study.run(spec(e), e.measurements()).estimates["static_1p"]["alpha"]
 
 
 def test_shipped_scene_reads_its_own_data_from_any_working_folder(tmp_path, monkeypatch):
@@ -122,7 +123,7 @@ def test_extra_column_without_columns_names_the_key(tmp_path):
 
 def _run(settings):
     """The estimation study handed its measurements, as the room hands them."""
-    return estimation_study.run(settings, settings.measurements())
+    return estimation_study.run(spec(settings), settings.measurements())
 
 
 def test_start_where_the_model_is_undefined_is_moved_and_reaches_the_same_optimum(tmp_path):

@@ -11,6 +11,7 @@ import yaml
 from numpy.testing import assert_allclose
 
 from autobal import cli, scenario
+from autobal.analyses.liquid_balancer import spec
 from autobal.analysis import liquid_balancer as study
 from autobal.analysis import liquid_balancer_optimum as optimum
 from autobal.analysis import rotor_identification as rid
@@ -359,7 +360,7 @@ def test_c8_liquid_choice_is_argmin_sin_beta(washer):
     settings = scenario.load("washer_liquid_balancer").analyses.liquid_balancer
     settings = settings.model_copy(update={"height": None, "unbalance_masses": [], "thesis_comparison": False,
                                            "volume": settings.volume.model_copy(update={"grid_points": 201})})
-    d = study.run(washer, settings).to_dict()["liquid_choice"]
+    d = study.run(washer, spec(settings)).to_dict()["liquid_choice"]
     sb = [c["sin_beta_star"] for c in d["candidates"]]
     assert d["chosen"] == d["candidates"][int(np.argmin(sb))]["name"] == "water"
     assert sb == sorted(sb)  # water < ethylene glycol < glycerol (nu increases)
@@ -609,7 +610,7 @@ def test_result_object_without_pyplot(washer, tmp_path):
     settings = scenario.load("washer_liquid_balancer").analyses.liquid_balancer
     settings = settings.model_copy(update={"height": None, "unbalance_masses": [], "liquids": [],
                                            "volume": settings.volume.model_copy(update={"grid_points": 201})})
-    res = study.run(washer, settings)
+    res = study.run(washer, spec(settings))
     before = matplotlib.get_backend()
     figs = res.plot()
     assert len(figs) == 2 and all(isinstance(f, Figure) for f in figs) and matplotlib.get_backend() == before

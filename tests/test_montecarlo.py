@@ -12,7 +12,7 @@ import yaml
 from numpy.testing import assert_allclose
 
 from autobal import scenario
-from autobal.analyses.montecarlo import Correlation, Distribution
+from autobal.analyses.montecarlo import Correlation, Distribution, spec
 from autobal.analysis import executor as ex
 from autobal.analysis import montecarlo as mc
 from autobal.analysis import montecarlo_afc as mcafc
@@ -44,9 +44,9 @@ def ev(dev):
 
 
 def small(scene, **changes):
-    """The scene's Monte Carlo settings, smaller."""
-    return scene.analyses.montecarlo.model_copy(update={"samples": 2000, "chunk_size": 500, "afc": None,
-                                                        "discharge_ratio": [0.75, 1.25]} | changes)
+    """The study's spec of the scene's Monte Carlo settings, smaller."""
+    return spec(scene.analyses.montecarlo.model_copy(update={"samples": 2000, "chunk_size": 500, "afc": None,
+                                                             "discharge_ratio": [0.75, 1.25]} | changes))
 
 
 def thesis_sampler(ev, seed=2014, kind="normal"):

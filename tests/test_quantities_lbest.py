@@ -108,9 +108,11 @@ def test_estimation_summary_one_verdict_bootstrap_and_correlation(shipped_run):
 def montecarlo():
     """The shipped Monte Carlo scene with 4000 samples at two discharge ratios, no AFC."""
     scene = scenario.load("pump_pe600_montecarlo")
+    from autobal.analyses.montecarlo import spec
+
     settings = scene.analyses.montecarlo.model_copy(update={"samples": 4000, "chunk_size": 2000, "afc": None,
                                                             "discharge_ratio": [0.75, 1.0]})
-    return mc.run(design(scene.device), settings, ex.InProcess(progress=False))
+    return mc.run(design(scene.device), spec(settings), ex.InProcess(progress=False))
 
 
 def test_montecarlo_gap_pressures_and_leak_in_engineering_units(montecarlo):

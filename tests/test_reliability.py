@@ -10,6 +10,7 @@ import yaml
 from numpy.testing import assert_allclose
 
 from autobal import scenario
+from autobal.analyses import reliability as rel_room
 from autobal.analysis import reliability as rel
 from autobal.cli import main
 from autobal.errors import ScenarioError
@@ -28,7 +29,7 @@ HOUR = 3600.0
 
 @pytest.fixture(scope="module")
 def example():
-    settings = scenario.load("hydroheel_wear").analyses.reliability
+    settings = rel_room.spec(scenario.load("hydroheel_wear").analyses.reliability)
     lit, ren, derived = rel.build(settings)
     return settings, lit, ren, derived
 

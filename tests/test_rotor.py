@@ -278,12 +278,12 @@ def test_rotor_dynamics_result_plots_without_pyplot(tmp_path):
     import matplotlib
     from matplotlib.figure import Figure
 
-    from autobal.analyses.rotor_dynamics import RotorDynamics, Stationary
+    from autobal.analyses.rotor_dynamics import RotorDynamics, Stationary, spec
     from autobal.analysis.rotor_study import run
     from autobal.schema import Range
 
     P = RotorParams.from_groups(Omega0=100.0, chi_over_m1=2.0, psi=0.5)
-    res = run(P, RotorDynamics(stationary=Stationary(cases=[(2, 0.1)], z=Range(start=0.01, stop=3.0, points=60))))
+    res = run(P, spec(RotorDynamics(stationary=Stationary(cases=[(2, 0.1)], z=Range(start=0.01, stop=3.0, points=60)))))
     before = matplotlib.get_backend()
     figs = res.plot()
     assert len(figs) == 1 and isinstance(figs[0], Figure) and matplotlib.get_backend() == before

@@ -304,16 +304,16 @@ def test_the_guides_ramp_table_dwell_near_the_critical_speed_is_cautioned(tmp_pa
 def test_rotor_dynamics_states_the_margin_from_the_scenes_service_speed():
     """rotor_dynamics: the rotor's AF always (the model's own response), its separation margin only from the scene's
     service speed (rotor.unbalance.service_speed), null with the reason without one; the summary says which."""
-    from autobal.analyses.rotor_dynamics import RotorDynamics
+    from autobal.analyses.rotor_dynamics import RotorDynamics, spec
     from autobal.analysis import rotor_study
 
     P = rotor(2400, 0.02)
-    with_speed = rotor_study.run(P, RotorDynamics(), service_speed=4000 * RPM)
+    with_speed = rotor_study.run(P, spec(RotorDynamics()), service_speed=4000 * RPM)
     r = with_speed.rotor
     assert r.amplification_factor == pytest.approx(hand_af(0.02)[0], rel=1e-8)
     assert r.required_separation_margin_pct == 16.0 and r.separation_margin_ok is True
     assert "API 684 (2005): AF 24.96, separation margin 39.98 % from the operating speed" in with_speed.summary()
-    bare = rotor_study.run(P, RotorDynamics()).rotor
+    bare = rotor_study.run(P, spec(RotorDynamics())).rotor
     assert bare.amplification_factor == pytest.approx(r.amplification_factor)
     assert bare.separation_margin_pct is None and "no operating speed" in bare.separation_margin_pct_status
     assert bare.service_speed_rad_s_status == "the scene gives no service speed (rotor.unbalance)"

@@ -150,14 +150,14 @@ def test_the_rotor_block_keeps_the_margin_keys_in_the_order_margin_check_writes_
     no extremum (μ1 < 3n/(6 − 2√5)): the rotor block is its groups, then the API margins in the order
     standards.margin_check writes them (with or without a service speed), the nulls with their statuses; the
     stationary case's z1..M2 null with theirs; everything comes back from results.json."""
-    from autobal.analyses.rotor_dynamics import RotorDynamics, Stationary
+    from autobal.analyses.rotor_dynamics import RotorDynamics, Stationary, spec
     from autobal.analysis.rotor_study import RotorDynamicsResult, api_margins, run
     from autobal.models.rotor import RotorParams
     from autobal.schema import Range
 
     P = RotorParams.from_groups(Omega0=100.0, chi_over_m1=2.0, psi=0.5)
-    res = run(P, RotorDynamics(stationary=Stationary(cases=[(1.0, 1.0)], z=Range(start=0.01, stop=3.0, points=40))),
-              service_speed=service_speed)
+    settings = RotorDynamics(stationary=Stationary(cases=[(1.0, 1.0)], z=Range(start=0.01, stop=3.0, points=40)))
+    res = run(P, spec(settings), service_speed=service_speed)
     d = json.loads(json.dumps(plain(res.to_dict())))
     groups = ["psi", "mu1", "Omega0_rad_s", "omega_cr_rad_s", "zeta0", "n_steady_1_s", "n_stationary",
               "n_passage_1_s", "service_speed_rad_s"]

@@ -284,7 +284,21 @@ def run(scene, settings: Estimation):
 
     device = adapt(scene.device) if scene.device is not None else None
     with progress.steps(None, "estimation", "IPOPT solve", catch=True):
-        return estimation_study.run(settings, settings.measurements(), device, scene.title)
+        return estimation_study.run(spec(settings), settings.measurements(), device, scene.title)
+
+
+def spec(settings: Estimation):
+    """The study's :class:`~autobal.analysis.estimation_study.Spec` of the validated settings (SI)."""
+    from autobal.analysis import estimation_study as es
+
+    s, ad, lc, bs = settings, settings.adequacy, settings.loss_coefficient, settings.bootstrap
+    fits = tuple(es.FitSpec(f.name, f.model, f.residual, dict(f.weights),
+                            {k: es.Parameter(**dict(p)) for k, p in f.parameters.items()}, f.flow_throttle, f.hessian,
+                            f.max_iterations) for f in s.fits)
+    return es.Spec(fits, s.bases.values(), s.closed_forms, s.tau_max,
+                   ad and es.AdequacySpec(ad.significance, ad.reference, ad.reference_parameters),
+                   lc and es.LossSpec(lc.fit, lc.unknown, lc.losses()), s.confidence, s.band_points, s.cross_check,
+                   bs and es.BootstrapSpec(bs.samples, bs.seed))
 
 
 def estimate_seconds(settings: Estimation) -> float:

@@ -68,7 +68,18 @@ def run(scene, settings: LiquidBalancerAnalysis):
     from autobal.analysis import liquid_balancer as lb
     from autobal.parts import liquid_balancer as part
 
-    return lb.run(part.adapt(scene.liquid_balancer), settings, scene.title)
+    return lb.run(part.adapt(scene.liquid_balancer), spec(settings), scene.title)
+
+
+def spec(settings: LiquidBalancerAnalysis):
+    """The study's :class:`~autobal.analysis.liquid_balancer.Spec` of the validated settings (SI)."""
+    from autobal.analysis import liquid_balancer as lb
+
+    s, r = settings, settings.speed_ratio
+    return lb.Spec(s.variant, s.deflection, (r.start, r.stop, r.points), tuple(s.table_ratios), s.arc_angle_deg,
+                   s.conversion_coefficient, s.height and lb.HeightSearch(**dict(s.height)),
+                   s.volume and lb.VolumeSearch(**dict(s.volume)), tuple(lb.Liquid(**dict(c)) for c in s.liquids),
+                   tuple(s.unbalance_masses), s.thesis_comparison)
 
 
 def estimate_seconds(settings: LiquidBalancerAnalysis) -> float:

@@ -174,7 +174,22 @@ def run(scene, settings: MonteCarlo):
         raise ScenarioError("analyses.montecarlo needs a device section")
     device = adapt(scene.device)
     with executor.make(scene_executor=getattr(scene, "executor", None)) as exe:
-        return mc.run(design(scene.device), settings, exe, scene.title, device=device)
+        return mc.run(design(scene.device), spec(settings), exe, scene.title, device=device)
+
+
+def spec(settings: MonteCarlo):
+    """The study's :class:`~autobal.analysis.montecarlo.Spec` of the validated settings (SI)."""
+    from autobal.analysis import montecarlo as mc
+
+    def distributions(parameters: dict) -> dict:
+        return {name: mc.Distribution(**dict(d)) for name, d in parameters.items()}
+
+    s, a = settings, settings.afc
+    afc = a and mc.AfcSpec(a.model, a.samples, a.chunk_size, a.operating_ratio, a.forcing, mc.Grid(**dict(a.omega)),
+                           distributions(a.parameters))
+    return mc.Spec(s.samples, s.seed, s.chunk_size, tuple(s.discharge_ratio), distributions(s.parameters),
+                   tuple(mc.Correlation(tuple(c.between), c.rho) for c in s.correlations), s.band_sigma,
+                   tuple(s.quantiles), s.sensitivity_step, afc)
 
 
 def estimate_seconds(settings: MonteCarlo) -> float:

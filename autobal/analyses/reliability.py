@@ -107,7 +107,17 @@ def run(scene, settings: Reliability):
     """Reliability of the traditional balance disc: P(t), MTTF, wear (Pavlenko 2014, ch. 1.2)."""
     from autobal.analysis import reliability as rel
 
-    return rel.run(settings, scene.title)
+    return rel.run(spec(settings), scene.title)
+
+
+def spec(settings: Reliability):
+    """The study's :class:`~autobal.analysis.reliability.Spec` of the validated settings (SI)."""
+    from autobal.analysis import reliability as rel
+
+    s = settings
+    return rel.Spec(rel.Disc(**dict(s.disc)), rel.Wear(**dict(s.wear)), rel.Load(**dict(s.load)),
+                    rel.Limits(**dict(s.limits)), tuple(s.times), s.horizon, s.time_points, s.tau_nodes,
+                    s.reliable_probability)
 
 
 def estimate_seconds(settings: Reliability) -> float:

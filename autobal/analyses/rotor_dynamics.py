@@ -99,8 +99,24 @@ def run(scene, settings: RotorDynamics):
                                 f"periods of the rotor from rest past its critical speed, more than "
                                 f"{MAX_PERIODS:.0e}: give at least {a * periods / MAX_PERIODS:.2g}")
     with progress.steps(None, "rotor dynamics (curves, steps, passage, Lewis cases)", "part", catch=True):
-        return rotor_study.run(params, settings, scene.title, drive.motor if drive else None,
+        return rotor_study.run(params, spec(settings, drive.motor if drive else None), scene.title,
                                scene.rotor.unbalance.service_speed if scene.rotor.unbalance else None)
+
+
+def spec(settings: RotorDynamics, motor=None):
+    """The study's :class:`~autobal.analysis.rotor_study.Spec` of the validated settings and the scene's
+    ``rotor.drive.motor`` (SI)."""
+    from autobal.analysis import rotor_study as rs
+
+    s, st, p = settings, settings.stationary, settings.passage
+    return rs.Spec(
+        stationary=st and rs.StationarySpec(tuple(st.cases), (st.z.start, st.z.stop, st.z.points)),
+        steps=s.steps and rs.StepsSpec(tuple(s.steps.psi), tuple(s.steps.steps), s.steps.duration),
+        passage=p and rs.PassageSpec(tuple(p.psi), tuple(p.friction), p.start_speed, p.acceleration, p.final_ratio,
+                                     p.crossover, p.sensitivity_acceleration),
+        lewis=s.lewis and rs.LewisSpec(tuple(s.lewis.zeta), tuple(s.lewis.accel_ratio)),
+        motor_runup=s.motor_runup and rs.MotorRunupSpec(s.motor_runup.duration, *(
+            (motor.stall_torque, motor.no_load_speed) if motor else ())))
 
 
 def estimate_seconds(settings: RotorDynamics) -> float:
