@@ -501,7 +501,7 @@ def run(dev: DeviceDesign, spec: Spec, executor, title: str = "", solver=None, d
             raise ScenarioError(f"analyses.montecarlo.parameters.{bad[0]}: not a parameter of this device "
                                 f"(it has no regulator section)")
     if spec.afc is not None:
-        afc_names(spec.afc)
+        afc_names(spec.afc.model, spec.afc.parameters)
     ev = evaluator(dev, names)
     margs = marginals(spec.parameters, ev.nominal())
     corr = correlation_matrix(names, spec.correlations) if spec.correlations else None

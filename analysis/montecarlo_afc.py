@@ -33,15 +33,16 @@ def afc_parameters(model: str) -> tuple:
     return PARAM_NAMES
 
 
-def afc_names(settings) -> list[str]:
-    """The uncertain parameters of an AFC Monte Carlo (autobal.analyses.montecarlo.AfcMonteCarlo), each
-    checked to be one of its model's (:func:`afc_parameters`); ScenarioError naming the first that is not."""
-    allowed = afc_parameters(settings.model)
-    for name in settings.parameters:
+def afc_names(model: str, parameters) -> list[str]:
+    """The names of an AFC Monte Carlo's uncertain ``parameters`` (names, or a mapping name -> distribution) of the
+    linear ``model``, each checked to be one of its model's (:func:`afc_parameters`); ScenarioError naming the first
+    that is not."""
+    allowed = afc_parameters(model)
+    for name in parameters:
         if name not in allowed:
-            raise ScenarioError(f"analyses.montecarlo.afc.parameters.{name}: not a parameter of the {settings.model} "
+            raise ScenarioError(f"analyses.montecarlo.afc.parameters.{name}: not a parameter of the {model} "
                                 f"model; expected one of {', '.join(allowed)}")
-    return list(settings.parameters)
+    return list(parameters)
 
 
 class AfcModel:
@@ -136,13 +137,13 @@ class AfcTask(Chunks):
             self.draw(chunk), self.omega)
 
 
-def afc_study(device, settings, seed: int, executor, band_sigma: float, quantiles) -> dict:
-    """AFC Monte Carlo (Fig. 3.7): statistics of A_u on the grid, at the nominal model's peaks and at
-    the operating speed, beside the nominal AFC of analysis/frequency.py."""
-    a = settings
+def afc_study(device, a, seed: int, executor, band_sigma: float, quantiles) -> dict:
+    """AFC Monte Carlo (Fig. 3.7) of the spec ``a`` (:class:`autobal.analysis.montecarlo.AfcSpec`): statistics of
+    A_u on the grid, at the nominal model's peaks and at the operating speed, beside the nominal AFC of
+    analysis/frequency.py."""
     if device is None or getattr(device, "dynamics", None) is None:
         raise ScenarioError("analyses.montecarlo.afc needs device.dynamics (masses, springs, volumes)")
-    names = afc_names(a)
+    names = afc_names(a.model, a.parameters)
     am = afc_model(device, a.operating_ratio, a.model, names, a.forcing)
     lin = am.setup.linear(a.model)
     d = am.setup.data

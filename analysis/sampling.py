@@ -45,7 +45,7 @@ class Marginal:
 
 
 def marginals(parameters: dict, nominal: dict, where: str = "analyses.montecarlo.parameters") -> tuple:
-    """Resolve the scene's distributions (autobal.analyses.montecarlo.Distribution) against the
+    """Resolve the distributions (:class:`autobal.analysis.montecarlo.Distribution`, name -> one) against the
     model's nominal values; a lognormal with a mean <= 0 is refused naming the parameter."""
     out = []
     for name, d in parameters.items():
@@ -64,7 +64,7 @@ def marginals(parameters: dict, nominal: dict, where: str = "analyses.montecarlo
 
 def correlation_matrix(names, correlations) -> np.ndarray:
     """The copula's correlation matrix of the parameters ``names`` from the scene's pairs
-    (autobal.analyses.montecarlo.Correlation: ``between`` two names, ``rho``); 1 on the diagonal."""
+    (:class:`autobal.analysis.montecarlo.Correlation`: ``between`` two names, ``rho``); 1 on the diagonal."""
     c = np.eye(len(names))
     for r in correlations:
         i, j = names.index(r.between[0]), names.index(r.between[1])

@@ -12,7 +12,7 @@ import yaml
 from numpy.testing import assert_allclose
 
 from autobal import scenario
-from autobal.analyses.montecarlo import Correlation, Distribution, spec
+from autobal.analyses.montecarlo import Distribution, spec
 from autobal.analysis import executor as ex
 from autobal.analysis import montecarlo as mc
 from autobal.analysis import montecarlo_afc as mcafc
@@ -49,8 +49,13 @@ def small(scene, **changes):
                                                              "discharge_ratio": [0.75, 1.25]} | changes))
 
 
+def afc_spec(scene, afc):
+    """The study's spec (analysis/montecarlo.py AfcSpec) of the AFC settings ``afc`` in the scene's Monte Carlo."""
+    return spec(scene.analyses.montecarlo.model_copy(update={"afc": afc})).afc
+
+
 def thesis_sampler(ev, seed=2014, kind="normal"):
-    d = {n: Distribution(distribution=kind, cv=0.05) for n in THESIS}
+    d = {n: mc.Distribution(distribution=kind, cv=0.05) for n in THESIS}
     return sampling.Sampler(sampling.marginals(d, ev.nominal()), None, seed)
 
 
@@ -76,12 +81,12 @@ def test_parametric_residual_equals_the_statics_residual(name):
 
 
 def test_samples_are_reproducible_and_have_the_asked_moments(ev):
-    d = {"alpha_e1": Distribution(distribution="normal", cv=0.05),
-         "b": Distribution(distribution="uniform", low=0.7, high=0.9),
-         "sigma": Distribution(distribution="lognormal", mean=1.5, std=0.3),
-         "chi": Distribution(distribution="gauss12", cv=0.05),
-         "psi_in": Distribution(distribution="uniform", cv=0.1)}
-    corr = sampling.correlation_matrix(list(d), [Correlation(between=["alpha_e1", "sigma"], rho=0.6)])
+    d = {"alpha_e1": mc.Distribution(distribution="normal", cv=0.05),
+         "b": mc.Distribution(distribution="uniform", low=0.7, high=0.9),
+         "sigma": mc.Distribution(distribution="lognormal", mean=1.5, std=0.3),
+         "chi": mc.Distribution(distribution="gauss12", cv=0.05),
+         "psi_in": mc.Distribution(distribution="uniform", cv=0.1)}
+    corr = sampling.correlation_matrix(list(d), [mc.Correlation(("alpha_e1", "sigma"), 0.6)])
     s = sampling.Sampler(sampling.marginals(d, ev.nominal()), corr, seed=7)
     X = s.draw(3, 200_000)
     assert np.array_equal(X, s.draw(3, 200_000))  # same seed and chunk: identical
@@ -255,8 +260,8 @@ def test_shipped_afc_monte_carlo_is_the_energy_consistent_model_under_physical_f
     a = scene.analyses.montecarlo.afc
     assert (a.model, a.forcing) == ("nonlinear", "physical")
     assert set(a.parameters) <= set(mcafc.afc_parameters(a.model))
-    r = mcafc.afc_study(device_part.adapt(scene.device), a.model_copy(update={"samples": 200, "chunk_size": 200}), 2014,
-                        ex.InProcess(progress=False), 3.0, [0.5])
+    r = mcafc.afc_study(device_part.adapt(scene.device), afc_spec(scene, a.model_copy(update={"samples": 200,
+                        "chunk_size": 200})), 2014, ex.InProcess(progress=False), 3.0, [0.5])
     # the nominal curve is the frequency analysis' headline (energy-consistent, physical): pump peak 986.8 rad/s,
     # 15.44 um at dpsi1a = 0.2, 3.59 um at omega0 = 660 rad/s
     assert list(r["at"]) == ["operating_speed", "peak_1"]
@@ -271,7 +276,7 @@ def test_afc_spread_of_the_program_model_matches_spec(scene):
     """Fig. 3.7: the 28 constants normal with cv 5 %: recomputed with N = 2e4: CV(A) = 0.30 at
     omega0 = 660 rad/s, 0.29 at omega_I, 0.51 at omega_II (the source: amplitude 'up to 40 %', conclusion 4,
     read off figures: same order, not a number to reproduce)."""
-    a = program_afc(scene).model_copy(update={"samples": 4000, "chunk_size": 2000})
+    a = afc_spec(scene, program_afc(scene).model_copy(update={"samples": 4000, "chunk_size": 2000}))
     r = mcafc.afc_study(device_part.adapt(scene.device), a, 2014, ex.InProcess(progress=False), 3.0, [0.5])
     at = r["at"]
     assert_allclose([at["peak_1"]["omega"], at["peak_2"]["omega"]], [1977.2, 2912.5], atol=1.0)

@@ -105,7 +105,7 @@ class AfcMonteCarlo(Strict):
         from autobal.analysis.montecarlo_afc import afc_names  # the names of its model (imports the model)
 
         try:
-            afc_names(self)
+            afc_names(self.model, self.parameters)
         except ScenarioError as exc:  # checked when the scene is read, so that check sees it too
             raise ValueError(str(exc).removeprefix("analyses.montecarlo.afc.")) from None
         return self
