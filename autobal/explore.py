@@ -690,12 +690,15 @@ class SpinupExplorer(Settings):
         self.profile = (np.asarray(tr.alpha, float), np.diff(np.append(tr.t_u, tr.t[-1])), dict(values))
         return {"peak_over_e": res.peak_deflection_over_e, "seconds": time.perf_counter() - t0}
 
-    def evaluate(self, values: dict) -> dict:
+    def evaluate(self, values: dict, fast: bool = True) -> dict:
         """The current optimum's profile and the constant ramps re-simulated for the settings: peaks (delta/e and
         m), the critical speed (rad/s) with its API 684 margins (``api``: :func:`analysis.standards.margin_check`'s
         dict, as the spin-up study's ``rotor`` block), the drive's use; ``status`` "ok", "refused" or
-        "no_optimum"."""
+        "no_optimum".  ``fast``: the re-simulations by the rotor's exact linear response
+        (:func:`autobal.ocp.linear_response.resimulate`, the page's live path), else by CVODES at the batch run's
+        tolerance (:func:`autobal.ocp.simulation.resimulate`, the cross-check); ``resimulation`` says which ran."""
         from autobal.analysis.rotor_study import api_margins
+        from autobal.ocp import linear_response
         from autobal.ocp.simulation import baselines, drive_use, resimulate
 
         t0 = time.perf_counter()
@@ -704,17 +707,23 @@ class SpinupExplorer(Settings):
         except (ValueError, ZeroDivisionError, AutobalError) as exc:
             return {"status": "refused", "message": str(exc)}
         P = ocp.params
+        if fast:  # the exact linear response where the rotor has one (not critically damped), else CVODES
+            try:
+                linear_response.fixed_frame(), linear_response.modes(ocp)
+            except ValueError:
+                fast = False
+        resim = linear_response.resimulate if fast else resimulate
         out = {"status": "ok", "message": "", "critical_speed": P.omega_cr, "eccentricity": P.e, "ramps": {},
                # API 684 (2005): AF and SM of the changed rotor from its service (final) speed, as the study's
-               "api": api_margins(P, ocp.omega_final)}
-        for key, tr in baselines(ocp).items():
+               "api": api_margins(P, ocp.omega_final), "resimulation": "linear response" if fast else "CVODES"}
+        for key, tr in baselines(ocp, resim=resim).items():
             out["ramps"][key] = {"label": tr.label, "peak_over_e": tr.peak_delta, "t": tr.t, "delta": tr.delta,
                                  "within_drive_limits": drive_use(ocp, tr)["within_drive_limits"]}
         if self.profile is None:
             return out | {"status": "no_optimum", "message": "the optimum is being found (autobal run's "
                                                              "optimisation)"}
         alpha, dt, at = self.profile
-        tr = resimulate(ocp, alpha / ocp.alpha_max, dt * ocp.Om, "optimum")  # in the changed problem's scales
+        tr = resim(ocp, alpha / ocp.alpha_max, dt * ocp.Om, "optimum")  # in the changed problem's scales
         out["optimum"] = {"peak_over_e": tr.peak_delta, "t": tr.t, "delta": tr.delta, "time_of_peak": tr.t_peak,
                           "omega": tr.omega, "within_drive_limits": drive_use(ocp, tr)["within_drive_limits"],
                           "optimised_for": self.overrides(at)}
