@@ -68,6 +68,11 @@ MODELS_KEPT = 8  # dynamic models kept built (one per structure: medium, regulat
 SLIDER_SPAN = 5.0  # a slider runs from value / SPAN to value * SPAN, inside the declared bounds
 SLIDER_STEPS = 400
 CHECK_RTOL = 1e-6  # IPOPT's operating point differs from Newton's when a value differs by more than this
+# CVODES's re-simulation (at the batch run's tolerance) differs from the spin-up page's linear response when a peak
+# differs by more than this relative amount, or its time by more than SPINUP_CHECK_T seconds (tests/
+# test_explore_linear_response.py: they agree to 1e-9 and 1e-7 s over a range of rotors and drives)
+SPINUP_CHECK_RTOL = 1e-8
+SPINUP_CHECK_T = 1e-6
 CHECK_AFTER_S = 1.0  # IPOPT cross-checks a setting once the sliders have rested this long
 CRITICAL_RTOL = 1e-12  # Brent's method's relative tolerance on the criticals psi1_kr, dpsi_kr
 PSI1_MAX = 100.0  # the largest discharge ratio a scene may give (analyses.statics): psi1_kr is looked for up to it
@@ -717,7 +722,8 @@ class SpinupExplorer(Settings):
                # API 684 (2005): AF and SM of the changed rotor from its service (final) speed, as the study's
                "api": api_margins(P, ocp.omega_final), "resimulation": "linear response" if fast else "CVODES"}
         for key, tr in baselines(ocp, resim=resim).items():
-            out["ramps"][key] = {"label": tr.label, "peak_over_e": tr.peak_delta, "t": tr.t, "delta": tr.delta,
+            out["ramps"][key] = {"label": tr.label, "peak_over_e": tr.peak_delta, "time_of_peak": tr.t_peak,
+                                 "t": tr.t, "delta": tr.delta,
                                  "within_drive_limits": drive_use(ocp, tr)["within_drive_limits"]}
         if self.profile is None:
             return out | {"status": "no_optimum", "message": "the optimum is being found (autobal run's "
@@ -729,6 +735,26 @@ class SpinupExplorer(Settings):
                           "optimised_for": self.overrides(at)}
         out["compute_ms"] = 1e3 * (time.perf_counter() - t0)
         return out
+
+
+    # -- the cross-check on release
+    def check(self, values: dict, answer: dict) -> str:
+        """The re-simulations by CVODES at the batch run's tolerance (``evaluate(fast=False)``: what ``autobal run``
+        does) against the live answer: '' when every peak agrees to :data:`SPINUP_CHECK_RTOL` and its time to
+        :data:`SPINUP_CHECK_T`, else CVODES's numbers where they differ (then shown on the page)."""
+        cv = self.evaluate(values, fast=False)
+        if cv["status"] != answer.get("status"):
+            return f"CVODES's re-simulation gives status {cv['status']} ({cv['message']}), the live path " \
+                   f"{answer.get('status')}"
+        if cv["status"] not in ("ok", "no_optimum"):
+            return ""
+        pairs = [(r["label"], r, answer["ramps"].get(k)) for k, r in cv["ramps"].items()]
+        if "optimum" in cv:
+            pairs.append(("current optimum's profile", cv["optimum"], answer.get("optimum")))
+        off = [f"{label}: peak δ/e {r['peak_over_e']:.10g} at {r['time_of_peak']:.6g} s" for label, r, live in pairs
+               if live is None or abs(r["peak_over_e"] / live["peak_over_e"] - 1) > SPINUP_CHECK_RTOL
+               or abs(r["time_of_peak"] - live["time_of_peak"]) > SPINUP_CHECK_T]
+        return "CVODES's re-simulation differs: " + "; ".join(off) if off else ""
 
 
 def _exact_statics(ans: dict) -> str:

@@ -190,8 +190,9 @@ _OPS = {ca.OP_ASSIGN: lambda x: x, ca.OP_ADD: np.add, ca.OP_SUB: np.subtract, ca
 @cache
 def vectorised(f: ca.Function):
     """``f`` (an SX Function of dense inputs with one output) evaluated by numpy on arrays of points, instruction by
-    instruction (the same operations as CasADi's virtual machine, on whole arrays): ``call(*rows)`` with each input's
-    rows as arrays or scalars (broadcast), returns the output's rows, shape (rows, points)."""
+    instruction (the same operations as CasADi's virtual machine, on whole arrays): ``call(*args)``, each input
+    indexable by its entries (an array (rows, points), or a sequence of scalars: broadcast), returns the output's
+    rows, shape (rows, points)."""
     if not f.is_a("SXFunction") or f.n_out() != 1 or not all(f.sparsity_in(i).is_dense() for i in range(f.n_in())):
         raise ValueError(f"{f.name()}: not an SX Function of dense inputs with one output")
     prog = [(f.instruction_id(k), f.instruction_input(k), f.instruction_output(k),
@@ -226,7 +227,7 @@ def torque(q: np.ndarray, a: np.ndarray, p) -> np.ndarray:
     accelerations a (1, N), by :func:`vectorised`."""
     from autobal.models.rotor import rotor_model
 
-    return vectorised(rotor_model().torque)(q, a[0], p)[0]
+    return vectorised(rotor_model().torque)(q, a, p)[0]
 
 
 def resimulate(ocp: SpinupOcp, u, h, label: str, points: int | None = None, tol: float = TOL) -> Trajectory:
