@@ -935,16 +935,18 @@ def _browser_only(doc, sliders: dict, *figs) -> None:
         "{get: () => false});")))
 
 
-def _connect(doc, explorer: DeviceSettings, sliders: dict, values: dict, state: dict, check, request) -> None:
-    """A device page's sliders: each change computed (``request``), and IPOPT's cross-check (``explorer.check``, in
-    a thread) once the sliders have rested :data:`CHECK_AFTER_S`, said in the ``check`` Div; ``state["good"]``: the
-    last good answer."""
+def _connect(doc, explorer: Settings, sliders: dict, values: dict, state: dict, check, request,
+             agrees: str = "the scene's checks pass and IPOPT agrees with the operating point", moved=lambda p: p):
+    """A page's sliders: each change computed (``request``, the slider named by ``moved(path)``), and the
+    cross-check (``explorer.check``: IPOPT's on a device page, CVODES's on a spin-up page; in a thread) once the
+    sliders have rested :data:`CHECK_AFTER_S`, said in the ``check`` Div (``agrees`` when it agrees);
+    ``state["good"]``: the last good answer.  Returns ``rested()``, which (re)starts the wait for the check."""
 
     def on_change(path):
         def cb(attr, old, new):
             values[path] = float(new)
             check.text = ""
-            request(values, path)
+            request(values, moved(path))
             rested()
         return cb
 
@@ -960,8 +962,8 @@ def _connect(doc, explorer: DeviceSettings, sliders: dict, values: dict, state: 
 
             def done():
                 if vals == values:  # still the setting checked
-                    check.text = (f"<span style='color:#b35900'>cross-check: {text}</span>" if text else
-                                  "cross-check: the scene's checks pass and IPOPT agrees with the operating point")
+                    check.text = (f"<span id='crosscheck' style='color:#b35900'>cross-check: {html.escape(text)}"
+                                  "</span>" if text else f"<span id='crosscheck'>cross-check: {agrees}</span>")
             doc.add_next_tick_callback(done)
         threading.Thread(target=work, daemon=True).start()
 
@@ -972,6 +974,7 @@ def _connect(doc, explorer: DeviceSettings, sliders: dict, values: dict, state: 
 
     for path, slider in sliders.items():
         slider.on_change("value", on_change(path))
+    return rested
 
 
 def make_document(explorer: DeviceExplorer, out: Path):
@@ -1206,9 +1209,10 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
 
     def modify(doc):
         values = explorer.defaults()
-        state = {"started": None}
+        state = {"started": None, "good": None}
         sliders = _sliders(explorer)
         verdict = Div(text="", width=1100, height=46)  # and the status line under it
+        check = Div(text="", name="check", width=1100, height=20)
         numbers = Div(text="", name="numbers", width=1100, height=150)
         fig = figure(title="deflection δ/e of the rotor", x_axis_label="time, s", y_axis_label="δ/e", width=900,
                      height=360, name="plots", toolbar_location=None)
@@ -1224,6 +1228,7 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
             good = ans["status"] in ("ok", "no_optimum")
             rows = []
             if good:
+                state["good"] = ans
                 for k, r in ans["ramps"].items():
                     sources[k].data = {"t": r["t"], "d": r["delta"]}
                     rows.append((r["label"], r["peak_over_e"], r["within_drive_limits"]))
@@ -1270,15 +1275,9 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
                                                                   "the curves in the plot are the last good answer"))
 
         request = _latest_wins(doc, explorer.evaluate, show, verdict)
-
-        def on_change(path):
-            def cb(attr, old, new):
-                values[path] = float(new)
-                request(values, path.removeprefix("rotor."))
-            return cb
-
-        for path, sl in sliders.items():
-            sl.on_change("value", on_change(path))
+        rested = _connect(doc, explorer, sliders, values, state, check, request,
+                          "CVODES's re-simulation (autobal run's) agrees with the live response",
+                          lambda path: path.removeprefix("rotor."))
 
         def tick():
             if state["started"] is not None:
@@ -1303,6 +1302,8 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
                     reopt.disabled, reopt.label = False, "re-optimise"
                     optimised.text = f"<span id='optimised'>{html.escape(msg)}</span>"
                     request(values, None)
+                    check.text = ""  # CVODES checks the new optimum's profile once the page rests
+                    rested()
                 doc.add_next_tick_callback(done)
             threading.Thread(target=work, daemon=True).start()
 
@@ -1311,7 +1312,7 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
         doc.add_periodic_callback(tick, 500)
         record = _record_buttons(doc, explorer, values, out)
         head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
-        doc.add_root(column(head, verdict, row(reopt, optimised), record, name="head"))
+        doc.add_root(column(head, verdict, check, row(reopt, optimised), record, name="head"))
         doc.add_root(column(*sliders.values(), name="controls"))
         doc.add_root(numbers)
         doc.add_root(fig)
