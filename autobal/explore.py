@@ -977,11 +977,14 @@ def _connect(doc, explorer: Settings, sliders: dict, values: dict, state: dict, 
     return rested
 
 
-def make_document(explorer: DeviceExplorer, out: Path):
-    """The Bokeh document builder of the page (one per browser session)."""
-    from bokeh.layouts import column, row
-    from bokeh.models import ColumnDataSource, Div
-    from bokeh.plotting import figure
+def _device_page(explorer: DeviceSettings, out: Path, build, verdict_height: int, numbers_height: int):
+    """The Bokeh document builder of a device page (one per browser session): the sliders, the verdict line (and the
+    status line under it), the cross-check line, "save scene" and "report", the ``numbers`` Div and the page's
+    plots, each change computed (latest wins) and cross-checked once the sliders rest.  ``build(doc, values, state,
+    sliders, verdict, numbers)`` makes the page's own plots and returns (``show(ans, moved)``, the plots' root, the
+    Divs under the verdict line)."""
+    from bokeh.layouts import column
+    from bokeh.models import Div
     from jinja2 import Template
 
     page = Template(PAGE_HTML)
@@ -991,9 +994,33 @@ def make_document(explorer: DeviceExplorer, out: Path):
         state = {"good": None}
         sliders = _sliders(explorer)
         # fixed sizes: a new text re-renders its Div only, not the page's layout
-        verdict = Div(text="", name="verdict", width=1100, height=46)  # and the status line under it
-        numbers = Div(text="", name="numbers", width=1100, height=190)
+        verdict = Div(text="", name="verdict", width=1100, height=verdict_height)  # and the status line under it
+        numbers = Div(text="", name="numbers", width=1100, height=numbers_height)
         check = Div(text="", name="check", width=1100, height=20)
+        record = _record_buttons(doc, explorer, values, out)
+        show, plots, under = build(doc, values, state, sliders, verdict, numbers)
+        request = _latest_wins(doc, explorer.evaluate, show, verdict)
+        _connect(doc, explorer, sliders, values, state, check, request)
+        request(values, None)
+        head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
+        # separate roots placed by the template: a changed text lays out its own root, not the 40 sliders
+        doc.add_root(column(head, verdict, *under, check, record, name="head"))
+        doc.add_root(column(*sliders.values(), name="controls"))
+        doc.add_root(numbers)
+        doc.add_root(plots)
+        doc.template = page
+        doc.title = f"autobal explore: {explorer.scene.name}"
+
+    return modify
+
+
+def make_document(explorer: DeviceExplorer, out: Path):
+    """The Bokeh document builder of a device-dynamics scene's page: operating point, poles, margin, AFC."""
+    from bokeh.layouts import row
+    from bokeh.models import ColumnDataSource
+    from bokeh.plotting import figure
+
+    def build(doc, values, state, sliders, verdict, numbers):
         afc_src = ColumnDataSource({"hz": [], "amp": []})
         pole_src = ColumnDataSource({"abs_re": [], "hz": [], "colour": []})
         afc = figure(title="AFC of the face gap (physical forcing)", x_axis_label="frequency, Hz",
@@ -1005,7 +1032,6 @@ def make_document(explorer: DeviceExplorer, out: Path):
                       y_axis_label="Im λ / 2π, Hz", x_axis_type="log", width=560, height=300, name="poles",
                       toolbar_location=None)
         pole_dots = pmap.scatter("abs_re", "hz", source=pole_src, size=9, marker="x", line_width=2, color="colour")
-        record = _record_buttons(doc, explorer, values, out)
         _browser_only(doc, sliders, afc, pmap)
 
         def show(ans: dict, moved: str | None):
@@ -1067,19 +1093,9 @@ def make_document(explorer: DeviceExplorer, out: Path):
             else:
                 _say(verdict, ans, moved)
 
-        request = _latest_wins(doc, explorer.evaluate, show, verdict)
-        _connect(doc, explorer, sliders, values, state, check, request)
-        request(values, None)
-        head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
-        # separate roots placed by the template: a changed text lays out its own root, not the 40 sliders
-        doc.add_root(column(head, verdict, check, record, name="head"))
-        doc.add_root(column(*sliders.values(), name="controls"))
-        doc.add_root(numbers)
-        doc.add_root(row(afc, pmap, name="plots"))
-        doc.template = page
-        doc.title = f"autobal explore: {explorer.scene.name}"
+        return show, row(afc, pmap, name="plots"), []
 
-    return modify
+    return _device_page(explorer, out, build, verdict_height=46, numbers_height=190)
 
 
 def _rows(rows) -> str:
@@ -1091,21 +1107,12 @@ def _rows(rows) -> str:
 def make_statics_document(explorer: StaticsExplorer, out: Path):
     """The Bokeh document builder of a device-statics scene's page: operating point, critical discharge pressure
     and margins, the static characteristic (face gap and flows against the discharge pressure), the verdict."""
-    from bokeh.layouts import column, row
+    from bokeh.layouts import row
     from bokeh.models import ColumnDataSource, Div, Span
     from bokeh.plotting import figure
-    from jinja2 import Template
 
-    page = Template(PAGE_HTML)
-
-    def modify(doc):
-        values = explorer.defaults()
-        state = {"good": None}
-        sliders = _sliders(explorer)
-        verdict = Div(text="", name="verdict", width=1100, height=68)  # and the status line under it
+    def build(doc, values, state, sliders, verdict, numbers):
         sweep_words = Div(text="", name="sweep_checks", width=1100, height=20)
-        check = Div(text="", name="check", width=1100, height=20)
-        numbers = Div(text="", name="numbers", width=1100, height=230)
         curve = ColumnDataSource({"p1": [], "gap": [], "leak": [], "q1": [], "colour": []})
         here = ColumnDataSource({"p1": [], "gap": [], "leak": [], "q1": []})
         figs = {}
@@ -1127,7 +1134,6 @@ def make_statics_document(explorer: StaticsExplorer, out: Path):
                         line_width=1.5) for k in figs}
         for k, f in figs.items():
             f.add_layout(crit[k])
-        record = _record_buttons(doc, explorer, values, out)
 
         def show(ans: dict, moved: str | None):
             good = ans.get("status") == "ok"
@@ -1179,18 +1185,9 @@ def make_statics_document(explorer: StaticsExplorer, out: Path):
             else:
                 _say(verdict, ans, moved)
 
-        request = _latest_wins(doc, explorer.evaluate, show, verdict)
-        _connect(doc, explorer, sliders, values, state, check, request)
-        request(values, None)
-        head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
-        doc.add_root(column(head, verdict, sweep_words, check, record, name="head"))
-        doc.add_root(column(*sliders.values(), name="controls"))
-        doc.add_root(numbers)
-        doc.add_root(row(figs["gap"], figs["flows"], name="plots"))
-        doc.template = page
-        doc.title = f"autobal explore: {explorer.scene.name}"
+        return show, row(figs["gap"], figs["flows"], name="plots"), [sweep_words]
 
-    return modify
+    return _device_page(explorer, out, build, verdict_height=68, numbers_height=230)
 
 
 RAMP_COLOURS = {"constant_ramp": "#7f7f7f", "max_acceleration_ramp": "#ff7f0e", "feasible_ramp": "#2ca02c"}
