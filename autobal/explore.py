@@ -22,8 +22,9 @@ parametric Newton roots, every stop set) and the study's verdict
 
 A spin-up scene (``analyses.spinup``) gets the rotor's sliders: its critical speed with the API 684 AF and SM
 (:func:`autobal.analysis.rotor_study.api_margins`, as the spin-up study), the current optimum's speed profile and the
-constant ramps re-simulated by CVODES (:func:`autobal.ocp.simulation.resimulate`, ``baselines``) for the changed
-rotor, and "re-optimise" (the batch run's optimisation, in a thread).
+constant ramps (``baselines``) re-simulated for the changed rotor by its exact linear response
+(:mod:`autobal.ocp.linear_response`; CVODES, :func:`autobal.ocp.simulation.resimulate`, the cross-check once the
+sliders rest), and "re-optimise" (the batch run's optimisation, in a thread).
 
 "save scene" writes the settings as a YAML scene with units that ``autobal run`` reproduces; "report" runs
 ``autobal.run`` on it and writes its report.html.  :class:`DeviceExplorer`, :class:`StaticsExplorer` and
@@ -657,9 +658,10 @@ class StaticsExplorer(DeviceSettings):
 
 class SpinupExplorer(Settings):
     """The what-if computation of a spin-up scene (``analyses.spinup``): the current optimum's speed profile and the
-    constant ramps re-simulated (CVODES, :func:`autobal.ocp.simulation.resimulate` and
-    :func:`~autobal.ocp.simulation.baselines`, the batch run's re-simulations) for a changed rotor or drive; the
-    optimum itself is found again only on request (:meth:`optimise`: the batch run's optimisation)."""
+    constant ramps re-simulated (the batch run's re-simulations, :func:`autobal.ocp.simulation.resimulate` and
+    :func:`~autobal.ocp.simulation.baselines`, by the rotor's exact linear response; CVODES in :meth:`check`) for a
+    changed rotor or drive; the optimum itself is found again only on request (:meth:`optimise`: the batch run's
+    optimisation)."""
 
     def __init__(self, source: str | Path):
         super().__init__(source)
