@@ -95,7 +95,7 @@ def modes(ocp: SpinupOcp) -> tuple:
     ValueError for a (nearly) critically damped rotor, whose A has no two independent eigenvectors."""
     ff = fixed_frame()
     lam, V = np.linalg.eig(np.array(ff.A(ocp.p)))
-    if abs(lam[0] - lam[1]) < 1e-6 * max(abs(lam[0]), 1.0):
+    if abs(lam[0] - lam[1]) < 1e-3 * max(abs(lam[0]), 1.0):  # V ill-conditioned (near critical damping)
         raise ValueError("a critically damped rotor: A has a double eigenvalue")
     Vi = np.linalg.inv(V)
     return lam, V, Vi, Vi @ np.array(ff.b(ocp.p)).ravel()
