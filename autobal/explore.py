@@ -22,8 +22,9 @@ parametric Newton roots, every stop set) and the study's verdict
 
 A spin-up scene (``analyses.spinup``) gets the rotor's sliders: its critical speed with the API 684 AF and SM
 (:func:`autobal.analysis.rotor_study.api_margins`, as the spin-up study), the current optimum's speed profile and the
-constant ramps re-simulated by CVODES (:func:`autobal.ocp.simulation.resimulate`, ``baselines``) for the changed
-rotor, and "re-optimise" (the batch run's optimisation, in a thread).
+constant ramps (``baselines``) re-simulated for the changed rotor by its exact linear response
+(:mod:`autobal.ocp.linear_response`; CVODES, :func:`autobal.ocp.simulation.resimulate`, the cross-check once the
+sliders rest), and "re-optimise" (the batch run's optimisation, in a thread).
 
 "save scene" writes the settings as a YAML scene with units that ``autobal run`` reproduces; "report" runs
 ``autobal.run`` on it and writes its report.html.  :class:`DeviceExplorer`, :class:`StaticsExplorer` and
@@ -68,6 +69,11 @@ MODELS_KEPT = 8  # dynamic models kept built (one per structure: medium, regulat
 SLIDER_SPAN = 5.0  # a slider runs from value / SPAN to value * SPAN, inside the declared bounds
 SLIDER_STEPS = 400
 CHECK_RTOL = 1e-6  # IPOPT's operating point differs from Newton's when a value differs by more than this
+# CVODES's re-simulation (at the batch run's tolerance) differs from the spin-up page's linear response when a peak
+# differs by more than this relative amount, or its time by more than SPINUP_CHECK_T seconds (tests/
+# test_explore_linear_response.py: they agree to 1e-9 and 1e-7 s over a range of rotors and drives)
+SPINUP_CHECK_RTOL = 1e-8
+SPINUP_CHECK_T = 1e-6
 CHECK_AFTER_S = 1.0  # IPOPT cross-checks a setting once the sliders have rested this long
 CRITICAL_RTOL = 1e-12  # Brent's method's relative tolerance on the criticals psi1_kr, dpsi_kr
 PSI1_MAX = 100.0  # the largest discharge ratio a scene may give (analyses.statics): psi1_kr is looked for up to it
@@ -652,9 +658,10 @@ class StaticsExplorer(DeviceSettings):
 
 class SpinupExplorer(Settings):
     """The what-if computation of a spin-up scene (``analyses.spinup``): the current optimum's speed profile and the
-    constant ramps re-simulated (CVODES, :func:`autobal.ocp.simulation.resimulate` and
-    :func:`~autobal.ocp.simulation.baselines`, the batch run's re-simulations) for a changed rotor or drive; the
-    optimum itself is found again only on request (:meth:`optimise`: the batch run's optimisation)."""
+    constant ramps re-simulated (the batch run's re-simulations, :func:`autobal.ocp.simulation.resimulate` and
+    :func:`~autobal.ocp.simulation.baselines`, by the rotor's exact linear response; CVODES in :meth:`check`) for a
+    changed rotor or drive; the optimum itself is found again only on request (:meth:`optimise`: the batch run's
+    optimisation)."""
 
     def __init__(self, source: str | Path):
         super().__init__(source)
@@ -690,12 +697,15 @@ class SpinupExplorer(Settings):
         self.profile = (np.asarray(tr.alpha, float), np.diff(np.append(tr.t_u, tr.t[-1])), dict(values))
         return {"peak_over_e": res.peak_deflection_over_e, "seconds": time.perf_counter() - t0}
 
-    def evaluate(self, values: dict) -> dict:
+    def evaluate(self, values: dict, fast: bool = True) -> dict:
         """The current optimum's profile and the constant ramps re-simulated for the settings: peaks (delta/e and
         m), the critical speed (rad/s) with its API 684 margins (``api``: :func:`analysis.standards.margin_check`'s
         dict, as the spin-up study's ``rotor`` block), the drive's use; ``status`` "ok", "refused" or
-        "no_optimum"."""
+        "no_optimum".  ``fast``: the re-simulations by the rotor's exact linear response
+        (:func:`autobal.ocp.linear_response.resimulate`, the page's live path), else by CVODES at the batch run's
+        tolerance (:func:`autobal.ocp.simulation.resimulate`, the cross-check); ``resimulation`` says which ran."""
         from autobal.analysis.rotor_study import api_margins
+        from autobal.ocp import linear_response
         from autobal.ocp.simulation import baselines, drive_use, resimulate
 
         t0 = time.perf_counter()
@@ -704,22 +714,49 @@ class SpinupExplorer(Settings):
         except (ValueError, ZeroDivisionError, AutobalError) as exc:
             return {"status": "refused", "message": str(exc)}
         P = ocp.params
+        if fast:  # the exact linear response where the rotor has one (not critically damped), else CVODES
+            try:
+                linear_response.fixed_frame(), linear_response.modes(ocp)
+            except ValueError:
+                fast = False
+        resim = linear_response.resimulate if fast else resimulate
         out = {"status": "ok", "message": "", "critical_speed": P.omega_cr, "eccentricity": P.e, "ramps": {},
                # API 684 (2005): AF and SM of the changed rotor from its service (final) speed, as the study's
-               "api": api_margins(P, ocp.omega_final)}
-        for key, tr in baselines(ocp).items():
-            out["ramps"][key] = {"label": tr.label, "peak_over_e": tr.peak_delta, "t": tr.t, "delta": tr.delta,
+               "api": api_margins(P, ocp.omega_final), "resimulation": "linear response" if fast else "CVODES"}
+        for key, tr in baselines(ocp, resim=resim).items():
+            out["ramps"][key] = {"label": tr.label, "peak_over_e": tr.peak_delta, "time_of_peak": tr.t_peak,
+                                 "t": tr.t, "delta": tr.delta,
                                  "within_drive_limits": drive_use(ocp, tr)["within_drive_limits"]}
         if self.profile is None:
             return out | {"status": "no_optimum", "message": "the optimum is being found (autobal run's "
                                                              "optimisation)"}
         alpha, dt, at = self.profile
-        tr = resimulate(ocp, alpha / ocp.alpha_max, dt * ocp.Om, "optimum")  # in the changed problem's scales
+        tr = resim(ocp, alpha / ocp.alpha_max, dt * ocp.Om, "optimum")  # in the changed problem's scales
         out["optimum"] = {"peak_over_e": tr.peak_delta, "t": tr.t, "delta": tr.delta, "time_of_peak": tr.t_peak,
                           "omega": tr.omega, "within_drive_limits": drive_use(ocp, tr)["within_drive_limits"],
                           "optimised_for": self.overrides(at)}
         out["compute_ms"] = 1e3 * (time.perf_counter() - t0)
         return out
+
+
+    # -- the cross-check on release
+    def check(self, values: dict, answer: dict) -> str:
+        """The re-simulations by CVODES at the batch run's tolerance (``evaluate(fast=False)``: what ``autobal run``
+        does) against the live answer: '' when every peak agrees to :data:`SPINUP_CHECK_RTOL` and its time to
+        :data:`SPINUP_CHECK_T`, else CVODES's numbers where they differ (then shown on the page)."""
+        cv = self.evaluate(values, fast=False)
+        if cv["status"] != answer.get("status"):
+            return f"CVODES's re-simulation gives status {cv['status']} ({cv['message']}), the live path " \
+                   f"{answer.get('status')}"
+        if cv["status"] not in ("ok", "no_optimum"):
+            return ""
+        pairs = [(r["label"], r, answer["ramps"].get(k)) for k, r in cv["ramps"].items()]
+        if "optimum" in cv:
+            pairs.append(("current optimum's profile", cv["optimum"], answer.get("optimum")))
+        off = [f"{label}: peak δ/e {r['peak_over_e']:.10g} at {r['time_of_peak']:.6g} s" for label, r, live in pairs
+               if live is None or abs(r["peak_over_e"] / live["peak_over_e"] - 1) > SPINUP_CHECK_RTOL
+               or abs(r["time_of_peak"] - live["time_of_peak"]) > SPINUP_CHECK_T]
+        return "CVODES's re-simulation differs: " + "; ".join(off) if off else ""
 
 
 def _exact_statics(ans: dict) -> str:
@@ -900,16 +937,18 @@ def _browser_only(doc, sliders: dict, *figs) -> None:
         "{get: () => false});")))
 
 
-def _connect(doc, explorer: DeviceSettings, sliders: dict, values: dict, state: dict, check, request) -> None:
-    """A device page's sliders: each change computed (``request``), and IPOPT's cross-check (``explorer.check``, in
-    a thread) once the sliders have rested :data:`CHECK_AFTER_S`, said in the ``check`` Div; ``state["good"]``: the
-    last good answer."""
+def _connect(doc, explorer: Settings, sliders: dict, values: dict, state: dict, check, request,
+             agrees: str = "the scene's checks pass and IPOPT agrees with the operating point", moved=lambda p: p):
+    """A page's sliders: each change computed (``request``, the slider named by ``moved(path)``), and the
+    cross-check (``explorer.check``: IPOPT's on a device page, CVODES's on a spin-up page; in a thread) once the
+    sliders have rested :data:`CHECK_AFTER_S`, said in the ``check`` Div (``agrees`` when it agrees);
+    ``state["good"]``: the last good answer.  Returns ``rested()``, which (re)starts the wait for the check."""
 
     def on_change(path):
         def cb(attr, old, new):
             values[path] = float(new)
             check.text = ""
-            request(values, path)
+            request(values, moved(path))
             rested()
         return cb
 
@@ -925,8 +964,8 @@ def _connect(doc, explorer: DeviceSettings, sliders: dict, values: dict, state: 
 
             def done():
                 if vals == values:  # still the setting checked
-                    check.text = (f"<span style='color:#b35900'>cross-check: {text}</span>" if text else
-                                  "cross-check: the scene's checks pass and IPOPT agrees with the operating point")
+                    check.text = (f"<span id='crosscheck' style='color:#b35900'>cross-check: {html.escape(text)}"
+                                  "</span>" if text else f"<span id='crosscheck'>cross-check: {agrees}</span>")
             doc.add_next_tick_callback(done)
         threading.Thread(target=work, daemon=True).start()
 
@@ -937,13 +976,17 @@ def _connect(doc, explorer: DeviceSettings, sliders: dict, values: dict, state: 
 
     for path, slider in sliders.items():
         slider.on_change("value", on_change(path))
+    return rested
 
 
-def make_document(explorer: DeviceExplorer, out: Path):
-    """The Bokeh document builder of the page (one per browser session)."""
-    from bokeh.layouts import column, row
-    from bokeh.models import ColumnDataSource, Div
-    from bokeh.plotting import figure
+def _device_page(explorer: DeviceSettings, out: Path, build, verdict_height: int, numbers_height: int):
+    """The Bokeh document builder of a device page (one per browser session): the sliders, the verdict line (and the
+    status line under it), the cross-check line, "save scene" and "report", the ``numbers`` Div and the page's
+    plots, each change computed (latest wins) and cross-checked once the sliders rest.  ``build(doc, values, state,
+    sliders, verdict, numbers)`` makes the page's own plots and returns (``show(ans, moved)``, the plots' root, the
+    Divs under the verdict line)."""
+    from bokeh.layouts import column
+    from bokeh.models import Div
     from jinja2 import Template
 
     page = Template(PAGE_HTML)
@@ -953,9 +996,33 @@ def make_document(explorer: DeviceExplorer, out: Path):
         state = {"good": None}
         sliders = _sliders(explorer)
         # fixed sizes: a new text re-renders its Div only, not the page's layout
-        verdict = Div(text="", name="verdict", width=1100, height=46)  # and the status line under it
-        numbers = Div(text="", name="numbers", width=1100, height=190)
+        verdict = Div(text="", name="verdict", width=1100, height=verdict_height)  # and the status line under it
+        numbers = Div(text="", name="numbers", width=1100, height=numbers_height)
         check = Div(text="", name="check", width=1100, height=20)
+        record = _record_buttons(doc, explorer, values, out)
+        show, plots, under = build(doc, values, state, sliders, verdict, numbers)
+        request = _latest_wins(doc, explorer.evaluate, show, verdict)
+        _connect(doc, explorer, sliders, values, state, check, request)
+        request(values, None)
+        head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
+        # separate roots placed by the template: a changed text lays out its own root, not the 40 sliders
+        doc.add_root(column(head, verdict, *under, check, record, name="head"))
+        doc.add_root(column(*sliders.values(), name="controls"))
+        doc.add_root(numbers)
+        doc.add_root(plots)
+        doc.template = page
+        doc.title = f"autobal explore: {explorer.scene.name}"
+
+    return modify
+
+
+def make_document(explorer: DeviceExplorer, out: Path):
+    """The Bokeh document builder of a device-dynamics scene's page: operating point, poles, margin, AFC."""
+    from bokeh.layouts import row
+    from bokeh.models import ColumnDataSource
+    from bokeh.plotting import figure
+
+    def build(doc, values, state, sliders, verdict, numbers):
         afc_src = ColumnDataSource({"hz": [], "amp": []})
         pole_src = ColumnDataSource({"abs_re": [], "hz": [], "colour": []})
         afc = figure(title="AFC of the face gap (physical forcing)", x_axis_label="frequency, Hz",
@@ -967,7 +1034,6 @@ def make_document(explorer: DeviceExplorer, out: Path):
                       y_axis_label="Im λ / 2π, Hz", x_axis_type="log", width=560, height=300, name="poles",
                       toolbar_location=None)
         pole_dots = pmap.scatter("abs_re", "hz", source=pole_src, size=9, marker="x", line_width=2, color="colour")
-        record = _record_buttons(doc, explorer, values, out)
         _browser_only(doc, sliders, afc, pmap)
 
         def show(ans: dict, moved: str | None):
@@ -1029,19 +1095,9 @@ def make_document(explorer: DeviceExplorer, out: Path):
             else:
                 _say(verdict, ans, moved)
 
-        request = _latest_wins(doc, explorer.evaluate, show, verdict)
-        _connect(doc, explorer, sliders, values, state, check, request)
-        request(values, None)
-        head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
-        # separate roots placed by the template: a changed text lays out its own root, not the 40 sliders
-        doc.add_root(column(head, verdict, check, record, name="head"))
-        doc.add_root(column(*sliders.values(), name="controls"))
-        doc.add_root(numbers)
-        doc.add_root(row(afc, pmap, name="plots"))
-        doc.template = page
-        doc.title = f"autobal explore: {explorer.scene.name}"
+        return show, row(afc, pmap, name="plots"), []
 
-    return modify
+    return _device_page(explorer, out, build, verdict_height=46, numbers_height=190)
 
 
 def _rows(rows) -> str:
@@ -1053,21 +1109,12 @@ def _rows(rows) -> str:
 def make_statics_document(explorer: StaticsExplorer, out: Path):
     """The Bokeh document builder of a device-statics scene's page: operating point, critical discharge pressure
     and margins, the static characteristic (face gap and flows against the discharge pressure), the verdict."""
-    from bokeh.layouts import column, row
+    from bokeh.layouts import row
     from bokeh.models import ColumnDataSource, Div, Span
     from bokeh.plotting import figure
-    from jinja2 import Template
 
-    page = Template(PAGE_HTML)
-
-    def modify(doc):
-        values = explorer.defaults()
-        state = {"good": None}
-        sliders = _sliders(explorer)
-        verdict = Div(text="", name="verdict", width=1100, height=68)  # and the status line under it
+    def build(doc, values, state, sliders, verdict, numbers):
         sweep_words = Div(text="", name="sweep_checks", width=1100, height=20)
-        check = Div(text="", name="check", width=1100, height=20)
-        numbers = Div(text="", name="numbers", width=1100, height=230)
         curve = ColumnDataSource({"p1": [], "gap": [], "leak": [], "q1": [], "colour": []})
         here = ColumnDataSource({"p1": [], "gap": [], "leak": [], "q1": []})
         figs = {}
@@ -1089,7 +1136,6 @@ def make_statics_document(explorer: StaticsExplorer, out: Path):
                         line_width=1.5) for k in figs}
         for k, f in figs.items():
             f.add_layout(crit[k])
-        record = _record_buttons(doc, explorer, values, out)
 
         def show(ans: dict, moved: str | None):
             good = ans.get("status") == "ok"
@@ -1141,18 +1187,9 @@ def make_statics_document(explorer: StaticsExplorer, out: Path):
             else:
                 _say(verdict, ans, moved)
 
-        request = _latest_wins(doc, explorer.evaluate, show, verdict)
-        _connect(doc, explorer, sliders, values, state, check, request)
-        request(values, None)
-        head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
-        doc.add_root(column(head, verdict, sweep_words, check, record, name="head"))
-        doc.add_root(column(*sliders.values(), name="controls"))
-        doc.add_root(numbers)
-        doc.add_root(row(figs["gap"], figs["flows"], name="plots"))
-        doc.template = page
-        doc.title = f"autobal explore: {explorer.scene.name}"
+        return show, row(figs["gap"], figs["flows"], name="plots"), [sweep_words]
 
-    return modify
+    return _device_page(explorer, out, build, verdict_height=68, numbers_height=230)
 
 
 RAMP_COLOURS = {"constant_ramp": "#7f7f7f", "max_acceleration_ramp": "#ff7f0e", "feasible_ramp": "#2ca02c"}
@@ -1171,9 +1208,10 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
 
     def modify(doc):
         values = explorer.defaults()
-        state = {"started": None}
+        state = {"started": None, "good": None}
         sliders = _sliders(explorer)
         verdict = Div(text="", width=1100, height=46)  # and the status line under it
+        check = Div(text="", name="check", width=1100, height=20)
         numbers = Div(text="", name="numbers", width=1100, height=150)
         fig = figure(title="deflection δ/e of the rotor", x_axis_label="time, s", y_axis_label="δ/e", width=900,
                      height=360, name="plots", toolbar_location=None)
@@ -1189,6 +1227,7 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
             good = ans["status"] in ("ok", "no_optimum")
             rows = []
             if good:
+                state["good"] = ans
                 for k, r in ans["ramps"].items():
                     sources[k].data = {"t": r["t"], "d": r["delta"]}
                     rows.append((r["label"], r["peak_over_e"], r["within_drive_limits"]))
@@ -1235,15 +1274,9 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
                                                                   "the curves in the plot are the last good answer"))
 
         request = _latest_wins(doc, explorer.evaluate, show, verdict)
-
-        def on_change(path):
-            def cb(attr, old, new):
-                values[path] = float(new)
-                request(values, path.removeprefix("rotor."))
-            return cb
-
-        for path, sl in sliders.items():
-            sl.on_change("value", on_change(path))
+        rested = _connect(doc, explorer, sliders, values, state, check, request,
+                          "CVODES's re-simulation (autobal run's) agrees with the live response",
+                          lambda path: path.removeprefix("rotor."))
 
         def tick():
             if state["started"] is not None:
@@ -1268,6 +1301,8 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
                     reopt.disabled, reopt.label = False, "re-optimise"
                     optimised.text = f"<span id='optimised'>{html.escape(msg)}</span>"
                     request(values, None)
+                    check.text = ""  # CVODES checks the new optimum's profile once the page rests
+                    rested()
                 doc.add_next_tick_callback(done)
             threading.Thread(target=work, daemon=True).start()
 
@@ -1276,7 +1311,7 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
         doc.add_periodic_callback(tick, 500)
         record = _record_buttons(doc, explorer, values, out)
         head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
-        doc.add_root(column(head, verdict, row(reopt, optimised), record, name="head"))
+        doc.add_root(column(head, verdict, check, row(reopt, optimised), record, name="head"))
         doc.add_root(column(*sliders.values(), name="controls"))
         doc.add_root(numbers)
         doc.add_root(fig)

@@ -190,19 +190,32 @@ def resimulate(ocp: SpinupOcp, u, h, label: str, points: int | None = None, tol:
     points = solver_options.defaults["resimulation.points"] if points is None else points
     frac = list(np.linspace(0, 1, points + 1)[1:])
     sim = simulate_profile(ocp, u, h, frac, tol, multistep, merge)
-    K = len(u)
+    return trajectory(ocp, u, h, label, sim)
+
+
+@cache
+def _mapped(f: ca.Function, n: int) -> ca.Function:
+    return f.map(n)
+
+
+def trajectory(ocp: SpinupOcp, u, h, label: str, sim: np.ndarray, torque=None) -> Trajectory:
+    """The :class:`Trajectory` of the states ``sim`` (K, points, nx) at the ends of ``points`` equal parts of each
+    of the K intervals h (tau) of the profile u (over alpha_max), from the start state ``ocp.q0``; ``torque`` (q (nx,
+    N), a* (1, N), p) -> M~ (N,), default the model's ``torque`` Function mapped over the samples."""
+    K, points = sim.shape[:2]
+    frac = np.linspace(0, 1, points + 1)[1:]
     t0 = np.concatenate([[0.0], np.cumsum(h)[:-1]])
-    tau = np.concatenate([[0.0], (t0[:, None] + np.asarray(h)[:, None] * np.array(frac)[None, :]).ravel()])
+    tau = np.concatenate([[0.0], (t0[:, None] + np.asarray(h)[:, None] * frac[None, :]).ravel()])
     q = np.vstack([np.asarray(ocp.q0, float)[None, :], sim.reshape(K * points, ocp.nx)]).T
     a = np.concatenate([np.repeat(np.asarray(u) * ocp.a_max, points)[:1], np.repeat(np.asarray(u) * ocp.a_max,
                                                                                      points)])
     dl, dd = deflection(q), unbalance(q, ocp.params.psi)
     pk, tpk = peak(tau, dl)
-    m = rotor_model()
     P = ocp.params
+    if torque is None:
+        torque = lambda q, a, p: np.array(_mapped(rotor_model().torque, q.shape[1])(q, a, p)).ravel()  # noqa: E731
     # the drive torque (without drive data J_p = b = 0: the unbalance reaction alone)
-    torque = np.array(m.torque.map(q.shape[1])(q, a[None, :], ca.repmat(ca.DM(P.p), 1, q.shape[1]))).ravel() \
-        * P.torque_scale
+    torque = torque(q, a[None, :], P.p) * P.torque_scale
     Om = ocp.Om
     integral = float(np.trapezoid(dl**2, tau) / Om)
     return Trajectory(label, tau / Om, q[4] * Om, dl, dd, torque, t0 / Om, np.asarray(u) * ocp.alpha_max,
@@ -296,9 +309,10 @@ def best_within_limits(peaks: dict, uses: dict):
     return min(feasible, key=peaks.get) if feasible else None
 
 
-def _ramp(ocp: SpinupOcp, alpha: float, h, n: int, ns: int, points: int, label: str) -> Trajectory:
+def _ramp(ocp: SpinupOcp, alpha: float, h, n: int, ns: int, points: int, label: str, resim=resimulate
+          ) -> Trajectory:
     u = np.concatenate([ramp_profile(ocp, n, alpha), np.zeros(ns)])
-    return resimulate(ocp, u, h, label, points=points)
+    return resim(ocp, u, h, label, points=points)
 
 
 def rate_cap(ocp: SpinupOcp, omega: float) -> float:
@@ -342,8 +356,8 @@ def drive_unreachable(ocp: SpinupOcp, points: int = 401) -> str | None:
     return None
 
 
-def fastest_feasible_rate(ocp: SpinupOcp, intervals: int = 200, points: int = 60, tries: int = 12
-                          ) -> tuple[float, Trajectory] | None:
+def fastest_feasible_rate(ocp: SpinupOcp, intervals: int = 200, points: int = 60, tries: int = 12,
+                          resim=resimulate) -> tuple[float, Trajectory] | None:
     """The fastest constant acceleration (ramp to omega_final, then hold) that keeps every drive limit at every
     speed it passes and arrives by the deadline, with its re-simulation; None when even the slowest ramp that
     arrives by the deadline breaks a limit.
@@ -358,7 +372,8 @@ def fastest_feasible_rate(ocp: SpinupOcp, intervals: int = 200, points: int = 60
     wt = max(ocp.omega_start, ocp.omega_final)
     a = max(rate_cap(ocp, wt) if ocp.omega_final > ocp.omega_start else ocp.alpha_max, slowest)
     for _ in range(tries):
-        tr = _ramp(ocp, a, h, ms.n, ms.ns, points, f"ramp {rate_text(a)} and hold (fastest within the drive limits)")
+        tr = _ramp(ocp, a, h, ms.n, ms.ns, points, f"ramp {rate_text(a)} and hold (fastest within the drive limits)",
+                   resim)
         use = drive_use(ocp, tr)
         if use["within_drive_limits"]:
             return a, tr
@@ -375,22 +390,23 @@ def fastest_feasible_rate(ocp: SpinupOcp, intervals: int = 200, points: int = 60
     return None
 
 
-def baselines(ocp: SpinupOcp, intervals: int = 200, points: int = 60) -> dict[str, Trajectory]:
+def baselines(ocp: SpinupOcp, intervals: int = 200, points: int = 60, resim=resimulate) -> dict[str, Trajectory]:
     """The constant-ramp baselines (CVODES, ``points`` samples on each of ``intervals`` piecewise-constant
     intervals): the constant ramp over the horizon and the maximum-acceleration ramp followed by a hold, each
     with the settling window, and, when the maximum-acceleration ramp breaks a drive limit, the fastest ramp and
     hold that keeps them all (:func:`fastest_feasible_rate`).  200 x 60 samples give the peaks of 2000 x 6 to 1e-6
-    in a quarter of the time (one CVODES call per interval)."""
+    in a quarter of the time (one CVODES call per interval).  ``resim``: the re-simulation, :func:`resimulate`'s
+    signature (the spin-up explorer's live path passes :func:`autobal.ocp.linear_response.resimulate`)."""
     ms = mesh(ocp, intervals)
     h = np.concatenate([np.full(ms.n, ms.h), np.full(ms.ns, ms.hs)])
     const = min(abs(ocp.omega_final - ocp.omega_start) / ocp.horizon, ocp.alpha_max)
     out = {}
     for key, label, a in (("constant_ramp", f"constant ramp {rate_text(const)}", const),
                           ("max_acceleration_ramp", f"ramp {rate_text(ocp.alpha_max)} and hold", ocp.alpha_max)):
-        out[key] = _ramp(ocp, a, h, ms.n, ms.ns, points, label)
+        out[key] = _ramp(ocp, a, h, ms.n, ms.ns, points, label, resim)
     if not drive_use(ocp, out["max_acceleration_ramp"])["within_drive_limits"] and \
             drive_use(ocp, out["constant_ramp"])["within_drive_limits"]:
-        best = fastest_feasible_rate(ocp, intervals, points)
+        best = fastest_feasible_rate(ocp, intervals, points, resim=resim)
         if best is not None:
             out["feasible_ramp"] = best[1]
     return out
