@@ -115,21 +115,26 @@ class Design(Strict):
 SETTINGS = Design
 
 
-def run(scene, settings: Design):
-    """Stability-constrained design of the balancing device (analysis/design.py)."""
+def spec(settings: Design):
+    """The design study's spec (autobal.analysis.design.Spec, SI) of the validated settings."""
     from autobal.analysis import design as ds
-    from autobal.analysis import design_study, progress
-    from autobal.parts.device import dynamic_device
 
     variables = tuple(ds.Variable(path, key, lo, hi) for path, (key, lo, hi) in settings.bounds_si().items())
     gap = (settings.face_gap.lower, settings.face_gap.upper)
     weights = {"leakage": (1.0, 0.0), "stiffness": (0.0, 1.0), "mix": tuple(settings.weights)}[settings.objective]
-    spec = ds.Spec(variables=variables, points=tuple(settings.operating_ratios), nominal_ratio=settings.nominal_ratio,
+    return ds.Spec(variables=variables, points=tuple(settings.operating_ratios), nominal_ratio=settings.nominal_ratio,
                    decay_rate=settings.decay_rate, gap=gap, valve_band=settings.valve_band,
                    min_stiffness=-float("inf") if settings.min_stiffness is None else settings.min_stiffness,
                    weights=weights, form=settings.model)
+
+
+def run(scene, settings: Design):
+    """Stability-constrained design of the balancing device (analysis/design.py)."""
+    from autobal.analysis import design_study, progress
+    from autobal.parts.device import dynamic_device
+
     with progress.steps(None, "design", "IPOPT solve", catch=True):
-        return design_study.run(dynamic_device(scene), spec, settings.samples, settings.seed,
+        return design_study.run(dynamic_device(scene), spec(settings), settings.samples, settings.seed,
                                 settings.sweep_points, scene.title)
 
 

@@ -35,16 +35,22 @@ class Statics(Strict):
 SETTINGS = Statics
 
 
+def spec(settings: Statics):
+    """The statics study's spec (autobal.analysis.statics_study.Spec) of the validated settings."""
+    from autobal.analysis import statics_study
+
+    r = settings.discharge_ratio
+    return statics_study.Spec(settings.operating_ratio, r.start, r.stop, r.points, settings.force_gap_points)
+
+
 def run(scene, settings: Statics):
     """Static calculation of the balancing device: operating point, criticals, sweep, force-gap."""
     from autobal.analysis import progress, statics_study
     from autobal.analysis.statics import StaticsSolver
     from autobal.parts.device import design
 
-    r = settings.discharge_ratio
-    spec = statics_study.Spec(settings.operating_ratio, r.start, r.stop, r.points, settings.force_gap_points)
     with progress.steps(None, "statics", "IPOPT solve", catch=True):
-        return statics_study.run(StaticsSolver(design(scene.device)), spec, scene.title)
+        return statics_study.run(StaticsSolver(design(scene.device)), spec(settings), scene.title)
 
 
 def estimate_seconds(settings: Statics) -> float:
