@@ -172,14 +172,15 @@ def test_failed_run_gets_a_report(tmp_path, capsys):
     scene = {"name": "spin_small", "title": "small spin-up", "source": "test",
              "rotor": {"mass": "1 kg", "stiffness": "11025 N/m", "damping": "5 N*s/m", "eccentricity": "0.1 mm"},
              "analyses": {"spinup": {"start_speed": "40 rad/s", "final_speed": "210 rad/s", "horizon": "8.5 s",
-                                     "max_acceleration": "10 rad/s^2", "intervals": 40, "multistart": False}}}
+                                     "max_acceleration": "40 rad/s^2", "intervals": 40, "multistart": False,
+                                     "max_iterations": 3}}}
     path = tmp_path / "scene.yaml"
     path.write_text(yaml.safe_dump(scene))
     assert cli.main(["run", str(path), "--out", str(tmp_path / "out"), "-q"]) == 3
     capsys.readouterr()
     page = Page((tmp_path / "out" / "report.html").read_text())
     body = " ".join(page.text)
-    assert "Infeasible_Problem_Detected" in body and "binding constraint: acceleration limit" in body
+    assert "Maximum_Iterations_Exceeded" in body and "iteration limit reached (3 iterations" in body
     assert "last iterate" in body and "small spin-up" in body
     assert not [link for link in page.links if external(link[2])]
     assert cli.main(["report", str(tmp_path / "out")]) == 0  # and again from the folder

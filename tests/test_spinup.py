@@ -225,15 +225,23 @@ SCENE = {
 
 
 @pytest.mark.cli
-def test_cli_infeasible_exit_3_last_iterate_saved(tmp_path, capsys):
+def test_cli_failed_solve_exit_3_last_iterate_saved(tmp_path, capsys):
+    """An iteration limit of 3 on a feasible problem: exit 3, one line with the status and the worst violations, the
+    last iterate saved.  (The scene's infeasible 10 rad/s^2 is refused before solving, exit 2.)"""
+    data = json.loads(json.dumps(SCENE))
+    data["analyses"]["spinup"] |= {"max_acceleration": "40 rad/s^2", "max_iterations": 3}
     p = tmp_path / "scene.yaml"
-    p.write_text(yaml.safe_dump(SCENE))
+    p.write_text(yaml.safe_dump(data))
     assert cli.main(["run", str(p), "--out", str(tmp_path / "out")]) == 3
     err = capsys.readouterr().err
-    assert "binding constraint: acceleration limit" in err and len(err.strip().splitlines()) == 1
+    assert "iteration limit reached (3 iterations" in err and "violates 'dynamics'" in err
+    assert len(err.strip().splitlines()) == 1
     saved = json.loads((tmp_path / "out" / "failed_solve.json").read_text())
-    assert saved["status"] == "Infeasible_Problem_Detected"
+    assert saved["status"] == "Maximum_Iterations_Exceeded"
     assert len(saved["last_iterate"]["omega_rad_s"]) == 41
+    p.write_text(yaml.safe_dump(SCENE))
+    assert cli.main(["run", str(p), "--out", str(tmp_path / "refused")]) == 2
+    assert "takes it from 40 to 210 rad/s in 17 s at the earliest, after the horizon 8.5 s" in capsys.readouterr().err
 
 
 @pytest.mark.cli
