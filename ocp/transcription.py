@@ -17,7 +17,8 @@ from functools import cache
 import casadi as ca
 import numpy as np
 
-from autobal.ocp.problem import SpinupOcp
+from autobal.ocp.problem import PathConstraint
+from autobal.ocp.protocol import SpinupProblem
 
 TV_SMOOTHING = 1e-2  # |Delta u| below which the total-variation penalty is quadratic
 
@@ -82,7 +83,7 @@ def interval_integrator(rhs: ca.Function, fractions: tuple, tol: float, multiste
                          | (adams if multistep == "adams" else {}))
 
 
-def interval_function(ocp: SpinupOcp, d: int, scheme: str, ref: float, continuity: bool = True) -> ca.Function:
+def interval_function(ocp: SpinupProblem, d: int, scheme: str, ref: float, continuity: bool = True) -> ca.Function:
     """One collocation interval as an SX Function (x_k (nx), the collocation states (nx d), u_k, x_(k+1) (nx),
     h, v) -> (collocation residuals (nx d) and, with ``continuity``, the continuity residual (nx), one column
     per path constraint (its values at the interval start when it uses the control, then at the path points),
@@ -107,14 +108,14 @@ def interval_function(ocp: SpinupOcp, d: int, scheme: str, ref: float, continuit
     return ca.Function("spinup_interval", [x0, xc, u, x1, h, v], [ca.vertcat(*res), *paths, quad])
 
 
-def jerk_regulariser(ocp: SpinupOcp, du):
+def jerk_regulariser(ocp: SpinupProblem, du):
     """The objective's jerk terms: ``jerk_penalty`` sum (Delta u)^2 plus ``jerk_variation`` times the total
     variation sum |Delta u|, smoothed as sqrt(Delta u^2 + s^2) - s with s = TV_SMOOTHING (Huber-like: quadratic
     below s, so one-interval pulses cost and the switches stay sharp).
 
     Parameters
     ----------
-    ocp : SpinupOcp
+    ocp : SpinupProblem
         The problem (its weights, dimensionless, relative to the scaled objective).
     du : SX or MX column
         Changes of u = alpha/alpha_max between consecutive control intervals of the horizon, dimensionless.
@@ -142,7 +143,7 @@ class Mesh:
     hs: float
 
 
-def mesh(ocp: SpinupOcp, n: int) -> Mesh:
+def mesh(ocp: SpinupProblem, n: int) -> Mesh:
     h = ocp.tau_h / n
     ns = int(math.ceil(ocp.tau_s / h - 1e-9)) if ocp.tau_s > 0 else 0
     return Mesh(n, ns, h, ocp.tau_s / ns if ns else 0.0)
@@ -172,13 +173,153 @@ class Nlp:
     stages: dict | None = None
 
 
-def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
-    """The NLP of ``ocp`` by ``method`` (DirectCollocation or MultipleShooting).
+@dataclass(frozen=True)
+class Layout:
+    """Where each variable of a transcription sits in the NLP's vector w.
+
+    Per interval k (K = control + settling intervals) a block of ``per`` variables [X_k (nx), Xc_k (d nx, collocation
+    only), u_k], then X_K, then v.  When the last collocation point is the interval end (Radau, ``merged``) it is the
+    next node: X_0, then per interval [Xc_k, u_k], then v; the node states and their continuity equations drop out (a
+    fifth of the KKT system and most of its zero-diagonal pairs: half the time per IPOPT iteration at N = 200,
+    benchmarks/spinup_ocp.md)."""
+
+    K: int
+    per: int  # variables per interval block
+    first: int  # where the interval blocks start (nx when merged: X_0 leads)
+    merged: bool
+    X: np.ndarray  # (K+1, nx) the node states
+    Xc: np.ndarray | None  # (K, d, nx) the collocation states (None for multiple shooting)
+    u: np.ndarray  # (K,) the controls
+    v: list  # the extra variables (epigraph level or final time)
+    size: int  # len(w)
+
+
+def layout(nx: int, nv: int, K: int, d: int, collocation: bool, merged: bool) -> Layout:
+    """The variable layout (:class:`Layout`) of K intervals of a model with nx states and nv extra variables, with d
+    collocation states per interval (``collocation``), the last the next node (``merged``)."""
+    per = (0 if merged else nx) + (nx * d if collocation else 0) + 1
+    first = nx if merged else 0
+    starts = first + per * np.arange(K)
+    Xc = (starts[:, None, None] + per - 1 - nx * d + nx * np.arange(d)[:, None] + np.arange(nx)
+          if collocation else None)
+    X = (np.concatenate([np.arange(nx)[None, :], Xc[:, -1, :]]) if merged else
+         np.concatenate([starts[:, None] + np.arange(nx), K * per + np.arange(nx)[None, :]]))
+    end = K * per + nx  # the extra variables follow the interval blocks and one node's nx
+    return Layout(K, per, first, merged, X, Xc, starts + per - 1, list(range(end, end + nv)), end + nv)
+
+
+def variable_bounds(ocp: SpinupProblem, lay: Layout, ms: Mesh) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds of w: the initial state fixed, the control in [u_min, 1] on the horizon and 0 over the settling window
+    (the speed held), the speed bounds at the horizon's inner nodes, the extra variable's range."""
+    lbx, ubx = np.full(lay.size, -np.inf), np.full(lay.size, np.inf)
+    sp = ocp.speed_index
+    # speed bounds on the horizon only: at its end omega_final is imposed, and over the settling window
+    # the speed is held by the dynamics (a bound there would duplicate an equality: degenerate multipliers)
+    # and at the nodes only: with a piecewise-constant acceleration the speed is linear in each interval
+    # (exact in any collocation), so a bound at the collocation points would duplicate the node bounds
+    # (the last Radau point is the next node): on an arc held at the cap that fails LICQ
+    nlo, nhi = ocp.nu_bounds()
+    lbx[lay.X[1:ms.n, sp]], ubx[lay.X[1:ms.n, sp]] = nlo, nhi
+    lbx[lay.X[0]] = ubx[lay.X[0]] = ocp.q0
+    lbx[lay.u[:ms.n]], ubx[lay.u[:ms.n]] = ocp.u_min, 1.0
+    lbx[lay.u[ms.n:]] = ubx[lay.u[ms.n:]] = 0.0  # settling window: held speed
+    if lay.v:
+        lbx[lay.v[0]], ubx[lay.v[0]] = (0.0, 1.0) if ocp.free_time else (0.0, np.inf)
+    return lbx, ubx
+
+
+def control_step(ocp: SpinupProblem, ms: Mesh, v):
+    """The length (tau) of a control interval of the horizon: fixed, or v_0 tau_h / n when the time is free."""
+    return v[0] * ocp.tau_h / ms.n if ocp.free_time else ms.h
+
+
+def collocation_rows(ocp: SpinupProblem, method: DirectCollocation, w, v, lay: Layout, ms: Mesh, ref: float
+                     ) -> tuple[list, list, object, dict]:
+    """The collocation's rows: one SX Function per interval (:func:`interval_function`), mapped over the K intervals
+    (C++, no Python loop).  Returns the dynamics rows, each path constraint's rows, the quadrature and the
+    interval data (the Function, its mapped arguments, and each interval input's variable (-1: a constant) and
+    coefficient, for :func:`structured_derivatives`); ``v`` is w's extra variables."""
+    nx, d, K, per = ocp.nx, method.degree, lay.K, lay.per
+    W = ca.reshape(w[lay.first:lay.first + K * per], per, K)
+    last = W[per - 1 - nx:per - 1, :]  # the last collocation point
+    X0 = ca.horzcat(w[:nx], last[:, :-1]) if lay.merged else W[:nx, :]  # each interval's start and end node
+    Xn = last if lay.merged else ca.horzcat(W[:nx, 1:], w[K * per:K * per + nx])
+    hrow = ca.horzcat(*([ca.repmat(control_step(ocp, ms, v), 1, ms.n)] + ([ca.repmat(ms.hs, 1, ms.ns)] if ms.ns
+                                                                            else [])))
+    fi = interval_function(ocp, d, method.scheme, ref, continuity=not lay.merged)
+    args = [X0, W[per - 1 - nx * d:per - 1, :], W[per - 1, :], Xn, hrow, v]
+    out = fi.map(K)(*args)
+    cols = np.full((fi.nnz_in(), K), -1)
+    coefs = np.ones((fi.nnz_in(), K))
+    ih = 2 * nx + nx * d + 1  # where h sits among the interval's inputs
+    cols[:nx] = lay.X[:-1].T
+    cols[nx:nx + nx * d] = lay.Xc.reshape(K, -1).T
+    cols[nx + nx * d] = lay.u
+    cols[nx + nx * d + 1:ih] = lay.X[1:].T
+    if ocp.free_time:  # h = v_0 tau_h / n on the horizon
+        cols[ih, :ms.n], coefs[ih, :ms.n] = lay.v[0], ocp.tau_h / ms.n
+    cols[ih + 1:] = np.array(lay.v, int)[:, None]
+    intervals = {"function": fi, "args": args, "cols": cols, "coefs": coefs}
+    return [ca.vec(out[0])], [[ca.vec(o)] for o in out[1:-1]], ca.sum2(out[-1]), intervals
+
+
+def shooting_rows(ocp: SpinupProblem, method: MultipleShooting, w, U, v, lay: Layout, ms: Mesh,
+                  paths: list[PathConstraint]) -> tuple[list, list]:
+    """Multiple shooting's rows: CVODES over each interval (:func:`interval_integrator`), the continuity of the
+    node states and the path constraints at the integrator's outputs (the collocation instants).  Returns the
+    dynamics rows and each path constraint's rows; ``U`` and ``v`` are w's controls and extra variables."""
+    if ocp.objective == "integrated_deflection":
+        raise ValueError("multiple shooting supports the peak and min_time objectives (no quadrature)")
+    frac = path_fractions(method.degree, method.scheme)
+    nx, per = ocp.nx, lay.per
+    X = [w[k * per:k * per + nx] for k in range(lay.K + 1)]  # shooting: [X_k, u_k] per interval
+    F = interval_integrator(ocp.rhs(), tuple(frac), method.tol)
+    dynamics, path_rows = [], [[] for _ in paths]
+    for k in range(lay.K):
+        h = control_step(ocp, ms, v) if k < ms.n else ms.hs
+        out = F(x0=X[k], p=ca.vertcat(U[k] * ocp.a_max, h, *ocp.p))["xf"]
+        dynamics.append(X[k + 1] - out[:, -1])
+        for pc, r in zip(paths, path_rows, strict=True):
+            r += [pc.expr(qj, U[k] * ocp.a_max, v) for qj in ([X[k]] if pc.uses_control else [])
+                  + [out[:, j] for j in range(len(frac))]]
+    return dynamics, path_rows
+
+
+def jerk_rows(ocp: SpinupProblem, U, ms: Mesh, v) -> tuple[list, list]:
+    """The changes du of the control between the horizon's intervals (one vector expression, not n scalar ones: the
+    MX Hessian of a sum of n scalar nodes costs ~n^2 to build; the study's NLP build at N = 1600: 6.6 s,
+    benchmarks/spinup_ocp.md, "Study scaling with N") and the jerk limit's rows du / (the largest change)."""
+    du = [U[1:ms.n] - U[:ms.n - 1]] if ms.n > 1 else []
+    if ocp.jerk_max is None:
+        return du, []
+    step = ocp.jerk_max / ocp.alpha_max / ocp.Om * (ocp.tau_h / ms.n if not ocp.free_time else 1.0)
+    return du, [d / step for d in du] if not ocp.free_time else [d / (step * v[0] * ocp.tau_h / ms.n) for d in du]
+
+
+def stack(rows: dict, bounds: dict) -> tuple[list, np.ndarray, np.ndarray, list]:
+    """The constraint blocks in order: each named block's expression, the bounds of g and (name, rows of g)."""
+    g, lbg, ubg, blocks, start = [], [], [], [], 0
+    for name, r in rows.items():
+        if not r:
+            continue
+        e = ca.vertcat(*r)
+        n = e.numel()
+        g.append(e)
+        lbg.append(np.full(n, bounds[name][0]))
+        ubg.append(np.full(n, bounds[name][1]))
+        blocks.append((name, np.arange(start, start + n)))
+        start += n
+    return g, np.concatenate(lbg), np.concatenate(ubg), blocks
+
+
+def transcribe(ocp: SpinupProblem, method, ref: float, symbolic: str = "SX") -> Nlp:
+    """The NLP of ``ocp`` by ``method`` (DirectCollocation: :func:`collocation_rows`, or MultipleShooting:
+    :func:`shooting_rows`), the variables laid out by :func:`layout`.
 
     Parameters
     ----------
-    ocp : SpinupOcp
-        The declared problem.
+    ocp : SpinupProblem
+        The declared problem (:class:`autobal.ocp.protocol.SpinupProblem`).
     method : DirectCollocation or MultipleShooting
         The transcription.
     ref : float
@@ -195,136 +336,44 @@ def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
     """
     collocation = isinstance(method, DirectCollocation)
     ms = mesh(ocp, method.intervals)
-    K = ms.n + ms.ns
-    d = method.degree
-    frac = path_fractions(d, method.scheme)
-    Sym = ca.MX if symbolic == "MX" or not collocation else ca.SX
-    nv, nx, sp = ocp.n_extra, ocp.nx, ocp.speed_index
-    # variables: per interval [X_k (nx), Xc_k (d*nx, collocation only), u_k], then X_K, then v.  When the
-    # last collocation point is the interval end (Radau) it is the next node: X_0, per interval [Xc_k, u_k],
-    # then v; the node states and their continuity equations drop out (a fifth of the KKT system and most
-    # of its zero-diagonal pairs: half the time per IPOPT iteration at N = 200, benchmarks/spinup_ocp.md)
-    merged = collocation and abs(collocation_data(d, method.scheme)[0][-1] - 1) < 1e-12
-    per = (0 if merged else nx) + (nx * d if collocation else 0) + 1
-    w = Sym.sym("w", K * per + nx + nv)
-    b0 = nx if merged else 0  # where the interval blocks start
-    starts = b0 + per * np.arange(K)
-    idx_Xc = (starts[:, None, None] + per - 1 - nx * d + nx * np.arange(d)[:, None] + np.arange(nx)
-              if collocation else None)
-    idx_X = (np.concatenate([np.arange(nx)[None, :], idx_Xc[:, -1, :]]) if merged else
-             np.concatenate([starts[:, None] + np.arange(nx), K * per + np.arange(nx)[None, :]]))
-    idx_u = starts + per - 1
-    idx_v = list(range(K * per + nx, K * per + nx + nv))
-    U = w[idx_u.tolist()]
-    v = w[K * per + nx:]
-
-    lbx, ubx = np.full(w.numel(), -np.inf), np.full(w.numel(), np.inf)
-    # speed bounds on the horizon only: at its end omega_final is imposed, and over the settling window
-    # the speed is held by the dynamics (a bound there would duplicate an equality: degenerate multipliers)
-    # and at the nodes only: with a piecewise-constant acceleration the speed is linear in each interval
-    # (exact in any collocation), so a bound at the collocation points would duplicate the node bounds
-    # (the last Radau point is the next node): on an arc held at the cap that fails LICQ
-    nlo, nhi = ocp.nu_bounds()
-    lbx[idx_X[1:ms.n, sp]], ubx[idx_X[1:ms.n, sp]] = nlo, nhi
-    lbx[idx_X[0]] = ubx[idx_X[0]] = ocp.q0
-    lbx[idx_u[:ms.n]], ubx[idx_u[:ms.n]] = ocp.u_min, 1.0
-    lbx[idx_u[ms.n:]] = ubx[idx_u[ms.n:]] = 0.0  # settling window: held speed
-    if nv:
-        lbx[idx_v[0]], ubx[idx_v[0]] = (0.0, 1.0) if ocp.free_time else (0.0, np.inf)
-
-    def h_of(k):
-        if k >= ms.n:
-            return ms.hs
-        return v[0] * ocp.tau_h / ms.n if ocp.free_time else ms.h
+    merged = collocation and abs(collocation_data(method.degree, method.scheme)[0][-1] - 1) < 1e-12
+    lay = layout(ocp.nx, ocp.n_extra, ms.n + ms.ns, method.degree, collocation, merged)
+    w = (ca.MX if symbolic == "MX" or not collocation else ca.SX).sym("w", lay.size)
+    U, v = w[lay.u.tolist()], w[lay.size - len(lay.v):]
+    lbx, ubx = variable_bounds(ocp, lay, ms)
 
     paths = ocp.path_constraints(ref)
-    rows: dict[str, list] = {"dynamics": []}
-    rows |= {pc.name: [] for pc in paths}
-    bounds: dict[str, tuple] = {pc.name: (pc.lb, pc.ub) for pc in paths}
-    quad = 0
-    if collocation:  # one SX Function per interval, mapped over the K intervals (C++, no Python loop)
-        W = ca.reshape(w[b0:b0 + K * per], per, K)
-        last = W[per - 1 - nx:per - 1, :]  # the last collocation point
-        X0 = ca.horzcat(w[:nx], last[:, :-1]) if merged else W[:nx, :]  # each interval's start and end node
-        Xn = last if merged else ca.horzcat(W[:nx, 1:], w[K * per:K * per + nx])
-        hn = v[0] * ocp.tau_h / ms.n if ocp.free_time else ms.h
-        hrow = ca.horzcat(*([ca.repmat(hn, 1, ms.n)] + ([ca.repmat(ms.hs, 1, ms.ns)] if ms.ns else [])))
-        fi = interval_function(ocp, d, method.scheme, ref, continuity=not merged)
-        args = [X0, W[per - 1 - nx * d:per - 1, :], W[per - 1, :], Xn, hrow, v]
-        out = fi.map(K)(*args)
-        # each interval input's variable (-1: a constant) and its coefficient (the interval length h is
-        # v_0 tau_h / n when the time is free)
-        cols = np.full((fi.nnz_in(), K), -1)
-        coefs = np.ones((fi.nnz_in(), K))
-        ih = 2 * nx + nx * d + 1  # where h sits among the interval's inputs
-        cols[:nx] = idx_X[:-1].T
-        cols[nx:nx + nx * d] = idx_Xc.reshape(K, -1).T
-        cols[nx + nx * d] = idx_u
-        cols[nx + nx * d + 1:ih] = idx_X[1:].T
-        if ocp.free_time:
-            cols[ih, :ms.n], coefs[ih, :ms.n] = idx_v[0], ocp.tau_h / ms.n
-        cols[ih + 1:] = np.array(idx_v, int)[:, None]
-        intervals = {"function": fi, "args": args, "cols": cols, "coefs": coefs}
-        rows["dynamics"].append(ca.vec(out[0]))
-        for pc, o in zip(paths, out[1:-1], strict=True):
-            rows[pc.name].append(ca.vec(o))
-        quad = ca.sum2(out[-1])
+    intervals, quad = None, 0
+    if collocation:
+        dynamics, path_rows, quad, intervals = collocation_rows(ocp, method, w, v, lay, ms, ref)
     else:
-        X = [w[k * per:k * per + nx] for k in range(K + 1)]  # shooting: [X_k, u_k] per interval
-        F = interval_integrator(ocp.rhs(), tuple(frac), method.tol)
-        for k in range(K):
-            h = h_of(k)
-            out = F(x0=X[k], p=ca.vertcat(U[k] * ocp.a_max, h, *ocp.p))["xf"]
-            rows["dynamics"].append(X[k + 1] - out[:, -1])
-            for pc in paths:
-                rows[pc.name] += [pc.expr(qj, U[k] * ocp.a_max, v) for qj in ([X[k]] if pc.uses_control else [])
-                                  + [out[:, j] for j in range(len(frac))]]
-        if ocp.objective == "integrated_deflection":
-            raise ValueError("multiple shooting supports the peak and min_time objectives (no quadrature)")
-    rows["final speed omega(T) = omega_final"] = [w[int(idx_X[ms.n, sp])] - ocp.nuf]
-    # one vector expression, not n scalar ones: the MX Hessian of a sum of n scalar nodes costs ~n^2 to build
-    # (the study's NLP build at N = 1600: 6.6 s; benchmarks/spinup_ocp.md, "Study scaling with N")
-    du = [U[1:ms.n] - U[:ms.n - 1]] if ms.n > 1 else []
+        dynamics, path_rows = shooting_rows(ocp, method, w, U, v, lay, ms, paths)
+    final = "final speed omega(T) = omega_final"
+    rows = {"dynamics": dynamics} | {pc.name: r for pc, r in zip(paths, path_rows, strict=True)}
+    rows[final] = [w[int(lay.X[ms.n, ocp.speed_index])] - ocp.nuf]
+    bounds = {pc.name: (pc.lb, pc.ub) for pc in paths} | {"dynamics": (0.0, 0.0), final: (0.0, 0.0)}
+    du, jerk = jerk_rows(ocp, U, ms, v)
     if ocp.jerk_max is not None:
         name = f"jerk limit |d alpha/dt| <= {ocp.jerk_max:g} rad/s^3"
-        step = ocp.jerk_max / ocp.alpha_max / ocp.Om * (ocp.tau_h / ms.n if not ocp.free_time else 1.0)
-        rows[name] = [d / step for d in du] if not ocp.free_time else [d / (step * v[0] * ocp.tau_h / ms.n)
-                                                                       for d in du]
-        bounds[name] = (-1.0, 1.0)
-    bounds["dynamics"] = (0.0, 0.0)
-    bounds["final speed omega(T) = omega_final"] = (0.0, 0.0)
+        rows[name], bounds[name] = jerk, (-1.0, 1.0)
+    g, lbg, ubg, blocks = stack(rows, bounds)
 
-    if not collocation:
-        intervals = None
-    g, lbg, ubg, blocks, start = [], [], [], [], 0
-    for name, r in rows.items():
-        if not r:
-            continue
-        e = ca.vertcat(*r)
-        n = e.numel()
-        g.append(e)
-        lbg.append(np.full(n, bounds[name][0]))
-        ubg.append(np.full(n, bounds[name][1]))
-        blocks.append((name, np.arange(start, start + n)))
-        start += n
-    if ocp.objective in ("peak_deflection", "peak_unbalance", "min_time"):
-        obj = v[0]
-    else:
-        obj = quad / ref
+    obj = v[0] if ocp.objective in ("peak_deflection", "peak_unbalance", "min_time") else quad / ref
     if du:
         obj = obj + jerk_regulariser(ocp, ca.vertcat(*du))
-    index = {"X": idx_X, "Xc": idx_Xc, "u": idx_u, "v": idx_v}
     if intervals is not None:  # g row of each interval output: the dynamics and path blocks come first
+        fi = intervals["function"]
         sizes = [fi.nnz_out(i) for i in range(fi.n_out() - 1)]
         first = [r[0] for _, r in blocks[:len(sizes)]]
-        intervals["rows"] = np.concatenate([a + n * np.arange(K)[None, :] + np.arange(n)[:, None]
+        intervals["rows"] = np.concatenate([a + n * np.arange(lay.K)[None, :] + np.arange(n)[:, None]
                                             for a, n in zip(first, sizes, strict=True)])
         intervals["tail"] = ca.vertcat(*g[len(sizes):])  # the rows outside the intervals
-    return Nlp(w, obj, ca.vertcat(*g), lbx, ubx, np.concatenate(lbg), np.concatenate(ubg), blocks, index, ms,
-               frac, method, ref, intervals)
+    index = {"X": lay.X, "Xc": lay.Xc, "u": lay.u, "v": lay.v}
+    return Nlp(w, obj, ca.vertcat(*g), lbx, ubx, lbg, ubg, blocks, index, ms,
+               path_fractions(method.degree, method.scheme), method, ref, intervals)
 
 
-def stage_function(ocp: SpinupOcp, d: int, scheme: str, ref: float, jerk: bool) -> ca.Function:
+def stage_function(ocp: SpinupProblem, d: int, scheme: str, ref: float, jerk: bool) -> ca.Function:
     """One stage of the stage form (:func:`transcribe_stages`) as an SX Function (x_k (nx), the collocation
     states (nx d), u_k, h, v_k, p_k, x_(k+1) (nx), v_(k+1), p_(k+1)) -> (the gap rows x_(k+1) - Z_d, v_(k+1) - v_k
     and, with ``jerk``, p_(k+1) - u_k; the collocation residuals; one column per path constraint; the speed
@@ -341,7 +390,7 @@ def stage_function(ocp: SpinupOcp, d: int, scheme: str, ref: float, jerk: bool) 
     return ca.Function("spinup_stage", [x0, xc, u, h, v, p, x1, v1, p1], [*rows, quad])
 
 
-def transcribe_stages(ocp: SpinupOcp, method: DirectCollocation, ref: float) -> Nlp:
+def transcribe_stages(ocp: SpinupProblem, method: DirectCollocation, ref: float) -> Nlp:
     """The collocation NLP of ``ocp`` in the stage form of a structure-exploiting solver (fatrop: Vanroye et
     al. (2023), a Riccati recursion over the stages, linear in their number).
 
@@ -355,7 +404,7 @@ def transcribe_stages(ocp: SpinupOcp, method: DirectCollocation, ref: float) -> 
 
     Parameters
     ----------
-    ocp : SpinupOcp
+    ocp : SpinupProblem
         The declared problem.
     method : DirectCollocation
         Radau collocation (the last point is the interval end, the next stage's state).
