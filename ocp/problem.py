@@ -45,9 +45,6 @@ JERK_VARIATION = 1e-4
 # extreme scene spinup_100x_slower spans 1.42e4 periods and solves (tests/test_extreme.py)
 CRITICAL_RATIO = 2.0
 MAX_PERIODS = 2e4
-#: the results.json suffix of a peak by the problem's ``deflection_unit``: delta/e for the Jeffcott rotor (Pashkov
-#: (2010), Eq. (2)), m for the modal (ROSS) rotor (the largest whirl radius over its nodes, 0-peak)
-PEAK_KEY = {"1": "over_e", "m": "m"}
 
 
 @dataclass(frozen=True)

@@ -14,12 +14,17 @@ over the horizon).
 
 from __future__ import annotations
 
-from typing import Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import casadi as ca
 import numpy as np
 
-from autobal.ocp.problem import PathConstraint
+if TYPE_CHECKING:  # the problem classes implement the protocol: the pipeline below them never imports them
+    from autobal.ocp.problem import PathConstraint
+
+#: the results.json suffix of a peak by the problem's ``deflection_unit``: delta/e for the Jeffcott rotor (Pashkov
+#: (2010), Eq. (2)), m for the modal (ROSS) rotor (the largest whirl radius over its nodes, 0-peak)
+PEAK_KEY = {"1": "over_e", "m": "m"}
 
 
 @runtime_checkable

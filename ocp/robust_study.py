@@ -23,7 +23,8 @@ from autobal.ocp import robust as rb
 from autobal.ocp.drive_profile import drive_table
 from autobal.ocp.modal_search import grid_search as modal_grid_search
 from autobal.ocp.modal_search import phase_profiles
-from autobal.ocp.problem import PEAK_KEY, SpinupOcp
+from autobal.ocp.problem import SpinupOcp
+from autobal.ocp.protocol import PEAK_KEY
 from autobal.ocp.search import FAST_STEP, controls_on_mesh, grid_search
 from autobal.ocp.simulation import Trajectory, best_within_limits, drive_use, resimulate
 from autobal.ocp.spinup_study import deflection_axis, deflection_text

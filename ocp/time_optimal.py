@@ -29,7 +29,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from autobal.errors import SolveError
-from autobal.ocp.problem import PEAK_KEY, SpinupOcp
+from autobal.ocp.problem import SpinupOcp
+from autobal.ocp.protocol import PEAK_KEY
 from autobal.ocp.search import averaged
 from autobal.ocp.simulation import Trajectory, baselines
 from autobal.ocp.solve import TIE, Optimum, Solver, optimize, resimulated_scores

@@ -13,12 +13,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cache
+from typing import TYPE_CHECKING
 
 import casadi as ca
 import numpy as np
 
-from autobal.ocp.problem import PathConstraint
 from autobal.ocp.protocol import SpinupProblem
+
+if TYPE_CHECKING:
+    from autobal.ocp.problem import PathConstraint
 
 TV_SMOOTHING = 1e-2  # |Delta u| below which the total-variation penalty is quadratic
 
