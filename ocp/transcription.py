@@ -393,6 +393,65 @@ def stage_function(ocp: SpinupProblem, d: int, scheme: str, ref: float, jerk: bo
     return ca.Function("spinup_stage", [x0, xc, u, h, v, p, x1, v1, p1], [*rows, quad])
 
 
+SPEED_ROWS = "speed: omega <= omega_max on the horizon, final speed omega(T) = omega_final"
+
+
+def stage_layout(nx: int, nv: int, jp: int, d: int, K: int) -> tuple[int, dict]:
+    """The variables of the stage form: stage k < K [X_k (nx), v_k (nv), p_k (jp), u_k, Xc_k (d nx)], then stage K
+    [X_K, v_K, p_K].  Returns the variables per stage k < K and the index of each ("X", "Xc", "u", "v", "v_copies"
+    (K+1, nv), "p" (K+1,) or None)."""
+    nxs = nx + nv + jp  # the states of a stage
+    per = nxs + 1 + nx * d
+    start = per * np.arange(K + 1)
+    idx_vc = start[:, None] + nx + np.arange(nv)
+    return per, {"X": start[:, None] + np.arange(nx), "Xc": start[:K, None, None] + nxs + 1 + nx * np.arange(d)[:, None]
+                 + np.arange(nx), "u": start[:K] + nxs, "v": list(idx_vc[0]), "v_copies": idx_vc,
+                 "p": start + nx + nv if jp else None}
+
+
+def stage_row_bounds(ocp: SpinupProblem, ms: Mesh, sizes: list, paths: list[PathConstraint]
+                     ) -> tuple[np.ndarray, np.ndarray, dict, np.ndarray]:
+    """Bounds of the stage form's rows (the K stages' rows of :func:`stage_function`, ``sizes`` rows per output, in
+    stage order): the gaps and collocation residuals 0, the path constraints', the speed bounded on the horizon's
+    inner nodes and omega_final at the deadline (when a settling window follows), the jerk limit on the horizon.
+    Returns lbg, ubg, the rows of each named block and the rows of each stage (rows per stage, K)."""
+    K, n = ms.n + ms.ns, ms.n
+    nrow = sum(sizes)
+    rows = np.arange(nrow)[:, None] + nrow * np.arange(K)[None, :]  # stage by stage
+    names = ["dynamics", "dynamics"] + [pc.name for pc in paths] + [SPEED_ROWS]
+    bounds = [(0.0, 0.0), (0.0, 0.0)] + [(pc.lb, pc.ub) for pc in paths] + [(-np.inf, np.inf)]
+    if ocp.jerk_max is not None:
+        names.append(f"jerk limit |d alpha/dt| <= {ocp.jerk_max:g} rad/s^3")
+        bounds.append((-np.inf, np.inf))
+    block = np.repeat(np.arange(len(sizes)), sizes)  # the output of each row of a stage
+    lo = np.repeat(np.array(bounds)[block, :1], K, axis=1)
+    hi = np.repeat(np.array(bounds)[block, 1:], K, axis=1)
+    speed = np.flatnonzero(block == names.index(SPEED_ROWS))[0]
+    lo[speed, 1:n], hi[speed, 1:n] = ocp.nu_bounds()
+    if ocp.jerk_max is not None:
+        lo[-1, 1:n], hi[-1, 1:n] = -1.0, 1.0
+    lo, hi = lo.ravel(order="F"), hi.ravel(order="F")
+    blocks = {name: rows[np.isin(block, [i for i, m in enumerate(names) if m == name])].ravel() for name in names}
+    if ms.ns:
+        lo[rows[speed, n]] = hi[rows[speed, n]] = ocp.nuf
+    return lo, hi, blocks, rows
+
+
+def stage_variable_bounds(ocp: SpinupProblem, size: int, index: dict, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds of the stage form's variables: X_0 fixed, u in [-1, 1] on the horizon and 0 after, the first previous
+    control 0, the extra variable's range (its copies free: the gap rows carry it)."""
+    lbx, ubx = np.full(size, -np.inf), np.full(size, np.inf)
+    idx_u, idx_vc = index["u"], index["v_copies"]
+    lbx[index["X"][0]] = ubx[index["X"][0]] = ocp.q0
+    lbx[idx_u[:n]], ubx[idx_u[:n]] = -1.0, 1.0
+    lbx[idx_u[n:]] = ubx[idx_u[n:]] = 0.0
+    if index["p"] is not None:
+        lbx[index["p"][0]] = ubx[index["p"][0]] = 0.0
+    if idx_vc.shape[1]:
+        lbx[idx_vc[0, 0]], ubx[idx_vc[0, 0]] = (0.0, 1.0) if ocp.free_time else (0.0, np.inf)
+    return lbx, ubx
+
+
 def transcribe_stages(ocp: SpinupProblem, method: DirectCollocation, ref: float) -> Nlp:
     """The collocation NLP of ``ocp`` in the stage form of a structure-exploiting solver (fatrop: Vanroye et
     al. (2023), a Riccati recursion over the stages, linear in their number).
@@ -400,10 +459,10 @@ def transcribe_stages(ocp: SpinupProblem, method: DirectCollocation, ref: float)
     The same discrete problem as :func:`transcribe` (Radau points): stage k < K has the states
     x_k = [X_k (nx), v_k (the epigraph level or the time scale, one copy per stage), p_k (the previous control,
     when the objective or a limit uses the jerk)] and the controls [u_k, the collocation states (nx d)]; stage 0
-    has only controls (X_0 fixed by its bounds); stage K only its states.  Each stage's rows follow its gap
-    rows (x_(k+1) as the last collocation point, v and p carried): the collocation residuals, the path
-    constraints, the speed (the bounds on the horizon, omega_final at the deadline, free elsewhere) and the
-    jerk limit.  No row or Hessian entry couples two stages but through the gap rows, as fatrop requires.
+    has only controls (X_0 fixed by its bounds); stage K only its states (:func:`stage_layout`).  Each stage's rows
+    follow its gap rows (x_(k+1) as the last collocation point, v and p carried): the collocation residuals, the path
+    constraints, the speed and the jerk limit (:func:`stage_row_bounds`).  No row or Hessian entry couples two
+    stages but through the gap rows, as fatrop requires.
 
     Parameters
     ----------
@@ -426,16 +485,9 @@ def transcribe_stages(ocp: SpinupProblem, method: DirectCollocation, ref: float)
     ms = mesh(ocp, method.intervals)
     K, n, d, nv, nx = ms.n + ms.ns, ms.n, method.degree, ocp.n_extra, ocp.nx
     jerk = n > 1 and bool(ocp.jerk_penalty or ocp.jerk_variation or ocp.jerk_max is not None)
-    jp = int(jerk)
-    nxs = nx + nv + jp  # the states of a stage
-    per = nxs + 1 + nx * d  # stage k < K: [X_k, v_k, p_k, u_k, Xc_k]; then stage K: [X_K, v_K, p_K]
+    nxs = nx + nv + int(jerk)  # the states of a stage
+    per, index = stage_layout(nx, nv, int(jerk), d, K)
     w = ca.MX.sym("w", K * per + nxs)
-    start = per * np.arange(K + 1)
-    idx_X = start[:, None] + np.arange(nx)
-    idx_vc = start[:, None] + nx + np.arange(nv)
-    idx_p = start + nx + nv if jerk else None
-    idx_u = start[:K] + nxs
-    idx_Xc = start[:K, None, None] + nxs + 1 + nx * np.arange(d)[:, None] + np.arange(nx)
     W = ca.reshape(w[:K * per], per, K)
     nxt = ca.horzcat(W[:nxs, 1:], w[K * per:])
     scale = ocp.tau_h / n  # h = v_0 tau_h / n on the horizon when the time is free
@@ -444,51 +496,20 @@ def transcribe_stages(ocp: SpinupProblem, method: DirectCollocation, ref: float)
     out = fs.map(K)(W[:nx, :], W[nxs + 1:, :], W[nxs, :], hrow, W[nx:nx + nv, :], W[nx + nv:nxs, :], nxt[:nx, :],
                     nxt[nx:nx + nv, :], nxt[nx + nv:, :])
     sizes = [fs.nnz_out(i) for i in range(fs.n_out() - 1)]
-    nrow = sum(sizes)
-    rows = np.arange(nrow)[:, None] + nrow * np.arange(K)[None, :]  # stage by stage
     g = ca.vec(ca.vertcat(*out[:-1]))
-
-    paths = ocp.path_constraints(ref)
-    speed_name = "speed: omega <= omega_max on the horizon, final speed omega(T) = omega_final"
-    names = ["dynamics", "dynamics"] + [pc.name for pc in paths] + [speed_name]
-    bounds = [(0.0, 0.0), (0.0, 0.0)] + [(pc.lb, pc.ub) for pc in paths] + [(-np.inf, np.inf)]
-    if ocp.jerk_max is not None:
-        names.append(f"jerk limit |d alpha/dt| <= {ocp.jerk_max:g} rad/s^3")
-        bounds.append((-np.inf, np.inf))
-    block = np.repeat(np.arange(len(sizes)), sizes)  # the output of each row of a stage
-    lo = np.repeat(np.array(bounds)[block, :1], K, axis=1)
-    hi = np.repeat(np.array(bounds)[block, 1:], K, axis=1)
-    speed = np.flatnonzero(block == names.index(speed_name))[0]
-    lo[speed, 1:n], hi[speed, 1:n] = ocp.nu_bounds()
-    if ocp.jerk_max is not None:
-        lo[-1, 1:n], hi[-1, 1:n] = -1.0, 1.0
-    lo, hi = lo.ravel(order="F"), hi.ravel(order="F")
-    blocks = {name: rows[np.isin(block, [i for i, m in enumerate(names) if m == name])].ravel() for name in names}
-    if ms.ns:
-        lo[rows[speed, n]] = hi[rows[speed, n]] = ocp.nuf
-    else:  # the deadline is the last stage's: its one row
-        g = ca.vertcat(g, w[int(idx_X[K, ocp.speed_index])])
+    lo, hi, blocks, _ = stage_row_bounds(ocp, ms, sizes, ocp.path_constraints(ref))
+    if not ms.ns:  # the deadline is the last stage's: its one row
+        g = ca.vertcat(g, w[int(index["X"][K, ocp.speed_index])])
         lo, hi = np.append(lo, ocp.nuf), np.append(hi, ocp.nuf)
-        blocks[speed_name] = np.append(blocks[speed_name], g.numel() - 1)
+        blocks[SPEED_ROWS] = np.append(blocks[SPEED_ROWS], g.numel() - 1)
     blocks = [(name, np.sort(r)) for name, r in blocks.items()]
-
-    lbx, ubx = np.full(w.numel(), -np.inf), np.full(w.numel(), np.inf)
-    lbx[idx_X[0]] = ubx[idx_X[0]] = ocp.q0
-    lbx[idx_u[:n]], ubx[idx_u[:n]] = -1.0, 1.0
-    lbx[idx_u[n:]] = ubx[idx_u[n:]] = 0.0
+    lbx, ubx = stage_variable_bounds(ocp, w.numel(), index, n)
+    obj = w[int(index["v_copies"][0, 0])] if ocp.objective in ("peak_deflection", "peak_unbalance", "min_time") \
+        else ca.sum2(out[-1]) / ref
     if jerk:
-        lbx[idx_p[0]] = ubx[idx_p[0]] = 0.0
-    if nv:
-        lbx[idx_vc[0, 0]], ubx[idx_vc[0, 0]] = (0.0, 1.0) if ocp.free_time else (0.0, np.inf)
-    if ocp.objective in ("peak_deflection", "peak_unbalance", "min_time"):
-        obj = w[int(idx_vc[0, 0])]
-    else:
-        obj = ca.sum2(out[-1]) / ref
-    if jerk:
-        obj = obj + jerk_regulariser(ocp, w[idx_u[1:n].tolist()] - w[idx_p[1:n].tolist()])
-    index = {"X": idx_X, "Xc": idx_Xc, "u": idx_u, "v": list(idx_vc[0]), "v_copies": idx_vc, "p": idx_p}
+        obj = obj + jerk_regulariser(ocp, w[index["u"][1:n].tolist()] - w[index["p"][1:n].tolist()])
     stages = {"N": K, "nx": [0] + [nxs] * K, "nu": [nxs + 1 + nx * d] + [1 + nx * d] * (K - 1) + [0],
-              "ng": [nrow - nxs] * K + [0 if ms.ns else 1]}
+              "ng": [sum(sizes) - nxs] * K + [0 if ms.ns else 1]}
     return Nlp(w, obj, g, lbx, ubx, lo, hi, blocks, index, ms,
                path_fractions(d, method.scheme), method, ref, None, stages)
 
@@ -595,10 +616,46 @@ def _lagrange(nodes: np.ndarray, s: np.ndarray) -> np.ndarray:
     return L
 
 
+def coarse_interval(coarse: Nlp, t: np.ndarray) -> np.ndarray:
+    """The interval of the ``coarse`` mesh each time t (tau) falls in."""
+    tc0 = point_times(coarse)[0]
+    return np.clip(np.searchsorted(tc0, t, side="right") - 1, 0, len(tc0) - 2)
+
+
 def interpolate(coarse: Nlp, w: np.ndarray, lam_g: np.ndarray, lam_x: np.ndarray, fine: Nlp
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Primal and dual guess of the ``fine`` collocation NLP from a solution of the ``coarse`` one (same
-    problem, a finer mesh): the states by the coarse collocation polynomials, the controls held.
+    problem, a finer mesh): the states by the coarse collocation polynomials, the controls held
+    (:func:`interpolate_duals` for the multipliers; None, None for the stage form, which starts from the primal
+    guess)."""
+    d, scheme = coarse.method.degree, coarse.method.scheme
+    tau = collocation_data(d, scheme)[0]
+    tc0, hc, _ = point_times(coarse)
+    tf0, hf, tfc = point_times(fine)
+    Kf = len(hf)
+    Xc, Zc = w[coarse.index["X"]], w[coarse.index["Xc"]]
+    nx = Xc.shape[1]
+    nodes = np.concatenate([[0.0], tau])
+
+    def state_at(t):
+        k = coarse_interval(coarse, t)
+        Z = np.concatenate([Xc[k][:, None, :], Zc[k]], axis=1)  # (P, d+1, nx)
+        return np.einsum("pr,pri->pi", _lagrange(nodes, (t - tc0[k]) / hc[k]), Z)
+
+    wf = np.zeros(fine.x.numel())
+    wf[fine.index["X"]] = state_at(tf0)
+    wf[fine.index["X"][-1]] = Xc[-1]
+    wf[fine.index["Xc"]] = state_at(tfc.ravel()).reshape((Kf, d, nx))
+    kc = coarse_interval(coarse, tf0[:-1] + 0.5 * hf)
+    wf[fine.index["u"]] = w[coarse.index["u"]][kc]
+    wf[fine.index["v"]] = w[coarse.index["v"]]
+    if lam_g is None or coarse.stages or fine.stages:  # the stage form (fatrop) starts from the primal guess
+        return wf, None, None
+    return (wf, *interpolate_duals(coarse, lam_g, lam_x, fine))
+
+
+def interpolate_duals(coarse: Nlp, lam_g: np.ndarray, lam_x: np.ndarray, fine: Nlp) -> tuple[np.ndarray, np.ndarray]:
+    """The multipliers of the ``fine`` NLP from the ``coarse`` one's (:func:`interpolate`).
 
     The multipliers of the collocation equations are B_j p(t) (quadrature weight times the costate, the
     same on any mesh) and those of the continuity equations p(t): both interpolated in time; the path
@@ -608,32 +665,12 @@ def interpolate(coarse: Nlp, w: np.ndarray, lam_g: np.ndarray, lam_x: np.ndarray
     epigraph points) the barrier's central path lifts the peak level far above the optimum first
     (benchmarks/spinup_ocp.md)."""
     d, scheme = coarse.method.degree, coarse.method.scheme
-    tau, _, _, B = collocation_data(d, scheme)
+    B = collocation_data(d, scheme)[3]
     tc0, hc, tcc = point_times(coarse)
     tf0, hf, tfc = point_times(fine)
     Kc, Kf = len(hc), len(hf)
-    Xc, Zc = w[coarse.index["X"]], w[coarse.index["Xc"]]
-    nx = Xc.shape[1]
-    nodes = np.concatenate([[0.0], tau])
-
-    def interval(t):
-        return np.clip(np.searchsorted(tc0, t, side="right") - 1, 0, Kc - 1)
-
-    def state_at(t):
-        k = interval(t)
-        Z = np.concatenate([Xc[k][:, None, :], Zc[k]], axis=1)  # (P, d+1, nx)
-        return np.einsum("pr,pri->pi", _lagrange(nodes, (t - tc0[k]) / hc[k]), Z)
-
-    wf = np.zeros(fine.x.numel())
-    wf[fine.index["X"]] = state_at(tf0)
-    wf[fine.index["X"][-1]] = Xc[-1]
-    wf[fine.index["Xc"]] = state_at(tfc.ravel()).reshape((Kf, d, nx))
-    kc = interval(tf0[:-1] + 0.5 * hf)
-    wf[fine.index["u"]] = w[coarse.index["u"]][kc]
-    wf[fine.index["v"]] = w[coarse.index["v"]]
-
-    if lam_g is None or coarse.stages or fine.stages:  # the stage form (fatrop) starts from the primal guess
-        return wf, None, None
+    nx = coarse.index["X"].shape[1]
+    kc = coarse_interval(coarse, tf0[:-1] + 0.5 * hf)
 
     def block(nlp, name):
         return next((r for n, r in nlp.blocks if n == name), None)
@@ -666,4 +703,4 @@ def interpolate(coarse: Nlp, w: np.ndarray, lam_g: np.ndarray, lam_x: np.ndarray
     lx = np.zeros(fine.x.numel())
     lx[fine.index["X"][0]] = lam_x[coarse.index["X"][0]]
     lx[fine.index["u"]] = lam_x[coarse.index["u"]][kc] * hf / hc[kc]
-    return wf, lg, lx
+    return lg, lx
