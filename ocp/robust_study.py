@@ -670,7 +670,8 @@ def run(ocp, method: DirectCollocation, uncertainty: rb.Uncertainty, design_poin
         cs = ocp.rotor.critical_speeds(ocp.omega_final)["wd"]
         model = {"omega_cr_rad_s": float(cs[0]) if len(cs) else None, "nodes": list(ocp.nodes),
                  "modes": ocp.rotor.n}
-        how = "the validation integrator (Runge-Kutta screening of the envelope, autobal.ocp.modal_search.screen)"
+        # the results.json text names the screening as the modal problem's module exports it (defined in modal_search)
+        how = "the validation integrator (Runge-Kutta screening of the envelope, autobal.ocp.modal.screen)"
     ramp_rows = [Ramp(p.label, float(p.u[0] * ocp.alpha_max), **{f"design_worst_{s}": float(d),
                                                                    f"validation_worst_{s}": float(w)},
                       within_drive_limits=ramp_use[i]["within_drive_limits"],
