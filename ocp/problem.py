@@ -45,9 +45,6 @@ JERK_VARIATION = 1e-4
 # extreme scene spinup_100x_slower spans 1.42e4 periods and solves (tests/test_extreme.py)
 CRITICAL_RATIO = 2.0
 MAX_PERIODS = 2e4
-#: the results.json suffix of a peak by the problem's ``deflection_unit``: delta/e for the Jeffcott rotor (Pashkov
-#: (2010), Eq. (2)), m for the modal (ROSS) rotor (the largest whirl radius over its nodes, 0-peak)
-PEAK_KEY = {"1": "over_e", "m": "m"}
 
 
 @dataclass(frozen=True)
@@ -257,6 +254,31 @@ class SpinupOcp(Dimensionless):
     deflection_unit = "1"  # of deflection_limit and of the peaks: delta/e (the modal rotor's problem: m)
     epigraph_unit = 1.0  # the reported peak is sqrt(epigraph level) times this (delta/e and d are reported as they are)
     max_steps = 20000  # CVODES steps per integrator call at most
+    # the coarse solves of the starts begin with the collocation states held at the interval-start values (rockit's
+    # guess): from a coarse mesh the Jeffcott rotor reaches better basins so (benchmarks/spinup_ocp.md)
+    hold_states = True
+
+    # the solver's parts of this model (:class:`autobal.ocp.protocol.SpinupProblem`): the functions of
+    # :mod:`autobal.ocp.solve` and :mod:`autobal.ocp.simulation` (imported here, as both import this module)
+    def starts(self, n: int, multistart: bool = True) -> list[tuple[str, np.ndarray]]:
+        """Labelled initial control profiles on n control intervals (:func:`autobal.ocp.solve.starts`)."""
+        from autobal.ocp.solve import starts
+        return starts(self, n, multistart)
+
+    def reference_level(self) -> float:
+        """The scale of the objective (:func:`autobal.ocp.solve.reference_level`)."""
+        from autobal.ocp.solve import reference_level
+        return reference_level(self)
+
+    def resimulate(self, u, h, label: str):
+        """CVODES re-simulation of the control u on intervals h, tau (:func:`autobal.ocp.simulation.resimulate`)."""
+        from autobal.ocp.simulation import resimulate
+        return resimulate(self, u, h, label)
+
+    def rank_coarse(self, found: list, n: int) -> tuple[int, dict[int, float]]:
+        """The best of the coarse optima ``found`` (:func:`autobal.ocp.solve.rank_coarse`)."""
+        from autobal.ocp.solve import rank_coarse
+        return rank_coarse(self, found, n)
 
     def perturbed(self, factors) -> SpinupOcp:
         """The problem of the rotor with the factors (critical speed, damping, liquid mass) applied

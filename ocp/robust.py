@@ -140,7 +140,7 @@ def cvodes_peaks(ocp: SpinupOcp, factors: np.ndarray, profile: Profile, points: 
 def fast_peaks(ocp: SpinupOcp, factors: np.ndarray, profiles: list[Profile]) -> np.ndarray:
     """Peak of every profile on every perturbed rotor by a fast integrator (the exponential integrator of the
     Jeffcott rotor's global search, :func:`autobal.ocp.search.simulate_steps`; another model's own
-    ``fast_peaks``, e.g. the modal rotor's Runge-Kutta screening, :func:`autobal.ocp.modal.screen`), all profiles
+    ``fast_peaks``, e.g. the modal rotor's Runge-Kutta screening, :func:`autobal.ocp.modal_search.screen`), all profiles
     of one rotor at once.
 
     Parameters

@@ -21,10 +21,12 @@ from autobal.analysis.quantities import Quantity, significant
 from autobal.analysis.result import new_figure, speed_axis, unit_axis
 from autobal.ocp import robust as rb
 from autobal.ocp.drive_profile import drive_table
-from autobal.ocp.problem import PEAK_KEY, SpinupOcp
+from autobal.ocp.modal_search import grid_search as modal_grid_search
+from autobal.ocp.modal_search import phase_profiles
+from autobal.ocp.problem import SpinupOcp
+from autobal.ocp.protocol import PEAK_KEY
 from autobal.ocp.search import FAST_STEP, controls_on_mesh, grid_search
 from autobal.ocp.simulation import Trajectory, best_within_limits, drive_use, resimulate
-from autobal.ocp.solve import model_of
 from autobal.ocp.spinup_study import deflection_axis, deflection_text
 from autobal.ocp.time_optimal import minimum_peak
 from autobal.ocp.transcription import DirectCollocation
@@ -486,7 +488,7 @@ def _on(ocp, factors, profile: rb.Profile):
     o = rb.scenario_ocps(ocp, np.atleast_2d(factors))[0]
     u, h = profile.on(o)
     return resimulate(o, u, h, profile.label, points=8) if isinstance(o, SpinupOcp) else \
-        model_of(o).resimulate(o, u, h, profile.label)
+        o.resimulate(u, h, profile.label)
 
 
 def nominal_optimum(ocp, method: DirectCollocation, multistart: bool, options: dict | None
@@ -572,8 +574,7 @@ def robust_starts(ocp: SpinupOcp, factors: np.ndarray, nominal: rb.Profile, ramp
     if isinstance(o, SpinupOcp):
         found = [controls_on_mesh(o, p, n) for p in grid_search(o, keep=2).params]
     else:
-        modal = model_of(o)
-        found = [modal.phase_profiles(o, *p)[0] for p in modal.grid_search(o, keep=2).params]
+        found = [phase_profiles(o, *p)[0] for p in modal_grid_search(o, keep=2).params]
     return [nominal, ramps[ib], *[rb.Profile(f"global search on design rotor {worst}", u) for u in found]]
 
 
@@ -669,6 +670,7 @@ def run(ocp, method: DirectCollocation, uncertainty: rb.Uncertainty, design_poin
         cs = ocp.rotor.critical_speeds(ocp.omega_final)["wd"]
         model = {"omega_cr_rad_s": float(cs[0]) if len(cs) else None, "nodes": list(ocp.nodes),
                  "modes": ocp.rotor.n}
+        # the results.json text names the screening as the modal problem's module exports it (defined in modal_search)
         how = "the validation integrator (Runge-Kutta screening of the envelope, autobal.ocp.modal.screen)"
     ramp_rows = [Ramp(p.label, float(p.u[0] * ocp.alpha_max), **{f"design_worst_{s}": float(d),
                                                                    f"validation_worst_{s}": float(w)},

@@ -18,12 +18,15 @@ towards the critical speed, backs off, and passes.  :func:`grid_search` evaluate
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import casadi as ca
 import numpy as np
 
 from autobal.models.rotor import FIXED_STATES, rotor_model
-from autobal.ocp.problem import SpinupOcp
+
+if TYPE_CHECKING:
+    from autobal.ocp.problem import SpinupOcp
 
 STEP = 1.0  # dimensionless time step of the search integrator (tau = Omega0 t)
 FAST_STEP = 0.5  # step of the validation and ranking integrator (peak within 1e-4 of CVODES, tested)

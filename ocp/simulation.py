@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cache
+from typing import TYPE_CHECKING
 
 import casadi as ca
 import numpy as np
@@ -13,8 +14,10 @@ from autobal.analysis import interrupt, solver_options
 from autobal.analysis.quantities import Quantity
 from autobal.analysis.rotor import deflection, peak, unbalance
 from autobal.models.rotor import rotor_model
-from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.transcription import Nlp, interval_integrator, mesh, path_fractions
+
+if TYPE_CHECKING:
+    from autobal.ocp.problem import SpinupOcp
 
 # the re-simulation's CVODES tolerance and samples: the solver options "resimulation" (analysis/solver_options.py)
 

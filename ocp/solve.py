@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import sys
 import time
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import casadi as ca
 import numpy as np
@@ -16,7 +16,8 @@ import numpy as np
 from autobal.analysis import ipopt, solver_options
 from autobal.analysis.solver_options import ipopt_options  # noqa: F401 (the rooms' and tests' name)
 from autobal.errors import SolveError
-from autobal.ocp.problem import PEAK_KEY, SpinupOcp
+from autobal.models.rotor import RotorParams
+from autobal.ocp.protocol import PEAK_KEY, SpinupProblem
 from autobal.ocp.search import (
     FixedFrameModes,
     backoff_controls,
@@ -44,6 +45,9 @@ from autobal.ocp.transcription import (
     transcribe,
     transcribe_stages,
 )
+
+if TYPE_CHECKING:  # the problem classes call this module (their starts, reference level and ranking)
+    from autobal.ocp.problem import SpinupOcp
 
 # the OCP's IPOPT options (the groups "spinup", "spinup_warm" for the fine stages of the mesh continuation,
 # "spinup_coarse" and "fatrop"): analysis/solver_options.py, with the measurements that chose them
@@ -121,7 +125,7 @@ class Solver:
         self.ocp, self.method = ocp, method
         # MX: the interval Function mapped over the intervals, so the construction hardly grows with N
         # (SX: 1.7 s at N = 200; benchmarks/spinup_ocp.md, "Levers")
-        ref = model_of(ocp).reference_level(ocp) if ref is None else ref
+        ref = ocp.reference_level() if ref is None else ref
         if getattr(method, "solver", "ipopt") == "fatrop":
             self.nlp = transcribe_stages(ocp, method, ref)
             self.solver = fatrop_solver(self.nlp, options)
@@ -410,7 +414,8 @@ def fell_back(ocp, coarse_u: np.ndarray, fine_u: np.ndarray) -> bool:
     coarse collocation keeps the drive limits at its points only, so its profile may promise a peak the fine mesh
     cannot keep: on a torque-limited rotor without braking (benchmarks/spinup_family.py, ``torque_no_brake``) the
     coarse winner re-simulated at 11.41 e and refined to 11.98 e in 381 + 914 iterations."""
-    if ocp.objective != "peak_deflection" or type(ocp) is not SpinupOcp or horizon_steps(ocp) > SEARCH_STEPS:
+    if ocp.objective != "peak_deflection" or not isinstance(getattr(ocp, "params", None), RotorParams) \
+            or horizon_steps(ocp) > SEARCH_STEPS:
         return False
     return profile_peak(ocp, fine_u) > profile_peak(ocp, coarse_u) * (1 + FALLBACK)
 
@@ -463,39 +468,20 @@ def refine(ocp: SpinupOcp, method, coarse: Solver, sol: SpinupSolution, options:
     return prev, sol
 
 
-def model_of(ocp):
-    """The rotor model's own parts of :func:`optimize`, by the problem's type (:data:`MODELS`): this module for the
-    Jeffcott rotor's :class:`SpinupOcp`, :mod:`autobal.ocp.modal` for the modal rotor's.  Each has ``starts(ocp, n,
-    multistart)`` (labelled profiles on n control intervals), ``reference_level(ocp)`` (the NLP's scale),
-    ``resimulate(ocp, u, h, label)`` (CVODES; ``peak`` in the problem's deflection unit), ``rank_coarse(ocp, found,
-    n)`` (the best coarse optimum) and HOLD_STATES (how the coarse starts' collocation states begin)."""
-    return MODELS[type(ocp)]
-
-
-#: the module of each problem type's model parts (:func:`model_of`); the modal rotor's module adds itself when
-#: imported (before any of its problems exists)
-MODELS = {SpinupOcp: sys.modules[__name__]}
-
-# the coarse solves of the starts begin with the collocation states held at the interval-start values (rockit's
-# guess): from a coarse mesh the Jeffcott rotor reaches better basins so (benchmarks/spinup_ocp.md)
-HOLD_STATES = True
-
-
-def optimize(ocp, method, multistart: bool = True, options: dict | None = None) -> Optimum:
-    """Solve from every start of the problem's model (:func:`model_of`: the Jeffcott rotor's
+def optimize(ocp: SpinupProblem, method, multistart: bool = True, options: dict | None = None) -> Optimum:
+    """Solve from every start of the problem (:meth:`~autobal.ocp.protocol.SpinupProblem.starts`: the Jeffcott rotor's
     :class:`SpinupOcp` or the modal rotor's :class:`autobal.ocp.modal.ModalSpinupOcp`); keep the best optimum by
     its re-simulated objective (for min_time: the shortest time whose re-simulated peak keeps the deflection limit
     within 1 %).
 
     With several starts and a collocation mesh of at least 2 x COARSE intervals, every start is solved on
-    the coarse mesh and the best coarse optimum (the model's ``rank_coarse``) is refined by mesh continuation
+    the coarse mesh and the best coarse optimum (the problem's ``rank_coarse``) is refined by mesh continuation
     (:func:`refine`).  min_time is solved by continuation: first the smallest peak over the full horizon
     (if even that exceeds the deflection limit, the limit is the binding constraint and no time is
     feasible), then the minimum time started from that profile.  One row per solve in ``Optimum.starts``: the
     start, its mesh stage, status, iterations, times, and its re-simulated ``objective`` where one was computed."""
-    model = model_of(ocp)
     clock = time.perf_counter()
-    ref = model.reference_level(ocp)
+    ref = ocp.reference_level()
     times = {"resimulation": time.perf_counter() - clock}
     n_ctrl = method.intervals
     rows, best, first_error, build = [], None, None, 0.0
@@ -520,7 +506,7 @@ def optimize(ocp, method, multistart: bool = True, options: dict | None = None) 
         start_list = [("minimum-peak profile over the horizon", pk.solution.u[:n_ctrl])]
     else:
         clock = time.perf_counter()
-        start_list = model.starts(ocp, n_ctrl, multistart)
+        start_list = ocp.starts(n_ctrl, multistart)
         times["global_search"] = time.perf_counter() - clock
     coarse = coarse_solver(ocp, method, ref, options) if len(start_list) > 1 else None
     solved = []  # (label, solution) of the finest mesh
@@ -531,7 +517,7 @@ def optimize(ocp, method, multistart: bool = True, options: dict | None = None) 
         for label, u in start_list:
             cu = u.reshape(nc, -1).mean(axis=1) if u.size % nc == 0 else np.interp(
                 np.linspace(0, 1, nc), np.linspace(0, 1, u.size), u)
-            sc = coarse.solve(cu, raise_on_failure=False, hold_states=model.HOLD_STATES)
+            sc = coarse.solve(cu, raise_on_failure=False, hold_states=ocp.hold_states)
             guesses.append(sc.guess_time_s)
             rows.append({"start": label, "stage": f"coarse ({nc} intervals)", "status": sc.status,
                          "success": sc.success, "iterations": sc.iterations, "solve_time_s": sc.solve_time_s})
@@ -540,7 +526,7 @@ def optimize(ocp, method, multistart: bool = True, options: dict | None = None) 
         start_list = []
         for _ in range(2 if found else 0):  # the best coarse optimum; the next too when its refinement falls back
             clock = time.perf_counter()
-            i, scores = model.rank_coarse(ocp, [f[:2] for f in found], nc)
+            i, scores = ocp.rank_coarse([f[:2] for f in found], nc)
             for j, score in scores.items():
                 found[j][2]["objective"] = score
             times["resimulation"] += time.perf_counter() - clock
@@ -571,7 +557,7 @@ def optimize(ocp, method, multistart: bool = True, options: dict | None = None) 
             rows.append({"start": label, "status": exc.status, "success": False})
     clock = time.perf_counter()
     for label, sol in solved:
-        tr = model.resimulate(ocp, sol.u, sol.h, "optimum")
+        tr = ocp.resimulate(sol.u, sol.h, "optimum")
         score, own = resimulated_scores(ocp, sol, tr)
         ok = ocp.deflection_limit is None or tr.peak <= 1.01 * ocp.deflection_limit
         # a refined optimum's solve is already in the row of its mesh-continuation stage

@@ -6,8 +6,8 @@ Any spin-up problem of the generic pipeline runs through it: the Jeffcott rotor'
 (:class:`autobal.ocp.modal.ModalSpinupOcp`, peaks in m), each with its ``min_time`` objective and its deflection
 limit as a path constraint of the shared transcription; each peak and limit in its problem's ``deflection_unit``.
 Only the minimum-peak optimum of a deadline (its model's global search for starts), the fastest ramp and the
-CVODES re-simulation are the model's own (:func:`minimum_peak`, :func:`fastest_ramp`,
-:func:`autobal.ocp.solve.model_of`).
+CVODES re-simulation are the model's own (:func:`minimum_peak`, :func:`fastest_ramp`, the methods of
+:class:`autobal.ocp.protocol.SpinupProblem`).
 
 The front is computed as its dual: for a deadline T, the smallest peak P*(T) by the minimum-peak OCP of
 :mod:`autobal.ocp.solve` (global search, multi-start, collocation, CVODES re-simulation), the control step
@@ -29,10 +29,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from autobal.errors import SolveError
-from autobal.ocp.problem import PEAK_KEY, SpinupOcp
+from autobal.ocp.problem import SpinupOcp
+from autobal.ocp.protocol import PEAK_KEY
 from autobal.ocp.search import averaged
 from autobal.ocp.simulation import Trajectory, baselines
-from autobal.ocp.solve import TIE, Optimum, Solver, model_of, optimize, resimulated_scores
+from autobal.ocp.solve import TIE, Optimum, Solver, optimize, resimulated_scores
 from autobal.ocp.transcription import DirectCollocation
 
 if TYPE_CHECKING:
@@ -53,7 +54,9 @@ def fastest_ramp(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation):
     modal rotor's on its own)."""
     if isinstance(ocp, SpinupOcp):
         return baselines(ocp, intervals=4 * method.intervals)["max_acceleration_ramp"]
-    return model_of(ocp).baselines(ocp.on_intervals(method.intervals))["max_acceleration_ramp"]  # the modal one
+    from autobal.ocp.modal import baselines as modal_baselines
+
+    return modal_baselines(ocp.on_intervals(method.intervals))["max_acceleration_ramp"]
 
 
 def peak_words(ocp: SpinupOcp | ModalSpinupOcp, x: float) -> str:
@@ -204,7 +207,7 @@ def extended(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation, earlier
         sol = solver.solve(np.clip(u, -1.0, 1.0))
     except SolveError:
         return None
-    tr = model_of(o).resimulate(o, sol.u, sol.h, "optimum")
+    tr = o.resimulate(sol.u, sol.h, "optimum")
     score, own = resimulated_scores(o, sol, tr)
     row = {"start": f"the {earlier.arrival_time_s:.4g} s point's profile, then held", "status": sol.status,
            "success": True, "iterations": sol.iterations, "solve_time_s": sol.solve_time_s, "objective": score}
@@ -256,7 +259,7 @@ def min_time_point(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation, l
     rows, build, level = [], 0.0, float(limit)
 
     def record(label: str):
-        tr = model_of(o).resimulate(o, sol.u, sol.h, "optimum")
+        tr = o.resimulate(sol.u, sol.h, "optimum")
         rows.append({"start": label, "stage": f"min_time, {n} intervals, collocation limit {peak_words(o, level)}",
                      "status": sol.status, "success": True, "iterations": sol.iterations,
                      "solve_time_s": sol.solve_time_s, "objective": sol.final_time_s,

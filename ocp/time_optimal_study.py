@@ -19,7 +19,8 @@ from autobal.analysis.quantities import Declarations, significant
 from autobal.analysis.result import new_figure, speed_axis, unit_axis
 from autobal.ocp import time_optimal as to
 from autobal.ocp.drive_profile import drive_table
-from autobal.ocp.problem import PEAK_KEY, SpinupOcp
+from autobal.ocp.problem import SpinupOcp
+from autobal.ocp.protocol import PEAK_KEY
 from autobal.ocp.robust_study import PEAK_SYMBOL, deflection_of, peak_text
 from autobal.ocp.solve import TIE
 from autobal.ocp.spinup_study import deflection_axis

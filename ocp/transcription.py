@@ -13,11 +13,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cache
+from typing import TYPE_CHECKING
 
 import casadi as ca
 import numpy as np
 
-from autobal.ocp.problem import SpinupOcp
+from autobal.ocp.protocol import SpinupProblem
+
+if TYPE_CHECKING:
+    from autobal.ocp.problem import PathConstraint
 
 TV_SMOOTHING = 1e-2  # |Delta u| below which the total-variation penalty is quadratic
 
@@ -82,7 +86,7 @@ def interval_integrator(rhs: ca.Function, fractions: tuple, tol: float, multiste
                          | (adams if multistep == "adams" else {}))
 
 
-def interval_function(ocp: SpinupOcp, d: int, scheme: str, ref: float, continuity: bool = True) -> ca.Function:
+def interval_function(ocp: SpinupProblem, d: int, scheme: str, ref: float, continuity: bool = True) -> ca.Function:
     """One collocation interval as an SX Function (x_k (nx), the collocation states (nx d), u_k, x_(k+1) (nx),
     h, v) -> (collocation residuals (nx d) and, with ``continuity``, the continuity residual (nx), one column
     per path constraint (its values at the interval start when it uses the control, then at the path points),
@@ -107,14 +111,14 @@ def interval_function(ocp: SpinupOcp, d: int, scheme: str, ref: float, continuit
     return ca.Function("spinup_interval", [x0, xc, u, x1, h, v], [ca.vertcat(*res), *paths, quad])
 
 
-def jerk_regulariser(ocp: SpinupOcp, du):
+def jerk_regulariser(ocp: SpinupProblem, du):
     """The objective's jerk terms: ``jerk_penalty`` sum (Delta u)^2 plus ``jerk_variation`` times the total
     variation sum |Delta u|, smoothed as sqrt(Delta u^2 + s^2) - s with s = TV_SMOOTHING (Huber-like: quadratic
     below s, so one-interval pulses cost and the switches stay sharp).
 
     Parameters
     ----------
-    ocp : SpinupOcp
+    ocp : SpinupProblem
         The problem (its weights, dimensionless, relative to the scaled objective).
     du : SX or MX column
         Changes of u = alpha/alpha_max between consecutive control intervals of the horizon, dimensionless.
@@ -142,7 +146,7 @@ class Mesh:
     hs: float
 
 
-def mesh(ocp: SpinupOcp, n: int) -> Mesh:
+def mesh(ocp: SpinupProblem, n: int) -> Mesh:
     h = ocp.tau_h / n
     ns = int(math.ceil(ocp.tau_s / h - 1e-9)) if ocp.tau_s > 0 else 0
     return Mesh(n, ns, h, ocp.tau_s / ns if ns else 0.0)
@@ -172,13 +176,153 @@ class Nlp:
     stages: dict | None = None
 
 
-def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
-    """The NLP of ``ocp`` by ``method`` (DirectCollocation or MultipleShooting).
+@dataclass(frozen=True)
+class Layout:
+    """Where each variable of a transcription sits in the NLP's vector w.
+
+    Per interval k (K = control + settling intervals) a block of ``per`` variables [X_k (nx), Xc_k (d nx, collocation
+    only), u_k], then X_K, then v.  When the last collocation point is the interval end (Radau, ``merged``) it is the
+    next node: X_0, then per interval [Xc_k, u_k], then v; the node states and their continuity equations drop out (a
+    fifth of the KKT system and most of its zero-diagonal pairs: half the time per IPOPT iteration at N = 200,
+    benchmarks/spinup_ocp.md)."""
+
+    K: int
+    per: int  # variables per interval block
+    first: int  # where the interval blocks start (nx when merged: X_0 leads)
+    merged: bool
+    X: np.ndarray  # (K+1, nx) the node states
+    Xc: np.ndarray | None  # (K, d, nx) the collocation states (None for multiple shooting)
+    u: np.ndarray  # (K,) the controls
+    v: list  # the extra variables (epigraph level or final time)
+    size: int  # len(w)
+
+
+def layout(nx: int, nv: int, K: int, d: int, collocation: bool, merged: bool) -> Layout:
+    """The variable layout (:class:`Layout`) of K intervals of a model with nx states and nv extra variables, with d
+    collocation states per interval (``collocation``), the last the next node (``merged``)."""
+    per = (0 if merged else nx) + (nx * d if collocation else 0) + 1
+    first = nx if merged else 0
+    starts = first + per * np.arange(K)
+    Xc = (starts[:, None, None] + per - 1 - nx * d + nx * np.arange(d)[:, None] + np.arange(nx)
+          if collocation else None)
+    X = (np.concatenate([np.arange(nx)[None, :], Xc[:, -1, :]]) if merged else
+         np.concatenate([starts[:, None] + np.arange(nx), K * per + np.arange(nx)[None, :]]))
+    end = K * per + nx  # the extra variables follow the interval blocks and one node's nx
+    return Layout(K, per, first, merged, X, Xc, starts + per - 1, list(range(end, end + nv)), end + nv)
+
+
+def variable_bounds(ocp: SpinupProblem, lay: Layout, ms: Mesh) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds of w: the initial state fixed, the control in [u_min, 1] on the horizon and 0 over the settling window
+    (the speed held), the speed bounds at the horizon's inner nodes, the extra variable's range."""
+    lbx, ubx = np.full(lay.size, -np.inf), np.full(lay.size, np.inf)
+    sp = ocp.speed_index
+    # speed bounds on the horizon only: at its end omega_final is imposed, and over the settling window
+    # the speed is held by the dynamics (a bound there would duplicate an equality: degenerate multipliers)
+    # and at the nodes only: with a piecewise-constant acceleration the speed is linear in each interval
+    # (exact in any collocation), so a bound at the collocation points would duplicate the node bounds
+    # (the last Radau point is the next node): on an arc held at the cap that fails LICQ
+    nlo, nhi = ocp.nu_bounds()
+    lbx[lay.X[1:ms.n, sp]], ubx[lay.X[1:ms.n, sp]] = nlo, nhi
+    lbx[lay.X[0]] = ubx[lay.X[0]] = ocp.q0
+    lbx[lay.u[:ms.n]], ubx[lay.u[:ms.n]] = ocp.u_min, 1.0
+    lbx[lay.u[ms.n:]] = ubx[lay.u[ms.n:]] = 0.0  # settling window: held speed
+    if lay.v:
+        lbx[lay.v[0]], ubx[lay.v[0]] = (0.0, 1.0) if ocp.free_time else (0.0, np.inf)
+    return lbx, ubx
+
+
+def control_step(ocp: SpinupProblem, ms: Mesh, v):
+    """The length (tau) of a control interval of the horizon: fixed, or v_0 tau_h / n when the time is free."""
+    return v[0] * ocp.tau_h / ms.n if ocp.free_time else ms.h
+
+
+def collocation_rows(ocp: SpinupProblem, method: DirectCollocation, w, v, lay: Layout, ms: Mesh, ref: float
+                     ) -> tuple[list, list, object, dict]:
+    """The collocation's rows: one SX Function per interval (:func:`interval_function`), mapped over the K intervals
+    (C++, no Python loop).  Returns the dynamics rows, each path constraint's rows, the quadrature and the
+    interval data (the Function, its mapped arguments, and each interval input's variable (-1: a constant) and
+    coefficient, for :func:`structured_derivatives`); ``v`` is w's extra variables."""
+    nx, d, K, per = ocp.nx, method.degree, lay.K, lay.per
+    W = ca.reshape(w[lay.first:lay.first + K * per], per, K)
+    last = W[per - 1 - nx:per - 1, :]  # the last collocation point
+    X0 = ca.horzcat(w[:nx], last[:, :-1]) if lay.merged else W[:nx, :]  # each interval's start and end node
+    Xn = last if lay.merged else ca.horzcat(W[:nx, 1:], w[K * per:K * per + nx])
+    hrow = ca.horzcat(*([ca.repmat(control_step(ocp, ms, v), 1, ms.n)] + ([ca.repmat(ms.hs, 1, ms.ns)] if ms.ns
+                                                                            else [])))
+    fi = interval_function(ocp, d, method.scheme, ref, continuity=not lay.merged)
+    args = [X0, W[per - 1 - nx * d:per - 1, :], W[per - 1, :], Xn, hrow, v]
+    out = fi.map(K)(*args)
+    cols = np.full((fi.nnz_in(), K), -1)
+    coefs = np.ones((fi.nnz_in(), K))
+    ih = 2 * nx + nx * d + 1  # where h sits among the interval's inputs
+    cols[:nx] = lay.X[:-1].T
+    cols[nx:nx + nx * d] = lay.Xc.reshape(K, -1).T
+    cols[nx + nx * d] = lay.u
+    cols[nx + nx * d + 1:ih] = lay.X[1:].T
+    if ocp.free_time:  # h = v_0 tau_h / n on the horizon
+        cols[ih, :ms.n], coefs[ih, :ms.n] = lay.v[0], ocp.tau_h / ms.n
+    cols[ih + 1:] = np.array(lay.v, int)[:, None]
+    intervals = {"function": fi, "args": args, "cols": cols, "coefs": coefs}
+    return [ca.vec(out[0])], [[ca.vec(o)] for o in out[1:-1]], ca.sum2(out[-1]), intervals
+
+
+def shooting_rows(ocp: SpinupProblem, method: MultipleShooting, w, U, v, lay: Layout, ms: Mesh,
+                  paths: list[PathConstraint]) -> tuple[list, list]:
+    """Multiple shooting's rows: CVODES over each interval (:func:`interval_integrator`), the continuity of the
+    node states and the path constraints at the integrator's outputs (the collocation instants).  Returns the
+    dynamics rows and each path constraint's rows; ``U`` and ``v`` are w's controls and extra variables."""
+    if ocp.objective == "integrated_deflection":
+        raise ValueError("multiple shooting supports the peak and min_time objectives (no quadrature)")
+    frac = path_fractions(method.degree, method.scheme)
+    nx, per = ocp.nx, lay.per
+    X = [w[k * per:k * per + nx] for k in range(lay.K + 1)]  # shooting: [X_k, u_k] per interval
+    F = interval_integrator(ocp.rhs(), tuple(frac), method.tol)
+    dynamics, path_rows = [], [[] for _ in paths]
+    for k in range(lay.K):
+        h = control_step(ocp, ms, v) if k < ms.n else ms.hs
+        out = F(x0=X[k], p=ca.vertcat(U[k] * ocp.a_max, h, *ocp.p))["xf"]
+        dynamics.append(X[k + 1] - out[:, -1])
+        for pc, r in zip(paths, path_rows, strict=True):
+            r += [pc.expr(qj, U[k] * ocp.a_max, v) for qj in ([X[k]] if pc.uses_control else [])
+                  + [out[:, j] for j in range(len(frac))]]
+    return dynamics, path_rows
+
+
+def jerk_rows(ocp: SpinupProblem, U, ms: Mesh, v) -> tuple[list, list]:
+    """The changes du of the control between the horizon's intervals (one vector expression, not n scalar ones: the
+    MX Hessian of a sum of n scalar nodes costs ~n^2 to build; the study's NLP build at N = 1600: 6.6 s,
+    benchmarks/spinup_ocp.md, "Study scaling with N") and the jerk limit's rows du / (the largest change)."""
+    du = [U[1:ms.n] - U[:ms.n - 1]] if ms.n > 1 else []
+    if ocp.jerk_max is None:
+        return du, []
+    step = ocp.jerk_max / ocp.alpha_max / ocp.Om * (ocp.tau_h / ms.n if not ocp.free_time else 1.0)
+    return du, [d / step for d in du] if not ocp.free_time else [d / (step * v[0] * ocp.tau_h / ms.n) for d in du]
+
+
+def stack(rows: dict, bounds: dict) -> tuple[list, np.ndarray, np.ndarray, list]:
+    """The constraint blocks in order: each named block's expression, the bounds of g and (name, rows of g)."""
+    g, lbg, ubg, blocks, start = [], [], [], [], 0
+    for name, r in rows.items():
+        if not r:
+            continue
+        e = ca.vertcat(*r)
+        n = e.numel()
+        g.append(e)
+        lbg.append(np.full(n, bounds[name][0]))
+        ubg.append(np.full(n, bounds[name][1]))
+        blocks.append((name, np.arange(start, start + n)))
+        start += n
+    return g, np.concatenate(lbg), np.concatenate(ubg), blocks
+
+
+def transcribe(ocp: SpinupProblem, method, ref: float, symbolic: str = "SX") -> Nlp:
+    """The NLP of ``ocp`` by ``method`` (DirectCollocation: :func:`collocation_rows`, or MultipleShooting:
+    :func:`shooting_rows`), the variables laid out by :func:`layout`.
 
     Parameters
     ----------
-    ocp : SpinupOcp
-        The declared problem.
+    ocp : SpinupProblem
+        The declared problem (:class:`autobal.ocp.protocol.SpinupProblem`).
     method : DirectCollocation or MultipleShooting
         The transcription.
     ref : float
@@ -195,136 +339,44 @@ def transcribe(ocp: SpinupOcp, method, ref: float, symbolic: str = "SX") -> Nlp:
     """
     collocation = isinstance(method, DirectCollocation)
     ms = mesh(ocp, method.intervals)
-    K = ms.n + ms.ns
-    d = method.degree
-    frac = path_fractions(d, method.scheme)
-    Sym = ca.MX if symbolic == "MX" or not collocation else ca.SX
-    nv, nx, sp = ocp.n_extra, ocp.nx, ocp.speed_index
-    # variables: per interval [X_k (nx), Xc_k (d*nx, collocation only), u_k], then X_K, then v.  When the
-    # last collocation point is the interval end (Radau) it is the next node: X_0, per interval [Xc_k, u_k],
-    # then v; the node states and their continuity equations drop out (a fifth of the KKT system and most
-    # of its zero-diagonal pairs: half the time per IPOPT iteration at N = 200, benchmarks/spinup_ocp.md)
-    merged = collocation and abs(collocation_data(d, method.scheme)[0][-1] - 1) < 1e-12
-    per = (0 if merged else nx) + (nx * d if collocation else 0) + 1
-    w = Sym.sym("w", K * per + nx + nv)
-    b0 = nx if merged else 0  # where the interval blocks start
-    starts = b0 + per * np.arange(K)
-    idx_Xc = (starts[:, None, None] + per - 1 - nx * d + nx * np.arange(d)[:, None] + np.arange(nx)
-              if collocation else None)
-    idx_X = (np.concatenate([np.arange(nx)[None, :], idx_Xc[:, -1, :]]) if merged else
-             np.concatenate([starts[:, None] + np.arange(nx), K * per + np.arange(nx)[None, :]]))
-    idx_u = starts + per - 1
-    idx_v = list(range(K * per + nx, K * per + nx + nv))
-    U = w[idx_u.tolist()]
-    v = w[K * per + nx:]
-
-    lbx, ubx = np.full(w.numel(), -np.inf), np.full(w.numel(), np.inf)
-    # speed bounds on the horizon only: at its end omega_final is imposed, and over the settling window
-    # the speed is held by the dynamics (a bound there would duplicate an equality: degenerate multipliers)
-    # and at the nodes only: with a piecewise-constant acceleration the speed is linear in each interval
-    # (exact in any collocation), so a bound at the collocation points would duplicate the node bounds
-    # (the last Radau point is the next node): on an arc held at the cap that fails LICQ
-    nlo, nhi = ocp.nu_bounds()
-    lbx[idx_X[1:ms.n, sp]], ubx[idx_X[1:ms.n, sp]] = nlo, nhi
-    lbx[idx_X[0]] = ubx[idx_X[0]] = ocp.q0
-    lbx[idx_u[:ms.n]], ubx[idx_u[:ms.n]] = ocp.u_min, 1.0
-    lbx[idx_u[ms.n:]] = ubx[idx_u[ms.n:]] = 0.0  # settling window: held speed
-    if nv:
-        lbx[idx_v[0]], ubx[idx_v[0]] = (0.0, 1.0) if ocp.free_time else (0.0, np.inf)
-
-    def h_of(k):
-        if k >= ms.n:
-            return ms.hs
-        return v[0] * ocp.tau_h / ms.n if ocp.free_time else ms.h
+    merged = collocation and abs(collocation_data(method.degree, method.scheme)[0][-1] - 1) < 1e-12
+    lay = layout(ocp.nx, ocp.n_extra, ms.n + ms.ns, method.degree, collocation, merged)
+    w = (ca.MX if symbolic == "MX" or not collocation else ca.SX).sym("w", lay.size)
+    U, v = w[lay.u.tolist()], w[lay.size - len(lay.v):]
+    lbx, ubx = variable_bounds(ocp, lay, ms)
 
     paths = ocp.path_constraints(ref)
-    rows: dict[str, list] = {"dynamics": []}
-    rows |= {pc.name: [] for pc in paths}
-    bounds: dict[str, tuple] = {pc.name: (pc.lb, pc.ub) for pc in paths}
-    quad = 0
-    if collocation:  # one SX Function per interval, mapped over the K intervals (C++, no Python loop)
-        W = ca.reshape(w[b0:b0 + K * per], per, K)
-        last = W[per - 1 - nx:per - 1, :]  # the last collocation point
-        X0 = ca.horzcat(w[:nx], last[:, :-1]) if merged else W[:nx, :]  # each interval's start and end node
-        Xn = last if merged else ca.horzcat(W[:nx, 1:], w[K * per:K * per + nx])
-        hn = v[0] * ocp.tau_h / ms.n if ocp.free_time else ms.h
-        hrow = ca.horzcat(*([ca.repmat(hn, 1, ms.n)] + ([ca.repmat(ms.hs, 1, ms.ns)] if ms.ns else [])))
-        fi = interval_function(ocp, d, method.scheme, ref, continuity=not merged)
-        args = [X0, W[per - 1 - nx * d:per - 1, :], W[per - 1, :], Xn, hrow, v]
-        out = fi.map(K)(*args)
-        # each interval input's variable (-1: a constant) and its coefficient (the interval length h is
-        # v_0 tau_h / n when the time is free)
-        cols = np.full((fi.nnz_in(), K), -1)
-        coefs = np.ones((fi.nnz_in(), K))
-        ih = 2 * nx + nx * d + 1  # where h sits among the interval's inputs
-        cols[:nx] = idx_X[:-1].T
-        cols[nx:nx + nx * d] = idx_Xc.reshape(K, -1).T
-        cols[nx + nx * d] = idx_u
-        cols[nx + nx * d + 1:ih] = idx_X[1:].T
-        if ocp.free_time:
-            cols[ih, :ms.n], coefs[ih, :ms.n] = idx_v[0], ocp.tau_h / ms.n
-        cols[ih + 1:] = np.array(idx_v, int)[:, None]
-        intervals = {"function": fi, "args": args, "cols": cols, "coefs": coefs}
-        rows["dynamics"].append(ca.vec(out[0]))
-        for pc, o in zip(paths, out[1:-1], strict=True):
-            rows[pc.name].append(ca.vec(o))
-        quad = ca.sum2(out[-1])
+    intervals, quad = None, 0
+    if collocation:
+        dynamics, path_rows, quad, intervals = collocation_rows(ocp, method, w, v, lay, ms, ref)
     else:
-        X = [w[k * per:k * per + nx] for k in range(K + 1)]  # shooting: [X_k, u_k] per interval
-        F = interval_integrator(ocp.rhs(), tuple(frac), method.tol)
-        for k in range(K):
-            h = h_of(k)
-            out = F(x0=X[k], p=ca.vertcat(U[k] * ocp.a_max, h, *ocp.p))["xf"]
-            rows["dynamics"].append(X[k + 1] - out[:, -1])
-            for pc in paths:
-                rows[pc.name] += [pc.expr(qj, U[k] * ocp.a_max, v) for qj in ([X[k]] if pc.uses_control else [])
-                                  + [out[:, j] for j in range(len(frac))]]
-        if ocp.objective == "integrated_deflection":
-            raise ValueError("multiple shooting supports the peak and min_time objectives (no quadrature)")
-    rows["final speed omega(T) = omega_final"] = [w[int(idx_X[ms.n, sp])] - ocp.nuf]
-    # one vector expression, not n scalar ones: the MX Hessian of a sum of n scalar nodes costs ~n^2 to build
-    # (the study's NLP build at N = 1600: 6.6 s; benchmarks/spinup_ocp.md, "Study scaling with N")
-    du = [U[1:ms.n] - U[:ms.n - 1]] if ms.n > 1 else []
+        dynamics, path_rows = shooting_rows(ocp, method, w, U, v, lay, ms, paths)
+    final = "final speed omega(T) = omega_final"
+    rows = {"dynamics": dynamics} | {pc.name: r for pc, r in zip(paths, path_rows, strict=True)}
+    rows[final] = [w[int(lay.X[ms.n, ocp.speed_index])] - ocp.nuf]
+    bounds = {pc.name: (pc.lb, pc.ub) for pc in paths} | {"dynamics": (0.0, 0.0), final: (0.0, 0.0)}
+    du, jerk = jerk_rows(ocp, U, ms, v)
     if ocp.jerk_max is not None:
         name = f"jerk limit |d alpha/dt| <= {ocp.jerk_max:g} rad/s^3"
-        step = ocp.jerk_max / ocp.alpha_max / ocp.Om * (ocp.tau_h / ms.n if not ocp.free_time else 1.0)
-        rows[name] = [d / step for d in du] if not ocp.free_time else [d / (step * v[0] * ocp.tau_h / ms.n)
-                                                                       for d in du]
-        bounds[name] = (-1.0, 1.0)
-    bounds["dynamics"] = (0.0, 0.0)
-    bounds["final speed omega(T) = omega_final"] = (0.0, 0.0)
+        rows[name], bounds[name] = jerk, (-1.0, 1.0)
+    g, lbg, ubg, blocks = stack(rows, bounds)
 
-    if not collocation:
-        intervals = None
-    g, lbg, ubg, blocks, start = [], [], [], [], 0
-    for name, r in rows.items():
-        if not r:
-            continue
-        e = ca.vertcat(*r)
-        n = e.numel()
-        g.append(e)
-        lbg.append(np.full(n, bounds[name][0]))
-        ubg.append(np.full(n, bounds[name][1]))
-        blocks.append((name, np.arange(start, start + n)))
-        start += n
-    if ocp.objective in ("peak_deflection", "peak_unbalance", "min_time"):
-        obj = v[0]
-    else:
-        obj = quad / ref
+    obj = v[0] if ocp.objective in ("peak_deflection", "peak_unbalance", "min_time") else quad / ref
     if du:
         obj = obj + jerk_regulariser(ocp, ca.vertcat(*du))
-    index = {"X": idx_X, "Xc": idx_Xc, "u": idx_u, "v": idx_v}
     if intervals is not None:  # g row of each interval output: the dynamics and path blocks come first
+        fi = intervals["function"]
         sizes = [fi.nnz_out(i) for i in range(fi.n_out() - 1)]
         first = [r[0] for _, r in blocks[:len(sizes)]]
-        intervals["rows"] = np.concatenate([a + n * np.arange(K)[None, :] + np.arange(n)[:, None]
+        intervals["rows"] = np.concatenate([a + n * np.arange(lay.K)[None, :] + np.arange(n)[:, None]
                                             for a, n in zip(first, sizes, strict=True)])
         intervals["tail"] = ca.vertcat(*g[len(sizes):])  # the rows outside the intervals
-    return Nlp(w, obj, ca.vertcat(*g), lbx, ubx, np.concatenate(lbg), np.concatenate(ubg), blocks, index, ms,
-               frac, method, ref, intervals)
+    index = {"X": lay.X, "Xc": lay.Xc, "u": lay.u, "v": lay.v}
+    return Nlp(w, obj, ca.vertcat(*g), lbx, ubx, lbg, ubg, blocks, index, ms,
+               path_fractions(method.degree, method.scheme), method, ref, intervals)
 
 
-def stage_function(ocp: SpinupOcp, d: int, scheme: str, ref: float, jerk: bool) -> ca.Function:
+def stage_function(ocp: SpinupProblem, d: int, scheme: str, ref: float, jerk: bool) -> ca.Function:
     """One stage of the stage form (:func:`transcribe_stages`) as an SX Function (x_k (nx), the collocation
     states (nx d), u_k, h, v_k, p_k, x_(k+1) (nx), v_(k+1), p_(k+1)) -> (the gap rows x_(k+1) - Z_d, v_(k+1) - v_k
     and, with ``jerk``, p_(k+1) - u_k; the collocation residuals; one column per path constraint; the speed
@@ -341,21 +393,80 @@ def stage_function(ocp: SpinupOcp, d: int, scheme: str, ref: float, jerk: bool) 
     return ca.Function("spinup_stage", [x0, xc, u, h, v, p, x1, v1, p1], [*rows, quad])
 
 
-def transcribe_stages(ocp: SpinupOcp, method: DirectCollocation, ref: float) -> Nlp:
+SPEED_ROWS = "speed: omega <= omega_max on the horizon, final speed omega(T) = omega_final"
+
+
+def stage_layout(nx: int, nv: int, jp: int, d: int, K: int) -> tuple[int, dict]:
+    """The variables of the stage form: stage k < K [X_k (nx), v_k (nv), p_k (jp), u_k, Xc_k (d nx)], then stage K
+    [X_K, v_K, p_K].  Returns the variables per stage k < K and the index of each ("X", "Xc", "u", "v", "v_copies"
+    (K+1, nv), "p" (K+1,) or None)."""
+    nxs = nx + nv + jp  # the states of a stage
+    per = nxs + 1 + nx * d
+    start = per * np.arange(K + 1)
+    idx_vc = start[:, None] + nx + np.arange(nv)
+    return per, {"X": start[:, None] + np.arange(nx), "Xc": start[:K, None, None] + nxs + 1 + nx * np.arange(d)[:, None]
+                 + np.arange(nx), "u": start[:K] + nxs, "v": list(idx_vc[0]), "v_copies": idx_vc,
+                 "p": start + nx + nv if jp else None}
+
+
+def stage_row_bounds(ocp: SpinupProblem, ms: Mesh, sizes: list, paths: list[PathConstraint]
+                     ) -> tuple[np.ndarray, np.ndarray, dict, np.ndarray]:
+    """Bounds of the stage form's rows (the K stages' rows of :func:`stage_function`, ``sizes`` rows per output, in
+    stage order): the gaps and collocation residuals 0, the path constraints', the speed bounded on the horizon's
+    inner nodes and omega_final at the deadline (when a settling window follows), the jerk limit on the horizon.
+    Returns lbg, ubg, the rows of each named block and the rows of each stage (rows per stage, K)."""
+    K, n = ms.n + ms.ns, ms.n
+    nrow = sum(sizes)
+    rows = np.arange(nrow)[:, None] + nrow * np.arange(K)[None, :]  # stage by stage
+    names = ["dynamics", "dynamics"] + [pc.name for pc in paths] + [SPEED_ROWS]
+    bounds = [(0.0, 0.0), (0.0, 0.0)] + [(pc.lb, pc.ub) for pc in paths] + [(-np.inf, np.inf)]
+    if ocp.jerk_max is not None:
+        names.append(f"jerk limit |d alpha/dt| <= {ocp.jerk_max:g} rad/s^3")
+        bounds.append((-np.inf, np.inf))
+    block = np.repeat(np.arange(len(sizes)), sizes)  # the output of each row of a stage
+    lo = np.repeat(np.array(bounds)[block, :1], K, axis=1)
+    hi = np.repeat(np.array(bounds)[block, 1:], K, axis=1)
+    speed = np.flatnonzero(block == names.index(SPEED_ROWS))[0]
+    lo[speed, 1:n], hi[speed, 1:n] = ocp.nu_bounds()
+    if ocp.jerk_max is not None:
+        lo[-1, 1:n], hi[-1, 1:n] = -1.0, 1.0
+    lo, hi = lo.ravel(order="F"), hi.ravel(order="F")
+    blocks = {name: rows[np.isin(block, [i for i, m in enumerate(names) if m == name])].ravel() for name in names}
+    if ms.ns:
+        lo[rows[speed, n]] = hi[rows[speed, n]] = ocp.nuf
+    return lo, hi, blocks, rows
+
+
+def stage_variable_bounds(ocp: SpinupProblem, size: int, index: dict, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds of the stage form's variables: X_0 fixed, u in [-1, 1] on the horizon and 0 after, the first previous
+    control 0, the extra variable's range (its copies free: the gap rows carry it)."""
+    lbx, ubx = np.full(size, -np.inf), np.full(size, np.inf)
+    idx_u, idx_vc = index["u"], index["v_copies"]
+    lbx[index["X"][0]] = ubx[index["X"][0]] = ocp.q0
+    lbx[idx_u[:n]], ubx[idx_u[:n]] = -1.0, 1.0
+    lbx[idx_u[n:]] = ubx[idx_u[n:]] = 0.0
+    if index["p"] is not None:
+        lbx[index["p"][0]] = ubx[index["p"][0]] = 0.0
+    if idx_vc.shape[1]:
+        lbx[idx_vc[0, 0]], ubx[idx_vc[0, 0]] = (0.0, 1.0) if ocp.free_time else (0.0, np.inf)
+    return lbx, ubx
+
+
+def transcribe_stages(ocp: SpinupProblem, method: DirectCollocation, ref: float) -> Nlp:
     """The collocation NLP of ``ocp`` in the stage form of a structure-exploiting solver (fatrop: Vanroye et
     al. (2023), a Riccati recursion over the stages, linear in their number).
 
     The same discrete problem as :func:`transcribe` (Radau points): stage k < K has the states
     x_k = [X_k (nx), v_k (the epigraph level or the time scale, one copy per stage), p_k (the previous control,
     when the objective or a limit uses the jerk)] and the controls [u_k, the collocation states (nx d)]; stage 0
-    has only controls (X_0 fixed by its bounds); stage K only its states.  Each stage's rows follow its gap
-    rows (x_(k+1) as the last collocation point, v and p carried): the collocation residuals, the path
-    constraints, the speed (the bounds on the horizon, omega_final at the deadline, free elsewhere) and the
-    jerk limit.  No row or Hessian entry couples two stages but through the gap rows, as fatrop requires.
+    has only controls (X_0 fixed by its bounds); stage K only its states (:func:`stage_layout`).  Each stage's rows
+    follow its gap rows (x_(k+1) as the last collocation point, v and p carried): the collocation residuals, the path
+    constraints, the speed and the jerk limit (:func:`stage_row_bounds`).  No row or Hessian entry couples two
+    stages but through the gap rows, as fatrop requires.
 
     Parameters
     ----------
-    ocp : SpinupOcp
+    ocp : SpinupProblem
         The declared problem.
     method : DirectCollocation
         Radau collocation (the last point is the interval end, the next stage's state).
@@ -374,16 +485,9 @@ def transcribe_stages(ocp: SpinupOcp, method: DirectCollocation, ref: float) -> 
     ms = mesh(ocp, method.intervals)
     K, n, d, nv, nx = ms.n + ms.ns, ms.n, method.degree, ocp.n_extra, ocp.nx
     jerk = n > 1 and bool(ocp.jerk_penalty or ocp.jerk_variation or ocp.jerk_max is not None)
-    jp = int(jerk)
-    nxs = nx + nv + jp  # the states of a stage
-    per = nxs + 1 + nx * d  # stage k < K: [X_k, v_k, p_k, u_k, Xc_k]; then stage K: [X_K, v_K, p_K]
+    nxs = nx + nv + int(jerk)  # the states of a stage
+    per, index = stage_layout(nx, nv, int(jerk), d, K)
     w = ca.MX.sym("w", K * per + nxs)
-    start = per * np.arange(K + 1)
-    idx_X = start[:, None] + np.arange(nx)
-    idx_vc = start[:, None] + nx + np.arange(nv)
-    idx_p = start + nx + nv if jerk else None
-    idx_u = start[:K] + nxs
-    idx_Xc = start[:K, None, None] + nxs + 1 + nx * np.arange(d)[:, None] + np.arange(nx)
     W = ca.reshape(w[:K * per], per, K)
     nxt = ca.horzcat(W[:nxs, 1:], w[K * per:])
     scale = ocp.tau_h / n  # h = v_0 tau_h / n on the horizon when the time is free
@@ -392,51 +496,20 @@ def transcribe_stages(ocp: SpinupOcp, method: DirectCollocation, ref: float) -> 
     out = fs.map(K)(W[:nx, :], W[nxs + 1:, :], W[nxs, :], hrow, W[nx:nx + nv, :], W[nx + nv:nxs, :], nxt[:nx, :],
                     nxt[nx:nx + nv, :], nxt[nx + nv:, :])
     sizes = [fs.nnz_out(i) for i in range(fs.n_out() - 1)]
-    nrow = sum(sizes)
-    rows = np.arange(nrow)[:, None] + nrow * np.arange(K)[None, :]  # stage by stage
     g = ca.vec(ca.vertcat(*out[:-1]))
-
-    paths = ocp.path_constraints(ref)
-    speed_name = "speed: omega <= omega_max on the horizon, final speed omega(T) = omega_final"
-    names = ["dynamics", "dynamics"] + [pc.name for pc in paths] + [speed_name]
-    bounds = [(0.0, 0.0), (0.0, 0.0)] + [(pc.lb, pc.ub) for pc in paths] + [(-np.inf, np.inf)]
-    if ocp.jerk_max is not None:
-        names.append(f"jerk limit |d alpha/dt| <= {ocp.jerk_max:g} rad/s^3")
-        bounds.append((-np.inf, np.inf))
-    block = np.repeat(np.arange(len(sizes)), sizes)  # the output of each row of a stage
-    lo = np.repeat(np.array(bounds)[block, :1], K, axis=1)
-    hi = np.repeat(np.array(bounds)[block, 1:], K, axis=1)
-    speed = np.flatnonzero(block == names.index(speed_name))[0]
-    lo[speed, 1:n], hi[speed, 1:n] = ocp.nu_bounds()
-    if ocp.jerk_max is not None:
-        lo[-1, 1:n], hi[-1, 1:n] = -1.0, 1.0
-    lo, hi = lo.ravel(order="F"), hi.ravel(order="F")
-    blocks = {name: rows[np.isin(block, [i for i, m in enumerate(names) if m == name])].ravel() for name in names}
-    if ms.ns:
-        lo[rows[speed, n]] = hi[rows[speed, n]] = ocp.nuf
-    else:  # the deadline is the last stage's: its one row
-        g = ca.vertcat(g, w[int(idx_X[K, ocp.speed_index])])
+    lo, hi, blocks, _ = stage_row_bounds(ocp, ms, sizes, ocp.path_constraints(ref))
+    if not ms.ns:  # the deadline is the last stage's: its one row
+        g = ca.vertcat(g, w[int(index["X"][K, ocp.speed_index])])
         lo, hi = np.append(lo, ocp.nuf), np.append(hi, ocp.nuf)
-        blocks[speed_name] = np.append(blocks[speed_name], g.numel() - 1)
+        blocks[SPEED_ROWS] = np.append(blocks[SPEED_ROWS], g.numel() - 1)
     blocks = [(name, np.sort(r)) for name, r in blocks.items()]
-
-    lbx, ubx = np.full(w.numel(), -np.inf), np.full(w.numel(), np.inf)
-    lbx[idx_X[0]] = ubx[idx_X[0]] = ocp.q0
-    lbx[idx_u[:n]], ubx[idx_u[:n]] = -1.0, 1.0
-    lbx[idx_u[n:]] = ubx[idx_u[n:]] = 0.0
+    lbx, ubx = stage_variable_bounds(ocp, w.numel(), index, n)
+    obj = w[int(index["v_copies"][0, 0])] if ocp.objective in ("peak_deflection", "peak_unbalance", "min_time") \
+        else ca.sum2(out[-1]) / ref
     if jerk:
-        lbx[idx_p[0]] = ubx[idx_p[0]] = 0.0
-    if nv:
-        lbx[idx_vc[0, 0]], ubx[idx_vc[0, 0]] = (0.0, 1.0) if ocp.free_time else (0.0, np.inf)
-    if ocp.objective in ("peak_deflection", "peak_unbalance", "min_time"):
-        obj = w[int(idx_vc[0, 0])]
-    else:
-        obj = ca.sum2(out[-1]) / ref
-    if jerk:
-        obj = obj + jerk_regulariser(ocp, w[idx_u[1:n].tolist()] - w[idx_p[1:n].tolist()])
-    index = {"X": idx_X, "Xc": idx_Xc, "u": idx_u, "v": list(idx_vc[0]), "v_copies": idx_vc, "p": idx_p}
+        obj = obj + jerk_regulariser(ocp, w[index["u"][1:n].tolist()] - w[index["p"][1:n].tolist()])
     stages = {"N": K, "nx": [0] + [nxs] * K, "nu": [nxs + 1 + nx * d] + [1 + nx * d] * (K - 1) + [0],
-              "ng": [nrow - nxs] * K + [0 if ms.ns else 1]}
+              "ng": [sum(sizes) - nxs] * K + [0 if ms.ns else 1]}
     return Nlp(w, obj, g, lbx, ubx, lo, hi, blocks, index, ms,
                path_fractions(d, method.scheme), method, ref, None, stages)
 
@@ -543,10 +616,46 @@ def _lagrange(nodes: np.ndarray, s: np.ndarray) -> np.ndarray:
     return L
 
 
+def coarse_interval(coarse: Nlp, t: np.ndarray) -> np.ndarray:
+    """The interval of the ``coarse`` mesh each time t (tau) falls in."""
+    tc0 = point_times(coarse)[0]
+    return np.clip(np.searchsorted(tc0, t, side="right") - 1, 0, len(tc0) - 2)
+
+
 def interpolate(coarse: Nlp, w: np.ndarray, lam_g: np.ndarray, lam_x: np.ndarray, fine: Nlp
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Primal and dual guess of the ``fine`` collocation NLP from a solution of the ``coarse`` one (same
-    problem, a finer mesh): the states by the coarse collocation polynomials, the controls held.
+    problem, a finer mesh): the states by the coarse collocation polynomials, the controls held
+    (:func:`interpolate_duals` for the multipliers; None, None for the stage form, which starts from the primal
+    guess)."""
+    d, scheme = coarse.method.degree, coarse.method.scheme
+    tau = collocation_data(d, scheme)[0]
+    tc0, hc, _ = point_times(coarse)
+    tf0, hf, tfc = point_times(fine)
+    Kf = len(hf)
+    Xc, Zc = w[coarse.index["X"]], w[coarse.index["Xc"]]
+    nx = Xc.shape[1]
+    nodes = np.concatenate([[0.0], tau])
+
+    def state_at(t):
+        k = coarse_interval(coarse, t)
+        Z = np.concatenate([Xc[k][:, None, :], Zc[k]], axis=1)  # (P, d+1, nx)
+        return np.einsum("pr,pri->pi", _lagrange(nodes, (t - tc0[k]) / hc[k]), Z)
+
+    wf = np.zeros(fine.x.numel())
+    wf[fine.index["X"]] = state_at(tf0)
+    wf[fine.index["X"][-1]] = Xc[-1]
+    wf[fine.index["Xc"]] = state_at(tfc.ravel()).reshape((Kf, d, nx))
+    kc = coarse_interval(coarse, tf0[:-1] + 0.5 * hf)
+    wf[fine.index["u"]] = w[coarse.index["u"]][kc]
+    wf[fine.index["v"]] = w[coarse.index["v"]]
+    if lam_g is None or coarse.stages or fine.stages:  # the stage form (fatrop) starts from the primal guess
+        return wf, None, None
+    return (wf, *interpolate_duals(coarse, lam_g, lam_x, fine))
+
+
+def interpolate_duals(coarse: Nlp, lam_g: np.ndarray, lam_x: np.ndarray, fine: Nlp) -> tuple[np.ndarray, np.ndarray]:
+    """The multipliers of the ``fine`` NLP from the ``coarse`` one's (:func:`interpolate`).
 
     The multipliers of the collocation equations are B_j p(t) (quadrature weight times the costate, the
     same on any mesh) and those of the continuity equations p(t): both interpolated in time; the path
@@ -556,32 +665,12 @@ def interpolate(coarse: Nlp, w: np.ndarray, lam_g: np.ndarray, lam_x: np.ndarray
     epigraph points) the barrier's central path lifts the peak level far above the optimum first
     (benchmarks/spinup_ocp.md)."""
     d, scheme = coarse.method.degree, coarse.method.scheme
-    tau, _, _, B = collocation_data(d, scheme)
+    B = collocation_data(d, scheme)[3]
     tc0, hc, tcc = point_times(coarse)
     tf0, hf, tfc = point_times(fine)
     Kc, Kf = len(hc), len(hf)
-    Xc, Zc = w[coarse.index["X"]], w[coarse.index["Xc"]]
-    nx = Xc.shape[1]
-    nodes = np.concatenate([[0.0], tau])
-
-    def interval(t):
-        return np.clip(np.searchsorted(tc0, t, side="right") - 1, 0, Kc - 1)
-
-    def state_at(t):
-        k = interval(t)
-        Z = np.concatenate([Xc[k][:, None, :], Zc[k]], axis=1)  # (P, d+1, nx)
-        return np.einsum("pr,pri->pi", _lagrange(nodes, (t - tc0[k]) / hc[k]), Z)
-
-    wf = np.zeros(fine.x.numel())
-    wf[fine.index["X"]] = state_at(tf0)
-    wf[fine.index["X"][-1]] = Xc[-1]
-    wf[fine.index["Xc"]] = state_at(tfc.ravel()).reshape((Kf, d, nx))
-    kc = interval(tf0[:-1] + 0.5 * hf)
-    wf[fine.index["u"]] = w[coarse.index["u"]][kc]
-    wf[fine.index["v"]] = w[coarse.index["v"]]
-
-    if lam_g is None or coarse.stages or fine.stages:  # the stage form (fatrop) starts from the primal guess
-        return wf, None, None
+    nx = coarse.index["X"].shape[1]
+    kc = coarse_interval(coarse, tf0[:-1] + 0.5 * hf)
 
     def block(nlp, name):
         return next((r for n, r in nlp.blocks if n == name), None)
@@ -614,4 +703,4 @@ def interpolate(coarse: Nlp, w: np.ndarray, lam_g: np.ndarray, lam_x: np.ndarray
     lx = np.zeros(fine.x.numel())
     lx[fine.index["X"][0]] = lam_x[coarse.index["X"][0]]
     lx[fine.index["u"]] = lam_x[coarse.index["u"]][kc] * hf / hc[kc]
-    return wf, lg, lx
+    return lg, lx

@@ -18,7 +18,7 @@ import autobal
 from autobal import report
 from autobal.analysis.quantities import significant
 from autobal.ocp import robust_study, spinup_study, time_optimal_study
-from autobal.ocp.modal import QUANTITIES as MODAL
+from autobal.ocp.modal_study import QUANTITIES as MODAL
 from autobal.ocp.solve import ipopt_options
 from tests.test_quantities import check_declared
 
@@ -197,7 +197,7 @@ def test_ross_api684_values_of_each_critical_speed():
     the run): in to_dict beside the critical speeds with their statuses, the final speed the optimum ends at; declared
     with the standard as the source."""
     from autobal.analysis.standards import HalfPower, margin_check
-    from autobal.ocp.modal import CriticalSpeeds, Margin
+    from autobal.ocp.modal_study import CriticalSpeeds, Margin
 
     margins = [margin_check(HalfPower(91.78, 91.8, 1.0, 90.5, 93.1, 91.8 / 2.6), 350.0),
                margin_check(HalfPower(270.99, status="no peak of its own"), 350.0)]

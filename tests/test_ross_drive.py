@@ -13,7 +13,7 @@ from autobal import api
 from autobal.analyses.ross_spinup import drive
 from autobal.errors import ScenarioError
 from autobal.models import ross_rotor as rr
-from autobal.ocp import modal
+from autobal.ocp import modal, modal_study
 from autobal.ocp.simulation import drive_use
 from autobal.ocp.solve import optimize
 from tests.test_ross_rotor import Ip, disk_rotor, needs_ross
@@ -41,7 +41,7 @@ def test_no_deceleration_keeps_the_speed_from_falling(free_and_no_braking):
     assert np.all(np.diff(held.trajectory.omega) >= -1e-9 * held.ocp.omega_final)
     # a bound can only cost: the held optimum peaks no lower than the free one (to the re-simulation's accuracy)
     assert held.trajectory.peak >= free.trajectory.peak * (1 - 1e-4)
-    for _, u in modal.starts(held.ocp, held.ocp.intervals):  # the four-phase search draws within the limit
+    for _, u in held.ocp.starts(held.ocp.intervals):  # the four-phase search draws within the limit
         assert u.min() >= -1e-12
 
 
@@ -70,9 +70,7 @@ def test_power_limit_binds_and_the_gain_is_quoted_against_a_feasible_ramp():
         base = modal.baselines(ocp)
         use = {k: drive_use(ocp, v) for k, v in base.items()}
         assert use["max_acceleration_ramp"]["violated"] == ["power limit"]
-        res = modal.run(ocp.rotor, {k: getattr(ocp, k) for k in (
-            "omega_start", "omega_final", "horizon", "alpha_max", "nodes", "settling_time", "omega_max", "intervals",
-            "drive_inertia", "power_max")}, "t", None, {"max_iter": 300})
+        res = modal_study.run(ocp, "t", None, {"max_iter": 300})
         d = res.to_dict()
         assert d["within_drive_limits"] and d["max_power_W"] <= power * (1 + 1e-3)
         assert d["max_power_W"] >= 0.9 * power  # the limit binds

@@ -16,7 +16,7 @@ from numpy.testing import assert_allclose
 from autobal import cli, scenario
 from autobal.errors import ScenarioError
 from autobal.models import ross_rotor as rr
-from autobal.ocp import modal
+from autobal.ocp import modal, modal_search
 from autobal.ocp import robust as rb
 from autobal.ocp.simulation import ramp_profile, simulate_profile
 from autobal.ocp.solve import TIE, Solver, optimize
@@ -108,7 +108,7 @@ def test_modal_starts_solved_coarse_and_the_best_refined(small_ocp):
     (each start's screened profile repeated onto the 100), re-simulates every coarse optimum, refines the best (ties
     within TIE to the earlier start) and re-simulates the refined optimum, no worse than the coarse one."""
     ocp = small_ocp.on_intervals(100)
-    labels, profiles = zip(*modal.starts(ocp, 100), strict=True)
+    labels, profiles = zip(*ocp.starts(100), strict=True)
     assert all(u.size == 100 and np.array_equal(u[0::2], u[1::2]) for u in profiles)
     opt = optimize(ocp, ocp.method, options={"max_iter": 300})
     coarse = [r for r in opt.starts if r.get("stage") == "coarse (50 intervals)"]
@@ -166,8 +166,8 @@ def test_screening_integrator_matches_the_resimulation(small_ocp):
     """The fixed-step Runge-Kutta screening of the envelope (taken from the same CasADi equation) gives the
     re-simulated (CVODES, fixed frame) peak of two profiles within 0.5 %."""
     n, ns = small_ocp.intervals, small_ocp.settling_intervals
-    for u in (ramp_profile(small_ocp, n, 70.0), modal.phase_profiles(small_ocp, 80.0, -1.0, 0.1, 120.0)[0]):
-        fast = modal.screen(small_ocp, u[None, :])[0]
+    for u in (ramp_profile(small_ocp, n, 70.0), modal_search.phase_profiles(small_ocp, 80.0, -1.0, 0.1, 120.0)[0]):
+        fast = modal_search.screen(small_ocp, u[None, :])[0]
         slow = modal.resimulate(small_ocp, np.concatenate([u, np.zeros(ns)]), None, "p").peak
         assert_allclose(fast, slow, rtol=5e-3)
         assert u.size == n
@@ -176,7 +176,7 @@ def test_screening_integrator_matches_the_resimulation(small_ocp):
 def test_phase_profiles_reach_the_final_speed_at_the_deadline(small_ocp):
     """Four-phase profiles keep |alpha| <= alpha_max, pass through w1 and arrive at omega_final by the deadline
     (w3 < omega_final: exactly at it)."""
-    u = modal.phase_profiles(small_ocp, [70.0, 90.0], [-1.0, 0.5], [0.1, 0.2], [120.0, 150.0])
+    u = modal_search.phase_profiles(small_ocp, [70.0, 90.0], [-1.0, 0.5], [0.1, 0.2], [120.0, 150.0])
     w = small_ocp.omega_start + np.cumsum(u * small_ocp.alpha_max * small_ocp.h, axis=1)
     assert np.all(np.abs(u) <= 1 + 1e-12)
     assert_allclose(w[:, -1], 150.0, rtol=1e-12)
@@ -188,8 +188,8 @@ def test_no_search_when_the_horizon_leaves_no_time(small_ocp):
     """With alpha_max x horizon exactly the speed change there is no room for a middle phase: the starts are
     the two ramps."""
     tight = modal.ModalSpinupOcp(small_ocp.rotor, 50.0, 150.0, 1.0, 100.0, (0,), intervals=20)
-    assert modal.grid_search(tight).evaluated == 0
-    assert [lab for lab, _ in modal.starts(tight, tight.intervals)] == ["constant ramp", "maximum-acceleration ramp"]
+    assert modal_search.grid_search(tight).evaluated == 0
+    assert [lab for lab, _ in tight.starts(tight.intervals)] == ["constant ramp", "maximum-acceleration ramp"]
 
 
 def test_missing_ross_names_the_extra(monkeypatch):

@@ -13,7 +13,7 @@ from autobal import scenario
 from autobal.analyses import ross_spinup_robust as analysis
 from autobal.analysis.quantities import display_units
 from autobal.models import ross_rotor as rr
-from autobal.ocp import modal
+from autobal.ocp import modal, modal_search
 from autobal.ocp import robust as rb
 from autobal.ocp.robust_study import QUANTITIES, peak_text
 from tests.test_quantities import check_declared
@@ -41,7 +41,7 @@ def test_a_coarse_profile_has_the_peaks_of_the_same_profile_on_the_full_mesh():
     screening within its 0.5 %, CVODES within the sampling of the peak)."""
     red = rr.reduce(disk_rotor(), [rr.Unbalance(0, 1e-4)], omega_final=150.0, cutoff=1.5)
     ocp = modal.ModalSpinupOcp(red, 50.0, 150.0, 1.5, 100.0, (0,), settling_time=0.3, omega_max=150.0, intervals=30)
-    coarse = modal.phase_profiles(ocp.on_intervals(15), 80.0, -1.0, 0.2, 120.0)[0]
+    coarse = modal_search.phase_profiles(ocp.on_intervals(15), 80.0, -1.0, 0.2, 120.0)[0]
     fine = np.repeat(coarse, 2)
     fast = np.array([rb.fast_peaks(ocp, np.ones((1, 3)), [rb.Profile(k, v)])[0, 0] for k, v in (("c", coarse),
                                                                                                 ("f", fine))])

@@ -15,7 +15,7 @@ from autobal.models import ross_rotor as rr
 from autobal.ocp import modal
 from autobal.ocp import time_optimal as to
 from autobal.ocp.simulation import ramp_profile, simulate_profile
-from autobal.ocp.solve import Solver, model_of
+from autobal.ocp.solve import Solver
 from autobal.ocp.time_optimal_study import QUANTITIES, peak_text
 from tests.test_quantities import check_declared
 from tests.test_ross_rotor import disk_rotor, needs_ross
@@ -42,7 +42,7 @@ def test_the_modal_min_time_problem_is_the_shared_transcriptions():
     assert sol.objective == pytest.approx(sol.final_time_s, rel=1e-9)
     assert 0.2 < sol.final_time_s < ocp.horizon
     assert sol.peak_collocation == pytest.approx(lim, rel=1e-6)  # the limit binds
-    tr = model_of(ocp).resimulate(ocp, sol.u, sol.h, "min_time")
+    tr = ocp.resimulate(sol.u, sol.h, "min_time")
     assert_allclose(tr.peak, lim, rtol=1e-2)
     assert tr.omega[-1] == pytest.approx(80.0, rel=1e-9)
     with pytest.raises(ValueError, match="min_time objective needs a deflection_limit"):

@@ -169,21 +169,21 @@ def test_the_scene_grade_is_the_standard_eccentricity():
 @pytest.mark.extra("ross")
 def test_multi_mode_af_against_ross_unbalance_response():
     """The shipped ROSS rotor (spinup_ross_rotor): each critical speed's AF read off the reduced model's steady response
-    at the nodes of interest (autobal.ocp.modal.api_readings) against an independent reading of ROSS's own
+    at the nodes of interest (autobal.ocp.modal_study.api_readings) against an independent reading of ROSS's own
     run_unbalance_response of the full 42-dof model (the orbit's major half-axis at the same nodes, the largest, on a
     grid around each peak, the half-power points by linear interpolation), within 3 %.  The third critical speed
     (271 rad/s, the split pair of the anisotropic bearings) has no peak of its own there: no AF."""
     from autobal import scenario
     from autobal.analyses.ross_spinup import problem
     from autobal.models import ross_rotor as rr
-    from autobal.ocp import modal
+    from autobal.ocp import modal_study
     from autobal.parts import ross_rotor as part
 
     scn = scenario.load("spinup_ross_rotor")
     settings = scn.analyses.ross_spinup
     ocp = problem(scn, settings)
     cs = ocp.rotor.critical_speeds(ocp.omega_final)
-    mine = modal.api_readings(ocp, cs)
+    mine = modal_study.api_readings(ocp, cs)
     assert [r.factor is None for r in mine] == [False, False, True, False]
     assert "no peak of its own" in mine[2].status
     # the numbers docs/ross_rotor.md quotes: AF 35.15, 50.92, none, 8.582 against 1/(2 zeta) 38.2, 51.9, 8.34, 9.88;

@@ -245,7 +245,7 @@ def test_ross_spinup_round_trip_and_report(shipped_run):
     """The shipped ROSS spin-up (modal rotor): a ModalSpinupResult whose API 684 margins keep margin_check's
     statuses where it puts them, its own nulls' statuses made; the round trip, load_run and the report byte for
     byte."""
-    from autobal.ocp.modal import ModalSpinupResult
+    from autobal.ocp.modal_study import ModalSpinupResult
 
     run, folder = shipped_run("spinup_ross_rotor")
     res = run["ross_spinup"]

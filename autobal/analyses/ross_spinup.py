@@ -1,5 +1,5 @@
 """``analyses.ross_spinup``: the minimum-peak spin-up of a ROSS rotor reduced to its modes, through two or more
-critical speeds (:mod:`autobal.ocp.modal`), with the reduced model's critical speeds checked against ROSS's own.
+critical speeds (:mod:`autobal.ocp.modal_study`), with the reduced model's critical speeds checked against ROSS's own.
 
 Needs the optional ROSS package (``pip install -e '.[ross]'``); a scene naming it without the package
 installed exits 2 with one line naming the extra.
@@ -21,7 +21,7 @@ from autobal.units import AngularAcceleration, AngularSpeed, SpeedOrZero, Time, 
 DESCRIPTION = "optimal spin-up of a ROSS rotor reduced to its modes (the ross extra)"
 NEEDS = "ross_rotor"
 EXTRA = "ross"  # the optional package it needs (autobal.analyses.EXTRAS)
-QUANTITIES_MODULE = "autobal.ocp.modal"  # its QUANTITIES declare every number of its block
+QUANTITIES_MODULE = "autobal.ocp.modal_study"  # its QUANTITIES declare every number of its block
 TITLE = "Optimal spin-up of a ROSS rotor (multi-mode)"  # of its section of report.html
 
 
@@ -66,7 +66,8 @@ def run(scene, settings: RossSpinup):
     model's critical speeds checked against ROSS's own (needs the ross extra)."""
     from autobal.analysis import progress, solver_options
     from autobal.models import ross_rotor as rr
-    from autobal.ocp import modal
+    from autobal.ocp import modal_study
+    from autobal.ocp.modal import ModalSpinupOcp
     from autobal.parts.ross_rotor import adapt
 
     spec, unbalances = adapt(scene.ross_rotor)
@@ -79,7 +80,8 @@ def run(scene, settings: RossSpinup):
           "degree": settings.degree, **drive(scene)}
     try:
         with progress.steps(None, "multi-mode spin-up (starts)", "IPOPT solve", catch=True):
-            return modal.run(reduced, kw, scene.title, ross_cs, solver_options.ipopt_options(settings.max_iterations))
+            return modal_study.run(ModalSpinupOcp(reduced, **kw), scene.title, ross_cs,
+                                   solver_options.ipopt_options(settings.max_iterations))
     except ValueError as exc:
         raise ScenarioError(f"analyses.ross_spinup: {exc}") from None
 
@@ -154,7 +156,7 @@ def estimate_seconds(settings: RossSpinup) -> float:
 def report_section(sec) -> None:
     """Optimal spin-up of a ROSS rotor reduced to its modes: the optimum's peak against the best ramp (the verdict),
     the reduction checked against ROSS, the API 684 (2005) margins of each critical speed.  Reads the fields of the
-    loaded :class:`~autobal.ocp.modal.ModalSpinupResult` (``sec.result``)."""
+    loaded :class:`~autobal.ocp.modal_study.ModalSpinupResult` (``sec.result``)."""
     from autobal.analyses.spinup import declared_cell
     from autobal.analysis.quantities import convert
     from autobal.analysis.standards import margin_words
