@@ -465,21 +465,27 @@ def resimulated_scores(ocp: SpinupOcp, sol: SpinupSolution, tr: Trajectory) -> t
     return tr.peak, sol.peak_collocation
 
 
-def refine(ocp: SpinupOcp, method, coarse: Solver, sol: SpinupSolution, options: dict | None, rows: list
-           ) -> tuple[Solver, SpinupSolution]:
+def refine(ocp: SpinupOcp, method, coarse: Solver, sol: SpinupSolution, options: dict | None, rows: list,
+           built: dict | None = None) -> tuple[Solver, SpinupSolution]:
     """Mesh continuation from the coarse optimum ``sol`` to ``method``'s mesh by doubling the intervals;
     each stage starts from the previous optimum and its multipliers (:func:`interpolate`) with a small
-    barrier parameter.  Returns the finest stage's solver and solution (a failed last stage raises)."""
+    barrier parameter.  Returns the finest stage's solver and solution (a failed last stage raises).  ``built``: the
+    stages' solvers by intervals, kept across the refinements of one study (a stage built before has no build
+    time in its row)."""
     prev, n = coarse, coarse.nlp.mesh.n
+    built = {} if built is None else built
     while n < method.intervals:
         n *= 2
-        stage = Solver(ocp, dataclasses.replace(method, intervals=n), prev.nlp.ref, options, warm=True)
+        new = n not in built
+        if new:
+            built[n] = Solver(ocp, dataclasses.replace(method, intervals=n), prev.nlp.ref, options, warm=True)
+        stage = built[n]
         w0, lg0, lx0 = interpolate(prev.nlp, sol.w, sol.lam_g, sol.lam_x, stage.nlp)
         last = n >= method.intervals
         sol = stage.solve(w0=w0, lam_g0=lg0, lam_x0=lx0, raise_on_failure=last)
         rows.append({"start": "mesh continuation", "stage": f"{n} intervals", "status": sol.status,
                      "success": sol.success, "iterations": sol.iterations, "solve_time_s": sol.solve_time_s,
-                     "build_time_s": stage.build_time_s})
+                     "build_time_s": stage.build_time_s if new else 0.0})
         prev = stage
     return prev, sol
 
@@ -559,7 +565,7 @@ def optimize(ocp, method, multistart: bool = True, options: dict | None = None) 
             if sc.success:
                 found.append((label, sc, rows[-1]))
         start_list = []
-        refined, fell = [], False  # the coarse profiles refined; whether the last refinement fell back
+        refined, fell, built = [], False, {}  # coarse profiles refined; the last refinement fell back; stages
         while found and len(refined) < REFINED:  # the best coarse optimum, then the close basins and fall-backs
             clock = time.perf_counter()
             i, scores = model.rank_coarse(ocp, [f[:2] for f in found], nc)
@@ -574,7 +580,7 @@ def optimize(ocp, method, multistart: bool = True, options: dict | None = None) 
                 continue
             refined.append(sc.u[:nc])
             try:
-                stage, sol = refine(ocp, method, coarse, sc, options, rows)
+                stage, sol = refine(ocp, method, coarse, sc, options, rows, built)
                 solved.append((f"{label}, refined from {nc} intervals", sol))
                 solver = solver or stage
             except SolveError as exc:
