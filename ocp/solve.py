@@ -410,9 +410,15 @@ def fell_back(ocp, coarse_u: np.ndarray, fine_u: np.ndarray) -> bool:
     coarse collocation keeps the drive limits at its points only, so its profile may promise a peak the fine mesh
     cannot keep: on a torque-limited rotor without braking (benchmarks/spinup_family.py, ``torque_no_brake``) the
     coarse winner re-simulated at 11.41 e and refined to 11.98 e in 381 + 914 iterations."""
-    if ocp.objective != "peak_deflection" or type(ocp) is not SpinupOcp or horizon_steps(ocp) > SEARCH_STEPS:
+    if not fast_judged(ocp):
         return False
     return profile_peak(ocp, fine_u) > profile_peak(ocp, coarse_u) * (1 + FALLBACK)
+
+
+def fast_judged(ocp) -> bool:
+    """Whether the exponential integrator judges the problem's profiles in the search policy (:func:`fell_back`,
+    :func:`another_basin`, :func:`moved`): the Jeffcott rotor's peak deflection over at most SEARCH_STEPS steps."""
+    return ocp.objective == "peak_deflection" and type(ocp) is SpinupOcp and horizon_steps(ocp) <= SEARCH_STEPS
 
 
 REFINED = 3  # coarse optima refined at most
@@ -427,8 +433,7 @@ def another_basin(ocp, refined: list, coarse_u: np.ndarray, spread: float) -> bo
     that is more than FALLBACK: the coarse ranking is trusted to that much.  On the liquid balancer the refinement
     moves 2.8 % and the third coarse optimum (0.33 % above the best) refines to 4.98965 e, the best two to 4.99276
     and 5.00248 e; on the Jeffcott deadline scene it moves 1e-6, on damped_issue35 0.7 % (docs/dev/spinup.md)."""
-    if not refined or ocp.objective != "peak_deflection" or type(ocp) is not SpinupOcp or \
-            horizon_steps(ocp) > SEARCH_STEPS:
+    if not refined or not fast_judged(ocp):
         return False
     rotor = FixedFrameModes.of(ocp)
     pk, done = profile_peak(ocp, coarse_u, rotor=rotor), [profile_peak(ocp, u, rotor=rotor) for u in refined]
@@ -440,7 +445,7 @@ def another_basin(ocp, refined: list, coarse_u: np.ndarray, spread: float) -> bo
 def moved(ocp, coarse_u: np.ndarray, fine_u: np.ndarray) -> float:
     """How far (relative) a mesh continuation moved from its coarse profile, both by the exponential integrator (the
     Jeffcott rotor's peak deflection only; another problem: 0)."""
-    if ocp.objective != "peak_deflection" or type(ocp) is not SpinupOcp or horizon_steps(ocp) > SEARCH_STEPS:
+    if not fast_judged(ocp):
         return 0.0
     return abs(profile_peak(ocp, fine_u) / profile_peak(ocp, coarse_u) - 1)
 
