@@ -581,6 +581,8 @@ def optimize(ocp, method, multistart: bool = True, options: dict | None = None) 
         start_list = []
         refined, fell, built, spread = [], False, {}, 0.0  # coarse profiles refined; the last fell back; stages
         while found and len(refined) < REFINED:  # the best coarse optimum, then the close basins and fall-backs
+            if refined and not fell and not spread:  # one refinement that kept to its coarse profile: done
+                break
             clock = time.perf_counter()
             i, scores = model.rank_coarse(ocp, [f[:2] for f in found], nc)
             for j, score in scores.items():
