@@ -15,16 +15,16 @@ __all__ = ["AutobalError", "DeviceParams", "DynamicData", "LiquidLayer", "Result
            "run", "set_solver_defaults", "solver_defaults", "using_solver_defaults"]
 
 _WHERE = {"load": "autobal.api", "run": "autobal.api", "load_run": "autobal.api",
-          "Run": "autobal.api", "Result": "autobal.analysis.result",
+          "Run": "autobal.api", "Result": "autobal.analysis.run.result",
           "Scenario": "autobal.scenario", "AutobalError": "autobal.errors", "ScenarioError": "autobal.errors",
           "SolveError": "autobal.errors", "DeviceParams": "autobal.models.device",
           "DynamicData": "autobal.models.dynamics", "RotorParams": "autobal.models.rotor",
-          "LiquidLayer": "autobal.models.rotor", "display_units": "autobal.analysis.quantities",
+          "LiquidLayer": "autobal.models.rotor", "display_units": "autobal.analysis.run.quantities",
           # module:name where the front door's name is not the module's
-          "solver_defaults": "autobal.analysis.solver_options:get",
-          "set_solver_defaults": "autobal.analysis.solver_options:set_defaults",
-          "reset_solver_defaults": "autobal.analysis.solver_options:reset_defaults",
-          "using_solver_defaults": "autobal.analysis.solver_options:using"}
+          "solver_defaults": "autobal.analysis.run.solver_options:get",
+          "set_solver_defaults": "autobal.analysis.run.solver_options:set_defaults",
+          "reset_solver_defaults": "autobal.analysis.run.solver_options:reset_defaults",
+          "using_solver_defaults": "autobal.analysis.run.solver_options:using"}
 
 
 def __getattr__(name: str):

@@ -23,9 +23,9 @@ from pathlib import Path
 from threadpoolctl import threadpool_limits
 
 from autobal import __version__, analyses, report, scenario
-from autobal.analysis import executor, interrupt
-from autobal.analysis.quantities import display_units
-from autobal.analysis.result import Result, html_figure, write_json
+from autobal.analysis.run import executor, interrupt
+from autobal.analysis.run.quantities import display_units
+from autobal.analysis.run.result import Result, html_figure, write_json
 from autobal.errors import AutobalError, SolveError
 from autobal.output import LOG, OutputFolder, SolverLog, signals_held
 from autobal.scenario import BaseScenario as Scenario  # every scene model (see scenario.model_for)
@@ -59,7 +59,7 @@ def load(name_or_path: str | Path, set: dict | None = None) -> Scenario:  # noqa
 
 
 class Run(Mapping):
-    """The results of one run of a scene: analysis name -> :class:`~autobal.analysis.result.Result`.
+    """The results of one run of a scene: analysis name -> :class:`~autobal.analysis.run.result.Result`.
 
     ``timing`` holds the wall time of each analysis, s; ``meta`` the version, time, platform and the
     resolved scene.

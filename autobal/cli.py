@@ -83,7 +83,7 @@ def _overrides(pairs: list[str]) -> dict:
 def _units(given: list[str]) -> dict[str, str]:
     """``--units KIND=UNIT[,KIND=UNIT...]`` (repeatable) -> kind -> display unit, spelled as the conversion
     table spells it; ScenarioError with one line naming the pair and the units of its kind."""
-    from autobal.analysis.quantities import KINDS, unit_of_kind
+    from autobal.analysis.run.quantities import KINDS, unit_of_kind
 
     out = {}
     for pair in (p.strip() for item in given for p in item.split(",")):
@@ -139,7 +139,7 @@ def _accuracy(args, scn) -> int:
     """Work-precision of every analysis of the scene that has a provider: figure, CSV, summary; into
     ``out/NAME-accuracy`` unless ``--out`` (never the run's folder), interrupted.json on an interrupt."""
     from autobal import analyses, api
-    from autobal.analysis.quantities import display_units
+    from autobal.analysis.run.quantities import display_units
 
     studies = {name: analyses.module(name).accuracy for name in analyses.named(scn)
                if hasattr(analyses.module(name), "accuracy")}
@@ -153,7 +153,7 @@ def _accuracy(args, scn) -> int:
 
 def _write_accuracy(args, scn, studies: dict, out: Path) -> int:
     from autobal import api
-    from autobal.analysis.result import write_json
+    from autobal.analysis.run.result import write_json
     from autobal.output import LOG, OutputFolder, SolverLog, signals_held
 
     folder = OutputFolder(out)
@@ -320,8 +320,8 @@ def _end(previous: dict) -> None:
     except OSError as exc:
         _stdout["lost"] = _stdout["lost"] or exc
         _quiet_stdout()
-    if "autobal.analysis.progress" in sys.modules:
-        sys.modules["autobal.analysis.progress"].set_quiet(False)
+    if "autobal.analysis.run.progress" in sys.modules:
+        sys.modules["autobal.analysis.run.progress"].set_quiet(False)
     for sig, handler in previous.items():
         signal.signal(sig, handler)
 
@@ -337,7 +337,7 @@ def _extras_note(scn) -> str:
 
 def _main(args) -> int:
     from autobal import analyses, scenario, units
-    from autobal.analysis import progress
+    from autobal.analysis.run import progress
     from autobal.schema import quantities
 
     if args.cmd == "list":

@@ -5,24 +5,25 @@ bounds the parameter's declaration gives; every change re-solves the scene's dev
 the same models and solvers the batch run uses:
 
 - statics: the Newton solve of the device's balances with every dimensionless group as a parameter
-  (:class:`autobal.analysis.statics.ParametricStatics`, the batch solver of sweeps and Monte Carlo), warm-started
-  from the previous point; on release of a slider IPOPT (:class:`~autobal.analysis.statics.StaticsSolver`, what
-  ``autobal run`` solves) cross-checks it, and its answer is shown where it differs;
+  (:class:`autobal.analysis.numerics.statics.ParametricStatics`, the batch solver of sweeps and Monte Carlo),
+  warm-started from the previous point; on release of a slider IPOPT
+  (:class:`~autobal.analysis.numerics.statics.StaticsSolver`, what ``autobal run`` solves) cross-checks it, and its
+  answer is shown where it differs;
 - dynamics: the exact Jacobians of the nonlinear model (:func:`autobal.models.dynamics.build`) built once with the
   groups and scales as symbols, so a change is one call of the Jacobian Function, not a rebuild; poles and
-  verdict by :func:`autobal.analysis.stability.verdict`; the AFC on the grid of :func:`autobal.analysis.frequency.grid`
-  from one eigen-decomposition, H(jw) = C V (jw - Lambda)^-1 V^-1 B, its peaks refined by
-  :func:`autobal.analysis.frequency.peaks`, as the batch run refines them.
+  verdict by :func:`autobal.analysis.numerics.stability.verdict`; the AFC on the grid of
+  :func:`autobal.analysis.numerics.frequency.grid` from one eigen-decomposition, H(jw) = C V (jw - Lambda)^-1 V^-1 B,
+  its peaks refined by :func:`autobal.analysis.numerics.frequency.peaks`, as the batch run refines them.
 
 A device-statics scene (``analyses.statics``, no ``device.dynamics``) gets the device's sliders and the statics
 study's answers: the operating point, the critical discharge pressure p1_kr and barrier margin dp_kr (Q_1 = 0, by
 Newton on the same balances with the pressure as an unknown), the static characteristic over the scene's grid (the
 parametric Newton roots, every stop set) and the study's verdict
-(:func:`autobal.analysis.statics_study.verdict`).
+(:func:`autobal.analysis.studies.statics_study.verdict`).
 
 A spin-up scene (``analyses.spinup``) gets the rotor's sliders: its critical speed with the API 684 AF and SM
-(:func:`autobal.analysis.rotor_study.api_margins`, as the spin-up study), the current optimum's speed profile and the
-constant ramps (``baselines``) re-simulated for the changed rotor by its exact linear response
+(:func:`autobal.analysis.studies.rotor_study.api_margins`, as the spin-up study), the current optimum's speed profile
+and the constant ramps (``baselines``) re-simulated for the changed rotor by its exact linear response
 (:mod:`autobal.ocp.linear_response`; CVODES, :func:`autobal.ocp.simulation.resimulate`, the cross-check once the
 sliders rest), and "re-optimise" (the batch run's optimisation, in a thread).
 
@@ -49,11 +50,11 @@ import numpy as np
 import yaml
 
 from autobal import scenario
-from autobal.analysis import frequency as fr
-from autobal.analysis import solver_options
-from autobal.analysis import stability as st
-from autobal.analysis.linearize import LinearModel
-from autobal.analysis.statics import RESIDUAL_TOL, ParametricStatics, StaticsSolver, ideal_guess
+from autobal.analysis.numerics import frequency as fr
+from autobal.analysis.numerics import stability as st
+from autobal.analysis.numerics.linearize import LinearModel
+from autobal.analysis.numerics.statics import RESIDUAL_TOL, ParametricStatics, StaticsSolver, ideal_guess
+from autobal.analysis.run import solver_options
 from autobal.errors import AutobalError, ScenarioError, SolveError
 from autobal.models import device as dv
 from autobal.models.dynamics import build
@@ -422,7 +423,8 @@ class DeviceExplorer(DeviceSettings):
         return out
 
     def _dynamics(self, lin: LinearModel, data) -> dict:
-        """Verdict (:func:`analysis.stability.verdict`) and the AFC of the face gap under the physical forcing."""
+        """Verdict (:func:`analysis.numerics.stability.verdict`) and the AFC of the face gap under the physical
+        forcing."""
         v = st.verdict(lin, hurwitz=False)
         decay = v["margin"]["decay_rate"]
         ok = bool(v["stable"]) and decay >= self.required_decay
@@ -446,7 +448,7 @@ class StaticsExplorer(DeviceSettings):
     """The what-if computation of a device-statics scene (``analyses.statics``): the operating point, the critical
     discharge pressure p1_kr and barrier margin dp_kr (the inner-seal flow q1 = 0, as the statics study's
     ``critical_exact``), the static characteristic over the scene's discharge ratios and the study's verdict
-    (:func:`autobal.analysis.statics_study.verdict`), all by Newton's roots of the parametric balances
+    (:func:`autobal.analysis.studies.statics_study.verdict`), all by Newton's roots of the parametric balances
     (the batch solver of sweeps); the criticals by Brent's method on q1 along psi1 (dpsi) over those roots."""
 
     def __init__(self, source: str | Path):
@@ -599,8 +601,8 @@ class StaticsExplorer(DeviceSettings):
         Returns a dict with ``status`` "ok", "refused" (a setting the device's declarations refuse) or "no_statics"
         (no static solution at the operating point); ``message`` says why.  SI inside; a critical that has no value
         is None with ``*_status`` saying why."""
-        from autobal.analysis import closed_form
-        from autobal.analysis.statics_study import verdict
+        from autobal.analysis.numerics import closed_form
+        from autobal.analysis.studies.statics_study import verdict
 
         t0 = time.perf_counter()
         dev, dd, pt = self._setting(values)
@@ -699,12 +701,13 @@ class SpinupExplorer(Settings):
 
     def evaluate(self, values: dict, fast: bool = True) -> dict:
         """The current optimum's profile and the constant ramps re-simulated for the settings: peaks (delta/e and
-        m), the critical speed (rad/s) with its API 684 margins (``api``: :func:`analysis.standards.margin_check`'s
-        dict, as the spin-up study's ``rotor`` block), the drive's use; ``status`` "ok", "refused" or
-        "no_optimum".  ``fast``: the re-simulations by the rotor's exact linear response
-        (:func:`autobal.ocp.linear_response.resimulate`, the page's live path), else by CVODES at the batch run's
-        tolerance (:func:`autobal.ocp.simulation.resimulate`, the cross-check); ``resimulation`` says which ran."""
-        from autobal.analysis.rotor_study import api_margins
+        m), the critical speed (rad/s) with its API 684 margins (``api``:
+        :func:`analysis.numerics.standards.margin_check`'s dict, as the spin-up study's ``rotor`` block), the drive's
+        use; ``status`` "ok", "refused" or "no_optimum".  ``fast``: the re-simulations by the rotor's exact linear
+        response (:func:`autobal.ocp.linear_response.resimulate`, the page's live path), else by CVODES at the batch
+        run's tolerance (:func:`autobal.ocp.simulation.resimulate`, the cross-check); ``resimulation`` says which
+        ran."""
+        from autobal.analysis.studies.rotor_study import api_margins
         from autobal.ocp import linear_response
         from autobal.ocp.simulation import baselines, drive_use, resimulate
 

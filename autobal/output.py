@@ -158,17 +158,17 @@ class OutputFolder:
 
 class SolverLog:
     """Within ``with SolverLog(path) as log:`` every IPOPT solve of this thread (its context: runs in other threads
-    keep their own logs) appends its iteration log and status to ``path`` (:func:`autobal.analysis.ipopt.solve`),
-    and :meth:`write` adds the run's own lines (an analysis' status, a failed solve).  Nothing of the process is
-    redirected: standard output and error (file descriptors 1 and 2, ``sys.stdout``, ``sys.stderr``), warnings
-    and progress bars stay the caller's."""
+    keep their own logs) appends its iteration log and status to ``path``
+    (:func:`autobal.analysis.numerics.ipopt.solve`), and :meth:`write` adds the run's own lines (an analysis' status, a
+    failed solve).  Nothing of the process is redirected: standard output and error (file descriptors 1 and 2,
+    ``sys.stdout``, ``sys.stderr``), warnings and progress bars stay the caller's."""
 
     def __init__(self, path: str | Path):
         self.path = path
         self._lock = threading.Lock()
 
     def __enter__(self):
-        from autobal.analysis import ipopt
+        from autobal.analysis.numerics import ipopt
 
         self._log = open(self.path, "a", errors="backslashreplace")  # noqa: SIM115 (closed in __exit__)
         self._logging = ipopt.logging_to(self.write)

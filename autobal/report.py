@@ -37,8 +37,8 @@ from markupsafe import Markup
 
 from autobal import analyses as rooms
 from autobal import report_input
-from autobal.analysis.fields import STATUS, Record, field_key, place
-from autobal.analysis.quantities import (
+from autobal.analysis.run.fields import STATUS, Record, field_key, place
+from autobal.analysis.run.quantities import (
     Declarations,
     Quantity,
     beside,
@@ -56,7 +56,7 @@ from autobal.analysis.quantities import (
     significant,
     spelled,
 )
-from autobal.analysis.result import Result, html_verdict, plain
+from autobal.analysis.run.result import Result, html_verdict, plain
 from autobal.errors import ScenarioError
 from autobal.output import umask
 from autobal.report_input import MAX_FIGURE_BYTES
@@ -91,7 +91,7 @@ class _FromRooms(Mapping):
 
 
 # --------------------------------------------------------------------------------------------
-# units of the results.json keys: the declarations of each Result class (analysis/quantities.py)
+# units of the results.json keys: the declarations of each Result class (analysis/run/quantities.py)
 # --------------------------------------------------------------------------------------------
 #: analysis -> the module whose QUANTITIES declare every number of its block, named by its room
 #: (``QUANTITIES_MODULE``; the declarations are imported when a report needs them)
@@ -151,7 +151,7 @@ def result_class(analysis: str) -> type | None:
 
 
 def load_result(analysis: str, block: dict, folder: Path | None = None) -> Result:
-    """The Result of an analysis rebuilt from its results.json block: a typed Result (analysis/fields.py) by its
+    """The Result of an analysis rebuilt from its results.json block: a typed Result (analysis/run/fields.py) by its
     ``from_dict``; a Result that holds only ``data`` with the block as its data, if its ``to_dict()`` gives the
     block back.  ValueError naming the analysis where neither works (a Result that holds more than its block:
     samples, curves, solver runs)."""
@@ -198,7 +198,7 @@ def number(v) -> str:
 
 def cell(v, unit: str | None = None, shown: str | None = None, digits: int | None = None) -> dict:
     """A table cell: a number (or null) with its unit, converted from the SI ``unit`` to the display unit
-    ``shown`` (default: the unit chosen for its kind, else the field's unit of analysis/quantities.py, µm for
+    ``shown`` (default: the unit chosen for its kind, else the field's unit of analysis/run/quantities.py, µm for
     lengths below 10 µm), to ``digits`` significant digits (default :func:`number`'s 5); words and yes/no
     without a unit."""
     if isinstance(v, bool | str):
@@ -448,8 +448,10 @@ def ordered_models(models: dict) -> list:
 
 
 def model_name(model: str) -> str:
-    """What a model is (analysis/frequency.py MODEL_LABELS, the one copy)."""
-    from autobal.analysis.frequency import MODEL_LABELS  # python-control and scipy: only a dynamics report needs it
+    """What a model is (analysis/numerics/frequency.py MODEL_LABELS, the one copy)."""
+    from autobal.analysis.numerics.frequency import (
+        MODEL_LABELS,  # python-control and scipy: only a dynamics report needs it
+    )
 
     return MODEL_LABELS.get(model, model)
 
@@ -737,7 +739,7 @@ def render(folder: str | Path, units: dict | None = None) -> Path:
     folder : str or Path
         An output folder of ``autobal run`` (or :meth:`autobal.api.Run.save`).
     units : dict, optional
-        Kind -> display unit (``{"pressure": "bar"}``, see :data:`autobal.analysis.quantities.KINDS`), over
+        Kind -> display unit (``{"pressure": "bar"}``, see :data:`autobal.analysis.run.quantities.KINDS`), over
         the ``display`` section of the run's scene.  The tables change; the figures keep the units of the run.
 
     Returns

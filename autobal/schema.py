@@ -11,7 +11,7 @@ from typing import Annotated, get_args
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, create_model, field_validator, model_validator
 from pydantic.fields import FieldInfo
 
-from autobal.analysis.quantities import KINDS, spelled, unit_of_kind, units_of_kind
+from autobal.analysis.run.quantities import KINDS, spelled, unit_of_kind, units_of_kind
 from autobal.models.params import BIG
 
 # Dimensionless numbers: finite (every model refuses inf and nan) and at most 1e6 in magnitude, far beyond
@@ -169,7 +169,7 @@ class _DisplayUnits(Strict):
         return None if value is None else unit_of_kind(info.field_name, value)
 
 
-#: the ``display`` section of a scene: kind -> display unit (analysis/quantities.py KINDS, DISPLAY_UNITS)
+#: the ``display`` section of a scene: kind -> display unit (analysis/run/quantities.py KINDS, DISPLAY_UNITS)
 Display = create_model(
     "Display", __base__=_DisplayUnits, __module__=__name__,
     __doc__="The units the terminal summaries, the report tables, the CSV headers and the statics figures show, "

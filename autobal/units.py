@@ -5,7 +5,7 @@ A quantity is read as a plain decimal number followed by a unit; only the unit i
 only after a strict grammar has accepted it (unit names joined by ``*``, ``/``, a space, and integer
 powers ``^n`` or ``**n``), so no text is ever evaluated as an arithmetic expression.  Values that are
 not finite, or that leave the physical range of their kind (:data:`DIMENSIONS`, from the one unit vocabulary of
-:mod:`autobal.analysis.kinds` that the display reads too), are refused.
+:mod:`autobal.analysis.run.kinds` that the display reads too), are refused.
 The plain SI-prefixed units (``mm``, ``MPa``, ``kg/m^3``, ...) are read from a small table; pint's
 registry is built on first use of any other unit, or to explain an error.  A quantity is at most
 :data:`MAX_CHARS` characters, so that reading it takes linear time.
@@ -27,10 +27,10 @@ from typing import Annotated
 
 from pydantic import AfterValidator, BeforeValidator, Field
 
-from autobal.analysis.kinds import TABLE
+from autobal.analysis.run.kinds import TABLE
 
 # name -> (pint dimensionality, SI unit used inside the toolkit, example, (smallest positive, largest) in SI): the
-# kinds of the one unit vocabulary (autobal/analysis/kinds.py), which the display reads too
+# kinds of the one unit vocabulary (autobal/analysis/run/kinds.py), which the display reads too
 DIMENSIONS = {k.name: (k.dimension, k.written, k.example, k.magnitude) for k in TABLE}
 
 MAX_CHARS = 100  # a quantity as written, spaces at its ends stripped: "6300 rpm" is 8

@@ -1,7 +1,7 @@
 """Benchmark: the stiff nonlinear device model integrated by CasADi's CVODES (BDF, Newton with the
 exact symbolic Jacobian) against scipy.integrate.solve_ivp (Radau, BDF, LSODA), at matched final
-error, in one run; beside them the toolkit's compiled Rosenbrock integrators (analysis/rosenbrock.py): RODAS4 and
-RODASP with step-size control through the transient Simulator (scene keys ``integrator: rodas4`` / ``rodas4p``),
+error, in one run; beside them the toolkit's compiled Rosenbrock integrators (analysis/numerics/rosenbrock.py): RODAS4
+and RODASP with step-size control through the transient Simulator (scene keys ``integrator: rodas4`` / ``rodas4p``),
 and RODAS4 with fixed steps, on CasADi's virtual machine and compiled to C.
 
 Problem: the pump PE 600-300 device (App. A data, energy-consistent chamber balances), a step of the
@@ -34,10 +34,10 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from autobal import scenario
-from autobal.analysis.compiled import compiled_map
-from autobal.analysis.linearize import Setup
-from autobal.analysis.rosenbrock import rodas4_fixed, rodas4_step
-from autobal.analysis.simulate import Simulator
+from autobal.analysis.numerics.compiled import compiled_map
+from autobal.analysis.numerics.linearize import Setup
+from autobal.analysis.numerics.rosenbrock import rodas4_fixed, rodas4_step
+from autobal.analysis.numerics.simulate import Simulator
 from autobal.parts import device as device_part
 from benchmarks._results import case, write
 
@@ -96,7 +96,7 @@ def problem():
 
 
 def library_rhs(m, w) -> ca.Function:
-    """The right-hand side as analysis/rosenbrock.py takes it: ``(t, x, p) -> dx/dt`` (no parameters)."""
+    """The right-hand side as analysis/numerics/rosenbrock.py takes it: ``(t, x, p) -> dx/dt`` (no parameters)."""
     x, t = ca.SX.sym("x", len(m.states)), ca.SX.sym("t")
     return ca.Function("f", [t, x, ca.SX.sym("p", 0)], [m.ode(x, w, m.p0)])
 
@@ -151,7 +151,7 @@ def simulator_runner(sim: Simulator, s: list):
 
 def rodas_runners(m, f) -> tuple[dict, dict]:
     """RODAS4 (library, fixed steps) over the step ladder and the Simulator's RODAS4 / RODASP over the rtol ladder:
-    on the virtual machine (``AUTOBAL_COMPILE=0`` while building) and compiled through analysis/compiled.py's
+    on the virtual machine (``AUTOBAL_COMPILE=0`` while building) and compiled through analysis/numerics/compiled.py's
     ``compiled_map`` into a fresh cache (``$AUTOBAL_CACHE`` set to a temporary folder for this process), so the
     compile time is measured, then built again from that cache (the time a later process pays: code generation
     for the hash, then loading the library).
@@ -480,7 +480,8 @@ def _main() -> list[dict]:
         t_c = chosen[3]
         notes.append(
             f"RODAS4 (Hairer & Wanner 1996, Sect. IV.7; L-stable, order 4) with {chosen[1]} "
-            f"fixed steps written once as a CasADi Function (analysis/rosenbrock.py's rodas4_fixed: exact Jacobian and "
+            f"fixed steps written once as a CasADi Function (analysis/numerics/rosenbrock.py's rodas4_fixed: exact "
+            f"Jacobian and "
             f"LU written out symbolically, mapaccum over the steps) reaches final error {chosen[2]:.1e} in "
             f"{t_c * 1e3:.3f} ms CPU ({chosen[0]}): {lsoda6['peer_s'] / t_c:.0f}x LSODA, "
             f"{lsoda6['autobal_s'] / t_c:.1f}x CVODES (build {builds[chosen[0], chosen[1]][0]:.2f} s). Its embedded "
@@ -493,13 +494,15 @@ def _main() -> list[dict]:
         a = rodas_best.get((name, 1e-6))
         if a:
             notes.append(
-                f"With step-size control (the toolkit's transient Simulator, analysis/rosenbrock.py's rodas4_grid; the "
+                f"With step-size control (the toolkit's transient Simulator, analysis/numerics/rosenbrock.py's "
+                f"rodas4_grid; the "
                 f"same rtol ladder as the others, atol = rtol x 1e-2), {name} meets 1e-6 at rtol {a[1]:.0e} with "
                 f"{a[6]} steps, error {a[2]:.1e}, in {a[3] * 1e3:.3f} ms CPU: {lsoda6['peer_s'] / a[3]:.0f}x LSODA, "
                 f"{lsoda6['autobal_s'] / a[3]:.1f}x CVODES, build {builds[name, a[1]][0]:.2f} s; no reference needed "
                 "to choose the steps.")
     write("dynamics_integrators", "Stiff transient: CVODES and RODAS4 vs scipy solve_ivp at matched final error",
-          cases, notes, tables=["Rosenbrock integrators at matched final error (analysis/rosenbrock.py; adaptive: the "
+          cases, notes, tables=["Rosenbrock integrators at matched final error (analysis/numerics/rosenbrock.py; "
+                                "adaptive: the "
                                 "transient Simulator):\n\n"
                          + "\n".join(other),
                          "CVODES levers tried (same problem, same reference, interleaved, best of "

@@ -24,8 +24,8 @@ import time
 import casadi as ca
 import numpy as np
 
-from autobal.analysis.disc_fit import START, DiscFitter, reference_fit, scipy_disc_fit
-from autobal.analysis.least_squares import LeastSquares
+from autobal.analysis.numerics.disc_fit import START, DiscFitter, reference_fit, scipy_disc_fit
+from autobal.analysis.numerics.least_squares import LeastSquares
 from autobal.models.hydroheel import TurbulentDisc
 from benchmarks._results import case, write
 from benchmarks._timing import best_of

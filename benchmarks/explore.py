@@ -7,9 +7,9 @@ every change moves the operating point or the dynamics):
 - the whole change (statics, poles, margin, AFC and its peaks: :meth:`DeviceExplorer.evaluate`) against
   ``autobal.run`` of the scene loaded with that one override (frequency, stability with its map, transient: what
   the page's "report" runs) and against the batch functions of the same numbers alone (``autobal.load`` with the
-  override, :class:`~autobal.analysis.linearize.Setup` with IPOPT's statics and the model built at its point,
+  override, :class:`~autobal.analysis.numerics.linearize.Setup` with IPOPT's statics and the model built at its point,
   ``frequency.study`` and ``stability.verdict`` of the headline model);
-- its statics (the warm-started Newton solve) against IPOPT's (:class:`~autobal.analysis.statics.StaticsSolver`
+- its statics (the warm-started Newton solve) against IPOPT's (:class:`~autobal.analysis.numerics.statics.StaticsSolver`
   built and solved for the changed device, as the batch run does);
 - its dynamics (one call of the Jacobian Function, eigenvalues, AFC by the modal sum, peaks) against
   ``Setup.linear`` (the model built at the point) with ``frequency.characteristic`` (python-control) and
@@ -94,8 +94,8 @@ def spinup_case(repeats: int) -> tuple[list[dict], float, float]:
     measured beside it (rows 6-9: CVODES at the batch run's and at looser tolerances, the optimum's profile alone);
     the page's ratio and the share of that run's wall time its re-simulations take."""
     import autobal
-    from autobal.analysis import solver_options
-    from autobal.analysis.rotor_study import api_margins
+    from autobal.analysis.run import solver_options
+    from autobal.analysis.studies.rotor_study import api_margins
     from autobal.explore import SpinupExplorer
     from autobal.ocp.simulation import resimulate
 
@@ -160,10 +160,10 @@ def spinup_case(repeats: int) -> tuple[list[dict], float, float]:
 
 def main(repeats: int = 5) -> list[dict]:
     import autobal
-    from autobal.analysis import frequency as fr
-    from autobal.analysis import stability as st
-    from autobal.analysis.linearize import Setup
-    from autobal.analysis.statics import StaticsSolver
+    from autobal.analysis.numerics import frequency as fr
+    from autobal.analysis.numerics import stability as st
+    from autobal.analysis.numerics.linearize import Setup
+    from autobal.analysis.numerics.statics import StaticsSolver
     from autobal.explore import DeviceExplorer
     from autobal.models import device as dv
     from autobal.parts.device import dynamic_device

@@ -17,7 +17,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from autobal import scenario
-from autobal.analysis import liquid_balancer_optimum as optimum
+from autobal.analysis.numerics import liquid_balancer_optimum as optimum
 from autobal.models import liquid_balancer as lb
 from autobal.parts import liquid_balancer as liquid_balancer_part
 from benchmarks._results import case, write
@@ -80,7 +80,7 @@ def main(repeats: int = 3) -> list[dict]:
         "optimum h* (k_D = 1) of the corrected branch. Build time of the IPOPT case: one optimise() call "
         "including its NLP construction.",
         "lambda0 sweep: the evaluation goes through numpy<->DM conversion of 1e5-long vectors; a buffer call "
-        "(as analysis/statics.py call_rows) is the lever left for models/liquid_balancer.py's owner."])
+        "(as analysis/numerics/statics.py call_rows) is the lever left for models/liquid_balancer.py's owner."])
     return cases
 
 

@@ -22,12 +22,12 @@ import numpy as np
 
 from autobal import scenario
 from autobal.analyses import montecarlo as mc_room
-from autobal.analysis import closed_form
-from autobal.analysis import executor as ex
-from autobal.analysis import montecarlo as mc
-from autobal.analysis.montecarlo_statics import SampledStatics
-from autobal.analysis.sampling import Sampler, marginals
-from autobal.analysis.statics import FAST_NEWTON_ITER, ideal_guess
+from autobal.analysis.numerics import closed_form
+from autobal.analysis.numerics.sampling import Sampler, marginals
+from autobal.analysis.numerics.statics import FAST_NEWTON_ITER, ideal_guess
+from autobal.analysis.run import executor as ex
+from autobal.analysis.studies import montecarlo as mc
+from autobal.analysis.studies.montecarlo_statics import SampledStatics
 from autobal.parts.device import design
 from benchmarks import _numpy_statics as ns
 from benchmarks._results import case, write

@@ -45,7 +45,7 @@ import numpy as np
 
 from autobal import api
 from autobal.analyses.spinup import ocp as spinup_ocp
-from autobal.analysis import solver_options
+from autobal.analysis.run import solver_options
 from autobal.models.rotor import rotor_model
 from autobal.ocp import solve as osolve
 from autobal.ocp.simulation import initial_guess, resimulate

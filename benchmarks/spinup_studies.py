@@ -171,7 +171,7 @@ SCALING_N = (200, 400, 800, 1600)
 SCALING_CHILD = """
 import json, os, sys, time
 from autobal import api
-from autobal.analysis import solver_options
+from autobal.analysis.run import solver_options
 from autobal.ocp import solve as S
 from autobal import analyses
 lever, n_final = json.loads(sys.argv[3]), int(sys.argv[2])

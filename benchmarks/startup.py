@@ -17,7 +17,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from autobal.analysis.result import DPI
+from autobal.analysis.run.result import DPI
 from benchmarks._results import case, write
 
 GOAL = 1.5
@@ -63,7 +63,7 @@ def main(repeats: int = 3) -> list[dict]:
 
     from autobal import scenario
     from autobal.analyses.statics import run as statics
-    from autobal.analysis.result import save_figure
+    from autobal.analysis.run.result import save_figure
 
     scn = scenario.load(SCENE)
     statics(scn, scn.analyses.statics)  # imports and first builds
@@ -112,12 +112,12 @@ def main(repeats: int = 3) -> list[dict]:
         f"{t_savefig:.2f} s). The first figure of a process also loads the fonts and builds the mathtext parser.",
         f"No longer in a statics run: scipy.optimize and scipy.stats ({t_scipy:.2f} s alone; the work-precision "
         "peers and the disc fits import them where they are used) and scipy.special at scene load.",
-        "The figures have a fixed layout (margins in inches, the legend measured: analysis/result.py fixed_layout) "
+        "The figures have a fixed layout (margins in inches, the legend measured: analysis/run/result.py fixed_layout) "
         "instead of constrained layout, plain unicode labels where they read the same (mathtext is left for the "
         "subscripts unicode lacks: p_B, z_B, Q_T, p_cam, p1^kr) and the source's groups and bases in the axis "
         "labels instead of secondary axes.",
         "Left: the statics study's 100-odd warm-started IPOPT solves (the force-gap curve about 40 % of the "
-        "study, in analysis/statics.py); in import autobal.cli: pydantic and jinja2 themselves, the device's "
+        "study, in analysis/numerics/statics.py); in import autobal.cli: pydantic and jinja2 themselves, the device's "
         "pydantic models (autobal/parts/device.py, imported with the scene's device), autobal/report.py "
         "compiling its 89 unit-rule patterns at import; the draw itself (tick labels, lines, legends); the floor.",
     ]

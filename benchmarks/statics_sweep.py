@@ -24,7 +24,7 @@ import casadi as ca
 import numpy as np
 
 from autobal import scenario
-from autobal.analysis.statics import StaticsSolver, call_rows
+from autobal.analysis.numerics.statics import StaticsSolver, call_rows
 from autobal.parts.device import design
 from benchmarks import _numpy_statics as ns
 from benchmarks._results import case, write

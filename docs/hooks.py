@@ -296,7 +296,7 @@ def quantities_markdown(analysis: str) -> str:
 
 def display_kinds_markdown() -> str:
     """The rows (kind, SI unit, display units) of the kinds a scene's ``display`` section chooses units for."""
-    from autobal.analysis.quantities import KINDS, units_of_kind
+    from autobal.analysis.run.quantities import KINDS, units_of_kind
 
     return "\n".join(f"| `{kind}`: {what} | {si} | {', '.join(units_of_kind(kind))} |"
                      for kind, (si, what) in KINDS.items())

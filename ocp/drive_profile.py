@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize
 
-from autobal.analysis.rotor import deflection, peak, unbalance
+from autobal.analysis.numerics.rotor import deflection, peak, unbalance
 from autobal.models.rotor import rotor_model
 from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.search import FAST_STEP, STEP, FixedFrameModes, simulate_steps

@@ -232,7 +232,7 @@ def torque(q: np.ndarray, a: np.ndarray, p) -> np.ndarray:
 
 def resimulate(ocp: SpinupOcp, u, h, label: str, points: int | None = None, tol: float = TOL) -> Trajectory:
     """:func:`autobal.ocp.simulation.resimulate` by :func:`response`: the same samples, the same Trajectory."""
-    from autobal.analysis import solver_options
+    from autobal.analysis.run import solver_options
 
     points = solver_options.defaults["resimulation.points"] if points is None else points
     return trajectory(ocp, u, h, label, response(ocp, u, h, points, tol)[0], torque)

@@ -6,11 +6,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from autobal.analysis.fields import Record, TypedResult, declarations, quantity, record, unsaved
-from autobal.analysis.figures import Figure, record_axis
-from autobal.analysis.quantities import Quantity, convert
-from autobal.analysis.result import new_figure, speed_axis, unit_axis
-from autobal.analysis.standards import Margin, half_power_readings, margin_check, margin_quantities, margin_words
+from autobal.analysis.numerics.standards import (
+    Margin,
+    half_power_readings,
+    margin_check,
+    margin_quantities,
+    margin_words,
+)
+from autobal.analysis.run.fields import Record, TypedResult, declarations, quantity, record, unsaved
+from autobal.analysis.run.figures import Figure, record_axis
+from autobal.analysis.run.quantities import Quantity, convert
+from autobal.analysis.run.result import new_figure, speed_axis, unit_axis
 from autobal.models import ross_rotor as rr
 from autobal.models.ross_rotor import POINTS_PER_REV, RESIM_TOL
 from autobal.ocp.drive_profile import drive_table
@@ -364,7 +370,7 @@ def steady_deflection(ocp: ModalSpinupOcp, omega) -> np.ndarray:
 def api_readings(ocp: ModalSpinupOcp, cs: dict) -> list:
     """Each critical speed of the reduced model (``cs``, :meth:`~autobal.models.ross_rotor.ModalRotor.critical_speeds`)
     read off the steady unbalance response at the nodes of interest (:func:`steady_deflection`) up to the mode cutoff
-    (:func:`autobal.analysis.standards.half_power_readings`, API 684 (2005): AF at the half-power points)."""
+    (:func:`autobal.analysis.numerics.standards.half_power_readings`, API 684 (2005): AF at the half-power points)."""
     return half_power_readings(lambda w: steady_deflection(ocp, w), cs["wd"], high=ocp.rotor.cutoff_rad_s,
                                undamped=[z <= 0 for z in cs["damping_ratio"]])
 

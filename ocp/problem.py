@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from autobal.analysis.rotor import steady_q, unbalance
+from autobal.analysis.numerics.rotor import steady_q, unbalance
 from autobal.models.rotor import STATES, RotorParams, rotor_model
 
 OBJECTIVES = ("peak_deflection", "peak_unbalance", "integrated_deflection", "min_time")

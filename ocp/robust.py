@@ -27,7 +27,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from autobal.analysis import ipopt, solver_options
+from autobal.analysis.numerics import ipopt
+from autobal.analysis.run import solver_options
 from autobal.errors import SolveError
 from autobal.models.rotor import RotorParams
 from autobal.ocp.problem import SpinupOcp

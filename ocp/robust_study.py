@@ -15,10 +15,10 @@ from dataclasses import KW_ONLY, field
 
 import numpy as np
 
-from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
-from autobal.analysis.figures import Figure
-from autobal.analysis.quantities import Quantity, significant
-from autobal.analysis.result import new_figure, speed_axis, unit_axis
+from autobal.analysis.run.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
+from autobal.analysis.run.figures import Figure
+from autobal.analysis.run.quantities import Quantity, significant
+from autobal.analysis.run.result import new_figure, speed_axis, unit_axis
 from autobal.ocp import robust as rb
 from autobal.ocp.drive_profile import drive_table
 from autobal.ocp.modal_search import grid_search as modal_grid_search
@@ -600,7 +600,7 @@ def run(ocp, method: DirectCollocation, uncertainty: rb.Uncertainty, design_poin
     ramps : int
         Constant ramps compared.
     executor
-        Where the validation chunks run (:func:`autobal.analysis.executor.make`).
+        Where the validation chunks run (:func:`autobal.analysis.run.executor.make`).
     title : str
         The scene's title.
     multistart : bool

@@ -10,16 +10,16 @@ from typing import TYPE_CHECKING
 import casadi as ca
 import numpy as np
 
-from autobal.analysis import interrupt, solver_options
-from autobal.analysis.quantities import Quantity
-from autobal.analysis.rotor import deflection, peak, unbalance
+from autobal.analysis.numerics.rotor import deflection, peak, unbalance
+from autobal.analysis.run import interrupt, solver_options
+from autobal.analysis.run.quantities import Quantity
 from autobal.models.rotor import rotor_model
 from autobal.ocp.transcription import Nlp, interval_integrator, mesh, path_fractions
 
 if TYPE_CHECKING:
     from autobal.ocp.problem import SpinupOcp
 
-# the re-simulation's CVODES tolerance and samples: the solver options "resimulation" (analysis/solver_options.py)
+# the re-simulation's CVODES tolerance and samples: the solver options "resimulation" (analysis/run/solver_options.py)
 
 
 def rate_text(alpha: float) -> str:

@@ -13,8 +13,9 @@ from typing import TYPE_CHECKING
 import casadi as ca
 import numpy as np
 
-from autobal.analysis import ipopt, solver_options
-from autobal.analysis.solver_options import ipopt_options  # noqa: F401 (the rooms' and tests' name)
+from autobal.analysis.numerics import ipopt
+from autobal.analysis.run import solver_options
+from autobal.analysis.run.solver_options import ipopt_options  # noqa: F401 (the rooms' and tests' name)
 from autobal.errors import SolveError
 from autobal.models.rotor import RotorParams
 from autobal.ocp.protocol import PEAK_KEY, SpinupProblem
@@ -50,7 +51,7 @@ if TYPE_CHECKING:  # the problem classes call this module (their starts, referen
     from autobal.ocp.problem import SpinupOcp
 
 # the OCP's IPOPT options (the groups "spinup", "spinup_warm" for the fine stages of the mesh continuation,
-# "spinup_coarse" and "fatrop"): analysis/solver_options.py, with the measurements that chose them
+# "spinup_coarse" and "fatrop"): analysis/run/solver_options.py, with the measurements that chose them
 FATROP_STATUS = {0: "Solve_Succeeded", 1: "Maximum_Iterations_Exceeded"}  # fatrop's return flags
 
 INFEASIBLE = ("Infeasible_Problem_Detected", "Restoration_Failed")

@@ -16,13 +16,14 @@ from pathlib import Path
 
 import numpy as np
 
-from autobal.analysis import solver_options, standards
-from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
-from autobal.analysis.figures import Figure
-from autobal.analysis.quantities import Quantity, significant
-from autobal.analysis.result import new_figure, speed_axis, twin_axis, unit_axis
-from autobal.analysis.rotor_study import api_margins
-from autobal.analysis.standards import Margin
+from autobal.analysis.numerics import standards
+from autobal.analysis.numerics.standards import Margin
+from autobal.analysis.run import solver_options
+from autobal.analysis.run.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
+from autobal.analysis.run.figures import Figure
+from autobal.analysis.run.quantities import Quantity, significant
+from autobal.analysis.run.result import new_figure, speed_axis, twin_axis, unit_axis
+from autobal.analysis.studies.rotor_study import api_margins
 from autobal.ocp import drive_profile
 from autobal.ocp.drive_profile import RPM
 from autobal.ocp.problem import SpinupOcp, pulse_variation
@@ -123,14 +124,15 @@ class _RotorData(Record):
 @record
 class Rotor(Margin, _RotorData):
     """The rotor as the scene gives it, then its critical speed against the service speed (API 684 (2005), API 617
-    (2014): the fields of :class:`autobal.analysis.standards.Margin`, :func:`~autobal.analysis.standards.margin_check`'s
-    block), then the amplitude convention."""
+    (2014): the fields of :class:`autobal.analysis.numerics.standards.Margin`,
+    :func:`~autobal.analysis.numerics.standards.margin_check`'s block), then the amplitude convention."""
 
     _: KW_ONLY
     amplitude_convention: str
 
     def margins(self) -> dict:
-        """The API 684 check as :func:`autobal.analysis.standards.margin_check` gives it (its words, its rows)."""
+        """The API 684 check as :func:`autobal.analysis.numerics.standards.margin_check` gives it (its words, its
+        rows)."""
         return {k: v for k, v in self.to_dict().items() if k not in _ROTOR_OWN}
 
 
@@ -480,9 +482,9 @@ def dwell(P, tr: Trajectory, alpha_max: float) -> Dwell:
     """How long a profile stays near the critical speed: its time within DWELL_BAND of omega_cr (s), the time
     the maximum acceleration ``alpha_max`` takes across that band, the speed it spends the most time at there
     (the time-weighted median, rad/s) with the rotor's steady whirl at that speed (delta/e, the model's steady state
-    :func:`autobal.analysis.rotor.steady_state`), and whether it dwells (more than DWELL_FACTOR times that
+    :func:`autobal.analysis.numerics.rotor.steady_state`), and whether it dwells (more than DWELL_FACTOR times that
     crossing)."""
-    from autobal.analysis.rotor import steady_state
+    from autobal.analysis.numerics.rotor import steady_state
 
     wc, dt = P.omega_cr, np.diff(tr.t)
     mid = 0.5 * (tr.omega[1:] + tr.omega[:-1])

@@ -13,10 +13,10 @@ from dataclasses import KW_ONLY
 
 import numpy as np
 
-from autobal.analysis.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
-from autobal.analysis.figures import Figure
-from autobal.analysis.quantities import Declarations, significant
-from autobal.analysis.result import new_figure, speed_axis, unit_axis
+from autobal.analysis.run.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
+from autobal.analysis.run.figures import Figure
+from autobal.analysis.run.quantities import Declarations, significant
+from autobal.analysis.run.result import new_figure, speed_axis, unit_axis
 from autobal.ocp import time_optimal as to
 from autobal.ocp.drive_profile import drive_table
 from autobal.ocp.problem import SpinupOcp

@@ -557,7 +557,7 @@ def structured_derivatives(nlp: Nlp) -> dict:
     -------
     dict
         ``jac_g`` (x, p) -> (g, dg/dx) and ``hess_lag`` (x, p, lam_f, lam_g) -> the upper triangle of the
-        Hessian of lam_f f + lam_g' g, for :func:`autobal.analysis.ipopt.nlpsol`.
+        Hessian of lam_f f + lam_g' g, for :func:`autobal.analysis.numerics.ipopt.nlpsol`.
     """
     s = nlp.intervals
     fi, args, cols, coefs, rows = s["function"], s["args"], s["cols"], s["coefs"], s["rows"]

@@ -3,7 +3,7 @@ re-simulation, over the collocation degree and the number of intervals (and mult
 
 from __future__ import annotations
 
-from autobal.analysis.workprecision import Trial, WorkPrecision
+from autobal.analysis.studies.workprecision import Trial, WorkPrecision
 from autobal.ocp.simulation import resimulate
 from autobal.ocp.solve import Solver, resimulated_scores
 from autobal.ocp.transcription import DirectCollocation, MultipleShooting

@@ -5,7 +5,7 @@ import re
 import pytest
 
 from autobal import api, scenario
-from autobal.analysis.statics import StaticsSolver
+from autobal.analysis.numerics.statics import StaticsSolver
 from autobal.parts.device import design
 
 

@@ -13,8 +13,8 @@ import yaml
 from numpy.testing import assert_allclose
 
 from autobal import scenario
-from autobal.analysis import frequency, sampling, stability, statics
-from autobal.analysis.linearize import Setup
+from autobal.analysis.numerics import frequency, sampling, stability, statics
+from autobal.analysis.numerics.linearize import Setup
 from autobal.cli import main
 from autobal.parts import device as device_part
 

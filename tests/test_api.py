@@ -8,7 +8,7 @@ from matplotlib.figure import Figure
 
 import autobal
 from autobal import cli
-from autobal.analysis import solver_options
+from autobal.analysis.run import solver_options
 from autobal.errors import ScenarioError, SolveError
 
 pytestmark = pytest.mark.cli

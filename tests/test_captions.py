@@ -1,4 +1,4 @@
-"""Figures carry their captions and the quantity on their axes (analysis/figures.py); the sources' published values
+"""Figures carry their captions and the quantity on their axes (analysis/run/figures.py); the sources' published values
 are a data file (autobal/published.yaml) whose keys are key paths of the Results' declarations."""
 
 from __future__ import annotations
@@ -9,9 +9,9 @@ import pytest
 from markupsafe import escape
 
 from autobal import analyses, report, scenario
-from autobal.analysis.figures import Figure
-from autobal.analysis.quantities import display_units
-from autobal.analysis.result import new_figure
+from autobal.analysis.run.figures import Figure
+from autobal.analysis.run.quantities import display_units
+from autobal.analysis.run.result import new_figure
 
 SHIPPED = [p.stem for p in scenario.shipped()]
 FAST = ("pump_pe600_statics", "compressor_k180_dynamics", "rig_table43_fit")

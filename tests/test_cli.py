@@ -6,7 +6,7 @@ import pytest
 import yaml
 
 from autobal import cli, scenario
-from autobal.analysis import solver_options
+from autobal.analysis.run import solver_options
 from autobal.errors import ScenarioError
 
 PUMP = yaml.safe_load(scenario.resolve("pump_pe600_statics").read_text())

@@ -1,4 +1,4 @@
-"""Grid-independent continuation of the statics sweep (analysis/statics_study.py).
+"""Grid-independent continuation of the statics sweep (analysis/studies/statics_study.py).
 
 A sweep's points are each warm-started from the nearest node of a path that depends only on the
 sweep's range, so a 100,000-point sweep takes the same continuation steps as a 1,000-point one.  The
@@ -11,8 +11,8 @@ IPOPT could not leave.
 import numpy as np
 import pytest
 
-from autobal.analysis.solver_options import defaults
-from autobal.analysis.statics_study import continuation
+from autobal.analysis.run.solver_options import defaults
+from autobal.analysis.studies.statics_study import continuation
 
 DENSE = np.linspace(0.25, 2.0, 100_000)  # the grid that failed at psi1 = 1.26162
 AROUND = DENSE[(DENSE > 1.2605) & (DENSE < 1.2625)]

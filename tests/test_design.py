@@ -1,4 +1,4 @@
-"""Stability-constrained design (analysis/design.py): the smooth Routh conditions against eigenvalues,
+"""Stability-constrained design (analysis/numerics/design.py): the smooth Routh conditions against eigenvalues,
 the optimum checked by eigenvalues at every operating point, by a random search, and through --set."""
 
 import casadi as ca
@@ -7,9 +7,9 @@ import pytest
 
 import autobal
 from autobal.analyses import design as design_analysis
-from autobal.analysis import design as ds
-from autobal.analysis.linearize import Setup
-from autobal.analysis.stability import verdict
+from autobal.analysis.numerics import design as ds
+from autobal.analysis.numerics.linearize import Setup
+from autobal.analysis.numerics.stability import verdict
 from autobal.errors import ScenarioError
 from autobal.parts import device as device_part
 
@@ -125,7 +125,7 @@ def test_accuracy_block(pump_design):
 
 
 def ds_tol():
-    from autobal.analysis.design_study import CERTIFY_TOL
+    from autobal.analysis.studies.design_study import CERTIFY_TOL
 
     return CERTIFY_TOL
 
@@ -193,7 +193,7 @@ def test_group_variables_enter_the_linearisation_exactly(path, key):
     s_m = 1.7 * s0
     A = np.array(prob.linearisation({key: s_m})(prob.static_state(1.0), [1.0, prob.dev0.groups.b], prob.model.p0))
     moved = ds.apply(dev, {key: s_m})
-    from autobal.analysis.linearize import jacobians
+    from autobal.analysis.numerics.linearize import jacobians
     from autobal.models.device import design
     from autobal.models.dynamics import build
 
@@ -242,7 +242,7 @@ def test_groups_of_the_design_are_symbolic_and_exact():
     h, d = ca.SX.sym("h"), ca.SX.sym("d")
     sym = prob.groups({"h_3": h, "d_e": d})
     moved = ds.apply(dev, {"h_3": 2.2e-4, "d_e": 2.5e-3})
-    from autobal.analysis.statics import StaticsSolver
+    from autobal.analysis.numerics.statics import StaticsSolver
     from autobal.models.device import design, groups_by_name
 
     num = groups_by_name(design(moved).groups)
@@ -287,8 +287,8 @@ def test_scale_variables_give_the_rebuilt_model(path, key, scales):
     (symbolic groups) vanish at the statics solver's solution of the design rebuilt with numbers, and the
     symbolic model's A there equals the rebuilt model's, eigenvalues too; leakage and stiffness of the
     NLP are the rebuilt design's in SI."""
-    from autobal.analysis.linearize import jacobians
-    from autobal.analysis.statics import StaticsSolver
+    from autobal.analysis.numerics.linearize import jacobians
+    from autobal.analysis.numerics.statics import StaticsSolver
     from autobal.models.device import design, groups_by_name
     from autobal.models.dynamics import build
 

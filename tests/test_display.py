@@ -14,7 +14,7 @@ import pytest
 import yaml
 
 from autobal import cli, report, scenario
-from autobal.analysis.quantities import (
+from autobal.analysis.run.quantities import (
     DISPLAY_UNITS,
     KINDS,
     Quantity,
@@ -295,11 +295,11 @@ def test_every_result_saves_its_figures_through_the_one_place():
 
     import autobal.analysis
     import autobal.ocp
-    from autobal.analysis.result import Result
+    from autobal.analysis.run.result import Result
 
     for package in (autobal.analysis, autobal.ocp):
-        for module in pkgutil.iter_modules(package.__path__):
-            importlib.import_module(f"{package.__name__}.{module.name}")
+        for module in pkgutil.walk_packages(package.__path__, f"{package.__name__}."):
+            importlib.import_module(module.name)
 
     def subclasses(cls):
         for sub in cls.__subclasses__():

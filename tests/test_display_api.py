@@ -13,9 +13,9 @@ import yaml
 
 import autobal
 from autobal import report, scenario
-from autobal.analysis import frequency, simulate, stability
-from autobal.analysis.linearize import Setup
-from autobal.analysis.quantities import DISPLAY_UNITS, display_units, flatten, is_number, significant
+from autobal.analysis.numerics import frequency, simulate, stability
+from autobal.analysis.numerics.linearize import Setup
+from autobal.analysis.run.quantities import DISPLAY_UNITS, display_units, flatten, is_number, significant
 from autobal.parts import device as device_part
 
 pytestmark = pytest.mark.cli  # end to end through autobal.run / the CLI

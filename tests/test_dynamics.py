@@ -10,8 +10,8 @@ import yaml
 from numpy.testing import assert_allclose
 
 from autobal import scenario
-from autobal.analysis import frequency, hand_linear, linearize, simulate, stability
-from autobal.analysis.linearize import Setup
+from autobal.analysis.numerics import frequency, hand_linear, linearize, simulate, stability
+from autobal.analysis.numerics.linearize import Setup
 from autobal.cli import main
 from autobal.errors import ScenarioError
 from autobal.models import dynamics as dy

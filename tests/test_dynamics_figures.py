@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from autobal import scenario
-from autobal.analysis import frequency, stability
-from autobal.analysis.linearize import Setup
+from autobal.analysis.numerics import frequency, stability
+from autobal.analysis.numerics.linearize import Setup
 from autobal.parts import device as device_part
 
 

@@ -1,4 +1,4 @@
-"""Parameter estimation (analysis/disc_fit.py, device_fit.py, least_squares.py, adequacy.py):
+"""Parameter estimation (analysis/numerics/disc_fit.py, device_fit.py, least_squares.py, adequacy.py):
 Pavlenko (2014), Sec. 4.4, Eqs. (4.16)-(4.38), Sec. 4.3.3, Eqs. (4.14)-(4.15), Table 4.3.
 
 Golden values: the source's Table 4.3 and its Sec. 4.3.3 parameter chain and Fisher numbers; on the
@@ -24,10 +24,10 @@ from scipy.optimize import least_squares, minimize_scalar
 
 import autobal
 from autobal import cli, scenario
-from autobal.analysis import device_fit
-from autobal.analysis import disc_fit as est
-from autobal.analysis.adequacy import fisher_adequacy
-from autobal.analysis.statics import StaticsSolver
+from autobal.analysis.numerics import device_fit
+from autobal.analysis.numerics import disc_fit as est
+from autobal.analysis.numerics.adequacy import fisher_adequacy
+from autobal.analysis.numerics.statics import StaticsSolver
 from autobal.errors import ScenarioError, SolveError
 from autobal.measurements import read_csv
 from autobal.models.device import design, static_system

@@ -19,7 +19,7 @@ from numpy.testing import assert_allclose
 
 from autobal import analyses, cli, scenario
 from autobal.analyses.estimation import spec
-from autobal.analysis import estimation_study
+from autobal.analysis.studies import estimation_study
 from autobal.errors import ScenarioError
 from autobal.models.hydroheel import TurbulentDisc
 from autobal.paths import SCENARIO_DIR
@@ -291,7 +291,7 @@ def test_alpha_bounded_below_the_default_lower_bound(tmp_path):
 
 def test_percentile_interval_of_too_few_refits_is_nan():
     """Fewer than two finished refits leave no interval (NaN bounds), not an IndexError."""
-    from autobal.analysis.least_squares import percentile_interval
+    from autobal.analysis.numerics.least_squares import percentile_interval
 
     samples = np.full((50, 2), np.nan)
     samples[0] = [1.0, 2.0]
@@ -306,7 +306,7 @@ def test_percentile_interval_of_too_few_refits_is_nan():
 def test_a_bootstrap_whose_refits_all_fail_is_a_failure(tmp_path, monkeypatch):
     """Every refit failing (forced) leaves the fit's estimate, but its bootstrap says failed and the
     run's status is failed with the reason (exit 3), never ok with null intervals."""
-    from autobal.analysis import disc_fit
+    from autobal.analysis.numerics import disc_fit
 
     def all_failed(self, *args, **kw):
         n = len(kw["bounds"])

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 import autobal
-from autobal.analysis import frequency as fr
-from autobal.analysis import stability as st
-from autobal.analysis.linearize import Setup
+from autobal.analysis.numerics import frequency as fr
+from autobal.analysis.numerics import stability as st
+from autobal.analysis.numerics.linearize import Setup
 from autobal.explore import DeviceExplorer, SpinupExplorer, StaticsExplorer
 from autobal.parts.device import dynamic_device
 
@@ -171,7 +171,7 @@ def statics_explorer():
 def assert_statics_equal(live: dict, block: dict, rel: float = 1e-8):
     """The live statics against the batch study's results.json block (IPOPT): operating point, criticals,
     characteristic, verdict."""
-    from autobal.analysis.statics_study import StaticsResult
+    from autobal.analysis.studies.statics_study import StaticsResult
 
     ex, crit, sw = block["exact"], block["critical_exact"], block["sweep"]
     assert live["gap"] == pytest.approx(ex["z0"], rel=rel)

@@ -173,7 +173,7 @@ def test_numbers_shown_equal_autobal_run_on_the_saved_scene(server, page, tmp_pa
     assert live["static_amplitude"] == pytest.approx(head["static_amplitude"], rel=1e-8)
     # the gap: the batch path's IPOPT statics of the saved scene (the dynamic analyses' operating point)
     import autobal
-    from autobal.analysis.linearize import Setup
+    from autobal.analysis.numerics.linearize import Setup
     from autobal.parts.device import dynamic_device
 
     scene = autobal.load(saved)

@@ -1,4 +1,4 @@
-"""Figure axes speak the display units (analysis/quantities.py): shaft speeds in rpm with rad/s beside, frequencies
+"""Figure axes speak the display units (analysis/run/quantities.py): shaft speeds in rpm with rad/s beside, frequencies
 in rad/s with Hz beside, amplitudes in µm, times in s; a scene's or a caller's choice (``display:``, ``--units``,
 :func:`display_units`) changes the label and the plotted data, which are the SI data converted.  The spin-up's
 objective value is declared in the unit of the scene's objective (δ*/e and d* dimensionless, ∫(δ/e)² dt and the
@@ -17,10 +17,10 @@ import pytest
 
 import autobal
 from autobal import cli, report, scenario
-from autobal.analysis import frequency, stability
-from autobal.analysis.linearize import Setup
-from autobal.analysis.quantities import display_units
-from autobal.analysis.result import new_figure, unit_axis
+from autobal.analysis.numerics import frequency, stability
+from autobal.analysis.numerics.linearize import Setup
+from autobal.analysis.run.quantities import display_units
+from autobal.analysis.run.result import new_figure, unit_axis
 from autobal.models.rotor import RotorParams
 from autobal.ocp import spinup as S
 from autobal.ocp import spinup_study

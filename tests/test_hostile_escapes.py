@@ -310,7 +310,7 @@ def test_an_unreachable_ross_drive_is_refused_before_solving(capsys):
 def test_isolated_returns_raises_and_is_ended_by_an_interrupt():
     """interrupt.isolated: the child's answer, its ScenarioError raised again here, and a signal during the wait
     raises at once and kills the child (which ignores SIGINT and SIGTERM itself)."""
-    from autobal.analysis import interrupt
+    from autobal.analysis.run import interrupt
     from autobal.errors import Interrupted, ScenarioError
 
     assert interrupt.isolated(pow, 3, 4) == 81

@@ -10,7 +10,7 @@ import pytest
 import yaml
 
 from autobal import cli, report, scenario
-from autobal.analysis.estimation_study import EstimationResult
+from autobal.analysis.studies.estimation_study import EstimationResult
 
 
 @pytest.fixture(scope="module")

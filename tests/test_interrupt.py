@@ -2,7 +2,7 @@
 
 The contract (autobal/cli.py, autobal/output.py): exit code 130 (SIGINT) or 143 (SIGTERM), one line on
 stderr, and an output folder that holds no results.json (it holds interrupted.json), or a results.json
-whose status is "interrupted".  The solver trace (analysis/interrupt.py) says when a solve is under way.
+whose status is "interrupted".  The solver trace (analysis/run/interrupt.py) says when a solve is under way.
 """
 
 import json
@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from autobal.analysis import interrupt
+from autobal.analysis.run import interrupt
 from autobal.errors import Interrupted
 
 

@@ -12,9 +12,9 @@ from numpy.testing import assert_allclose
 
 from autobal import cli, scenario
 from autobal.analyses.liquid_balancer import spec
-from autobal.analysis import liquid_balancer as study
-from autobal.analysis import liquid_balancer_optimum as optimum
-from autobal.analysis import rotor_identification as rid
+from autobal.analysis.numerics import liquid_balancer_optimum as optimum
+from autobal.analysis.numerics import rotor_identification as rid
+from autobal.analysis.studies import liquid_balancer as study
 from autobal.errors import ScenarioError
 from autobal.models import balancing_norms as norms
 from autobal.models import liquid_balancer as lb

@@ -13,12 +13,12 @@ from numpy.testing import assert_allclose
 
 from autobal import scenario
 from autobal.analyses.montecarlo import Distribution, spec
-from autobal.analysis import executor as ex
-from autobal.analysis import montecarlo as mc
-from autobal.analysis import montecarlo_afc as mcafc
-from autobal.analysis import montecarlo_statics as mcs
-from autobal.analysis import sampling
-from autobal.analysis.statics import StaticsSolver
+from autobal.analysis.numerics import sampling
+from autobal.analysis.numerics.statics import StaticsSolver
+from autobal.analysis.run import executor as ex
+from autobal.analysis.studies import montecarlo as mc
+from autobal.analysis.studies import montecarlo_afc as mcafc
+from autobal.analysis.studies import montecarlo_statics as mcs
 from autobal.cli import main
 from autobal.errors import ScenarioError
 from autobal.models.device import DeviceDesign, static_system
@@ -50,7 +50,8 @@ def small(scene, **changes):
 
 
 def afc_spec(scene, afc):
-    """The study's spec (analysis/montecarlo.py AfcSpec) of the AFC settings ``afc`` in the scene's Monte Carlo."""
+    """The study's spec (analysis/studies/montecarlo.py AfcSpec) of the AFC settings ``afc`` in the scene's Monte
+    Carlo."""
     return spec(scene.analyses.montecarlo.model_copy(update={"afc": afc})).afc
 
 
@@ -232,7 +233,7 @@ def test_dask_cluster_gives_the_in_process_numbers(scene, dev, cluster, tmp_path
     assert (tmp_path / "a" / "fig_montecarlo.png").exists() and (tmp_path / "a" / "fig_montecarlo_afc.png").exists()
 
 
-# ---- the AFC amplitude through the linear models of analysis/linearize.py (Fig. 3.7) --------------
+# ---- the AFC amplitude through the linear models of analysis/numerics/linearize.py (Fig. 3.7) --------------
 
 @pytest.mark.parametrize("model, names", [("program", ["K1", "T1", "tau7", "zeta1"]),
                                           ("nonlinear", ["m_p", "k_pr", "E", "V2", "V3", "c_z"])])

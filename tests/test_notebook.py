@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from autobal.analysis.result import Result
+from autobal.analysis.run.result import Result
 
 
 @pytest.fixture(scope="module")

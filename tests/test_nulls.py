@@ -8,7 +8,7 @@ A value that is NaN (written as null), or a list holding nulls, under key ``k`` 
 import pytest
 
 from autobal import scenario
-from autobal.analysis.result import plain
+from autobal.analysis.run.result import plain
 
 
 def unexplained_nulls(node, path="") -> list[str]:

@@ -1,4 +1,4 @@
-"""Progress bars (analysis/progress.py): drawn on a terminal, silent on a pipe and with --quiet."""
+"""Progress bars (analysis/run/progress.py): drawn on a terminal, silent on a pipe and with --quiet."""
 
 import io
 import signal
@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 from autobal import scenario
-from autobal.analysis import interrupt, ipopt, progress
-from autobal.analysis.linearize import Setup
-from autobal.analysis.stability import max_real
+from autobal.analysis.numerics import ipopt
+from autobal.analysis.numerics.linearize import Setup
+from autobal.analysis.numerics.stability import max_real
+from autobal.analysis.run import interrupt, progress
 from autobal.cli import main
 from autobal.errors import Interrupted
 from autobal.parts import device as device_part

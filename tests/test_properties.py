@@ -9,8 +9,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from autobal import scenario
-from autobal.analysis import linearize
-from autobal.analysis.simulate import Simulator, equilibrium_residual
+from autobal.analysis.numerics import linearize
+from autobal.analysis.numerics.simulate import Simulator, equilibrium_residual
 from autobal.models.dynamics import build
 from autobal.parts import device as device_part
 

@@ -1,4 +1,4 @@
-"""Declared result quantities (analysis/quantities.py): every numeric leaf of results.json has a declared unit,
+"""Declared result quantities (analysis/run/quantities.py): every numeric leaf of results.json has a declared unit,
 the report's unit is the declaration's display unit, the terminal speaks engineering units, and report.py has
 no unit rule for a declared analysis."""
 
@@ -11,7 +11,7 @@ import re
 import pytest
 
 from autobal import cli, report, scenario
-from autobal.analysis.quantities import Declarations, Quantity, convert, is_display_unit, significant
+from autobal.analysis.run.quantities import Declarations, Quantity, convert, is_display_unit, significant
 from tests.test_report import Page
 
 FAST = ("pump_pe600_statics", "pump_pe600_dynamics", "rig_table43_fit", "washer_liquid_balancer_nested")

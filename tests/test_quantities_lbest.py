@@ -14,13 +14,14 @@ import pytest
 import yaml
 
 from autobal import api, cli, report, scenario
-from autobal.analysis import executor as ex
-from autobal.analysis import montecarlo as mc
+from autobal.analysis.run import executor as ex
+from autobal.analysis.studies import montecarlo as mc
 from autobal.parts.device import design
 from tests.test_quantities import FAST, SLOW, check_declared
 
-MINE = {"liquid_balancer": "autobal.analysis.liquid_balancer", "estimation": "autobal.analysis.estimation_study",
-        "montecarlo": "autobal.analysis.montecarlo", "rotor_dynamics": "autobal.analysis.rotor_study"}
+MINE = {"liquid_balancer": "autobal.analysis.studies.liquid_balancer",
+        "estimation": "autobal.analysis.studies.estimation_study",
+        "montecarlo": "autobal.analysis.studies.montecarlo", "rotor_dynamics": "autobal.analysis.studies.rotor_study"}
 
 
 def line(out: str, symbol: str) -> str:

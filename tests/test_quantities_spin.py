@@ -16,7 +16,7 @@ import pytest
 
 import autobal
 from autobal import report
-from autobal.analysis.quantities import significant
+from autobal.analysis.run.quantities import significant
 from autobal.ocp import robust_study, spinup_study, time_optimal_study
 from autobal.ocp.modal_study import QUANTITIES as MODAL
 from autobal.ocp.solve import ipopt_options
@@ -193,10 +193,10 @@ def test_time_optimal_verdict_is_the_earliest_arrival_under_the_limit():
 
 
 def test_ross_api684_values_of_each_critical_speed():
-    """API 684 (2005) per critical speed below the final speed (autobal.analysis.standards.margin_check, computed in
-    the run): in to_dict beside the critical speeds with their statuses, the final speed the optimum ends at; declared
-    with the standard as the source."""
-    from autobal.analysis.standards import HalfPower, margin_check
+    """API 684 (2005) per critical speed below the final speed (autobal.analysis.numerics.standards.margin_check,
+    computed in the run): in to_dict beside the critical speeds with their statuses, the final speed the optimum ends
+    at; declared with the standard as the source."""
+    from autobal.analysis.numerics.standards import HalfPower, margin_check
     from autobal.ocp.modal_study import CriticalSpeeds, Margin
 
     margins = [margin_check(HalfPower(91.78, 91.8, 1.0, 90.5, 93.1, 91.8 / 2.6), 350.0),
@@ -276,7 +276,7 @@ def test_every_objective_declares_every_number(extra):
     The integrated objective converges slowly on this rotor at 40 intervals (775 IPOPT iterations; a rounding-level
     change of the NLP once took it past 1000): the iteration limit is raised, this test is about declarations."""
     from autobal.analyses.spinup import ocp as spinup_ocp
-    from autobal.analysis.result import plain
+    from autobal.analysis.run.result import plain
 
     scene = autobal.load(SCENE, set=SMALL | {"analyses.spinup.segments": 0, "analyses.spinup.max_iterations": 3000}
                          | extra)

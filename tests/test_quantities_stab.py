@@ -17,10 +17,11 @@ import yaml
 import autobal
 from autobal import report, scenario
 from autobal.analyses.design import VARIABLES
-from autobal.analysis import design_study, stability
-from autobal.analysis.linearize import Setup
-from autobal.analysis.quantities import leaf_paths, significant
-from autobal.analysis.result import plain
+from autobal.analysis.numerics import stability
+from autobal.analysis.numerics.linearize import Setup
+from autobal.analysis.run.quantities import leaf_paths, significant
+from autobal.analysis.run.result import plain
+from autobal.analysis.studies import design_study
 from autobal.parts.device import dynamic_device
 from autobal.units import DIMENSIONS
 from tests.test_quantities import FAST, SLOW, check_declared
@@ -73,7 +74,7 @@ def test_every_number_of_an_extreme_scene_is_declared(path):
 
 def test_every_design_variable_is_declared_in_the_unit_of_its_scene_field():
     """The two tables agree: the scene's unit kind of each design variable (autobal/analyses/design.py) and the SI
-    unit the design states for its key (analysis/design.py), through the declaration by scene path."""
+    unit the design states for its key (analysis/numerics/design.py), through the declaration by scene path."""
     for path, (key, kind) in VARIABLES.items():
         q = design_study.variable(path)
         assert q is not None and q.symbol == key and q.display, path

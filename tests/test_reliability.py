@@ -11,7 +11,7 @@ from numpy.testing import assert_allclose
 
 from autobal import scenario
 from autobal.analyses import reliability as rel_room
-from autobal.analysis import reliability as rel
+from autobal.analysis.studies import reliability as rel
 from autobal.cli import main
 from autobal.errors import ScenarioError
 from autobal.models.hydroheel import (

@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 
 from autobal import report
-from autobal.analysis.design_study import quantity, variable
+from autobal.analysis.studies.design_study import quantity, variable
 
 
 @pytest.mark.cli

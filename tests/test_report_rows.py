@@ -12,9 +12,9 @@ import pytest
 
 import autobal
 from autobal import report
-from autobal.analysis.fields import Record, TypedResult, declarations, field_key, place, quantity, record
-from autobal.analysis.quantities import Quantity
-from autobal.analysis.result import plain
+from autobal.analysis.run.fields import Record, TypedResult, declarations, field_key, place, quantity, record
+from autobal.analysis.run.quantities import Quantity
+from autobal.analysis.run.result import plain
 
 ROOT = Path(autobal.__file__).parent
 

@@ -65,8 +65,8 @@ at the nominal pressure, the area base s_B of the dimensionless groups (Pavlenko
 from pydantic import Field
 
 from autobal.analyses import COST
-from autobal.analysis.quantities import Declarations, Quantity
-from autobal.analysis.result import Result
+from autobal.analysis.run.quantities import Declarations, Quantity
+from autobal.analysis.run.result import Result
 from autobal.schema import Strict
 from autobal.units import Pressure
 

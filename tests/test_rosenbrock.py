@@ -1,5 +1,5 @@
-"""RODAS4 (analysis/rosenbrock.py) and the transient Simulator's ``integrator="rodas4"``: against CVODES at a tight
-tolerance on the pump's energy-consistent model, against the exact solution (matrix exponential) of a stiff
+"""RODAS4 (analysis/numerics/rosenbrock.py) and the transient Simulator's ``integrator="rodas4"``: against CVODES at a
+tight tolerance on the pump's energy-consistent model, against the exact solution (matrix exponential) of a stiff
 linear system, its order under a step ladder, failures, stop events, and the virtual machine against C."""
 
 from __future__ import annotations
@@ -11,8 +11,8 @@ import scipy.linalg
 
 from autobal import scenario
 from autobal.analyses import transient as transient_analysis
-from autobal.analysis import rosenbrock, simulate
-from autobal.analysis.linearize import Setup
+from autobal.analysis.numerics import rosenbrock, simulate
+from autobal.analysis.numerics.linearize import Setup
 from autobal.models.dynamics import build
 from autobal.parts import device as device_part
 

@@ -11,7 +11,7 @@ from numpy.testing import assert_allclose
 
 from autobal import scenario
 from autobal.analyses import ross_spinup_robust as analysis
-from autobal.analysis.quantities import display_units
+from autobal.analysis.run.quantities import display_units
 from autobal.models import ross_rotor as rr
 from autobal.ocp import modal, modal_search
 from autobal.ocp import robust as rb

@@ -10,7 +10,7 @@ import pytest
 from numpy.testing import assert_allclose
 from scipy.optimize import brentq
 
-from autobal.analysis import rotor as R
+from autobal.analysis.numerics import rotor as R
 from autobal.models.rotor import LiquidLayer, RotorParams, rotor_model
 
 SOURCE = RotorParams.from_groups(105.0, 100.0)  # Omega0 = 105 1/s, chi/m1 = 100 1/s
@@ -125,7 +125,7 @@ STEPS = [(0, 150), (150, 0), (110, 150), (150, 110)]
 @pytest.mark.parametrize("psi", [1.0, 0.75, 0.5, 0.25])
 @pytest.mark.parametrize("w0, w1", STEPS)
 def test_step_closed_form_equals_cvodes(psi, w0, w1):
-    from autobal.analysis.rotor_study import step_case
+    from autobal.analysis.studies.rotor_study import step_case
 
     r = step_case(SOURCE.with_psi(psi), w0, w1, 0.3, points=3000)
     assert r["closed_form_vs_cvodes"] < 1e-8
@@ -145,7 +145,7 @@ TABLE_5_3 = [
 @pytest.mark.literature
 @pytest.mark.parametrize("row", TABLE_5_3)
 def test_step_table_5_3(row):
-    from autobal.analysis.rotor_study import step_case
+    from autobal.analysis.studies.rotor_study import step_case
 
     step, psi, d0, dmax, tmax, dss, amax, ass, t5 = row
     w0, w1 = (float(v) for v in step.split("->"))
@@ -279,7 +279,7 @@ def test_rotor_dynamics_result_plots_without_pyplot(tmp_path):
     from matplotlib.figure import Figure
 
     from autobal.analyses.rotor_dynamics import RotorDynamics, Stationary, spec
-    from autobal.analysis.rotor_study import run
+    from autobal.analysis.studies.rotor_study import run
     from autobal.schema import Range
 
     P = RotorParams.from_groups(Omega0=100.0, chi_over_m1=2.0, psi=0.5)

@@ -1,4 +1,4 @@
-"""The rotor identified from a run-up (analysis/runup.py, issue #36): the transient Jeffcott model of the 1x
+"""The rotor identified from a run-up (analysis/studies/runup.py, issue #36): the transient Jeffcott model of the 1x
 vectors against an independent simulation (scipy DOP853 and a per-revolution DFT of its own), the fit's recovery of
 the critical speed, damping ratio and unbalance within their 95 % intervals at moderate and fast rates, the
 classical readings' bias beside it, the coverage of the intervals over many noisy run-ups (slow), a run that never
@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from autobal.analysis import runup as R
-from autobal.analysis.rotor import steady_state
+from autobal.analysis.numerics.rotor import steady_state
+from autobal.analysis.studies import runup as R
 from autobal.models.rotor import RotorParams
 from tests.hostile import refused
 
@@ -49,7 +49,7 @@ def fast():
 
 def test_steady_whirl_is_the_closed_form():
     """The steady 1x vector per unit eccentricity from ode_fixed's Jacobian ((i nu I - A) Z = F) equals Pashkov
-    (2010), Eq. (3) at psi = 1 (analysis/rotor.py) and the hand formula w^2/(w_n^2 - w^2 + 2 i zeta w_n w)."""
+    (2010), Eq. (3) at psi = 1 (analysis/numerics/rotor.py) and the hand formula w^2/(w_n^2 - w^2 + 2 i zeta w_n w)."""
     w = np.array([10.0, 60.0, 99.0, 100.0, 101.0, 250.0])
     H = R.steady_response(w, WN, ZETA)
     assert_allclose(H, w**2 / (WN**2 - w**2 + 2j * ZETA * WN * w), rtol=1e-12)
@@ -274,7 +274,7 @@ def shipped_measurement() -> str:
     v = sim.vectors(SHIPPED_NOISE, np.random.default_rng(SHIPPED_SEED))
     s = SHIPPED
     lines = [
-        "# Synthetic run-up of a 120 kg Jeffcott rotor, made by autobal.analysis.runup.SyntheticRunup (scipy",
+        "# Synthetic run-up of a 120 kg Jeffcott rotor, made by autobal.analysis.studies.runup.SyntheticRunup (scipy",
         "# DOP853, order tracking by its own DFT from key-phasor pulse to pulse), not by the fitting model's code:",
         "# tests/test_runup.py::shipped_measurement writes this file and",
         "# test_the_shipped_measurement_is_the_simulators checks it. Truth: critical speed 2400 rpm, damping ratio",

@@ -9,7 +9,8 @@ import threading
 import pytest
 
 import autobal
-from autobal.analysis import ipopt, solver_options
+from autobal.analysis.numerics import ipopt
+from autobal.analysis.run import solver_options
 from autobal.errors import SolveError
 from autobal.output import SolverLog
 
@@ -144,7 +145,7 @@ def test_casadi_messages_of_a_solver_call_go_to_the_runs_log_and_the_streams_com
     the same objects afterwards; without a run log it reaches the caller as before."""
     import casadi as ca
 
-    from autobal.analysis import interrupt, solver_output
+    from autobal.analysis.run import interrupt, solver_output
 
     x = ca.SX.sym("x")
     F = ca.integrator("F", "cvodes", {"x": x, "ode": ca.sqrt(x)}, 0, 1)

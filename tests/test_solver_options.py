@@ -1,4 +1,4 @@
-"""One place for solver options (analysis/solver_options.py): documented defaults, set for a session, reset,
+"""One place for solver options (analysis/run/solver_options.py): documented defaults, set for a session, reset,
 changed within a block, refused when unknown; every solver reads them when it is built or run."""
 
 import re
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import autobal
-from autobal.analysis import solver_options as so
+from autobal.analysis.run import solver_options as so
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -75,7 +75,7 @@ def test_an_integer_is_a_float_option():
 
 def _fit(max_iter=None):
     """A two-parameter least-squares fit that IPOPT needs several iterations for: r = (e^x0 - 2, x1^3 - 1)."""
-    from autobal.analysis.least_squares import LeastSquares
+    from autobal.analysis.numerics.least_squares import LeastSquares
 
     x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 0)
     ls = LeastSquares("fit_test", x, p, ca.vertcat(ca.exp(x[0]) - 2, x[1] ** 3 - 1), ca.SX(0, 1), 2,
@@ -84,7 +84,7 @@ def _fit(max_iter=None):
 
 
 def ipopt_solve(solver):
-    from autobal.analysis import ipopt
+    from autobal.analysis.numerics import ipopt
 
     return ipopt.solve(solver, x0=[3.0, 3.0], lbx=-10, ubx=10, lbg=0, ubg=0, p=[])
 
@@ -108,8 +108,8 @@ def test_an_ipopt_solver_is_built_with_the_options_in_force():
 
 
 def test_the_statics_read_the_ipopt_and_continuation_groups():
-    from autobal.analysis.statics import StaticsSolver
-    from autobal.analysis.statics_study import continuation
+    from autobal.analysis.numerics.statics import StaticsSolver
+    from autobal.analysis.studies.statics_study import continuation
     from autobal.errors import SolveError
     from autobal.parts.device import design
     from autobal.scenario import load
@@ -138,8 +138,8 @@ def test_the_spinup_coarse_stage_and_the_transient_read_theirs():
 
 
 def test_the_transient_integrator_reads_its_group():
-    from autobal.analysis.linearize import Setup
-    from autobal.analysis.simulate import Simulator
+    from autobal.analysis.numerics.linearize import Setup
+    from autobal.analysis.numerics.simulate import Simulator
     from autobal.parts import device
 
     model = Setup(device.adapt(autobal.load("pump_pe600_dynamics").device)).nonlinear("energy")
@@ -160,9 +160,9 @@ def test_the_transient_integrator_reads_its_group():
 
 
 def test_the_rotor_studies_read_their_group():
-    """Lewis' run-up (analysis/rotor.py): a looser tolerance of the group moves the peak, within it, and a step
+    """Lewis' run-up (analysis/numerics/rotor.py): a looser tolerance of the group moves the peak, within it, and a step
     budget of 3 does not reach the first output (CVODES fails)."""
-    from autobal.analysis import rotor
+    from autobal.analysis.numerics import rotor
 
     ref = rotor.lewis(0.05, 0.01)["peak"]
     with autobal.using_solver_defaults("rotor", tol=1e-5):
@@ -185,7 +185,7 @@ def test_the_scene_defaults_are_the_documented_ones():
 def test_no_copy_of_a_documented_default_outside_the_module():
     # "option": <its documented value> written anywhere else in the library is a second place for it
     copies = []
-    for path in [*ROOT.glob("analysis/*.py"), *ROOT.glob("ocp/*.py"), *ROOT.glob("autobal/**/*.py")]:
+    for path in [*ROOT.glob("analysis/**/*.py"), *ROOT.glob("ocp/*.py"), *ROOT.glob("autobal/**/*.py")]:
         if path.name == "solver_options.py":
             continue
         text = path.read_text()
@@ -222,7 +222,7 @@ def test_the_spinup_resimulation_reads_its_group():
 
 
 def test_the_batched_gauss_newton_reads_its_group():
-    from autobal.analysis.least_squares import GaussNewtonBatch
+    from autobal.analysis.numerics.least_squares import GaussNewtonBatch
 
     x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 2)
     residual = ca.Function("r", [x, p], [ca.vertcat(ca.exp(x[0]) - p[0], x[1] ** 3 - p[1])])

@@ -11,10 +11,10 @@ from pydantic import BaseModel
 
 from autobal import scenario
 from autobal.analyses import design, estimation, liquid_balancer, montecarlo, reliability, rotor_dynamics, statics
-from autobal.analysis import design_study, estimation_study, rotor_study, statics_study
-from autobal.analysis import liquid_balancer as liquid_balancer_study
-from autobal.analysis import montecarlo as montecarlo_study
-from autobal.analysis import reliability as reliability_study
+from autobal.analysis.studies import design_study, estimation_study, rotor_study, statics_study
+from autobal.analysis.studies import liquid_balancer as liquid_balancer_study
+from autobal.analysis.studies import montecarlo as montecarlo_study
+from autobal.analysis.studies import reliability as reliability_study
 
 #: the studies that take a spec: their modules read no schema, no file and no settings
 STUDIES = (estimation_study, liquid_balancer_study, montecarlo_study, reliability_study, rotor_study, design_study,
@@ -55,9 +55,9 @@ def test_the_room_hands_its_study_a_frozen_spec_of_plain_values(room, name):
     settings = getattr(scene.analyses, key)
     args = (settings, _motor(scene)) if room is rotor_dynamics else (settings,)
     spec = room.spec(*args)
-    # the study's own Spec (the design study's is of its NLP, analysis/design.py)
+    # the study's own Spec (the design study's is of its NLP, analysis/numerics/design.py)
     assert type(spec).__name__ == "Spec"
-    assert type(spec).__module__ in (room.QUANTITIES_MODULE, "autobal.analysis.design")
+    assert type(spec).__module__ in (room.QUANTITIES_MODULE, "autobal.analysis.numerics.design")
     # the loss coefficient's DiscLosses is a model parameter object: frozen data as well
     assert _plain(spec, "spec") == []
     with pytest.raises(dataclasses.FrozenInstanceError):

@@ -14,7 +14,7 @@ import pytest
 from autobal import api
 from autobal.analyses import spinup_robust as spinup_robust_analysis
 from autobal.analyses.spinup import ocp as spinup_ocp
-from autobal.analysis.executor import InProcess
+from autobal.analysis.run.executor import InProcess
 from autobal.errors import ScenarioError
 from autobal.models.rotor import RotorParams
 from autobal.ocp import robust as rb
@@ -178,7 +178,7 @@ def test_earliest_arrival_of_a_limit_the_ramp_keeps_is_the_ramp():
 def test_validation_on_a_dask_cluster_gives_the_in_process_numbers():
     from distributed import LocalCluster
 
-    from autobal.analysis import executor
+    from autobal.analysis.run import executor
 
     ocp = jeffcott()
     unc = rb.Uncertainty()

@@ -112,7 +112,7 @@ def test_robust_report_verdict_never_against_a_ramp_outside_the_drive_limits(ram
     """The robust profile beats the nominal optimum but not a ramp: against a ramp within the limits the verdict
     fails; against a ramp outside them it is not compared and says so."""
     from autobal.analyses.spinup_robust import report_section
-    from autobal.analysis.result import plain
+    from autobal.analysis.run.result import plain
     from autobal.report import Section
     from tests.test_typed_ocp import robust_result
 

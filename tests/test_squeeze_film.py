@@ -9,8 +9,8 @@ import pytest
 from numpy.testing import assert_allclose
 
 import autobal
-from autobal.analysis import linearize, simulate, stability
-from autobal.analysis.linearize import Setup
+from autobal.analysis.numerics import linearize, simulate, stability
+from autobal.analysis.numerics.linearize import Setup
 from autobal.models import dynamics as dy
 from autobal.models.device import face_area
 from autobal.parts.device import dynamic_device

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from autobal.analysis.stability import _intervals
+from autobal.analysis.numerics.stability import _intervals
 
 
 def test_a_boundary_is_the_root_between_grid_points():

@@ -1,6 +1,6 @@
-"""The standards' clauses (autobal.analysis.standards) against hand calculations: API 684 (2005) / API 617 (2014)
-amplification factor at the half-power points of the unbalance response, separation margin from the operating speed,
-the margin required; ISO 21940-11 (2016) balance quality grades; and the reports that call them (the Jeffcott
+"""The standards' clauses (autobal.analysis.numerics.standards) against hand calculations: API 684 (2005) / API 617
+(2014) amplification factor at the half-power points of the unbalance response, separation margin from the operating
+speed, the margin required; ISO 21940-11 (2016) balance quality grades; and the reports that call them (the Jeffcott
 spin-up, rotor_dynamics, the multi-mode ROSS rotor against ROSS's own unbalance response)."""
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from autobal.analysis import standards as S
-from autobal.analysis.rotor_study import api_margins
+from autobal.analysis.numerics import standards as S
+from autobal.analysis.studies.rotor_study import api_margins
 from autobal.models.rotor import RotorParams
 
 RPM = 2 * math.pi / 60
@@ -54,8 +54,8 @@ def test_the_issue_case_2400_rpm_critical_service_at_4000_rpm():
                     rtol=1e-9)
     assert S.separation_margin(2400, 4000) == pytest.approx(40.0)
     assert S.required_separation_margin(af, below=True) == 16.0
-    # the toolkit's Jeffcott rotor through its own steady response (analysis.rotor.steady_state): the critical speed
-    # is the response's peak, 2400 r_p rpm, so SM = 100 (4000 - 2400 r_p)/4000 = 39.98 %
+    # the toolkit's Jeffcott rotor through its own steady response (analysis.numerics.rotor.steady_state): the critical
+    # speed is the response's peak, 2400 r_p rpm, so SM = 100 (4000 - 2400 r_p)/4000 = 39.98 %
     check = api_margins(rotor(2400, 0.02), 4000 * RPM)
     assert check["amplification_factor"] == pytest.approx(af, rel=1e-8)
     assert_allclose(check["half_power_speeds_rad_s"], [2400 * RPM * r_1, 2400 * RPM * r_2], rtol=1e-8)
@@ -305,7 +305,7 @@ def test_rotor_dynamics_states_the_margin_from_the_scenes_service_speed():
     """rotor_dynamics: the rotor's AF always (the model's own response), its separation margin only from the scene's
     service speed (rotor.unbalance.service_speed), null with the reason without one; the summary says which."""
     from autobal.analyses.rotor_dynamics import RotorDynamics, spec
-    from autobal.analysis import rotor_study
+    from autobal.analysis.studies import rotor_study
 
     P = rotor(2400, 0.02)
     with_speed = rotor_study.run(P, spec(RotorDynamics()), service_speed=4000 * RPM)

@@ -12,8 +12,8 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from autobal import scenario
-from autobal.analysis import closed_form
-from autobal.analysis.statics import ParametricStatics, StaticsSolver, ideal_guess
+from autobal.analysis.numerics import closed_form
+from autobal.analysis.numerics.statics import ParametricStatics, StaticsSolver, ideal_guess
 from autobal.parts.device import design
 
 # ---- literature validation: the source's closed forms (App. A, App. B) ----
@@ -223,7 +223,7 @@ def test_property_ipopt_satisfies_balances_and_equals_newton(case):
 # ---- the parametric statics evaluator (one Newton solve for the sweep, the Monte Carlo, the estimation) ----
 
 def test_parametric_evaluator_equals_ipopt_in_chunks_and_on_the_stop(pump):
-    """Evaluator of analysis/statics.py with sigma and the supply pressure psi_in as parameters, in chunks
+    """Evaluator of analysis/numerics/statics.py with sigma and the supply pressure psi_in as parameters, in chunks
     of 3 points (so maps of several sizes and a remainder), against IPOPT per point: the regulating points
     from the closed-form start, the saturated ones (psi1 >= 1.2, App. A) through the valve-on-stop set."""
     g = pump.design.groups
@@ -254,8 +254,8 @@ def test_compiled_batch_path_equals_the_virtual_machine_and_ipopt_over_a_paramet
     block) against CasADi's virtual machine on the same points (bit for bit: same operations, no fast-math) and
     against IPOPT point by point: psi1 across regulation and saturation (App. A: the valve reaches its stop
     near psi1 = 1.2), sigma and psi_in over +-10 %."""
-    from autobal.analysis.compiled import compiler
-    from autobal.analysis.statics import COMPILED_MIN
+    from autobal.analysis.numerics.compiled import compiler
+    from autobal.analysis.numerics.statics import COMPILED_MIN
 
     if compiler() is None:
         pytest.skip("no C compiler: the batch path runs on CasADi's virtual machine only")
@@ -290,7 +290,7 @@ def test_compiled_batch_path_equals_the_virtual_machine_and_ipopt_over_a_paramet
 def test_refinement_resolves_the_saturation_kink(pump):
     """Refined points lie inside the one interval where the valve reaches its stop, each equal to a cold
     solve there, and bracket the onset more tightly than the grid; no refinement where no stop changes."""
-    from autobal.analysis.statics_study import REFINE_POINTS, continuation, refine
+    from autobal.analysis.studies.statics_study import REFINE_POINTS, continuation, refine
 
     grid = np.linspace(1.0, 1.5, 11)
     pts = continuation(pump, grid, 0.04)

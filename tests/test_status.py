@@ -19,8 +19,8 @@ import yaml
 
 import autobal
 from autobal import scenario
-from autobal.analysis import executor, interrupt
-from autobal.analysis import statics as st
+from autobal.analysis.numerics import statics as st
+from autobal.analysis.run import executor, interrupt
 from autobal.cli import main
 from autobal.errors import ScenarioError, SolveError, SolverFailure
 from autobal.models import device as dv

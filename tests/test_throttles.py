@@ -84,7 +84,7 @@ def test_closed_valve_passes_no_flow():
 
 def test_dynamics_flows_at_equilibrium_are_the_statics_flows():
     from autobal import scenario
-    from autobal.analysis.linearize import Setup
+    from autobal.analysis.numerics.linearize import Setup
     from autobal.parts import device as device_part
 
     setup = Setup(device_part.adapt(scenario.load("pump_pe600_dynamics").device), 1.0)

@@ -14,9 +14,10 @@ import pytest
 
 import autobal
 from autobal import report
-from autobal.analysis import fields, statics_study
-from autobal.analysis.result import plain, with_statuses
-from autobal.analysis.statics_study import QUANTITIES, StaticsResult
+from autobal.analysis.run import fields
+from autobal.analysis.run.result import plain, with_statuses
+from autobal.analysis.studies import statics_study
+from autobal.analysis.studies.statics_study import QUANTITIES, StaticsResult
 
 #: shipped scene -> the typed analyses of this file it runs; (slow): more than about 20 s
 SCENES = {"pump_pe600_statics": ("statics",), "compressor_k180_statics": ("statics",),
@@ -104,7 +105,7 @@ def test_a_small_monte_carlo_round_trips_with_its_failures_last(tmp_path):
     """Pump PE 600-300, 1000 samples at ψ1 = 1 (Pavlenko 2014, ch. 3): the block ends with its failures (none),
     the null correlation has its status, the sampled arrays are held but not written, and the failures a run adds
     stay last and fail the result."""
-    from autobal.analysis.montecarlo import MonteCarloResult
+    from autobal.analysis.studies.montecarlo import MonteCarloResult
 
     scene = autobal.load("pump_pe600_montecarlo", set={
         "analyses.montecarlo.samples": 1000, "analyses.montecarlo.chunk_size": 1000, "analyses.montecarlo.afc": None,
@@ -129,7 +130,7 @@ def test_a_small_monte_carlo_round_trips_with_its_failures_last(tmp_path):
 def test_a_failed_fit_loads_back_as_a_failed_fit(shipped_run):
     """Table 4.3 fits (Pavlenko 2014, §4.4): the solved fits are Fit records, the failures stay after the status;
     a fit whose block says it failed comes back as a FailedFit, with its solver's status in the verdict."""
-    from autobal.analysis.estimation_study import EstimationResult, FailedFit, Fit
+    from autobal.analysis.studies.estimation_study import EstimationResult, FailedFit, Fit
 
     res = shipped_run("rig_table43_fit")[0]["estimation"]
     assert all(isinstance(f, Fit) for f in res.fits.values()) and res.solved == res.fits
@@ -213,7 +214,7 @@ def test_a_keyword_only_record_takes_keywords_and_keeps_its_field_order():
 def test_the_statics_study_takes_a_frozen_spec():
     """issue #34 item 3: the room validates its settings into statics_study.Spec; the study run on a Spec built in
     code gives the room's Result (compressor K 180-131-1, a coarse sweep), and a Spec is frozen and checked."""
-    from autobal.analysis.statics import StaticsSolver
+    from autobal.analysis.numerics.statics import StaticsSolver
     from autobal.parts.device import design
 
     scene = autobal.load("compressor_k180_statics", set={"analyses.statics.discharge_ratio.points": 6,

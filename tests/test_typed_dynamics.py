@@ -3,7 +3,7 @@
 For every shipped scene that runs one of them: the Result is a typed Result, ``from_dict(to_dict(r)) == r`` through
 JSON, its block is the one results.json holds, ``autobal.load_run`` loads it back (it is not in ``unloaded``), its
 summary is the run's, and report.html rendered again from the loaded Results is the page the run wrote, byte for
-byte.  Beside them the small pieces of analysis/fields.py and analysis/quantities.py these Results need."""
+byte.  Beside them the small pieces of analysis/run/fields.py and analysis/run/quantities.py these Results need."""
 
 from __future__ import annotations
 
@@ -15,9 +15,9 @@ import pytest
 
 import autobal
 from autobal import report
-from autobal.analysis import fields
-from autobal.analysis.quantities import Declarations, Quantity
-from autobal.analysis.result import plain
+from autobal.analysis.run import fields
+from autobal.analysis.run.quantities import Declarations, Quantity
+from autobal.analysis.run.result import plain
 
 DYNAMICS = ("frequency", "transient", "rotor_dynamics", "liquid_balancer")  # the analyses typed here
 SCENES = [pytest.param("compressor_k180_dynamics", id="compressor_k180_dynamics"),
@@ -151,7 +151,7 @@ def test_the_rotor_block_keeps_the_margin_keys_in_the_order_margin_check_writes_
     standards.margin_check writes them (with or without a service speed), the nulls with their statuses; the
     stationary case's z1..M2 null with theirs; everything comes back from results.json."""
     from autobal.analyses.rotor_dynamics import RotorDynamics, Stationary, spec
-    from autobal.analysis.rotor_study import RotorDynamicsResult, api_margins, run
+    from autobal.analysis.studies.rotor_study import RotorDynamicsResult, api_margins, run
     from autobal.models.rotor import RotorParams
     from autobal.schema import Range
 

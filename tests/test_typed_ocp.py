@@ -15,8 +15,8 @@ import pytest
 
 import autobal
 from autobal import report
-from autobal.analysis import fields
-from autobal.analysis.result import plain
+from autobal.analysis.run import fields
+from autobal.analysis.run.result import plain
 from autobal.ocp import robust_study
 from autobal.ocp.robust_study import ModalRobustResult, Profiles, RobustResult
 from autobal.ocp.spinup_study import Baseline, Dwell, Rotor, SpinupResult

@@ -14,11 +14,12 @@ import pytest
 
 import autobal
 from autobal import report, scenario
-from autobal.analysis import fields, stability
-from autobal.analysis.linearize import Setup
-from autobal.analysis.quantities import significant
-from autobal.analysis.result import Failures, html_block, plain
-from autobal.analysis.stability import QUANTITIES, StabilityResult
+from autobal.analysis.numerics import stability
+from autobal.analysis.numerics.linearize import Setup
+from autobal.analysis.numerics.stability import QUANTITIES, StabilityResult
+from autobal.analysis.run import fields
+from autobal.analysis.run.quantities import significant
+from autobal.analysis.run.result import Failures, html_block, plain
 from autobal.api import Run
 from autobal.cli import main
 from autobal.parts.device import dynamic_device
@@ -124,7 +125,7 @@ def test_failures_are_a_field_and_fail_the_run(pump):
 
 
 def test_a_result_holding_data_keeps_its_failures():
-    from autobal.analysis.result import Result
+    from autobal.analysis.run.result import Result
 
     class Held(Result):
         def __init__(self, data):
@@ -201,8 +202,8 @@ def test_reliability_is_typed_loads_back_and_renders_the_same_report(tmp_path):
     """Hydro-heel wear (Pavlenko 2014, ch. 1.2) on a coarse grid (201 times, 4001 load nodes): the Result's fields
     are its block, a null (no time of reliable operation: P(0) = 0.776 < 0.8) comes back as NaN and goes out as
     null with its status, load_run rebuilds it equal, and report.html rendered again from it is the same page."""
-    from autobal.analysis.reliability import QUANTITIES as REL
-    from autobal.analysis.reliability import ReliabilityResult
+    from autobal.analysis.studies.reliability import QUANTITIES as REL
+    from autobal.analysis.studies.reliability import ReliabilityResult
 
     scene = autobal.load("hydroheel_wear", set={"analyses.reliability.time_points": 201,
                                                 "analyses.reliability.tau_nodes": 4001})

@@ -1,5 +1,5 @@
-"""One unit vocabulary (analysis/kinds.py): the scene loader (autobal/units.py) and the display
-(analysis/quantities.py) read the same table of kinds; kN/mm in and out."""
+"""One unit vocabulary (analysis/run/kinds.py): the scene loader (autobal/units.py) and the display
+(analysis/run/quantities.py) read the same table of kinds; kN/mm in and out."""
 
 import json
 from pathlib import Path
@@ -8,8 +8,8 @@ import pytest
 
 import autobal
 from autobal import cli, units
-from autobal.analysis import kinds
-from autobal.analysis.quantities import (
+from autobal.analysis.run import kinds
+from autobal.analysis.run.quantities import (
     DEFAULT_DISPLAY,
     DISPLAY_UNITS,
     KINDS,

@@ -11,8 +11,8 @@ from html.parser import HTMLParser
 import pytest
 
 from autobal import report, scenario
-from autobal.analysis.frequency import MODEL_LABELS
-from autobal.analysis.quantities import significant
+from autobal.analysis.numerics.frequency import MODEL_LABELS
+from autobal.analysis.run.quantities import significant
 
 FAST = ("pump_pe600_statics", "pump_pe600_dynamics", "rig_table43_fit", "washer_liquid_balancer_nested")
 SLOW = tuple(p.stem for p in scenario.shipped() if p.stem not in FAST)

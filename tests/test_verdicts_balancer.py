@@ -11,7 +11,7 @@ import math
 
 import pytest
 
-from autobal.analysis.liquid_balancer import EFFICIENCIES, QUANTITIES, OperatingPoint, balance_verdict
+from autobal.analysis.studies.liquid_balancer import EFFICIENCIES, QUANTITIES, OperatingPoint, balance_verdict
 
 R, H, V, RHO, D0 = 0.2, 0.05, 150e-6, 1000.0, 0.15 * 0.2
 LAYER = R - math.sqrt(R**2 - V / (math.pi * H))  # R - r: 2.402 mm

@@ -17,10 +17,10 @@ import yaml
 
 import autobal
 from autobal import report
-from autobal.analysis import frequency
-from autobal.analysis.result import plain
-from autobal.analysis.statics import StaticsSolver
-from autobal.analysis.statics_study import QUANTITIES
+from autobal.analysis.numerics import frequency
+from autobal.analysis.numerics.statics import StaticsSolver
+from autobal.analysis.run.result import plain
+from autobal.analysis.studies.statics_study import QUANTITIES
 from autobal.parts.device import design
 from autobal.scenario import shipped
 

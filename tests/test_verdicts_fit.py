@@ -17,8 +17,8 @@ from numpy.testing import assert_allclose
 from scipy import stats
 
 import autobal
-from autobal.analysis.adequacy import decision, fisher_adequacy
-from autobal.analysis.estimation_study import EstimationResult, _physical
+from autobal.analysis.numerics.adequacy import decision, fisher_adequacy
+from autobal.analysis.studies.estimation_study import EstimationResult, _physical
 from autobal.models.hydroheel import TurbulentDisc
 
 ROOT = Path(__file__).resolve().parents[1]

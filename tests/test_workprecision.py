@@ -8,8 +8,8 @@ import pytest
 from numpy.testing import assert_allclose
 
 from autobal import cli
-from autobal.analysis import workprecision as wp
-from autobal.analysis.result import plain
+from autobal.analysis.run.result import plain
+from autobal.analysis.studies import workprecision as wp
 
 
 def test_reference_agrees_with_double_precision_newton(pump, compressor):
@@ -54,7 +54,7 @@ def test_run_reports_timing_and_accuracy(tmp_path):
 
 def test_dynamics_work_precision_orders_the_integrators():
     from autobal import scenario
-    from autobal.analysis.linearize import Setup
+    from autobal.analysis.numerics.linearize import Setup
     from autobal.parts import device as device_part
 
     model = Setup(device_part.adapt(scenario.load("pump_pe600_dynamics").device)).nonlinear("energy")

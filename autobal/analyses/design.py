@@ -2,7 +2,7 @@
 
 Each design variable is a scene path with bounds in units, e.g.
 ``device.dynamics.disc_chamber_volume: {lower: 1e-6 m^3, upper: 2e-3 m^3}``; the analysis is
-analysis/design.py and analysis/design_study.py.
+analysis/numerics/design.py and analysis/studies/design_study.py.
 """
 
 from __future__ import annotations
@@ -17,10 +17,10 @@ from autobal.units import Length, to_si
 
 DESCRIPTION = "stability-constrained design of the device"
 NEEDS = "device.dynamics"
-QUANTITIES_MODULE = "autobal.analysis.design_study"  # its QUANTITIES declare every number of its block
+QUANTITIES_MODULE = "autobal.analysis.studies.design_study"  # its QUANTITIES declare every number of its block
 TITLE = "Stability-constrained design"  # of its section of report.html
 
-# scene path -> (design key of analysis/design.py, unit kind; None: dimensionless)
+# scene path -> (design key of analysis/numerics/design.py, unit kind; None: dimensionless)
 VARIABLES = {
     "device.dynamics.disc_chamber_volume": ("V2", "volume"),
     "device.dynamics.cavity_volume": ("V3", "volume"),
@@ -116,8 +116,8 @@ SETTINGS = Design
 
 
 def spec(settings: Design):
-    """The design study's spec (autobal.analysis.design.Spec, SI) of the validated settings."""
-    from autobal.analysis import design as ds
+    """The design study's spec (autobal.analysis.numerics.design.Spec, SI) of the validated settings."""
+    from autobal.analysis.numerics import design as ds
 
     variables = tuple(ds.Variable(path, key, lo, hi) for path, (key, lo, hi) in settings.bounds_si().items())
     gap = (settings.face_gap.lower, settings.face_gap.upper)
@@ -129,8 +129,9 @@ def spec(settings: Design):
 
 
 def run(scene, settings: Design):
-    """Stability-constrained design of the balancing device (analysis/design.py)."""
-    from autobal.analysis import design_study, progress
+    """Stability-constrained design of the balancing device (analysis/numerics/design.py)."""
+    from autobal.analysis.run import progress
+    from autobal.analysis.studies import design_study
     from autobal.parts.device import dynamic_device
 
     with progress.steps(None, "design", "IPOPT solve", catch=True):
@@ -148,9 +149,9 @@ def estimate_seconds(settings: Design) -> float:
 def report_section(sec) -> None:
     """Stability-constrained design: the optimum's verdict with its margin to the required decay rate, its
     certificate, the parameters in display units; the designs under the source's models in the validation part.
-    Reads the fields of the loaded :class:`~autobal.analysis.design_study.DesignResult` (``sec.result``)."""
-    from autobal.analysis import design_study as ds  # the declarations and the variables: one copy each
-    from autobal.analysis.quantities import is_number, significant
+    Reads the fields of the loaded :class:`~autobal.analysis.studies.design_study.DesignResult` (``sec.result``)."""
+    from autobal.analysis.run.quantities import is_number, significant
+    from autobal.analysis.studies import design_study as ds  # the declarations and the variables: one copy each
     from autobal.report import WHY_UNSTABLE, table, text
 
     r = sec.result

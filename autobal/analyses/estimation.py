@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Annotated, Literal
 from pydantic import Field, PrivateAttr, ValidationInfo, model_validator
 
 from autobal.analyses import COST
-from autobal.analysis.solver_options import DEFAULTS
+from autobal.analysis.run.solver_options import DEFAULTS
 from autobal.errors import ScenarioError
 from autobal.measurements import QUANTITIES, Measurements, check_fit, read_csv
 from autobal.models.device import DEVICE_GROUPS, PRESSURE_GROUPS, REGULATOR_GROUPS
@@ -27,7 +27,7 @@ if TYPE_CHECKING:
 
 DESCRIPTION = "parameter fits to measured characteristics"
 NEEDS = None
-QUANTITIES_MODULE = "autobal.analysis.estimation_study"  # its QUANTITIES declare every number of its block
+QUANTITIES_MODULE = "autobal.analysis.studies.estimation_study"  # its QUANTITIES declare every number of its block
 TITLE = "Parameter estimation"  # of its section of report.html
 
 # Parameters each model can fit.  traditional_disc: (4.16)-(4.31).  device: the groups (2.18) of the
@@ -279,7 +279,8 @@ SETTINGS = Estimation
 
 def run(scene, settings: Estimation):
     """Parameter estimation from measured static and flow characteristics (Pavlenko (2014), Sec. 4.4)."""
-    from autobal.analysis import estimation_study, progress
+    from autobal.analysis.run import progress
+    from autobal.analysis.studies import estimation_study
     from autobal.parts.device import adapt
 
     device = adapt(scene.device) if scene.device is not None else None
@@ -288,8 +289,8 @@ def run(scene, settings: Estimation):
 
 
 def spec(settings: Estimation):
-    """The study's :class:`~autobal.analysis.estimation_study.Spec` of the validated settings (SI)."""
-    from autobal.analysis import estimation_study as es
+    """The study's :class:`~autobal.analysis.studies.estimation_study.Spec` of the validated settings (SI)."""
+    from autobal.analysis.studies import estimation_study as es
 
     s, ad, lc, bs = settings, settings.adequacy, settings.loss_coefficient, settings.bootstrap
     fits = tuple(es.FitSpec(f.name, f.model, f.residual, dict(f.weights),
@@ -312,7 +313,7 @@ def estimate_seconds(settings: Estimation) -> float:
 
 def accuracy(scene, settings: Estimation):
     """Work-precision of the scene's first traditional-disc fit in u (its data, its free parameters)."""
-    from autobal.analysis import workprecision
+    from autobal.analysis.studies import workprecision
 
     fit = next((f for f in settings.fits if f.model == "traditional_disc" and f.residual == "u"), None)
     if fit is None:
@@ -340,8 +341,9 @@ def _adequacy_row(label: str, ad: dict) -> list[dict]:
 def report_section(sec) -> None:
     """Least-squares fits with standard errors, bootstrap intervals, parameter correlation and adequacy
     (Pavlenko 2014, §4.3-4.4), the loss coefficient of (4.38): one verdict over the fits (solved and adequate).
-    Reads the fields of the loaded :class:`~autobal.analysis.estimation_study.EstimationResult` (``sec.result``)."""
-    from autobal.analysis.quantities import is_number
+    Reads the fields of the loaded :class:`~autobal.analysis.studies.estimation_study.EstimationResult`
+    (``sec.result``)."""
+    from autobal.analysis.run.quantities import is_number
     from autobal.report import cell, number, table, text
 
     r = sec.result

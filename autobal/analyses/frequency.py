@@ -15,7 +15,7 @@ from autobal.units import AngularSpeed
 
 DESCRIPTION = "frequency response (AFC/Bode)"
 NEEDS = "device.dynamics"
-QUANTITIES_MODULE = "autobal.analysis.frequency"  # its QUANTITIES declare every number of its block
+QUANTITIES_MODULE = "autobal.analysis.numerics.frequency"  # its QUANTITIES declare every number of its block
 TITLE = "Frequency response (AFC)"  # of its section of report.html
 
 
@@ -50,8 +50,8 @@ SETTINGS = Frequency
 
 def run(scene, settings: Frequency):
     """AFC/PFC of the face gap of every named model (Pavlenko (2014), Eqs. (2.100)-(2.110))."""
-    from autobal.analysis import frequency as fr
-    from autobal.analysis.linearize import Setup
+    from autobal.analysis.numerics import frequency as fr
+    from autobal.analysis.numerics.linearize import Setup
     from autobal.parts.device import dynamic_device
 
     setup = Setup(dynamic_device(scene), settings.operating_ratio)
@@ -68,8 +68,8 @@ def estimate_seconds(settings: Frequency) -> float:
 def report_section(sec) -> None:
     """AFC of the face gap (Pavlenko 2014, §2.6): the headline model (energy-consistent, physical forcing)
     gives the verdict; the source's models are the validation part.  Reads the fields of the loaded
-    :class:`~autobal.analysis.frequency.FrequencyResult` (``sec.result``)."""
-    from autobal.analysis.frequency import FORCING_WORDS, QUANTITIES
+    :class:`~autobal.analysis.numerics.frequency.FrequencyResult` (``sec.result``)."""
+    from autobal.analysis.numerics.frequency import FORCING_WORDS, QUANTITIES
     from autobal.report import (
         SOURCE_MODELS,
         cell,

@@ -13,7 +13,7 @@ from autobal.units import Density, Length, Mass, Viscosity, Volume
 
 DESCRIPTION = "liquid auto-balancer studies"
 NEEDS = "liquid_balancer"
-QUANTITIES_MODULE = "autobal.analysis.liquid_balancer"  # its QUANTITIES declare every number of its block
+QUANTITIES_MODULE = "autobal.analysis.studies.liquid_balancer"  # its QUANTITIES declare every number of its block
 TITLE = "Liquid auto-balancer"  # of its section of report.html
 
 
@@ -65,15 +65,15 @@ SETTINGS = LiquidBalancerAnalysis
 
 def run(scene, settings: LiquidBalancerAnalysis):
     """Design calculations of the liquid auto-balancer (Khomyak (2020); Pashkov (2010), ch. 3)."""
-    from autobal.analysis import liquid_balancer as lb
+    from autobal.analysis.studies import liquid_balancer as lb
     from autobal.parts import liquid_balancer as part
 
     return lb.run(part.adapt(scene.liquid_balancer), spec(settings), scene.title)
 
 
 def spec(settings: LiquidBalancerAnalysis):
-    """The study's :class:`~autobal.analysis.liquid_balancer.Spec` of the validated settings (SI)."""
-    from autobal.analysis import liquid_balancer as lb
+    """The study's :class:`~autobal.analysis.studies.liquid_balancer.Spec` of the validated settings (SI)."""
+    from autobal.analysis.studies import liquid_balancer as lb
 
     s, r = settings, settings.speed_ratio
     return lb.Spec(s.variant, s.deflection, (r.start, r.stop, r.points), tuple(s.table_ratios), s.arc_angle_deg,
@@ -91,9 +91,9 @@ def estimate_seconds(settings: LiquidBalancerAnalysis) -> float:
 def report_section(sec) -> None:
     """Efficiency of the liquid auto-balancer at the operating point (Khomyak 2020, ch. 3): one verdict (a balancing
     equilibrium and enough liquid at the working speed); Tables 3.2/3.3 in the validation part.  Reads the fields of
-    the loaded :class:`~autobal.analysis.liquid_balancer.LiquidBalancerResult` (``sec.result``)."""
-    from autobal.analysis.liquid_balancer import EFFICIENCIES, optimum_words  # what each number is: one copy
-    from autobal.analysis.quantities import is_number
+    the loaded :class:`~autobal.analysis.studies.liquid_balancer.LiquidBalancerResult` (``sec.result``)."""
+    from autobal.analysis.run.quantities import is_number
+    from autobal.analysis.studies.liquid_balancer import EFFICIENCIES, optimum_words  # what each number is: one copy
     from autobal.report import cell, number, table, text
 
     r = sec.result

@@ -25,7 +25,7 @@ MAX_AFC_SAMPLES = 1_000_000  # AFC Monte Carlo: a frequency response per sample
 
 DESCRIPTION = "Monte Carlo of the statics (and AFC)"
 NEEDS = "device"
-QUANTITIES_MODULE = "autobal.analysis.montecarlo"  # its QUANTITIES declare every number of its block
+QUANTITIES_MODULE = "autobal.analysis.studies.montecarlo"  # its QUANTITIES declare every number of its block
 TITLE = "Monte Carlo"  # of its section of report.html
 
 
@@ -102,7 +102,7 @@ class AfcMonteCarlo(Strict):
 
     @model_validator(mode="after")
     def _names(self):
-        from autobal.analysis.montecarlo_afc import afc_names  # the names of its model (imports the model)
+        from autobal.analysis.studies.montecarlo_afc import afc_names  # the names of its model (imports the model)
 
         try:
             afc_names(self.model, self.parameters)
@@ -166,8 +166,8 @@ SETTINGS = MonteCarlo
 def run(scene, settings: MonteCarlo):
     """Monte Carlo of the device statics (and optionally the AFC) over uncertain groups (Pavlenko (2014),
     ch. 3), on the executor the CLI or the scene names."""
-    from autobal.analysis import executor
-    from autobal.analysis import montecarlo as mc
+    from autobal.analysis.run import executor
+    from autobal.analysis.studies import montecarlo as mc
     from autobal.parts.device import adapt, design
 
     if scene.device is None:
@@ -178,8 +178,8 @@ def run(scene, settings: MonteCarlo):
 
 
 def spec(settings: MonteCarlo):
-    """The study's :class:`~autobal.analysis.montecarlo.Spec` of the validated settings (SI)."""
-    from autobal.analysis import montecarlo as mc
+    """The study's :class:`~autobal.analysis.studies.montecarlo.Spec` of the validated settings (SI)."""
+    from autobal.analysis.studies import montecarlo as mc
 
     def distributions(parameters: dict) -> dict:
         return {name: mc.Distribution(**dict(d)) for name, d in parameters.items()}
@@ -214,8 +214,8 @@ def _reference_rows(sec, r) -> None:
 def report_section(sec) -> None:
     """Spreads of face gap, pressures and leak over the sampled groups (Pavlenko 2014, ch. 3): the physical values
     beside the source's groups; its closed forms in the validation part.  Reads the fields of the loaded
-    :class:`~autobal.analysis.montecarlo.MonteCarloResult` (``sec.result``)."""
-    from autobal.analysis.quantities import significant
+    :class:`~autobal.analysis.studies.montecarlo.MonteCarloResult` (``sec.result``)."""
+    from autobal.analysis.run.quantities import significant
     from autobal.report import SOURCE_MODELS, model_name, number, stable_models, table, text
 
     r = sec.result

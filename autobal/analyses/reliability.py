@@ -13,7 +13,7 @@ from autobal.units import Length, Time
 
 DESCRIPTION = "traditional disc wear and time to failure"
 NEEDS = None
-QUANTITIES_MODULE = "autobal.analysis.reliability"  # its QUANTITIES declare every number of its block
+QUANTITIES_MODULE = "autobal.analysis.studies.reliability"  # its QUANTITIES declare every number of its block
 TITLE = "Reliability"  # of its section of report.html
 Probability = Annotated[float, Field(gt=0, lt=1)]
 
@@ -105,14 +105,14 @@ SETTINGS = Reliability
 
 def run(scene, settings: Reliability):
     """Reliability of the traditional balance disc: P(t), MTTF, wear (Pavlenko 2014, ch. 1.2)."""
-    from autobal.analysis import reliability as rel
+    from autobal.analysis.studies import reliability as rel
 
     return rel.run(spec(settings), scene.title)
 
 
 def spec(settings: Reliability):
-    """The study's :class:`~autobal.analysis.reliability.Spec` of the validated settings (SI)."""
-    from autobal.analysis import reliability as rel
+    """The study's :class:`~autobal.analysis.studies.reliability.Spec` of the validated settings (SI)."""
+    from autobal.analysis.studies import reliability as rel
 
     s = settings
     return rel.Spec(rel.Disc(**dict(s.disc)), rel.Wear(**dict(s.wear)), rel.Load(**dict(s.load)),
@@ -127,9 +127,9 @@ def estimate_seconds(settings: Reliability) -> float:
 
 def report_section(sec) -> None:
     """Wear, reliability P(t) and mean time to failure of the traditional disc (Pavlenko 2014, ch. 1.2); reads the
-    fields of the loaded :class:`~autobal.analysis.reliability.ReliabilityResult` (``sec.result``)."""
-    from autobal.analysis.reliability import HOUR
-    from autobal.analysis.result import plain
+    fields of the loaded :class:`~autobal.analysis.studies.reliability.ReliabilityResult` (``sec.result``)."""
+    from autobal.analysis.run.result import plain
+    from autobal.analysis.studies.reliability import HOUR
     from autobal.report import number
 
     r = sec.result

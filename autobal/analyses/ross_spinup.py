@@ -12,7 +12,7 @@ from typing import Annotated
 from pydantic import Field, model_validator
 
 from autobal.analyses import COST
-from autobal.analysis.solver_options import DEFAULTS
+from autobal.analysis.run.solver_options import DEFAULTS
 from autobal.errors import ScenarioError
 from autobal.parts.ross_rotor import Node
 from autobal.schema import Strict
@@ -64,7 +64,7 @@ SETTINGS = RossSpinup
 def run(scene, settings: RossSpinup):
     """Optimal spin-up of a ROSS rotor reduced to its modes, through its critical speeds, with the reduced
     model's critical speeds checked against ROSS's own (needs the ross extra)."""
-    from autobal.analysis import progress, solver_options
+    from autobal.analysis.run import progress, solver_options
     from autobal.models import ross_rotor as rr
     from autobal.ocp import modal_study
     from autobal.ocp.modal import ModalSpinupOcp
@@ -95,9 +95,9 @@ def _ross_side(spec, upper: float | None):
 
 def ross_side(spec, upper: float | None = None):
     """What ROSS computes of the rotor ``spec``: its lateral matrices and, with ``upper`` (rad/s), its own critical
-    speeds below it; in a child process (:func:`autobal.analysis.interrupt.isolated`), since ROSS's numba compiles
+    speeds below it; in a child process (:func:`autobal.analysis.run.interrupt.isolated`), since ROSS's numba compiles
     drop a Ctrl-C and its Python runs on for tens of seconds without a check."""
-    from autobal.analysis import interrupt
+    from autobal.analysis.run import interrupt
 
     return interrupt.isolated(_ross_side, spec, upper)
 
@@ -158,8 +158,8 @@ def report_section(sec) -> None:
     the reduction checked against ROSS, the API 684 (2005) margins of each critical speed.  Reads the fields of the
     loaded :class:`~autobal.ocp.modal_study.ModalSpinupResult` (``sec.result``)."""
     from autobal.analyses.spinup import declared_cell
-    from autobal.analysis.quantities import convert
-    from autobal.analysis.standards import margin_words
+    from autobal.analysis.numerics.standards import margin_words
+    from autobal.analysis.run.quantities import convert
     from autobal.report import cell, number, table, text
 
     r = sec.result

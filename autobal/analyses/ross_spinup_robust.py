@@ -60,7 +60,7 @@ def check(scene, settings: RossSpinupRobust) -> None:
 def run(scene, settings: RossSpinupRobust):
     """One spin-up profile of the reduced ROSS rotor minimising the worst-case peak over a set of rotors,
     validated on a random sample (on the executor the CLI or the scene names; needs the ross extra)."""
-    from autobal.analysis import executor, progress, solver_options
+    from autobal.analysis.run import executor, progress, solver_options
     from autobal.ocp import robust, robust_study
 
     ocp = problem(scene, settings)

@@ -54,7 +54,7 @@ def check(scene, settings: RossSpinupTimeOptimal) -> None:
 def run(scene, settings: RossSpinupTimeOptimal):
     """The earliest arrival of the reduced ROSS rotor with the peak bounded, and the front of peak against arrival
     time (needs the ross extra)."""
-    from autobal.analysis import progress, solver_options
+    from autobal.analysis.run import progress, solver_options
     from autobal.ocp import time_optimal_study
 
     ocp = ross_spinup.problem(scene, settings, "ross_spinup_time_optimal", deflection_limit=settings.deflection_limit)

@@ -15,7 +15,7 @@ from autobal.units import AngularAcceleration, AngularSpeed, SpeedOrZero, Time, 
 
 DESCRIPTION = "Jeffcott rotor studies"
 NEEDS = "rotor"
-QUANTITIES_MODULE = "autobal.analysis.rotor_study"  # its QUANTITIES declare every number of its block
+QUANTITIES_MODULE = "autobal.analysis.studies.rotor_study"  # its QUANTITIES declare every number of its block
 TITLE = "Rotor dynamics"  # of its section of report.html
 RateOrZero = quantity("rate", "nonnegative")  # n = chi/m1, 1/s
 Fraction = Annotated[float, Field(gt=0, le=1)]
@@ -75,7 +75,8 @@ SETTINGS = RotorDynamics
 
 def run(scene, settings: RotorDynamics):
     """The source's studies of the Jeffcott rotor with a liquid auto-balancer (Pashkov (2010))."""
-    from autobal.analysis import progress, rotor_study
+    from autobal.analysis.run import progress
+    from autobal.analysis.studies import rotor_study
     from autobal.ocp.problem import MAX_PERIODS
     from autobal.parts.rotor import adapt
 
@@ -90,7 +91,7 @@ def run(scene, settings: RotorDynamics):
             raise ScenarioError(f"analyses.rotor_dynamics.passage.{key}: {a:g} rad/s^2 takes {periods:.3g} natural "
                                 f"periods of the rotor to reach final_ratio, more than {MAX_PERIODS:.0e}: give at "
                                 f"least {a * periods / MAX_PERIODS:.3g} rad/s^2")
-    from autobal.analysis.rotor import lewis_end
+    from autobal.analysis.numerics.rotor import lewis_end
 
     for a in settings.lewis.accel_ratio if settings.lewis else ():
         periods = lewis_end(a) / a / (2 * math.pi)  # from rest to lewis_end at a* = alpha/Omega^2, in 2 pi/Omega
@@ -104,9 +105,9 @@ def run(scene, settings: RotorDynamics):
 
 
 def spec(settings: RotorDynamics, motor=None):
-    """The study's :class:`~autobal.analysis.rotor_study.Spec` of the validated settings and the scene's
+    """The study's :class:`~autobal.analysis.studies.rotor_study.Spec` of the validated settings and the scene's
     ``rotor.drive.motor`` (SI)."""
-    from autobal.analysis import rotor_study as rs
+    from autobal.analysis.studies import rotor_study as rs
 
     s, st, p = settings, settings.stationary, settings.passage
     return rs.Spec(
@@ -131,7 +132,8 @@ def estimate_seconds(settings: RotorDynamics) -> float:
 
 def report_section(sec) -> None:
     """Rotor with a liquid auto-balancer: stationary, steps, passage (Pashkov 2010); one verdict, the result's.
-    Reads the fields of the loaded :class:`~autobal.analysis.rotor_study.RotorDynamicsResult` (``sec.result``)."""
+    Reads the fields of the loaded :class:`~autobal.analysis.studies.rotor_study.RotorDynamicsResult`
+    (``sec.result``)."""
     from autobal.report import cell, table
 
     r = sec.result
@@ -165,7 +167,7 @@ def report_section(sec) -> None:
 
 def api_verdict(sec, margins: dict) -> None:
     """The check line of the API 684 (2005) separation margin (kept or not, or why there is none)."""
-    from autobal.analysis.standards import margin_words
+    from autobal.analysis.numerics.standards import margin_words
 
     if "amplification_factor" in margins:
         sec.verdict(margins.get("separation_margin_ok"), "API 684 (2005): " + margin_words(margins))

@@ -1,7 +1,7 @@
 """``analyses.runup``: the rotor identified from a measured run-up or coast-down (issue #36): the critical speed,
 damping ratio and unbalance fitted to the 1x vectors by the transient Jeffcott response driven by the measured speed
-profile (:mod:`autobal.analysis.runup`), beside the steady-state fit and the classical readings; the measurement is
-read by :mod:`autobal.runup_data` (1x vectors, or raw probe and key-phasor signals by order tracking).  It needs no
+profile (:mod:`autobal.analysis.studies.runup`), beside the steady-state fit and the classical readings; the measurement
+is read by :mod:`autobal.runup_data` (1x vectors, or raw probe and key-phasor signals by order tracking).  It needs no
 scene part: the identified rotor is written as the ``rotor:`` section of a spin-up scene in the run folder."""
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from autobal.units import AngularSpeed, Force, Length, Mass, Stiffness
 
 DESCRIPTION = "the rotor (critical speed, damping, unbalance) identified from a measured run-up"
 NEEDS = None
-QUANTITIES_MODULE = "autobal.analysis.runup"
+QUANTITIES_MODULE = "autobal.analysis.studies.runup"
 TITLE = "Rotor identified from a run-up"
 FILE_KEY = "analyses.runup.measurement.file"
 
@@ -118,8 +118,8 @@ SETTINGS = Runup
 
 
 def run(scene, settings: Runup):
-    """Identify the rotor from the scene's measured run-up (:func:`autobal.analysis.runup.run`)."""
-    from autobal.analysis import runup
+    """Identify the rotor from the scene's measured run-up (:func:`autobal.analysis.studies.runup.run`)."""
+    from autobal.analysis.studies import runup
 
     s = settings
     stiffness = s.stiffness if s.static_test is None else s.static_test.load / s.static_test.deflection
@@ -137,7 +137,7 @@ def estimate_seconds(settings: Runup) -> float:
 
 def report_section(sec) -> None:
     """The identified rotor, the verdict, the fits side by side and the classical readings with their bias; reads
-    the fields of the loaded :class:`~autobal.analysis.runup.RunupResult` (``sec.result``)."""
+    the fields of the loaded :class:`~autobal.analysis.studies.runup.RunupResult` (``sec.result``)."""
     from autobal.report import number, table, text
 
     r = sec.result

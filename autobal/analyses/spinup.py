@@ -9,7 +9,7 @@ from typing import Annotated, Literal
 from pydantic import Field, model_validator
 
 from autobal.analyses import COST
-from autobal.analysis.solver_options import DEFAULTS
+from autobal.analysis.run.solver_options import DEFAULTS
 from autobal.errors import ScenarioError
 from autobal.schema import Positive, Strict
 from autobal.units import AngularAcceleration, AngularSpeed, SpeedOrZero, Time, TimeOrZero, quantity
@@ -112,8 +112,8 @@ def check(scene, settings: Spinup) -> None:
 
 def run(scene, settings: Spinup):
     """Optimal spin-up through the critical speed (global search, collocation, CVODES re-simulation)."""
-    from autobal.analysis import progress
-    from autobal.analysis.solver_options import ipopt_options
+    from autobal.analysis.run import progress
+    from autobal.analysis.run.solver_options import ipopt_options
     from autobal.ocp import spinup_study
 
     with progress.steps(None, "spin-up (starts, mesh stages)", "IPOPT solve", catch=True):
@@ -130,7 +130,7 @@ def estimate_seconds(settings: Spinup) -> float:
 
 def accuracy(scene, settings: Spinup):
     """Work-precision of the scene's spin-up OCP (collocation degree and intervals)."""
-    from autobal.analysis import progress
+    from autobal.analysis.run import progress
     from autobal.ocp.workprecision import spinup_study
 
     with progress.steps(None, "accuracy spinup (degrees x intervals)", "IPOPT solve", catch=True):

@@ -59,8 +59,8 @@ SETTINGS = SpinupRobust
 def run(scene, settings: SpinupRobust):
     """One spin-up profile minimising the worst-case peak over a set of rotors, validated on a random sample
     (on the executor the CLI or the scene names)."""
-    from autobal.analysis import executor, progress
-    from autobal.analysis.solver_options import ipopt_options
+    from autobal.analysis.run import executor, progress
+    from autobal.analysis.run.solver_options import ipopt_options
     from autobal.ocp import robust, robust_study
     from autobal.ocp.transcription import DirectCollocation
 

@@ -40,8 +40,8 @@ SETTINGS = SpinupTimeOptimal
 
 def run(scene, settings: SpinupTimeOptimal):
     """The earliest arrival with the peak bounded, and the front of peak against arrival time."""
-    from autobal.analysis import progress
-    from autobal.analysis.solver_options import ipopt_options
+    from autobal.analysis.run import progress
+    from autobal.analysis.run.solver_options import ipopt_options
     from autobal.ocp import time_optimal_study
     from autobal.ocp.transcription import DirectCollocation
 

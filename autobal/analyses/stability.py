@@ -17,7 +17,7 @@ RateOrZero = quantity("rate", "nonnegative")
 
 DESCRIPTION = "poles, Hurwitz, stability maps"
 NEEDS = "device.dynamics"
-QUANTITIES_MODULE = "autobal.analysis.stability"  # its QUANTITIES declare every number of its block
+QUANTITIES_MODULE = "autobal.analysis.numerics.stability"  # its QUANTITIES declare every number of its block
 TITLE = "Stability"  # of its section of report.html
 
 
@@ -74,8 +74,8 @@ SETTINGS = Stability
 
 def run(scene, settings: Stability):
     """Poles, damping, Hurwitz determinants, margin and the optional stability map."""
-    from autobal.analysis import stability as st
-    from autobal.analysis.linearize import Setup
+    from autobal.analysis.numerics import stability as st
+    from autobal.analysis.numerics.linearize import Setup
     from autobal.parts.device import dynamic_device
 
     setup = Setup(dynamic_device(scene), settings.operating_ratio)
@@ -99,8 +99,8 @@ def _rate(decay) -> str:
 def report_section(sec) -> None:
     """Poles, Hurwitz determinants and margins (Pavlenko 2014, §2.7): the headline model (energy-consistent)
     gives the verdict; the source's models are the validation part.  Reads the fields of the loaded
-    :class:`~autobal.analysis.stability.StabilityResult` (``sec.result``)."""
-    from autobal.analysis.result import plain
+    :class:`~autobal.analysis.numerics.stability.StabilityResult` (``sec.result``)."""
+    from autobal.analysis.run.result import plain
     from autobal.report import (
         SOURCE_MODELS,
         cell,

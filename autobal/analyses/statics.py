@@ -12,7 +12,7 @@ from autobal.schema import MAX_FORCE_GAP_POINTS, PressureRatio, Range, Strict
 
 DESCRIPTION = "static calculation"
 NEEDS = "device"
-QUANTITIES_MODULE = "autobal.analysis.statics_study"  # its QUANTITIES declare every number of its block
+QUANTITIES_MODULE = "autobal.analysis.studies.statics_study"  # its QUANTITIES declare every number of its block
 TITLE = "Statics"  # of its section of report.html
 
 
@@ -36,8 +36,8 @@ SETTINGS = Statics
 
 
 def spec(settings: Statics):
-    """The statics study's spec (autobal.analysis.statics_study.Spec) of the validated settings."""
-    from autobal.analysis import statics_study
+    """The statics study's spec (autobal.analysis.studies.statics_study.Spec) of the validated settings."""
+    from autobal.analysis.studies import statics_study
 
     r = settings.discharge_ratio
     return statics_study.Spec(settings.operating_ratio, r.start, r.stop, r.points, settings.force_gap_points)
@@ -45,8 +45,9 @@ def spec(settings: Statics):
 
 def run(scene, settings: Statics):
     """Static calculation of the balancing device: operating point, criticals, sweep, force-gap."""
-    from autobal.analysis import progress, statics_study
-    from autobal.analysis.statics import StaticsSolver
+    from autobal.analysis.numerics.statics import StaticsSolver
+    from autobal.analysis.run import progress
+    from autobal.analysis.studies import statics_study
     from autobal.parts.device import design
 
     with progress.steps(None, "statics", "IPOPT solve", catch=True):
@@ -55,7 +56,7 @@ def run(scene, settings: Statics):
 
 def estimate_seconds(settings: Statics) -> float:
     """One warm-started IPOPT solve per sweep point (and path node) and per force-gap point."""
-    from autobal.analysis.solver_options import defaults
+    from autobal.analysis.run.solver_options import defaults
 
     nodes = defaults["continuation.path_nodes"]
 
@@ -66,8 +67,8 @@ def estimate_seconds(settings: Statics) -> float:
 
 def accuracy(scene, settings: Statics):
     """Work-precision of the statics at the scene's operating point."""
-    from autobal.analysis import workprecision
-    from autobal.analysis.statics import StaticsSolver
+    from autobal.analysis.numerics.statics import StaticsSolver
+    from autobal.analysis.studies import workprecision
     from autobal.parts.device import design
 
     solver = StaticsSolver(design(scene.device))
@@ -76,7 +77,7 @@ def accuracy(scene, settings: Statics):
 
 def report_section(sec) -> None:
     """Operating point, criticals, saturation and contact (Pavlenko 2014, ch. 2.2-2.3); reads the fields of the
-    loaded :class:`~autobal.analysis.statics_study.StaticsResult` (``sec.result``)."""
+    loaded :class:`~autobal.analysis.studies.statics_study.StaticsResult` (``sec.result``)."""
     from autobal.report import cell, number, table, text
 
     r = sec.result

@@ -14,7 +14,7 @@ from autobal.units import AngularSpeed, Time
 
 DESCRIPTION = "time responses"
 NEEDS = "device.dynamics"
-QUANTITIES_MODULE = "autobal.analysis.simulate"  # its QUANTITIES declare every number of its block
+QUANTITIES_MODULE = "autobal.analysis.numerics.simulate"  # its QUANTITIES declare every number of its block
 TITLE = "Transients"  # of its section of report.html
 
 
@@ -58,7 +58,7 @@ SETTINGS = Transient
 
 def _model(scene, settings: Transient):
     """The scene's nonlinear device model at the settings' operating point."""
-    from autobal.analysis.linearize import Setup
+    from autobal.analysis.numerics.linearize import Setup
     from autobal.parts.device import dynamic_device
 
     setup = Setup(dynamic_device(scene), settings.operating_ratio)
@@ -67,7 +67,7 @@ def _model(scene, settings: Transient):
 
 def run(scene, settings: Transient):
     """Time responses of the nonlinear device model from its static solution (CVODES / IDAS / RODAS4)."""
-    from autobal.analysis import simulate as sim
+    from autobal.analysis.numerics import simulate as sim
 
     model = _model(scene, settings)
     cases = [{"input": c.input, "amplitude": c.amplitude, "frequency": c.frequency,
@@ -84,7 +84,7 @@ def estimate_seconds(settings: Transient) -> float:
 
 def accuracy(scene, settings: Transient):
     """Work-precision of the time integration of the scene's transient (first force step, or dtau = 0.01)."""
-    from autobal.analysis import workprecision
+    from autobal.analysis.studies import workprecision
 
     dtau = next((c.amplitude for c in settings.cases if c.input == "force_step"), 0.01)
     return workprecision.dynamics_study(_model(scene, settings), settings.duration, dtau)
@@ -92,7 +92,7 @@ def accuracy(scene, settings: Transient):
 
 def report_section(sec) -> None:
     """Nonlinear transients by CVODES/IDAS (Pavlenko 2014, §2.5).  Reads the fields of the loaded
-    :class:`~autobal.analysis.simulate.TransientResult` (``sec.result``)."""
+    :class:`~autobal.analysis.numerics.simulate.TransientResult` (``sec.result``)."""
     from autobal.report import cell, table, text
 
     r = sec.result

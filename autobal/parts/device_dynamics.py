@@ -30,5 +30,5 @@ RegulatorDynamics = Dynamics.model_fields["regulator"].annotation.__args__[0]
 _KINDS = {f.name: f.metadata["kind"] for f in fields(DynamicData)}
 PARAMETERS = {long: _KINDS[short] for long, short in LONG_NAMES.items()}
 ParameterName = Literal[tuple(PARAMETERS)]  # type: ignore[valid-type]
-# the dynamic models of the device an analysis can name (analysis/linearize.py)
+# the dynamic models of the device an analysis can name (analysis/numerics/linearize.py)
 ModelName = Literal["nonlinear", "nonlinear_chain", "program", "thesis", "consistent"]

@@ -1,5 +1,5 @@
 """Scene part ``executor``: how sweeps and Monte Carlo run (the progress bar; where they run is never a scene's
-choice). The section is read as it is by :func:`autobal.analysis.executor.make` (no SI parameter object)."""
+choice). The section is read as it is by :func:`autobal.analysis.run.executor.make` (no SI parameter object)."""
 
 from __future__ import annotations
 

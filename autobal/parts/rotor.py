@@ -157,7 +157,7 @@ def adapt(r: Rotor) -> RotorParams:
     if r.eccentricity is None:
         u = r.unbalance
         if u.grade is not None:
-            from autobal.analysis.standards import permissible_eccentricity  # e = G/Omega, ISO 21940-11
+            from autobal.analysis.numerics.standards import permissible_eccentricity  # e = G/Omega, ISO 21940-11
 
             filled["e"] = permissible_eccentricity(u.grade_m_s, u.service_speed)
         else:
