@@ -198,6 +198,7 @@ class Settings:
     the scene they write."""
 
     def __init__(self, source: str | Path):
+        self.source = str(source)  # as the user named it: a shipped scene's name or a file
         self.path = scenario.resolve(source)
         self.raw = scenario.read(self.path)
         self.scene = scenario.load(self.path)
@@ -1007,7 +1008,8 @@ def _device_page(explorer: DeviceSettings, out: Path, build, verdict_height: int
         request = _latest_wins(doc, explorer.evaluate, show, verdict)
         _connect(doc, explorer, sliders, values, state, check, request)
         request(values, None)
-        head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
+        head = Div(text=f"<h2>{html.escape(explorer.scene.title)}</h2><p title='{html.escape(str(explorer.path))}'>"
+                            f"scene {html.escape(explorer.source)}</p>")
         # separate roots placed by the template: a changed text lays out its own root, not the 40 sliders
         doc.add_root(column(head, verdict, *under, check, record, name="head"))
         doc.add_root(column(*sliders.values(), name="controls"))
@@ -1234,8 +1236,9 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
                 for k, r in ans["ramps"].items():
                     sources[k].data = {"t": r["t"], "d": r["delta"]}
                     rows.append((r["label"], r["peak_over_e"], r["within_drive_limits"]))
-                for k in RAMP_COLOURS:
-                    lines[k].visible = k in ans["ramps"]
+                for item in fig.legend.items:  # a ramp this setting has not: neither its curve nor its label
+                    k = next(k for k, r in lines.items() if r in item.renderers)
+                    lines[k].visible = item.visible = k == "optimum" or k in ans["ramps"]
             opt = ans.get("optimum")
             if opt is not None:
                 sources["optimum"].data = {"t": opt["t"], "d": opt["delta"]}
@@ -1313,7 +1316,8 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
         reopt.on_click(optimise)
         doc.add_periodic_callback(tick, 500)
         record = _record_buttons(doc, explorer, values, out)
-        head = Div(text=f"<h2>{explorer.scene.title}</h2><p>{explorer.path}</p>")
+        head = Div(text=f"<h2>{html.escape(explorer.scene.title)}</h2><p title='{html.escape(str(explorer.path))}'>"
+                            f"scene {html.escape(explorer.source)}</p>")
         doc.add_root(column(head, verdict, check, row(reopt, optimised), record, name="head"))
         doc.add_root(column(*sliders.values(), name="controls"))
         doc.add_root(numbers)
