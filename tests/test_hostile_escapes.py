@@ -7,6 +7,7 @@ import json
 import os
 import re
 import signal
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -305,6 +306,36 @@ def test_an_unreachable_ross_drive_is_refused_before_solving(capsys):
     err = refused(capsys, "spinup_ross_rotor", "ross_rotor.drive.max_torque=1e-3 N*m")
     assert "analyses.ross_spinup: the drive's torque, power and motor limits on its inertia" in err
     assert "at the earliest, after the horizon 4 s" in err
+
+
+def test_isolated_with_a_hash_seed_runs_a_fresh_interpreter_with_that_seed():
+    """hash_seed: the child's string hashes are those of PYTHONHASHSEED=seed (a fresh interpreter), the same on every
+    call, whatever this process's seed; its exceptions come back as without one."""
+    from autobal.analysis.run import interrupt
+    from autobal.errors import ScenarioError
+
+    expected = subprocess.run([sys.executable, "-c", "print(hash('autobal'))"], capture_output=True, text=True,
+                              env=os.environ | {"PYTHONHASHSEED": "0"}, check=True).stdout.strip()
+    assert [interrupt.isolated(hash, "autobal", hash_seed=0) for _ in range(2)] == [int(expected)] * 2
+    with pytest.raises(ScenarioError, match="no-such-scene"):
+        interrupt.isolated(scenario.resolve, "no-such-scene", hash_seed=0)
+
+
+@pytest.mark.slow
+@pytest.mark.extra("ross")
+def test_the_ross_rotor_is_the_same_whatever_the_hash_seed(tmp_path):
+    """ROSS sums its element matrices over a set: under two hash seeds of the calling process the lateral matrices
+    handed back are bit-identical (they differed in M, G and K_sdt before the child got a fixed seed)."""
+    code = ("import hashlib, numpy as np, autobal\n"
+            "from autobal.analyses.ross_spinup import ross_side\n"
+            "from autobal.parts.ross_rotor import adapt\n"
+            "lat, _ = ross_side(adapt(autobal.load('spinup_ross_rotor').ross_rotor)[0])\n"
+            "print('digest', hashlib.sha1(b''.join(np.ascontiguousarray(getattr(lat, k)).tobytes() "
+            "for k in ('M', 'K', 'C', 'G', 'Ksdt'))).hexdigest())\n")
+    digests = [next(line for line in subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path, check=True,
+        env=os.environ | {"PYTHONHASHSEED": seed}).stdout.splitlines() if line.startswith("digest")) for seed in "12"]
+    assert digests[0] == digests[1]
 
 
 def test_isolated_returns_raises_and_is_ended_by_an_interrupt():

@@ -148,6 +148,31 @@ def _trace(function) -> None:
             fh.write(f"{_name(function)}\n")
 
 
+def answer(function, args, fd: int) -> None:
+    """Compute ``function(*args)`` and write ``(True, value)`` or ``(False, exception)`` pickled to the file
+    descriptor ``fd`` (the child's side of :func:`isolated`)."""
+    try:
+        out = (True, function(*args))
+    except BaseException as exc:  # noqa: BLE001 - raised again in the parent
+        out = (False, exc)
+    try:
+        data = pickle.dumps(out)
+        pickle.loads(data)  # noqa: S301 - an exception whose __init__ takes other arguments does not load
+    except Exception as exc:  # noqa: BLE001
+        data = pickle.dumps((False, RuntimeError(f"{type(out[1]).__name__}: {out[1]}" if not out[0] else
+                                                 f"the answer cannot be sent back: {exc}")))
+    with os.fdopen(fd, "wb") as fh:
+        fh.write(data)
+
+
+# the fresh interpreter of isolated(..., hash_seed=...): reads the pickled (function, args), answers
+FRESH_CHILD = ("import os, pickle, sys\n"
+               "from autobal.analysis.run.interrupt import answer\n"
+               "with os.fdopen(int(sys.argv[1]), 'rb') as fh:\n"
+               "    function, args = pickle.load(fh)\n"
+               "answer(function, args, int(sys.argv[2]))\n")
+
+
 def _failure(function, exc: RuntimeError) -> SolverFailure:
     """The SolverFailure of a CasADi function that raised: its name, the error's last line, and the return flag
     the message quotes (``CV_TOO_MUCH_WORK``) as its status."""
@@ -157,7 +182,7 @@ def _failure(function, exc: RuntimeError) -> SolverFailure:
     return SolverFailure(f"{name}: {last}", flag.group(1) if flag else "solver_raised")
 
 
-def isolated(function, *args):
+def isolated(function, *args, hash_seed: int | None = None):
     """``function(*args)`` in a forked child process, its result (or the exception it raised) sent back pickled.
 
     For library code that would swallow an interrupt or ignore it for long (ROSS: numba compiles in ctypes
@@ -165,6 +190,11 @@ def isolated(function, *args):
     the parent waits in a read that a signal ends at once, so SIGINT and SIGTERM stop it there; the child, which
     ignores them, is killed then.  What the child prints goes where the parent's output goes (the run's log).
     Without ``os.fork`` (not POSIX) the function runs in this process.
+
+    With ``hash_seed`` the child is a fresh interpreter (the fork executes Python anew) whose ``PYTHONHASHSEED`` is
+    that seed: for library code whose arithmetic follows the iteration order of a set of objects hashed by their
+    strings (ROSS assembles its matrices over ``set(self.elements)``), so that its numbers are the same on every
+    run.  ``function`` must then be importable by name (a module's function).
 
     Returns
     -------
@@ -175,29 +205,38 @@ def isolated(function, *args):
     check()
     _trace(function)
     read, write = os.pipe()
+    job_read, job_write = os.pipe() if hash_seed is not None else (None, None)
     pid = os.fork()
     if pid == 0:  # the child: compute, send, leave without running the parent's exit handlers
-        code = 0
+        code = 1
         try:
             os.close(read)
-            for sig in SIGNALS:
+            for sig in SIGNALS:  # ignored signals stay ignored in an executed program too
                 signal.signal(sig, signal.SIG_IGN)
-            try:
-                out = (True, function(*args))
-            except BaseException as exc:  # noqa: BLE001 - raised again in the parent
-                out = (False, exc)
-            try:
-                data = pickle.dumps(out)
-                pickle.loads(data)  # noqa: S301 - an exception whose __init__ takes other arguments does not load
-            except Exception as exc:  # noqa: BLE001
-                data = pickle.dumps((False, RuntimeError(f"{type(out[1]).__name__}: {out[1]}" if not out[0] else
-                                                         f"the answer cannot be sent back: {exc}")))
-            with os.fdopen(write, "wb") as fh:
-                fh.write(data)
+            if hash_seed is None:
+                answer(function, args, write)
+                code = 0
+            else:
+                os.close(job_write)
+                os.set_inheritable(job_read, True)
+                os.set_inheritable(write, True)
+                env = os.environ | {"PYTHONHASHSEED": str(hash_seed)}
+                os.execve(sys.executable, [sys.executable, "-c", FRESH_CHILD, str(job_read), str(write)], env)
         except BaseException:  # noqa: BLE001 - nothing to send it to
-            code = 1
+            pass
         finally:
             os._exit(code)
+    if hash_seed is not None:
+        os.close(job_read)
+        try:
+            with os.fdopen(job_write, "wb") as fh:
+                fh.write(pickle.dumps((function, args)))
+        except BaseException:
+            os.kill(pid, signal.SIGKILL)
+            os.waitpid(pid, 0)
+            os.close(write)
+            os.close(read)
+            raise
     os.close(write)
     try:
         with os.fdopen(read, "rb") as fh:

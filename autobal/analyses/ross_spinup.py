@@ -96,10 +96,13 @@ def _ross_side(spec, upper: float | None):
 def ross_side(spec, upper: float | None = None):
     """What ROSS computes of the rotor ``spec``: its lateral matrices and, with ``upper`` (rad/s), its own critical
     speeds below it; in a child process (:func:`autobal.analysis.run.interrupt.isolated`), since ROSS's numba compiles
-    drop a Ctrl-C and its Python runs on for tens of seconds without a check."""
+    drop a Ctrl-C and its Python runs on for tens of seconds without a check.  The child is a fresh interpreter with
+    the string hash seed 0: ROSS assembles M, G and K_sdt over ``set(self.elements)`` (ross/rotor_assembly.py), whose
+    order, and so the matrices' last bits, followed the process's hash seed (the reduced rotor's natural frequencies
+    moved by 1e-12 and the spin-up optimum by 1e-8 from run to run)."""
     from autobal.analysis.run import interrupt
 
-    return interrupt.isolated(_ross_side, spec, upper)
+    return interrupt.isolated(_ross_side, spec, upper, hash_seed=0)  # ROSS sums over a set of its elements
 
 
 def drive(scene) -> dict:
