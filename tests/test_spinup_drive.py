@@ -16,11 +16,12 @@ from scipy.integrate import solve_ivp
 
 import autobal
 from autobal.analyses.spinup import ocp as spinup_ocp
+from autobal.analysis.run.quantities import is_display_unit
 from autobal.errors import ScenarioError
 from autobal.ocp import spinup_study
+from autobal.ocp.columns import COLUMNS, HEADER
 from autobal.ocp.search import grid_search
 from autobal.parts import rotor as rotor_part
-from tests.test_display_api import headers_without_units
 
 SCENE = "scenarios/spinup_rotor_datasheet.yaml"
 SMALL = {"analyses.spinup.intervals": 40, "analyses.spinup.multistart": False}
@@ -122,13 +123,16 @@ def test_segment_table_integrated_independently_matches_the_reported_peak(run):
 
 @pytest.mark.cli
 def test_every_spinup_csv_is_headed_name_unit_in_the_display_unit(run):
-    """Every column of the spin-up's CSV files is 'name [unit]' with a unit the toolkit knows (a word column aside),
+    """Every column of the spin-up's CSV files is 'name [unit]' in a display unit of its declaration (no word columns),
     the numbers in the unit the header names: the largest power in kW and torque in N·m are those of results.json."""
     out, res = run
     tables = {f.name: read_csv_columns(f) for f in out.glob("*.csv")}
     assert set(tables) == {"drive_profile.csv", "drive_segments.csv", "spinup_baselines.csv", "spinup_controls.csv",
                            "spinup_optimum.csv"}
-    assert headers_without_units(tables) == []
+    for name, cols in tables.items():  # each header 'name [unit]', the unit a display unit of the column's declaration
+        for header in cols:
+            m = HEADER.fullmatch(header)
+            assert m is not None and is_display_unit(m["unit"], COLUMNS.find(m["name"]).unit), (name, header)
     assert list(tables["drive_profile.csv"]) == ["time [s]", "speed [rpm]", "speed [rad/s]", "acceleration [rpm/s]",
                                                  "acceleration [rad/s²]", "torque [N·m]", "power [kW]"]
     assert list(tables["drive_segments.csv"]) == ["segment [1]", "t_start [s]", "t_end [s]", "speed_start [rpm]",
