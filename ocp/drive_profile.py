@@ -47,13 +47,11 @@ HOLD_FRACTIONS = (0.8, 0.9, 0.95)  # starts holding the speed at these fractions
 
 
 def drive_table(tr: Trajectory) -> dict[str, np.ndarray]:
-    """The profile as a drive takes it, at the re-simulation's samples (the Jeffcott rotor's or the modal rotor's
-    trajectory): time s, speed rpm and rad/s, acceleration rpm/s and rad/s^2 (of the interval ending at each sample;
-    the first row that of the first interval), torque N m and power kW."""
+    """drive_profile.csv, SI (:func:`autobal.ocp.columns.headed` heads it): the profile as a drive takes it, at the
+    re-simulation's samples (the Jeffcott rotor's or the modal rotor's trajectory): time, speed, acceleration (of the
+    interval ending at each sample; the first row that of the first interval), torque and power."""
     alpha = acceleration_at(tr.t, tr.t_u, tr.alpha)
-    return {"time_s": tr.t, "speed_rpm": tr.omega * RPM, "speed_rad_s": tr.omega,
-            "acceleration_rpm_s": alpha * RPM, "acceleration_rad_s2": alpha, "torque_N_m": tr.torque,
-            "power_kW": tr.torque * tr.omega * 1e-3}
+    return {"time": tr.t, "speed": tr.omega, "acceleration": alpha, "torque": tr.torque, "power": tr.torque * tr.omega}
 
 
 def objective_of(ocp: SpinupOcp, tr: Trajectory) -> float:
@@ -81,13 +79,13 @@ class Segments:
         return np.diff(self.omega) / np.diff(self.t)
 
     def table(self, end: float) -> dict[str, list]:
-        """drive_segments.csv: the K segments and the hold to ``end`` (s) as the last row (rate 0)."""
+        """drive_segments.csv, SI (:func:`autobal.ocp.columns.headed` heads it): the K segments and the hold to ``end``
+        (s) as the last row (rate 0)."""
         t = np.append(self.t, end) if end > self.t[-1] * (1 + 1e-12) else self.t
         w = np.append(self.omega, self.omega[-1]) if len(t) > len(self.t) else self.omega
         r = np.diff(w) / np.diff(t)
-        return {"segment": list(range(1, len(r) + 1)), "t_start_s": t[:-1], "t_end_s": t[1:],
-                "speed_start_rpm": w[:-1] * RPM, "speed_end_rpm": w[1:] * RPM, "rate_rpm_s": r * RPM,
-                "rate_rad_s2": r}
+        return {"segment": list(range(1, len(r) + 1)), "t_start": t[:-1], "t_end": t[1:], "speed_start": w[:-1],
+                "speed_end": w[1:], "rate": r}
 
 
 def _profile(ocp: SpinupOcp, t, w, step: float):

@@ -15,10 +15,11 @@ from autobal.analysis.numerics.standards import (
 )
 from autobal.analysis.run.fields import Record, TypedResult, declarations, quantity, record, unsaved
 from autobal.analysis.run.figures import Figure, record_axis
-from autobal.analysis.run.quantities import Quantity, convert
+from autobal.analysis.run.quantities import Quantity
 from autobal.analysis.run.result import new_figure, speed_axis, unit_axis
 from autobal.models import ross_rotor as rr
 from autobal.models.ross_rotor import POINTS_PER_REV, RESIM_TOL
+from autobal.ocp.columns import headed
 from autobal.ocp.drive_profile import drive_table
 from autobal.ocp.modal import ModalSpinupOcp, ModalTrajectory, baselines
 from autobal.ocp.simulation import (
@@ -245,27 +246,28 @@ class ModalSpinupResult(TypedResult):
                              "figures are the files of its run")
 
     def tables(self) -> dict[str, dict]:
+        """The tables headed 'name [unit]' in their display units (:func:`autobal.ocp.columns.headed`); each ramp's
+        time beside its speed and largest deflection over the nodes."""
         self._held()
         o, cs = self.optimum, self.critical_speeds
         cols = {}
         for k, v in self.ramp_runs.items():
-            cols |= {f"{k}_t_s": v.t, f"{k}_omega_rad_s": v.omega, f"{k}_deflection_m": v.deflection.max(axis=0)}
+            cols |= {f"{k}_time": v.t, f"{k}_speed": v.omega, f"{k}_deflection": v.deflection.max(axis=0)}
         n = min(len(c) for c in cols.values())
-        out = {"ross_spinup_optimum.csv": {"t_s": o.t, "omega_rad_s": o.omega,
-                                           "omega_rpm": convert(o.omega, "rad/s", "rpm")} | {
-                   f"deflection_node{nd}_m": o.deflection[i] for i, nd in enumerate(o.nodes)},
-               "ross_spinup_controls.csv": {"t_start_s": o.t_u, "alpha_rad_s2": o.alpha},
-               "drive_profile.csv": drive_table(o),
-               "ross_spinup_baselines.csv": {k: np.asarray(v)[:n] for k, v in cols.items()},
-               "ross_modes.csv": {"mode": np.arange(1, self.modes + 1),
-                                  "natural_frequency_rad_s": self.natural_frequencies_rad_s}}
         m = len(cs.reduced_wd_rad_s)
         ross = cs.ross_wd_rad_s
-        out["ross_critical_speeds.csv"] = {"reduced_wd_rad_s": cs.reduced_wd_rad_s,
-                                           "reduced_damping_ratio": cs.reduced_damping_ratio,
-                                           "ross_wd_rad_s": (ross[:m] + [np.nan] * (m - len(ross))) if ross is not None
-                                           else [np.nan] * m}
-        return out
+        tables = {"ross_spinup_optimum.csv": {"time": o.t, "speed": o.omega} | {
+                      f"deflection_node{nd}": o.deflection[i] for i, nd in enumerate(o.nodes)},
+                  "ross_spinup_controls.csv": {"t_start": o.t_u, "acceleration": o.alpha},
+                  "drive_profile.csv": drive_table(o),
+                  "ross_spinup_baselines.csv": {k: np.asarray(v)[:n] for k, v in cols.items()},
+                  "ross_modes.csv": {"mode": np.arange(1, self.modes + 1),
+                                     "natural_frequency": self.natural_frequencies_rad_s},
+                  "ross_critical_speeds.csv": {"reduced_wd": cs.reduced_wd_rad_s,
+                                               "reduced_damping_ratio": cs.reduced_damping_ratio,
+                                               "ross_wd": (ross[:m] + [np.nan] * (m - len(ross))) if ross is not None
+                                               else [np.nan] * m}}
+        return {file: headed(t) for file, t in tables.items()}
 
     def _runs(self):
         self._held()

@@ -20,6 +20,7 @@ from autobal.analysis.run.figures import Figure
 from autobal.analysis.run.quantities import Quantity, significant
 from autobal.analysis.run.result import new_figure, speed_axis, unit_axis
 from autobal.ocp import robust as rb
+from autobal.ocp.columns import headed
 from autobal.ocp.drive_profile import drive_table
 from autobal.ocp.modal_search import grid_search as modal_grid_search
 from autobal.ocp.modal_search import phase_profiles
@@ -351,26 +352,28 @@ class RobustResult(TypedResult):
                              "figures are the files of its run")
 
     def tables(self) -> dict[str, dict]:
+        """The tables headed 'name [unit]' in their display units (:func:`autobal.ocp.columns.headed`): peaks delta/e
+        (``*_peak_over_e``) or m shown in µm (``*_peak``), as the block's ``peak_unit``."""
         self._runs()
-        factor, _, col = self._shown()
+        name = "_over_e" if self.peak_unit == "1" else ""
         f = self.validation["factors"]
         cols = {"critical_speed_factor": f[:, 0], "damping_factor": f[:, 1], "liquid_mass_factor": f[:, 2]}
-        cols |= {f"{k}_peak_{col}": factor * self.validation[k] for k in self.KEYS}
+        cols |= {f"{k}_peak{name}": self.validation[k] for k in self.KEYS}
         r = self.nominal_runs["robust"]
         design = {"critical_speed_factor": [], "damping_factor": [], "liquid_mass_factor": []}
         for row in self.design_set:
             for key, v in zip(design, row, strict=True):
                 design[key].append(v)
-        design |= {f"{k}_peak_{col}": factor * np.asarray(p.design_peaks) for k, p in self.profiles.items()}
-        s = PEAK_KEY[self.peak_unit]
-        ramps = {}
-        for k in self.ramps[0].to_dict():
-            v = [row.to_dict()[k] for row in self.ramps]
-            peak = k.endswith("_" + s)
-            ramps[k[:-len(s)] + col if peak else k] = list(factor * np.asarray(v)) if peak else v
-        return {f"{self.name}_validation.csv": cols, f"{self.name}_design.csv": design,
-                f"{self.name}_controls.csv": {"t_start_s": r.t_u, "alpha_rad_s2": r.alpha},
-                f"{self.name}_ramps.csv": ramps, "drive_profile.csv": drive_table(r)}
+        design |= {f"{k}_peak{name}": np.asarray(p.design_peaks) for k, p in self.profiles.items()}
+        ramps = {"label": [p.label for p in self.ramps], "acceleration": [p.alpha_rad_s2 for p in self.ramps],
+                 f"design_worst{name}": [p.design_worst for p in self.ramps],
+                 f"validation_worst{name}": [p.validation_worst for p in self.ramps],
+                 "within_drive_limits": [p.within_drive_limits for p in self.ramps],
+                 "violated": [p.violated for p in self.ramps]}
+        tables = {f"{self.name}_validation.csv": cols, f"{self.name}_design.csv": design,
+                  f"{self.name}_controls.csv": {"t_start": r.t_u, "acceleration": r.alpha},
+                  f"{self.name}_ramps.csv": ramps, "drive_profile.csv": drive_table(r)}
+        return {file: headed(t) for file, t in tables.items()}
 
     def draw(self, ax) -> None:
         """Empirical distribution of the validation peaks of the three profiles."""

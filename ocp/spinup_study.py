@@ -7,7 +7,6 @@ optimum and both ramps on each plot).
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 import re
 import time
@@ -25,7 +24,7 @@ from autobal.analysis.run.quantities import Quantity, significant
 from autobal.analysis.run.result import new_figure, speed_axis, twin_axis, unit_axis
 from autobal.analysis.studies.rotor_study import api_margins
 from autobal.ocp import drive_profile
-from autobal.ocp.drive_profile import RPM
+from autobal.ocp.columns import headed, read_table
 from autobal.ocp.problem import SpinupOcp, pulse_variation
 from autobal.ocp.simulation import (
     DRIVE_QUANTITIES,
@@ -256,8 +255,8 @@ class SpinupResult(TypedResult):
     optimum: Trajectory | None = unsaved()
     ramp_runs: dict | None = unsaved()  # baseline key -> its Trajectory
     ramp_table_run: drive_profile.Segments | None = unsaved()
-    controls: dict | None = unsaved()  # spinup_controls.csv: t_start_s, alpha_rad_s2
-    ramp_table: dict | None = unsaved()  # drive_segments.csv, None without a ramp table
+    controls: dict | None = unsaved()  # spinup_controls.csv, SI: t_start, acceleration
+    ramp_table: dict | None = unsaved()  # drive_segments.csv, SI (drive_profile.Segments.table), None without one
     name = "spinup"
 
     @property
@@ -272,7 +271,7 @@ class SpinupResult(TypedResult):
         res = cls.from_dict(block)
         if folder is None:
             return res
-        tables = {name: _read_csv(Path(folder) / name) for name in ("spinup_controls.csv", "drive_segments.csv")}
+        tables = {name: read_table(Path(folder) / name) for name in ("spinup_controls.csv", "drive_segments.csv")}
         return dataclasses.replace(res, controls=tables["spinup_controls.csv"],
                                    ramp_table=tables["drive_segments.csv"])
 
@@ -359,18 +358,18 @@ class SpinupResult(TypedResult):
                              "figures are the files of its run")
 
     def tables(self) -> dict[str, dict]:
+        """The tables headed 'name [unit]' in their display units (:func:`autobal.ocp.columns.headed`)."""
         self._held()
         o = self.optimum
-        cols = {"t_s": next(iter(self.ramp_runs.values())).t}
+        cols = {"time": next(iter(self.ramp_runs.values())).t}
         for k, v in self.ramp_runs.items():
-            cols |= {f"{k}_omega_rad_s": v.omega, f"{k}_deflection_over_e": v.delta, f"{k}_unbalance_d": v.d}
+            cols |= {f"{k}_speed": v.omega, f"{k}_deflection_over_e": v.delta, f"{k}_unbalance": v.d}
         e = self.eccentricity_m or np.nan
-        return {"spinup_optimum.csv": {"t_s": o.t, "omega_rad_s": o.omega, "omega_rpm": o.omega * RPM,
-                                       "deflection_over_e": o.delta, "deflection_mm": o.delta * e * 1e3,
-                                       "unbalance_d": o.d, "torque_N_m": o.torque},
-                "spinup_controls.csv": self.controls, "spinup_baselines.csv": cols,
-                "drive_profile.csv": drive_profile.drive_table(o)} | (
-            {} if self.ramp_table is None else {"drive_segments.csv": self.ramp_table})
+        tables = {"spinup_optimum.csv": {"time": o.t, "speed": o.omega, "deflection_over_e": o.delta,
+                                         "deflection": o.delta * e, "unbalance": o.d, "torque": o.torque},
+                  "spinup_controls.csv": self.controls, "spinup_baselines.csv": cols,
+                  "drive_profile.csv": drive_profile.drive_table(o), "drive_segments.csv": self.ramp_table}
+        return {name: headed(t) for name, t in tables.items() if t is not None}
 
     def _runs(self):
         self._held()
@@ -445,23 +444,6 @@ class SpinupResult(TypedResult):
                                                    "and the drive's limits dotted"),
                 "spinup_deflection.png": Figure(fig2, "Optimal spin-up: deflection of the optimum beside the ramps "
                                                       "against time and against speed")}
-
-
-def _read_csv(path: Path) -> dict | None:
-    """A CSV table the run wrote (column -> numbers, or words where a column holds them), None where it has none."""
-    if not path.is_file():
-        return None
-    with path.open(newline="") as fh:
-        rows = list(csv.DictReader(fh))
-    names = list(rows[0]) if rows else []
-
-    def value(x: str):
-        try:
-            return float(x)
-        except ValueError:
-            return x
-
-    return {n: [value(r[n]) for r in rows] for n in names}
 
 
 #: every number of the spinup block, from the fields; the API 684 margins of the rotor, the drive's use of the optimum
@@ -642,5 +624,5 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
         **statuses,
         collocation_peak_unbalance=opt.collocation_value if ocp.objective == "peak_unbalance" else None,
         segments=table, time_split={f"{k}_time_s": v for k, v in split.items()},
-        optimum=tr, ramp_runs=base, ramp_table_run=seg, controls={"t_start_s": tr.t_u, "alpha_rad_s2": tr.alpha},
+        optimum=tr, ramp_runs=base, ramp_table_run=seg, controls={"t_start": tr.t_u, "acceleration": tr.alpha},
         ramp_table=None if seg is None else seg.table(tr.t[-1]))

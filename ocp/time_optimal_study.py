@@ -9,6 +9,7 @@ front, and the profiles of the front's points); the modal rotor's ``ross_spinup_
 
 from __future__ import annotations
 
+import re
 from dataclasses import KW_ONLY
 
 import numpy as np
@@ -18,6 +19,7 @@ from autobal.analysis.run.figures import Figure
 from autobal.analysis.run.quantities import Declarations, significant
 from autobal.analysis.run.result import new_figure, speed_axis, unit_axis
 from autobal.ocp import time_optimal as to
+from autobal.ocp.columns import headed
 from autobal.ocp.drive_profile import drive_table
 from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.protocol import PEAK_KEY
@@ -209,21 +211,21 @@ class TimeOptimalResult(TypedResult):
                              "figures are the files of its run")
 
     def tables(self) -> dict[str, dict]:
+        """The tables headed 'name [unit]' in their display units (:func:`autobal.ocp.columns.headed`): peaks delta/e
+        (``*_peak_over_e``) or m shown in µm (``*_peak``), as the block's ``peak_unit``."""
         self._runs()
-        factor, _, col = self._shown()
         s = PEAK_KEY[self.peak_unit]
         f = self.to_dict()["front"]  # the rows as results.json has them (with the statuses of their nulls)
-        front = {}
-        for k in f[0]:
-            peak = k.endswith("_" + s)
-            front[k[:-len(s)] + col if peak else k] = [factor * p[k] if peak else p.get(k) for p in f]
-        out = {f"{self.name}_front.csv": front}
+        # the keys without their SI suffix: arrival_time_s -> arrival_time, resimulated_peak_m -> resimulated_peak
+        plain = {k: re.sub(r"_s(?=$|_status$)", "", k.removesuffix("_m") if s == "m" else k) for k in f[0]}
+        out = {f"{self.name}_front.csv": {plain[k]: [p.get(k) for p in f] for k in f[0]}}
         if self.limited_point is not None:
             tr = self.limited_point.trajectory
-            out[f"{self.name}_profile.csv"] = {"t_s": tr.t, "omega_rad_s": tr.omega,
-                                               f"deflection_{col}": factor * deflection_of(tr)}
+            out[f"{self.name}_profile.csv"] = {"time": tr.t, "speed": tr.omega,
+                                               "deflection_over_e" if s == "over_e" else "largest_deflection":
+                                               deflection_of(tr)}
             out["drive_profile.csv"] = drive_table(tr)
-        return out
+        return {file: headed(t) for file, t in out.items()}
 
     def draw(self, ax) -> None:
         """The front: re-simulated peak against arrival time, with the two ends."""

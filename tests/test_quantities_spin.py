@@ -123,10 +123,13 @@ def test_spinup_optimum_csv_has_rpm_and_mm_beside_si(datasheet):
     d = results["spinup"]
     with (out / "spinup_optimum.csv").open() as fh:
         rows = [{k: float(v) for k, v in r.items()} for r in csv.DictReader(fh)]
+    assert list(rows[0]) == ["time [s]", "speed [rpm]", "speed [rad/s]", "deflection_over_e [1]", "deflection [mm]",
+                             "unbalance [1]", "torque [N·m]"]
     for r in rows:
-        assert r["omega_rpm"] == pytest.approx(r["omega_rad_s"] * 30 / math.pi, rel=1e-12)
-        assert r["deflection_mm"] == pytest.approx(r["deflection_over_e"] * d["eccentricity_m"] * 1e3, rel=1e-12)
-    assert max(r["deflection_mm"] for r in rows) == pytest.approx(d["peak_deflection_m"] * 1e3, rel=1e-3)
+        assert r["speed [rpm]"] == pytest.approx(r["speed [rad/s]"] * 30 / math.pi, rel=1e-12)
+        assert r["deflection [mm]"] == pytest.approx(r["deflection_over_e [1]"] * d["eccentricity_m"] * 1e3,
+                                                     rel=1e-12)
+    assert max(r["deflection [mm]"] for r in rows) == pytest.approx(d["peak_deflection_m"] * 1e3, rel=1e-3)
 
 
 @pytest.mark.cli

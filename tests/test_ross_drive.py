@@ -90,12 +90,12 @@ def test_power_limit_binds_and_the_gain_is_quoted_against_a_feasible_ramp():
             assert lines[base["max_acceleration_ramp"].label + " (outside the drive limits)"] == ":"
             assert lines[base["feasible_ramp"].label] == "--"
             # drive_profile.csv: the speed is the integral of the acceleration column, the torque J alpha
-            c = res.tables()["drive_profile.csv"]
-            t, w, a = c["time_s"], c["speed_rad_s"], c["acceleration_rad_s2"]
+            c = {k: np.asarray(v) for k, v in res.tables()["drive_profile.csv"].items()}
+            t, w, a = c["time [s]"], c["speed [rad/s]"], c["acceleration [rad/s²]"]
             np.testing.assert_allclose(w[1:], w[0] + np.cumsum(a[1:] * np.diff(t)), rtol=1e-9, atol=1e-6)
-            np.testing.assert_allclose(c["torque_N_m"], (Ip + J_DRIVE) * a, rtol=1e-12)
-            np.testing.assert_allclose(c["power_kW"], c["torque_N_m"] * w / 1e3, rtol=1e-12)
-            np.testing.assert_allclose(c["speed_rpm"], w * 30 / np.pi, rtol=1e-12)
+            np.testing.assert_allclose(c["torque [N·m]"], (Ip + J_DRIVE) * a, rtol=1e-12)
+            np.testing.assert_allclose(c["power [kW]"], c["torque [N·m]"] * w / 1e3, rtol=1e-12)
+            np.testing.assert_allclose(c["speed [rpm]"], w * 30 / np.pi, rtol=1e-12)
 
 
 def test_scene_drive_section_reaches_the_problem():

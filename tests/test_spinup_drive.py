@@ -16,8 +16,10 @@ from scipy.integrate import solve_ivp
 
 import autobal
 from autobal.analyses.spinup import ocp as spinup_ocp
+from autobal.analysis.run.quantities import is_display_unit
 from autobal.errors import ScenarioError
 from autobal.ocp import spinup_study
+from autobal.ocp.columns import COLUMNS, HEADER
 from autobal.ocp.search import grid_search
 from autobal.parts import rotor as rotor_part
 
@@ -27,8 +29,24 @@ RPM = 2 * math.pi / 60
 
 
 def _rows(path):
+    return [{k: float(v) for k, v in r.items()} for r in _rows_text(path)]
+
+
+def _rows_text(path):
     with open(path) as fh:
-        return [{k: float(v) for k, v in r.items()} for r in csv.DictReader(fh)]
+        return list(csv.DictReader(fh))
+
+
+def read_csv_columns(path) -> dict:
+    """A CSV file as header -> column, numbers as floats, words as they are."""
+    def value(x):
+        try:
+            return float(x)
+        except ValueError:
+            return x
+
+    rows = _rows_text(path)
+    return {k: [value(r[k]) for r in rows] for k in rows[0]}
 
 
 def jeffcott_peak(t, w, rotor) -> float:
@@ -69,14 +87,14 @@ def run(tmp_path_factory):
 def test_drive_profile_csv_integrated_independently_matches_the_reported_peak(run):
     out, res = run
     rows = _rows(out / "drive_profile.csv")
-    t = np.array([r["time_s"] for r in rows])
-    w = np.array([r["speed_rad_s"] for r in rows])
+    t = np.array([r["time [s]"] for r in rows])
+    w = np.array([r["speed [rad/s]"] for r in rows])
     # the columns agree with each other: rpm beside rad/s, the acceleration the slope of the speed, P = M omega
-    assert_allclose([r["speed_rpm"] * RPM for r in rows], w, rtol=1e-12)
-    assert_allclose([r["acceleration_rpm_s"] * RPM for r in rows], [r["acceleration_rad_s2"] for r in rows],
+    assert_allclose([r["speed [rpm]"] * RPM for r in rows], w, rtol=1e-12)
+    assert_allclose([r["acceleration [rpm/s]"] * RPM for r in rows], [r["acceleration [rad/s²]"] for r in rows],
                     rtol=1e-12)
-    assert_allclose(np.diff(w) / np.diff(t), [r["acceleration_rad_s2"] for r in rows[1:]], rtol=1e-6, atol=1e-6)
-    assert_allclose([r["power_kW"] for r in rows], [r["torque_N_m"] * r["speed_rad_s"] * 1e-3 for r in rows],
+    assert_allclose(np.diff(w) / np.diff(t), [r["acceleration [rad/s²]"] for r in rows[1:]], rtol=1e-6, atol=1e-6)
+    assert_allclose([r["power [kW]"] for r in rows], [r["torque [N·m]"] * r["speed [rad/s]"] * 1e-3 for r in rows],
                     rtol=1e-12)
     assert t[-1] == pytest.approx(8.0)
     assert_allclose(jeffcott_peak(t, w, res["rotor"]), res["peak_deflection_over_e"], rtol=1e-3)
@@ -87,12 +105,12 @@ def test_segment_table_integrated_independently_matches_the_reported_peak(run):
     out, res = run
     rows = _rows(out / "drive_segments.csv")
     assert len(rows) in (2, 3)  # two ramp segments, then the hold to the end of the window if any
-    t = [rows[0]["t_start_s"]] + [r["t_end_s"] for r in rows]
-    w = [rows[0]["speed_start_rpm"] * RPM] + [r["speed_end_rpm"] * RPM for r in rows]
+    t = [rows[0]["t_start [s]"]] + [r["t_end [s]"] for r in rows]
+    w = [rows[0]["speed_start [rpm]"] * RPM] + [r["speed_end [rpm]"] * RPM for r in rows]
     for r in rows:
-        assert r["rate_rpm_s"] == pytest.approx((r["speed_end_rpm"] - r["speed_start_rpm"]) /
-                                                (r["t_end_s"] - r["t_start_s"]), rel=1e-9)
-        assert r["rate_rad_s2"] <= 60.0 * (1 + 1e-3)  # the acceleration limit
+        assert r["rate [rpm/s]"] == pytest.approx((r["speed_end [rpm]"] - r["speed_start [rpm]"]) /
+                                                (r["t_end [s]"] - r["t_start [s]"]), rel=1e-9)
+        assert r["rate [rad/s²]"] <= 60.0 * (1 + 1e-3)  # the acceleration limit
     assert w[0] == pytest.approx(600 * RPM) and w[-1] == pytest.approx(4000 * RPM)
     assert t[-1] == pytest.approx(8.0)
     seg = res["segments"]
@@ -101,6 +119,55 @@ def test_segment_table_integrated_independently_matches_the_reported_peak(run):
     assert seg["loss_vs_optimum_pct"] >= -0.1
     assert seg["within_drive_limits"]
     assert seg["max_power_W"] <= 45e3 * 1.001 and seg["min_torque_N_m"] >= -0.15
+
+
+@pytest.mark.cli
+def test_every_spinup_csv_is_headed_name_unit_in_the_display_unit(run):
+    """Every column of the spin-up's CSV files is 'name [unit]' in a display unit of its declaration (no word columns),
+    the numbers in the unit the header names: the largest power in kW and torque in N·m are those of results.json."""
+    out, res = run
+    tables = {f.name: read_csv_columns(f) for f in out.glob("*.csv")}
+    assert set(tables) == {"drive_profile.csv", "drive_segments.csv", "spinup_baselines.csv", "spinup_controls.csv",
+                           "spinup_optimum.csv"}
+    for name, cols in tables.items():  # each header 'name [unit]', the unit a display unit of the column's declaration
+        for header in cols:
+            m = HEADER.fullmatch(header)
+            assert m is not None and is_display_unit(m["unit"], COLUMNS.find(m["name"]).unit), (name, header)
+    assert list(tables["drive_profile.csv"]) == ["time [s]", "speed [rpm]", "speed [rad/s]", "acceleration [rpm/s]",
+                                                 "acceleration [rad/s²]", "torque [N·m]", "power [kW]"]
+    assert list(tables["drive_segments.csv"]) == ["segment [1]", "t_start [s]", "t_end [s]", "speed_start [rpm]",
+                                                  "speed_start [rad/s]", "speed_end [rpm]", "speed_end [rad/s]",
+                                                  "rate [rpm/s]", "rate [rad/s²]"]
+    drive = tables["drive_profile.csv"]
+    assert max(drive["power [kW]"]) == pytest.approx(res["max_power_W"] / 1e3, rel=1e-9)
+    assert max(drive["torque [N·m]"]) == pytest.approx(res["max_torque_N_m"], rel=1e-9)
+
+
+def test_spinup_table_headers_follow_the_display_units_and_read_back_si(tmp_path):
+    """headed(): speeds in the unit chosen for their kind with the twin beside, an undeclared number refused;
+    read_table() gives the SI table back, exactly from the SI twin."""
+    from autobal.analysis.run.quantities import display_units
+    from autobal.analysis.run.result import write_csv
+    from autobal.ocp.columns import headed, read_table
+
+    table = {"time": [0.0, 0.5], "speed": [10.0, 2 * math.pi * 7 / 3], "acceleration": [1 / 3, 0.0],
+             "power": [1234.5, 0.0], "label": ["a", "b"]}
+    assert list(headed(table)) == ["time [s]", "speed [rpm]", "speed [rad/s]", "acceleration [rpm/s]",
+                                   "acceleration [rad/s²]", "power [kW]", "label"]
+    with display_units({"speed": "Hz", "power": "W"}):
+        cols = headed(table)
+    assert list(cols) == ["time [s]", "speed [Hz]", "speed [rpm]", "acceleration [rpm/s]", "acceleration [rad/s²]",
+                          "power [W]", "label"]
+    assert cols["speed [Hz]"] == pytest.approx([10.0 / (2 * math.pi), 7 / 3], rel=1e-15)
+    assert cols["speed [rpm]"] == pytest.approx([10.0 / RPM, 140.0], rel=1e-15)
+    assert headed(table)["power [kW]"] == [1.2345, 0.0]
+    back = read_table(write_csv(tmp_path / "t.csv", headed(table)))
+    assert back["power"] == pytest.approx(table["power"], rel=1e-15)  # kW converted back
+    assert back | {"power": table["power"]} == table  # the rest exactly: the SI twin
+    back = read_table(write_csv(tmp_path / "hz.csv", cols))
+    assert back["speed"] == pytest.approx(table["speed"], rel=1e-15) and back["power"] == table["power"]
+    with pytest.raises(ValueError, match="column 'wobble' is not declared"):
+        headed({"wobble": [1.0]})
 
 
 @pytest.mark.cli
@@ -115,14 +182,14 @@ def test_every_baseline_a_percentage_refers_to_keeps_the_drive_limits(run):
     assert base["max_acceleration_ramp"]["violated"] == ["power limit"]
     assert ref == "feasible_ramp"
     rows = _rows(out / "spinup_baselines.csv")
-    t = np.array([r["t_s"] for r in rows])
+    t = np.array([r["time [s]"] for r in rows])
     for key in (ref, "constant_ramp"):  # both are quoted as percentages
         b = base[key]
         assert b["max_torque_N_m"] <= tmax * 1.001 and b["max_power_W"] <= pmax * 1.001
         assert b["min_torque_N_m"] >= -1e-3 * tmax  # no braking in this scene
         # independently from the CSV: the inertial torque J alpha and its power J alpha omega (the rotor's reaction,
         # below 1 N m here, aside)
-        w = np.array([r[f"{key}_omega_rad_s"] for r in rows])
+        w = np.array([r[f"{key}_speed [rad/s]"] for r in rows])
         alpha = np.diff(w) / np.diff(t)
         assert np.max(J * alpha) <= tmax * 1.01
         assert np.max(J * alpha * w[1:]) <= pmax * 1.01

@@ -210,8 +210,9 @@ def test_spinup_round_trip_loads_its_controls_and_renders_the_same_report(shippe
     back = _round_trip(res, SpinupResult)
     assert back.controls is None and back.rotor == res.rotor and back.dwell.dwells is res.dwell.dwells
     loaded = _loads_back(folder, "spinup", res)
-    assert loaded.controls["alpha_rad_s2"] == list(res.optimum.alpha)  # full precision through the CSV
-    assert loaded.ramp_table["t_end_s"] == list(res.ramp_table["t_end_s"])
+    # SI, at full precision through the CSV (headed 'name [unit]', read back from the SI twin of rpm and rpm/s)
+    assert loaded.controls["acceleration"] == list(res.optimum.alpha)
+    assert {k: list(v) for k, v in loaded.ramp_table.items()} == {k: list(v) for k, v in res.ramp_table.items()}
     amax = 40.0  # the scene's max_acceleration, rad/s^2
     on = int(np.sum(np.abs(res.optimum.alpha) >= 0.999 * amax))
     assert f"on {on} of {len(res.optimum.alpha)} control intervals" in (folder / report.REPORT).read_text()

@@ -147,7 +147,7 @@ def _spinup_binding(sec, r) -> list[str]:
     out = []
     amax = ocp.get("max_acceleration")
     if amax and r.controls is not None:
-        alpha = r.controls["alpha_rad_s2"]
+        alpha = r.controls["acceleration"]
         on = sum(abs(a) >= 0.999 * amax for a in alpha)
         if on:
             from autobal.ocp.simulation import rate_text  # rad/s² with rpm/s beside, the one copy
@@ -240,11 +240,13 @@ def report_section(sec) -> None:
         sec.verdict(None, f"binding constraint: {b}")
     t = r.ramp_table
     if t is not None:
-        rows = [[text(f"{s:g}"), cell(t0, "s"), cell(t1, "s"), text(number(w0)), text(number(w1)), text(number(rpm)),
+        from autobal.analysis.run.quantities import convert
+
+        rows = [[text(f"{s:g}"), cell(t0, "s"), cell(t1, "s"), text(number(convert(w0, "rad/s", "rpm"))),
+                 text(number(convert(w1, "rad/s", "rpm"))), text(number(convert(rad, "rad/s^2", "rpm/s"))),
                  cell(rad, "rad/s^2")]
-                for s, t0, t1, w0, w1, rpm, rad in zip(t["segment"], t["t_start_s"], t["t_end_s"],
-                                                        t["speed_start_rpm"], t["speed_end_rpm"], t["rate_rpm_s"],
-                                                        t["rate_rad_s2"], strict=True)]
+                for s, t0, t1, w0, w1, rad in zip(t["segment"], t["t_start"], t["t_end"], t["speed_start"],
+                                                  t["speed_end"], t["rate"], strict=True)]
         caution = "; CAUTION: it dwells near the critical speed (the checks above)" if seg and seg.dwell.dwells else ""
         sec.tables.append(table("Ramp table for the drive (drive_segments.csv; the last row the hold): speeds in "
                                 "rpm, rates in rpm/s" + caution, ["segment", "start", "end", "start speed, rpm",
