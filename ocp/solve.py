@@ -258,7 +258,8 @@ def starts(ocp: SpinupOcp, n: int, multistart: bool = True) -> list[tuple[str, n
     the back-off search, and after the grid alone when its best profile is AHEAD (relative) below each of their
     peaks (the exponential integrator): on the issue-35 family (benchmarks/spinup_family.py) their optima were
     never the best (docs/dev/spinup.md); the ramp that holds below the critical speed, a structure outside the
-    searched families, stays."""
+    searched families, stays.  For the integrated objective the late ramp (:func:`late_ramp`: a hold at the start
+    speed, then the drive's full rate) replaces the three constant ramps where there is slack for it."""
     const = abs(ocp.omega_final - ocp.omega_start) / ocp.horizon
     out, lead, families = [], None, []
     if ocp.objective in ("peak_deflection", "peak_unbalance") and horizon_steps(ocp) <= SEARCH_STEPS:
