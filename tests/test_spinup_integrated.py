@@ -1,11 +1,12 @@
 """The integrated-deflection objective on the long window of ``spinup_rotor_datasheet`` (8 s, Omega0 t = 2011).
 
 From a constant ramp the 40-interval solve took 775 IPOPT iterations and the study's three constant ramps stopped
-at their 200-iteration coarse cap: the integral's optimum holds 2 s at the start speed (where the steady (delta/e)^2
-is 4.4e-3) and crosses late at the drive's full rate, and from a ramp IPOPT moves the 2 s of slack to the start along a
-nearly flat valley in short, cut-back steps.  The late ramp (:func:`autobal.ocp.solve.late_ramp`) starts there
-(docs/dev/spinup.md, "The integrated objective on long windows").  These tests hold the iterations it reaches,
-with headroom, and its optimum to the one reached from the old starts."""
+at their 200-iteration coarse cap: the integral's optimum holds 2 s at the start speed (where the steady
+(delta/e)^2 is 4.4e-3) and crosses late at the drive's full rate, and from a ramp IPOPT moves the 2 s of slack to
+the start in short steps (78 % cut below 0.1 by the line search, the Hessian indefinite on 42 % of the
+iterations).  The late ramp (:func:`autobal.ocp.solve.late_ramp`) starts there (docs/dev/spinup.md, "The
+integrated objective on long windows").  These tests hold the iterations it reaches, with headroom, and its
+optimum to the one reached from the old starts."""
 
 import dataclasses
 
