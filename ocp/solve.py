@@ -258,7 +258,8 @@ def starts(ocp: SpinupOcp, n: int, multistart: bool = True) -> list[tuple[str, n
     the back-off search, and after the grid alone when its best profile is AHEAD (relative) below each of their
     peaks (the exponential integrator): on the issue-35 family (benchmarks/spinup_family.py) their optima were
     never the best (docs/dev/spinup.md); the ramp that holds below the critical speed, a structure outside the
-    searched families, stays."""
+    searched families, stays.  For the integrated objective the late ramp (:func:`late_ramp`: a hold at the start
+    speed, then the drive's full rate) replaces the three constant ramps where there is slack for it."""
     const = abs(ocp.omega_final - ocp.omega_start) / ocp.horizon
     out, lead, families = [], None, []
     if ocp.objective in ("peak_deflection", "peak_unbalance") and horizon_steps(ocp) <= SEARCH_STEPS:
@@ -285,7 +286,10 @@ def starts(ocp: SpinupOcp, n: int, multistart: bool = True) -> list[tuple[str, n
         ramps.append(("maximum-acceleration ramp and hold", ramp_profile(ocp, n, ocp.alpha_max)))
         if not ocp.free_time:
             ramps.append(("ramp at the mean of both", ramp_profile(ocp, n, 0.5 * (const + ocp.alpha_max))))
-    if not (lead is not None and families) and (
+    late = late_ramp(ocp, n) if ocp.objective == "integrated_deflection" else None
+    if late is not None:  # the integrated objective: the late ramp instead of the three ramps
+        out.append(late)
+    elif not (lead is not None and families) and (
             lead is None or AHEAD <= 0 or min(profile_peak(ocp, u) for _, u in ramps) * (1 - AHEAD) < lead):
         out += ramps
     if multistart and not ocp.free_time:
@@ -300,6 +304,29 @@ def starts(ocp: SpinupOcp, n: int, multistart: bool = True) -> list[tuple[str, n
             out.append(("ramp, hold at 0.8 omega_cr, ramp", ramp_profile(ocp, n, ocp.alpha_max, hold_at=w_hold,
                                                                          accel2=a2)))
     return out
+
+
+def late_ramp(ocp: SpinupOcp, n: int) -> tuple[str, np.ndarray] | None:
+    """The integrated objective's start on n control intervals: hold at the start speed, then the drive's full rate
+    (:func:`drive_acceleration` at each speed) so as to reach omega_final at the deadline; None without slack for a
+    hold (or for a free final time or a spin-down).  (delta/e)^2 grows with the speed below the critical and stays
+    above 1 above it, so the integral's optimum spends the slack at the lowest speed and crosses late at the
+    drive's rate (on ``spinup_rotor_datasheet`` a 2 s hold at 600 rpm).  From the three constant ramps the coarse
+    solves of that scene stop at their 200-iteration cap (docs/dev/spinup.md, "The integrated objective on long
+    windows")."""
+    if ocp.free_time or ocp.omega_final <= ocp.omega_start:
+        return None
+    steps = 20 * n  # the full-rate climb integrated back from omega_final at the deadline (explicit Euler)
+    dt, w = ocp.horizon / steps, [ocp.omega_final]
+    while w[-1] > ocp.omega_start and len(w) <= steps:
+        w.append(w[-1] - drive_acceleration(ocp, w[-1]) * dt)
+    if len(w) > steps:
+        return None
+    t = ocp.horizon - dt * np.arange(len(w))[::-1]
+    omega = np.interp(np.linspace(0.0, ocp.horizon, n + 1), t, np.maximum(w[::-1], ocp.omega_start),
+                      left=ocp.omega_start)
+    u = np.clip(np.diff(omega) / (ocp.horizon / n) / ocp.alpha_max, -1, 1)
+    return f"hold at the start speed for {t[0]:.3g} s, then the drive's full rate", u
 
 
 def backoff_families(ocp: SpinupOcp) -> list[tuple[int, bool]]:

@@ -133,10 +133,11 @@ def test_ramps_left_out_when_the_global_search_leads():
     # either, and the ramps start
     labels = [lab for lab, _ in S.starts(dataclasses.replace(real_problem(40.0), horizon=4.25), 50)]
     assert "constant ramp" in labels and not any(lab.startswith(("back-off", "global")) for lab in labels)
-    # no search (another objective): all ramps
+    # no search (the integrated objective): the late ramp (hold at the start speed, then the drive's full rate) and
+    # the ramp that holds below the critical speed, not the three constant ramps
     labels = [lab for lab, _ in S.starts(dataclasses.replace(real_problem(40.0), objective="integrated_deflection"),
                                          50)]
-    assert "constant ramp" in labels and "maximum-acceleration ramp and hold" in labels
+    assert labels[0].startswith("hold at the start speed") and labels[1:] == ["ramp, hold at 0.8 omega_cr, ramp"]
 
 
 def test_collocation_and_multiple_shooting_same_optimum():
