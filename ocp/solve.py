@@ -592,6 +592,10 @@ def optimize(ocp: SpinupProblem, method, multistart: bool = True, options: dict 
                          "success": sc.success, "iterations": sc.iterations, "solve_time_s": sc.solve_time_s})
             if sc.success:
                 found.append((label, sc, rows[-1]))
+        if not found:  # every start failed on the coarse mesh: say so, with their statuses (not a limit's words)
+            statuses = list(dict.fromkeys(r["status"] for r in rows if r.get("stage") == f"coarse ({nc} intervals)"))
+            raise SolveError(f"spin-up OCP: none of the {len(start_list)} starts converged on the coarse mesh ({nc} "
+                             f"intervals; raise max_iterations or check the problem's limits)", ", ".join(statuses))
         start_list = []
         refined, fell, built, spread = [], False, {}, 0.0  # coarse profiles refined; the last fell back; stages
         while found and len(refined) < REFINED:  # the best coarse optimum, then the close basins and fall-backs

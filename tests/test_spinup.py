@@ -410,3 +410,15 @@ def test_real_problem_control_step_converged(real):
     fine = S.Solver(ocp, S.DirectCollocation(2 * n, 3, "radau")).solve(np.repeat(opt.solution.u[:n], 2))
     peak = S.resimulate(ocp, fine.u, fine.h, "fine").peak_delta
     assert abs(peak / opt.score - 1) < 1e-3
+
+
+def test_every_start_failing_on_the_coarse_mesh_says_so_with_their_status():
+    """An iteration cap of 2 on the coarse stage: no start converges there, and the error says that with IPOPT's
+    status, not that no start keeps a deflection limit (the problem has none)."""
+    import autobal
+
+    ocp = S.SpinupOcp(JEFFCOTT, 40.0, 210.0, 8.5, 40.0)
+    with autobal.using_solver_defaults("spinup_coarse", max_iter=2), pytest.raises(SolveError) as err:
+        S.optimize(ocp, S.DirectCollocation(200, 3, "radau"))
+    assert "none of the" in str(err.value) and "starts converged on the coarse mesh" in str(err.value)
+    assert err.value.status == "Maximum_Iterations_Exceeded"
