@@ -57,6 +57,9 @@ def headed(table: dict) -> dict:
         if q is None:
             out[name] = values
             continue
+        words = [v for v in values if v is not None and not _number(v)]
+        if words:
+            raise ValueError(f"spin-up table column '{name}' is declared a quantity but holds {words[0]!r}")
         for unit in dict.fromkeys(u for u in (q.display, beside(q.unit, q.display)) if u):
             out[f"{name} [{unit}]"] = [convert(v, q.unit, unit) if _number(v) else None for v in values]
     return out
@@ -79,6 +82,9 @@ def read_table(path: Path) -> dict | None:
             out[header] = [_value(r[header]) for r in rows]
             continue
         name, unit = m["name"], m["unit"]
+        if COLUMNS.find(name) is None:
+            raise ValueError(f"{Path(path).name}: column '{header}' is not a spin-up table column "
+                             "(autobal.ocp.columns.COLUMNS)")
         si = COLUMNS.find(name).unit
         if name in exact or name in out and unit != spelled(si):
             continue

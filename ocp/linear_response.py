@@ -57,7 +57,7 @@ def fixed_frame() -> FixedFrame:
     J = ca.jacobian(rhs[:4], x)
     forcing = ca.substitute(rhs[:4], x, ca.DM.zeros(4))
     # the linear part does not depend on the speed or the angle, and X and Y obey the same equation
-    for s in (nu, beta, a):
+    for s in (x, nu, beta, a):
         if not ca.jacobian(J, s).is_zero():
             raise ValueError("the fixed-frame model is not linear with constant coefficients in its state")
     iso = ca.Function("iso", [p], [J[[0, 2], [0, 2]] - J[[1, 3], [1, 3]], J[[0, 2], [1, 3]], J[[1, 3], [0, 2]]])

@@ -259,7 +259,8 @@ class SpinupOcp(Dimensionless):
     hold_states = True
 
     # the solver's parts of this model (:class:`autobal.ocp.protocol.SpinupProblem`): the functions of
-    # :mod:`autobal.ocp.solve` and :mod:`autobal.ocp.simulation` (imported here, as both import this module)
+    # :mod:`autobal.ocp.solve` and :mod:`autobal.ocp.simulation` (imported in each method: those modules sit below
+    # this one, importing it for type checking only)
     def starts(self, n: int, multistart: bool = True) -> list[tuple[str, np.ndarray]]:
         """Labelled initial control profiles on n control intervals (:func:`autobal.ocp.solve.starts`)."""
         from autobal.ocp.solve import starts

@@ -438,12 +438,12 @@ def stage_row_bounds(ocp: SpinupProblem, ms: Mesh, sizes: list, paths: list[Path
 
 
 def stage_variable_bounds(ocp: SpinupProblem, size: int, index: dict, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Bounds of the stage form's variables: X_0 fixed, u in [-1, 1] on the horizon and 0 after, the first previous
-    control 0, the extra variable's range (its copies free: the gap rows carry it)."""
+    """Bounds of the stage form's variables: X_0 fixed, u in [u_min, 1] on the horizon (as :func:`variable_bounds`)
+    and 0 after, the first previous control 0, the extra variable's range (its copies free: the gap rows carry it)."""
     lbx, ubx = np.full(size, -np.inf), np.full(size, np.inf)
     idx_u, idx_vc = index["u"], index["v_copies"]
     lbx[index["X"][0]] = ubx[index["X"][0]] = ocp.q0
-    lbx[idx_u[:n]], ubx[idx_u[:n]] = -1.0, 1.0
+    lbx[idx_u[:n]], ubx[idx_u[:n]] = ocp.u_min, 1.0
     lbx[idx_u[n:]] = ubx[idx_u[n:]] = 0.0
     if index["p"] is not None:
         lbx[index["p"][0]] = ubx[index["p"][0]] = 0.0

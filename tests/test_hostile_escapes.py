@@ -16,6 +16,7 @@ import pytest
 
 from autobal import analyses, cli, scenario
 from autobal.analyses.stability import Stability
+from autobal.ocp import spinup as S
 from autobal.paths import SCENARIO_DIR
 from tests.hostile import refused
 from tests.test_interrupt import interrupted_run
@@ -244,6 +245,24 @@ def test_an_acceleration_limit_that_cannot_reach_the_final_speed_is_refused_by_c
     assert "posed without solving: spinup" in capsys.readouterr().out
 
 
+def test_a_deadline_the_drive_just_keeps_is_not_refused():
+    """A motor whose no-load speed is 1.01 x the final speed: 1/alpha is steep and convex near the top, where
+    trapezoids overestimated the earliest arrival by 0.1 %.  The deadline at the exact earliest arrival (quad) is
+    posed; 0.1 % before it is refused, with a lower bound of the arrival within 1e-3 of the exact one (4 digits)."""
+    from scipy.integrate import quad
+
+    from autobal.ocp.simulation import drive_unreachable, rate_cap
+    from tests.test_spinup_derivatives import DRIVE
+
+    kw = {"motor_stall_torque": 0.2, "motor_no_load_speed": 1.01 * 210.0}
+    probe = S.SpinupOcp(DRIVE, 40.0, 210.0, 100.0, 1e4, **kw)
+    exact = quad(lambda w: 1.0 / rate_cap(probe, w), 40.0, 210.0, limit=200, epsabs=0, epsrel=1e-12)[0]
+    assert drive_unreachable(S.SpinupOcp(DRIVE, 40.0, 210.0, exact, 1e4, **kw)) is None
+    why = drive_unreachable(S.SpinupOcp(DRIVE, 40.0, 210.0, 0.999 * exact, 1e4, **kw))
+    bound = float(why.split(" s at the earliest")[0].rsplit(" ", 1)[1])
+    assert exact * (1 - 1e-3) < bound <= exact
+
+
 def test_an_unreachable_modal_drive_is_refused_when_posed():
     """The one-disk modal rotor (tests/test_ross_rotor.py) with J = I_p + 0.05 = 0.13 kg m^2 on a 100 W drive: power
     limited from the start (100/(0.13 x 50) = 15.4 < 100 rad/s^2), the earliest arrival J (w_f^2 - w_0^2)/(2P) =
@@ -306,6 +325,11 @@ def test_an_unreachable_ross_drive_is_refused_before_solving(capsys):
     err = refused(capsys, "spinup_ross_rotor", "ross_rotor.drive.max_torque=1e-3 N*m")
     assert "analyses.ross_spinup: the drive's torque, power and motor limits on its inertia" in err
     assert "at the earliest, after the horizon 4 s" in err
+    # autobal check poses it as the run does: refused there too, and a drive it can keep is accepted
+    assert cli.main(["check", "spinup_ross_rotor", "--set", "ross_rotor.drive.max_torque=1e-3 N*m"]) == 2
+    assert "at the earliest, after the horizon 4 s" in capsys.readouterr().err
+    assert cli.main(["check", "spinup_ross_rotor", "--set", "ross_rotor.drive.max_deceleration=0 rad/s^2"]) == 0
+    assert "posed without solving: ross_spinup" in capsys.readouterr().out
 
 
 def test_isolated_with_a_hash_seed_runs_a_fresh_interpreter_with_that_seed():

@@ -23,6 +23,7 @@ VARIANTS = {
     "min_time": dataclasses.replace(BASE, objective="min_time", deflection_limit=20.0),
     "jerk": dataclasses.replace(BASE, jerk_penalty=1e-3, jerk_variation=1e-4, jerk_max=400.0),
     "torque_power": S.SpinupOcp(DRIVE, 40.0, 210.0, 8.5, 40.0, torque_max=0.05, power_max=6.0),
+    "deceleration_limit": dataclasses.replace(BASE, alpha_min=-10.0),  # u >= -0.25 (the stage form kept -1 once)
 }
 
 

@@ -148,6 +148,14 @@ def _trace(function) -> None:
             fh.write(f"{_name(function)}\n")
 
 
+def _blas_limit() -> dict:
+    """The environment that gives a new process this process's BLAS thread limit (threadpoolctl's view)."""
+    from threadpoolctl import threadpool_info
+
+    n = min((i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"), default=None)
+    return {} if n is None else {k: str(n) for k in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")}
+
+
 def answer(function, args, fd: int) -> None:
     """Compute ``function(*args)`` and write ``(True, value)`` or ``(False, exception)`` pickled to the file
     descriptor ``fd`` (the child's side of :func:`isolated`)."""
@@ -194,7 +202,9 @@ def isolated(function, *args, hash_seed: int | None = None):
     With ``hash_seed`` the child is a fresh interpreter (the fork executes Python anew) whose ``PYTHONHASHSEED`` is
     that seed: for library code whose arithmetic follows the iteration order of a set of objects hashed by their
     strings (ROSS assembles its matrices over ``set(self.elements)``), so that its numbers are the same on every
-    run.  ``function`` must then be importable by name (a module's function).
+    run.  ``function`` must then be importable by name (a module's function); the BLAS thread limit in force here
+    (:func:`autobal.run` sets one thread) is the child's too.  Without ``os.fork`` the seed cannot be set: the
+    function runs in this process, with its seed.
 
     Returns
     -------
@@ -206,6 +216,7 @@ def isolated(function, *args, hash_seed: int | None = None):
     _trace(function)
     read, write = os.pipe()
     job_read, job_write = os.pipe() if hash_seed is not None else (None, None)
+    blas_threads = {} if hash_seed is None else _blas_limit()
     pid = os.fork()
     if pid == 0:  # the child: compute, send, leave without running the parent's exit handlers
         code = 1
@@ -220,7 +231,7 @@ def isolated(function, *args, hash_seed: int | None = None):
                 os.close(job_write)
                 os.set_inheritable(job_read, True)
                 os.set_inheritable(write, True)
-                env = os.environ | {"PYTHONHASHSEED": str(hash_seed)}
+                env = os.environ | {"PYTHONHASHSEED": str(hash_seed)} | blas_threads  # as limited here
                 os.execve(sys.executable, [sys.executable, "-c", FRESH_CHILD, str(job_read), str(write)], env)
         except BaseException:  # noqa: BLE001 - nothing to send it to
             pass

@@ -65,25 +65,36 @@ def run(scene, settings: RossSpinup):
     """Optimal spin-up of a ROSS rotor reduced to its modes, through its critical speeds, with the reduced
     model's critical speeds checked against ROSS's own (needs the ross extra)."""
     from autobal.analysis.run import progress, solver_options
-    from autobal.models import ross_rotor as rr
     from autobal.ocp import modal_study
+
+    ocp, ross_cs = posed(scene, settings, settings.final_speed if settings.validate_with_ross else None)
+    try:
+        with progress.steps(None, "multi-mode spin-up (starts)", "IPOPT solve", catch=True):
+            return modal_study.run(ocp, scene.title, ross_cs, solver_options.ipopt_options(settings.max_iterations))
+    except ValueError as exc:
+        raise ScenarioError(f"analyses.ross_spinup: {exc}") from None
+
+
+def posed(scene, settings: RossSpinup, upper: float | None = None, key: str = "ross_spinup", **extra):
+    """The spin-up problem of the scene's ROSS rotor reduced to its modes (SI; needs the ross extra), with the
+    limits of ``ross_rotor.drive`` and the ``extra`` members of :class:`autobal.ocp.modal.ModalSpinupOcp` (e.g. a
+    deflection limit), and ROSS's own critical speeds below ``upper`` (rad/s; None: not computed).  A problem that
+    cannot be posed (a drive that cannot reach the final speed by the deadline too) raises ScenarioError naming
+    ``analyses.<key>``."""
+    from autobal.models import ross_rotor as rr
     from autobal.ocp.modal import ModalSpinupOcp
     from autobal.parts.ross_rotor import adapt
 
     spec, unbalances = adapt(scene.ross_rotor)
-    lateral, ross_cs = ross_side(spec, settings.final_speed if settings.validate_with_ross else None)
+    lateral, ross_cs = ross_side(spec, upper)
     reduced = rr.reduce(lateral, unbalances, settings.final_speed, settings.mode_cutoff,
                         settings.gyroscopic_tolerance)
-    kw = {"omega_start": settings.start_speed, "omega_final": settings.final_speed, "horizon": settings.horizon,
-          "alpha_max": settings.max_acceleration, "nodes": tuple(settings.nodes),
-          "settling_time": settings.settling_time, "omega_max": settings.max_speed, "intervals": settings.intervals,
-          "degree": settings.degree, **drive(scene)}
     try:
-        with progress.steps(None, "multi-mode spin-up (starts)", "IPOPT solve", catch=True):
-            return modal_study.run(ModalSpinupOcp(reduced, **kw), scene.title, ross_cs,
-                                   solver_options.ipopt_options(settings.max_iterations))
+        return ModalSpinupOcp(reduced, settings.start_speed, settings.final_speed, settings.horizon,
+                              settings.max_acceleration, tuple(settings.nodes), settings.settling_time,
+                              settings.max_speed, settings.intervals, settings.degree, **drive(scene), **extra), ross_cs
     except ValueError as exc:
-        raise ScenarioError(f"analyses.ross_spinup: {exc}") from None
+        raise ScenarioError(f"analyses.{key}: {exc}") from None
 
 
 def _ross_side(spec, upper: float | None):
@@ -119,33 +130,18 @@ def drive(scene) -> dict:
 
 
 def problem(scene, settings: RossSpinup, key: str = "ross_spinup", **extra):
-    """The spin-up problem of the scene's ROSS rotor reduced to its modes (SI; needs the ross extra), with the
-    ``extra`` members of :class:`autobal.ocp.modal.ModalSpinupOcp` (e.g. a deflection limit); a problem that cannot
-    be posed raises ScenarioError naming ``analyses.<key>``.  The robust and time-optimal studies of the modal
-    rotor (its callers) take the acceleration limit only: a scene with ``ross_rotor.drive`` is refused."""
-    from autobal.models import ross_rotor as rr
-    from autobal.ocp import modal
-    from autobal.parts.ross_rotor import adapt
-
+    """The problem of :func:`posed` for the robust and time-optimal studies of the modal rotor (its callers), which
+    take the acceleration limit only: a scene with ``ross_rotor.drive`` is refused."""
     if scene.ross_rotor.drive is not None:
         raise ScenarioError(f"analyses.{key}: ross_rotor.drive: this study of the ROSS rotor takes the acceleration "
                             "limit only; remove the drive section (ross_spinup takes its limits)")
-
-    spec, unbalances = adapt(scene.ross_rotor)
-    reduced = rr.reduce(ross_side(spec)[0], unbalances, settings.final_speed, settings.mode_cutoff,
-                        settings.gyroscopic_tolerance)
-    try:
-        return modal.ModalSpinupOcp(reduced, settings.start_speed, settings.final_speed, settings.horizon,
-                                    settings.max_acceleration, tuple(settings.nodes), settings.settling_time,
-                                    settings.max_speed, settings.intervals, settings.degree, **extra)
-    except ValueError as exc:
-        raise ScenarioError(f"analyses.{key}: {exc}") from None
+    return posed(scene, settings, None, key, **extra)[0]
 
 
 def check(scene, settings: RossSpinup) -> None:
-    """``autobal check``: the modal problem posed (ROSS's rotor built and reduced, a few seconds), the drive's reach
-    checked, nothing solved."""
-    problem(scene, settings)
+    """``autobal check``: the modal problem posed as :func:`run` poses it (ROSS's rotor built and reduced, a few
+    seconds), the drive's reach checked, nothing solved."""
+    posed(scene, settings)
 
 
 def estimate_seconds(settings: RossSpinup) -> float:
