@@ -1272,8 +1272,10 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
                     words += f"; crossed by {moved} (re-optimise)"
                 if opt["optimised_for"] != explorer.overrides(values):
                     words += " — profile optimised for other settings"
+                how = "" if ans.get("resimulation") != "CVODES" else \
+                    " by CVODES: the rotor is near critical damping, without the exact linear response"
                 verdict.text = _verdict_html(words, "green" if ok else "red",
-                                             f"current (computed in {ans['compute_ms']:.0f} ms)")
+                                             f"current (computed in {ans['compute_ms']:.0f} ms{how})")
             else:
                 verdict.text = _verdict_html(ans["status"].upper() + ": " + ans["message"], "#555" if good else "red",
                                              "current ramps; " + ("the optimum is being found" if good else
