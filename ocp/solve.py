@@ -579,7 +579,6 @@ def optimize(ocp: SpinupProblem, method, multistart: bool = True, options: dict 
         times["global_search"] = time.perf_counter() - clock
     coarse = coarse_solver(ocp, method, ref, options) if len(start_list) > 1 else None
     solved = []  # (label, solution) of the finest mesh
-    solver = None
     if coarse is not None:  # mesh continuation: every start on the coarse mesh, the best one refined
         build += coarse.build_time_s
         nc, found = coarse.nlp.mesh.n, []
@@ -614,9 +613,8 @@ def optimize(ocp: SpinupProblem, method, multistart: bool = True, options: dict 
                 continue
             refined.append(sc.u[:nc])
             try:
-                stage, sol = refine(ocp, method, coarse, sc, options, rows, built)
+                _, sol = refine(ocp, method, coarse, sc, options, rows, built)
                 solved.append((f"{label}, refined from {nc} intervals", sol))
-                solver = solver or stage
             except SolveError as exc:
                 if exc.status in INFEASIBLE:
                     raise

@@ -165,3 +165,35 @@ def test_backoff_families_follow_the_problems_numbers():
     assert backoff_families(dataclasses.replace(ocp, horizon=150 / 160)) == []
     above = dataclasses.replace(ocp, omega_start=120.0)
     assert backoff_families(above) == [(1, True), (2, True)]
+
+
+def test_the_search_policy_judges_by_the_exponential_integrator():
+    """fast_judged / moved / fell_back / another_basin (ocp/solve.py) against the peaks of two ramps computed here:
+    the Jeffcott rotor's peak objective is judged, another objective or a problem without the Jeffcott rotor's
+    parameters is not; a refinement that rose more than FALLBACK fell back; a coarse profile within SAME of a
+    refined one is its basin (None), within the spread worth refining (True), beyond it not (False)."""
+    import dataclasses
+    from types import SimpleNamespace
+
+    from autobal.ocp import solve
+    from autobal.ocp.search import profile_peak
+    from autobal.ocp.simulation import ramp_profile
+    from autobal.ocp.spinup import SpinupOcp
+    from tests.test_spinup import JEFFCOTT
+
+    ocp = SpinupOcp(JEFFCOTT, 40.0, 210.0, 8.5, 40.0)
+    n = 60
+    slow, fast = ramp_profile(ocp, n, 20.0), ramp_profile(ocp, n, 40.0)
+    ps, pf = profile_peak(ocp, slow), profile_peak(ocp, fast)
+    assert pf < ps  # passing faster: the lower peak
+    assert solve.fast_judged(ocp)
+    assert not solve.fast_judged(dataclasses.replace(ocp, objective="integrated_deflection"))
+    assert not solve.fast_judged(SimpleNamespace(objective="peak_deflection", params=None))
+    assert solve.moved(ocp, fast, slow) == pytest.approx(ps / pf - 1, rel=1e-12)
+    assert solve.moved(dataclasses.replace(ocp, objective="integrated_deflection"), fast, slow) == 0.0
+    rise = ps / pf - 1
+    assert rise > solve.FALLBACK and solve.fell_back(ocp, fast, slow) and not solve.fell_back(ocp, slow, fast)
+    assert solve.another_basin(ocp, [], slow, 1.0) is False  # nothing refined yet: the first is the best's
+    assert solve.another_basin(ocp, [fast], fast.copy(), 0.0) is None
+    assert solve.another_basin(ocp, [fast], slow, 1.01 * rise) is True
+    assert solve.another_basin(ocp, [fast], slow, 0.99 * rise) is False
