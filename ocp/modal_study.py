@@ -28,6 +28,7 @@ from autobal.ocp.simulation import (
     best_within_limits,
     drive_use,
     ramp_runs,
+    require_resimulations,
     torque_reference,
 )
 from autobal.ocp.solve import optimize
@@ -241,9 +242,7 @@ class ModalSpinupResult(TypedResult):
         return "\n".join(lines)
 
     def _held(self):
-        if self.optimum is None:
-            raise ValueError(f"{self.name}: a Result loaded from results.json holds no re-simulations; its tables and "
-                             "figures are the files of its run")
+        require_resimulations(self.name, self.optimum)
 
     def tables(self) -> dict[str, dict]:
         """The tables headed 'name [unit]' in their display units (:func:`autobal.ocp.columns.headed`); each ramp's

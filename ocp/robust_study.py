@@ -27,7 +27,7 @@ from autobal.ocp.modal_search import phase_profiles
 from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.protocol import PEAK_KEY
 from autobal.ocp.search import FAST_STEP, controls_on_mesh, grid_search
-from autobal.ocp.simulation import Trajectory, best_within_limits, drive_use, resimulate
+from autobal.ocp.simulation import Trajectory, best_within_limits, drive_use, require_resimulations, resimulate
 from autobal.ocp.spinup_study import deflection_axis, deflection_text
 from autobal.ocp.time_optimal import minimum_peak
 from autobal.ocp.transcription import DirectCollocation
@@ -347,9 +347,7 @@ class RobustResult(TypedResult):
         return "\n".join(lines)
 
     def _runs(self):
-        if self.nominal_runs is None:
-            raise ValueError(f"{self.name}: a Result loaded from results.json holds no re-simulations; its tables and "
-                             "figures are the files of its run")
+        require_resimulations(self.name, self.nominal_runs)
 
     def tables(self) -> dict[str, dict]:
         """The tables headed 'name [unit]' in their display units (:func:`autobal.ocp.columns.headed`): peaks delta/e

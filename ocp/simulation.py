@@ -39,6 +39,14 @@ def chained_integrator(rhs: ca.Function, fractions: tuple, tol: float, intervals
     return ca.Function("spinup_interval_step", [q, par], [xf[:, -1], xf]).mapaccum("spinup_chain", intervals, [0], [0])
 
 
+def require_resimulations(name: str, held) -> None:
+    """ValueError when a spin-up Result loaded from results.json (``held`` None: no re-simulations) is asked for its
+    tables or figures, which only its run held (they are the files of its run)."""
+    if held is None:
+        raise ValueError(f"{name}: a Result loaded from results.json holds no re-simulations; its tables and "
+                         "figures are the files of its run")
+
+
 def runs(u: np.ndarray, h: np.ndarray) -> list[tuple[int, int]]:
     """(first interval, length) of the maximal runs of consecutive intervals with equal control and length."""
     change = np.flatnonzero((np.diff(u) != 0) | (np.diff(h) != 0)) + 1

@@ -35,6 +35,7 @@ from autobal.ocp.simulation import (
     drive_use,
     legend_above_curves,
     ramp_runs,
+    require_resimulations,
     torque_reference,
 )
 from autobal.ocp.solve import optimize
@@ -353,9 +354,7 @@ class SpinupResult(TypedResult):
         return "\n".join(lines)
 
     def _held(self):
-        if self.optimum is None:
-            raise ValueError(f"{self.name}: a Result loaded from results.json holds no re-simulations; its tables and "
-                             "figures are the files of its run")
+        require_resimulations(self.name, self.optimum)
 
     def tables(self) -> dict[str, dict]:
         """The tables headed 'name [unit]' in their display units (:func:`autobal.ocp.columns.headed`)."""

@@ -24,6 +24,7 @@ from autobal.ocp.drive_profile import drive_table
 from autobal.ocp.problem import SpinupOcp
 from autobal.ocp.protocol import PEAK_KEY
 from autobal.ocp.robust_study import PEAK_SYMBOL, deflection_of, peak_text
+from autobal.ocp.simulation import require_resimulations
 from autobal.ocp.solve import TIE
 from autobal.ocp.spinup_study import deflection_axis
 from autobal.ocp.transcription import DirectCollocation
@@ -206,9 +207,7 @@ class TimeOptimalResult(TypedResult):
         return "\n".join(lines)
 
     def _runs(self):
-        if self.points is None:
-            raise ValueError(f"{self.name}: a Result loaded from results.json holds no re-simulations; its tables and "
-                             "figures are the files of its run")
+        require_resimulations(self.name, self.points)
 
     def tables(self) -> dict[str, dict]:
         """The tables headed 'name [unit]' in their display units (:func:`autobal.ocp.columns.headed`): peaks delta/e
