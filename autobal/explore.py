@@ -1225,6 +1225,7 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
                                      legend_label="current optimum's profile")}
         for k, c in RAMP_COLOURS.items():
             lines[k] = fig.line("t", "d", source=sources[k], line_width=1.5, color=c, legend_label=k.replace("_", " "))
+        labels = {k: next(i for i in fig.legend.items if lines[k] in i.renderers) for k in RAMP_COLOURS}
         reopt = Button(label="re-optimise", name="reoptimise", button_type="primary")
         _browser_only(doc, sliders, fig)
 
@@ -1236,9 +1237,8 @@ def make_spinup_document(explorer: SpinupExplorer, out: Path):
                 for k, r in ans["ramps"].items():
                     sources[k].data = {"t": r["t"], "d": r["delta"]}
                     rows.append((r["label"], r["peak_over_e"], r["within_drive_limits"]))
-                for item in fig.legend.items:  # a ramp this setting has not: neither its curve nor its label
-                    k = next(k for k, r in lines.items() if r in item.renderers)
-                    lines[k].visible = item.visible = k == "optimum" or k in ans["ramps"]
+                for k, item in labels.items():  # a ramp this setting has not: neither its curve nor its label
+                    lines[k].visible = item.visible = k in ans["ramps"]
             opt = ans.get("optimum")
             if opt is not None:
                 sources["optimum"].data = {"t": opt["t"], "d": opt["delta"]}
