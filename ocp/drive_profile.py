@@ -17,7 +17,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import minimize
 
 from autobal.analysis.numerics.rotor import deflection, peak, unbalance
 from autobal.models.rotor import rotor_model
@@ -157,6 +156,8 @@ def fit_segments(tr: Trajectory, omega_final: float, horizon: float, K: int) -> 
         tt = np.concatenate([[0.0], np.sort(np.clip(x, 0, last)), [last]])
         return float(np.mean((np.interp(tr.t[keep], tt, np.interp(tt, tr.t, tr.omega)) - tr.omega[keep]) ** 2))
 
+    from scipy.optimize import minimize  # 0.4 s to import: only the segments' fit needs it
+
     x0 = np.linspace(0, last, K + 1)[1:-1]
     x = np.sort(np.clip(minimize(err, x0, method="Nelder-Mead", options={"maxfev": 200 * K}).x, 0, last)) \
         if K > 1 else x0
@@ -259,6 +260,8 @@ def segment_profile(ocp: SpinupOcp, optimum: Trajectory, K: int, evaluations: in
             xs[k] = x
     scores = {k: score(x) for k, x in xs.items()}
     best = start or min(scores, key=scores.get)
+    from scipy.optimize import minimize  # 0.4 s to import: only the segments' polish needs it
+
     res = minimize(score, xs[best], method="Nelder-Mead",
                    options={"maxfev": evaluations, "xatol": 1e-6, "fatol": 1e-7 * scores[best], "adaptive": True})
     x = res.x if res.fun < scores[best] else xs[best]
