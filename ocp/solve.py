@@ -4,8 +4,11 @@ every optimum (the reported peak is the re-simulated one)."""
 
 from __future__ import annotations
 
+import contextvars
 import dataclasses
 import math
+import os
+import threading
 import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -14,7 +17,7 @@ import casadi as ca
 import numpy as np
 
 from autobal.analysis.numerics import ipopt
-from autobal.analysis.run import solver_options
+from autobal.analysis.run import interrupt, solver_options
 from autobal.analysis.run.solver_options import ipopt_options  # noqa: F401 (the rooms' and tests' name)
 from autobal.errors import SolveError
 from autobal.models.rotor import RotorParams
@@ -413,6 +416,52 @@ def coarse_solver(ocp: SpinupOcp, method, ref: float, options: dict | None) -> S
     return Solver(screen, dataclasses.replace(method, intervals=n), ref, coarse_options(options))
 
 
+def screen_threads(starts: int) -> int:
+    """How many coarse solves run at once: the solver option spinup_coarse.threads, at most the cores this process
+    may use and the number of starts."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    return max(1, min(int(solver_options.defaults["spinup_coarse.threads"]), cores, starts))
+
+
+def screen(ocp: SpinupProblem, solvers: list[Solver], profiles: list[np.ndarray]) -> list[SpinupSolution]:
+    """Each control profile (over the horizon's intervals, any number) averaged onto the coarse mesh and solved there
+    (never raising on a failed solve), in order.  The profiles are shared among ``solvers`` (copies of one coarse
+    NLP), each in a thread of its own: CasADi lets go of Python's lock while IPOPT runs.  A solve depends on its
+    start alone, so the solutions are those of one solver taking the profiles one after another, bit for bit.  The
+    first solver works in the calling thread, where an interrupt stops IPOPT; the others then stop after their
+    current solve (one coarse solve, at most spinup_coarse.max_iter iterations)."""
+    nc = solvers[0].nlp.mesh.n
+    guesses = [u.reshape(nc, -1).mean(axis=1) if u.size % nc == 0 else np.interp(
+        np.linspace(0, 1, nc), np.linspace(0, 1, u.size), u) for u in profiles]
+    out, errors, todo, stop = [None] * len(guesses), [], iter(range(len(guesses))), threading.Event()
+    lock = threading.Lock()
+
+    def lane(solver: Solver) -> None:
+        while not stop.is_set() and interrupt.requested() is None:
+            with lock:
+                i = next(todo, None)
+            if i is None:
+                return
+            try:
+                out[i] = solver.solve(guesses[i], raise_on_failure=False, hold_states=ocp.hold_states)
+            except BaseException as exc:  # an interrupt seen after the solve, an unexpected failure: to the caller
+                errors.append(exc)
+                stop.set()
+
+    threads = [threading.Thread(target=contextvars.copy_context().run, args=(lane, s), daemon=True)
+               for s in solvers[1:]]  # the run's log (a context variable) goes with each thread
+    for t in threads:
+        t.start()
+    lane(solvers[0])
+    if not errors:
+        for t in threads:
+            t.join()
+    interrupt.check()  # a signal no solve has raised yet (a lane stopped before its next solve)
+    if errors:
+        raise errors[0]
+    return out
+
+
 def rank_coarse(ocp: SpinupOcp, found: list, n: int) -> tuple[int, dict[int, float]]:
     """The best of the coarse optima ``found`` ((label, solution) pairs, in start order, ``n`` control
     intervals): its index, and the objective re-simulated by CVODES of those it was judged by (by index).
@@ -565,6 +614,7 @@ def optimize(ocp: SpinupProblem, method, multistart: bool = True, options: dict 
         build += pk.build_time_s
         times["resimulation"] += pk.times["resimulation"]
         times["global_search"] = pk.times["global_search"]
+        times["screening"] = pk.times.get("screening", 0.0)
         guesses.append(pk.times["guesses"])
         if pk.score > ocp.deflection_limit:
             raise SolveError(f"spin-up OCP infeasible: binding constraint: deflection limit delta/e <= "
@@ -582,11 +632,12 @@ def optimize(ocp: SpinupProblem, method, multistart: bool = True, options: dict 
     if coarse is not None:  # mesh continuation: every start on the coarse mesh, the best one refined
         build += coarse.build_time_s
         nc, found = coarse.nlp.mesh.n, []
-        for label, u in start_list:
-            cu = u.reshape(nc, -1).mean(axis=1) if u.size % nc == 0 else np.interp(
-                np.linspace(0, 1, nc), np.linspace(0, 1, u.size), u)
-            sc = coarse.solve(cu, raise_on_failure=False, hold_states=ocp.hold_states)
-            guesses.append(sc.guess_time_s)
+        twins = [coarse_solver(ocp, method, ref, options) for _ in range(screen_threads(len(start_list)) - 1)]
+        build += sum(t.build_time_s for t in twins)
+        clock = time.perf_counter()
+        screened = screen(ocp, [coarse, *twins], [u for _, u in start_list])
+        times["screening"] = time.perf_counter() - clock  # wall: its guesses and solves, several at once
+        for (label, _), sc in zip(start_list, screened, strict=True):
             rows.append({"start": label, "stage": f"coarse ({nc} intervals)", "status": sc.status,
                          "success": sc.success, "iterations": sc.iterations, "solve_time_s": sc.solve_time_s})
             if sc.success:

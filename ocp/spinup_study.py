@@ -596,10 +596,12 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
         segments, seg.trajectory.peak_delta, seg.trajectory.peak_d, seg.objective, _pct(seg.objective, opt.score),
         seg.evaluations, seg.start, seg.start_objectives, **seg.drive, dwell=dwell(P, seg.trajectory, ocp.alpha_max))
     # the wall time by part (s): what the global search, the initial guesses, the NLP builds, the IPOPT solves,
-    # the CVODES re-simulations (reference ramp, ranking near-ties, the optimum) and the baselines took
+    # the CVODES re-simulations (reference ramp, ranking near-ties, the optimum) and the baselines took; the coarse
+    # screening's guesses and solves, several at once (solve.screen), by its own wall time
+    screened = sum(r.get("solve_time_s", 0.0) for r in opt.starts if "coarse (" in str(r.get("stage", "")))
     total_solve = sum(r.get("solve_time_s", 0.0) for r in opt.starts)
-    split = {"global_search": opt.times.get("global_search", 0.0), "guesses": opt.times.get("guesses", 0.0),
-             "build": opt.build_time_s, "solve": total_solve,
+    split = {"global_search": opt.times.get("global_search", 0.0), "screening": opt.times.get("screening", 0.0),
+             "guesses": opt.times.get("guesses", 0.0), "build": opt.build_time_s, "solve": total_solve - screened,
              "resimulation": opt.times.get("resimulation", 0.0), "baselines": t_base,
              "segments": t_seg}
     wall = time.perf_counter() - t0

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import contextlib
 import sys
+import threading
 
 from tqdm import tqdm
 
@@ -56,7 +57,10 @@ def output(terminal):
 
 
 def enabled(out=None) -> bool:
-    """Whether a bar is drawn: not quiet, and ``out`` (default: the current stream) is a terminal."""
+    """Whether a bar is drawn: not quiet, in the main thread (a solve in a helper thread, such as the spin-up's
+    coarse screening's, draws nothing), and ``out`` (default: the current stream) is a terminal."""
+    if threading.current_thread() is not threading.main_thread():
+        return False
     out = out or stream()
     try:
         return not _STATE["quiet"] and bool(out.isatty())

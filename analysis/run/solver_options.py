@@ -125,6 +125,11 @@ GROUPS = {
     # a screening, not the answer (benchmarks/spinup_ocp.md, "Study time" and "Liquid balancer convergence")
     "spinup_coarse": ("the coarse stage of the spin-up mesh continuation: a screening of the starts", {
         "max_iter": (200, "iteration limit of a start (the best basins converge in 13-111)"),
+        # CasADi lets go of Python's lock while IPOPT runs, so the starts' coarse solves share the cores; each solve
+        # depends on its start alone, so the answer is the same bit for bit (benchmarks/spinup_ocp.md, "Screening
+        # on two cores")
+        "threads": (2, "coarse solves at once, each on its own copy of the NLP (at most the cores the process may "
+                       "use; 1: one after another)"),
     }),
     "fatrop": ("fatrop on the spin-up's stage form (tol and max_iter from `spinup`)", {
         # fatrop on the stage form (transcribe_stages): from the benchmark's guess at 200-800 intervals mu_init
