@@ -490,7 +490,9 @@ def fell_back(ocp, coarse_u: np.ndarray, fine_u: np.ndarray) -> bool:
     judged by the exponential integrator (the Jeffcott rotor's peak deflection only; another problem: False).  The
     coarse collocation keeps the drive limits at its points only, so its profile may promise a peak the fine mesh
     cannot keep: on a torque-limited rotor without braking (benchmarks/spinup_family.py, ``torque_no_brake``) the
-    coarse winner re-simulated at 11.41 e and refined to 11.98 e in 381 + 914 iterations."""
+    coarse winner re-simulated at 11.41 e and refined to 11.98 e in 381 + 914 iterations (measured cause: the
+    no-braking limit at the settling window's points, where the speed is held; docs/dev/spinup.md, "Where
+    torque_no_brake's basin is lost")."""
     if not fast_judged(ocp):
         return False
     return profile_peak(ocp, fine_u) > profile_peak(ocp, coarse_u) * (1 + FALLBACK)

@@ -79,10 +79,12 @@ def test_reference_keeps_its_limits(name):
 
 
 #: problems the study misses, with the measured reason (strict: a fix makes the test fail until this is removed)
-MISSES = {"torque_no_brake": "the study's 11.420 e is 0.31 % above the reference's 11.385 e: two holds below the "
-                             "critical speed (77 and 88 rad/s) that the cross-entropy search does not find (its "
-                             "best in that family 11.460 e; the profile itself is in it at 11.378 e); and from "
-                             "that profile the study's coarse solve and mesh continuation end at 11.397 e (+0.11 %)"}
+MISSES = {"torque_no_brake": "the study's 11.420 e is 0.31 % above the reference's 11.385 e: the no-braking limit "
+                             "M >= 0 at the settling window's collocation points (the speed held, u = 0: only the "
+                             "residual whirl's phase can keep the unbalance reaction non-negative there) moves the "
+                             "200-interval stage out of the basin (from the two-back-off profile: 11.3735 e at 100 "
+                             "intervals, 11.4034 e at 200); with those rows relaxed by DRIVE_TOL in the transcription "
+                             "the study gives 11.334 e (docs/dev/spinup.md, \"Where torque_no_brake's basin is lost\")"}
 
 
 @pytest.mark.slow
@@ -106,3 +108,43 @@ def test_integrated_objective_on_a_long_window_refines_from_the_screening():
     stages = [r for r in opt.starts if r["start"] == "mesh continuation"]
     assert stages and all(r["success"] and r["iterations"] < 100 for r in stages)
     assert opt.solution.status == "Solve_Succeeded" and opt.resimulation_rel_error < 1e-3
+
+
+@pytest.mark.slow
+def test_torque_no_brake_basin_is_kept_without_the_settling_brake_rows(tmp_path):
+    """The measured cause of the torque_no_brake miss (docs/dev/spinup.md, "Where torque_no_brake's basin is lost"):
+    from the two-back-off profile (holds at 78 and 88 rad/s) the mesh continuation's 100-interval stage is in the
+    reference's basin; with the no-braking rows M >= 0 over the settling window (where the speed is held) lowered to
+    the re-simulation check's tolerance DRIVE_TOL, its 200-interval stage stays in it: below the reference, and the
+    re-simulated profile keeps the drive's limits within DRIVE_TOL (with the rows as they are: 11.4034 e, +0.17 %)."""
+    import dataclasses
+
+    import numpy as np
+
+    from autobal.ocp import solve
+    from autobal.ocp.search import backoff_controls
+    from autobal.ocp.simulation import drive_use
+    from autobal.ocp.transcription import interpolate
+
+    ocp, scene = load(tmp_path, "torque_no_brake")
+    method = method_of(scene.analyses.spinup)
+    ref = ocp.reference_level()
+    x = np.array([0.2375, 0.1669, 0.0840, 0.4081, 0.0])  # the family's best (Nelder-Mead on the search integrator)
+    coarse = solve.coarse_solver(ocp, method, ref, None)
+    nc = coarse.nlp.mesh.n
+    sol = coarse.solve(backoff_controls(ocp, x[None], 2, np.linspace(0, ocp.horizon, nc + 1))[0],
+                       hold_states=ocp.hold_states)
+    prev = coarse
+    for n in (2 * nc, method.intervals):
+        stage = solve.Solver(ocp, dataclasses.replace(method, intervals=n), ref, None, warm=True)
+        nlp, lbg = stage.nlp, stage.nlp.lbg.copy()
+        for name, rows in nlp.blocks:  # the no-braking rows of the settling window
+            if name.startswith("torque limit"):
+                settle = rows[len(rows) // (nlp.mesh.n + nlp.mesh.ns) * nlp.mesh.n:]
+                lbg[settle[lbg[settle] == 0.0]] = -DRIVE_TOL
+        w0, lg0, lx0 = interpolate(prev.nlp, sol.w, sol.lam_g, sol.lam_x, nlp)
+        sol = stage.solve(w0=w0, lam_g0=lg0, lam_x0=lx0, bounds={"lbg": lbg})
+        prev = stage
+    tr = ocp.resimulate(sol.u, sol.h, "refined")
+    assert tr.peak < PROBLEMS["torque_no_brake"]["reference_peak_over_e"]
+    assert drive_use(ocp, tr)["within_drive_limits"]
