@@ -311,7 +311,8 @@ def levers(names: list[str]) -> None:
     before issue 35), the lean start list (the one-back-off searches and the hold ramp: no three-phase grid, no
     two-back-off search, no constant ramps), the start list without the three-phase grid's two, one refinement of
     the coarse optima instead of up to three, the coarse screening to IPOPT tolerance 1e-4, and the coarse ranking
-    by the exponential integrator alone (no CVODES for near ties); LEVERS=name,name (environment) runs a subset
+    by the exponential integrator alone (no CVODES for near ties), the coarse screening on one thread instead of
+    two; LEVERS=name,name (environment) runs a subset
     beside "as is"."""
     import dataclasses
     from unittest import mock
@@ -343,7 +344,8 @@ def levers(names: list[str]) -> None:
                 "regulariser in the screening": {"coarse_solver": regularised_screen},
                 "lean starts": {"starts": lean}, "no three-phase grid": {"starts": nogrid},
                 "coarse tolerance 1e-4": {"coarse_options": loose},
-                "coarse ranking by the exponential integrator alone": {"RANK_TIE": 0.0}}
+                "coarse ranking by the exponential integrator alone": {"RANK_TIE": 0.0},
+                "coarse screening on one thread": {"screen_threads": lambda starts: 1}}
     keep = [v for v in os.environ.get("LEVERS", "").split(",") if v]  # a subset of the variants, by name
     variants = {k: v for k, v in variants.items() if not keep or k in keep or k == "as is"}
     cases = []
@@ -394,16 +396,23 @@ def main(argv: list[str] | None = None) -> None:
             DATA.write_text(json.dumps(data, indent=1) + "\n")
     if "--refs" in argv:
         return
-    base = next((a.split("=", 1)[1] for a in argv if a.startswith("--base=")), None)  # main's python, "before"
+    option = {a.split("=", 1)[0]: a.split("=", 1)[1] for a in argv if a.startswith("--") and "=" in a}
+    base = option.get("--base")  # the python of the code to compare with, "before"
+    label = option.get("--base-label", "the study before issue 35")
+    repeat = int(option.get("--repeat", 1))  # each study this many times, before and after in turn: the median
     cases = []
     for name in names:
         ref = data["problems"][name]["reference_peak_over_e"]
-        runs = {key: study(name, PROBLEMS[name][1], python) for key, python in (("before", base),
-                                                                                ("after", sys.executable)) if python}
+        tries = {"before": [], "after": []}
+        for _ in range(repeat):
+            for key, python in (("before", base), ("after", sys.executable)):
+                if python:
+                    tries[key].append(study(name, PROBLEMS[name][1], python))
+        runs = {k: sorted(v, key=lambda r: r["study_s"])[len(v) // 2] for k, v in tries.items() if v}
         gap = {k: None if r["study_peak_over_e"] is None else 100 * (r["study_peak_over_e"] / ref - 1)
                for k, r in runs.items()}
         b = runs.get("before", {})
-        cases.append(case(name, runs["after"]["study_s"], None, "the study before issue 35" if b else None,
+        cases.append(case(name, runs["after"]["study_s"], None, label if b else None,
                           b.get("study_s"), gap["after"], gap.get("before"), reference_peak_over_e=ref,
                           peak_over_e=runs["after"]["study_peak_over_e"], before_peak_over_e=b.get("study_peak_over_e"),
                           failure=runs["after"].get("failure"), before_failure=b.get("failure"),
@@ -420,8 +429,8 @@ def main(argv: list[str] | None = None) -> None:
     med = {k: float(np.median([c[k] for c in cases if c[k] is not None] or [np.nan])) for k in ("autobal_s", "peer_s")}
     write("spinup_family", "Spin-up study on the issue-35 family: peak against the independent reference, wall time",
           cases, notes=["autobal (s): the study's wall time in a new process (start-up included), this branch; peer "
-                        "(s): the same before issue 35 (main's python given by --base=); errors: the study's peak "
-                        "against the reference, % (negative: below it)",
+                        f"(s): {label} (its python given by --base=); each the median of {repeat} (before and after in "
+                        "turn); errors: the study's peak against the reference, % (negative: below it)",
                         f"median wall time: {med['autobal_s']:.2f} s after, {med['peer_s']:.2f} s before"])
     doc = json.loads(old.read_text())  # the medians beside the cases, for the docs' placeholders
     old.write_text(json.dumps(doc | {"median_after_s": med["autobal_s"], "median_before_s": med["peer_s"]}, indent=1,
