@@ -519,10 +519,11 @@ def resimulated_scores(ocp: SpinupOcp, sol: SpinupSolution, tr: Trajectory) -> t
 
 
 # The graded mesh of the mesh continuation (:func:`grading`): the intervals within GRADE_NEAR of the horizon of a
-# switch of the coarse optimum's control GRADE_RATIO times denser than the rest, none longer than GRADE_LONGEST
-# times the uniform one (docs/dev/spinup.md, "The graded mesh")
+# switch of the coarse optimum's control or of a point where its deflection is near its peak GRADE_RATIO times
+# denser than the rest, none longer than GRADE_LONGEST times the uniform one (docs/dev/spinup.md, "The graded mesh")
 GRADE_RATIO, GRADE_NEAR, GRADE_LONGEST = 2.0, 0.05, 2.0
 SWITCH = 0.1  # a change of the coarse control (over alpha_max) this large between two intervals is a switch
+NEAR_PEAK = 0.99  # a coarse point whose deflection is this close to the coarse peak (relative) is near it
 
 
 def equidistributed(density, tau_h: float, n: int, longest: float) -> np.ndarray:
@@ -544,15 +545,19 @@ def equidistributed(density, tau_h: float, n: int, longest: float) -> np.ndarray
 def grading(ocp: SpinupOcp, coarse: Nlp, sol: SpinupSolution, n: int) -> np.ndarray | None:
     """The grading of n control intervals (:func:`autobal.ocp.transcription.mesh`) from the coarse optimum ``sol``:
     GRADE_RATIO times denser within GRADE_NEAR of the horizon of each switch of its control (a change of more than
-    SWITCH between two coarse intervals), at most GRADE_LONGEST times the uniform interval elsewhere.  None (uniform)
-    for a free final time, a coarse optimum without switches, or a problem other than the Jeffcott rotor's (the modal
-    rotor keeps its uniform mesh)."""
+    SWITCH between two coarse intervals) and of each of its points on the horizon whose deflection is within
+    NEAR_PEAK of its peak, at most GRADE_LONGEST times the uniform interval elsewhere.  None (uniform) for a free
+    final time, a coarse optimum without switches, or a problem other than the Jeffcott rotor's (the modal rotor
+    keeps its uniform mesh)."""
     if ocp.free_time or not isinstance(getattr(ocp, "params", None), RotorParams):
         return None
     nc = coarse.mesh.n
-    at = point_times(coarse)[0][1:nc][np.abs(np.diff(sol.u[:nc])) > SWITCH]
-    if not at.size:
+    t0, _, tc = point_times(coarse)
+    switches = t0[1:nc][np.abs(np.diff(sol.u[:nc])) > SWITCH]
+    if not switches.size:
         return None
+    d2 = ocp.epigraph2(sol.points[:, :tc.shape[1]])  # (K, d): the deflection squared at the collocation points
+    at = np.concatenate([switches, tc[:nc][d2[:nc] >= NEAR_PEAK**2 * d2.max()]])
 
     def density(t):
         return np.where(np.min(np.abs(t[:, None] - at[None, :]), axis=1) <= GRADE_NEAR * ocp.tau_h, GRADE_RATIO, 1.0)

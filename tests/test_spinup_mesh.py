@@ -14,6 +14,7 @@ from autobal.ocp import spinup as S
 from autobal.ocp.transcription import (
     interpolate,
     jerk_steps,
+    point_times,
     on_uniform,
     structured_derivatives,
     transcribe,
@@ -128,3 +129,27 @@ def test_interpolation_from_the_uniform_coarse_mesh_onto_a_graded_one():
                                                                np.cumsum(np.r_[0.0, h]), np.r_[0.0, np.cumsum(u * h)]),
                     rtol=1e-12, atol=1e-12)
     assert_array_equal(on_uniform(sol.u[:20], coarse.nlp.mesh.control_lengths, 20), sol.u[:20])
+
+
+def test_grading_is_twice_as_dense_near_the_coarse_switches_and_peak():
+    """The grading of the mesh continuation from a coarse optimum: n lengths summing to n, none longer than
+    GRADE_LONGEST, the intervals near a coarse switch (or the coarse peak) GRADE_RATIO times shorter than those far
+    from both; uniform for a free final time."""
+    ocp = small()
+    coarse = S.Solver(ocp, S.DirectCollocation(20, 3, "radau"))
+    sol = coarse.solve()
+    g = solve.grading(ocp, coarse.nlp, sol, 80)
+    assert g.shape == (80,) and g.sum() == pytest.approx(80, rel=1e-12)
+    assert g.max() <= solve.GRADE_LONGEST * (1 + 1e-2)
+    t0, _, tc = point_times(coarse.nlp)
+    switches = t0[1:20][np.abs(np.diff(sol.u[:20])) > solve.SWITCH]
+    d2 = ocp.epigraph2(sol.points[:, :3])
+    marks = np.concatenate([switches, tc[:20][d2[:20] >= solve.NEAR_PEAK**2 * d2.max()]])
+    assert switches.size
+    mid = (np.cumsum(g) - g / 2) * ocp.tau_h / 80
+    dist = np.min(np.abs(mid[:, None] - marks[None, :]), axis=1) / ocp.tau_h
+    near, far = g[dist < solve.GRADE_NEAR - 0.02], g[dist > solve.GRADE_NEAR + 0.02]
+    assert near.size and far.size
+    assert_allclose(np.median(far) / np.median(near), solve.GRADE_RATIO, rtol=2e-2)
+    free = small(objective="min_time", deflection_limit=5.0)
+    assert solve.grading(free, coarse.nlp, sol, 80) is None
