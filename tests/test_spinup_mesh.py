@@ -14,8 +14,8 @@ from autobal.ocp import spinup as S
 from autobal.ocp.transcription import (
     interpolate,
     jerk_steps,
-    point_times,
     on_uniform,
+    point_times,
     structured_derivatives,
     transcribe,
     transcribe_stages,
