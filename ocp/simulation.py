@@ -137,7 +137,7 @@ def initial_guess(ocp: SpinupOcp, nlp: Nlp, u: np.ndarray) -> np.ndarray:
     at every interval: from the Adams guess (1e-8 apart) the robust study's NLP lands in another local optimum."""
     ms = nlp.mesh
     uu = np.concatenate([u, np.zeros(ms.ns)])
-    h = np.concatenate([np.full(ms.n, ms.h), np.full(ms.ns, ms.hs)])
+    h = ms.lengths
     w0 = np.zeros(nlp.x.numel())
     if nlp.index["Xc"] is not None:
         sim = simulate_profile(ocp, uu, h, path_fractions(nlp.method.degree, nlp.method.scheme), tol=1e-8)
@@ -381,7 +381,7 @@ def fastest_feasible_rate(ocp: SpinupOcp, intervals: int = 200, points: int = 60
     top speed), then lowered by the re-simulated excess torque (the rotor's reaction) until the re-simulation
     keeps the limits."""
     ms = mesh(ocp, intervals)
-    h = np.concatenate([np.full(ms.n, ms.h), np.full(ms.ns, ms.hs)])
+    h = ms.lengths
     J = ocp.inertia
     slowest = min(abs(ocp.omega_final - ocp.omega_start) / ocp.horizon, ocp.alpha_max)
     wt = max(ocp.omega_start, ocp.omega_final)
@@ -413,7 +413,7 @@ def baselines(ocp: SpinupOcp, intervals: int = 200, points: int = 60, resim=resi
     in a quarter of the time (one CVODES call per interval).  ``resim``: the re-simulation, :func:`resimulate`'s
     signature (the spin-up explorer's live path passes :func:`autobal.ocp.linear_response.resimulate`)."""
     ms = mesh(ocp, intervals)
-    h = np.concatenate([np.full(ms.n, ms.h), np.full(ms.ns, ms.hs)])
+    h = ms.lengths
     const = min(abs(ocp.omega_final - ocp.omega_start) / ocp.horizon, ocp.alpha_max)
     out = {}
     for key, label, a in (("constant_ramp", f"constant ramp {rate_text(const)}", const),

@@ -41,10 +41,14 @@ from autobal.ocp.simulation import (
 )
 from autobal.ocp.transcription import (
     DirectCollocation,
+    Mesh,
     MultipleShooting,
     Nlp,
     complete_stage_guess,
     interpolate,
+    mesh,
+    on_uniform,
+    point_times,
     structured_derivatives,
     transcribe,
     transcribe_stages,
@@ -103,7 +107,9 @@ def _points(nlp: Nlp, wopt: np.ndarray, ocp: SpinupOcp) -> np.ndarray:
 
 def _controls(nlp: Nlp, wopt: np.ndarray, ocp: SpinupOcp) -> tuple[np.ndarray, np.ndarray]:
     ms = nlp.mesh
-    hn = wopt[nlp.index["v"][0]] * ocp.tau_h / ms.n if ocp.free_time else ms.h
+    if not ocp.free_time:
+        return wopt[nlp.index["u"]], ms.lengths
+    hn = wopt[nlp.index["v"][0]] * ocp.tau_h / ms.n
     return wopt[nlp.index["u"]], np.concatenate([np.full(ms.n, hn), np.full(ms.ns, ms.hs)])
 
 
@@ -124,18 +130,18 @@ class Solver:
     """The NLP of one (problem, method) pair, built once and solved from any guess."""
 
     def __init__(self, ocp: SpinupOcp, method, ref: float | None = None, options: dict | None = None,
-                 warm: bool = False):
+                 warm: bool = False, mesh: Mesh | None = None):
         t0 = time.perf_counter()
         self.ocp, self.method = ocp, method
         # MX: the interval Function mapped over the intervals, so the construction hardly grows with N
         # (SX: 1.7 s at N = 200; benchmarks/spinup_ocp.md, "Levers")
         ref = ocp.reference_level() if ref is None else ref
         if getattr(method, "solver", "ipopt") == "fatrop":
-            self.nlp = transcribe_stages(ocp, method, ref)
+            self.nlp = transcribe_stages(ocp, method, ref, mesh)
             self.solver = fatrop_solver(self.nlp, options)
             self.build_time_s = time.perf_counter() - t0
             return
-        self.nlp = transcribe(ocp, method, ref, "MX")
+        self.nlp = transcribe(ocp, method, ref, "MX", mesh)
         nlp = self.nlp
         extra = solver_options.get("spinup") | (solver_options.get("spinup_warm") if warm else {}) | (options or {})
         if isinstance(method, MultipleShooting):
@@ -563,21 +569,71 @@ def resimulated_scores(ocp: SpinupOcp, sol: SpinupSolution, tr: Trajectory) -> t
     return tr.peak, sol.peak_collocation
 
 
+# The graded mesh of the mesh continuation (:func:`grading`): the intervals within GRADE_NEAR of the horizon of a
+# switch of the coarse optimum's control or of a point where its deflection is near its peak GRADE_RATIO times
+# denser than the rest, none longer than GRADE_LONGEST times the uniform one (docs/dev/spinup.md, "The graded mesh")
+GRADE_RATIO, GRADE_NEAR, GRADE_LONGEST = 2.0, 0.05, 2.0
+SWITCH = 0.1  # a change of the coarse control (over alpha_max) this large between two intervals is a switch
+NEAR_PEAK = 0.99  # a coarse point whose deflection is this close to the coarse peak (relative) is near it
+
+
+def equidistributed(density, tau_h: float, n: int, longest: float) -> np.ndarray:
+    """n interval lengths over tau_h / n (summing to n), each inversely proportional to ``density`` (a function of tau
+    on [0, tau_h], positive): the nodes equidistribute its integral, the density first raised to 1/``longest`` of its
+    mean wherever it is lower, so that no interval is longer than about ``longest`` times tau_h / n."""
+    t = np.linspace(0.0, tau_h, 64 * n + 1)
+    rho = np.asarray(density(t), float)
+    for _ in range(50):
+        floor = np.trapezoid(rho, t) / tau_h / longest
+        if rho.min() >= floor * (1 - 1e-9):
+            break
+        rho = np.maximum(rho, floor)
+    cum = np.concatenate([[0.0], np.cumsum(0.5 * (rho[1:] + rho[:-1]) * np.diff(t))])
+    g = np.diff(np.interp(np.linspace(0.0, cum[-1], n + 1), cum, t)) / (tau_h / n)
+    return g * (n / g.sum())
+
+
+def grading(ocp: SpinupOcp, coarse: Nlp, sol: SpinupSolution, n: int) -> np.ndarray | None:
+    """The grading of n control intervals (:func:`autobal.ocp.transcription.mesh`) from the coarse optimum ``sol``:
+    GRADE_RATIO times denser within GRADE_NEAR of the horizon of each switch of its control (a change of more than
+    SWITCH between two coarse intervals) and of each of its points on the horizon whose deflection is within
+    NEAR_PEAK of its peak, at most GRADE_LONGEST times the uniform interval elsewhere.  None (uniform) for a free
+    final time, a coarse optimum without switches, or a problem other than the Jeffcott rotor's (the modal rotor
+    keeps its uniform mesh)."""
+    if ocp.free_time or not isinstance(getattr(ocp, "params", None), RotorParams):
+        return None
+    nc = coarse.mesh.n
+    t0, _, tc = point_times(coarse)
+    switches = t0[1:nc][np.abs(np.diff(sol.u[:nc])) > SWITCH]
+    if not switches.size:
+        return None
+    d2 = ocp.epigraph2(sol.points[:, :tc.shape[1]])  # (K, d): the deflection squared at the collocation points
+    at = np.concatenate([switches, tc[:nc][d2[:nc] >= NEAR_PEAK**2 * d2.max()]])
+
+    def density(t):
+        return np.where(np.min(np.abs(t[:, None] - at[None, :]), axis=1) <= GRADE_NEAR * ocp.tau_h, GRADE_RATIO, 1.0)
+
+    return equidistributed(density, ocp.tau_h, n, GRADE_LONGEST)
+
+
 def refine(ocp: SpinupOcp, method, coarse: Solver, sol: SpinupSolution, options: dict | None, rows: list,
-           built: dict | None = None) -> tuple[Solver, SpinupSolution]:
+           built: dict | None = None, graded: bool = False) -> tuple[Solver, SpinupSolution]:
     """Mesh continuation from the coarse optimum ``sol`` to ``method``'s mesh by doubling the intervals;
     each stage starts from the previous optimum and its multipliers (:func:`interpolate`) with a small
     barrier parameter.  Returns the finest stage's solver and solution (a failed last stage raises).  ``built``: the
     stages' solvers by intervals, kept across the refinements of one study (a stage built before has no build
     time in its row)."""
-    prev, n = coarse, coarse.nlp.mesh.n
+    prev, n, first = coarse, coarse.nlp.mesh.n, sol
     built = {} if built is None else built
     while n < method.intervals:
         n *= 2
-        new = n not in built
+        g = grading(ocp, coarse.nlp, first, n) if graded else None
+        key = n if g is None else (n, g.tobytes())
+        new = key not in built
         if new:
-            built[n] = Solver(ocp, dataclasses.replace(method, intervals=n), prev.nlp.ref, options, warm=True)
-        stage = built[n]
+            built[key] = Solver(ocp, dataclasses.replace(method, intervals=n), prev.nlp.ref, options, warm=True,
+                                mesh=None if g is None else mesh(ocp, n, g))
+        stage = built[key]
         w0, lg0, lx0 = interpolate(prev.nlp, sol.w, sol.lam_g, sol.lam_x, stage.nlp)
         last = n >= method.intervals
         sol = stage.solve(w0=w0, lam_g0=lg0, lam_x0=lx0, raise_on_failure=last)
@@ -588,7 +644,8 @@ def refine(ocp: SpinupOcp, method, coarse: Solver, sol: SpinupSolution, options:
     return prev, sol
 
 
-def optimize(ocp: SpinupProblem, method, multistart: bool = True, options: dict | None = None) -> Optimum:
+def optimize(ocp: SpinupProblem, method, multistart: bool = True, options: dict | None = None,
+             graded: bool = True) -> Optimum:
     """Solve from every start of the problem (:meth:`~autobal.ocp.protocol.SpinupProblem.starts`: the Jeffcott rotor's
     :class:`SpinupOcp` or the modal rotor's :class:`autobal.ocp.modal.ModalSpinupOcp`); keep the best optimum by
     its re-simulated objective (for min_time: the shortest time whose re-simulated peak keeps the deflection limit
@@ -596,7 +653,9 @@ def optimize(ocp: SpinupProblem, method, multistart: bool = True, options: dict 
 
     With several starts and a collocation mesh of at least 2 x COARSE intervals, every start is solved on
     the coarse mesh and the best coarse optimum (the problem's ``rank_coarse``) is refined by mesh continuation
-    (:func:`refine`).  min_time is solved by continuation: first the smallest peak over the full horizon
+    (:func:`refine`), on a mesh graded from the coarse optimum (:func:`grading`) with ``graded`` (uniform without it:
+    for callers that read the optimum's controls as equal intervals, and for the modal rotor and a free final time
+    always).  min_time is solved by continuation: first the smallest peak over the full horizon
     (if even that exceeds the deflection limit, the limit is the binding constraint and no time is
     feasible), then the minimum time started from that profile.  One row per solve in ``Optimum.starts``: the
     start, its mesh stage, status, iterations, times, and its re-simulated ``objective`` where one was computed."""
@@ -608,7 +667,7 @@ def optimize(ocp: SpinupProblem, method, multistart: bool = True, options: dict 
     guesses = []  # every solve's initial-guess simulation (s)
     if ocp.free_time:
         peak_ocp = dataclasses.replace(ocp, objective="peak_deflection", deflection_limit=None)
-        pk = optimize(peak_ocp, method, multistart, options)
+        pk = optimize(peak_ocp, method, multistart, options, graded=False)  # its profile starts the uniform mesh
         # the minimum-peak stage's solves, builds and times are this study's too (its own start list instead of
         # the ramps starts() would give)
         rows += [r | {"start": f"minimum-peak stage: {r['start']}",
@@ -666,17 +725,20 @@ def optimize(ocp: SpinupProblem, method, multistart: bool = True, options: dict 
                 continue
             refined.append(sc.u[:nc])
             try:
-                _, sol = refine(ocp, method, coarse, sc, options, rows, built)
+                _, sol = refine(ocp, method, coarse, sc, options, rows, built, graded)
                 solved.append((f"{label}, refined from {nc} intervals", sol))
             except SolveError as exc:
                 if exc.status in INFEASIBLE:
                     raise
                 first_error, fell = exc, True
                 continue
-            fell = fell_back(ocp, sc.u[:nc], sol.u[:n_ctrl])
+            # the search policy judges profiles on equal intervals: a graded optimum averaged onto 4 N of them
+            h = sol.h[:n_ctrl]
+            fine = on_uniform(sol.u[:n_ctrl], h, n_ctrl if np.all(h == h[0]) else 4 * n_ctrl)
+            fell = fell_back(ocp, sc.u[:nc], fine)
             # a refinement that moved more than FALLBACK (either way) from its coarse profile: the coarse ranking is
             # trusted to that much (the liquid balancer 2.8 %; damped_issue35 0.7 %, the deadline scene 1e-6: one)
-            step = moved(ocp, sc.u[:nc], sol.u[:n_ctrl])
+            step = moved(ocp, sc.u[:nc], fine)
             spread = max(spread, step) if step > FALLBACK else spread
         build += sum(r.get("build_time_s", 0.0) for r in rows)
     if start_list:

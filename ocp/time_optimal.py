@@ -44,9 +44,10 @@ def minimum_peak(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation, mul
                  options: dict | None = None) -> Optimum:
     """The minimum-peak optimum of ``ocp`` on ``method``'s mesh by the shared loop (:func:`autobal.ocp.solve.optimize`:
     its model's global search for starts, the shared solver and mesh continuation); the modal problem on the
-    method's intervals (its starts and baselines are on its own mesh)."""
+    method's intervals (its starts and baselines are on its own mesh).  On a uniform mesh: the front's later
+    deadlines and the robust study start from its controls as equal intervals."""
     return optimize(ocp if isinstance(ocp, SpinupOcp) else ocp.on_intervals(method.intervals), method, multistart,
-                    options)
+                    options, graded=False)
 
 
 def fastest_ramp(ocp: SpinupOcp | ModalSpinupOcp, method: DirectCollocation):

@@ -138,18 +138,49 @@ def jerk_regulariser(ocp: SpinupProblem, du):
 
 @dataclass
 class Mesh:
-    """Interval lengths (tau): ``n`` control intervals of the horizon, then ``ns`` settling intervals."""
+    """Interval lengths (tau): ``n`` control intervals of the horizon, then ``ns`` settling intervals of ``hs``.
+    The control intervals are ``h`` each (uniform) or ``h`` times ``grading`` (a graded mesh: ``grading`` sums to
+    ``n``, so the intervals still cover the horizon); the settling window stays uniform."""
 
     n: int
     ns: int
-    h: float  # control interval length at the horizon (guess, when the time is free)
+    h: float  # control interval length of the uniform mesh (guess, when the time is free), the graded one's mean
     hs: float
+    grading: np.ndarray | None = None  # (n,) each control interval's length over h; None: uniform
+
+    @property
+    def control_lengths(self) -> np.ndarray:
+        """The n control intervals' lengths, tau (the guess when the time is free)."""
+        return np.full(self.n, self.h) if self.grading is None else self.h * self.grading
+
+    @property
+    def lengths(self) -> np.ndarray:
+        """All n + ns interval lengths, tau."""
+        return np.concatenate([self.control_lengths, np.full(self.ns, self.hs)])
 
 
-def mesh(ocp: SpinupProblem, n: int) -> Mesh:
+def on_uniform(u: np.ndarray, h: np.ndarray, m: int) -> np.ndarray:
+    """The piecewise-constant controls u on intervals of lengths h averaged onto m equal intervals of the same span
+    (the speed at their edges kept exactly); u itself when the intervals are already equal and m = len(u)."""
+    if m == len(u) and np.all(h == h[0]):
+        return np.asarray(u)
+    cum = np.concatenate([[0.0], np.cumsum(np.asarray(u) * h)])
+    edges = np.linspace(0.0, np.sum(h), m + 1)
+    return np.diff(np.interp(edges, np.concatenate([[0.0], np.cumsum(h)]), cum)) / np.diff(edges)
+
+
+def mesh(ocp: SpinupProblem, n: int, grading: np.ndarray | None = None) -> Mesh:
+    """The mesh of n control intervals (uniform, or graded by ``grading``, n lengths over tau_h / n summing to n)
+    and the settling window's intervals at about the uniform control step."""
     h = ocp.tau_h / n
     ns = int(math.ceil(ocp.tau_s / h - 1e-9)) if ocp.tau_s > 0 else 0
-    return Mesh(n, ns, h, ocp.tau_s / ns if ns else 0.0)
+    if grading is not None:
+        if ocp.free_time:
+            raise ValueError("a graded mesh needs a fixed deadline (the free-time transcription is uniform)")
+        grading = np.asarray(grading, float)
+        if grading.shape != (n,) or np.any(grading <= 0) or abs(grading.sum() - n) > 1e-9 * n:
+            raise ValueError(f"a graded mesh needs {n} positive interval lengths over tau_h/n summing to {n}")
+    return Mesh(n, ns, h, ocp.tau_s / ns if ns else 0.0, grading)
 
 
 @dataclass
@@ -247,8 +278,8 @@ def collocation_rows(ocp: SpinupProblem, method: DirectCollocation, w, v, lay: L
     last = W[per - 1 - nx:per - 1, :]  # the last collocation point
     X0 = ca.horzcat(w[:nx], last[:, :-1]) if lay.merged else W[:nx, :]  # each interval's start and end node
     Xn = last if lay.merged else ca.horzcat(W[:nx, 1:], w[K * per:K * per + nx])
-    hrow = ca.horzcat(*([ca.repmat(control_step(ocp, ms, v), 1, ms.n)] + ([ca.repmat(ms.hs, 1, ms.ns)] if ms.ns
-                                                                            else [])))
+    hrow = ca.horzcat(ca.repmat(control_step(ocp, ms, v), 1, ms.n), ca.repmat(ms.hs, 1, ms.ns)) \
+        if ms.grading is None else ca.DM(ms.lengths).T
     fi = interval_function(ocp, d, method.scheme, ref, continuity=not lay.merged)
     args = [X0, W[per - 1 - nx * d:per - 1, :], W[per - 1, :], Xn, hrow, v]
     out = fi.map(K)(*args)
@@ -278,8 +309,9 @@ def shooting_rows(ocp: SpinupProblem, method: MultipleShooting, w, U, v, lay: La
     X = [w[k * per:k * per + nx] for k in range(lay.K + 1)]  # shooting: [X_k, u_k] per interval
     F = interval_integrator(ocp.rhs(), tuple(frac), method.tol)
     dynamics, path_rows = [], [[] for _ in paths]
+    lengths = ms.lengths
     for k in range(lay.K):
-        h = control_step(ocp, ms, v) if k < ms.n else ms.hs
+        h = control_step(ocp, ms, v) if k < ms.n and ms.grading is None else lengths[k]
         out = F(x0=X[k], p=ca.vertcat(U[k] * ocp.a_max, h, *ocp.p))["xf"]
         dynamics.append(X[k + 1] - out[:, -1])
         for pc, r in zip(paths, path_rows, strict=True):
@@ -296,7 +328,16 @@ def jerk_rows(ocp: SpinupProblem, U, ms: Mesh, v) -> tuple[list, list]:
     if ocp.jerk_max is None:
         return du, []
     step = ocp.jerk_max / ocp.alpha_max / ocp.Om * (ocp.tau_h / ms.n if not ocp.free_time else 1.0)
+    if ms.grading is not None:  # each pair of intervals its own step: the time between their midpoints
+        return du, [d / ca.DM(step * jerk_steps(ms)) for d in du]
     return du, [d / step for d in du] if not ocp.free_time else [d / (step * v[0] * ocp.tau_h / ms.n) for d in du]
+
+
+def jerk_steps(ms: Mesh) -> np.ndarray:
+    """The n - 1 steps over tau_h / n between consecutive control intervals' midpoints (1 on a uniform mesh): the
+    jerk limit bounds the change of the acceleration by the limit times this step."""
+    g = np.ones(ms.n) if ms.grading is None else ms.grading
+    return (g[1:] + g[:-1]) / 2
 
 
 def stack(rows: dict, bounds: dict) -> tuple[list, np.ndarray, np.ndarray, list]:
@@ -315,7 +356,7 @@ def stack(rows: dict, bounds: dict) -> tuple[list, np.ndarray, np.ndarray, list]
     return g, np.concatenate(lbg), np.concatenate(ubg), blocks
 
 
-def transcribe(ocp: SpinupProblem, method, ref: float, symbolic: str = "SX") -> Nlp:
+def transcribe(ocp: SpinupProblem, method, ref: float, symbolic: str = "SX", ms: Mesh | None = None) -> Nlp:
     """The NLP of ``ocp`` by ``method`` (DirectCollocation: :func:`collocation_rows`, or MultipleShooting:
     :func:`shooting_rows`), the variables laid out by :func:`layout`.
 
@@ -331,6 +372,9 @@ def transcribe(ocp: SpinupProblem, method, ref: float, symbolic: str = "SX") -> 
         The collocation NLP's expression graph: "SX" (scalar, each interval's expressions inlined) or "MX"
         (the interval Function mapped over the intervals; its derivatives are maps too, so the solver's
         construction hardly grows with the intervals).  Multiple shooting is always MX.
+    ms : Mesh, optional
+        The intervals (:func:`mesh`; a graded one from :func:`graded_mesh`); the uniform mesh of
+        ``method.intervals`` by default.
 
     Returns
     -------
@@ -338,7 +382,7 @@ def transcribe(ocp: SpinupProblem, method, ref: float, symbolic: str = "SX") -> 
         Variables, objective, constraints, bounds, the named constraint blocks and the index of each variable.
     """
     collocation = isinstance(method, DirectCollocation)
-    ms = mesh(ocp, method.intervals)
+    ms = mesh(ocp, method.intervals) if ms is None else ms
     merged = collocation and abs(collocation_data(method.degree, method.scheme)[0][-1] - 1) < 1e-12
     lay = layout(ocp.nx, ocp.n_extra, ms.n + ms.ns, method.degree, collocation, merged)
     w = (ca.MX if symbolic == "MX" or not collocation else ca.SX).sym("w", lay.size)
@@ -378,19 +422,20 @@ def transcribe(ocp: SpinupProblem, method, ref: float, symbolic: str = "SX") -> 
 
 def stage_function(ocp: SpinupProblem, d: int, scheme: str, ref: float, jerk: bool) -> ca.Function:
     """One stage of the stage form (:func:`transcribe_stages`) as an SX Function (x_k (nx), the collocation
-    states (nx d), u_k, h, v_k, p_k, x_(k+1) (nx), v_(k+1), p_(k+1)) -> (the gap rows x_(k+1) - Z_d, v_(k+1) - v_k
-    and, with ``jerk``, p_(k+1) - u_k; the collocation residuals; one column per path constraint; the speed
-    of x_k; with a jerk limit (u_k - p_k)/h; the quadrature).  The equations are :func:`interval_function`'s."""
+    states (nx d), u_k, h, v_k, p_k, x_(k+1) (nx), v_(k+1), p_(k+1), h_j) -> (the gap rows x_(k+1) - Z_d,
+    v_(k+1) - v_k and, with ``jerk``, p_(k+1) - u_k; the collocation residuals; one column per path constraint; the
+    speed of x_k; with a jerk limit (u_k - p_k)/h_j (h_j the step from the previous interval's midpoint); the
+    quadrature).  The equations are :func:`interval_function`'s."""
     fi = interval_function(ocp, d, scheme, ref, continuity=False)
     nv, jp, nx = ocp.n_extra, int(jerk), ocp.nx
-    x0, xc, u, h = ca.SX.sym("x0", nx), ca.SX.sym("xc", nx * d), ca.SX.sym("u"), ca.SX.sym("h")
+    x0, xc, u, h, hj = ca.SX.sym("x0", nx), ca.SX.sym("xc", nx * d), ca.SX.sym("u"), ca.SX.sym("h"), ca.SX.sym("hj")
     v, p, x1, v1, p1 = (ca.SX.sym(n, k) for n, k in (("v", nv), ("p", jp), ("x1", nx), ("v1", nv), ("p1", jp)))
     res, *paths, quad = fi(x0, xc, u, xc[-nx:], h, v)
     gap = ca.vertcat(x1 - xc[-nx:], v1 - v, p1 - u if jerk else ca.SX(0, 1))
     rows = [gap, res, *paths, x0[ocp.speed_index]]
     if ocp.jerk_max is not None:
-        rows.append((u - p) / (ocp.jerk_max / ocp.alpha_max / ocp.Om * h))
-    return ca.Function("spinup_stage", [x0, xc, u, h, v, p, x1, v1, p1], [*rows, quad])
+        rows.append((u - p) / (ocp.jerk_max / ocp.alpha_max / ocp.Om * hj))
+    return ca.Function("spinup_stage", [x0, xc, u, h, v, p, x1, v1, p1, hj], [*rows, quad])
 
 
 SPEED_ROWS = "speed: omega <= omega_max on the horizon, final speed omega(T) = omega_final"
@@ -452,7 +497,7 @@ def stage_variable_bounds(ocp: SpinupProblem, size: int, index: dict, n: int) ->
     return lbx, ubx
 
 
-def transcribe_stages(ocp: SpinupProblem, method: DirectCollocation, ref: float) -> Nlp:
+def transcribe_stages(ocp: SpinupProblem, method: DirectCollocation, ref: float, ms: Mesh | None = None) -> Nlp:
     """The collocation NLP of ``ocp`` in the stage form of a structure-exploiting solver (fatrop: Vanroye et
     al. (2023), a Riccati recursion over the stages, linear in their number).
 
@@ -472,6 +517,8 @@ def transcribe_stages(ocp: SpinupProblem, method: DirectCollocation, ref: float)
         Radau collocation (the last point is the interval end, the next stage's state).
     ref : float
         Scale of the objective, as for :func:`transcribe`.
+    ms : Mesh, optional
+        The intervals, as for :func:`transcribe`.
 
     Returns
     -------
@@ -482,7 +529,7 @@ def transcribe_stages(ocp: SpinupProblem, method: DirectCollocation, ref: float)
     if not isinstance(method, DirectCollocation) or abs(collocation_data(method.degree, method.scheme)[0][-1]
                                                         - 1) > 1e-12:
         raise ValueError(f"the stage form (fatrop) needs Radau collocation, got {method.label}")
-    ms = mesh(ocp, method.intervals)
+    ms = mesh(ocp, method.intervals) if ms is None else ms
     K, n, d, nv, nx = ms.n + ms.ns, ms.n, method.degree, ocp.n_extra, ocp.nx
     jerk = n > 1 and bool(ocp.jerk_penalty or ocp.jerk_variation or ocp.jerk_max is not None)
     nxs = nx + nv + int(jerk)  # the states of a stage
@@ -491,10 +538,13 @@ def transcribe_stages(ocp: SpinupProblem, method: DirectCollocation, ref: float)
     W = ca.reshape(w[:K * per], per, K)
     nxt = ca.horzcat(W[:nxs, 1:], w[K * per:])
     scale = ocp.tau_h / n  # h = v_0 tau_h / n on the horizon when the time is free
-    hrow = ca.horzcat(W[nx, :n] * scale if ocp.free_time else ca.repmat(ms.h, 1, n), ca.repmat(ms.hs, 1, ms.ns))
+    hrow = ca.horzcat(W[nx, :n] * scale if ocp.free_time else ca.repmat(ms.h, 1, n), ca.repmat(ms.hs, 1, ms.ns)) \
+        if ms.grading is None else ca.DM(ms.lengths).T
+    # the jerk limit's step of stage k: the time between the midpoints of intervals k - 1 and k (h when uniform)
+    hjerk = hrow if ms.grading is None else ca.DM(np.concatenate([[1.0], jerk_steps(ms), np.ones(ms.ns)]) * ms.h).T
     fs = stage_function(ocp, d, method.scheme, ref, jerk)
     out = fs.map(K)(W[:nx, :], W[nxs + 1:, :], W[nxs, :], hrow, W[nx:nx + nv, :], W[nx + nv:nxs, :], nxt[:nx, :],
-                    nxt[nx:nx + nv, :], nxt[nx + nv:, :])
+                    nxt[nx:nx + nv, :], nxt[nx + nv:, :], hjerk)
     sizes = [fs.nnz_out(i) for i in range(fs.n_out() - 1)]
     g = ca.vec(ca.vertcat(*out[:-1]))
     lo, hi, blocks, _ = stage_row_bounds(ocp, ms, sizes, ocp.path_constraints(ref))
@@ -599,8 +649,7 @@ def structured_derivatives(nlp: Nlp) -> dict:
 
 def point_times(nlp: Nlp) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Node times (K+1,), interval lengths (K,) and collocation-point times (K, d) of a collocation NLP, tau."""
-    ms = nlp.mesh
-    h = np.concatenate([np.full(ms.n, ms.h), np.full(ms.ns, ms.hs)])
+    h = nlp.mesh.lengths
     t0 = np.concatenate([[0.0], np.cumsum(h)])
     tau = np.array(collocation_data(nlp.method.degree, nlp.method.scheme)[0])
     return t0, h, t0[:-1, None] + h[:, None] * tau[None, :]

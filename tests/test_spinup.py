@@ -20,6 +20,7 @@ from autobal.ocp import spinup as S
 from autobal.ocp.problem import pulse_variation
 from autobal.ocp.solve import drive_acceleration
 from autobal.ocp.spinup_study import run
+from autobal.ocp.transcription import on_uniform
 from autobal.parts import rotor as rotor_part
 
 JEFFCOTT = RotorParams.from_groups(105.0, 5.0, 1.0)  # psi = 1, n = chi/m1 = 5 1/s, Omega0 = 105 1/s
@@ -411,7 +412,9 @@ def test_real_problem_control_step_converged(real):
     ocp, opt = real
     n = opt.solution.u.size - S.mesh(ocp, len(opt.solution.u)).ns  # control intervals to the deadline
     n = CONVERGED[ocp.alpha_max]
-    fine = S.Solver(ocp, S.DirectCollocation(2 * n, 3, "radau")).solve(np.repeat(opt.solution.u[:n], 2))
+    # the optimum's controls (on its graded mesh) averaged onto 2n equal intervals as the start
+    start = on_uniform(opt.solution.u[:n], opt.solution.h[:n], 2 * n)
+    fine = S.Solver(ocp, S.DirectCollocation(2 * n, 3, "radau")).solve(start)
     peak = S.resimulate(ocp, fine.u, fine.h, "fine").peak_delta
     assert abs(peak / opt.score - 1) < 1e-3
 

@@ -27,11 +27,20 @@ VARIANTS = {
 }
 
 
+def graded(ocp, n: int = 12):
+    """A graded mesh of n intervals (lengths 0.6-1.8 of the uniform one), or None (uniform) for a free final time."""
+    return None if ocp.free_time else S.mesh(ocp, n, np.linspace(0.6, 1.8, n) / np.linspace(0.6, 1.8, n).mean())
+
+
+@pytest.mark.parametrize("mesh", ["uniform", "graded"])
 @pytest.mark.parametrize("scheme,degree", [("radau", 3), ("legendre", 2)])
 @pytest.mark.parametrize("name", VARIANTS)
-def test_structured_derivatives_equal_casadi_ad(name, scheme, degree):
+def test_structured_derivatives_equal_casadi_ad(name, scheme, degree, mesh):
     ocp = VARIANTS[name]
-    nlp = S.transcribe(ocp, S.DirectCollocation(12, degree, scheme), 200.0, "MX")
+    if mesh == "graded" and ocp.free_time:
+        pytest.skip("the free-time transcription is uniform")
+    nlp = S.transcribe(ocp, S.DirectCollocation(12, degree, scheme), 200.0, "MX", graded(ocp) if mesh == "graded"
+                       else None)
     d = structured_derivatives(nlp)
     x, g = nlp.x, nlp.g
     p, lam_f, lam_g = ca.MX.sym("p", 0), ca.MX.sym("lam_f"), ca.MX.sym("lam_g", g.numel())

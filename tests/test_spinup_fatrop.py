@@ -15,7 +15,7 @@ from autobal.errors import ScenarioError, SolveError
 from autobal.ocp import solve as osolve
 from autobal.ocp import spinup_study
 from autobal.ocp.transcription import DirectCollocation, complete_stage_guess, transcribe, transcribe_stages
-from tests.test_spinup_derivatives import VARIANTS
+from tests.test_spinup_derivatives import VARIANTS, graded
 
 
 def stage_point(ipopt_nlp, stage_nlp, w):
@@ -26,13 +26,18 @@ def stage_point(ipopt_nlp, stage_nlp, w):
     return complete_stage_guess(stage_nlp, ws)
 
 
+@pytest.mark.parametrize("mesh", ["uniform", "graded"])
 @pytest.mark.parametrize("name", VARIANTS)
-def test_the_stage_form_is_the_same_discrete_problem(name):
+def test_the_stage_form_is_the_same_discrete_problem(name, mesh):
     """At a random point: the same objective, the same values of every constraint block (the gap rows the stage
-    form adds are zero there), and the same bounds."""
+    form adds are zero there), and the same bounds; on the uniform mesh and on a graded one (the jerk limit's rows
+    with each interval pair's own step)."""
     ocp = VARIANTS[name]
-    a = transcribe(ocp, DirectCollocation(12), 200.0, "MX")
-    b = transcribe_stages(ocp, DirectCollocation(12, solver="fatrop"), 200.0)
+    if mesh == "graded" and ocp.free_time:
+        pytest.skip("the free-time transcription is uniform")
+    ms = graded(ocp) if mesh == "graded" else None
+    a = transcribe(ocp, DirectCollocation(12), 200.0, "MX", ms)
+    b = transcribe_stages(ocp, DirectCollocation(12, solver="fatrop"), 200.0, ms)
     w = np.random.default_rng(3).normal(size=a.x.numel())
     w[a.index["v"]] = np.abs(w[a.index["v"]])
     ws = stage_point(a, b, w)
