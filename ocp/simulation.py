@@ -14,7 +14,7 @@ from autobal.analysis.numerics.rotor import deflection, peak, unbalance
 from autobal.analysis.run import interrupt, solver_options
 from autobal.analysis.run.quantities import Quantity
 from autobal.models.rotor import rotor_model
-from autobal.ocp.transcription import Nlp, interval_integrator, mesh, path_fractions
+from autobal.ocp.transcription import DRIVE_TOL, Nlp, interval_integrator, mesh, path_fractions
 
 if TYPE_CHECKING:
     from autobal.ocp.problem import SpinupOcp
@@ -233,9 +233,6 @@ def trajectory(ocp: SpinupOcp, u, h, label: str, sim: np.ndarray, torque=None) -
                       pk, peak(tau, dd)[0], tpk / Om, integral)
 
 
-# relative tolerance of the drive-limit check of a re-simulated profile (the NLP keeps the limits at its
-# collocation points only); on torques it is relative to the torque reference :func:`torque_reference`
-DRIVE_TOL = 1e-3
 
 
 def torque_reference(ocp: SpinupOcp) -> float:

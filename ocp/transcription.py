@@ -356,7 +356,29 @@ def stack(rows: dict, bounds: dict) -> tuple[list, np.ndarray, np.ndarray, list]
     return g, np.concatenate(lbg), np.concatenate(ubg), blocks
 
 
-def transcribe(ocp: SpinupProblem, method, ref: float, symbolic: str = "SX", ms: Mesh | None = None) -> Nlp:
+# relative tolerance of the drive limits: the check of a re-simulated profile (the NLP keeps the limits at its
+# collocation points only; ocp/simulation.py) and the no-braking rows of the settling window
+# (:func:`relax_settling_brake`); on torques it is relative to the torque reference (simulation.torque_reference)
+DRIVE_TOL = 1e-3
+
+
+def relax_settling_brake(lbg: np.ndarray, blocks: list, ms: Mesh, tol: float = DRIVE_TOL) -> None:
+    """Lower a no-braking limit (torque or braking rows whose lower bound is 0) over the settling window to -``tol``,
+    in place (0: left as it is; the coarse screening, ocp/solve.py ``coarse_solver``).  There the control is 0 (the
+    speed held), so the drive torque is the unbalance reaction of the residual whirl alone, and M >= 0 at the
+    window's points constrains only that whirl's phase where the points fall: on a torque-limited rotor without
+    braking the refinement lost its basin to it (torque_no_brake of the family, docs/dev/spinup.md, "Where
+    torque_no_brake's basin is lost").  The re-simulation's drive check allows the same tolerance."""
+    if not ms.ns:
+        return
+    for name, r in blocks:
+        if name.startswith(("torque limit", "braking limit")):
+            settle = r[len(r) // (ms.n + ms.ns) * ms.n:]
+            lbg[settle[lbg[settle] == 0.0]] = -tol
+
+
+def transcribe(ocp: SpinupProblem, method, ref: float, symbolic: str = "SX", ms: Mesh | None = None,
+               brake_tol: float = DRIVE_TOL) -> Nlp:
     """The NLP of ``ocp`` by ``method`` (DirectCollocation: :func:`collocation_rows`, or MultipleShooting:
     :func:`shooting_rows`), the variables laid out by :func:`layout`.
 
@@ -375,6 +397,9 @@ def transcribe(ocp: SpinupProblem, method, ref: float, symbolic: str = "SX", ms:
     ms : Mesh, optional
         The intervals (:func:`mesh`; a graded one from :func:`graded_mesh`); the uniform mesh of
         ``method.intervals`` by default.
+    brake_tol : float
+        How far below 0 a no-braking limit's rows of the settling window may go (:func:`relax_settling_brake`;
+        relative to the row's torque reference); 0: kept as stated.
 
     Returns
     -------
@@ -404,6 +429,7 @@ def transcribe(ocp: SpinupProblem, method, ref: float, symbolic: str = "SX", ms:
         name = f"jerk limit |d alpha/dt| <= {ocp.jerk_max:g} rad/s^3"
         rows[name], bounds[name] = jerk, (-1.0, 1.0)
     g, lbg, ubg, blocks = stack(rows, bounds)
+    relax_settling_brake(lbg, blocks, ms, brake_tol)
 
     obj = v[0] if ocp.objective in ("peak_deflection", "peak_unbalance", "min_time") else quad / ref
     if du:
@@ -454,8 +480,8 @@ def stage_layout(nx: int, nv: int, jp: int, d: int, K: int) -> tuple[int, dict]:
                  "p": start + nx + nv if jp else None}
 
 
-def stage_row_bounds(ocp: SpinupProblem, ms: Mesh, sizes: list, paths: list[PathConstraint]
-                     ) -> tuple[np.ndarray, np.ndarray, dict, np.ndarray]:
+def stage_row_bounds(ocp: SpinupProblem, ms: Mesh, sizes: list, paths: list[PathConstraint],
+                     brake_tol: float = DRIVE_TOL) -> tuple[np.ndarray, np.ndarray, dict, np.ndarray]:
     """Bounds of the stage form's rows (the K stages' rows of :func:`stage_function`, ``sizes`` rows per output, in
     stage order): the gaps and collocation residuals 0, the path constraints', the speed bounded on the horizon's
     inner nodes and omega_final at the deadline (when a settling window follows), the jerk limit on the horizon.
@@ -475,6 +501,11 @@ def stage_row_bounds(ocp: SpinupProblem, ms: Mesh, sizes: list, paths: list[Path
     lo[speed, 1:n], hi[speed, 1:n] = ocp.nu_bounds()
     if ocp.jerk_max is not None:
         lo[-1, 1:n], hi[-1, 1:n] = -1.0, 1.0
+    for pc in paths:  # the no-braking rows of the settling window, as relax_settling_brake
+        if pc.name.startswith(("torque limit", "braking limit")):
+            settle = lo[block == names.index(pc.name), n:]
+            settle[settle == 0.0] = -brake_tol
+            lo[block == names.index(pc.name), n:] = settle
     lo, hi = lo.ravel(order="F"), hi.ravel(order="F")
     blocks = {name: rows[np.isin(block, [i for i, m in enumerate(names) if m == name])].ravel() for name in names}
     if ms.ns:
@@ -497,7 +528,8 @@ def stage_variable_bounds(ocp: SpinupProblem, size: int, index: dict, n: int) ->
     return lbx, ubx
 
 
-def transcribe_stages(ocp: SpinupProblem, method: DirectCollocation, ref: float, ms: Mesh | None = None) -> Nlp:
+def transcribe_stages(ocp: SpinupProblem, method: DirectCollocation, ref: float, ms: Mesh | None = None,
+                      brake_tol: float = DRIVE_TOL) -> Nlp:
     """The collocation NLP of ``ocp`` in the stage form of a structure-exploiting solver (fatrop: Vanroye et
     al. (2023), a Riccati recursion over the stages, linear in their number).
 
@@ -519,6 +551,8 @@ def transcribe_stages(ocp: SpinupProblem, method: DirectCollocation, ref: float,
         Scale of the objective, as for :func:`transcribe`.
     ms : Mesh, optional
         The intervals, as for :func:`transcribe`.
+    brake_tol : float
+        As for :func:`transcribe`.
 
     Returns
     -------
@@ -547,7 +581,7 @@ def transcribe_stages(ocp: SpinupProblem, method: DirectCollocation, ref: float,
                     nxt[nx:nx + nv, :], nxt[nx + nv:, :], hjerk)
     sizes = [fs.nnz_out(i) for i in range(fs.n_out() - 1)]
     g = ca.vec(ca.vertcat(*out[:-1]))
-    lo, hi, blocks, _ = stage_row_bounds(ocp, ms, sizes, ocp.path_constraints(ref))
+    lo, hi, blocks, _ = stage_row_bounds(ocp, ms, sizes, ocp.path_constraints(ref), brake_tol)
     if not ms.ns:  # the deadline is the last stage's: its one row
         g = ca.vertcat(g, w[int(index["X"][K, ocp.speed_index])])
         lo, hi = np.append(lo, ocp.nuf), np.append(hi, ocp.nuf)

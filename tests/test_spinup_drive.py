@@ -289,3 +289,27 @@ def test_residual_unbalance_in_g_mm():
 def test_datasheet_refusals_name_the_field(rotor, match):
     with pytest.raises(ScenarioError, match=match):
         autobal.load(SCENE, set={f"rotor.{k}": v for k, v in rotor.items()})
+
+
+@pytest.mark.parametrize("solver", ["ipopt", "fatrop"])
+def test_settling_no_braking_rows_keep_drive_tol_and_the_screening_keeps_them_as_stated(solver):
+    """Without braking (rotor.drive.max_braking_torque 0), the torque rows' lower bound is 0 on the horizon and
+    -DRIVE_TOL (of the torque limit) over the settling window, where the speed is held (transcription
+    relax_settling_brake); brake_tol=0, as the coarse screening builds it, keeps them all at 0.  The upper bound
+    (the torque limit) is never touched.  Both the collocation NLP and fatrop's stage form."""
+    from autobal.ocp import solve
+    from autobal.ocp.transcription import DRIVE_TOL
+
+    scene = autobal.load(SCENE, set={**SMALL, "analyses.spinup.settling_time": "1 s"})
+    ocp = spinup_ocp(scene, scene.analyses.spinup)
+    method = dataclasses.replace(spinup_study.method_of(scene.analyses.spinup), intervals=20, solver=solver)
+    assert ocp.torque_bounds[0] == 0.0 and ocp.tau_s > 0
+    for tol in (DRIVE_TOL, 0.0):
+        nlp = solve.Solver(ocp, method, None, None, brake_tol=tol).nlp
+        rows = dict(nlp.blocks)[next(n for n, _ in nlp.blocks if n.startswith("torque limit"))]
+        K, n = nlp.mesh.n + nlp.mesh.ns, nlp.mesh.n
+        rows = np.sort(rows) if solver == "fatrop" else rows  # the stage form's rows run stage by stage
+        horizon, settle = rows[:len(rows) // K * n], rows[len(rows) // K * n:]
+        assert settle.size and np.all(nlp.lbg[horizon] == 0.0)
+        assert np.all(nlp.lbg[settle] == -tol)
+        assert np.all(nlp.ubg[rows] == 1.0)
