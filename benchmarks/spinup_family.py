@@ -21,7 +21,7 @@ within the limits).
 
 Writes tests/data/spinup_family.json (each problem's scene, its reference peak, the family and parameters that
 found it, the check of its limits, how it was computed) and benchmarks/results/spinup_family.json (the study's
-peak and wall time on each, beside the reference).  Run: ``python -m benchmarks spinup_family`` (tens of minutes);
+peak and wall time on each, beside the reference).  Run: ``python -m benchmarks.spinup_family`` (tens of minutes);
 ``python -m benchmarks.spinup_family --study`` re-times the study alone.
 """
 
@@ -326,7 +326,7 @@ def levers(names: list[str]) -> None:
             return None
         n = solve.coarse_intervals(method.intervals)
         return None if n == method.intervals else solve.Solver(ocp, dataclasses.replace(method, intervals=n), ref,
-                                                               solve.coarse_options(options))
+                                                               solve.coarse_options(options), brake_tol=0.0)
 
     def lean(ocp, n, multistart=True):
         out = [s for s in full(ocp, n, multistart) if "2 back-offs" not in s[0] and not s[0].startswith("global")
@@ -392,7 +392,7 @@ def main(argv: list[str] | None = None) -> None:
             data["how"] = ("scipy differential_evolution (seed 1) over four profile families, the best polished "
                            "by Nelder-Mead, on the exponential integrator at step 0.5 in Omega0 t; the best judged by "
                            "scipy solve_ivp DOP853 rtol 1e-10 atol 1e-12 on the model's ode_fixed "
-                           "(python -m benchmarks spinup_family --refs)")
+                           "(python -m benchmarks.spinup_family --refs)")
             DATA.write_text(json.dumps(data, indent=1) + "\n")
     if "--refs" in argv:
         return

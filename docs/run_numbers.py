@@ -275,6 +275,8 @@ EXTRACT: dict[str, Callable[[dict], dict]] = {
     "washer_liquid_balancer": liquid,
     "pump_pe600_montecarlo": montecarlo,
     "spinup_jeffcott_ramp_baselines": spinup,
+    "spinup_jeffcott_deadline_5s": spinup,
+    "spinup_jeffcott_horizon_10s": spinup,
     "spinup_liquid_balancer": spinup,
     "spinup_robust_jeffcott": robust,
     "spinup_time_optimal": time_optimal,
@@ -317,6 +319,8 @@ TOLERANCE: dict[str, dict[str, float | str]] = {
     "spinup_robust_jeffcott": {"": 1e-2},
     # re-simulated peaks (CVODES rtol 1e-10) of an IPOPT optimum (tol 1e-8) from a global search's starts
     "spinup_jeffcott_ramp_baselines": {"": 1e-4, "ipopt_iterations": ITERATIONS},
+    "spinup_jeffcott_deadline_5s": {"": 1e-4, "ipopt_iterations": ITERATIONS},
+    "spinup_jeffcott_horizon_10s": {"": 1e-4, "ipopt_iterations": ITERATIONS},
     "spinup_liquid_balancer": {"": 1e-4, "ipopt_iterations": ITERATIONS},
     # quadratures in tau (20 001 nodes) and in time: the MTTF to infinity moves by 1e-3 with the nodes (its
     # accuracy estimate), the rest by 1e-8..2.5e-4
