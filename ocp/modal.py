@@ -350,7 +350,7 @@ def resimulate(ocp: ModalSpinupOcp, u: np.ndarray, h: np.ndarray | None, label: 
     u = np.asarray(u, float)
     if h is None:
         ms = mesh(ocp, ocp.intervals)
-        h = np.concatenate([np.full(ms.n, ms.h), np.full(ms.ns, ms.hs)])[:len(u)]
+        h = ms.lengths[:len(u)]
     hs = np.asarray(h, float) / ocp.Om  # s
     t, w, xy = simulate_fixed(ocp.rotor, ocp.omega_start, u * ocp.alpha_max, hs, ocp.nodes)
     t_u = np.concatenate([[0.0], np.cumsum(hs)[:-1]])

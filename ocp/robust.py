@@ -122,8 +122,7 @@ class Profile:
     def on(self, ocp: SpinupOcp) -> tuple[np.ndarray, np.ndarray]:
         """(u, h) of the profile on ``ocp``'s mesh (dimensionless interval lengths, settling window appended)."""
         ms = mesh(ocp, self.u.size)
-        return (np.concatenate([self.u, np.zeros(ms.ns)]),
-                np.concatenate([np.full(ms.n, ms.h), np.full(ms.ns, ms.hs)]))
+        return np.concatenate([self.u, np.zeros(ms.ns)]), ms.lengths
 
 
 def cvodes_peaks(ocp: SpinupOcp, factors: np.ndarray, profile: Profile, points: int = 8) -> np.ndarray:

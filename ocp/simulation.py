@@ -233,8 +233,6 @@ def trajectory(ocp: SpinupOcp, u, h, label: str, sim: np.ndarray, torque=None) -
                       pk, peak(tau, dd)[0], tpk / Om, integral)
 
 
-
-
 def torque_reference(ocp: SpinupOcp) -> float:
     """The drive's torque scale, N m: max_torque, else the inertial torque of the full acceleration."""
     return ocp.torque_max or ocp.inertia * ocp.alpha_max

@@ -395,8 +395,7 @@ def transcribe(ocp: SpinupProblem, method, ref: float, symbolic: str = "SX", ms:
         (the interval Function mapped over the intervals; its derivatives are maps too, so the solver's
         construction hardly grows with the intervals).  Multiple shooting is always MX.
     ms : Mesh, optional
-        The intervals (:func:`mesh`; a graded one from :func:`graded_mesh`); the uniform mesh of
-        ``method.intervals`` by default.
+        The intervals (:func:`mesh`, uniform or graded); the uniform mesh of ``method.intervals`` by default.
     brake_tol : float
         How far below 0 a no-braking limit's rows of the settling window may go (:func:`relax_settling_brake`;
         relative to the row's torque reference); 0: kept as stated.
@@ -501,13 +500,9 @@ def stage_row_bounds(ocp: SpinupProblem, ms: Mesh, sizes: list, paths: list[Path
     lo[speed, 1:n], hi[speed, 1:n] = ocp.nu_bounds()
     if ocp.jerk_max is not None:
         lo[-1, 1:n], hi[-1, 1:n] = -1.0, 1.0
-    for pc in paths:  # the no-braking rows of the settling window, as relax_settling_brake
-        if pc.name.startswith(("torque limit", "braking limit")):
-            settle = lo[block == names.index(pc.name), n:]
-            settle[settle == 0.0] = -brake_tol
-            lo[block == names.index(pc.name), n:] = settle
     lo, hi = lo.ravel(order="F"), hi.ravel(order="F")
     blocks = {name: rows[np.isin(block, [i for i, m in enumerate(names) if m == name])].ravel() for name in names}
+    relax_settling_brake(lo, [(name, np.sort(r)) for name, r in blocks.items()], ms, brake_tol)  # in stage order
     if ms.ns:
         lo[rows[speed, n]] = hi[rows[speed, n]] = ocp.nuf
     return lo, hi, blocks, rows
