@@ -311,10 +311,13 @@ def levers(names: list[str]) -> None:
     before issue 35), the lean start list (the one-back-off searches and the hold ramp: no three-phase grid, no
     two-back-off search, no constant ramps), the start list without the three-phase grid's two, one refinement of
     the coarse optima instead of up to three, the coarse screening to IPOPT tolerance 1e-4, and the coarse ranking
-    by the exponential integrator alone (no CVODES for near ties), the coarse screening on one thread instead of
-    two; LEVERS=name,name (environment) runs a subset
+    by the exponential integrator alone (no CVODES for near ties), the global search and the screening in one
+    process (two as is: analysis/run/forked.py), and the screening on two threads of one process; LEVERS=name,name
+    (environment) runs a subset
     beside "as is"."""
     import dataclasses
+    import threading
+    from types import SimpleNamespace
     from unittest import mock
 
     from autobal.ocp import solve
@@ -339,13 +342,38 @@ def levers(names: list[str]) -> None:
     def loose(options):  # the coarse screening to IPOPT tolerance 1e-4 (1e-8 as is)
         return coarse(options) | {"tol": 1e-4, "constr_viol_tol": 1e-6, "compl_inf_tol": 1e-6}
 
+    def serial(fn, n, helper_fn=None):  # the global search and the screening in this process alone
+        return [fn(i) for i in range(n)]
+
+    def threaded(ocp, solver, profiles, twin):  # the screening on two threads of this process, each with its own NLP
+        nc, todo, lock = solver.nlp.mesh.n, iter(range(len(profiles))), threading.Lock()
+        out = [None] * len(profiles)
+
+        def lane(s):
+            while True:
+                with lock:
+                    i = next(todo, None)
+                if i is None:
+                    return
+                u = profiles[i]
+                u = u.reshape(nc, -1).mean(axis=1) if u.size % nc == 0 else np.interp(
+                    np.linspace(0, 1, nc), np.linspace(0, 1, u.size), u)
+                out[i] = s.solve(u, raise_on_failure=False, hold_states=ocp.hold_states)
+
+        other = threading.Thread(target=lane, args=(twin(),))
+        other.start()
+        lane(solver)
+        other.join()
+        return out
+
     full, coarse = solve.starts, solve.coarse_options
     variants = {"as is": {}, "one refinement (before)": {"REFINED": 1},
                 "regulariser in the screening": {"coarse_solver": regularised_screen},
                 "lean starts": {"starts": lean}, "no three-phase grid": {"starts": nogrid},
                 "coarse tolerance 1e-4": {"coarse_options": loose},
                 "coarse ranking by the exponential integrator alone": {"RANK_TIE": 0.0},
-                "coarse screening on one thread": {"screen_threads": lambda starts: 1}}
+                "all in one process": {"forked": SimpleNamespace(shared=serial)},
+                "coarse screening on two threads": {"screen": threaded}}
     keep = [v for v in os.environ.get("LEVERS", "").split(",") if v]  # a subset of the variants, by name
     variants = {k: v for k, v in variants.items() if not keep or k in keep or k == "as is"}
     cases = []

@@ -4,11 +4,9 @@ every optimum (the reported peak is the re-simulated one)."""
 
 from __future__ import annotations
 
-import contextvars
 import dataclasses
+import functools
 import math
-import os
-import threading
 import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -17,7 +15,7 @@ import casadi as ca
 import numpy as np
 
 from autobal.analysis.numerics import ipopt
-from autobal.analysis.run import interrupt, solver_options
+from autobal.analysis.run import forked, solver_options
 from autobal.analysis.run.solver_options import ipopt_options  # noqa: F401 (the rooms' and tests' name)
 from autobal.errors import SolveError
 from autobal.models.rotor import RotorParams
@@ -274,14 +272,16 @@ def starts(ocp: SpinupOcp, n: int, multistart: bool = True) -> list[tuple[str, n
     out, lead, families = [], None, []
     if ocp.objective in ("peak_deflection", "peak_unbalance") and horizon_steps(ocp) <= SEARCH_STEPS:
         families = backoff_families(ocp)
-        found = grid_search(ocp, keep=2 if multistart else 1)
+        # the grid and the back-off searches are independent: shared with a forked process (analysis/run/forked.py)
+        searches = [functools.partial(grid_search, ocp, keep=2 if multistart else 1)] + [
+            functools.partial(backoff_search, ocp, k, above) for k, above in families]
+        found, *backoffs = forked.shared(lambda i: searches[i](), len(searches))
         out += [(f"global search: {p[0] * ocp.alpha_max:.3g} rad/s^2 to {p[1]:.4g} rad/s, {p[2] * ocp.alpha_max:.3g} "
                  f"rad/s^2 for {p[3]:.3g} s, then {ocp.alpha_max:.3g} rad/s^2 (peak {pk:.4g} e)",
                  controls_on_mesh(ocp, p, n)) for p, pk in zip(found.params, found.peaks, strict=True)]
         peaks = list(found.peaks)
         edges = np.linspace(0.0, ocp.horizon, n + 1)
-        for k, above in families:
-            x, pk, _ = backoff_search(ocp, k, above)
+        for (k, above), (x, pk, _) in zip(families, backoffs, strict=True):
             out.append((f"back-off search: {k} back-off{'s' if k > 1 else ''}, the first excursion "
                         f"{'above' if above else 'below'} the critical speed (peak {pk:.4g} e)",
                         backoff_controls(ocp, x[None], k, edges)[0]))
@@ -426,50 +426,24 @@ def coarse_solver(ocp: SpinupOcp, method, ref: float, options: dict | None) -> S
     return Solver(screen, dataclasses.replace(method, intervals=n), ref, coarse_options(options), brake_tol=0.0)
 
 
-def screen_threads(starts: int) -> int:
-    """How many coarse solves run at once: the solver option spinup_coarse.threads, at most the cores this process
-    may use and the number of starts."""
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-    return max(1, min(int(solver_options.defaults["spinup_coarse.threads"]), cores, starts))
-
-
-def screen(ocp: SpinupProblem, solvers: list[Solver], profiles: list[np.ndarray]) -> list[SpinupSolution]:
-    """Each control profile (over the horizon's intervals, any number) averaged onto the coarse mesh and solved there
-    (never raising on a failed solve), in order.  The profiles are shared among ``solvers`` (copies of one coarse
-    NLP), each in a thread of its own: CasADi lets go of Python's lock while IPOPT runs.  A solve depends on its
-    start alone, so the solutions are those of one solver taking the profiles one after another, bit for bit.  The
-    first solver works in the calling thread, where an interrupt stops IPOPT; the others then stop after their
-    current solve (one coarse solve, at most spinup_coarse.max_iter iterations)."""
-    nc = solvers[0].nlp.mesh.n
+def screen(ocp: SpinupProblem, solver: Solver, profiles: list[np.ndarray], twin) -> list[SpinupSolution]:
+    """Each control profile (over the horizon's intervals, any number) averaged onto the coarse mesh of ``solver`` and
+    solved there (never raising on a failed solve), in order.  The profiles are shared with a forked process
+    (analysis/run/forked.py: IPOPT's MUMPS takes a lock that a process's threads share), which solves on a copy of the
+    NLP it builds with ``twin()`` (each solver has its IPOPT log file).  A solve depends on its start alone, so the
+    solutions are those of one solver taking the profiles one after another, bit for bit."""
+    nc = solver.nlp.mesh.n
     guesses = [u.reshape(nc, -1).mean(axis=1) if u.size % nc == 0 else np.interp(
         np.linspace(0, 1, nc), np.linspace(0, 1, u.size), u) for u in profiles]
-    out, errors, todo, stop = [None] * len(guesses), [], iter(range(len(guesses))), threading.Event()
-    lock = threading.Lock()
+    own = []  # the helper's solver
 
-    def lane(solver: Solver) -> None:
-        while not stop.is_set() and interrupt.requested() is None:
-            with lock:
-                i = next(todo, None)
-            if i is None:
-                return
-            try:
-                out[i] = solver.solve(guesses[i], raise_on_failure=False, hold_states=ocp.hold_states)
-            except BaseException as exc:  # an interrupt seen after the solve, an unexpected failure: to the caller
-                errors.append(exc)
-                stop.set()
+    def helper(i: int) -> SpinupSolution:
+        if not own:
+            own.append(twin())
+        return own[0].solve(guesses[i], raise_on_failure=False, hold_states=ocp.hold_states)
 
-    threads = [threading.Thread(target=contextvars.copy_context().run, args=(lane, s), daemon=True)
-               for s in solvers[1:]]  # the run's log (a context variable) goes with each thread
-    for t in threads:
-        t.start()
-    lane(solvers[0])
-    if not errors:
-        for t in threads:
-            t.join()
-    interrupt.check()  # a signal no solve has raised yet (a lane stopped before its next solve)
-    if errors:
-        raise errors[0]
-    return out
+    return forked.shared(lambda i: solver.solve(guesses[i], raise_on_failure=False, hold_states=ocp.hold_states),
+                         len(guesses), helper)
 
 
 def rank_coarse(ocp: SpinupOcp, found: list, n: int) -> tuple[int, dict[int, float]]:
@@ -697,11 +671,9 @@ def optimize(ocp: SpinupProblem, method, multistart: bool = True, options: dict 
     if coarse is not None:  # mesh continuation: every start on the coarse mesh, the best one refined
         build += coarse.build_time_s
         nc, found = coarse.nlp.mesh.n, []
-        twins = [coarse_solver(ocp, method, ref, options) for _ in range(screen_threads(len(start_list)) - 1)]
-        build += sum(t.build_time_s for t in twins)
         clock = time.perf_counter()
-        screened = screen(ocp, [coarse, *twins], [u for _, u in start_list])
-        times["screening"] = time.perf_counter() - clock  # wall: its guesses and solves, several at once
+        screened = screen(ocp, coarse, [u for _, u in start_list], lambda: coarse_solver(ocp, method, ref, options))
+        times["screening"] = time.perf_counter() - clock  # wall: its guesses and solves, two processes at once
         for (label, _), sc in zip(start_list, screened, strict=True):
             rows.append({"start": label, "stage": f"coarse ({nc} intervals)", "status": sc.status,
                          "success": sc.success, "iterations": sc.iterations, "solve_time_s": sc.solve_time_s})

@@ -8,6 +8,7 @@ optimum and both ramps on each plot).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import re
 import time
 from dataclasses import KW_ONLY, field
@@ -17,7 +18,7 @@ import numpy as np
 
 from autobal.analysis.numerics import standards
 from autobal.analysis.numerics.standards import Margin
-from autobal.analysis.run import solver_options
+from autobal.analysis.run import forked, solver_options
 from autobal.analysis.run.fields import Record, TypedResult, declarations, optional, quantity, record, unsaved
 from autobal.analysis.run.figures import Figure
 from autobal.analysis.run.quantities import Quantity, significant
@@ -556,10 +557,11 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
         The optimum's re-simulation beside the ramps; peaks in delta/e, times in s.
     """
     t0 = time.perf_counter()
-    opt = optimize(ocp, method, multistart, options)
-    t1 = time.perf_counter()
-    base = baselines(ocp)
-    t_base = time.perf_counter() - t1
+    with forked.Later(functools.partial(baselines, ocp)) as later:  # the ramps meanwhile, in a forked process
+        opt = optimize(ocp, method, multistart, options)
+        t1 = time.perf_counter()
+        base = later.result()
+        t_base = time.perf_counter() - t1  # what is left of them after the optimisation
     sol, tr = opt.solution, opt.trajectory
     use = {k: drive_use(ocp, v) for k, v in base.items()}
     # percentages refer only to the baselines the drive can run

@@ -33,6 +33,13 @@ def set_quiet(quiet: bool) -> None:
     _STATE["quiet"] = bool(quiet)
 
 
+def silence() -> None:
+    """No bars from now on, and the bars open now are left alone (in a forked helper process they are its
+    parent's: analysis/run/forked.py)."""
+    _STATE["quiet"] = True
+    _STATE["open"] = []
+
+
 def set_stream(stream) -> None:
     """Where bars go; None: standard error."""
     _STATE["stream"] = stream

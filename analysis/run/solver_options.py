@@ -125,11 +125,13 @@ GROUPS = {
     # a screening, not the answer (benchmarks/spinup_ocp.md, "Study time" and "Liquid balancer convergence")
     "spinup_coarse": ("the coarse stage of the spin-up mesh continuation: a screening of the starts", {
         "max_iter": (200, "iteration limit of a start (the best basins converge in 13-111)"),
-        # CasADi lets go of Python's lock while IPOPT runs, so the starts' coarse solves share the cores; each solve
-        # depends on its start alone, so the answer is the same bit for bit (benchmarks/spinup_ocp.md, "Screening
-        # on two cores")
-        "threads": (2, "coarse solves at once, each on its own copy of the NLP (at most the cores the process may "
-                       "use; 1: one after another)"),
+    }),
+    # IPOPT's MUMPS calls take a lock the threads of a process share: two threads solving the coarse NLP take as long
+    # as one solving both, two processes 0.6x (analysis/run/forked.py; docs/benchmarks.md, "Spin-up family")
+    "parallel": ("work the spin-up study shares with a process forked from this one (Linux): the global search's "
+                 "back-off searches, the coarse screening, the ramp baselines", {
+        "processes": (2, "processes at once, this one included (at most the cores this process may use; 1: all in "
+                         "this process); the results are the same bit for bit"),
     }),
     "fatrop": ("fatrop on the spin-up's stage form (tol and max_iter from `spinup`)", {
         # fatrop on the stage form (transcribe_stages): from the benchmark's guess at 200-800 intervals mu_init
