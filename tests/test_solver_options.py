@@ -2,6 +2,7 @@
 changed within a block, refused when unknown; every solver reads them when it is built or run."""
 
 import re
+import sys
 from pathlib import Path
 
 import casadi as ca
@@ -235,3 +236,20 @@ def test_the_batched_gauss_newton_reads_its_group():
         short = GaussNewtonBatch(residual).solve(*start, data, *box)
     assert short["blocks"] == 2 and not short["converged"].any()
     assert GaussNewtonBatch(residual, max_blocks=1).solve(*start, data, *box)["blocks"] == 1
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="CasADi's Linux wheels")
+def test_casadis_openblas_under_mumps_runs_on_one_thread_unless_the_environment_says():
+    import ctypes
+    import os
+    import subprocess
+
+    from autobal.analysis.numerics import ipopt
+
+    blas = ctypes.CDLL(ipopt.OPENBLAS, mode=os.RTLD_NOLOAD | os.RTLD_LAZY)  # the one MUMPS loaded (RTLD_NOLOAD)
+    if "OPENBLAS_NUM_THREADS" not in os.environ:
+        assert blas.openblas_get_num_threads() == 1
+    code = ("import ctypes, os, casadi; from autobal.analysis.numerics import ipopt; casadi.load_nlpsol('ipopt'); "
+            "print(ctypes.CDLL(ipopt.OPENBLAS, mode=os.RTLD_NOLOAD | os.RTLD_LAZY).openblas_get_num_threads())")
+    env = os.environ | {"OPENBLAS_NUM_THREADS": "2"}
+    assert subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True).stdout.split() == ["2"]

@@ -10,12 +10,17 @@ its own (IPOPT's ``output_file``), never onto the terminal (``print_level`` 0); 
 solve wrote, headed by its name, status and iteration count, to the log of the run it belongs to
 (:func:`~autobal.analysis.run.solver_output.logging_to`: a context variable, so runs in several threads each get their
 own solves).  Nothing of the process (its standard output and error, file descriptors 1 and 2) is redirected.
+
+The OpenBLAS that CasADi brings along (under IPOPT's MUMPS; threadpoolctl does not see it, so ``autobal.run``'s
+BLAS limit misses it) runs on one thread unless the environment sets ``OPENBLAS_NUM_THREADS``
+(:func:`one_blas_thread`).
 """
 
 from __future__ import annotations
 
 import atexit
 import contextlib
+import ctypes
 import os
 import shutil
 import tempfile
@@ -33,6 +38,23 @@ from autobal.analysis.run.solver_output import log, logging_to  # noqa: F401 (th
 # themselves, with their documented defaults, are analysis/run/solver_options.py's)
 QUIET = {"ipopt.print_level": 0, "ipopt.sb": "yes", "print_time": False}
 FILE_PRINT_LEVEL = 5  # IPOPT's iteration table and exit message in the solver's log file, not on the terminal
+OPENBLAS = "libcasadi-tp-openblas.so.0"  # the name MUMPS asks for (CasADi 3.7-3.8 Linux wheels); elsewhere none
+
+
+def one_blas_thread() -> None:
+    """CasADi's own OpenBLAS, the one IPOPT's MUMPS is linked with (``OPENBLAS``), on one thread, unless the environment
+    sets ``OPENBLAS_NUM_THREADS``.  MUMPS's fronts in these NLPs are small: on the 2-core machine the spin-up's IPOPT
+    iterations took 72-74 ms on one thread against 84-87 ms on two (the deadline scene at 800 intervals), and the
+    spin-up study 2.6-2.8 s against 3.2-3.3 s (``damped_issue35``, two processes; docs/benchmarks.md, "Spin-up
+    family")."""
+    if "OPENBLAS_NUM_THREADS" in os.environ:
+        return
+    with contextlib.suppress(OSError, AttributeError, RuntimeError):
+        ca.load_nlpsol("ipopt")  # IPOPT, MUMPS and the OpenBLAS they load
+        ctypes.CDLL(OPENBLAS, mode=os.RTLD_NOLOAD | os.RTLD_LAZY).openblas_set_num_threads(1)
+
+
+one_blas_thread()
 NOTE_EVERY_S = 0.2  # the bar's note (objective, infeasibility) is refreshed at most this often, s
 
 
