@@ -22,7 +22,8 @@ within the limits).
 Writes tests/data/spinup_family.json (each problem's scene, its reference peak, the family and parameters that
 found it, the check of its limits, how it was computed) and benchmarks/results/spinup_family.json (the study's
 peak and wall time on each, beside the reference).  Run: ``python -m benchmarks.spinup_family`` (tens of minutes);
-``python -m benchmarks.spinup_family --study`` re-times the study alone.
+``python -m benchmarks.spinup_family --study`` re-times the study alone; ``--levers NAME ...`` the study's levers side
+by side; ``--screening NAME ...`` the coarse screening in one process, on two threads and in two processes.
 """
 
 from __future__ import annotations
@@ -316,7 +317,6 @@ def levers(names: list[str]) -> None:
     (environment) runs a subset
     beside "as is"."""
     import dataclasses
-    import threading
     from types import SimpleNamespace
     from unittest import mock
 
@@ -345,27 +345,6 @@ def levers(names: list[str]) -> None:
     def serial(fn, n, helper_fn=None):  # the global search and the screening in this process alone
         return [fn(i) for i in range(n)]
 
-    def threaded(ocp, solver, profiles, twin):  # the screening on two threads of this process, each with its own NLP
-        nc, todo, lock = solver.nlp.mesh.n, iter(range(len(profiles))), threading.Lock()
-        out = [None] * len(profiles)
-
-        def lane(s):
-            while True:
-                with lock:
-                    i = next(todo, None)
-                if i is None:
-                    return
-                u = profiles[i]
-                u = u.reshape(nc, -1).mean(axis=1) if u.size % nc == 0 else np.interp(
-                    np.linspace(0, 1, nc), np.linspace(0, 1, u.size), u)
-                out[i] = s.solve(u, raise_on_failure=False, hold_states=ocp.hold_states)
-
-        other = threading.Thread(target=lane, args=(twin(),))
-        other.start()
-        lane(solver)
-        other.join()
-        return out
-
     full, coarse = solve.starts, solve.coarse_options
     variants = {"as is": {}, "one refinement (before)": {"REFINED": 1},
                 "regulariser in the screening": {"coarse_solver": regularised_screen},
@@ -373,7 +352,7 @@ def levers(names: list[str]) -> None:
                 "coarse tolerance 1e-4": {"coarse_options": loose},
                 "coarse ranking by the exponential integrator alone": {"RANK_TIE": 0.0},
                 "all in one process": {"forked": SimpleNamespace(shared=serial)},
-                "coarse screening on two threads": {"screen": threaded}}
+                "coarse screening on two threads": {"screen": threaded_screen}}
     keep = [v for v in os.environ.get("LEVERS", "").split(",") if v]  # a subset of the variants, by name
     variants = {k: v for k, v in variants.items() if not keep or k in keep or k == "as is"}
     cases = []
@@ -405,11 +384,101 @@ def spinup_method(sc):
     return method_of(sc.analyses.spinup)
 
 
+def threaded_screen(ocp, solver, profiles, twin):
+    """The coarse screening on two threads of this process, each with its own NLP (the round before the forked
+    process: IPOPT's MUMPS calls take a lock the threads share)."""
+    import threading
+
+    nc, todo, lock = solver.nlp.mesh.n, iter(range(len(profiles))), threading.Lock()
+    out = [None] * len(profiles)
+
+    def lane(s):
+        while True:
+            with lock:
+                i = next(todo, None)
+            if i is None:
+                return
+            u = profiles[i]
+            u = u.reshape(nc, -1).mean(axis=1) if u.size % nc == 0 else np.interp(
+                np.linspace(0, 1, nc), np.linspace(0, 1, u.size), u)
+            out[i] = s.solve(u, raise_on_failure=False, hold_states=ocp.hold_states)
+
+    other = threading.Thread(target=lane, args=(twin(),))
+    other.start()
+    lane(solver)
+    other.join()
+    return out
+
+
+def screening(names: list[str], rounds: int = 6) -> None:
+    """The coarse screening of each problem's starts (the study's own starts and coarse NLP) one after another in this
+    process, on two threads of it, shared with a forked process (as the study does), and that with CasADi's OpenBLAS
+    on two threads (as before it was set to one), in turn ``rounds`` times: the median wall time of each, and its
+    speed-up over the first (ratio)."""
+    cases = [c for name in names for c in screening_of(name, rounds)]
+    write("spinup_screening", "The spin-up study's coarse screening: one process, two threads, two processes",
+          cases, notes=[f"autobal (s): the median wall time of the screening over {rounds} rounds, the variants in "
+                        "turn; ratio: the one-process time over it; same_solutions: every variant's coarse optima "
+                        "equal the one-process ones bit for bit"])
+
+
+def screening_of(name: str, rounds: int) -> list[dict]:
+    """:func:`screening`'s rows of one problem."""
+    import ctypes
+
+    import autobal
+    from autobal.analysis.numerics import ipopt
+    from autobal.ocp import solve
+
+    ocp, sc = load_problem(name, PROBLEMS[name][1])
+    method = spinup_method(sc)
+    ref = ocp.reference_level()
+    profiles = [u for _, u in solve.starts(ocp, method.intervals)]
+    coarse = solve.coarse_solver(ocp, method, ref, None)
+
+    def twin():
+        return solve.coarse_solver(ocp, method, ref, None)
+
+    def serial():
+        with autobal.using_solver_defaults("parallel", processes=1):
+            return solve.screen(ocp, coarse, profiles, twin)
+
+    def blas_two():  # CasADi's OpenBLAS on two threads, as before it was set to one (analysis/numerics/ipopt.py)
+        blas = ctypes.CDLL(ipopt.OPENBLAS, mode=os.RTLD_NOLOAD | os.RTLD_LAZY)
+        blas.openblas_set_num_threads(2)
+        try:
+            return solve.screen(ocp, coarse, profiles, twin)
+        finally:
+            blas.openblas_set_num_threads(1)
+
+    one = "one after another in one process"
+    variants = {one: serial, "two threads of one process": lambda: threaded_screen(ocp, coarse, profiles, twin),
+                "two processes (the study)": lambda: solve.screen(ocp, coarse, profiles, twin),
+                "two processes, CasADi's OpenBLAS on two threads": blas_two}
+    times, first = {k: [] for k in variants}, {}
+    for _ in range(rounds):
+        for label, run in variants.items():
+            t0 = time.perf_counter()
+            out = run()
+            times[label].append(time.perf_counter() - t0)
+            first.setdefault(label, [r.w for r in out])
+    same = all(np.array_equal(a, b) for k in first for a, b in zip(first[k], first[one], strict=True))
+    base = float(np.median(times[one]))
+    cases = [case(f"{name}: {label}", float(np.median(t)), None, one, base, problem=name, variant=label,
+                  starts=len(profiles), rounds=[round(x, 3) for x in t], same_solutions=same,
+                  load_average=os.getloadavg()[0]) for label, t in times.items()]
+    for c in cases:
+        print(c, flush=True)
+    return cases
+
+
 def main(argv: list[str] | None = None) -> None:
     argv = sys.argv[1:] if argv is None else argv
     names = [a for a in argv if not a.startswith("-")] or list(PROBLEMS)
     if "--levers" in argv:
         return levers(names)
+    if "--screening" in argv:
+        return screening(names)
     data = json.loads(DATA.read_text()) if DATA.exists() else {"problems": {}}
     if "--study" not in argv:  # the references (--refs: only they)
         for name in names:

@@ -99,3 +99,14 @@ def test_an_interrupt_here_stops_at_once_and_kills_the_helper(tmp_path):
     proc.wait(timeout=10)
     assert time.perf_counter() - t0 < 2 and proc.returncode != 0
     assert not os.path.exists(f"/proc/{helper}")  # killed and reaped before the process ended
+
+
+@needs_two
+def test_without_a_process_to_fork_the_work_is_done_here(monkeypatch):
+    def no_fork():
+        raise BlockingIOError(11, "Resource temporarily unavailable")
+
+    monkeypatch.setattr(forked.os, "fork", no_fork)
+    assert forked.shared(slow_square, 3) == [(i * i, os.getpid()) for i in range(3)]
+    with forked.Later(lambda: os.getpid()) as later:
+        assert later.result() == os.getpid()

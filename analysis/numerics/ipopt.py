@@ -46,7 +46,7 @@ def one_blas_thread() -> None:
     sets ``OPENBLAS_NUM_THREADS``.  MUMPS's fronts in these NLPs are small: on the 2-core machine the spin-up's IPOPT
     iterations took 72-74 ms on one thread against 84-87 ms on two (the deadline scene at 800 intervals), and the
     spin-up study 2.6-2.8 s against 3.2-3.3 s (``damped_issue35``, two processes; docs/benchmarks.md, "Spin-up
-    family")."""
+    study on a family of problems")."""
     if "OPENBLAS_NUM_THREADS" in os.environ:
         return
     with contextlib.suppress(OSError, AttributeError, RuntimeError):

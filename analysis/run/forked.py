@@ -1,12 +1,13 @@
 """The second core: work shared with a process forked from this one.
 
-IPOPT's MUMPS calls take a lock that every thread of a process shares, so two threads solving NLPs at once take
-about as long as one thread solving both (measured on the spin-up's coarse NLP: 1.0-1.1x; two processes 1.6x;
-docs/benchmarks.md, "Spin-up family").  The spin-up study's independent parts (its global search's back-off searches,
-the coarse screening of its starts, the ramp baselines: autobal/ocp/solve.py, autobal/ocp/spinup_study.py) therefore
-run in a process forked from this one.  A forked process has everything built before the fork (the problem, its
-NLPs) and nothing built after; it takes work by index and sends each result back pickled.  Its results are those
-this process would compute, bit for bit: a task depends on its index alone.
+IPOPT serialises every MUMPS call of a process with one lock (``mumps_call_mutex`` in Ipopt 3.14), so two threads
+solving NLPs at once take turns at the factorisations: on the spin-up's coarse screening two threads gained 1.1x, two
+processes 1.6-1.7x (``python -m benchmarks.spinup_family --screening``; docs/benchmarks.md, "Spin-up study on a
+family of problems").  The spin-up study's independent parts (its global search, the coarse screening of its
+starts, the ramp baselines: autobal/ocp/solve.py, autobal/ocp/spinup_study.py) therefore run in a process forked
+from this one.  A forked process has everything built before the fork (the problem, its NLPs) and nothing built
+after; it takes work by index and sends each result back pickled.  Its results are those this process would
+compute, bit for bit: a task depends on its index alone.
 
 Nothing of the helper reaches the terminal (its standard output and error go to /dev/null, it draws no bars); what
 its solvers print for the run's log comes back with each result and is logged here.  It ends with this process
@@ -45,8 +46,10 @@ def shared(fn: Callable, n: int, helper_fn: Callable | None = None) -> list:
     (default ``fn``) instead, e.g. to use solvers of its own.  An exception of a task is raised here."""
     if n < 2 or processes() < 2:
         return [fn(i) for i in range(n)]
-    ctx = multiprocessing.get_context("fork")
-    counter = ctx.Value("i", 0)
+    try:
+        counter = multiprocessing.get_context("fork").Value("i", 0)
+    except OSError:  # no shared memory for the counter (a container without /dev/shm): all here
+        return [fn(i) for i in range(n)]
 
     def take() -> int | None:
         with counter.get_lock():
@@ -58,7 +61,7 @@ def shared(fn: Callable, n: int, helper_fn: Callable | None = None) -> list:
     with _helper(lambda send: _serve(send, helper_fn or fn, take)) as results:
         while (i := take()) is not None:
             out[i], done[i] = fn(i), True
-        for i, value in results:
+        for i, value in results or ():
             out[i], done[i] = value, True
     return [out[i] if done[i] else fn(i) for i in range(n)]  # what the helper did not send: done here
 
@@ -89,9 +92,14 @@ class Later:
 @contextlib.contextmanager
 def _helper(work: Callable):
     """Fork a helper process that runs ``work(send)``; yield the (index, value) pairs it sends, as they come (an
-    exception it sends is raised here).  On leaving, the helper is killed if it is still running, and reaped."""
-    receive, send = multiprocessing.get_context("fork").Pipe(duplex=False)
-    pid = os.fork()
+    exception it sends is raised here), or None when no process can be forked (the caller does the work itself).
+    On leaving, the helper is killed if it is still running, and reaped."""
+    try:
+        receive, send = multiprocessing.get_context("fork").Pipe(duplex=False)
+        pid = os.fork()
+    except OSError:  # no process or pipe left (the user's limits)
+        yield None
+        return
     if pid == 0:  # the helper
         code = 1
         try:
