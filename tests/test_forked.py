@@ -51,6 +51,16 @@ def test_what_a_dead_helper_did_not_send_is_computed_here():
 
 
 @needs_two
+def test_a_result_larger_than_the_pipe_does_not_hold_the_helper_up():
+    def big(i):  # 1 MB each: the helper goes on to its next task while this process works on its own
+        time.sleep(0.1)
+        return bytes(1 << 20), os.getpid()
+
+    out = forked.shared(big, 8)
+    assert len({p for _, p in out}) == 2 and sum(1 for _, p in out if p != os.getpid()) >= 3
+
+
+@needs_two
 def test_the_helpers_log_goes_to_the_run_log_and_nothing_to_the_terminal(capfd):
     def helper(i):
         print("helper noise")
@@ -77,7 +87,8 @@ def test_later_computes_in_another_process_and_ends_it():
 
 
 @needs_two
-def test_an_interrupt_here_stops_at_once_and_kills_the_helper(tmp_path):
+@pytest.mark.parametrize("here", ["time.sleep(60)", "None"])  # working on its own task, or waiting for the helper
+def test_an_interrupt_here_stops_at_once_and_kills_the_helper(tmp_path, here):
     script = textwrap.dedent(f"""
         import os, time
         from autobal.analysis.run import forked, interrupt
@@ -85,7 +96,7 @@ def test_an_interrupt_here_stops_at_once_and_kills_the_helper(tmp_path):
         def helper(i):
             open({str(tmp_path / "pid")!r}, "w").write(str(os.getpid()))
             time.sleep(60)
-        forked.shared(lambda i: time.sleep(60), 2, helper)
+        forked.shared(lambda i: {here}, 2, helper)
     """)
     proc = subprocess.Popen([sys.executable, "-c", script], stderr=subprocess.PIPE)
     pid_file = tmp_path / "pid"

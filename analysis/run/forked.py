@@ -22,8 +22,10 @@ import contextlib
 import ctypes
 import multiprocessing
 import os
+import queue
 import signal
 import sys
+import threading
 from collections.abc import Callable
 
 from autobal.analysis.run import progress, solver_options, solver_output
@@ -110,13 +112,24 @@ def _helper(work: Callable):
         finally:
             os._exit(code)
     send.close()
+    # a thread here takes each result off the pipe as it comes: a helper whose result fills the pipe's buffer
+    # (a coarse solution, about 100 kB) would otherwise wait for this process to finish its own tasks first
+    messages = queue.SimpleQueue()
 
-    def results():
+    def read() -> None:
         while True:
             try:
-                i, ok, value, logs = receive.recv()
-            except EOFError:  # the helper has ended
+                messages.put(receive.recv())
+            except (EOFError, OSError):  # the helper has ended
+                messages.put(None)
                 return
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+
+    def results():
+        while (message := messages.get()) is not None:
+            i, ok, value, logs = message
             for text in logs:
                 solver_output.log(text)
             if not ok:
@@ -126,10 +139,11 @@ def _helper(work: Callable):
     try:
         yield results()
     finally:
-        receive.close()
         with contextlib.suppress(ProcessLookupError):
             os.kill(pid, signal.SIGKILL)
         os.waitpid(pid, 0)
+        reader.join()  # at the end of the pipe now
+        receive.close()
 
 
 def _quiet() -> None:
