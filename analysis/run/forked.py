@@ -96,6 +96,7 @@ def _helper(work: Callable):
     """Fork a helper process that runs ``work(send)``; yield the (index, value) pairs it sends, as they come (an
     exception it sends is raised here), or None when no process can be forked (the caller does the work itself).
     On leaving, the helper is killed if it is still running, and reaped."""
+    parent = os.getpid()
     try:
         receive, send = multiprocessing.get_context("fork").Pipe(duplex=False)
         pid = os.fork()
@@ -106,7 +107,7 @@ def _helper(work: Callable):
         code = 1
         try:
             receive.close()
-            _quiet()
+            _quiet(parent)
             work(send)
             code = 0
         finally:
@@ -146,11 +147,11 @@ def _helper(work: Callable):
         receive.close()
 
 
-def _quiet() -> None:
-    """In the helper: end with the parent, nothing to the terminal, no bars, the run's log collected per task."""
+def _quiet(parent: int) -> None:
+    """In the helper of the process ``parent``: end with it, nothing to the terminal, no bars."""
     with contextlib.suppress(OSError, AttributeError):
         ctypes.CDLL(None).prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
-    if os.getppid() == 1:  # the parent ended before the line above
+    if os.getppid() != parent:  # the parent ended before the line above
         os._exit(1)
     null = os.open(os.devnull, os.O_WRONLY)
     os.dup2(null, 1)
