@@ -39,7 +39,7 @@ def test_an_exception_of_the_helper_is_raised_here():
         raise ValueError(f"task {i} failed in the helper")
 
     with pytest.raises(ValueError, match="failed in the helper"):
-        forked.shared(lambda i: time.sleep(0.3), 3, fail_in_helper)
+        forked.shared(lambda i: time.sleep(0.5), 3, fail_in_helper)
 
 
 @needs_two
@@ -57,7 +57,7 @@ def test_a_result_larger_than_the_pipe_does_not_hold_the_helper_up():
         return bytes(1 << 20), os.getpid()
 
     out = forked.shared(big, 8)
-    assert len({p for _, p in out}) == 2 and sum(1 for _, p in out if p != os.getpid()) >= 3
+    assert sum(1 for _, p in out if p != os.getpid()) >= 2  # held up, the helper would have done one
 
 
 @needs_two
@@ -71,7 +71,7 @@ def test_the_helpers_log_goes_to_the_run_log_and_nothing_to_the_terminal(capfd):
     lines = []
     with solver_output.logging_to(lines.append):
         assert forked.shared(lambda i: (time.sleep(0.2), i)[1], 2, helper) == [0, 1]
-    assert "helper log 1" in lines
+    assert len([t for t in lines if t.startswith("helper log")]) == 1  # the task the helper took (either)
     out, err = capfd.readouterr()
     assert "noise" not in out + err
 
