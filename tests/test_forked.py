@@ -62,7 +62,8 @@ def test_a_result_larger_than_the_pipe_does_not_hold_the_helper_up():
 
 @needs_two
 def test_the_helpers_log_goes_to_the_run_log_and_nothing_to_the_terminal(capfd):
-    def helper(i):
+    def helper(i):  # as long as this process's task: each side takes one of the two
+        time.sleep(0.2)
         print("helper noise")
         os.write(2, b"helper fd noise\n")
         solver_output.log(f"helper log {i}")
@@ -87,7 +88,7 @@ def test_later_computes_in_another_process_and_ends_it():
 
 
 @needs_two
-@pytest.mark.parametrize("here", ["time.sleep(60)", "None"])  # working on its own task, or waiting for the helper
+@pytest.mark.parametrize("here", ["time.sleep(60)", "time.sleep(0.3)"])  # at work on its own task, or waiting
 def test_an_interrupt_here_stops_at_once_and_kills_the_helper(tmp_path, here):
     script = textwrap.dedent(f"""
         import os, time
@@ -105,6 +106,7 @@ def test_an_interrupt_here_stops_at_once_and_kills_the_helper(tmp_path, here):
             break
         time.sleep(0.05)
     helper = int(pid_file.read_text())
+    time.sleep(0.5)  # this process now at its own task (60 s) or waiting for the helper's (after 0.3 s)
     t0 = time.perf_counter()
     proc.terminate()
     proc.wait(timeout=10)
