@@ -43,10 +43,9 @@ OPENBLAS = "libcasadi-tp-openblas.so.0"  # the name MUMPS asks for (CasADi 3.7-3
 
 def one_blas_thread() -> None:
     """CasADi's own OpenBLAS, the one IPOPT's MUMPS is linked with (``OPENBLAS``), on one thread, unless the environment
-    sets ``OPENBLAS_NUM_THREADS``.  MUMPS's fronts in these NLPs are small: on the 2-core machine the spin-up's IPOPT
-    iterations took 72-74 ms on one thread against 84-87 ms on two (the deadline scene at 800 intervals), and the
-    spin-up study 2.6-2.8 s against 3.2-3.3 s (``damped_issue35``, two processes; docs/benchmarks.md, "Spin-up
-    study on a family of problems")."""
+    sets ``OPENBLAS_NUM_THREADS``.  On the 2-core machine one thread was faster per IPOPT iteration of the spin-up's
+    fine NLPs: 10.7-12.7 ms against 11.5-13.9 ms at 200 intervals, 72-74 ms against 84-87 ms at 800; on its coarse
+    ones (50 intervals) it made no difference (docs/benchmarks.md, "Spin-up study on a family of problems")."""
     if "OPENBLAS_NUM_THREADS" in os.environ:
         return
     with contextlib.suppress(OSError, AttributeError, RuntimeError):
