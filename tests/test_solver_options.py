@@ -240,16 +240,14 @@ def test_the_batched_gauss_newton_reads_its_group():
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="CasADi's Linux wheels")
 def test_casadis_openblas_under_mumps_runs_on_one_thread_unless_the_environment_says():
-    import ctypes
     import os
     import subprocess
 
-    from autobal.analysis.numerics import ipopt
-
-    blas = ctypes.CDLL(ipopt.OPENBLAS, mode=os.RTLD_NOLOAD | os.RTLD_LAZY)  # the one MUMPS loaded (RTLD_NOLOAD)
-    if "OPENBLAS_NUM_THREADS" not in os.environ:
-        assert blas.openblas_get_num_threads() == 1
-    code = ("import ctypes, os, casadi; from autobal.analysis.numerics import ipopt; casadi.load_nlpsol('ipopt'); "
+    # a solver built in a new process, then the thread count of the OpenBLAS that MUMPS loaded (RTLD_NOLOAD)
+    code = ("import ctypes, os, casadi; from autobal.analysis.numerics import ipopt; x = casadi.MX.sym('x'); "
+            "ipopt.nlpsol('t', x, casadi.MX.sym('p', 0), x**2, casadi.MX(0, 1)); "
             "print(ctypes.CDLL(ipopt.OPENBLAS, mode=os.RTLD_NOLOAD | os.RTLD_LAZY).openblas_get_num_threads())")
-    env = os.environ | {"OPENBLAS_NUM_THREADS": "2"}
-    assert subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True).stdout.split() == ["2"]
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    for extra, threads in (({}, "1"), ({"OPENBLAS_NUM_THREADS": "2"}, "2")):
+        out = subprocess.run([sys.executable, "-c", code], env=env | extra, capture_output=True, text=True)
+        assert out.stdout.split() == [threads], out.stderr

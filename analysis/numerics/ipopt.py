@@ -12,8 +12,8 @@ solve wrote, headed by its name, status and iteration count, to the log of the r
 own solves).  Nothing of the process (its standard output and error, file descriptors 1 and 2) is redirected.
 
 The OpenBLAS that CasADi brings along (under IPOPT's MUMPS; threadpoolctl does not see it, so ``autobal.run``'s
-BLAS limit misses it) runs on one thread unless the environment sets ``OPENBLAS_NUM_THREADS``
-(:func:`one_blas_thread`).
+BLAS limit misses it) is set to one thread as each solver is built, unless the environment sets
+``OPENBLAS_NUM_THREADS`` (:func:`one_blas_thread`).
 """
 
 from __future__ import annotations
@@ -48,12 +48,10 @@ def one_blas_thread() -> None:
     ones (50 intervals) it made no difference (docs/benchmarks.md, "Spin-up study on a family of problems")."""
     if "OPENBLAS_NUM_THREADS" in os.environ:
         return
-    with contextlib.suppress(OSError, AttributeError, RuntimeError):
-        ca.load_nlpsol("ipopt")  # IPOPT, MUMPS and the OpenBLAS they load
+    with contextlib.suppress(OSError, AttributeError):  # RTLD_NOLOAD: the one loaded with IPOPT's plugin, if any
         ctypes.CDLL(OPENBLAS, mode=os.RTLD_NOLOAD | os.RTLD_LAZY).openblas_set_num_threads(1)
 
 
-one_blas_thread()
 NOTE_EVERY_S = 0.2  # the bar's note (objective, infeasibility) is refreshed at most this often, s
 
 
@@ -129,6 +127,7 @@ def nlpsol(name: str, x, p, f, g, warm: bool = False, hess_lag: ca.Function | No
         bar = IterationBar(name, {"x": nx, "f": 1, "g": ng, "lam_x": nx, "lam_g": ng, "lam_p": n_p})
         opts["iteration_callback"] = bar
     solver = ca.nlpsol(name, "ipopt", {"x": x, "p": p, "f": f, "g": g}, opts)
+    one_blas_thread()  # IPOPT's plugin, and with it MUMPS's OpenBLAS, is loaded now
     if bar is not None:
         solver.autobal_iterations, bar.solver = bar, solver  # the callback lives as long as the solver
     solver.autobal_log = log
