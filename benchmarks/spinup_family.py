@@ -389,6 +389,8 @@ def threaded_screen(ocp, solver, profiles, twin):
     process: IPOPT's MUMPS calls take a lock the threads share)."""
     import threading
 
+    from autobal.ocp import solve
+
     nc, todo, lock = solver.nlp.mesh.n, iter(range(len(profiles))), threading.Lock()
     out = [None] * len(profiles)
 
@@ -398,10 +400,7 @@ def threaded_screen(ocp, solver, profiles, twin):
                 i = next(todo, None)
             if i is None:
                 return
-            u = profiles[i]
-            u = u.reshape(nc, -1).mean(axis=1) if u.size % nc == 0 else np.interp(
-                np.linspace(0, 1, nc), np.linspace(0, 1, u.size), u)
-            out[i] = s.solve(u, raise_on_failure=False, hold_states=ocp.hold_states)
+            out[i] = s.solve(solve.on_coarse(profiles[i], nc), raise_on_failure=False, hold_states=ocp.hold_states)
 
     other = threading.Thread(target=lane, args=(twin(),))
     other.start()

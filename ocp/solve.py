@@ -426,15 +426,20 @@ def coarse_solver(ocp: SpinupOcp, method, ref: float, options: dict | None) -> S
     return Solver(screen, dataclasses.replace(method, intervals=n), ref, coarse_options(options), brake_tol=0.0)
 
 
+def on_coarse(u: np.ndarray, nc: int) -> np.ndarray:
+    """A control profile over the horizon's intervals (any number) on ``nc`` coarse intervals: averaged over each
+    when they divide evenly, else interpolated."""
+    return u.reshape(nc, -1).mean(axis=1) if u.size % nc == 0 else np.interp(
+        np.linspace(0, 1, nc), np.linspace(0, 1, u.size), u)
+
+
 def screen(ocp: SpinupProblem, solver: Solver, profiles: list[np.ndarray], twin) -> list[SpinupSolution]:
     """Each control profile (over the horizon's intervals, any number) averaged onto the coarse mesh of ``solver`` and
     solved there (never raising on a failed solve), in order.  The profiles are shared with a forked process
     (analysis/run/forked.py: IPOPT's MUMPS takes a lock that a process's threads share), which solves on a copy of the
     NLP it builds with ``twin()`` (each solver has its IPOPT log file).  A solve depends on its start alone, so the
     solutions are those of one solver taking the profiles one after another, bit for bit."""
-    nc = solver.nlp.mesh.n
-    guesses = [u.reshape(nc, -1).mean(axis=1) if u.size % nc == 0 else np.interp(
-        np.linspace(0, 1, nc), np.linspace(0, 1, u.size), u) for u in profiles]
+    guesses = [on_coarse(u, solver.nlp.mesh.n) for u in profiles]
     own = []  # the helper's solver
 
     def helper(i: int) -> SpinupSolution:
