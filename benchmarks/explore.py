@@ -150,7 +150,7 @@ def spinup_case(repeats: int) -> tuple[list[dict], float, float]:
         return err
 
     split = blocks[0]["time_split"]
-    share = (split["resimulation_time_s"] + split["baselines_time_s"]) / blocks[0]["wall_time_s"]
+    share = (split["resimulation_time_s"] + blocks[0]["baselines_time_s"]) / blocks[0]["wall_time_s"]
     rows = [case("spin-up scene: one change (optimum's profile and ramps re-simulated, critical speed, AF, SM)",
                  times[0], t_build, "autobal.run with the override", t_run, error(ex.evaluate), None)]
     rows += [case(f"spin-up lever: {name}", t, None, "autobal.run with the override", t_run, error(fn), None)

@@ -252,6 +252,9 @@ class SpinupResult(TypedResult):
     gain_vs_constant_ramp_pct_status: str | None = optional()
     collocation_peak_unbalance: float | None = _unbalance(optional=True)  # the peak_unbalance objective's
     segments: RampTable | None = optional()
+    baselines_time_s: float | None = quantity("s", "", "wall time of the ramp baselines' own re-simulations, run "
+                                              "alongside the optimisation (in a forked process where one can be "
+                                              "had; time_split has what was waited for them)", optional=True)
     #: part -> its wall time, s
     time_split: dict[str, float] = field(default_factory=dict)
     optimum: Trajectory | None = unsaved()
@@ -321,7 +324,9 @@ class SpinupResult(TypedResult):
                  + f" s), NLP build {self.build_time_s:.2f} s, wall {self.wall_time_s:.2f} s (with the global "
                  "search, re-simulations and baselines)",
                  "  wall time split: " + ", ".join(f"{k[:-7].replace('_', ' ')} {v:.2f} s" for k, v in
-                                                   self.time_split.items()),
+                                                   self.time_split.items())
+                 + ("" if self.baselines_time_s is None else
+                    f"; the ramp baselines took {self.baselines_time_s:.2f} s alongside"),
                  f"  optimum: collocation peak {significant(self.collocation_peak_over_e)} e (re-simulation "
                  f"difference {self.resimulation_rel_error:.2e}), peak unbalance {significant(self.peak_unbalance)}, "
                  f"peak at t = {q('time_of_peak_s').text(self.time_of_peak_s)} and "
@@ -531,6 +536,12 @@ def _pct(x: float, ref: float | None) -> float | None:
     return None if not ref else 100 * (x - ref) / ref
 
 
+def timed(fn, *args):
+    """``fn(*args)`` and its wall time (s)."""
+    t0 = time.perf_counter()
+    return fn(*args), time.perf_counter() - t0
+
+
 def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, options: dict | None = None,
         segments: int = 0) -> SpinupResult:
     """Optimise (global search and multi-start), re-simulate, and compute the constant-ramp baselines.
@@ -557,10 +568,10 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
         The optimum's re-simulation beside the ramps; peaks in delta/e, times in s.
     """
     t0 = time.perf_counter()
-    with forked.Later(functools.partial(baselines, ocp)) as later:  # the ramps meanwhile, in a forked process
+    with forked.Later(functools.partial(timed, baselines, ocp)) as later:  # the ramps meanwhile, in a forked process
         opt = optimize(ocp, method, multistart, options)
         t1 = time.perf_counter()
-        base = later.result()
+        base, t_own = later.result()
         t_base = time.perf_counter() - t1  # what is left of them after the optimisation
     sol, tr = opt.solution, opt.trajectory
     use = {k: drive_use(ocp, v) for k, v in base.items()}
@@ -598,13 +609,14 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
         segments, seg.trajectory.peak_delta, seg.trajectory.peak_d, seg.objective, _pct(seg.objective, opt.score),
         seg.evaluations, seg.start, seg.start_objectives, **seg.drive, dwell=dwell(P, seg.trajectory, ocp.alpha_max))
     # the wall time by part (s): what the global search, the initial guesses, the NLP builds, the IPOPT solves,
-    # the CVODES re-simulations (reference ramp, ranking near-ties, the optimum) and the baselines took; the coarse
-    # screening's guesses and solves, several at once (solve.screen), by its own wall time
+    # the CVODES re-simulations (reference ramp, ranking near-ties, the optimum) took, and the wait for the baselines
+    # (computed alongside: their own time is baselines_time_s); the coarse screening's guesses and solves, several at
+    # once (solve.screen), by its own wall time
     screened = sum(r.get("solve_time_s", 0.0) for r in opt.starts if "coarse (" in str(r.get("stage", "")))
     total_solve = sum(r.get("solve_time_s", 0.0) for r in opt.starts)
     split = {"global_search": opt.times.get("global_search", 0.0), "screening": opt.times.get("screening", 0.0),
              "guesses": opt.times.get("guesses", 0.0), "build": opt.build_time_s, "solve": total_solve - screened,
-             "resimulation": opt.times.get("resimulation", 0.0), "baselines": t_base,
+             "resimulation": opt.times.get("resimulation", 0.0), "baselines_wait": t_base,
              "segments": t_seg}
     wall = time.perf_counter() - t0
     split["rest"] = wall - sum(split.values())
@@ -626,6 +638,6 @@ def run(ocp: SpinupOcp, method, title: str = "", multistart: bool = True, option
                          f"{solver_options.defaults['resimulation.points']} samples per interval)"},
         **statuses,
         collocation_peak_unbalance=opt.collocation_value if ocp.objective == "peak_unbalance" else None,
-        segments=table, time_split={f"{k}_time_s": v for k, v in split.items()},
+        segments=table, baselines_time_s=t_own, time_split={f"{k}_time_s": v for k, v in split.items()},
         optimum=tr, ramp_runs=base, ramp_table_run=seg, controls={"t_start": tr.t_u, "acceleration": tr.alpha},
         ramp_table=None if seg is None else seg.table(tr.t[-1]))
