@@ -278,14 +278,21 @@ def reference(name: str, scene: dict, seed: int = 1) -> dict:
 
 
 #: what a study process runs: load the scene, run the spin-up study as `autobal run` does (without writing files),
-#: print its re-simulated peak
-SNIPPET = """import sys
+#: print its re-simulated peak and where its time went (s): the imports, the scene's loading, the study and the
+#: study's own split (``time_split``) as one JSON line
+SNIPPET = """import time
+t0 = time.perf_counter()
+import json, sys
 from autobal import api
 from autobal.analyses.spinup import ocp
 from autobal.ocp import spinup_study
+t1 = time.perf_counter()
 sc = api.load(sys.argv[1]); s = sc.analyses.spinup
+t2 = time.perf_counter()
 res = spinup_study.run(ocp(sc, s), spinup_study.method_of(s), sc.title, s.multistart, None, s.segments)
-print(res.peak_deflection)
+t3 = time.perf_counter()
+print(json.dumps({"peak": res.peak_deflection, "import_s": t1 - t0, "load_s": t2 - t1, "run_s": t3 - t2,
+                  "split": res.time_split}))
 """
 
 
@@ -303,7 +310,21 @@ def study(name: str, scene: dict, python: str = sys.executable) -> dict:
         dt = time.perf_counter() - t0
         if out.returncode:  # a failed study: no peak, its last line
             return {"study_peak_over_e": None, "study_s": dt, "failure": (out.stderr.strip().splitlines() or ["?"])[-1]}
-        return {"study_peak_over_e": float(out.stdout.split()[-1]), "study_s": dt}
+        got = json.loads(out.stdout.splitlines()[-1])
+        return {"study_peak_over_e": got["peak"], "study_s": dt, "parts": parts(got, dt)}
+
+
+def parts(got: dict, wall: float) -> dict:
+    """Where a study process's wall time went (s), from its SNIPPET line ``got``: the interpreter's start and exit (what
+    the imports, the loading and the study leave of ``wall``), the imports, the scene's loading, and the study's own
+    parts (its ``time_split``): the global search, the coarse screening, the refinement (its NLP builds, guesses and
+    IPOPT solves; the coarse NLP's build too), the CVODES re-simulations, and the rest (the baselines, computed
+    alongside, are in it where they were waited for)."""
+    split = {k.removesuffix("_time_s"): v for k, v in got["split"].items()}
+    own = {"global_search_s": split["global_search"], "screening_s": split["screening"],
+           "refinement_s": split["build"] + split["solve"] + split["guesses"], "resimulation_s": split["resimulation"]}
+    return {"start_exit_s": wall - got["import_s"] - got["load_s"] - got["run_s"], "imports_s": got["import_s"],
+            "loading_s": got["load_s"], **own, "rest_s": got["run_s"] - sum(own.values())}
 
 
 def levers(names: list[str]) -> None:
@@ -512,13 +533,15 @@ def main(argv: list[str] | None = None) -> None:
                           b.get("study_s"), gap["after"], gap.get("before"), reference_peak_over_e=ref,
                           peak_over_e=runs["after"]["study_peak_over_e"], before_peak_over_e=b.get("study_peak_over_e"),
                           failure=runs["after"].get("failure"), before_failure=b.get("failure"),
+                          parts=runs["after"].get("parts"), before_parts=b.get("parts"),
                           load_average=os.getloadavg()[0]))
         print(cases[-1], flush=True)
     old = Path(__file__).parent / "results" / "spinup_family.json"  # the rows of problems not re-run are kept
     kept = {c["case"]: c for c in json.loads(old.read_text())["cases"]} if old.exists() else {}
     for c in cases:  # without --base the rows keep their measured "before"
         prev = kept.get(c["case"], {})
-        keep = {k: prev.get(k) for k in ("peer", "peer_s", "peer_error", "before_peak_over_e", "before_failure")
+        keep = {k: prev.get(k) for k in ("peer", "peer_s", "peer_error", "before_peak_over_e", "before_failure",
+                                         "before_parts")
                 if c.get(k) is None and prev.get(k) is not None}
         kept[c["case"]] = c | keep | ({"ratio": keep["peer_s"] / c["autobal_s"]} if "peer_s" in keep else {})
     cases = [kept[n] for n in PROBLEMS if n in kept]
@@ -529,8 +552,24 @@ def main(argv: list[str] | None = None) -> None:
                         "turn); errors: the study's peak against the reference, % (negative: below it)",
                         f"median wall time: {med['autobal_s']:.2f} s after, {med['peer_s']:.2f} s before"])
     doc = json.loads(old.read_text())  # the medians beside the cases, for the docs' placeholders
-    old.write_text(json.dumps(doc | {"median_after_s": med["autobal_s"], "median_before_s": med["peer_s"]}, indent=1,
-                              allow_nan=False) + "\n")
+    old.write_text(json.dumps(doc | {"median_after_s": med["autobal_s"], "median_before_s": med["peer_s"]}
+                              | to_goal(cases), indent=1, allow_nan=False) + "\n")
+
+
+GOAL_S = 1.5  # issue 35: the study's median wall time over the family, process start-up included
+
+
+def to_goal(cases: list[dict]) -> dict:
+    """How far the family's median is from GOAL_S: each part's median over the problems (s), the median fixed part
+    (the interpreter's start and exit, the imports, the scene's loading: what any study process pays), and how many
+    times faster the median problem's study itself (its wall time less the fixed part) would have to be."""
+    split = [c["parts"] for c in cases if c.get("parts")]
+    if not split:
+        return {}
+    fixed = float(np.median([p["start_exit_s"] + p["imports_s"] + p["loading_s"] for p in split]))
+    study = float(np.median([c["autobal_s"] for c in cases if c.get("parts")])) - fixed
+    return {"median_parts": {k: float(np.median([p[k] for p in split])) for k in split[0]}, "median_fixed_s": fixed,
+            "median_study_s": study, "goal_s": GOAL_S, "study_speedup_needed": study / (GOAL_S - fixed)}
 
 
 if __name__ == "__main__":
