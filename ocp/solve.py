@@ -442,13 +442,15 @@ def screen(ocp: SpinupProblem, solver: Solver, profiles: list[np.ndarray], twin)
     guesses = [on_coarse(u, solver.nlp.mesh.n) for u in profiles]
     own = []  # the helper's solver
 
+    def solve(s: Solver, i: int) -> SpinupSolution:
+        return s.solve(guesses[i], raise_on_failure=False, hold_states=ocp.hold_states)
+
     def helper(i: int) -> SpinupSolution:
         if not own:
             own.append(twin())
-        return own[0].solve(guesses[i], raise_on_failure=False, hold_states=ocp.hold_states)
+        return solve(own[0], i)
 
-    return forked.shared(lambda i: solver.solve(guesses[i], raise_on_failure=False, hold_states=ocp.hold_states),
-                         len(guesses), helper)
+    return forked.shared(functools.partial(solve, solver), len(guesses), helper)
 
 
 def rank_coarse(ocp: SpinupOcp, found: list, n: int) -> tuple[int, dict[int, float]]:
