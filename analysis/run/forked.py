@@ -1,9 +1,9 @@
 """The second core: work shared with a process forked from this one.
 
 IPOPT serialises every MUMPS call of a process with one lock (``mumps_call_mutex`` in Ipopt 3.14), so two threads
-solving NLPs at once take turns at the factorisations: on the spin-up's coarse screening two threads gained 1.1x, two
-processes 1.6-1.7x (``python -m benchmarks.spinup_family --screening``; docs/benchmarks.md, "Spin-up study on a
-family of problems").  The spin-up study's independent parts (its global search, the coarse screening of its
+solving NLPs at once take turns at the factorisations: on the spin-up's coarse screening two threads gained
+1.03-1.11x, two processes 1.50-1.84x (``python -m benchmarks.spinup_family --screening``; docs/benchmarks.md, "Spin-up
+study on a family of problems").  The spin-up study's independent parts (its global search, the coarse screening of its
 starts, the ramp baselines: autobal/ocp/solve.py, autobal/ocp/spinup_study.py) therefore run in a process forked
 from this one.  A forked process has everything built before the fork (the problem, its NLPs) and nothing built
 after; it takes work by index and sends each result back pickled.  Its results are those this process would

@@ -126,8 +126,9 @@ GROUPS = {
     "spinup_coarse": ("the coarse stage of the spin-up mesh continuation: a screening of the starts", {
         "max_iter": (200, "iteration limit of a start (the best basins converge in 13-111)"),
     }),
-    # IPOPT's MUMPS calls take a lock the threads of a process share: on the coarse screening two threads gained 1.1x,
-    # two processes 1.6-1.7x (analysis/run/forked.py; docs/benchmarks.md, "Spin-up study on a family of problems")
+    # IPOPT's MUMPS calls take a lock the threads of a process share: on the coarse screening two threads gained
+    # 1.03-1.11x, two processes 1.50-1.84x (analysis/run/forked.py; docs/benchmarks.md, "Spin-up study on a family of
+    # problems")
     "parallel": ("work the spin-up study shares with a process forked from this one (Linux): the global search's "
                  "back-off searches, the coarse screening, the ramp baselines", {
         "processes": (2, "processes at once, this one included (at most the cores this process may use; 1: all in "
